@@ -1,0 +1,189 @@
+// rtwall engine: the one public header.
+//
+// A scene description (plain data, loaded from a TOML scene file or built in code) is turned
+// into an Embree scene once; renderTile() then renders any rectangle of the image from it.
+// renderTile() is the one tile-render function: the single-machine path, the render clients,
+// the tests and the benchmarks all call it. It is stateless apart from per-thread scratch
+// buffers and deterministic: a pixel's bytes depend only on the scene, the camera, the
+// settings and the pixel, never on the tile size, the tile order, the thread count or the
+// kernel (packet or single-ray).
+#pragma once
+
+#include <rtwall/mesh.h>
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace rtwall {
+
+using Color = Float3;  // linear RGB
+
+// Row-major 3x4 affine transform (object to world), kept in double precision on the CPU side.
+struct Transform {
+    std::array<double, 12> m{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+
+    static Transform translate(double x, double y, double z);
+    static Transform scale(double x, double y, double z);
+    static Transform rotateDegrees(double axisX, double axisY, double axisZ, double degrees);
+    Transform operator*(const Transform& b) const;  // apply b first, then *this
+    Float3 applyPoint(const Float3& p) const;
+};
+
+enum class MaterialType { Lambert, Phong, Mirror, Glass };
+
+struct Material {
+    std::string name;
+    MaterialType type = MaterialType::Lambert;
+    Color color{0.8f, 0.8f, 0.8f};     // diffuse albedo (lambert, phong); reflectance (mirror); tint (glass)
+    Color specular{0.0f, 0.0f, 0.0f};  // phong: specular reflectance
+    float shininess = 32.0f;           // phong: Blinn-Phong exponent
+    float ior = 1.5f;                  // glass: index of refraction
+};
+
+enum class LightType { Point, Directional };
+
+struct Light {
+    LightType type = LightType::Point;
+    Float3 position{0, 10, 0};   // point
+    Float3 direction{0, -1, 0};  // directional: the direction the light travels
+    Color color{1, 1, 1};
+    float intensity = 1.0f;  // point: radiant intensity (falls off as 1/r^2); directional: irradiance
+};
+
+struct CameraDesc {
+    std::string name = "default";
+    Float3 position{0, 0, 5};
+    Float3 lookAt{0, 0, 0};
+    Float3 up{0, 1, 0};
+    float fovY = 45.0f;  // vertical field of view in degrees
+};
+
+struct MeshDesc {
+    std::string name;
+    std::string source;  // file path or "shape:<kind>", for messages and hashing
+    std::shared_ptr<const TriangleMesh> mesh;
+};
+
+struct InstanceDesc {
+    uint32_t mesh = 0;      // index into SceneDesc::meshes
+    uint32_t material = 0;  // index into SceneDesc::materials
+    Transform transform;
+};
+
+enum class KernelType { Packet, Single };
+enum class ShadingMode { Full, EyeLight };
+
+struct RenderSettings {
+    int width = 800;                      // image size in pixels
+    int height = 600;
+    int tileSize = 32;                    // square tiles, in pixels
+    KernelType kernel = KernelType::Packet;
+    ShadingMode shading = ShadingMode::Full;  // eyelight: primary rays only, for fast previews
+    int maxDepth = 8;                     // primary ray = depth 1; reflection/refraction add one each
+    int supersample = 1;                  // n x n regular sub-pixel grid
+    bool shadows = true;                  // hard shadows from every light
+    Color background{0.05f, 0.05f, 0.08f};
+    Color ambient{0.0f, 0.0f, 0.0f};      // constant ambient light, times diffuse albedo
+    int threads = 0;                      // 0 = one per hardware thread
+};
+
+struct SceneDesc {
+    std::filesystem::path sourceFile;  // empty when built in code
+    std::vector<MeshDesc> meshes;
+    std::vector<Material> materials;
+    std::vector<InstanceDesc> instances;
+    std::vector<Light> lights;
+    std::vector<CameraDesc> cameras;
+    RenderSettings settings;
+
+    const CameraDesc* findCamera(const std::string& name) const;  // nullptr if absent
+    Bounds3 worldBounds() const;
+};
+
+// Loads a TOML scene file (format: configs/README.md). Throws InputError naming the file, the
+// line and the key on any problem, including unknown keys and wrong types.
+SceneDesc loadSceneFile(const std::filesystem::path& file);
+
+// A scene made of one mesh file, with a camera that frames its bounds and a default light.
+SceneDesc sceneFromMeshFile(const std::filesystem::path& file);
+
+// Scenes built in code, shared by tests, benchmarks and examples. "knots": twelve distinct
+// torus knots on a floor with about `triangles` triangles in all (the kernel benchmark).
+SceneDesc builtinScene(const std::string& name, int64_t triangles);
+
+// A loaded scene ready to render: Embree device, one BVH per mesh, instances on top.
+class Scene {
+public:
+    explicit Scene(const SceneDesc& desc);
+    ~Scene();
+    Scene(const Scene&) = delete;
+    Scene& operator=(const Scene&) = delete;
+
+    const SceneDesc& desc() const;
+    struct Impl;
+    const Impl& impl() const { return *impl_; }
+
+private:
+    std::unique_ptr<Impl> impl_;
+};
+
+// Pinhole camera with derived per-image state computed once.
+class Camera {
+public:
+    Camera(const CameraDesc& desc, int width, int height);
+    // Direction (unnormalised) through image position (px, py), pixels from the top-left corner.
+    Float3 direction(float px, float py) const;
+    Float3 origin() const { return origin_; }
+
+private:
+    Float3 origin_, corner_, du_, dv_;
+};
+
+struct TileRect {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // half-open pixel rectangle [x0,x1) x [y0,y1)
+    int width() const { return x1 - x0; }
+    int height() const { return y1 - y0; }
+};
+
+// Where renderTile writes: pixel (rect.x0 + i, rect.y0 + j) goes to data + j*stride + 3*i (sRGB8).
+struct TileView {
+    uint8_t* data = nullptr;
+    size_t stride = 0;
+};
+
+// Per-tile statistics for benchmarks and false-colour views.
+struct TileStats {
+    uint64_t rays = 0;        // closest-hit rays traced
+    uint64_t shadowRays = 0;  // occlusion rays traced
+};
+
+// The one tile-render function. `frame` is part of the signature for per-frame sampling
+// sequences (it does not change the image of a still scene today).
+TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
+                     const RenderSettings& settings, TileView out);
+
+struct Image {
+    int width = 0, height = 0;
+    std::vector<uint8_t> rgb;  // sRGB8, row-major, no padding
+    uint8_t* pixel(int x, int y) { return rgb.data() + (size_t(y) * width + x) * 3; }
+    const uint8_t* pixel(int x, int y) const { return rgb.data() + (size_t(y) * width + x) * 3; }
+};
+
+std::vector<TileRect> makeTiles(int width, int height, int tileSize);
+
+// Renders a whole frame on settings.threads threads (tiles handed out on demand).
+Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings& settings, uint32_t frame = 0,
+                  TileStats* stats = nullptr);
+
+void writePng(const Image& image, const std::filesystem::path& file);  // throws InputError
+Image readPng(const std::filesystem::path& file);                      // throws InputError
+
+// Number of rays per Embree packet the packet kernel uses on this CPU (4, 8 or 16).
+int packetWidth();
+
+}  // namespace rtwall

@@ -1,0 +1,52 @@
+// PNG input and output through libpng's simplified API.
+#include <rtwall/engine.h>
+
+#include <png.h>
+
+#include <cstdio>
+#include <memory>
+
+namespace rtwall {
+
+void writePng(const Image& image, const std::filesystem::path& file) {
+    if (!file.parent_path().empty()) {
+        std::error_code ec;
+        std::filesystem::create_directories(file.parent_path(), ec);
+    }
+    png_image png{};
+    png.version = PNG_IMAGE_VERSION;
+    png.width = png_uint_32(image.width);
+    png.height = png_uint_32(image.height);
+    png.format = PNG_FORMAT_RGB;
+    if (!png_image_write_to_file(&png, file.c_str(), 0, image.rgb.data(), image.width * 3, nullptr)) {
+        std::string why = png.message;
+        png_image_free(&png);
+        throw InputError(file.string() + ": cannot write PNG: " + why);
+    }
+}
+
+Image readPng(const std::filesystem::path& file) {
+    png_image png{};
+    png.version = PNG_IMAGE_VERSION;
+    if (!png_image_begin_read_from_file(&png, file.c_str()))
+        throw InputError(file.string() + ": cannot read PNG: " + png.message);
+    png.format = PNG_FORMAT_RGB;
+    // Refuse absurd sizes before allocating (a 16k x 16k RGB image is already 768 MB).
+    if (png.width == 0 || png.height == 0 || png.width > 16384 || png.height > 16384) {
+        png_image_free(&png);
+        throw InputError(file.string() + ": PNG size " + std::to_string(png.width) + "x" + std::to_string(png.height) +
+                         " is out of range");
+    }
+    Image img;
+    img.width = int(png.width);
+    img.height = int(png.height);
+    img.rgb.resize(PNG_IMAGE_SIZE(png));
+    if (!png_image_finish_read(&png, nullptr, img.rgb.data(), 0, nullptr)) {
+        std::string why = png.message;
+        png_image_free(&png);
+        throw InputError(file.string() + ": cannot read PNG: " + why);
+    }
+    return img;
+}
+
+}  // namespace rtwall

@@ -1,0 +1,111 @@
+#include "scene_impl.h"
+#include "vec.h"
+
+#include <rtwall/engine_embree.h>
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+namespace rtwall {
+
+namespace {
+
+void embreeErrorHandler(void* userPtr, RTCError code, const char* message) {
+    auto* last = static_cast<std::string*>(userPtr);
+    *last = "Embree error " + std::to_string(int(code)) + ": " + (message ? message : "(no message)");
+}
+
+void checkDevice(RTCDevice device, const std::string& lastError, const char* what) {
+    if (rtcGetDeviceError(device) != RTC_ERROR_NONE || !lastError.empty())
+        throw std::runtime_error(std::string("while ") + what + ": " + lastError);
+}
+
+// Inverse transpose of the upper 3x3, in double precision, so normals stay perpendicular
+// under non-uniform scaling.
+void normalMatrixOf(const Transform& t, float out[9]) {
+    const auto& m = t.m;
+    double a = m[0], b = m[1], c = m[2], d = m[4], e = m[5], f = m[6], g = m[8], h = m[9], i = m[10];
+    double A = e * i - f * h, B = -(d * i - f * g), C = d * h - e * g;
+    double D = -(b * i - c * h), E = a * i - c * g, F = -(a * h - b * g);
+    double G = b * f - c * e, H = -(a * f - c * d), I = a * e - b * d;
+    double det = a * A + b * B + c * C;
+    if (det == 0.0 || !std::isfinite(det))
+        throw std::runtime_error("instance transform is singular");
+    // inverse = adj^T / det; its transpose is the cofactor matrix / det.
+    double cof[9] = {A, B, C, D, E, F, G, H, I};
+    for (int k = 0; k < 9; ++k) out[k] = float(cof[k] / det);
+}
+
+}  // namespace
+
+Scene::Scene(const SceneDesc& desc) : impl_(std::make_unique<Impl>()) {
+    Impl& s = *impl_;
+    s.desc = desc;
+    std::string& lastError = s.lastError;
+    s.device = rtcNewDevice(nullptr);
+    if (!s.device) throw std::runtime_error("cannot create an Embree device (rtcNewDevice failed)");
+    rtcSetDeviceErrorFunction(s.device, embreeErrorHandler, &lastError);
+
+    try {
+        s.meshScenes.reserve(s.desc.meshes.size());
+        for (const MeshDesc& md : s.desc.meshes) {
+            const TriangleMesh& mesh = *md.mesh;
+            RTCScene ms = rtcNewScene(s.device);
+            s.meshScenes.push_back(ms);
+            if (mesh.triangleCount() > 0) {
+                RTCGeometry g = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+                // Shared buffers: Embree reads the importer's arrays in place. The positions
+                // buffer carries the tail padding Embree's 16-byte loads need.
+                rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, mesh.positions(), 0,
+                                           3 * sizeof(float), mesh.vertexCount());
+                rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, mesh.indices(), 0,
+                                           3 * sizeof(uint32_t), mesh.triangleCount());
+                rtcCommitGeometry(g);
+                rtcAttachGeometryByID(ms, g, 0);
+                rtcReleaseGeometry(g);
+            }
+            rtcCommitScene(ms);
+            checkDevice(s.device, lastError, ("building the BVH of mesh '" + md.name + "'").c_str());
+        }
+
+        s.top = rtcNewScene(s.device);
+        s.instances.resize(s.desc.instances.size());
+        for (size_t i = 0; i < s.desc.instances.size(); ++i) {
+            const InstanceDesc& in = s.desc.instances[i];
+            InstanceData& data = s.instances[i];
+            data.mesh = s.desc.meshes.at(in.mesh).mesh.get();
+            data.material = &s.desc.materials.at(in.material);
+            for (int k = 0; k < 12; ++k) data.objectToWorld[k] = float(in.transform.m[k]);
+            normalMatrixOf(in.transform, data.normalMatrix);
+
+            RTCGeometry g = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_INSTANCE);
+            rtcSetGeometryInstancedScene(g, s.meshScenes[in.mesh]);
+            rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, data.objectToWorld);
+            rtcCommitGeometry(g);
+            rtcAttachGeometryByID(s.top, g, unsigned(i));
+            rtcReleaseGeometry(g);
+        }
+        rtcCommitScene(s.top);
+        checkDevice(s.device, lastError, "building the top-level BVH");
+    } catch (...) {
+        for (RTCScene ms : s.meshScenes) rtcReleaseScene(ms);
+        if (s.top) rtcReleaseScene(s.top);
+        rtcReleaseDevice(s.device);
+        throw;
+    }
+}
+
+Scene::~Scene() {
+    if (!impl_) return;
+    if (impl_->top) rtcReleaseScene(impl_->top);
+    for (RTCScene ms : impl_->meshScenes) rtcReleaseScene(ms);
+    if (impl_->device) rtcReleaseDevice(impl_->device);
+}
+
+const SceneDesc& Scene::desc() const { return impl_->desc; }
+
+RTCScene embreeScene(const Scene& scene) { return scene.impl().top; }
+
+}  // namespace rtwall

@@ -1,0 +1,76 @@
+// Shading: turns one hit into contributions, shadow rays and secondary rays. Scalar code used
+// unchanged by the packet and single-ray kernels.
+#pragma once
+
+#include "scene_impl.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace rtwall {
+
+inline constexpr uint32_t kNoHit = 0xFFFFFFFFu;
+
+struct RayTask {
+    Float3 org, dir;  // dir is unit length
+    float tfar;
+    Color weight;     // throughput from the pixel to this ray, including the sample weight
+    uint32_t pixel;   // index into the tile's accumulation buffer
+    int depth;        // 1 for primary rays
+};
+
+struct Hit {
+    float t, u, v;  // Embree's distance and barycentrics (u for vertex 1, v for vertex 2)
+    Float3 ng;      // Embree's unnormalised geometric normal, in the instance's object space
+    uint32_t inst;  // instance index, kNoHit for a miss
+    uint32_t prim;
+};
+
+struct ShadowTask {
+    Float3 org, dir;
+    float tfar;
+    Color contribution;  // added to the pixel if the light is visible
+    uint32_t pixel;
+};
+
+struct ShadingContext {
+    const Scene::Impl& scene;
+    const RenderSettings& settings;
+};
+
+// Adds what is known now to `pixel`, appends the shadow rays whose contribution depends on
+// visibility to `shadows`, and the reflection/refraction rays to `next`.
+void shadeHit(const ShadingContext& ctx, const RayTask& ray, const Hit& hit, Color& pixel,
+              std::vector<ShadowTask>& shadows, std::vector<RayTask>& next);
+
+// Correctly rounded linear-to-sRGB quantisation: a bucket table gives the code at the start of
+// each of 4096 equal linear intervals. Codes are at least 1/(12.92*255) = 3.0e-4 apart in
+// linear terms (the spacing is smallest near black), wider than a bucket (2.4e-4), so at most
+// one threshold falls inside a bucket and one branch-free compare finishes the job: exact,
+// without pow() or a search.
+struct SrgbTables {
+    static constexpr int kBuckets = 4096;
+    float thresholds[257];  // [c]: linear value halfway (in sRGB) between codes c-1 and c; [256] = +inf
+    float toLinear[256];
+    uint8_t bucketStart[kBuckets];
+    SrgbTables();
+};
+extern const SrgbTables kSrgb;
+
+inline uint8_t linearToSrgb8(float linear) {
+    if (!(linear > 0.0f)) return 0;  // also maps NaN to black
+    if (linear >= 1.0f) return 255;
+    const int c = kSrgb.bucketStart[int(linear * float(SrgbTables::kBuckets))];
+    return uint8_t(c + (linear >= kSrgb.thresholds[c + 1]));
+}
+inline float srgb8ToLinear(uint8_t value) { return kSrgb.toLinear[value]; }
+
+// Exact dielectric Fresnel reflectance for unpolarised light; cosI > 0 is the cosine on the
+// incident side, eta = n_incident / n_transmitted. Returns 1 for total internal reflection.
+float fresnelDielectric(float cosI, float eta);
+
+// Refracts unit direction d through unit normal n (facing against d). Returns false on total
+// internal reflection.
+bool refractDirection(const Float3& d, const Float3& n, float eta, Float3& out);
+
+}  // namespace rtwall

@@ -1,0 +1,159 @@
+// Scene files: what loads, and how every kind of mistake is reported (file, line, key).
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+namespace rtwall {
+namespace {
+
+using test::inputErrorOf;
+using test::scratchDir;
+using test::writeFile;
+
+const char* kMinimal = R"([image]
+width = 64
+height = 48
+
+[[mesh]]
+name = "ball"
+shape = "sphere"
+
+[[material]]
+name = "red"
+type = "phong"
+color = [0.8, 0.1, 0.1]
+
+[[instance]]
+mesh = "ball"
+material = "red"
+translate = [1, 2, 3]
+
+[[light]]
+type = "point"
+position = [0, 5, 0]
+
+[[camera]]
+name = "front"
+position = [0, 0, 5]
+look_at = [0, 0, 0]
+)";
+
+TEST(SceneFile, LoadsEveryTable) {
+    const auto file = writeFile(scratchDir() / "s.toml", kMinimal);
+    const SceneDesc s = loadSceneFile(file);
+    EXPECT_EQ(s.settings.width, 64);
+    EXPECT_EQ(s.settings.height, 48);
+    ASSERT_EQ(s.meshes.size(), 1u);
+    ASSERT_EQ(s.instances.size(), 1u);
+    EXPECT_EQ(s.materials.at(s.instances[0].material).type, MaterialType::Phong);
+    EXPECT_DOUBLE_EQ(s.instances[0].transform.m[3], 1.0);
+    EXPECT_DOUBLE_EQ(s.instances[0].transform.m[7], 2.0);
+    EXPECT_DOUBLE_EQ(s.instances[0].transform.m[11], 3.0);
+    ASSERT_NE(s.findCamera("front"), nullptr);
+    EXPECT_EQ(s.lights.size(), 1u);
+}
+
+TEST(SceneFile, EveryShippedConfigLoads) {
+    // Like Equalizer's loader test: every example under configs/ must load.
+    int count = 0;
+    for (const auto& e : std::filesystem::directory_iterator(test::sourceDir() / "configs")) {
+        if (e.path().extension() != ".toml") continue;
+        SCOPED_TRACE(e.path().string());
+        EXPECT_NO_THROW(loadSceneFile(e.path()));
+        ++count;
+    }
+    EXPECT_GT(count, 0);
+}
+
+TEST(SceneFile, SameMeshFileIsLoadedOnce) {
+    const auto dir = scratchDir();
+    std::filesystem::copy_file(test::sourceDir() / "configs/meshes/knot.ply", dir / "knot.ply");
+    const auto file = writeFile(dir / "s.toml", R"(
+[[mesh]]
+name = "a"
+file = "knot.ply"
+[[mesh]]
+name = "b"
+file = "./knot.ply"
+)");
+    const SceneDesc s = loadSceneFile(file);
+    ASSERT_EQ(s.meshes.size(), 2u);
+    EXPECT_EQ(s.meshes[0].mesh.get(), s.meshes[1].mesh.get()) << "one file must be one copy in memory";
+}
+
+struct BadScene {
+    const char* name;
+    const char* text;
+    const char* place;  // expected "file:line" suffix
+    const char* what;   // expected substring
+};
+
+class SceneFileErrors : public ::testing::TestWithParam<BadScene> {};
+
+TEST_P(SceneFileErrors, NameFileLineAndProblem) {
+    const BadScene& b = GetParam();
+    const auto file = writeFile(scratchDir() / "bad.toml", b.text);
+    const std::string msg = inputErrorOf([&] { loadSceneFile(file); });
+    EXPECT_NE(msg.find(file.string() + ":" + b.place), std::string::npos) << msg;
+    EXPECT_NE(msg.find(b.what), std::string::npos) << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << "must be one line: " << msg;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    All, SceneFileErrors,
+    ::testing::Values(
+        BadScene{"Malformed", "[image]\nwidth = = 3\n", "2", ""},
+        BadScene{"UnknownTopLevelKey", "[image]\nwidth = 3\n\n[rendr]\nx = 1\n", "4", "unknown key 'rendr'"},
+        BadScene{"UnknownKeyInTable", "[image]\nwidth = 3\nhieght = 4\n", "3", "unknown key 'hieght'"},
+        BadScene{"WrongType", "[image]\nwidth = \"wide\"\n", "2", "key 'width': expected an integer, got a string"},
+        BadScene{"OutOfRange", "[image]\nwidth = -5\n", "2", "out of range"},
+        BadScene{"NotFinite", "[[light]]\ntype = \"point\"\nposition = [0, nan, 0]\n", "3", "must be finite"},
+        BadScene{"NanNumber", "[[camera]]\nposition = [0,0,1]\nlook_at = [0,0,0]\nfov = nan\n", "4", "finite"},
+        BadScene{"WrongArrayLength", "[[camera]]\nposition = [0, 0]\nlook_at = [0,0,0]\n", "2", "array of 3 numbers"},
+        BadScene{"UnknownMaterialType", "[[material]]\nname = \"m\"\ntype = \"velvet\"\n", "3",
+                 "'velvet' is not one of lambert, phong, mirror, glass"},
+        BadScene{"UnknownMeshReference", "[[instance]]\nmesh = \"ghost\"\n", "2", "no [[mesh]] is named 'ghost'"},
+        BadScene{"UnknownMaterialReference",
+                 "[[mesh]]\nname = \"b\"\nshape = \"box\"\n\n[[instance]]\nmesh = \"b\"\nmaterial = \"gold\"\n", "7",
+                 "no [[material]] is named 'gold'"},
+        BadScene{"MissingRequiredKey", "[[mesh]]\nshape = \"box\"\n", "1", "missing required key 'name'"},
+        BadScene{"MissingMeshFile", "[[mesh]]\nname = \"m\"\nfile = \"nowhere.obj\"\n", "3", "nowhere.obj"},
+        BadScene{"FileAndShape", "[[mesh]]\nname = \"m\"\nfile = \"a.obj\"\nshape = \"box\"\n", "1",
+                 "exactly one of 'file' and 'shape'"},
+        BadScene{"DuplicateName", "[[mesh]]\nname = \"m\"\nshape = \"box\"\n[[mesh]]\nname = \"m\"\nshape = \"box\"\n",
+                 "5", "used twice"},
+        BadScene{"TableWhereArrayExpected", "[mesh]\nname = \"m\"\n", "1", "[[mesh]]"},
+        BadScene{"ColorAboveOne", "[[material]]\nname = \"m\"\ncolor = [2, 0, 0]\n", "3", "[0, 1]"},
+        BadScene{"DegenerateCamera", "[[camera]]\nposition = [0,0,0]\nlook_at = [0,0,0]\n", "3", "own position"},
+        BadScene{"ZeroScale", "[[mesh]]\nname = \"b\"\nshape = \"box\"\n[[instance]]\nmesh = \"b\"\nscale = [1, 0, 1]\n",
+                 "6", "must not be zero"}),
+    [](const auto& param) { return std::string(param.param.name); });
+
+TEST(SceneFile, MissingFileIsAnInputError) {
+    const std::string msg = inputErrorOf([] { loadSceneFile("/nonexistent/scene.toml"); });
+    EXPECT_NE(msg.find("/nonexistent/scene.toml: no such file"), std::string::npos) << msg;
+}
+
+TEST(SceneFile, BinaryGarbageIsAnInputError) {
+    std::string junk;
+    for (int i = 0; i < 4096; ++i) junk += char((i * 7919) & 0xFF);
+    const auto file = writeFile(scratchDir() / "junk.toml", junk);
+    const std::string msg = inputErrorOf([&] { loadSceneFile(file); });
+    EXPECT_NE(msg.find(file.string()), std::string::npos) << msg;
+}
+
+TEST(SceneFile, MeshFileGetsAFramingCamera) {
+    const SceneDesc s = sceneFromMeshFile(test::sourceDir() / "configs/meshes/knot.ply");
+    ASSERT_EQ(s.cameras.size(), 1u);
+    const Bounds3 b = s.worldBounds();
+    // The camera looks at the centre of the bounds from outside them.
+    const CameraDesc& c = s.cameras[0];
+    EXPECT_NEAR(c.lookAt.x, 0.5f * (b.lo.x + b.hi.x), 1e-5f);
+    EXPECT_NEAR(c.lookAt.y, 0.5f * (b.lo.y + b.hi.y), 1e-5f);
+    EXPECT_FALSE(c.position.x >= b.lo.x && c.position.x <= b.hi.x && c.position.y >= b.lo.y &&
+                 c.position.y <= b.hi.y && c.position.z >= b.lo.z && c.position.z <= b.hi.z);
+    EXPECT_FALSE(s.lights.empty());
+}
+
+}  // namespace
+}  // namespace rtwall

@@ -1,0 +1,79 @@
+// Fresnel, refraction and sRGB quantisation against analytic values.
+#include "shading.h"
+#include "vec.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace rtwall {
+namespace {
+
+TEST(Fresnel, NormalIncidenceMatchesSchlickR0) {
+    for (float n : {1.33f, 1.5f, 2.4f}) {
+        const float r0 = ((n - 1) / (n + 1)) * ((n - 1) / (n + 1));
+        EXPECT_NEAR(fresnelDielectric(1.0f, 1.0f / n), r0, 1e-6f) << "n=" << n;
+        // Symmetric from inside at normal incidence.
+        EXPECT_NEAR(fresnelDielectric(1.0f, n), r0, 1e-6f) << "n=" << n;
+    }
+}
+
+TEST(Fresnel, BrewsterAngleHasNoPPolarisedReflection) {
+    // At Brewster's angle rp = 0, so the unpolarised reflectance is rs^2 / 2.
+    const double n = 1.5, thetaB = std::atan(n);
+    const double cosI = std::cos(thetaB), cosT = std::cos(std::asin(std::sin(thetaB) / n));
+    const double rs = (cosI - n * cosT) / (cosI + n * cosT);
+    EXPECT_NEAR(fresnelDielectric(float(cosI), float(1.0 / n)), 0.5 * rs * rs, 1e-5);
+}
+
+TEST(Fresnel, TotalInternalReflectionBeyondCriticalAngle) {
+    const float n = 1.5f, critical = std::asin(1.0f / n);
+    EXPECT_EQ(fresnelDielectric(std::cos(critical + 0.01f), n), 1.0f);
+    EXPECT_LT(fresnelDielectric(std::cos(critical - 0.01f), n), 1.0f);
+    Float3 out;
+    const float a = critical + 0.05f;
+    EXPECT_FALSE(refractDirection(Float3{std::sin(a), -std::cos(a), 0}, Float3{0, 1, 0}, n, out));
+}
+
+TEST(Fresnel, GrazingIncidenceReflectsEverything) {
+    EXPECT_NEAR(fresnelDielectric(1e-6f, 1.0f / 1.5f), 1.0f, 1e-4f);
+}
+
+TEST(Refraction, ObeysSnellsLaw) {
+    for (float deg : {0.0f, 10.0f, 30.0f, 60.0f, 85.0f}) {
+        const float a = deg * float(std::numbers::pi) / 180.0f;
+        const Float3 d{std::sin(a), -std::cos(a), 0};
+        Float3 t;
+        ASSERT_TRUE(refractDirection(d, Float3{0, 1, 0}, 1.0f / 1.5f, t));
+        EXPECT_NEAR(length(t), 1.0f, 1e-6f);
+        EXPECT_LT(t.y, 0.0f);  // continues into the surface
+        EXPECT_NEAR(std::sin(a), 1.5f * t.x, 1e-5f) << deg;  // n1 sin(i) = n2 sin(t)
+    }
+}
+
+TEST(Srgb, EveryCodeRoundTripsExactly) {
+    for (int c = 0; c < 256; ++c) EXPECT_EQ(linearToSrgb8(srgb8ToLinear(uint8_t(c))), c);
+}
+
+TEST(Srgb, QuantisationIsCorrectlyRoundedAndMonotonic) {
+    // Compare with the formula evaluated in double precision on a fine grid.
+    uint8_t prev = 0;
+    for (int i = 0; i <= 100000; ++i) {
+        const double x = i / 100000.0;
+        const double s = x <= 0.0031308 ? 12.92 * x : 1.055 * std::pow(x, 1 / 2.4) - 0.055;
+        const double code = s * 255.0;
+        const uint8_t got = linearToSrgb8(float(x));
+        // Exactly at a rounding boundary either neighbour is acceptable (float input).
+        EXPECT_LE(std::fabs(double(got) - code), 0.5 + 1e-4) << x;
+        EXPECT_GE(got, prev);
+        prev = got;
+    }
+    EXPECT_EQ(linearToSrgb8(-1.0f), 0);
+    EXPECT_EQ(linearToSrgb8(NAN), 0);
+    EXPECT_EQ(linearToSrgb8(INFINITY), 255);
+    EXPECT_EQ(linearToSrgb8(7.0f), 255);
+}
+
+}  // namespace
+}  // namespace rtwall

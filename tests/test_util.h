@@ -1,0 +1,44 @@
+// Helpers shared by the test programs.
+#pragma once
+
+#include <rtwall/engine.h>
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace rtwall::test {
+
+inline std::filesystem::path dataDir() { return RTWALL_TEST_DATA_DIR; }
+inline std::filesystem::path sourceDir() { return RTWALL_SOURCE_DIR; }
+
+// A fresh scratch directory per test, under the build tree.
+inline std::filesystem::path scratchDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::filesystem::path dir = std::filesystem::path(RTWALL_BINARY_DIR) / "test-scratch" /
+                                (std::string(info->test_suite_name()) + "." + info->name());
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    return dir;
+}
+
+inline std::filesystem::path writeFile(const std::filesystem::path& path, const std::string& text) {
+    std::ofstream(path, std::ios::binary) << text;
+    return path;
+}
+
+// Runs f, expects an InputError, returns its message.
+template <class F> std::string inputErrorOf(F&& f) {
+    try {
+        f();
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << "expected an InputError";
+    return {};
+}
+
+}  // namespace rtwall::test

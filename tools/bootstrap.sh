@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# One entry point for a fresh Debian 12 machine:
+#   tools/bootstrap.sh demo   install what is missing, build, render the demo scene
+#   tools/bootstrap.sh test   install what is missing, build, run the whole test suite
+#   tools/bootstrap.sh deps   only install what is missing
+#   tools/bootstrap.sh build  install and build
+# Idempotent; works as root or through sudo; says what it does.
+set -euo pipefail
+
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+BUILD_DIR=${RTWALL_BUILD_DIR:-build}
+JOBS=${RTWALL_JOBS:-$(nproc)}
+
+# Debian packages, found by CMake's find_package.
+PACKAGES=(
+  cmake ninja-build g++ pkg-config
+  libembree-dev        # Embree 3: BVH build and packet traversal
+  libopenmesh-dev      # OpenMesh 9: OBJ/OFF/PLY/STL/OM parsers
+  libtomlplusplus-dev  # toml++: scene and wall configs, JSON output
+  libcli11-dev         # CLI11: command-line parsing
+  libpng-dev           # libpng: PNG images
+  libgtest-dev libgmock-dev  # GoogleTest
+  libbenchmark-dev     # Google Benchmark
+  python3
+)
+
+say() { printf '[bootstrap] %s\n' "$*"; }
+
+install_missing() {
+  local missing=()
+  for p in "${PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
+  done
+  if [ ${#missing[@]} -eq 0 ]; then
+    say "all ${#PACKAGES[@]} packages are installed"
+    return
+  fi
+  local sudo=()
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "bootstrap: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
+    sudo=(sudo)
+  fi
+  say "installing: ${missing[*]}"
+  "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -q
+  "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${missing[@]}"
+}
+
+build() {
+  say "configuring ${BUILD_DIR} (Ninja, RelWithDebInfo)"
+  cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+  say "building with ${JOBS} jobs"
+  cmake --build "$BUILD_DIR" -j "$JOBS"
+}
+
+case "${1:-}" in
+  deps) install_missing ;;
+  build) install_missing; build ;;
+  demo)
+    install_missing; build
+    say "rendering configs/demo.toml"
+    "$BUILD_DIR/tools/rtwall" render configs/demo.toml --out out/demo.png
+    say "the demo image is at $(pwd)/out/demo.png"
+    ;;
+  test)
+    install_missing; build
+    say "running the test suite"
+    ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS" --timeout 900
+    ;;
+  *)
+    echo "usage: tools/bootstrap.sh demo|test|deps|build" >&2
+    exit 2
+    ;;
+esac

@@ -1,0 +1,160 @@
+// rtwall bench kernel: primary-ray throughput of the packet and single-ray kernels against a
+// bare rtcIntersectK loop over the very same Embree scene. Rounds are interleaved (bare,
+// packet, single, bare, ...) so that machine noise hits all three alike; medians are reported.
+#include "commands.h"
+
+#include <rtwall/engine.h>
+#include <rtwall/engine_embree.h>
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <iostream>
+#include <memory>
+#include <thread>
+
+namespace rtwall::cli {
+
+namespace {
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const size_t n = v.size();
+    return n == 0 ? 0.0 : (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]));
+}
+
+// The reference: tiles handed out exactly as renderFrame does, 4x2 pixel blocks, one
+// rtcIntersect8 per block, and nothing else but storing the primitive ID.
+void bareFrame(RTCScene scene, const Camera& camera, int width, int height, int tileSize, int threads,
+               std::vector<uint32_t>& ids) {
+    const std::vector<TileRect> tiles = makeTiles(width, height, tileSize);
+    std::atomic<size_t> next{0};
+    auto worker = [&] {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+        alignas(32) RTCRayHit8 rh;
+        alignas(32) int valid[8];
+        const Float3 org = camera.origin();
+        for (size_t t; (t = next.fetch_add(1)) < tiles.size();) {
+            const TileRect& r = tiles[t];
+            for (int by = r.y0; by < r.y1; by += 2)
+                for (int bx = r.x0; bx < r.x1; bx += 4) {
+                    for (int k = 0; k < 8; ++k) {
+                        const int x = bx + (k & 3), y = by + (k >> 2);
+                        valid[k] = (x < r.x1 && y < r.y1) ? -1 : 0;
+                        const Float3 d = camera.direction(float(x) + 0.5f, float(y) + 0.5f);
+                        rh.ray.org_x[k] = org.x;
+                        rh.ray.org_y[k] = org.y;
+                        rh.ray.org_z[k] = org.z;
+                        rh.ray.dir_x[k] = d.x;
+                        rh.ray.dir_y[k] = d.y;
+                        rh.ray.dir_z[k] = d.z;
+                        rh.ray.tnear[k] = 0.0f;
+                        rh.ray.tfar[k] = INFINITY;
+                        rh.ray.time[k] = 0.0f;
+                        rh.ray.mask[k] = 0xFFFFFFFFu;
+                        rh.ray.id[k] = 0;
+                        rh.ray.flags[k] = 0;
+                        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+                        rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+                    }
+                    rtcIntersect8(valid, scene, &ctx, &rh);
+                    for (int k = 0; k < 8; ++k)
+                        if (valid[k]) ids[size_t(by + (k >> 2)) * width + bx + (k & 3)] = rh.hit.primID[k];
+                }
+        }
+    };
+    std::vector<std::thread> pool;
+    for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
+    worker();
+    for (auto& t : pool) t.join();
+}
+
+template <class F> double seconds(F&& f) {
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+void addBenchKernel(CLI::App& bench, Run& run) {
+    struct Options {
+        int width = 1600, height = 1200, threads = 0, rounds = 7, tile = 32;
+        int64_t triangles = 3'000'000;
+        bool json = false;
+    };
+    auto o = std::make_shared<Options>();
+    CLI::App* cmd = bench.add_subcommand("kernel", "Primary-ray Mrays/s: packet kernel, single kernel, bare Embree loop");
+    cmd->add_option("--width", o->width, "Image width")->check(CLI::Range(16, 16384));
+    cmd->add_option("--height", o->height, "Image height")->check(CLI::Range(16, 16384));
+    cmd->add_option("--triangles", o->triangles, "Unique triangles in the benchmark scene")->check(CLI::Range(int64_t(1000), int64_t(200'000'000)));
+    cmd->add_option("--threads", o->threads, "Threads (0 = one per hardware thread)")->check(CLI::Range(0, 1024));
+    cmd->add_option("--rounds", o->rounds, "Interleaved rounds; medians are reported")->check(CLI::Range(1, 1000));
+    cmd->add_option("--tile", o->tile, "Tile size")->check(CLI::Range(2, 1024));
+    cmd->add_flag("--json", o->json, "Print JSON");
+    cmd->callback([&run, o] {
+        run = [o] {
+            SceneDesc desc = builtinScene("knots", o->triangles);
+            int64_t tris = 0;
+            for (const MeshDesc& m : desc.meshes) tris += int64_t(m.mesh->triangleCount());
+            Scene scene(desc);
+            const int threads = o->threads > 0 ? o->threads : int(std::max(1u, std::thread::hardware_concurrency()));
+            const Camera camera(desc.cameras.front(), o->width, o->height);
+
+            RenderSettings s = desc.settings;
+            s.width = o->width;
+            s.height = o->height;
+            s.tileSize = o->tile;
+            s.threads = threads;
+            s.shading = ShadingMode::EyeLight;  // primary rays only, as in the bare loop
+            RenderSettings single = s;
+            single.kernel = KernelType::Single;
+
+            std::vector<uint32_t> ids(size_t(o->width) * o->height);
+            std::vector<double> bare, packet, one;
+            // Warm-up: page in the BVH and the scratch buffers.
+            bareFrame(embreeScene(scene), camera, o->width, o->height, o->tile, threads, ids);
+            renderFrame(scene, camera, s);
+            renderFrame(scene, camera, single);
+            for (int r = 0; r < o->rounds; ++r) {
+                bare.push_back(seconds([&] { bareFrame(embreeScene(scene), camera, o->width, o->height, o->tile, threads, ids); }));
+                packet.push_back(seconds([&] { renderFrame(scene, camera, s); }));
+                one.push_back(seconds([&] { renderFrame(scene, camera, single); }));
+            }
+            const double rays = double(o->width) * o->height;
+            const double mBare = rays / median(bare) * 1e-6, mPacket = rays / median(packet) * 1e-6,
+                         mSingle = rays / median(one) * 1e-6;
+            auto arr = [](const std::vector<double>& v) {
+                toml::array a;
+                for (double x : v) a.push_back(x);
+                return a;
+            };
+            toml::table out{{"benchmark", "kernel"},
+                            {"width", o->width},
+                            {"height", o->height},
+                            {"threads", threads},
+                            {"packet_width", packetWidth()},
+                            {"triangles", tris},
+                            {"rounds", o->rounds},
+                            {"bare_mrays_per_s", mBare},
+                            {"packet_mrays_per_s", mPacket},
+                            {"single_mrays_per_s", mSingle},
+                            {"packet_over_bare", mPacket / mBare},
+                            {"packet_over_single", mPacket / mSingle},
+                            {"frame_seconds", toml::table{{"bare", arr(bare)}, {"packet", arr(packet)}, {"single", arr(one)}}}};
+            if (o->json) std::cout << toml::json_formatter{out} << "\n";
+            else
+                std::printf("%dx%d, %lld triangles, %d threads, packets of %d: bare %.2f, packet %.2f, single %.2f Mrays/s "
+                            "(packet/bare %.3f, packet/single %.3f)\n",
+                            o->width, o->height, (long long)tris, threads, packetWidth(), mBare, mPacket, mSingle,
+                            mPacket / mBare, mPacket / mSingle);
+            return 0;
+        };
+    });
+}
+
+}  // namespace rtwall::cli

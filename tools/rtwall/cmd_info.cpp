@@ -1,0 +1,73 @@
+#include "commands.h"
+
+#include <rtwall/engine.h>
+
+#include <toml++/toml.h>
+
+#include <iostream>
+#include <memory>
+
+namespace rtwall::cli {
+
+namespace {
+
+toml::array boundsArray(const Bounds3& b) {
+    return toml::array{toml::array{double(b.lo.x), double(b.lo.y), double(b.lo.z)},
+                       toml::array{double(b.hi.x), double(b.hi.y), double(b.hi.z)}};
+}
+
+toml::table meshInfo(const std::filesystem::path& path) {
+    ImportReport report;
+    const TriangleMesh mesh = loadMesh(path, &report);
+    return toml::table{{"file", path.string()},
+                       {"format", report.format},
+                       {"triangles", int64_t(mesh.triangleCount())},
+                       {"vertices", int64_t(mesh.vertexCount())},
+                       {"bounds", boundsArray(mesh.bounds())},
+                       {"normals", mesh.hasNormals()},
+                       {"polygons_triangulated", int64_t(report.polygonsTriangulated)},
+                       {"degenerate_triangles", int64_t(report.degenerateTriangles)},
+                       {"resident_bytes", int64_t(mesh.residentBytes())}};
+}
+
+toml::table sceneInfo(const std::filesystem::path& path) {
+    const SceneDesc desc = loadSceneFile(path);
+    int64_t unique = 0, instanced = 0;
+    for (const MeshDesc& m : desc.meshes) unique += int64_t(m.mesh->triangleCount());
+    for (const InstanceDesc& in : desc.instances) instanced += int64_t(desc.meshes[in.mesh].mesh->triangleCount());
+    toml::array cameras;
+    for (const CameraDesc& c : desc.cameras) cameras.push_back(c.name);
+    return toml::table{{"file", path.string()},
+                       {"meshes", int64_t(desc.meshes.size())},
+                       {"instances", int64_t(desc.instances.size())},
+                       {"materials", int64_t(desc.materials.size())},
+                       {"lights", int64_t(desc.lights.size())},
+                       {"cameras", cameras},
+                       {"triangles", unique},
+                       {"instanced_triangles", instanced},
+                       {"bounds", boundsArray(desc.worldBounds())}};
+}
+
+}  // namespace
+
+void addInfo(CLI::App& app, Run& run) {
+    struct Options {
+        std::string file;
+        bool json = false;
+    };
+    auto o = std::make_shared<Options>();
+    CLI::App* cmd = app.add_subcommand("info", "Print what a mesh file or scene file holds");
+    cmd->add_option("file", o->file, "Mesh file (.obj .off .ply .stl .om) or scene file (.toml)")->required();
+    cmd->add_flag("--json", o->json, "Print JSON instead of TOML-style text");
+    cmd->callback([&run, o] {
+        run = [o] {
+            const std::filesystem::path path(o->file);
+            const toml::table info = path.extension() == ".toml" ? sceneInfo(path) : meshInfo(path);
+            if (o->json) std::cout << toml::json_formatter{info} << "\n";
+            else std::cout << info << "\n";
+            return 0;
+        };
+    });
+}
+
+}  // namespace rtwall::cli

@@ -1,0 +1,71 @@
+#include "commands.h"
+
+#include <rtwall/engine.h>
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
+
+namespace rtwall::cli {
+
+namespace {
+
+bool isSceneFile(const std::filesystem::path& p) {
+    std::string ext = p.extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return ext == ".toml";
+}
+
+}  // namespace
+
+void addRender(CLI::App& app, Run& run) {
+    struct Options {
+        std::string scene, out, camera, kernel;
+        int width = 0, height = 0, threads = -1, tile = 0;
+    };
+    auto o = std::make_shared<Options>();
+    CLI::App* cmd = app.add_subcommand("render", "Render one frame of a scene file (.toml) or a mesh file to PNG");
+    cmd->add_option("scene", o->scene, "Scene file (.toml) or mesh file (.obj .off .ply .stl .om)")->required();
+    cmd->add_option("--out,-o", o->out, "Output PNG file")->required();
+    cmd->add_option("--width", o->width, "Image width in pixels (overrides the scene)")->check(CLI::Range(1, 16384));
+    cmd->add_option("--height", o->height, "Image height in pixels (overrides the scene)")->check(CLI::Range(1, 16384));
+    cmd->add_option("--camera", o->camera, "Name of the scene camera to use (default: the first)");
+    cmd->add_option("--threads", o->threads, "Render threads (0 = one per hardware thread)")->check(CLI::Range(0, 1024));
+    cmd->add_option("--tile", o->tile, "Tile size in pixels (overrides the scene)")->check(CLI::Range(1, 1024));
+    cmd->add_option("--kernel", o->kernel, "Ray kernel (overrides the scene)")->check(CLI::IsMember({"packet", "single"}));
+
+    cmd->callback([&run, o] {
+        run = [o] {
+            const std::filesystem::path path(o->scene);
+            SceneDesc desc = isSceneFile(path) ? loadSceneFile(path) : sceneFromMeshFile(path);
+            RenderSettings& s = desc.settings;
+            if (o->width) s.width = o->width;
+            if (o->height) s.height = o->height;
+            if (o->threads >= 0) s.threads = o->threads;
+            if (o->tile) s.tileSize = o->tile;
+            if (!o->kernel.empty()) s.kernel = o->kernel == "single" ? KernelType::Single : KernelType::Packet;
+            const CameraDesc* cam = o->camera.empty() ? &desc.cameras.front() : desc.findCamera(o->camera);
+            if (!cam) {
+                std::string names;
+                for (const CameraDesc& c : desc.cameras) names += (names.empty() ? "" : ", ") + c.name;
+                throw InputError(o->scene + ": no camera named '" + o->camera + "' (cameras: " + names + ")");
+            }
+            const auto t0 = std::chrono::steady_clock::now();
+            Scene scene(desc);
+            const auto t1 = std::chrono::steady_clock::now();
+            TileStats stats;
+            const Image img = renderFrame(scene, Camera(*cam, s.width, s.height), s, 0, &stats);
+            const auto t2 = std::chrono::steady_clock::now();
+            writePng(img, o->out);
+            const double build = std::chrono::duration<double>(t1 - t0).count();
+            const double render = std::chrono::duration<double>(t2 - t1).count();
+            std::printf("wrote %s (%dx%d, camera '%s', %s kernel): BVH build %.3f s, render %.3f s, %.2f Mrays/s\n",
+                        o->out.c_str(), s.width, s.height, cam->name.c_str(),
+                        s.kernel == KernelType::Packet ? "packet" : "single", build, render,
+                        double(stats.rays + stats.shadowRays) / render * 1e-6);
+            return 0;
+        };
+    });
+}
+
+}  // namespace rtwall::cli

@@ -1,0 +1,17 @@
+// Sub-command registration for the rtwall executable. Each command adds its options to the
+// CLI11 app and returns the function that runs it.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+
+namespace rtwall::cli {
+
+using Run = std::function<int()>;
+
+void addRender(CLI::App& app, Run& run);
+void addInfo(CLI::App& app, Run& run);
+void addBenchKernel(CLI::App& bench, Run& run);
+
+}  // namespace rtwall::cli
