@@ -67,19 +67,26 @@ private:
 struct ImportReport {
     std::string format;               // "obj", "off", "ply", "stl", "om"
     size_t polygonsTriangulated = 0;  // faces with more than three corners, fan-triangulated
-    size_t degenerateTriangles = 0;   // zero-area triangles (kept, never hit, counted)
+    size_t degenerateTriangles = 0;   // zero-area triangles (kept, never hit, counted), plus faces
+                                      // the OBJ and STL readers drop because corners repeat
 };
 
 // Reads OBJ, OFF, PLY (ASCII/binary), STL (ASCII/binary) and OM. The format is chosen from
 // the extension and checked against the content. Throws InputError on any malformed input,
 // naming the file and the place; never crashes, never hangs, never allocates much more than
-// the file's size before the data has been validated.
+// the file's size before the data has been validated. Polygons are fan-triangulated. Vertex
+// normals are kept, normalised, only when the file gives every vertex one. STL corners at the
+// same position become one shared vertex, as in OpenMesh's reader, so an STL mesh is indexed
+// like the others. Safe to call from several threads (the OpenMesh part runs one at a time).
 TriangleMesh loadMesh(const std::filesystem::path& file, ImportReport* report = nullptr);
 
-// Procedural shapes for scenes, tests and benchmarks.
-TriangleMesh makeSphere(int rings, int segments);                 // unit sphere at the origin
+// Procedural shapes for scenes, tests and benchmarks, wound counter-clockwise seen from
+// outside. Sizes out of range throw std::invalid_argument.
+TriangleMesh makeSphere(int rings, int segments);                 // unit sphere at the origin, with normals;
+                                                                  // rings >= 2, segments >= 3
 TriangleMesh makeBox();                                           // [-1,1]^3, 12 triangles
 TriangleMesh makeQuad();                                          // [-1,1]^2 in the xz-plane, normal +y
+// A tube of tubeRadius, with normals, around a (p,q) torus knot that lies within the unit ball.
 TriangleMesh makeTorusKnot(int p, int q, int segments, int sides, float tubeRadius);
 
 }  // namespace rtwall

@@ -1,0 +1,496 @@
+// loadMesh: OpenMesh's format readers feeding rtwall::TriangleMesh directly.
+//
+// The readers talk to a BaseImporter; ours writes straight into the TriangleMesh buffers, so no
+// OpenMesh mesh (and no second copy of the geometry) is ever built. Every file first passes
+// validateMesh (validate.cpp), which is what makes the readers safe to run on it; the importer
+// still checks every index it is handed, because that is the last line between a file and an
+// out-of-bounds read in Embree.
+#include "rtwall/mesh.h"
+
+#include "validate.h"
+
+#include <OpenMesh/Core/IO/IOManager.hh>
+#include <OpenMesh/Core/IO/importer/BaseImporter.hh>
+#include <OpenMesh/Core/IO/reader/OBJReader.hh>
+#include <OpenMesh/Core/IO/reader/OFFReader.hh>
+#include <OpenMesh/Core/IO/reader/OMReader.hh>
+#include <OpenMesh/Core/IO/reader/PLYReader.hh>
+#include <OpenMesh/Core/IO/reader/STLReader.hh>
+#include <OpenMesh/Core/Mesh/BaseKernel.hh>
+#include <OpenMesh/Core/System/omstream.hh>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <mutex>
+#include <new>
+#include <sstream>
+#include <streambuf>
+#include <string>
+#include <system_error>
+#include <vector>
+
+namespace rtwall {
+namespace {
+
+namespace fs = std::filesystem;
+namespace OmIo = OpenMesh::IO;
+using detail::MeshFormat;
+
+// -----------------------------------------------------------------------------------------------
+// Importer
+
+class MeshImporter final : public OmIo::BaseImporter {
+public:
+    using FaceHandle = OpenMesh::FaceHandle;
+
+    explicit MeshImporter(TriangleMesh& mesh) : mesh_(mesh) {}
+
+    const std::string& error() const { return error_; }
+    size_t polygonsTriangulated() const { return polygonsTriangulated_; }
+    size_t degenerateTriangles() const { return degenerateTriangles_; }
+
+    // OM files from format 2.0 on describe faces by halfedge loops; they are turned into
+    // polygons once the whole file has been read.
+    void resolveHalfedgeFaces() {
+        const size_t halfedges = toVertex_.size();
+        std::vector<OpenMesh::VertexHandle> corners;
+        for (size_t f = 0; f < faceHalfedge_.size() && error_.empty(); ++f) {
+            corners.clear();
+            const int start = faceHalfedge_[f];
+            int h = start;
+            do {
+                if (h < 0 || size_t(h) >= halfedges) {
+                    fail("face " + std::to_string(f) + ": halfedge " + std::to_string(h) + " is out of range");
+                    return;
+                }
+                if (corners.size() >= halfedges) {
+                    fail("face " + std::to_string(f) + ": its halfedge loop does not close");
+                    return;
+                }
+                corners.emplace_back(toVertex_[size_t(h)]);
+                h = next_[size_t(h)];
+            } while (h != start);
+            addPolygon(corners, f);
+        }
+    }
+
+    // Normals are kept only when every vertex got a usable one.
+    void finishNormals() {
+        if (normalsSet_ == 0 || normalsInvalid_ || normalsSet_ != mesh_.vertexCount()) return;
+        normals_.resize(3 * mesh_.vertexCount());
+        mesh_.setNormals(std::move(normals_));
+    }
+
+    // -- geometry ------------------------------------------------------------------------------
+
+    OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3f& p) override {
+        return add_vertex(OpenMesh::Vec3d(p[0], p[1], p[2]));
+    }
+
+    OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3d& p) override {
+        const OpenMesh::VertexHandle vh = add_vertex();
+        if (vh.is_valid()) storePoint(size_t(vh.idx()), p);
+        return vh;
+    }
+
+    // PLY adds each vertex first and sets its coordinates afterwards.
+    OpenMesh::VertexHandle add_vertex() override {
+        if (!error_.empty()) return OpenMesh::VertexHandle();
+        if (mesh_.vertexCount() >= size_t(std::numeric_limits<int>::max())) {
+            fail("more vertices than the reader can address");
+            return OpenMesh::VertexHandle();
+        }
+        return OpenMesh::VertexHandle(int(mesh_.addVertex({0, 0, 0})));
+    }
+
+    void set_point(OpenMesh::VertexHandle vh, const OpenMesh::Vec3f& p) override {
+        if (!error_.empty()) return;
+        if (!validVertex(vh)) {
+            fail("coordinates for vertex index " + std::to_string(vh.idx()) + ", which is out of range");
+            return;
+        }
+        storePoint(size_t(vh.idx()), OpenMesh::Vec3d(p[0], p[1], p[2]));
+    }
+
+    FaceHandle add_face(const VHandles& corners) override { return addPolygon(corners, faceCount_); }
+
+    void set_normal(OpenMesh::VertexHandle vh, const OpenMesh::Vec3f& n) override {
+        set_normal(vh, OpenMesh::Vec3d(n[0], n[1], n[2]));
+    }
+
+    void set_normal(OpenMesh::VertexHandle vh, const OpenMesh::Vec3d& n) override {
+        // An out-of-range handle here comes with a face that add_face reports.
+        if (!error_.empty() || !validVertex(vh)) return;
+        const size_t v = size_t(vh.idx());
+        if (normals_.size() < 3 * (v + 1)) {
+            normals_.resize(3 * std::max(v + 1, mesh_.vertexCount()));
+            hasNormal_.resize(normals_.size() / 3);
+        }
+        const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (!std::isfinite(length) || length == 0.0) {
+            normalsInvalid_ = true;
+            return;
+        }
+        for (int k = 0; k < 3; ++k) normals_[3 * v + size_t(k)] = float(n[k] / length);
+        if (!hasNormal_[v]) {
+            hasNormal_[v] = true;
+            ++normalsSet_;
+        }
+    }
+
+    // -- OM topology ---------------------------------------------------------------------------
+
+    OpenMesh::HalfedgeHandle add_edge(OpenMesh::VertexHandle from, OpenMesh::VertexHandle to) override {
+        // Halfedge 2e runs from -> to, halfedge 2e+1 back, as in OpenMesh's kernel.
+        const auto first = int(toVertex_.size());
+        toVertex_.push_back(to.idx());
+        toVertex_.push_back(from.idx());
+        next_.push_back(-1);
+        next_.push_back(-1);
+        return OpenMesh::HalfedgeHandle(first);
+    }
+
+    void set_next(OpenMesh::HalfedgeHandle h, OpenMesh::HalfedgeHandle next) override {
+        if (h.idx() >= 0 && size_t(h.idx()) < next_.size()) next_[size_t(h.idx())] = next.idx();
+    }
+
+    FaceHandle add_face(OpenMesh::HalfedgeHandle h) override {
+        faceHalfedge_.push_back(h.idx());
+        return FaceHandle(int(faceHalfedge_.size() - 1));
+    }
+
+    // The OM reader refuses an importer without a kernel. This one stays empty, so the reader
+    // finds no property to restore and skips every custom-property chunk.
+    OpenMesh::BaseKernel* kernel() override { return &kernel_; }
+
+    size_t n_vertices() const override { return mesh_.vertexCount(); }
+    size_t n_faces() const override { return faceCount_ + faceHalfedge_.size(); }
+    size_t n_edges() const override { return toVertex_.size() / 2; }
+
+    // -- ignored: rtwall reads no colours, texture coordinates, status bits or face normals ---
+
+    void add_face_texcoords(FaceHandle, OpenMesh::VertexHandle, const std::vector<OpenMesh::Vec2f>&) override {}
+    void add_face_texcoords(FaceHandle, OpenMesh::VertexHandle, const std::vector<OpenMesh::Vec3f>&) override {}
+    void set_face_texindex(FaceHandle, int) override {}
+    void set_halfedge(OpenMesh::VertexHandle, OpenMesh::HalfedgeHandle) override {}
+    void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec3uc&) override {}
+    void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec4uc&) override {}
+    void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
+    void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec4f&) override {}
+    void set_texcoord(OpenMesh::VertexHandle, const OpenMesh::Vec2f&) override {}
+    void set_texcoord(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
+    void set_texcoord(OpenMesh::HalfedgeHandle, const OpenMesh::Vec2f&) override {}
+    void set_texcoord(OpenMesh::HalfedgeHandle, const OpenMesh::Vec3f&) override {}
+    void set_status(OpenMesh::VertexHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+    void set_status(OpenMesh::HalfedgeHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+    void set_status(OpenMesh::EdgeHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+    void set_status(FaceHandle, const OpenMesh::Attributes::StatusInfo&) override {}
+    void set_face(OpenMesh::HalfedgeHandle, FaceHandle) override {}
+    void request_face_texcoords2D() override {}
+    void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec3uc&) override {}
+    void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec4uc&) override {}
+    void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec3f&) override {}
+    void set_color(OpenMesh::EdgeHandle, const OpenMesh::Vec4f&) override {}
+    void set_normal(FaceHandle, const OpenMesh::Vec3f&) override {}
+    void set_normal(FaceHandle, const OpenMesh::Vec3d&) override {}
+    void set_color(FaceHandle, const OpenMesh::Vec3uc&) override {}
+    void set_color(FaceHandle, const OpenMesh::Vec4uc&) override {}
+    void set_color(FaceHandle, const OpenMesh::Vec3f&) override {}
+    void set_color(FaceHandle, const OpenMesh::Vec4f&) override {}
+    void add_texture_information(int, std::string) override {}
+
+private:
+    // Errors are recorded, not thrown: an exception must not unwind through the reader, which
+    // may be holding OpenMesh's global log streams switched off. After the first error every
+    // callback is ignored.
+    void fail(std::string what) {
+        if (error_.empty()) error_ = std::move(what);
+    }
+
+    bool validVertex(OpenMesh::VertexHandle vh) const { return vh.idx() >= 0 && size_t(vh.idx()) < mesh_.vertexCount(); }
+
+    void storePoint(size_t v, const OpenMesh::Vec3d& p) {
+        // Doubles beyond float range would become infinities in the float buffer.
+        for (int k = 0; k < 3; ++k) {
+            if (!std::isfinite(p[k]) || std::fabs(p[k]) > double(std::numeric_limits<float>::max())) {
+                fail("vertex " + std::to_string(v) + " has a NaN or infinite coordinate");
+                return;
+            }
+        }
+        mesh_.setPosition(uint32_t(v), {float(p[0]), float(p[1]), float(p[2])});
+    }
+
+    FaceHandle addPolygon(const VHandles& corners, size_t face) {
+        if (!error_.empty()) return FaceHandle();
+        if (corners.size() < 3) {
+            fail("face " + std::to_string(face) + " has fewer than 3 corners");
+            return FaceHandle();
+        }
+        for (const auto vh : corners) {
+            if (!validVertex(vh)) {
+                fail("face " + std::to_string(face) + ": vertex index " + std::to_string(vh.idx()) +
+                     " is out of range (the file has " + std::to_string(mesh_.vertexCount()) + " vertices)");
+                return FaceHandle();
+            }
+        }
+        if (corners.size() > 3) ++polygonsTriangulated_;
+        const auto first = uint32_t(corners[0].idx());
+        for (size_t k = 1; k + 1 < corners.size(); ++k) {
+            const auto b = uint32_t(corners[k].idx()), c = uint32_t(corners[k + 1].idx());
+            if (zeroArea(first, b, c)) ++degenerateTriangles_;
+            mesh_.addTriangle(first, b, c);
+        }
+        ++faceCount_;
+        return FaceHandle(int(faceCount_ - 1));
+    }
+
+    bool zeroArea(uint32_t a, uint32_t b, uint32_t c) const {
+        const Float3 pa = mesh_.position(a), pb = mesh_.position(b), pc = mesh_.position(c);
+        const double ux = double(pb.x) - pa.x, uy = double(pb.y) - pa.y, uz = double(pb.z) - pa.z;
+        const double vx = double(pc.x) - pa.x, vy = double(pc.y) - pa.y, vz = double(pc.z) - pa.z;
+        return uy * vz - uz * vy == 0.0 && uz * vx - ux * vz == 0.0 && ux * vy - uy * vx == 0.0;
+    }
+
+    TriangleMesh& mesh_;
+    std::string error_;
+    size_t faceCount_ = 0;
+    size_t polygonsTriangulated_ = 0;
+    size_t degenerateTriangles_ = 0;
+
+    std::vector<float> normals_;
+    std::vector<bool> hasNormal_;
+    size_t normalsSet_ = 0;
+    bool normalsInvalid_ = false;
+
+    std::vector<int> toVertex_;      // per halfedge
+    std::vector<int> next_;          // per halfedge
+    std::vector<int> faceHalfedge_;  // per face
+    OpenMesh::BaseKernel kernel_;
+};
+
+// -----------------------------------------------------------------------------------------------
+// OpenMesh plumbing
+
+// A read-only, seekable stream over the validated buffer: the readers seek (OBJ reads twice,
+// PLY re-reads its header) and the buffer is not copied.
+class BufferStreamBuf final : public std::streambuf {
+public:
+    explicit BufferStreamBuf(std::string& data) { setg(data.data(), data.data(), data.data() + data.size()); }
+
+protected:
+    pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode which) override {
+        if (!(which & std::ios_base::in)) return pos_type(off_type(-1));
+        const off_type size = egptr() - eback();
+        off_type target = off;
+        if (dir == std::ios_base::cur) target += gptr() - eback();
+        if (dir == std::ios_base::end) target += size;
+        if (target < 0 || target > size) return pos_type(off_type(-1));
+        setg(eback(), eback() + target, egptr());
+        return pos_type(target);
+    }
+    pos_type seekpos(pos_type pos, std::ios_base::openmode which) override {
+        return seekoff(off_type(pos), std::ios_base::beg, which);
+    }
+};
+
+// OpenMesh reports through its global omerr/omlog streams. While a file is read they go to a
+// string instead of the terminal, so the user sees our one-line error and not the reader's.
+class CaptureOpenMeshLog {
+public:
+    CaptureOpenMeshLog() {
+        errHadCerr_ = omerr().disconnect(std::cerr);
+        errEnabled_ = omerr().is_enabled();
+        omerr().connect(text_);
+        omerr().enable();
+        logEnabled_ = omlog().is_enabled();
+        outEnabled_ = omout().is_enabled();
+        omlog().disable();
+        omout().disable();
+    }
+    ~CaptureOpenMeshLog() {
+        omerr().flush();
+        omerr().disconnect(text_);
+        if (errHadCerr_) omerr().connect(std::cerr);
+        // Set both ways: a reader that switched it off and then threw leaves it off.
+        if (errEnabled_)
+            omerr().enable();
+        else
+            omerr().disable();
+        if (logEnabled_) omlog().enable();
+        if (outEnabled_) omout().enable();
+    }
+    CaptureOpenMeshLog(const CaptureOpenMeshLog&) = delete;
+    CaptureOpenMeshLog& operator=(const CaptureOpenMeshLog&) = delete;
+
+    // The first line the reader wrote, for an error message. Readers echo bytes of the file,
+    // so anything unprintable is replaced.
+    std::string firstLine() {
+        omerr().flush();
+        std::string line;
+        std::istringstream in(text_.str());
+        while (std::getline(in, line) && line.find_first_not_of(" \t\r") == std::string::npos) {
+        }
+        for (char& c : line)
+            if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+        return line.substr(0, 200);
+    }
+
+private:
+    std::ostringstream text_;
+    bool errHadCerr_ = false, errEnabled_ = true, logEnabled_ = true, outEnabled_ = true;
+};
+
+// The readers are process-wide singletons with per-file state, and the log streams are global.
+std::mutex& openMeshMutex() {
+    static std::mutex mutex;
+    return mutex;
+}
+
+// Names each reader's singleton, so that a static OpenMesh build links and registers them all,
+// and confirms they are there: without them IOManager would fail every file the same way.
+void requireReaders() {
+    static const bool registered = [] {
+        OmIo::OBJReader();
+        OmIo::OFFReader();
+        OmIo::PLYReader();
+        OmIo::STLReader();
+        OmIo::OMReader();
+        // can_read() would sniff a file named dummy.<ext>; the filter list names every
+        // registered reader's extensions without touching the disk.
+        const std::string& filters = OmIo::IOManager().qt_read_filters();
+        for (const char* ext : {"*.obj ", "*.off ", "*.ply ", "*.stl ", "*.om "})
+            if (filters.find(ext) == std::string::npos) return false;
+        return true;
+    }();
+    if (!registered) throw std::logic_error("rtwall: OpenMesh's mesh readers are not registered");
+}
+
+// -----------------------------------------------------------------------------------------------
+// Files
+
+struct FormatInfo {
+    MeshFormat format;
+    const char* name;
+};
+
+FormatInfo formatFromExtension(const fs::path& file, const std::string& name) {
+    std::string ext = file.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext == ".obj") return {MeshFormat::Obj, "obj"};
+    if (ext == ".off") return {MeshFormat::Off, "off"};
+    if (ext == ".ply") return {MeshFormat::Ply, "ply"};
+    if (ext == ".stl") return {MeshFormat::Stl, "stl"};
+    if (ext == ".om") return {MeshFormat::Om, "om"};
+    throw InputError(name + ": unknown mesh format " + (ext.empty() ? std::string("(no extension)") : "'" + ext + "'") +
+                     "; expected .obj, .off, .ply, .stl or .om");
+}
+
+void requireRegularFile(const fs::path& file, const std::string& name) {
+    std::error_code ec;
+    const fs::file_status st = fs::status(file, ec);
+    if (ec && ec != std::errc::no_such_file_or_directory) throw InputError(name + ": cannot access: " + ec.message());
+    if (!fs::exists(st)) throw InputError(name + ": no such file");
+    if (fs::is_directory(st)) throw InputError(name + ": is a directory, not a mesh file");
+    // Devices and pipes have no size to check against and may never end.
+    if (!fs::is_regular_file(st)) throw InputError(name + ": not a regular file");
+}
+
+std::string readFile(const fs::path& file, const std::string& name) {
+    std::error_code ec;
+    const uintmax_t size = fs::file_size(file, ec);
+    if (ec) throw InputError(name + ": cannot read: " + ec.message());
+    if (size == 0) throw InputError(name + ": file is empty");
+
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw InputError(name + ": cannot open: " + std::error_code(errno, std::generic_category()).message());
+    std::string data;
+    try {
+        data.resize(size_t(size));
+    } catch (const std::exception&) {
+        throw InputError(name + ": file too large to load (" + std::to_string(size) + " bytes)");
+    }
+    in.read(data.data(), std::streamsize(size));
+    if (size_t(in.gcount()) != size)
+        throw InputError(name + ": read only " + std::to_string(in.gcount()) + " of " + std::to_string(size) + " bytes");
+    return data;
+}
+
+std::string readPrefix(const fs::path& file, size_t bytes) {
+    std::ifstream in(file, std::ios::binary);
+    std::string prefix(bytes, '\0');
+    in.read(prefix.data(), std::streamsize(bytes));
+    prefix.resize(size_t(std::max<std::streamsize>(in.gcount(), 0)));
+    return prefix;
+}
+
+std::string firstToken(const std::string& text) {
+    const size_t end = text.find_first_of(" \t\r\n#");
+    return text.substr(0, end);
+}
+
+}  // namespace
+
+TriangleMesh loadMesh(const std::filesystem::path& file, ImportReport* report) {
+    const std::string name = file.string();
+    requireRegularFile(file, name);
+    const FormatInfo format = formatFromExtension(file, name);
+    std::string data = readFile(file, name);
+    const detail::Prepass pre = detail::validateMesh(format.format, data, name);
+    requireReaders();
+
+    TriangleMesh mesh;
+    // The pre-pass counts are backed by data; the cap (every vertex and triangle takes some
+    // bytes of the file) only guards this promise against a slip in a validator.
+    mesh.reserve(std::min(pre.vertices, data.size() / 4), std::min(pre.triangles, data.size()));
+    MeshImporter importer(mesh);
+    bool ok = false;
+    std::string readerMessage;
+    {
+        const std::lock_guard<std::mutex> lock(openMeshMutex());
+        CaptureOpenMeshLog log;
+        BufferStreamBuf buffer(data);
+        std::istream in(&buffer);
+        OmIo::Options options = OmIo::Options::VertexNormal;
+        if (pre.binaryStl) options += OmIo::Options::Binary;
+        try {
+            // The OFF reader takes its header flags (normals, colours, binary) from sniffing a
+            // file by name, a step IOManager skips for streams; without it the flags would be
+            // whatever the last OFF file read in this process had. So the file itself is sniffed,
+            // and must still start as the validated buffer does.
+            if (format.format == MeshFormat::Off) {
+                if (!OmIo::OFFReader().can_u_read(name)) throw InputError(name + ": OpenMesh does not recognise the OFF header");
+                if (firstToken(readPrefix(file, 256)) != firstToken(data))
+                    throw InputError(name + ": the file changed while it was being read");
+            }
+            ok = OmIo::IOManager().read(in, format.name, importer, options);
+        } catch (const InputError&) {
+            throw;
+        } catch (const std::bad_alloc&) {
+            throw InputError(name + ": out of memory while reading");
+        } catch (const std::exception& e) {
+            throw InputError(name + ": OpenMesh failed: " + e.what());
+        }
+        if (!ok) readerMessage = log.firstLine();
+    }
+    if (!importer.error().empty()) throw InputError(name + ": " + importer.error());
+    if (!ok)
+        throw InputError(name + ": OpenMesh could not read the file" + (readerMessage.empty() ? "" : " (" + readerMessage + ")"));
+    importer.resolveHalfedgeFaces();
+    if (!importer.error().empty()) throw InputError(name + ": " + importer.error());
+    if (mesh.triangleCount() == 0) throw InputError(name + ": contains no triangles");
+    importer.finishNormals();
+
+    if (report) {
+        report->format = format.name;
+        report->polygonsTriangulated = importer.polygonsTriangulated();
+        report->degenerateTriangles = importer.degenerateTriangles() + pre.droppedDegenerate;
+    }
+    return mesh;
+}
+
+}  // namespace rtwall
