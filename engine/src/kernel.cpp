@@ -14,6 +14,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <mutex>
+#include <stdexcept>
+#include <string>
 #include <thread>
 
 namespace rtwall {
@@ -274,8 +277,11 @@ TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& r
                         t.depth = 1;
                     }
                     tracer.closest(s.top, block, blockHits, size_t(n), true);
-                    for (int k = 0; k < n; ++k)
-                        shadeHit(shading, block[k], blockHits[k], sc.accum[block[k].pixel], sc.shadows, sc.next);
+                    if (settings.shading == ShadingMode::EyeLight)
+                        shadeEyeLightBlock(shading, block, blockHits, n, sc.accum.data());
+                    else
+                        for (int k = 0; k < n; ++k)
+                            shadeHit(shading, block[k], blockHits[k], sc.accum[block[k].pixel], sc.shadows, sc.next);
                 }
         }
     stats.rays += uint64_t(w) * h * ss * ss;
@@ -334,13 +340,28 @@ Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings
 
     std::atomic<size_t> nextTile{0};
     std::atomic<uint64_t> rays{0}, shadowRays{0};
+    std::mutex failureMutex;
+    std::string failure;  // the first tile that threw, with a command line that replays it
     auto worker = [&] {
         TileStats local;
         for (size_t t; (t = nextTile.fetch_add(1, std::memory_order_relaxed)) < tiles.size();) {
             const TileRect& r = tiles[t];
-            TileStats ts = renderTile(scene, camera, r, frame, settings, {img.pixel(r.x0, r.y0), size_t(img.width) * 3});
-            local.rays += ts.rays;
-            local.shadowRays += ts.shadowRays;
+            try {
+                TileStats ts = renderTile(scene, camera, r, frame, settings, {img.pixel(r.x0, r.y0), size_t(img.width) * 3});
+                local.rays += ts.rays;
+                local.shadowRays += ts.shadowRays;
+            } catch (const std::exception& e) {
+                // No thread dies silently: stop handing out tiles and report this one.
+                nextTile = tiles.size();
+                std::lock_guard lock(failureMutex);
+                if (failure.empty())
+                    failure = "frame " + std::to_string(frame) + ", tile " + std::to_string(r.x0) + "," +
+                              std::to_string(r.y0) + "," + std::to_string(r.x1) + "," + std::to_string(r.y1) + ": " +
+                              e.what() + " (replay: rtwall render " + scene.desc().sourceFile.string() + " --width " +
+                              std::to_string(settings.width) + " --height " + std::to_string(settings.height) +
+                              " --region " + std::to_string(r.x0) + "," + std::to_string(r.y0) + "," +
+                              std::to_string(r.x1) + "," + std::to_string(r.y1) + " --out tile.png)";
+            }
         }
         rays += local.rays;
         shadowRays += local.shadowRays;
@@ -349,6 +370,7 @@ Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings
     for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
     worker();
     for (auto& t : pool) t.join();
+    if (!failure.empty()) throw std::runtime_error(failure);
     if (stats) *stats = {rays.load(), shadowRays.load()};
     return img;
 }

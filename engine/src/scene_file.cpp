@@ -208,6 +208,8 @@ std::shared_ptr<const TriangleMesh> makeShape(Reader& r, const std::string& shap
     const int p = r.integer("p", 2, 1, 64), q = r.integer("q", 3, 1, 64);
     const int segments = r.integer("segments", 256, 3, 1 << 20), sides = r.integer("sides", 16, 3, 4096);
     const float radius = float(r.number("radius", 0.25, 1e-6, 1e6));
+    if (int64_t(segments) * sides > (int64_t(1) << 26))
+        r.fail(r.find("segments"), "torus_knot: segments x sides must stay below 2^26 vertices");
     return std::make_shared<const TriangleMesh>(makeTorusKnot(p, q, segments, sides, radius));
 }
 
@@ -290,7 +292,13 @@ SceneDesc loadSceneFile(const std::filesystem::path& file) {
         } else {
             const std::string shape = r.choice("shape", "", {"sphere", "box", "quad", "torus_knot"});
             md.source = "shape:" + shape;
-            md.mesh = makeShape(r, shape);
+            try {
+                md.mesh = makeShape(r, shape);
+            } catch (const std::invalid_argument& e) {
+                r.fail(r.find("shape"), std::string("shape '") + shape + "': " + e.what());
+            } catch (const std::bad_alloc&) {
+                r.fail(r.find("shape"), std::string("shape '") + shape + "': too large to fit in memory");
+            }
         }
         meshIndex[md.name] = uint32_t(scene.meshes.size());
         scene.meshes.push_back(std::move(md));

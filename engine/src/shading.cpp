@@ -13,11 +13,6 @@ namespace {
 
 constexpr float kInvPi = float(1.0 / std::numbers::pi);
 
-Float3 transformNormal(const float n[9], const Float3& v) {
-    return {n[0] * v.x + n[1] * v.y + n[2] * v.z, n[3] * v.x + n[4] * v.y + n[5] * v.z,
-            n[6] * v.x + n[7] * v.y + n[8] * v.z};
-}
-
 Float3 reflect(const Float3& d, const Float3& n) { return d - n * (2.0f * dot(d, n)); }
 
 // Scale-aware offset for secondary-ray origins: a fixed epsilon is too small far from the
@@ -146,9 +141,9 @@ void shadeHit(const ShadingContext& ctx, const RayTask& ray, const Hit& hit, Col
     const Material& m = *inst.material;
 
     if (settings.shading == ShadingMode::EyeLight) {
-        // Preview shading from what Embree returned alone: no mesh data is touched.
-        const Float3 ng = transformNormal(inst.normalMatrix, hit.ng);
-        pixel += ray.weight * m.color * (std::fabs(dot(ng, ray.dir)) / length(ng));
+        RayTask local = ray;
+        local.pixel = 0;  // index into a one-pixel accumulation buffer
+        shadeEyeLightBlock(ctx, &local, &hit, 1, &pixel);
         return;
     }
     const SurfacePoint sp = surfaceAt(inst, ray, hit);

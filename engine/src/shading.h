@@ -4,6 +4,7 @@
 
 #include "scene_impl.h"
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -37,6 +38,63 @@ struct ShadingContext {
     const Scene::Impl& scene;
     const RenderSettings& settings;
 };
+
+inline Float3 transformNormal(const float n[9], const Float3& v) {
+    return {n[0] * v.x + n[1] * v.y + n[2] * v.z, n[3] * v.x + n[4] * v.y + n[5] * v.z,
+            n[6] * v.x + n[7] * v.y + n[8] * v.z};
+}
+
+// Preview shading from what Embree returned alone (no mesh data is touched): the colour
+// times the cosine between the geometric normal and the ray. Works on a whole packet-sized
+// block in structure-of-arrays form, so that the square roots and divisions vectorise; the
+// kernel's primary-ray loop calls it for every block of a preview frame.
+inline void shadeEyeLightBlock(const ShadingContext& ctx, const RayTask* rays, const Hit* hits, int n, Color* accum) {
+    constexpr int kMax = 16;
+    alignas(64) float nx[kMax], ny[kMax], nz[kMax], cr[kMax], cg[kMax], cb[kMax], cosine[kMax];
+    for (int k = 0; k < kMax; ++k) {
+        nx[k] = ny[k] = cr[k] = cg[k] = cb[k] = 0.0f;
+        nz[k] = 1.0f;
+    }
+    for (int k = 0; k < n; ++k) {
+        const Hit& h = hits[k];
+        if (h.inst == kNoHit) {
+            // A miss takes the background at cosine 1: the normal is the ray itself.
+            nx[k] = rays[k].dir.x;
+            ny[k] = rays[k].dir.y;
+            nz[k] = rays[k].dir.z;
+            cr[k] = ctx.settings.background.x;
+            cg[k] = ctx.settings.background.y;
+            cb[k] = ctx.settings.background.z;
+            continue;
+        }
+        const InstanceData& inst = ctx.scene.instances[h.inst];
+        const Float3 ng = transformNormal(inst.normalMatrix, h.ng);
+        nx[k] = ng.x;
+        ny[k] = ng.y;
+        nz[k] = ng.z;
+        cr[k] = inst.material->color.x;
+        cg[k] = inst.material->color.y;
+        cb[k] = inst.material->color.z;
+    }
+    alignas(64) float dx[kMax] = {}, dy[kMax] = {}, dz[kMax] = {};
+    for (int k = 0; k < n; ++k) {
+        dx[k] = rays[k].dir.x;
+        dy[k] = rays[k].dir.y;
+        dz[k] = rays[k].dir.z;
+    }
+    for (int k = 0; k < kMax; ++k) {
+        const float nn = nx[k] * nx[k] + ny[k] * ny[k] + nz[k] * nz[k];
+        cosine[k] = std::fabs(nx[k] * dx[k] + ny[k] * dy[k] + nz[k] * dz[k]) / std::sqrt(nn);
+    }
+    for (int k = 0; k < n; ++k) {
+        Color& p = accum[rays[k].pixel];
+        // A miss uses cosine 1 exactly, whatever rounding the division above did.
+        const float c = hits[k].inst == kNoHit ? 1.0f : cosine[k];
+        p.x += rays[k].weight.x * cr[k] * c;
+        p.y += rays[k].weight.y * cg[k] * c;
+        p.z += rays[k].weight.z * cb[k] * c;
+    }
+}
 
 // Adds what is known now to `pixel`, appends the shadow rays whose contribution depends on
 // visibility to `shadows`, and the reflection/refraction rays to `next`.

@@ -125,6 +125,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadScene{"TableWhereArrayExpected", "[mesh]\nname = \"m\"\n", "1", "[[mesh]]"},
         BadScene{"ColorAboveOne", "[[material]]\nname = \"m\"\ncolor = [2, 0, 0]\n", "3", "[0, 1]"},
         BadScene{"DegenerateCamera", "[[camera]]\nposition = [0,0,0]\nlook_at = [0,0,0]\n", "3", "own position"},
+        BadScene{"HugeShape", "[[mesh]]\nname = \"k\"\nshape = \"torus_knot\"\nsegments = 1000000\nsides = 4000\n", "4",
+                 "below 2^26"},
         BadScene{"ZeroScale", "[[mesh]]\nname = \"b\"\nshape = \"box\"\n[[instance]]\nmesh = \"b\"\nscale = [1, 0, 1]\n",
                  "6", "must not be zero"}),
     [](const auto& param) { return std::string(param.param.name); });

@@ -20,12 +20,13 @@ bool isSceneFile(const std::filesystem::path& p) {
 
 void addRender(CLI::App& app, Run& run) {
     struct Options {
-        std::string scene, out, camera, kernel;
+        std::string scene, out, camera, kernel, region;
         int width = 0, height = 0, threads = -1, tile = 0;
     };
     auto o = std::make_shared<Options>();
     CLI::App* cmd = app.add_subcommand("render", "Render one frame of a scene file (.toml) or a mesh file to PNG");
-    cmd->add_option("scene", o->scene, "Scene file (.toml) or mesh file (.obj .off .ply .stl .om)")->required();
+    cmd->add_option("scene", o->scene,
+                    "Scene file (.toml), mesh file (.obj .off .ply .stl .om), or builtin:knots")->required();
     cmd->add_option("--out,-o", o->out, "Output PNG file")->required();
     cmd->add_option("--width", o->width, "Image width in pixels (overrides the scene)")->check(CLI::Range(1, 16384));
     cmd->add_option("--height", o->height, "Image height in pixels (overrides the scene)")->check(CLI::Range(1, 16384));
@@ -33,11 +34,14 @@ void addRender(CLI::App& app, Run& run) {
     cmd->add_option("--threads", o->threads, "Render threads (0 = one per hardware thread)")->check(CLI::Range(0, 1024));
     cmd->add_option("--tile", o->tile, "Tile size in pixels (overrides the scene)")->check(CLI::Range(1, 1024));
     cmd->add_option("--kernel", o->kernel, "Ray kernel (overrides the scene)")->check(CLI::IsMember({"packet", "single"}));
+    cmd->add_option("--region", o->region, "Render only pixels x0,y0,x1,y1 (half-open; the rest stays black), to replay one tile");
 
     cmd->callback([&run, o] {
         run = [o] {
             const std::filesystem::path path(o->scene);
-            SceneDesc desc = isSceneFile(path) ? loadSceneFile(path) : sceneFromMeshFile(path);
+            SceneDesc desc = o->scene.starts_with("builtin:") ? builtinScene(o->scene.substr(8), 3'000'000)
+                             : isSceneFile(path)                 ? loadSceneFile(path)
+                                                                 : sceneFromMeshFile(path);
             RenderSettings& s = desc.settings;
             if (o->width) s.width = o->width;
             if (o->height) s.height = o->height;
@@ -54,7 +58,21 @@ void addRender(CLI::App& app, Run& run) {
             Scene scene(desc);
             const auto t1 = std::chrono::steady_clock::now();
             TileStats stats;
-            const Image img = renderFrame(scene, Camera(*cam, s.width, s.height), s, 0, &stats);
+            const Camera camera(*cam, s.width, s.height);
+            Image img;
+            if (o->region.empty()) {
+                img = renderFrame(scene, camera, s, 0, &stats);
+            } else {
+                TileRect r;
+                if (std::sscanf(o->region.c_str(), "%d,%d,%d,%d", &r.x0, &r.y0, &r.x1, &r.y1) != 4 || r.x0 < 0 ||
+                    r.y0 < 0 || r.x1 > s.width || r.y1 > s.height || r.x0 >= r.x1 || r.y0 >= r.y1)
+                    throw InputError("--region '" + o->region + "': expected x0,y0,x1,y1 inside the " +
+                                     std::to_string(s.width) + "x" + std::to_string(s.height) + " image");
+                img.width = s.width;
+                img.height = s.height;
+                img.rgb.assign(size_t(s.width) * s.height * 3, 0);
+                stats = renderTile(scene, camera, r, 0, s, {img.pixel(r.x0, r.y0), size_t(s.width) * 3});
+            }
             const auto t2 = std::chrono::steady_clock::now();
             writePng(img, o->out);
             const double build = std::chrono::duration<double>(t1 - t0).count();
