@@ -22,6 +22,4 @@ Camera::Camera(const CameraDesc& desc, int width, int height) {
     corner_ = w - u * halfW + v * halfH;
 }
 
-Float3 Camera::direction(float px, float py) const { return corner_ + du_ * px + dv_ * py; }
-
 }  // namespace rtwall

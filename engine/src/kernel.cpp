@@ -184,11 +184,115 @@ void traceShadowSingle(RTCScene scene, const ShadowTask* rays, uint8_t* occluded
 struct Tracer {
     void (*closest)(RTCScene, const RayTask*, Hit*, size_t, bool);
     void (*shadow)(RTCScene, const ShadowTask*, uint8_t*, size_t);
-    int blockW, blockH;
 };
 
 template <int K> Tracer packetTracer() {
-    return {traceClosestPacket<K>, traceShadowPacket<K>, Packet<K>::blockW, Packet<K>::blockH};
+    return {traceClosestPacket<K>, traceShadowPacket<K>};
+}
+
+// The primary-ray pass of one tile. Both kernels run this same code and differ only in how
+// the packet is handed to Embree: whole (rtcIntersectK) or lane by lane (rtcIntersect1, with
+// the results written back into the packet), so every value downstream is identical.
+template <int K, bool kUsePackets>
+void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& rect, const RenderSettings& settings,
+                  Scratch& sc) {
+    using P = Packet<K>;
+    constexpr int bw = P::blockW, bh = P::blockH;
+    const int w = rect.width(), h = rect.height();
+    const int ss = std::max(1, settings.supersample);
+    const float sampleWeight = 1.0f / float(ss * ss);
+    const ShadingContext shading{s, settings};
+    const bool eyeLight = settings.shading == ShadingMode::EyeLight;
+    const Float3 org = camera.origin();
+
+    RTCIntersectContext ctx;
+    initContext(ctx, true);
+    alignas(64) typename P::RayHit rh;
+    alignas(64) int valid[K];
+    uint32_t pixel[K];
+    for (int k = 0; k < K; ++k) {
+        rh.ray.org_x[k] = org.x;
+        rh.ray.org_y[k] = org.y;
+        rh.ray.org_z[k] = org.z;
+        rh.ray.tnear[k] = 0.0f;
+        rh.ray.time[k] = 0.0f;
+        rh.ray.mask[k] = 0xFFFFFFFFu;
+        rh.ray.id[k] = 0;
+        rh.ray.flags[k] = 0;
+    }
+    for (int sy = 0; sy < ss; ++sy)
+        for (int sx = 0; sx < ss; ++sx) {
+            const float ox = (float(sx) + 0.5f) / float(ss), oy = (float(sy) + 0.5f) / float(ss);
+            for (int by = 0; by < h; by += bh)
+                for (int bx = 0; bx < w; bx += bw) {
+                    for (int k = 0; k < K; ++k) {
+                        const int i = bx + k % bw, j = by + k / bw;
+                        const bool inside = i < w && j < h;
+                        valid[k] = inside ? -1 : 0;
+                        pixel[k] = inside ? uint32_t(j * w + i) : 0;
+                        const Float3 d = camera.direction(float(rect.x0 + i) + ox, float(rect.y0 + j) + oy);
+                        const float inv = 1.0f / std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+                        rh.ray.dir_x[k] = d.x * inv;
+                        rh.ray.dir_y[k] = d.y * inv;
+                        rh.ray.dir_z[k] = d.z * inv;
+                        rh.ray.tfar[k] = INFINITY;
+                        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+                        rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+                    }
+                    if constexpr (kUsePackets) {
+                        P::intersect(valid, s.top, &ctx, &rh);
+                    } else {
+                        for (int k = 0; k < K; ++k) {
+                            if (!valid[k]) continue;
+                            RTCRayHit one;
+                            one.ray = {rh.ray.org_x[k], rh.ray.org_y[k], rh.ray.org_z[k], 0.0f, rh.ray.dir_x[k],
+                                       rh.ray.dir_y[k], rh.ray.dir_z[k], 0.0f, INFINITY, 0xFFFFFFFFu, 0, 0};
+                            one.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                            one.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+                            rtcIntersect1(s.top, &ctx, &one);
+                            rh.ray.tfar[k] = one.ray.tfar;
+                            rh.hit.Ng_x[k] = one.hit.Ng_x;
+                            rh.hit.Ng_y[k] = one.hit.Ng_y;
+                            rh.hit.Ng_z[k] = one.hit.Ng_z;
+                            rh.hit.u[k] = one.hit.u;
+                            rh.hit.v[k] = one.hit.v;
+                            rh.hit.primID[k] = one.hit.primID;
+                            rh.hit.geomID[k] = one.hit.geomID;
+                            rh.hit.instID[0][k] = one.hit.instID[0];
+                        }
+                    }
+                    if (eyeLight) {
+                        shadeEyeLightPacket<K>(shading, rh, valid, pixel, sampleWeight, sc.accum.data());
+                        continue;
+                    }
+                    for (int k = 0; k < K; ++k) {
+                        if (!valid[k]) continue;
+                        RayTask t;
+                        t.org = org;
+                        t.dir = {rh.ray.dir_x[k], rh.ray.dir_y[k], rh.ray.dir_z[k]};
+                        t.tfar = INFINITY;
+                        t.weight = {sampleWeight, sampleWeight, sampleWeight};
+                        t.pixel = pixel[k];
+                        t.depth = 1;
+                        Hit hit;
+                        hit.inst = rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID ? kNoHit : rh.hit.instID[0][k];
+                        hit.prim = rh.hit.primID[k];
+                        hit.t = rh.ray.tfar[k];
+                        hit.u = rh.hit.u[k];
+                        hit.v = rh.hit.v[k];
+                        hit.ng = {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]};
+                        shadeHit(shading, t, hit, sc.accum[t.pixel], sc.shadows, sc.next);
+                    }
+                }
+        }
+}
+
+template <bool kUsePackets>
+void primaryPassFor(int width, const Scene::Impl& s, const Camera& camera, const TileRect& rect,
+                    const RenderSettings& settings, Scratch& sc) {
+    if (width == 16) primaryPassK<16, kUsePackets>(s, camera, rect, settings, sc);
+    else if (width == 8) primaryPassK<8, kUsePackets>(s, camera, rect, settings, sc);
+    else primaryPassK<4, kUsePackets>(s, camera, rect, settings, sc);
 }
 
 int detectPacketWidth() {
@@ -200,14 +304,7 @@ int detectPacketWidth() {
 
 Tracer tracerFor(KernelType kernel) {
     static const int width = packetWidth();
-    if (kernel == KernelType::Single) {
-        // The single-ray kernel visits pixels in the same block order as the packet kernel, so
-        // the two differ only in how Embree is called.
-        Tracer t{traceClosestSingle, traceShadowSingle, 4, 2};
-        if (width == 4) t.blockW = t.blockH = 2;
-        if (width == 16) t.blockW = t.blockH = 4;
-        return t;
-    }
+    if (kernel == KernelType::Single) return {traceClosestSingle, traceShadowSingle};
     if (width == 16) return packetTracer<16>();
     if (width == 8) return packetTracer<8>();
     return packetTracer<4>();
@@ -230,60 +327,15 @@ TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& r
     const int w = rect.width(), h = rect.height();
     if (w <= 0 || h <= 0) return stats;
     const int ss = std::max(1, settings.supersample);
-    const float sampleWeight = 1.0f / float(ss * ss);
+    const ShadingContext shading{s, settings};
 
     sc.accum.assign(size_t(w) * h, Color{0, 0, 0});
     sc.shadows.clear();
     sc.next.clear();
-    const ShadingContext shading{s, settings};
-
-    // Primary rays: sub-pixel sample outermost, then one coherent blockW x blockH pixel block
-    // per batch, generated, traced and shaded while it is hot in L1.
-    const Float3 org = camera.origin();
-    RayTask block[16];
-    Hit blockHits[16];
-    alignas(64) float px[16] = {}, py[16] = {}, dx[16], dy[16], dz[16];
-    const Float3 corner = camera.direction(0.0f, 0.0f);
-    const Float3 du = camera.direction(1.0f, 0.0f) - corner, dv = camera.direction(0.0f, 1.0f) - corner;
-    for (int sy = 0; sy < ss; ++sy)
-        for (int sx = 0; sx < ss; ++sx) {
-            const float ox = (float(sx) + 0.5f) / float(ss), oy = (float(sy) + 0.5f) / float(ss);
-            for (int by = 0; by < h; by += tracer.blockH)
-                for (int bx = 0; bx < w; bx += tracer.blockW) {
-                    int n = 0;
-                    for (int j = by; j < std::min(h, by + tracer.blockH); ++j)
-                        for (int i = bx; i < std::min(w, bx + tracer.blockW); ++i) {
-                            px[n] = float(rect.x0 + i) + ox;
-                            py[n] = float(rect.y0 + j) + oy;
-                            block[n++].pixel = uint32_t(j * w + i);
-                        }
-                    // Fixed-length loops over the block so the compiler vectorises the
-                    // normalisation; both kernels run this same code, so results stay identical.
-                    for (int k = 0; k < 16; ++k) {
-                        const float x = corner.x + du.x * px[k] + dv.x * py[k];
-                        const float y = corner.y + du.y * px[k] + dv.y * py[k];
-                        const float z = corner.z + du.z * px[k] + dv.z * py[k];
-                        const float inv = 1.0f / std::sqrt(x * x + y * y + z * z);
-                        dx[k] = x * inv;
-                        dy[k] = y * inv;
-                        dz[k] = z * inv;
-                    }
-                    for (int k = 0; k < n; ++k) {
-                        RayTask& t = block[k];
-                        t.org = org;
-                        t.dir = {dx[k], dy[k], dz[k]};
-                        t.tfar = INFINITY;
-                        t.weight = {sampleWeight, sampleWeight, sampleWeight};
-                        t.depth = 1;
-                    }
-                    tracer.closest(s.top, block, blockHits, size_t(n), true);
-                    if (settings.shading == ShadingMode::EyeLight)
-                        shadeEyeLightBlock(shading, block, blockHits, n, sc.accum.data());
-                    else
-                        for (int k = 0; k < n; ++k)
-                            shadeHit(shading, block[k], blockHits[k], sc.accum[block[k].pixel], sc.shadows, sc.next);
-                }
-        }
+    // Primary rays: sub-pixel sample outermost, then one coherent packet-shaped pixel block
+    // per batch, generated straight into Embree's SoA packet, traced and shaded while hot in L1.
+    if (settings.kernel == KernelType::Packet) primaryPassFor<true>(packetWidth(), s, camera, rect, settings, sc);
+    else primaryPassFor<false>(packetWidth(), s, camera, rect, settings, sc);
     stats.rays += uint64_t(w) * h * ss * ss;
 
     // Then generation by generation: the shadow rays of the last one, and the rays it spawned.

@@ -140,12 +140,6 @@ void shadeHit(const ShadingContext& ctx, const RayTask& ray, const Hit& hit, Col
     const InstanceData& inst = ctx.scene.instances[hit.inst];
     const Material& m = *inst.material;
 
-    if (settings.shading == ShadingMode::EyeLight) {
-        RayTask local = ray;
-        local.pixel = 0;  // index into a one-pixel accumulation buffer
-        shadeEyeLightBlock(ctx, &local, &hit, 1, &pixel);
-        return;
-    }
     const SurfacePoint sp = surfaceAt(inst, ray, hit);
 
     const bool canSpawn = ray.depth < settings.maxDepth;

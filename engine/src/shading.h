@@ -45,30 +45,25 @@ inline Float3 transformNormal(const float n[9], const Float3& v) {
 }
 
 // Preview shading from what Embree returned alone (no mesh data is touched): the colour
-// times the cosine between the geometric normal and the ray. Works on a whole packet-sized
-// block in structure-of-arrays form, so that the square roots and divisions vectorise; the
-// kernel's primary-ray loop calls it for every block of a preview frame.
-inline void shadeEyeLightBlock(const ShadingContext& ctx, const RayTask* rays, const Hit* hits, int n, Color* accum) {
-    constexpr int kMax = 16;
-    alignas(64) float nx[kMax], ny[kMax], nz[kMax], cr[kMax], cg[kMax], cb[kMax], cosine[kMax];
-    for (int k = 0; k < kMax; ++k) {
-        nx[k] = ny[k] = cr[k] = cg[k] = cb[k] = 0.0f;
-        nz[k] = 1.0f;
-    }
-    for (int k = 0; k < n; ++k) {
-        const Hit& h = hits[k];
-        if (h.inst == kNoHit) {
-            // A miss takes the background at cosine 1: the normal is the ray itself.
-            nx[k] = rays[k].dir.x;
-            ny[k] = rays[k].dir.y;
-            nz[k] = rays[k].dir.z;
+// times the cosine between the geometric normal and the ray, for a whole primary packet in
+// structure-of-arrays form so that the square roots and divisions vectorise.
+template <int K, class RayHitK>
+inline void shadeEyeLightPacket(const ShadingContext& ctx, const RayHitK& rh, const int* valid, const uint32_t* pixel,
+                                float weight, Color* accum) {
+    alignas(64) float nx[K], ny[K], nz[K], cr[K], cg[K], cb[K], cosine[K];
+    for (int k = 0; k < K; ++k) {
+        if (!valid[k] || rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
+            // A miss (or an unused lane) takes the background at cosine 1.
+            nx[k] = rh.ray.dir_x[k];
+            ny[k] = rh.ray.dir_y[k];
+            nz[k] = rh.ray.dir_z[k];
             cr[k] = ctx.settings.background.x;
             cg[k] = ctx.settings.background.y;
             cb[k] = ctx.settings.background.z;
             continue;
         }
-        const InstanceData& inst = ctx.scene.instances[h.inst];
-        const Float3 ng = transformNormal(inst.normalMatrix, h.ng);
+        const InstanceData& inst = ctx.scene.instances[rh.hit.instID[0][k]];
+        const Float3 ng = transformNormal(inst.normalMatrix, {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]});
         nx[k] = ng.x;
         ny[k] = ng.y;
         nz[k] = ng.z;
@@ -76,23 +71,18 @@ inline void shadeEyeLightBlock(const ShadingContext& ctx, const RayTask* rays, c
         cg[k] = inst.material->color.y;
         cb[k] = inst.material->color.z;
     }
-    alignas(64) float dx[kMax] = {}, dy[kMax] = {}, dz[kMax] = {};
-    for (int k = 0; k < n; ++k) {
-        dx[k] = rays[k].dir.x;
-        dy[k] = rays[k].dir.y;
-        dz[k] = rays[k].dir.z;
-    }
-    for (int k = 0; k < kMax; ++k) {
+    for (int k = 0; k < K; ++k) {
         const float nn = nx[k] * nx[k] + ny[k] * ny[k] + nz[k] * nz[k];
-        cosine[k] = std::fabs(nx[k] * dx[k] + ny[k] * dy[k] + nz[k] * dz[k]) / std::sqrt(nn);
+        cosine[k] = std::fabs(nx[k] * rh.ray.dir_x[k] + ny[k] * rh.ray.dir_y[k] + nz[k] * rh.ray.dir_z[k]) / std::sqrt(nn);
     }
-    for (int k = 0; k < n; ++k) {
-        Color& p = accum[rays[k].pixel];
+    for (int k = 0; k < K; ++k) {
+        if (!valid[k]) continue;
         // A miss uses cosine 1 exactly, whatever rounding the division above did.
-        const float c = hits[k].inst == kNoHit ? 1.0f : cosine[k];
-        p.x += rays[k].weight.x * cr[k] * c;
-        p.y += rays[k].weight.y * cg[k] * c;
-        p.z += rays[k].weight.z * cb[k] * c;
+        const float c = rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID ? 1.0f : cosine[k];
+        Color& p = accum[pixel[k]];
+        p.x += weight * cr[k] * c;
+        p.y += weight * cg[k] * c;
+        p.z += weight * cb[k] * c;
     }
 }
 

@@ -1,5 +1,5 @@
 // rtwall bench kernel: primary-ray throughput of the packet and single-ray kernels against a
-// bare rtcIntersectK loop over the very same Embree scene. Rounds are interleaved (bare,
+// bare rtcIntersectK loop (K = the packet kernel's width) over the very same Embree scene. Rounds are interleaved (bare,
 // packet, single, bare, ...) so that machine noise hits all three alike; medians are reported.
 #include "commands.h"
 
@@ -25,25 +25,46 @@ double median(std::vector<double> v) {
     return n == 0 ? 0.0 : (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]));
 }
 
-// The reference: tiles handed out exactly as renderFrame does, 4x2 pixel blocks, one
-// rtcIntersect8 per block, and nothing else but storing the primitive ID.
+template <int K> struct BarePacket;
+template <> struct BarePacket<4> {
+    using RayHit = RTCRayHit4;
+    static constexpr int w = 2;
+    static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) { rtcIntersect4(v, s, c, r); }
+};
+template <> struct BarePacket<8> {
+    using RayHit = RTCRayHit8;
+    static constexpr int w = 4;
+    static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) { rtcIntersect8(v, s, c, r); }
+};
+template <> struct BarePacket<16> {
+    using RayHit = RTCRayHit16;
+    static constexpr int w = 4;
+    static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) { rtcIntersect16(v, s, c, r); }
+};
+
+// The reference: tiles handed out exactly as renderFrame does, pixel blocks of the packet
+// kernel's shape and width, one rtcIntersectK per block, and nothing else but storing the
+// primitive ID.
+template <int K>
 void bareFrame(RTCScene scene, const Camera& camera, int width, int height, int tileSize, int threads,
                std::vector<uint32_t>& ids) {
+    using P = BarePacket<K>;
+    constexpr int bw = P::w, bh = K / P::w;
     const std::vector<TileRect> tiles = makeTiles(width, height, tileSize);
     std::atomic<size_t> next{0};
     auto worker = [&] {
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
         ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-        alignas(32) RTCRayHit8 rh;
-        alignas(32) int valid[8];
+        alignas(64) typename P::RayHit rh;
+        alignas(64) int valid[K];
         const Float3 org = camera.origin();
         for (size_t t; (t = next.fetch_add(1)) < tiles.size();) {
             const TileRect& r = tiles[t];
-            for (int by = r.y0; by < r.y1; by += 2)
-                for (int bx = r.x0; bx < r.x1; bx += 4) {
-                    for (int k = 0; k < 8; ++k) {
-                        const int x = bx + (k & 3), y = by + (k >> 2);
+            for (int by = r.y0; by < r.y1; by += bh)
+                for (int bx = r.x0; bx < r.x1; bx += bw) {
+                    for (int k = 0; k < K; ++k) {
+                        const int x = bx + k % bw, y = by + k / bw;
                         valid[k] = (x < r.x1 && y < r.y1) ? -1 : 0;
                         const Float3 d = camera.direction(float(x) + 0.5f, float(y) + 0.5f);
                         rh.ray.org_x[k] = org.x;
@@ -61,9 +82,9 @@ void bareFrame(RTCScene scene, const Camera& camera, int width, int height, int 
                         rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
                         rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
                     }
-                    rtcIntersect8(valid, scene, &ctx, &rh);
-                    for (int k = 0; k < 8; ++k)
-                        if (valid[k]) ids[size_t(by + (k >> 2)) * width + bx + (k & 3)] = rh.hit.primID[k];
+                    P::intersect(valid, scene, &ctx, &rh);
+                    for (int k = 0; k < K; ++k)
+                        if (valid[k]) ids[size_t(by + k / bw) * width + bx + k % bw] = rh.hit.primID[k];
                 }
         }
     };
@@ -71,6 +92,13 @@ void bareFrame(RTCScene scene, const Camera& camera, int width, int height, int 
     for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
     worker();
     for (auto& t : pool) t.join();
+}
+
+void bareFrameFor(RTCScene scene, const Camera& camera, int width, int height, int tileSize, int threads,
+                  std::vector<uint32_t>& ids) {
+    if (packetWidth() == 16) bareFrame<16>(scene, camera, width, height, tileSize, threads, ids);
+    else if (packetWidth() == 8) bareFrame<8>(scene, camera, width, height, tileSize, threads, ids);
+    else bareFrame<4>(scene, camera, width, height, tileSize, threads, ids);
 }
 
 template <class F> double seconds(F&& f) {
@@ -113,17 +141,21 @@ void addBenchKernel(CLI::App& bench, Run& run) {
             s.shading = ShadingMode::EyeLight;  // primary rays only, as in the bare loop
             RenderSettings single = s;
             single.kernel = KernelType::Single;
+            RenderSettings full = s;  // for scale: the whole frame with Phong shading and shadows
+            full.shading = ShadingMode::Full;
 
             std::vector<uint32_t> ids(size_t(o->width) * o->height);
-            std::vector<double> bare, packet, one;
+            std::vector<double> bare, packet, one, shaded;
+            TileStats fullStats;
             // Warm-up: page in the BVH and the scratch buffers.
-            bareFrame(embreeScene(scene), camera, o->width, o->height, o->tile, threads, ids);
+            bareFrameFor(embreeScene(scene), camera, o->width, o->height, o->tile, threads, ids);
             renderFrame(scene, camera, s);
             renderFrame(scene, camera, single);
             for (int r = 0; r < o->rounds; ++r) {
-                bare.push_back(seconds([&] { bareFrame(embreeScene(scene), camera, o->width, o->height, o->tile, threads, ids); }));
+                bare.push_back(seconds([&] { bareFrameFor(embreeScene(scene), camera, o->width, o->height, o->tile, threads, ids); }));
                 packet.push_back(seconds([&] { renderFrame(scene, camera, s); }));
                 one.push_back(seconds([&] { renderFrame(scene, camera, single); }));
+                shaded.push_back(seconds([&] { renderFrame(scene, camera, full, 0, &fullStats); }));
             }
             const double rays = double(o->width) * o->height;
             const double mBare = rays / median(bare) * 1e-6, mPacket = rays / median(packet) * 1e-6,
@@ -145,13 +177,15 @@ void addBenchKernel(CLI::App& bench, Run& run) {
                             {"single_mrays_per_s", mSingle},
                             {"packet_over_bare", mPacket / mBare},
                             {"packet_over_single", mPacket / mSingle},
-                            {"frame_seconds", toml::table{{"bare", arr(bare)}, {"packet", arr(packet)}, {"single", arr(one)}}}};
+                            {"full_shading_frame_s", median(shaded)},
+                            {"full_shading_mrays_per_s", double(fullStats.rays + fullStats.shadowRays) / median(shaded) * 1e-6},
+                            {"frame_seconds", toml::table{{"bare", arr(bare)}, {"packet", arr(packet)}, {"single", arr(one)}, {"full_shading", arr(shaded)}}}};
             if (o->json) std::cout << toml::json_formatter{out} << "\n";
             else
                 std::printf("%dx%d, %lld triangles, %d threads, packets of %d: bare %.2f, packet %.2f, single %.2f Mrays/s "
-                            "(packet/bare %.3f, packet/single %.3f)\n",
+                            "(packet/bare %.3f, packet/single %.3f); full shading %.3f s/frame\n",
                             o->width, o->height, (long long)tris, threads, packetWidth(), mBare, mPacket, mSingle,
-                            mPacket / mBare, mPacket / mSingle);
+                            mPacket / mBare, mPacket / mSingle, median(shaded));
             return 0;
         };
     });

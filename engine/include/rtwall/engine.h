@@ -137,7 +137,11 @@ class Camera {
 public:
     Camera(const CameraDesc& desc, int width, int height);
     // Direction (unnormalised) through image position (px, py), pixels from the top-left corner.
-    Float3 direction(float px, float py) const;
+    // Inline: the kernel calls it for every primary ray.
+    Float3 direction(float px, float py) const {
+        return {corner_.x + du_.x * px + dv_.x * py, corner_.y + du_.y * px + dv_.y * py,
+                corner_.z + du_.z * px + dv_.z * py};
+    }
     Float3 origin() const { return origin_; }
 
 private:
