@@ -21,6 +21,10 @@ PACKAGES=(
   libpng-dev           # libpng: PNG images
   libgtest-dev libgmock-dev  # GoogleTest
   libbenchmark-dev     # Google Benchmark
+  libzmq3-dev cppzmq-dev  # ZeroMQ: master/client transport
+  liblz4-dev libzstd-dev libturbojpeg0-dev  # tile codecs
+  libxxhash-dev        # content hashes of meshes and scene states
+  clang libclang-rt-14-dev  # libFuzzer with ASan/UBSan for the fuzz targets
   python3
 )
 
@@ -63,6 +67,12 @@ case "${1:-}" in
     ;;
   test)
     install_missing; build
+    # Fuzz targets need clang's libFuzzer: a second, small build of just those, each run briefly.
+    say "fuzzing every decoder briefly (clang, libFuzzer, ASan+UBSan)"
+    cmake -S . -B "$BUILD_DIR-fuzz" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
+      -DRTWALL_FUZZ=ON -DRTWALL_BUILD_BENCHMARKS=OFF >/dev/null
+    cmake --build "$BUILD_DIR-fuzz" -j "$JOBS" --target fuzz_protocol
+    ctest --test-dir "$BUILD_DIR-fuzz" -L fuzz --output-on-failure --timeout 600
     say "running the test suite"
     ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS" --timeout 900
     ;;

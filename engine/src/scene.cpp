@@ -3,6 +3,7 @@
 
 #include <rtwall/engine_embree.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -105,6 +106,42 @@ Scene::~Scene() {
 }
 
 const SceneDesc& Scene::desc() const { return impl_->desc; }
+
+void Scene::setInstanceTransform(uint32_t instance, const Transform& transform) {
+    Impl& s = *impl_;
+    if (instance >= s.instances.size()) throw std::out_of_range("instance " + std::to_string(instance) + " does not exist");
+    InstanceData& data = s.instances[instance];
+    float normal[9];
+    normalMatrixOf(transform, normal);  // throws for a singular transform before anything changes
+    s.desc.instances[instance].transform = transform;
+    for (int k = 0; k < 12; ++k) data.objectToWorld[k] = float(transform.m[k]);
+    std::copy(normal, normal + 9, data.normalMatrix);
+    RTCGeometry g = rtcGetGeometry(s.top, instance);
+    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, data.objectToWorld);
+    rtcCommitGeometry(g);
+    s.dirty = true;
+}
+
+void Scene::setMaterial(uint32_t material, const Material& value) {
+    Impl& s = *impl_;
+    if (material >= s.desc.materials.size())
+        throw std::out_of_range("material " + std::to_string(material) + " does not exist");
+    s.desc.materials[material] = value;  // instances point at this element; the vector never grows
+}
+
+void Scene::setLight(uint32_t light, const Light& value) {
+    Impl& s = *impl_;
+    if (light >= s.desc.lights.size()) throw std::out_of_range("light " + std::to_string(light) + " does not exist");
+    s.desc.lights[light] = value;
+}
+
+void Scene::commit() {
+    Impl& s = *impl_;
+    if (!s.dirty) return;
+    rtcCommitScene(s.top);
+    s.dirty = false;
+    checkDevice(s.device, s.lastError, "refitting the top-level BVH");
+}
 
 RTCScene embreeScene(const Scene& scene) { return scene.impl().top; }
 

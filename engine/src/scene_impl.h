@@ -24,6 +24,7 @@ struct Scene::Impl {
     RTCScene top = nullptr;
     std::vector<RTCScene> meshScenes;      // one BVH per unique mesh
     std::vector<InstanceData> instances;   // indexed by the instance geometry ID in `top`
+    bool dirty = false;                    // instance transforms changed since the last commit
 };
 
 }  // namespace rtwall

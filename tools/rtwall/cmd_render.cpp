@@ -1,5 +1,7 @@
 #include "commands.h"
+#include "local_clients.h"
 
+#include <rtwall/cluster.h>
 #include <rtwall/engine.h>
 
 #include <chrono>
@@ -10,20 +12,54 @@ namespace rtwall::cli {
 
 namespace {
 
+struct RenderOptions {
+    std::string scene, out, camera, kernel, region, codec = "lz4";
+    int width = 0, height = 0, threads = -1, tile = 0, clients = 0, prefetch = 4;
+};
+
 bool isSceneFile(const std::filesystem::path& p) {
     std::string ext = p.extension().string();
     for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
     return ext == ".toml";
 }
 
+TileCodec codecFromName(const std::string& name) {
+    if (name == "raw") return TileCodec::Raw;
+    if (name == "zstd") return TileCodec::Zstd;
+    if (name == "jpeg") return TileCodec::Jpeg;
+    return TileCodec::Lz4;
+}
+
+TileRect parseRegion(const std::string& text, const RenderSettings& s) {
+    TileRect r;
+    if (std::sscanf(text.c_str(), "%d,%d,%d,%d", &r.x0, &r.y0, &r.x1, &r.y1) != 4 || r.x0 < 0 || r.y0 < 0 ||
+        r.x1 > s.width || r.y1 > s.height || r.x0 >= r.x1 || r.y0 >= r.y1)
+        throw InputError("--region '" + text + "': expected x0,y0,x1,y1 inside the " + std::to_string(s.width) + "x" +
+                         std::to_string(s.height) + " image");
+    return r;
+}
+
+// The cluster path: a master on loopback and local client processes, one frame.
+Image renderWithClients(SceneDesc desc, const CameraDesc& camera, const RenderOptions& o, FrameReport& report) {
+    desc.cameras = {camera};
+    ClusterSettings cs;
+    cs.localClients = o.clients;
+    cs.threadsPerClient = desc.settings.threads > 0 ? std::max(1, desc.settings.threads / o.clients) : 1;
+    cs.prefetch = o.prefetch;
+    cs.async = false;
+    cs.codec.codec = codecFromName(o.codec);
+    Master master(desc, cs);
+    LocalClients clients(o.clients, master.endpoint(), cs.threadsPerClient);
+    if (!master.waitForClients(o.clients, 60'000))
+        throw InputError("only " + std::to_string(master.connectedClients()) + " of " + std::to_string(o.clients) +
+                         " local render clients joined within 60 s");
+    return master.renderFrame(&report);
+}
+
 }  // namespace
 
 void addRender(CLI::App& app, Run& run) {
-    struct Options {
-        std::string scene, out, camera, kernel, region;
-        int width = 0, height = 0, threads = -1, tile = 0;
-    };
-    auto o = std::make_shared<Options>();
+    auto o = std::make_shared<RenderOptions>();
     CLI::App* cmd = app.add_subcommand("render", "Render one frame of a scene file (.toml) or a mesh file to PNG");
     cmd->add_option("scene", o->scene,
                     "Scene file (.toml), mesh file (.obj .off .ply .stl .om), or builtin:knots")->required();
@@ -34,6 +70,12 @@ void addRender(CLI::App& app, Run& run) {
     cmd->add_option("--threads", o->threads, "Render threads (0 = one per hardware thread)")->check(CLI::Range(0, 1024));
     cmd->add_option("--tile", o->tile, "Tile size in pixels (overrides the scene)")->check(CLI::Range(1, 1024));
     cmd->add_option("--kernel", o->kernel, "Ray kernel (overrides the scene)")->check(CLI::IsMember({"packet", "single"}));
+    cmd->add_option("--clients", o->clients,
+                    "Render through a master and this many local client processes (the cluster path)")
+        ->check(CLI::Range(0, 256));
+    cmd->add_option("--prefetch", o->prefetch, "Tiles each client keeps in flight (with --clients)")->check(CLI::Range(1, 64));
+    cmd->add_option("--codec", o->codec, "Tile codec (with --clients); jpeg is lossy")
+        ->check(CLI::IsMember({"raw", "lz4", "zstd", "jpeg"}));
     cmd->add_option("--region", o->region, "Render only pixels x0,y0,x1,y1 (half-open; the rest stays black), to replay one tile");
 
     cmd->callback([&run, o] {
@@ -54,20 +96,29 @@ void addRender(CLI::App& app, Run& run) {
                 for (const CameraDesc& c : desc.cameras) names += (names.empty() ? "" : ", ") + c.name;
                 throw InputError(o->scene + ": no camera named '" + o->camera + "' (cameras: " + names + ")");
             }
+            const char* kernel = s.kernel == KernelType::Packet ? "packet" : "single";
             const auto t0 = std::chrono::steady_clock::now();
+            if (o->clients > 0) {
+                if (!o->region.empty()) throw InputError("--region and --clients cannot be combined");
+                FrameReport report;
+                const Image img = renderWithClients(desc, *cam, *o, report);
+                writePng(img, o->out);
+                const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                std::printf("wrote %s (%dx%d, camera '%s', %s kernel, %d clients, codec %s): frame %.3f s, "
+                            "%.3f s with start-up, %.2f MB of tiles\n",
+                            o->out.c_str(), s.width, s.height, cam->name.c_str(), kernel, o->clients, o->codec.c_str(),
+                            report.seconds, total, double(report.bytes) * 1e-6);
+                return 0;
+            }
             Scene scene(desc);
             const auto t1 = std::chrono::steady_clock::now();
-            TileStats stats;
             const Camera camera(*cam, s.width, s.height);
+            TileStats stats;
             Image img;
             if (o->region.empty()) {
                 img = renderFrame(scene, camera, s, 0, &stats);
             } else {
-                TileRect r;
-                if (std::sscanf(o->region.c_str(), "%d,%d,%d,%d", &r.x0, &r.y0, &r.x1, &r.y1) != 4 || r.x0 < 0 ||
-                    r.y0 < 0 || r.x1 > s.width || r.y1 > s.height || r.x0 >= r.x1 || r.y0 >= r.y1)
-                    throw InputError("--region '" + o->region + "': expected x0,y0,x1,y1 inside the " +
-                                     std::to_string(s.width) + "x" + std::to_string(s.height) + " image");
+                const TileRect r = parseRegion(o->region, s);
                 img.width = s.width;
                 img.height = s.height;
                 img.rgb.assign(size_t(s.width) * s.height * 3, 0);
@@ -78,8 +129,7 @@ void addRender(CLI::App& app, Run& run) {
             const double build = std::chrono::duration<double>(t1 - t0).count();
             const double render = std::chrono::duration<double>(t2 - t1).count();
             std::printf("wrote %s (%dx%d, camera '%s', %s kernel): BVH build %.3f s, render %.3f s, %.2f Mrays/s\n",
-                        o->out.c_str(), s.width, s.height, cam->name.c_str(),
-                        s.kernel == KernelType::Packet ? "packet" : "single", build, render,
+                        o->out.c_str(), s.width, s.height, cam->name.c_str(), kernel, build, render,
                         double(stats.rays + stats.shadowRays) / render * 1e-6);
             return 0;
         };

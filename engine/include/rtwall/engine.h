@@ -125,6 +125,14 @@ public:
     Scene& operator=(const Scene&) = delete;
 
     const SceneDesc& desc() const;
+
+    // Differential updates: they change what the next commit() publishes, without rebuilding
+    // any mesh's BVH (a transform only refits the top level). Not safe while tiles render.
+    void setInstanceTransform(uint32_t instance, const Transform& transform);  // throws std::out_of_range
+    void setMaterial(uint32_t material, const Material& value);
+    void setLight(uint32_t light, const Light& value);
+    void commit();
+
     struct Impl;
     const Impl& impl() const { return *impl_; }
 

@@ -1,0 +1,106 @@
+// rtwall cluster: the one public header.
+//
+// A Master owns the scene state and the wall's framebuffer; render clients (other processes,
+// on this PC or others) connect over ZeroMQ, ask for tiles, render them with the engine's
+// renderTile() and send the pixels back. Scheduling and frame assembly are plain classes
+// (cluster/src/scheduler.h, assembler.h) that never see a socket.
+#pragma once
+
+#include <rtwall/engine.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace rtwall {
+
+enum class TileCodec : uint8_t { Raw = 0, Lz4 = 1, Zstd = 2, Jpeg = 3 };
+
+struct CodecSettings {
+    TileCodec codec = TileCodec::Lz4;
+    int jpegQuality = 90;         // 1..100
+    bool jpegSubsample = false;   // 4:2:0 chroma subsampling (else 4:4:4)
+    int zstdLevel = 1;            // 1..19
+};
+
+struct ClusterSettings {
+    std::string bind = "tcp://127.0.0.1:0";  // master endpoint; port 0 picks a free port
+    int localClients = 2;                     // client processes `rtwall run` spawns on this PC
+    int threadsPerClient = 1;                 // render threads per client (0 = hardware threads)
+    int prefetch = 4;                         // tiles each client keeps in flight
+    bool affinity = true;                     // same tiles to the same client next frame
+    bool async = true;                        // specify frame N+1 while N renders
+    CodecSettings codec;
+    int heartbeatMs = 250;                    // both directions
+    int timeoutMs = 3000;                     // a silent peer is dead after this
+    double stragglerFactor = 4.0;             // re-issue tiles outstanding this many median tile times
+};
+
+struct ClientReport {
+    uint32_t id = 0;
+    uint64_t tiles = 0;         // results accepted this frame
+    uint64_t stolen = 0;        // of which taken from another client's queue
+    double busyFraction = 0;    // render time / frame time
+};
+
+struct FrameReport {
+    uint32_t frame = 0;
+    double seconds = 0;             // from frame begin to the last tile
+    uint64_t bytes = 0;             // encoded tile bytes received
+    uint64_t tilesStolen = 0;
+    uint64_t tilesReissued = 0;     // straggler re-issues
+    uint64_t duplicatesDropped = 0; // results for tiles already done
+    uint64_t staleDropped = 0;      // results for an older frame
+    uint64_t affinityHits = 0;      // tiles rendered by last frame's client
+    double meanTileLatency = 0;     // seconds from assignment to result
+    std::vector<ClientReport> clients;
+};
+
+// The display master: owns the scene state, hands out tiles, assembles frames.
+class Master {
+public:
+    Master(const SceneDesc& scene, const ClusterSettings& settings);
+    ~Master();
+    Master(const Master&) = delete;
+    Master& operator=(const Master&) = delete;
+
+    std::string endpoint() const;  // where clients connect, with the bound port
+    int connectedClients() const;  // clients that hold the current scene state
+    bool waitForClients(int count, int timeoutMs);
+
+    // Differential scene updates: only what changes is sent to the clients. They take effect
+    // in the next frame that begins after the call.
+    void setCamera(const CameraDesc& camera);
+    void setInstanceTransform(uint32_t instance, const Transform& transform);
+    void setMaterial(uint32_t material, const Material& value);
+    void setLight(uint32_t light, const Light& value);
+    void setRenderSettings(const RenderSettings& settings);
+
+    // Renders one frame with the current state and returns it. With async on, the next
+    // frame's updates already stream to the clients while this one renders.
+    Image renderFrame(FrameReport* report = nullptr);
+
+    uint64_t droppedMessages() const;  // malformed, stale or unexpected messages dropped
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> impl_;
+};
+
+struct ClientSettings {
+    std::string connect;                // tcp://HOST:PORT
+    int threads = 0;                    // render threads, 0 = hardware threads
+    std::filesystem::path cacheDir;     // meshes received from the master, by content hash
+    int maxReconnectMs = 5000;          // back-off ceiling
+    int exitAfterIdleMs = 0;            // > 0: exit when no master answers for this long
+};
+
+// Runs a render client until the master says goodbye (or exitAfterIdleMs passes).
+// Returns the process exit status.
+int runClient(const ClientSettings& settings);
+
+}  // namespace rtwall

@@ -1,0 +1,425 @@
+// A render client: one network thread (the caller's) owns the DEALER socket; render threads
+// share one scene, take tiles from a local queue and hand encoded results back through inproc
+// PUSH sockets, so only the network thread ever touches the master's connection.
+#include "codec.h"
+#include "net.h"
+#include "protocol.h"
+
+#include <rtwall/cluster.h>
+
+#include <unistd.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdio>
+#include <deque>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <random>
+#include <shared_mutex>
+#include <thread>
+
+namespace rtwall {
+
+using namespace cluster;
+
+namespace {
+
+std::string hexOf(const Hash128& h) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%016llx%016llx", (unsigned long long)h[1], (unsigned long long)h[0]);
+    return buf;
+}
+
+class ClientRuntime {
+public:
+    explicit ClientRuntime(const ClientSettings& s) : settings_(s) {
+        threads_ = s.threads > 0 ? s.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+    }
+
+    int run() {
+        results_.bind(kResultsAddress);
+        for (int i = 0; i < threads_; ++i) workers_.emplace_back([this] { workerLoop(); });
+        const int status = networkLoop();
+        {
+            std::lock_guard lock(workMutex_);
+            stopping_ = true;
+        }
+        workCv_.notify_all();
+        for (auto& t : workers_) t.join();
+        return status;
+    }
+
+private:
+    static constexpr const char* kResultsAddress = "inproc://rtwall-client-results";
+
+    struct Work {
+        uint32_t frame;
+        uint32_t tile;
+    };
+
+    // ---- network thread -------------------------------------------------------------------
+
+    void connect() {
+        dealer_ = zmq::socket_t(ctx_, zmq::socket_type::dealer);
+        // The largest legitimate message from the master is a mesh.
+        configureSocket(dealer_, int64_t(kHeaderSize + 64 + kMaxMeshBytes), heartbeatMs_, timeoutMs());
+        dealer_.set(zmq::sockopt::reconnect_ivl, 100);
+        dealer_.set(zmq::sockopt::reconnect_ivl_max, std::max(100, settings_.maxReconnectMs));
+        dealer_.connect(settings_.connect);
+        session_ = 0;
+        ready_ = false;
+        snapshot_.reset();
+        Hello hello;
+        hello.threads = uint32_t(threads_);
+        char host[256] = {};
+        gethostname(host, sizeof host - 1);
+        hello.host = host;
+        sendNow(dealer_, encodeMessage(header(MsgType::Hello), hello));
+        lastHeard_ = nowSeconds();
+    }
+
+    int timeoutMs() const { return 3000; }
+
+    Header header(MsgType type, uint32_t frame = 0) const {
+        Header h;
+        h.type = type;
+        h.session = session_.load();
+        h.frame = frame;
+        h.sceneVersion = stateSeq_;
+        return h;
+    }
+
+    template <class Msg> void send(const Msg& msg, uint32_t frame = 0) {
+        sendNow(dealer_, encodeMessage(header(messageTypeOf(msg), frame), msg));
+        lastSent_ = nowSeconds();
+    }
+
+    int networkLoop() {
+        connect();
+        double idleSince = nowSeconds();
+        std::mt19937 jitter(std::random_device{}());
+        for (;;) {
+            zmq::pollitem_t items[] = {{dealer_.handle(), 0, ZMQ_POLLIN, 0}, {results_.handle(), 0, ZMQ_POLLIN, 0}};
+            zmq::poll(items, 2, std::chrono::milliseconds(20));
+            if (items[0].revents & ZMQ_POLLIN) {
+                for (int i = 0; i < 256; ++i) {
+                    zmq::message_t msg;
+                    if (!dealer_.recv(msg, zmq::recv_flags::dontwait)) break;
+                    lastHeard_ = idleSince = nowSeconds();
+                    if (auto status = handle(msg)) return *status;
+                }
+            }
+            if (items[1].revents & ZMQ_POLLIN) {
+                for (int i = 0; i < 256; ++i) {
+                    zmq::message_t msg;
+                    if (!results_.recv(msg, zmq::recv_flags::dontwait)) break;
+                    if (!dealer_.send(msg, zmq::send_flags::dontwait)) ++dropped_;
+                    lastSent_ = nowSeconds();
+                }
+            }
+            if (std::string why = failure(); !why.empty()) {
+                send(Goodbye{why});
+                std::fprintf(stderr, "rtwall client: %s\n", why.c_str());
+                return 1;
+            }
+            const double now = nowSeconds();
+            if (session_.load() && now - lastSent_ > heartbeatMs_ * 1e-3) send(Heartbeat{});
+            if (now - lastHeard_ > timeoutMs() * 1e-3) {
+                // The master went silent: start over with a fresh connection after a jittered
+                // pause, so that many clients do not reconnect in lock-step.
+                if (settings_.exitAfterIdleMs > 0 && now - idleSince > settings_.exitAfterIdleMs * 1e-3) {
+                    std::fprintf(stderr, "rtwall client: no master at %s for %d ms, giving up\n",
+                                 settings_.connect.c_str(), settings_.exitAfterIdleMs);
+                    return 1;
+                }
+                dropWork();
+                std::this_thread::sleep_for(std::chrono::milliseconds(std::uniform_int_distribution<int>(50, 250)(jitter)));
+                connect();
+            }
+        }
+    }
+
+    // Returns an exit status when the client should stop.
+    std::optional<int> handle(const zmq::message_t& msg) {
+        const auto* bytes = static_cast<const uint8_t*>(msg.data());
+        try {
+            const Header h = decodeHeader(bytes, msg.size());
+            const uint8_t* p = bytes + kHeaderSize;
+            const size_t n = msg.size() - kHeaderSize;
+            if (h.version != kProtocolVersion) {
+                std::fprintf(stderr, "rtwall client: the master speaks protocol version %u, this client %u\n",
+                             unsigned(h.version), unsigned(kProtocolVersion));
+                return 1;
+            }
+            if (h.type == MsgType::Welcome) {
+                const Welcome w = decodePayload<Welcome>(p, n);
+                session_ = h.session;
+                id_ = w.clientId;
+                codec_ = w.codec;
+                prefetch_ = std::max(1u, w.prefetch);
+                heartbeatMs_ = int(std::max(10u, w.heartbeatMs));
+                return std::nullopt;
+            }
+            if (h.session != session_.load() || session_.load() == 0) {
+                ++dropped_;  // from another master session, or before the handshake
+                return std::nullopt;
+            }
+            switch (h.type) {
+            case MsgType::SceneSnapshot: onSnapshot(decodePayload<SceneSnapshot>(p, n)); break;
+            case MsgType::MeshData: onMeshData(decodePayload<MeshData>(p, n)); break;
+            case MsgType::Update: {
+                Update u = decodePayload<Update>(p, n);
+                if (u.seq > stateSeq_) pendingUpdates_[u.seq] = std::move(u);
+                break;
+            }
+            case MsgType::FrameBegin: onFrameBegin(decodePayload<FrameBegin>(p, n)); break;
+            case MsgType::TileAssign: onAssign(decodePayload<TileAssign>(p, n)); break;
+            case MsgType::Heartbeat: decodePayload<Heartbeat>(p, n); break;
+            case MsgType::Goodbye: {
+                const Goodbye bye = decodePayload<Goodbye>(p, n);
+                std::fprintf(stderr, "rtwall client %u: the master says goodbye: %s\n", id_, bye.reason.c_str());
+                return 0;
+            }
+            default: ++dropped_; break;
+            }
+        } catch (const DecodeError&) {
+            ++dropped_;
+        } catch (const std::exception& e) {
+            std::lock_guard lock(workMutex_);
+            failure_ = std::string("cannot use the master's scene: ") + e.what();
+        }
+        return std::nullopt;
+    }
+
+    std::shared_ptr<const TriangleMesh> localMesh(const MeshRef& ref) {
+        if (auto it = meshes_.find(ref.hash); it != meshes_.end()) return it->second;
+        std::vector<std::filesystem::path> candidates;
+        if (!ref.source.empty() && !ref.source.starts_with("shape:")) candidates.push_back(ref.source);
+        if (!settings_.cacheDir.empty()) candidates.push_back(settings_.cacheDir / (hexOf(ref.hash) + ".rtmesh"));
+        for (const auto& path : candidates) {
+            std::error_code ec;
+            if (!std::filesystem::is_regular_file(path, ec)) continue;
+            try {
+                std::vector<uint8_t> bytes;
+                if (path.extension() == ".rtmesh") {
+                    std::ifstream in(path, std::ios::binary);
+                    bytes.assign(std::istreambuf_iterator<char>(in), {});
+                } else {
+                    bytes = encodeMesh(loadMesh(path));
+                }
+                if (hashBytes(bytes.data(), bytes.size()) != ref.hash) continue;  // a different file: not trusted
+                auto mesh = std::make_shared<const TriangleMesh>(decodeMesh(bytes.data(), bytes.size()));
+                meshes_[ref.hash] = mesh;
+                return mesh;
+            } catch (const std::exception&) {
+                continue;  // unreadable or stale: fetch it from the master instead
+            }
+        }
+        return nullptr;
+    }
+
+    void onSnapshot(SceneSnapshot snap) {
+        dropWork();
+        ready_ = false;
+        snapshot_ = std::move(snap);
+        pendingUpdates_.erase(pendingUpdates_.begin(), pendingUpdates_.upper_bound(snapshot_->updateSeq));
+        for (const MeshRef& ref : snapshot_->meshes)
+            if (!localMesh(ref)) send(MeshRequest{ref.hash});
+        tryBuildScene();
+    }
+
+    void onMeshData(MeshData md) {
+        if (hashBytes(md.mesh.data(), md.mesh.size()) != md.hash) {
+            ++dropped_;
+            return;
+        }
+        meshes_[md.hash] = std::make_shared<const TriangleMesh>(decodeMesh(md.mesh.data(), md.mesh.size()));
+        if (!settings_.cacheDir.empty()) {
+            std::error_code ec;
+            std::filesystem::create_directories(settings_.cacheDir, ec);
+            const auto path = settings_.cacheDir / (hexOf(md.hash) + ".rtmesh");
+            const auto tmp = path.string() + ".tmp";
+            std::ofstream(tmp, std::ios::binary).write(reinterpret_cast<const char*>(md.mesh.data()), std::streamsize(md.mesh.size()));
+            std::filesystem::rename(tmp, path, ec);
+        }
+        tryBuildScene();
+    }
+
+    void tryBuildScene() {
+        if (!snapshot_ || ready_) return;
+        SceneDesc desc;
+        for (const MeshRef& ref : snapshot_->meshes) {
+            auto it = meshes_.find(ref.hash);
+            if (it == meshes_.end()) return;  // still waiting for a mesh
+            desc.meshes.push_back({ref.name, ref.source, it->second});
+        }
+        desc.materials = snapshot_->materials;
+        desc.instances = snapshot_->instances;
+        desc.lights = snapshot_->lights;
+        desc.cameras = {snapshot_->camera};
+        desc.settings = snapshot_->settings;
+        const Hash128 hash = stateHash(*snapshot_);
+        {
+            std::unique_lock lock(sceneMutex_);
+            scene_ = std::make_unique<Scene>(desc);
+            camera_ = snapshot_->camera;
+            renderSettings_ = snapshot_->settings;
+            renderSettings_.threads = 1;
+            tiles_ = makeTiles(renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
+            stateSeq_ = snapshot_->updateSeq;
+        }
+        ready_ = true;
+        send(Ready{stateSeq_, hash});
+    }
+
+    // Applies the buffered updates up to `seq`; false (and a resync request) on a gap.
+    bool catchUp(uint32_t seq) {
+        if (seq == stateSeq_) return true;
+        if (seq < stateSeq_) return false;
+        for (uint32_t next = stateSeq_ + 1; next <= seq; ++next)
+            if (!pendingUpdates_.count(next)) {
+                ready_ = false;
+                send(ResyncRequest{stateSeq_});
+                return false;
+            }
+        std::unique_lock lock(sceneMutex_);
+        for (uint32_t next = stateSeq_ + 1; next <= seq; ++next) {
+            const Update& u = pendingUpdates_[next];
+            for (const Change& c : u.changes) {
+                if (auto* cam = std::get_if<CameraChange>(&c)) camera_ = cam->camera;
+                else if (auto* t = std::get_if<TransformChange>(&c)) scene_->setInstanceTransform(t->instance, t->transform);
+                else if (auto* m = std::get_if<MaterialChange>(&c)) scene_->setMaterial(m->material, m->value);
+                else if (auto* l = std::get_if<LightChange>(&c)) scene_->setLight(l->light, l->value);
+                else if (auto* st = std::get_if<SettingsChange>(&c)) {
+                    renderSettings_ = st->settings;
+                    renderSettings_.threads = 1;
+                    tiles_ = makeTiles(renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
+                }
+            }
+            pendingUpdates_.erase(next);
+        }
+        scene_->commit();
+        stateSeq_ = seq;
+        return true;
+    }
+
+    void onFrameBegin(const FrameBegin& fb) {
+        dropWork();
+        if (!ready_ || !catchUp(fb.updateSeq)) return;
+        frame_.store(fb.frame);
+        send(TileRequest{fb.frame, prefetch_}, fb.frame);
+    }
+
+    void onAssign(const TileAssign& a) {
+        if (!ready_ || a.frame != frame_.load()) {
+            ++dropped_;
+            return;
+        }
+        {
+            std::lock_guard lock(workMutex_);
+            for (uint32_t t : a.tiles) work_.push_back({a.frame, t});
+        }
+        workCv_.notify_all();
+    }
+
+    void dropWork() {
+        std::lock_guard lock(workMutex_);
+        work_.clear();
+        frame_.store(0);
+    }
+
+    std::string failure() {
+        std::lock_guard lock(workMutex_);
+        return failure_;
+    }
+
+    // ---- render threads -------------------------------------------------------------------
+
+    void workerLoop() {
+        zmq::socket_t out(ctx_, zmq::socket_type::push);
+        out.set(zmq::sockopt::linger, 0);
+        out.connect(kResultsAddress);
+        std::vector<uint8_t> pixels;
+        for (;;) {
+            Work w;
+            {
+                std::unique_lock lock(workMutex_);
+                workCv_.wait(lock, [&] { return stopping_ || !work_.empty(); });
+                if (stopping_) return;
+                w = work_.front();
+                work_.pop_front();
+            }
+            try {
+                std::shared_lock lock(sceneMutex_);
+                if (w.frame != frame_.load() || !scene_ || w.tile >= tiles_.size()) continue;  // stale or bogus
+                const TileRect r = tiles_[w.tile];
+                pixels.resize(size_t(r.width()) * r.height() * 3);
+                const auto t0 = std::chrono::steady_clock::now();
+                renderTile(*scene_, Camera(camera_, renderSettings_.width, renderSettings_.height), r, w.frame,
+                           renderSettings_, {pixels.data(), size_t(r.width()) * 3});
+                const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                TileResult result;
+                result.frame = w.frame;
+                result.tile = w.tile;
+                result.codec = codec_.codec;
+                result.renderMicros = uint32_t(std::min(seconds * 1e6, 4e9));
+                encodeTile(codec_, pixels.data(), r.width(), r.height(), size_t(r.width()) * 3, result.pixels);
+                const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame), result);
+                out.send(zmq::const_buffer(bytes.data(), bytes.size()), zmq::send_flags::none);
+            } catch (const std::exception& e) {
+                // Tell the master why before going away (the network thread sends it).
+                std::lock_guard lock(workMutex_);
+                if (failure_.empty())
+                    failure_ = "frame " + std::to_string(w.frame) + ", tile " + std::to_string(w.tile) + ": " + e.what();
+                return;
+            }
+        }
+    }
+
+    ClientSettings settings_;
+    int threads_ = 1;
+    zmq::context_t ctx_{1};
+    zmq::socket_t dealer_;
+    zmq::socket_t results_{ctx_, zmq::socket_type::pull};
+
+    std::atomic<uint64_t> session_{0};  // read by render threads when they write results
+    uint32_t id_ = 0;
+    CodecSettings codec_;
+    uint32_t prefetch_ = 4;
+    int heartbeatMs_ = 250;
+    double lastHeard_ = 0, lastSent_ = 0;
+    uint64_t dropped_ = 0;
+    std::string failure_;  // guarded by workMutex_
+
+    std::optional<SceneSnapshot> snapshot_;
+    std::map<Hash128, std::shared_ptr<const TriangleMesh>> meshes_;
+    std::map<uint32_t, Update> pendingUpdates_;
+    bool ready_ = false;
+    uint32_t stateSeq_ = 0;
+
+    // Shared with the render threads.
+    std::shared_mutex sceneMutex_;  // render threads read; the network thread changes the scene
+    std::unique_ptr<Scene> scene_;
+    CameraDesc camera_;
+    RenderSettings renderSettings_;
+    std::vector<TileRect> tiles_;
+    std::atomic<uint32_t> frame_{0};
+
+    std::mutex workMutex_;
+    std::condition_variable workCv_;
+    std::deque<Work> work_;
+    bool stopping_ = false;
+    std::vector<std::thread> workers_;
+};
+
+}  // namespace
+
+int runClient(const ClientSettings& settings) {
+    ClientRuntime client(settings);
+    return client.run();
+}
+
+}  // namespace rtwall

@@ -1,0 +1,641 @@
+// The display master's network side.
+//
+// One network thread owns the ROUTER socket, the TileScheduler and the FrameAssembler's claims;
+// the application thread talks to it through a command queue and an inproc wake-up socket, so
+// updates stream to the clients the moment they are made (asynchronous rendering). Tiles are
+// decoded by a small pool of threads straight into the framebuffer.
+#include "assembler.h"
+#include "codec.h"
+#include "net.h"
+#include "protocol.h"
+#include "scheduler.h"
+
+#include <rtwall/cluster.h>
+
+#include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <cstdio>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <random>
+#include <thread>
+#include <utility>
+
+namespace rtwall {
+
+using namespace cluster;
+
+namespace {
+
+struct ClientState {
+    uint32_t id = 0;
+    std::string peer;
+    double lastSeen = 0;
+    double lastSent = 0;
+    bool ready = false;       // proved it holds the state at stateSeq
+    uint32_t stateSeq = 0;    // the snapshot it was sent; it also has every update after it
+    uint32_t credits = 0;     // tiles it asked for and has not been given
+    uint32_t threads = 0;
+    double busySeconds = 0;   // render time reported this frame
+    const char* deathReason = nullptr;  // set when it must go; reaped outside any iteration
+};
+
+// Decodes accepted tiles into the framebuffer on a few threads.
+class DecodePool {
+public:
+    struct Job {
+        std::vector<uint8_t> pixels;  // encoded
+        TileCodec codec;
+        uint32_t tile;
+        TileRect rect;
+        TileView view;
+    };
+
+    DecodePool(FrameAssembler& assembler, int threads, std::function<void()> onComplete)
+        : assembler_(assembler), onComplete_(std::move(onComplete)) {
+        for (int i = 0; i < threads; ++i) workers_.emplace_back([this] { run(); });
+    }
+    ~DecodePool() {
+        {
+            std::lock_guard lock(m_);
+            stop_ = true;
+        }
+        cv_.notify_all();
+        for (auto& t : workers_) t.join();
+    }
+    void push(Job job) {
+        {
+            std::lock_guard lock(m_);
+            jobs_.push_back(std::move(job));
+        }
+        cv_.notify_one();
+    }
+    uint64_t failures() const { return failures_.load(); }
+
+private:
+    void run() {
+        for (;;) {
+            Job job;
+            {
+                std::unique_lock lock(m_);
+                cv_.wait(lock, [&] { return stop_ || !jobs_.empty(); });
+                if (jobs_.empty()) return;
+                job = std::move(jobs_.front());
+                jobs_.pop_front();
+            }
+            try {
+                decodeTile(job.codec, job.pixels.data(), job.pixels.size(), job.rect.width(), job.rect.height(),
+                           job.view.data, job.view.stride);
+                assembler_.commit(job.tile);
+                if (assembler_.complete()) onComplete_();
+            } catch (const std::exception&) {
+                // A result that does not decode is dropped; the tile becomes claimable again
+                // and the scheduler's straggler logic has it rendered once more.
+                assembler_.release(job.tile);
+                ++failures_;
+            }
+        }
+    }
+
+    FrameAssembler& assembler_;
+    std::function<void()> onComplete_;
+    std::mutex m_;
+    std::condition_variable cv_;
+    std::deque<Job> jobs_;
+    bool stop_ = false;
+    std::atomic<uint64_t> failures_{0};
+    std::vector<std::thread> workers_;
+};
+
+struct Command {
+    enum Kind { kUpdate, kBeginFrame, kStop } kind;
+    Update update;              // kUpdate; for kBeginFrame only its seq: the state the frame renders
+    uint32_t frame = 0;
+    RenderSettings settings;    // kBeginFrame: image and tile size at that state
+};
+
+}  // namespace
+
+struct Master::Impl {
+    ClusterSettings settings;
+    SceneDesc scene;       // the master's state: geometry once, shared with nobody
+    CameraDesc camera;
+    std::vector<MeshRef> meshRefs;
+    // The scene state above is written by the application thread (set*) and read by the
+    // network thread (snapshots for joining clients): stateMutex guards it, seq and hashAt.
+    mutable std::mutex stateMutex;
+    uint32_t seq = 0;      // state sequence number
+    std::map<uint32_t, Hash128> hashAt;  // recent states, to check a client's Ready
+    uint64_t session = 0;
+
+    zmq::context_t ctx{1};
+    zmq::socket_t router{ctx, zmq::socket_type::router};
+    zmq::socket_t wakeSend{ctx, zmq::socket_type::pair};
+    zmq::socket_t wakeRecv{ctx, zmq::socket_type::pair};
+    std::string boundEndpoint;
+
+    std::mutex m;                 // guards commands, the frame hand-over and counters below
+    std::condition_variable cv;
+    std::deque<Command> commands;
+    std::mutex wakeMutex;         // zmq sockets are not thread-safe: one writer at a time
+    uint32_t completedFrame = 0;
+    Image completedImage;
+    FrameReport completedReport;
+    int readyClients = 0;
+
+    // Network-thread state.
+    std::map<std::string, ClientState> clients;  // by ZMQ peer identity
+    uint32_t nextClientId = 1;
+    TileScheduler scheduler;
+    FrameAssembler assembler;
+    std::unique_ptr<DecodePool> decoder;
+    uint32_t currentFrame = 0;
+    uint32_t frameSeq = 0;        // state the current frame renders
+    bool frameActive = false;
+    double frameStart = 0;
+    uint64_t frameBytes = 0;
+    std::atomic<bool> frameDecoded{false};
+    std::atomic<uint64_t> dropped{0};
+
+    uint32_t lastBegun = 0;       // application side
+    bool inFlight = false;
+    std::thread net;
+
+    Impl(const SceneDesc& s, const ClusterSettings& cs)
+        : settings(cs), scene(s), scheduler(SchedulerOptions{cs.affinity, cs.stragglerFactor, 0.05, 1}) {}
+
+    // The current state and its sequence number, consistent with each other.
+    SceneSnapshot snapshot() const {
+        std::lock_guard lock(stateMutex);
+        return snapshotLocked();
+    }
+    SceneSnapshot snapshotLocked() const {
+        SceneSnapshot snap;
+        snap.updateSeq = seq;
+        snap.meshes = meshRefs;
+        snap.materials = scene.materials;
+        snap.instances = scene.instances;
+        snap.lights = scene.lights;
+        snap.camera = camera;
+        snap.settings = scene.settings;
+        return snap;
+    }
+
+    Header header(MsgType type, uint32_t frame = 0) const {
+        Header h;
+        h.type = type;
+        h.session = session;
+        h.frame = frame;
+        h.sceneVersion = frameSeq;
+        return h;
+    }
+
+    template <class Msg> bool send(ClientState& c, const Msg& msg, uint32_t frame = 0) {
+        const bool ok = sendToPeer(router, c.peer, encodeMessage(header(messageTypeOf(msg), frame), msg));
+        c.lastSent = nowSeconds();
+        return ok;
+    }
+
+    void wake() {
+        std::lock_guard lock(wakeMutex);
+        const uint8_t one = 1;
+        wakeSend.send(zmq::const_buffer(&one, 1), zmq::send_flags::dontwait);
+    }
+
+    // Marks a client for removal; reap() removes it outside any loop over the clients.
+    void markDead(ClientState& c, const char* why) {
+        if (!c.deathReason) c.deathReason = why;
+    }
+
+    void reap() {
+        bool any = false;
+        for (auto it = clients.begin(); it != clients.end();) {
+            if (!it->second.deathReason) {
+                ++it;
+                continue;
+            }
+            std::fprintf(stderr, "rtwall master: client %u leaves: %s\n", it->second.id, it->second.deathReason);
+            scheduler.removeClient(it->second.id);  // its tiles go back to the shared queue
+            if (it->second.ready) {
+                std::lock_guard lock(m);
+                --readyClients;
+            }
+            it = clients.erase(it);
+            any = true;
+        }
+        if (any) serveAll();
+    }
+
+    void serve(ClientState& c) {
+        if (!frameActive || !c.ready || c.credits == 0 || c.stateSeq > frameSeq) return;
+        TileAssign assign;
+        assign.frame = currentFrame;
+        assign.tiles = scheduler.request(c.id, c.credits, nowSeconds());
+        if (assign.tiles.empty()) return;
+        c.credits -= uint32_t(assign.tiles.size());
+        if (!send(c, assign, currentFrame)) markDead(c, "its queue is full or it is unreachable");
+    }
+
+    void serveAll() {
+        for (auto& [peer, c] : clients)
+            if (!c.deathReason) serve(c);
+    }
+
+    void beginFrame(uint32_t frame, uint32_t stateSeq, const RenderSettings& rs) {
+        currentFrame = frame;
+        frameSeq = stateSeq;
+        frameActive = true;
+        frameStart = nowSeconds();
+        frameBytes = 0;
+        frameDecoded = false;
+        assembler.beginFrame(frame, rs.width, rs.height, rs.tileSize);
+        scheduler.beginFrame(frame, uint32_t(assembler.tiles().size()));
+        FrameBegin fb{frame, frameSeq};
+        for (auto& [peer, c] : clients) {
+            c.credits = 0;
+            c.busySeconds = 0;
+            if (c.ready && c.stateSeq <= frameSeq && !send(c, fb, frame)) markDead(c, "its queue is full or it is unreachable");
+        }
+    }
+
+    void finishFrameIfDone() {
+        if (!frameActive || !frameDecoded.load()) return;
+        frameActive = false;
+        const double seconds = nowSeconds() - frameStart;
+        FrameReport r;
+        r.frame = currentFrame;
+        r.seconds = seconds;
+        r.bytes = frameBytes;
+        const SchedulerStats& st = scheduler.stats();
+        r.tilesStolen = st.stolen;
+        r.tilesReissued = st.reissued;
+        r.duplicatesDropped = st.duplicates;
+        r.staleDropped = st.stale;
+        r.affinityHits = st.affinityHits;
+        for (const auto& [peer, c] : clients) {
+            ClientReport cr;
+            cr.id = c.id;
+            auto done = st.completedBy.find(c.id);
+            cr.tiles = done == st.completedBy.end() ? 0 : done->second;
+            auto stolen = st.stolenBy.find(c.id);
+            cr.stolen = stolen == st.stolenBy.end() ? 0 : stolen->second;
+            cr.busyFraction = seconds > 0 ? c.busySeconds / (seconds * std::max(1u, c.threads)) : 0;
+            r.clients.push_back(cr);
+        }
+        {
+            std::lock_guard lock(m);
+            completedImage = std::exchange(assembler.image(), Image{});  // the assembler starts the next frame afresh
+            completedReport = std::move(r);
+            completedFrame = currentFrame;
+        }
+        cv.notify_all();
+    }
+
+    void onHello(const std::string& peer, const Header& h, const uint8_t* data, size_t size) {
+        const Hello hello = decodePayload<Hello>(data, size);
+        if (h.version != kProtocolVersion || hello.protocolVersion != kProtocolVersion) {
+            Goodbye bye{"protocol version " + std::to_string(hello.protocolVersion) + " is not the master's " +
+                        std::to_string(kProtocolVersion)};
+            sendToPeer(router, peer, encodeMessage(header(MsgType::Goodbye), bye));
+            std::fprintf(stderr, "rtwall master: refused a client speaking protocol version %u (master: %u)\n",
+                         unsigned(hello.protocolVersion), unsigned(kProtocolVersion));
+            return;
+        }
+        if (auto old = clients.find(peer); old != clients.end()) {
+            markDead(old->second, "said hello again");
+            reap();
+        }
+        ClientState c;
+        c.id = nextClientId++;
+        c.peer = peer;
+        c.lastSeen = nowSeconds();
+        c.threads = std::max(1u, hello.threads);
+        const SceneSnapshot snap = snapshot();
+        c.stateSeq = snap.updateSeq;
+        scheduler.addClient(c.id);
+        auto& ref = clients[peer] = c;
+        Welcome w{ref.id, settings.codec, uint32_t(settings.prefetch), uint32_t(settings.heartbeatMs)};
+        if (!send(ref, w) || !send(ref, snap)) markDead(ref, "unreachable during the handshake");
+    }
+
+    void onReady(ClientState& c, const uint8_t* data, size_t size) {
+        const Ready r = decodePayload<Ready>(data, size);
+        bool matches;
+        {
+            std::lock_guard lock(stateMutex);
+            auto it = hashAt.find(r.updateSeq);
+            matches = r.updateSeq == c.stateSeq && it != hashAt.end() && it->second == r.stateHash;
+        }
+        if (!matches) {
+            // It does not hold the state we sent: never accept its tiles; send the state again.
+            ++dropped;
+            const SceneSnapshot snap = snapshot();
+            c.stateSeq = snap.updateSeq;
+            if (!send(c, snap)) markDead(c, "unreachable during a resync");
+            return;
+        }
+        if (!c.ready) {
+            c.ready = true;
+            {
+                std::lock_guard lock(m);
+                ++readyClients;
+            }
+            cv.notify_all();
+        }
+        if (frameActive && c.stateSeq <= frameSeq) send(c, FrameBegin{currentFrame, frameSeq}, currentFrame);
+    }
+
+    void onMeshRequest(ClientState& c, const uint8_t* data, size_t size) {
+        const MeshRequest req = decodePayload<MeshRequest>(data, size);
+        for (size_t i = 0; i < meshRefs.size(); ++i)
+            if (meshRefs[i].hash == req.hash) {
+                MeshData md{req.hash, encodeMesh(*scene.meshes[i].mesh)};
+                if (!send(c, md)) markDead(c, "unreachable while sending a mesh");
+                return;
+            }
+        ++dropped;
+    }
+
+    void onTileResult(ClientState& c, const Header& h, const uint8_t* data, size_t size) {
+        TileResult r = decodePayload<TileResult>(data, size);
+        c.busySeconds += r.renderMicros * 1e-6;
+        if (!frameActive || h.frame != currentFrame || r.frame != currentFrame) {
+            ++dropped;  // a tile of a frame that is no longer current
+            return;
+        }
+        const auto result = scheduler.complete(c.id, r.frame, r.tile, nowSeconds());
+        c.credits += 1;  // a result is also a request for the next tile
+        if (result == TileScheduler::Result::Accepted) {
+            TileRect rect;
+            TileView view;
+            if (assembler.claim(r.frame, r.tile, rect, view) == FrameAssembler::Claim::Granted) {
+                frameBytes += r.pixels.size();
+                decoder->push({std::move(r.pixels), r.codec, r.tile, rect, view});
+            }
+        }
+        serve(c);
+    }
+
+    void handle(zmq::message_t& identity, zmq::message_t& msg) {
+        const std::string peer(static_cast<const char*>(identity.data()), identity.size());
+        const auto* bytes = static_cast<const uint8_t*>(msg.data());
+        Header h;
+        try {
+            h = decodeHeader(bytes, msg.size());
+        } catch (const DecodeError&) {
+            ++dropped;
+            return;
+        }
+        const uint8_t* payload = bytes + kHeaderSize;
+        const size_t payloadSize = msg.size() - kHeaderSize;
+        try {
+            if (h.type == MsgType::Hello) {
+                onHello(peer, h, payload, payloadSize);
+                return;
+            }
+            auto it = clients.find(peer);
+            if (it == clients.end() || h.session != session || h.version != kProtocolVersion) {
+                ++dropped;  // not (or no longer) one of ours
+                return;
+            }
+            ClientState& c = it->second;
+            c.lastSeen = nowSeconds();
+            switch (h.type) {
+            case MsgType::Ready: onReady(c, payload, payloadSize); break;
+            case MsgType::MeshRequest: onMeshRequest(c, payload, payloadSize); break;
+            case MsgType::TileRequest: {
+                const TileRequest req = decodePayload<TileRequest>(payload, payloadSize);
+                if (frameActive && req.frame == currentFrame) {
+                    c.credits = std::min<uint32_t>(c.credits + req.count, 64);
+                    serve(c);
+                } else {
+                    ++dropped;
+                }
+                break;
+            }
+            case MsgType::TileResult: onTileResult(c, h, payload, payloadSize); break;
+            case MsgType::Heartbeat: decodePayload<Heartbeat>(payload, payloadSize); break;
+            case MsgType::ResyncRequest:
+                decodePayload<ResyncRequest>(payload, payloadSize);
+                if (c.ready) {
+                    c.ready = false;
+                    std::lock_guard lock(m);
+                    --readyClients;
+                }
+                {
+                    const SceneSnapshot snap = snapshot();
+                    c.stateSeq = snap.updateSeq;
+                    if (!send(c, snap)) markDead(c, "unreachable during a resync");
+                }
+                break;
+            case MsgType::Goodbye: {
+                const Goodbye bye = decodePayload<Goodbye>(payload, payloadSize);
+                std::fprintf(stderr, "rtwall master: client %u says goodbye: %s\n", c.id, bye.reason.c_str());
+                markDead(c, "it said goodbye");
+                break;
+            }
+            default: ++dropped; break;  // a master-to-client type from a client
+            }
+        } catch (const DecodeError&) {
+            ++dropped;
+        }
+    }
+
+    void runCommands() {
+        std::deque<Command> todo;
+        {
+            std::lock_guard lock(m);
+            todo.swap(commands);
+        }
+        for (Command& cmd : todo) {
+            if (cmd.kind == Command::kUpdate) {
+                for (auto& [peer, c] : clients)
+                    if (!send(c, cmd.update)) markDead(c, "its queue is full or it is unreachable");
+            } else if (cmd.kind == Command::kBeginFrame) {
+                beginFrame(cmd.frame, cmd.update.seq, cmd.settings);
+            }
+        }
+    }
+
+    void checkTimeouts() {
+        const double now = nowSeconds();
+        const double timeout = settings.timeoutMs * 1e-3, beat = settings.heartbeatMs * 1e-3;
+        for (auto& [peer, c] : clients) {
+            if (now - c.lastSeen > timeout) markDead(c, "heartbeat timeout");
+            else if (now - c.lastSent > beat && !send(c, Heartbeat{})) markDead(c, "its queue is full or it is unreachable");
+        }
+    }
+
+    void loop() {
+        zmq::pollitem_t items[] = {{router.handle(), 0, ZMQ_POLLIN, 0}, {wakeRecv.handle(), 0, ZMQ_POLLIN, 0}};
+        double lastHousekeeping = 0;
+        for (;;) {
+            zmq::poll(items, 2, std::chrono::milliseconds(frameActive ? 2 : 20));
+            if (items[1].revents & ZMQ_POLLIN) {
+                zmq::message_t ignored;
+                while (wakeRecv.recv(ignored, zmq::recv_flags::dontwait)) {
+                }
+                {
+                    std::lock_guard lock(m);
+                    for (const Command& c : commands)
+                        if (c.kind == Command::kStop) return;
+                }
+                runCommands();
+            }
+            // Drain what is queued, bounded so commands and timers are not starved.
+            for (int i = 0; i < 256 && (items[0].revents & ZMQ_POLLIN); ++i) {
+                zmq::message_t identity, msg;
+                if (!router.recv(identity, zmq::recv_flags::dontwait)) break;
+                if (!identity.more() || !router.recv(msg, zmq::recv_flags::dontwait)) {
+                    ++dropped;
+                    continue;
+                }
+                while (msg.more()) {  // extra frames: not ours
+                    zmq::message_t extra;
+                    if (!router.recv(extra, zmq::recv_flags::dontwait)) break;
+                    ++dropped;
+                }
+                handle(identity, msg);
+            }
+            reap();
+            finishFrameIfDone();
+            const double now = nowSeconds();
+            if (now - lastHousekeeping > 0.002) {
+                lastHousekeeping = now;
+                checkTimeouts();
+                reap();
+                serveAll();  // re-queued tiles of departed clients, stragglers
+            }
+        }
+    }
+};
+
+Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(std::make_unique<Impl>(scene, settings)) {
+    Impl& s = *impl_;
+    if (scene.cameras.empty()) throw InputError("the scene has no camera");
+    s.camera = scene.cameras.front();
+    std::random_device rd;
+    s.session = (uint64_t(rd()) << 32) ^ rd();
+    for (const MeshDesc& md : scene.meshes) {
+        const std::vector<uint8_t> bytes = encodeMesh(*md.mesh);  // only to hash it; freed at once
+        s.meshRefs.push_back({md.name, md.source, hashBytes(bytes.data(), bytes.size()), bytes.size()});
+    }
+    s.hashAt[s.seq] = stateHash(s.snapshotLocked());
+
+    // The largest legitimate message a client sends is a result for the largest tile allowed.
+    const int64_t maxResult = int64_t(kHeaderSize + 64 + maxEncodedTileBytes(1024, 1024));
+    configureSocket(s.router, maxResult, settings.heartbeatMs, settings.timeoutMs);
+    s.router.set(zmq::sockopt::router_mandatory, 1);
+    s.router.bind(settings.bind);
+    s.boundEndpoint = s.router.get(zmq::sockopt::last_endpoint);
+    const std::string wakeAddress = "inproc://rtwall-master-wake";
+    s.wakeRecv.bind(wakeAddress);
+    s.wakeSend.connect(wakeAddress);
+
+    const int decodeThreads = std::clamp(int(std::thread::hardware_concurrency()) / 2, 1, 4);
+    s.decoder = std::make_unique<DecodePool>(s.assembler, decodeThreads, [this] {
+        impl_->frameDecoded = true;
+        impl_->wake();
+    });
+    s.net = std::thread([this] {
+        try {
+            impl_->loop();
+        } catch (const std::exception& e) {
+            // No thread dies silently: report and let waiting callers fail their timeouts.
+            std::fprintf(stderr, "rtwall master: network thread stopped: %s\n", e.what());
+        }
+    });
+}
+
+Master::~Master() {
+    Impl& s = *impl_;
+    {
+        std::lock_guard lock(s.m);
+        s.commands.push_back({Command::kStop, {}, 0, {}});
+    }
+    s.wake();
+    if (s.net.joinable()) s.net.join();
+    for (auto& [peer, c] : s.clients) s.send(c, Goodbye{"the master is shutting down"});
+    s.decoder.reset();
+}
+
+std::string Master::endpoint() const { return impl_->boundEndpoint; }
+
+int Master::connectedClients() const {
+    std::lock_guard lock(impl_->m);
+    return impl_->readyClients;
+}
+
+bool Master::waitForClients(int count, int timeoutMs) {
+    std::unique_lock lock(impl_->m);
+    return impl_->cv.wait_for(lock, std::chrono::milliseconds(timeoutMs), [&] { return impl_->readyClients >= count; });
+}
+
+namespace {
+
+void pushUpdate(Master::Impl& s, Change change) {
+    Command cmd{Command::kUpdate, {}, 0, {}};
+    {
+        std::lock_guard lock(s.stateMutex);
+        applyChange(s.scene, s.camera, change);  // throws for an index out of range, before anything changed
+        ++s.seq;
+        s.hashAt[s.seq] = stateHash(s.snapshotLocked());
+        while (s.hashAt.size() > 1024) s.hashAt.erase(s.hashAt.begin());
+        cmd.update.seq = s.seq;
+    }
+    cmd.update.changes.push_back(std::move(change));
+    {
+        std::lock_guard lock(s.m);
+        s.commands.push_back(std::move(cmd));
+    }
+    s.wake();
+}
+
+}  // namespace
+
+void Master::setCamera(const CameraDesc& camera) { pushUpdate(*impl_, CameraChange{camera}); }
+void Master::setInstanceTransform(uint32_t instance, const Transform& t) { pushUpdate(*impl_, TransformChange{instance, t}); }
+void Master::setMaterial(uint32_t material, const Material& value) { pushUpdate(*impl_, MaterialChange{material, value}); }
+void Master::setLight(uint32_t light, const Light& value) { pushUpdate(*impl_, LightChange{light, value}); }
+void Master::setRenderSettings(const RenderSettings& settings) { pushUpdate(*impl_, SettingsChange{settings}); }
+
+Image Master::renderFrame(FrameReport* report) {
+    Impl& s = *impl_;
+    auto begin = [&] {
+        const uint32_t frame = ++s.lastBegun;
+        Command cmd{Command::kBeginFrame, {}, frame, {}};
+        {
+            // The frame renders the state as it is now; later updates belong to later frames.
+            std::lock_guard lock(s.stateMutex);
+            cmd.update.seq = s.seq;
+            cmd.settings = s.scene.settings;
+        }
+        {
+            std::lock_guard lock(s.m);
+            s.commands.push_back(std::move(cmd));
+        }
+        s.wake();
+        s.inFlight = true;
+        return frame;
+    };
+    auto wait = [&](uint32_t frame) {
+        std::unique_lock lock(s.m);
+        s.cv.wait(lock, [&] { return s.completedFrame >= frame; });
+        s.inFlight = false;
+        if (report) *report = s.completedReport;
+        return std::move(s.completedImage);
+    };
+    if (!s.settings.async) return wait(begin());
+    // Asynchronous: finish the frame in flight, start the next at once (it carries every update
+    // made so far), and return the finished one while the clients already render its successor.
+    const uint32_t waitFor = s.inFlight ? s.lastBegun : begin();
+    Image img = wait(waitFor);
+    begin();
+    return img;
+}
+
+uint64_t Master::droppedMessages() const { return impl_->dropped.load(); }
+
+}  // namespace rtwall

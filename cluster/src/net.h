@@ -1,0 +1,56 @@
+// ZeroMQ helpers shared by the master and the client: socket options in one place, and
+// sends that never block.
+#pragma once
+
+#include "protocol.h"
+
+#include <zmq.hpp>
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+
+namespace rtwall::cluster {
+
+inline double nowSeconds() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// High-water marks, in messages. A tile result is at most one tile's pixels; 1000 of them in
+// a queue are a few tens of MB at worst, so memory stays bounded while a peer is slow.
+inline constexpr int kSendHwm = 1000;
+inline constexpr int kReceiveHwm = 1000;
+
+// Options every rtwall socket gets: finite linger (a dead peer cannot keep the process alive),
+// bounded queues, the largest legitimate message as ZMQ_MAXMSGSIZE, and ZMTP heartbeats so a
+// peer that vanished without a FIN is noticed by the transport as well as by our own timeouts.
+inline void configureSocket(zmq::socket_t& s, int64_t maxMessageBytes, int heartbeatMs, int timeoutMs) {
+    s.set(zmq::sockopt::linger, 100);
+    s.set(zmq::sockopt::sndhwm, kSendHwm);
+    s.set(zmq::sockopt::rcvhwm, kReceiveHwm);
+    s.set(zmq::sockopt::maxmsgsize, maxMessageBytes);
+    s.set(zmq::sockopt::heartbeat_ivl, heartbeatMs);
+    s.set(zmq::sockopt::heartbeat_timeout, timeoutMs);
+    s.set(zmq::sockopt::heartbeat_ttl, timeoutMs);
+}
+
+// Non-blocking send of one message; false if the peer's queue is full or it is unreachable
+// (ZMQ_ROUTER_MANDATORY), which the caller treats as a sign of a dead or stuck peer.
+inline bool sendNow(zmq::socket_t& s, const std::vector<uint8_t>& bytes) {
+    try {
+        return s.send(zmq::const_buffer(bytes.data(), bytes.size()), zmq::send_flags::dontwait).has_value();
+    } catch (const zmq::error_t&) {
+        return false;
+    }
+}
+
+inline bool sendToPeer(zmq::socket_t& router, const std::string& peer, const std::vector<uint8_t>& bytes) {
+    try {
+        if (!router.send(zmq::buffer(peer), zmq::send_flags::sndmore | zmq::send_flags::dontwait)) return false;
+        return router.send(zmq::const_buffer(bytes.data(), bytes.size()), zmq::send_flags::dontwait).has_value();
+    } catch (const zmq::error_t&) {
+        return false;
+    }
+}
+
+}  // namespace rtwall::cluster

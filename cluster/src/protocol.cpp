@@ -1,0 +1,681 @@
+#include "protocol.h"
+
+#include "codec.h"
+
+#include <xxhash.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <type_traits>
+
+namespace rtwall::cluster {
+
+namespace {
+
+// Ranges the engine relies on; the same bounds the scene-file loader enforces.
+constexpr int kMaxImageSide = 16384;
+constexpr int kMaxTileSize = 1024;
+constexpr int kMaxDepth = 64;
+constexpr int kMaxSupersample = 16;
+constexpr int kMaxThreads = 1024;
+
+[[noreturn]] void fail(const std::string& what) { throw DecodeError(what); }
+
+// -- Field helpers -----------------------------------------------------------------------------
+
+int readInt(Reader& r, int lo, int hi, const char* what) {
+    const int32_t v = r.i32();
+    if (v < lo || v > hi)
+        fail(std::string(what) + " " + std::to_string(v) + " is out of range [" + std::to_string(lo) + ", " +
+             std::to_string(hi) + "]");
+    return v;
+}
+
+template <class E> void writeEnum(Writer& w, E v) { w.u8(uint8_t(v)); }
+
+template <class E> E readEnum(Reader& r, E last, const char* what) {
+    const uint8_t v = r.u8();
+    if (v > uint8_t(last)) fail(std::string("unknown ") + what + " " + std::to_string(v));
+    return E(v);
+}
+
+void write(Writer& w, const Float3& v) {
+    w.f32(v.x);
+    w.f32(v.y);
+    w.f32(v.z);
+}
+
+Float3 readFloat3(Reader& r) {
+    Float3 v;
+    v.x = r.f32();
+    v.y = r.f32();
+    v.z = r.f32();
+    return v;
+}
+
+Color readUnitColor(Reader& r, const char* what) {
+    // A surface cannot reflect more than it receives; the shading code assumes it.
+    const Color c = readFloat3(r);
+    for (float v : {c.x, c.y, c.z})
+        if (!(v >= 0.0f && v <= 1.0f))
+            fail(std::string(what) + " component " + std::to_string(v) + " is outside [0, 1]");
+    return c;
+}
+
+void write(Writer& w, const Hash128& h) {
+    w.u64(h[0]);
+    w.u64(h[1]);
+}
+
+Hash128 readHash(Reader& r) {
+    Hash128 h;
+    h[0] = r.u64();
+    h[1] = r.u64();
+    return h;
+}
+
+// -- Scene values --------------------------------------------------------------------------------
+
+void write(Writer& w, const CodecSettings& c) {
+    writeEnum(w, c.codec);
+    w.i32(c.jpegQuality);
+    w.boolean(c.jpegSubsample);
+    w.i32(c.zstdLevel);
+}
+
+void read(Reader& r, CodecSettings& c) {
+    c.codec = readEnum(r, TileCodec::Jpeg, "tile codec");
+    c.jpegQuality = readInt(r, 1, 100, "JPEG quality");
+    c.jpegSubsample = r.boolean();
+    c.zstdLevel = readInt(r, 1, 19, "zstd level");
+}
+
+void write(Writer& w, const Transform& t) {
+    for (double v : t.m) w.f64(v);
+}
+
+void read(Reader& r, Transform& t) {
+    for (double& v : t.m) v = r.f64();
+}
+
+void write(Writer& w, const Material& m) {
+    w.string(m.name);
+    writeEnum(w, m.type);
+    write(w, m.color);
+    write(w, m.specular);
+    w.f32(m.shininess);
+    w.f32(m.ior);
+}
+
+void read(Reader& r, Material& m) {
+    m.name = r.string(kMaxStringBytes);
+    m.type = readEnum(r, MaterialType::Glass, "material type");
+    m.color = readUnitColor(r, "material color");
+    m.specular = readUnitColor(r, "material specular");
+    m.shininess = r.f32();
+    // A negative exponent makes pow() blow up at grazing angles.
+    if (m.shininess < 0.0f) fail("material shininess " + std::to_string(m.shininess) + " is negative");
+    m.ior = r.f32();
+    if (!(m.ior >= 1.0f && m.ior <= 4.0f)) fail("material ior " + std::to_string(m.ior) + " is outside [1, 4]");
+}
+
+void write(Writer& w, const Light& l) {
+    writeEnum(w, l.type);
+    write(w, l.position);
+    write(w, l.direction);
+    write(w, l.color);
+    w.f32(l.intensity);
+}
+
+void read(Reader& r, Light& l) {
+    l.type = readEnum(r, LightType::Directional, "light type");
+    l.position = readFloat3(r);
+    l.direction = readFloat3(r);
+    l.color = readFloat3(r);
+    l.intensity = r.f32();
+    if (l.intensity < 0.0f) fail("light intensity " + std::to_string(l.intensity) + " is negative");
+}
+
+void write(Writer& w, const CameraDesc& c) {
+    w.string(c.name);
+    write(w, c.position);
+    write(w, c.lookAt);
+    write(w, c.up);
+    w.f32(c.fovY);
+}
+
+void read(Reader& r, CameraDesc& c) {
+    c.name = r.string(kMaxStringBytes);
+    c.position = readFloat3(r);
+    c.lookAt = readFloat3(r);
+    c.up = readFloat3(r);
+    c.fovY = r.f32();
+    if (!(c.fovY > 0.0f && c.fovY < 180.0f)) fail("camera fov " + std::to_string(c.fovY) + " is outside (0, 180)");
+}
+
+void write(Writer& w, const InstanceDesc& in) {
+    w.u32(in.mesh);
+    w.u32(in.material);
+    write(w, in.transform);
+}
+
+void read(Reader& r, InstanceDesc& in) {
+    in.mesh = r.u32();
+    in.material = r.u32();
+    read(r, in.transform);
+}
+
+void write(Writer& w, const RenderSettings& s) {
+    w.i32(s.width);
+    w.i32(s.height);
+    w.i32(s.tileSize);
+    writeEnum(w, s.kernel);
+    writeEnum(w, s.shading);
+    w.i32(s.maxDepth);
+    w.i32(s.supersample);
+    w.boolean(s.shadows);
+    write(w, s.background);
+    write(w, s.ambient);
+    w.i32(s.threads);
+}
+
+void read(Reader& r, RenderSettings& s) {
+    s.width = readInt(r, 1, kMaxImageSide, "image width");
+    s.height = readInt(r, 1, kMaxImageSide, "image height");
+    s.tileSize = readInt(r, 1, kMaxTileSize, "tile size");
+    s.kernel = readEnum(r, KernelType::Single, "kernel type");
+    s.shading = readEnum(r, ShadingMode::EyeLight, "shading mode");
+    s.maxDepth = readInt(r, 1, kMaxDepth, "max depth");
+    s.supersample = readInt(r, 1, kMaxSupersample, "supersample");
+    s.shadows = r.boolean();
+    s.background = readFloat3(r);
+    s.ambient = readFloat3(r);
+    s.threads = readInt(r, 0, kMaxThreads, "thread count");
+}
+
+void write(Writer& w, const MeshRef& m) {
+    w.string(m.name);
+    w.string(m.source);
+    write(w, m.hash);
+    w.u64(m.bytes);
+}
+
+void read(Reader& r, MeshRef& m) {
+    m.name = r.string(kMaxStringBytes);
+    m.source = r.string(kMaxStringBytes);
+    m.hash = readHash(r);
+    m.bytes = r.u64();
+    if (m.bytes > kMaxMeshBytes) fail("mesh size " + std::to_string(m.bytes) + " exceeds the limit");
+}
+
+// Defined with the changes below; declared here for the vector helpers, which unqualified
+// lookup at their definition must find (these overloads are invisible to ADL).
+void write(Writer& w, const Change& c);
+void read(Reader& r, Change& c);
+
+// The smallest encoding of a value (empty strings), measured with the writer itself so that
+// the element-count checks below cannot drift from the format.
+template <class T> size_t minEncodedSize(const T& emptyValue) {
+    Writer w;
+    write(w, emptyValue);
+    return w.size();
+}
+
+template <class T> void writeVector(Writer& w, const std::vector<T>& v) {
+    if (v.size() > std::numeric_limits<uint32_t>::max())
+        throw std::length_error("protocol: vector of " + std::to_string(v.size()) + " elements");
+    w.u32(uint32_t(v.size()));
+    for (const T& e : v) write(w, e);
+}
+
+template <class T> void readVector(Reader& r, std::vector<T>& v, size_t minElementSize, uint64_t maxCount) {
+    const uint32_t n = r.u32();
+    r.expectElements(n, minElementSize, maxCount);
+    v.resize(n);
+    for (T& e : v) read(r, e);
+}
+
+// -- Changes -------------------------------------------------------------------------------------
+
+void write(Writer& w, const CameraChange& c) { write(w, c.camera); }
+void read(Reader& r, CameraChange& c) { read(r, c.camera); }
+
+void write(Writer& w, const TransformChange& c) {
+    w.u32(c.instance);
+    write(w, c.transform);
+}
+void read(Reader& r, TransformChange& c) {
+    c.instance = r.u32();
+    read(r, c.transform);
+}
+
+void write(Writer& w, const MaterialChange& c) {
+    w.u32(c.material);
+    write(w, c.value);
+}
+void read(Reader& r, MaterialChange& c) {
+    c.material = r.u32();
+    read(r, c.value);
+}
+
+void write(Writer& w, const LightChange& c) {
+    w.u32(c.light);
+    write(w, c.value);
+}
+void read(Reader& r, LightChange& c) {
+    c.light = r.u32();
+    read(r, c.value);
+}
+
+void write(Writer& w, const SettingsChange& c) { write(w, c.settings); }
+void read(Reader& r, SettingsChange& c) { read(r, c.settings); }
+
+// A change is its variant index (u8) and then the alternative.
+void write(Writer& w, const Change& c) {
+    w.u8(uint8_t(c.index()));
+    std::visit([&](const auto& alt) { write(w, alt); }, c);
+}
+
+template <size_t I> void readAlternative(Reader& r, Change& c) {
+    std::variant_alternative_t<I, Change> alt;
+    read(r, alt);
+    c = std::move(alt);
+}
+
+void read(Reader& r, Change& c) {
+    const uint8_t kind = r.u8();
+    static_assert(std::variant_size_v<Change> == 5, "a new change kind needs a case here");
+    switch (kind) {
+        case 0: readAlternative<0>(r, c); break;
+        case 1: readAlternative<1>(r, c); break;
+        case 2: readAlternative<2>(r, c); break;
+        case 3: readAlternative<3>(r, c); break;
+        case 4: readAlternative<4>(r, c); break;
+        default: fail("unknown change kind " + std::to_string(kind));
+    }
+}
+
+size_t minChangeSize() {
+    CameraChange camera;
+    camera.camera.name.clear();
+    MaterialChange material;
+    material.value.name.clear();
+    return 1 + std::min({minEncodedSize(camera), minEncodedSize(TransformChange{}), minEncodedSize(material),
+                         minEncodedSize(LightChange{}), minEncodedSize(SettingsChange{})});
+}
+
+// -- Messages ------------------------------------------------------------------------------------
+
+void write(Writer& w, const Hello& m) {
+    w.u16(m.protocolVersion);
+    w.u32(m.threads);
+    w.string(m.host);
+}
+void read(Reader& r, Hello& m) {
+    m.protocolVersion = r.u16();  // returned as read, so that the master can name both versions
+    m.threads = r.u32();
+    if (m.threads > uint32_t(kMaxThreads)) fail("thread count " + std::to_string(m.threads) + " exceeds the limit");
+    m.host = r.string(kMaxStringBytes);
+}
+
+void write(Writer& w, const Welcome& m) {
+    w.u32(m.clientId);
+    write(w, m.codec);
+    w.u32(m.prefetch);
+    w.u32(m.heartbeatMs);
+}
+void read(Reader& r, Welcome& m) {
+    m.clientId = r.u32();
+    read(r, m.codec);
+    m.prefetch = r.u32();
+    // A client never needs more tiles in flight than one assignment can carry.
+    if (m.prefetch > kMaxTilesPerMessage) fail("prefetch " + std::to_string(m.prefetch) + " exceeds the limit");
+    m.heartbeatMs = r.u32();
+}
+
+// Everything that affects the image, i.e. the snapshot without its sequence number; stateHash
+// hashes exactly these bytes.
+void writeState(Writer& w, const SceneSnapshot& m) {
+    writeVector(w, m.meshes);
+    writeVector(w, m.materials);
+    writeVector(w, m.instances);
+    writeVector(w, m.lights);
+    write(w, m.camera);
+    write(w, m.settings);
+}
+
+void write(Writer& w, const SceneSnapshot& m) {
+    w.u32(m.updateSeq);
+    writeState(w, m);
+}
+void read(Reader& r, SceneSnapshot& m) {
+    static const size_t meshRefBytes = minEncodedSize(MeshRef{});
+    static const size_t materialBytes = minEncodedSize(Material{});
+    static const size_t instanceBytes = minEncodedSize(InstanceDesc{});
+    static const size_t lightBytes = minEncodedSize(Light{});
+    m.updateSeq = r.u32();
+    readVector(r, m.meshes, meshRefBytes, kMaxSceneObjects);
+    readVector(r, m.materials, materialBytes, kMaxSceneObjects);
+    readVector(r, m.instances, instanceBytes, kMaxSceneObjects);
+    readVector(r, m.lights, lightBytes, kMaxSceneObjects);
+    read(r, m.camera);
+    read(r, m.settings);
+    // The engine indexes meshes and materials with these without further checks.
+    for (size_t i = 0; i < m.instances.size(); ++i) {
+        const InstanceDesc& in = m.instances[i];
+        if (in.mesh >= m.meshes.size())
+            fail("instance " + std::to_string(i) + " refers to mesh " + std::to_string(in.mesh) + " of " +
+                 std::to_string(m.meshes.size()));
+        if (in.material >= m.materials.size())
+            fail("instance " + std::to_string(i) + " refers to material " + std::to_string(in.material) + " of " +
+                 std::to_string(m.materials.size()));
+    }
+}
+
+void write(Writer& w, const MeshRequest& m) { write(w, m.hash); }
+void read(Reader& r, MeshRequest& m) { m.hash = readHash(r); }
+
+void write(Writer& w, const MeshData& m) {
+    write(w, m.hash);
+    w.blob(m.mesh.data(), m.mesh.size());
+}
+void read(Reader& r, MeshData& m) {
+    m.hash = readHash(r);
+    const auto [p, n] = r.blobView(kMaxMeshBytes);
+    // Checked here so that a corrupted mesh can never enter a client's cache under a hash it does not have.
+    if (hashBytes(p, n) != m.hash) fail("mesh bytes do not match their hash");
+    m.mesh.assign(p, p + n);
+}
+
+void write(Writer& w, const Update& m) {
+    w.u32(m.seq);
+    writeVector(w, m.changes);
+}
+void read(Reader& r, Update& m) {
+    static const size_t changeBytes = minChangeSize();
+    m.seq = r.u32();
+    readVector(r, m.changes, changeBytes, kMaxChangesPerUpdate);
+}
+
+void write(Writer& w, const FrameBegin& m) {
+    w.u32(m.frame);
+    w.u32(m.updateSeq);
+}
+void read(Reader& r, FrameBegin& m) {
+    m.frame = r.u32();
+    m.updateSeq = r.u32();
+}
+
+void write(Writer& w, const TileRequest& m) {
+    w.u32(m.frame);
+    w.u32(m.count);
+}
+void read(Reader& r, TileRequest& m) {
+    m.frame = r.u32();
+    m.count = r.u32();
+    if (m.count > kMaxTilesPerMessage) fail("tile request for " + std::to_string(m.count) + " tiles exceeds the limit");
+}
+
+void write(Writer& w, const TileAssign& m) {
+    w.u32(m.frame);
+    if (m.tiles.size() > std::numeric_limits<uint32_t>::max())
+        throw std::length_error("protocol: too many tiles in one assignment");
+    w.u32(uint32_t(m.tiles.size()));
+    for (uint32_t t : m.tiles) w.u32(t);
+}
+void read(Reader& r, TileAssign& m) {
+    m.frame = r.u32();
+    const uint32_t n = r.u32();
+    r.expectElements(n, sizeof(uint32_t), kMaxTilesPerMessage);
+    m.tiles.resize(n);
+    for (uint32_t& t : m.tiles) t = r.u32();
+}
+
+void write(Writer& w, const TileResult& m) {
+    w.u32(m.frame);
+    w.u32(m.tile);
+    writeEnum(w, m.codec);
+    w.u32(m.renderMicros);
+    w.blob(m.pixels.data(), m.pixels.size());
+}
+void read(Reader& r, TileResult& m) {
+    static const size_t maxPixelBytes = maxEncodedTileBytes(kMaxTileSize, kMaxTileSize);
+    m.frame = r.u32();
+    m.tile = r.u32();
+    m.codec = readEnum(r, TileCodec::Jpeg, "tile codec");
+    m.renderMicros = r.u32();
+    m.pixels = r.blob(maxPixelBytes);
+}
+
+void write(Writer&, const Heartbeat&) {}
+void read(Reader&, Heartbeat&) {}
+
+void write(Writer& w, const Goodbye& m) { w.string(m.reason); }
+void read(Reader& r, Goodbye& m) { m.reason = r.string(kMaxStringBytes); }
+
+void write(Writer& w, const Ready& m) {
+    w.u32(m.updateSeq);
+    write(w, m.stateHash);
+}
+void read(Reader& r, Ready& m) {
+    m.updateSeq = r.u32();
+    m.stateHash = readHash(r);
+}
+
+void write(Writer& w, const ResyncRequest& m) { w.u32(m.lastSeq); }
+void read(Reader& r, ResyncRequest& m) { m.lastSeq = r.u32(); }
+
+void writeHeader(Writer& w, const Header& h) {
+    w.u32(kMagic);
+    w.u16(h.version);
+    w.u16(uint16_t(h.type));
+    w.u64(h.session);
+    w.u32(h.frame);
+    w.u32(h.sceneVersion);
+    w.u32(h.payloadLength);
+    w.u32(0);  // reserved
+}
+
+// Measures with a counting writer, reserves exactly, then writes with the same code.
+template <class F> std::vector<uint8_t> measureAndWrite(F&& writeAll) {
+    Writer counter;
+    writeAll(counter);
+    std::vector<uint8_t> out;
+    out.reserve(counter.size());
+    Writer w(&out);
+    writeAll(w);
+    if (w.size() != counter.size())
+        throw std::logic_error("protocol: measured " + std::to_string(counter.size()) + " bytes but wrote " +
+                               std::to_string(w.size()));
+    return out;
+}
+
+}  // namespace
+
+// -- Public API ----------------------------------------------------------------------------------
+
+Header decodeHeader(const uint8_t* data, size_t size) {
+    if (size < kHeaderSize)
+        fail("message of " + std::to_string(size) + " bytes is shorter than the " + std::to_string(kHeaderSize) +
+             "-byte header");
+    Reader r(data, kHeaderSize);
+    const uint32_t magic = r.u32();
+    if (magic != kMagic) fail("bad magic number " + std::to_string(magic));
+    Header h;
+    h.version = r.u16();
+    const uint16_t type = r.u16();
+    if (type < 1 || type > kMaxMsgType) fail("unknown message type " + std::to_string(type));
+    h.type = MsgType(type);
+    h.session = r.u64();
+    h.frame = r.u32();
+    h.sceneVersion = r.u32();
+    h.payloadLength = r.u32();
+    if (h.payloadLength != size - kHeaderSize)
+        fail("header says " + std::to_string(h.payloadLength) + " payload bytes, message has " +
+             std::to_string(size - kHeaderSize));
+    const uint32_t reserved = r.u32();
+    if (reserved != 0) fail("reserved header field is " + std::to_string(reserved) + ", not 0");
+    return h;
+}
+
+template <class Msg> std::vector<uint8_t> encodeMessage(Header header, const Msg& msg) {
+    // The type always follows the message, so a header copied from another message cannot mislabel it.
+    header.type = messageTypeOf(msg);
+    Writer counter;
+    write(counter, msg);
+    if (counter.size() > std::numeric_limits<uint32_t>::max())
+        throw std::length_error("protocol: payload of " + std::to_string(counter.size()) + " bytes is too large");
+    header.payloadLength = uint32_t(counter.size());
+
+    std::vector<uint8_t> out;
+    out.reserve(kHeaderSize + counter.size());
+    Writer w(&out);
+    writeHeader(w, header);
+    write(w, msg);
+    if (w.size() != kHeaderSize + counter.size())
+        throw std::logic_error("protocol: measured " + std::to_string(kHeaderSize + counter.size()) +
+                               " bytes but wrote " + std::to_string(w.size()));
+    return out;
+}
+
+template <class Msg> Msg decodePayload(const uint8_t* data, size_t size) {
+    Reader r(data, size);
+    Msg msg;
+    read(r, msg);
+    r.expectEnd();
+    return msg;
+}
+
+MsgType messageTypeOf(const Hello&) { return MsgType::Hello; }
+MsgType messageTypeOf(const Welcome&) { return MsgType::Welcome; }
+MsgType messageTypeOf(const SceneSnapshot&) { return MsgType::SceneSnapshot; }
+MsgType messageTypeOf(const MeshRequest&) { return MsgType::MeshRequest; }
+MsgType messageTypeOf(const MeshData&) { return MsgType::MeshData; }
+MsgType messageTypeOf(const Update&) { return MsgType::Update; }
+MsgType messageTypeOf(const FrameBegin&) { return MsgType::FrameBegin; }
+MsgType messageTypeOf(const TileRequest&) { return MsgType::TileRequest; }
+MsgType messageTypeOf(const TileAssign&) { return MsgType::TileAssign; }
+MsgType messageTypeOf(const TileResult&) { return MsgType::TileResult; }
+MsgType messageTypeOf(const Heartbeat&) { return MsgType::Heartbeat; }
+MsgType messageTypeOf(const Goodbye&) { return MsgType::Goodbye; }
+MsgType messageTypeOf(const Ready&) { return MsgType::Ready; }
+MsgType messageTypeOf(const ResyncRequest&) { return MsgType::ResyncRequest; }
+
+#define RTWALL_INSTANTIATE_MESSAGE(Msg)                                                    \
+    template std::vector<uint8_t> encodeMessage<Msg>(Header header, const Msg& msg); \
+    template Msg decodePayload<Msg>(const uint8_t* data, size_t size);
+RTWALL_INSTANTIATE_MESSAGE(Hello)
+RTWALL_INSTANTIATE_MESSAGE(Welcome)
+RTWALL_INSTANTIATE_MESSAGE(SceneSnapshot)
+RTWALL_INSTANTIATE_MESSAGE(MeshRequest)
+RTWALL_INSTANTIATE_MESSAGE(MeshData)
+RTWALL_INSTANTIATE_MESSAGE(Update)
+RTWALL_INSTANTIATE_MESSAGE(FrameBegin)
+RTWALL_INSTANTIATE_MESSAGE(TileRequest)
+RTWALL_INSTANTIATE_MESSAGE(TileAssign)
+RTWALL_INSTANTIATE_MESSAGE(TileResult)
+RTWALL_INSTANTIATE_MESSAGE(Heartbeat)
+RTWALL_INSTANTIATE_MESSAGE(Goodbye)
+RTWALL_INSTANTIATE_MESSAGE(Ready)
+RTWALL_INSTANTIATE_MESSAGE(ResyncRequest)
+#undef RTWALL_INSTANTIATE_MESSAGE
+
+// -- Meshes --------------------------------------------------------------------------------------
+
+namespace {
+
+void writeMesh(Writer& w, const TriangleMesh& mesh) {
+    const size_t vertices = mesh.vertexCount(), triangles = mesh.triangleCount();
+    w.u64(vertices);
+    const float* p = mesh.positions();
+    for (size_t i = 0; i < 3 * vertices; ++i) w.f32(p[i]);
+    w.u64(triangles);
+    const uint32_t* idx = mesh.indices();
+    for (size_t i = 0; i < 3 * triangles; ++i) w.u32(idx[i]);
+    w.boolean(mesh.hasNormals());
+    if (const float* n = mesh.normals())
+        for (size_t i = 0; i < 3 * vertices; ++i) w.f32(n[i]);
+}
+
+}  // namespace
+
+std::vector<uint8_t> encodeMesh(const TriangleMesh& mesh) {
+    return measureAndWrite([&](Writer& w) { writeMesh(w, mesh); });
+}
+
+TriangleMesh decodeMesh(const uint8_t* data, size_t size) {
+    if (size > kMaxMeshBytes) fail("mesh of " + std::to_string(size) + " bytes exceeds the limit");
+    Reader r(data, size);
+    constexpr size_t kVertexBytes = 3 * sizeof(float), kTriangleBytes = 3 * sizeof(uint32_t);
+    TriangleMesh mesh;
+
+    const uint64_t vertices = r.u64();
+    // 32-bit indices address at most 2^32 - 1 vertices (TriangleMesh's own limit).
+    r.expectElements(vertices, kVertexBytes, std::numeric_limits<uint32_t>::max());
+    mesh.reserve(size_t(vertices), 0);
+    for (uint64_t v = 0; v < vertices; ++v) mesh.addVertex(readFloat3(r));
+
+    const uint64_t triangles = r.u64();
+    r.expectElements(triangles, kTriangleBytes, kMaxMeshBytes / kTriangleBytes);
+    mesh.reserve(size_t(vertices), size_t(triangles));
+    for (uint64_t t = 0; t < triangles; ++t) {
+        uint32_t c[3];
+        for (uint32_t& i : c) {
+            i = r.u32();
+            if (i >= vertices)
+                fail("triangle " + std::to_string(t) + " refers to vertex " + std::to_string(i) + " of " +
+                     std::to_string(vertices));
+        }
+        mesh.addTriangle(c[0], c[1], c[2]);
+    }
+
+    if (r.boolean()) {
+        // The encoder writes the flag only for a mesh with normals, which has vertices; anything
+        // else would not re-encode to the same bytes (and hash).
+        if (vertices == 0) fail("normals flag set on a mesh without vertices");
+        r.expectElements(vertices, kVertexBytes, std::numeric_limits<uint32_t>::max());
+        std::vector<float> normals(size_t(3 * vertices));
+        for (float& n : normals) n = r.f32();
+        mesh.setNormals(std::move(normals));
+    }
+    r.expectEnd();
+    return mesh;
+}
+
+Hash128 hashBytes(const uint8_t* data, size_t size) {
+    const XXH128_hash_t h = XXH3_128bits(data, size);
+    return {h.low64, h.high64};
+}
+
+// -- Scene state -----------------------------------------------------------------------------------
+
+void applyChange(SceneDesc& scene, CameraDesc& camera, const Change& change) {
+    auto element = [](auto& v, uint32_t i, const char* what) -> auto& {
+        if (i >= v.size())
+            fail(std::string(what) + " " + std::to_string(i) + " does not exist (the scene has " +
+                 std::to_string(v.size()) + ")");
+        return v[i];
+    };
+    struct Visitor {
+        SceneDesc& scene;
+        CameraDesc& camera;
+        decltype(element)& at;
+        void operator()(const CameraChange& c) const { camera = c.camera; }
+        void operator()(const TransformChange& c) const {
+            at(scene.instances, c.instance, "instance").transform = c.transform;
+        }
+        void operator()(const MaterialChange& c) const { at(scene.materials, c.material, "material") = c.value; }
+        void operator()(const LightChange& c) const { at(scene.lights, c.light, "light") = c.value; }
+        void operator()(const SettingsChange& c) const { scene.settings = c.settings; }
+    };
+    std::visit(Visitor{scene, camera, element}, change);
+}
+
+Hash128 stateHash(const SceneSnapshot& snapshot) {
+    const std::vector<uint8_t> bytes = measureAndWrite([&](Writer& w) { writeState(w, snapshot); });
+    return hashBytes(bytes.data(), bytes.size());
+}
+
+}  // namespace rtwall::cluster

@@ -1,0 +1,209 @@
+// The rtwall wire protocol, version 1.
+//
+// Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
+// layout depends on the type. Each message type is a plain struct with one writer and one
+// reader (protocol.cpp); encodeMessage() measures and writes with the same code. Decoders check
+// every length and range before touching data and throw DecodeError; the caller drops the
+// message and counts it.
+//
+// Header: magic "RTWL" (u32 0x4C575452), protocol version (u16), type (u16), session (u64),
+// frame (u32), scene version = update sequence number (u32), payload length (u32), reserved (u32, 0).
+#pragma once
+
+#include "wire.h"
+
+#include <rtwall/cluster.h>
+#include <rtwall/engine.h>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace rtwall::cluster {
+
+inline constexpr uint32_t kMagic = 0x4C575452u;
+inline constexpr uint16_t kProtocolVersion = 1;
+inline constexpr size_t kHeaderSize = 32;
+
+// Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
+inline constexpr size_t kMaxStringBytes = 4096;
+inline constexpr uint32_t kMaxTilesPerMessage = 1 << 16;
+inline constexpr uint32_t kMaxChangesPerUpdate = 1 << 16;
+inline constexpr uint32_t kMaxSceneObjects = 1 << 24;  // meshes, instances, materials, lights, cameras
+inline constexpr uint64_t kMaxMeshBytes = uint64_t(1) << 31;
+
+enum class MsgType : uint16_t {
+    Hello = 1,          // client -> master
+    Welcome = 2,        // master -> client
+    SceneSnapshot = 3,  // master -> client: the whole state at one update sequence number
+    MeshRequest = 4,    // client -> master
+    MeshData = 5,       // master -> client
+    Update = 6,         // master -> client: one numbered set of changes
+    FrameBegin = 7,     // master -> client
+    TileRequest = 8,    // client -> master
+    TileAssign = 9,     // master -> client
+    TileResult = 10,    // client -> master
+    Heartbeat = 11,     // both ways
+    Goodbye = 12,       // both ways, with the reason
+    Ready = 13,         // client -> master: holds the state at a sequence number with this hash
+    ResyncRequest = 14, // client -> master: saw a gap after this sequence number
+};
+inline constexpr uint16_t kMaxMsgType = 14;
+
+struct Header {
+    uint16_t version = kProtocolVersion;
+    MsgType type = MsgType::Heartbeat;
+    uint64_t session = 0;
+    uint32_t frame = 0;
+    uint32_t sceneVersion = 0;
+    uint32_t payloadLength = 0;  // set by encodeMessage
+};
+
+using Hash128 = std::array<uint64_t, 2>;
+
+struct Hello {
+    uint16_t protocolVersion = kProtocolVersion;
+    uint32_t threads = 0;
+    std::string host;
+};
+
+struct Welcome {
+    uint32_t clientId = 0;
+    CodecSettings codec;
+    uint32_t prefetch = 4;
+    uint32_t heartbeatMs = 250;
+};
+
+struct MeshRef {
+    std::string name;
+    std::string source;  // a path the client may load directly on a shared file system
+    Hash128 hash{};      // of the canonical mesh bytes (encodeMesh)
+    uint64_t bytes = 0;  // size of those bytes
+};
+
+// The scene without geometry: meshes are referenced by content hash.
+struct SceneSnapshot {
+    uint32_t updateSeq = 0;
+    std::vector<MeshRef> meshes;
+    std::vector<Material> materials;
+    std::vector<InstanceDesc> instances;
+    std::vector<Light> lights;
+    CameraDesc camera;
+    RenderSettings settings;
+};
+
+struct MeshRequest {
+    Hash128 hash{};
+};
+
+struct MeshData {
+    Hash128 hash{};
+    std::vector<uint8_t> mesh;  // encodeMesh bytes
+};
+
+struct CameraChange {
+    CameraDesc camera;
+};
+struct TransformChange {
+    uint32_t instance = 0;
+    Transform transform;
+};
+struct MaterialChange {
+    uint32_t material = 0;
+    Material value;
+};
+struct LightChange {
+    uint32_t light = 0;
+    Light value;
+};
+struct SettingsChange {
+    RenderSettings settings;
+};
+using Change = std::variant<CameraChange, TransformChange, MaterialChange, LightChange, SettingsChange>;
+
+struct Update {
+    uint32_t seq = 0;  // the state's sequence number after applying this update
+    std::vector<Change> changes;
+};
+
+struct FrameBegin {
+    uint32_t frame = 0;
+    uint32_t updateSeq = 0;  // the frame renders the state at exactly this sequence number
+};
+
+struct TileRequest {
+    uint32_t frame = 0;
+    uint32_t count = 0;
+};
+
+struct TileAssign {
+    uint32_t frame = 0;
+    std::vector<uint32_t> tiles;
+};
+
+struct TileResult {
+    uint32_t frame = 0;
+    uint32_t tile = 0;
+    TileCodec codec = TileCodec::Raw;
+    uint32_t renderMicros = 0;
+    std::vector<uint8_t> pixels;  // encoded
+};
+
+struct Heartbeat {};
+
+struct Goodbye {
+    std::string reason;
+};
+
+struct Ready {
+    uint32_t updateSeq = 0;
+    Hash128 stateHash{};
+};
+
+struct ResyncRequest {
+    uint32_t lastSeq = 0;
+};
+
+// Header alone (for routing before the payload is decoded). Checks magic, length and type
+// range; a version mismatch is reported to the caller through header.version, not thrown, so
+// that a peer can be told both versions.
+Header decodeHeader(const uint8_t* data, size_t size);
+
+// Encoders: the header's payloadLength is filled in.
+template <class Msg> std::vector<uint8_t> encodeMessage(Header header, const Msg& msg);
+
+// Decoders: the payload after the header; throw DecodeError.
+template <class Msg> Msg decodePayload(const uint8_t* data, size_t size);
+
+MsgType messageTypeOf(const Hello&);
+MsgType messageTypeOf(const Welcome&);
+MsgType messageTypeOf(const SceneSnapshot&);
+MsgType messageTypeOf(const MeshRequest&);
+MsgType messageTypeOf(const MeshData&);
+MsgType messageTypeOf(const Update&);
+MsgType messageTypeOf(const FrameBegin&);
+MsgType messageTypeOf(const TileRequest&);
+MsgType messageTypeOf(const TileAssign&);
+MsgType messageTypeOf(const TileResult&);
+MsgType messageTypeOf(const Heartbeat&);
+MsgType messageTypeOf(const Goodbye&);
+MsgType messageTypeOf(const Ready&);
+MsgType messageTypeOf(const ResyncRequest&);
+
+// Canonical mesh bytes (vertex count, positions, triangle count, indices, normals flag and
+// normals, all little-endian), their hash (XXH3 128-bit) and the way back. decodeMesh
+// validates counts against the size and every index against the vertex count.
+std::vector<uint8_t> encodeMesh(const TriangleMesh& mesh);
+TriangleMesh decodeMesh(const uint8_t* data, size_t size);
+Hash128 hashBytes(const uint8_t* data, size_t size);
+
+// Applies one change to a scene description; throws DecodeError for an index out of range.
+void applyChange(SceneDesc& scene, CameraDesc& camera, const Change& change);
+
+// A hash of everything that affects the image (all of SceneSnapshot except updateSeq, with
+// meshes by content hash). Master and client compare it before a client's tiles are accepted.
+Hash128 stateHash(const SceneSnapshot& snapshot);
+
+}  // namespace rtwall::cluster

@@ -1,0 +1,232 @@
+// FrameAssembler without a network: each tile of the current frame is written exactly once,
+// at the right place, also with several decode threads racing for the same tiles.
+#include "assembler.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <random>
+#include <thread>
+
+namespace rtwall::cluster {
+namespace {
+
+using Claim = FrameAssembler::Claim;
+
+std::array<uint8_t, 3> colourOf(uint32_t tile) {
+    return {uint8_t(tile * 37 + 1), uint8_t(255 - tile), uint8_t(tile * 11 + 7)};
+}
+
+// Fills a granted tile through its view, as a decoder does.
+void fill(const TileRect& rect, const TileView& view, std::array<uint8_t, 3> c) {
+    for (int j = 0; j < rect.height(); ++j)
+        for (int i = 0; i < rect.width(); ++i) {
+            uint8_t* p = view.data + size_t(j) * view.stride + 3 * size_t(i);
+            p[0] = c[0];
+            p[1] = c[1];
+            p[2] = c[2];
+        }
+}
+
+std::array<uint8_t, 3> at(const Image& img, int x, int y) {
+    const uint8_t* p = img.pixel(x, y);
+    return {p[0], p[1], p[2]};
+}
+
+bool writeTile(FrameAssembler& a, uint32_t frame, uint32_t tile, std::array<uint8_t, 3> c) {
+    TileRect rect;
+    TileView view;
+    if (a.claim(frame, tile, rect, view) != Claim::Granted) return false;
+    fill(rect, view, c);
+    a.commit(tile);
+    return true;
+}
+
+TEST(Assembler, BeginFrameSizesImageAndTiles) {
+    FrameAssembler a;
+    a.beginFrame(4, 37, 23, 8);
+    EXPECT_EQ(a.frame(), 4u);
+    EXPECT_EQ(a.image().width, 37);
+    EXPECT_EQ(a.image().height, 23);
+    EXPECT_EQ(a.image().rgb.size(), size_t(37) * 23 * 3);
+    ASSERT_EQ(a.tiles().size(), 15u);  // 5 x 3
+    const std::vector<TileRect> expected = makeTiles(37, 23, 8);
+    for (size_t t = 0; t < expected.size(); ++t) {
+        EXPECT_EQ(a.tiles()[t].x0, expected[t].x0);
+        EXPECT_EQ(a.tiles()[t].y1, expected[t].y1);
+    }
+    EXPECT_EQ(a.missing(), 15u);
+    EXPECT_FALSE(a.complete());
+
+    a.beginFrame(5, 64, 16, 16);
+    EXPECT_EQ(a.image().rgb.size(), size_t(64) * 16 * 3);
+    EXPECT_EQ(a.tiles().size(), 4u);
+    EXPECT_EQ(a.missing(), 4u);
+}
+
+TEST(Assembler, TileIsGrantedOnceUntilReleased) {
+    FrameAssembler a;
+    a.beginFrame(1, 16, 16, 8);
+    TileRect rect;
+    TileView view;
+    EXPECT_EQ(a.claim(1, 2, rect, view), Claim::Granted);
+    EXPECT_EQ(rect.x0, 0);
+    EXPECT_EQ(rect.y0, 8);
+    EXPECT_EQ(rect.width(), 8);
+    EXPECT_EQ(view.data, a.image().pixel(0, 8));
+    EXPECT_EQ(view.stride, size_t(16) * 3);
+    EXPECT_EQ(a.claim(1, 2, rect, view), Claim::Duplicate) << "being written";
+
+    a.release(2);  // decoding failed
+    EXPECT_EQ(a.missing(), 4u);
+    EXPECT_EQ(a.claim(1, 2, rect, view), Claim::Granted);
+    a.commit(2);
+    EXPECT_EQ(a.missing(), 3u);
+    EXPECT_EQ(a.claim(1, 2, rect, view), Claim::Duplicate) << "done";
+    a.release(2);  // too late: a committed tile stays done
+    EXPECT_EQ(a.claim(1, 2, rect, view), Claim::Duplicate);
+    EXPECT_EQ(a.missing(), 3u);
+}
+
+TEST(Assembler, OtherFrameIsStaleAndOutOfRangeIsInvalid) {
+    FrameAssembler a;
+    a.beginFrame(7, 16, 16, 8);
+    TileRect rect;
+    TileView view;
+    EXPECT_EQ(a.claim(6, 0, rect, view), Claim::Stale);
+    EXPECT_EQ(a.claim(8, 0, rect, view), Claim::Stale);
+    EXPECT_EQ(a.claim(6, 100, rect, view), Claim::Stale) << "another frame may have another tiling";
+    EXPECT_EQ(a.claim(7, 4, rect, view), Claim::Invalid);
+    EXPECT_EQ(a.claim(7, UINT32_MAX, rect, view), Claim::Invalid);
+    EXPECT_EQ(a.missing(), 4u);
+
+    EXPECT_EQ(a.claim(7, 0, rect, view), Claim::Granted);
+    a.beginFrame(8, 16, 16, 8);  // frame 7's tiles are stale now, and every tile is missing again
+    EXPECT_EQ(a.claim(7, 1, rect, view), Claim::Stale);
+    EXPECT_EQ(a.claim(8, 0, rect, view), Claim::Granted);
+}
+
+TEST(Assembler, CompleteOnlyAfterEveryTileIsCommitted) {
+    FrameAssembler a;
+    a.beginFrame(0, 20, 10, 8);  // 3 x 2
+    ASSERT_EQ(a.tiles().size(), 6u);
+    for (uint32_t t = 0; t < 6; ++t) {
+        EXPECT_FALSE(a.complete());
+        TileRect rect;
+        TileView view;
+        ASSERT_EQ(a.claim(0, t, rect, view), Claim::Granted);
+        EXPECT_FALSE(a.complete()) << "claimed is not done";
+        a.commit(t);
+        a.commit(t);  // a stray second commit must not count twice
+        EXPECT_EQ(a.missing(), 5 - t);
+    }
+    EXPECT_TRUE(a.complete());
+}
+
+TEST(Assembler, CommitWithoutClaimIsIgnored) {
+    FrameAssembler a;
+    a.beginFrame(0, 16, 8, 8);
+    a.commit(0);
+    a.commit(99);
+    a.release(99);
+    EXPECT_EQ(a.missing(), 2u);
+    TileRect rect;
+    TileView view;
+    EXPECT_EQ(a.claim(0, 0, rect, view), Claim::Granted);
+}
+
+TEST(Assembler, PixelsLandInTheirTileIncludingEdgeTiles) {
+    FrameAssembler a;
+    a.beginFrame(3, 37, 23, 8);
+    const uint32_t columns = 5;  // ceil(37 / 8)
+    // Write every other tile, edges included, so neighbours show any spill.
+    std::vector<uint32_t> written;
+    for (uint32_t t = 0; t < a.tiles().size(); t += 2) written.push_back(t);
+    ASSERT_EQ(written.back(), 14u) << "the bottom-right corner tile";
+    for (uint32_t t : written) ASSERT_TRUE(writeTile(a, 3, t, colourOf(t)));
+
+    const TileRect& corner = a.tiles()[14];
+    EXPECT_EQ(corner.width(), 5);
+    EXPECT_EQ(corner.height(), 7);
+    for (int y = 0; y < 23; ++y)
+        for (int x = 0; x < 37; ++x) {
+            const uint32_t t = uint32_t(y / 8) * columns + uint32_t(x / 8);
+            const std::array<uint8_t, 3> expected = t % 2 == 0 ? colourOf(t) : std::array<uint8_t, 3>{0, 0, 0};
+            ASSERT_EQ(at(a.image(), x, y), expected) << "pixel " << x << "," << y << " of tile " << t;
+        }
+    EXPECT_EQ(a.missing(), 7u);
+}
+
+TEST(Assembler, SameSizeKeepsLastFramesPixelsNewSizeClears) {
+    FrameAssembler a;
+    a.beginFrame(0, 16, 8, 8);
+    ASSERT_TRUE(writeTile(a, 0, 1, colourOf(1)));
+    a.beginFrame(1, 16, 8, 8);
+    // A tile that never arrives shows last frame's pixels rather than black.
+    EXPECT_EQ(at(a.image(), 15, 7), colourOf(1));
+    EXPECT_EQ(a.missing(), 2u);
+
+    a.beginFrame(2, 8, 16, 8);
+    EXPECT_EQ(a.image().width, 8);
+    for (uint8_t v : a.image().rgb) ASSERT_EQ(v, 0);
+    a.beginFrame(3, 0, 0, 8);
+    EXPECT_EQ(a.tiles().size(), 0u);
+    EXPECT_TRUE(a.complete());
+}
+
+TEST(Assembler, ConcurrentClaimsGrantEachTileExactlyOnce) {
+    constexpr int kThreads = 4;
+    FrameAssembler a;
+    for (uint32_t frame = 0; frame < 30; ++frame) {
+        a.beginFrame(frame, 37, 23, 4);  // 10 x 6 tiles
+        const uint32_t tiles = uint32_t(a.tiles().size());
+        std::vector<std::atomic<int>> granted(tiles);
+        std::vector<std::thread> threads;
+        for (int id = 0; id < kThreads; ++id) {
+            threads.emplace_back([&, id] {
+                std::mt19937 rng(frame * 131 + uint32_t(id));
+                // Every thread walks all tiles in its own order, twice; some decodes fail.
+                for (int pass = 0; pass < 2; ++pass)
+                    for (uint32_t k = 0; k < tiles; ++k) {
+                        const uint32_t t = (k * 7 + uint32_t(id) * 31 + uint32_t(rng() % 3)) % tiles;
+                        TileRect rect;
+                        TileView view;
+                        if (a.claim(frame, t, rect, view) != Claim::Granted) continue;
+                        if (rng() % 5 == 0) {
+                            a.release(t);
+                            continue;
+                        }
+                        fill(rect, view, {uint8_t(id + 1), uint8_t(t), uint8_t(frame)});
+                        granted[t].fetch_add(1);
+                        a.commit(t);
+                    }
+                // Sweep up what failed or was skipped.
+                for (uint32_t t = 0; t < tiles; ++t) {
+                    TileRect rect;
+                    TileView view;
+                    if (a.claim(frame, t, rect, view) != Claim::Granted) continue;
+                    fill(rect, view, {uint8_t(id + 1), uint8_t(t), uint8_t(frame)});
+                    granted[t].fetch_add(1);
+                    a.commit(t);
+                }
+            });
+        }
+        for (std::thread& th : threads) th.join();
+        ASSERT_TRUE(a.complete()) << "frame " << frame;
+        for (uint32_t t = 0; t < tiles; ++t) {
+            ASSERT_EQ(granted[t].load(), 1) << "frame " << frame << " tile " << t;
+            // One writer per tile: the whole tile carries one thread's colour.
+            const TileRect& r = a.tiles()[t];
+            const std::array<uint8_t, 3> first = at(a.image(), r.x0, r.y0);
+            EXPECT_GE(first[0], 1);
+            EXPECT_LE(first[0], kThreads);
+            EXPECT_EQ(first[1], uint8_t(t));
+            EXPECT_EQ(first[2], uint8_t(frame));
+            for (int y = r.y0; y < r.y1; ++y)
+                for (int x = r.x0; x < r.x1; ++x) ASSERT_EQ(at(a.image(), x, y), first);
+        }
+    }
+}
+
+}  // namespace
+}  // namespace rtwall::cluster

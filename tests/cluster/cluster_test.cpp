@@ -1,0 +1,304 @@
+// The cluster end to end on loopback: a Master in this process and render clients running
+// runClient() on threads (each with its own ZeroMQ context, so nothing is shared but TCP).
+// Every loop is bounded; every wait has a timeout.
+#include "test_util.h"
+
+#include "protocol.h"
+
+#include <rtwall/cluster.h>
+
+#include <zmq.hpp>
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <thread>
+
+namespace rtwall {
+namespace {
+
+class ClientThreads {
+public:
+    ClientThreads(const std::string& endpoint, int count, int threadsEach = 1) {
+        for (int i = 0; i < count; ++i) add(endpoint, threadsEach);
+    }
+    void add(const std::string& endpoint, int threadsEach = 1) {
+        ClientSettings cs;
+        cs.connect = endpoint;
+        cs.threads = threadsEach;
+        cs.exitAfterIdleMs = 4000;  // never outlive the test by much
+        threads_.emplace_back([cs] { runClient(cs); });
+    }
+    ~ClientThreads() {
+        for (auto& t : threads_) t.join();
+    }
+
+private:
+    std::vector<std::thread> threads_;
+};
+
+// A master with client threads. The master goes first (its goodbye ends the clients), then
+// the client threads are joined, also when a test fails half-way.
+struct LocalCluster {
+    LocalCluster(const SceneDesc& desc, const ClusterSettings& cs, int clientCount)
+        : master(std::make_unique<Master>(desc, cs)), clients(master->endpoint(), clientCount) {}
+    ~LocalCluster() { master.reset(); }
+    std::unique_ptr<Master> master;
+    ClientThreads clients;
+};
+
+SceneDesc demoScene(int width, int height) {
+    SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
+    desc.settings.width = width;
+    desc.settings.height = height;
+    desc.settings.supersample = 1;
+    return desc;
+}
+
+Image singleMachine(const SceneDesc& desc) {
+    const Scene scene(desc);
+    return renderFrame(scene, Camera(desc.cameras.front(), desc.settings.width, desc.settings.height), desc.settings);
+}
+
+size_t differingBytes(const Image& a, const Image& b) {
+    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
+    size_t n = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
+    return n;
+}
+
+struct Layout {
+    int clients, tile, prefetch;
+    TileCodec codec;
+};
+
+class ClusterImage : public ::testing::TestWithParam<Layout> {};
+
+TEST_P(ClusterImage, BitIdenticalToOneMachine) {
+    const Layout& l = GetParam();
+    SceneDesc desc = demoScene(160, 120);
+    desc.settings.tileSize = l.tile;
+    ClusterSettings cs;
+    cs.prefetch = l.prefetch;
+    cs.async = false;
+    cs.codec.codec = l.codec;
+    LocalCluster cluster(desc, cs, l.clients);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(l.clients, 30000));
+    FrameReport report;
+    const Image img = master.renderFrame(&report);
+    EXPECT_EQ(differingBytes(img, singleMachine(desc)), 0u);
+    uint64_t tiles = 0;
+    for (const ClientReport& c : report.clients) tiles += c.tiles;
+    EXPECT_EQ(tiles, makeTiles(160, 120, l.tile).size());
+}
+
+INSTANTIATE_TEST_SUITE_P(Layouts, ClusterImage,
+                         ::testing::Values(Layout{1, 32, 4, TileCodec::Lz4}, Layout{2, 16, 1, TileCodec::Raw},
+                                           Layout{4, 8, 8, TileCodec::Zstd}, Layout{2, 13, 4, TileCodec::Lz4},
+                                           Layout{4, 64, 2, TileCodec::Raw}));
+
+TEST(Cluster, JpegIsCloseButLossy) {
+    SceneDesc desc = demoScene(160, 120);
+    ClusterSettings cs;
+    cs.async = false;
+    cs.codec.codec = TileCodec::Jpeg;
+    cs.codec.jpegQuality = 95;
+    LocalCluster cluster(desc, cs, 2);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(2, 30000));
+    const Image img = master.renderFrame();
+    const Image ref = singleMachine(desc);
+    ASSERT_EQ(img.rgb.size(), ref.rgb.size());
+    double se = 0;
+    for (size_t i = 0; i < img.rgb.size(); ++i) se += double(int(img.rgb[i]) - int(ref.rgb[i])) * (int(img.rgb[i]) - int(ref.rgb[i]));
+    const double psnr = 10 * std::log10(255.0 * 255.0 / (se / double(img.rgb.size())));
+    EXPECT_GT(psnr, 35.0);
+    EXPECT_GT(differingBytes(img, ref), 0u) << "JPEG at quality 95 should not be bit-exact on this image";
+}
+
+TEST(Cluster, AffinityKeepsTilesWithTheirClient) {
+    // Enough tiles per client that stealing, which only happens as a frame runs out, moves a
+    // small share of them even when the machine is busy with other tests.
+    SceneDesc desc = demoScene(320, 240);
+    desc.settings.tileSize = 16;
+    ClusterSettings cs;
+    cs.async = false;
+    LocalCluster cluster(desc, cs, 2);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(2, 30000));
+    master.renderFrame();
+    const size_t tiles = makeTiles(320, 240, 16).size();
+    uint64_t hits = 0, total = 0, stolen = 0;
+    for (int f = 0; f < 4; ++f) {
+        FrameReport r;
+        master.renderFrame(&r);
+        hits += r.affinityHits;
+        stolen += r.tilesStolen;
+        total += tiles;
+    }
+    // A still camera: at least 90% of tiles go back to the client that rendered them last frame.
+    EXPECT_GE(double(hits) / double(total), 0.9) << hits << " of " << total << ", " << stolen << " stolen";
+}
+
+TEST(Cluster, WithoutAffinityTilesWander) {
+    // The control experiment: the same still camera with affinity off keeps far fewer tiles
+    // with their previous client, so the test above measures the policy, not luck.
+    SceneDesc desc = demoScene(320, 240);
+    desc.settings.tileSize = 16;
+    ClusterSettings cs;
+    cs.async = false;
+    cs.affinity = false;
+    LocalCluster cluster(desc, cs, 2);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(2, 30000));
+    master.renderFrame();
+    uint64_t hits = 0, total = 0;
+    for (int f = 0; f < 4; ++f) {
+        FrameReport r;
+        master.renderFrame(&r);
+        hits += r.affinityHits;
+        total += makeTiles(320, 240, 16).size();
+    }
+    EXPECT_LT(double(hits) / double(total), 0.9) << hits << " of " << total;
+}
+
+TEST(Cluster, UpdatesShowInTheNextFrameOnly) {
+    SceneDesc desc = demoScene(96, 72);
+    ClusterSettings cs;
+    cs.async = true;
+    LocalCluster cluster(desc, cs, 2);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(2, 30000));
+
+    SceneDesc moved = desc;
+    CameraDesc top = *desc.findCamera("top");
+    moved.cameras = {top};
+    const Image before = singleMachine(desc), after = singleMachine(moved);
+    ASSERT_GT(differingBytes(before, after), 0u);
+
+    // Asynchronous: renderFrame returns frame N while N+1 already renders. An update made now
+    // lands in the first frame that begins after it.
+    const Image f1 = master.renderFrame();  // frame 1 (frame 2 begins)
+    master.setCamera(top);                   // during frame 2
+    const Image f2 = master.renderFrame();  // frame 2 (frame 3 begins, with the update)
+    const Image f3 = master.renderFrame();  // frame 3
+    EXPECT_EQ(differingBytes(f1, before), 0u);
+    EXPECT_EQ(differingBytes(f2, before), 0u) << "an update made during frame 2 must not show in frame 2";
+    EXPECT_EQ(differingBytes(f3, after), 0u) << "it must show in frame 3";
+}
+
+TEST(Cluster, TransformMaterialAndLightUpdatesMatchARebuiltScene) {
+    SceneDesc desc = demoScene(96, 72);
+    ClusterSettings cs;
+    cs.async = false;
+    LocalCluster cluster(desc, cs, 2);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(2, 30000));
+    master.renderFrame();
+
+    SceneDesc changed = desc;
+    changed.instances[1].transform = Transform::translate(0.5, 1.0, 0.3) * changed.instances[1].transform;
+    changed.materials[1].color = {0.2f, 0.6f, 0.3f};
+    changed.lights[0].intensity = 40.0f;
+    master.setInstanceTransform(1, changed.instances[1].transform);
+    master.setMaterial(1, changed.materials[1]);
+    master.setLight(0, changed.lights[0]);
+    EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(changed)), 0u);
+}
+
+TEST(Cluster, LateJoinerGetsTheCurrentStateFirst) {
+    SceneDesc desc = demoScene(96, 72);
+    ClusterSettings cs;
+    cs.async = false;
+    LocalCluster cluster(desc, cs, 1);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(1, 30000));
+    master.renderFrame();
+    CameraDesc top = *desc.findCamera("top");
+    master.setCamera(top);
+    master.setLight(0, Light{LightType::Point, {0, 4, 2}, {}, {1, 1, 1}, 50.0f});
+    master.renderFrame();
+    // A client joining now must receive the snapshot with both updates, prove it (state hash)
+    // and only then render; the frame must equal the single-machine image of the new state.
+    cluster.clients.add(master.endpoint());
+    ASSERT_TRUE(master.waitForClients(2, 30000));
+    SceneDesc expect = desc;
+    expect.cameras = {top};
+    expect.lights[0] = Light{LightType::Point, {0, 4, 2}, {}, {1, 1, 1}, 50.0f};
+    for (int f = 0; f < 3; ++f) {
+        FrameReport r;
+        const Image img = master.renderFrame(&r);
+        EXPECT_EQ(differingBytes(img, singleMachine(expect)), 0u) << "frame " << r.frame;
+    }
+}
+
+// A client that completes the handshake, takes tiles and then goes silent (a PC that froze
+// or lost its cable): the master must notice within its timeout, put the tiles back, and the
+// frame must still be bit-identical.
+TEST(Cluster, SilentClientLosesNoTile) {
+    using namespace cluster;
+    SceneDesc desc = demoScene(96, 72);
+    desc.settings.tileSize = 8;
+    desc.settings.supersample = 4;  // slow enough that the rogue's request lands mid-frame
+    ClusterSettings cs;
+    cs.async = false;
+    cs.timeoutMs = 400;
+    cs.heartbeatMs = 50;
+    LocalCluster cluster(desc, cs, 1);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(1, 30000));
+
+    zmq::context_t ctx;
+    zmq::socket_t rogue(ctx, zmq::socket_type::dealer);
+    rogue.set(zmq::sockopt::linger, 0);
+    rogue.set(zmq::sockopt::rcvtimeo, 5000);
+    rogue.connect(master.endpoint());
+    Header h;
+    h.type = MsgType::Hello;
+    const auto hello = encodeMessage(h, Hello{kProtocolVersion, 1, "rogue"});
+    rogue.send(zmq::buffer(hello));
+    uint64_t session = 0;
+    bool readySent = false;
+    FrameReport first;
+    Image firstImage;
+    std::thread frame;
+    // Bounded: Welcome, snapshot, maybe heartbeats, then a FrameBegin once we are ready.
+    for (int i = 0; i < 200; ++i) {
+        zmq::message_t msg;
+        if (!rogue.recv(msg)) break;
+        const auto* p = static_cast<const uint8_t*>(msg.data());
+        const Header in = decodeHeader(p, msg.size());
+        session = in.session;
+        Header out;
+        out.session = session;
+        if (in.type == MsgType::SceneSnapshot && !readySent) {
+            const auto snap = decodePayload<SceneSnapshot>(p + kHeaderSize, msg.size() - kHeaderSize);
+            out.type = MsgType::Ready;
+            rogue.send(zmq::buffer(encodeMessage(out, Ready{snap.updateSeq, stateHash(snap)})));
+            readySent = true;
+            frame = std::thread([&] { firstImage = master.renderFrame(&first); });
+        } else if (in.type == MsgType::FrameBegin) {
+            const auto fb = decodePayload<FrameBegin>(p + kHeaderSize, msg.size() - kHeaderSize);
+            out.type = MsgType::TileRequest;
+            out.frame = fb.frame;
+            rogue.send(zmq::buffer(encodeMessage(out, TileRequest{fb.frame, 8})));
+        } else if (in.type == MsgType::TileAssign) {
+            break;  // holding tiles now: go silent
+        }
+    }
+    ASSERT_TRUE(readySent);
+    frame.join();  // completes only if the rogue's tiles were rendered by someone else
+    EXPECT_EQ(differingBytes(firstImage, singleMachine(desc)), 0u);
+    // The straggler rule re-issued the rogue's tiles long before its heartbeat timed out.
+    EXPECT_GT(first.tilesReissued, 0u);
+    // Then the heartbeat timeout removes it (bounded wait).
+    for (int i = 0; i < 300 && master.connectedClients() != 1; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    EXPECT_EQ(master.connectedClients(), 1);
+    FrameReport report;
+    EXPECT_EQ(differingBytes(master.renderFrame(&report), singleMachine(desc)), 0u);
+    EXPECT_EQ(report.clients.size(), 1u);
+}
+
+}  // namespace
+}  // namespace rtwall

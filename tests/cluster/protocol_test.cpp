@@ -1,0 +1,821 @@
+// Tests for cluster/src/protocol.cpp: a round trip per message with every field set, the header
+// checks, truncation at every byte, hostile counts, value ranges, meshes and scene state.
+#include "protocol.h"
+
+#include <gtest/gtest.h>
+
+#define XXH_INLINE_ALL
+#include <xxhash.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <random>
+#include <set>
+
+namespace rtwall::cluster {
+namespace {
+
+// -- Field-by-field comparison -------------------------------------------------------------------
+
+void expectSame(const Float3& a, const Float3& b) {
+    EXPECT_EQ(a.x, b.x);
+    EXPECT_EQ(a.y, b.y);
+    EXPECT_EQ(a.z, b.z);
+}
+void expectSame(const Transform& a, const Transform& b) {
+    for (size_t i = 0; i < a.m.size(); ++i) EXPECT_EQ(a.m[i], b.m[i]) << "element " << i;
+}
+void expectSame(const CodecSettings& a, const CodecSettings& b) {
+    EXPECT_EQ(a.codec, b.codec);
+    EXPECT_EQ(a.jpegQuality, b.jpegQuality);
+    EXPECT_EQ(a.jpegSubsample, b.jpegSubsample);
+    EXPECT_EQ(a.zstdLevel, b.zstdLevel);
+}
+void expectSame(const Material& a, const Material& b) {
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_EQ(a.type, b.type);
+    expectSame(a.color, b.color);
+    expectSame(a.specular, b.specular);
+    EXPECT_EQ(a.shininess, b.shininess);
+    EXPECT_EQ(a.ior, b.ior);
+}
+void expectSame(const Light& a, const Light& b) {
+    EXPECT_EQ(a.type, b.type);
+    expectSame(a.position, b.position);
+    expectSame(a.direction, b.direction);
+    expectSame(a.color, b.color);
+    EXPECT_EQ(a.intensity, b.intensity);
+}
+void expectSame(const CameraDesc& a, const CameraDesc& b) {
+    EXPECT_EQ(a.name, b.name);
+    expectSame(a.position, b.position);
+    expectSame(a.lookAt, b.lookAt);
+    expectSame(a.up, b.up);
+    EXPECT_EQ(a.fovY, b.fovY);
+}
+void expectSame(const InstanceDesc& a, const InstanceDesc& b) {
+    EXPECT_EQ(a.mesh, b.mesh);
+    EXPECT_EQ(a.material, b.material);
+    expectSame(a.transform, b.transform);
+}
+void expectSame(const RenderSettings& a, const RenderSettings& b) {
+    EXPECT_EQ(a.width, b.width);
+    EXPECT_EQ(a.height, b.height);
+    EXPECT_EQ(a.tileSize, b.tileSize);
+    EXPECT_EQ(a.kernel, b.kernel);
+    EXPECT_EQ(a.shading, b.shading);
+    EXPECT_EQ(a.maxDepth, b.maxDepth);
+    EXPECT_EQ(a.supersample, b.supersample);
+    EXPECT_EQ(a.shadows, b.shadows);
+    expectSame(a.background, b.background);
+    expectSame(a.ambient, b.ambient);
+    EXPECT_EQ(a.threads, b.threads);
+}
+void expectSame(const MeshRef& a, const MeshRef& b) {
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_EQ(a.source, b.source);
+    EXPECT_EQ(a.hash, b.hash);
+    EXPECT_EQ(a.bytes, b.bytes);
+}
+void expectSame(const Change& a, const Change& b);  // for the vector overload below
+template <class T> void expectSame(const std::vector<T>& a, const std::vector<T>& b) {
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i) {
+        SCOPED_TRACE("element " + std::to_string(i));
+        expectSame(a[i], b[i]);
+    }
+}
+void expectSame(const Hello& a, const Hello& b) {
+    EXPECT_EQ(a.protocolVersion, b.protocolVersion);
+    EXPECT_EQ(a.threads, b.threads);
+    EXPECT_EQ(a.host, b.host);
+}
+void expectSame(const Welcome& a, const Welcome& b) {
+    EXPECT_EQ(a.clientId, b.clientId);
+    expectSame(a.codec, b.codec);
+    EXPECT_EQ(a.prefetch, b.prefetch);
+    EXPECT_EQ(a.heartbeatMs, b.heartbeatMs);
+}
+void expectSame(const SceneSnapshot& a, const SceneSnapshot& b) {
+    EXPECT_EQ(a.updateSeq, b.updateSeq);
+    expectSame(a.meshes, b.meshes);
+    expectSame(a.materials, b.materials);
+    expectSame(a.instances, b.instances);
+    expectSame(a.lights, b.lights);
+    expectSame(a.camera, b.camera);
+    expectSame(a.settings, b.settings);
+}
+void expectSame(const MeshRequest& a, const MeshRequest& b) { EXPECT_EQ(a.hash, b.hash); }
+void expectSame(const MeshData& a, const MeshData& b) {
+    EXPECT_EQ(a.hash, b.hash);
+    EXPECT_EQ(a.mesh, b.mesh);
+}
+void expectSame(const CameraChange& a, const CameraChange& b) { expectSame(a.camera, b.camera); }
+void expectSame(const TransformChange& a, const TransformChange& b) {
+    EXPECT_EQ(a.instance, b.instance);
+    expectSame(a.transform, b.transform);
+}
+void expectSame(const MaterialChange& a, const MaterialChange& b) {
+    EXPECT_EQ(a.material, b.material);
+    expectSame(a.value, b.value);
+}
+void expectSame(const LightChange& a, const LightChange& b) {
+    EXPECT_EQ(a.light, b.light);
+    expectSame(a.value, b.value);
+}
+void expectSame(const SettingsChange& a, const SettingsChange& b) { expectSame(a.settings, b.settings); }
+void expectSame(const Change& a, const Change& b) {
+    ASSERT_EQ(a.index(), b.index());
+    std::visit([&](const auto& alt) { expectSame(alt, std::get<std::decay_t<decltype(alt)>>(b)); }, a);
+}
+void expectSame(const Update& a, const Update& b) {
+    EXPECT_EQ(a.seq, b.seq);
+    expectSame(a.changes, b.changes);
+}
+void expectSame(const FrameBegin& a, const FrameBegin& b) {
+    EXPECT_EQ(a.frame, b.frame);
+    EXPECT_EQ(a.updateSeq, b.updateSeq);
+}
+void expectSame(const TileRequest& a, const TileRequest& b) {
+    EXPECT_EQ(a.frame, b.frame);
+    EXPECT_EQ(a.count, b.count);
+}
+void expectSame(const TileAssign& a, const TileAssign& b) {
+    EXPECT_EQ(a.frame, b.frame);
+    EXPECT_EQ(a.tiles, b.tiles);
+}
+void expectSame(const TileResult& a, const TileResult& b) {
+    EXPECT_EQ(a.frame, b.frame);
+    EXPECT_EQ(a.tile, b.tile);
+    EXPECT_EQ(a.codec, b.codec);
+    EXPECT_EQ(a.renderMicros, b.renderMicros);
+    EXPECT_EQ(a.pixels, b.pixels);
+}
+void expectSame(const Heartbeat&, const Heartbeat&) {}
+void expectSame(const Goodbye& a, const Goodbye& b) { EXPECT_EQ(a.reason, b.reason); }
+void expectSame(const Ready& a, const Ready& b) {
+    EXPECT_EQ(a.updateSeq, b.updateSeq);
+    EXPECT_EQ(a.stateHash, b.stateHash);
+}
+void expectSame(const ResyncRequest& a, const ResyncRequest& b) { EXPECT_EQ(a.lastSeq, b.lastSeq); }
+
+// -- Sample values: every field differs from its default ----------------------------------------
+
+Material sampleMaterial(int k) {
+    Material m;
+    m.name = "material-" + std::to_string(k);
+    m.type = k % 2 ? MaterialType::Glass : MaterialType::Phong;
+    m.color = {0.25f, 0.5f + 0.01f * float(k), 0.75f};
+    m.specular = {0.125f, 0.375f, 1.0f};
+    m.shininess = 77.5f + float(k);
+    m.ior = 1.33f + 0.1f * float(k);
+    return m;
+}
+
+Light sampleLight(int k) {
+    Light l;
+    l.type = k % 2 ? LightType::Directional : LightType::Point;
+    l.position = {1.5f, -2.25f, 3.0f + float(k)};
+    l.direction = {0.5f, -0.75f, 0.25f};
+    l.color = {0.9f, 0.8f, 0.7f};
+    l.intensity = 123.5f + float(k);
+    return l;
+}
+
+CameraDesc sampleCamera() {
+    CameraDesc c;
+    c.name = "wall-left";
+    c.position = {-4.5f, 2.0f, 9.25f};
+    c.lookAt = {0.5f, 0.25f, -1.0f};
+    c.up = {0.0f, 0.0f, 1.0f};
+    c.fovY = 61.5f;
+    return c;
+}
+
+Transform sampleTransform(int k) {
+    Transform t;
+    for (size_t i = 0; i < t.m.size(); ++i) t.m[i] = 0.1 * double(i + 1) + 1e-9 * k - 0.5;
+    return t;
+}
+
+RenderSettings sampleSettings() {
+    RenderSettings s;
+    s.width = 1920;
+    s.height = 1080;
+    s.tileSize = 48;
+    s.kernel = KernelType::Single;
+    s.shading = ShadingMode::EyeLight;
+    s.maxDepth = 12;
+    s.supersample = 3;
+    s.shadows = false;
+    s.background = {0.1f, 0.2f, 0.3f};
+    s.ambient = {0.05f, 0.06f, 0.07f};
+    s.threads = 7;
+    return s;
+}
+
+Hello sampleHello() { return Hello{7, 12, "render-node-3.local"}; }
+
+Welcome sampleWelcome() {
+    Welcome w;
+    w.clientId = 42;
+    w.codec = CodecSettings{TileCodec::Zstd, 77, true, 9};
+    w.prefetch = 6;
+    w.heartbeatMs = 125;
+    return w;
+}
+
+SceneSnapshot sampleSnapshot() {
+    SceneSnapshot s;
+    s.updateSeq = 99;
+    s.meshes.push_back(
+        MeshRef{"bunny", "/shared/meshes/bunny.ply", {0x0123456789abcdefull, 0xfedcba9876543210ull}, 123456});
+    s.meshes.push_back(MeshRef{"floor", "shape:quad", {1, 2}, 200});
+    s.materials = {sampleMaterial(0), sampleMaterial(1)};
+    s.instances.push_back(InstanceDesc{1, 0, sampleTransform(0)});
+    s.instances.push_back(InstanceDesc{0, 1, sampleTransform(1)});
+    s.lights = {sampleLight(0), sampleLight(1)};
+    s.camera = sampleCamera();
+    s.settings = sampleSettings();
+    return s;
+}
+
+MeshData sampleMeshData() {
+    MeshData m;
+    m.mesh = encodeMesh(makeBox());
+    m.hash = hashBytes(m.mesh.data(), m.mesh.size());
+    return m;
+}
+
+Update sampleUpdate() {
+    Update u;
+    u.seq = 17;
+    u.changes.push_back(CameraChange{sampleCamera()});
+    u.changes.push_back(TransformChange{3, sampleTransform(2)});
+    u.changes.push_back(MaterialChange{5, sampleMaterial(3)});
+    u.changes.push_back(LightChange{2, sampleLight(1)});
+    u.changes.push_back(SettingsChange{sampleSettings()});
+    return u;
+}
+
+TileResult sampleTileResult() {
+    TileResult t;
+    t.frame = 57;
+    t.tile = 300;
+    t.codec = TileCodec::Jpeg;
+    t.renderMicros = 4567;
+    for (int i = 0; i < 300; ++i) t.pixels.push_back(uint8_t(i * 7));
+    return t;
+}
+
+Header sampleHeader() {
+    Header h;
+    h.type = MsgType::Goodbye;  // encodeMessage sets the type from the message
+    h.session = 0x1122334455667788ull;
+    h.frame = 31337;
+    h.sceneVersion = 4242;
+    h.payloadLength = 12345;  // and the length
+    return h;
+}
+
+// Calls f with every sample message, each a different type.
+template <class F> void forEachSample(F&& f) {
+    f(sampleHello());
+    f(sampleWelcome());
+    f(sampleSnapshot());
+    f(MeshRequest{{0xaaaabbbbccccddddull, 0x1111222233334444ull}});
+    f(sampleMeshData());
+    f(sampleUpdate());
+    f(FrameBegin{1234, 99});
+    f(TileRequest{55, 8});
+    f(TileAssign{56, {0, 7, 1u << 20, 0xFFFFFFFFu}});
+    f(sampleTileResult());
+    f(Heartbeat{});
+    f(Goodbye{"shutting down: operator request"});
+    f(Ready{99, {0x0102030405060708ull, 0x1112131415161718ull}});
+    f(ResyncRequest{98});
+}
+
+template <class Msg> std::vector<uint8_t> payloadOf(const Msg& msg) {
+    const std::vector<uint8_t> bytes = encodeMessage(sampleHeader(), msg);
+    return std::vector<uint8_t>(bytes.begin() + kHeaderSize, bytes.end());
+}
+
+template <class Msg> Msg decode(const std::vector<uint8_t>& payload) {
+    return decodePayload<Msg>(payload.data(), payload.size());
+}
+
+void putU32(std::vector<uint8_t>& bytes, size_t at, uint32_t v) {
+    for (int i = 0; i < 4; ++i) bytes[at + i] = uint8_t(v >> (8 * i));
+}
+
+// -- Round trips ---------------------------------------------------------------------------------
+
+TEST(Protocol, RoundTripEveryMessage) {
+    std::set<MsgType> seen;
+    forEachSample([&](const auto& msg) {
+        using Msg = std::decay_t<decltype(msg)>;
+        SCOPED_TRACE("message type " + std::to_string(int(messageTypeOf(msg))));
+        seen.insert(messageTypeOf(msg));
+        const std::vector<uint8_t> bytes = encodeMessage(sampleHeader(), msg);
+        // encodeMessage reserved the counted size; a different written size would have grown the
+        // vector past it (and the header's length, which is the counted size, would disagree).
+        EXPECT_EQ(bytes.capacity(), bytes.size());
+        const Header h = decodeHeader(bytes.data(), bytes.size());
+        EXPECT_EQ(h.version, kProtocolVersion);
+        EXPECT_EQ(h.type, messageTypeOf(msg));
+        EXPECT_EQ(h.session, 0x1122334455667788ull);
+        EXPECT_EQ(h.frame, 31337u);
+        EXPECT_EQ(h.sceneVersion, 4242u);
+        EXPECT_EQ(size_t(h.payloadLength) + kHeaderSize, bytes.size());
+        const Msg back = decodePayload<Msg>(bytes.data() + kHeaderSize, bytes.size() - kHeaderSize);
+        expectSame(msg, back);
+        // The encoding is canonical: the decoded message encodes to the same bytes.
+        EXPECT_EQ(encodeMessage(sampleHeader(), back), bytes);
+    });
+    EXPECT_EQ(seen.size(), size_t(kMaxMsgType));
+}
+
+TEST(Protocol, RoundTripEmptyAndLimitValues) {
+    SceneSnapshot empty;
+    empty.camera.name.clear();
+    expectSame(empty, decode<SceneSnapshot>(payloadOf(empty)));
+    expectSame(Update{}, decode<Update>(payloadOf(Update{})));
+    expectSame(TileAssign{}, decode<TileAssign>(payloadOf(TileAssign{})));
+    expectSame(TileResult{}, decode<TileResult>(payloadOf(TileResult{})));
+    expectSame(Goodbye{std::string(kMaxStringBytes, 'x')},
+               decode<Goodbye>(payloadOf(Goodbye{std::string(kMaxStringBytes, 'x')})));
+    EXPECT_THROW(decode<Goodbye>(payloadOf(Goodbye{std::string(kMaxStringBytes + 1, 'x')})), DecodeError);
+
+    SceneSnapshot edges = sampleSnapshot();
+    edges.settings.width = 16384;
+    edges.settings.height = 1;
+    edges.settings.tileSize = 1024;
+    edges.settings.maxDepth = 64;
+    edges.settings.supersample = 16;
+    edges.settings.threads = 1024;
+    edges.materials[0].ior = 1.0f;
+    edges.materials[1].ior = 4.0f;
+    edges.materials[0].color = {0, 0, 0};
+    edges.materials[1].color = {1, 1, 1};
+    edges.lights[0].intensity = 0;
+    edges.camera.fovY = 179.9f;
+    expectSame(edges, decode<SceneSnapshot>(payloadOf(edges)));
+}
+
+TEST(Protocol, EncodeSetsTypeAndLength) {
+    Header h = sampleHeader();
+    h.type = MsgType::Hello;
+    const std::vector<uint8_t> bytes = encodeMessage(h, Goodbye{"x"});
+    const Header back = decodeHeader(bytes.data(), bytes.size());
+    EXPECT_EQ(back.type, MsgType::Goodbye);
+    EXPECT_EQ(back.payloadLength, 5u);
+}
+
+TEST(Protocol, GoldenBytes) {
+    // The exact layout of a header and a small payload; a change here breaks every deployed peer.
+    Header h;
+    h.session = 0x0807060504030201ull;
+    h.frame = 0x0C0B0A09u;
+    h.sceneVersion = 0x100F0E0Du;
+    const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
+    const std::vector<uint8_t> expected{
+        'R',  'T',  'W',  'L',                           // magic 0x4C575452
+        0x01, 0x00,                                      // version
+        0x07, 0x00,                                      // type FrameBegin
+        0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
+        0x09, 0x0A, 0x0B, 0x0C,                          // frame
+        0x0D, 0x0E, 0x0F, 0x10,                          // scene version
+        0x08, 0x00, 0x00, 0x00,                          // payload length
+        0x00, 0x00, 0x00, 0x00,                          // reserved
+        0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88,  // payload
+    };
+    EXPECT_EQ(bytes, expected);
+}
+
+// -- Header checks -------------------------------------------------------------------------------
+
+TEST(Protocol, HeaderRejectsMalformed) {
+    const std::vector<uint8_t> good = encodeMessage(sampleHeader(), Goodbye{"bye"});
+    ASSERT_NO_THROW(decodeHeader(good.data(), good.size()));
+
+    auto rejects = [](std::vector<uint8_t> bytes, const char* what) {
+        EXPECT_THROW(decodeHeader(bytes.data(), bytes.size()), DecodeError) << what;
+    };
+    std::vector<uint8_t> b = good;
+    b[0] ^= 1;
+    rejects(b, "wrong magic");
+    rejects(std::vector<uint8_t>(good.begin(), good.begin() + 31), "31 bytes");
+    rejects({}, "empty");
+    b = good;
+    b.push_back(0);
+    rejects(b, "payload longer than the length");
+    b = good;
+    b.pop_back();
+    rejects(b, "payload shorter than the length");
+    b = good;
+    putU32(b, 24, 0xFFFFFFFFu);
+    rejects(b, "huge length");
+    for (uint16_t type : {uint16_t(0), uint16_t(15), uint16_t(0xFFFF)}) {
+        b = good;
+        b[6] = uint8_t(type);
+        b[7] = uint8_t(type >> 8);
+        rejects(b, "type out of range");
+    }
+    for (size_t at = 28; at < 32; ++at) {
+        b = good;
+        b[at] = 1;
+        rejects(b, "reserved not zero");
+    }
+    EXPECT_THROW(decodeHeader(nullptr, 0), DecodeError);
+}
+
+TEST(Protocol, HeaderReturnsOtherVersions) {
+    Header h = sampleHeader();
+    h.version = 2;
+    const std::vector<uint8_t> bytes = encodeMessage(h, Hello{2, 4, "future"});
+    const Header back = decodeHeader(bytes.data(), bytes.size());
+    EXPECT_EQ(back.version, 2);
+    EXPECT_EQ(back.type, MsgType::Hello);
+    EXPECT_EQ(decodePayload<Hello>(bytes.data() + kHeaderSize, bytes.size() - kHeaderSize).protocolVersion, 2);
+}
+
+TEST(Protocol, HeaderAloneIsAValidEmptyMessage) {
+    const std::vector<uint8_t> bytes = encodeMessage(sampleHeader(), Heartbeat{});
+    ASSERT_EQ(bytes.size(), kHeaderSize);
+    EXPECT_EQ(decodeHeader(bytes.data(), bytes.size()).type, MsgType::Heartbeat);
+    EXPECT_NO_THROW(decodePayload<Heartbeat>(bytes.data() + kHeaderSize, 0));
+    EXPECT_THROW(decodePayload<Heartbeat>(bytes.data(), 1), DecodeError);
+}
+
+// -- Truncation and trailing bytes ---------------------------------------------------------------
+
+TEST(Protocol, EveryTruncationThrows) {
+    forEachSample([&](const auto& msg) {
+        using Msg = std::decay_t<decltype(msg)>;
+        SCOPED_TRACE("message type " + std::to_string(int(messageTypeOf(msg))));
+        const std::vector<uint8_t> bytes = encodeMessage(sampleHeader(), msg);
+        for (size_t cut = 0; cut < bytes.size(); ++cut) {
+            // Exactly sized copies, so that AddressSanitizer would see any read past the end.
+            const std::vector<uint8_t> whole(bytes.begin(), bytes.begin() + ptrdiff_t(cut));
+            EXPECT_THROW(decodeHeader(whole.data(), whole.size()), DecodeError) << "cut at " << cut;
+            if (cut >= kHeaderSize) {
+                const std::vector<uint8_t> payload(bytes.begin() + kHeaderSize, bytes.begin() + ptrdiff_t(cut));
+                EXPECT_THROW(decodePayload<Msg>(payload.data(), payload.size()), DecodeError) << "cut at " << cut;
+            }
+        }
+        std::vector<uint8_t> trailing(bytes.begin() + kHeaderSize, bytes.end());
+        trailing.push_back(0);
+        EXPECT_THROW(decodePayload<Msg>(trailing.data(), trailing.size()), DecodeError);
+    });
+}
+
+TEST(Protocol, RandomCorruptionNeverCrashes) {
+    // A small deterministic fuzz pass that runs with every test; tests/fuzz goes further.
+    std::mt19937 rng(12345);
+    forEachSample([&](const auto& msg) {
+        using Msg = std::decay_t<decltype(msg)>;
+        const std::vector<uint8_t> payload = payloadOf(msg);
+        if (payload.empty()) return;
+        for (int iteration = 0; iteration < 500; ++iteration) {
+            std::vector<uint8_t> bad = payload;
+            const int flips = 1 + int(rng() % 4);
+            for (int f = 0; f < flips; ++f) bad[rng() % bad.size()] = uint8_t(rng());
+            try {
+                const Msg back = decodePayload<Msg>(bad.data(), bad.size());
+                // Whatever decodes must be canonical.
+                EXPECT_EQ(payloadOf(back), bad);
+            } catch (const DecodeError&) {
+            }
+        }
+    });
+}
+
+// -- Hostile counts ------------------------------------------------------------------------------
+
+TEST(Protocol, OversizedCountsThrowBeforeAllocating) {
+    // Counts far beyond the limits, and within the limits but beyond the bytes present. A
+    // decoder that sized a vector first would throw bad_alloc (or take gigabytes) instead.
+    for (uint32_t count : {0x80000000u, 0xFFFFFFFFu, kMaxTilesPerMessage, kMaxTilesPerMessage + 1}) {
+        std::vector<uint8_t> p = payloadOf(TileAssign{9, {}});
+        putU32(p, 4, count);
+        EXPECT_THROW(decode<TileAssign>(p), DecodeError) << count;
+    }
+    for (uint32_t count : {0x80000000u, 0xFFFFFFFFu, kMaxChangesPerUpdate, kMaxChangesPerUpdate + 1}) {
+        std::vector<uint8_t> p = payloadOf(Update{3, {}});
+        putU32(p, 4, count);
+        EXPECT_THROW(decode<Update>(p), DecodeError) << count;
+    }
+    // Each of the snapshot's four vectors in turn: its count sits right after the previous (empty) ones.
+    SceneSnapshot empty;
+    for (size_t vectorIndex = 0; vectorIndex < 4; ++vectorIndex) {
+        for (uint32_t count : {0x80000000u, 0xFFFFFFFFu, kMaxSceneObjects, kMaxSceneObjects + 1}) {
+            std::vector<uint8_t> p = payloadOf(empty);
+            putU32(p, 4 + 4 * vectorIndex, count);
+            EXPECT_THROW(decode<SceneSnapshot>(p), DecodeError) << vectorIndex << " " << count;
+        }
+    }
+    // Blobs and strings with lengths of up to 4 GiB.
+    for (uint32_t length : {0x80000000u, 0xFFFFFFFFu}) {
+        std::vector<uint8_t> p = payloadOf(MeshData{});
+        putU32(p, 16, length);
+        EXPECT_THROW(decode<MeshData>(p), DecodeError);
+        p = payloadOf(TileResult{});
+        putU32(p, 13, length);
+        EXPECT_THROW(decode<TileResult>(p), DecodeError);
+        p = payloadOf(Goodbye{});
+        putU32(p, 0, length);
+        EXPECT_THROW(decode<Goodbye>(p), DecodeError);
+        p = payloadOf(Hello{});
+        putU32(p, 6, length);
+        EXPECT_THROW(decode<Hello>(p), DecodeError);
+    }
+}
+
+// -- Value ranges --------------------------------------------------------------------------------
+
+TEST(Protocol, SnapshotRejectsValuesOutOfRange) {
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    const std::vector<std::pair<const char*, std::function<void(SceneSnapshot&)>>> cases = {
+        {"width 0", [](SceneSnapshot& s) { s.settings.width = 0; }},
+        {"width 16385", [](SceneSnapshot& s) { s.settings.width = 16385; }},
+        {"height -1", [](SceneSnapshot& s) { s.settings.height = -1; }},
+        {"height 16385", [](SceneSnapshot& s) { s.settings.height = 16385; }},
+        {"tile 0", [](SceneSnapshot& s) { s.settings.tileSize = 0; }},
+        {"tile 1025", [](SceneSnapshot& s) { s.settings.tileSize = 1025; }},
+        {"depth 0", [](SceneSnapshot& s) { s.settings.maxDepth = 0; }},
+        {"depth 65", [](SceneSnapshot& s) { s.settings.maxDepth = 65; }},
+        {"supersample 0", [](SceneSnapshot& s) { s.settings.supersample = 0; }},
+        {"supersample 17", [](SceneSnapshot& s) { s.settings.supersample = 17; }},
+        {"threads -1", [](SceneSnapshot& s) { s.settings.threads = -1; }},
+        {"threads 1025", [](SceneSnapshot& s) { s.settings.threads = 1025; }},
+        {"kernel 2", [](SceneSnapshot& s) { s.settings.kernel = KernelType(2); }},
+        {"shading 2", [](SceneSnapshot& s) { s.settings.shading = ShadingMode(2); }},
+        {"background NaN", [=](SceneSnapshot& s) { s.settings.background.y = nan; }},
+        {"ambient inf", [=](SceneSnapshot& s) { s.settings.ambient.z = inf; }},
+        {"fov 0", [](SceneSnapshot& s) { s.camera.fovY = 0; }},
+        {"fov 180", [](SceneSnapshot& s) { s.camera.fovY = 180; }},
+        {"fov -10", [](SceneSnapshot& s) { s.camera.fovY = -10; }},
+        {"camera NaN", [=](SceneSnapshot& s) { s.camera.lookAt.x = nan; }},
+        {"camera name too long", [](SceneSnapshot& s) { s.camera.name.assign(kMaxStringBytes + 1, 'c'); }},
+        {"material type 4", [](SceneSnapshot& s) { s.materials[1].type = MaterialType(4); }},
+        {"color 1.01", [](SceneSnapshot& s) { s.materials[0].color.x = 1.01f; }},
+        {"color -0.1", [](SceneSnapshot& s) { s.materials[0].color.z = -0.1f; }},
+        {"specular 2", [](SceneSnapshot& s) { s.materials[1].specular.y = 2.0f; }},
+        {"color NaN", [=](SceneSnapshot& s) { s.materials[0].color.y = nan; }},
+        {"ior 0.99", [](SceneSnapshot& s) { s.materials[1].ior = 0.99f; }},
+        {"ior 4.01", [](SceneSnapshot& s) { s.materials[1].ior = 4.01f; }},
+        {"shininess -1", [](SceneSnapshot& s) { s.materials[0].shininess = -1; }},
+        {"shininess inf", [=](SceneSnapshot& s) { s.materials[0].shininess = inf; }},
+        {"light type 2", [](SceneSnapshot& s) { s.lights[0].type = LightType(2); }},
+        {"intensity -1", [](SceneSnapshot& s) { s.lights[0].intensity = -1; }},
+        {"light position NaN", [=](SceneSnapshot& s) { s.lights[1].position.x = nan; }},
+        {"light direction inf", [=](SceneSnapshot& s) { s.lights[1].direction.z = -inf; }},
+        {"transform NaN", [](SceneSnapshot& s) { s.instances[0].transform.m[11] = std::nan(""); }},
+        {"transform inf", [](SceneSnapshot& s) { s.instances[1].transform.m[0] = HUGE_VAL; }},
+        {"instance mesh out of range", [](SceneSnapshot& s) { s.instances[1].mesh = 2; }},
+        {"instance material out of range", [](SceneSnapshot& s) { s.instances[0].material = 2; }},
+        {"mesh bytes over the limit", [](SceneSnapshot& s) { s.meshes[0].bytes = kMaxMeshBytes + 1; }},
+    };
+    ASSERT_NO_THROW(decode<SceneSnapshot>(payloadOf(sampleSnapshot())));
+    for (const auto& [what, mutate] : cases) {
+        SceneSnapshot s = sampleSnapshot();
+        mutate(s);
+        EXPECT_THROW(decode<SceneSnapshot>(payloadOf(s)), DecodeError) << what;
+        // The same values arrive in changes, and must be rejected there too.
+        Update u;
+        u.changes = {CameraChange{s.camera}, MaterialChange{0, s.materials[0]}, MaterialChange{1, s.materials[1]},
+                     LightChange{0, s.lights[0]}, LightChange{1, s.lights[1]},
+                     TransformChange{0, s.instances[0].transform}, TransformChange{1, s.instances[1].transform},
+                     SettingsChange{s.settings}};
+        const std::string name = what;
+        const bool crossReference = name.find("out of range") != std::string::npos || name.find("mesh bytes") == 0;
+        if (!crossReference) {
+            EXPECT_THROW(decode<Update>(payloadOf(u)), DecodeError) << what;
+        }
+    }
+}
+
+TEST(Protocol, OtherMessagesRejectValuesOutOfRange) {
+    auto welcomeWith = [](auto mutate) {
+        Welcome w = sampleWelcome();
+        mutate(w);
+        return payloadOf(w);
+    };
+    EXPECT_THROW(decode<Welcome>(welcomeWith([](Welcome& w) { w.codec.codec = TileCodec(4); })), DecodeError);
+    EXPECT_THROW(decode<Welcome>(welcomeWith([](Welcome& w) { w.codec.jpegQuality = 0; })), DecodeError);
+    EXPECT_THROW(decode<Welcome>(welcomeWith([](Welcome& w) { w.codec.jpegQuality = 101; })), DecodeError);
+    EXPECT_THROW(decode<Welcome>(welcomeWith([](Welcome& w) { w.codec.zstdLevel = 0; })), DecodeError);
+    EXPECT_THROW(decode<Welcome>(welcomeWith([](Welcome& w) { w.codec.zstdLevel = 20; })), DecodeError);
+    EXPECT_THROW(decode<Welcome>(welcomeWith([](Welcome& w) { w.prefetch = kMaxTilesPerMessage + 1; })),
+                 DecodeError);
+    EXPECT_NO_THROW(decode<Welcome>(welcomeWith([](Welcome& w) {
+        w.codec = {TileCodec::Jpeg, 100, false, 19};
+    })));
+    EXPECT_NO_THROW(decode<Welcome>(welcomeWith([](Welcome& w) { w.codec = {TileCodec::Raw, 1, false, 1}; })));
+
+    std::vector<uint8_t> p = payloadOf(sampleWelcome());
+    p[9] = 2;  // the subsampling boolean
+    EXPECT_THROW(decode<Welcome>(p), DecodeError);
+
+    TileResult t = sampleTileResult();
+    t.codec = TileCodec(4);
+    EXPECT_THROW(decode<TileResult>(payloadOf(t)), DecodeError);
+    EXPECT_THROW(decode<TileRequest>(payloadOf(TileRequest{1, kMaxTilesPerMessage + 1})), DecodeError);
+    EXPECT_NO_THROW(decode<TileRequest>(payloadOf(TileRequest{1, kMaxTilesPerMessage})));
+    EXPECT_THROW(decode<Hello>(payloadOf(Hello{1, 1025, "big"})), DecodeError);
+
+    // Change kinds past the last one.
+    p = payloadOf(Update{1, {SettingsChange{}}});
+    ASSERT_EQ(p[8], 4);
+    p[8] = 5;
+    EXPECT_THROW(decode<Update>(p), DecodeError);
+
+    // Mesh bytes that do not match their hash.
+    MeshData m = sampleMeshData();
+    m.hash[1] ^= 1;
+    EXPECT_THROW(decode<MeshData>(payloadOf(m)), DecodeError);
+}
+
+// -- Meshes --------------------------------------------------------------------------------------
+
+void expectSameMesh(const TriangleMesh& a, const TriangleMesh& b) {
+    ASSERT_EQ(a.vertexCount(), b.vertexCount());
+    ASSERT_EQ(a.triangleCount(), b.triangleCount());
+    ASSERT_EQ(a.hasNormals(), b.hasNormals());
+    // Bitwise, so that -0.0 and 0.0 count as different; std::equal also copes with the null
+    // pointers of an empty mesh, which memcmp must not be given.
+    auto sameBits = [](const auto* x, const auto* y, size_t n) {
+        return std::equal(x, x + n, y, [](auto u, auto v) { return std::memcmp(&u, &v, sizeof u) == 0; });
+    };
+    EXPECT_TRUE(sameBits(a.positions(), b.positions(), 3 * a.vertexCount()));
+    EXPECT_TRUE(sameBits(a.indices(), b.indices(), 3 * a.triangleCount()));
+    if (a.hasNormals()) {
+        EXPECT_TRUE(sameBits(a.normals(), b.normals(), 3 * a.vertexCount()));
+    }
+}
+
+TEST(ProtocolMesh, RoundTrip) {
+    for (const TriangleMesh& mesh : {makeBox(), makeSphere(5, 7), makeTorusKnot(2, 3, 40, 6, 0.2f), TriangleMesh{}}) {
+        const std::vector<uint8_t> bytes = encodeMesh(mesh);
+        EXPECT_EQ(bytes.size(), 8 + 12 * mesh.vertexCount() + 8 + 12 * mesh.triangleCount() + 1 +
+                                    (mesh.hasNormals() ? 12 * mesh.vertexCount() : 0));
+        const TriangleMesh back = decodeMesh(bytes.data(), bytes.size());
+        expectSameMesh(mesh, back);
+        EXPECT_EQ(encodeMesh(back), bytes);
+    }
+}
+
+TEST(ProtocolMesh, Layout) {
+    TriangleMesh m;
+    m.addVertex({1.0f, 0.0f, 0.0f});
+    m.addVertex({0.0f, 1.0f, 0.0f});
+    m.addVertex({0.0f, 0.0f, 1.0f});
+    m.addTriangle(0, 1, 2);
+    const std::vector<uint8_t> bytes = encodeMesh(m);
+    ASSERT_EQ(bytes.size(), 8u + 36u + 8u + 12u + 1u);
+    EXPECT_EQ(bytes[0], 3);                            // vertex count
+    EXPECT_EQ(bytes[8 + 3], 0x3F);                     // 1.0f, little-endian
+    EXPECT_EQ(bytes[44], 1);                           // triangle count
+    EXPECT_EQ(bytes[52 + 4], 1);                       // second index
+    EXPECT_EQ(bytes[64], 0);                           // no normals
+}
+
+TEST(ProtocolMesh, HashIsStableAndSeesEveryByte) {
+    const std::vector<uint8_t> bytes = encodeMesh(makeSphere(3, 4));
+    const Hash128 h = hashBytes(bytes.data(), bytes.size());
+    EXPECT_EQ(hashBytes(encodeMesh(makeSphere(3, 4)).data(), bytes.size()), h);
+    EXPECT_NE(hashBytes(bytes.data(), bytes.size() - 1), h);
+    for (size_t i = 0; i < bytes.size(); ++i) {
+        std::vector<uint8_t> changed = bytes;
+        changed[i] ^= 0x10;
+        EXPECT_NE(hashBytes(changed.data(), changed.size()), h) << "byte " << i;
+    }
+    // Low then high half of XXH3-128, as documented.
+    const XXH128_hash_t ref = XXH3_128bits(bytes.data(), bytes.size());
+    EXPECT_EQ(h[0], ref.low64);
+    EXPECT_EQ(h[1], ref.high64);
+}
+
+TEST(ProtocolMesh, RejectsMalformed) {
+    TriangleMesh m;
+    m.addVertex({1.0f, 0.0f, 0.0f});
+    m.addVertex({0.0f, 1.0f, 0.0f});
+    m.addVertex({0.0f, 0.0f, 1.0f});
+    m.addTriangle(0, 1, 2);
+    m.setNormals({0, 0, 1, 0, 0, 1, 0, 0, 1});
+    const std::vector<uint8_t> good = encodeMesh(m);
+    ASSERT_NO_THROW(decodeMesh(good.data(), good.size()));
+    const size_t indexAt = 8 + 36 + 8, flagAt = indexAt + 12;
+
+    auto rejects = [](const std::vector<uint8_t>& b, const std::string& what) {
+        EXPECT_THROW(decodeMesh(b.data(), b.size()), DecodeError) << what;
+    };
+    std::vector<uint8_t> b = good;
+    putU32(b, indexAt + 8, 3);  // == vertex count
+    rejects(b, "index out of range");
+    b = good;
+    putU32(b, indexAt, 0xFFFFFFFFu);
+    rejects(b, "index 2^32-1");
+    b = good;
+    putU32(b, 8 + 4, 0x7FC00000u);  // NaN in a position
+    rejects(b, "NaN position");
+    b = good;
+    putU32(b, flagAt + 1 + 20, 0x7F800000u);  // inf in a normal
+    rejects(b, "infinite normal");
+    b = good;
+    b[flagAt] = 2;
+    rejects(b, "normals flag 2");
+    b = good;
+    b.push_back(0);
+    rejects(b, "trailing byte");
+    for (size_t cut = 0; cut < good.size(); ++cut) {
+        const std::vector<uint8_t> prefix(good.begin(), good.begin() + ptrdiff_t(cut));
+        rejects(prefix, "cut at " + std::to_string(cut));
+    }
+    // Counts that cannot fit, up to 2^64 - 1, fail before anything is reserved.
+    for (uint64_t count : {uint64_t(1000), uint64_t(1) << 32, uint64_t(1) << 40, ~uint64_t(0)}) {
+        b = good;
+        for (int i = 0; i < 8; ++i) b[size_t(i)] = uint8_t(count >> (8 * i));
+        rejects(b, "vertex count");
+        b = good;
+        for (int i = 0; i < 8; ++i) b[44 + size_t(i)] = uint8_t(count >> (8 * i));
+        rejects(b, "triangle count");
+    }
+    // A normals flag on a mesh without vertices would not re-encode to the same bytes.
+    std::vector<uint8_t> empty = encodeMesh(TriangleMesh{});
+    empty.back() = 1;
+    rejects(empty, "normals without vertices");
+}
+
+// -- Scene state ---------------------------------------------------------------------------------
+
+SceneDesc sampleScene() {
+    SceneDesc scene;
+    scene.materials = {sampleMaterial(0), sampleMaterial(1)};
+    scene.instances = {InstanceDesc{0, 0, {}}, InstanceDesc{0, 1, {}}};
+    scene.lights = {sampleLight(0)};
+    return scene;
+}
+
+TEST(Protocol, ApplyChange) {
+    SceneDesc scene = sampleScene();
+    CameraDesc camera;
+    applyChange(scene, camera, CameraChange{sampleCamera()});
+    expectSame(camera, sampleCamera());
+
+    applyChange(scene, camera, TransformChange{1, sampleTransform(5)});
+    expectSame(scene.instances[1].transform, sampleTransform(5));
+    expectSame(scene.instances[0].transform, Transform{});
+    EXPECT_EQ(scene.instances[1].material, 1u);  // only the transform changes
+
+    applyChange(scene, camera, MaterialChange{0, sampleMaterial(7)});
+    expectSame(scene.materials[0], sampleMaterial(7));
+    expectSame(scene.materials[1], sampleMaterial(1));
+
+    applyChange(scene, camera, LightChange{0, sampleLight(3)});
+    expectSame(scene.lights[0], sampleLight(3));
+
+    applyChange(scene, camera, SettingsChange{sampleSettings()});
+    expectSame(scene.settings, sampleSettings());
+
+    EXPECT_THROW(applyChange(scene, camera, TransformChange{2, {}}), DecodeError);
+    EXPECT_THROW(applyChange(scene, camera, MaterialChange{2, {}}), DecodeError);
+    EXPECT_THROW(applyChange(scene, camera, LightChange{1, {}}), DecodeError);
+    EXPECT_THROW(applyChange(scene, camera, LightChange{0xFFFFFFFFu, {}}), DecodeError);
+    expectSame(scene.lights[0], sampleLight(3));  // a failed change leaves the scene alone
+}
+
+TEST(Protocol, StateHash) {
+    const SceneSnapshot base = sampleSnapshot();
+    const Hash128 h = stateHash(base);
+    EXPECT_EQ(stateHash(sampleSnapshot()), h);
+    SceneSnapshot s = base;
+    s.updateSeq = 1000;
+    EXPECT_EQ(stateHash(s), h) << "the sequence number is not part of the state";
+
+    const std::vector<std::function<void(SceneSnapshot&)>> changes = {
+        [](SceneSnapshot& x) { x.meshes[0].hash[0] ^= 1; },
+        [](SceneSnapshot& x) { x.meshes[1].name += "'"; },
+        [](SceneSnapshot& x) { x.meshes.pop_back(); },
+        [](SceneSnapshot& x) { x.materials[1].color.x = std::nextafter(x.materials[1].color.x, 0.0f); },
+        [](SceneSnapshot& x) { x.instances[0].transform.m[3] += 1e-12; },
+        [](SceneSnapshot& x) { std::swap(x.instances[0], x.instances[1]); },
+        [](SceneSnapshot& x) { x.lights[1].intensity *= 2; },
+        [](SceneSnapshot& x) { x.camera.fovY += 1; },
+        [](SceneSnapshot& x) { x.settings.shadows = true; },
+        [](SceneSnapshot& x) { x.settings.threads = 3; },
+    };
+    std::set<Hash128> seen{h};
+    for (size_t i = 0; i < changes.size(); ++i) {
+        SceneSnapshot changed = base;
+        changes[i](changed);
+        EXPECT_TRUE(seen.insert(stateHash(changed)).second) << "change " << i;
+    }
+}
+
+}  // namespace
+}  // namespace rtwall::cluster

@@ -1,0 +1,833 @@
+// TileScheduler without a network: every policy (affinity, stealing, straggler re-issue, dead
+// and late clients, stale results) driven by hand with an explicit clock.
+#include "scheduler.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <numeric>
+#include <set>
+
+namespace rtwall::cluster {
+namespace {
+
+using Result = TileScheduler::Result;
+
+std::vector<uint32_t> range(uint32_t first, uint32_t last) {  // [first, last)
+    std::vector<uint32_t> v(last - first);
+    std::iota(v.begin(), v.end(), first);
+    return v;
+}
+
+uint64_t sum(const std::map<ClientId, uint64_t>& m) {
+    uint64_t s = 0;
+    for (const auto& [client, n] : m) s += n;
+    return s;
+}
+
+// Each client in turn, starting with clients[first], asks for `batch` tiles and returns them
+// all before its next turn. Returns who rendered each tile.
+std::vector<ClientId> runRoundRobin(TileScheduler& s, const std::vector<ClientId>& clients, size_t first,
+                                    uint32_t batch, double& now) {
+    std::vector<ClientId> owner(s.tileCount(), TileScheduler::kNobody);
+    for (int round = 0; !s.frameComplete(); ++round) {
+        if (round > 10000) {
+            ADD_FAILURE() << "frame " << s.frame() << " never completes";
+            break;
+        }
+        for (size_t i = 0; i < clients.size(); ++i) {
+            const ClientId c = clients[(first + i) % clients.size()];
+            for (uint32_t t : s.request(c, batch, now)) {
+                now += 0.001;
+                EXPECT_EQ(s.complete(c, s.frame(), t, now), Result::Accepted) << "tile " << t;
+                owner[t] = c;
+            }
+        }
+    }
+    return owner;
+}
+
+// One frame in which each (client, n) takes n tiles in that order and returns them, so the
+// next frame's affinity queues are known exactly.
+void ownFrame(TileScheduler& s, uint32_t frame, const std::vector<std::pair<ClientId, uint32_t>>& takes,
+              double now) {
+    uint32_t total = 0;
+    for (const auto& [c, n] : takes) total += n;
+    s.beginFrame(frame, total);
+    for (const auto& [c, n] : takes)
+        for (uint32_t t : s.request(c, n, now)) ASSERT_EQ(s.complete(c, frame, t, now + 0.001), Result::Accepted);
+    ASSERT_TRUE(s.frameComplete());
+}
+
+// --- Basics ----------------------------------------------------------------------------------
+
+TEST(Scheduler, SingleClientGetsAllTilesInImageOrderNAtATime) {
+    TileScheduler s;
+    s.addClient(7);
+    s.beginFrame(0, 10);
+    EXPECT_EQ(s.remaining(), 10u);
+    EXPECT_FALSE(s.frameComplete());
+
+    std::vector<std::vector<uint32_t>> batches;
+    for (int i = 0; i < 5; ++i) batches.push_back(s.request(7, 3, 0.0));
+    EXPECT_EQ(batches[0], range(0, 3));
+    EXPECT_EQ(batches[1], range(3, 6));
+    EXPECT_EQ(batches[2], range(6, 9));
+    EXPECT_EQ(batches[3], range(9, 10));
+    EXPECT_TRUE(batches[4].empty());
+    EXPECT_EQ(s.stats().assigned, 10u);
+
+    for (uint32_t t = 0; t < 10; ++t) {
+        EXPECT_FALSE(s.frameComplete()) << "before tile " << t;
+        EXPECT_EQ(s.complete(7, 0, t, 0.01), Result::Accepted);
+        EXPECT_EQ(s.remaining(), 9 - t);
+    }
+    EXPECT_TRUE(s.frameComplete());
+    EXPECT_EQ(s.stats().completed, 10u);
+    EXPECT_EQ(s.stats().completedBy.at(7), 10u);
+    EXPECT_EQ(s.stats().stolen, 0u);
+    EXPECT_EQ(s.stats().reissued, 0u);
+}
+
+TEST(Scheduler, CountZeroAndEmptyFrameGiveNothing) {
+    TileScheduler s;
+    s.addClient(1);
+    s.beginFrame(0, 0);
+    EXPECT_TRUE(s.frameComplete());
+    EXPECT_TRUE(s.request(1, 4, 0).empty());
+    s.beginFrame(1, 3);
+    EXPECT_TRUE(s.request(1, 0, 0).empty());
+    EXPECT_EQ(s.stats().assigned, 0u);
+    EXPECT_EQ(s.request(1, 4, 0), range(0, 3));
+}
+
+// Decision: an unknown client gets nothing rather than being added implicitly, so a late
+// request from a client the master declared dead cannot bring it back.
+TEST(Scheduler, UnknownOrRemovedClientGetsNothing) {
+    TileScheduler s;
+    s.addClient(1);
+    s.beginFrame(0, 4);
+    EXPECT_FALSE(s.hasClient(2));
+    EXPECT_TRUE(s.request(2, 4, 0).empty());
+    EXPECT_FALSE(s.hasClient(2));
+    EXPECT_EQ(s.complete(2, 0, 0, 0), Result::Unexpected);
+
+    s.addClient(2);
+    s.addClient(2);  // again: no effect
+    EXPECT_EQ(s.request(2, 1, 0), std::vector<uint32_t>{0});
+    EXPECT_EQ(s.removeClient(2), 1u);
+    EXPECT_EQ(s.removeClient(2), 0u);
+    EXPECT_TRUE(s.request(2, 4, 0).empty());
+    EXPECT_EQ(s.stats().assigned, 1u);
+    EXPECT_EQ(s.request(1, 4, 0), range(0, 4));
+}
+
+TEST(Scheduler, ReservedClientIdIsRefused) {
+    TileScheduler s;
+    EXPECT_THROW(s.addClient(TileScheduler::kNobody), std::invalid_argument);
+    EXPECT_FALSE(s.hasClient(TileScheduler::kNobody));
+}
+
+TEST(Scheduler, PrefetchingClientsCompletingInVariousOrders) {
+    SchedulerOptions options;
+    options.minStragglerSeconds = 1e9;  // a tile held back by newest-first is not a straggler here
+    TileScheduler s(options);
+    const std::vector<ClientId> clients{10, 11, 12};
+    for (ClientId c : clients) s.addClient(c);
+    s.beginFrame(3, 50);
+
+    std::mt19937 rng(5);
+    std::map<ClientId, std::vector<uint32_t>> inFlight;
+    std::vector<int> accepted(50, 0);
+    double now = 0;
+    for (int round = 0; !s.frameComplete() && round < 1000; ++round) {
+        for (ClientId c : clients) {
+            // Keep 4 in flight, like a client with prefetch 4.
+            auto& mine = inFlight[c];
+            for (uint32_t t : s.request(c, 4 - uint32_t(mine.size()), now)) mine.push_back(t);
+            if (mine.empty()) continue;
+            // 10 returns its oldest tile, 11 its newest, 12 a random one.
+            size_t pick = c == 10 ? 0 : c == 11 ? mine.size() - 1 : rng() % mine.size();
+            now += 0.001;
+            const uint32_t t = mine[pick];
+            mine.erase(mine.begin() + std::ptrdiff_t(pick));
+            ASSERT_EQ(s.complete(c, 3, t, now), Result::Accepted) << "tile " << t;
+            ++accepted[t];
+        }
+    }
+    EXPECT_TRUE(s.frameComplete());
+    EXPECT_EQ(accepted, std::vector<int>(50, 1));
+    EXPECT_EQ(s.stats().completed, 50u);
+    EXPECT_EQ(s.stats().assigned, 50u);
+    EXPECT_EQ(sum(s.stats().completedBy), 50u);
+    EXPECT_EQ(s.stats().duplicates + s.stats().stale + s.stats().unexpected, 0u);
+    for (ClientId c : clients) EXPECT_GT(s.stats().completedBy.at(c), 0u) << c;
+}
+
+// --- Results that must not be written ----------------------------------------------------------
+
+TEST(Scheduler, ResultForPreviousOrFutureFrameIsStale) {
+    TileScheduler s;
+    s.addClient(1);
+    s.beginFrame(5, 4);
+    EXPECT_EQ(s.request(1, 4, 0), range(0, 4));
+    EXPECT_EQ(s.complete(1, 5, 0, 0.1), Result::Accepted);
+
+    s.beginFrame(6, 4);
+    EXPECT_EQ(s.stats().completed, 0u) << "stats are per frame";
+    EXPECT_EQ(s.remaining(), 4u);
+    EXPECT_EQ(s.complete(1, 5, 1, 0.2), Result::Stale);
+    EXPECT_EQ(s.complete(1, 7, 1, 0.2), Result::Stale);
+    EXPECT_EQ(s.stats().stale, 2u);
+    // The unfinished frame's hand-outs are forgotten.
+    EXPECT_EQ(s.complete(1, 6, 1, 0.2), Result::Unexpected);
+    EXPECT_EQ(s.remaining(), 4u);
+    EXPECT_EQ(s.request(1, 4, 0.3), range(0, 4));
+}
+
+TEST(Scheduler, ResultForTileNeverHandedOutIsUnexpected) {
+    TileScheduler s;
+    s.addClient(1);
+    s.addClient(2);
+    s.beginFrame(0, 4);
+    EXPECT_EQ(s.request(1, 2, 0), range(0, 2));
+    EXPECT_EQ(s.complete(1, 0, 4, 0.1), Result::Unexpected) << "out of range";
+    EXPECT_EQ(s.complete(1, 0, 1000000, 0.1), Result::Unexpected) << "out of range";
+    EXPECT_EQ(s.complete(1, 0, 2, 0.1), Result::Unexpected) << "still queued";
+    EXPECT_EQ(s.complete(2, 0, 0, 0.1), Result::Unexpected) << "handed to client 1";
+    EXPECT_EQ(s.stats().unexpected, 4u);
+    EXPECT_EQ(s.remaining(), 4u);
+    EXPECT_EQ(s.complete(1, 0, 0, 0.1), Result::Accepted);
+    EXPECT_EQ(s.complete(2, 0, 0, 0.1), Result::Unexpected) << "done, but never 2's";
+    EXPECT_EQ(s.complete(1, 0, 0, 0.1), Result::Duplicate) << "sent twice";
+    EXPECT_EQ(s.stats().duplicates, 1u);
+    EXPECT_EQ(s.stats().completed, 1u);
+}
+
+// --- Affinity ----------------------------------------------------------------------------------
+
+// Who asks first changes from frame to frame, as it does on a network.
+SchedulerStats stillCamera(bool affinity, std::vector<double>* hitRates) {
+    SchedulerOptions options;
+    options.affinity = affinity;
+    TileScheduler s(options);
+    const std::vector<ClientId> clients{1, 2, 3};
+    for (ClientId c : clients) s.addClient(c);
+    double now = 0;
+    std::vector<ClientId> last;
+    for (uint32_t f = 0; f < 6; ++f) {
+        s.beginFrame(f, 48);  // 4 batches of 4 each: nobody runs out early and steals
+        std::vector<ClientId> owner = runRoundRobin(s, clients, f % clients.size(), 4, now);
+        if (f > 0) {
+            size_t same = 0;
+            for (size_t t = 0; t < owner.size(); ++t) same += owner[t] == last[t];
+            EXPECT_EQ(s.stats().affinityHits, same) << "frame " << f;
+            hitRates->push_back(double(s.stats().affinityHits) / 48);
+        }
+        last = owner;
+    }
+    return s.stats();
+}
+
+TEST(SchedulerAffinity, StillCameraSendsEveryTileBackToItsOwner) {
+    std::vector<double> rates;
+    const SchedulerStats last = stillCamera(true, &rates);
+    ASSERT_EQ(rates.size(), 5u);
+    for (double r : rates) EXPECT_EQ(r, 1.0);
+    EXPECT_EQ(last.stolen, 0u);
+    EXPECT_EQ(last.completed, 48u);
+}
+
+TEST(SchedulerAffinity, WithoutAffinityTilesGoToWhoeverAsksFirst) {
+    std::vector<double> on, off;
+    const SchedulerStats withAffinity = stillCamera(true, &on);
+    const SchedulerStats without = stillCamera(false, &off);
+    EXPECT_LT(without.affinityHits, withAffinity.affinityHits);
+    EXPECT_LT(*std::max_element(off.begin(), off.end()), 0.9);
+    EXPECT_EQ(without.completed, 48u);
+}
+
+TEST(SchedulerAffinity, FirstAskerGetsItsOwnTilesNotTheSharedOrder) {
+    TileScheduler s;
+    s.addClient(1);
+    s.addClient(2);
+    ownFrame(s, 0, {{1, 3}, {2, 3}}, 0);  // 1 rendered 0..2, 2 rendered 3..5
+    s.beginFrame(1, 6);
+    EXPECT_EQ(s.request(2, 2, 1.0), range(3, 5)) << "own queue, front first";
+    EXPECT_EQ(s.request(1, 3, 1.0), range(0, 3));
+    EXPECT_EQ(s.stats().stolen, 0u);
+    for (uint32_t t = 0; t < 3; ++t) EXPECT_EQ(s.complete(1, 1, t, 1.1), Result::Accepted);
+    EXPECT_EQ(s.complete(2, 1, 3, 1.1), Result::Accepted);
+    EXPECT_EQ(s.stats().affinityHits, 4u);
+}
+
+TEST(SchedulerAffinity, ChangedTileCountStartsFromTheSharedQueue) {
+    TileScheduler s;
+    s.addClient(1);
+    s.addClient(2);
+    ownFrame(s, 0, {{1, 3}, {2, 3}}, 0);
+    s.beginFrame(1, 8);  // resized wall: last frame's owners mean nothing
+    EXPECT_EQ(s.request(2, 3, 1.0), range(0, 3));
+    EXPECT_EQ(s.stats().stolen, 0u);
+    for (uint32_t t = 0; t < 3; ++t) EXPECT_EQ(s.complete(2, 1, t, 1.1), Result::Accepted);
+    EXPECT_EQ(s.stats().affinityHits, 0u);
+
+    // Back to 6 tiles after an 8-tile frame: still no affinity (the 8-tile frame was last).
+    s.beginFrame(2, 6);
+    EXPECT_EQ(s.request(2, 6, 2.0), range(0, 6));
+}
+
+TEST(SchedulerAffinity, AffinityOffPutsEverythingInTheSharedQueue) {
+    SchedulerOptions options;
+    options.affinity = false;
+    TileScheduler s(options);
+    s.addClient(1);
+    s.addClient(2);
+    ownFrame(s, 0, {{1, 3}, {2, 3}}, 0);
+    s.beginFrame(1, 6);
+    EXPECT_EQ(s.request(2, 6, 1.0), range(0, 6));
+    EXPECT_EQ(s.stats().stolen, 0u) << "shared tiles are not steals";
+    for (uint32_t t = 0; t < 6; ++t) EXPECT_EQ(s.complete(2, 1, t, 1.1), Result::Accepted);
+    EXPECT_EQ(s.stats().affinityHits, 3u) << "hits are still measured";
+}
+
+TEST(SchedulerAffinity, UnfinishedFrameOnlyPassesOnTheTilesThatWereDone) {
+    TileScheduler s;
+    s.addClient(1);
+    s.addClient(2);
+    s.beginFrame(0, 4);
+    EXPECT_EQ(s.request(1, 4, 0), range(0, 4));
+    EXPECT_EQ(s.complete(1, 0, 2, 0.1), Result::Accepted);
+    s.beginFrame(1, 4);  // frame 0 abandoned
+    EXPECT_EQ(s.request(2, 3, 1.0), (std::vector<uint32_t>{0, 1, 3})) << "only tile 2 has an owner";
+    EXPECT_EQ(s.stats().stolen, 0u);
+    EXPECT_EQ(s.request(1, 4, 1.0), std::vector<uint32_t>{2});
+}
+
+// --- Stealing ----------------------------------------------------------------------------------
+
+TEST(SchedulerStealing, IdleClientsStealFromTheBackOfASlowClientsQueue) {
+    TileScheduler s;
+    const ClientId a = 1, b = 2, slow = 3;
+    for (ClientId c : {a, b, slow}) s.addClient(c);
+    double now = 0;
+    s.beginFrame(0, 48);
+    const std::vector<ClientId> lastOwner = runRoundRobin(s, {a, b, slow}, 0, 4, now);
+    std::vector<uint32_t> slowTiles;
+    for (uint32_t t = 0; t < 48; ++t)
+        if (lastOwner[t] == slow) slowTiles.push_back(t);
+    ASSERT_EQ(slowTiles.size(), 16u);
+
+    s.beginFrame(1, 48);
+    // The slow client takes its first tiles and sits on them until the end.
+    const std::vector<uint32_t> slowHeld = s.request(slow, 4, now);
+    EXPECT_EQ(slowHeld, std::vector<uint32_t>(slowTiles.begin(), slowTiles.begin() + 4));
+
+    std::vector<uint32_t> stolenTiles;
+    std::vector<std::vector<uint32_t>> stolenBatches;
+    std::vector<int> accepted(48, 0);
+    for (int round = 0; round < 100; ++round) {
+        bool gotAny = false;
+        for (ClientId c : {a, b}) {
+            std::vector<uint32_t> batch;
+            for (uint32_t t : s.request(c, 2, now)) {
+                gotAny = true;
+                if (lastOwner[t] != c) batch.push_back(t);
+                EXPECT_EQ(s.complete(c, 1, t, now + 0.001), Result::Accepted);
+                ++accepted[t];
+            }
+            now += 0.001;
+            if (!batch.empty()) stolenBatches.push_back(batch);
+            stolenTiles.insert(stolenTiles.end(), batch.begin(), batch.end());
+        }
+        if (!gotAny) break;
+    }
+    EXPECT_FALSE(s.frameComplete());
+    for (uint32_t t : s.request(slow, 4, now)) ADD_FAILURE() << "everything left was stolen, got " << t;
+    for (uint32_t t : slowHeld) {
+        EXPECT_EQ(s.complete(slow, 1, t, now), Result::Accepted);
+        ++accepted[t];
+    }
+    EXPECT_TRUE(s.frameComplete());
+    EXPECT_EQ(accepted, std::vector<int>(48, 1));
+
+    // Every stolen tile was the slow client's, taken from the back, never its next ones.
+    std::sort(stolenTiles.begin(), stolenTiles.end());
+    EXPECT_EQ(stolenTiles, std::vector<uint32_t>(slowTiles.begin() + 4, slowTiles.end()));
+    ASSERT_FALSE(stolenBatches.empty());
+    EXPECT_EQ(stolenBatches.front(), (std::vector<uint32_t>{slowTiles[14], slowTiles[15]}));
+    EXPECT_EQ(s.stats().stolen, 12u);
+    EXPECT_EQ(s.stats().stolenBy.count(slow), 0u);
+    EXPECT_EQ(s.stats().stolenBy.at(a) + s.stats().stolenBy.at(b), 12u);
+    EXPECT_EQ(s.stats().completedBy.at(slow), 4u);
+    EXPECT_EQ(s.stats().affinityHits, 36u);
+    EXPECT_EQ(s.stats().reissued, 0u);
+}
+
+TEST(SchedulerStealing, VictimIsAPeerWithTilesLeft) {
+    for (uint64_t seed = 1; seed <= 20; ++seed) {
+        SchedulerOptions options;
+        options.seed = seed;
+        TileScheduler s(options);
+        for (ClientId c : {1, 2, 3}) s.addClient(c);
+        ownFrame(s, 0, {{1, 10}, {2, 10}, {3, 10}}, 0);
+        s.beginFrame(1, 30);
+        EXPECT_EQ(s.request(2, 10, 1), range(10, 20));  // 2 drained its own queue
+        EXPECT_EQ(s.request(1, 10, 1), range(0, 10));
+        // Only 3 has tiles left: every steal comes from it, from the back.
+        for (uint32_t t = 29; t >= 20; --t) ASSERT_EQ(s.request(1, 1, 1), std::vector<uint32_t>{t}) << "seed " << seed;
+        EXPECT_TRUE(s.request(1, 1, 1).empty());
+        EXPECT_TRUE(s.request(3, 1, 1).empty());
+        EXPECT_EQ(s.stats().stolen, 10u);
+    }
+}
+
+TEST(SchedulerStealing, VictimChoiceIsRandomButReproducible) {
+    auto victims = [](uint64_t seed) {
+        SchedulerOptions options;
+        options.seed = seed;
+        TileScheduler s(options);
+        for (ClientId c : {1, 2, 3}) s.addClient(c);
+        ownFrame(s, 0, {{1, 10}, {2, 10}, {3, 10}}, 0);
+        s.beginFrame(1, 30);
+        EXPECT_EQ(s.request(1, 10, 1), range(0, 10));
+        std::vector<ClientId> from;
+        uint32_t nextOf2 = 19, nextOf3 = 29;
+        for (int i = 0; i < 8; ++i) {
+            const std::vector<uint32_t> got = s.request(1, 1, 1);
+            EXPECT_EQ(got.size(), 1u);
+            if (got.empty()) break;
+            // Each victim loses its back tile first.
+            if (got[0] < 20) {
+                EXPECT_EQ(got[0], nextOf2--);
+                from.push_back(2);
+            } else {
+                EXPECT_EQ(got[0], nextOf3--);
+                from.push_back(3);
+            }
+        }
+        return from;
+    };
+    std::set<std::vector<ClientId>> distinct;
+    for (uint64_t seed = 1; seed <= 10; ++seed) {
+        const std::vector<ClientId> v = victims(seed);
+        EXPECT_EQ(v, victims(seed)) << "seed " << seed;
+        distinct.insert(v);
+    }
+    EXPECT_GT(distinct.size(), 1u);
+}
+
+TEST(SchedulerStealing, StolenRunIsHandedOutInImageOrder) {
+    TileScheduler s;
+    s.addClient(1);
+    s.addClient(2);
+    ownFrame(s, 0, {{1, 8}}, 0);
+    s.beginFrame(1, 8);
+    EXPECT_EQ(s.request(2, 3, 1), range(5, 8));
+    EXPECT_EQ(s.request(1, 8, 1), range(0, 5)) << "the victim keeps its next tiles";
+    EXPECT_EQ(s.stats().stolenBy.at(2), 3u);
+}
+
+// --- Clients coming and going --------------------------------------------------------------------
+
+TEST(SchedulerClients, DeadClientsTilesGoBackAndItsLateResultsAreRejected) {
+    TileScheduler s;
+    for (ClientId c : {1, 2, 3}) s.addClient(c);
+    ownFrame(s, 0, {{1, 6}, {2, 6}, {3, 6}}, 0);  // 2 owns 6..11
+    s.beginFrame(1, 18);
+    const std::vector<uint32_t> held = s.request(2, 4, 1.0);
+    EXPECT_EQ(held, range(6, 10));
+    EXPECT_EQ(s.complete(2, 1, 6, 1.1), Result::Accepted);
+
+    // 7..9 outstanding plus 10..11 queued come back; 6 is done and stays done.
+    EXPECT_EQ(s.removeClient(2), 5u);
+    EXPECT_FALSE(s.hasClient(2));
+    EXPECT_EQ(s.remaining(), 17u);
+    // Its tiles are in the shared queue now, in image order, behind 1's own queue.
+    EXPECT_EQ(s.request(1, 8, 1.2), (std::vector<uint32_t>{0, 1, 2, 3, 4, 5, 7, 8}));
+    EXPECT_EQ(s.stats().stolen, 0u);
+
+    std::vector<int> accepted(18, 0);
+    accepted[6] = 1;
+    for (uint32_t t : {0, 1, 2, 3, 4, 5, 7, 8}) {
+        EXPECT_EQ(s.complete(1, 1, t, 1.3), Result::Accepted);
+        ++accepted[t];
+    }
+    double now = 1.3;
+    for (ClientId c : {3, 1})
+        for (uint32_t t : s.request(c, 10, now)) {
+            EXPECT_EQ(s.complete(c, 1, t, now += 0.001), Result::Accepted);
+            ++accepted[t];
+        }
+    EXPECT_TRUE(s.frameComplete());
+    EXPECT_EQ(accepted, std::vector<int>(18, 1));
+
+    // The dead client's late results: never accepted, in this frame or the next.
+    for (uint32_t t : held) EXPECT_EQ(s.complete(2, 1, t, 2.0), Result::Unexpected) << t;
+    s.beginFrame(2, 18);
+    EXPECT_EQ(s.complete(2, 1, 7, 3.0), Result::Stale);
+    EXPECT_EQ(s.complete(2, 2, 7, 3.0), Result::Unexpected);
+    EXPECT_TRUE(s.request(2, 4, 3.0).empty());
+}
+
+TEST(SchedulerClients, TileStillRenderedByAReissueIsNotQueuedAgain) {
+    TileScheduler s;
+    for (ClientId c : {1, 2, 3}) s.addClient(c);
+    s.beginFrame(0, 3);
+    EXPECT_EQ(s.request(1, 1, 0), std::vector<uint32_t>{0});
+    EXPECT_EQ(s.request(2, 2, 0), range(1, 3));
+    EXPECT_EQ(s.complete(2, 0, 1, 0.01), Result::Accepted);
+    EXPECT_EQ(s.complete(2, 0, 2, 0.01), Result::Accepted);
+    EXPECT_EQ(s.request(2, 1, 1.0), std::vector<uint32_t>{0});  // re-issue of 1's tile
+    // 1 dies: tile 0 is still being rendered by 2, so it is not queued again.
+    EXPECT_EQ(s.removeClient(1), 0u);
+    EXPECT_TRUE(s.request(3, 4, 1.0).empty());
+    EXPECT_EQ(s.complete(2, 0, 0, 1.01), Result::Accepted);
+    EXPECT_TRUE(s.frameComplete());
+    EXPECT_EQ(s.complete(1, 0, 0, 1.02), Result::Unexpected);
+}
+
+TEST(SchedulerClients, LateJoinerStealsWhenEveryTileHasAnOwner) {
+    TileScheduler s;
+    s.addClient(1);
+    s.addClient(2);
+    ownFrame(s, 0, {{1, 4}, {2, 4}}, 0);
+    s.beginFrame(1, 8);
+    s.addClient(3);
+    const std::vector<uint32_t> got = s.request(3, 2, 1.0);
+    ASSERT_EQ(got.size(), 2u);
+    EXPECT_TRUE(got == range(2, 4) || got == range(6, 8)) << got[0] << "," << got[1];
+    EXPECT_EQ(s.stats().stolenBy.at(3), 2u);
+}
+
+TEST(SchedulerClients, DepartedClientsTilesGoToTheSharedQueueNextFrame) {
+    TileScheduler s;
+    for (ClientId c : {1, 2}) s.addClient(c);
+    ownFrame(s, 0, {{1, 4}, {2, 4}}, 0);
+    s.removeClient(2);
+    s.addClient(3);
+    s.beginFrame(1, 8);
+    EXPECT_EQ(s.request(3, 4, 1.0), range(4, 8)) << "2's tiles, shared, in image order";
+    EXPECT_EQ(s.stats().stolen, 0u);
+    EXPECT_EQ(s.request(1, 8, 1.0), range(0, 4));
+}
+
+TEST(SchedulerClients, ReturningIdStartsWithoutAffinity) {
+    TileScheduler s;
+    for (ClientId c : {1, 2}) s.addClient(c);
+    ownFrame(s, 0, {{1, 4}, {2, 4}}, 0);
+    s.removeClient(2);
+    s.addClient(2);  // a restarted process: its cache is cold
+    s.beginFrame(1, 8);
+    EXPECT_EQ(s.request(1, 8, 1.0), range(0, 8)) << "own queue, then 2's old tiles from the shared queue";
+    EXPECT_EQ(s.stats().stolen, 0u);
+}
+
+// --- Stragglers --------------------------------------------------------------------------------
+
+TEST(SchedulerStragglers, HungTileIsReissuedToAnIdleClient) {
+    SchedulerOptions options;
+    options.minStragglerSeconds = 0.05;
+    options.stragglerFactor = 4;
+    TileScheduler s(options);
+    const ClientId hung = 1, worker = 2;
+    s.addClient(hung);
+    s.addClient(worker);
+    s.beginFrame(0, 8);
+    EXPECT_EQ(s.request(hung, 1, 0.0), std::vector<uint32_t>{0});
+    EXPECT_EQ(s.request(worker, 7, 0.0), range(1, 8));
+    for (uint32_t t = 1; t < 8; ++t) EXPECT_EQ(s.complete(worker, 0, t, 0.01), Result::Accepted);
+    // Median 0.01 s, so the threshold is max(0.05, 4 * 0.01) = 0.05 s.
+    EXPECT_TRUE(s.request(worker, 4, 0.045).empty()) << "older than 4 * median but not than the minimum";
+    EXPECT_TRUE(s.request(worker, 4, 0.05).empty()) << "must be older than the threshold";
+    EXPECT_TRUE(s.request(hung, 4, 10.0).empty()) << "never re-issued to its holder";
+    EXPECT_EQ(s.request(worker, 4, 0.06), std::vector<uint32_t>{0});
+    EXPECT_EQ(s.stats().reissued, 1u);
+    EXPECT_EQ(s.stats().assigned, 9u);
+    EXPECT_TRUE(s.request(worker, 4, 1.0).empty()) << "already handed to this client";
+    EXPECT_FALSE(s.frameComplete());
+
+    EXPECT_EQ(s.complete(worker, 0, 0, 0.07), Result::Accepted);
+    EXPECT_TRUE(s.frameComplete());
+    EXPECT_EQ(s.complete(hung, 0, 0, 2.0), Result::Duplicate);
+    EXPECT_EQ(s.stats().duplicates, 1u);
+    EXPECT_EQ(s.stats().completedBy.count(hung), 0u);
+    EXPECT_EQ(s.stats().completedBy.at(worker), 8u);
+}
+
+TEST(SchedulerStragglers, SlowHolderWinsAndTheReissueIsTheDuplicate) {
+    TileScheduler s;
+    s.addClient(1);
+    s.addClient(2);
+    s.beginFrame(0, 2);
+    EXPECT_EQ(s.request(1, 1, 0), std::vector<uint32_t>{0});
+    EXPECT_EQ(s.request(2, 1, 0), std::vector<uint32_t>{1});
+    EXPECT_EQ(s.complete(2, 0, 1, 0.01), Result::Accepted);
+    EXPECT_EQ(s.request(2, 1, 1.0), std::vector<uint32_t>{0});
+    EXPECT_EQ(s.complete(1, 0, 0, 1.001), Result::Accepted);
+    EXPECT_EQ(s.complete(2, 0, 0, 1.002), Result::Duplicate);
+    EXPECT_TRUE(s.request(2, 1, 5.0).empty()) << "done tiles are never re-issued";
+}
+
+TEST(SchedulerStragglers, LatencyIsMeasuredFromTheAnsweringHandOut) {
+    TileScheduler s;  // min 0.05 s, factor 4
+    for (ClientId c : {1, 2, 3}) s.addClient(c);
+    s.beginFrame(0, 3);
+    EXPECT_EQ(s.request(1, 1, 0.0), std::vector<uint32_t>{0});
+    EXPECT_EQ(s.request(2, 1, 0.0), std::vector<uint32_t>{1});
+    EXPECT_EQ(s.request(3, 1, 0.5), std::vector<uint32_t>{2});
+    EXPECT_EQ(s.complete(2, 0, 1, 0.01), Result::Accepted);
+    EXPECT_EQ(s.request(2, 1, 1.0), std::vector<uint32_t>{0});
+    // 0.01 s after the re-issue, not 1.01 s after 1 got it: the median stays 0.01 s...
+    EXPECT_EQ(s.complete(2, 0, 0, 1.01), Result::Accepted);
+    // ...so tile 2, 0.7 s old, is a straggler (with 1.01 s samples it would not be before 4 s).
+    EXPECT_EQ(s.request(2, 1, 1.2), std::vector<uint32_t>{2});
+}
+
+TEST(SchedulerStragglers, NothingIsReissuedBeforeTheFirstResult) {
+    TileScheduler s;
+    s.addClient(1);
+    s.addClient(2);
+    s.beginFrame(0, 2);
+    EXPECT_EQ(s.request(1, 1, 0), std::vector<uint32_t>{0});
+    EXPECT_EQ(s.request(2, 1, 0), std::vector<uint32_t>{1});
+    EXPECT_TRUE(s.request(2, 1, 100.0).empty());
+    EXPECT_TRUE(s.request(1, 1, 100.0).empty());
+    EXPECT_EQ(s.stats().reissued, 0u);
+}
+
+TEST(SchedulerStragglers, ThresholdFollowsTheMedianTileTime) {
+    SchedulerOptions options;
+    options.minStragglerSeconds = 0.05;
+    options.stragglerFactor = 4;
+    TileScheduler s(options);
+    s.addClient(1);
+    s.addClient(2);
+    s.beginFrame(0, 5);
+    EXPECT_EQ(s.request(2, 4, 0), range(0, 4));
+    // Latencies 0.5, 1, 1, 9: median 1 (the outlier does not drag it, as a mean would to
+    // 2.875), so the threshold is 4 s.
+    EXPECT_EQ(s.complete(2, 0, 0, 0.5), Result::Accepted);
+    EXPECT_EQ(s.complete(2, 0, 1, 1.0), Result::Accepted);
+    EXPECT_EQ(s.complete(2, 0, 2, 1.0), Result::Accepted);
+    EXPECT_EQ(s.complete(2, 0, 3, 9.0), Result::Accepted);
+    EXPECT_EQ(s.request(1, 1, 9.0), std::vector<uint32_t>{4});
+    EXPECT_TRUE(s.request(2, 1, 12.9).empty());
+    EXPECT_EQ(s.request(2, 1, 13.1), std::vector<uint32_t>{4});
+}
+
+TEST(SchedulerStragglers, OldestFirstAndAgedFromTheLatestHandOut) {
+    TileScheduler s;  // min 0.05 s, factor 4
+    for (ClientId c : {1, 2, 3, 4}) s.addClient(c);
+    s.beginFrame(0, 4);
+    EXPECT_EQ(s.request(1, 1, 0.0), std::vector<uint32_t>{0});
+    EXPECT_EQ(s.request(2, 1, 0.1), std::vector<uint32_t>{1});
+    EXPECT_EQ(s.request(3, 2, 0.1), range(2, 4));
+    EXPECT_EQ(s.complete(3, 0, 2, 0.11), Result::Accepted);
+    EXPECT_EQ(s.complete(3, 0, 3, 0.11), Result::Accepted);
+    // Tile 0 was handed out first, so it is re-issued first.
+    EXPECT_EQ(s.request(3, 1, 1.0), std::vector<uint32_t>{0});
+    EXPECT_EQ(s.request(3, 1, 1.0), std::vector<uint32_t>{1});
+    // Both were just re-issued: 4 waits until the re-issues themselves look stuck.
+    EXPECT_TRUE(s.request(4, 2, 1.01).empty());
+    EXPECT_EQ(s.request(4, 2, 2.0), range(0, 2));
+    EXPECT_EQ(s.stats().reissued, 4u);
+    EXPECT_EQ(s.complete(4, 0, 1, 2.01), Result::Accepted);
+    EXPECT_EQ(s.complete(2, 0, 1, 2.02), Result::Duplicate);
+    EXPECT_EQ(s.complete(3, 0, 1, 2.03), Result::Duplicate);
+}
+
+TEST(SchedulerStragglers, QueuedTilesComeBeforeReissues) {
+    TileScheduler s;
+    s.addClient(1);
+    s.addClient(2);
+    s.beginFrame(0, 4);
+    EXPECT_EQ(s.request(1, 1, 0), std::vector<uint32_t>{0});
+    EXPECT_EQ(s.request(2, 1, 0), std::vector<uint32_t>{1});
+    EXPECT_EQ(s.complete(2, 0, 1, 0.01), Result::Accepted);
+    // Tile 0 is a straggler by now, but 2 and 3 are still queued: they come first, and the
+    // rest of the request is filled with the re-issue.
+    EXPECT_EQ(s.request(2, 3, 10.0), (std::vector<uint32_t>{2, 3, 0}));
+    EXPECT_EQ(s.stats().reissued, 1u);
+}
+
+// --- Properties over random sequences ------------------------------------------------------------
+
+TEST(SchedulerProperty, RandomSequencesKeepTheInvariants) {
+    for (uint64_t seed = 1; seed <= 150; ++seed) {
+        SCOPED_TRACE("seed " + std::to_string(seed));
+        std::mt19937_64 rng(seed * 7919);
+        SchedulerOptions options;
+        options.affinity = seed % 2 == 1;
+        options.seed = seed;
+        options.stragglerFactor = 2;
+        TileScheduler s(options);
+
+        std::set<ClientId> live;
+        ClientId nextId = 0;
+        auto addClient = [&] {
+            s.addClient(nextId);
+            live.insert(nextId++);
+        };
+        for (uint64_t i = 0, n = 1 + rng() % 4; i < n; ++i) addClient();
+
+        struct Held {
+            ClientId client;
+            uint32_t frame, tile;
+        };
+        std::vector<Held> held;  // hand-outs not reported yet, of any frame and any client
+        double now = 0;
+        uint32_t tiles = 0;
+
+        for (uint32_t frame = 0; frame < 6; ++frame) {
+            if (frame == 0 || rng() % 4 == 0) tiles = 1 + uint32_t(rng() % 40);
+            s.beginFrame(frame, tiles);
+            std::vector<int> accepted(tiles, 0);
+            std::set<std::pair<uint32_t, ClientId>> handed;    // this frame, present clients
+            std::vector<std::set<ClientId>> holders(tiles);    // awaiting a result, present clients
+            uint64_t assigned = 0, acceptedCount = 0;
+
+            auto request = [&](ClientId c, uint32_t n) {
+                const uint64_t reissuedBefore = s.stats().reissued;
+                const std::vector<uint32_t> got = s.request(c, n, now);
+                EXPECT_LE(got.size(), n);
+                if (!live.count(c)) {
+                    EXPECT_TRUE(got.empty());
+                }
+                std::set<uint32_t> unique;
+                uint64_t heldElsewhere = 0;
+                for (uint32_t t : got) {
+                    ASSERT_LT(t, tiles);
+                    EXPECT_TRUE(unique.insert(t).second) << "tile " << t << " twice in one request";
+                    EXPECT_EQ(accepted[t], 0) << "done tile " << t << " handed out";
+                    EXPECT_EQ(handed.count({t, c}), 0u) << "tile " << t << " handed to " << c << " twice";
+                    heldElsewhere += !holders[t].empty();
+                    holders[t].insert(c);
+                    handed.insert({t, c});
+                    held.push_back({c, frame, t});
+                }
+                // A tile somebody is still rendering goes out again only as a re-issue.
+                EXPECT_EQ(heldElsewhere, s.stats().reissued - reissuedBefore);
+                assigned += got.size();
+            };
+            auto report = [&](const Held& h) {
+                Result expected;
+                if (h.frame != frame)
+                    expected = Result::Stale;
+                else if (h.tile >= tiles || !live.count(h.client) || !handed.count({h.tile, h.client}))
+                    expected = Result::Unexpected;
+                else if (accepted[h.tile])
+                    expected = Result::Duplicate;
+                else
+                    expected = Result::Accepted;
+                EXPECT_EQ(s.complete(h.client, h.frame, h.tile, now), expected);
+                if (expected == Result::Accepted) {
+                    ++accepted[h.tile];
+                    ++acceptedCount;
+                    holders[h.tile].clear();
+                }
+            };
+            auto removeClient = [&](ClientId c) {
+                live.erase(c);
+                // At least the tiles only it held and that are not done come back.
+                size_t onlyHeldByIt = 0;
+                for (uint32_t t = 0; t < tiles; ++t) {
+                    onlyHeldByIt += !accepted[t] && holders[t] == std::set<ClientId>{c};
+                    holders[t].erase(c);
+                }
+                for (auto it = handed.begin(); it != handed.end();) it = it->second == c ? handed.erase(it) : std::next(it);
+                EXPECT_GE(s.removeClient(c), onlyHeldByIt);
+            };
+            auto pick = [&](const std::set<ClientId>& from) {
+                auto it = from.begin();
+                std::advance(it, std::ptrdiff_t(rng() % from.size()));
+                return *it;
+            };
+
+            for (int step = 0; step < 300; ++step) {
+                now += rng() % 50 == 0 ? 1.0 : double(rng() % 10) * 0.001;
+                const uint64_t op = rng() % 20;
+                if (op < 8 && !live.empty()) {
+                    request(pick(live), 1 + uint32_t(rng() % 4));
+                } else if (op < 15 && !held.empty()) {
+                    const size_t i = rng() % held.size();
+                    const Held h = held[i];
+                    held.erase(held.begin() + std::ptrdiff_t(i));
+                    report(h);
+                } else if (op == 15) {
+                    report({ClientId(rng() % (nextId + 2)), frame, uint32_t(rng() % (tiles + 3))});  // garbage
+                } else if (op == 16) {
+                    request(nextId + 5, 4);  // a client never seen
+                } else if (op == 17 && !live.empty()) {
+                    removeClient(pick(live));
+                } else if (op == 18) {
+                    addClient();
+                }
+                ASSERT_EQ(s.remaining(), tiles - acceptedCount);
+                ASSERT_EQ(s.frameComplete(), acceptedCount == tiles);
+            }
+
+            // Drain with whoever is left: every tile must be accepted exactly once.
+            if (live.empty()) addClient();
+            for (int round = 0; !s.frameComplete() && round < 1000; ++round) {
+                for (ClientId c : std::vector<ClientId>(live.begin(), live.end())) request(c, 4);
+                now += 0.001;
+                for (size_t i = 0; i < held.size();) {
+                    if (held[i].frame == frame && live.count(held[i].client)) {
+                        const Held h = held[i];
+                        held.erase(held.begin() + std::ptrdiff_t(i));
+                        report(h);
+                    } else {
+                        ++i;
+                    }
+                }
+            }
+            ASSERT_TRUE(s.frameComplete());
+            EXPECT_EQ(s.remaining(), 0u);
+            EXPECT_EQ(accepted, std::vector<int>(tiles, 1));
+            EXPECT_EQ(s.stats().completed, tiles);
+            EXPECT_EQ(sum(s.stats().completedBy), tiles);
+            EXPECT_EQ(s.stats().assigned, assigned);
+            EXPECT_EQ(sum(s.stats().stolenBy), s.stats().stolen);
+            EXPECT_LE(s.stats().affinityHits, s.stats().completed);
+            EXPECT_LE(s.stats().stolen + s.stats().reissued, s.stats().assigned);
+        }
+    }
+}
+
+TEST(SchedulerProperty, SameSeedSameSchedule) {
+    auto trace = [](uint64_t seed) {
+        SchedulerOptions options;
+        options.seed = seed;
+        TileScheduler s(options);
+        std::mt19937 ops(99);  // the same calls every time; only the scheduler's seed varies
+        for (ClientId c = 0; c < 4; ++c) s.addClient(c);
+        std::vector<uint32_t> out;
+        double now = 0;
+        for (uint32_t frame = 0; frame < 4; ++frame) {
+            s.beginFrame(frame, 40);
+            std::vector<std::pair<ClientId, uint32_t>> held;
+            for (int step = 0; step < 400 && !s.frameComplete(); ++step) {
+                now += 0.001;
+                const ClientId c = ClientId(ops() % 4);
+                if (ops() % 2 && c != 0) {  // client 0 is slow: others steal from it
+                    for (uint32_t t : s.request(c, 1 + ops() % 3, now)) {
+                        out.push_back(t);
+                        held.emplace_back(c, t);
+                    }
+                } else if (!held.empty()) {
+                    const size_t i = ops() % held.size();
+                    s.complete(held[i].first, frame, held[i].second, now);
+                    held.erase(held.begin() + std::ptrdiff_t(i));
+                }
+            }
+            out.push_back(uint32_t(s.stats().stolen));
+        }
+        return out;
+    };
+    EXPECT_EQ(trace(3), trace(3));
+    EXPECT_NE(trace(3), trace(4));
+}
+
+}  // namespace
+}  // namespace rtwall::cluster

@@ -1,0 +1,119 @@
+// Writes the seed corpus for fuzz_protocol: one valid input per decoder, in the layout that
+// fuzz_protocol.cpp documents (a selector byte, then the decoder's input).
+//   make_protocol_corpus <directory>
+#include "codec.h"
+#include "protocol.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+using namespace rtwall;
+using namespace rtwall::cluster;
+
+namespace {
+
+std::filesystem::path outDir;
+
+void writeSeed(const std::string& name, uint8_t selector, const std::vector<uint8_t>& bytes) {
+    std::ofstream out(outDir / name, std::ios::binary);
+    out.put(char(selector));
+    out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+    if (!out) {
+        std::fprintf(stderr, "make_protocol_corpus: cannot write %s\n", (outDir / name).c_str());
+        std::exit(1);
+    }
+}
+
+// Each message twice: whole (selector 0) and as a bare payload (selector = its type).
+template <class Msg> void seedMessage(const std::string& name, const Msg& msg) {
+    Header header;
+    header.session = 0x5EED;
+    header.frame = 3;
+    header.sceneVersion = 2;
+    const std::vector<uint8_t> bytes = encodeMessage(header, msg);
+    writeSeed("msg-" + name, 0, bytes);
+    writeSeed("payload-" + name, uint8_t(messageTypeOf(msg)),
+              std::vector<uint8_t>(bytes.begin() + kHeaderSize, bytes.end()));
+}
+
+// Built by hand so that the generator needs no engine code (Transform's helpers live there).
+Transform translation(double x, double y, double z) {
+    Transform t;
+    t.m[3] = x;
+    t.m[7] = y;
+    t.m[11] = z;
+    return t;
+}
+
+SceneSnapshot snapshot() {
+    SceneSnapshot s;
+    s.updateSeq = 2;
+    const std::vector<uint8_t> box = encodeMesh(makeBox());
+    s.meshes.push_back(MeshRef{"box", "shape:box", hashBytes(box.data(), box.size()), box.size()});
+    Material glass;
+    glass.name = "glass";
+    glass.type = MaterialType::Glass;
+    glass.ior = 1.45f;
+    s.materials = {Material{}, glass};
+    s.instances.push_back(InstanceDesc{0, 1, translation(1, 2, 3)});
+    Light sun;
+    sun.type = LightType::Directional;
+    s.lights = {Light{}, sun};
+    s.settings.width = 320;
+    s.settings.height = 200;
+    return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc != 2) {
+        std::fprintf(stderr, "usage: make_protocol_corpus <directory>\n");
+        return 2;
+    }
+    outDir = argv[1];
+    std::filesystem::create_directories(outDir);
+
+    seedMessage("hello", Hello{kProtocolVersion, 8, "node-1"});
+    seedMessage("welcome", Welcome{1, CodecSettings{TileCodec::Jpeg, 85, true, 3}, 4, 250});
+    seedMessage("snapshot", snapshot());
+    seedMessage("mesh-request", MeshRequest{{1, 2}});
+    MeshData mesh;
+    mesh.mesh = encodeMesh(makeSphere(3, 4));
+    mesh.hash = hashBytes(mesh.mesh.data(), mesh.mesh.size());
+    seedMessage("mesh-data", mesh);
+    Update update;
+    update.seq = 3;
+    update.changes = {CameraChange{CameraDesc{}}, TransformChange{0, translation(0, 1, 0)},
+                      MaterialChange{1, Material{}}, LightChange{0, Light{}}, SettingsChange{RenderSettings{}}};
+    seedMessage("update", update);
+    seedMessage("frame-begin", FrameBegin{3, 2});
+    seedMessage("tile-request", TileRequest{3, 4});
+    seedMessage("tile-assign", TileAssign{3, {0, 1, 2, 17}});
+    seedMessage("tile-result", TileResult{3, 17, TileCodec::Lz4, 1500, {1, 2, 3, 4, 5}});
+    seedMessage("heartbeat", Heartbeat{});
+    seedMessage("goodbye", Goodbye{"done"});
+    seedMessage("ready", Ready{2, {3, 4}});
+    seedMessage("resync-request", ResyncRequest{1});
+
+    writeSeed("mesh-box", 15, encodeMesh(makeBox()));
+    writeSeed("mesh-sphere-normals", 15, encodeMesh(makeSphere(3, 5)));
+
+    // An 8x6 gradient tile per codec; the three bytes after the selector give 8x6 and 3 bytes of padding.
+    const int w = 8, h = 6;
+    std::vector<uint8_t> rgb(size_t(w) * h * 3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c) rgb[(size_t(y) * w + x) * 3 + c] = uint8_t(x * 30 + y * 20 + c * 50);
+    for (TileCodec codec : {TileCodec::Raw, TileCodec::Lz4, TileCodec::Zstd, TileCodec::Jpeg}) {
+        CodecSettings settings;
+        settings.codec = codec;
+        std::vector<uint8_t> bytes{uint8_t(w - 1), uint8_t(h - 1), 3};
+        encodeTile(settings, rgb.data(), w, h, size_t(w) * 3, bytes);
+        writeSeed(std::string("tile-") + codecName(codec), uint8_t(16 + int(codec)), bytes);
+    }
+    return 0;
+}

@@ -1,0 +1,25 @@
+#include "commands.h"
+
+#include <rtwall/cluster.h>
+
+#include <memory>
+
+namespace rtwall::cli {
+
+void addClient(CLI::App& app, Run& run) {
+    auto o = std::make_shared<ClientSettings>();
+    CLI::App* cmd = app.add_subcommand("client", "Join a master as a render client");
+    cmd->add_option("--connect", o->connect, "The master's endpoint, tcp://HOST:PORT")->required();
+    cmd->add_option("--threads", o->threads, "Render threads (0 = one per hardware thread)")->check(CLI::Range(0, 1024));
+    cmd->add_option("--cache", o->cacheDir, "Directory for meshes received from the master (by content hash)");
+    cmd->add_option("--exit-after-idle", o->exitAfterIdleMs, "Exit when no master answers for this many ms (0 = retry forever)")
+        ->check(CLI::Range(0, 86'400'000));
+    cmd->callback([&run, o] {
+        run = [o] {
+            if (!o->connect.starts_with("tcp://")) throw InputError("--connect '" + o->connect + "': expected tcp://HOST:PORT");
+            return runClient(*o);
+        };
+    });
+}
+
+}  // namespace rtwall::cli
