@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # One entry point for a fresh Debian 12 machine:
-#   tools/bootstrap.sh demo   install what is missing, build, render the demo scene
+#   tools/bootstrap.sh demo   install what is missing, build, run the master with local clients
 #   tools/bootstrap.sh test   install what is missing, build, run the whole test suite
 #   tools/bootstrap.sh deps   only install what is missing
 #   tools/bootstrap.sh build  install and build
@@ -61,9 +61,9 @@ case "${1:-}" in
   build) install_missing; build ;;
   demo)
     install_missing; build
-    say "rendering configs/demo.toml"
-    "$BUILD_DIR/tools/rtwall" render configs/demo.toml --out out/demo.png
-    say "the demo image is at $(pwd)/out/demo.png"
+    say "running the master with two local render clients on the built-in scene (rtwall run)"
+    "$BUILD_DIR/tools/rtwall" run --frames 60 --write-every 30 --out out/frames
+    say "frames are in $(pwd)/out/frames/"
     ;;
   test)
     install_missing; build

@@ -37,7 +37,8 @@ void expectOneLineError(const Result& r, const std::string& mustContain) {
 }
 
 TEST(Cli, HelpOnEveryCommand) {
-    for (const char* c : {"--help", "render --help", "info --help", "bench --help", "bench kernel --help"}) {
+    for (const char* c : {"--help", "render --help", "info --help", "bench --help", "bench kernel --help", "run --help",
+                          "client --help"}) {
         const Result r = run(c);
         EXPECT_EQ(r.status, 0) << c;
         EXPECT_NE(r.output.find("Usage"), std::string::npos) << c << ": " << r.output;
@@ -69,6 +70,36 @@ TEST(Cli, InfoJsonOnAMesh) {
     EXPECT_NE(r.output.find("\"vertices\" : 8640"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("\"bounds\""), std::string::npos) << r.output;
 }
+
+TEST(Cli, RenderThroughLocalClientsGivesTheSameBytes) {
+    const auto dir = test::scratchDir();
+    const std::string scene = (test::sourceDir() / "configs/demo.toml").string();
+    const Result one = run("render " + scene + " --out " + (dir / "one.png").string() + " --width 64 --height 48");
+    const Result two = run("render " + scene + " --out " + (dir / "two.png").string() +
+                           " --width 64 --height 48 --clients 2 --tile 8 --codec zstd");
+    ASSERT_EQ(one.status, 0) << one.output;
+    ASSERT_EQ(two.status, 0) << two.output;
+    EXPECT_EQ(readPng(dir / "one.png").rgb, readPng(dir / "two.png").rgb);
+}
+
+TEST(Cli, RunWithTheEmbeddedDefaultAndWithAConfig) {
+    const auto dir = test::scratchDir();
+    const Result a = run("run --frames 3 --write-every 3 --out " + dir.string());
+    ASSERT_EQ(a.status, 0) << a.output;
+    EXPECT_TRUE(std::filesystem::exists(dir / "frame_000003.png")) << a.output;
+    EXPECT_NE(a.output.find("median"), std::string::npos) << a.output;
+    const Result b = run("run " + (test::sourceDir() / "configs/run/demo.toml").string() + " --frames 2 --write-every 0");
+    EXPECT_EQ(b.status, 0) << b.output;
+}
+
+TEST(Cli, BadRunConfigNamesFileLineAndKey) {
+    const auto file = test::writeFile(test::scratchDir() / "run.toml", "scene = \"builtin:knots\"\n[cluster]\nclients = 2\ncodec = \"png\"\n");
+    expectOneLineError(run("run " + file.string()), file.string() + ":4: [cluster]: key 'codec'");
+    const auto typo = test::writeFile(test::scratchDir() / "typo.toml", "[run]\nframs = 3\n");
+    expectOneLineError(run("run " + typo.string()), "unknown key 'frams'");
+}
+
+TEST(Cli, ClientRejectsABadEndpoint) { expectOneLineError(run("client --connect localhost:1"), "tcp://HOST:PORT"); }
 
 TEST(Cli, MissingSceneFile) { expectOneLineError(run("render /no/such.toml --out x.png"), "/no/such.toml"); }
 

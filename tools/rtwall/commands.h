@@ -13,6 +13,7 @@ using Run = std::function<int()>;
 void addRender(CLI::App& app, Run& run);
 void addInfo(CLI::App& app, Run& run);
 void addClient(CLI::App& app, Run& run);
+void addRun(CLI::App& app, Run& run);
 void addBenchKernel(CLI::App& bench, Run& run);
 
 }  // namespace rtwall::cli

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
     rtwall::cli::addRender(app, run);
     rtwall::cli::addInfo(app, run);
     rtwall::cli::addClient(app, run);
+    rtwall::cli::addRun(app, run);
     CLI::App* bench = app.add_subcommand("bench", "Benchmarks that print their figures (JSON with --json)");
     bench->require_subcommand(1);
     rtwall::cli::addBenchKernel(*bench, run);

@@ -1,0 +1,208 @@
+// rtwall run: the display master with local render clients, frame after frame. Until the
+// wall display exists, frames go to PNG files (every Nth) and the frame rate to stdout.
+#include "commands.h"
+#include "local_clients.h"
+
+#include <rtwall/cluster.h>
+#include <rtwall/engine.h>
+#include <rtwall/toml_reader.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <memory>
+#include <numbers>
+
+namespace rtwall::cli {
+
+namespace {
+
+// The run configuration (format: configs/README.md, "Run configs").
+struct RunConfig {
+    std::string scene = "builtin:knots";  // scene file, mesh file or builtin:NAME
+    std::string camera;
+    ClusterSettings cluster;
+    int frames = 60;         // 0 = until Ctrl-C
+    int writeEvery = 30;     // 0 = never
+    std::string out = "out/frames";
+    double orbit = 1.0;      // degrees per frame around the camera's look-at point
+    int width = 0, height = 0;  // override the scene's image size
+};
+
+// Used when `rtwall run` is given no config: the built-in knot field, two local clients.
+constexpr const char* kEmbeddedDefault = R"(scene = "builtin:knots"
+[image]
+width = 800
+height = 600
+[cluster]
+clients = 2
+[run]
+frames = 60
+write_every = 30
+orbit = 1.0
+)";
+
+TileCodec codecFromName(const std::string& name) {
+    if (name == "raw") return TileCodec::Raw;
+    if (name == "zstd") return TileCodec::Zstd;
+    if (name == "jpeg") return TileCodec::Jpeg;
+    return TileCodec::Lz4;
+}
+
+RunConfig readRunConfig(const std::filesystem::path& file, const toml::table& root) {
+    using namespace toml_reader;
+    RunConfig c;
+    Reader top(file, root, "");
+    std::string scene = top.string("scene", c.scene);
+    if (!scene.starts_with("builtin:") && !file.empty()) scene = (file.parent_path() / scene).string();
+    c.scene = scene;
+    c.camera = top.string("camera", "");
+    if (const toml::table* t = subTable(top, "image")) {
+        Reader r(file, *t, "[image]: ");
+        c.width = r.integer("width", 0, 1, 16384);
+        c.height = r.integer("height", 0, 1, 16384);
+        r.finish();
+    }
+    if (const toml::table* t = subTable(top, "cluster")) {
+        Reader r(file, *t, "[cluster]: ");
+        ClusterSettings& cs = c.cluster;
+        cs.bind = r.string("bind", cs.bind);
+        cs.localClients = r.integer("clients", cs.localClients, 0, 256);
+        cs.threadsPerClient = r.integer("threads", cs.threadsPerClient, 0, 1024);
+        cs.prefetch = r.integer("prefetch", cs.prefetch, 1, 64);
+        cs.affinity = r.boolean("affinity", cs.affinity);
+        cs.async = r.boolean("async", cs.async);
+        cs.codec.codec = codecFromName(r.choice("codec", "lz4", {"raw", "lz4", "zstd", "jpeg"}));
+        cs.codec.jpegQuality = r.integer("jpeg_quality", cs.codec.jpegQuality, 1, 100);
+        cs.codec.jpegSubsample = r.boolean("jpeg_subsample", cs.codec.jpegSubsample);
+        cs.codec.zstdLevel = r.integer("zstd_level", cs.codec.zstdLevel, 1, 19);
+        cs.heartbeatMs = r.integer("heartbeat_ms", cs.heartbeatMs, 10, 60000);
+        cs.timeoutMs = r.integer("timeout_ms", cs.timeoutMs, 50, 600000);
+        cs.stragglerFactor = r.number("straggler_factor", cs.stragglerFactor, 1.0, 1000.0);
+        if (cs.timeoutMs <= cs.heartbeatMs) r.fail(r.find("timeout_ms"), "timeout_ms must exceed heartbeat_ms");
+        r.finish();
+    }
+    if (const toml::table* t = subTable(top, "run")) {
+        Reader r(file, *t, "[run]: ");
+        c.frames = r.integer("frames", c.frames, 0, 100'000'000);
+        c.writeEvery = r.integer("write_every", c.writeEvery, 0, 100'000'000);
+        c.out = r.string("out", c.out);
+        c.orbit = r.number("orbit", c.orbit, -360.0, 360.0);
+        r.finish();
+    }
+    top.finish();
+    return c;
+}
+
+std::atomic<bool> gStop{false};
+
+CameraDesc orbited(const CameraDesc& c, double degrees) {
+    const double a = degrees * std::numbers::pi / 180.0, ca = std::cos(a), sa = std::sin(a);
+    const double x = c.position.x - c.lookAt.x, z = c.position.z - c.lookAt.z;
+    CameraDesc o = c;
+    o.position.x = float(c.lookAt.x + ca * x + sa * z);
+    o.position.z = float(c.lookAt.z - sa * x + ca * z);
+    return o;
+}
+
+}  // namespace
+
+void addRun(CLI::App& app, Run& run) {
+    struct Options {
+        std::string config;
+        int frames = -1, clients = -1, writeEvery = -1;
+        std::string out, bind;
+    };
+    auto o = std::make_shared<Options>();
+    CLI::App* cmd = app.add_subcommand("run", "Run the display master with local render clients (default: a built-in demo)");
+    cmd->add_option("config", o->config, "Run config (.toml, see configs/README.md); none: the embedded default");
+    cmd->add_option("--frames", o->frames, "Frames to render (0 = until Ctrl-C)")->check(CLI::Range(0, 100'000'000));
+    cmd->add_option("--clients", o->clients, "Local client processes to start")->check(CLI::Range(0, 256));
+    cmd->add_option("--write-every", o->writeEvery, "Write every Nth frame as PNG (0 = never)")->check(CLI::Range(0, 100'000'000));
+    cmd->add_option("--out", o->out, "Directory for the PNG frames");
+    cmd->add_option("--bind", o->bind, "Endpoint for clients, e.g. tcp://0.0.0.0:7700 (default: loopback, any port)");
+    cmd->callback([&run, o] {
+        run = [o] {
+            RunConfig c = o->config.empty() ? readRunConfig({}, toml::parse(kEmbeddedDefault))
+                                            : readRunConfig(o->config, toml_reader::parseFile(o->config));
+            if (o->frames >= 0) c.frames = o->frames;
+            if (o->clients >= 0) c.cluster.localClients = o->clients;
+            if (o->writeEvery >= 0) c.writeEvery = o->writeEvery;
+            if (!o->out.empty()) c.out = o->out;
+            if (!o->bind.empty()) c.cluster.bind = o->bind;
+
+            const std::filesystem::path scenePath(c.scene);
+            SceneDesc desc = c.scene.starts_with("builtin:") ? builtinScene(c.scene.substr(8), 3'000'000)
+                             : scenePath.extension() == ".toml" ? loadSceneFile(scenePath)
+                                                                : sceneFromMeshFile(scenePath);
+            if (c.width) desc.settings.width = c.width;
+            if (c.height) desc.settings.height = c.height;
+            if (!c.camera.empty()) {
+                const CameraDesc* cam = desc.findCamera(c.camera);
+                if (!cam) throw InputError(c.scene + ": no camera named '" + c.camera + "'");
+                desc.cameras = {*cam};
+            }
+            const CameraDesc start = desc.cameras.front();
+
+            Master master(desc, c.cluster);
+            std::printf("rtwall master at %s, %dx%d, %d local clients, codec %s%s\n", master.endpoint().c_str(),
+                        desc.settings.width, desc.settings.height, c.cluster.localClients,
+                        c.cluster.codec.codec == TileCodec::Raw    ? "raw"
+                        : c.cluster.codec.codec == TileCodec::Zstd ? "zstd"
+                        : c.cluster.codec.codec == TileCodec::Jpeg ? "jpeg"
+                                                                    : "lz4",
+                        c.cluster.async ? ", asynchronous" : "");
+            std::fflush(stdout);
+            LocalClients clients(c.cluster.localClients, master.endpoint(), std::max(1, c.cluster.threadsPerClient));
+            // Remote clients may take a while to be started; local ones are here in seconds.
+            const int needed = std::max(1, c.cluster.localClients);
+            const int waitMs = c.cluster.localClients > 0 ? 60'000 : 600'000;
+            if (c.cluster.localClients == 0)
+                std::printf("waiting for clients: rtwall client --connect %s\n", master.endpoint().c_str());
+            if (!master.waitForClients(needed, waitMs))
+                throw InputError("no render client joined " + master.endpoint() + " in time");
+
+            std::signal(SIGINT, [](int) { gStop = true; });
+            std::signal(SIGTERM, [](int) { gStop = true; });
+            std::vector<double> frameTimes;
+            auto last = std::chrono::steady_clock::now();
+            uint64_t bytes = 0;
+            for (int f = 1; (c.frames == 0 || f <= c.frames) && !gStop; ++f) {
+                if (c.orbit != 0.0) master.setCamera(orbited(start, c.orbit * f));
+                FrameReport report;
+                const Image img = master.renderFrame(&report);
+                const auto now = std::chrono::steady_clock::now();
+                frameTimes.push_back(std::chrono::duration<double>(now - last).count());
+                last = now;
+                bytes += report.bytes;
+                if (c.writeEvery > 0 && f % c.writeEvery == 0) {
+                    char name[64];
+                    std::snprintf(name, sizeof name, "frame_%06u.png", report.frame);
+                    writePng(img, std::filesystem::path(c.out) / name);
+                    std::printf("wrote %s\n", (std::filesystem::path(c.out) / name).c_str());
+                }
+                if (f % 10 == 0 || f == c.frames) {
+                    std::vector<double> recent(frameTimes.end() - std::min<size_t>(10, frameTimes.size()), frameTimes.end());
+                    std::sort(recent.begin(), recent.end());
+                    std::printf("frame %d: %.1f fps (median of the last %zu), %.2f MB of tiles, %llu stolen, %llu of %zu tiles kept their client\n",
+                                f, 1.0 / recent[recent.size() / 2], recent.size(), double(report.bytes) * 1e-6,
+                                (unsigned long long)report.tilesStolen, (unsigned long long)report.affinityHits,
+                                makeTiles(desc.settings.width, desc.settings.height, desc.settings.tileSize).size());
+                    std::fflush(stdout);
+                }
+            }
+            if (!frameTimes.empty()) {
+                std::vector<double> sorted = frameTimes;
+                std::sort(sorted.begin(), sorted.end());
+                std::printf("%zu frames, median %.1f fps, %.2f MB of tiles per frame\n", frameTimes.size(),
+                            1.0 / sorted[sorted.size() / 2], double(bytes) * 1e-6 / double(frameTimes.size()));
+            }
+            return 0;
+        };
+    });
+}
+
+}  // namespace rtwall::cli
