@@ -331,6 +331,24 @@ private:
         frame_.store(0);
     }
 
+    // Replay mode (benchmarks of the master and the link): a tile rendered once is sent again
+    // from memory, so the client costs next to nothing. Valid only while the view is still.
+    bool replaySend(zmq::socket_t& out, const Work& w) {
+        TileResult result;
+        {
+            std::lock_guard lock(replayMutex_);
+            auto it = replay_.find(w.tile);
+            if (it == replay_.end()) return false;
+            result.pixels = it->second;  // renderMicros stays 0: a replay costs no rendering
+        }
+        result.frame = w.frame;
+        result.tile = w.tile;
+        result.codec = codec_.codec;
+        const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame), result);
+        out.send(zmq::const_buffer(bytes.data(), bytes.size()), zmq::send_flags::none);
+        return true;
+    }
+
     std::string failure() {
         std::lock_guard lock(workMutex_);
         return failure_;
@@ -355,6 +373,7 @@ private:
             try {
                 std::shared_lock lock(sceneMutex_);
                 if (w.frame != frame_.load() || !scene_ || w.tile >= tiles_.size()) continue;  // stale or bogus
+                if (settings_.replay && replaySend(out, w)) continue;
                 const TileRect r = tiles_[w.tile];
                 pixels.resize(size_t(r.width()) * r.height() * 3);
                 const auto t0 = std::chrono::steady_clock::now();
@@ -367,6 +386,10 @@ private:
                 result.codec = codec_.codec;
                 result.renderMicros = uint32_t(std::min(seconds * 1e6, 4e9));
                 encodeTile(codec_, pixels.data(), r.width(), r.height(), size_t(r.width()) * 3, result.pixels);
+                if (settings_.replay) {
+                    std::lock_guard replayLock(replayMutex_);
+                    replay_[w.tile] = result.pixels;
+                }
                 const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame), result);
                 out.send(zmq::const_buffer(bytes.data(), bytes.size()), zmq::send_flags::none);
             } catch (const std::exception& e) {
@@ -407,6 +430,9 @@ private:
     RenderSettings renderSettings_;
     std::vector<TileRect> tiles_;
     std::atomic<uint32_t> frame_{0};
+
+    std::mutex replayMutex_;
+    std::map<uint32_t, std::vector<uint8_t>> replay_;  // tile -> encoded bytes
 
     std::mutex workMutex_;
     std::condition_variable workCv_;

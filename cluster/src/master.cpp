@@ -274,6 +274,10 @@ struct Master::Impl {
         r.duplicatesDropped = st.duplicates;
         r.staleDropped = st.stale;
         r.affinityHits = st.affinityHits;
+        const std::vector<double>& lat = scheduler.latencies();
+        double sum = 0;
+        for (double l : lat) sum += l;
+        r.meanTileLatency = lat.empty() ? 0.0 : sum / double(lat.size());
         for (const auto& [peer, c] : clients) {
             ClientReport cr;
             cr.id = c.id;

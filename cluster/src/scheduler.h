@@ -73,6 +73,7 @@ public:
     uint32_t tileCount() const { return tileCount_; }
     uint32_t remaining() const;  // tiles without an accepted result
     const SchedulerStats& stats() const { return stats_; }  // of the current frame
+    const std::vector<double>& latencies() const { return latencies_; }  // hand-out to result, this frame
 
     static constexpr ClientId kNobody = UINT32_MAX;
 

@@ -22,10 +22,11 @@ public:
     ClientThreads(const std::string& endpoint, int count, int threadsEach = 1) {
         for (int i = 0; i < count; ++i) add(endpoint, threadsEach);
     }
-    void add(const std::string& endpoint, int threadsEach = 1) {
+    void add(const std::string& endpoint, int threadsEach = 1, const std::filesystem::path& cacheDir = {}) {
         ClientSettings cs;
         cs.connect = endpoint;
         cs.threads = threadsEach;
+        cs.cacheDir = cacheDir;
         cs.exitAfterIdleMs = 4000;  // never outlive the test by much
         threads_.emplace_back([cs] { runClient(cs); });
     }
@@ -231,6 +232,32 @@ TEST(Cluster, LateJoinerGetsTheCurrentStateFirst) {
         const Image img = master.renderFrame(&r);
         EXPECT_EQ(differingBytes(img, singleMachine(expect)), 0u) << "frame " << r.frame;
     }
+}
+
+// Meshes travel by content hash: a client that cannot read the master's file (or reads a
+// different file under that name) gets the bytes from the master, checks their hash and keeps
+// them in its cache directory; a local file with the wrong content is never trusted.
+TEST(Cluster, MeshesTravelByContentHash) {
+    SceneDesc desc = demoScene(96, 72);
+    const auto cache = test::scratchDir();
+    for (MeshDesc& m : desc.meshes)
+        if (m.name == "knot") m.source = (test::dataDir() / "meshes/box_quads.obj").string();  // same name, other content
+    ClusterSettings cs;
+    cs.async = false;
+    {
+        LocalCluster cluster(desc, cs, 0);
+        cluster.clients.add(cluster.master->endpoint(), 1, cache);
+        ASSERT_TRUE(cluster.master->waitForClients(1, 30000));
+        EXPECT_EQ(differingBytes(cluster.master->renderFrame(), singleMachine(desc)), 0u);
+    }
+    size_t cached = 0;
+    for (const auto& e : std::filesystem::directory_iterator(cache)) cached += e.path().extension() == ".rtmesh";
+    EXPECT_EQ(cached, desc.meshes.size()) << "every mesh was fetched and cached";
+    // A second client finds them all in its cache.
+    LocalCluster again(desc, cs, 0);
+    again.clients.add(again.master->endpoint(), 1, cache);
+    ASSERT_TRUE(again.master->waitForClients(1, 30000));
+    EXPECT_EQ(differingBytes(again.master->renderFrame(), singleMachine(desc)), 0u);
 }
 
 // A client that completes the handshake, takes tiles and then goes silent (a PC that froze

@@ -14,6 +14,7 @@ void addClient(CLI::App& app, Run& run) {
     cmd->add_option("--cache", o->cacheDir, "Directory for meshes received from the master (by content hash)");
     cmd->add_option("--exit-after-idle", o->exitAfterIdleMs, "Exit when no master answers for this many ms (0 = retry forever)")
         ->check(CLI::Range(0, 86'400'000));
+    cmd->add_flag("--replay", o->replay, "Benchmarks: render each tile once, then resend its bytes (measures master and link)");
     cmd->callback([&run, o] {
         run = [o] {
             if (!o->connect.starts_with("tcp://")) throw InputError("--connect '" + o->connect + "': expected tcp://HOST:PORT");

@@ -15,5 +15,6 @@ void addInfo(CLI::App& app, Run& run);
 void addClient(CLI::App& app, Run& run);
 void addRun(CLI::App& app, Run& run);
 void addBenchKernel(CLI::App& bench, Run& run);
+void addBenchCluster(CLI::App& bench, Run& run);
 
 }  // namespace rtwall::cli

@@ -16,13 +16,13 @@ extern char** environ;
 
 namespace rtwall::cli {
 
-LocalClients::LocalClients(int count, const std::string& endpoint, int threadsEach) {
+LocalClients::LocalClients(int count, const std::string& endpoint, int threadsEach, bool replay) {
     const std::string threads = std::to_string(threadsEach);
     for (int i = 0; i < count; ++i) {
         // The same executable, so client and master always speak the same protocol version.
         // A client whose master has gone gives up after a few seconds on its own as well.
         const char* argv[] = {"rtwall", "client", "--connect", endpoint.c_str(), "--threads", threads.c_str(),
-                              "--exit-after-idle", "5000", nullptr};
+                              "--exit-after-idle", "5000", replay ? "--replay" : nullptr, nullptr};
         pid_t pid;
         const int err = posix_spawn(&pid, "/proc/self/exe", nullptr, nullptr, const_cast<char**>(argv), environ);
         if (err != 0) throw InputError(std::string("cannot start a local render client: ") + std::strerror(err));

@@ -11,7 +11,7 @@ namespace rtwall::cli {
 
 class LocalClients {
 public:
-    LocalClients(int count, const std::string& endpoint, int threadsEach);
+    LocalClients(int count, const std::string& endpoint, int threadsEach, bool replay = false);
     ~LocalClients();
     LocalClients(const LocalClients&) = delete;
     LocalClients& operator=(const LocalClients&) = delete;

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
     CLI::App* bench = app.add_subcommand("bench", "Benchmarks that print their figures (JSON with --json)");
     bench->require_subcommand(1);
     rtwall::cli::addBenchKernel(*bench, run);
+    rtwall::cli::addBenchCluster(*bench, run);
 
     try {
         app.parse(argc, argv);

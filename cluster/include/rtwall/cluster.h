@@ -97,6 +97,7 @@ struct ClientSettings {
     std::filesystem::path cacheDir;     // meshes received from the master, by content hash
     int maxReconnectMs = 5000;          // back-off ceiling
     int exitAfterIdleMs = 0;            // > 0: exit when no master answers for this long
+    bool replay = false;                // benchmarks: render each tile once, then resend its bytes
 };
 
 // Runs a render client until the master says goodbye (or exitAfterIdleMs passes).
