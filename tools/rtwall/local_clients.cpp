@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <filesystem>
 #include <chrono>
 #include <csignal>
 #include <cstring>
@@ -16,15 +17,28 @@ extern char** environ;
 
 namespace rtwall::cli {
 
-LocalClients::LocalClients(int count, const std::string& endpoint, int threadsEach, bool replay) {
+LocalClients::LocalClients(int count, const std::string& endpoint, int threadsEach, bool replay,
+                           const std::string& netnsPrefix) {
     const std::string threads = std::to_string(threadsEach);
     for (int i = 0; i < count; ++i) {
         // The same executable, so client and master always speak the same protocol version.
         // A client whose master has gone gives up after a few seconds on its own as well.
-        const char* argv[] = {"rtwall", "client", "--connect", endpoint.c_str(), "--threads", threads.c_str(),
-                              "--exit-after-idle", "5000", replay ? "--replay" : nullptr, nullptr};
+        std::vector<std::string> args = {"client", "--connect", endpoint, "--threads", threads, "--exit-after-idle", "5000"};
+        if (replay) args.push_back("--replay");
+        std::string program = "/proc/self/exe";
+        if (!netnsPrefix.empty()) {
+            // `ip netns exec NS EXE ...`: the same executable, resolved, inside the namespace.
+            std::error_code ec;
+            args.insert(args.begin(), {"netns", "exec", netnsPrefix + std::to_string(i + 1),
+                                       std::filesystem::read_symlink("/proc/self/exe", ec).string()});
+            program = "/usr/sbin/ip";
+        }
+        std::vector<char*> argv{const_cast<char*>("rtwall")};
+        if (!netnsPrefix.empty()) argv[0] = const_cast<char*>("ip");
+        for (std::string& a : args) argv.push_back(a.data());
+        argv.push_back(nullptr);
         pid_t pid;
-        const int err = posix_spawn(&pid, "/proc/self/exe", nullptr, nullptr, const_cast<char**>(argv), environ);
+        const int err = posix_spawn(&pid, program.c_str(), nullptr, nullptr, argv.data(), environ);
         if (err != 0) throw InputError(std::string("cannot start a local render client: ") + std::strerror(err));
         pids_.push_back(pid);
     }

@@ -11,7 +11,9 @@ namespace rtwall::cli {
 
 class LocalClients {
 public:
-    LocalClients(int count, const std::string& endpoint, int threadsEach, bool replay = false);
+    // With a netns prefix, client i runs in network namespace <prefix><i> (tools/netem.sh).
+    LocalClients(int count, const std::string& endpoint, int threadsEach, bool replay = false,
+                 const std::string& netnsPrefix = {});
     ~LocalClients();
     LocalClients(const LocalClients&) = delete;
     LocalClients& operator=(const LocalClients&) = delete;

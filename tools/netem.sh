@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# Emulated cluster network in network namespaces this script creates itself (root needed):
+# a switch namespace with a bridge, the master in rtw-m (10.199.0.1) behind a shaped uplink,
+# and N clients rtw-c1..rtw-cN (10.199.0.11, ...) with shaped links. Traffic never leaves
+# these namespaces.
+#
+#   tools/netem.sh up N [MASTER_RATE] [CLIENT_RATE]   e.g. up 4 1gbit 100mbit (default 1gbit 1gbit)
+#   tools/netem.sh bench N [MASTER_RATE] [CLIENT_RATE] [-- rtwall bench cluster arguments]
+#   tools/netem.sh down
+#
+# Shaping uses tc's token-bucket filter (tbf) on the switch's ports, i.e. on what each machine
+# receives (tiles flow into the master). The kernel here has no sch_netem, so added latency and
+# loss cannot be emulated; the rates can.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+RTWALL=${RTWALL:-build/tools/rtwall}
+
+shape() {  # namespace device rate
+  ip netns exec "$1" tc qdisc replace dev "$2" root tbf rate "$3" burst 512kb latency 100ms
+}
+
+up() {
+  local n=$1 mrate=${2:-1gbit} crate=${3:-1gbit}
+  down >/dev/null 2>&1 || true
+  ip netns add rtw-sw
+  ip -n rtw-sw link add br0 type bridge
+  ip -n rtw-sw link set br0 up
+  attach() {  # namespace address rate-into-it
+    local ns=$1 addr=$2 rate=$3 port="p-$1"
+    ip netns add "$ns"
+    ip link add "$port" type veth peer name eth0 netns "$ns"
+    ip link set "$port" netns rtw-sw
+    ip -n rtw-sw link set "$port" master br0 up
+    ip -n "$ns" addr add "$addr/24" dev eth0
+    ip -n "$ns" link set eth0 up
+    ip -n "$ns" link set lo up
+    shape rtw-sw "$port" "$rate"    # the switch's port towards this machine: what it receives
+    shape "$ns" eth0 "$rate"        # and what it sends
+  }
+  attach rtw-m 10.199.0.1 "$mrate"
+  for i in $(seq 1 "$n"); do attach "rtw-c$i" "10.199.0.$((10 + i))" "$crate"; done
+  echo "netem: master 10.199.0.1 at $mrate, $n clients at $crate" >&2
+}
+
+down() {
+  for ns in $(ip netns list | awk '{print $1}' | grep -E '^rtw-(m|sw|c[0-9]+)$' || true); do ip netns del "$ns"; done
+}
+
+case "${1:-}" in
+  up) shift; up "$@" ;;
+  down) down ;;
+  bench)
+    shift
+    n=$1; shift
+    mrate=1gbit crate=1gbit
+    if [ $# -gt 0 ] && [ "$1" != "--" ]; then mrate=$1; shift; fi
+    if [ $# -gt 0 ] && [ "$1" != "--" ]; then crate=$1; shift; fi
+    [ "${1:-}" = "--" ] && shift
+    up "$n" "$mrate" "$crate"
+    trap down EXIT
+    ip netns exec rtw-m "$RTWALL" bench cluster --bind tcp://10.199.0.1:7700 --client-netns rtw-c \
+      --max-clients "$n" --link "master $mrate, clients $crate" "$@"
+    ;;
+  *) echo "usage: tools/netem.sh up N [MASTER_RATE] [CLIENT_RATE] | bench N [RATES] [-- ARGS] | down" >&2; exit 2 ;;
+esac
