@@ -4,6 +4,7 @@
 #include "codec.h"
 #include "net.h"
 #include "protocol.h"
+#include "update_sequencer.h"
 
 #include <rtwall/cluster.h>
 
@@ -170,11 +171,9 @@ private:
             switch (h.type) {
             case MsgType::SceneSnapshot: onSnapshot(decodePayload<SceneSnapshot>(p, n)); break;
             case MsgType::MeshData: onMeshData(decodePayload<MeshData>(p, n)); break;
-            case MsgType::Update: {
-                Update u = decodePayload<Update>(p, n);
-                if (u.seq > stateSeq_) pendingUpdates_[u.seq] = std::move(u);
+            case MsgType::Update:
+                if (!updates_.add(decodePayload<Update>(p, n))) requestResync();
                 break;
-            }
             case MsgType::FrameBegin: onFrameBegin(decodePayload<FrameBegin>(p, n)); break;
             case MsgType::TileAssign: onAssign(decodePayload<TileAssign>(p, n)); break;
             case MsgType::Heartbeat: decodePayload<Heartbeat>(p, n); break;
@@ -225,7 +224,7 @@ private:
         dropWork();
         ready_ = false;
         snapshot_ = std::move(snap);
-        pendingUpdates_.erase(pendingUpdates_.begin(), pendingUpdates_.upper_bound(snapshot_->updateSeq));
+        updates_.reset(snapshot_->updateSeq);
         for (const MeshRef& ref : snapshot_->meshes)
             if (!localMesh(ref)) send(MeshRequest{ref.hash});
         tryBuildScene();
@@ -275,19 +274,23 @@ private:
         send(Ready{stateSeq_, hash});
     }
 
-    // Applies the buffered updates up to `seq`; false (and a resync request) on a gap.
+    void requestResync() {
+        ready_ = false;
+        send(ResyncRequest{stateSeq_});
+    }
+
+    // Applies the buffered updates up to `seq`. False when this frame cannot be rendered here:
+    // an update is missing (a resync is requested) or our state is already newer.
     bool catchUp(uint32_t seq) {
-        if (seq == stateSeq_) return true;
-        if (seq < stateSeq_) return false;
-        for (uint32_t next = stateSeq_ + 1; next <= seq; ++next)
-            if (!pendingUpdates_.count(next)) {
-                ready_ = false;
-                send(ResyncRequest{stateSeq_});
-                return false;
-            }
+        std::vector<Update> ups;
+        switch (updates_.catchUp(seq, ups)) {
+        case UpdateSequencer::CatchUp::Gap: requestResync(); return false;
+        case UpdateSequencer::CatchUp::Ahead: return false;
+        case UpdateSequencer::CatchUp::Ready: break;
+        }
+        if (ups.empty()) return true;
         std::unique_lock lock(sceneMutex_);
-        for (uint32_t next = stateSeq_ + 1; next <= seq; ++next) {
-            const Update& u = pendingUpdates_[next];
+        for (const Update& u : ups)
             for (const Change& c : u.changes) {
                 if (auto* cam = std::get_if<CameraChange>(&c)) camera_ = cam->camera;
                 else if (auto* t = std::get_if<TransformChange>(&c)) scene_->setInstanceTransform(t->instance, t->transform);
@@ -299,8 +302,6 @@ private:
                     tiles_ = makeTiles(renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
                 }
             }
-            pendingUpdates_.erase(next);
-        }
         scene_->commit();
         stateSeq_ = seq;
         return true;
@@ -419,7 +420,7 @@ private:
 
     std::optional<SceneSnapshot> snapshot_;
     std::map<Hash128, std::shared_ptr<const TriangleMesh>> meshes_;
-    std::map<uint32_t, Update> pendingUpdates_;
+    UpdateSequencer updates_;
     bool ready_ = false;
     uint32_t stateSeq_ = 0;
 

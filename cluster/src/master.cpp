@@ -37,6 +37,7 @@ struct ClientState {
     bool ready = false;       // proved it holds the state at stateSeq
     uint32_t stateSeq = 0;    // the snapshot it was sent; it also has every update after it
     uint32_t credits = 0;     // tiles it asked for and has not been given
+    uint64_t updatesSent = 0; // for fault injection
     uint32_t threads = 0;
     double busySeconds = 0;   // render time reported this frame
     const char* deathReason = nullptr;  // set when it must go; reaped outside any iteration
@@ -114,6 +115,7 @@ struct Command {
     Update update;              // kUpdate; for kBeginFrame only its seq: the state the frame renders
     uint32_t frame = 0;
     RenderSettings settings;    // kBeginFrame: image and tile size at that state
+    std::shared_ptr<const SceneSnapshot> state;  // kBeginFrame: the whole state the frame renders
 };
 
 }  // namespace
@@ -153,11 +155,14 @@ struct Master::Impl {
     std::unique_ptr<DecodePool> decoder;
     uint32_t currentFrame = 0;
     uint32_t frameSeq = 0;        // state the current frame renders
+    std::shared_ptr<const SceneSnapshot> frameState;  // that state in full (null before the first frame)
+    std::deque<Update> sentUpdates;  // updates already sent to everyone, newest last, for joiners
     bool frameActive = false;
     double frameStart = 0;
     uint64_t frameBytes = 0;
     std::atomic<bool> frameDecoded{false};
     std::atomic<uint64_t> dropped{0};
+    std::atomic<uint64_t> resyncCount{0};
 
     uint32_t lastBegun = 0;       // application side
     bool inFlight = false;
@@ -243,9 +248,28 @@ struct Master::Impl {
             if (!c.deathReason) serve(c);
     }
 
-    void beginFrame(uint32_t frame, uint32_t stateSeq, const RenderSettings& rs) {
+    // A joining or resyncing client gets the state of the frame being rendered (so that it can
+    // help with it at once) and then the updates sent since, exactly as the others got them.
+    void sendState(ClientState& c) {
+        const SceneSnapshot snap = frameState ? *frameState : snapshot();
+        c.stateSeq = snap.updateSeq;
+        if (!send(c, snap)) {
+            markDead(c, "unreachable while sending the scene state");
+            return;
+        }
+        for (const Update& u : sentUpdates)
+            if (u.seq > snap.updateSeq && !send(c, u)) {
+                markDead(c, "unreachable while sending the scene state");
+                return;
+            }
+    }
+
+    void beginFrame(uint32_t frame, uint32_t stateSeq, const RenderSettings& rs,
+                    std::shared_ptr<const SceneSnapshot> state) {
         currentFrame = frame;
         frameSeq = stateSeq;
+        frameState = std::move(state);
+        while (!sentUpdates.empty() && sentUpdates.front().seq <= frameSeq) sentUpdates.pop_front();
         frameActive = true;
         frameStart = nowSeconds();
         frameBytes = 0;
@@ -316,12 +340,11 @@ struct Master::Impl {
         c.peer = peer;
         c.lastSeen = nowSeconds();
         c.threads = std::max(1u, hello.threads);
-        const SceneSnapshot snap = snapshot();
-        c.stateSeq = snap.updateSeq;
         scheduler.addClient(c.id);
         auto& ref = clients[peer] = c;
         Welcome w{ref.id, settings.codec, uint32_t(settings.prefetch), uint32_t(settings.heartbeatMs)};
-        if (!send(ref, w) || !send(ref, snap)) markDead(ref, "unreachable during the handshake");
+        if (!send(ref, w)) markDead(ref, "unreachable during the handshake");
+        else sendState(ref);
     }
 
     void onReady(ClientState& c, const uint8_t* data, size_t size) {
@@ -335,9 +358,7 @@ struct Master::Impl {
         if (!matches) {
             // It does not hold the state we sent: never accept its tiles; send the state again.
             ++dropped;
-            const SceneSnapshot snap = snapshot();
-            c.stateSeq = snap.updateSeq;
-            if (!send(c, snap)) markDead(c, "unreachable during a resync");
+            sendState(c);
             return;
         }
         if (!c.ready) {
@@ -423,16 +444,13 @@ struct Master::Impl {
             case MsgType::Heartbeat: decodePayload<Heartbeat>(payload, payloadSize); break;
             case MsgType::ResyncRequest:
                 decodePayload<ResyncRequest>(payload, payloadSize);
+                ++resyncCount;
                 if (c.ready) {
                     c.ready = false;
                     std::lock_guard lock(m);
                     --readyClients;
                 }
-                {
-                    const SceneSnapshot snap = snapshot();
-                    c.stateSeq = snap.updateSeq;
-                    if (!send(c, snap)) markDead(c, "unreachable during a resync");
-                }
+                sendState(c);
                 break;
             case MsgType::Goodbye: {
                 const Goodbye bye = decodePayload<Goodbye>(payload, payloadSize);
@@ -455,10 +473,15 @@ struct Master::Impl {
         }
         for (Command& cmd : todo) {
             if (cmd.kind == Command::kUpdate) {
-                for (auto& [peer, c] : clients)
+                for (auto& [peer, c] : clients) {
+                    const int n = settings.dropEveryNthUpdate;
+                    if (n > 0 && ++c.updatesSent % uint64_t(n) == 0) continue;  // injected loss
                     if (!send(c, cmd.update)) markDead(c, "its queue is full or it is unreachable");
+                }
+                sentUpdates.push_back(cmd.update);
+                if (sentUpdates.size() > 4096) sentUpdates.pop_front();
             } else if (cmd.kind == Command::kBeginFrame) {
-                beginFrame(cmd.frame, cmd.update.seq, cmd.settings);
+                beginFrame(cmd.frame, cmd.update.seq, cmd.settings, std::move(cmd.state));
             }
         }
     }
@@ -557,7 +580,7 @@ Master::~Master() {
     Impl& s = *impl_;
     {
         std::lock_guard lock(s.m);
-        s.commands.push_back({Command::kStop, {}, 0, {}});
+        s.commands.push_back({Command::kStop, {}, 0, {}, nullptr});
     }
     s.wake();
     if (s.net.joinable()) s.net.join();
@@ -580,7 +603,7 @@ bool Master::waitForClients(int count, int timeoutMs) {
 namespace {
 
 void pushUpdate(Master::Impl& s, Change change) {
-    Command cmd{Command::kUpdate, {}, 0, {}};
+    Command cmd{Command::kUpdate, {}, 0, {}, nullptr};
     {
         std::lock_guard lock(s.stateMutex);
         applyChange(s.scene, s.camera, change);  // throws for an index out of range, before anything changed
@@ -609,12 +632,13 @@ Image Master::renderFrame(FrameReport* report) {
     Impl& s = *impl_;
     auto begin = [&] {
         const uint32_t frame = ++s.lastBegun;
-        Command cmd{Command::kBeginFrame, {}, frame, {}};
+        Command cmd{Command::kBeginFrame, {}, frame, {}, nullptr};
         {
             // The frame renders the state as it is now; later updates belong to later frames.
             std::lock_guard lock(s.stateMutex);
             cmd.update.seq = s.seq;
             cmd.settings = s.scene.settings;
+            cmd.state = std::make_shared<const SceneSnapshot>(s.snapshotLocked());
         }
         {
             std::lock_guard lock(s.m);
@@ -641,5 +665,6 @@ Image Master::renderFrame(FrameReport* report) {
 }
 
 uint64_t Master::droppedMessages() const { return impl_->dropped.load(); }
+uint64_t Master::resyncs() const { return impl_->resyncCount.load(); }
 
 }  // namespace rtwall

@@ -208,6 +208,33 @@ TEST(Cluster, TransformMaterialAndLightUpdatesMatchARebuiltScene) {
     EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(changed)), 0u);
 }
 
+// Lost update messages (fault injection drops every second one per client): each client sees
+// the gap when a frame needs the missing update, resyncs from the frame's state, and every frame
+// still equals the single-machine image of the state it was begun with.
+TEST(Cluster, LostUpdatesAreDetectedAndResynced) {
+    SceneDesc desc = demoScene(96, 72);
+    ClusterSettings cs;
+    cs.async = false;
+    cs.dropEveryNthUpdate = 2;
+    LocalCluster cluster(desc, cs, 2);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(2, 30000));
+    master.renderFrame();
+    SceneDesc expect = desc;
+    for (int f = 0; f < 5; ++f) {
+        // Two updates per frame: one of them is lost for each client.
+        expect.lights[0].intensity = 20.0f + 15.0f * f;
+        expect.materials[1].color = {0.2f + 0.1f * f, 0.5f, 0.3f};
+        master.setLight(0, expect.lights[0]);
+        master.setMaterial(1, expect.materials[1]);
+        FrameReport r;
+        const Image img = master.renderFrame(&r);
+        EXPECT_EQ(differingBytes(img, singleMachine(expect)), 0u) << "frame " << r.frame;
+    }
+    EXPECT_GE(master.resyncs(), 5u) << "the losses must have been noticed and repaired";
+    EXPECT_EQ(master.connectedClients(), 2);
+}
+
 TEST(Cluster, LateJoinerGetsTheCurrentStateFirst) {
     SceneDesc desc = demoScene(96, 72);
     ClusterSettings cs;

@@ -37,6 +37,7 @@ struct ClusterSettings {
     int heartbeatMs = 250;                    // both directions
     int timeoutMs = 3000;                     // a silent peer is dead after this
     double stragglerFactor = 4.0;             // re-issue tiles outstanding this many median tile times
+    int dropEveryNthUpdate = 0;               // fault injection for tests: lose every Nth update message per client
 };
 
 struct ClientReport {
@@ -84,6 +85,7 @@ public:
     Image renderFrame(FrameReport* report = nullptr);
 
     uint64_t droppedMessages() const;  // malformed, stale or unexpected messages dropped
+    uint64_t resyncs() const;          // full states sent again after a client found a gap
 
     struct Impl;
 
