@@ -380,6 +380,8 @@ private:
                 const auto t0 = std::chrono::steady_clock::now();
                 renderTile(*scene_, Camera(camera_, renderSettings_.width, renderSettings_.height), r, w.frame,
                            renderSettings_, {pixels.data(), size_t(r.width()) * 3});
+                if (settings_.extraTileDelayMs > 0)
+                    std::this_thread::sleep_for(std::chrono::milliseconds(settings_.extraTileDelayMs));
                 const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 TileResult result;
                 result.frame = w.frame;

@@ -99,6 +99,19 @@ TEST(Cli, BadRunConfigNamesFileLineAndKey) {
     expectOneLineError(run("run " + typo.string()), "unknown key 'frams'");
 }
 
+TEST(Cli, RunFollowsACameraPath) {
+    const auto dir = test::scratchDir();
+    const Result r = run("run " + (test::sourceDir() / "configs/run/demo.toml").string() + " --camera-path " +
+                         (test::sourceDir() / "configs/run/flyby.toml").string() +
+                         " --frames 3 --write-every 1 --out " + dir.string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    // Asynchronous: frame 2 was begun before the camera of frame 2 was set, so it shows in 3.
+    EXPECT_NE(readPng(dir / "frame_000001.png").rgb, readPng(dir / "frame_000003.png").rgb) << "the camera moved";
+    const auto bad = test::writeFile(dir / "path.toml", "[[key]]\nframe = 5\nposition = [0,0,1]\nlook_at = [0,0,0]\n"
+                                                        "[[key]]\nframe = 2\nposition = [0,0,2]\nlook_at = [0,0,0]\n");
+    expectOneLineError(run("run --camera-path " + bad.string() + " --frames 1"), bad.string() + ":6");
+}
+
 TEST(Cli, ClientRejectsABadEndpoint) { expectOneLineError(run("client --connect localhost:1"), "tcp://HOST:PORT"); }
 
 TEST(Cli, MissingSceneFile) { expectOneLineError(run("render /no/such.toml --out x.png"), "/no/such.toml"); }

@@ -29,8 +29,55 @@ struct RunConfig {
     int writeEvery = 30;     // 0 = never
     std::string out = "out/frames";
     double orbit = 1.0;      // degrees per frame around the camera's look-at point
+    std::string cameraPath;  // a camera path file (replaces orbit)
     int width = 0, height = 0;  // override the scene's image size
 };
+
+// A camera path: keyframes at frame numbers, linearly interpolated, held after the last.
+struct CameraKey {
+    int frame;
+    CameraDesc camera;
+};
+
+std::vector<CameraKey> readCameraPath(const std::filesystem::path& file) {
+    using namespace toml_reader;
+    const toml::table root = parseFile(file);
+    Reader top(file, root, "");
+    std::vector<CameraKey> keys;
+    forEachTable(top, file, "key", [&](Reader& r, const toml::table&) {
+        CameraKey k;
+        k.frame = r.integer("frame", 0, 0, 100'000'000);
+        if (!keys.empty() && k.frame <= keys.back().frame)
+            r.fail(r.find("frame"), "key 'frame': keyframes must have increasing frame numbers");
+        k.camera.position = r.vec3("position", {}, true);
+        k.camera.lookAt = r.vec3("look_at", {}, true);
+        k.camera.up = r.vec3("up", k.camera.up);
+        k.camera.fovY = float(r.number("fov", k.camera.fovY, 0.01, 179.0));
+        keys.push_back(k);
+    });
+    top.finish();
+    if (keys.empty()) throw InputError(file.string() + ": a camera path needs at least one [[key]]");
+    return keys;
+}
+
+CameraDesc cameraAt(const std::vector<CameraKey>& keys, int frame) {
+    if (frame <= keys.front().frame) return keys.front().camera;
+    for (size_t i = 1; i < keys.size(); ++i)
+        if (frame <= keys[i].frame) {
+            const CameraKey &a = keys[i - 1], &b = keys[i];
+            const float t = float(frame - a.frame) / float(b.frame - a.frame);
+            auto mix = [t](Float3 p, Float3 q) {
+                return Float3{p.x + (q.x - p.x) * t, p.y + (q.y - p.y) * t, p.z + (q.z - p.z) * t};
+            };
+            CameraDesc c = a.camera;
+            c.position = mix(a.camera.position, b.camera.position);
+            c.lookAt = mix(a.camera.lookAt, b.camera.lookAt);
+            c.up = mix(a.camera.up, b.camera.up);
+            c.fovY = a.camera.fovY + (b.camera.fovY - a.camera.fovY) * t;
+            return c;
+        }
+    return keys.back().camera;
+}
 
 // Used when `rtwall run` is given no config: the built-in knot field, two local clients.
 constexpr const char* kEmbeddedDefault = R"(scene = "builtin:knots"
@@ -91,6 +138,11 @@ RunConfig readRunConfig(const std::filesystem::path& file, const toml::table& ro
         c.writeEvery = r.integer("write_every", c.writeEvery, 0, 100'000'000);
         c.out = r.string("out", c.out);
         c.orbit = r.number("orbit", c.orbit, -360.0, 360.0);
+        if (r.has("camera_path")) {
+            if (r.has("orbit")) r.fail(r.find("camera_path"), "give either 'orbit' or 'camera_path'");
+            c.cameraPath = (file.parent_path() / r.string("camera_path", "")).string();
+            c.orbit = 0.0;
+        }
         r.finish();
     }
     top.finish();
@@ -114,7 +166,7 @@ void addRun(CLI::App& app, Run& run) {
     struct Options {
         std::string config;
         int frames = -1, clients = -1, writeEvery = -1;
-        std::string out, bind;
+        std::string out, bind, cameraPath;
     };
     auto o = std::make_shared<Options>();
     CLI::App* cmd = app.add_subcommand("run", "Run the display master with local render clients (default: a built-in demo)");
@@ -123,6 +175,7 @@ void addRun(CLI::App& app, Run& run) {
     cmd->add_option("--clients", o->clients, "Local client processes to start")->check(CLI::Range(0, 256));
     cmd->add_option("--write-every", o->writeEvery, "Write every Nth frame as PNG (0 = never)")->check(CLI::Range(0, 100'000'000));
     cmd->add_option("--out", o->out, "Directory for the PNG frames");
+    cmd->add_option("--camera-path", o->cameraPath, "Camera path file (.toml keyframes, see configs/README.md)");
     cmd->add_option("--bind", o->bind, "Endpoint for clients, e.g. tcp://0.0.0.0:7700 (default: loopback, any port)");
     cmd->callback([&run, o] {
         run = [o] {
@@ -133,6 +186,7 @@ void addRun(CLI::App& app, Run& run) {
             if (o->writeEvery >= 0) c.writeEvery = o->writeEvery;
             if (!o->out.empty()) c.out = o->out;
             if (!o->bind.empty()) c.cluster.bind = o->bind;
+            if (!o->cameraPath.empty()) c.cameraPath = o->cameraPath;
 
             const std::filesystem::path scenePath(c.scene);
             SceneDesc desc = c.scene.starts_with("builtin:") ? builtinScene(c.scene.substr(8), 3'000'000)
@@ -146,6 +200,7 @@ void addRun(CLI::App& app, Run& run) {
                 desc.cameras = {*cam};
             }
             const CameraDesc start = desc.cameras.front();
+            const std::vector<CameraKey> path = c.cameraPath.empty() ? std::vector<CameraKey>{} : readCameraPath(c.cameraPath);
 
             Master master(desc, c.cluster);
             std::printf("rtwall master at %s, %dx%d, %d local clients, codec %s%s\n", master.endpoint().c_str(),
@@ -171,7 +226,9 @@ void addRun(CLI::App& app, Run& run) {
             auto last = std::chrono::steady_clock::now();
             uint64_t bytes = 0;
             for (int f = 1; (c.frames == 0 || f <= c.frames) && !gStop; ++f) {
-                if (c.orbit != 0.0) master.setCamera(orbited(start, c.orbit * f));
+                // Differential updates: only the camera changes from frame to frame.
+                if (!path.empty()) master.setCamera(cameraAt(path, f));
+                else if (c.orbit != 0.0) master.setCamera(orbited(start, c.orbit * f));
                 FrameReport report;
                 const Image img = master.renderFrame(&report);
                 const auto now = std::chrono::steady_clock::now();

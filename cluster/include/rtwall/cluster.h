@@ -100,6 +100,7 @@ struct ClientSettings {
     int maxReconnectMs = 5000;          // back-off ceiling
     int exitAfterIdleMs = 0;            // > 0: exit when no master answers for this long
     bool replay = false;                // benchmarks: render each tile once, then resend its bytes
+    int extraTileDelayMs = 0;           // fault injection for tests: emulate a slower PC
 };
 
 // Runs a render client until the master says goodbye (or exitAfterIdleMs passes).
