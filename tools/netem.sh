@@ -58,7 +58,8 @@ case "${1:-}" in
     [ "${1:-}" = "--" ] && shift
     up "$n" "$mrate" "$crate"
     trap down EXIT
-    ip netns exec rtw-m "$RTWALL" bench cluster --bind tcp://10.199.0.1:7700 --client-netns rtw-c \
+    # --insecure: these namespaces are the script's own and reach nothing else.
+    ip netns exec rtw-m "$RTWALL" bench cluster --bind tcp://10.199.0.1:7700 --client-netns rtw-c --insecure \
       --max-clients "$n" --link "master $mrate, clients $crate" "$@"
     ;;
   *) echo "usage: tools/netem.sh up N [MASTER_RATE] [CLIENT_RATE] | bench N [RATES] [-- ARGS] | down" >&2; exit 2 ;;

@@ -4,6 +4,7 @@
 #include "codec.h"
 #include "net.h"
 #include "protocol.h"
+#include "security.h"
 #include "update_sequencer.h"
 
 #include <rtwall/cluster.h>
@@ -38,6 +39,12 @@ class ClientRuntime {
 public:
     explicit ClientRuntime(const ClientSettings& s) : settings_(s) {
         threads_ = s.threads > 0 ? s.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+        checkZmqVersion();
+        if (!s.keyFile.empty()) {
+            if (s.serverKeyFile.empty()) throw InputError("--key needs --server-key (the master's public key)");
+            keys_ = readKeyPair(s.keyFile);
+            serverKey_ = readPublicKey(s.serverKeyFile);
+        }
     }
 
     int run() {
@@ -69,6 +76,11 @@ private:
         configureSocket(dealer_, int64_t(kHeaderSize + 64 + kMaxMeshBytes), heartbeatMs_, timeoutMs());
         dealer_.set(zmq::sockopt::reconnect_ivl, 100);
         dealer_.set(zmq::sockopt::reconnect_ivl_max, std::max(100, settings_.maxReconnectMs));
+        if (!settings_.keyFile.empty()) {
+            dealer_.set(zmq::sockopt::curve_serverkey, serverKey_);
+            dealer_.set(zmq::sockopt::curve_publickey, keys_.publicKey);
+            dealer_.set(zmq::sockopt::curve_secretkey, keys_.secretKey);
+        }
         dealer_.connect(settings_.connect);
         session_ = 0;
         ready_ = false;
@@ -406,6 +418,8 @@ private:
     }
 
     ClientSettings settings_;
+    KeyPair keys_;
+    std::string serverKey_;
     int threads_ = 1;
     zmq::context_t ctx_{1};
     zmq::socket_t dealer_;
@@ -445,6 +459,8 @@ private:
 };
 
 }  // namespace
+
+void writeNewKeyPair(const std::filesystem::path& stem) { writeKeyFiles(makeKeyPair(), stem); }
 
 int runClient(const ClientSettings& settings) {
     ClientRuntime client(settings);

@@ -9,6 +9,7 @@
 #include "net.h"
 #include "protocol.h"
 #include "scheduler.h"
+#include "security.h"
 
 #include <rtwall/cluster.h>
 
@@ -133,6 +134,7 @@ struct Master::Impl {
     uint64_t session = 0;
 
     zmq::context_t ctx{1};
+    std::unique_ptr<ZapHandler> zap;  // before the router: it must answer the first handshake
     zmq::socket_t router{ctx, zmq::socket_type::router};
     zmq::socket_t wakeSend{ctx, zmq::socket_type::pair};
     zmq::socket_t wakeRecv{ctx, zmq::socket_type::pair};
@@ -555,6 +557,27 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
     const int64_t maxResult = int64_t(kHeaderSize + 64 + maxEncodedTileBytes(1024, 1024));
     configureSocket(s.router, maxResult, settings.heartbeatMs, settings.timeoutMs);
     s.router.set(zmq::sockopt::router_mandatory, 1);
+    checkZmqVersion();
+    if (!settings.keyFile.empty()) {
+        const KeyPair keys = readKeyPair(settings.keyFile);
+        std::vector<std::string> allowed;
+        for (const auto& f : settings.clientKeys) allowed.push_back(readPublicKey(f));
+        if (allowed.empty()) throw InputError(settings.keyFile.string() + ": a master key needs at least one client key");
+        s.zap = std::make_unique<ZapHandler>(s.ctx, allowed);
+        s.router.set(zmq::sockopt::zap_domain, "rtwall");
+        s.router.set(zmq::sockopt::curve_server, 1);
+        s.router.set(zmq::sockopt::curve_secretkey, keys.secretKey);
+    } else {
+        const std::string& b = settings.bind;
+        const bool loopback = b.starts_with("tcp://127.") || b.starts_with("tcp://localhost:") || b.starts_with("tcp://[::1]:") ||
+                              b.starts_with("inproc://") || b.starts_with("ipc://");
+        if (!loopback && !settings.insecure)
+            throw InputError("refusing to listen on " + b +
+                             " without CURVE keys: give the master a key and the clients' public keys, or say --insecure");
+        if (!loopback)
+            std::fprintf(stderr, "rtwall master: WARNING: listening on %s WITHOUT authentication or encryption "
+                                 "(--insecure): anyone who reaches this port can join and read the model\n", b.c_str());
+    }
     s.router.bind(settings.bind);
     s.boundEndpoint = s.router.get(zmq::sockopt::last_endpoint);
     const std::string wakeAddress = "inproc://rtwall-master-wake";
@@ -586,6 +609,8 @@ Master::~Master() {
     if (s.net.joinable()) s.net.join();
     for (auto& [peer, c] : s.clients) s.send(c, Goodbye{"the master is shutting down"});
     s.decoder.reset();
+    s.router.close();
+    s.zap.reset();
 }
 
 std::string Master::endpoint() const { return impl_->boundEndpoint; }
@@ -666,5 +691,6 @@ Image Master::renderFrame(FrameReport* report) {
 
 uint64_t Master::droppedMessages() const { return impl_->dropped.load(); }
 uint64_t Master::resyncs() const { return impl_->resyncCount.load(); }
+uint64_t Master::refusedConnections() const { return impl_->zap ? impl_->zap->denied() : 0; }
 
 }  // namespace rtwall

@@ -48,7 +48,7 @@ void addBenchCluster(CLI::App& bench, Run& run) {
     struct Options {
         int width = 1600, height = 1200, tile = 32, frames = 10, maxClients = 4;
         int64_t triangles = 200'000;
-        bool json = false, render = false;
+        bool json = false, render = false, insecure = false;
         std::string bind = "tcp://127.0.0.1:0", netns, link = "loopback";
     };
     auto o = std::make_shared<Options>();
@@ -63,6 +63,7 @@ void addBenchCluster(CLI::App& bench, Run& run) {
     cmd->add_option("--bind", o->bind, "Master endpoint (tools/netem.sh binds inside its namespaces)");
     cmd->add_option("--client-netns", o->netns, "Start client i in network namespace <prefix><i> (tools/netem.sh)");
     cmd->add_option("--link", o->link, "Description of the link, copied into the output");
+    cmd->add_flag("--insecure", o->insecure, "Allow a non-loopback --bind without CURVE keys (tools/netem.sh namespaces)");
     cmd->add_flag("--json", o->json, "Print JSON");
     cmd->callback([&run, o] {
         run = [o] {
@@ -103,6 +104,7 @@ void addBenchCluster(CLI::App& bench, Run& run) {
                 cs.codec.codec = p.codec;
                 cs.async = true;
                 cs.bind = o->bind;
+                cs.insecure = o->insecure;
                 Master master(desc, cs);
                 LocalClients clients(p.clients, master.endpoint(), 1, !o->render, o->netns);
                 if (!master.waitForClients(p.clients, 120'000)) throw InputError("local clients did not join");

@@ -2,6 +2,7 @@
 
 #include <rtwall/cluster.h>
 
+#include <cstdio>
 #include <memory>
 
 namespace rtwall::cli {
@@ -14,11 +15,26 @@ void addClient(CLI::App& app, Run& run) {
     cmd->add_option("--cache", o->cacheDir, "Directory for meshes received from the master (by content hash)");
     cmd->add_option("--exit-after-idle", o->exitAfterIdleMs, "Exit when no master answers for this many ms (0 = retry forever)")
         ->check(CLI::Range(0, 86'400'000));
+    cmd->add_option("--key", o->keyFile, "This client's CURVE key pair (rtwall keys): encrypt and authenticate");
+    cmd->add_option("--server-key", o->serverKeyFile, "The master's public key file; the client checks the master with it");
     cmd->add_flag("--replay", o->replay, "Benchmarks: render each tile once, then resend its bytes (measures master and link)");
     cmd->callback([&run, o] {
         run = [o] {
             if (!o->connect.starts_with("tcp://")) throw InputError("--connect '" + o->connect + "': expected tcp://HOST:PORT");
             return runClient(*o);
+        };
+    });
+}
+
+void addKeys(CLI::App& app, Run& run) {
+    auto stem = std::make_shared<std::string>();
+    CLI::App* cmd = app.add_subcommand("keys", "Make a CURVE key pair: STEM.key (secret, mode 0600) and STEM.pub");
+    cmd->add_option("stem", *stem, "Path without extension, e.g. keys/master")->required();
+    cmd->callback([&run, stem] {
+        run = [stem] {
+            writeNewKeyPair(*stem);
+            std::printf("wrote %s.key (keep it secret) and %s.pub\n", stem->c_str(), stem->c_str());
+            return 0;
         };
     });
 }

@@ -130,6 +130,17 @@ RunConfig readRunConfig(const std::filesystem::path& file, const toml::table& ro
         cs.timeoutMs = r.integer("timeout_ms", cs.timeoutMs, 50, 600000);
         cs.stragglerFactor = r.number("straggler_factor", cs.stragglerFactor, 1.0, 1000.0);
         if (cs.timeoutMs <= cs.heartbeatMs) r.fail(r.find("timeout_ms"), "timeout_ms must exceed heartbeat_ms");
+        const std::string key = r.string("key", "");
+        if (!key.empty()) cs.keyFile = file.parent_path() / key;
+        if (const toml::node* n = r.find("client_keys")) {
+            const toml::array* a = n->as_array();
+            if (!a) r.fail(n, "key 'client_keys': expected an array of public key files");
+            for (const toml::node& e : *a) {
+                if (!e.is_string()) r.fail(n, "key 'client_keys': expected strings");
+                cs.clientKeys.push_back(file.parent_path() / std::string(*e.value<std::string>()));
+            }
+        }
+        cs.insecure = r.boolean("insecure", cs.insecure);
         r.finish();
     }
     if (const toml::table* t = subTable(top, "run")) {
@@ -167,6 +178,7 @@ void addRun(CLI::App& app, Run& run) {
         std::string config;
         int frames = -1, clients = -1, writeEvery = -1;
         std::string out, bind, cameraPath;
+        bool insecure = false;
     };
     auto o = std::make_shared<Options>();
     CLI::App* cmd = app.add_subcommand("run", "Run the display master with local render clients (default: a built-in demo)");
@@ -176,6 +188,7 @@ void addRun(CLI::App& app, Run& run) {
     cmd->add_option("--write-every", o->writeEvery, "Write every Nth frame as PNG (0 = never)")->check(CLI::Range(0, 100'000'000));
     cmd->add_option("--out", o->out, "Directory for the PNG frames");
     cmd->add_option("--camera-path", o->cameraPath, "Camera path file (.toml keyframes, see configs/README.md)");
+    cmd->add_flag("--insecure", o->insecure, "Allow a non-loopback bind without CURVE keys (says so loudly)");
     cmd->add_option("--bind", o->bind, "Endpoint for clients, e.g. tcp://0.0.0.0:7700 (default: loopback, any port)");
     cmd->callback([&run, o] {
         run = [o] {
@@ -187,6 +200,7 @@ void addRun(CLI::App& app, Run& run) {
             if (!o->out.empty()) c.out = o->out;
             if (!o->bind.empty()) c.cluster.bind = o->bind;
             if (!o->cameraPath.empty()) c.cameraPath = o->cameraPath;
+            if (o->insecure) c.cluster.insecure = true;
 
             const std::filesystem::path scenePath(c.scene);
             SceneDesc desc = c.scene.starts_with("builtin:") ? builtinScene(c.scene.substr(8), 3'000'000)

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
     rtwall::cli::addInfo(app, run);
     rtwall::cli::addClient(app, run);
     rtwall::cli::addRun(app, run);
+    rtwall::cli::addKeys(app, run);
     CLI::App* bench = app.add_subcommand("bench", "Benchmarks that print their figures (JSON with --json)");
     bench->require_subcommand(1);
     rtwall::cli::addBenchKernel(*bench, run);

@@ -38,6 +38,11 @@ struct ClusterSettings {
     int timeoutMs = 3000;                     // a silent peer is dead after this
     double stragglerFactor = 4.0;             // re-issue tiles outstanding this many median tile times
     int dropEveryNthUpdate = 0;               // fault injection for tests: lose every Nth update message per client
+    // Security: with a key pair every link is CURVE-encrypted and only the listed client public
+    // keys get in. Without keys the master listens on loopback only, unless `insecure`.
+    std::filesystem::path keyFile;                  // the master's key pair (rtwall keys)
+    std::vector<std::filesystem::path> clientKeys;  // public key files of the clients allowed in
+    bool insecure = false;
 };
 
 struct ClientReport {
@@ -86,6 +91,7 @@ public:
 
     uint64_t droppedMessages() const;  // malformed, stale or unexpected messages dropped
     uint64_t resyncs() const;          // full states sent again after a client found a gap
+    uint64_t refusedConnections() const;  // CURVE clients whose key is not in the config
 
     struct Impl;
 
@@ -101,7 +107,12 @@ struct ClientSettings {
     int exitAfterIdleMs = 0;            // > 0: exit when no master answers for this long
     bool replay = false;                // benchmarks: render each tile once, then resend its bytes
     int extraTileDelayMs = 0;           // fault injection for tests: emulate a slower PC
+    std::filesystem::path keyFile;      // this client's key pair: CURVE on (needs serverKeyFile)
+    std::filesystem::path serverKeyFile;  // the master's public key: the client checks it
 };
+
+// Writes a new CURVE key pair to STEM.key (secret, mode 0600) and STEM.pub (public).
+void writeNewKeyPair(const std::filesystem::path& stem);
 
 // Runs a render client until the master says goodbye (or exitAfterIdleMs passes).
 // Returns the process exit status.

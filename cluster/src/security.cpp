@@ -1,0 +1,119 @@
+#include "security.h"
+
+#include <rtwall/mesh.h>
+#include <rtwall/toml_reader.h>
+
+#include <sys/stat.h>
+
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+
+namespace rtwall::cluster {
+
+namespace {
+
+std::string z85ToBinary(const std::string& z85) {
+    std::string bin(32, '\0');
+    if (z85.size() != 40 || !zmq_z85_decode(reinterpret_cast<uint8_t*>(bin.data()), z85.c_str())) return {};
+    return bin;
+}
+
+std::string keyFrom(const std::filesystem::path& file, const char* name) {
+    using namespace toml_reader;
+    const toml::table root = parseFile(file);
+    Reader r(file, root, "");
+    std::string key = r.string(name, "", true);
+    r.string(std::strcmp(name, "public") == 0 ? "secret" : "public", "");  // the other key may be there
+    r.finish();
+    if (z85ToBinary(key).empty())
+        throw InputError(file.string() + ": key '" + name + "' is not a 40-character Z85 CURVE key");
+    return key;
+}
+
+}  // namespace
+
+KeyPair makeKeyPair() {
+    char pub[41], sec[41];
+    if (zmq_curve_keypair(pub, sec) != 0) throw std::runtime_error("zmq_curve_keypair failed: libzmq without CURVE");
+    return {pub, sec};
+}
+
+void writeKeyFiles(const KeyPair& keys, const std::filesystem::path& stem) {
+    const std::filesystem::path secretFile = stem.string() + ".key", publicFile = stem.string() + ".pub";
+    {
+        // Created with mode 0600 before anything secret is written into it.
+        std::FILE* f = std::fopen(secretFile.c_str(), "w");
+        if (!f) throw InputError(secretFile.string() + ": cannot write");
+        chmod(secretFile.c_str(), 0600);
+        std::fprintf(f, "# rtwall CURVE key pair: keep this file secret\npublic = \"%s\"\nsecret = \"%s\"\n",
+                     keys.publicKey.c_str(), keys.secretKey.c_str());
+        std::fclose(f);
+    }
+    std::ofstream pub(publicFile);
+    if (!pub) throw InputError(publicFile.string() + ": cannot write");
+    pub << "# rtwall CURVE public key\npublic = \"" << keys.publicKey << "\"\n";
+}
+
+KeyPair readKeyPair(const std::filesystem::path& file) { return {keyFrom(file, "public"), keyFrom(file, "secret")}; }
+
+std::string readPublicKey(const std::filesystem::path& file) { return keyFrom(file, "public"); }
+
+void checkZmqVersion() {
+    int major, minor, patch;
+    zmq_version(&major, &minor, &patch);
+    if (major * 10000 + minor * 100 + patch < 40303)
+        throw InputError("libzmq " + std::to_string(major) + "." + std::to_string(minor) + "." + std::to_string(patch) +
+                         " is older than 4.3.3 and has known vulnerabilities; refusing to start");
+    if (!zmq_has("curve")) throw InputError("this libzmq was built without CURVE; refusing to start");
+}
+
+ZapHandler::ZapHandler(zmq::context_t& ctx, const std::vector<std::string>& allowedPublicKeysZ85)
+    : socket_(ctx, zmq::socket_type::rep) {
+    for (const std::string& k : allowedPublicKeysZ85) allowed_.insert(z85ToBinary(k));
+    socket_.set(zmq::sockopt::linger, 0);
+    socket_.bind("inproc://zeromq.zap.01");
+    thread_ = std::thread([this] { run(); });
+}
+
+ZapHandler::~ZapHandler() {
+    stop_ = true;
+    thread_.join();
+}
+
+void ZapHandler::run() {
+    zmq::pollitem_t items[] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}};
+    while (!stop_) {
+        zmq::poll(items, 1, std::chrono::milliseconds(50));
+        if (!(items[0].revents & ZMQ_POLLIN)) continue;
+        // version, request id, domain, address, routing id, mechanism, credentials...
+        std::vector<zmq::message_t> frames;
+        do {
+            zmq::message_t part;
+            if (!socket_.recv(part, zmq::recv_flags::none)) break;
+            const bool more = part.more();
+            frames.push_back(std::move(part));
+            if (!more) break;
+        } while (frames.size() < 16);
+        if (frames.size() < 6) continue;
+        const std::string address = frames[3].to_string(), mechanism = frames[5].to_string();
+        const std::string key = frames.size() > 6 ? frames[6].to_string() : std::string();
+        const bool ok = mechanism == "CURVE" && key.size() == 32 && allowed_.count(key);
+        if (!ok) {
+            ++denied_;
+            char z85[41] = "-";
+            if (key.size() == 32) zmq_z85_encode(z85, reinterpret_cast<const uint8_t*>(key.data()), 32);
+            std::fprintf(stderr, "rtwall master: refused a client from %s (mechanism %s, key %s): not in the config's client keys\n",
+                         address.c_str(), mechanism.c_str(), z85);
+        }
+        const std::string status = ok ? "200" : "400", text = ok ? "OK" : "unknown client key";
+        socket_.send(zmq::str_buffer("1.0"), zmq::send_flags::sndmore);
+        socket_.send(frames[1], zmq::send_flags::sndmore);
+        socket_.send(zmq::buffer(status), zmq::send_flags::sndmore);
+        socket_.send(zmq::buffer(text), zmq::send_flags::sndmore);
+        socket_.send(zmq::str_buffer(""), zmq::send_flags::sndmore);
+        socket_.send(zmq::str_buffer(""), zmq::send_flags::none);
+    }
+}
+
+}  // namespace rtwall::cluster
