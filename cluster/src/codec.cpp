@@ -240,3 +240,15 @@ const char* codecName(TileCodec codec) {
 }
 
 }  // namespace rtwall::cluster
+
+namespace rtwall {
+
+TileCodec tileCodecFromName(const std::string& name) {
+    for (TileCodec c : {TileCodec::Raw, TileCodec::Lz4, TileCodec::Zstd, TileCodec::Jpeg})
+        if (name == cluster::codecName(c)) return c;
+    throw InputError("unknown tile codec '" + name + "' (raw, lz4, zstd, jpeg)");
+}
+
+const char* tileCodecName(TileCodec codec) { return cluster::codecName(codec); }
+
+}  // namespace rtwall

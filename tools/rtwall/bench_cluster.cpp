@@ -28,15 +28,6 @@ struct Point {
     bool affinity;
 };
 
-const char* name(TileCodec c) {
-    switch (c) {
-    case TileCodec::Raw: return "raw";
-    case TileCodec::Lz4: return "lz4";
-    case TileCodec::Zstd: return "zstd";
-    default: return "jpeg";
-    }
-}
-
 double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());
     return v.empty() ? 0.0 : v[v.size() / 2];
@@ -131,7 +122,7 @@ void addBenchCluster(CLI::App& bench, Run& run) {
                 toml::table row{{"vary", p.vary},
                                 {"clients", p.clients},
                                 {"prefetch", p.prefetch},
-                                {"codec", name(p.codec)},
+                                {"codec", tileCodecName(p.codec)},
                                 {"affinity", p.affinity},
                                 {"fps", 1.0 / median(times)},
                                 {"bytes_per_frame", median(bytes)},
@@ -143,7 +134,7 @@ void addBenchCluster(CLI::App& bench, Run& run) {
                 if (!o->json) {
                     std::printf("%-9s clients %d prefetch %d %-4s affinity %-3s: %6.1f fps, %6.2f MB/frame, PSNR %5.1f dB, "
                                 "tile latency %6.2f ms, busy %.2f, %.1f stolen/frame, %.0f%% kept their client\n",
-                                p.vary.c_str(), p.clients, p.prefetch, name(p.codec), p.affinity ? "on" : "off",
+                                p.vary.c_str(), p.clients, p.prefetch, tileCodecName(p.codec), p.affinity ? "on" : "off",
                                 1.0 / median(times), median(bytes) * 1e-6, quality, median(latency) * 1e3, median(busy),
                                 double(stolen) / o->frames, 100.0 * double(hits) / tiles);
                     std::fflush(stdout);

@@ -23,13 +23,6 @@ bool isSceneFile(const std::filesystem::path& p) {
     return ext == ".toml";
 }
 
-TileCodec codecFromName(const std::string& name) {
-    if (name == "raw") return TileCodec::Raw;
-    if (name == "zstd") return TileCodec::Zstd;
-    if (name == "jpeg") return TileCodec::Jpeg;
-    return TileCodec::Lz4;
-}
-
 TileRect parseRegion(const std::string& text, const RenderSettings& s) {
     TileRect r;
     if (std::sscanf(text.c_str(), "%d,%d,%d,%d", &r.x0, &r.y0, &r.x1, &r.y1) != 4 || r.x0 < 0 || r.y0 < 0 ||
@@ -47,7 +40,7 @@ Image renderWithClients(SceneDesc desc, const CameraDesc& camera, const RenderOp
     cs.threadsPerClient = desc.settings.threads > 0 ? std::max(1, desc.settings.threads / o.clients) : 1;
     cs.prefetch = o.prefetch;
     cs.async = false;
-    cs.codec.codec = codecFromName(o.codec);
+    cs.codec.codec = tileCodecFromName(o.codec);
     Master master(desc, cs);
     LocalClients clients(o.clients, master.endpoint(), cs.threadsPerClient);
     if (!master.waitForClients(o.clients, 60'000))

@@ -92,13 +92,6 @@ write_every = 30
 orbit = 1.0
 )";
 
-TileCodec codecFromName(const std::string& name) {
-    if (name == "raw") return TileCodec::Raw;
-    if (name == "zstd") return TileCodec::Zstd;
-    if (name == "jpeg") return TileCodec::Jpeg;
-    return TileCodec::Lz4;
-}
-
 RunConfig readRunConfig(const std::filesystem::path& file, const toml::table& root) {
     using namespace toml_reader;
     RunConfig c;
@@ -122,7 +115,7 @@ RunConfig readRunConfig(const std::filesystem::path& file, const toml::table& ro
         cs.prefetch = r.integer("prefetch", cs.prefetch, 1, 64);
         cs.affinity = r.boolean("affinity", cs.affinity);
         cs.async = r.boolean("async", cs.async);
-        cs.codec.codec = codecFromName(r.choice("codec", "lz4", {"raw", "lz4", "zstd", "jpeg"}));
+        cs.codec.codec = tileCodecFromName(r.choice("codec", "lz4", {"raw", "lz4", "zstd", "jpeg"}));
         cs.codec.jpegQuality = r.integer("jpeg_quality", cs.codec.jpegQuality, 1, 100);
         cs.codec.jpegSubsample = r.boolean("jpeg_subsample", cs.codec.jpegSubsample);
         cs.codec.zstdLevel = r.integer("zstd_level", cs.codec.zstdLevel, 1, 19);
@@ -219,10 +212,7 @@ void addRun(CLI::App& app, Run& run) {
             Master master(desc, c.cluster);
             std::printf("rtwall master at %s, %dx%d, %d local clients, codec %s%s\n", master.endpoint().c_str(),
                         desc.settings.width, desc.settings.height, c.cluster.localClients,
-                        c.cluster.codec.codec == TileCodec::Raw    ? "raw"
-                        : c.cluster.codec.codec == TileCodec::Zstd ? "zstd"
-                        : c.cluster.codec.codec == TileCodec::Jpeg ? "jpeg"
-                                                                    : "lz4",
+                        tileCodecName(c.cluster.codec.codec),
                         c.cluster.async ? ", asynchronous" : "");
             std::fflush(stdout);
             LocalClients clients(c.cluster.localClients, master.endpoint(), std::max(1, c.cluster.threadsPerClient));

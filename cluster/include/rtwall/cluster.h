@@ -19,6 +19,10 @@ namespace rtwall {
 
 enum class TileCodec : uint8_t { Raw = 0, Lz4 = 1, Zstd = 2, Jpeg = 3 };
 
+// "raw", "lz4", "zstd", "jpeg" and back; an unknown name is an InputError.
+TileCodec tileCodecFromName(const std::string& name);
+const char* tileCodecName(TileCodec codec);
+
 struct CodecSettings {
     TileCodec codec = TileCodec::Lz4;
     int jpegQuality = 90;         // 1..100
