@@ -675,7 +675,15 @@ Image Master::renderFrame(FrameReport* report) {
     };
     auto wait = [&](uint32_t frame) {
         std::unique_lock lock(s.m);
-        s.cv.wait(lock, [&] { return s.completedFrame >= frame; });
+        // Never a silent hang: with no render client at all for a while, the frame cannot end.
+        const auto patience = std::chrono::milliseconds(std::max(5000, 2 * s.settings.timeoutMs));
+        auto lastSeenClients = std::chrono::steady_clock::now();
+        while (!s.cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return s.completedFrame >= frame; })) {
+            const auto now = std::chrono::steady_clock::now();
+            if (s.readyClients > 0) lastSeenClients = now;
+            else if (now - lastSeenClients > patience)
+                throw std::runtime_error("frame " + std::to_string(frame) + " cannot finish: no render client is connected");
+        }
         s.inFlight = false;
         if (report) *report = s.completedReport;
         return std::move(s.completedImage);

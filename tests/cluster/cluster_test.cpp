@@ -278,6 +278,17 @@ TEST(Cluster, LateJoinerGetsTheCurrentStateFirst) {
     }
 }
 
+TEST(Cluster, AFrameWithoutAnyClientFailsInsteadOfHanging) {
+    SceneDesc desc = demoScene(32, 24);
+    ClusterSettings cs;
+    cs.async = false;
+    cs.timeoutMs = 500;
+    Master master(desc, cs);
+    const auto t0 = std::chrono::steady_clock::now();
+    EXPECT_THROW(master.renderFrame(), std::runtime_error);
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(30));
+}
+
 // Meshes travel by content hash: a client that cannot read the master's file (or reads a
 // different file under that name) gets the bytes from the master, checks their hash and keeps
 // them in its cache directory; a local file with the wrong content is never trusted.
