@@ -13,6 +13,7 @@
 #include <sys/wait.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <future>
 #include <thread>
 
@@ -25,10 +26,16 @@ using Clock = std::chrono::steady_clock;
 
 struct Process {
     pid_t pid = -1;
-    explicit Process(const std::string& endpoint) {
-        const char* argv[] = {RTWALL_EXE, "client", "--connect", endpoint.c_str(), "--threads", "1",
-                              "--exit-after-idle", "8000", nullptr};
-        EXPECT_EQ(posix_spawn(&pid, RTWALL_EXE, nullptr, nullptr, const_cast<char**>(argv), environ), 0);
+    // A client process; with a namespace, inside it (`ip netns exec NS rtwall client ...`).
+    explicit Process(const std::string& endpoint, const std::string& netns = {}) {
+        std::vector<std::string> args = {RTWALL_EXE, "client", "--connect", endpoint, "--threads", "1",
+                                         "--exit-after-idle", "8000"};
+        if (!netns.empty()) args.insert(args.begin(), {"ip", "netns", "exec", netns});
+        std::vector<char*> argv;
+        for (auto& a : args) argv.push_back(a.data());
+        argv.push_back(nullptr);
+        const char* program = netns.empty() ? RTWALL_EXE : "/usr/sbin/ip";
+        EXPECT_EQ(posix_spawn(&pid, program, nullptr, nullptr, argv.data(), environ), 0);
     }
     ~Process() {
         if (pid <= 0) return;
@@ -110,6 +117,50 @@ TEST(Faults, FrozenClientMidFrameThenWakesUp) {
     FrameReport r;
     EXPECT_EQ(master.renderFrame(&r).rgb, expected.rgb);
     EXPECT_EQ(r.clients.size(), 2u);
+}
+
+// A namespace with one end of a veth pair: taking the link down cuts the client off without a
+// FIN or RST, the case only heartbeats can detect. Needs root (CI runs as root); skipped
+// otherwise. Addresses are this test's own, inside its own namespace.
+class CutLink : public ::testing::Test {
+protected:
+    static constexpr const char* kNs = "rtwt-cut";
+    void SetUp() override {
+        std::system("ip netns del rtwt-cut 2>/dev/null");
+        if (std::system("ip netns add rtwt-cut 2>/dev/null") != 0) GTEST_SKIP() << "cannot create network namespaces here";
+        ready_ = std::system("ip link add rtwt-h type veth peer name rtwt-n netns rtwt-cut && "
+                             "ip addr add 10.198.7.1/24 dev rtwt-h && ip link set rtwt-h up && "
+                             "ip -n rtwt-cut addr add 10.198.7.2/24 dev rtwt-n && ip -n rtwt-cut link set rtwt-n up && "
+                             "ip -n rtwt-cut link set lo up") == 0;
+        if (!ready_) GTEST_SKIP() << "cannot create a veth pair here";
+    }
+    void TearDown() override {
+        std::system("ip link del rtwt-h 2>/dev/null");
+        std::system("ip netns del rtwt-cut 2>/dev/null");
+    }
+    bool ready_ = false;
+};
+
+TEST_F(CutLink, ClientBehindACutCableMidFrame) {
+    const SceneDesc desc = slowScene();
+    const Image expected = singleMachine(desc);
+    ClusterSettings cs = faultSettings();
+    cs.bind = "tcp://10.198.7.1:0";
+    cs.insecure = true;  // the test's own namespace and veth; nothing else is reachable
+    Master master(desc, cs);
+    Process local(master.endpoint()), remote(master.endpoint(), kNs);
+    ASSERT_TRUE(master.waitForClients(2, 30000));
+    master.renderFrame();
+
+    auto frame = std::async(std::launch::async, [&] { return master.renderFrame(); });
+    std::this_thread::sleep_for(std::chrono::milliseconds(60));
+    const auto cutAt = Clock::now();
+    ASSERT_EQ(std::system("ip -n rtwt-cut link set rtwt-n down"), 0);
+    ASSERT_TRUE(waitUntil([&] { return master.connectedClients() == 1; }, 5000));
+    const double detection = std::chrono::duration<double>(Clock::now() - cutAt).count();
+    EXPECT_EQ(frame.get().rgb, expected.rgb) << "the frame completes, bit-identical";
+    EXPECT_GE(detection, 0.2) << "no FIN: only the heartbeat timeout can have noticed";
+    EXPECT_LT(detection, 0.4 * 3) << "within the heartbeat timeout (plus scheduling slack)";
 }
 
 }  // namespace
