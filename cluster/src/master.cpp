@@ -55,8 +55,9 @@ public:
         TileView view;
     };
 
-    DecodePool(FrameAssembler& assembler, int threads, std::function<void()> onComplete)
-        : assembler_(assembler), onComplete_(std::move(onComplete)) {
+    DecodePool(FrameAssembler& assembler, int threads, std::function<void()> onComplete,
+               std::function<void(uint32_t)> onFailure)
+        : assembler_(assembler), onComplete_(std::move(onComplete)), onFailure_(std::move(onFailure)) {
         for (int i = 0; i < threads; ++i) workers_.emplace_back([this] { run(); });
     }
     ~DecodePool() {
@@ -93,16 +94,18 @@ private:
                 assembler_.commit(job.tile);
                 if (assembler_.complete()) onComplete_();
             } catch (const std::exception&) {
-                // A result that does not decode is dropped; the tile becomes claimable again
-                // and the scheduler's straggler logic has it rendered once more.
+                // A result that does not decode is dropped: the tile becomes claimable again
+                // and the network thread reopens it in the scheduler, so someone renders it.
                 assembler_.release(job.tile);
                 ++failures_;
+                onFailure_(job.tile);
             }
         }
     }
 
     FrameAssembler& assembler_;
     std::function<void()> onComplete_;
+    std::function<void(uint32_t)> onFailure_;
     std::mutex m_;
     std::condition_variable cv_;
     std::deque<Job> jobs_;
@@ -163,6 +166,8 @@ struct Master::Impl {
     double frameStart = 0;
     uint64_t frameBytes = 0;
     std::atomic<bool> frameDecoded{false};
+    std::mutex failedMutex;
+    std::vector<uint32_t> failedTiles;  // accepted results of the current frame that did not decode
     std::atomic<uint64_t> dropped{0};
     std::atomic<uint64_t> resyncCount{0};
 
@@ -467,6 +472,18 @@ struct Master::Impl {
         }
     }
 
+    void reopenFailedTiles() {
+        std::vector<uint32_t> failed;
+        {
+            std::lock_guard lock(failedMutex);
+            failed.swap(failedTiles);
+        }
+        if (failed.empty()) return;
+        dropped += failed.size();
+        for (uint32_t t : failed) scheduler.reopen(currentFrame, t);
+        serveAll();
+    }
+
     void runCommands() {
         std::deque<Command> todo;
         {
@@ -512,6 +529,7 @@ struct Master::Impl {
                         if (c.kind == Command::kStop) return;
                 }
                 runCommands();
+                reopenFailedTiles();
             }
             // Drain what is queued, bounded so commands and timers are not starved.
             for (int i = 0; i < 256 && (items[0].revents & ZMQ_POLLIN); ++i) {
@@ -585,10 +603,19 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
     s.wakeSend.connect(wakeAddress);
 
     const int decodeThreads = std::clamp(int(std::thread::hardware_concurrency()) / 2, 1, 4);
-    s.decoder = std::make_unique<DecodePool>(s.assembler, decodeThreads, [this] {
-        impl_->frameDecoded = true;
-        impl_->wake();
-    });
+    s.decoder = std::make_unique<DecodePool>(
+        s.assembler, decodeThreads,
+        [this] {
+            impl_->frameDecoded = true;
+            impl_->wake();
+        },
+        [this](uint32_t tile) {
+            {
+                std::lock_guard lock(impl_->failedMutex);
+                impl_->failedTiles.push_back(tile);
+            }
+            impl_->wake();
+        });
     s.net = std::thread([this] {
         try {
             impl_->loop();

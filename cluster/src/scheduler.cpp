@@ -58,6 +58,20 @@ size_t TileScheduler::removeClient(ClientId client) {
     return returned;
 }
 
+bool TileScheduler::reopen(uint32_t frame, uint32_t tile) {
+    if (frame != frame_ || tile >= tileCount_ || !done_[tile]) return false;
+    done_[tile] = 0;
+    --doneCount_;
+    if (stats_.completed > 0) --stats_.completed;
+    if (owner_[tile] != kNobody) {
+        auto by = stats_.completedBy.find(owner_[tile]);
+        if (by != stats_.completedBy.end() && by->second > 0) --by->second;
+    }
+    owner_[tile] = kNobody;
+    shared_.insert(tile);
+    return true;
+}
+
 void TileScheduler::beginFrame(uint32_t frame, uint32_t tileCount) {
     // Last frame's owners only mean something for the same tiling. They are kept with affinity
     // off too, so affinityHits shows the hit rate that affinity would have improved on.

@@ -68,6 +68,10 @@ public:
     // A tile's pixels arrived. Only Accepted results may be written to the frame.
     Result complete(ClientId client, uint32_t frame, uint32_t tile, double now);
 
+    // An accepted result turned out unusable (its pixels did not decode): the tile is open
+    // again and goes to the shared queue. False if it was not done or belongs to another frame.
+    bool reopen(uint32_t frame, uint32_t tile);
+
     bool frameComplete() const;
     uint32_t frame() const { return frame_; }
     uint32_t tileCount() const { return tileCount_; }

@@ -315,6 +315,68 @@ TEST(Cluster, MeshesTravelByContentHash) {
     EXPECT_EQ(differingBytes(again.master->renderFrame(), singleMachine(desc)), 0u);
 }
 
+// A client that answers its tiles with bytes that do not decode: the results are dropped, the
+// tiles reopened and rendered by the honest client; the frame still completes, bit-identical.
+TEST(Cluster, UndecodableResultsAreReRendered) {
+    using namespace cluster;
+    SceneDesc desc = demoScene(96, 72);
+    desc.settings.tileSize = 8;
+    desc.settings.supersample = 4;
+    ClusterSettings cs;
+    cs.async = false;
+    LocalCluster cluster(desc, cs, 1);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(1, 30000));
+
+    zmq::context_t ctx;
+    zmq::socket_t rogue(ctx, zmq::socket_type::dealer);
+    rogue.set(zmq::sockopt::linger, 0);
+    rogue.set(zmq::sockopt::rcvtimeo, 5000);
+    rogue.connect(master.endpoint());
+    Header h;
+    h.type = MsgType::Hello;
+    rogue.send(zmq::buffer(encodeMessage(h, Hello{kProtocolVersion, 1, "liar"})));
+    std::thread frame;
+    Image img;
+    int lies = 0;
+    for (int i = 0; i < 200 && lies == 0; ++i) {
+        zmq::message_t msg;
+        if (!rogue.recv(msg)) break;
+        const auto* p = static_cast<const uint8_t*>(msg.data());
+        const Header in = decodeHeader(p, msg.size());
+        Header out;
+        out.session = in.session;
+        if (in.type == MsgType::SceneSnapshot) {
+            const auto snap = decodePayload<SceneSnapshot>(p + kHeaderSize, msg.size() - kHeaderSize);
+            out.type = MsgType::Ready;
+            rogue.send(zmq::buffer(encodeMessage(out, Ready{snap.updateSeq, stateHash(snap)})));
+            frame = std::thread([&] { img = master.renderFrame(); });
+        } else if (in.type == MsgType::FrameBegin) {
+            const auto fb = decodePayload<FrameBegin>(p + kHeaderSize, msg.size() - kHeaderSize);
+            out.type = MsgType::TileRequest;
+            out.frame = fb.frame;
+            rogue.send(zmq::buffer(encodeMessage(out, TileRequest{fb.frame, 4})));
+        } else if (in.type == MsgType::TileAssign) {
+            const auto a = decodePayload<TileAssign>(p + kHeaderSize, msg.size() - kHeaderSize);
+            for (uint32_t t : a.tiles) {
+                TileResult r;
+                r.frame = a.frame;
+                r.tile = t;
+                r.codec = TileCodec::Lz4;
+                r.pixels.assign(40, 0x7F);  // not an LZ4 block of an 8x8 tile
+                out.type = MsgType::TileResult;
+                out.frame = a.frame;
+                rogue.send(zmq::buffer(encodeMessage(out, r)));
+                ++lies;
+            }
+        }
+    }
+    ASSERT_GT(lies, 0);
+    frame.join();
+    EXPECT_EQ(differingBytes(img, singleMachine(desc)), 0u);
+    EXPECT_GE(master.droppedMessages(), uint64_t(lies));
+}
+
 // A client that completes the handshake, takes tiles and then goes silent (a PC that froze
 // or lost its cable): the master must notice within its timeout, put the tiles back, and the
 // frame must still be bit-identical.

@@ -89,6 +89,28 @@ TEST(Scheduler, SingleClientGetsAllTilesInImageOrderNAtATime) {
     EXPECT_EQ(s.stats().reissued, 0u);
 }
 
+TEST(Scheduler, ReopenedTileIsHandedOutAgain) {
+    // An accepted result whose pixels did not decode: the tile must be rendered again.
+    TileScheduler s;
+    s.addClient(1);
+    s.addClient(2);
+    s.beginFrame(1, 2);
+    const auto a = s.request(1, 2, 0.0);
+    ASSERT_EQ(a.size(), 2u);
+    EXPECT_EQ(s.complete(1, 1, a[0], 0.1), Result::Accepted);
+    EXPECT_EQ(s.complete(1, 1, a[1], 0.1), Result::Accepted);
+    EXPECT_TRUE(s.frameComplete());
+    EXPECT_FALSE(s.reopen(2, a[0])) << "another frame";
+    EXPECT_TRUE(s.reopen(1, a[0]));
+    EXPECT_FALSE(s.reopen(1, a[0])) << "already open";
+    EXPECT_FALSE(s.frameComplete());
+    EXPECT_EQ(s.remaining(), 1u);
+    const auto again = s.request(2, 4, 0.2);
+    ASSERT_EQ(again, std::vector<uint32_t>{a[0]});
+    EXPECT_EQ(s.complete(2, 1, a[0], 0.3), Result::Accepted);
+    EXPECT_TRUE(s.frameComplete());
+}
+
 TEST(Scheduler, CountZeroAndEmptyFrameGiveNothing) {
     TileScheduler s;
     s.addClient(1);
