@@ -140,16 +140,20 @@ private:
             }
             const double now = nowSeconds();
             if (session_.load() && now - lastSent_ > heartbeatMs_ * 1e-3) send(Heartbeat{});
-            if (now - lastHeard_ > timeoutMs() * 1e-3) {
-                // The master went silent: start over with a fresh connection after a jittered
-                // pause, so that many clients do not reconnect in lock-step.
+            if (reconnectRequested_ || now - lastHeard_ > timeoutMs() * 1e-3) {
+                // The master went silent or away: start over with a fresh connection after an
+                // exponentially growing, jittered pause, so that a restarted master is not hit by
+                // every client in the same millisecond.
                 if (settings_.exitAfterIdleMs > 0 && now - idleSince > settings_.exitAfterIdleMs * 1e-3) {
                     std::fprintf(stderr, "rtwall client: no master at %s for %d ms, giving up\n",
                                  settings_.connect.c_str(), settings_.exitAfterIdleMs);
                     return 1;
                 }
+                reconnectRequested_ = false;
                 dropWork();
-                std::this_thread::sleep_for(std::chrono::milliseconds(std::uniform_int_distribution<int>(50, 250)(jitter)));
+                const int pause = std::uniform_int_distribution<int>(backoffMs_ / 2, backoffMs_)(jitter);
+                backoffMs_ = std::min(std::max(100, settings_.maxReconnectMs), backoffMs_ * 2);
+                std::this_thread::sleep_for(std::chrono::milliseconds(pause));
                 connect();
             }
         }
@@ -171,6 +175,7 @@ private:
                 const Welcome w = decodePayload<Welcome>(p, n);
                 session_ = h.session;
                 id_ = w.clientId;
+                backoffMs_ = 100;
                 codec_ = w.codec;
                 prefetch_ = std::max(1u, w.prefetch);
                 heartbeatMs_ = int(std::max(10u, w.heartbeatMs));
@@ -192,7 +197,9 @@ private:
             case MsgType::Goodbye: {
                 const Goodbye bye = decodePayload<Goodbye>(p, n);
                 std::fprintf(stderr, "rtwall client %u: the master says goodbye: %s\n", id_, bye.reason.c_str());
-                return 0;
+                if (settings_.exitAfterIdleMs > 0) return 0;
+                reconnectRequested_ = true;  // a master that restarts finds this client waiting
+                break;
             }
             default: ++dropped_; break;
             }
@@ -431,6 +438,8 @@ private:
     uint32_t prefetch_ = 4;
     int heartbeatMs_ = 250;
     double lastHeard_ = 0, lastSent_ = 0;
+    bool reconnectRequested_ = false;
+    int backoffMs_ = 100;  // next reconnection pause (jittered), doubled up to maxReconnectMs
     uint64_t dropped_ = 0;
     std::string failure_;  // guarded by workMutex_
 

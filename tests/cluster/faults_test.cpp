@@ -27,9 +27,9 @@ using Clock = std::chrono::steady_clock;
 struct Process {
     pid_t pid = -1;
     // A client process; with a namespace, inside it (`ip netns exec NS rtwall client ...`).
-    explicit Process(const std::string& endpoint, const std::string& netns = {}) {
+    explicit Process(const std::string& endpoint, const std::string& netns = {}, int exitAfterIdleMs = 8000) {
         std::vector<std::string> args = {RTWALL_EXE, "client", "--connect", endpoint, "--threads", "1",
-                                         "--exit-after-idle", "8000"};
+                                         "--exit-after-idle", std::to_string(exitAfterIdleMs)};
         if (!netns.empty()) args.insert(args.begin(), {"ip", "netns", "exec", netns});
         std::vector<char*> argv;
         for (auto& a : args) argv.push_back(a.data());
@@ -117,6 +117,27 @@ TEST(Faults, FrozenClientMidFrameThenWakesUp) {
     FrameReport r;
     EXPECT_EQ(master.renderFrame(&r).rgb, expected.rgb);
     EXPECT_EQ(r.clients.size(), 2u);
+}
+
+// The master goes away (goodbye) and a new one starts on the same port: a client that waits
+// for a master forever reconnects with back-off and jitter and renders for the new one.
+TEST(Faults, MasterRestart) {
+    const SceneDesc desc = slowScene();
+    const Image expected = singleMachine(desc);
+    auto first = std::make_unique<Master>(desc, faultSettings());
+    const std::string endpoint = first->endpoint();
+    Process client(endpoint, {}, 0);
+    ASSERT_TRUE(first->waitForClients(1, 30000));
+    EXPECT_EQ(first->renderFrame().rgb, expected.rgb);
+    first.reset();
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    ClusterSettings cs = faultSettings();
+    cs.bind = endpoint;
+    Master second(desc, cs);
+    const auto t0 = Clock::now();
+    ASSERT_TRUE(second.waitForClients(1, 15000)) << "the client came back";
+    EXPECT_LT(Clock::now() - t0, std::chrono::seconds(10));
+    EXPECT_EQ(second.renderFrame().rgb, expected.rgb);
 }
 
 // A namespace with one end of a veth pair: taking the link down cuts the client off without a

@@ -13,7 +13,7 @@ void addClient(CLI::App& app, Run& run) {
     cmd->add_option("--connect", o->connect, "The master's endpoint, tcp://HOST:PORT")->required();
     cmd->add_option("--threads", o->threads, "Render threads (0 = one per hardware thread)")->check(CLI::Range(0, 1024));
     cmd->add_option("--cache", o->cacheDir, "Directory for meshes received from the master (by content hash)");
-    cmd->add_option("--exit-after-idle", o->exitAfterIdleMs, "Exit when no master answers for this many ms (0 = retry forever)")
+    cmd->add_option("--exit-after-idle", o->exitAfterIdleMs, "Exit when the master says goodbye or none answers for this many ms (0 = wait for a master forever)")
         ->check(CLI::Range(0, 86'400'000));
     cmd->add_option("--key", o->keyFile, "This client's CURVE key pair (rtwall keys): encrypt and authenticate");
     cmd->add_option("--server-key", o->serverKeyFile, "The master's public key file; the client checks the master with it");
