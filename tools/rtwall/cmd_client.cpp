@@ -15,6 +15,8 @@ void addClient(CLI::App& app, Run& run) {
     cmd->add_option("--cache", o->cacheDir, "Directory for meshes received from the master (by content hash)");
     cmd->add_option("--exit-after-idle", o->exitAfterIdleMs, "Exit when the master says goodbye or none answers for this many ms (0 = wait for a master forever)")
         ->check(CLI::Range(0, 86'400'000));
+    cmd->add_option("--max-reconnect", o->maxReconnectMs, "Longest pause between reconnection attempts, in ms (jittered, doubling from 100)")
+        ->check(CLI::Range(100, 3'600'000));
     cmd->add_option("--key", o->keyFile, "This client's CURVE key pair (rtwall keys): encrypt and authenticate");
     cmd->add_option("--server-key", o->serverKeyFile, "The master's public key file; the client checks the master with it");
     cmd->add_flag("--replay", o->replay, "Benchmarks: render each tile once, then resend its bytes (measures master and link)");
