@@ -3,7 +3,11 @@
 // after their idle limit.
 #include "test_util.h"
 
+#include "protocol.h"
+
 #include <rtwall/cluster.h>
+
+#include <zmq.hpp>
 
 #include <gtest/gtest.h>
 
@@ -115,6 +119,84 @@ TEST(Security, KeyFilesAreCheckedAndPrivate) {
     const std::string msg = test::inputErrorOf([&] { Master m(smallScene(), cs); });
     EXPECT_NE(msg.find("bad.key"), std::string::npos) << msg;
     EXPECT_NE(msg.find("Z85"), std::string::npos) << msg;
+}
+
+}  // namespace
+}  // namespace rtwall
+
+namespace rtwall {
+namespace {
+
+// Truncated, mislabelled, wrong-version, oversized and replayed messages from a peer that
+// speaks ZeroMQ but lies: none of them changes a frame, each is dropped (and counted), and the
+// master goes on serving.
+TEST(Attack, MalformedMessagesReachNothing) {
+    using namespace cluster;
+    const SceneDesc desc = smallScene();
+    const Image expected = singleMachine(desc);
+    ClusterSettings cs;
+    cs.async = false;
+    auto master = std::make_unique<Master>(desc, cs);
+    auto honest = startClient(master->endpoint(), {}, {}, 4000);
+    ASSERT_TRUE(master->waitForClients(1, 30000));
+    EXPECT_EQ(master->renderFrame().rgb, expected.rgb);
+
+    zmq::context_t ctx;
+    zmq::socket_t rogue(ctx, zmq::socket_type::dealer);
+    rogue.set(zmq::sockopt::linger, 0);
+    rogue.set(zmq::sockopt::rcvtimeo, 3000);
+    rogue.connect(master->endpoint());
+    const uint64_t dropped0 = master->droppedMessages();
+
+    // A truncated Hello: the header's length says more than the frame holds.
+    Header h;
+    h.type = MsgType::Hello;
+    std::vector<uint8_t> hello = encodeMessage(h, Hello{kProtocolVersion, 1, "rogue"});
+    rogue.send(zmq::buffer(hello.data(), hello.size() - 3));
+    // Bytes that are not a message at all, and a header with a type out of range.
+    rogue.send(zmq::str_buffer("hello, master"));
+    std::vector<uint8_t> badType = hello;
+    badType[6] = 99;
+    rogue.send(zmq::buffer(badType));
+    // A result before any handshake, with a made-up session.
+    Header forged;
+    forged.type = MsgType::TileResult;
+    forged.session = 0x1234;
+    forged.frame = 2;
+    TileResult fake;
+    fake.frame = 2;
+    fake.tile = 0;
+    fake.codec = TileCodec::Raw;
+    fake.pixels.assign(size_t(desc.settings.tileSize) * desc.settings.tileSize * 3, 255);
+    rogue.send(zmq::buffer(encodeMessage(forged, fake)));
+
+    // Another protocol version: refused with a goodbye that names both versions.
+    Header future;
+    future.type = MsgType::Hello;
+    future.version = kProtocolVersion + 1;
+    rogue.send(zmq::buffer(encodeMessage(future, Hello{uint16_t(kProtocolVersion + 1), 1, "future"})));
+    bool namedBoth = false;
+    for (int i = 0; i < 20 && !namedBoth; ++i) {
+        zmq::message_t msg;
+        if (!rogue.recv(msg)) break;
+        const auto* p = static_cast<const uint8_t*>(msg.data());
+        const Header in = decodeHeader(p, msg.size());
+        if (in.type != MsgType::Goodbye) continue;
+        const Goodbye bye = decodePayload<Goodbye>(p + kHeaderSize, msg.size() - kHeaderSize);
+        namedBoth = bye.reason.find(std::to_string(kProtocolVersion + 1)) != std::string::npos &&
+                    bye.reason.find(std::to_string(kProtocolVersion)) != std::string::npos;
+    }
+    EXPECT_TRUE(namedBoth);
+
+    // A message larger than ZMQ_MAXMSGSIZE: the transport drops the connection, not the master.
+    std::vector<uint8_t> huge(16 << 20, 0xAB);
+    rogue.send(zmq::buffer(huge), zmq::send_flags::dontwait);
+
+    for (int f = 0; f < 3; ++f) EXPECT_EQ(master->renderFrame().rgb, expected.rgb) << "frame " << f;
+    EXPECT_GE(master->droppedMessages(), dropped0 + 4) << "truncated, garbage, bad type and forged: all counted";
+    EXPECT_EQ(master->connectedClients(), 1);
+    master.reset();
+    EXPECT_EQ(honest.get(), 0);
 }
 
 }  // namespace
