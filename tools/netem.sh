@@ -6,6 +6,7 @@
 #
 #   tools/netem.sh up N [MASTER_RATE] [CLIENT_RATE]   e.g. up 4 1gbit 100mbit (default 1gbit 1gbit)
 #   tools/netem.sh bench N [MASTER_RATE] [CLIENT_RATE] [-- rtwall bench cluster arguments]
+#   tools/netem.sh faults N [MASTER_RATE] [CLIENT_RATE] [-- rtwall bench faults arguments]
 #   tools/netem.sh down
 #
 # Shaping uses tc's token-bucket filter (tbf) on the switch's ports, i.e. on what each machine
@@ -49,7 +50,8 @@ down() {
 case "${1:-}" in
   up) shift; up "$@" ;;
   down) down ;;
-  bench)
+  bench|faults)
+    what=$1
     shift
     n=$1; shift
     mrate=1gbit crate=1gbit
@@ -58,9 +60,14 @@ case "${1:-}" in
     [ "${1:-}" = "--" ] && shift
     up "$n" "$mrate" "$crate"
     trap down EXIT
-    # --insecure: these namespaces are the script's own and reach nothing else.
-    ip netns exec rtw-m "$RTWALL" bench cluster --bind tcp://10.199.0.1:7700 --client-netns rtw-c --insecure \
-      --max-clients "$n" --link "master $mrate, clients $crate" "$@"
+    if [ "$what" = bench ]; then
+      # --insecure: these namespaces are the script's own and reach nothing else.
+      ip netns exec rtw-m "$RTWALL" bench cluster --bind tcp://10.199.0.1:7700 --client-netns rtw-c --insecure \
+        --max-clients "$n" --link "master $mrate, clients $crate" "$@"
+    else
+      ip netns exec rtw-m "$RTWALL" bench faults --bind tcp://10.199.0.1:7700 --client-netns rtw-c \
+        --link "master $mrate, clients $crate" "$@"
+    fi
     ;;
-  *) echo "usage: tools/netem.sh up N [MASTER_RATE] [CLIENT_RATE] | bench N [RATES] [-- ARGS] | down" >&2; exit 2 ;;
+  *) echo "usage: tools/netem.sh up N [MASTER_RATE] [CLIENT_RATE] | bench|faults N [RATES] [-- ARGS] | down" >&2; exit 2 ;;
 esac

@@ -17,5 +17,6 @@ void addRun(CLI::App& app, Run& run);
 void addKeys(CLI::App& app, Run& run);
 void addBenchKernel(CLI::App& bench, Run& run);
 void addBenchCluster(CLI::App& bench, Run& run);
+void addBenchFaults(CLI::App& bench, Run& run);
 
 }  // namespace rtwall::cli

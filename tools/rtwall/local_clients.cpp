@@ -18,13 +18,14 @@ extern char** environ;
 namespace rtwall::cli {
 
 LocalClients::LocalClients(int count, const std::string& endpoint, int threadsEach, bool replay,
-                           const std::string& netnsPrefix) {
+                           const std::string& netnsPrefix, const std::vector<std::string>& extraArgs) {
     const std::string threads = std::to_string(threadsEach);
     for (int i = 0; i < count; ++i) {
         // The same executable, so client and master always speak the same protocol version.
         // A client whose master has gone gives up after a few seconds on its own as well.
         std::vector<std::string> args = {"client", "--connect", endpoint, "--threads", threads, "--exit-after-idle", "5000"};
         if (replay) args.push_back("--replay");
+        args.insert(args.end(), extraArgs.begin(), extraArgs.end());
         std::string program = "/proc/self/exe";
         if (!netnsPrefix.empty()) {
             // `ip netns exec NS EXE ...`: the same executable, resolved, inside the namespace.

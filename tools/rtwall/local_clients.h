@@ -13,7 +13,7 @@ class LocalClients {
 public:
     // With a netns prefix, client i runs in network namespace <prefix><i> (tools/netem.sh).
     LocalClients(int count, const std::string& endpoint, int threadsEach, bool replay = false,
-                 const std::string& netnsPrefix = {});
+                 const std::string& netnsPrefix = {}, const std::vector<std::string>& extraArgs = {});
     ~LocalClients();
     LocalClients(const LocalClients&) = delete;
     LocalClients& operator=(const LocalClients&) = delete;

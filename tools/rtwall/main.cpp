@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
     bench->require_subcommand(1);
     rtwall::cli::addBenchKernel(*bench, run);
     rtwall::cli::addBenchCluster(*bench, run);
+    rtwall::cli::addBenchFaults(*bench, run);
 
     try {
         app.parse(argc, argv);
