@@ -119,6 +119,32 @@ TEST(Faults, FrozenClientMidFrameThenWakesUp) {
     EXPECT_EQ(r.clients.size(), 2u);
 }
 
+// A client process dies and is started again (as systemd would): it joins, proves it holds the
+// current state (updates made while it was gone included) and renders again within 5 s.
+TEST(Faults, RestartedClientContributesAgainWithinFiveSeconds) {
+    SceneDesc desc = slowScene();
+    Master master(desc, faultSettings());
+    Process a(master.endpoint());
+    auto b = std::make_unique<Process>(master.endpoint());
+    ASSERT_TRUE(master.waitForClients(2, 30000));
+    master.renderFrame();
+    kill(b->pid, SIGKILL);
+    ASSERT_TRUE(waitUntil([&] { return master.connectedClients() == 1; }, 5000));
+    b.reset();
+    desc.lights[0].intensity = 42.0f;  // changed while it is away
+    master.setLight(0, desc.lights[0]);
+    master.renderFrame();
+    const auto restartedAt = Clock::now();
+    b = std::make_unique<Process>(master.endpoint());
+    ASSERT_TRUE(waitUntil([&] { return master.connectedClients() == 2; }, 10000));
+    FrameReport r;
+    const Image img = master.renderFrame(&r);
+    EXPECT_LT(std::chrono::duration<double>(Clock::now() - restartedAt).count(), 5.0);
+    EXPECT_EQ(img.rgb, singleMachine(desc).rgb);
+    ASSERT_EQ(r.clients.size(), 2u);
+    EXPECT_GT(std::min(r.clients[0].tiles, r.clients[1].tiles), 0u) << "both contribute";
+}
+
 // The master goes away (goodbye) and a new one starts on the same port: a client that waits
 // for a master forever reconnects with back-off and jitter and renders for the new one.
 TEST(Faults, MasterRestart) {
