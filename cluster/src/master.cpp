@@ -485,12 +485,12 @@ struct Master::Impl {
     }
 
     void runCommands() {
-        std::deque<Command> todo;
+        std::deque<Command> pending;
         {
             std::lock_guard lock(m);
-            todo.swap(commands);
+            pending.swap(commands);
         }
-        for (Command& cmd : todo) {
+        for (Command& cmd : pending) {
             if (cmd.kind == Command::kUpdate) {
                 for (auto& [peer, c] : clients) {
                     const int n = settings.dropEveryNthUpdate;

@@ -299,6 +299,65 @@ TEST(Cluster, MeshesTravelByContentHash) {
     EXPECT_EQ(differingBytes(again.master->renderFrame(), singleMachine(desc)), 0u);
 }
 
+// A client written against the protocol by hand, to misbehave on purpose: it completes the
+// handshake honestly (Ready with the right state hash) and asks for tiles, then hands every
+// TileAssign to the test, which decides what the client does with the tiles. Bounded: at most
+// 200 messages, 5 s per receive.
+class RogueClient {
+public:
+    RogueClient(const std::string& endpoint, uint32_t wantTiles) : socket_(ctx_, zmq::socket_type::dealer), want_(wantTiles) {
+        using namespace cluster;
+        socket_.set(zmq::sockopt::linger, 0);
+        socket_.set(zmq::sockopt::rcvtimeo, 5000);
+        socket_.connect(endpoint);
+        Header h;
+        h.type = MsgType::Hello;
+        socket_.send(zmq::buffer(encodeMessage(h, Hello{kProtocolVersion, 1, "rogue"})));
+    }
+
+    // Runs the conversation; onReady is called once the master accepted our state, onAssign for
+    // each assignment until it returns false.
+    template <class OnReady, class OnAssign> bool run(OnReady&& onReady, OnAssign&& onAssign) {
+        using namespace cluster;
+        bool ready = false;
+        for (int i = 0; i < 200; ++i) {
+            zmq::message_t msg;
+            if (!socket_.recv(msg)) break;
+            const auto* p = static_cast<const uint8_t*>(msg.data());
+            const Header in = decodeHeader(p, msg.size());
+            session_ = in.session;
+            const uint8_t* payload = p + kHeaderSize;
+            const size_t n = msg.size() - kHeaderSize;
+            if (in.type == MsgType::SceneSnapshot && !ready) {
+                const auto snap = decodePayload<SceneSnapshot>(payload, n);
+                send(MsgType::Ready, 0, Ready{snap.updateSeq, stateHash(snap)});
+                ready = true;
+                onReady();
+            } else if (in.type == MsgType::FrameBegin) {
+                const auto fb = decodePayload<FrameBegin>(payload, n);
+                send(MsgType::TileRequest, fb.frame, TileRequest{fb.frame, want_});
+            } else if (in.type == MsgType::TileAssign) {
+                if (!onAssign(decodePayload<TileAssign>(payload, n))) break;
+            }
+        }
+        return ready;
+    }
+
+    template <class Msg> void send(cluster::MsgType type, uint32_t frame, const Msg& m) {
+        cluster::Header h;
+        h.type = type;
+        h.session = session_;
+        h.frame = frame;
+        socket_.send(zmq::buffer(cluster::encodeMessage(h, m)));
+    }
+
+private:
+    zmq::context_t ctx_;
+    zmq::socket_t socket_;
+    uint32_t want_;
+    uint64_t session_ = 0;
+};
+
 // A client that answers its tiles with bytes that do not decode: the results are dropped, the
 // tiles reopened and rendered by the honest client; the frame still completes, bit-identical.
 TEST(Cluster, UndecodableResultsAreReRendered) {
@@ -312,51 +371,26 @@ TEST(Cluster, UndecodableResultsAreReRendered) {
     Master& master = *cluster.master;
     ASSERT_TRUE(master.waitForClients(1, 30000));
 
-    zmq::context_t ctx;
-    zmq::socket_t rogue(ctx, zmq::socket_type::dealer);
-    rogue.set(zmq::sockopt::linger, 0);
-    rogue.set(zmq::sockopt::rcvtimeo, 5000);
-    rogue.connect(master.endpoint());
-    Header h;
-    h.type = MsgType::Hello;
-    rogue.send(zmq::buffer(encodeMessage(h, Hello{kProtocolVersion, 1, "liar"})));
+    RogueClient rogue(master.endpoint(), 4);
     std::thread frame;
     Image img;
     int lies = 0;
-    for (int i = 0; i < 200 && lies == 0; ++i) {
-        zmq::message_t msg;
-        if (!rogue.recv(msg)) break;
-        const auto* p = static_cast<const uint8_t*>(msg.data());
-        const Header in = decodeHeader(p, msg.size());
-        Header out;
-        out.session = in.session;
-        if (in.type == MsgType::SceneSnapshot) {
-            const auto snap = decodePayload<SceneSnapshot>(p + kHeaderSize, msg.size() - kHeaderSize);
-            out.type = MsgType::Ready;
-            rogue.send(zmq::buffer(encodeMessage(out, Ready{snap.updateSeq, stateHash(snap)})));
-            frame = std::thread([&] { img = master.renderFrame(); });
-        } else if (in.type == MsgType::FrameBegin) {
-            const auto fb = decodePayload<FrameBegin>(p + kHeaderSize, msg.size() - kHeaderSize);
-            out.type = MsgType::TileRequest;
-            out.frame = fb.frame;
-            rogue.send(zmq::buffer(encodeMessage(out, TileRequest{fb.frame, 4})));
-        } else if (in.type == MsgType::TileAssign) {
-            const auto a = decodePayload<TileAssign>(p + kHeaderSize, msg.size() - kHeaderSize);
-            for (uint32_t t : a.tiles) {
-                TileResult r;
-                r.frame = a.frame;
-                r.tile = t;
-                r.codec = TileCodec::Lz4;
-                r.pixels.assign(40, 0x7F);  // not an LZ4 block of an 8x8 tile
-                out.type = MsgType::TileResult;
-                out.frame = a.frame;
-                rogue.send(zmq::buffer(encodeMessage(out, r)));
-                ++lies;
-            }
-        }
-    }
-    ASSERT_GT(lies, 0);
+    rogue.run([&] { frame = std::thread([&] { img = master.renderFrame(); }); },
+              [&](const TileAssign& a) {
+                  for (uint32_t t : a.tiles) {
+                      TileResult r;
+                      r.frame = a.frame;
+                      r.tile = t;
+                      r.codec = TileCodec::Lz4;
+                      r.pixels.assign(40, 0x7F);  // not an LZ4 block of an 8x8 tile
+                      rogue.send(MsgType::TileResult, a.frame, r);
+                      ++lies;
+                  }
+                  return false;
+              });
+    ASSERT_TRUE(frame.joinable());
     frame.join();
+    ASSERT_GT(lies, 0);
     EXPECT_EQ(differingBytes(img, singleMachine(desc)), 0u);
     EXPECT_GE(master.droppedMessages(), uint64_t(lies));
 }
@@ -365,7 +399,6 @@ TEST(Cluster, UndecodableResultsAreReRendered) {
 // or lost its cable): the master must notice within its timeout, put the tiles back, and the
 // frame must still be bit-identical.
 TEST(Cluster, SilentClientLosesNoTile) {
-    using namespace cluster;
     SceneDesc desc = demoScene(96, 72);
     desc.settings.tileSize = 8;
     desc.settings.supersample = 4;  // slow enough that the rogue's request lands mid-frame
@@ -377,45 +410,13 @@ TEST(Cluster, SilentClientLosesNoTile) {
     Master& master = *cluster.master;
     ASSERT_TRUE(master.waitForClients(1, 30000));
 
-    zmq::context_t ctx;
-    zmq::socket_t rogue(ctx, zmq::socket_type::dealer);
-    rogue.set(zmq::sockopt::linger, 0);
-    rogue.set(zmq::sockopt::rcvtimeo, 5000);
-    rogue.connect(master.endpoint());
-    Header h;
-    h.type = MsgType::Hello;
-    const auto hello = encodeMessage(h, Hello{kProtocolVersion, 1, "rogue"});
-    rogue.send(zmq::buffer(hello));
-    uint64_t session = 0;
-    bool readySent = false;
+    RogueClient rogue(master.endpoint(), 8);
     FrameReport first;
     Image firstImage;
     std::thread frame;
-    // Bounded: Welcome, snapshot, maybe heartbeats, then a FrameBegin once we are ready.
-    for (int i = 0; i < 200; ++i) {
-        zmq::message_t msg;
-        if (!rogue.recv(msg)) break;
-        const auto* p = static_cast<const uint8_t*>(msg.data());
-        const Header in = decodeHeader(p, msg.size());
-        session = in.session;
-        Header out;
-        out.session = session;
-        if (in.type == MsgType::SceneSnapshot && !readySent) {
-            const auto snap = decodePayload<SceneSnapshot>(p + kHeaderSize, msg.size() - kHeaderSize);
-            out.type = MsgType::Ready;
-            rogue.send(zmq::buffer(encodeMessage(out, Ready{snap.updateSeq, stateHash(snap)})));
-            readySent = true;
-            frame = std::thread([&] { firstImage = master.renderFrame(&first); });
-        } else if (in.type == MsgType::FrameBegin) {
-            const auto fb = decodePayload<FrameBegin>(p + kHeaderSize, msg.size() - kHeaderSize);
-            out.type = MsgType::TileRequest;
-            out.frame = fb.frame;
-            rogue.send(zmq::buffer(encodeMessage(out, TileRequest{fb.frame, 8})));
-        } else if (in.type == MsgType::TileAssign) {
-            break;  // holding tiles now: go silent
-        }
-    }
-    ASSERT_TRUE(readySent);
+    const bool ready = rogue.run([&] { frame = std::thread([&] { firstImage = master.renderFrame(&first); }); },
+                                 [](const cluster::TileAssign&) { return false; });  // holding tiles: go silent
+    ASSERT_TRUE(ready);
     frame.join();  // completes only if the rogue's tiles were rendered by someone else
     EXPECT_EQ(differingBytes(firstImage, singleMachine(desc)), 0u);
     // The straggler rule re-issued the rogue's tiles long before its heartbeat timed out.
