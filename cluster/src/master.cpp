@@ -264,11 +264,11 @@ struct Master::Impl {
             markDead(c, "unreachable while sending the scene state");
             return;
         }
+        // The history since the snapshot, merged into one message whatever its length.
+        Update since;
         for (const Update& u : sentUpdates)
-            if (u.seq > snap.updateSeq && !send(c, u)) {
-                markDead(c, "unreachable while sending the scene state");
-                return;
-            }
+            if (u.baseSeq >= snap.updateSeq) mergeInto(since, Update(u));
+        if (since.seq != 0 && !send(c, since)) markDead(c, "unreachable while sending the scene state");
     }
 
     void beginFrame(uint32_t frame, uint32_t stateSeq, const RenderSettings& rs,
@@ -484,6 +484,52 @@ struct Master::Impl {
         serveAll();
     }
 
+    // Merges consecutive updates into one message: the last change to each object wins, and the
+    // message covers the whole range of sequence numbers. A burst of application calls (a
+    // script, a dragged object) then costs a few messages instead of filling every queue.
+    static void mergeInto(Update& merged, Update&& u) {
+        if (merged.changes.empty() && merged.seq == 0) {
+            merged = std::move(u);
+            return;
+        }
+        merged.seq = u.seq;
+        for (Change& c : u.changes) {
+            auto same = [&](const Change& old) {
+                if (old.index() != c.index()) return false;
+                if (auto* t = std::get_if<TransformChange>(&c)) return std::get<TransformChange>(old).instance == t->instance;
+                if (auto* m = std::get_if<MaterialChange>(&c)) return std::get<MaterialChange>(old).material == m->material;
+                if (auto* l = std::get_if<LightChange>(&c)) return std::get<LightChange>(old).light == l->light;
+                return true;  // camera, settings: one of each
+            };
+            auto it = std::find_if(merged.changes.begin(), merged.changes.end(), same);
+            if (it != merged.changes.end()) *it = std::move(c);
+            else merged.changes.push_back(std::move(c));
+        }
+    }
+
+    void sendUpdate(const Update& update) {
+        for (auto& [peer, c] : clients) {
+            const int n = settings.dropEveryNthUpdate;
+            if (n > 0 && ++c.updatesSent % uint64_t(n) == 0) continue;  // injected loss
+            if (!send(c, update)) markDead(c, "its queue is full or it is unreachable");
+        }
+        sentUpdates.push_back(update);
+        if (sentUpdates.size() > 4096) sentUpdates.pop_front();
+    }
+
+    // Updates are merged and sent at most every kUpdateIntervalSeconds (and always before a
+    // frame begins), so a burst of application calls cannot flood a client's queue.
+    static constexpr double kUpdateIntervalSeconds = 0.002;
+    Update unsent;               // merged updates not sent yet
+    double lastUpdateSent = 0;
+
+    void flushUpdates() {
+        if (unsent.seq == 0) return;
+        sendUpdate(unsent);
+        unsent = Update{};
+        lastUpdateSent = nowSeconds();
+    }
+
     void runCommands() {
         std::deque<Command> pending;
         {
@@ -492,17 +538,14 @@ struct Master::Impl {
         }
         for (Command& cmd : pending) {
             if (cmd.kind == Command::kUpdate) {
-                for (auto& [peer, c] : clients) {
-                    const int n = settings.dropEveryNthUpdate;
-                    if (n > 0 && ++c.updatesSent % uint64_t(n) == 0) continue;  // injected loss
-                    if (!send(c, cmd.update)) markDead(c, "its queue is full or it is unreachable");
-                }
-                sentUpdates.push_back(cmd.update);
-                if (sentUpdates.size() > 4096) sentUpdates.pop_front();
-            } else if (cmd.kind == Command::kBeginFrame) {
-                beginFrame(cmd.frame, cmd.update.seq, cmd.settings, std::move(cmd.state));
+                mergeInto(unsent, std::move(cmd.update));
+                continue;
             }
+            // Never merge across a frame: a frame's state must be a point in the sequence.
+            flushUpdates();
+            if (cmd.kind == Command::kBeginFrame) beginFrame(cmd.frame, cmd.update.seq, cmd.settings, std::move(cmd.state));
         }
+        if (nowSeconds() - lastUpdateSent > kUpdateIntervalSeconds) flushUpdates();
     }
 
     void checkTimeouts() {
@@ -551,6 +594,7 @@ struct Master::Impl {
             const double now = nowSeconds();
             if (now - lastHousekeeping > 0.002) {
                 lastHousekeeping = now;
+                flushUpdates();
                 checkTimeouts();
                 reap();
                 serveAll();  // re-queued tiles of departed clients, stragglers
@@ -663,6 +707,7 @@ void pushUpdate(Master::Impl& s, Change change) {
         s.hashAt[s.seq] = stateHash(s.snapshotLocked());
         while (s.hashAt.size() > 1024) s.hashAt.erase(s.hashAt.begin());
         cmd.update.seq = s.seq;
+        cmd.update.baseSeq = s.seq - 1;
     }
     cmd.update.changes.push_back(std::move(change));
     {

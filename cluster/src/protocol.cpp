@@ -392,11 +392,13 @@ void read(Reader& r, MeshData& m) {
 void write(Writer& w, const Update& m) {
     w.u32(m.seq);
     writeVector(w, m.changes);
+    w.u32(m.baseSeq);
 }
 void read(Reader& r, Update& m) {
     static const size_t changeBytes = minChangeSize();
     m.seq = r.u32();
     readVector(r, m.changes, changeBytes, kMaxChangesPerUpdate);
+    m.baseSeq = r.u32();
 }
 
 void write(Writer& w, const FrameBegin& m) {

@@ -123,9 +123,13 @@ struct SettingsChange {
 };
 using Change = std::variant<CameraChange, TransformChange, MaterialChange, LightChange, SettingsChange>;
 
+// The changes that take the state from baseSeq to seq. The master merges the updates made
+// between two network-thread wake-ups into one (keeping the last change to each object), so a
+// burst of application calls costs one message, not thousands.
 struct Update {
     uint32_t seq = 0;  // the state's sequence number after applying this update
     std::vector<Change> changes;
+    uint32_t baseSeq = 0;  // the state it applies to (seq - 1 unless merged)
 };
 
 struct FrameBegin {

@@ -21,8 +21,9 @@ public:
     // newer ones kept.
     void reset(uint32_t seq);
 
-    // Buffers an update; ignores ones at or below the state and duplicates. Returns false when
-    // the buffer overflowed (everything pending is dropped; the caller must resync).
+    // Buffers an update; ignores ones at or below the state, duplicates and ones whose base is
+    // not below their seq. Returns false when the buffer overflowed (everything pending is
+    // dropped; the caller must resync).
     bool add(Update update);
 
     enum class CatchUp {
@@ -37,7 +38,7 @@ public:
 
 private:
     uint32_t state_ = 0;
-    std::map<uint32_t, Update> pending_;
+    std::map<uint32_t, Update> pending_;  // by baseSeq: the state each one applies to
 };
 
 }  // namespace rtwall::cluster

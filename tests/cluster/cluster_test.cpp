@@ -223,10 +223,13 @@ TEST(Cluster, LostUpdatesAreDetectedAndResynced) {
     master.renderFrame();
     SceneDesc expect = desc;
     for (int f = 0; f < 5; ++f) {
-        // Two updates per frame: one of them is lost for each client.
+        // Two update messages per frame: one of them is lost for each client.
         expect.lights[0].intensity = 20.0f + 15.0f * f;
         expect.materials[1].color = {0.2f + 0.1f * f, 0.5f, 0.3f};
         master.setLight(0, expect.lights[0]);
+        // The master merges updates made within a couple of milliseconds into one message;
+        // these two must travel apart so that one of them is lost.
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
         master.setMaterial(1, expect.materials[1]);
         FrameReport r;
         const Image img = master.renderFrame(&r);

@@ -145,6 +145,31 @@ TEST(Faults, RestartedClientContributesAgainWithinFiveSeconds) {
     EXPECT_GT(std::min(r.clients[0].tiles, r.clients[1].tiles), 0u) << "both contribute";
 }
 
+// A client that stops reading (frozen) while the application floods the master with 60,000
+// updates: the master must never block on it, the updates are merged instead of queued one by
+// one, the frozen client is dropped (heartbeat timeout or full queue) and the healthy one keeps
+// rendering the final state.
+TEST(Faults, AFloodOfUpdatesWithAFrozenPeerBlocksNothing) {
+    SceneDesc desc = slowScene();
+    desc.settings.supersample = 1;
+    Master master(desc, faultSettings());
+    Process a(master.endpoint()), b(master.endpoint());
+    ASSERT_TRUE(master.waitForClients(2, 30000));
+    master.renderFrame();
+    kill(b.pid, SIGSTOP);
+    const auto t0 = Clock::now();
+    for (int i = 0; i < 60000; ++i) {
+        desc.lights[0].intensity = float(10 + i % 100);
+        master.setLight(0, desc.lights[0]);
+    }
+    const double flood = std::chrono::duration<double>(Clock::now() - t0).count();
+    EXPECT_LT(flood, 30.0) << "the application was never blocked";
+    EXPECT_TRUE(waitUntil([&] { return master.connectedClients() == 1; }, 20000)) << "the frozen client is gone";
+    FrameReport r;
+    EXPECT_EQ(master.renderFrame(&r).rgb, singleMachine(desc).rgb);
+    EXPECT_EQ(r.clients.size(), 1u);
+}
+
 // The master goes away (goodbye) and a new one starts on the same port: a client that waits
 // for a master forever reconnects with back-off and jitter and renders for the new one.
 TEST(Faults, MasterRestart) {

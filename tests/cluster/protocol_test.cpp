@@ -133,6 +133,7 @@ void expectSame(const Change& a, const Change& b) {
 }
 void expectSame(const Update& a, const Update& b) {
     EXPECT_EQ(a.seq, b.seq);
+    EXPECT_EQ(a.baseSeq, b.baseSeq);
     expectSame(a.changes, b.changes);
 }
 void expectSame(const FrameBegin& a, const FrameBegin& b) {
@@ -253,6 +254,7 @@ MeshData sampleMeshData() {
 Update sampleUpdate() {
     Update u;
     u.seq = 17;
+    u.baseSeq = 12;
     u.changes.push_back(CameraChange{sampleCamera()});
     u.changes.push_back(TransformChange{3, sampleTransform(2)});
     u.changes.push_back(MaterialChange{5, sampleMaterial(3)});

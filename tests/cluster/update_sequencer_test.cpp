@@ -10,9 +10,10 @@
 namespace rtwall::cluster {
 namespace {
 
-Update update(uint32_t seq) {
+Update update(uint32_t seq, uint32_t base = ~0u) {
     Update u;
     u.seq = seq;
+    u.baseSeq = base == ~0u ? seq - 1 : base;
     u.changes.push_back(LightChange{seq, Light{}});  // tags the update with its number
     return u;
 }
@@ -76,6 +77,18 @@ TEST(UpdateSequencer, OverflowAsksForAResync) {
     UpdateSequencer s;
     for (uint32_t i = 0; i < UpdateSequencer::kMaxPending; ++i) ASSERT_TRUE(s.add(update(i + 2)));
     EXPECT_FALSE(s.add(update(UpdateSequencer::kMaxPending + 2)));
+    EXPECT_EQ(s.pending(), 0u);
+}
+
+TEST(UpdateSequencer, MergedUpdatesCoverARange) {
+    UpdateSequencer s;
+    s.add(update(5, 0));   // 0 -> 5 in one message
+    s.add(update(7, 5));   // 5 -> 7
+    std::vector<Update> out;
+    EXPECT_EQ(s.catchUp(3, out), UpdateSequencer::CatchUp::Gap) << "a frame inside a merged update cannot start";
+    EXPECT_EQ(s.catchUp(7, out), UpdateSequencer::CatchUp::Ready);
+    EXPECT_EQ(seqs(out), (std::vector<uint32_t>{5, 7}));
+    s.add(update(9, 9));   // malformed: base not below seq
     EXPECT_EQ(s.pending(), 0u);
 }
 
