@@ -74,6 +74,18 @@ inline void setRay(RayK& r, int k, const Float3& org, const Float3& dir, float t
     r.flags[k] = 0;
 }
 
+// Lane k of an Embree packet's result, as the shading code reads it.
+template <class RayHitK> inline Hit hitOf(const RayHitK& rh, int k) {
+    Hit h;
+    h.inst = rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID ? kNoHit : rh.hit.instID[0][k];
+    h.prim = rh.hit.primID[k];
+    h.t = rh.ray.tfar[k];
+    h.u = rh.hit.u[k];
+    h.v = rh.hit.v[k];
+    h.ng = {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]};
+    return h;
+}
+
 void initContext(RTCIntersectContext& ctx, bool coherent) {
     rtcInitIntersectContext(&ctx);
     ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
@@ -96,15 +108,7 @@ void traceClosestPacket(RTCScene scene, const RayTask* rays, Hit* hits, size_t n
             rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
         P::intersect(valid, scene, &ctx, &rh);
-        for (int k = 0; k < count; ++k) {
-            Hit& h = hits[base + k];
-            h.inst = rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID ? kNoHit : rh.hit.instID[0][k];
-            h.prim = rh.hit.primID[k];
-            h.t = rh.ray.tfar[k];
-            h.u = rh.hit.u[k];
-            h.v = rh.hit.v[k];
-            h.ng = {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]};
-        }
+        for (int k = 0; k < count; ++k) hits[base + k] = hitOf(rh, k);
     }
 }
 
@@ -274,14 +278,7 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
                         t.weight = {sampleWeight, sampleWeight, sampleWeight};
                         t.pixel = pixel[k];
                         t.depth = 1;
-                        Hit hit;
-                        hit.inst = rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID ? kNoHit : rh.hit.instID[0][k];
-                        hit.prim = rh.hit.primID[k];
-                        hit.t = rh.ray.tfar[k];
-                        hit.u = rh.hit.u[k];
-                        hit.v = rh.hit.v[k];
-                        hit.ng = {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]};
-                        shadeHit(shading, t, hit, sc.accum[t.pixel], sc.shadows, sc.next);
+                        shadeHit(shading, t, hitOf(rh, k), sc.accum[t.pixel], sc.shadows, sc.next);
                     }
                 }
         }
@@ -303,10 +300,9 @@ int detectPacketWidth() {
 }
 
 Tracer tracerFor(KernelType kernel) {
-    static const int width = packetWidth();
     if (kernel == KernelType::Single) return {traceClosestSingle, traceShadowSingle};
-    if (width == 16) return packetTracer<16>();
-    if (width == 8) return packetTracer<8>();
+    if (packetWidth() == 16) return packetTracer<16>();
+    if (packetWidth() == 8) return packetTracer<8>();
     return packetTracer<4>();
 }
 
