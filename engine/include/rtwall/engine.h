@@ -9,6 +9,7 @@
 // kernel (packet or single-ray).
 #pragma once
 
+#include <rtwall/image.h>
 #include <rtwall/mesh.h>
 
 #include <array>
@@ -179,21 +180,11 @@ struct TileStats {
 TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
                      const RenderSettings& settings, TileView out);
 
-struct Image {
-    int width = 0, height = 0;
-    std::vector<uint8_t> rgb;  // sRGB8, row-major, no padding
-    uint8_t* pixel(int x, int y) { return rgb.data() + (size_t(y) * width + x) * 3; }
-    const uint8_t* pixel(int x, int y) const { return rgb.data() + (size_t(y) * width + x) * 3; }
-};
-
 std::vector<TileRect> makeTiles(int width, int height, int tileSize);
 
 // Renders a whole frame on settings.threads threads (tiles handed out on demand).
 Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings& settings, uint32_t frame = 0,
                   TileStats* stats = nullptr);
-
-void writePng(const Image& image, const std::filesystem::path& file);  // throws InputError
-Image readPng(const std::filesystem::path& file);                      // throws InputError
 
 // Number of rays per Embree packet the packet kernel uses on this CPU (4, 8 or 16).
 int packetWidth();

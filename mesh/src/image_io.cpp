@@ -1,5 +1,5 @@
 // PNG input and output through libpng's simplified API.
-#include <rtwall/engine.h>
+#include <rtwall/image.h>
 
 #include <png.h>
 
