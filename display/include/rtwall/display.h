@@ -1,0 +1,243 @@
+// rtwall display: the one public header.
+//
+// A wall config (TOML, configs/wall/) describes the screens of a tiled display wall: where each
+// screen's pixels lie in the wall image, hidden bezel pixels, projector overlap with blending
+// ramps, per-screen gamma and brightness, stereo eyes, and which monitor/window each one uses.
+// Presenting is split in two: the mapping from a wall image to each screen's pixels is plain
+// CPU code (mapPixel, presentScreen), used by the headless presenter and the tests; the GLFW /
+// OpenGL 3.3 presenter does the same per pixel in a GLSL shader. The display knows nothing of
+// the engine or the cluster: it is given finished wall images.
+#pragma once
+
+#include <rtwall/image.h>
+#include <rtwall/mesh.h>
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace rtwall {
+
+// ---------------------------------------------------------------------------------------------
+// Wall configuration
+
+struct PixelRect {
+    int x = 0, y = 0, width = 0, height = 0;  // in wall pixels, origin top-left
+    bool operator==(const PixelRect&) const = default;
+};
+
+enum class Eye { Mono, Left, Right, Both };          // Both: side-by-side or quad-buffered screens
+enum class StereoMode { None, Passive, SideBySide, QuadBuffer };
+
+struct ScreenConfig {
+    std::string name;
+    PixelRect viewport;               // the wall pixels this screen shows
+    int outputWidth = 0;              // the screen's own pixels (default: the viewport's size)
+    int outputHeight = 0;
+    std::array<int, 4> blend{};       // blending ramp width in wall pixels at the left, right, top, bottom edge
+    std::array<double, 4> blendGamma{2.2, 2.2, 2.2, 2.2};  // display gamma the ramps compensate, per edge
+    double gamma = 1.0;               // colour correction: out = brightness * in^(1/gamma)
+    double brightness = 1.0;
+    Eye eye = Eye::Mono;
+    int monitor = 0;                  // GLFW monitor index (fullscreen)
+    std::array<int, 2> window{0, 0};  // window position (windowed)
+    bool fullscreen = false;
+    std::filesystem::path fragmentShader;  // replaces the shipped present.frag when set
+    int line = 0;                     // where the screen was defined (messages only)
+    bool operator==(const ScreenConfig& o) const;  // ignores `line`
+};
+
+struct StereoConfig {
+    StereoMode mode = StereoMode::None;
+    double eyeSeparation = 0.065;  // metres
+    Float3 viewer{0, 0, 2};        // tracked or nominal head position, wall coordinates (metres)
+    Float3 lowerLeft{-1, -0.75f, 0}, lowerRight{1, -0.75f, 0}, upperLeft{-1, 0.75f, 0};  // physical corners
+    bool operator==(const StereoConfig& o) const;
+};
+
+struct WallConfig {
+    std::filesystem::path file;       // where it was read from (messages, relative shader paths)
+    std::string name = "wall";
+    int width = 0, height = 0;        // the wall image the renderer produces, bezel pixels included
+    bool vsync = true;
+    std::vector<ScreenConfig> screens;
+    StereoConfig stereo;
+    int writeEvery = 1;               // headless: every Nth frame as per-screen PNGs (0: never)
+    std::string video;                // headless: also encode the wall to this file through ffmpeg
+    bool operator==(const WallConfig& o) const;  // ignores `file` and screen lines
+};
+
+// Reads and validates a wall config (format: configs/README.md, "Wall configs"). Every problem
+// is an InputError of one line "<file>:<line>: <context>key '<key>': <what>".
+WallConfig loadWallConfig(const std::filesystem::path& file);
+WallConfig parseWallConfig(const std::string& text, const std::filesystem::path& nameForMessages);
+// Writes a config that loads back to an equal WallConfig (screens always as an explicit list).
+std::string writeWallConfig(const WallConfig& wall);
+// One window showing the whole image: the default wall of `rtwall run`.
+WallConfig singleScreenWall(int width, int height);
+
+// ---------------------------------------------------------------------------------------------
+// Shaders
+
+struct ShaderSource {
+    std::string name;  // file name, for messages
+    std::string text;
+};
+// The shipped shaders (display/shaders/), embedded at build time.
+ShaderSource presentVertexShader();
+ShaderSource presentFragmentShader();
+// Compiles GLSL 330 core with glslang (no GPU needed). Returns the problems, one line each:
+// "<name>:<line>: <message>", empty when it compiles.
+std::vector<std::string> checkShader(const ShaderSource& source, bool fragment);
+// Everything `rtwall check` does: the config (throws InputError) and every shader it uses.
+std::vector<std::string> checkWall(const std::filesystem::path& file);
+
+// ---------------------------------------------------------------------------------------------
+// Mapping a wall image to the screens (the CPU reference of present.frag)
+
+// A finished frame as the renderer delivers it.
+struct WallFrame {
+    uint32_t number = 0;
+    Image left;                         // the mono image, or the left eye
+    Image right;                        // the right eye (stereo walls only)
+    std::vector<uint32_t> tileOwners;   // client id per tile (row-major), for the false-colour view
+    int tileSize = 0;
+};
+
+struct PresentOptions {
+    bool falseColour = false;  // tint every tile with the colour of the client that rendered it
+    int quadBufferEye = 0;     // quad-buffered screens: which eye presentScreen returns (0 left, 1 right)
+};
+
+struct ScreenSample {
+    int wallX = 0, wallY = 0;  // the wall pixel shown
+    int eye = 0;               // 0 left/mono, 1 right
+    float weight = 1.0f;       // blending multiplier on the encoded value
+};
+
+// Which wall pixel an output pixel of a screen shows, and its blending weight.
+ScreenSample mapPixel(const ScreenConfig& screen, StereoMode mode, int outX, int outY);
+// Linear-light blending ramp (0 at the screen's outer edge, 1 inside) times all edges; the
+// encoded weight is this to the power 1/blendGamma per edge.
+float blendRamp(int widthPx, float distancePx);
+uint8_t correctColour(uint8_t value, float weight, const ScreenConfig& screen);
+std::array<uint8_t, 3> ownerColour(uint32_t client);  // fixed palette; grey for nobody
+// The image a screen (projector) gets, exactly what the GL presenter draws (within rounding).
+Image presentScreen(const WallConfig& wall, size_t screen, const WallFrame& frame, const PresentOptions& options = {});
+
+// ---------------------------------------------------------------------------------------------
+// Presenters
+
+struct PresentStats {
+    uint64_t frames = 0;
+    double uploadSeconds = 0, drawSeconds = 0, swapSeconds = 0;  // totals
+    uint64_t late = 0;  // frames shown more than 1.5 refresh intervals after the previous (vsync only)
+};
+
+// Writes per-screen PNGs (as the projectors would get them) and optionally a video (ffmpeg).
+class HeadlessPresenter {
+public:
+    HeadlessPresenter(WallConfig wall, std::filesystem::path outDir);
+    ~HeadlessPresenter();
+    void present(const WallFrame& frame, const PresentOptions& options = {});
+    const std::vector<std::filesystem::path>& written() const { return written_; }
+
+private:
+    WallConfig wall_;
+    std::filesystem::path out_;
+    std::vector<std::filesystem::path> written_;
+    FILE* video_ = nullptr;
+    uint64_t count_ = 0;
+};
+
+enum class UploadMethod { TexSubImage, Pbo };
+const char* uploadMethodName(UploadMethod m);
+
+// Keyboard and mouse state collected by the GL presenter between two polls.
+struct InputState {
+    std::array<bool, 512> keyDown{};  // GLFW key codes
+    std::vector<int> keysPressed;     // pressed since the last poll (GLFW key codes)
+    std::vector<int> modsPressed;     // modifiers of each press (GLFW_MOD_* bits)
+    double mouseDx = 0, mouseDy = 0;  // cursor motion with a button held, screen pixels
+    double scroll = 0;
+    bool leftDown = false, rightDown = false;
+    bool leftPressed = false;         // the left button went down since the last poll
+    int clickMods = 0;
+    double wallX = 0, wallY = 0;      // cursor position in wall pixels (last moved window)
+    bool closeRequested = false;
+};
+
+// GLFW windows (one per screen, shared contexts), OpenGL 3.3 core, the wall streamed into a
+// texture and drawn per screen with present.frag (or the screen's own shader).
+class GlPresenter {
+public:
+    struct Options {
+        UploadMethod upload = UploadMethod::Pbo;
+        bool visible = true;
+        int vsyncOverride = -1;  // -1: the config's vsync; 0/1 force it (benchmarks)
+    };
+    // Null, with the reason in *whyNot, where no window can be opened (no DISPLAY, no GL 3.3).
+    static std::unique_ptr<GlPresenter> open(const WallConfig& wall, const Options& options, std::string* whyNot);
+    ~GlPresenter();
+    GlPresenter(const GlPresenter&) = delete;
+    GlPresenter& operator=(const GlPresenter&) = delete;
+
+    // Uploads the frame, draws every screen and swaps them all together. With `capture`, each
+    // screen's pixels are read back before the swap (tests).
+    void present(const WallFrame& frame, const PresentOptions& options = {}, std::vector<Image>* capture = nullptr);
+    InputState poll();
+    void setStatus(const std::string& text);  // shown in the first window's title
+    const PresentStats& stats() const;
+    std::string renderer() const;  // GL_RENDERER
+
+    struct Impl;
+
+private:
+    explicit GlPresenter(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Navigation
+
+struct ViewPose {
+    Float3 position{0, 0, 5};
+    Float3 lookAt{0, 0, 0};
+    Float3 up{0, 1, 0};
+    float fovY = 45.0f;
+};
+
+// Fly (WASD + mouse look) and orbit (drag around the look-at point, scroll to zoom), camera
+// bookmarks and camera-path recording. Plain state: fed InputState, tested without a window.
+class Navigator {
+public:
+    enum class Mode { Fly, Orbit };
+    explicit Navigator(const ViewPose& start, float sceneScale = 1.0f);
+    // Applies one poll's input over dt seconds; true when the pose changed.
+    bool update(const InputState& input, double dt);
+    const ViewPose& pose() const { return pose_; }
+    void setPose(const ViewPose& p) { pose_ = p; }
+    Mode mode() const { return mode_; }
+    void setMode(Mode m) { mode_ = m; }
+    // Bookmarks 1..9: Ctrl+digit stores, digit recalls.
+    bool hasBookmark(int slot) const;
+    // Recording (key R): one pose per update while on. Written as a camera path (configs/README.md).
+    bool recording() const { return recording_; }
+    const std::vector<ViewPose>& recorded() const { return path_; }
+    static std::string cameraPathToml(const std::vector<ViewPose>& poses);
+
+private:
+    ViewPose pose_;
+    Mode mode_ = Mode::Orbit;
+    float speed_;
+    std::array<ViewPose, 10> bookmarks_{};
+    std::array<bool, 10> hasBookmark_{};
+    bool recording_ = false;
+    std::vector<ViewPose> path_;
+};
+
+}  // namespace rtwall

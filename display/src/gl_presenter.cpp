@@ -1,0 +1,384 @@
+// The GLFW / OpenGL 3.3 core presenter: one window per screen, all sharing the first window's
+// context objects (textures), so the wall image is uploaded once per frame and each window
+// draws its screen from it with present.frag. All windows are swapped together, back to back;
+// with vsync only the first waits for the retrace, so the others do not each add a frame.
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/glcorearb.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+#include <rtwall/display.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace rtwall {
+
+namespace {
+
+std::string gLastGlfwError;
+void onGlfwError(int, const char* what) { gLastGlfwError = what ? what : "unknown GLFW error"; }
+
+double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+
+GLuint compile(GLenum type, const ShaderSource& src) {
+    const GLuint s = glCreateShader(type);
+    const char* text = src.text.c_str();
+    glShaderSource(s, 1, &text, nullptr);
+    glCompileShader(s);
+    GLint ok = 0;
+    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        char log[2048] = {};
+        glGetShaderInfoLog(s, sizeof log, nullptr, log);
+        glDeleteShader(s);
+        throw InputError(src.name + ": the OpenGL driver does not compile it: " + std::string(log));
+    }
+    return s;
+}
+
+struct Screen {
+    GLFWwindow* window = nullptr;
+    GLuint vao = 0, program = 0;
+    GLint uViewport = -1, uOutputSize = -1, uEyeMode = -1, uBlendWidth = -1, uBlendInvGamma = -1, uInvGamma = -1,
+          uBrightness = -1, uTileSize = -1;
+};
+
+}  // namespace
+
+const char* uploadMethodName(UploadMethod m) { return m == UploadMethod::Pbo ? "pbo" : "texsubimage"; }
+
+struct GlPresenter::Impl {
+    WallConfig wall;
+    Options options;
+    std::vector<Screen> screens;
+    GLuint wallTex[2] = {0, 0}, ownerTex = 0, pbo[2][2] = {{0, 0}, {0, 0}};
+    int pboNext = 0;
+    int ownerW = 0, ownerH = 0;
+    PresentStats stats;
+    InputState input;
+    int lastWindow = 0;
+    double lastCursor[2] = {0, 0};
+    bool haveCursor = false;
+    double lastSwap = 0, refresh = 60;
+    bool quad = false;
+
+    ~Impl() {
+        if (!screens.empty()) {
+            glfwMakeContextCurrent(screens[0].window);
+            glDeleteTextures(2, wallTex);
+            glDeleteTextures(1, &ownerTex);
+            glDeleteBuffers(4, &pbo[0][0]);
+        }
+        for (Screen& s : screens)
+            if (s.window) {
+                glfwMakeContextCurrent(s.window);
+                glDeleteVertexArrays(1, &s.vao);
+                glDeleteProgram(s.program);
+                glfwDestroyWindow(s.window);
+            }
+        glfwTerminate();
+    }
+
+    void upload(GLuint tex, GLuint* pbos, const Image& img) {
+        glBindTexture(GL_TEXTURE_2D, tex);
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+        if (options.upload == UploadMethod::Pbo) {
+            // Two buffers in turn, orphaned before each write, so the copy never waits for the
+            // driver to finish reading last frame's data.
+            glBindBuffer(GL_PIXEL_UNPACK_BUFFER, pbos[pboNext]);
+            glBufferData(GL_PIXEL_UNPACK_BUFFER, GLsizeiptr(img.rgb.size()), nullptr, GL_STREAM_DRAW);
+            void* dst = glMapBufferRange(GL_PIXEL_UNPACK_BUFFER, 0, GLsizeiptr(img.rgb.size()),
+                                         GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT);
+            if (dst) {
+                std::memcpy(dst, img.rgb.data(), img.rgb.size());
+                glUnmapBuffer(GL_PIXEL_UNPACK_BUFFER);
+                glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, img.width, img.height, GL_RGB, GL_UNSIGNED_BYTE, nullptr);
+            }
+            glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+            if (dst) return;
+        }
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, img.width, img.height, GL_RGB, GL_UNSIGNED_BYTE, img.rgb.data());
+    }
+
+    void draw(size_t i, int eyeMode, int tileSize) {
+        const ScreenConfig& c = wall.screens[i];
+        const Screen& s = screens[i];
+        glUseProgram(s.program);
+        glUniform4i(s.uViewport, c.viewport.x, c.viewport.y, c.viewport.width, c.viewport.height);
+        glUniform2i(s.uOutputSize, c.outputWidth, c.outputHeight);
+        glUniform1i(s.uEyeMode, eyeMode);
+        glUniform4i(s.uBlendWidth, c.blend[0], c.blend[1], c.blend[2], c.blend[3]);
+        glUniform4f(s.uBlendInvGamma, float(1.0 / c.blendGamma[0]), float(1.0 / c.blendGamma[1]), float(1.0 / c.blendGamma[2]),
+                    float(1.0 / c.blendGamma[3]));
+        glUniform1f(s.uInvGamma, float(1.0 / c.gamma));
+        glUniform1f(s.uBrightness, float(c.brightness));
+        glUniform1i(s.uTileSize, tileSize);
+        glBindVertexArray(s.vao);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+    }
+};
+
+GlPresenter::GlPresenter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+GlPresenter::~GlPresenter() = default;
+
+std::unique_ptr<GlPresenter> GlPresenter::open(const WallConfig& wall, const Options& options, std::string* whyNot) {
+    auto no = [&](const std::string& why) -> std::unique_ptr<GlPresenter> {
+        if (whyNot) *whyNot = why;
+        return nullptr;
+    };
+    const char* display = std::getenv("DISPLAY");
+    const char* wayland = std::getenv("WAYLAND_DISPLAY");
+    if ((!display || !*display) && (!wayland || !*wayland)) return no("no DISPLAY");
+    glfwSetErrorCallback(onGlfwError);
+    if (!glfwInit()) return no("GLFW does not start: " + gLastGlfwError);
+    auto impl = std::make_unique<Impl>();  // from here on, its destructor calls glfwTerminate
+    impl->wall = wall;
+    impl->options = options;
+    impl->quad = wall.stereo.mode == StereoMode::QuadBuffer;
+    int monitorCount = 0;
+    GLFWmonitor** monitors = glfwGetMonitors(&monitorCount);
+    if (monitorCount > 0)
+        if (const GLFWvidmode* mode = glfwGetVideoMode(monitors[0]); mode && mode->refreshRate > 0) impl->refresh = mode->refreshRate;
+
+    ShaderSource vert = presentVertexShader(), frag = presentFragmentShader();
+    for (size_t i = 0; i < wall.screens.size(); ++i) {
+        const ScreenConfig& c = wall.screens[i];
+        glfwDefaultWindowHints();
+        glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+        glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+        glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+        glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+        glfwWindowHint(GLFW_RESIZABLE, GLFW_FALSE);
+        glfwWindowHint(GLFW_VISIBLE, options.visible ? GLFW_TRUE : GLFW_FALSE);
+        glfwWindowHint(GLFW_DECORATED, wall.screens.size() == 1 ? GLFW_TRUE : GLFW_FALSE);
+        if (impl->quad) glfwWindowHint(GLFW_STEREO, GLFW_TRUE);
+        GLFWmonitor* monitor = nullptr;
+        if (c.fullscreen) {
+            if (c.monitor >= monitorCount)
+                return no("screen '" + c.name + "' wants monitor " + std::to_string(c.monitor) + ", there are " +
+                          std::to_string(monitorCount));
+            monitor = monitors[c.monitor];
+        }
+        const std::string title = "rtwall: " + wall.name + " / " + c.name;
+        GLFWwindow* share = impl->screens.empty() ? nullptr : impl->screens[0].window;
+        GLFWwindow* win = glfwCreateWindow(c.outputWidth, c.outputHeight, title.c_str(), monitor, share);
+        if (!win)
+            return no("no OpenGL 3.3 core window for screen '" + c.name + "'" + (impl->quad ? " (quad-buffered stereo)" : "") +
+                      ": " + gLastGlfwError);
+        impl->screens.push_back({});
+        Screen& s = impl->screens.back();
+        s.window = win;
+        if (!monitor) glfwSetWindowPos(win, c.window[0], c.window[1]);
+        glfwSetWindowUserPointer(win, impl.get());
+        glfwMakeContextCurrent(win);
+        glfwSwapInterval(i == 0 && (options.vsyncOverride < 0 ? wall.vsync : options.vsyncOverride == 1) ? 1 : 0);
+
+        ShaderSource f = frag;
+        if (!c.fragmentShader.empty()) {
+            std::ifstream in(c.fragmentShader, std::ios::binary);
+            std::ostringstream text;
+            text << in.rdbuf();
+            f = {c.fragmentShader.string(), text.str()};
+        }
+        const GLuint vs = compile(GL_VERTEX_SHADER, vert), fs = compile(GL_FRAGMENT_SHADER, f);
+        s.program = glCreateProgram();
+        glAttachShader(s.program, vs);
+        glAttachShader(s.program, fs);
+        glLinkProgram(s.program);
+        glDeleteShader(vs);
+        glDeleteShader(fs);
+        GLint ok = 0;
+        glGetProgramiv(s.program, GL_LINK_STATUS, &ok);
+        if (!ok) return no("the present shaders of screen '" + c.name + "' do not link");
+        glUseProgram(s.program);
+        glUniform1i(glGetUniformLocation(s.program, "wallLeft"), 0);
+        glUniform1i(glGetUniformLocation(s.program, "wallRight"), 1);
+        glUniform1i(glGetUniformLocation(s.program, "owners"), 2);
+        s.uViewport = glGetUniformLocation(s.program, "viewport");
+        s.uOutputSize = glGetUniformLocation(s.program, "outputSize");
+        s.uEyeMode = glGetUniformLocation(s.program, "eyeMode");
+        s.uBlendWidth = glGetUniformLocation(s.program, "blendWidth");
+        s.uBlendInvGamma = glGetUniformLocation(s.program, "blendInvGamma");
+        s.uInvGamma = glGetUniformLocation(s.program, "invGamma");
+        s.uBrightness = glGetUniformLocation(s.program, "brightness");
+        s.uTileSize = glGetUniformLocation(s.program, "tileSize");
+        glGenVertexArrays(1, &s.vao);  // vertex arrays are not shared between contexts
+
+        glfwSetKeyCallback(win, [](GLFWwindow* w, int key, int, int action, int mods) {
+            auto* im = static_cast<Impl*>(glfwGetWindowUserPointer(w));
+            if (key < 0 || key >= int(im->input.keyDown.size())) return;
+            im->input.keyDown[size_t(key)] = action != GLFW_RELEASE;
+            if (action == GLFW_PRESS) {
+                im->input.keysPressed.push_back(key);
+                im->input.modsPressed.push_back(mods);
+            }
+        });
+        glfwSetMouseButtonCallback(win, [](GLFWwindow* w, int button, int action, int mods) {
+            auto* im = static_cast<Impl*>(glfwGetWindowUserPointer(w));
+            const bool down = action == GLFW_PRESS;
+            if (button == GLFW_MOUSE_BUTTON_LEFT) {
+                im->input.leftDown = down;
+                if (down) {
+                    im->input.leftPressed = true;
+                    im->input.clickMods = mods;
+                }
+            } else if (button == GLFW_MOUSE_BUTTON_RIGHT) {
+                im->input.rightDown = down;
+            }
+        });
+        glfwSetCursorPosCallback(win, [](GLFWwindow* w, double x, double y) {
+            auto* im = static_cast<Impl*>(glfwGetWindowUserPointer(w));
+            int index = 0;
+            for (size_t k = 0; k < im->screens.size(); ++k)
+                if (im->screens[k].window == w) index = int(k);
+            if (im->haveCursor && index == im->lastWindow && (im->input.leftDown || im->input.rightDown)) {
+                im->input.mouseDx += x - im->lastCursor[0];
+                im->input.mouseDy += y - im->lastCursor[1];
+            }
+            im->haveCursor = true;
+            im->lastWindow = index;
+            im->lastCursor[0] = x;
+            im->lastCursor[1] = y;
+            const ScreenConfig& sc = im->wall.screens[size_t(index)];
+            im->input.wallX = sc.viewport.x + x * sc.viewport.width / sc.outputWidth;
+            im->input.wallY = sc.viewport.y + y * sc.viewport.height / sc.outputHeight;
+        });
+        glfwSetScrollCallback(win, [](GLFWwindow* w, double, double dy) {
+            static_cast<Impl*>(glfwGetWindowUserPointer(w))->input.scroll += dy;
+        });
+    }
+
+    // Textures and pixel buffers live in the first context and are shared by all.
+    Impl& im = *impl;
+    glfwMakeContextCurrent(im.screens[0].window);
+    glGenTextures(2, im.wallTex);
+    glGenTextures(1, &im.ownerTex);
+    glGenBuffers(4, &im.pbo[0][0]);
+    for (GLuint t : {im.wallTex[0], im.wallTex[1], im.ownerTex}) {
+        glBindTexture(GL_TEXTURE_2D, t);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    }
+    for (int e = 0; e < 2; ++e) {
+        glBindTexture(GL_TEXTURE_2D, im.wallTex[e]);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, wall.width, wall.height, 0, GL_RGB, GL_UNSIGNED_BYTE, nullptr);
+    }
+    if (glGetError() != GL_NO_ERROR) return no("OpenGL refuses a " + std::to_string(wall.width) + "x" + std::to_string(wall.height) + " texture");
+    return std::unique_ptr<GlPresenter>(new GlPresenter(std::move(impl)));
+}
+
+void GlPresenter::present(const WallFrame& frame, const PresentOptions& options, std::vector<Image>* capture) {
+    Impl& im = *impl_;
+    const WallConfig& wall = im.wall;
+    if (frame.left.width != wall.width || frame.left.height != wall.height)
+        throw std::invalid_argument("GlPresenter::present: the frame is not the wall's size");
+    const bool haveRight = frame.right.width == wall.width && frame.right.height == wall.height;
+
+    double t0 = now();
+    glfwMakeContextCurrent(im.screens[0].window);
+    im.upload(im.wallTex[0], im.pbo[0], frame.left);
+    if (haveRight) im.upload(im.wallTex[1], im.pbo[1], frame.right);
+    im.pboNext ^= 1;
+    const int tileSize = options.falseColour && frame.tileSize > 0 ? frame.tileSize : 0;
+    if (tileSize > 0) {
+        // One texel per tile with the colour of its client: tiny, uploaded directly.
+        const int tw = (wall.width + tileSize - 1) / tileSize, th = (wall.height + tileSize - 1) / tileSize;
+        std::vector<uint8_t> rgb(size_t(tw) * th * 3);
+        for (size_t t = 0; t < size_t(tw) * th; ++t) {
+            const auto c = ownerColour(t < frame.tileOwners.size() ? frame.tileOwners[t] : UINT32_MAX);
+            std::memcpy(&rgb[3 * t], c.data(), 3);
+        }
+        glBindTexture(GL_TEXTURE_2D, im.ownerTex);
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+        if (tw != im.ownerW || th != im.ownerH) {
+            glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, tw, th, 0, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
+            im.ownerW = tw;
+            im.ownerH = th;
+        } else {
+            glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, tw, th, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
+        }
+    }
+    glFlush();  // the other contexts see the new texture contents only after this
+    double t1 = now();
+    im.stats.uploadSeconds += t1 - t0;
+
+    if (capture) capture->assign(im.screens.size(), Image{});
+    for (size_t i = 0; i < im.screens.size(); ++i) {
+        const ScreenConfig& c = wall.screens[i];
+        glfwMakeContextCurrent(im.screens[i].window);
+        int fw = 0, fh = 0;
+        glfwGetFramebufferSize(im.screens[i].window, &fw, &fh);
+        glViewport(0, 0, fw, fh);
+        glActiveTexture(GL_TEXTURE0);
+        glBindTexture(GL_TEXTURE_2D, im.wallTex[0]);
+        glActiveTexture(GL_TEXTURE1);
+        glBindTexture(GL_TEXTURE_2D, im.wallTex[haveRight ? 1 : 0]);
+        glActiveTexture(GL_TEXTURE2);
+        glBindTexture(GL_TEXTURE_2D, im.ownerTex);
+        const bool quad = im.quad && c.eye == Eye::Both;
+        const int eyeMode = c.eye == Eye::Right ? 1 : (c.eye == Eye::Both && wall.stereo.mode == StereoMode::SideBySide ? 2 : 0);
+        if (quad) {
+            glDrawBuffer(GL_BACK_LEFT);
+            im.draw(i, 0, tileSize);
+            glDrawBuffer(GL_BACK_RIGHT);
+            im.draw(i, 1, tileSize);
+            glDrawBuffer(GL_BACK);
+        } else {
+            im.draw(i, eyeMode, tileSize);
+        }
+        if (capture) {
+            Image& img = (*capture)[i];
+            img.width = c.outputWidth;
+            img.height = c.outputHeight;
+            img.rgb.resize(size_t(img.width) * img.height * 3);
+            std::vector<uint8_t> rows(img.rgb.size());
+            glReadBuffer(quad ? GL_BACK_LEFT : GL_BACK);
+            glPixelStorei(GL_PACK_ALIGNMENT, 1);
+            glReadPixels(0, 0, img.width, img.height, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
+            const size_t stride = size_t(img.width) * 3;
+            for (int y = 0; y < img.height; ++y)  // OpenGL's row 0 is the bottom row
+                std::memcpy(&img.rgb[size_t(y) * stride], &rows[size_t(img.height - 1 - y) * stride], stride);
+        }
+    }
+    double t2 = now();
+    im.stats.drawSeconds += t2 - t1;
+    for (Screen& s : im.screens) glfwSwapBuffers(s.window);
+    double t3 = now();
+    im.stats.swapSeconds += t3 - t2;
+    const bool vsync = im.options.vsyncOverride < 0 ? wall.vsync : im.options.vsyncOverride == 1;
+    if (vsync && im.lastSwap > 0 && t3 - im.lastSwap > 1.5 / im.refresh) ++im.stats.late;
+    im.lastSwap = t3;
+    ++im.stats.frames;
+}
+
+InputState GlPresenter::poll() {
+    Impl& im = *impl_;
+    glfwPollEvents();
+    for (Screen& s : im.screens)
+        if (glfwWindowShouldClose(s.window)) im.input.closeRequested = true;
+    InputState out = im.input;
+    im.input.keysPressed.clear();
+    im.input.modsPressed.clear();
+    im.input.mouseDx = im.input.mouseDy = im.input.scroll = 0;
+    im.input.leftPressed = false;
+    return out;
+}
+
+void GlPresenter::setStatus(const std::string& text) { glfwSetWindowTitle(impl_->screens[0].window, text.c_str()); }
+
+const PresentStats& GlPresenter::stats() const { return impl_->stats; }
+
+std::string GlPresenter::renderer() const {
+    glfwMakeContextCurrent(impl_->screens[0].window);
+    const GLubyte* r = glGetString(GL_RENDERER);
+    return r ? reinterpret_cast<const char*>(r) : "unknown";
+}
+
+}  // namespace rtwall

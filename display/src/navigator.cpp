@@ -1,0 +1,141 @@
+// Fly and orbit navigation, bookmarks and camera-path recording: plain state fed with the
+// input the presenter collected, so it is tested without a window.
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>  // key codes only
+
+#include <rtwall/display.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+namespace rtwall {
+
+namespace {
+struct V {
+    double x, y, z;
+};
+V v(Float3 a) { return {a.x, a.y, a.z}; }
+Float3 f(V a) { return {float(a.x), float(a.y), float(a.z)}; }
+V operator+(V a, V b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+V operator-(V a, V b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+V operator*(V a, double s) { return {a.x * s, a.y * s, a.z * s}; }
+double dot(V a, V b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+V cross(V a, V b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+V normalize(V a) {
+    const double l = std::sqrt(dot(a, a));
+    return l > 0 ? a * (1.0 / l) : a;
+}
+// Rodrigues' rotation of p about unit axis k.
+V rotate(V p, V k, double rad) {
+    const double c = std::cos(rad), s = std::sin(rad);
+    return p * c + cross(k, p) * s + k * (dot(k, p) * (1 - c));
+}
+constexpr double kRadPerPixel = 0.005;
+constexpr double kMaxPitch = 1.5;  // radians from the horizon: never quite straight up or down
+}  // namespace
+
+Navigator::Navigator(const ViewPose& start, float sceneScale) : pose_(start), speed_(std::max(sceneScale, 1e-3f)) {}
+
+bool Navigator::hasBookmark(int slot) const { return slot >= 0 && slot < 10 && hasBookmark_[size_t(slot)]; }
+
+bool Navigator::update(const InputState& in, double dt) {
+    bool changed = false;
+    for (size_t i = 0; i < in.keysPressed.size(); ++i) {
+        const int key = in.keysPressed[i], mods = i < in.modsPressed.size() ? in.modsPressed[i] : 0;
+        if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9) {
+            const size_t slot = size_t(key - GLFW_KEY_0);
+            if (mods & GLFW_MOD_CONTROL) {
+                bookmarks_[slot] = pose_;
+                hasBookmark_[slot] = true;
+            } else if (hasBookmark_[slot]) {
+                pose_ = bookmarks_[slot];
+                changed = true;
+            }
+        } else if (key == GLFW_KEY_TAB) {
+            mode_ = mode_ == Mode::Fly ? Mode::Orbit : Mode::Fly;
+        } else if (key == GLFW_KEY_R) {
+            recording_ = !recording_;
+            if (recording_) path_.clear();
+        }
+    }
+
+    const V up = normalize(v(pose_.up));
+    V pos = v(pose_.position), at = v(pose_.lookAt);
+    V fwd = at - pos;
+    const double dist = std::sqrt(dot(fwd, fwd));
+    fwd = normalize(fwd);
+    const V right = normalize(cross(fwd, up));
+    const bool picking = in.leftDown && (in.clickMods & GLFW_MOD_CONTROL);
+    const double dx = picking ? 0.0 : in.mouseDx, dy = picking ? 0.0 : in.mouseDy;
+    // Turns `vec` up or down by `delta` radians of elevation, never past kMaxPitch: asin alone
+    // cannot tell a vector that went over the pole from one that did not, so clamp the angle.
+    auto pitched = [&](V vec, V axis, double delta, double sign) {
+        const double e = std::asin(std::clamp(dot(normalize(vec), up), -1.0, 1.0));
+        const double target = std::clamp(e + delta, -kMaxPitch, kMaxPitch);
+        return rotate(vec, axis, sign * (target - e));
+    };
+    if (mode_ == Mode::Fly) {
+        V move{0, 0, 0};
+        auto down = [&](int k) { return in.keyDown[size_t(k)]; };
+        if (down(GLFW_KEY_W)) move = move + fwd;
+        if (down(GLFW_KEY_S)) move = move - fwd;
+        if (down(GLFW_KEY_D)) move = move + right;
+        if (down(GLFW_KEY_A)) move = move - right;
+        if (down(GLFW_KEY_E)) move = move + up;
+        if (down(GLFW_KEY_Q)) move = move - up;
+        const double fast = down(GLFW_KEY_LEFT_SHIFT) ? 4.0 : 1.0;
+        if (dot(move, move) > 0) {
+            const V step = normalize(move) * (double(speed_) * fast * dt);
+            pos = pos + step;
+            at = at + step;
+            changed = true;
+        }
+        if (dx != 0 || dy != 0) {
+            // Mouse look: the view direction turns about the camera's position.
+            V dir = rotate(at - pos, up, -dx * kRadPerPixel);
+            dir = pitched(dir, normalize(cross(dir, up)), -dy * kRadPerPixel, 1.0);
+            at = pos + dir;
+            changed = true;
+        }
+    } else {
+        if (dx != 0 || dy != 0) {
+            // Orbit: the camera turns about the look-at point.
+            V off = rotate(pos - at, up, -dx * kRadPerPixel);
+            off = pitched(off, normalize(cross(off * -1.0, up)), dy * kRadPerPixel, -1.0);
+            pos = at + off;
+            changed = true;
+        }
+        double zoom = in.scroll;
+        if (in.keyDown[GLFW_KEY_W]) zoom += 2.0 * dt;
+        if (in.keyDown[GLFW_KEY_S]) zoom -= 2.0 * dt;
+        if (zoom != 0 && dist > 0) {
+            const double d = std::max(dist * std::pow(0.9, zoom), 1e-3 * double(speed_));
+            pos = at - fwd * d;
+            changed = true;
+        }
+    }
+    pose_.position = f(pos);
+    pose_.lookAt = f(at);
+    if (recording_) path_.push_back(pose_);
+    return changed;
+}
+
+std::string Navigator::cameraPathToml(const std::vector<ViewPose>& poses) {
+    std::ostringstream os;
+    os << std::setprecision(9) << "# A camera path recorded by rtwall run: replay with rtwall run --camera-path FILE\n";
+    auto f3 = [&](Float3 a) { os << "[" << a.x << ", " << a.y << ", " << a.z << "]"; };
+    for (size_t i = 0; i < poses.size(); ++i) {
+        os << "\n[[key]]\nframe = " << i << "\nposition = ";
+        f3(poses[i].position);
+        os << "\nlook_at = ";
+        f3(poses[i].lookAt);
+        os << "\nup = ";
+        f3(poses[i].up);
+        os << "\nfov = " << poses[i].fovY << "\n";
+    }
+    return os.str();
+}
+
+}  // namespace rtwall

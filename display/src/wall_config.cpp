@@ -1,0 +1,395 @@
+// Wall configs: strict reading (every key checked, every problem with its line), validation of
+// the layout as a whole (overlaps, bezels, stereo eyes), and writing back out.
+#include <rtwall/display.h>
+#include <rtwall/toml_reader.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+namespace rtwall {
+
+namespace {
+
+using toml_reader::Reader;
+
+// An array of exactly n integers in [lo, hi].
+template <size_t N>
+std::array<int, N> intArray(Reader& r, const std::string& key, std::array<int, N> def, int lo, int hi,
+                            bool required = false) {
+    const toml::node* n = r.find(key);
+    if (!n) {
+        if (required) r.fail(nullptr, "missing required key '" + key + "'");
+        return def;
+    }
+    const toml::array* a = n->as_array();
+    if (!a || a->size() != N) r.fail(n, "key '" + key + "': expected an array of " + std::to_string(N) + " integers");
+    std::array<int, N> v{};
+    for (size_t i = 0; i < N; ++i) {
+        const auto* e = a->get(i)->as_integer();
+        if (!e) r.fail(n, "key '" + key + "': element " + std::to_string(i) + " is " + Reader::typeName(*a->get(i)) + ", not an integer");
+        if (e->get() < lo || e->get() > hi)
+            r.fail(n, "key '" + key + "': element " + std::to_string(i) + " (" + std::to_string(e->get()) +
+                          ") is out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+        v[i] = int(e->get());
+    }
+    return v;
+}
+
+// A number for all four edges, or an array of four numbers (left, right, top, bottom).
+std::array<double, 4> edgeNumbers(Reader& r, const std::string& key, std::array<double, 4> def, double lo, double hi) {
+    const toml::node* n = r.find(key);
+    if (!n) return def;
+    auto one = [&](const toml::node& e, const std::string& what) {
+        double v;
+        if (auto i = e.as_integer()) v = double(i->get());
+        else if (auto f = e.as_floating_point()) v = f->get();
+        else r.fail(n, "key '" + key + "': " + what + " is " + Reader::typeName(e) + ", not a number");
+        if (!std::isfinite(v) || v < lo || v > hi) {
+            std::ostringstream os;
+            os << "key '" << key << "': " << what << " (" << v << ") is out of range [" << lo << ", " << hi << "]";
+            r.fail(n, os.str());
+        }
+        return v;
+    };
+    if (const toml::array* a = n->as_array()) {
+        if (a->size() != 4) r.fail(n, "key '" + key + "': expected a number or an array of 4 numbers (left, right, top, bottom)");
+        std::array<double, 4> v{};
+        for (size_t i = 0; i < 4; ++i) v[i] = one(*a->get(i), "element " + std::to_string(i));
+        return v;
+    }
+    const double v = one(*n, "the value");
+    return {v, v, v, v};
+}
+
+Eye eyeFromName(const std::string& s) {
+    if (s == "left") return Eye::Left;
+    if (s == "right") return Eye::Right;
+    if (s == "both") return Eye::Both;
+    return Eye::Mono;
+}
+const char* eyeName(Eye e) {
+    switch (e) {
+    case Eye::Left: return "left";
+    case Eye::Right: return "right";
+    case Eye::Both: return "both";
+    default: return "mono";
+    }
+}
+StereoMode stereoFromName(const std::string& s) {
+    if (s == "passive") return StereoMode::Passive;
+    if (s == "side_by_side") return StereoMode::SideBySide;
+    if (s == "quad_buffer") return StereoMode::QuadBuffer;
+    return StereoMode::None;
+}
+const char* stereoName(StereoMode m) {
+    switch (m) {
+    case StereoMode::Passive: return "passive";
+    case StereoMode::SideBySide: return "side_by_side";
+    case StereoMode::QuadBuffer: return "quad_buffer";
+    default: return "none";
+    }
+}
+
+// Options shared by [grid] and [[screen]] (colour correction, output).
+void readScreenCommon(Reader& r, ScreenConfig& s) {
+    s.blendGamma = edgeNumbers(r, "blend_gamma", s.blendGamma, 0.1, 10.0);
+    s.gamma = r.number("gamma", s.gamma, 0.1, 10.0);
+    s.brightness = r.number("brightness", s.brightness, 0.0, 10.0);
+    s.fullscreen = r.boolean("fullscreen", s.fullscreen);
+}
+
+bool eyesMeet(Eye a, Eye b) {
+    if (a == Eye::Mono || b == Eye::Mono || a == Eye::Both || b == Eye::Both) return true;
+    return a == b;
+}
+
+// The part `in` of screen s is inside one of s's blending ramps.
+bool blended(const ScreenConfig& s, const PixelRect& in) {
+    const PixelRect& v = s.viewport;
+    return (s.blend[0] > 0 && in.x + in.width <= v.x + s.blend[0]) ||
+           (s.blend[1] > 0 && in.x >= v.x + v.width - s.blend[1]) ||
+           (s.blend[2] > 0 && in.y + in.height <= v.y + s.blend[2]) ||
+           (s.blend[3] > 0 && in.y >= v.y + v.height - s.blend[3]);
+}
+
+WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
+    using namespace toml_reader;
+    WallConfig w;
+    w.file = file;
+    Reader top(file, root, "");
+    const toml::table* wallT = subTable(top, "wall");
+    if (!wallT) top.fail(nullptr, "missing required table [wall]");
+    Reader wr(file, *wallT, "[wall]: ");
+    w.name = wr.string("name", w.name);
+    const toml::node* widthNode = wr.find("width");
+    const toml::node* heightNode = wr.find("height");
+    w.width = wr.integer("width", 0, 1, 65536);
+    w.height = wr.integer("height", 0, 1, 65536);
+    w.vsync = wr.boolean("vsync", w.vsync);
+    wr.finish();
+
+    if (const toml::table* t = subTable(top, "stereo")) {
+        Reader r(file, *t, "[stereo]: ");
+        StereoConfig& st = w.stereo;
+        st.mode = stereoFromName(r.choice("mode", "none", {"none", "passive", "side_by_side", "quad_buffer"}));
+        st.eyeSeparation = r.number("eye_separation", st.eyeSeparation, 0.0, 1.0);
+        st.viewer = r.vec3("viewer", st.viewer);
+        st.lowerLeft = r.vec3("lower_left", st.lowerLeft);
+        st.lowerRight = r.vec3("lower_right", st.lowerRight);
+        st.upperLeft = r.vec3("upper_left", st.upperLeft);
+        auto sub = [](Float3 a, Float3 b) { return Float3{a.x - b.x, a.y - b.y, a.z - b.z}; };
+        auto dot = [](Float3 a, Float3 b) { return double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z; };
+        const Float3 across = sub(st.lowerRight, st.lowerLeft), up = sub(st.upperLeft, st.lowerLeft);
+        const double la = std::sqrt(dot(across, across)), lu = std::sqrt(dot(up, up));
+        if (la < 1e-6 || lu < 1e-6) r.fail(r.find("upper_left"), "the wall's corners must span a rectangle");
+        if (std::fabs(dot(across, up)) > 1e-3 * la * lu)
+            r.fail(r.find("upper_left"), "lower_left->lower_right and lower_left->upper_left must be at right angles");
+        r.finish();
+    }
+    const Eye defaultEye = w.stereo.mode == StereoMode::SideBySide || w.stereo.mode == StereoMode::QuadBuffer ? Eye::Both
+                                                                                                             : Eye::Mono;
+
+    const bool hasGrid = top.has("grid"), hasScreens = top.has("screen");
+    if (hasGrid && hasScreens) top.fail(top.find("screen"), "give either [grid] or [[screen]], not both");
+    if (!hasGrid && !hasScreens) top.fail(nullptr, "a wall needs a [grid] or a list of [[screen]]");
+
+    std::vector<const toml::node*> viewportNodes;  // per screen, for messages about the layout
+    if (hasGrid) {
+        const toml::table* t = subTable(top, "grid");
+        Reader r(file, *t, "[grid]: ");
+        const int cols = r.integer("columns", 1, 1, 64), rows = r.integer("rows", 1, 1, 64);
+        const int sw = r.integer("screen_width", 0, 1, 16384), sh = r.integer("screen_height", 0, 1, 16384);
+        if (!r.has("screen_width")) r.fail(nullptr, "missing required key 'screen_width'");
+        if (!r.has("screen_height")) r.fail(nullptr, "missing required key 'screen_height'");
+        std::array<int, 4> bezel{};  // left, right, top, bottom
+        if (r.has("bezel") && r.has("bezel_mm")) r.fail(r.find("bezel_mm"), "give either 'bezel' (pixels) or 'bezel_mm'");
+        bezel = intArray<4>(r, "bezel", bezel, 0, 16384);
+        const toml::node* bezelNode = r.find("bezel");
+        if (r.has("bezel_mm")) {
+            bezelNode = r.find("bezel_mm");
+            const std::array<double, 4> mm = edgeNumbers(r, "bezel_mm", {0, 0, 0, 0}, 0.0, 10000.0);
+            if (!r.has("screen_mm")) r.fail(bezelNode, "key 'bezel_mm' needs 'screen_mm' = [width, height], the visible area in millimetres");
+            const std::array<int, 2> smm = intArray<2>(r, "screen_mm", {0, 0}, 1, 100000);
+            for (int i = 0; i < 4; ++i) bezel[i] = int(std::lround(mm[i] * (i < 2 ? double(sw) / smm[0] : double(sh) / smm[1])));
+        } else if (r.has("screen_mm")) {
+            intArray<2>(r, "screen_mm", {0, 0}, 1, 100000);
+        }
+        if (bezel[0] + bezel[1] >= sw)
+            r.fail(bezelNode, "the bezel (" + std::to_string(bezel[0] + bezel[1]) + " pixels left and right) is wider than the screen (" +
+                                  std::to_string(sw) + ")");
+        if (bezel[2] + bezel[3] >= sh)
+            r.fail(bezelNode, "the bezel (" + std::to_string(bezel[2] + bezel[3]) + " pixels top and bottom) is taller than the screen (" +
+                                  std::to_string(sh) + ")");
+        const int overlap = r.integer("overlap", 0, 0, 16384);
+        if (overlap > 0 && (bezel != std::array<int, 4>{}))
+            r.fail(r.find("overlap"), "overlapping projectors have no bezels: give 'overlap' or a bezel, not both");
+        if (2 * overlap >= std::min(sw, sh)) r.fail(r.find("overlap"), "key 'overlap': must be less than half the screen");
+        ScreenConfig base;
+        readScreenCommon(r, base);
+        const int firstMonitor = r.integer("first_monitor", 0, 0, 64);
+        r.finish();
+        // Bezels between screens are hidden wall pixels; the outer ones are not rendered.
+        const int stepX = sw + bezel[0] + bezel[1] - overlap, stepY = sh + bezel[2] + bezel[3] - overlap;
+        const int total = cols * rows;
+        const bool pairs = w.stereo.mode == StereoMode::Passive;
+        for (int eye = 0; eye < (pairs ? 2 : 1); ++eye)
+            for (int row = 0; row < rows; ++row)
+                for (int col = 0; col < cols; ++col) {
+                    ScreenConfig s = base;
+                    s.name = "c" + std::to_string(col) + "r" + std::to_string(row) + (pairs ? (eye ? "R" : "L") : "");
+                    s.viewport = {col * stepX, row * stepY, sw, sh};
+                    s.outputWidth = sw;
+                    s.outputHeight = sh;
+                    if (overlap > 0) s.blend = {col > 0 ? overlap : 0, col + 1 < cols ? overlap : 0, row > 0 ? overlap : 0,
+                                                row + 1 < rows ? overlap : 0};
+                    s.eye = pairs ? (eye ? Eye::Right : Eye::Left) : defaultEye;
+                    s.monitor = firstMonitor + eye * total + row * cols + col;
+                    s.window = {eye * cols * sw + col * sw, row * sh};
+                    s.line = int(t->source().begin.line);
+                    w.screens.push_back(s);
+                    viewportNodes.push_back(t);
+                }
+        const int gw = cols * stepX - (bezel[0] + bezel[1]) + overlap, gh = rows * stepY - (bezel[2] + bezel[3]) + overlap;
+        if (w.width && w.width != gw) wr.fail(widthNode, "key 'width': " + std::to_string(w.width) + " differs from the grid's " + std::to_string(gw));
+        if (w.height && w.height != gh) wr.fail(heightNode, "key 'height': " + std::to_string(w.height) + " differs from the grid's " + std::to_string(gh));
+        w.width = gw;
+        w.height = gh;
+    } else {
+        if (!w.width) wr.fail(nullptr, "missing required key 'width' (the wall image's size in pixels)");
+        if (!w.height) wr.fail(nullptr, "missing required key 'height' (the wall image's size in pixels)");
+        forEachTable(top, file, "screen", [&](Reader& r, const toml::table& t) {
+            ScreenConfig s;
+            s.line = int(t.source().begin.line);
+            s.name = r.string("name", "screen" + std::to_string(w.screens.size() + 1));
+            const std::array<int, 4> vp = intArray<4>(r, "viewport", {}, 0, 65536, true);
+            const toml::node* vpNode = r.find("viewport");
+            s.viewport = {vp[0], vp[1], vp[2], vp[3]};
+            if (vp[2] < 1 || vp[3] < 1) r.fail(vpNode, "key 'viewport': width and height must be at least 1");
+            if (vp[0] + vp[2] > w.width || vp[1] + vp[3] > w.height)
+                r.fail(vpNode, "key 'viewport': [" + std::to_string(vp[0]) + ", " + std::to_string(vp[1]) + ", " + std::to_string(vp[2]) +
+                                   ", " + std::to_string(vp[3]) + "] reaches outside the " + std::to_string(w.width) + "x" +
+                                   std::to_string(w.height) + " wall");
+            const std::array<int, 2> res = intArray<2>(r, "resolution", {vp[2], vp[3]}, 1, 16384);
+            s.outputWidth = res[0];
+            s.outputHeight = res[1];
+            s.blend = intArray<4>(r, "blend", s.blend, 0, 16384);
+            if (s.blend[0] + s.blend[1] > vp[2] || s.blend[2] + s.blend[3] > vp[3])
+                r.fail(r.find("blend"), "key 'blend': the ramps are wider than the screen's viewport");
+            readScreenCommon(r, s);
+            const std::string eye = r.choice("eye", eyeName(defaultEye), {"mono", "left", "right", "both"});
+            s.eye = eyeFromName(eye);
+            s.monitor = r.integer("monitor", 0, 0, 64);
+            s.window = intArray<2>(r, "window", s.window, -65536, 65536);
+            const std::string shader = r.string("shader", "");
+            if (!shader.empty()) {
+                s.fragmentShader = std::filesystem::absolute(file.parent_path() / shader).lexically_normal();
+                if (!std::filesystem::exists(s.fragmentShader))
+                    r.fail(r.find("shader"), "key 'shader': no such file " + s.fragmentShader.string());
+            }
+            for (size_t i = 0; i < w.screens.size(); ++i)
+                if (w.screens[i].name == s.name) r.fail(r.find("name"), "key 'name': '" + s.name + "' is used by another screen");
+            w.screens.push_back(s);
+            viewportNodes.push_back(vpNode);
+        });
+    }
+
+    if (const toml::table* t = subTable(top, "headless")) {
+        Reader r(file, *t, "[headless]: ");
+        w.writeEvery = r.integer("write_every", w.writeEvery, 0, 100'000'000);
+        w.video = r.string("video", "");
+        r.finish();
+    }
+    top.finish();
+
+    // The layout as a whole.
+    bool left = false, right = false;
+    for (size_t i = 0; i < w.screens.size(); ++i) {
+        const ScreenConfig& s = w.screens[i];
+        auto failAt = [&](const std::string& what) {
+            throw InputError(toml_reader::where(file, viewportNodes[i]->source()) + ": screen '" + s.name + "': " + what);
+        };
+        left |= s.eye == Eye::Left;
+        right |= s.eye == Eye::Right;
+        switch (w.stereo.mode) {
+        case StereoMode::None:
+            if (s.eye != Eye::Mono) failAt("key 'eye': '" + std::string(eyeName(s.eye)) + "' needs a [stereo] mode");
+            break;
+        case StereoMode::Passive:
+            if (s.eye != Eye::Left && s.eye != Eye::Right) failAt("key 'eye': passive stereo needs 'left' or 'right' on every screen");
+            break;
+        default:
+            if (s.eye != Eye::Both) failAt("key 'eye': side-by-side and quad-buffered stereo show 'both' eyes on every screen");
+        }
+        for (size_t j = 0; j < i; ++j) {
+            const ScreenConfig& o = w.screens[j];
+            if (!eyesMeet(s.eye, o.eye)) continue;
+            const PixelRect &a = s.viewport, &b = o.viewport;
+            const int x0 = std::max(a.x, b.x), x1 = std::min(a.x + a.width, b.x + b.width);
+            const int y0 = std::max(a.y, b.y), y1 = std::min(a.y + a.height, b.y + b.height);
+            if (x0 >= x1 || y0 >= y1) continue;
+            const PixelRect in{x0, y0, x1 - x0, y1 - y0};
+            if (!blended(s, in) || !blended(o, in))
+                failAt("key 'viewport': overlaps screen '" + o.name + "' by " + std::to_string(in.width) + "x" +
+                       std::to_string(in.height) + " wall pixels that no blend ramp of both screens covers");
+        }
+    }
+    if (w.stereo.mode == StereoMode::Passive && (!left || !right))
+        throw InputError(toml_reader::where(file, root.source()) + ": [stereo]: passive stereo needs screens for both eyes");
+    return w;
+}
+
+}  // namespace
+
+bool ScreenConfig::operator==(const ScreenConfig& o) const {
+    return name == o.name && viewport == o.viewport && outputWidth == o.outputWidth && outputHeight == o.outputHeight &&
+           blend == o.blend && blendGamma == o.blendGamma && gamma == o.gamma && brightness == o.brightness &&
+           eye == o.eye && monitor == o.monitor && window == o.window && fullscreen == o.fullscreen &&
+           fragmentShader == o.fragmentShader;
+}
+
+bool StereoConfig::operator==(const StereoConfig& o) const {
+    auto eq = [](Float3 a, Float3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; };
+    return mode == o.mode && eyeSeparation == o.eyeSeparation && eq(viewer, o.viewer) && eq(lowerLeft, o.lowerLeft) &&
+           eq(lowerRight, o.lowerRight) && eq(upperLeft, o.upperLeft);
+}
+
+bool WallConfig::operator==(const WallConfig& o) const {
+    return name == o.name && width == o.width && height == o.height && vsync == o.vsync && screens == o.screens &&
+           stereo == o.stereo && writeEvery == o.writeEvery && video == o.video;
+}
+
+WallConfig loadWallConfig(const std::filesystem::path& file) { return parse(toml_reader::parseFile(file), file); }
+
+WallConfig parseWallConfig(const std::string& text, const std::filesystem::path& nameForMessages) {
+    toml::table root;
+    try {
+        root = toml::parse(text, nameForMessages.string());
+    } catch (const toml::parse_error& e) {
+        throw InputError(toml_reader::where(nameForMessages, e.source()) + ": " + std::string(e.description()));
+    }
+    return parse(root, nameForMessages);
+}
+
+std::string writeWallConfig(const WallConfig& w) {
+    std::ostringstream os;
+    os << std::setprecision(17);
+    auto quoted = [](const std::string& s) {
+        std::string q = "\"";
+        for (char c : s) {
+            if (c == '"' || c == '\\') q += '\\';
+            q += c;
+        }
+        return q + "\"";
+    };
+    auto f3 = [](Float3 v) {
+        std::ostringstream o;
+        o << std::setprecision(9) << "[" << v.x << ", " << v.y << ", " << v.z << "]";
+        return o.str();
+    };
+    auto num = [](double v) {
+        std::ostringstream o;
+        o << std::setprecision(17) << v;
+        std::string s = o.str();
+        if (s.find_first_of(".eE") == std::string::npos) s += ".0";
+        return s;
+    };
+    os << "[wall]\nname = " << quoted(w.name) << "\nwidth = " << w.width << "\nheight = " << w.height
+       << "\nvsync = " << (w.vsync ? "true" : "false") << "\n\n";
+    if (w.stereo.mode != StereoMode::None) {
+        const StereoConfig& s = w.stereo;
+        os << "[stereo]\nmode = \"" << stereoName(s.mode) << "\"\neye_separation = " << num(s.eyeSeparation)
+           << "\nviewer = " << f3(s.viewer) << "\nlower_left = " << f3(s.lowerLeft) << "\nlower_right = " << f3(s.lowerRight)
+           << "\nupper_left = " << f3(s.upperLeft) << "\n\n";
+    }
+    os << "[headless]\nwrite_every = " << w.writeEvery << "\nvideo = " << quoted(w.video) << "\n";
+    for (const ScreenConfig& s : w.screens) {
+        os << "\n[[screen]]\nname = " << quoted(s.name) << "\nviewport = [" << s.viewport.x << ", " << s.viewport.y << ", "
+           << s.viewport.width << ", " << s.viewport.height << "]\nresolution = [" << s.outputWidth << ", " << s.outputHeight
+           << "]\nblend = [" << s.blend[0] << ", " << s.blend[1] << ", " << s.blend[2] << ", " << s.blend[3]
+           << "]\nblend_gamma = [" << num(s.blendGamma[0]) << ", " << num(s.blendGamma[1]) << ", " << num(s.blendGamma[2]) << ", "
+           << num(s.blendGamma[3]) << "]\ngamma = " << num(s.gamma) << "\nbrightness = " << num(s.brightness) << "\neye = \""
+           << eyeName(s.eye) << "\"\nmonitor = " << s.monitor << "\nwindow = [" << s.window[0] << ", " << s.window[1]
+           << "]\nfullscreen = " << (s.fullscreen ? "true" : "false") << "\n";
+        if (!s.fragmentShader.empty()) os << "shader = " << quoted(s.fragmentShader.string()) << "\n";
+    }
+    return os.str();
+}
+
+WallConfig singleScreenWall(int width, int height) {
+    WallConfig w;
+    w.name = "desktop";
+    w.width = width;
+    w.height = height;
+    ScreenConfig s;
+    s.name = "main";
+    s.viewport = {0, 0, width, height};
+    s.outputWidth = width;
+    s.outputHeight = height;
+    s.window = {0, 0};
+    w.screens.push_back(s);
+    return w;
+}
+
+}  // namespace rtwall

@@ -1,0 +1,138 @@
+// The real GLFW / OpenGL 3.3 path under Xvfb with Mesa's software renderer: the 2x2 wall shows
+// a rendered frame, and each screen's pixels, read back, match the headless presenter's image.
+// The test starts its own Xvfb (a free display number, found with -displayfd).
+#include "display_test_util.h"
+
+#include <rtwall/engine.h>
+
+#include <csignal>
+#include <cstdlib>
+#include <poll.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace rtwall {
+namespace {
+
+class XvfbServer : public ::testing::Environment {
+public:
+    void SetUp() override {
+        int fds[2];
+        ASSERT_EQ(pipe(fds), 0);
+        pid_ = fork();
+        ASSERT_GE(pid_, 0);
+        if (pid_ == 0) {
+            close(fds[0]);
+            const std::string fd = std::to_string(fds[1]);
+            execlp("Xvfb", "Xvfb", "-displayfd", fd.c_str(), "-screen", "0", "3300x2500x24", "-nolisten", "tcp", nullptr);
+            _exit(127);
+        }
+        close(fds[1]);
+        std::string number;
+        pollfd p{fds[0], POLLIN, 0};
+        // Xvfb writes its display number when it is ready; give it 30 s.
+        while (poll(&p, 1, 30000) > 0) {
+            char c;
+            if (read(fds[0], &c, 1) != 1 || c == '\n') break;
+            number += c;
+        }
+        close(fds[0]);
+        ASSERT_FALSE(number.empty()) << "Xvfb did not start (is the xvfb package installed?)";
+        setenv("DISPLAY", (":" + number).c_str(), 1);
+        setenv("LIBGL_ALWAYS_SOFTWARE", "1", 1);  // Mesa's llvmpipe even where a GPU exists
+    }
+    void TearDown() override {
+        if (pid_ > 0) {
+            kill(pid_, SIGTERM);
+            waitpid(pid_, nullptr, 0);
+        }
+    }
+
+private:
+    pid_t pid_ = -1;
+};
+
+const auto* const gXvfb = ::testing::AddGlobalTestEnvironment(new XvfbServer);
+
+WallFrame renderedFrame(int width, int height, uint32_t number, float cameraX) {
+    SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
+    desc.settings.width = width;
+    desc.settings.height = height;
+    desc.settings.threads = 2;
+    desc.settings.shading = ShadingMode::EyeLight;  // fast: the test is about presenting
+    desc.cameras.front().position.x += cameraX;
+    Scene scene(desc);
+    WallFrame f;
+    f.number = number;
+    f.left = renderFrame(scene, Camera(desc.cameras.front(), width, height), desc.settings);
+    f.tileSize = 32;
+    const int tiles = ((width + 31) / 32) * ((height + 31) / 32);
+    for (int t = 0; t < tiles; ++t) f.tileOwners.push_back(uint32_t(t % 3));
+    return f;
+}
+
+int maxDifference(const Image& a, const Image& b) {
+    EXPECT_EQ(a.width, b.width);
+    EXPECT_EQ(a.height, b.height);
+    if (a.rgb.size() != b.rgb.size()) return 256;
+    int worst = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) worst = std::max(worst, std::abs(int(a.rgb[i]) - int(b.rgb[i])));
+    return worst;
+}
+
+void expectScreensMatchHeadless(const std::filesystem::path& config, UploadMethod upload, const PresentOptions& options,
+                                int tolerance) {
+    const WallConfig wall = loadWallConfig(config);
+    std::string why;
+    GlPresenter::Options o;
+    o.upload = upload;
+    auto gl = GlPresenter::open(wall, o, &why);
+    ASSERT_TRUE(gl) << why;
+    const auto dir = test::displayScratchDir();
+    // Two frames, so the second really streams new pixels into the texture.
+    for (uint32_t n = 1; n <= 2; ++n) {
+        const WallFrame frame = renderedFrame(wall.width, wall.height, n, float(n) * 0.3f);
+        std::vector<Image> shown;
+        gl->present(frame, options, &shown);
+        ASSERT_EQ(shown.size(), wall.screens.size());
+        for (size_t s = 0; s < wall.screens.size(); ++s) {
+            const Image expected = presentScreen(wall, s, frame, options);
+            const int diff = maxDifference(shown[s], expected);
+            EXPECT_LE(diff, tolerance) << "frame " << n << ", screen " << wall.screens[s].name << " ("
+                                       << uploadMethodName(upload) << ", " << gl->renderer() << ")";
+            if (diff > tolerance) {
+                writePng(shown[s], dir / ("shown_" + wall.screens[s].name + ".png"));
+                writePng(expected, dir / ("expected_" + wall.screens[s].name + ".png"));
+            }
+        }
+    }
+    EXPECT_EQ(gl->stats().frames, 2u);
+}
+
+TEST(GlPresenter, TheTwoByTwoWallShowsWhatTheHeadlessPresenterWrites) {
+    // Pure crops: the same bytes.
+    expectScreensMatchHeadless(test::sourceDir() / "configs/wall/projectors-2x2.toml", UploadMethod::TexSubImage, {}, 0);
+}
+
+TEST(GlPresenter, PixelBufferUploadShowsTheSame) {
+    expectScreensMatchHeadless(test::sourceDir() / "configs/wall/projectors-2x2.toml", UploadMethod::Pbo, {}, 0);
+}
+
+TEST(GlPresenter, BlendingGammaAndFalseColourMatchTheCpuReference) {
+    // pow() on the GPU and the CPU may differ in the last bits: one level of slack.
+    PresentOptions o;
+    o.falseColour = true;
+    expectScreensMatchHeadless(test::sourceDir() / "configs/wall/projector-pair-blend.toml", UploadMethod::Pbo, o, 1);
+}
+
+TEST(GlPresenter, ABrokenConfigShaderIsRefusedBeforeAnyWindowOpens) {
+    const auto dir = test::displayScratchDir();
+    test::writeText(dir / "bad.frag", "#version 330 core\nout vec4 colour;\nvoid main() { colour = nope; }\n");
+    const auto file = test::writeText(dir / "w.toml", "[wall]\nwidth = 64\nheight = 64\n[[screen]]\nviewport = [0, 0, 64, 64]\nshader = \"bad.frag\"\n");
+    const auto problems = checkWall(file);
+    ASSERT_EQ(problems.size(), 1u);
+    EXPECT_NE(problems[0].find("bad.frag:3:"), std::string::npos) << problems[0];
+}
+
+}  // namespace
+}  // namespace rtwall

@@ -1,0 +1,159 @@
+// The wall-to-screen mapping on the CPU, against values worked out by hand.
+#include "display_test_util.h"
+
+#include <cmath>
+#include <cstring>
+
+namespace rtwall {
+namespace {
+
+WallFrame gradientFrame(int w, int h, int tileSize = 0) {
+    WallFrame f;
+    f.left.width = w;
+    f.left.height = h;
+    f.left.rgb.resize(size_t(w) * h * 3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            uint8_t* p = f.left.pixel(x, y);
+            p[0] = uint8_t(x * 7 + y);
+            p[1] = uint8_t(y * 3);
+            p[2] = uint8_t(x ^ y);
+        }
+    f.tileSize = tileSize;
+    return f;
+}
+
+TEST(Mapping, TwoByTwoScreensCropTheirQuarter) {
+    const WallConfig w = loadWallConfig(test::sourceDir() / "configs/wall/projectors-2x2.toml");
+    const ScreenSample a = mapPixel(w.screens[1], w.stereo.mode, 0, 0);
+    EXPECT_EQ(a.wallX, 800);
+    EXPECT_EQ(a.wallY, 0);
+    EXPECT_EQ(a.weight, 1.0f);
+    const ScreenSample b = mapPixel(w.screens[3], w.stereo.mode, 799, 599);
+    EXPECT_EQ(b.wallX, 1599);
+    EXPECT_EQ(b.wallY, 1199);
+    // With no blending or correction, each screen is exactly its quarter of the wall.
+    const WallFrame f = gradientFrame(1600, 1200);
+    for (size_t s = 0; s < 4; ++s) {
+        const Image img = presentScreen(w, s, f);
+        const PixelRect& v = w.screens[s].viewport;
+        for (int y = 0; y < 600; y += 7)
+            for (int x = 0; x < 800; x += 5)
+                ASSERT_EQ(0, std::memcmp(img.pixel(x, y), f.left.pixel(v.x + x, v.y + y), 3)) << s << " " << x << "," << y;
+    }
+}
+
+TEST(Mapping, BezelPixelsAreRenderedButNotShown) {
+    const WallConfig w = parseWallConfig(
+        "[wall]\n[grid]\ncolumns = 2\nrows = 1\nscreen_width = 100\nscreen_height = 50\nbezel = [10, 10, 0, 0]\n", "w.toml");
+    EXPECT_EQ(w.width, 220);  // 100 + 10 + 10 (the mullion) + 100
+    EXPECT_EQ(mapPixel(w.screens[0], StereoMode::None, 99, 0).wallX, 99);
+    EXPECT_EQ(mapPixel(w.screens[1], StereoMode::None, 0, 0).wallX, 120);
+    // No screen pixel shows wall columns 100..119.
+    for (const ScreenConfig& s : w.screens)
+        for (int x = 0; x < s.outputWidth; ++x) {
+            const int wx = mapPixel(s, StereoMode::None, x, 0).wallX;
+            EXPECT_TRUE(wx < 100 || wx >= 120) << wx;
+        }
+}
+
+TEST(Mapping, ScaledScreensSampleTheNearestWallPixel) {
+    ScreenConfig s;
+    s.viewport = {10, 20, 100, 50};
+    s.outputWidth = 200;  // every wall pixel twice
+    s.outputHeight = 25;  // every other row
+    EXPECT_EQ(mapPixel(s, StereoMode::None, 0, 0).wallX, 10);
+    EXPECT_EQ(mapPixel(s, StereoMode::None, 1, 0).wallX, 10);
+    EXPECT_EQ(mapPixel(s, StereoMode::None, 2, 0).wallX, 11);
+    EXPECT_EQ(mapPixel(s, StereoMode::None, 199, 0).wallX, 109);
+    EXPECT_EQ(mapPixel(s, StereoMode::None, 0, 0).wallY, 21);  // centre of output row 0 is wall row 1
+    EXPECT_EQ(mapPixel(s, StereoMode::None, 0, 24).wallY, 69);
+}
+
+TEST(Mapping, BlendRampsOfAnOverlapAddUpToOneInLight) {
+    const WallConfig w = loadWallConfig(test::sourceDir() / "configs/wall/projector-pair-blend.toml");
+    const ScreenConfig &a = w.screens[0], &b = w.screens[1];
+    ASSERT_EQ(a.viewport.x + a.viewport.width - b.viewport.x, 128);
+    for (int wx = 0; wx < w.width; ++wx) {
+        double light = 0;
+        if (wx < a.viewport.x + a.viewport.width) light += std::pow(mapPixel(a, w.stereo.mode, wx - a.viewport.x, 100).weight, 2.2);
+        if (wx >= b.viewport.x) light += std::pow(mapPixel(b, w.stereo.mode, wx - b.viewport.x, 100).weight, 2.2);
+        EXPECT_NEAR(light, 1.0, 1e-4) << "wall column " << wx;
+    }
+    // Hand-worked: the first overlap column is 0.5/128 of the way into b's ramp.
+    EXPECT_NEAR(mapPixel(b, w.stereo.mode, 0, 0).weight, std::pow(0.5 / 128, 1 / 2.2), 1e-6);
+    EXPECT_EQ(mapPixel(b, w.stereo.mode, 128, 0).weight, 1.0f);
+    EXPECT_FLOAT_EQ(blendRamp(4, 0.5f), 0.125f);
+    EXPECT_FLOAT_EQ(blendRamp(4, 9.0f), 1.0f);
+    EXPECT_FLOAT_EQ(blendRamp(0, 0.0f), 1.0f);
+}
+
+TEST(Mapping, GammaAndBrightnessCorrection) {
+    ScreenConfig s;
+    EXPECT_EQ(correctColour(200, 1.0f, s), 200);
+    s.brightness = 0.5;
+    EXPECT_EQ(correctColour(200, 1.0f, s), 100);
+    s.brightness = 1.0;
+    s.gamma = 2.0;  // out = in^(1/2): 64/255 -> 0.50098 -> 128
+    EXPECT_EQ(correctColour(64, 1.0f, s), 128);
+    s.gamma = 1.0;
+    s.brightness = 2.0;
+    EXPECT_EQ(correctColour(200, 1.0f, s), 255);  // clamped
+    EXPECT_EQ(correctColour(100, 0.5f, ScreenConfig{}), 50);
+}
+
+TEST(Mapping, SideBySideStereoSplitsTheScreen) {
+    ScreenConfig s;
+    s.viewport = {0, 0, 100, 100};
+    s.outputWidth = 200;
+    s.outputHeight = 100;
+    s.eye = Eye::Both;
+    const ScreenSample l = mapPixel(s, StereoMode::SideBySide, 0, 0), r = mapPixel(s, StereoMode::SideBySide, 100, 0);
+    EXPECT_EQ(l.eye, 0);
+    EXPECT_EQ(r.eye, 1);
+    EXPECT_EQ(l.wallX, 0);
+    EXPECT_EQ(r.wallX, 0);
+    EXPECT_EQ(mapPixel(s, StereoMode::SideBySide, 199, 0).wallX, 99);
+    s.eye = Eye::Right;
+    EXPECT_EQ(mapPixel(s, StereoMode::Passive, 0, 0).eye, 1);
+}
+
+TEST(Mapping, FalseColourTintsEachTileWithItsClient) {
+    const WallConfig w = singleScreenWall(64, 32);
+    WallFrame f = gradientFrame(64, 32, 32);
+    f.tileOwners = {0, 1};
+    PresentOptions o;
+    o.falseColour = true;
+    const Image img = presentScreen(w, 0, f, o);
+    const auto c0 = ownerColour(0), c1 = ownerColour(1);
+    for (int k = 0; k < 3; ++k) {
+        EXPECT_NEAR(img.pixel(5, 5)[k], (f.left.pixel(5, 5)[k] + c0[size_t(k)]) / 2.0, 0.51);
+        EXPECT_NEAR(img.pixel(40, 5)[k], (f.left.pixel(40, 5)[k] + c1[size_t(k)]) / 2.0, 0.51);
+    }
+    EXPECT_NE(ownerColour(0), ownerColour(1));
+    EXPECT_EQ(ownerColour(UINT32_MAX), (std::array<uint8_t, 3>{128, 128, 128}));
+}
+
+TEST(Mapping, HeadlessPresenterWritesEveryNthFramePerScreen) {
+    const auto dir = test::displayScratchDir();
+    WallConfig w = loadWallConfig(test::sourceDir() / "configs/wall/projectors-2x2.toml");
+    w.writeEvery = 2;
+    HeadlessPresenter p(w, dir);
+    WallFrame f = gradientFrame(1600, 1200);
+    for (uint32_t n = 1; n <= 4; ++n) {
+        f.number = n;
+        p.present(f);
+    }
+    ASSERT_EQ(p.written().size(), 8u);  // frames 2 and 4, four screens each
+    EXPECT_EQ(p.written()[0].filename(), "frame_000002_c0r0.png");
+    const Image img = readPng(dir / "frame_000004_c1r1.png");
+    EXPECT_EQ(img.rgb, presentScreen(w, 3, f).rgb);
+}
+
+TEST(Mapping, AFrameOfTheWrongSizeIsRefused) {
+    const WallConfig w = singleScreenWall(64, 32);
+    EXPECT_THROW(presentScreen(w, 0, gradientFrame(32, 32)), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rtwall

@@ -1,0 +1,157 @@
+#include "display_test_util.h"
+
+namespace rtwall {
+namespace {
+
+using test::wallError;
+
+std::vector<std::filesystem::path> shippedWalls() {
+    std::vector<std::filesystem::path> files;
+    for (const auto& e : std::filesystem::directory_iterator(test::sourceDir() / "configs/wall"))
+        if (e.path().extension() == ".toml") files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    return files;
+}
+
+// Equalizer's loader test: load every shipped config, write it out, reload, compare.
+TEST(WallConfig, EveryShippedConfigLoadsWritesAndReloads) {
+    const auto files = shippedWalls();
+    ASSERT_GE(files.size(), 5u);
+    for (const auto& file : files) {
+        SCOPED_TRACE(file.string());
+        const WallConfig a = loadWallConfig(file);
+        const std::string text = writeWallConfig(a);
+        const WallConfig b = parseWallConfig(text, "written.toml");
+        EXPECT_EQ(a, b) << text;
+        EXPECT_EQ(writeWallConfig(b), text);
+        EXPECT_TRUE(checkWall(file).empty());
+    }
+}
+
+TEST(WallConfig, TheReferenceWallIsTwoByTwoProjectors) {
+    const WallConfig w = loadWallConfig(test::sourceDir() / "configs/wall/projectors-2x2.toml");
+    EXPECT_EQ(w.width, 1600);
+    EXPECT_EQ(w.height, 1200);
+    ASSERT_EQ(w.screens.size(), 4u);
+    EXPECT_EQ(w.screens[0].viewport, (PixelRect{0, 0, 800, 600}));
+    EXPECT_EQ(w.screens[1].viewport, (PixelRect{800, 0, 800, 600}));
+    EXPECT_EQ(w.screens[2].viewport, (PixelRect{0, 600, 800, 600}));
+    EXPECT_EQ(w.screens[3].viewport, (PixelRect{800, 600, 800, 600}));
+    EXPECT_EQ(w.screens[3].window, (std::array<int, 2>{800, 600}));
+}
+
+TEST(WallConfig, BezelsInMillimetresBecomeHiddenPixels) {
+    const WallConfig w = loadWallConfig(test::sourceDir() / "configs/wall/monitors-3x2-bezels.toml");
+    // 4.15 mm of a 531 mm, 1920-pixel screen is 15 pixels; between two screens 30 are hidden.
+    EXPECT_EQ(w.width, 3 * 1920 + 2 * 30);
+    EXPECT_EQ(w.height, 2 * 1080 + 30);
+    ASSERT_EQ(w.screens.size(), 6u);
+    EXPECT_EQ(w.screens[1].viewport, (PixelRect{1950, 0, 1920, 1080}));
+    EXPECT_EQ(w.screens[4].viewport, (PixelRect{1950, 1110, 1920, 1080}));
+    EXPECT_EQ(w.screens[5].monitor, 5);
+}
+
+TEST(WallConfig, GridOverlapGetsBlendRampsOnInnerEdges) {
+    const WallConfig w = parseWallConfig("[wall]\n[grid]\ncolumns = 2\nrows = 1\nscreen_width = 800\nscreen_height = 600\noverlap = 100\n",
+                                         "w.toml");
+    EXPECT_EQ(w.width, 1500);
+    EXPECT_EQ(w.screens[0].blend, (std::array<int, 4>{0, 100, 0, 0}));
+    EXPECT_EQ(w.screens[1].blend, (std::array<int, 4>{100, 0, 0, 0}));
+    EXPECT_EQ(w.screens[1].viewport.x, 700);
+}
+
+TEST(WallConfig, PassiveStereoGridMakesAScreenPerEye) {
+    const WallConfig w = parseWallConfig("[wall]\n[stereo]\nmode = \"passive\"\n[grid]\ncolumns = 2\nrows = 1\n"
+                                         "screen_width = 640\nscreen_height = 480\n",
+                                         "w.toml");
+    ASSERT_EQ(w.screens.size(), 4u);
+    EXPECT_EQ(w.screens[0].eye, Eye::Left);
+    EXPECT_EQ(w.screens[2].eye, Eye::Right);
+    EXPECT_EQ(w.screens[2].viewport, w.screens[0].viewport);
+}
+
+const char* kPair = R"([wall]
+width = 1500
+height = 600
+
+[[screen]]
+name = "a"
+viewport = [0, 0, 800, 600]
+
+[[screen]]
+name = "b"
+viewport = [700, 0, 800, 600]
+)";
+
+TEST(WallConfig, OverlappingScreensWithoutBlendingAreAnError) {
+    EXPECT_EQ(wallError(kPair), "wall.toml:11: screen 'b': key 'viewport': overlaps screen 'a' by 100x600 wall pixels "
+                                "that no blend ramp of both screens covers");
+    // One side blended is not enough.
+    std::string oneSide = kPair;
+    oneSide.insert(oneSide.find("\n\n[[screen]]\nname = \"b\""), "\nblend = [0, 100, 0, 0]");
+    EXPECT_NE(wallError(oneSide).find("overlaps screen 'a'"), std::string::npos);
+    // Both sides blended over the whole overlap: fine.
+    std::string both = oneSide + "blend = [100, 0, 0, 0]\n";
+    EXPECT_NO_THROW(parseWallConfig(both, "wall.toml"));
+    // Left and right eye may share pixels; two left-eye screens may not.
+    const std::string eyes = "[stereo]\nmode = \"passive\"\n" + std::string(kPair);
+    EXPECT_NE(wallError(eyes).find("key 'eye': passive stereo needs"), std::string::npos);
+}
+
+TEST(WallConfig, EveryKindOfMistakeNamesLineAndKey) {
+    struct Case {
+        std::string text, expected;
+    };
+    const std::string grid = "[wall]\n[grid]\ncolumns = 2\nrows = 2\nscreen_width = 800\nscreen_height = 600\n";
+    const std::vector<Case> cases = {
+        {grid + "bezel = [500, 400, 0, 0]\n", "wall.toml:7: [grid]: the bezel (900 pixels left and right) is wider than the screen (800)"},
+        {grid + "bezel = [0, 0, 300, 300]\n", "wall.toml:7: [grid]: the bezel (600 pixels top and bottom) is taller than the screen (600)"},
+        {grid + "bezel_mm = [5, 5, 5, 5]\n", "wall.toml:7: [grid]: key 'bezel_mm' needs 'screen_mm'"},
+        {grid + "colums = 3\n", "wall.toml:7: [grid]: unknown key 'colums'"},
+        {"[wall]\n[grid]\ncolumns = 2\nscreen_width = \"800\"\nscreen_height = 600\n",
+         "wall.toml:4: [grid]: key 'screen_width': expected an integer, got a string"},
+        {grid + "bezel = [1, 2, 3]\n", "wall.toml:7: [grid]: key 'bezel': expected an array of 4 integers"},
+        {grid + "bezel = [1, 2.5, 3, 4]\n", "wall.toml:7: [grid]: key 'bezel': element 1 is a float, not an integer"},
+        {grid + "gamma = -1\n", "wall.toml:7: [grid]: key 'gamma': -1 is out of range"},
+        {grid + "overlap = 10\nbezel = [1, 1, 1, 1]\n", "wall.toml:7: [grid]: overlapping projectors have no bezels"},
+        {"[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [50, 0, 100, 100]\n",
+         "wall.toml:5: [[screen]] #1: key 'viewport': [50, 0, 100, 100] reaches outside the 100x100 wall"},
+        {"[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\nblend = [60, 60, 0, 0]\n",
+         "wall.toml:6: [[screen]] #1: key 'blend': the ramps are wider than the screen's viewport"},
+        {"[wall]\nwidth = 100\nheight = 100\n[[screen]]\nname = \"x\"\nviewport = [0, 0, 50, 100]\n"
+         "[[screen]]\nname = \"x\"\nviewport = [50, 0, 50, 100]\n",
+         "wall.toml:8: [[screen]] #2: key 'name': 'x' is used by another screen"},
+        {"[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\neye = \"left\"\n",
+         "wall.toml:5: screen 'screen1': key 'eye': 'left' needs a [stereo] mode"},
+        {"[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\neye = \"center\"\n",
+         "wall.toml:6: [[screen]] #1: key 'eye': 'center' is not one of mono, left, right, both"},
+        {"[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\nshader = \"nope.frag\"\n",
+         "wall.toml:6: [[screen]] #1: key 'shader': no such file"},
+        {"[wall]\nwidth = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\n", "[wall]: missing required key 'height'"},
+        {"[wall]\nwidht = 100\n", "wall.toml:2: [wall]: unknown key 'widht'"},
+        {"[grid]\ncolumns = 1\n", "missing required table [wall]"},
+        {"[wall]\nwidth = 10\nheight = 10\n", "a wall needs a [grid] or a list of [[screen]]"},
+        {grid + "[[screen]]\nviewport = [0, 0, 1, 1]\n", "give either [grid] or [[screen]], not both"},
+        {"screen = 3\n[wall]\nwidth = 10\nheight = 10\n", "wall.toml:1: 'screen' must be an array of tables"},
+        {"[wall]\nname = \"x\n", "wall.toml:2: "},
+        {grid + "[stereo]\nmode = \"anaglyph\"\n", "wall.toml:8: [stereo]: key 'mode': 'anaglyph' is not one of"},
+        {grid + "[stereo]\nmode = \"passive\"\nupper_left = [-1, -0.75, 0]\n", "wall.toml:9: [stereo]: the wall's corners must span a rectangle"},
+        {grid + "[stereo]\nmode = \"passive\"\nupper_left = [0, 0.75, 0]\n", "wall.toml:9: [stereo]: lower_left->lower_right and lower_left->upper_left must be at right angles"},
+        {grid + "[headless]\nwrite_every = true\n", "wall.toml:8: [headless]: key 'write_every': expected an integer, got a boolean"},
+        {"[wall]\nwidth = 200\nheight = 600\n[grid]\ncolumns = 2\nrows = 1\nscreen_width = 800\nscreen_height = 600\n",
+         "wall.toml:2: [wall]: key 'width': 200 differs from the grid's 1600"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.text);
+        const std::string e = wallError(c.text);
+        EXPECT_NE(e.find(c.expected), std::string::npos) << "got: " << e << "\nexpected: " << c.expected;
+        EXPECT_EQ(e.find('\n'), std::string::npos) << "one line";
+    }
+}
+
+TEST(WallConfig, MissingFileIsAnInputError) {
+    EXPECT_THROW(loadWallConfig(test::sourceDir() / "configs/wall/none.toml"), InputError);
+}
+
+}  // namespace
+}  // namespace rtwall
