@@ -24,7 +24,8 @@ public:
         if (pid_ == 0) {
             close(fds[0]);
             const std::string fd = std::to_string(fds[1]);
-            execlp("Xvfb", "Xvfb", "-displayfd", fd.c_str(), "-screen", "0", "3300x2500x24", "-nolisten", "tcp", nullptr);
+            execlp("Xvfb", "Xvfb", "-displayfd", fd.c_str(), "-screen", "0", "3300x2500x24", "-nolisten", "tcp", "-noreset",
+                   nullptr);  // -noreset: no server reset (and refused connections) between tests
             _exit(127);
         }
         close(fds[1]);
@@ -130,8 +131,11 @@ TEST(GlPresenter, ABrokenConfigShaderIsRefusedBeforeAnyWindowOpens) {
     test::writeText(dir / "bad.frag", "#version 330 core\nout vec4 colour;\nvoid main() { colour = nope; }\n");
     const auto file = test::writeText(dir / "w.toml", "[wall]\nwidth = 64\nheight = 64\n[[screen]]\nviewport = [0, 0, 64, 64]\nshader = \"bad.frag\"\n");
     const auto problems = checkWall(file);
-    ASSERT_EQ(problems.size(), 1u);
-    EXPECT_NE(problems[0].find("bad.frag:3:"), std::string::npos) << problems[0];
+    ASSERT_FALSE(problems.empty());
+    EXPECT_NE(problems[0].find("bad.frag:3: 'nope' : undeclared identifier"), std::string::npos) << problems[0];
+    // The wall does not open with it either: the driver refuses it too.
+    std::string why;
+    EXPECT_THROW(GlPresenter::open(loadWallConfig(file), {}, &why), InputError);
 }
 
 }  // namespace

@@ -1,0 +1,82 @@
+// `rtwall check` and `rtwall run --wall` as a user meets them: exit codes, one-line errors,
+// the headless presenter's per-screen images.
+#include "display_test_util.h"
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+
+namespace rtwall {
+namespace {
+
+struct Result {
+    int status = -1;
+    std::string output;  // stdout and stderr together
+};
+
+Result run(const std::string& args) {
+    // No display: the wall must fall back to headless by itself.
+    const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY timeout 300 " + std::string(RTWALL_EXE) + " " + args + " 2>&1";
+    Result r;
+    FILE* p = popen(cmd.c_str(), "r");
+    if (!p) return r;
+    std::array<char, 4096> buf;
+    size_t n;
+    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
+    const int st = pclose(p);
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+    return r;
+}
+
+TEST(WallCli, CheckAcceptsEveryShippedWall) {
+    for (const char* w : {"desktop", "projectors-2x2", "monitors-3x2-bezels", "projector-pair-blend", "stereo-passive"}) {
+        const Result r = run("check " + (test::sourceDir() / "configs/wall" / (std::string(w) + ".toml")).string());
+        EXPECT_EQ(r.status, 0) << r.output;
+        EXPECT_NE(r.output.find("ok"), std::string::npos) << r.output;
+    }
+}
+
+TEST(WallCli, CheckReportsABadConfigAndABadShaderOnOneLine) {
+    const auto dir = test::displayScratchDir();
+    const auto bad = test::writeText(dir / "bad.toml", "[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\ngama = 2\n");
+    Result r = run("check " + bad.string());
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.output, "rtwall: error: " + bad.string() + ":6: [[screen]] #1: unknown key 'gama'\n");
+    test::writeText(dir / "bad.frag", "#version 330 core\nout vec4 colour;\nvoid main() {\n  colour = 1;\n}\n");
+    const auto shader = test::writeText(dir / "shader.toml", "[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\nshader = \"bad.frag\"\n");
+    r = run("check " + shader.string());
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.output.find("bad.frag:4: "), std::string::npos) << r.output;
+    r = run("check");
+    EXPECT_EQ(r.status, 2) << r.output;
+    r = run("check " + (dir / "missing.toml").string());
+    EXPECT_EQ(r.status, 1) << r.output;
+    // run refuses the wall before starting anything.
+    r = run("run --wall " + shader.string() + " --frames 1");
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("bad.frag:4: "), std::string::npos) << r.output;
+}
+
+TEST(WallCli, RunWithoutADisplayWritesWhatEachProjectorGets) {
+    const auto dir = test::displayScratchDir();
+    const auto wall = test::writeText(dir / "wall.toml", "[wall]\n[grid]\ncolumns = 2\nrows = 2\nscreen_width = 64\nscreen_height = 48\n"
+                                                         "[headless]\nwrite_every = 2\n");
+    const Result r = run("run " + (test::sourceDir() / "configs/run/demo.toml").string() + " --wall " + wall.string() +
+                         " --frames 2 --write-every 2 --out " + dir.string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("headless (no DISPLAY)"), std::string::npos) << r.output;
+    const Image whole = readPng(dir / "frame_000002.png");
+    EXPECT_EQ(whole.width, 128);
+    EXPECT_EQ(whole.height, 96);
+    const WallConfig w = loadWallConfig(wall);
+    WallFrame f;
+    f.left = whole;
+    for (size_t s = 0; s < 4; ++s) {
+        const Image screen = readPng(dir / ("frame_000002_" + w.screens[s].name + ".png"));
+        EXPECT_EQ(screen.rgb, presentScreen(w, s, f).rgb) << w.screens[s].name;
+    }
+}
+
+}  // namespace
+}  // namespace rtwall
