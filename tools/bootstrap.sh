@@ -25,6 +25,9 @@ PACKAGES=(
   liblz4-dev libzstd-dev libturbojpeg0-dev  # tile codecs
   libxxhash-dev        # content hashes of meshes and scene states
   clang libclang-rt-14-dev  # libFuzzer with ASan/UBSan for the fuzz targets
+  libglfw3-dev libgl-dev  # GLFW and OpenGL 3.3: the wall's windows and input
+  glslang-dev          # glslang: every wall shader is compiled at `rtwall check` and in the tests
+  xvfb xauth libgl1-mesa-dri  # gui tests and bench display: Xvfb with Mesa's software OpenGL (llvmpipe)
   python3
 )
 

@@ -305,6 +305,7 @@ struct Master::Impl {
         r.duplicatesDropped = st.duplicates;
         r.staleDropped = st.stale;
         r.affinityHits = st.affinityHits;
+        r.tileOwners.assign(scheduler.owners().begin(), scheduler.owners().end());
         const std::vector<double>& lat = scheduler.latencies();
         double sum = 0;
         for (double l : lat) sum += l;

@@ -78,6 +78,7 @@ public:
     uint32_t remaining() const;  // tiles without an accepted result
     const SchedulerStats& stats() const { return stats_; }  // of the current frame
     const std::vector<double>& latencies() const { return latencies_; }  // hand-out to result, this frame
+    const std::vector<ClientId>& owners() const { return owner_; }       // who rendered each tile, this frame
 
     static constexpr ClientId kNobody = UINT32_MAX;
 

@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <memory>
 #include <thread>
 
@@ -94,6 +96,11 @@ TEST_P(ClusterImage, BitIdenticalToOneMachine) {
     uint64_t tiles = 0;
     for (const ClientReport& c : report.clients) tiles += c.tiles;
     EXPECT_EQ(tiles, makeTiles(160, 120, l.tile).size());
+    // Every tile names the client that rendered it (the display's false-colour view), and the
+    // counts agree with the per-client report.
+    ASSERT_EQ(report.tileOwners.size(), makeTiles(160, 120, l.tile).size());
+    for (const ClientReport& c : report.clients)
+        EXPECT_EQ(uint64_t(std::count(report.tileOwners.begin(), report.tileOwners.end(), c.id)), c.tiles);
 }
 
 INSTANTIATE_TEST_SUITE_P(Layouts, ClusterImage,

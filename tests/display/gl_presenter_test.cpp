@@ -138,5 +138,23 @@ TEST(GlPresenter, ABrokenConfigShaderIsRefusedBeforeAnyWindowOpens) {
     EXPECT_THROW(GlPresenter::open(loadWallConfig(file), {}, &why), InputError);
 }
 
+// `rtwall run` opens the wall by itself when there is a display (this test's Xvfb).
+TEST(GlPresenter, RunShowsTheWallInWindowsWhereThereIsADisplay) {
+    const auto dir = test::displayScratchDir();
+    const std::string cmd = "timeout 300 " + std::string(RTWALL_EXE) + " run " + (test::sourceDir() / "configs/run/demo.toml").string() +
+                            " --wall " + (test::sourceDir() / "configs/wall/projectors-2x2.toml").string() +
+                            " --frames 3 --write-every 3 --out " + dir.string() + " 2>&1";
+    std::string output;
+    FILE* p = popen(cmd.c_str(), "r");
+    ASSERT_TRUE(p);
+    char buf[4096];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, p)) > 0) output.append(buf, n);
+    EXPECT_EQ(pclose(p), 0) << output;
+    EXPECT_NE(output.find("4 windows"), std::string::npos) << output;
+    EXPECT_TRUE(std::filesystem::exists(dir / "frame_000003.png")) << output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "frame_000003_c0r0.png")) << "per-screen files only without a display";
+}
+
 }  // namespace
 }  // namespace rtwall

@@ -1,7 +1,9 @@
-// rtwall run: the display master with local render clients, frame after frame. Until the
-// wall display exists, frames go to PNG files (every Nth) and the frame rate to stdout.
+// rtwall run: the display master with local render clients, frame after frame, shown on the
+// wall (GLFW windows, or the headless presenter where there is no display); every Nth frame
+// also goes to a PNG file and the frame rate to stdout.
 #include "commands.h"
 #include "local_clients.h"
+#include "wall_view.h"
 
 #include <rtwall/cluster.h>
 #include <rtwall/engine.h>
@@ -15,6 +17,7 @@
 #include <cstdio>
 #include <memory>
 #include <numbers>
+#include <optional>
 
 namespace rtwall::cli {
 
@@ -31,6 +34,7 @@ struct RunConfig {
     double orbit = 1.0;      // degrees per frame around the camera's look-at point
     std::string cameraPath;  // a camera path file (replaces orbit)
     int width = 0, height = 0;  // override the scene's image size
+    std::string wall;        // a wall config (configs/wall/); none: one window of the image's size
 };
 
 // A camera path: keyframes at frame numbers, linearly interpolated, held after the last.
@@ -100,6 +104,7 @@ RunConfig readRunConfig(const std::filesystem::path& file, const toml::table& ro
     if (!scene.starts_with("builtin:") && !file.empty()) scene = (file.parent_path() / scene).string();
     c.scene = scene;
     c.camera = top.string("camera", "");
+    if (const std::string wall = top.string("wall", ""); !wall.empty()) c.wall = (file.parent_path() / wall).string();
     if (const toml::table* t = subTable(top, "image")) {
         Reader r(file, *t, "[image]: ");
         c.width = r.integer("width", 0, 1, 16384);
@@ -170,8 +175,8 @@ void addRun(CLI::App& app, Run& run) {
     struct Options {
         std::string config;
         int frames = -1, clients = -1, writeEvery = -1;
-        std::string out, bind, cameraPath;
-        bool insecure = false;
+        std::string out, bind, cameraPath, wall;
+        bool insecure = false, headless = false;
     };
     auto o = std::make_shared<Options>();
     CLI::App* cmd = app.add_subcommand("run", "Run the display master with local render clients (default: a built-in demo)");
@@ -181,6 +186,8 @@ void addRun(CLI::App& app, Run& run) {
     cmd->add_option("--write-every", o->writeEvery, "Write every Nth frame as PNG (0 = never)")->check(CLI::Range(0, 100'000'000));
     cmd->add_option("--out", o->out, "Directory for the PNG frames");
     cmd->add_option("--camera-path", o->cameraPath, "Camera path file (.toml keyframes, see configs/README.md)");
+    cmd->add_option("--wall", o->wall, "Wall config (configs/wall/*.toml; default: one window of the image's size)");
+    cmd->add_flag("--headless", o->headless, "Never open windows, even where a display is available");
     cmd->add_flag("--insecure", o->insecure, "Allow a non-loopback bind without CURVE keys (says so loudly)");
     cmd->add_option("--bind", o->bind, "Endpoint for clients, e.g. tcp://0.0.0.0:7700 (default: loopback, any port)");
     cmd->callback([&run, o] {
@@ -194,6 +201,7 @@ void addRun(CLI::App& app, Run& run) {
             if (!o->bind.empty()) c.cluster.bind = o->bind;
             if (!o->cameraPath.empty()) c.cameraPath = o->cameraPath;
             if (o->insecure) c.cluster.insecure = true;
+            if (!o->wall.empty()) c.wall = o->wall;
 
             const std::filesystem::path scenePath(c.scene);
             SceneDesc desc = c.scene.starts_with("builtin:") ? builtinScene(c.scene.substr(8), 3'000'000)
@@ -201,6 +209,21 @@ void addRun(CLI::App& app, Run& run) {
                                                                 : sceneFromMeshFile(scenePath);
             if (c.width) desc.settings.width = c.width;
             if (c.height) desc.settings.height = c.height;
+            // The wall decides the image size; its config and shaders are checked before anything starts.
+            WallConfig wall = singleScreenWall(desc.settings.width, desc.settings.height);
+            if (!c.wall.empty()) {
+                const std::vector<std::string> problems = checkWall(c.wall);
+                if (!problems.empty()) throw InputError(problems.front());
+                wall = loadWallConfig(c.wall);
+                desc.settings.width = wall.width;
+                desc.settings.height = wall.height;
+            }
+            const bool stereo = wall.stereo.mode != StereoMode::None;
+            if (stereo && c.cluster.async) {
+                // Two renders per frame, one per eye: asynchronous mode would give each eye the other's camera.
+                std::printf("stereo wall: asynchronous rendering off, each frame renders the left then the right eye\n");
+                c.cluster.async = false;
+            }
             if (!c.camera.empty()) {
                 const CameraDesc* cam = desc.findCamera(c.camera);
                 if (!cam) throw InputError(c.scene + ": no camera named '" + c.camera + "'");
@@ -224,20 +247,46 @@ void addRun(CLI::App& app, Run& run) {
             if (!master.waitForClients(needed, waitMs))
                 throw InputError("no render client joined " + master.endpoint() + " in time");
 
+            WallView::Options vo;
+            vo.forceHeadless = o->headless;
+            vo.perScreenImages = !c.wall.empty();
+            vo.outDir = c.out;
+            vo.interactive = path.empty();
+            vo.codec = tileCodecName(c.cluster.codec.codec);
+            WallView view(wall, desc, start, vo);
+            // In a window the wall runs until it is closed, unless a frame count was asked for.
+            if (view.windowed() && o->frames < 0) c.frames = 0;
+
             std::signal(SIGINT, [](int) { gStop = true; });
             std::signal(SIGTERM, [](int) { gStop = true; });
             std::vector<double> frameTimes;
             auto last = std::chrono::steady_clock::now();
             uint64_t bytes = 0;
             for (int f = 1; (c.frames == 0 || f <= c.frames) && !gStop; ++f) {
-                // Differential updates: only the camera changes from frame to frame.
-                if (!path.empty()) master.setCamera(cameraAt(path, f));
-                else if (c.orbit != 0.0) master.setCamera(orbited(start, c.orbit * f));
+                // Differential updates: only what changes goes to the clients (the camera; objects the
+                // user moves on the wall).
+                if (!view.handleInput(master, frameTimes.empty() ? 0.0 : frameTimes.back())) break;
+                std::optional<CameraDesc> scripted;
+                if (!path.empty()) scripted = cameraAt(path, f);
+                else if (c.orbit != 0.0 && !view.windowed()) scripted = orbited(start, c.orbit * f);
+                if (scripted) view.setCamera(*scripted);
                 FrameReport report;
-                const Image img = master.renderFrame(&report);
+                WallFrame shown;
+                if (stereo) {
+                    master.setCamera(view.eyeCamera(0));
+                    shown.left = master.renderFrame();
+                    master.setCamera(view.eyeCamera(1));
+                    shown.right = master.renderFrame(&report);
+                } else {
+                    if (scripted) master.setCamera(*scripted);
+                    shown.left = master.renderFrame(&report);
+                }
+                shown.number = report.frame;
+                const Image& img = shown.left;
                 const auto now = std::chrono::steady_clock::now();
                 frameTimes.push_back(std::chrono::duration<double>(now - last).count());
                 last = now;
+                view.show(shown, report, frameTimes.back());
                 bytes += report.bytes;
                 if (c.writeEvery > 0 && f % c.writeEvery == 0) {
                     char name[64];

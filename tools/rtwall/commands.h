@@ -18,5 +18,7 @@ void addKeys(CLI::App& app, Run& run);
 void addBenchKernel(CLI::App& bench, Run& run);
 void addBenchCluster(CLI::App& bench, Run& run);
 void addBenchFaults(CLI::App& bench, Run& run);
+void addCheck(CLI::App& app, Run& run);
+void addBenchDisplay(CLI::App& bench, Run& run);
 
 }  // namespace rtwall::cli

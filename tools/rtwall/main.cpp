@@ -20,6 +20,8 @@ int main(int argc, char** argv) {
     rtwall::cli::addBenchKernel(*bench, run);
     rtwall::cli::addBenchCluster(*bench, run);
     rtwall::cli::addBenchFaults(*bench, run);
+    rtwall::cli::addCheck(app, run);
+    rtwall::cli::addBenchDisplay(*bench, run);
 
     try {
         app.parse(argc, argv);

@@ -67,6 +67,7 @@ struct FrameReport {
     uint64_t affinityHits = 0;      // tiles rendered by last frame's client
     double meanTileLatency = 0;     // seconds from assignment to result
     std::vector<ClientReport> clients;
+    std::vector<uint32_t> tileOwners;  // client id that rendered each tile (makeTiles order); UINT32_MAX: none
 };
 
 // The display master: owns the scene state, hands out tiles, assembles frames.

@@ -186,6 +186,16 @@ std::vector<TileRect> makeTiles(int width, int height, int tileSize);
 Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings& settings, uint32_t frame = 0,
                   TileStats* stats = nullptr);
 
+// Picking: the instance that the primary ray through image position (px, py) (pixels from the
+// top-left corner) hits first, where, and how far along the ray (in units of the ray
+// direction camera.direction(px, py)); nothing when the ray escapes.
+struct PickResult {
+    uint32_t instance = 0;  // index into SceneDesc::instances
+    float t = 0;
+    Float3 point;           // world space
+};
+std::optional<PickResult> pick(const Scene& scene, const Camera& camera, float px, float py);
+
 // Number of rays per Embree packet the packet kernel uses on this CPU (4, 8 or 16).
 int packetWidth();
 

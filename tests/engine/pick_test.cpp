@@ -1,0 +1,44 @@
+// Picking (the display's object selection): the first instance along a pixel's primary ray.
+#include <rtwall/engine.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace rtwall {
+namespace {
+
+TEST(Pick, FindsTheInstanceUnderAPixelAndWhereItWasHit) {
+    SceneDesc s;
+    s.meshes.push_back({"sphere", "shape:sphere", std::make_shared<const TriangleMesh>(makeSphere(32, 64))});
+    s.materials.push_back({});
+    s.instances.push_back({0, 0, Transform::translate(-2, 0, 0)});
+    s.instances.push_back({0, 0, Transform::translate(2, 0, 0)});
+    s.settings.width = 200;
+    s.settings.height = 100;
+    CameraDesc cd;
+    cd.position = {0, 0, 10};
+    cd.lookAt = {0, 0, 0};
+    Scene scene(s);
+    const Camera cam(cd, 200, 100);
+    EXPECT_FALSE(pick(scene, cam, 100, 50).has_value()) << "between the spheres";
+    EXPECT_FALSE(pick(scene, cam, 100, 2).has_value()) << "above them";
+    // The pixel column through x = +2 at the focal plane z = 0.
+    float px = 100;
+    while (px < 200 && cam.origin().x + cam.direction(px, 50).x * 10.0f / -cam.direction(px, 50).z < 2.0f) px += 0.25f;
+    const auto hit = pick(scene, cam, px, 50);
+    ASSERT_TRUE(hit.has_value());
+    EXPECT_EQ(hit->instance, 1u);
+    EXPECT_NEAR(hit->point.z, 1.0f, 0.01f);  // the sphere's front, radius 1
+    EXPECT_NEAR(hit->point.x, 2.0f, 0.05f);
+    const auto left = pick(scene, cam, 200 - px, 50);
+    ASSERT_TRUE(left.has_value());
+    EXPECT_EQ(left->instance, 0u);
+    // After a transform update the pick follows the object.
+    scene.setInstanceTransform(1, Transform::translate(2, 10, 0));
+    scene.commit();
+    EXPECT_FALSE(pick(scene, cam, px, 50).has_value());
+}
+
+}  // namespace
+}  // namespace rtwall

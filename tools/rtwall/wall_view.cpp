@@ -1,0 +1,142 @@
+#include "wall_view.h"
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>  // key codes
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+namespace rtwall::cli {
+
+namespace {
+ViewPose poseOf(const CameraDesc& c) { return {c.position, c.lookAt, c.up, c.fovY}; }
+CameraDesc cameraOf(const CameraDesc& base, const ViewPose& p) {
+    CameraDesc c = base;
+    c.position = p.position;
+    c.lookAt = p.lookAt;
+    c.up = p.up;
+    c.fovY = p.fovY;
+    return c;
+}
+float length(Float3 a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
+}  // namespace
+
+WallView::WallView(const WallConfig& wall, const SceneDesc& scene, const CameraDesc& start, const Options& options)
+    : wall_(wall), scene_(scene), base_(start), options_(options) {
+    if (options.forceHeadless) {
+        whyHeadless_ = "--headless";
+    } else {
+        gl_ = GlPresenter::open(wall_, {}, &whyHeadless_);
+    }
+    if (!gl_ && options.perScreenImages) headless_ = std::make_unique<HeadlessPresenter>(wall_, options.outDir);
+    const Float3 d{start.position.x - start.lookAt.x, start.position.y - start.lookAt.y, start.position.z - start.lookAt.z};
+    nav_ = std::make_unique<Navigator>(poseOf(start), std::max(0.1f, length(d)));
+    if (gl_)
+        std::printf("wall '%s': %zu window%s (%s); keys: H status, T tile owners, Tab fly/orbit, 1-9 bookmarks "
+                    "(Ctrl+digit stores), R record, Ctrl+drag moves an object, Esc quits\n",
+                    wall_.name.c_str(), wall_.screens.size(), wall_.screens.size() == 1 ? "" : "s", gl_->renderer().c_str());
+    else
+        std::printf("wall '%s': headless (%s)\n", wall_.name.c_str(), whyHeadless_.c_str());
+}
+
+WallView::~WallView() = default;
+
+CameraDesc WallView::camera() const { return cameraOf(base_, nav_->pose()); }
+
+CameraDesc WallView::eyeCamera(int eye) const {
+    CameraDesc c = camera();
+    if (wall_.stereo.mode == StereoMode::None) return c;
+    // Parallel eye axes, each shifted by half the separation along the camera's right vector.
+    const Float3 f{c.lookAt.x - c.position.x, c.lookAt.y - c.position.y, c.lookAt.z - c.position.z};
+    Float3 r{f.y * c.up.z - f.z * c.up.y, f.z * c.up.x - f.x * c.up.z, f.x * c.up.y - f.y * c.up.x};
+    const float l = length(r);
+    if (l <= 0) return c;
+    const float s = float(wall_.stereo.eyeSeparation * 0.5) * (eye == 0 ? -1.0f : 1.0f) / l;
+    for (Float3* p : {&c.position, &c.lookAt}) {
+        p->x += r.x * s;
+        p->y += r.y * s;
+        p->z += r.z * s;
+    }
+    return c;
+}
+
+void WallView::setCamera(const CameraDesc& c) { nav_->setPose(poseOf(c)); }
+
+bool WallView::handleInput(Master& master, double dt) {
+    if (!gl_) return true;
+    const InputState in = gl_->poll();
+    if (in.closeRequested || in.keyDown[GLFW_KEY_ESCAPE]) return false;
+    for (int key : in.keysPressed) {
+        if (key == GLFW_KEY_H) showStatus_ = !showStatus_;
+        if (key == GLFW_KEY_T) present_.falseColour = !present_.falseColour;
+    }
+    const bool wasRecording = nav_->recording();
+    bool moved = options_.interactive && nav_->update(in, dt);
+    if (wasRecording && !nav_->recording()) {
+        const auto file = options_.outDir / ("camera_path_" + std::to_string(++recordings_) + ".toml");
+        std::filesystem::create_directories(options_.outDir);
+        std::ofstream(file) << Navigator::cameraPathToml(nav_->recorded());
+        std::printf("recorded %zu cameras to %s (replay: rtwall run --camera-path %s)\n", nav_->recorded().size(),
+                    file.c_str(), file.c_str());
+    }
+    if (moved) master.setCamera(camera());
+
+    // Ctrl+click picks the object under the cursor; dragging moves it parallel to the screen.
+    const bool ctrl = in.clickMods & GLFW_MOD_CONTROL;
+    if (options_.interactive && in.leftPressed && ctrl) {
+        if (!pickScene_) pickScene_ = std::make_unique<Scene>(scene_);
+        const Camera cam(camera(), wall_.width, wall_.height);
+        grabbed_ = pick(*pickScene_, cam, float(in.wallX), float(in.wallY));
+        if (grabbed_) {
+            grabbedStart_ = scene_.instances[grabbed_->instance].transform;
+            std::printf("picked instance %u at distance %.2f\n", grabbed_->instance, double(grabbed_->t * length(cam.direction(float(in.wallX), float(in.wallY)))));
+        }
+    }
+    if (grabbed_ && in.leftDown && ctrl) {
+        const Camera cam(camera(), wall_.width, wall_.height);
+        const Float3 o = cam.origin(), d = cam.direction(float(in.wallX), float(in.wallY));
+        const Float3 p{o.x + d.x * grabbed_->t, o.y + d.y * grabbed_->t, o.z + d.z * grabbed_->t};
+        const Transform t = Transform::translate(double(p.x) - grabbed_->point.x, double(p.y) - grabbed_->point.y,
+                                                 double(p.z) - grabbed_->point.z) *
+                            grabbedStart_;
+        master.setInstanceTransform(grabbed_->instance, t);  // a differential update to every client
+        pickScene_->setInstanceTransform(grabbed_->instance, t);
+        pickScene_->commit();
+        scene_.instances[grabbed_->instance].transform = t;
+    } else if (grabbed_ && !in.leftDown) {
+        grabbed_.reset();
+    }
+    return true;
+}
+
+void WallView::show(WallFrame& frame, const FrameReport& report, double frameSeconds) {
+    frame.tileOwners = report.tileOwners;
+    frame.tileSize = scene_.settings.tileSize;
+    if (gl_) {
+        gl_->present(frame, present_);
+        statusClock_ += frameSeconds;
+        if (showStatus_ && statusClock_ >= 0.5) {
+            statusClock_ = 0;
+            char line[256];
+            std::snprintf(line, sizeof line, "rtwall %.1f fps | %.2f MB/frame %s | late swaps %llu",
+                          frameSeconds > 0 ? 1.0 / frameSeconds : 0.0, double(report.bytes) * 1e-6, options_.codec.c_str(),
+                          (unsigned long long)gl_->stats().late);
+            std::string status = line;
+            for (const ClientReport& c : report.clients) {
+                std::snprintf(line, sizeof line, " | client %u: %llu tiles (%.2f MB/s) %.0f%% busy", c.id, (unsigned long long)c.tiles,
+                              report.seconds > 0 && !report.tileOwners.empty()
+                                  ? double(report.bytes) * double(c.tiles) / double(report.tileOwners.size()) / report.seconds * 1e-6
+                                  : 0.0,
+                              100.0 * c.busyFraction);
+                status += line;
+            }
+            gl_->setStatus(status);
+            std::printf("%s\n", status.c_str());
+        }
+    } else if (headless_) {
+        headless_->present(frame, present_);
+    }
+}
+
+}  // namespace rtwall::cli
