@@ -29,8 +29,11 @@ TEST(Pick, FindsTheInstanceUnderAPixelAndWhereItWasHit) {
     const auto hit = pick(scene, cam, px, 50);
     ASSERT_TRUE(hit.has_value());
     EXPECT_EQ(hit->instance, 1u);
-    EXPECT_NEAR(hit->point.z, 1.0f, 0.01f);  // the sphere's front, radius 1
-    EXPECT_NEAR(hit->point.x, 2.0f, 0.05f);
+    // The ray from (0, 0, 10) through (2, 0, 0) meets the unit sphere at (2, 0, 0) where
+    // 104 (1 - s)^2 = 1: s = 1 - 1/sqrt(104), the point (2s, 0, 10 - 10s).
+    const float s1 = 1.0f - 1.0f / std::sqrt(104.0f);
+    EXPECT_NEAR(hit->point.z, 10.0f - 10.0f * s1, 0.01f);
+    EXPECT_NEAR(hit->point.x, 2.0f * s1, 0.02f);
     const auto left = pick(scene, cam, 200 - px, 50);
     ASSERT_TRUE(left.has_value());
     EXPECT_EQ(left->instance, 0u);
