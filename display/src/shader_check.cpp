@@ -9,6 +9,7 @@
 #include <fstream>
 #include <mutex>
 #include <regex>
+#include <set>
 #include <sstream>
 
 namespace rtwall {
@@ -67,8 +68,9 @@ std::vector<std::string> checkWall(const std::filesystem::path& file) {
     std::vector<std::string> problems = checkShader(presentVertexShader(), false);
     auto more = [&](std::vector<std::string> p) { problems.insert(problems.end(), p.begin(), p.end()); };
     more(checkShader(presentFragmentShader(), true));
+    std::set<std::filesystem::path> seen;  // a shader several screens share is reported once
     for (const ScreenConfig& s : wall.screens) {
-        if (s.fragmentShader.empty()) continue;
+        if (s.fragmentShader.empty() || !seen.insert(s.fragmentShader).second) continue;
         std::ifstream in(s.fragmentShader, std::ios::binary);
         if (!in) throw InputError(s.fragmentShader.string() + ": cannot be read");
         std::ostringstream text;

@@ -55,7 +55,7 @@ private:
 
 const auto* const gXvfb = ::testing::AddGlobalTestEnvironment(new XvfbServer);
 
-WallFrame renderedFrame(int width, int height, uint32_t number, float cameraX) {
+WallFrame renderedFrame(int width, int height, uint32_t number, float cameraX, bool stereo = false) {
     SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
     desc.settings.width = width;
     desc.settings.height = height;
@@ -66,6 +66,11 @@ WallFrame renderedFrame(int width, int height, uint32_t number, float cameraX) {
     WallFrame f;
     f.number = number;
     f.left = renderFrame(scene, Camera(desc.cameras.front(), width, height), desc.settings);
+    if (stereo) {
+        CameraDesc right = desc.cameras.front();
+        right.position.x += 0.5f;
+        f.right = renderFrame(scene, Camera(right, width, height), desc.settings);
+    }
     f.tileSize = 32;
     const int tiles = ((width + 31) / 32) * ((height + 31) / 32);
     for (int t = 0; t < tiles; ++t) f.tileOwners.push_back(uint32_t(t % 3));
@@ -92,7 +97,7 @@ void expectScreensMatchHeadless(const std::filesystem::path& config, UploadMetho
     const auto dir = test::displayScratchDir();
     // Two frames, so the second really streams new pixels into the texture.
     for (uint32_t n = 1; n <= 2; ++n) {
-        const WallFrame frame = renderedFrame(wall.width, wall.height, n, float(n) * 0.3f);
+        const WallFrame frame = renderedFrame(wall.width, wall.height, n, float(n) * 0.3f, wall.stereo.mode != StereoMode::None);
         std::vector<Image> shown;
         gl->present(frame, options, &shown);
         ASSERT_EQ(shown.size(), wall.screens.size());
@@ -124,6 +129,14 @@ TEST(GlPresenter, BlendingGammaAndFalseColourMatchTheCpuReference) {
     PresentOptions o;
     o.falseColour = true;
     expectScreensMatchHeadless(test::sourceDir() / "configs/wall/projector-pair-blend.toml", UploadMethod::Pbo, o, 1);
+}
+
+TEST(GlPresenter, StereoScreensShowTheirEyes) {
+    expectScreensMatchHeadless(test::sourceDir() / "configs/wall/stereo-passive.toml", UploadMethod::TexSubImage, {}, 0);
+    const auto dir = test::displayScratchDir();
+    const auto sbs = test::writeText(dir / "sbs.toml", "[wall]\nwidth = 320\nheight = 240\n[stereo]\nmode = \"side_by_side\"\n"
+                                                       "[[screen]]\nviewport = [0, 0, 320, 240]\nresolution = [640, 240]\n");
+    expectScreensMatchHeadless(sbs, UploadMethod::TexSubImage, {}, 0);
 }
 
 TEST(GlPresenter, ABrokenConfigShaderIsRefusedBeforeAnyWindowOpens) {

@@ -176,7 +176,9 @@ struct InputState {
 class GlPresenter {
 public:
     struct Options {
-        UploadMethod upload = UploadMethod::Pbo;
+        // glTexSubImage2D measured faster than PBO streaming (README, bench display): with Mesa's
+        // llvmpipe a PBO is one more CPU copy, not a DMA transfer. Measure again on a real GPU.
+        UploadMethod upload = UploadMethod::TexSubImage;
         bool visible = true;
         int vsyncOverride = -1;  // -1: the config's vsync; 0/1 force it (benchmarks)
     };
