@@ -78,5 +78,26 @@ TEST(WallCli, RunWithoutADisplayWritesWhatEachProjectorGets) {
     }
 }
 
+TEST(WallCli, TheShippedWallRunConfigRunsHeadless) {
+    const auto dir = test::displayScratchDir();
+    const Result r = run("run " + (test::sourceDir() / "configs/run/wall-2x2.toml").string() + " --frames 1 --write-every 1 --out " +
+                         dir.string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_EQ(readPng(dir / "frame_000001.png").width, 1600);
+    for (const char* s : {"c0r0", "c1r0", "c0r1", "c1r1"})
+        EXPECT_EQ(readPng(dir / ("frame_000001_" + std::string(s) + ".png")).width, 800) << s;
+}
+
+TEST(WallCli, ARecordedCameraPathReplays) {
+    const auto dir = test::displayScratchDir();
+    ViewPose a, b;
+    a.position = {0, 2, 8};
+    b.position = {3, 2, 8};
+    const auto path = test::writeText(dir / "recorded.toml", Navigator::cameraPathToml({a, b, b}));
+    const Result r = run("run " + (test::sourceDir() / "configs/run/demo.toml").string() + " --camera-path " + path.string() +
+                         " --frames 3 --write-every 0 --out " + dir.string());
+    EXPECT_EQ(r.status, 0) << r.output;
+}
+
 }  // namespace
 }  // namespace rtwall
