@@ -139,6 +139,30 @@ TEST(GlPresenter, StereoScreensShowTheirEyes) {
     expectScreensMatchHeadless(sbs, UploadMethod::TexSubImage, {}, 0);
 }
 
+// A config's own shader is what the window draws: here present.frag with its output inverted,
+// so every pixel must differ from the CPU reference by exactly that.
+TEST(GlPresenter, AConfigShaderReplacesTheShippedOne) {
+    const auto dir = test::displayScratchDir();
+    std::string text = presentFragmentShader().text;
+    const std::string last = "colour = vec4(clamp(c * brightness * w, 0.0, 1.0), 1.0);";
+    ASSERT_NE(text.find(last), std::string::npos);
+    text.replace(text.find(last), last.size(), "colour = vec4(1.0 - clamp(c * brightness * w, 0.0, 1.0), 1.0);");
+    test::writeText(dir / "invert.frag", text);
+    const auto file = test::writeText(dir / "w.toml", "[wall]\nwidth = 160\nheight = 120\n[[screen]]\nviewport = [0, 0, 160, 120]\nshader = \"invert.frag\"\n");
+    ASSERT_TRUE(checkWall(file).empty());
+    const WallConfig wall = loadWallConfig(file);
+    std::string why;
+    auto gl = GlPresenter::open(wall, {}, &why);
+    ASSERT_TRUE(gl) << why;
+    const WallFrame frame = renderedFrame(160, 120, 1, 0.0f);
+    std::vector<Image> shown;
+    gl->present(frame, {}, &shown);
+    Image expected = presentScreen(wall, 0, frame);
+    EXPECT_GT(maxDifference(shown[0], expected), 100) << "the shipped shader was used";
+    for (uint8_t& v : expected.rgb) v = uint8_t(255 - v);
+    EXPECT_EQ(maxDifference(shown[0], expected), 0);
+}
+
 TEST(GlPresenter, ABrokenConfigShaderIsRefusedBeforeAnyWindowOpens) {
     const auto dir = test::displayScratchDir();
     test::writeText(dir / "bad.frag", "#version 330 core\nout vec4 colour;\nvoid main() { colour = nope; }\n");
