@@ -9,6 +9,7 @@
 
 #include <rtwall/display.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -57,6 +58,8 @@ struct GlPresenter::Impl {
     Options options;
     std::vector<Screen> screens;
     GLuint wallTex[2] = {0, 0}, ownerTex = 0, pbo[2][2] = {{0, 0}, {0, 0}};
+    GLuint overlayTex = 0, overlayFbo = 0;  // first context only: framebuffer objects are not shared
+    int overlayW = 0, overlayH = 0;
     int pboNext = 0;
     int ownerW = 0, ownerH = 0;
     PresentStats stats;
@@ -73,6 +76,8 @@ struct GlPresenter::Impl {
             glDeleteTextures(2, wallTex);
             glDeleteTextures(1, &ownerTex);
             glDeleteBuffers(4, &pbo[0][0]);
+            glDeleteTextures(1, &overlayTex);
+            glDeleteFramebuffers(1, &overlayFbo);
         }
         for (Screen& s : screens)
             if (s.window) {
@@ -103,6 +108,34 @@ struct GlPresenter::Impl {
             if (dst) return;
         }
         glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, img.width, img.height, GL_RGB, GL_UNSIGNED_BYTE, img.rgb.data());
+    }
+
+    // The status overlay, copied 1:1 (no shader, no blending) to the first screen's top-left.
+    void blitOverlay(const Image& o, const ScreenConfig& c) {
+        if (!overlayFbo) {
+            glGenTextures(1, &overlayTex);
+            glGenFramebuffers(1, &overlayFbo);
+            glBindTexture(GL_TEXTURE_2D, overlayTex);
+            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        }
+        glBindTexture(GL_TEXTURE_2D, overlayTex);
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+        glBindFramebuffer(GL_READ_FRAMEBUFFER, overlayFbo);
+        if (o.width != overlayW || o.height != overlayH) {
+            glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, o.width, o.height, 0, GL_RGB, GL_UNSIGNED_BYTE, o.rgb.data());
+            glFramebufferTexture2D(GL_READ_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, overlayTex, 0);
+            overlayW = o.width;
+            overlayH = o.height;
+        } else {
+            glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, o.width, o.height, GL_RGB, GL_UNSIGNED_BYTE, o.rgb.data());
+        }
+        const int w = std::min(o.width, c.outputWidth - kOverlayMargin), h = std::min(o.height, c.outputHeight - kOverlayMargin);
+        const int top = c.outputHeight - kOverlayMargin;
+        glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+        if (w > 0 && h > 0)  // image row 0 (the texture's first row) lands at the top: a flipped blit
+            glBlitFramebuffer(0, 0, w, h, kOverlayMargin, top, kOverlayMargin + w, top - h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
     }
 
     void draw(size_t i, int eyeMode, int tileSize) {
@@ -333,6 +366,7 @@ void GlPresenter::present(const WallFrame& frame, const PresentOptions& options,
         } else {
             im.draw(i, eyeMode, tileSize);
         }
+        if (i == 0 && options.overlay && options.overlay->width > 0) im.blitOverlay(*options.overlay, c);
         if (capture) {
             Image& img = (*capture)[i];
             img.width = c.outputWidth;

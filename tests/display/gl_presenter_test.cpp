@@ -120,6 +120,13 @@ TEST(GlPresenter, TheTwoByTwoWallShowsWhatTheHeadlessPresenterWrites) {
     expectScreensMatchHeadless(test::sourceDir() / "configs/wall/projectors-2x2.toml", UploadMethod::TexSubImage, {}, 0);
 }
 
+TEST(GlPresenter, TheStatusOverlaySitsOnTheFirstScreen) {
+    const Image status = textImage("rtwall 12.5 fps | 0.84 MB/frame lz4\nclient 1: 300 tiles 85% busy", 2);
+    PresentOptions o;
+    o.overlay = &status;
+    expectScreensMatchHeadless(test::sourceDir() / "configs/wall/projectors-2x2.toml", UploadMethod::TexSubImage, o, 0);
+}
+
 TEST(GlPresenter, PixelBufferUploadShowsTheSame) {
     expectScreensMatchHeadless(test::sourceDir() / "configs/wall/projectors-2x2.toml", UploadMethod::Pbo, {}, 0);
 }

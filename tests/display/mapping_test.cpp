@@ -150,6 +150,28 @@ TEST(Mapping, HeadlessPresenterWritesEveryNthFramePerScreen) {
     EXPECT_EQ(img.rgb, presentScreen(w, 3, f).rgb);
 }
 
+TEST(Mapping, StatusTextAndItsOverlay) {
+    const Image one = textImage("1", 1);
+    EXPECT_EQ(one.width, 7);   // a 2-pixel border, 3 columns, a gap, a border
+    EXPECT_EQ(one.height, 9);
+    EXPECT_EQ(one.pixel(3, 2)[0], 235);  // the top of the 1 is its middle column
+    EXPECT_EQ(one.pixel(2, 2)[0], 24);
+    EXPECT_EQ(one.pixel(2, 3)[0], 235);  // the flag
+    const Image two = textImage("ab\nC", 2);
+    EXPECT_EQ(two.width, (2 * 4 + 3) * 2);
+    EXPECT_EQ(two.height, (2 * 6 + 3) * 2);
+    EXPECT_EQ(textImage("a", 1).rgb, textImage("A", 1).rgb);
+    // Pasted on the first screen only, kOverlayMargin from its top-left.
+    const WallConfig w = loadWallConfig(test::sourceDir() / "configs/wall/projectors-2x2.toml");
+    const WallFrame f = gradientFrame(1600, 1200);
+    PresentOptions o;
+    o.overlay = &one;
+    const Image first = presentScreen(w, 0, f, o);
+    EXPECT_EQ(first.pixel(kOverlayMargin + 3, kOverlayMargin + 2)[1], 235);
+    EXPECT_EQ(first.pixel(kOverlayMargin - 1, kOverlayMargin)[1], f.left.pixel(kOverlayMargin - 1, kOverlayMargin)[1]);
+    EXPECT_EQ(presentScreen(w, 1, f, o).rgb, presentScreen(w, 1, f).rgb);
+}
+
 TEST(Mapping, AFrameOfTheWrongSizeIsRefused) {
     const WallConfig w = singleScreenWall(64, 32);
     EXPECT_THROW(presentScreen(w, 0, gradientFrame(32, 32)), std::invalid_argument);

@@ -68,7 +68,11 @@ bool WallView::handleInput(Master& master, double dt) {
     const InputState in = gl_->poll();
     if (in.closeRequested || in.keyDown[GLFW_KEY_ESCAPE]) return false;
     for (int key : in.keysPressed) {
-        if (key == GLFW_KEY_H) showStatus_ = !showStatus_;
+        if (key == GLFW_KEY_H) {
+            showStatus_ = !showStatus_;
+            statusImage_ = {};
+            present_.overlay = showStatus_ ? &statusImage_ : nullptr;
+        }
         if (key == GLFW_KEY_T) present_.falseColour = !present_.falseColour;
     }
     const bool wasRecording = nav_->recording();
@@ -122,7 +126,7 @@ void WallView::show(WallFrame& frame, const FrameReport& report, double frameSec
             std::snprintf(line, sizeof line, "rtwall %.1f fps | %.2f MB/frame %s | late swaps %llu",
                           frameSeconds > 0 ? 1.0 / frameSeconds : 0.0, double(report.bytes) * 1e-6, options_.codec.c_str(),
                           (unsigned long long)gl_->stats().late);
-            std::string status = line;
+            std::string status = line, overlay = line;
             for (const ClientReport& c : report.clients) {
                 std::snprintf(line, sizeof line, " | client %u: %llu tiles (%.2f MB/s) %.0f%% busy", c.id, (unsigned long long)c.tiles,
                               report.seconds > 0 && !report.tileOwners.empty()
@@ -130,8 +134,10 @@ void WallView::show(WallFrame& frame, const FrameReport& report, double frameSec
                                   : 0.0,
                               100.0 * c.busyFraction);
                 status += line;
+                overlay += "\n" + std::string(line + 3);
             }
             gl_->setStatus(status);
+            statusImage_ = textImage(overlay, 2);  // shown from the next frame on
             std::printf("%s\n", status.c_str());
         }
     } else if (headless_) {

@@ -49,6 +49,7 @@ private:
     std::unique_ptr<Navigator> nav_;
     PresentOptions present_;
     bool showStatus_ = false;
+    Image statusImage_;  // the overlay (H): frame rate, bytes, codec, per-client figures
     double statusClock_ = 0;
     int recordings_ = 0;
     // Picking: a local copy of the scene (built on the first pick) to cast rays into.

@@ -110,6 +110,7 @@ struct WallFrame {
 
 struct PresentOptions {
     bool falseColour = false;  // tint every tile with the colour of the client that rendered it
+    const Image* overlay = nullptr;  // the status overlay: copied 1:1 to the first screen, 8 pixels from its top-left
     int quadBufferEye = 0;     // quad-buffered screens: which eye presentScreen returns (0 left, 1 right)
 };
 
@@ -126,6 +127,10 @@ ScreenSample mapPixel(const ScreenConfig& screen, StereoMode mode, int outX, int
 float blendRamp(int widthPx, float distancePx);
 uint8_t correctColour(uint8_t value, float weight, const ScreenConfig& screen);
 std::array<uint8_t, 3> ownerColour(uint32_t client);  // fixed palette; grey for nobody
+// Text as an image (the status overlay): a built-in 3x5 pixel font scaled by `scale`, light on
+// dark, '\n' starts a new line; letters are shown upper-case, characters without a glyph as blanks.
+Image textImage(const std::string& text, int scale = 2);
+constexpr int kOverlayMargin = 8;
 // The image a screen (projector) gets, exactly what the GL presenter draws (within rounding).
 Image presentScreen(const WallConfig& wall, size_t screen, const WallFrame& frame, const PresentOptions& options = {});
 
