@@ -85,6 +85,7 @@ private:
         session_ = 0;
         ready_ = false;
         snapshot_.reset();
+        lastFrameBegun_ = 0;
         Hello hello;
         hello.threads = uint32_t(threads_);
         char host[256] = {};
@@ -94,7 +95,8 @@ private:
         lastHeard_ = nowSeconds();
     }
 
-    int timeoutMs() const { return 3000; }
+    // The master's peer timeout, from its Welcome (before the first Welcome: the default).
+    int timeoutMs() const { return timeoutMs_; }
 
     Header header(MsgType type, uint32_t frame = 0) const {
         Header h;
@@ -129,7 +131,7 @@ private:
                 for (int i = 0; i < 256; ++i) {
                     zmq::message_t msg;
                     if (!results_.recv(msg, zmq::recv_flags::dontwait)) break;
-                    if (!dealer_.send(msg, zmq::send_flags::dontwait)) ++dropped_;
+                    if (!dealer_.send(msg, zmq::send_flags::dontwait)) ++dropped_;  // the master re-issues it
                     lastSent_ = nowSeconds();
                 }
             }
@@ -173,12 +175,18 @@ private:
             }
             if (h.type == MsgType::Welcome) {
                 const Welcome w = decodePayload<Welcome>(p, n);
+                if (h.session != session_.load()) {  // a new master session: nothing of the old one counts
+                    snapshot_.reset();
+                    ready_ = false;
+                    lastFrameBegun_ = 0;
+                }
                 session_ = h.session;
                 id_ = w.clientId;
                 backoffMs_ = 100;
                 codec_ = w.codec;
                 prefetch_ = std::max(1u, w.prefetch);
                 heartbeatMs_ = int(std::max(10u, w.heartbeatMs));
+                timeoutMs_ = int(std::max(std::max(50u, w.timeoutMs), 2 * uint32_t(heartbeatMs_)));
                 return std::nullopt;
             }
             if (h.session != session_.load() || session_.load() == 0) {
@@ -240,6 +248,12 @@ private:
     }
 
     void onSnapshot(SceneSnapshot snap) {
+        // Within a session the master's states to one client never go back in time (it sends
+        // the current frame's state): one older than what this client holds is a replay.
+        if (snapshot_ && snap.updateSeq < stateSeq_) {
+            ++dropped_;
+            return;
+        }
         dropWork();
         ready_ = false;
         snapshot_ = std::move(snap);
@@ -327,9 +341,17 @@ private:
     }
 
     void onFrameBegin(const FrameBegin& fb) {
+        // Frames only move forward. An older FrameBegin, or the one being rendered again, is a
+        // replay: obeying it would throw away the work in progress. (The master repeats the
+        // current frame's FrameBegin after a resync, when this client renders nothing.)
+        if (fb.frame < lastFrameBegun_ || (fb.frame != 0 && fb.frame == frame_.load())) {
+            ++dropped_;
+            return;
+        }
         dropWork();
         if (!ready_ || !catchUp(fb.updateSeq)) return;
         frame_.store(fb.frame);
+        lastFrameBegun_ = fb.frame;
         send(TileRequest{fb.frame, prefetch_}, fb.frame);
     }
 
@@ -365,8 +387,15 @@ private:
         result.tile = w.tile;
         result.codec = codec_.codec;
         const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame), result);
-        out.send(zmq::const_buffer(bytes.data(), bytes.size()), zmq::send_flags::none);
+        sendResult(out, bytes);
         return true;
+    }
+
+    // Render threads hand results to the network thread without blocking either: with its queue
+    // full (the master reads slowly and the network thread's own queue is full too) the result
+    // is dropped and counted, and the master re-issues the tile as a straggler.
+    void sendResult(zmq::socket_t& out, const std::vector<uint8_t>& bytes) {
+        if (!sendNow(out, bytes)) ++droppedResults_;
     }
 
     std::string failure() {
@@ -413,7 +442,7 @@ private:
                     replay_[w.tile] = result.pixels;
                 }
                 const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame), result);
-                out.send(zmq::const_buffer(bytes.data(), bytes.size()), zmq::send_flags::none);
+                sendResult(out, bytes);
             } catch (const std::exception& e) {
                 // Tell the master why before going away (the network thread sends it).
                 std::lock_guard lock(workMutex_);
@@ -437,10 +466,13 @@ private:
     CodecSettings codec_;
     uint32_t prefetch_ = 4;
     int heartbeatMs_ = 250;
+    int timeoutMs_ = 3000;
+    uint32_t lastFrameBegun_ = 0;  // this session's newest FrameBegin
     double lastHeard_ = 0, lastSent_ = 0;
     bool reconnectRequested_ = false;
     int backoffMs_ = 100;  // next reconnection pause (jittered), doubled up to maxReconnectMs
     uint64_t dropped_ = 0;
+    std::atomic<uint64_t> droppedResults_{0};
     std::string failure_;  // guarded by workMutex_
 
     std::optional<SceneSnapshot> snapshot_;
