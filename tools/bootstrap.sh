@@ -25,6 +25,7 @@ PACKAGES=(
   liblz4-dev libzstd-dev libturbojpeg0-dev  # tile codecs
   libxxhash-dev        # content hashes of meshes and scene states
   clang libclang-rt-14-dev  # libFuzzer with ASan/UBSan for the fuzz targets
+  nftables             # nft: packet loss in the fault tests' own namespaces (no sch_netem here)
   python3
 )
 
