@@ -26,6 +26,7 @@ PACKAGES=(
   libxxhash-dev        # content hashes of meshes and scene states
   clang libclang-rt-14-dev  # libFuzzer with ASan/UBSan for the fuzz targets
   nftables             # nft: packet loss in the fault tests' own namespaces (no sch_netem here)
+  iptables libnetfilter-queue-dev  # NFQUEUE: netjitter's delay, jitter and reordering in those namespaces
   python3
 )
 

@@ -284,15 +284,18 @@ TEST_F(CutLink, ClientBehindACutCableMidFrame) {
 }
 
 
-// Packet loss on the clients' link, in the test's own namespace. This kernel has neither
-// sch_netem nor act_gact, so the loss comes from nftables inside the namespace: `numgen random
-// mod 100 < 1 drop` on every packet in and out, 1% each way (TCP repairs it, late). Jitter and
-// reordering cannot be emulated here (README, "Transport limits"). On top, the master loses
-// every third update message to each client (dropEveryNthUpdate): a gap that the client must
-// notice when a frame needs the update, and repair with a resync. Every frame must equal the
-// single-machine image of its own state, and the state changes every frame: a tile rendered
-// for an old state, or a gap nobody noticed, would show.
-class LossyLink : public ::testing::Test {
+// An impaired link to the clients, in the test's own namespace. This kernel has neither
+// sch_netem nor act_gact, so:
+//  - loss comes from nftables inside the namespace: `numgen random mod 100 < 1 drop` on every
+//    packet in and out, 1% each way (TCP repairs it, late);
+//  - delay, jitter and reordering come from tools/netjitter: iptables sends every packet in and
+//    out to an NFQUEUE, where netjitter holds each for 5 +- 5 ms (uniform) before letting it
+//    go, so packets overtake each other as with netem's jitter.
+// On top, the master loses every third update message to each client (dropEveryNthUpdate): a
+// gap that the client must notice when a frame needs the update, and repair with a resync.
+// Every frame must equal the single-machine image of its own state, and the state changes every
+// frame: a tile rendered for an old state, or a gap nobody noticed, would show.
+class ImpairedLink : public ::testing::Test {
 protected:
     static constexpr const char* kNs = "rtwt-loss";
     void SetUp() override {
@@ -308,12 +311,40 @@ protected:
                               "  chain in { type filter hook input priority 0; iifname \"rtwt-ln\" numgen random mod 100 < 1 counter drop; }\n"
                               "  chain out { type filter hook output priority 0; oifname \"rtwt-ln\" numgen random mod 100 < 1 counter drop; }\n"
                               "}\nEOF"), 0) << "nftables numgen";
+#ifdef RTWALL_NETJITTER
+        if (std::system("command -v iptables >/dev/null") != 0) GTEST_SKIP() << "iptables is missing (tools/bootstrap.sh deps installs it)";
+        ASSERT_EQ(std::system("ip netns exec rtwt-loss iptables -A INPUT -i rtwt-ln -j NFQUEUE --queue-num 7 --queue-bypass && "
+                              "ip netns exec rtwt-loss iptables -A OUTPUT -o rtwt-ln -j NFQUEUE --queue-num 7 --queue-bypass"), 0)
+            << "iptables NFQUEUE";
+        report_ = (test::scratchDir() / "netjitter.txt").string();
+        std::vector<std::string> args = {"ip", "netns", "exec", kNs, RTWALL_NETJITTER, "--queue", "7", "--delay", "5",
+                                         "--jitter", "5", "--report", report_};
+        std::vector<char*> argv;
+        for (auto& a : args) argv.push_back(a.data());
+        argv.push_back(nullptr);
+        ASSERT_EQ(posix_spawn(&jitter_, "/usr/sbin/ip", nullptr, nullptr, argv.data(), environ), 0);
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));  // bound to its queue (--queue-bypass until then)
+#endif
     }
     void TearDown() override {
+        stopJitter();
         std::system("ip link del rtwt-lh 2>/dev/null");
         std::system("ip netns del rtwt-loss 2>/dev/null");
     }
-    // Packets the rules dropped so far, both ways.
+    // Stops netjitter; its packets and how many of them overtook an earlier one.
+    std::pair<long, long> stopJitter() {
+        if (jitter_ <= 0) return {-1, -1};
+        kill(jitter_, SIGTERM);
+        waitpid(jitter_, nullptr, 0);
+        jitter_ = -1;
+        long packets = -1, reordered = -1;
+        if (FILE* f = std::fopen(report_.c_str(), "r")) {
+            if (std::fscanf(f, "packets %ld reordered %ld", &packets, &reordered) != 2) packets = reordered = -1;
+            std::fclose(f);
+        }
+        return {packets, reordered};
+    }
+    // Packets the loss rules dropped so far, both ways.
     static long lostPackets() {
         FILE* f = popen("ip netns exec rtwt-loss nft list table inet rtwall_loss", "r");
         if (!f) return -1;
@@ -327,9 +358,11 @@ protected:
             sum += std::stol((*it)[1]);
         return sum;
     }
+    pid_t jitter_ = -1;
+    std::string report_;
 };
 
-TEST_F(LossyLink, FramesCompleteAndEveryUpdateGapIsResynced) {
+TEST_F(ImpairedLink, FramesCompleteAndEveryUpdateGapIsResynced) {
     SceneDesc desc = slowScene();
     desc.settings.supersample = 1;
     ClusterSettings cs = faultSettings();
@@ -350,9 +383,15 @@ TEST_F(LossyLink, FramesCompleteAndEveryUpdateGapIsResynced) {
         EXPECT_EQ(master.renderFrame(&r).rgb, singleMachine(desc).rgb) << "frame " << r.frame;
     }
     const long lost = lostPackets();
-    std::printf("lossy link: %ld packets lost, %llu update messages lost, %llu resyncs\n", lost,
-                (unsigned long long)master.injectedUpdateLosses(), (unsigned long long)master.resyncs());
+    const auto [delayed, reordered] = stopJitter();
+    std::printf("impaired link: %ld packets lost, %ld delayed of which %ld overtook an earlier one; "
+                "%llu update messages lost, %llu resyncs\n",
+                lost, delayed, reordered, (unsigned long long)master.injectedUpdateLosses(),
+                (unsigned long long)master.resyncs());
     EXPECT_GT(lost, 0) << "the link must really have lost packets";
+#ifdef RTWALL_NETJITTER
+    EXPECT_GT(reordered, 0) << "the link must really have reordered packets";
+#endif
     EXPECT_GE(master.injectedUpdateLosses(), 2u * (kFrames / 3));
     // A lost update is either needed by the next frame (a gap: one resync) or already covered by
     // a state that was on its way to a resyncing client; never more resyncs than losses.
