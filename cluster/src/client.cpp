@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <deque>
 #include <fstream>
+#include <future>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -85,6 +86,7 @@ private:
         session_ = 0;
         ready_ = false;
         snapshot_.reset();
+        ++buildGeneration_;
         lastFrameBegun_ = 0;
         Hello hello;
         hello.threads = uint32_t(threads_);
@@ -135,6 +137,7 @@ private:
                     lastSent_ = nowSeconds();
                 }
             }
+            finishBuild();
             if (std::string why = failure(); !why.empty()) {
                 send(Goodbye{why});
                 std::fprintf(stderr, "rtwall client: %s\n", why.c_str());
@@ -177,6 +180,7 @@ private:
                 const Welcome w = decodePayload<Welcome>(p, n);
                 if (h.session != session_.load()) {  // a new master session: nothing of the old one counts
                     snapshot_.reset();
+                    ++buildGeneration_;
                     ready_ = false;
                     lastFrameBegun_ = 0;
                 }
@@ -256,6 +260,7 @@ private:
         }
         dropWork();
         ready_ = false;
+        ++buildGeneration_;
         snapshot_ = std::move(snap);
         updates_.reset(snapshot_->updateSeq);
         for (const MeshRef& ref : snapshot_->meshes)
@@ -280,8 +285,12 @@ private:
         tryBuildScene();
     }
 
+    // Builds the scene (Embree's BVH: seconds for millions of triangles on a slow PC) on its own
+    // thread, so that this thread keeps reading and sending heartbeats: a joining client that
+    // went silent for longer than the master's timeout would be dropped and, rejoining, build
+    // again, never getting in.
     void tryBuildScene() {
-        if (!snapshot_ || ready_) return;
+        if (!snapshot_ || ready_ || building_.valid()) return;  // a stale build is redone when it ends
         SceneDesc desc;
         for (const MeshRef& ref : snapshot_->meshes) {
             auto it = meshes_.find(ref.hash);
@@ -293,10 +302,32 @@ private:
         desc.lights = snapshot_->lights;
         desc.cameras = {snapshot_->camera};
         desc.settings = snapshot_->settings;
+        building_ = std::async(std::launch::async, [desc = std::move(desc), delay = settings_.extraSceneBuildMs] {
+            if (delay > 0) std::this_thread::sleep_for(std::chrono::milliseconds(delay));
+            return std::make_unique<Scene>(desc);
+        });
+        buildingFor_ = buildGeneration_;
+    }
+
+    // Installs a finished build if it is still for the current snapshot, and proves the state.
+    void finishBuild() {
+        if (!building_.valid() || building_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+        std::unique_ptr<Scene> scene;
+        try {
+            scene = building_.get();
+        } catch (const std::exception& e) {
+            std::lock_guard lock(workMutex_);
+            failure_ = std::string("cannot use the master's scene: ") + e.what();
+            return;
+        }
+        if (buildingFor_ != buildGeneration_ || !snapshot_) {  // another snapshot came meanwhile
+            tryBuildScene();
+            return;
+        }
         const Hash128 hash = stateHash(*snapshot_);
         {
             std::unique_lock lock(sceneMutex_);
-            scene_ = std::make_unique<Scene>(desc);
+            scene_ = std::move(scene);
             camera_ = snapshot_->camera;
             renderSettings_ = snapshot_->settings;
             renderSettings_.threads = 1;
@@ -476,6 +507,9 @@ private:
     std::string failure_;  // guarded by workMutex_
 
     std::optional<SceneSnapshot> snapshot_;
+    std::future<std::unique_ptr<Scene>> building_;  // the scene for a snapshot, being built
+    uint64_t buildGeneration_ = 0;  // bumped by every snapshot (and reconnect): older builds are stale
+    uint64_t buildingFor_ = 0;
     std::map<Hash128, std::shared_ptr<const TriangleMesh>> meshes_;
     UpdateSequencer updates_;
     bool ready_ = false;

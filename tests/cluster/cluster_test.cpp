@@ -449,6 +449,30 @@ TEST(Cluster, SilentClientLosesNoTile) {
 }
 
 
+// A render PC that needs longer to build the scene (its BVH) than the master's timeout: it must
+// keep answering while it builds, or the master drops it and it builds again on rejoining,
+// never getting in (what `rtwall run` did with its 3-million-triangle scene on a busy machine).
+TEST(Cluster, AClientSlowerToBuildTheSceneThanTheTimeoutStillJoins) {
+    SceneDesc desc = demoScene(64, 48);
+    ClusterSettings cs;
+    cs.async = false;
+    cs.heartbeatMs = 50;
+    cs.timeoutMs = 300;
+    auto master = std::make_unique<Master>(desc, cs);
+    ClientSettings slow;
+    slow.connect = master->endpoint();
+    slow.threads = 1;
+    slow.exitAfterIdleMs = 4000;
+    slow.extraSceneBuildMs = 1500;  // five timeouts
+    std::thread client([slow] { runClient(slow); });
+    EXPECT_TRUE(master->waitForClients(1, 20000)) << "it got in despite the slow build";
+    if (master->connectedClients() == 1) {
+        EXPECT_EQ(differingBytes(master->renderFrame(), singleMachine(desc)), 0u);
+    }
+    master.reset();
+    client.join();
+}
+
 // A client that answers the snapshot with the wrong state hash (it holds another scene, or lies)
 // never gets a tile: the master sends the state again instead, and frames come from the honest
 // client alone, bit-identical.
@@ -603,15 +627,20 @@ TEST(Transport, SendToAPeerAtItsHighWaterMarkThatDisconnectsNeverBlocks) {
     EXPECT_LT(accepted, 100000) << "the high-water mark was never reached";
     EXPECT_GE(accepted, 4);
     peer.reset();  // the peer at its high-water mark disconnects
+    // While libzmq tears the connection down a send may still be taken (and then lost with the
+    // pipe); once it is gone every send fails (EHOSTUNREACH). None of them may block.
+    int early = 0;
     auto after = std::async(std::launch::async, [&] {
-        int ok = 0;
+        int late = 0;
         for (int i = 0; i < 200; ++i) {
-            ok += cluster::sendToPeer(router, "stuck", chunk);
+            const bool ok = cluster::sendToPeer(router, "stuck", chunk);
+            (i < 100 ? early : late) += ok;
             std::this_thread::sleep_for(std::chrono::milliseconds(5));
         }
-        return ok;
+        return late;
     });
-    EXPECT_EQ(watchdog(after, "a send to a full peer that disconnected"), 0);
+    EXPECT_EQ(watchdog(after, "a send to a full peer that disconnected"), 0) << "still accepted 0.5 s after it left";
+    EXPECT_LE(early, 4) << "at most a high-water mark's worth while it was leaving";
 }
 
 // The same at the level of the master: a peer that completes the handshake and stops reading.

@@ -115,6 +115,7 @@ struct ClientSettings {
     int exitAfterIdleMs = 0;            // > 0: exit when no master answers for this long
     bool replay = false;                // benchmarks: render each tile once, then resend its bytes
     int extraTileDelayMs = 0;           // fault injection for tests: emulate a slower PC
+    int extraSceneBuildMs = 0;          // fault injection for tests: a PC slow to build the scene
     std::filesystem::path keyFile;      // this client's key pair: CURVE on (needs serverKeyFile)
     std::filesystem::path serverKeyFile;  // the master's public key: the client checks it
 };
