@@ -397,7 +397,7 @@ TEST_F(ImpairedLink, FramesCompleteAndEveryUpdateGapIsResynced) {
     // a state that was on its way to a resyncing client; never more resyncs than losses.
     EXPECT_GE(master.resyncs(), 1u);
     EXPECT_LE(master.resyncs(), master.injectedUpdateLosses());
-    EXPECT_EQ(master.connectedClients(), 2);
+    EXPECT_TRUE(master.waitForClients(2, 10000)) << "both back after their resyncs";
 }
 
 }  // namespace
