@@ -28,6 +28,8 @@ PACKAGES=(
   libglfw3-dev libgl-dev  # GLFW and OpenGL 3.3: the wall's windows and input
   glslang-dev          # glslang: every wall shader is compiled at `rtwall check` and in the tests
   xvfb xauth libgl1-mesa-dri  # gui tests and bench display: Xvfb with Mesa's software OpenGL (llvmpipe)
+  nftables             # nft: packet loss in the fault tests' own namespaces (no sch_netem here)
+  iptables libnetfilter-queue-dev  # NFQUEUE: netjitter's delay, jitter and reordering in those namespaces
   python3
 )
 

@@ -8,16 +8,42 @@
 #   tools/netem.sh bench N [MASTER_RATE] [CLIENT_RATE] [-- rtwall bench cluster arguments]
 #   tools/netem.sh faults N [MASTER_RATE] [CLIENT_RATE] [-- rtwall bench faults arguments]
 #   tools/netem.sh down
+#   LOSS=1 tools/netem.sh bench 2 ...                 each client's link loses 1% of packets each way
+#   DELAY=5 JITTER=5 tools/netem.sh bench 2 ...       each packet on a client's link is held 5 +- 5 ms
 #
 # Shaping uses tc's token-bucket filter (tbf) on the switch's ports, i.e. on what each machine
-# receives (tiles flow into the master). The kernel here has no sch_netem, so added latency and
-# loss cannot be emulated; the rates can.
+# receives (tiles flow into the master). The kernel here has no sch_netem (nor act_gact), so
+# random loss comes from nftables (`numgen random` in each client's namespace, LOSS percent in
+# steps of 0.1), and delay and jitter (hence reordering) from build/tools/netjitter, fed by an
+# iptables NFQUEUE rule in each client's namespace.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 RTWALL=${RTWALL:-build/tools/rtwall}
+LOSS=${LOSS:-0}
+DELAY=${DELAY:-0}
+JITTER=${JITTER:-0}
+NETJITTER=${NETJITTER:-build/tools/netjitter}
 
 shape() {  # namespace device rate
   ip netns exec "$1" tc qdisc replace dev "$2" root tbf rate "$3" burst 512kb latency 100ms
+}
+
+lose() {  # namespace percent: drop that share of what the namespace's eth0 sends and receives
+  local permille
+  permille=$(awk -v p="$2" 'BEGIN { printf "%d", p * 10 + 0.5 }')
+  ip netns exec "$1" nft -f - <<EOF
+table inet rtw_loss {
+  chain in { type filter hook input priority 0; iifname "eth0" numgen random mod 1000 < $permille counter drop; }
+  chain out { type filter hook output priority 0; oifname "eth0" numgen random mod 1000 < $permille counter drop; }
+}
+EOF
+}
+
+jitter() {  # namespace: every packet on its eth0 held DELAY +- JITTER ms by netjitter
+  ip netns exec "$1" iptables -A INPUT -i eth0 -j NFQUEUE --queue-num 0 --queue-bypass
+  ip netns exec "$1" iptables -A OUTPUT -o eth0 -j NFQUEUE --queue-num 0 --queue-bypass
+  ip netns exec "$1" "$NETJITTER" --queue 0 --delay "$DELAY" --jitter "$JITTER" >/dev/null &
+  echo $! > "/run/rtw-netjitter-$1.pid"
 }
 
 up() {
@@ -39,11 +65,21 @@ up() {
     shape "$ns" eth0 "$rate"        # and what it sends
   }
   attach rtw-m 10.199.0.1 "$mrate"
-  for i in $(seq 1 "$n"); do attach "rtw-c$i" "10.199.0.$((10 + i))" "$crate"; done
-  echo "netem: master 10.199.0.1 at $mrate, $n clients at $crate" >&2
+  for i in $(seq 1 "$n"); do
+    attach "rtw-c$i" "10.199.0.$((10 + i))" "$crate"
+    if [ "$LOSS" != 0 ]; then lose "rtw-c$i" "$LOSS"; fi
+    if [ "$DELAY" != 0 ] || [ "$JITTER" != 0 ]; then jitter "rtw-c$i"; fi
+  done
+  echo "netem: master 10.199.0.1 at $mrate, $n clients at $crate, loss $LOSS% each way," \
+       "delay $DELAY +- $JITTER ms each way on client links" >&2
 }
 
 down() {
+  for f in /run/rtw-netjitter-rtw-*.pid; do
+    [ -e "$f" ] || continue
+    kill "$(cat "$f")" 2>/dev/null || true
+    rm -f "$f"
+  done
   for ns in $(ip netns list | awk '{print $1}' | grep -E '^rtw-(m|sw|c[0-9]+)$' || true); do ip netns del "$ns"; done
 }
 
@@ -60,13 +96,16 @@ case "${1:-}" in
     [ "${1:-}" = "--" ] && shift
     up "$n" "$mrate" "$crate"
     trap down EXIT
+    link="master $mrate, clients $crate"
+    if [ "$LOSS" != 0 ]; then link="$link, loss $LOSS% each way"; fi
+    if [ "$DELAY" != 0 ] || [ "$JITTER" != 0 ]; then link="$link, delay $DELAY +- $JITTER ms each way"; fi
     if [ "$what" = bench ]; then
       # --insecure: these namespaces are the script's own and reach nothing else.
       ip netns exec rtw-m "$RTWALL" bench cluster --bind tcp://10.199.0.1:7700 --client-netns rtw-c --insecure \
-        --max-clients "$n" --link "master $mrate, clients $crate" "$@"
+        --max-clients "$n" --link "$link" "$@"
     else
       ip netns exec rtw-m "$RTWALL" bench faults --bind tcp://10.199.0.1:7700 --client-netns rtw-c \
-        --link "master $mrate, clients $crate" "$@"
+        --link "$link" "$@"
     fi
     ;;
   *) echo "usage: tools/netem.sh up N [MASTER_RATE] [CLIENT_RATE] | bench|faults N [RATES] [-- ARGS] | down" >&2; exit 2 ;;

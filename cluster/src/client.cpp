@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <deque>
 #include <fstream>
+#include <future>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -85,6 +86,8 @@ private:
         session_ = 0;
         ready_ = false;
         snapshot_.reset();
+        ++buildGeneration_;
+        lastFrameBegun_ = 0;
         Hello hello;
         hello.threads = uint32_t(threads_);
         char host[256] = {};
@@ -94,7 +97,8 @@ private:
         lastHeard_ = nowSeconds();
     }
 
-    int timeoutMs() const { return 3000; }
+    // The master's peer timeout, from its Welcome (before the first Welcome: the default).
+    int timeoutMs() const { return timeoutMs_; }
 
     Header header(MsgType type, uint32_t frame = 0) const {
         Header h;
@@ -129,10 +133,11 @@ private:
                 for (int i = 0; i < 256; ++i) {
                     zmq::message_t msg;
                     if (!results_.recv(msg, zmq::recv_flags::dontwait)) break;
-                    if (!dealer_.send(msg, zmq::send_flags::dontwait)) ++dropped_;
+                    if (!dealer_.send(msg, zmq::send_flags::dontwait)) ++dropped_;  // the master re-issues it
                     lastSent_ = nowSeconds();
                 }
             }
+            finishBuild();
             if (std::string why = failure(); !why.empty()) {
                 send(Goodbye{why});
                 std::fprintf(stderr, "rtwall client: %s\n", why.c_str());
@@ -173,12 +178,19 @@ private:
             }
             if (h.type == MsgType::Welcome) {
                 const Welcome w = decodePayload<Welcome>(p, n);
+                if (h.session != session_.load()) {  // a new master session: nothing of the old one counts
+                    snapshot_.reset();
+                    ++buildGeneration_;
+                    ready_ = false;
+                    lastFrameBegun_ = 0;
+                }
                 session_ = h.session;
                 id_ = w.clientId;
                 backoffMs_ = 100;
                 codec_ = w.codec;
                 prefetch_ = std::max(1u, w.prefetch);
                 heartbeatMs_ = int(std::max(10u, w.heartbeatMs));
+                timeoutMs_ = int(std::max(std::max(50u, w.timeoutMs), 2 * uint32_t(heartbeatMs_)));
                 return std::nullopt;
             }
             if (h.session != session_.load() || session_.load() == 0) {
@@ -240,8 +252,15 @@ private:
     }
 
     void onSnapshot(SceneSnapshot snap) {
+        // Within a session the master's states to one client never go back in time (it sends
+        // the current frame's state): one older than what this client holds is a replay.
+        if (snapshot_ && snap.updateSeq < stateSeq_) {
+            ++dropped_;
+            return;
+        }
         dropWork();
         ready_ = false;
+        ++buildGeneration_;
         snapshot_ = std::move(snap);
         updates_.reset(snapshot_->updateSeq);
         for (const MeshRef& ref : snapshot_->meshes)
@@ -266,8 +285,12 @@ private:
         tryBuildScene();
     }
 
+    // Builds the scene (Embree's BVH: seconds for millions of triangles on a slow PC) on its own
+    // thread, so that this thread keeps reading and sending heartbeats: a joining client that
+    // went silent for longer than the master's timeout would be dropped and, rejoining, build
+    // again, never getting in.
     void tryBuildScene() {
-        if (!snapshot_ || ready_) return;
+        if (!snapshot_ || ready_ || building_.valid()) return;  // a stale build is redone when it ends
         SceneDesc desc;
         for (const MeshRef& ref : snapshot_->meshes) {
             auto it = meshes_.find(ref.hash);
@@ -279,10 +302,32 @@ private:
         desc.lights = snapshot_->lights;
         desc.cameras = {snapshot_->camera};
         desc.settings = snapshot_->settings;
+        building_ = std::async(std::launch::async, [desc = std::move(desc), delay = settings_.extraSceneBuildMs] {
+            if (delay > 0) std::this_thread::sleep_for(std::chrono::milliseconds(delay));
+            return std::make_unique<Scene>(desc);
+        });
+        buildingFor_ = buildGeneration_;
+    }
+
+    // Installs a finished build if it is still for the current snapshot, and proves the state.
+    void finishBuild() {
+        if (!building_.valid() || building_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+        std::unique_ptr<Scene> scene;
+        try {
+            scene = building_.get();
+        } catch (const std::exception& e) {
+            std::lock_guard lock(workMutex_);
+            failure_ = std::string("cannot use the master's scene: ") + e.what();
+            return;
+        }
+        if (buildingFor_ != buildGeneration_ || !snapshot_) {  // another snapshot came meanwhile
+            tryBuildScene();
+            return;
+        }
         const Hash128 hash = stateHash(*snapshot_);
         {
             std::unique_lock lock(sceneMutex_);
-            scene_ = std::make_unique<Scene>(desc);
+            scene_ = std::move(scene);
             camera_ = snapshot_->camera;
             renderSettings_ = snapshot_->settings;
             renderSettings_.threads = 1;
@@ -327,9 +372,17 @@ private:
     }
 
     void onFrameBegin(const FrameBegin& fb) {
+        // Frames only move forward. An older FrameBegin, or the one being rendered again, is a
+        // replay: obeying it would throw away the work in progress. (The master repeats the
+        // current frame's FrameBegin after a resync, when this client renders nothing.)
+        if (fb.frame < lastFrameBegun_ || (fb.frame != 0 && fb.frame == frame_.load())) {
+            ++dropped_;
+            return;
+        }
         dropWork();
         if (!ready_ || !catchUp(fb.updateSeq)) return;
         frame_.store(fb.frame);
+        lastFrameBegun_ = fb.frame;
         send(TileRequest{fb.frame, prefetch_}, fb.frame);
     }
 
@@ -365,8 +418,15 @@ private:
         result.tile = w.tile;
         result.codec = codec_.codec;
         const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame), result);
-        out.send(zmq::const_buffer(bytes.data(), bytes.size()), zmq::send_flags::none);
+        sendResult(out, bytes);
         return true;
+    }
+
+    // Render threads hand results to the network thread without blocking either: with its queue
+    // full (the master reads slowly and the network thread's own queue is full too) the result
+    // is dropped and counted, and the master re-issues the tile as a straggler.
+    void sendResult(zmq::socket_t& out, const std::vector<uint8_t>& bytes) {
+        if (!sendNow(out, bytes)) ++droppedResults_;
     }
 
     std::string failure() {
@@ -413,7 +473,7 @@ private:
                     replay_[w.tile] = result.pixels;
                 }
                 const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame), result);
-                out.send(zmq::const_buffer(bytes.data(), bytes.size()), zmq::send_flags::none);
+                sendResult(out, bytes);
             } catch (const std::exception& e) {
                 // Tell the master why before going away (the network thread sends it).
                 std::lock_guard lock(workMutex_);
@@ -437,13 +497,19 @@ private:
     CodecSettings codec_;
     uint32_t prefetch_ = 4;
     int heartbeatMs_ = 250;
+    int timeoutMs_ = 3000;
+    uint32_t lastFrameBegun_ = 0;  // this session's newest FrameBegin
     double lastHeard_ = 0, lastSent_ = 0;
     bool reconnectRequested_ = false;
     int backoffMs_ = 100;  // next reconnection pause (jittered), doubled up to maxReconnectMs
     uint64_t dropped_ = 0;
+    std::atomic<uint64_t> droppedResults_{0};
     std::string failure_;  // guarded by workMutex_
 
     std::optional<SceneSnapshot> snapshot_;
+    std::future<std::unique_ptr<Scene>> building_;  // the scene for a snapshot, being built
+    uint64_t buildGeneration_ = 0;  // bumped by every snapshot (and reconnect): older builds are stale
+    uint64_t buildingFor_ = 0;
     std::map<Hash128, std::shared_ptr<const TriangleMesh>> meshes_;
     UpdateSequencer updates_;
     bool ready_ = false;

@@ -21,6 +21,7 @@
 #include <map>
 #include <mutex>
 #include <random>
+#include <set>
 #include <thread>
 #include <utility>
 
@@ -36,6 +37,8 @@ struct ClientState {
     double lastSeen = 0;
     double lastSent = 0;
     bool ready = false;       // proved it holds the state at stateSeq
+    bool stateInFlight = false;  // a state was sent and not yet proved: another resync request adds nothing
+    std::set<Hash128> meshesSent;  // each mesh goes to a client once: repeated requests cannot pile up meshes in its queue
     uint32_t stateSeq = 0;    // the snapshot it was sent; it also has every update after it
     uint32_t credits = 0;     // tiles it asked for and has not been given
     uint64_t updatesSent = 0; // for fault injection
@@ -114,6 +117,10 @@ private:
     std::vector<std::thread> workers_;
 };
 
+// Tiles a client may be owed at once: bounds what a client (or a replay of its requests) can
+// make the master queue for it.
+constexpr uint32_t kMaxCredits = 64;
+
 struct Command {
     enum Kind { kUpdate, kBeginFrame, kStop } kind;
     Update update;              // kUpdate; for kBeginFrame only its seq: the state the frame renders
@@ -170,6 +177,8 @@ struct Master::Impl {
     std::vector<uint32_t> failedTiles;  // accepted results of the current frame that did not decode
     std::atomic<uint64_t> dropped{0};
     std::atomic<uint64_t> resyncCount{0};
+    std::atomic<uint64_t> sendFailures{0};
+    std::atomic<uint64_t> injectedLosses{0};
 
     uint32_t lastBegun = 0;       // application side
     bool inFlight = false;
@@ -207,6 +216,7 @@ struct Master::Impl {
     template <class Msg> bool send(ClientState& c, const Msg& msg, uint32_t frame = 0) {
         const bool ok = sendToPeer(router, c.peer, encodeMessage(header(messageTypeOf(msg), frame), msg));
         c.lastSent = nowSeconds();
+        if (!ok) ++sendFailures;
         return ok;
     }
 
@@ -260,6 +270,7 @@ struct Master::Impl {
     void sendState(ClientState& c) {
         const SceneSnapshot snap = frameState ? *frameState : snapshot();
         c.stateSeq = snap.updateSeq;
+        c.stateInFlight = true;
         if (!send(c, snap)) {
             markDead(c, "unreachable while sending the scene state");
             return;
@@ -334,7 +345,7 @@ struct Master::Impl {
         if (h.version != kProtocolVersion || hello.protocolVersion != kProtocolVersion) {
             Goodbye bye{"protocol version " + std::to_string(hello.protocolVersion) + " is not the master's " +
                         std::to_string(kProtocolVersion)};
-            sendToPeer(router, peer, encodeMessage(header(MsgType::Goodbye), bye));
+            if (!sendToPeer(router, peer, encodeMessage(header(MsgType::Goodbye), bye))) ++sendFailures;
             std::fprintf(stderr, "rtwall master: refused a client speaking protocol version %u (master: %u)\n",
                          unsigned(hello.protocolVersion), unsigned(kProtocolVersion));
             return;
@@ -350,13 +361,20 @@ struct Master::Impl {
         c.threads = std::max(1u, hello.threads);
         scheduler.addClient(c.id);
         auto& ref = clients[peer] = c;
-        Welcome w{ref.id, settings.codec, uint32_t(settings.prefetch), uint32_t(settings.heartbeatMs)};
+        Welcome w{ref.id, settings.codec, uint32_t(settings.prefetch), uint32_t(settings.heartbeatMs),
+                  uint32_t(settings.timeoutMs)};
         if (!send(ref, w)) markDead(ref, "unreachable during the handshake");
         else sendState(ref);
     }
 
     void onReady(ClientState& c, const uint8_t* data, size_t size) {
         const Ready r = decodePayload<Ready>(data, size);
+        if (!c.stateInFlight) {
+            // Nothing to prove: a replayed or repeated Ready. Answering it with the state again
+            // would let one message cost a whole snapshot.
+            ++dropped;
+            return;
+        }
         bool matches;
         {
             std::lock_guard lock(stateMutex);
@@ -369,6 +387,7 @@ struct Master::Impl {
             sendState(c);
             return;
         }
+        c.stateInFlight = false;
         if (!c.ready) {
             c.ready = true;
             {
@@ -382,6 +401,10 @@ struct Master::Impl {
 
     void onMeshRequest(ClientState& c, const uint8_t* data, size_t size) {
         const MeshRequest req = decodePayload<MeshRequest>(data, size);
+        if (!c.meshesSent.insert(req.hash).second) {
+            ++dropped;  // asked before: it has it, or it is replaying requests to fill its queue
+            return;
+        }
         for (size_t i = 0; i < meshRefs.size(); ++i)
             if (meshRefs[i].hash == req.hash) {
                 MeshData md{req.hash, encodeMesh(*scene.meshes[i].mesh)};
@@ -399,7 +422,13 @@ struct Master::Impl {
             return;
         }
         const auto result = scheduler.complete(c.id, r.frame, r.tile, nowSeconds());
-        c.credits += 1;  // a result is also a request for the next tile
+        if (result == TileScheduler::Result::Unexpected) {
+            ++dropped;  // a tile never handed to this client (replayed from another frame's hand-outs, or made up)
+            return;
+        }
+        // A result for a tile it was given is also a request for the next tile; a duplicate
+        // (the tile was done by a re-issue, or the result was replayed) is counted in the report.
+        c.credits = std::min<uint32_t>(c.credits + 1, kMaxCredits);
         if (result == TileScheduler::Result::Accepted) {
             TileRect rect;
             TileView view;
@@ -441,7 +470,7 @@ struct Master::Impl {
             case MsgType::TileRequest: {
                 const TileRequest req = decodePayload<TileRequest>(payload, payloadSize);
                 if (frameActive && req.frame == currentFrame) {
-                    c.credits = std::min<uint32_t>(c.credits + req.count, 64);
+                    c.credits = std::min<uint32_t>(c.credits + req.count, kMaxCredits);
                     serve(c);
                 } else {
                     ++dropped;
@@ -452,6 +481,10 @@ struct Master::Impl {
             case MsgType::Heartbeat: decodePayload<Heartbeat>(payload, payloadSize); break;
             case MsgType::ResyncRequest:
                 decodePayload<ResyncRequest>(payload, payloadSize);
+                if (c.stateInFlight) {
+                    ++dropped;  // the state on its way already covers it (or the request is a replay)
+                    break;
+                }
                 ++resyncCount;
                 if (c.ready) {
                     c.ready = false;
@@ -511,7 +544,10 @@ struct Master::Impl {
     void sendUpdate(const Update& update) {
         for (auto& [peer, c] : clients) {
             const int n = settings.dropEveryNthUpdate;
-            if (n > 0 && ++c.updatesSent % uint64_t(n) == 0) continue;  // injected loss
+            if (n > 0 && ++c.updatesSent % uint64_t(n) == 0) {  // injected loss
+                ++injectedLosses;
+                continue;
+            }
             if (!send(c, update)) markDead(c, "its queue is full or it is unreachable");
         }
         sentUpdates.push_back(update);
@@ -589,6 +625,8 @@ struct Master::Impl {
                     ++dropped;
                 }
                 handle(identity, msg);
+                if (settings.consumeDelayUs > 0)
+                    std::this_thread::sleep_for(std::chrono::microseconds(settings.consumeDelayUs));
             }
             reap();
             finishFrameIfDone();
@@ -618,7 +656,8 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
 
     // The largest legitimate message a client sends is a result for the largest tile allowed.
     const int64_t maxResult = int64_t(kHeaderSize + 64 + maxEncodedTileBytes(1024, 1024));
-    configureSocket(s.router, maxResult, settings.heartbeatMs, settings.timeoutMs);
+    if (settings.highWaterMark < 1) throw InputError("the high-water mark must be at least 1 message");
+    configureSocket(s.router, maxResult, settings.heartbeatMs, settings.timeoutMs, settings.highWaterMark);
     s.router.set(zmq::sockopt::router_mandatory, 1);
     checkZmqVersion();
     if (!settings.keyFile.empty()) {
@@ -772,6 +811,8 @@ Image Master::renderFrame(FrameReport* report) {
 
 uint64_t Master::droppedMessages() const { return impl_->dropped.load(); }
 uint64_t Master::resyncs() const { return impl_->resyncCount.load(); }
+uint64_t Master::failedSends() const { return impl_->sendFailures.load(); }
+uint64_t Master::injectedUpdateLosses() const { return impl_->injectedLosses.load(); }
 uint64_t Master::refusedConnections() const { return impl_->zap ? impl_->zap->denied() : 0; }
 
 }  // namespace rtwall

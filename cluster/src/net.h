@@ -16,18 +16,19 @@ inline double nowSeconds() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-// High-water marks, in messages. A tile result is at most one tile's pixels; 1000 of them in
-// a queue are a few tens of MB at worst, so memory stays bounded while a peer is slow.
+// High-water marks, in messages (the default; the master's is ClusterSettings::highWaterMark).
+// A tile result is at most one tile's pixels; 1000 of them in a queue are a few tens of MB at
+// worst, so memory stays bounded while a peer is slow.
 inline constexpr int kSendHwm = 1000;
-inline constexpr int kReceiveHwm = 1000;
 
 // Options every rtwall socket gets: finite linger (a dead peer cannot keep the process alive),
 // bounded queues, the largest legitimate message as ZMQ_MAXMSGSIZE, and ZMTP heartbeats so a
 // peer that vanished without a FIN is noticed by the transport as well as by our own timeouts.
-inline void configureSocket(zmq::socket_t& s, int64_t maxMessageBytes, int heartbeatMs, int timeoutMs) {
+inline void configureSocket(zmq::socket_t& s, int64_t maxMessageBytes, int heartbeatMs, int timeoutMs,
+                            int highWaterMark = kSendHwm) {
     s.set(zmq::sockopt::linger, 100);
-    s.set(zmq::sockopt::sndhwm, kSendHwm);
-    s.set(zmq::sockopt::rcvhwm, kReceiveHwm);
+    s.set(zmq::sockopt::sndhwm, highWaterMark);
+    s.set(zmq::sockopt::rcvhwm, highWaterMark);
     s.set(zmq::sockopt::maxmsgsize, maxMessageBytes);
     s.set(zmq::sockopt::heartbeat_ivl, heartbeatMs);
     s.set(zmq::sockopt::heartbeat_timeout, timeoutMs);
@@ -35,7 +36,10 @@ inline void configureSocket(zmq::socket_t& s, int64_t maxMessageBytes, int heart
 }
 
 // Non-blocking send of one message; false if the peer's queue is full or it is unreachable
-// (ZMQ_ROUTER_MANDATORY), which the caller treats as a sign of a dead or stuck peer.
+// (ZMQ_ROUTER_MANDATORY), which the caller treats as a sign of a dead or stuck peer. Never a
+// blocking send: with ZMQ_ROUTER_MANDATORY a blocking send to a peer at its high-water mark
+// that then disconnects waits forever (libzmq issue #2348, pull request #4665); with
+// ZMQ_DONTWAIT it returns EAGAIN or EHOSTUNREACH at once.
 inline bool sendNow(zmq::socket_t& s, const std::vector<uint8_t>& bytes) {
     try {
         return s.send(zmq::const_buffer(bytes.data(), bytes.size()), zmq::send_flags::dontwait).has_value();

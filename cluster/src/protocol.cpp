@@ -325,6 +325,7 @@ void write(Writer& w, const Welcome& m) {
     write(w, m.codec);
     w.u32(m.prefetch);
     w.u32(m.heartbeatMs);
+    w.u32(m.timeoutMs);
 }
 void read(Reader& r, Welcome& m) {
     m.clientId = r.u32();
@@ -333,6 +334,11 @@ void read(Reader& r, Welcome& m) {
     // A client never needs more tiles in flight than one assignment can carry.
     if (m.prefetch > kMaxTilesPerMessage) fail("prefetch " + std::to_string(m.prefetch) + " exceeds the limit");
     m.heartbeatMs = r.u32();
+    m.timeoutMs = r.u32();
+    // The client turns these into socket options (ints) and timers: keep them sane.
+    if (m.heartbeatMs > kMaxTimeoutMs || m.timeoutMs > kMaxTimeoutMs)
+        fail("heartbeat " + std::to_string(m.heartbeatMs) + " ms or timeout " + std::to_string(m.timeoutMs) +
+             " ms exceeds the limit");
 }
 
 // Everything that affects the image, i.e. the snapshot without its sequence number; stateHash

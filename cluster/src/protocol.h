@@ -1,4 +1,4 @@
-// The rtwall wire protocol, version 1.
+// The rtwall wire protocol, version 2 (2 added the master's peer timeout to Welcome).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one writer and one
@@ -24,7 +24,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 1;
+inline constexpr uint16_t kProtocolVersion = 2;
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -33,6 +33,7 @@ inline constexpr uint32_t kMaxTilesPerMessage = 1 << 16;
 inline constexpr uint32_t kMaxChangesPerUpdate = 1 << 16;
 inline constexpr uint32_t kMaxSceneObjects = 1 << 24;  // meshes, instances, materials, lights, cameras
 inline constexpr uint64_t kMaxMeshBytes = uint64_t(1) << 31;
+inline constexpr uint32_t kMaxTimeoutMs = 3'600'000;  // heartbeat and timeout: an hour at most
 
 enum class MsgType : uint16_t {
     Hello = 1,          // client -> master
@@ -74,6 +75,7 @@ struct Welcome {
     CodecSettings codec;
     uint32_t prefetch = 4;
     uint32_t heartbeatMs = 250;
+    uint32_t timeoutMs = 3000;  // the client declares the master dead after this much silence
 };
 
 struct MeshRef {

@@ -107,12 +107,14 @@ void ZapHandler::run() {
                          address.c_str(), mechanism.c_str(), z85);
         }
         const std::string status = ok ? "200" : "400", text = ok ? "OK" : "unknown client key";
-        socket_.send(zmq::str_buffer("1.0"), zmq::send_flags::sndmore);
-        socket_.send(frames[1], zmq::send_flags::sndmore);
-        socket_.send(zmq::buffer(status), zmq::send_flags::sndmore);
-        socket_.send(zmq::buffer(text), zmq::send_flags::sndmore);
-        socket_.send(zmq::str_buffer(""), zmq::send_flags::sndmore);
-        socket_.send(zmq::str_buffer(""), zmq::send_flags::none);
+        // Non-blocking like every other send: if libzmq's side of the ZAP exchange is gone or
+        // full, the reply is dropped and that handshake fails by its own timeout.
+        constexpr auto more = zmq::send_flags::sndmore | zmq::send_flags::dontwait;
+        const bool replied = socket_.send(zmq::str_buffer("1.0"), more) && socket_.send(frames[1], more) &&
+                             socket_.send(zmq::buffer(status), more) && socket_.send(zmq::buffer(text), more) &&
+                             socket_.send(zmq::str_buffer(""), more) &&
+                             socket_.send(zmq::str_buffer(""), zmq::send_flags::dontwait);
+        if (!replied) std::fprintf(stderr, "rtwall master: could not answer a ZAP request from %s\n", address.c_str());
     }
 }
 

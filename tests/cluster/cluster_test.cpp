@@ -3,6 +3,8 @@
 // Every loop is bounded; every wait has a timeout.
 #include "test_util.h"
 
+#include "codec.h"
+#include "net.h"
 #include "protocol.h"
 
 #include <rtwall/cluster.h>
@@ -12,8 +14,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-
+#include <atomic>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <future>
 #include <memory>
+#include <optional>
 #include <thread>
 
 namespace rtwall {
@@ -243,7 +250,8 @@ TEST(Cluster, LostUpdatesAreDetectedAndResynced) {
         EXPECT_EQ(differingBytes(img, singleMachine(expect)), 0u) << "frame " << r.frame;
     }
     EXPECT_GE(master.resyncs(), 5u) << "the losses must have been noticed and repaired";
-    EXPECT_EQ(master.connectedClients(), 2);
+    // A client may still be resyncing from the last frame (done by the other one): bounded wait.
+    EXPECT_TRUE(master.waitForClients(2, 10000)) << "both back after their resyncs";
 }
 
 TEST(Cluster, LateJoinerGetsTheCurrentStateFirst) {
@@ -338,13 +346,17 @@ public:
             session_ = in.session;
             const uint8_t* payload = p + kHeaderSize;
             const size_t n = msg.size() - kHeaderSize;
-            if (in.type == MsgType::SceneSnapshot && !ready) {
+            if (in.type == MsgType::SceneSnapshot && (!ready || lieAboutState)) {
                 const auto snap = decodePayload<SceneSnapshot>(payload, n);
-                send(MsgType::Ready, 0, Ready{snap.updateSeq, stateHash(snap)});
+                Hash128 hash = stateHash(snap);
+                if (lieAboutState) hash[0] ^= 1;  // a state it does not hold
+                send(MsgType::Ready, 0, Ready{snap.updateSeq, hash});
+                if (!ready) onReady();
                 ready = true;
-                onReady();
+                ++snapshots;
             } else if (in.type == MsgType::FrameBegin) {
                 const auto fb = decodePayload<FrameBegin>(payload, n);
+                ++frameBegins;
                 send(MsgType::TileRequest, fb.frame, TileRequest{fb.frame, want_});
             } else if (in.type == MsgType::TileAssign) {
                 if (!onAssign(decodePayload<TileAssign>(payload, n))) break;
@@ -360,6 +372,9 @@ public:
         h.frame = frame;
         socket_.send(zmq::buffer(cluster::encodeMessage(h, m)));
     }
+
+    bool lieAboutState = false;  // answer every snapshot with a wrong state hash
+    int snapshots = 0, frameBegins = 0;
 
 private:
     zmq::context_t ctx_;
@@ -437,6 +452,416 @@ TEST(Cluster, SilentClientLosesNoTile) {
     FrameReport report;
     EXPECT_EQ(differingBytes(master.renderFrame(&report), singleMachine(desc)), 0u);
     EXPECT_EQ(report.clients.size(), 1u);
+}
+
+
+// A render PC that needs longer to build the scene (its BVH) than the master's timeout: it must
+// keep answering while it builds, or the master drops it and it builds again on rejoining,
+// never getting in (what `rtwall run` did with its 3-million-triangle scene on a busy machine).
+TEST(Cluster, AClientSlowerToBuildTheSceneThanTheTimeoutStillJoins) {
+    SceneDesc desc = demoScene(64, 48);
+    ClusterSettings cs;
+    cs.async = false;
+    cs.heartbeatMs = 50;
+    cs.timeoutMs = 300;
+    auto master = std::make_unique<Master>(desc, cs);
+    ClientSettings slow;
+    slow.connect = master->endpoint();
+    slow.threads = 1;
+    slow.exitAfterIdleMs = 4000;
+    slow.extraSceneBuildMs = 1500;  // five timeouts
+    std::thread client([slow] { runClient(slow); });
+    EXPECT_TRUE(master->waitForClients(1, 20000)) << "it got in despite the slow build";
+    if (master->connectedClients() == 1) {
+        EXPECT_EQ(differingBytes(master->renderFrame(), singleMachine(desc)), 0u);
+    }
+    master.reset();
+    client.join();
+}
+
+// A client that answers the snapshot with the wrong state hash (it holds another scene, or lies)
+// never gets a tile: the master sends the state again instead, and frames come from the honest
+// client alone, bit-identical.
+TEST(Cluster, AClientThatCannotProveTheStateGetsNoTile) {
+    SceneDesc desc = demoScene(96, 72);
+    ClusterSettings cs;
+    cs.async = false;
+    LocalCluster cluster(desc, cs, 1);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(1, 30000));
+    RogueClient rogue(master.endpoint(), 4);
+    rogue.lieAboutState = true;
+    int assigns = 0;
+    std::atomic<bool> stop{false};
+    std::thread frames([&] {
+        for (int f = 0; f < 3 && !stop; ++f) EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(desc)), 0u);
+        stop = true;
+    });
+    rogue.run([] {}, [&](const cluster::TileAssign&) { return ++assigns < 100; });
+    frames.join();
+    EXPECT_EQ(assigns, 0);
+    EXPECT_EQ(rogue.frameBegins, 0) << "not even told that a frame began";
+    EXPECT_GT(rogue.snapshots, 1) << "it was sent the state again";
+    EXPECT_EQ(master.connectedClients(), 1);
+}
+
+long residentKiB() {
+    std::ifstream in("/proc/self/status");
+    std::string key;
+    long value = 0;
+    while (in >> key) {
+        if (key == "VmRSS:") {
+            in >> value;
+            return value;
+        }
+        in.ignore(1 << 12, '\n');
+    }
+    return 0;
+}
+
+// A slow display PC: the master's network thread takes 1 ms per message it reads while a peer
+// sends as fast as it can. Nothing grows without bound: the flood waits in ZeroMQ queues of at
+// most highWaterMark messages at each end (plus the TCP buffers), the sender's non-blocking sends
+// fail beyond that (EAGAIN, counted by the sender), every message that was sent is read and
+// counted as dropped by the master (it is not from a client), and an honest client's frames
+// still complete, bit-identical.
+TEST(Cluster, ASlowMasterKeepsMemoryBoundedAndCountsEveryDrop) {
+    SceneDesc desc = demoScene(96, 72);
+    ClusterSettings cs;
+    cs.async = false;
+    cs.consumeDelayUs = 1000;
+    cs.highWaterMark = 500;
+    cs.stragglerFactor = 1e9;  // no re-issued tiles, so no stray results: the flood is all that is dropped
+    cs.timeoutMs = 10000;  // the honest client's heartbeats wait behind the flood
+    LocalCluster cluster(desc, cs, 1);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(1, 30000));
+    EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(desc)), 0u);
+
+    constexpr size_t kMessageBytes = 32 << 10;
+    zmq::context_t ctx;
+    zmq::socket_t flood(ctx, zmq::socket_type::dealer);
+    flood.set(zmq::sockopt::linger, 0);
+    flood.set(zmq::sockopt::sndhwm, cs.highWaterMark);
+    flood.connect(master.endpoint());
+    cluster::Header h;
+    h.type = cluster::MsgType::TileResult;
+    h.session = 0x5EED;  // not a session of this master: dropped and counted
+    cluster::TileResult junk;
+    junk.pixels.assign(kMessageBytes, 0x42);
+    const std::vector<uint8_t> bytes = cluster::encodeMessage(h, junk);
+
+    const uint64_t dropped0 = master.droppedMessages();
+    const long rss0 = residentKiB();
+    long rssPeak = rss0;
+    uint64_t sent = 0, refused = 0;
+    std::thread frame([&] {
+        // The honest client keeps rendering through the flood.
+        EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(desc)), 0u);
+    });
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(1500);
+    while (std::chrono::steady_clock::now() < end) {
+        if (cluster::sendNow(flood, bytes)) {
+            ++sent;
+        } else {
+            ++refused;
+            std::this_thread::sleep_for(std::chrono::microseconds(200));
+        }
+        if ((sent + refused) % 64 == 0) rssPeak = std::max(rssPeak, residentKiB());
+    }
+    frame.join();
+    // The master reads what was sent, one message a millisecond; bounded wait.
+    for (int i = 0; i < 3000 && master.droppedMessages() - dropped0 < sent; ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        rssPeak = std::max(rssPeak, residentKiB());
+    }
+    const uint64_t dropped = master.droppedMessages() - dropped0;
+    const double queuedMiB = 2.0 * cs.highWaterMark * double(bytes.size()) / (1 << 20);
+    std::printf("slow master: %llu sent, %llu refused (EAGAIN) by the sender, %llu counted as dropped by the master; "
+                "RSS %.1f -> %.1f MiB (queues at most %.1f MiB)\n",
+                (unsigned long long)sent, (unsigned long long)refused, (unsigned long long)dropped, rss0 / 1024.0,
+                rssPeak / 1024.0, queuedMiB);
+    EXPECT_GT(refused, 0u) << "the high-water mark was reached: sends beyond it fail instead of queueing";
+    EXPECT_EQ(dropped, sent) << "every message that left the sender was read and counted; none lost uncounted";
+    // Bounded: both queues full plus TCP buffers and slack, far below the unbounded total.
+    EXPECT_LT(double(rssPeak - rss0) / 1024.0, queuedMiB + 64.0);
+    EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(desc)), 0u);
+    EXPECT_EQ(master.connectedClients(), 1);
+}
+
+// The libzmq case behind "no blocking send": a ROUTER with ZMQ_ROUTER_MANDATORY whose peer
+// stops reading reaches that peer's high-water mark; if the peer then disconnects, a blocking
+// send waits forever (libzmq issue #2348, pull request #4665). rtwall's sendToPeer never blocks:
+// it fails at the mark (EAGAIN) and after the disconnect (EAGAIN or EHOSTUNREACH). A watchdog
+// ends the program rather than letting a regression hang CI.
+TEST(Transport, SendToAPeerAtItsHighWaterMarkThatDisconnectsNeverBlocks) {
+    zmq::context_t ctx;
+    zmq::socket_t router(ctx, zmq::socket_type::router);
+    router.set(zmq::sockopt::linger, 0);
+    router.set(zmq::sockopt::router_mandatory, 1);
+    router.set(zmq::sockopt::sndhwm, 4);
+    router.set(zmq::sockopt::sndbuf, 4096);
+    router.bind("tcp://127.0.0.1:0");
+    auto peer = std::make_unique<zmq::socket_t>(ctx, zmq::socket_type::dealer);
+    peer->set(zmq::sockopt::linger, 0);
+    peer->set(zmq::sockopt::routing_id, "stuck");
+    peer->set(zmq::sockopt::rcvhwm, 1);
+    peer->set(zmq::sockopt::rcvbuf, 4096);
+    peer->connect(router.get(zmq::sockopt::last_endpoint));
+    peer->send(zmq::str_buffer("hi"));
+    zmq::message_t id, body;
+    router.set(zmq::sockopt::rcvtimeo, 5000);
+    ASSERT_TRUE(router.recv(id));
+    ASSERT_TRUE(router.recv(body));
+
+    const std::vector<uint8_t> chunk(64 << 10, 7);
+    auto watchdog = [](std::future<int>& f, const char* what) {
+        if (f.wait_for(std::chrono::seconds(20)) != std::future_status::ready) {
+            ADD_FAILURE() << what << " blocked";
+            std::fflush(stdout);
+            std::_Exit(1);  // a blocked thread cannot be joined
+        }
+        return f.get();
+    };
+    // The peer never reads: sends succeed until its queue is full, then fail at once.
+    auto fill = std::async(std::launch::async, [&] {
+        int ok = 0;
+        for (int i = 0; i < 100000 && cluster::sendToPeer(router, "stuck", chunk); ++i) ++ok;
+        return ok;
+    });
+    const int accepted = watchdog(fill, "a send to a full peer");
+    EXPECT_LT(accepted, 100000) << "the high-water mark was never reached";
+    EXPECT_GE(accepted, 4);
+    peer.reset();  // the peer at its high-water mark disconnects
+    // While libzmq tears the connection down a send may still be taken (and then lost with the
+    // pipe); once it is gone every send fails (EHOSTUNREACH). None of them may block.
+    int early = 0;
+    auto after = std::async(std::launch::async, [&] {
+        int late = 0;
+        for (int i = 0; i < 200; ++i) {
+            const bool ok = cluster::sendToPeer(router, "stuck", chunk);
+            (i < 100 ? early : late) += ok;
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+        return late;
+    });
+    EXPECT_EQ(watchdog(after, "a send to a full peer that disconnected"), 0) << "still accepted 0.5 s after it left";
+    EXPECT_LE(early, 4) << "at most a high-water mark's worth while it was leaving";
+}
+
+// The same at the level of the master: a peer that completes the handshake and stops reading.
+// First it asks for every mesh ten times: each mesh is sent once and every repeated request
+// dropped and counted, so a client cannot make the master queue the model again and again.
+// Then it says hello again and again on the same connection, each time a new client asking for
+// the meshes: the master's queue to it fills, the send that finds it full fails at once, and it
+// is dropped (and the failed send counted). Then it disconnects at its high-water mark.
+// Meanwhile an honest client's frames complete, bit-identical.
+TEST(Cluster, APeerThatStopsReadingBlocksNothing) {
+    using namespace cluster;
+    SceneDesc desc = demoScene(96, 72);
+    ClusterSettings cs;
+    cs.async = false;
+    cs.timeoutMs = 20000;  // only a full queue can remove it within this test
+    cs.highWaterMark = 8;
+    cs.stragglerFactor = 1e9;  // no stray results: the repeated requests are all that is dropped
+    LocalCluster cluster(desc, cs, 1);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(1, 30000));
+
+    zmq::context_t ctx;
+    auto stuck = std::make_unique<zmq::socket_t>(ctx, zmq::socket_type::dealer);
+    stuck->set(zmq::sockopt::linger, 0);
+    stuck->set(zmq::sockopt::rcvhwm, 1);
+    stuck->set(zmq::sockopt::rcvbuf, 4096);
+    stuck->set(zmq::sockopt::rcvtimeo, 5000);
+    stuck->connect(master.endpoint());
+    Header h;
+    h.type = MsgType::Hello;
+    const std::vector<uint8_t> hello = encodeMessage(h, Hello{kProtocolVersion, 1, "stuck"});
+    stuck->send(zmq::buffer(hello));
+    std::optional<SceneSnapshot> snap;
+    for (int i = 0; i < 10 && !snap; ++i) {
+        zmq::message_t msg;
+        ASSERT_TRUE(stuck->recv(msg));
+        const auto* p = static_cast<const uint8_t*>(msg.data());
+        const Header in = decodeHeader(p, msg.size());
+        h.session = in.session;
+        if (in.type == MsgType::SceneSnapshot) snap = decodePayload<SceneSnapshot>(p + kHeaderSize, msg.size() - kHeaderSize);
+    }
+    ASSERT_TRUE(snap);
+    // It reads nothing from now on.
+    const uint64_t dropped0 = master.droppedMessages(), failed0 = master.failedSends();
+    h.type = MsgType::MeshRequest;
+    std::vector<std::vector<uint8_t>> requests;
+    for (const MeshRef& m : snap->meshes) requests.push_back(encodeMessage(h, MeshRequest{m.hash}));
+    for (int round = 0; round < 10; ++round)
+        for (const auto& r : requests) stuck->send(zmq::buffer(r), zmq::send_flags::dontwait);
+    const uint64_t repeated = 9 * requests.size();
+    for (int i = 0; i < 500 && master.droppedMessages() - dropped0 < repeated; ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    EXPECT_EQ(master.droppedMessages() - dropped0, repeated) << "each mesh sent once; every repeated request dropped and counted";
+    EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(desc)), 0u);
+
+    for (int round = 0; round < 200 && master.failedSends() == failed0; ++round) {
+        stuck->send(zmq::buffer(hello), zmq::send_flags::dontwait);
+        for (const auto& r : requests) stuck->send(zmq::buffer(r), zmq::send_flags::dontwait);
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    EXPECT_GT(master.failedSends(), failed0) << "its queue filled and the send failed instead of blocking";
+    EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(desc)), 0u);
+    stuck.reset();  // disconnects at its high-water mark
+    for (int f = 0; f < 3; ++f) EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(desc)), 0u) << "frame " << f;
+    EXPECT_EQ(master.connectedClients(), 1);
+}
+
+// A stand-in master written by hand, to test what a client does with messages a real master
+// never sends: Welcome with another timeout, and old messages sent again (replays).
+class FakeMaster {
+public:
+    FakeMaster() : router_(ctx_, zmq::socket_type::router) {
+        router_.set(zmq::sockopt::linger, 0);
+        router_.bind("tcp://127.0.0.1:0");
+        endpoint = router_.get(zmq::sockopt::last_endpoint);
+    }
+    struct Received {
+        std::string peer;
+        cluster::Header header;
+        std::vector<uint8_t> payload;
+    };
+    // The next message of the given type (others are skipped), within ms.
+    std::optional<Received> expect(cluster::MsgType type, int ms) {
+        const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
+        while (std::chrono::steady_clock::now() < end) {
+            zmq::pollitem_t item{router_.handle(), 0, ZMQ_POLLIN, 0};
+            zmq::poll(&item, 1, std::chrono::milliseconds(10));
+            zmq::message_t id, msg;
+            if (!router_.recv(id, zmq::recv_flags::dontwait)) continue;
+            if (!router_.recv(msg, zmq::recv_flags::dontwait)) continue;
+            const auto* p = static_cast<const uint8_t*>(msg.data());
+            Received r{id.to_string(), cluster::decodeHeader(p, msg.size()),
+                       std::vector<uint8_t>(p + cluster::kHeaderSize, p + msg.size())};
+            if (r.header.type == type) return r;
+        }
+        return std::nullopt;
+    }
+    template <class Msg> std::vector<uint8_t> send(const std::string& peer, const Msg& m, uint32_t frame = 0) {
+        cluster::Header h;
+        h.type = cluster::messageTypeOf(m);
+        h.session = kSession;
+        h.frame = frame;
+        std::vector<uint8_t> bytes = cluster::encodeMessage(h, m);
+        resend(peer, bytes);
+        return bytes;
+    }
+    void resend(const std::string& peer, const std::vector<uint8_t>& bytes) {
+        router_.send(zmq::buffer(peer), zmq::send_flags::sndmore);
+        router_.send(zmq::buffer(bytes));
+    }
+    static constexpr uint64_t kSession = 0xFACE;
+    std::string endpoint;
+
+private:
+    zmq::context_t ctx_;
+    zmq::socket_t router_;
+};
+
+// The client's peer timeout is the master's (Welcome), not a fixed 3 s: a master that says
+// 300 ms and then falls silent gets a new Hello well within 2.5 s (with the old fixed 3 s, none).
+TEST(Cluster, TheClientTakesItsTimeoutFromTheMaster) {
+    using namespace cluster;
+    FakeMaster fake;
+    ClientSettings cs;
+    cs.connect = fake.endpoint;
+    cs.threads = 1;
+    cs.exitAfterIdleMs = 2500;
+    auto client = std::async(std::launch::async, [cs] { return runClient(cs); });
+    const auto hello = fake.expect(MsgType::Hello, 10000);
+    ASSERT_TRUE(hello);
+    fake.send(hello->peer, Welcome{1, CodecSettings{}, 4, 100, 300});
+    const auto start = std::chrono::steady_clock::now();
+    const auto again = fake.expect(MsgType::Hello, 2500);
+    EXPECT_TRUE(again) << "no new Hello after "
+                       << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << " s";
+    EXPECT_EQ(client.get(), 1) << "it gives up after its idle limit";
+}
+
+// Old master messages sent again (a replayed snapshot, FrameBegin and Update, and the current
+// FrameBegin once more) must not make the client drop its work or go back to an old state:
+// after them it still renders the tiles it is given, for the current state.
+TEST(Cluster, TheClientIgnoresReplayedMasterMessages) {
+    using namespace cluster;
+    SceneDesc desc = demoScene(64, 48);
+    desc.settings.tileSize = 16;
+    FakeMaster fake;
+    ClientSettings cs;
+    cs.connect = fake.endpoint;
+    cs.threads = 1;
+    cs.exitAfterIdleMs = 3000;
+    auto client = std::async(std::launch::async, [cs] { return runClient(cs); });
+    const auto hello = fake.expect(MsgType::Hello, 10000);
+    ASSERT_TRUE(hello);
+    const std::string peer = hello->peer;
+    fake.send(peer, Welcome{1, CodecSettings{}, 4, 100, 3000});
+
+    SceneSnapshot snap;
+    std::vector<std::vector<uint8_t>> meshBytes;
+    for (const MeshDesc& m : desc.meshes) {
+        meshBytes.push_back(encodeMesh(*m.mesh));
+        snap.meshes.push_back({m.name, "shape:none", hashBytes(meshBytes.back().data(), meshBytes.back().size()),
+                               meshBytes.back().size()});
+    }
+    snap.materials = desc.materials;
+    snap.instances = desc.instances;
+    snap.lights = desc.lights;
+    snap.camera = desc.cameras.front();
+    snap.settings = desc.settings;
+    const std::vector<uint8_t> oldSnapshot = fake.send(peer, snap);
+    for (size_t i = 0; i < desc.meshes.size(); ++i) {
+        const auto req = fake.expect(MsgType::MeshRequest, 10000);
+        ASSERT_TRUE(req);
+        const MeshRequest r = decodePayload<MeshRequest>(req->payload.data(), req->payload.size());
+        for (size_t k = 0; k < snap.meshes.size(); ++k)
+            if (snap.meshes[k].hash == r.hash) fake.send(peer, MeshData{r.hash, meshBytes[k]});
+    }
+    ASSERT_TRUE(fake.expect(MsgType::Ready, 30000));
+    const std::vector<uint8_t> oldBegin = fake.send(peer, FrameBegin{1, 0}, 1);
+    ASSERT_TRUE(fake.expect(MsgType::TileRequest, 10000));
+
+    // The state moves on: frame 2 renders seq 1 (a brighter light).
+    Update u;
+    u.baseSeq = 0;
+    u.seq = 1;
+    desc.lights[0].intensity *= 3.0f;
+    u.changes.push_back(LightChange{0, desc.lights[0]});
+    const std::vector<uint8_t> oldUpdate = fake.send(peer, u);
+    const std::vector<uint8_t> begin2 = fake.send(peer, FrameBegin{2, 1}, 2);
+    ASSERT_TRUE(fake.expect(MsgType::TileRequest, 10000));
+    // Replays: none of these may reach the client's work or state.
+    for (const auto* bytes : {&oldSnapshot, &oldBegin, &oldUpdate, &begin2}) fake.resend(peer, *bytes);
+    fake.send(peer, TileAssign{2, {1, 5}}, 2);
+
+    const Image expected = singleMachine(desc);
+    const std::vector<TileRect> tiles = makeTiles(64, 48, 16);
+    int good = 0;
+    for (int i = 0; i < 2; ++i) {
+        const auto res = fake.expect(MsgType::TileResult, 10000);
+        ASSERT_TRUE(res) << "the client dropped its work after a replay";
+        const TileResult r = decodePayload<TileResult>(res->payload.data(), res->payload.size());
+        EXPECT_EQ(r.frame, 2u);
+        const TileRect rect = tiles.at(r.tile);
+        std::vector<uint8_t> px(size_t(rect.width()) * rect.height() * 3);
+        decodeTile(r.codec, r.pixels.data(), r.pixels.size(), rect.width(), rect.height(), px.data(),
+                   size_t(rect.width()) * 3);
+        bool same = true;
+        for (int y = 0; y < rect.height(); ++y)
+            same &= std::equal(px.begin() + ptrdiff_t(y) * rect.width() * 3, px.begin() + ptrdiff_t(y + 1) * rect.width() * 3,
+                               expected.rgb.begin() + ((ptrdiff_t(rect.y0) + y) * 64 + rect.x0) * 3);
+        EXPECT_TRUE(same) << "tile " << r.tile << " was rendered for the current state";
+        good += same;
+    }
+    EXPECT_EQ(good, 2);
+    fake.send(peer, Goodbye{"test over"});
+    EXPECT_EQ(client.get(), 0);
 }
 
 }  // namespace

@@ -98,6 +98,7 @@ void expectSame(const Welcome& a, const Welcome& b) {
     expectSame(a.codec, b.codec);
     EXPECT_EQ(a.prefetch, b.prefetch);
     EXPECT_EQ(a.heartbeatMs, b.heartbeatMs);
+    EXPECT_EQ(a.timeoutMs, b.timeoutMs);
 }
 void expectSame(const SceneSnapshot& a, const SceneSnapshot& b) {
     EXPECT_EQ(a.updateSeq, b.updateSeq);
@@ -226,6 +227,7 @@ Welcome sampleWelcome() {
     w.codec = CodecSettings{TileCodec::Zstd, 77, true, 9};
     w.prefetch = 6;
     w.heartbeatMs = 125;
+    w.timeoutMs = 900;
     return w;
 }
 
@@ -386,7 +388,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x01, 0x00,                                      // version
+        0x02, 0x00,                                      // version (2: Welcome carries the timeout)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -612,6 +614,8 @@ TEST(Protocol, OtherMessagesRejectValuesOutOfRange) {
     EXPECT_THROW(decode<Welcome>(welcomeWith([](Welcome& w) { w.codec.jpegQuality = 101; })), DecodeError);
     EXPECT_THROW(decode<Welcome>(welcomeWith([](Welcome& w) { w.codec.zstdLevel = 0; })), DecodeError);
     EXPECT_THROW(decode<Welcome>(welcomeWith([](Welcome& w) { w.codec.zstdLevel = 20; })), DecodeError);
+    EXPECT_THROW(decode<Welcome>(welcomeWith([](Welcome& w) { w.timeoutMs = kMaxTimeoutMs + 1; })), DecodeError);
+    EXPECT_THROW(decode<Welcome>(welcomeWith([](Welcome& w) { w.heartbeatMs = kMaxTimeoutMs + 1; })), DecodeError);
     EXPECT_THROW(decode<Welcome>(welcomeWith([](Welcome& w) { w.prefetch = kMaxTilesPerMessage + 1; })),
                  DecodeError);
     EXPECT_NO_THROW(decode<Welcome>(welcomeWith([](Welcome& w) {

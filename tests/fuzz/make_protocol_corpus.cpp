@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
     std::filesystem::create_directories(outDir);
 
     seedMessage("hello", Hello{kProtocolVersion, 8, "node-1"});
-    seedMessage("welcome", Welcome{1, CodecSettings{TileCodec::Jpeg, 85, true, 3}, 4, 250});
+    seedMessage("welcome", Welcome{1, CodecSettings{TileCodec::Jpeg, 85, true, 3}, 4, 250, 3000});
     seedMessage("snapshot", snapshot());
     seedMessage("mesh-request", MeshRequest{{1, 2}});
     MeshData mesh;

@@ -2,6 +2,7 @@
 //  - a client killed (SIGKILL) or frozen (SIGSTOP) a third into a frame: time from the fault to
 //    the master noticing, and from then to the frame completing;
 //  - the frame time while that client is missing, against the frame time with it;
+//  - for the frozen one, the time from SIGCONT until it is back (rejoin: reconnect and proof);
 //  - the throughput cost of CURVE against no encryption (replaying clients, so the master and
 //    the link are what is measured).
 #include "commands.h"
@@ -65,8 +66,16 @@ toml::table faultRun(const SceneDesc& desc, int signal, int clients, int frames,
     detectedAt = Clock::now();
     frame.get();
     const double after = medianFrameTime(master, frames);
-    if (signal == SIGSTOP) kill(procs.pids().back(), SIGKILL);
-    return toml::table{{"fault", signal == SIGKILL ? "SIGKILL" : "SIGSTOP"},
+    // A frozen client that wakes up notices the master's silence after the master's timeout
+    // (it learns it in Welcome), reconnects and proves its state: the time until it is back.
+    double rejoin = -1;
+    if (signal == SIGSTOP) {
+        const auto resumedAt = Clock::now();
+        kill(procs.pids().back(), SIGCONT);
+        if (master.waitForClients(clients, 30'000)) rejoin = seconds(Clock::now() - resumedAt);
+        kill(procs.pids().back(), SIGKILL);
+    }
+    toml::table out{{"fault", signal == SIGKILL ? "SIGKILL" : "SIGSTOP"},
                        {"clients", clients},
                        {"timeout_ms", timeoutMs},
                        {"detection_s", seconds(detectedAt - faultAt)},
@@ -76,6 +85,8 @@ toml::table faultRun(const SceneDesc& desc, int signal, int clients, int frames,
                        {"frame_s_before", before},
                        {"frame_s_without_client", after},
                        {"extra_frame_fraction", after / before - 1.0}};
+    if (signal == SIGSTOP) out.insert("rejoin_after_resume_s", rejoin);  // -1: not back within 30 s
+    return out;
 }
 
 toml::table curveRun(const SceneDesc& desc, bool curve, TileCodec codec, int clients, int frames,
@@ -154,6 +165,8 @@ void addBenchFaults(CLI::App& bench, Run& run) {
                                 t["detection_s"].value_or(0.0), t["completion_after_fault_s"].value_or(0.0),
                                 t["frame_s_before"].value_or(0.0), t["frame_s_without_client"].value_or(0.0),
                                 100.0 * t["extra_frame_fraction"].value_or(0.0));
+                    if (t.contains("rejoin_after_resume_s"))
+                        std::printf("  resumed with SIGCONT: back in %.3f s\n", t["rejoin_after_resume_s"].value_or(-1.0));
                 }
                 for (const auto& c : curve) {
                     const toml::table& t = *c.as_table();

@@ -39,9 +39,11 @@ struct ClusterSettings {
     bool async = true;                        // specify frame N+1 while N renders
     CodecSettings codec;
     int heartbeatMs = 250;                    // both directions
-    int timeoutMs = 3000;                     // a silent peer is dead after this
+    int timeoutMs = 3000;                     // a silent peer is dead after this (clients learn it in Welcome)
+    int highWaterMark = 1000;                 // messages queued per peer and direction; a peer whose queue is full is dropped
     double stragglerFactor = 4.0;             // re-issue tiles outstanding this many median tile times
     int dropEveryNthUpdate = 0;               // fault injection for tests: lose every Nth update message per client
+    int consumeDelayUs = 0;                   // fault injection for tests: the network thread pauses this long per received message (a slow display PC)
     // Security: with a key pair every link is CURVE-encrypted and only the listed client public
     // keys get in. Without keys the master listens on loopback only, unless `insecure`.
     std::filesystem::path keyFile;                  // the master's key pair (rtwall keys)
@@ -94,7 +96,9 @@ public:
     // frame's updates already stream to the clients while this one renders.
     Image renderFrame(FrameReport* report = nullptr);
 
-    uint64_t droppedMessages() const;  // malformed, stale or unexpected messages dropped
+    uint64_t droppedMessages() const;  // malformed, stale, replayed or unexpected messages dropped
+    uint64_t failedSends() const;      // messages not sent because a peer's queue was full or it was gone
+    uint64_t injectedUpdateLosses() const;  // update messages dropped by dropEveryNthUpdate
     uint64_t resyncs() const;          // full states sent again after a client found a gap
     uint64_t refusedConnections() const;  // CURVE clients whose key is not in the config
 
@@ -112,6 +116,7 @@ struct ClientSettings {
     int exitAfterIdleMs = 0;            // > 0: exit when no master answers for this long
     bool replay = false;                // benchmarks: render each tile once, then resend its bytes
     int extraTileDelayMs = 0;           // fault injection for tests: emulate a slower PC
+    int extraSceneBuildMs = 0;          // fault injection for tests: a PC slow to build the scene
     std::filesystem::path keyFile;      // this client's key pair: CURVE on (needs serverKeyFile)
     std::filesystem::path serverKeyFile;  // the master's public key: the client checks it
 };
