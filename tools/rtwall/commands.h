@@ -18,5 +18,7 @@ void addKeys(CLI::App& app, Run& run);
 void addBenchKernel(CLI::App& bench, Run& run);
 void addBenchCluster(CLI::App& bench, Run& run);
 void addBenchFaults(CLI::App& bench, Run& run);
+void addGen(CLI::App& app, Run& run);
+void addBenchScene(CLI::App& bench, Run& run);
 
 }  // namespace rtwall::cli

@@ -15,11 +15,13 @@ int main(int argc, char** argv) {
     rtwall::cli::addClient(app, run);
     rtwall::cli::addRun(app, run);
     rtwall::cli::addKeys(app, run);
+    rtwall::cli::addGen(app, run);
     CLI::App* bench = app.add_subcommand("bench", "Benchmarks that print their figures (JSON with --json)");
     bench->require_subcommand(1);
     rtwall::cli::addBenchKernel(*bench, run);
     rtwall::cli::addBenchCluster(*bench, run);
     rtwall::cli::addBenchFaults(*bench, run);
+    rtwall::cli::addBenchScene(*bench, run);
 
     try {
         app.parse(argc, argv);
@@ -34,6 +36,9 @@ int main(int argc, char** argv) {
     }
     try {
         return run ? run() : 2;
+    } catch (const rtwall::Cancelled&) {
+        std::fprintf(stderr, "rtwall: interrupted\n");
+        return 130;
     } catch (const rtwall::InputError& e) {
         std::fprintf(stderr, "rtwall: error: %s\n", e.what());
         return 1;
