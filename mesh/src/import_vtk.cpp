@@ -20,6 +20,7 @@
 #include <vtkDataSetSurfaceFilter.h>
 #include <vtkDoubleArray.h>
 #include <vtkFloatArray.h>
+#include <vtkLogger.h>
 #include <vtkObjectFactory.h>
 #include <vtkOutputWindow.h>
 #include <vtkPointData.h>
@@ -84,6 +85,13 @@ std::mutex& vtkMutex() {
 class WindowScope {
 public:
     WindowScope() : window_(vtkSmartPointer<RecordingOutputWindow>::New()) {
+        // VTK 9 also logs every error through vtkLogger straight to stderr; rtwall reports one
+        // line itself. Process-wide, and rtwall uses VTK for nothing else.
+        static const bool quiet = [] {
+            vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
+            return true;
+        }();
+        (void)quiet;
         previous_ = vtkOutputWindow::GetInstance();
         if (previous_) previous_->Register(nullptr);
         vtkOutputWindow::SetInstance(window_);
@@ -139,6 +147,8 @@ bool parseCount(std::string_view t, uint64_t& v) {
     return r.ec == std::errc() && r.ptr == t.data() + t.size();
 }
 
+void walkLegacyBinary(std::string_view data, size_t pos, const std::string& name);
+
 void checkLegacy(std::string_view data, const std::string& name) {
     // Every number takes at least one byte in a binary file and two ("0 ") in an ASCII one.
     const bool binary = [&] {
@@ -150,6 +160,15 @@ void checkLegacy(std::string_view data, const std::string& name) {
         return pos != std::string_view::npos && startsWith(lineAt(data, pos), "BINARY");
     }();
     const uint64_t limit = binary ? data.size() : data.size() / 2 + 1;
+    if (binary) {
+        size_t pos = 0;
+        for (int line = 0; line < 4 && pos != std::string_view::npos; ++line) {
+            pos = data.find('\n', pos);
+            if (pos != std::string_view::npos) ++pos;
+        }
+        if (pos == std::string_view::npos) fail(name, "legacy VTK header is incomplete");
+        walkLegacyBinary(data, pos, name);
+    }
     static const char* kCounted[] = {"POINTS",     "POLYGONS", "TRIANGLE_STRIPS", "LINES",     "VERTICES",
                                      "CELLS",      "CELL_TYPES", "POINT_DATA",    "CELL_DATA", "LOOKUP_TABLE",
                                      "FIELD",      "OFFSETS",  "CONNECTIVITY",    "DIMENSIONS"};
@@ -184,6 +203,113 @@ void checkLegacy(std::string_view data, const std::string& name) {
         const size_t next = data.find('\n', pos);
         if (next == std::string_view::npos) break;
         pos = next + 1;
+    }
+}
+
+// Binary legacy files: every section's payload must be in the file before VTK reads it. VTK's
+// legacy reader does not stop cleanly on a truncated binary section (it crashed in our tests),
+// so the whole section structure is walked here first.
+size_t typeSize(std::string_view t) {
+    if (t == "unsigned_char" || t == "char") return 1;
+    if (t == "unsigned_short" || t == "short") return 2;
+    if (t == "unsigned_int" || t == "int" || t == "float") return 4;
+    if (t == "unsigned_long" || t == "long" || t == "double" || t == "vtktypeint64" || t == "vtktypeuint64") return 8;
+    return 0;
+}
+
+void walkLegacyBinary(std::string_view data, size_t pos, const std::string& name) {
+    auto failAt = [&](size_t at, const std::string& what) { fail(name + ":offset " + std::to_string(at), what); };
+    auto skipSpace = [&] {
+        while (pos < data.size() && (data[pos] == '\n' || data[pos] == '\r' || data[pos] == ' ' || data[pos] == '\t')) ++pos;
+    };
+    auto nextLine = [&](size_t& at) {
+        skipSpace();
+        at = pos;
+        const std::string_view line = lineAt(data, pos);
+        const size_t end = data.find('\n', pos);
+        pos = end == std::string_view::npos ? data.size() : end + 1;
+        return tokens(line);
+    };
+    auto count = [&](std::string_view t, size_t at) {
+        uint64_t v = 0;
+        if (!parseCount(t, v)) failAt(at, "expected a count, got '" + std::string(t.substr(0, 20)) + "'");
+        return v;
+    };
+    auto payload = [&](uint64_t values, size_t size, size_t at, const std::string& what) {
+        if (size == 0) failAt(at, what + ": unsupported data type");
+        if (values > data.size() || values * size > data.size() - pos)
+            failAt(at, what + ": truncated: needs " + std::to_string(values) + " values of " + std::to_string(size) +
+                           " bytes, the file has " + std::to_string(data.size() - pos) + " bytes left");
+        pos += size_t(values * size);
+    };
+    uint64_t attributeCount = 0;
+    while (true) {
+        size_t at = 0;
+        const std::vector<std::string_view> t = nextLine(at);
+        if (at >= data.size()) return;
+        if (t.empty()) continue;
+        const std::string_view k = t[0];
+        const std::string key(k.substr(0, 32));
+        if (k == "POINTS" && t.size() == 3) {
+            payload(3 * count(t[1], at), typeSize(t[2]), at, key);
+        } else if ((k == "VERTICES" || k == "LINES" || k == "POLYGONS" || k == "TRIANGLE_STRIPS" || k == "CELLS") && t.size() == 3) {
+            const uint64_t n = count(t[1], at), m = count(t[2], at);
+            const size_t save = pos;
+            size_t at2 = 0;
+            const std::vector<std::string_view> off = nextLine(at2);
+            if (!off.empty() && off[0] == "OFFSETS" && off.size() == 2) {
+                payload(n, typeSize(off[1]), at2, "OFFSETS");
+                const std::vector<std::string_view> conn = nextLine(at2);
+                if (conn.size() != 2 || conn[0] != "CONNECTIVITY") failAt(at2, "expected CONNECTIVITY after OFFSETS");
+                payload(m, typeSize(conn[1]), at2, "CONNECTIVITY");
+            } else {
+                pos = save;
+                payload(m, 4, at, key);
+            }
+        } else if (k == "CELL_TYPES" && t.size() == 2) {
+            payload(count(t[1], at), 4, at, key);
+        } else if ((k == "POINT_DATA" || k == "CELL_DATA") && t.size() == 2) {
+            attributeCount = count(t[1], at);
+        } else if ((k == "NORMALS" || k == "VECTORS") && t.size() == 3) {
+            payload(3 * attributeCount, typeSize(t[2]), at, key);
+        } else if (k == "TENSORS" && t.size() == 3) {
+            payload(9 * attributeCount, typeSize(t[2]), at, key);
+        } else if (k == "TEXTURE_COORDINATES" && t.size() == 4) {
+            payload(count(t[2], at) * attributeCount, typeSize(t[3]), at, key);
+        } else if (k == "COLOR_SCALARS" && t.size() == 3) {
+            payload(count(t[2], at) * attributeCount, 1, at, key);
+        } else if (k == "SCALARS" && (t.size() == 3 || t.size() == 4)) {
+            const uint64_t comps = t.size() == 4 ? count(t[3], at) : 1;
+            size_t at2 = 0;
+            const size_t save = pos;
+            const std::vector<std::string_view> lut = nextLine(at2);
+            if (lut.empty() || lut[0] != "LOOKUP_TABLE") pos = save;
+            payload(comps * attributeCount, typeSize(t[2]), at, key);
+        } else if (k == "LOOKUP_TABLE" && t.size() == 3) {
+            payload(4 * count(t[2], at), 1, at, key);
+        } else if (k == "FIELD" && t.size() == 3) {
+            const uint64_t arrays = count(t[2], at);
+            if (arrays > data.size()) failAt(at, "FIELD declares more arrays than the file can hold");
+            for (uint64_t a = 0; a < arrays; ++a) {
+                size_t at2 = 0;
+                const std::vector<std::string_view> arr = nextLine(at2);
+                if (arr.size() == 1 && arr[0] == "NULL_ARRAY") continue;
+                if (arr.size() != 4) failAt(at2, "expected a field array header 'name components tuples type'");
+                const uint64_t comps = count(arr[1], at2), tuples = count(arr[2], at2);
+                if (comps > data.size() || tuples > data.size()) failAt(at2, "field array larger than the file");
+                payload(comps * tuples, typeSize(arr[3]), at2, "field array");
+            }
+        } else if (k == "METADATA") {
+            // Text until an empty line.
+            while (pos < data.size()) {
+                const std::string_view line = lineAt(data, pos);
+                const size_t end = data.find('\n', pos);
+                pos = end == std::string_view::npos ? data.size() : end + 1;
+                if (line.find_first_not_of(" \t\r") == std::string_view::npos) break;
+            }
+        } else {
+            failAt(at, "unexpected section '" + key + "' in a binary legacy VTK file");
+        }
     }
 }
 
