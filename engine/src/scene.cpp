@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <set>
 #include <stdexcept>
 #include <string>
 
@@ -118,6 +119,7 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
             s.trianglesBuilt += s.currentMesh;
         }
         s.progress = nullptr;
+        s.meshBvhBytes = s.embreeBytes.load();
 
         s.top = rtcNewScene(s.device);
         rtcSetSceneFlags(s.top, sceneFlags(s.desc.bvh));
@@ -194,9 +196,16 @@ void Scene::commit() {
 
 size_t Scene::embreeBytes() const { return size_t(std::max<int64_t>(0, impl_->embreeBytes.load())); }
 
+size_t Scene::embreeTopLevelBytes() const {
+    return size_t(std::max<int64_t>(0, impl_->embreeBytes.load() - impl_->meshBvhBytes));
+}
+
 size_t Scene::geometryBytes() const {
+    // Meshes named by several [[mesh]] entries share one TriangleMesh: count it once.
+    std::set<const TriangleMesh*> seen;
     size_t bytes = 0;
-    for (const MeshDesc& md : impl_->desc.meshes) bytes += md.mesh->residentBytes();
+    for (const MeshDesc& md : impl_->desc.meshes)
+        if (seen.insert(md.mesh.get()).second) bytes += md.mesh->residentBytes();
     return bytes;
 }
 

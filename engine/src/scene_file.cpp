@@ -268,6 +268,7 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
         meshIndex[md.name] = uint32_t(scene.meshes.size());
         scene.meshes.push_back(std::move(md));
     });
+    if (options.progress && !options.progress(1.0)) throw Cancelled();
 
     forEachTable(top, file, "material", [&](Reader& r, const toml::table&) {
         Material m;

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -372,6 +373,34 @@ TEST(GeneratedScenes, SunflowerFieldInstancesEveryPlantFromSharedMeshes) {
     const Image img = renderScene(s, 64, 48);
     std::set<uint8_t> values(img.rgb.begin(), img.rgb.end());
     EXPECT_GT(values.size(), 10u);
+}
+
+}  // namespace
+}  // namespace rtwall
+
+namespace rtwall {
+namespace {
+
+// Loading reports progress and stops when asked (Ctrl-C in the command line).
+TEST(SceneLoad, ProgressIsReportedAndCanCancel) {
+    const fs::path dir = scratch("load_cancel");
+    gen::GenOptions o;
+    o.out = dir;
+    o.triangles = 5000;
+    gen::genPowerplant(o);
+    std::vector<double> seen;
+    SceneLoadOptions lo;
+    lo.cache = false;
+    lo.progress = [&](double f) {
+        seen.push_back(f);
+        return true;
+    };
+    (void)loadSceneFile(dir / "scene.toml", lo);
+    ASSERT_FALSE(seen.empty());
+    EXPECT_TRUE(std::is_sorted(seen.begin(), seen.end()));
+    EXPECT_DOUBLE_EQ(seen.back(), 1.0);
+    lo.progress = [](double) { return false; };
+    EXPECT_THROW(loadSceneFile(dir / "scene.toml", lo), Cancelled);
 }
 
 }  // namespace

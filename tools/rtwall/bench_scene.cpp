@@ -17,6 +17,8 @@
 #include <set>
 #include <thread>
 
+#include <time.h>
+
 namespace rtwall::cli {
 
 namespace {
@@ -30,6 +32,14 @@ template <class F> double seconds(F&& f) {
     const auto t0 = std::chrono::steady_clock::now();
     f();
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// CPU seconds of the whole process (all threads): on a shared machine, wall time alone says
+// little about the work done.
+double cpuSeconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
 // VmRSS / VmHWM of this process in bytes.
@@ -77,8 +87,10 @@ void addBenchScene(CLI::App& bench, Run& run) {
                 lo.stats = &parse;
                 ProgressBar bar("import", 1, "");
                 lo.progress = bar.fn();
+                const double cpu0 = cpuSeconds();
                 const double total = seconds([&] { (void)loadSceneFile(path, lo); });
                 out.insert("parse_load_s", total);
+                out.insert("parse_load_cpu_s", cpuSeconds() - cpu0);
                 out.insert("parse_import_s", parse.importSeconds);
             }
             {
@@ -95,7 +107,9 @@ void addBenchScene(CLI::App& bench, Run& run) {
             lo.cache = true;
             lo.stats = &cached;
             SceneDesc desc;
+            const double cpuLoad0 = cpuSeconds();
             const double cacheLoad = seconds([&] { desc = loadSceneFile(path, lo); });
+            out.insert("cache_load_cpu_s", cpuSeconds() - cpuLoad0);
             out.insert("cache_load_s", cacheLoad);
             out.insert("cache_read_s", cached.cacheSeconds);
             out.insert("cache_hits", int64_t(cached.cacheHits));
@@ -131,23 +145,32 @@ void addBenchScene(CLI::App& bench, Run& run) {
                 desc.bvh = settings[i];
                 std::unique_ptr<Scene> scene;
                 ProgressBar bar("bvh build", double(unique) * 1e-6, "Mtri");
+                const double cpu0 = cpuSeconds();
                 const double build = seconds([&] { scene = std::make_unique<Scene>(desc, bar.fn()); });
+                const double buildCpu = cpuSeconds() - cpu0;
                 const Camera c(camera, s.width, s.height);
                 std::vector<double> frames;
                 TileStats stats;
                 renderFrame(*scene, c, s, 0, &stats);  // warm-up
+                const double cpu1 = cpuSeconds();
                 for (int f = 0; f < o->frames; ++f) frames.push_back(seconds([&] { renderFrame(*scene, c, s, 0); }));
+                const double frameCpu = (cpuSeconds() - cpu1) / o->frames;
                 const double geometry = double(scene->geometryBytes()), embree = double(scene->embreeBytes());
                 toml::table row{{"quality", qualityName(desc.bvh.quality)},
                                 {"compact", desc.bvh.compact},
                                 {"robust", desc.bvh.robust},
                                 {"bvh_build_s", build},
+                                {"bvh_build_cpu_s", buildCpu},
                                 {"geometry_bytes", int64_t(geometry)},
                                 {"embree_bytes", int64_t(embree)},
+                                {"embree_top_level_bytes", int64_t(scene->embreeTopLevelBytes())},
+                                {"embree_bytes_per_instance_top_level", double(scene->embreeTopLevelBytes()) / double(std::max<size_t>(1, desc.instances.size()))},
+                                {"rss_bytes_per_instanced_triangle", double(procStatus("VmRSS:")) / double(std::max<int64_t>(1, instanced))},
                                 {"bytes_per_unique_triangle", (geometry + embree) / double(std::max<int64_t>(1, unique))},
                                 {"rss_bytes", procStatus("VmRSS:")},
                                 {"rss_bytes_per_unique_triangle", double(procStatus("VmRSS:")) / double(std::max<int64_t>(1, unique))},
                                 {"frame_s", medianOf(frames)},
+                                {"frame_cpu_s", frameCpu},
                                 {"rays_per_frame", int64_t(stats.rays + stats.shadowRays)}};
                 if (i == 0) out.insert("default", row);
                 else rows.push_back(row);

@@ -57,8 +57,10 @@ bool ProgressBar::update(double fraction) {
     const int width = 30, filled = int(fraction * width);
     const double rate = fraction * total_ / elapsed;
     const double left = fraction > 0 ? elapsed * (1 - fraction) / fraction : 0;
-    std::fprintf(stderr, "\r%-14s [%.*s%*s] %3d%%  %.1f %s/s  %4.0f s left ", label_.c_str(), filled,
-                 "##############################", width - filled, "", int(fraction * 100), rate, unit_.c_str(), left);
+    char rateText[64] = "";
+    if (!unit_.empty()) std::snprintf(rateText, sizeof rateText, "  %.1f %s/s", rate, unit_.c_str());
+    std::fprintf(stderr, "\r%-14s [%.*s%*s] %3d%%%s  %4.0f s left ", label_.c_str(), filled,
+                 "##############################", width - filled, "", int(fraction * 100), rateText, left);
     std::fflush(stderr);
     return true;
 }

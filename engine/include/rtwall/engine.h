@@ -156,6 +156,7 @@ public:
     // Bytes Embree holds for BVHs and instances (its memory monitor), and the geometry buffers
     // of the unique meshes (shared with Embree, counted once).
     size_t embreeBytes() const;
+    size_t embreeTopLevelBytes() const;  // the part for instances and the top-level BVH
     size_t geometryBytes() const;
     Scene(const Scene&) = delete;
     Scene& operator=(const Scene&) = delete;
