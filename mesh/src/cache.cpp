@@ -163,10 +163,10 @@ fs::path meshCachePath(const fs::path& source, const fs::path& cacheDir) {
     return cacheDir / (source.filename().string() + "." + hex + ".rtwcache");
 }
 
-void writeMeshCache(const TriangleMesh& mesh, const ImportReport& report, const fs::path& source,
-                    const fs::path& cacheFile, const ProgressFn& progress) {
-    SourceStamp stamp;
-    if (!stampOf(source, stamp)) throw InputError(source.string() + ": cannot stat the source of a cache");
+namespace detail {
+
+std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const ImportReport& report, uint64_t sourceSize,
+                                           int64_t sourceMtime) {
     const size_t V = mesh.vertexCount(), T = mesh.triangleCount();
     const size_t posBytes = align64((3 * V + 1) * 4);
     const size_t nrmBytes = mesh.hasNormals() ? align64((3 * V + 1) * 4) : 0;
@@ -178,8 +178,8 @@ void writeMeshCache(const TriangleMesh& mesh, const ImportReport& report, const 
     std::memcpy(h, kMagic, 8);
     putLE<uint32_t>(h + 8, kCacheVersion);
     putLE<uint32_t>(h + 12, uint32_t(kHeaderSize));
-    putLE<uint64_t>(h + 16, stamp.size);
-    putLE<int64_t>(h + 24, stamp.mtimeNs);
+    putLE<uint64_t>(h + 16, sourceSize);
+    putLE<int64_t>(h + 24, sourceMtime);
     putLE<uint64_t>(h + 32, V);
     putLE<uint64_t>(h + 40, T);
     putLE<uint32_t>(h + 48, mesh.hasNormals() ? 1u : 0u);
@@ -198,6 +198,18 @@ void writeMeshCache(const TriangleMesh& mesh, const ImportReport& report, const 
     }
     copyArrayLE(h + at, mesh.indices(), 3 * T);
     putLE<uint64_t>(h + kChecksumAt, checksum(h, total));
+    return bytes;
+}
+
+}  // namespace detail
+
+void writeMeshCache(const TriangleMesh& mesh, const ImportReport& report, const fs::path& source,
+                    const fs::path& cacheFile, const ProgressFn& progress) {
+    SourceStamp stamp;
+    if (!stampOf(source, stamp)) throw InputError(source.string() + ": cannot stat the source of a cache");
+    const std::vector<unsigned char> bytes = detail::encodeMeshCache(mesh, report, stamp.size, stamp.mtimeNs);
+    const unsigned char* h = bytes.data();
+    const size_t total = bytes.size();
 
     const fs::path tmp = cacheFile.string() + ".tmp." + std::to_string(::getpid());
     {

@@ -30,6 +30,7 @@
 #include <limits>
 #include <mutex>
 #include <new>
+#include <optional>
 #include <sstream>
 #include <streambuf>
 #include <string>
@@ -506,7 +507,15 @@ TriangleMesh importMesh(const fs::path& file, ImportReport* report) {
     const std::string name = file.string();
     requireRegularFile(file, name);
     const bool vtkExt = isVtkExtension(file);
-    const FormatInfo format = vtkExt ? FormatInfo{MeshFormat::Obj, "vtk"} : formatFromExtension(file, name);
+    std::optional<FormatInfo> format;
+    std::string unknownFormat;
+    if (!vtkExt) {
+        try {
+            format = formatFromExtension(file, name);
+        } catch (const InputError& e) {
+            unknownFormat = e.what();  // unless the content says VTK
+        }
+    }
     std::string data = readFile(file, name);
     const VtkKind kind = sniffVtk(data);
     if (kind != VtkKind::None) {
@@ -516,7 +525,8 @@ TriangleMesh importMesh(const fs::path& file, ImportReport* report) {
     }
     if (vtkExt)
         throw InputError(name + ": not a VTK file (expected '# vtk DataFile Version' or an XML <VTKFile> of type PolyData or UnstructuredGrid)");
-    return importOpenMesh(file, format, data, name, report);
+    if (!format) throw InputError(unknownFormat);
+    return importOpenMesh(file, *format, data, name, report);
 }
 
 }  // namespace detail

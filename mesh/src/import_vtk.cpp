@@ -31,8 +31,21 @@
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -503,8 +516,9 @@ void checkVtkCounts(VtkKind kind, std::string_view data, const std::string& name
     else checkXml(data, name);
 }
 
-TriangleMesh loadVtk(VtkKind kind, const std::string& data, const std::string& name, ImportReport& report) {
-    checkVtkCounts(kind, data, name);
+namespace {
+
+TriangleMesh loadVtkHere(VtkKind kind, const std::string& data, const std::string& name, ImportReport& report) {
     const std::lock_guard<std::mutex> lock(vtkMutex());
     WindowScope scope;
     RecordingOutputWindow& window = scope.window();
@@ -557,6 +571,110 @@ TriangleMesh loadVtk(VtkKind kind, const std::string& data, const std::string& n
         return toTriangles(pd, name, report);
     } catch (const std::bad_alloc&) {
         fail(name, "out of memory while reading");
+    }
+}
+
+bool writeAll(int fd, const unsigned char* p, size_t n) {
+    while (n > 0) {
+        const ssize_t w = ::write(fd, p, n);
+        if (w < 0 && errno == EINTR) continue;
+        if (w <= 0) return false;
+        p += w;
+        n -= size_t(w);
+    }
+    return true;
+}
+
+}  // namespace
+
+// VTK's readers crash on some malformed files (a fuzzer finds a NULL dereference in the legacy
+// reader and a division by zero in the XML decompressor within a minute), and a crash or a hang
+// must not take rtwall down. So VTK parses in a child process: it hands the mesh back as cache
+// bytes in a memfd (decoded and validated here like any cache), or an error line through a
+// pipe; a crash, or no answer within the time limit, is reported as a bad file. The child's
+// copy disappears with it, so the geometry still exists once afterwards.
+TriangleMesh loadVtk(VtkKind kind, const std::string& data, const std::string& name, ImportReport& report) {
+    checkVtkCounts(kind, data, name);
+    if (const char* inProcess = std::getenv("RTWALL_VTK_IN_PROCESS"); inProcess && *inProcess == '1')
+        return loadVtkHere(kind, data, name, report);
+
+    const int memfd = ::memfd_create("rtwall-vtk-mesh", MFD_CLOEXEC);
+    int errPipe[2];
+    if (memfd < 0 || ::pipe2(errPipe, O_CLOEXEC) != 0) {
+        if (memfd >= 0) ::close(memfd);
+        fail(name, std::string("cannot start the VTK reader: ") + std::strerror(errno));
+    }
+    std::fflush(nullptr);
+    const pid_t pid = ::fork();
+    if (pid < 0) {
+        ::close(memfd);
+        ::close(errPipe[0]);
+        ::close(errPipe[1]);
+        fail(name, std::string("cannot start the VTK reader: ") + std::strerror(errno));
+    }
+    if (pid == 0) {
+        ::close(errPipe[0]);
+        int code = 4;
+        try {
+            ImportReport r;
+            const TriangleMesh mesh = loadVtkHere(kind, data, name, r);
+            const std::vector<unsigned char> bytes = encodeMeshCache(mesh, r, 0, 0);
+            code = writeAll(memfd, bytes.data(), bytes.size()) ? 0 : 5;
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            writeAll(errPipe[1], reinterpret_cast<const unsigned char*>(what.data()), what.size());
+            code = 3;
+        } catch (...) {
+        }
+        ::_exit(code);
+    }
+    ::close(errPipe[1]);
+    // The error line (small), then the exit status, within a limit that grows with the file.
+    std::string message;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60 + data.size() / (4 << 20));
+    int status = 0;
+    bool exited = false;
+    char buf[512];
+    while (!exited) {
+        pollfd pfd{errPipe[0], POLLIN, 0};
+        if (::poll(&pfd, 1, 50) > 0) {
+            const ssize_t n = ::read(errPipe[0], buf, sizeof buf);
+            if (n > 0 && message.size() < 4096) message.append(buf, size_t(n));
+        }
+        const pid_t w = ::waitpid(pid, &status, WNOHANG);
+        if (w == pid) exited = true;
+        else if (std::chrono::steady_clock::now() > deadline) {
+            ::kill(pid, SIGKILL);
+            ::waitpid(pid, &status, 0);
+            ::close(errPipe[0]);
+            ::close(memfd);
+            fail(name, "VTK did not finish reading the file within the time limit");
+        }
+    }
+    for (ssize_t n; (n = ::read(errPipe[0], buf, sizeof buf)) > 0 && message.size() < 4096;) message.append(buf, size_t(n));
+    ::close(errPipe[0]);
+    struct Closer {
+        int fd;
+        ~Closer() { ::close(fd); }
+    } closer{memfd};
+    if (WIFSIGNALED(status)) fail(name, "VTK crashed reading the file (signal " + std::to_string(WTERMSIG(status)) + "); the file is malformed");
+    const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    if (code == 3 && !message.empty()) {
+        if (const size_t nl = message.find('\n'); nl != std::string::npos) message.resize(nl);
+        throw InputError(message);
+    }
+    if (code != 0) fail(name, "VTK failed reading the file (the reader exited with status " + std::to_string(code) + ")");
+    struct stat st {};
+    if (::fstat(memfd, &st) != 0 || st.st_size <= 0) fail(name, "the VTK reader returned no mesh");
+    void* map = ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, memfd, 0);
+    if (map == MAP_FAILED) fail(name, "cannot map the mesh the VTK reader returned");
+    try {
+        TriangleMesh mesh = decodeMeshCache(static_cast<const unsigned char*>(map), size_t(st.st_size), 0, 0, name, &report);
+        ::munmap(map, size_t(st.st_size));
+        return mesh;
+    } catch (...) {
+        ::munmap(map, size_t(st.st_size));
+        throw;
     }
 }
 

@@ -32,6 +32,11 @@ bool zeroArea(const TriangleMesh& mesh, uint32_t a, uint32_t b, uint32_t c);
 
 namespace rtwall::detail {
 
+// The bytes of a cache file for `mesh` (cache.cpp); also how a VTK import returns its mesh from
+// the child process it runs in.
+std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const ImportReport& report, uint64_t sourceSize,
+                                           int64_t sourceMtime);
+
 // Reads any supported mesh file, without a cache (import.cpp).
 TriangleMesh importMesh(const std::filesystem::path& file, ImportReport* report);
 

@@ -99,6 +99,16 @@ TEST(VtkImport, FarFromOriginIsRecentredWithoutLoss) {
     EXPECT_NEAR(std::fabs(signedVolume(mesh)), 6.0, 1e-9);
 }
 
+// A VTK file without a known extension is recognised by its content.
+TEST(VtkImport, VtkFileWithoutExtension) {
+    const fs::path dir = fs::path(::testing::TempDir()) / "rtwall_vtk_tests";
+    fs::create_directories(dir);
+    fs::copy_file(kMeshes / "box_zlib.vtp", dir / "box_no_ext", fs::copy_options::overwrite_existing);
+    ImportReport report;
+    EXPECT_EQ(loadMesh(dir / "box_no_ext", &report).triangleCount(), 12u);
+    EXPECT_EQ(report.format, "vtp");
+}
+
 // A legacy file named .vtp is still read as what it is.
 TEST(VtkImport, ContentDecidesBetweenVtkReaders) {
     const fs::path dir = fs::path(::testing::TempDir()) / "rtwall_vtk_tests";
@@ -144,7 +154,12 @@ INSTANTIATE_TEST_SUITE_P(
                       BadVtk{"bad_truncated_binary.vtk", {":offset ", "POLYGONS: truncated"}},
                       BadVtk{"bad_structured.vtk", {":line ", "not supported"}},
                       BadVtk{"bad_not_vtk.vtk", {"not a VTK file"}},
-                      BadVtk{"bad_garbage.vtp", {"VTK"}}),
+                      BadVtk{"bad_garbage.vtp", {"VTK"}},
+                      // Found by fuzz_import_vtk / fuzz_import_vtp: VTK 9.1 itself dies on these (a NULL
+                      // dereference in vtkDataReader::ReadString, a division by zero in
+                      // vtkXMLDataParser::ReadCompressedData); the child process keeps rtwall alive.
+                      BadVtk{"bad_fuzz_vtk_reader_null_deref.vtk", {}},
+                      BadVtk{"bad_fuzz_vtp_zero_block_size.vtp", {}}),
     [](const ::testing::TestParamInfo<BadVtk>& param) {
         std::string name = param.param.file;
         for (char& c : name)
