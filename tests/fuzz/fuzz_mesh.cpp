@@ -9,6 +9,10 @@
 // out-of-memory past -malloc_limit_mb) is a finding. A mesh that loads must satisfy the
 // invariants Embree relies on (indices in range, finite coordinates).
 //
+// VTK parses in a child process (import_vtk.cpp), so a crash inside VTK is contained and is no
+// finding here (ASan still prints its report from the child), and the coverage of VTK's own code
+// does not reach the fuzzer. To hunt bugs inside VTK, run with RTWALL_VTK_IN_PROCESS=1.
+//
 // Leak detection is off (-detect_leaks=0): the libraries leak a few constant bytes per file on
 // valid seeds already (VTK 9.1's vtkGeometryFilterHelper and XML array iterators, OpenMesh's
 // mostream connect/disconnect in CaptureOpenMeshLog), which would stop every run at once.
