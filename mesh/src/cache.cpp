@@ -342,7 +342,7 @@ TriangleMesh loadMesh(const fs::path& file, const LoadOptions& options, ImportRe
     TriangleMesh mesh = detail::importMesh(file, &r);
     try {
         if (!options.cacheDir.empty()) fs::create_directories(options.cacheDir);
-        writeMeshCache(mesh, r, file, cacheFile);
+        writeMeshCache(mesh, r, file, cacheFile, options.progress);
         r.cache = why == "no cache" ? "written" : "rebuilt: " + why;
     } catch (const Cancelled&) {
         throw;

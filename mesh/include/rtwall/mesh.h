@@ -102,7 +102,7 @@ public:
 struct LoadOptions {
     bool cache = false;              // use FILE's cache when it is current, else import and write one
     std::filesystem::path cacheDir;  // where caches live; empty: beside the file, as FILE.rtwcache
-    ProgressFn progress;             // import progress, where the reader reports it
+    ProgressFn progress;             // progress of writing a cache (large meshes); false cancels
 };
 
 // Reads OBJ, OFF, PLY (ASCII/binary), STL (ASCII/binary) and OM. The format is chosen from
