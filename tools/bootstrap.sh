@@ -16,6 +16,7 @@ PACKAGES=(
   cmake ninja-build g++ pkg-config
   libembree-dev        # Embree 3: BVH build and packet traversal
   libopenmesh-dev      # OpenMesh 9: OBJ/OFF/PLY/STL/OM parsers
+  libvtk9-dev          # VTK 9: .vtk/.vtp/.vtu importers (legacy and XML readers, surface filter)
   libtomlplusplus-dev  # toml++: scene and wall configs, JSON output
   libcli11-dev         # CLI11: command-line parsing
   libpng-dev           # libpng: PNG images
@@ -76,7 +77,8 @@ case "${1:-}" in
     say "fuzzing every decoder briefly (clang, libFuzzer, ASan+UBSan)"
     cmake -S . -B "$BUILD_DIR-fuzz" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
       -DRTWALL_FUZZ=ON -DRTWALL_BUILD_BENCHMARKS=OFF >/dev/null
-    cmake --build "$BUILD_DIR-fuzz" -j "$JOBS" --target fuzz_protocol
+    cmake --build "$BUILD_DIR-fuzz" -j "$JOBS" --target fuzz_protocol fuzz_import_vtk fuzz_import_vtp fuzz_import_vtu \
+      fuzz_import_openmesh fuzz_mesh_cache
     ctest --test-dir "$BUILD_DIR-fuzz" -L fuzz --output-on-failure --timeout 600
     say "running the test suite"
     ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS" --timeout 900

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <set>
 #include <stdexcept>
 #include <string>
 
@@ -39,15 +40,55 @@ void normalMatrixOf(const Transform& t, float out[9]) {
     for (int k = 0; k < 9; ++k) out[k] = float(cof[k] / det);
 }
 
+bool memoryMonitor(void* userPtr, ssize_t bytes, bool) {
+    static_cast<std::atomic<int64_t>*>(userPtr)->fetch_add(int64_t(bytes), std::memory_order_relaxed);
+    return true;
+}
+
+// Embree reports each mesh's build from 0 to 1; the whole build is weighted by triangles.
+bool buildProgress(void* userPtr, double n) {
+    auto& s = *static_cast<Scene::Impl*>(userPtr);
+    if (s.cancelled) return false;
+    if (s.progress && s.trianglesTotal > 0 &&
+        !s.progress((s.trianglesBuilt + n * s.currentMesh) / s.trianglesTotal)) {
+        s.cancelled = true;
+        return false;
+    }
+    return true;
+}
+
+RTCBuildQuality buildQuality(BvhSettings::Quality q) {
+    switch (q) {
+    case BvhSettings::Quality::Low: return RTC_BUILD_QUALITY_LOW;
+    case BvhSettings::Quality::High: return RTC_BUILD_QUALITY_HIGH;
+    default: return RTC_BUILD_QUALITY_MEDIUM;
+    }
+}
+
+// RTC_SCENE_FLAG_ROBUST, where the scene asks for it, goes on every mesh BVH and on the top
+// level: it makes traversal conservative, so rays along shared edges of thin triangles (common
+// in CAD) do not slip through between boxes.
+RTCSceneFlags sceneFlags(const BvhSettings& b) {
+    int f = RTC_SCENE_FLAG_NONE;
+    if (b.compact) f |= RTC_SCENE_FLAG_COMPACT;
+    if (b.robust) f |= RTC_SCENE_FLAG_ROBUST;
+    return RTCSceneFlags(f);
+}
+
 }  // namespace
 
-Scene::Scene(const SceneDesc& desc) : impl_(std::make_unique<Impl>()) {
+Scene::Scene(const SceneDesc& desc) : Scene(desc, ProgressFn{}) {}
+
+Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::make_unique<Impl>()) {
     Impl& s = *impl_;
     s.desc = desc;
+    s.progress = progress;
     std::string& lastError = s.lastError;
     s.device = rtcNewDevice(nullptr);
     if (!s.device) throw std::runtime_error("cannot create an Embree device (rtcNewDevice failed)");
     rtcSetDeviceErrorFunction(s.device, embreeErrorHandler, &lastError);
+    rtcSetDeviceMemoryMonitorFunction(s.device, memoryMonitor, &s.embreeBytes);
+    for (const MeshDesc& md : s.desc.meshes) s.trianglesTotal += double(md.mesh->triangleCount());
 
     try {
         s.meshScenes.reserve(s.desc.meshes.size());
@@ -55,8 +96,13 @@ Scene::Scene(const SceneDesc& desc) : impl_(std::make_unique<Impl>()) {
             const TriangleMesh& mesh = *md.mesh;
             RTCScene ms = rtcNewScene(s.device);
             s.meshScenes.push_back(ms);
+            rtcSetSceneBuildQuality(ms, buildQuality(s.desc.bvh.quality));
+            rtcSetSceneFlags(ms, sceneFlags(s.desc.bvh));
+            rtcSetSceneProgressMonitorFunction(ms, buildProgress, &s);
+            s.currentMesh = double(mesh.triangleCount());
             if (mesh.triangleCount() > 0) {
                 RTCGeometry g = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+                rtcSetGeometryBuildQuality(g, buildQuality(s.desc.bvh.quality));
                 // Shared buffers: Embree reads the importer's arrays in place. The positions
                 // buffer carries the tail padding Embree's 16-byte loads need.
                 rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, mesh.positions(), 0,
@@ -68,10 +114,15 @@ Scene::Scene(const SceneDesc& desc) : impl_(std::make_unique<Impl>()) {
                 rtcReleaseGeometry(g);
             }
             rtcCommitScene(ms);
+            if (s.cancelled) throw Cancelled();
             checkDevice(s.device, lastError, ("building the BVH of mesh '" + md.name + "'").c_str());
+            s.trianglesBuilt += s.currentMesh;
         }
+        s.progress = nullptr;
+        s.meshBvhBytes = s.embreeBytes.load();
 
         s.top = rtcNewScene(s.device);
+        rtcSetSceneFlags(s.top, sceneFlags(s.desc.bvh));
         s.instances.resize(s.desc.instances.size());
         for (size_t i = 0; i < s.desc.instances.size(); ++i) {
             const InstanceDesc& in = s.desc.instances[i];
@@ -141,6 +192,21 @@ void Scene::commit() {
     rtcCommitScene(s.top);
     s.dirty = false;
     checkDevice(s.device, s.lastError, "refitting the top-level BVH");
+}
+
+size_t Scene::embreeBytes() const { return size_t(std::max<int64_t>(0, impl_->embreeBytes.load())); }
+
+size_t Scene::embreeTopLevelBytes() const {
+    return size_t(std::max<int64_t>(0, impl_->embreeBytes.load() - impl_->meshBvhBytes));
+}
+
+size_t Scene::geometryBytes() const {
+    // Meshes named by several [[mesh]] entries share one TriangleMesh: count it once.
+    std::set<const TriangleMesh*> seen;
+    size_t bytes = 0;
+    for (const MeshDesc& md : impl_->desc.meshes)
+        if (seen.insert(md.mesh.get()).second) bytes += md.mesh->residentBytes();
+    return bytes;
 }
 
 RTCScene embreeScene(const Scene& scene) { return scene.impl().top; }

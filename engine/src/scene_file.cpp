@@ -6,7 +6,9 @@
 
 #include <toml++/toml.h>
 
+#include <chrono>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <numbers>
 #include <set>
@@ -45,6 +47,55 @@ void readSettings(Reader& top, const std::filesystem::path& file, RenderSettings
     }
 }
 
+void readBvh(Reader& top, const std::filesystem::path& file, BvhSettings& b) {
+    const toml::table* t = subTable(top, "bvh");
+    if (!t) return;
+    Reader r(file, *t, "[bvh]: ");
+    const std::string q = r.choice("quality", "medium", {"low", "medium", "high"});
+    b.quality = q == "low" ? BvhSettings::Quality::Low : q == "high" ? BvhSettings::Quality::High : BvhSettings::Quality::Medium;
+    b.compact = r.boolean("compact", b.compact);
+    b.robust = r.boolean("robust", b.robust);
+    r.finish();
+}
+
+struct LoadSettings {
+    bool cache = false;
+    std::filesystem::path cacheDir;
+};
+
+LoadSettings readLoad(Reader& top, const std::filesystem::path& file) {
+    LoadSettings l;
+    const toml::table* t = subTable(top, "load");
+    if (!t) return l;
+    Reader r(file, *t, "[load]: ");
+    l.cache = r.boolean("cache", l.cache);
+    const std::string dir = r.string("cache_dir", "");
+    if (!dir.empty()) l.cacheDir = file.parent_path() / dir;
+    r.finish();
+    return l;
+}
+
+// A 3-vector in double precision: positions in CAD scenes need more than a float's 24 bits.
+std::array<double, 3> vec3d(Reader& r, const std::string& key, std::array<double, 3> def, bool required = false) {
+    const toml::node* n = r.find(key);
+    if (!n) {
+        if (required) r.fail(nullptr, "missing required key '" + key + "'");
+        return def;
+    }
+    auto a = n->as_array();
+    if (!a || a->size() != 3) r.fail(n, "key '" + key + "': expected an array of 3 numbers");
+    std::array<double, 3> v{};
+    for (size_t i = 0; i < 3; ++i) {
+        const toml::node& e = *a->get(i);
+        if (auto x = e.as_integer()) v[i] = double(x->get());
+        else if (auto f = e.as_floating_point()) v[i] = f->get();
+        else r.fail(n, "key '" + key + "': element " + std::to_string(i) + " is " + Reader::typeName(e) + ", not a number");
+        if (!std::isfinite(v[i]) || std::fabs(v[i]) > 1e15)
+            r.fail(n, "key '" + key + "': element " + std::to_string(i) + " must be finite and within 1e15");
+    }
+    return v;
+}
+
 std::shared_ptr<const TriangleMesh> makeShape(Reader& r, const std::string& shape) {
     if (shape == "sphere") {
         const int rings = r.integer("rings", 32, 2, 4096), segments = r.integer("segments", 64, 3, 8192);
@@ -70,17 +121,51 @@ Transform readTransform(Reader& r) {
             const double s = r.number("scale", 1.0, 1e-12, 1e12);
             t = Transform::scale(s, s, s);
         } else {
-            const Float3 s = r.vec3("scale", {1, 1, 1});
-            if (s.x == 0 || s.y == 0 || s.z == 0) r.fail(n, "key 'scale': factors must not be zero");
-            t = Transform::scale(s.x, s.y, s.z);
+            const std::array<double, 3> s = vec3d(r, "scale", {1, 1, 1});
+            if (s[0] == 0 || s[1] == 0 || s[2] == 0) r.fail(n, "key 'scale': factors must not be zero");
+            t = Transform::scale(s[0], s[1], s[2]);
         }
     }
-    const Float3 rot = r.vec3("rotate", {0, 0, 0});
-    t = Transform::rotateDegrees(1, 0, 0, rot.x) * t;
-    t = Transform::rotateDegrees(0, 1, 0, rot.y) * t;
-    t = Transform::rotateDegrees(0, 0, 1, rot.z) * t;
-    const Float3 tr = r.vec3("translate", {0, 0, 0});
-    return Transform::translate(tr.x, tr.y, tr.z) * t;
+    const std::array<double, 3> rot = vec3d(r, "rotate", {0, 0, 0});
+    t = Transform::rotateDegrees(1, 0, 0, rot[0]) * t;
+    t = Transform::rotateDegrees(0, 1, 0, rot[1]) * t;
+    t = Transform::rotateDegrees(0, 0, 1, rot[2]) * t;
+    const std::array<double, 3> tr = vec3d(r, "translate", {0, 0, 0});
+    return Transform::translate(tr[0], tr[1], tr[2]) * t;
+}
+
+// The centre of the instances' world bounds, rounded to a whole number, when the scene lies
+// further from the origin than its own size (and at least 1024 units); else the origin.
+std::array<double, 3> rebaseOrigin(const SceneDesc& scene) {
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    std::vector<Bounds3> meshBounds(scene.meshes.size());
+    std::vector<bool> known(scene.meshes.size(), false);
+    for (const InstanceDesc& in : scene.instances) {
+        if (!known[in.mesh]) {
+            meshBounds[in.mesh] = scene.meshes[in.mesh].mesh->bounds();
+            known[in.mesh] = true;
+        }
+        const Bounds3& b = meshBounds[in.mesh];
+        if (b.empty()) continue;
+        const auto& m = in.transform.m;
+        for (int corner = 0; corner < 8; ++corner) {
+            const double p[3] = {(corner & 1) ? b.hi.x : b.lo.x, (corner & 2) ? b.hi.y : b.lo.y, (corner & 4) ? b.hi.z : b.lo.z};
+            for (int i = 0; i < 3; ++i) {
+                const double w = m[4 * i] * p[0] + m[4 * i + 1] * p[1] + m[4 * i + 2] * p[2] + m[4 * i + 3];
+                lo[i] = std::min(lo[i], w);
+                hi[i] = std::max(hi[i], w);
+            }
+        }
+    }
+    double farthest = 0, extent = 0, centre[3];
+    for (int i = 0; i < 3; ++i) {
+        if (!(lo[i] <= hi[i])) return {0, 0, 0};
+        centre[i] = 0.5 * (lo[i] + hi[i]);
+        farthest = std::max(farthest, std::fabs(centre[i]));
+        extent = std::max(extent, hi[i] - lo[i]);
+    }
+    if (farthest < 1024.0 || farthest <= extent) return {0, 0, 0};
+    return {std::round(centre[0]), std::round(centre[1]), std::round(centre[2])};
 }
 
 CameraDesc framingCamera(const Bounds3& b) {
@@ -100,7 +185,9 @@ CameraDesc framingCamera(const Bounds3& b) {
 
 }  // namespace
 
-SceneDesc loadSceneFile(const std::filesystem::path& file) {
+SceneDesc loadSceneFile(const std::filesystem::path& file) { return loadSceneFile(file, SceneLoadOptions{}); }
+
+SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOptions& options) {
     const toml::table root = toml_reader::parseFile(file);
 
     SceneDesc scene;
@@ -108,6 +195,26 @@ SceneDesc loadSceneFile(const std::filesystem::path& file) {
     const std::filesystem::path dir = file.parent_path();
     Reader top(file, root, "");
     readSettings(top, file, scene.settings);
+    readBvh(top, file, scene.bvh);
+    const LoadSettings load = readLoad(top, file);
+    LoadOptions meshOptions;
+    meshOptions.cache = options.cache.value_or(load.cache);
+    meshOptions.cacheDir = load.cacheDir;
+    SceneLoadStats localStats;
+    SceneLoadStats& stats = options.stats ? *options.stats : localStats;
+
+    // Progress is counted in bytes of mesh files, which the first pass sums.
+    double bytesTotal = 0, bytesDone = 0;
+    if (options.progress) {
+        if (const toml::array* meshes = root["mesh"].as_array())
+            for (const toml::node& m : *meshes)
+                if (const toml::table* t = m.as_table())
+                    if (auto f = (*t)["file"].value<std::string>()) {
+                        std::error_code ec;
+                        const auto size = std::filesystem::file_size(dir / *f, ec);
+                        if (!ec) bytesTotal += double(size);
+                    }
+    }
 
     std::map<std::string, uint32_t> meshIndex, materialIndex;
     std::map<std::filesystem::path, std::shared_ptr<const TriangleMesh>> loadedFiles;  // one copy per file
@@ -125,9 +232,25 @@ SceneDesc loadSceneFile(const std::filesystem::path& file) {
             auto& slot = loadedFiles[ec ? path : key];
             if (!slot) {
                 try {
-                    slot = std::make_shared<const TriangleMesh>(loadMesh(path));
+                    const auto t0 = std::chrono::steady_clock::now();
+                    ImportReport report;
+                    slot = std::make_shared<const TriangleMesh>(loadMesh(path, meshOptions, &report));
+                    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                    if (report.cache == "hit") {
+                        stats.cacheSeconds += dt;
+                        ++stats.cacheHits;
+                    } else {
+                        stats.importSeconds += dt;
+                        ++stats.filesImported;
+                        if (report.cache == "written" || report.cache.starts_with("rebuilt")) ++stats.cacheWritten;
+                    }
                 } catch (const InputError& e) {
                     r.fail(r.find("file"), std::string("mesh '") + md.name + "': " + e.what());
+                }
+                if (options.progress) {
+                    const auto size = std::filesystem::file_size(path, ec);
+                    if (!ec) bytesDone += double(size);
+                    if (!options.progress(bytesTotal > 0 ? bytesDone / bytesTotal : 1.0)) throw Cancelled();
                 }
             }
             md.mesh = slot;
@@ -145,6 +268,7 @@ SceneDesc loadSceneFile(const std::filesystem::path& file) {
         meshIndex[md.name] = uint32_t(scene.meshes.size());
         scene.meshes.push_back(std::move(md));
     });
+    if (options.progress && !options.progress(1.0)) throw Cancelled();
 
     forEachTable(top, file, "material", [&](Reader& r, const toml::table&) {
         Material m;
@@ -169,36 +293,118 @@ SceneDesc loadSceneFile(const std::filesystem::path& file) {
         scene.materials.push_back(m);
     });
 
-    forEachTable(top, file, "instance", [&](Reader& r, const toml::table&) {
-        InstanceDesc in;
-        const std::string mesh = r.string("mesh", "", true);
-        auto mi = meshIndex.find(mesh);
-        if (mi == meshIndex.end()) r.fail(r.find("mesh"), "key 'mesh': no [[mesh]] is named '" + mesh + "'");
-        in.mesh = mi->second;
-        const std::string material = r.string("material", "");
-        if (material.empty()) {
-            if (!materialIndex.count("")) {
-                Material def;
-                def.name = "";
-                materialIndex[""] = uint32_t(scene.materials.size());
-                scene.materials.push_back(def);
-            }
-            in.material = materialIndex[""];
+    // Instances place a mesh or a group; a group is a list of such instances and may use groups
+    // defined before it, so there are no cycles. Groups are flattened here, on the CPU in double
+    // precision, into one level of Embree instances: the Embree build has one instance level
+    // (RTC_MAX_INSTANCE_LEVEL_COUNT), and every flattened instance still shares its mesh's BVH.
+    constexpr uint32_t kNoMaterial = ~0u;
+    struct Child {
+        bool isGroup = false;
+        uint32_t target = 0;              // mesh or group index
+        uint32_t material = kNoMaterial;  // inherited from the parent when not given
+        Transform transform;
+    };
+    struct Group {
+        std::vector<Child> children;
+        uint64_t expanded = 0;  // mesh instances it stands for (saturating)
+    };
+    std::map<std::string, uint32_t> groupIndex;
+    std::vector<Group> groups;
+    constexpr uint64_t kMaxInstances = uint64_t(1) << 24;
+
+    auto readChild = [&](Reader& r) {
+        Child c;
+        const bool hasMesh = r.has("mesh"), hasGroup = r.has("group");
+        if (hasMesh == hasGroup) r.fail(nullptr, "give exactly one of 'mesh' and 'group'");
+        if (hasMesh) {
+            const std::string mesh = r.string("mesh", "", true);
+            auto mi = meshIndex.find(mesh);
+            if (mi == meshIndex.end()) r.fail(r.find("mesh"), "key 'mesh': no [[mesh]] is named '" + mesh + "'");
+            c.target = mi->second;
         } else {
+            const std::string group = r.string("group", "", true);
+            auto gi = groupIndex.find(group);
+            if (gi == groupIndex.end())
+                r.fail(r.find("group"), "key 'group': no [[group]] named '" + group + "' is defined before this point");
+            c.isGroup = true;
+            c.target = gi->second;
+        }
+        const std::string material = r.string("material", "");
+        if (!material.empty()) {
             auto it = materialIndex.find(material);
             if (it == materialIndex.end())
                 r.fail(r.find("material"), "key 'material': no [[material]] is named '" + material + "'");
-            in.material = it->second;
+            c.material = it->second;
         }
-        in.transform = readTransform(r);
-        scene.instances.push_back(in);
+        c.transform = readTransform(r);
+        return c;
+    };
+    auto expandedOf = [&](const Child& c) -> uint64_t { return c.isGroup ? groups[c.target].expanded : 1; };
+
+    forEachTable(top, file, "group", [&](Reader& r, const toml::table&) {
+        const std::string name = r.string("name", "", true);
+        if (groupIndex.count(name)) r.fail(r.find("name"), "group name '" + name + "' is used twice");
+        Group g;
+        const toml::node* list = r.find("instance");
+        if (!list) r.fail(nullptr, "a group needs at least one [[group.instance]]");
+        const toml::array* arr = list->as_array();
+        if (!arr || arr->empty()) r.fail(list, "'instance' must be a non-empty array of tables, written [[group.instance]]");
+        size_t k = 0;
+        for (const toml::node& e : *arr) {
+            const toml::table* t = e.as_table();
+            if (!t) r.fail(&e, "'instance' entries must be tables, written [[group.instance]]");
+            Reader cr(file, *t, "[[group]] '" + name + "' instance #" + std::to_string(++k) + ": ");
+            g.children.push_back(readChild(cr));
+            cr.finish();
+            g.expanded = std::min(kMaxInstances + 1, g.expanded + expandedOf(g.children.back()));
+        }
+        groupIndex[name] = uint32_t(groups.size());
+        groups.push_back(std::move(g));
     });
 
+    uint32_t defaultMaterial = kNoMaterial;
+    auto materialOrDefault = [&](uint32_t m) {
+        if (m != kNoMaterial) return m;
+        if (defaultMaterial == kNoMaterial) {
+            Material def;
+            def.name = "";
+            defaultMaterial = uint32_t(scene.materials.size());
+            scene.materials.push_back(def);
+        }
+        return defaultMaterial;
+    };
+    // Mesh origins (far-from-origin files are stored recentred) go into the transform here.
+    auto emit = [&](const Child& leaf, const Transform& parent, uint32_t inherited) {
+        InstanceDesc in;
+        in.mesh = leaf.target;
+        in.material = materialOrDefault(leaf.material != kNoMaterial ? leaf.material : inherited);
+        const auto& o = scene.meshes[leaf.target].mesh->origin();
+        in.transform = parent * leaf.transform * Transform::translate(o[0], o[1], o[2]);
+        scene.instances.push_back(in);
+    };
+    std::function<void(const Child&, const Transform&, uint32_t)> expand = [&](const Child& c, const Transform& parent,
+                                                                              uint32_t inherited) {
+        const uint32_t material = c.material != kNoMaterial ? c.material : inherited;
+        if (!c.isGroup) return emit(c, parent, inherited);
+        const Transform t = parent * c.transform;
+        for (const Child& child : groups[c.target].children) expand(child, t, material);
+    };
+    uint64_t total = 0;
+    forEachTable(top, file, "instance", [&](Reader& r, const toml::table&) {
+        const Child c = readChild(r);
+        total += expandedOf(c);
+        if (total > kMaxInstances)
+            r.fail(nullptr, "the scene expands to more than " + std::to_string(kMaxInstances) + " mesh instances");
+        expand(c, Transform{}, kNoMaterial);
+    });
+
+    std::vector<std::array<double, 3>> lightPositions;
     forEachTable(top, file, "light", [&](Reader& r, const toml::table&) {
         Light l;
+        std::array<double, 3> position{0, 10, 0};
         l.type = r.choice("type", "point", {"point", "directional"}) == "directional" ? LightType::Directional
                                                                                      : LightType::Point;
-        if (l.type == LightType::Point) l.position = r.vec3("position", {}, true);
+        if (l.type == LightType::Point) position = vec3d(r, "position", {}, true);
         else {
             l.direction = r.vec3("direction", {}, true);
             if (dot(l.direction, l.direction) == 0.0f) r.fail(r.find("direction"), "key 'direction' must not be zero");
@@ -206,22 +412,42 @@ SceneDesc loadSceneFile(const std::filesystem::path& file) {
         l.color = r.vec3("color", l.color);
         l.intensity = float(r.number("intensity", 1.0, 0.0, 1e12));
         scene.lights.push_back(l);
+        lightPositions.push_back(position);
     });
 
+    std::vector<std::array<double, 3>> cameraPositions, cameraTargets;
     forEachTable(top, file, "camera", [&](Reader& r, const toml::table&) {
         CameraDesc c;
         c.name = r.string("name", "camera" + std::to_string(scene.cameras.size() + 1));
         if (scene.findCamera(c.name)) r.fail(r.find("name"), "camera name '" + c.name + "' is used twice");
-        c.position = r.vec3("position", {}, true);
-        c.lookAt = r.vec3("look_at", {}, true);
+        const std::array<double, 3> p = vec3d(r, "position", {}, true), at = vec3d(r, "look_at", {}, true);
         c.up = r.vec3("up", c.up);
         c.fovY = float(r.number("fov", c.fovY, 0.01, 179.0));
-        if (length(c.lookAt - c.position) == 0.0f) r.fail(r.find("look_at"), "camera looks at its own position");
-        if (length(cross(c.lookAt - c.position, c.up)) == 0.0f)
-            r.fail(r.find("up"), "key 'up' is parallel to the viewing direction");
+        const Float3 view{float(at[0] - p[0]), float(at[1] - p[1]), float(at[2] - p[2])};
+        if (length(view) == 0.0f) r.fail(r.find("look_at"), "camera looks at its own position");
+        if (length(cross(view, c.up)) == 0.0f) r.fail(r.find("up"), "key 'up' is parallel to the viewing direction");
         scene.cameras.push_back(c);
+        cameraPositions.push_back(p);
+        cameraTargets.push_back(at);
     });
     top.finish();
+
+    // Rebase: everything the renderer sees in single precision becomes relative to one origin
+    // near the geometry, computed and subtracted in double precision.
+    scene.origin = rebaseOrigin(scene);
+    const auto& o = scene.origin;
+    auto rel = [&](const std::array<double, 3>& p) { return Float3{float(p[0] - o[0]), float(p[1] - o[1]), float(p[2] - o[2])}; };
+    for (InstanceDesc& in : scene.instances) {
+        in.transform.m[3] -= o[0];
+        in.transform.m[7] -= o[1];
+        in.transform.m[11] -= o[2];
+    }
+    for (size_t i = 0; i < scene.lights.size(); ++i)
+        if (scene.lights[i].type == LightType::Point) scene.lights[i].position = rel(lightPositions[i]);
+    for (size_t i = 0; i < scene.cameras.size(); ++i) {
+        scene.cameras[i].position = rel(cameraPositions[i]);
+        scene.cameras[i].lookAt = rel(cameraTargets[i]);
+    }
 
     if (scene.cameras.empty()) scene.cameras.push_back(framingCamera(scene.worldBounds()));
     return scene;
@@ -235,6 +461,9 @@ SceneDesc sceneFromMeshFile(const std::filesystem::path& file) {
     md.source = file.string();
     md.mesh = std::make_shared<const TriangleMesh>(loadMesh(file));
     scene.meshes.push_back(md);
+    // A far-from-origin file is stored recentred; the scene stays in those small coordinates
+    // and records where they lie.
+    scene.origin = md.mesh->origin();
     Material m;
     m.name = "default";
     m.type = MaterialType::Phong;

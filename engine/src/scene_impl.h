@@ -5,6 +5,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,11 @@ struct Scene::Impl {
     std::vector<RTCScene> meshScenes;      // one BVH per unique mesh
     std::vector<InstanceData> instances;   // indexed by the instance geometry ID in `top`
     bool dirty = false;                    // instance transforms changed since the last commit
+    std::atomic<int64_t> embreeBytes{0};   // Embree's memory monitor: BVHs, instances, build scratch
+    int64_t meshBvhBytes = 0;              // embreeBytes once every mesh BVH is built
+    ProgressFn progress;                   // during construction only
+    double trianglesBuilt = 0, trianglesTotal = 0, currentMesh = 0;
+    bool cancelled = false;
 };
 
 }  // namespace rtwall

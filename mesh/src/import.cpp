@@ -7,6 +7,8 @@
 // out-of-bounds read in Embree.
 #include "rtwall/mesh.h"
 
+#include "import_vtk.h"
+#include "mesh_internal.h"
 #include "validate.h"
 
 #include <OpenMesh/Core/IO/IOManager.hh>
@@ -28,6 +30,7 @@
 #include <limits>
 #include <mutex>
 #include <new>
+#include <optional>
 #include <sstream>
 #include <streambuf>
 #include <string>
@@ -387,7 +390,13 @@ FormatInfo formatFromExtension(const fs::path& file, const std::string& name) {
     if (ext == ".stl") return {MeshFormat::Stl, "stl"};
     if (ext == ".om") return {MeshFormat::Om, "om"};
     throw InputError(name + ": unknown mesh format " + (ext.empty() ? std::string("(no extension)") : "'" + ext + "'") +
-                     "; expected .obj, .off, .ply, .stl or .om");
+                     "; expected .obj, .off, .ply, .stl, .om, .vtk, .vtp or .vtu");
+}
+
+bool isVtkExtension(const fs::path& file) {
+    std::string ext = file.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext == ".vtk" || ext == ".vtp" || ext == ".vtu";
 }
 
 void requireRegularFile(const fs::path& file, const std::string& name) {
@@ -433,13 +442,8 @@ std::string firstToken(const std::string& text) {
     return text.substr(0, end);
 }
 
-}  // namespace
-
-TriangleMesh loadMesh(const std::filesystem::path& file, ImportReport* report) {
-    const std::string name = file.string();
-    requireRegularFile(file, name);
-    const FormatInfo format = formatFromExtension(file, name);
-    std::string data = readFile(file, name);
+TriangleMesh importOpenMesh(const fs::path& file, const FormatInfo& format, std::string& data,
+                            const std::string& name, ImportReport* report) {
     const detail::Prepass pre = detail::validateMesh(format.format, data, name);
     requireReaders();
 
@@ -490,7 +494,41 @@ TriangleMesh loadMesh(const std::filesystem::path& file, ImportReport* report) {
         report->polygonsTriangulated = importer.polygonsTriangulated();
         report->degenerateTriangles = importer.degenerateTriangles() + pre.droppedDegenerate;
     }
+    detail::recentre(mesh);
     return mesh;
 }
+
+}  // namespace
+
+namespace detail {
+
+// One entry for every format: VTK files are recognised by their bytes, the rest by extension.
+TriangleMesh importMesh(const fs::path& file, ImportReport* report) {
+    const std::string name = file.string();
+    requireRegularFile(file, name);
+    const bool vtkExt = isVtkExtension(file);
+    std::optional<FormatInfo> format;
+    std::string unknownFormat;
+    if (!vtkExt) {
+        try {
+            format = formatFromExtension(file, name);
+        } catch (const InputError& e) {
+            unknownFormat = e.what();  // unless the content says VTK
+        }
+    }
+    std::string data = readFile(file, name);
+    const VtkKind kind = sniffVtk(data);
+    if (kind != VtkKind::None) {
+        ImportReport local;
+        TriangleMesh mesh = loadVtk(kind, data, name, report ? *report : local);
+        return mesh;
+    }
+    if (vtkExt)
+        throw InputError(name + ": not a VTK file (expected '# vtk DataFile Version' or an XML <VTKFile> of type PolyData or UnstructuredGrid)");
+    if (!format) throw InputError(unknownFormat);
+    return importOpenMesh(file, *format, data, name, report);
+}
+
+}  // namespace detail
 
 }  // namespace rtwall

@@ -1,6 +1,9 @@
 #include "rtwall/mesh.h"
 
+#include "mesh_internal.h"
+
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -74,5 +77,41 @@ size_t TriangleMesh::residentBytes() const {
     return positions_.capacity() * sizeof(float) + normals_.capacity() * sizeof(float) +
            indices_.capacity() * sizeof(uint32_t);
 }
+
+namespace detail {
+
+std::array<double, 3> chooseOrigin(const double lo[3], const double hi[3]) {
+    double centre[3], farthest = 0, extent = 0;
+    for (int k = 0; k < 3; ++k) {
+        if (!(lo[k] <= hi[k])) return {0, 0, 0};
+        centre[k] = 0.5 * (lo[k] + hi[k]);
+        farthest = std::max(farthest, std::fabs(centre[k]));
+        extent = std::max(extent, hi[k] - lo[k]);
+    }
+    if (farthest < 1024.0 || farthest <= extent) return {0, 0, 0};
+    return {std::round(centre[0]), std::round(centre[1]), std::round(centre[2])};
+}
+
+void recentre(TriangleMesh& mesh) {
+    const Bounds3 b = mesh.bounds();
+    if (b.empty()) return;
+    const double lo[3] = {b.lo.x, b.lo.y, b.lo.z}, hi[3] = {b.hi.x, b.hi.y, b.hi.z};
+    const std::array<double, 3> o = chooseOrigin(lo, hi);
+    if (o == std::array<double, 3>{0, 0, 0}) return;
+    std::vector<float>& p = MeshAccess::positions(mesh);
+    for (size_t v = 0; v < mesh.vertexCount(); ++v)
+        for (size_t k = 0; k < 3; ++k) p[3 * v + k] = float(double(p[3 * v + k]) - o[k]);
+    const std::array<double, 3> old = mesh.origin();
+    mesh.setOrigin({old[0] + o[0], old[1] + o[1], old[2] + o[2]});
+}
+
+bool zeroArea(const TriangleMesh& mesh, uint32_t a, uint32_t b, uint32_t c) {
+    const Float3 pa = mesh.position(a), pb = mesh.position(b), pc = mesh.position(c);
+    const double ux = double(pb.x) - pa.x, uy = double(pb.y) - pa.y, uz = double(pb.z) - pa.z;
+    const double vx = double(pc.x) - pa.x, vy = double(pc.y) - pa.y, vz = double(pc.z) - pa.z;
+    return uy * vz - uz * vy == 0.0 && uz * vx - ux * vz == 0.0 && ux * vy - uy * vx == 0.0;
+}
+
+}  // namespace detail
 
 }  // namespace rtwall

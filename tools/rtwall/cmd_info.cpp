@@ -27,6 +27,10 @@ toml::table meshInfo(const std::filesystem::path& path) {
                        {"normals", mesh.hasNormals()},
                        {"polygons_triangulated", int64_t(report.polygonsTriangulated)},
                        {"degenerate_triangles", int64_t(report.degenerateTriangles)},
+                       {"strips_triangulated", int64_t(report.stripsTriangulated)},
+                       {"cells_skipped", int64_t(report.cellsSkipped)},
+                       // bounds are relative to origin (CAD files far from their origin are recentred)
+                       {"origin", toml::array{mesh.origin()[0], mesh.origin()[1], mesh.origin()[2]}},
                        {"resident_bytes", int64_t(mesh.residentBytes())}};
 }
 
@@ -45,7 +49,8 @@ toml::table sceneInfo(const std::filesystem::path& path) {
                        {"cameras", cameras},
                        {"triangles", unique},
                        {"instanced_triangles", instanced},
-                       {"bounds", boundsArray(desc.worldBounds())}};
+                       {"bounds", boundsArray(desc.worldBounds())},
+                       {"origin", toml::array{desc.origin[0], desc.origin[1], desc.origin[2]}}};
 }
 
 }  // namespace
@@ -57,7 +62,7 @@ void addInfo(CLI::App& app, Run& run) {
     };
     auto o = std::make_shared<Options>();
     CLI::App* cmd = app.add_subcommand("info", "Print what a mesh file or scene file holds");
-    cmd->add_option("file", o->file, "Mesh file (.obj .off .ply .stl .om) or scene file (.toml)")->required();
+    cmd->add_option("file", o->file, "Mesh file (.obj .off .ply .stl .om .vtk .vtp .vtu) or scene file (.toml)")->required();
     cmd->add_flag("--json", o->json, "Print JSON instead of TOML-style text");
     cmd->callback([&run, o] {
         run = [o] {

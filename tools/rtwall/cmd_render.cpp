@@ -1,5 +1,6 @@
 #include "commands.h"
 #include "local_clients.h"
+#include "progress.h"
 
 #include <rtwall/cluster.h>
 #include <rtwall/engine.h>
@@ -7,6 +8,7 @@
 #include <chrono>
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 namespace rtwall::cli {
 
@@ -49,6 +51,14 @@ Image renderWithClients(SceneDesc desc, const CameraDesc& camera, const RenderOp
     return master.renderFrame(&report);
 }
 
+// Scene files may name gigabytes of meshes: a progress bar on a terminal, and Ctrl-C stops.
+SceneDesc loadWithProgress(const std::filesystem::path& path) {
+    ProgressBar bar("loading", 1, "");
+    SceneLoadOptions lo;
+    lo.progress = bar.fn();
+    return loadSceneFile(path, lo);
+}
+
 }  // namespace
 
 void addRender(CLI::App& app, Run& run) {
@@ -74,8 +84,9 @@ void addRender(CLI::App& app, Run& run) {
     cmd->callback([&run, o] {
         run = [o] {
             const std::filesystem::path path(o->scene);
+            installInterruptHandler();
             SceneDesc desc = o->scene.starts_with("builtin:") ? builtinScene(o->scene.substr(8), 3'000'000)
-                             : isSceneFile(path)                 ? loadSceneFile(path)
+                             : isSceneFile(path)                 ? loadWithProgress(path)
                                                                  : sceneFromMeshFile(path);
             RenderSettings& s = desc.settings;
             if (o->width) s.width = o->width;
@@ -103,7 +114,11 @@ void addRender(CLI::App& app, Run& run) {
                             report.seconds, total, double(report.bytes) * 1e-6);
                 return 0;
             }
-            Scene scene(desc);
+            int64_t triangles = 0;
+            for (const MeshDesc& m : desc.meshes) triangles += int64_t(m.mesh->triangleCount());
+            std::optional<ProgressBar> bar(std::in_place, "bvh build", double(triangles) * 1e-6, "Mtri");
+            Scene scene(desc, bar->fn());
+            bar.reset();
             const auto t1 = std::chrono::steady_clock::now();
             const Camera camera(*cam, s.width, s.height);
             TileStats stats;

@@ -20,5 +20,7 @@ void addBenchCluster(CLI::App& bench, Run& run);
 void addBenchFaults(CLI::App& bench, Run& run);
 void addCheck(CLI::App& app, Run& run);
 void addBenchDisplay(CLI::App& bench, Run& run);
+void addGen(CLI::App& app, Run& run);
+void addBenchScene(CLI::App& bench, Run& run);
 
 }  // namespace rtwall::cli

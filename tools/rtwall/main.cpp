@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
     rtwall::cli::addClient(app, run);
     rtwall::cli::addRun(app, run);
     rtwall::cli::addKeys(app, run);
+    rtwall::cli::addGen(app, run);
     CLI::App* bench = app.add_subcommand("bench", "Benchmarks that print their figures (JSON with --json)");
     bench->require_subcommand(1);
     rtwall::cli::addBenchKernel(*bench, run);
@@ -22,6 +23,7 @@ int main(int argc, char** argv) {
     rtwall::cli::addBenchFaults(*bench, run);
     rtwall::cli::addCheck(app, run);
     rtwall::cli::addBenchDisplay(*bench, run);
+    rtwall::cli::addBenchScene(*bench, run);
 
     try {
         app.parse(argc, argv);
@@ -36,6 +38,9 @@ int main(int argc, char** argv) {
     }
     try {
         return run ? run() : 2;
+    } catch (const rtwall::Cancelled&) {
+        std::fprintf(stderr, "rtwall: interrupted\n");
+        return 130;
     } catch (const rtwall::InputError& e) {
         std::fprintf(stderr, "rtwall: error: %s\n", e.what());
         return 1;

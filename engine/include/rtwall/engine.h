@@ -93,8 +93,22 @@ struct RenderSettings {
     int threads = 0;                      // 0 = one per hardware thread
 };
 
+// How each mesh's BVH is built ([bvh] in scene files): memory against build and render speed.
+struct BvhSettings {
+    enum class Quality { Low, Medium, High };
+    Quality quality = Quality::Medium;  // Embree build quality (high: spatial splits, slower builds)
+    bool compact = false;               // RTC_SCENE_FLAG_COMPACT: smaller BVH, slower traversal
+    bool robust = false;                // RTC_SCENE_FLAG_ROBUST: exact traversal (thin, far triangles)
+};
+
 struct SceneDesc {
     std::filesystem::path sourceFile;  // empty when built in code
+    // Where this description's coordinate origin lies in the scene file's world, in double
+    // precision. Scenes far from the world origin are rebased on load: instance transforms,
+    // cameras and lights are stored relative to it, so the single-precision data Embree and the
+    // kernel see stays small and exact. {0,0,0} for scenes near the origin.
+    std::array<double, 3> origin{0, 0, 0};
+    BvhSettings bvh;
     std::vector<MeshDesc> meshes;
     std::vector<Material> materials;
     std::vector<InstanceDesc> instances;
@@ -110,6 +124,19 @@ struct SceneDesc {
 // line and the key on any problem, including unknown keys and wrong types.
 SceneDesc loadSceneFile(const std::filesystem::path& file);
 
+// What a scene load did, for benchmarks and progress reports.
+struct SceneLoadStats {
+    double importSeconds = 0;   // parsing mesh files (including writing caches)
+    double cacheSeconds = 0;    // reading valid caches
+    size_t cacheHits = 0, cacheWritten = 0, filesImported = 0;
+};
+struct SceneLoadOptions {
+    ProgressFn progress;            // fraction of mesh bytes loaded; returning false cancels (Cancelled)
+    std::optional<bool> cache;      // overrides the scene file's [load] cache
+    SceneLoadStats* stats = nullptr;
+};
+SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOptions& options);
+
 // A scene made of one mesh file, with a camera that frames its bounds and a default light.
 SceneDesc sceneFromMeshFile(const std::filesystem::path& file);
 
@@ -121,7 +148,16 @@ SceneDesc builtinScene(const std::string& name, int64_t triangles);
 class Scene {
 public:
     explicit Scene(const SceneDesc& desc);
+    // With a BVH build progress report (fraction of triangles built); returning false stops the
+    // build, which then throws Cancelled.
+    Scene(const SceneDesc& desc, const ProgressFn& buildProgress);
     ~Scene();
+
+    // Bytes Embree holds for BVHs and instances (its memory monitor), and the geometry buffers
+    // of the unique meshes (shared with Embree, counted once).
+    size_t embreeBytes() const;
+    size_t embreeTopLevelBytes() const;  // the part for instances and the top-level BVH
+    size_t geometryBytes() const;
     Scene(const Scene&) = delete;
     Scene& operator=(const Scene&) = delete;
 

@@ -4,10 +4,13 @@
 // engine hands to Embree as shared buffers, so an imported model exists once in memory.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -20,6 +23,10 @@ class InputError : public std::runtime_error {
 public:
     using std::runtime_error::runtime_error;
 };
+
+namespace detail {
+struct MeshAccess;  // the cache reader fills the buffers directly
+}
 
 struct Float3 {
     float x = 0, y = 0, z = 0;
@@ -54,21 +61,48 @@ public:
     void addTriangle(uint32_t a, uint32_t b, uint32_t c);  // indices must already be valid
     void setNormals(std::vector<float> normalsXYZ);       // 3 per vertex (padding is added here)
 
-    Bounds3 bounds() const;
+    Bounds3 bounds() const;        // of the float buffers, i.e. relative to origin()
     size_t residentBytes() const;  // heap bytes of the buffers
 
+    // Where the buffers' origin lies in the file's coordinates, in double precision. CAD files
+    // often place a model 1e5..1e6 units from their origin, where a float keeps only centimetres;
+    // importers then store positions relative to the bounds' centre, and scenes put this offset
+    // into the (double) instance transform. {0,0,0} for meshes near their origin.
+    const std::array<double, 3>& origin() const { return origin_; }
+    void setOrigin(const std::array<double, 3>& origin) { origin_ = origin; }
+
 private:
+    friend struct detail::MeshAccess;
     std::vector<float> positions_{0.0f};  // always ends with one padding float
     std::vector<float> normals_;          // empty, or 3 per vertex + one padding float
     std::vector<uint32_t> indices_;
     size_t vertexCount_ = 0;
+    std::array<double, 3> origin_{0, 0, 0};
 };
 
 struct ImportReport {
-    std::string format;               // "obj", "off", "ply", "stl", "om"
+    std::string format;               // "obj", "off", "ply", "stl", "om", "vtk", "vtp", "vtu"
     size_t polygonsTriangulated = 0;  // faces with more than three corners, fan-triangulated
     size_t degenerateTriangles = 0;   // zero-area triangles (kept, never hit, counted), plus faces
                                       // the OBJ and STL readers drop because corners repeat
+    size_t stripsTriangulated = 0;    // VTK triangle strips turned into triangles
+    size_t cellsSkipped = 0;          // VTK vertices and lines (nothing to render), counted
+    std::string cache;                // loadMesh with a cache: "hit", "written", or "rebuilt: <why>"
+};
+
+// Optional progress report for long steps: called with the fraction done in [0, 1]; returning
+// false asks the step to stop, which it does by throwing Cancelled.
+using ProgressFn = std::function<bool(double fraction)>;
+
+class Cancelled : public std::runtime_error {
+public:
+    Cancelled() : std::runtime_error("cancelled") {}
+};
+
+struct LoadOptions {
+    bool cache = false;              // use FILE's cache when it is current, else import and write one
+    std::filesystem::path cacheDir;  // where caches live; empty: beside the file, as FILE.rtwcache
+    ProgressFn progress;             // progress of writing a cache (large meshes); false cancels
 };
 
 // Reads OBJ, OFF, PLY (ASCII/binary), STL (ASCII/binary) and OM. The format is chosen from
@@ -78,7 +112,30 @@ struct ImportReport {
 // normals are kept, normalised, only when the file gives every vertex one. STL corners at the
 // same position become one shared vertex, as in OpenMesh's reader, so an STL mesh is indexed
 // like the others. Safe to call from several threads (the OpenMesh part runs one at a time).
+//
+// VTK formats go through VTK: legacy .vtk (polydata and unstructured grids, ASCII or binary),
+// XML .vtp and .vtu (raw, base64 or compressed; an unstructured grid becomes its outer surface).
+// The reader is chosen by content for VTK files (a legacy file named .vtp is read as legacy)
+// and by extension otherwise. Meshes far from their file's origin are recentred (origin()).
 TriangleMesh loadMesh(const std::filesystem::path& file, ImportReport* report = nullptr);
+TriangleMesh loadMesh(const std::filesystem::path& file, const LoadOptions& options, ImportReport* report = nullptr);
+
+// Mesh caches: a binary file that holds a mesh exactly as imported, mmap-able (every section
+// 64-byte aligned), little-endian, versioned, with an XXH3-64 checksum over everything, and the
+// size and modification time of the source it was made from. A cache that is stale, truncated,
+// corrupt or from another version is never used. The cache's file name for a source file:
+std::filesystem::path meshCachePath(const std::filesystem::path& source, const std::filesystem::path& cacheDir = {});
+// Writes atomically (a temporary file, then rename).
+void writeMeshCache(const TriangleMesh& mesh, const ImportReport& report, const std::filesystem::path& source,
+                    const std::filesystem::path& cacheFile, const ProgressFn& progress = {});
+// The mesh in a cache file if the cache is valid and matches `source` as it is now; otherwise
+// nothing, with the reason in *whyNot. Never throws for a bad cache file.
+std::optional<TriangleMesh> readMeshCache(const std::filesystem::path& cacheFile, const std::filesystem::path& source,
+                                          ImportReport* report = nullptr, std::string* whyNot = nullptr);
+// The decoder behind readMeshCache, on bytes in memory (for the fuzz target). `sourceSize` and
+// `sourceMtime` are what the cache must have been made from. Throws InputError naming `name`.
+TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t sourceSize, int64_t sourceMtime,
+                             const std::string& name, ImportReport* report = nullptr);
 
 // Procedural shapes for scenes, tests and benchmarks, wound counter-clockwise seen from
 // outside. Sizes out of range throw std::invalid_argument.

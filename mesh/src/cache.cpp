@@ -1,0 +1,356 @@
+// Mesh caches: an imported mesh as one binary file that loads without parsing.
+//
+// Layout (every integer and float little-endian, whatever the host):
+//   0   char[8]  magic "RTWMESH\0"
+//   8   u32      format version (kCacheVersion; bumped whenever the layout or an importer's
+//                output changes, so an old cache is rebuilt rather than misread)
+//   12  u32      header size (128)
+//   16  u64      source file size in bytes
+//   24  i64      source modification time, nanoseconds since the epoch
+//   32  u64      vertex count V
+//   40  u64      triangle count T
+//   48  u32      flags: bit 0 = vertex normals
+//   52  u32      zero
+//   56  f64[3]   mesh origin (TriangleMesh::origin)
+//   80  u64[4]   import report: polygons triangulated, degenerate triangles, strips, cells skipped
+//   112 char[8]  import format name, zero-padded
+//   120 u64      XXH3-64 of the whole file with these 8 bytes taken as zero
+//   128 f32[3V+1] positions (with Embree's padding float), then zeros to a multiple of 64
+//       f32[3V+1] normals, if flagged, padded likewise
+//       u32[3T]   triangle indices, padded likewise
+// The file size must be exactly what the counts give. Sections start on 64-byte boundaries so
+// that the file can be mapped and its arrays used in place.
+#include "mesh_internal.h"
+
+#include <xxhash.h>
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+
+namespace rtwall {
+
+namespace {
+
+namespace fs = std::filesystem;
+using detail::MeshAccess;
+
+constexpr char kMagic[8] = {'R', 'T', 'W', 'M', 'E', 'S', 'H', 0};
+constexpr uint32_t kCacheVersion = 1;
+constexpr size_t kHeaderSize = 128;
+constexpr size_t kChecksumAt = 120;
+
+constexpr size_t align64(size_t n) { return (n + 63) & ~size_t(63); }
+
+// --- little-endian encoding -------------------------------------------------------------------
+
+template <class T>
+T byteswap(T v) {
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, &v, sizeof(T));
+    for (size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
+    std::memcpy(&v, b, sizeof(T));
+    return v;
+}
+
+template <class T>
+void putLE(unsigned char* at, T v) {
+    if constexpr (std::endian::native == std::endian::big) v = byteswap(v);
+    std::memcpy(at, &v, sizeof(T));
+}
+
+template <class T>
+T getLE(const unsigned char* at) {
+    T v;
+    std::memcpy(&v, at, sizeof(T));
+    if constexpr (std::endian::native == std::endian::big) v = byteswap(v);
+    return v;
+}
+
+// Arrays of 4-byte values: a copy on little-endian hosts, element by element elsewhere.
+template <class T>
+void copyArrayLE(unsigned char* dst, const T* src, size_t n) {
+    if constexpr (std::endian::native == std::endian::little) std::memcpy(dst, src, n * sizeof(T));
+    else
+        for (size_t i = 0; i < n; ++i) putLE(dst + i * sizeof(T), src[i]);
+}
+
+template <class T>
+void readArrayLE(T* dst, const unsigned char* src, size_t n) {
+    if constexpr (std::endian::native == std::endian::little) std::memcpy(dst, src, n * sizeof(T));
+    else
+        for (size_t i = 0; i < n; ++i) dst[i] = getLE<T>(src + i * sizeof(T));
+}
+
+struct SourceStamp {
+    uint64_t size = 0;
+    int64_t mtimeNs = 0;
+};
+
+bool stampOf(const fs::path& source, SourceStamp& out) {
+    struct stat st {};
+    if (::stat(source.c_str(), &st) != 0) return false;
+    out.size = uint64_t(st.st_size);
+    out.mtimeNs = int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
+    return true;
+}
+
+uint64_t checksum(const unsigned char* data, size_t size) {
+    XXH3_state_t* state = XXH3_createState();
+    if (!state) throw std::bad_alloc();
+    XXH3_64bits_reset(state);
+    const unsigned char zero[8] = {};
+    XXH3_64bits_update(state, data, kChecksumAt);
+    XXH3_64bits_update(state, zero, 8);
+    XXH3_64bits_update(state, data + kChecksumAt + 8, size - kChecksumAt - 8);
+    const uint64_t h = XXH3_64bits_digest(state);
+    XXH3_freeState(state);
+    return h;
+}
+
+// A read-only mapping of a whole file.
+class Mapping {
+public:
+    explicit Mapping(const fs::path& file) {
+        fd_ = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+        if (fd_ < 0) return;
+        struct stat st {};
+        if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) return;
+        size_ = size_t(st.st_size);
+        if (size_ == 0) return;
+        void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd_, 0);
+        if (p == MAP_FAILED) {
+            size_ = 0;
+            return;
+        }
+        data_ = static_cast<const unsigned char*>(p);
+        ::madvise(p, size_, MADV_SEQUENTIAL);
+    }
+    ~Mapping() {
+        if (data_) ::munmap(const_cast<unsigned char*>(data_), size_);
+        if (fd_ >= 0) ::close(fd_);
+    }
+    Mapping(const Mapping&) = delete;
+    Mapping& operator=(const Mapping&) = delete;
+    bool ok() const { return fd_ >= 0; }
+    const unsigned char* data() const { return data_; }
+    size_t size() const { return size_; }
+
+private:
+    int fd_ = -1;
+    const unsigned char* data_ = nullptr;
+    size_t size_ = 0;
+};
+
+}  // namespace
+
+fs::path meshCachePath(const fs::path& source, const fs::path& cacheDir) {
+    if (cacheDir.empty()) return fs::path(source.string() + ".rtwcache");
+    // Caches of files from different folders share the directory: the absolute path's hash
+    // keeps them apart.
+    std::error_code ec;
+    const std::string key = fs::absolute(source, ec).lexically_normal().string();
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(XXH3_64bits(key.data(), key.size())));
+    return cacheDir / (source.filename().string() + "." + hex + ".rtwcache");
+}
+
+namespace detail {
+
+std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const ImportReport& report, uint64_t sourceSize,
+                                           int64_t sourceMtime) {
+    const size_t V = mesh.vertexCount(), T = mesh.triangleCount();
+    const size_t posBytes = align64((3 * V + 1) * 4);
+    const size_t nrmBytes = mesh.hasNormals() ? align64((3 * V + 1) * 4) : 0;
+    const size_t idxBytes = align64(3 * T * 4);
+    const size_t total = kHeaderSize + posBytes + nrmBytes + idxBytes;
+
+    std::vector<unsigned char> bytes(total, 0);
+    unsigned char* h = bytes.data();
+    std::memcpy(h, kMagic, 8);
+    putLE<uint32_t>(h + 8, kCacheVersion);
+    putLE<uint32_t>(h + 12, uint32_t(kHeaderSize));
+    putLE<uint64_t>(h + 16, sourceSize);
+    putLE<int64_t>(h + 24, sourceMtime);
+    putLE<uint64_t>(h + 32, V);
+    putLE<uint64_t>(h + 40, T);
+    putLE<uint32_t>(h + 48, mesh.hasNormals() ? 1u : 0u);
+    for (int k = 0; k < 3; ++k) putLE<double>(h + 56 + 8 * k, mesh.origin()[size_t(k)]);
+    putLE<uint64_t>(h + 80, report.polygonsTriangulated);
+    putLE<uint64_t>(h + 88, report.degenerateTriangles);
+    putLE<uint64_t>(h + 96, report.stripsTriangulated);
+    putLE<uint64_t>(h + 104, report.cellsSkipped);
+    std::memcpy(h + 112, report.format.data(), std::min<size_t>(report.format.size(), 8));
+    size_t at = kHeaderSize;
+    copyArrayLE(h + at, mesh.positions(), 3 * V + 1);
+    at += posBytes;
+    if (mesh.hasNormals()) {
+        copyArrayLE(h + at, mesh.normals(), 3 * V + 1);
+        at += nrmBytes;
+    }
+    copyArrayLE(h + at, mesh.indices(), 3 * T);
+    putLE<uint64_t>(h + kChecksumAt, checksum(h, total));
+    return bytes;
+}
+
+}  // namespace detail
+
+void writeMeshCache(const TriangleMesh& mesh, const ImportReport& report, const fs::path& source,
+                    const fs::path& cacheFile, const ProgressFn& progress) {
+    SourceStamp stamp;
+    if (!stampOf(source, stamp)) throw InputError(source.string() + ": cannot stat the source of a cache");
+    const std::vector<unsigned char> bytes = detail::encodeMeshCache(mesh, report, stamp.size, stamp.mtimeNs);
+    const unsigned char* h = bytes.data();
+    const size_t total = bytes.size();
+
+    const fs::path tmp = cacheFile.string() + ".tmp." + std::to_string(::getpid());
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        if (!out) throw InputError(cacheFile.string() + ": cannot write the cache: " + std::strerror(errno));
+        constexpr size_t kChunk = size_t(16) << 20;
+        for (size_t done = 0; done < total; done += kChunk) {
+            out.write(reinterpret_cast<const char*>(h + done), std::streamsize(std::min(kChunk, total - done)));
+            if (progress && !progress(double(done) / double(total))) {
+                out.close();
+                fs::remove(tmp);
+                throw Cancelled();
+            }
+        }
+        out.flush();
+        if (!out) {
+            out.close();
+            std::error_code ec;
+            fs::remove(tmp, ec);
+            throw InputError(cacheFile.string() + ": cannot write the cache (disk full?)");
+        }
+    }
+    std::error_code ec;
+    fs::rename(tmp, cacheFile, ec);
+    if (ec) {
+        fs::remove(tmp, ec);
+        throw InputError(cacheFile.string() + ": cannot write the cache: " + ec.message());
+    }
+    if (progress) progress(1.0);
+}
+
+TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t sourceSize, int64_t sourceMtime,
+                             const std::string& name, ImportReport* report) {
+    auto bad = [&](size_t offset, const std::string& what) -> InputError {
+        return InputError(name + ":offset " + std::to_string(offset) + ": " + what);
+    };
+    if (size < kHeaderSize) throw bad(size, "truncated: " + std::to_string(size) + " bytes, shorter than the header");
+    if (std::memcmp(data, kMagic, 8) != 0) throw bad(0, "not an rtwall mesh cache");
+    const uint32_t version = getLE<uint32_t>(data + 8);
+    if (version != kCacheVersion)
+        throw bad(8, "cache version " + std::to_string(version) + ", this rtwall reads version " + std::to_string(kCacheVersion));
+    if (getLE<uint32_t>(data + 12) != kHeaderSize) throw bad(12, "unexpected header size");
+    if (getLE<uint64_t>(data + 16) != sourceSize || getLE<int64_t>(data + 24) != sourceMtime)
+        throw bad(16, "stale: the source file changed since the cache was written");
+    const uint64_t V = getLE<uint64_t>(data + 32), T = getLE<uint64_t>(data + 40);
+    const uint32_t flags = getLE<uint32_t>(data + 48);
+    if (flags > 1 || getLE<uint32_t>(data + 52) != 0) throw bad(48, "unknown flags");
+    // Counts must fit the file before anything is computed from them.
+    if (V == 0 || T == 0 || V >= std::numeric_limits<uint32_t>::max() || V > size / 12 || T > size / 12)
+        throw bad(32, "vertex or triangle count does not fit the file");
+    const bool normals = flags & 1;
+    const size_t posBytes = align64((3 * V + 1) * 4), nrmBytes = normals ? posBytes : 0, idxBytes = align64(3 * T * 4);
+    const size_t expected = kHeaderSize + posBytes + nrmBytes + idxBytes;
+    if (size != expected)
+        throw bad(std::min(size, expected), (size < expected ? "truncated: " : "trailing bytes: ") + std::to_string(size) +
+                                                " bytes, the counts give " + std::to_string(expected));
+    if (getLE<uint64_t>(data + kChecksumAt) != checksum(data, size)) throw bad(kChecksumAt, "checksum mismatch: the cache is corrupt");
+
+    TriangleMesh mesh;
+    std::vector<float>& pos = MeshAccess::positions(mesh);
+    pos.resize(3 * V + 1);
+    readArrayLE(pos.data(), data + kHeaderSize, 3 * V + 1);
+    for (size_t i = 0; i < 3 * V; ++i)
+        if (!std::isfinite(pos[i])) throw bad(kHeaderSize + 4 * i, "non-finite coordinate");
+    MeshAccess::setVertexCount(mesh, V);
+    if (normals) {
+        std::vector<float>& nrm = MeshAccess::normals(mesh);
+        nrm.resize(3 * V + 1);
+        readArrayLE(nrm.data(), data + kHeaderSize + posBytes, 3 * V + 1);
+        for (size_t i = 0; i < 3 * V; ++i)
+            if (!std::isfinite(nrm[i])) throw bad(kHeaderSize + posBytes + 4 * i, "non-finite normal");
+    }
+    std::vector<uint32_t>& idx = MeshAccess::indices(mesh);
+    idx.resize(3 * T);
+    const size_t idxAt = kHeaderSize + posBytes + nrmBytes;
+    readArrayLE(idx.data(), data + idxAt, 3 * T);
+    // The last line before Embree: an index past the vertices would be an out-of-bounds read.
+    for (size_t i = 0; i < 3 * T; ++i)
+        if (idx[i] >= V) throw bad(idxAt + 4 * i, "vertex index " + std::to_string(idx[i]) + " out of range");
+    std::array<double, 3> origin{};
+    for (int k = 0; k < 3; ++k) {
+        origin[size_t(k)] = getLE<double>(data + 56 + 8 * k);
+        if (!std::isfinite(origin[size_t(k)])) throw bad(56, "non-finite origin");
+    }
+    mesh.setOrigin(origin);
+    if (report) {
+        report->polygonsTriangulated = getLE<uint64_t>(data + 80);
+        report->degenerateTriangles = getLE<uint64_t>(data + 88);
+        report->stripsTriangulated = getLE<uint64_t>(data + 96);
+        report->cellsSkipped = getLE<uint64_t>(data + 104);
+        const char* f = reinterpret_cast<const char*>(data + 112);
+        report->format.clear();
+        for (int k = 0; k < 8 && f[k] >= 'a' && f[k] <= 'z'; ++k) report->format += f[k];
+    }
+    return mesh;
+}
+
+std::optional<TriangleMesh> readMeshCache(const fs::path& cacheFile, const fs::path& source, ImportReport* report,
+                                          std::string* whyNot) {
+    auto no = [&](const std::string& why) -> std::optional<TriangleMesh> {
+        if (whyNot) *whyNot = why;
+        return std::nullopt;
+    };
+    SourceStamp stamp;
+    if (!stampOf(source, stamp)) return no("the source file cannot be read");
+    const Mapping map(cacheFile);
+    if (!map.ok()) return no("no cache");
+    if (!map.data()) return no("the cache is empty or cannot be mapped");
+    try {
+        return decodeMeshCache(map.data(), map.size(), stamp.size, stamp.mtimeNs, cacheFile.string(), report);
+    } catch (const InputError& e) {
+        return no(e.what());
+    } catch (const std::bad_alloc&) {
+        return no("out of memory reading the cache");
+    }
+}
+
+TriangleMesh loadMesh(const fs::path& file, ImportReport* report) { return detail::importMesh(file, report); }
+
+TriangleMesh loadMesh(const fs::path& file, const LoadOptions& options, ImportReport* report) {
+    ImportReport local;
+    ImportReport& r = report ? *report : local;
+    if (!options.cache) return detail::importMesh(file, &r);
+    const fs::path cacheFile = meshCachePath(file, options.cacheDir);
+    std::string why;
+    if (std::optional<TriangleMesh> cached = readMeshCache(cacheFile, file, &r, &why)) {
+        r.cache = "hit";
+        return std::move(*cached);
+    }
+    TriangleMesh mesh = detail::importMesh(file, &r);
+    try {
+        if (!options.cacheDir.empty()) fs::create_directories(options.cacheDir);
+        writeMeshCache(mesh, r, file, cacheFile, options.progress);
+        r.cache = why == "no cache" ? "written" : "rebuilt: " + why;
+    } catch (const Cancelled&) {
+        throw;
+    } catch (const std::exception& e) {
+        // A read-only folder must not stop a scene from loading.
+        r.cache = std::string("not written: ") + e.what();
+    }
+    return mesh;
+}
+
+}  // namespace rtwall

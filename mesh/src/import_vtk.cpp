@@ -1,0 +1,681 @@
+// VTK importers: legacy .vtk (polydata, unstructured grids), XML .vtp and .vtu.
+//
+// VTK parses into its own data set; the triangles are copied once into the TriangleMesh buffers
+// that Embree reads, and the VTK objects are destroyed before loadMesh returns, so after the
+// import the geometry exists once. Attribute arrays other than point normals are dropped.
+//
+// VTK's readers trust header counts (POINTS n allocates n points before reading any), and they
+// report problems through a global output window. So the counts are checked against the file
+// size first (checkVtkCounts), the window is replaced by one that records the first error, and
+// every index VTK hands back is checked here, since VTK does not check connectivity.
+#include "import_vtk.h"
+
+#include "mesh_internal.h"
+
+#include <vtkCellArray.h>
+#include <vtkCellArrayIterator.h>
+#include <vtkCommand.h>
+#include <vtkDataArray.h>
+#include <vtkDataSetReader.h>
+#include <vtkDataSetSurfaceFilter.h>
+#include <vtkDoubleArray.h>
+#include <vtkFloatArray.h>
+#include <vtkLogger.h>
+#include <vtkObjectFactory.h>
+#include <vtkOutputWindow.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLPolyDataReader.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <new>
+
+namespace rtwall::detail {
+
+// ---------------------------------------------------------------------------------------------
+// VTK's messages
+
+// Records the first error or warning instead of printing it; VTK writes every reader problem
+// here (or to an ErrorEvent observer, which this replaces for objects we do not create).
+class RecordingOutputWindow : public vtkOutputWindow {
+public:
+    static RecordingOutputWindow* New();
+    vtkTypeMacro(RecordingOutputWindow, vtkOutputWindow)
+
+    void DisplayText(const char* text) override {
+        if (!text) return;
+        const auto type = GetCurrentMessageType();
+        if (type != MESSAGE_TYPE_ERROR && type != MESSAGE_TYPE_WARNING) return;
+        if (first_.empty()) first_ = text;
+    }
+    void clear() { first_.clear(); }
+    // The message without VTK's "ERROR: In /path/file.cxx, line N\nvtkClass (0x...): " prefix,
+    // on one printable line.
+    std::string message() const {
+        std::string m = first_;
+        if (const size_t colon = m.find("): "); colon != std::string::npos) m = m.substr(colon + 3);
+        for (char& c : m)
+            if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = ' ';
+        while (!m.empty() && m.back() == ' ') m.pop_back();
+        return m.substr(0, 200);
+    }
+    bool empty() const { return first_.empty(); }
+
+private:
+    std::string first_;
+};
+vtkStandardNewMacro(RecordingOutputWindow);
+
+namespace {
+
+// VTK's output window is global, so VTK imports run one at a time.
+std::mutex& vtkMutex() {
+    static std::mutex mutex;
+    return mutex;
+}
+
+class WindowScope {
+public:
+    WindowScope() : window_(vtkSmartPointer<RecordingOutputWindow>::New()) {
+        // VTK 9 also logs every error through vtkLogger straight to stderr; rtwall reports one
+        // line itself. Process-wide, and rtwall uses VTK for nothing else.
+        static const bool quiet = [] {
+            vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
+            return true;
+        }();
+        (void)quiet;
+        previous_ = vtkOutputWindow::GetInstance();
+        if (previous_) previous_->Register(nullptr);
+        vtkOutputWindow::SetInstance(window_);
+    }
+    ~WindowScope() {
+        vtkOutputWindow::SetInstance(previous_);
+        if (previous_) previous_->UnRegister(nullptr);
+    }
+    WindowScope(const WindowScope&) = delete;
+    WindowScope& operator=(const WindowScope&) = delete;
+    RecordingOutputWindow& window() { return *window_; }
+
+private:
+    vtkSmartPointer<RecordingOutputWindow> window_;
+    vtkOutputWindow* previous_ = nullptr;
+};
+
+[[noreturn]] void fail(const std::string& name, const std::string& what) { throw InputError(name + ": " + what); }
+
+bool startsWith(std::string_view s, std::string_view p) { return s.substr(0, p.size()) == p; }
+
+// ---------------------------------------------------------------------------------------------
+// Header counts
+
+struct Limits {
+    uint64_t values;  // the most numbers the file can hold
+};
+
+std::string_view lineAt(std::string_view data, size_t pos) {
+    const size_t end = data.find('\n', pos);
+    std::string_view line = data.substr(pos, end == std::string_view::npos ? std::string_view::npos : end - pos);
+    if (line.size() > 256) line = line.substr(0, 256);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    return line;
+}
+
+// Splits a header line into whitespace-separated tokens.
+std::vector<std::string_view> tokens(std::string_view line) {
+    std::vector<std::string_view> out;
+    size_t i = 0;
+    while (i < line.size()) {
+        while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+        size_t j = i;
+        while (j < line.size() && line[j] != ' ' && line[j] != '\t') ++j;
+        if (j > i) out.push_back(line.substr(i, j - i));
+        i = j;
+    }
+    return out;
+}
+
+bool parseCount(std::string_view t, uint64_t& v) {
+    const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
+    return r.ec == std::errc() && r.ptr == t.data() + t.size();
+}
+
+void walkLegacyBinary(std::string_view data, size_t pos, const std::string& name);
+
+void checkLegacy(std::string_view data, const std::string& name) {
+    // Every number takes at least one byte in a binary file and two ("0 ") in an ASCII one.
+    const bool binary = [&] {
+        size_t pos = 0;
+        for (int line = 0; line < 2 && pos != std::string_view::npos; ++line) {
+            pos = data.find('\n', pos);
+            if (pos != std::string_view::npos) ++pos;
+        }
+        return pos != std::string_view::npos && startsWith(lineAt(data, pos), "BINARY");
+    }();
+    const uint64_t limit = binary ? data.size() : data.size() / 2 + 1;
+    if (binary) {
+        size_t pos = 0;
+        for (int line = 0; line < 4 && pos != std::string_view::npos; ++line) {
+            pos = data.find('\n', pos);
+            if (pos != std::string_view::npos) ++pos;
+        }
+        if (pos == std::string_view::npos) fail(name, "legacy VTK header is incomplete");
+        walkLegacyBinary(data, pos, name);
+    }
+    static const char* kCounted[] = {"POINTS",     "POLYGONS", "TRIANGLE_STRIPS", "LINES",     "VERTICES",
+                                     "CELLS",      "CELL_TYPES", "POINT_DATA",    "CELL_DATA", "LOOKUP_TABLE",
+                                     "FIELD",      "OFFSETS",  "CONNECTIVITY",    "DIMENSIONS"};
+    size_t lineNo = 1;
+    for (size_t pos = 0; pos < data.size(); ++lineNo) {
+        const std::string_view line = lineAt(data, pos);
+        // Lines of ASCII numbers are data, not headers.
+        const char c0 = line.empty() ? ' ' : line[0];
+        const bool dataLine = (c0 >= '0' && c0 <= '9') || c0 == '-' || c0 == '+' || c0 == '.';
+        const std::vector<std::string_view> t = dataLine ? std::vector<std::string_view>{} : tokens(line);
+        if (!t.empty()) {
+            const bool keyword = std::any_of(std::begin(kCounted), std::end(kCounted), [&](const char* k) { return t[0] == k; });
+            if (keyword && t[0] == "DIMENSIONS") fail(name + ":line " + std::to_string(lineNo), "structured data sets are not supported (polydata and unstructured grids are)");
+            // A field array header "name components tuples type" allocates components x tuples.
+            uint64_t a = 0, b = 0;
+            static const char* kTypes[] = {"bit", "unsigned_char", "char", "unsigned_short", "short", "unsigned_int", "int",
+                                           "unsigned_long", "long", "float", "double", "vtktypeint64", "vtktypeuint64", "string"};
+            const bool fieldArray = !keyword && t.size() == 4 && parseCount(t[1], a) && parseCount(t[2], b) &&
+                                    std::any_of(std::begin(kTypes), std::end(kTypes), [&](const char* k) { return t[3] == k; });
+            if (keyword || fieldArray) {
+                uint64_t total = 0;
+                for (size_t k = 1; k < t.size() && k < 3; ++k) {
+                    uint64_t v = 0;
+                    if (!parseCount(t[k], v)) continue;
+                    if (v > limit) fail(name + ":line " + std::to_string(lineNo), std::string(t[0]) + " declares " + std::to_string(v) + " entries, more than the file's " + std::to_string(data.size()) + " bytes can hold");
+                    total = fieldArray ? (k == 1 ? v : total * v) : total + (t[0] == "POINTS" ? 3 * v : v);
+                }
+                if (total > (fieldArray ? limit : 3 * limit))
+                    fail(name + ":line " + std::to_string(lineNo), std::string(t[0]) + " declares " + std::to_string(total) + " numbers, more than the file's " + std::to_string(data.size()) + " bytes can hold");
+            }
+        }
+        const size_t next = data.find('\n', pos);
+        if (next == std::string_view::npos) break;
+        pos = next + 1;
+    }
+}
+
+// Binary legacy files: every section's payload must be in the file before VTK reads it. VTK's
+// legacy reader does not stop cleanly on a truncated binary section (it crashed in our tests),
+// so the whole section structure is walked here first.
+size_t typeSize(std::string_view t) {
+    if (t == "unsigned_char" || t == "char") return 1;
+    if (t == "unsigned_short" || t == "short") return 2;
+    if (t == "unsigned_int" || t == "int" || t == "float") return 4;
+    if (t == "unsigned_long" || t == "long" || t == "double" || t == "vtktypeint64" || t == "vtktypeuint64") return 8;
+    return 0;
+}
+
+void walkLegacyBinary(std::string_view data, size_t pos, const std::string& name) {
+    auto failAt = [&](size_t at, const std::string& what) { fail(name + ":offset " + std::to_string(at), what); };
+    auto skipSpace = [&] {
+        while (pos < data.size() && (data[pos] == '\n' || data[pos] == '\r' || data[pos] == ' ' || data[pos] == '\t')) ++pos;
+    };
+    auto nextLine = [&](size_t& at) {
+        skipSpace();
+        at = pos;
+        const std::string_view line = lineAt(data, pos);
+        const size_t end = data.find('\n', pos);
+        pos = end == std::string_view::npos ? data.size() : end + 1;
+        return tokens(line);
+    };
+    auto count = [&](std::string_view t, size_t at) {
+        uint64_t v = 0;
+        if (!parseCount(t, v)) failAt(at, "expected a count, got '" + std::string(t.substr(0, 20)) + "'");
+        return v;
+    };
+    auto payload = [&](uint64_t values, size_t size, size_t at, const std::string& what) {
+        if (size == 0) failAt(at, what + ": unsupported data type");
+        if (values > data.size() || values * size > data.size() - pos)
+            failAt(at, what + ": truncated: needs " + std::to_string(values) + " values of " + std::to_string(size) +
+                           " bytes, the file has " + std::to_string(data.size() - pos) + " bytes left");
+        pos += size_t(values * size);
+    };
+    uint64_t attributeCount = 0;
+    while (true) {
+        size_t at = 0;
+        const std::vector<std::string_view> t = nextLine(at);
+        if (at >= data.size()) return;
+        if (t.empty()) continue;
+        const std::string_view k = t[0];
+        const std::string key(k.substr(0, 32));
+        if (k == "POINTS" && t.size() == 3) {
+            payload(3 * count(t[1], at), typeSize(t[2]), at, key);
+        } else if ((k == "VERTICES" || k == "LINES" || k == "POLYGONS" || k == "TRIANGLE_STRIPS" || k == "CELLS") && t.size() == 3) {
+            const uint64_t n = count(t[1], at), m = count(t[2], at);
+            const size_t save = pos;
+            size_t at2 = 0;
+            const std::vector<std::string_view> off = nextLine(at2);
+            if (!off.empty() && off[0] == "OFFSETS" && off.size() == 2) {
+                payload(n, typeSize(off[1]), at2, "OFFSETS");
+                const std::vector<std::string_view> conn = nextLine(at2);
+                if (conn.size() != 2 || conn[0] != "CONNECTIVITY") failAt(at2, "expected CONNECTIVITY after OFFSETS");
+                payload(m, typeSize(conn[1]), at2, "CONNECTIVITY");
+            } else {
+                pos = save;
+                payload(m, 4, at, key);
+            }
+        } else if (k == "CELL_TYPES" && t.size() == 2) {
+            payload(count(t[1], at), 4, at, key);
+        } else if ((k == "POINT_DATA" || k == "CELL_DATA") && t.size() == 2) {
+            attributeCount = count(t[1], at);
+        } else if ((k == "NORMALS" || k == "VECTORS") && t.size() == 3) {
+            payload(3 * attributeCount, typeSize(t[2]), at, key);
+        } else if (k == "TENSORS" && t.size() == 3) {
+            payload(9 * attributeCount, typeSize(t[2]), at, key);
+        } else if (k == "TEXTURE_COORDINATES" && t.size() == 4) {
+            payload(count(t[2], at) * attributeCount, typeSize(t[3]), at, key);
+        } else if (k == "COLOR_SCALARS" && t.size() == 3) {
+            payload(count(t[2], at) * attributeCount, 1, at, key);
+        } else if (k == "SCALARS" && (t.size() == 3 || t.size() == 4)) {
+            const uint64_t comps = t.size() == 4 ? count(t[3], at) : 1;
+            size_t at2 = 0;
+            const size_t save = pos;
+            const std::vector<std::string_view> lut = nextLine(at2);
+            if (lut.empty() || lut[0] != "LOOKUP_TABLE") pos = save;
+            payload(comps * attributeCount, typeSize(t[2]), at, key);
+        } else if (k == "LOOKUP_TABLE" && t.size() == 3) {
+            payload(4 * count(t[2], at), 1, at, key);
+        } else if (k == "FIELD" && t.size() == 3) {
+            const uint64_t arrays = count(t[2], at);
+            if (arrays > data.size()) failAt(at, "FIELD declares more arrays than the file can hold");
+            for (uint64_t a = 0; a < arrays; ++a) {
+                size_t at2 = 0;
+                const std::vector<std::string_view> arr = nextLine(at2);
+                if (arr.size() == 1 && arr[0] == "NULL_ARRAY") continue;
+                if (arr.size() != 4) failAt(at2, "expected a field array header 'name components tuples type'");
+                const uint64_t comps = count(arr[1], at2), tuples = count(arr[2], at2);
+                if (comps > data.size() || tuples > data.size()) failAt(at2, "field array larger than the file");
+                payload(comps * tuples, typeSize(arr[3]), at2, "field array");
+            }
+        } else if (k == "METADATA") {
+            // Text until an empty line.
+            while (pos < data.size()) {
+                const std::string_view line = lineAt(data, pos);
+                const size_t end = data.find('\n', pos);
+                pos = end == std::string_view::npos ? data.size() : end + 1;
+                if (line.find_first_not_of(" \t\r") == std::string_view::npos) break;
+            }
+        } else {
+            failAt(at, "unexpected section '" + key + "' in a binary legacy VTK file");
+        }
+    }
+}
+
+void checkXml(std::string_view data, const std::string& name) {
+    // zlib and LZ4 blocks can expand by up to about 1032 times (zlib's limit); raw, base64 and
+    // ASCII data take at least one byte per number.
+    const bool compressed = data.find("compressor=") != std::string_view::npos;
+    const uint64_t limit = compressed ? uint64_t(data.size()) * 1032 : data.size();
+    for (size_t pos = data.find("NumberOf"); pos != std::string_view::npos; pos = data.find("NumberOf", pos + 8)) {
+        const size_t eq = data.find("=\"", pos);
+        if (eq == std::string_view::npos || eq - pos > 40) continue;
+        const std::string_view key = data.substr(pos, eq - pos);
+        const size_t end = data.find('"', eq + 2);
+        if (end == std::string_view::npos || end - eq > 40) continue;
+        uint64_t v = 0;
+        const std::string_view text = data.substr(eq + 2, end - eq - 2);
+        if (!parseCount(text, v)) {
+            if (!text.empty() && text[0] == '-') fail(name + ":offset " + std::to_string(pos), std::string(key) + " is negative");
+            continue;
+        }
+        const uint64_t numbers = key == "NumberOfPoints" ? 3 * v : v;
+        if (v > limit || numbers > limit)
+            fail(name + ":offset " + std::to_string(pos), std::string(key) + "=" + std::to_string(v) + " is more than the file's " + std::to_string(data.size()) + " bytes can hold");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Data set to triangles
+
+// Reads point i of any VTK point array in double precision, without a virtual call for the
+// usual float and double arrays.
+class PointReader {
+public:
+    explicit PointReader(vtkDataArray* a) : array_(a) {
+        if (auto* f = vtkFloatArray::SafeDownCast(a)) f_ = f->GetPointer(0);
+        if (auto* d = vtkDoubleArray::SafeDownCast(a)) d_ = d->GetPointer(0);
+    }
+    void get(vtkIdType i, double p[3]) const {
+        if (f_) {
+            for (int k = 0; k < 3; ++k) p[k] = f_[3 * i + k];
+        } else if (d_) {
+            for (int k = 0; k < 3; ++k) p[k] = d_[3 * i + k];
+        } else {
+            array_->GetTuple(i, p);
+        }
+    }
+
+private:
+    vtkDataArray* array_;
+    const float* f_ = nullptr;
+    const double* d_ = nullptr;
+};
+
+TriangleMesh toTriangles(vtkPolyData* pd, const std::string& name, ImportReport& report) {
+    vtkPoints* points = pd->GetPoints();
+    const vtkIdType nPoints = points ? points->GetNumberOfPoints() : 0;
+    if (nPoints <= 0) fail(name, "contains no points");
+    if (uint64_t(nPoints) >= std::numeric_limits<uint32_t>::max()) fail(name, "more points than 32-bit indices can address");
+    vtkDataArray* coords = points->GetData();
+    if (!coords || coords->GetNumberOfComponents() != 3) fail(name, "points do not have 3 components");
+
+    // Bounds in double precision, then the origin the float buffers are relative to.
+    const PointReader pr(coords);
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (vtkIdType i = 0; i < nPoints; ++i) {
+        double p[3];
+        pr.get(i, p);
+        for (int k = 0; k < 3; ++k) {
+            if (!std::isfinite(p[k]) || std::fabs(p[k]) > 1e30)
+                fail(name, "point " + std::to_string(i) + " has a NaN, infinite or out-of-range coordinate");
+            lo[k] = std::min(lo[k], p[k]);
+            hi[k] = std::max(hi[k], p[k]);
+        }
+    }
+    const std::array<double, 3> origin = chooseOrigin(lo, hi);
+
+    vtkCellArray* polys = pd->GetPolys();
+    vtkCellArray* strips = pd->GetStrips();
+    size_t triangles = 0;
+    if (polys) triangles += size_t(std::max<vtkIdType>(0, polys->GetNumberOfConnectivityIds() - 2 * polys->GetNumberOfCells()));
+    if (strips) triangles += size_t(std::max<vtkIdType>(0, strips->GetNumberOfConnectivityIds() - 2 * strips->GetNumberOfCells()));
+
+    TriangleMesh mesh;
+    mesh.reserve(size_t(nPoints), triangles);
+    for (vtkIdType i = 0; i < nPoints; ++i) {
+        double p[3];
+        pr.get(i, p);
+        mesh.addVertex({float(p[0] - origin[0]), float(p[1] - origin[1]), float(p[2] - origin[2])});
+    }
+    mesh.setOrigin(origin);
+
+    auto checkIds = [&](const char* what, vtkIdType cell, vtkIdType n, const vtkIdType* ids) {
+        for (vtkIdType k = 0; k < n; ++k)
+            if (ids[k] < 0 || ids[k] >= nPoints)
+                fail(name, std::string(what) + " " + std::to_string(cell) + ": point index " + std::to_string(ids[k]) +
+                               " is out of range (the file has " + std::to_string(nPoints) + " points)");
+    };
+    if (polys) {
+        auto it = vtkSmartPointer<vtkCellArrayIterator>::Take(polys->NewIterator());
+        vtkIdType cell = 0;
+        for (it->GoToFirstCell(); !it->IsDoneWithTraversal(); it->GoToNextCell(), ++cell) {
+            vtkIdType n = 0;
+            const vtkIdType* ids = nullptr;
+            it->GetCurrentCell(n, ids);
+            if (n < 3) fail(name, "polygon " + std::to_string(cell) + " has fewer than 3 corners");
+            checkIds("polygon", cell, n, ids);
+            if (n > 3) ++report.polygonsTriangulated;
+            for (vtkIdType k = 1; k + 1 < n; ++k) {
+                const auto a = uint32_t(ids[0]), b = uint32_t(ids[k]), c = uint32_t(ids[k + 1]);
+                if (zeroArea(mesh, a, b, c)) ++report.degenerateTriangles;
+                mesh.addTriangle(a, b, c);
+            }
+        }
+    }
+    if (strips) {
+        auto it = vtkSmartPointer<vtkCellArrayIterator>::Take(strips->NewIterator());
+        vtkIdType cell = 0;
+        for (it->GoToFirstCell(); !it->IsDoneWithTraversal(); it->GoToNextCell(), ++cell) {
+            vtkIdType n = 0;
+            const vtkIdType* ids = nullptr;
+            it->GetCurrentCell(n, ids);
+            if (n < 3) fail(name, "triangle strip " + std::to_string(cell) + " has fewer than 3 points");
+            checkIds("triangle strip", cell, n, ids);
+            ++report.stripsTriangulated;
+            for (vtkIdType k = 0; k + 2 < n; ++k) {
+                // Every second triangle of a strip is wound the other way round.
+                auto a = uint32_t(ids[k]), b = uint32_t(ids[k + 1]);
+                const auto c = uint32_t(ids[k + 2]);
+                if (k & 1) std::swap(a, b);
+                if (zeroArea(mesh, a, b, c)) ++report.degenerateTriangles;
+                mesh.addTriangle(a, b, c);
+            }
+        }
+    }
+    report.cellsSkipped += size_t((pd->GetVerts() ? pd->GetVerts()->GetNumberOfCells() : 0) +
+                                  (pd->GetLines() ? pd->GetLines()->GetNumberOfCells() : 0));
+    if (mesh.triangleCount() == 0) fail(name, "contains no triangles (no polygons or triangle strips)");
+
+    // Point normals are kept when there is one usable normal per point.
+    if (vtkDataArray* n = pd->GetPointData() ? pd->GetPointData()->GetNormals() : nullptr;
+        n && n->GetNumberOfComponents() == 3 && n->GetNumberOfTuples() == nPoints) {
+        std::vector<float> normals(3 * size_t(nPoints));
+        bool ok = true;
+        for (vtkIdType i = 0; i < nPoints && ok; ++i) {
+            double v[3];
+            n->GetTuple(i, v);
+            const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            ok = std::isfinite(len) && len > 0.0;
+            for (int k = 0; k < 3 && ok; ++k) normals[3 * size_t(i) + size_t(k)] = float(v[k] / len);
+        }
+        if (ok) mesh.setNormals(std::move(normals));
+    }
+    return mesh;
+}
+
+// Runs a reader (and the surface filter for unstructured grids), turning VTK's recorded
+// messages into one InputError.
+template <class Algorithm>
+void runVtk(Algorithm* algorithm, RecordingOutputWindow& window, const std::string& name) {
+    window.clear();
+    algorithm->Update();
+    if (!window.empty()) fail(name, "VTK: " + window.message());
+    if (algorithm->GetErrorCode() != 0) fail(name, "VTK could not read the file (error code " + std::to_string(algorithm->GetErrorCode()) + ")");
+}
+
+vtkSmartPointer<vtkPolyData> surfaceOf(vtkDataSet* ds, RecordingOutputWindow& window, const std::string& name) {
+    if (auto* pd = vtkPolyData::SafeDownCast(ds)) return pd;
+    auto filter = vtkSmartPointer<vtkDataSetSurfaceFilter>::New();
+    filter->SetInputData(ds);
+    runVtk(filter.Get(), window, name);
+    vtkSmartPointer<vtkPolyData> out = filter->GetOutput();
+    return out;
+}
+
+}  // namespace
+
+VtkKind sniffVtk(std::string_view head) {
+    if (startsWith(head, "# vtk DataFile Version")) return VtkKind::Legacy;
+    head = head.substr(0, 4096);
+    const size_t file = head.find("<VTKFile");
+    if (file == std::string_view::npos) return VtkKind::None;
+    const size_t close = head.find('>', file);
+    const std::string_view tag = head.substr(file, close == std::string_view::npos ? std::string_view::npos : close - file);
+    if (tag.find("type=\"PolyData\"") != std::string_view::npos) return VtkKind::XmlPolyData;
+    if (tag.find("type=\"UnstructuredGrid\"") != std::string_view::npos) return VtkKind::XmlUnstructuredGrid;
+    return VtkKind::None;
+}
+
+void checkVtkCounts(VtkKind kind, std::string_view data, const std::string& name) {
+    if (kind == VtkKind::Legacy) checkLegacy(data, name);
+    else checkXml(data, name);
+}
+
+namespace {
+
+TriangleMesh loadVtkHere(VtkKind kind, const std::string& data, const std::string& name, ImportReport& report) {
+    const std::lock_guard<std::mutex> lock(vtkMutex());
+    WindowScope scope;
+    RecordingOutputWindow& window = scope.window();
+    try {
+        if (kind == VtkKind::Legacy) {
+            report.format = "vtk";
+            // Legacy headers: the type line decides what VTK builds; only two are surfaces.
+            const std::string_view d(data);
+            size_t pos = 0;
+            for (int line = 0; line < 3 && pos != std::string_view::npos; ++line) {
+                pos = d.find('\n', pos);
+                if (pos != std::string_view::npos) ++pos;
+            }
+            if (pos == std::string_view::npos) fail(name, "legacy VTK header is incomplete (expected a DATASET line on line 4)");
+            const std::string_view fmt = lineAt(d, d.rfind('\n', pos - 2) + 1);
+            if (!startsWith(fmt, "ASCII") && !startsWith(fmt, "BINARY")) fail(name + ":line 3", "expected ASCII or BINARY");
+            const std::vector<std::string_view> t = tokens(lineAt(d, pos));
+            if (t.size() != 2 || t[0] != "DATASET") fail(name + ":line 4", "expected 'DATASET POLYDATA' or 'DATASET UNSTRUCTURED_GRID'");
+            if (t[1] != "POLYDATA" && t[1] != "UNSTRUCTURED_GRID")
+                fail(name + ":line 4", "DATASET " + std::string(t[1].substr(0, 40)) + " is not supported (POLYDATA and UNSTRUCTURED_GRID are)");
+            if (data.size() > size_t(std::numeric_limits<int>::max())) fail(name, "legacy VTK files over 2 GiB are not supported; use .vtp");
+            auto reader = vtkSmartPointer<vtkDataSetReader>::New();
+            reader->ReadFromInputStringOn();
+            reader->SetInputString(data.data(), int(data.size()));
+            reader->ReadAllNormalsOn();
+            runVtk(reader.Get(), window, name);
+            vtkDataSet* ds = reader->GetOutput();
+            if (!ds) fail(name, "VTK read no data set");
+            vtkSmartPointer<vtkPolyData> pd = surfaceOf(ds, window, name);
+            return toTriangles(pd, name, report);
+        }
+        if (kind == VtkKind::XmlPolyData) {
+            report.format = "vtp";
+            auto reader = vtkSmartPointer<vtkXMLPolyDataReader>::New();
+            reader->ReadFromInputStringOn();
+            reader->SetInputString(data);
+            runVtk(reader.Get(), window, name);
+            vtkPolyData* pd = reader->GetOutput();
+            if (!pd) fail(name, "VTK read no data set");
+            return toTriangles(pd, name, report);
+        }
+        report.format = "vtu";
+        auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+        reader->ReadFromInputStringOn();
+        reader->SetInputString(data);
+        runVtk(reader.Get(), window, name);
+        vtkUnstructuredGrid* ug = reader->GetOutput();
+        if (!ug) fail(name, "VTK read no data set");
+        vtkSmartPointer<vtkPolyData> pd = surfaceOf(ug, window, name);
+        return toTriangles(pd, name, report);
+    } catch (const std::bad_alloc&) {
+        fail(name, "out of memory while reading");
+    }
+}
+
+bool writeAll(int fd, const unsigned char* p, size_t n) {
+    while (n > 0) {
+        const ssize_t w = ::write(fd, p, n);
+        if (w < 0 && errno == EINTR) continue;
+        if (w <= 0) return false;
+        p += w;
+        n -= size_t(w);
+    }
+    return true;
+}
+
+}  // namespace
+
+// VTK's readers crash on some malformed files (a fuzzer finds a NULL dereference in the legacy
+// reader and a division by zero in the XML decompressor within a minute), and a crash or a hang
+// must not take rtwall down. So VTK parses in a child process: it hands the mesh back as cache
+// bytes in a memfd (decoded and validated here like any cache), or an error line through a
+// pipe; a crash, or no answer within the time limit, is reported as a bad file. The child's
+// copy disappears with it, so the geometry still exists once afterwards.
+TriangleMesh loadVtk(VtkKind kind, const std::string& data, const std::string& name, ImportReport& report) {
+    checkVtkCounts(kind, data, name);
+    if (const char* inProcess = std::getenv("RTWALL_VTK_IN_PROCESS"); inProcess && *inProcess == '1')
+        return loadVtkHere(kind, data, name, report);
+
+    const int memfd = ::memfd_create("rtwall-vtk-mesh", MFD_CLOEXEC);
+    int errPipe[2];
+    if (memfd < 0 || ::pipe2(errPipe, O_CLOEXEC) != 0) {
+        if (memfd >= 0) ::close(memfd);
+        fail(name, std::string("cannot start the VTK reader: ") + std::strerror(errno));
+    }
+    std::fflush(nullptr);
+    const pid_t pid = ::fork();
+    if (pid < 0) {
+        ::close(memfd);
+        ::close(errPipe[0]);
+        ::close(errPipe[1]);
+        fail(name, std::string("cannot start the VTK reader: ") + std::strerror(errno));
+    }
+    if (pid == 0) {
+        ::close(errPipe[0]);
+        int code = 4;
+        try {
+            ImportReport r;
+            const TriangleMesh mesh = loadVtkHere(kind, data, name, r);
+            const std::vector<unsigned char> bytes = encodeMeshCache(mesh, r, 0, 0);
+            code = writeAll(memfd, bytes.data(), bytes.size()) ? 0 : 5;
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            writeAll(errPipe[1], reinterpret_cast<const unsigned char*>(what.data()), what.size());
+            code = 3;
+        } catch (...) {
+        }
+        ::_exit(code);
+    }
+    ::close(errPipe[1]);
+    // The error line (small), then the exit status, within a limit that grows with the file.
+    std::string message;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60 + data.size() / (4 << 20));
+    int status = 0;
+    bool exited = false;
+    char buf[512];
+    while (!exited) {
+        pollfd pfd{errPipe[0], POLLIN, 0};
+        if (::poll(&pfd, 1, 50) > 0) {
+            const ssize_t n = ::read(errPipe[0], buf, sizeof buf);
+            if (n > 0 && message.size() < 4096) message.append(buf, size_t(n));
+        }
+        const pid_t w = ::waitpid(pid, &status, WNOHANG);
+        if (w == pid) exited = true;
+        else if (std::chrono::steady_clock::now() > deadline) {
+            ::kill(pid, SIGKILL);
+            ::waitpid(pid, &status, 0);
+            ::close(errPipe[0]);
+            ::close(memfd);
+            fail(name, "VTK did not finish reading the file within the time limit");
+        }
+    }
+    for (ssize_t n; (n = ::read(errPipe[0], buf, sizeof buf)) > 0 && message.size() < 4096;) message.append(buf, size_t(n));
+    ::close(errPipe[0]);
+    struct Closer {
+        int fd;
+        ~Closer() { ::close(fd); }
+    } closer{memfd};
+    if (WIFSIGNALED(status)) fail(name, "VTK crashed reading the file (signal " + std::to_string(WTERMSIG(status)) + "); the file is malformed");
+    const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    if (code == 3 && !message.empty()) {
+        if (const size_t nl = message.find('\n'); nl != std::string::npos) message.resize(nl);
+        throw InputError(message);
+    }
+    if (code != 0) fail(name, "VTK failed reading the file (the reader exited with status " + std::to_string(code) + ")");
+    struct stat st {};
+    if (::fstat(memfd, &st) != 0 || st.st_size <= 0) fail(name, "the VTK reader returned no mesh");
+    void* map = ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, memfd, 0);
+    if (map == MAP_FAILED) fail(name, "cannot map the mesh the VTK reader returned");
+    try {
+        TriangleMesh mesh = decodeMeshCache(static_cast<const unsigned char*>(map), size_t(st.st_size), 0, 0, name, &report);
+        ::munmap(map, size_t(st.st_size));
+        return mesh;
+    } catch (...) {
+        ::munmap(map, size_t(st.st_size));
+        throw;
+    }
+}
+
+}  // namespace rtwall::detail

@@ -1,0 +1,28 @@
+// VTK-based importers (legacy .vtk, XML .vtp and .vtu). Internal to rtwall_mesh: VTK stays
+// private to this library and nothing of it appears in rtwall/mesh.h.
+#pragma once
+
+#include "rtwall/mesh.h"
+
+#include <string>
+#include <string_view>
+
+namespace rtwall::detail {
+
+enum class VtkKind { None, Legacy, XmlPolyData, XmlUnstructuredGrid };
+
+// What the bytes of a file say it is, whatever its extension.
+VtkKind sniffVtk(std::string_view head);
+
+// Reads a VTK file whose bytes are `data` (already read from disk, so that size checks and the
+// reader see the same bytes). Polygons and triangle strips become triangles, unstructured grids
+// are reduced to their outer surface, vertices and lines are skipped and counted. Coordinates are
+// read in double precision and recentred (see TriangleMesh::origin) before they are rounded to
+// float. Throws InputError naming the file and the place.
+TriangleMesh loadVtk(VtkKind kind, const std::string& data, const std::string& name, ImportReport& report);
+
+// Checks the counts a VTK header declares against the size of the file, before VTK allocates
+// anything for them. Exposed for the tests.
+void checkVtkCounts(VtkKind kind, std::string_view data, const std::string& name);
+
+}  // namespace rtwall::detail

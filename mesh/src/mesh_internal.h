@@ -1,0 +1,43 @@
+// Helpers shared by the importers and the cache. Internal to rtwall_mesh.
+#pragma once
+
+#include "rtwall/mesh.h"
+
+#include <array>
+#include <vector>
+
+namespace rtwall::detail {
+
+// The cache reader and the recentring step work on the buffers directly.
+struct MeshAccess {
+    static std::vector<float>& positions(TriangleMesh& m) { return m.positions_; }
+    static std::vector<float>& normals(TriangleMesh& m) { return m.normals_; }
+    static std::vector<uint32_t>& indices(TriangleMesh& m) { return m.indices_; }
+    static void setVertexCount(TriangleMesh& m, size_t n) { m.vertexCount_ = n; }
+};
+
+// The origin a mesh with these bounds is stored relative to: the centre of its bounds, rounded to
+// a whole number so that the offset itself is exact, when the mesh lies further from its origin
+// than its own size (and at least 1024 units); else {0,0,0}, which leaves meshes near their
+// origin bit-for-bit as they were.
+std::array<double, 3> chooseOrigin(const double lo[3], const double hi[3]);
+
+// Recentres a mesh imported in float (the OpenMesh readers) by chooseOrigin's rule.
+void recentre(TriangleMesh& mesh);
+
+// True when the triangle has zero area in the float buffers.
+bool zeroArea(const TriangleMesh& mesh, uint32_t a, uint32_t b, uint32_t c);
+
+}  // namespace rtwall::detail
+
+namespace rtwall::detail {
+
+// The bytes of a cache file for `mesh` (cache.cpp); also how a VTK import returns its mesh from
+// the child process it runs in.
+std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const ImportReport& report, uint64_t sourceSize,
+                                           int64_t sourceMtime);
+
+// Reads any supported mesh file, without a cache (import.cpp).
+TriangleMesh importMesh(const std::filesystem::path& file, ImportReport* report);
+
+}  // namespace rtwall::detail

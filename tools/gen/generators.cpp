@@ -1,0 +1,17 @@
+#include "generators.h"
+
+namespace rtwall::gen {
+
+const std::map<std::string, Generator>& generators() {
+    static const std::map<std::string, Generator> all = {
+        {"powerplant",
+         {"CAD-like plant far from the origin: VTK/PLY/OBJ sections, instanced pumps (--triangles, --copies)", genPowerplant}},
+        {"sunflowers",
+         {"field of instanced sunflowers in groups of groups, plus large trees (--instances plants, --triangles per plant, "
+          "--trees, --tree-triangles)",
+          genSunflowers}},
+    };
+    return all;
+}
+
+}  // namespace rtwall::gen

@@ -1,0 +1,194 @@
+// rtwall bench scene SCENE: what loading and rendering a big scene costs. Load from the mesh
+// files (parse), from the caches, the BVH build, resident bytes, and frame times at 1600x1200
+// with primary rays and shadows; with --sweep, the same for every BVH quality and compact mode.
+#include "commands.h"
+#include "progress.h"
+
+#include <rtwall/engine.h>
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <set>
+#include <thread>
+
+#include <time.h>
+
+namespace rtwall::cli {
+
+namespace {
+
+double medianOf(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+template <class F> double seconds(F&& f) {
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// CPU seconds of the whole process (all threads): on a shared machine, wall time alone says
+// little about the work done.
+double cpuSeconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+// VmRSS / VmHWM of this process in bytes.
+int64_t procStatus(const char* key) {
+    std::ifstream in("/proc/self/status");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.starts_with(key)) return std::stoll(line.substr(std::string(key).size() + 1)) * 1024;
+    return -1;
+}
+
+const char* qualityName(BvhSettings::Quality q) {
+    return q == BvhSettings::Quality::Low ? "low" : q == BvhSettings::Quality::High ? "high" : "medium";
+}
+
+}  // namespace
+
+void addBenchScene(CLI::App& bench, Run& run) {
+    struct Options {
+        std::string scene, camera;
+        int width = 1600, height = 1200, threads = 0, frames = 3;
+        bool json = false, sweep = false, skipParse = false;
+    };
+    auto o = std::make_shared<Options>();
+    CLI::App* cmd = bench.add_subcommand("scene", "Import, cache, BVH build, memory and frame time of a scene file");
+    cmd->add_option("scene", o->scene, "Scene file (.toml)")->required();
+    cmd->add_option("--camera", o->camera, "Camera (default: the first)");
+    cmd->add_option("--width", o->width, "Image width")->check(CLI::Range(16, 16384));
+    cmd->add_option("--height", o->height, "Image height")->check(CLI::Range(16, 16384));
+    cmd->add_option("--threads", o->threads, "Render threads (0 = one per hardware thread)")->check(CLI::Range(0, 1024));
+    cmd->add_option("--frames", o->frames, "Frames per setting; the median is reported")->check(CLI::Range(1, 100));
+    cmd->add_flag("--sweep", o->sweep, "Also build and render with every BVH quality, compact off and on");
+    cmd->add_flag("--skip-parse", o->skipParse, "Do not time a load without caches");
+    cmd->add_flag("--json", o->json, "Print JSON");
+    cmd->callback([&run, o] {
+        run = [o] {
+            installInterruptHandler();
+            const std::filesystem::path path(o->scene);
+            toml::table out{{"benchmark", "scene"}, {"scene", o->scene}};
+            // 1. Parse every mesh file (no caches), 2. make sure caches exist, 3. load from them.
+            if (!o->skipParse) {
+                SceneLoadStats parse;
+                SceneLoadOptions lo;
+                lo.cache = false;
+                lo.stats = &parse;
+                ProgressBar bar("import", 1, "");
+                lo.progress = bar.fn();
+                const double cpu0 = cpuSeconds();
+                const double total = seconds([&] { (void)loadSceneFile(path, lo); });
+                out.insert("parse_load_s", total);
+                out.insert("parse_load_cpu_s", cpuSeconds() - cpu0);
+                out.insert("parse_import_s", parse.importSeconds);
+            }
+            {
+                SceneLoadStats fill;
+                SceneLoadOptions lo;
+                lo.cache = true;
+                lo.stats = &fill;
+                const double total = seconds([&] { (void)loadSceneFile(path, lo); });
+                out.insert("cache_fill_s", total);
+                out.insert("caches_written", int64_t(fill.cacheWritten));
+            }
+            SceneLoadStats cached;
+            SceneLoadOptions lo;
+            lo.cache = true;
+            lo.stats = &cached;
+            SceneDesc desc;
+            const double cpuLoad0 = cpuSeconds();
+            const double cacheLoad = seconds([&] { desc = loadSceneFile(path, lo); });
+            out.insert("cache_load_cpu_s", cpuSeconds() - cpuLoad0);
+            out.insert("cache_load_s", cacheLoad);
+            out.insert("cache_read_s", cached.cacheSeconds);
+            out.insert("cache_hits", int64_t(cached.cacheHits));
+
+            int64_t unique = 0, instanced = 0;
+            std::set<const TriangleMesh*> seen;
+            for (const MeshDesc& m : desc.meshes)
+                if (seen.insert(m.mesh.get()).second) unique += int64_t(m.mesh->triangleCount());
+            for (const InstanceDesc& in : desc.instances) instanced += int64_t(desc.meshes[in.mesh].mesh->triangleCount());
+            out.insert("unique_triangles", unique);
+            out.insert("instanced_triangles", instanced);
+            out.insert("instances", int64_t(desc.instances.size()));
+            out.insert("meshes", int64_t(desc.meshes.size()));
+
+            const CameraDesc* cam = o->camera.empty() ? &desc.cameras.front() : desc.findCamera(o->camera);
+            if (!cam) throw InputError(o->scene + ": no camera named '" + o->camera + "'");
+            const CameraDesc camera = *cam;
+            RenderSettings s = desc.settings;
+            s.width = o->width;
+            s.height = o->height;
+            s.threads = o->threads;
+            s.shading = ShadingMode::Full;
+            s.shadows = true;
+            s.maxDepth = 1;  // primary rays plus shadow rays
+            s.supersample = 1;
+
+            std::vector<BvhSettings> settings{desc.bvh};
+            if (o->sweep)
+                for (auto q : {BvhSettings::Quality::Low, BvhSettings::Quality::Medium, BvhSettings::Quality::High})
+                    for (bool compact : {false, true}) settings.push_back({q, compact, desc.bvh.robust});
+            toml::array rows;
+            for (size_t i = 0; i < settings.size(); ++i) {
+                desc.bvh = settings[i];
+                std::unique_ptr<Scene> scene;
+                ProgressBar bar("bvh build", double(unique) * 1e-6, "Mtri");
+                const double cpu0 = cpuSeconds();
+                const double build = seconds([&] { scene = std::make_unique<Scene>(desc, bar.fn()); });
+                const double buildCpu = cpuSeconds() - cpu0;
+                const Camera c(camera, s.width, s.height);
+                std::vector<double> frames;
+                TileStats stats;
+                renderFrame(*scene, c, s, 0, &stats);  // warm-up
+                const double cpu1 = cpuSeconds();
+                for (int f = 0; f < o->frames; ++f) frames.push_back(seconds([&] { renderFrame(*scene, c, s, 0); }));
+                const double frameCpu = (cpuSeconds() - cpu1) / o->frames;
+                const double geometry = double(scene->geometryBytes()), embree = double(scene->embreeBytes());
+                toml::table row{{"quality", qualityName(desc.bvh.quality)},
+                                {"compact", desc.bvh.compact},
+                                {"robust", desc.bvh.robust},
+                                {"bvh_build_s", build},
+                                {"bvh_build_cpu_s", buildCpu},
+                                {"geometry_bytes", int64_t(geometry)},
+                                {"embree_bytes", int64_t(embree)},
+                                {"embree_top_level_bytes", int64_t(scene->embreeTopLevelBytes())},
+                                {"embree_bytes_per_instance_top_level", double(scene->embreeTopLevelBytes()) / double(std::max<size_t>(1, desc.instances.size()))},
+                                {"rss_bytes_per_instanced_triangle", double(procStatus("VmRSS:")) / double(std::max<int64_t>(1, instanced))},
+                                {"bytes_per_unique_triangle", (geometry + embree) / double(std::max<int64_t>(1, unique))},
+                                {"rss_bytes", procStatus("VmRSS:")},
+                                {"rss_bytes_per_unique_triangle", double(procStatus("VmRSS:")) / double(std::max<int64_t>(1, unique))},
+                                {"frame_s", medianOf(frames)},
+                                {"frame_cpu_s", frameCpu},
+                                {"rays_per_frame", int64_t(stats.rays + stats.shadowRays)}};
+                if (i == 0) out.insert("default", row);
+                else rows.push_back(row);
+                if (!o->json)
+                    std::printf("bvh %-6s compact=%d: build %.2f s, %.1f B/unique tri (geometry+Embree), rss %.2f GB, frame %.3f s\n",
+                                qualityName(desc.bvh.quality), int(desc.bvh.compact), build, (geometry + embree) / double(std::max<int64_t>(1, unique)),
+                                double(procStatus("VmRSS:")) * 1e-9, medianOf(frames));
+            }
+            if (o->sweep) out.insert("sweep", rows);
+            out.insert("peak_rss_bytes", procStatus("VmHWM:"));
+            out.insert("width", o->width);
+            out.insert("height", o->height);
+            out.insert("threads", o->threads > 0 ? o->threads : int(std::max(1u, std::thread::hardware_concurrency())));
+            if (o->json) std::cout << toml::json_formatter{out} << "\n";
+            else std::cout << out << "\n";
+            return 0;
+        };
+    });
+}
+
+}  // namespace rtwall::cli
