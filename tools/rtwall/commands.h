@@ -18,5 +18,10 @@ void addKeys(CLI::App& app, Run& run);
 void addBenchKernel(CLI::App& bench, Run& run);
 void addBenchCluster(CLI::App& bench, Run& run);
 void addBenchFaults(CLI::App& bench, Run& run);
+// Speed against accuracy (cmd_speed.cpp).
+void addCompare(CLI::App& app, Run& run);
+void addReference(CLI::App& app, Run& run);
+void addSimulate(CLI::App& app, Run& run);
+void addBenchTiles(CLI::App& bench, Run& run);
 
 }  // namespace rtwall::cli

@@ -15,11 +15,15 @@ int main(int argc, char** argv) {
     rtwall::cli::addClient(app, run);
     rtwall::cli::addRun(app, run);
     rtwall::cli::addKeys(app, run);
+    rtwall::cli::addCompare(app, run);
+    rtwall::cli::addReference(app, run);
+    rtwall::cli::addSimulate(app, run);
     CLI::App* bench = app.add_subcommand("bench", "Benchmarks that print their figures (JSON with --json)");
     bench->require_subcommand(1);
     rtwall::cli::addBenchKernel(*bench, run);
     rtwall::cli::addBenchCluster(*bench, run);
     rtwall::cli::addBenchFaults(*bench, run);
+    rtwall::cli::addBenchTiles(*bench, run);
 
     try {
         app.parse(argc, argv);
