@@ -28,6 +28,7 @@ struct CodecSettings {
     int jpegQuality = 90;         // 1..100
     bool jpegSubsample = false;   // 4:2:0 chroma subsampling (else 4:4:4)
     int zstdLevel = 1;            // 1..19
+    bool operator==(const CodecSettings&) const = default;
 };
 
 struct ClusterSettings {
@@ -88,6 +89,9 @@ public:
     void setMaterial(uint32_t material, const Material& value);
     void setLight(uint32_t light, const Light& value);
     void setRenderSettings(const RenderSettings& settings);
+    // Changes the tile codec of every client from their next tile on (a Welcome within the
+    // session carries it); results in flight keep their own codec, which each result names.
+    void setCodec(const CodecSettings& codec);
 
     // Renders one frame with the current state and returns it. With async on, the next
     // frame's updates already stream to the clients while this one renders.
