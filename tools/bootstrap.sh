@@ -26,6 +26,7 @@ PACKAGES=(
   libxxhash-dev        # content hashes of meshes and scene states
   clang libclang-rt-14-dev  # libFuzzer with ASan/UBSan for the fuzz targets
   python3
+  python3-matplotlib   # charts of tools/speed_accuracy.py (speed against accuracy)
 )
 
 say() { printf '[bootstrap] %s\n' "$*"; }

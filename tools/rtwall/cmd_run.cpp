@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <memory>
 #include <numbers>
+#include <tuple>
 
 namespace rtwall::cli {
 
@@ -279,6 +280,11 @@ void addRun(CLI::App& app, Run& run) {
             const CameraDesc start = desc.cameras.front();
             const std::vector<CameraKey> path = c.cameraPath.empty() ? std::vector<CameraKey>{} : readCameraPath(c.cameraPath);
 
+            // A given front is checked before anything starts: a mistake in it is one line, at once.
+            const std::vector<OperatingPoint> givenFront = o->front.empty() ? std::vector<OperatingPoint>{} : readFront(o->front);
+            if (!o->front.empty() && o->targetFps <= 0) throw InputError("--front needs --target-fps");
+            for (const OperatingPoint& p : givenFront) knobsOf(p, desc.settings, c.cluster.codec);  // unknown controls fail now
+
             Master master(desc, c.cluster);
             std::printf("rtwall master at %s, %dx%d, %d local clients, codec %s%s\n", master.endpoint().c_str(),
                         desc.settings.width, desc.settings.height, c.cluster.localClients,
@@ -305,23 +311,26 @@ void addRun(CLI::App& app, Run& run) {
             };
             if (o->targetFps > 0) {
                 std::vector<OperatingPoint> points;
-                if (!o->front.empty()) {
-                    points = readFront(o->front);
-                    for (const OperatingPoint& p : points) knobsOf(p, baseSettings, baseCodec);  // unknown controls fail now
+                if (!givenFront.empty()) {
+                    points = givenFront;
                 } else {
                     // Calibration: each codec and tile size for three frames of the first view;
                     // error = 1 - SSIM against the lossless frame.
-                    std::printf("calibrating the operating points (codec x tile size, 3 frames each)\n");
+                    std::printf("calibrating the operating points (codec x tile size, and resolution, 3 frames each)\n");
                     std::fflush(stdout);
                     const Image lossless = master.renderFrame();
+                    std::vector<std::tuple<int, int, double>> grid;  // JPEG quality (0: LZ4), tile, scale
                     for (int q : {0, 95, 90, 75, 50})
-                        for (int tile : {32, 64, 128}) {
+                        for (int tile : {32, 64, 128}) grid.emplace_back(q, tile, 1.0);
+                    for (double scale : {0.75, 0.5}) grid.emplace_back(0, 64, scale);
+                    for (const auto& [q, tile, scale] : grid) {
                             OperatingPoint p;
                             CodecSettings cs = baseCodec;
                             cs.codec = q == 0 ? TileCodec::Lz4 : TileCodec::Jpeg;
                             if (q) cs.jpegQuality = q;
                             p.name = codecPointName(cs, tile);
-                            p.controls = {{"tile", tile}, {"codec", double(int(cs.codec))}};
+                            p.controls = {{"tile", tile}, {"codec", double(int(cs.codec))}, {"scale", scale}};
+                            if (scale != 1.0) p.name += ", scale " + std::to_string(scale).substr(0, 4);
                             if (q) p.controls.emplace_back("jpeg_quality", q);
                             apply(p);
                             std::vector<double> times;
@@ -334,7 +343,7 @@ void addRun(CLI::App& app, Run& run) {
                             if (gStop) return 0;
                             std::sort(times.begin(), times.end());
                             p.frameSeconds = std::max(1e-6, times.front());
-                            p.error = img.width == lossless.width ? std::max(0.0, 1.0 - ssimLuminance(img, lossless)) : 1.0;
+                            p.error = std::max(0.0, 1.0 - ssimLuminance(resizeBilinear(img, lossless.width, lossless.height), lossless));
                             std::printf("  %-20s %7.1f ms  1-SSIM %.5f\n", p.name.c_str(), p.frameSeconds * 1e3, p.error);
                             points.push_back(p);
                         }
@@ -376,7 +385,8 @@ void addRun(CLI::App& app, Run& run) {
                 if (c.writeEvery > 0 && f % c.writeEvery == 0) {
                     char name[64];
                     std::snprintf(name, sizeof name, "frame_%06u.png", report.frame);
-                    writePng(img, std::filesystem::path(c.out) / name);
+                    // A frame rendered at a lower resolution (operating point) is shown upscaled.
+                    writePng(resizeBilinear(img, baseSettings.width, baseSettings.height), std::filesystem::path(c.out) / name);
                     std::printf("wrote %s\n", (std::filesystem::path(c.out) / name).c_str());
                 }
                 if (f % 10 == 0 || f == c.frames) {

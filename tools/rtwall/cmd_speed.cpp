@@ -299,6 +299,53 @@ void addBenchTiles(CLI::App& bench, Run& run) {
     });
 }
 
+void addBenchCodecs(CLI::App& bench, Run& run) {
+    struct Options {
+        std::string image, codecs = "lz4,zstd,jpeg:50,jpeg:75,jpeg:90,jpeg:95", diffDir;
+        int tile = 64;
+        bool json = false;
+    };
+    auto o = std::make_shared<Options>();
+    CLI::App* cmd = bench.add_subcommand("codecs", "Size and error of any image (PNG) through each tile codec");
+    cmd->add_option("image", o->image, "The image (PNG)")->required();
+    cmd->add_option("--codecs", o->codecs, "Comma-separated codecs: raw, lz4, zstd[:LEVEL], jpeg[:QUALITY]");
+    cmd->add_option("--tile", o->tile, "Tile size")->check(CLI::Range(4, 1024));
+    cmd->add_option("--diff-dir", o->diffDir, "Write each codec's decoded image and false-colour difference here");
+    cmd->add_flag("--json", o->json, "Print JSON");
+    cmd->callback([&run, o] {
+        run = [o] {
+            const Image img = readPng(o->image);
+            toml::array rows;
+            for (const std::string& c : splitList(o->codecs)) {
+                const CodecSettings cs = parseCodec(c);
+                uint64_t bytes = 0;
+                const Image out = codecRoundTrip(img, o->tile, cs, &bytes);
+                const ImageError e = compareImages(out, img);
+                if (!o->diffDir.empty()) {
+                    std::string stem = codecLabel(cs);
+                    for (char& ch : stem) if (ch == ':') ch = '_';
+                    writePng(out, std::filesystem::path(o->diffDir) / (stem + ".png"));
+                    writePng(differenceImage(out, img, 32), std::filesystem::path(o->diffDir) / (stem + "_diff.png"));
+                }
+                toml::table row{{"codec", codecLabel(cs)}, {"bytes", int64_t(bytes)},
+                                {"bits_per_pixel", 8.0 * double(bytes) / (double(img.width) * img.height)},
+                                {"error", errorTable(e)}};
+                if (!o->json)
+                    std::printf("%-8s %9llu bytes (%.2f bit/pixel), PSNR %6.2f dB, SSIM %.4f, largest error %d\n",
+                                codecLabel(cs).c_str(), (unsigned long long)bytes,
+                                8.0 * double(bytes) / (double(img.width) * img.height), e.psnrDb, e.ssim, e.maxError);
+                rows.push_back(std::move(row));
+            }
+            if (o->json) {
+                toml::table out{{"benchmark", "codecs"}, {"image", o->image}, {"width", img.width},
+                                {"height", img.height}, {"tile", o->tile}, {"codecs", rows}};
+                std::cout << toml::json_formatter{out} << "\n";
+            }
+            return 0;
+        };
+    });
+}
+
 void addSimulate(CLI::App& app, Run& run) {
     struct Options {
         std::string profile, codec, clients = "1,2,4,8,16,32,64,128,256", clientLink = "100mbit", masterLink = "1gbit";

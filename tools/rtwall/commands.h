@@ -23,5 +23,6 @@ void addCompare(CLI::App& app, Run& run);
 void addReference(CLI::App& app, Run& run);
 void addSimulate(CLI::App& app, Run& run);
 void addBenchTiles(CLI::App& bench, Run& run);
+void addBenchCodecs(CLI::App& bench, Run& run);
 
 }  // namespace rtwall::cli

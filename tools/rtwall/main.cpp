@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
     rtwall::cli::addBenchCluster(*bench, run);
     rtwall::cli::addBenchFaults(*bench, run);
     rtwall::cli::addBenchTiles(*bench, run);
+    rtwall::cli::addBenchCodecs(*bench, run);
 
     try {
         app.parse(argc, argv);
