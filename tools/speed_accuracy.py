@@ -77,7 +77,7 @@ SCALING_LINKS = {
     "modern (10 Gbit/s clients and master)": ("10gbit", "10gbit"),
 }
 SCALING_CLIENTS = [1, 2, 4, 8, 16, 32, 64, 128, 256]
-SCALING_POINT = dict(tile=32, scale=1.0, supersample=1)
+SCALING_POINT = dict(tile=64, scale=1.0, supersample=1)
 SCALING_CODECS = ["raw", "lz4", "jpeg:90"]
 
 
@@ -233,18 +233,6 @@ def scaling(r, scene, ref):
     return out
 
 
-def limit(row, slowest_tile_s):
-    if row["master_link_load"] >= 0.9:
-        return "master link"
-    if row["max_client_link_load"] >= 0.9:
-        return "client links"
-    if row["master_cpu_load"] >= 0.9:
-        return "master CPU"
-    if row["fps"] >= 0.7 / slowest_tile_s:
-        return "slowest tile"
-    return "rendering"
-
-
 def saturation(rows, threshold=0.9):
     for row in rows:
         if row["master_link_load"] >= threshold:
@@ -311,22 +299,57 @@ def failure_prefetch(r, scene):
 
 # ---- 5. validation ---------------------------------------------------------------------------
 
+VALIDATION_REPEATS = 3
 VALIDATION_SCENE = ["builtin:knots", "--triangles", "200000", "--shading", "eyelight", "--width", "1600",
                     "--height", "1200"]
+
+
+def merge_profiles_min(parts, out):
+    """Per tile the fastest render, encode and decode time of several recordings of one profile."""
+    import tomllib
+    ps = [tomllib.loads(p.read_text()) for p in parts]
+    base = ps[0]
+    arr = lambda v: "[ " + ", ".join(repr(x) for x in v) + " ]"
+    lines = [f'scene = "{base["scene"]}"', f"width = {base['width']}", f"height = {base['height']}",
+             f"tile = {base['tile']}", ""]
+    for f in range(len(base["frame"])):
+        lines += ["[[frame]]", "render_s = " + arr([min(x) for x in zip(*[p["frame"][f]["render_s"] for p in ps])]), ""]
+    for c in range(len(base["codec"])):
+        cc = base["codec"][c]
+        lines += ["[[codec]]", f'codec = "{cc["codec"]}"', f"jpeg_quality = {cc['jpeg_quality']}",
+                  f"jpeg_subsample = {str(cc['jpeg_subsample']).lower()}", f"zstd_level = {cc['zstd_level']}",
+                  "bytes = " + arr(cc["bytes"])]
+        for key in ("encode_s", "decode_s"):
+            lines.append(f"{key} = " + arr([min(x) for x in zip(*[p["codec"][c][key] for p in ps])]))
+        lines.append("")
+    out.write_text("\n".join(lines))
 
 
 def validate(r):
     """bench cluster's own configuration, measured for real and simulated from a tile profile."""
     rows = []
     for tile in (64,):
+        # The profile is recorded as often as the cluster runs, keeping each tile's fastest time,
+        # for the same reason as the fastest run below.
         profile = r.raw / f"profile-validation-tile{tile}.toml"
-        r.run("bench", "tiles", *VALIDATION_SCENE, "--tile", tile, "--codecs", "raw,lz4,zstd,jpeg:90",
-              "--profile-out", profile, "--json")
+        parts = []
+        for i in range(VALIDATION_REPEATS):
+            part = r.raw / f"profile-validation-tile{tile}-{i}.toml"
+            r.run("bench", "tiles", *VALIDATION_SCENE, "--tile", tile, "--codecs", "raw,lz4,zstd,jpeg:90",
+                  "--profile-out", part, "--json")
+            parts.append(part)
+        merge_profiles_min(parts, profile)
         for mode in ("replay", "render"):
             args = ["bench", "cluster", "--tile", tile, "--frames", 8, "--max-clients", 2, "--json"]
             if mode == "render":
                 args.append("--render")
-            measured = r.run(*args)
+            # The PC is shared: each run is repeated and every row keeps its fastest run, the one least
+            # disturbed by other jobs (the simulation models an otherwise idle cluster).
+            runs = [r.run(*args) for _ in range(VALIDATION_REPEATS)]
+            measured = runs[0]
+            for i, row in enumerate(measured["results"]):
+                row["fps_runs"] = [run["results"][i]["fps"] for run in runs]
+                row["fps"] = max(row["fps_runs"])
             (r.raw / f"validation-{mode}-tile{tile}.json").write_text(json.dumps(measured, indent=1))
             def sim_row(m, latency_ms, master_us):
                 codec = m["codec"] if m["codec"] != "jpeg" else "jpeg:90"
@@ -351,7 +374,7 @@ def validate(r):
                 sim = sim_row(m, r.latency_ms, r.master_us)
                 rows.append({"mode": mode, "tile": tile, "vary": m["vary"], "clients": m["clients"],
                              "prefetch": m["prefetch"], "codec": m["codec"], "affinity": m["affinity"],
-                             "measured_fps": m["fps"], "simulated_fps": sim["fps"],
+                             "measured_fps": m["fps"], "measured_fps_runs": m["fps_runs"], "simulated_fps": sim["fps"],
                              "latency_ms": r.latency_ms, "master_us": r.master_us,
                              "fitted": mode == "replay"})
     return rows
@@ -451,6 +474,33 @@ def psnr(v):
     return "inf (lossless)" if v >= 900 else f"{v:.1f}"
 
 
+def affinity_summary(affinity):
+    cost = []
+    for d in sorted({a["degrees_per_frame"] for a in affinity}):
+        on = next(a for a in affinity if a["degrees_per_frame"] == d and a["affinity"])
+        off = next(a for a in affinity if a["degrees_per_frame"] == d and not a["affinity"])
+        cost.append((d, on["fps"] / off["fps"] - 1))
+    worst = min(cost, key=lambda c: c[1])
+    return (f"Measured here: affinity changes frames/s by {', '.join(f'{100 * c:+.0f}% at {d} deg' for d, c in cost)} "
+            f"(worst {100 * worst[1]:+.0f}% at {worst[0]} deg/frame). Work stealing absorbs the mismatch, so the "
+            "frame rate barely moves; what breaks is the premise: when the image moves by more than a tile per "
+            "frame, the tile a client gets back shows other geometry than last frame, so any per-client cache "
+            "warmth is gone while the stealing traffic stays.")
+
+
+def prefetch_summary(prefetch):
+    calm = {p["prefetch"]: p["fps"] for p in prefetch if p["spike_probability"] == 0}
+    worst = [p for p in prefetch if p["spike_probability"] == max(q["spike_probability"] for q in prefetch)
+             and p["spike_ms"] == max(q["spike_ms"] for q in prefetch)]
+    parts = ", ".join(f"{100 * p['fps'] / calm[p['prefetch']]:.0f}% at prefetch {p['prefetch']}" for p in worst)
+    most = max(prefetch, key=lambda p: p["reissued_per_frame"])
+    return (f"With the worst spikes ({worst[0]['spike_probability']:g} of messages, {worst[0]['spike_ms']} ms) "
+            f"frames/s falls to {parts} of the spike-free rate. Deeper prefetch still loses the least here: more "
+            "tiles wait behind a spike, but the other clients' queues keep them busy meanwhile. Where it breaks "
+            f"is duplicate work: stragglers are re-issued, up to {most['reissued_per_frame']:.0f} tiles per frame "
+            f"(prefetch {most['prefetch']}, {most['spike_ms']} ms spikes), rendered twice and sent twice.")
+
+
 def write_docs(path, figs, points_by_scene, scaling_by_scene, text_rows, affinity, prefetch, validation, elapsed, args):
     rel = lambda p: os.path.relpath(p, path.parent)
     md = ["# Speed against accuracy", "",
@@ -494,6 +544,19 @@ def write_docs(path, figs, points_by_scene, scaling_by_scene, text_rows, affinit
                               "clients at which the 1 Gbit/s master link saturates (paper-era links, raw RGB8)"],
                              headline),
                    ""] + md[6:]
+    md += ["## Automatic operating point", "",
+           "`rtwall run CONFIG --target-fps N --front docs/speed-accuracy/front-SCENE.toml` starts at the most "
+           "accurate front point whose frame time fits 1/N, then feeds every measured frame time to an "
+           "`OperatingPointController` (rtwall/tune.h). It predicts each point's time as its front time times a "
+           "running ratio of measured to front time (a heavier view, fewer clients or a throttled link raise the "
+           "ratio for every point), steps to a faster point after 2 frames more than 5% over budget, to a more "
+           "accurate one only after 10 frames in which it would fit with 10% headroom, and rests 5 frames after "
+           "every change, so noise below (1 + 5%) / (1 - 10%) cannot make it flip. Without `--front` it calibrates "
+           "codec x tile size (and two lower resolutions) on the first view. It sets codec and JPEG quality "
+           "(`Master::setCodec`, from the next frame), tile size, resolution (frames written upscaled) and samples "
+           "per pixel; a front naming any other control is refused with its name. The fronts above come from the "
+           "simulated 8-client cluster, so on this 2-core PC the ratio settles far above 1 and the controller "
+           "walks down the front to what two local clients can hold.", ""]
     md += ["## Scaling beyond this machine", "",
            f"![scaling]({rel(figs['scaling'])})", "",
            f"Simulated with the scene's tile profile at tile {SCALING_POINT['tile']}, "
@@ -509,13 +572,16 @@ def write_docs(path, figs, points_by_scene, scaling_by_scene, text_rows, affinit
                 continue
             for codec, res in by_codec.items():
                 n = saturation(res)
+                last = res[-1]
                 rows.append([label, codec, f"{res[0]['bytes_per_frame'] / 1e6:.2f}",
                              " / ".join(f"{row['fps']:.1f}" for row in res), str(n) if n else "> 256",
-                             limit(res[-1], slowest)])
+                             f"{100 * last['master_link_load']:.0f}% / {100 * last['master_cpu_load']:.0f}% / "
+                             f"{100 * last['mean_client_utilisation']:.0f}%"])
         md += [f"**{scene}**, frames/s at {', '.join(map(str, SCALING_CLIENTS))} clients (slowest tile "
                f"{slowest * 1e3:.0f} ms on one thread, so no frame can be faster than {1 / slowest:.0f} frames/s "
                "however many clients):", "",
-               fmt_table(["links", "codec", "MB/frame", "frames/s", "link saturated at", "limit at 256"], rows), ""]
+               fmt_table(["links", "codec", "MB/frame", "frames/s", "link saturated at",
+                          "at 256 clients: master link / master CPU / clients busy"], rows), ""]
     if validation:
         agree = [abs(v["simulated_fps"] / v["measured_fps"] - 1) for v in validation if not v["fitted"]]
         fit = [abs(v["simulated_fps"] / v["measured_fps"] - 1) for v in validation if v["fitted"]]
@@ -526,8 +592,9 @@ def write_docs(path, figs, points_by_scene, scaling_by_scene, text_rows, affinit
         md += ["## Validation: simulated against measured", "",
                f"![validation]({rel(figs['validation'])})", "",
                "`rtwall bench cluster --tile 64 --frames 8 --max-clients 2` (1600x1200, 200,000-triangle knots, "
-               "eye-light shading, 1 thread per client, loopback) against `rtwall simulate` on a tile profile of the "
-               "same frame. Replay: clients resend pre-encoded tiles (the master and the link are measured); "
+               "eye-light shading, 1 thread per client, loopback), run "
+               f"{VALIDATION_REPEATS} times, each row's fastest run (the least disturbed by other jobs), against "
+               "`rtwall simulate` on a tile profile of the same frame. Replay: clients resend pre-encoded tiles (the master and the link are measured); "
                "render: clients render every tile. Two parameters, the loopback latency and the master's cost per "
                f"message, are fitted on the replay rows ({r_fit}) and then predict the render rows, which depend on "
                "the recorded per-tile render times.", "",
@@ -535,10 +602,11 @@ def write_docs(path, figs, points_by_scene, scaling_by_scene, text_rows, affinit
                f"{100 * sorted(agree)[len(agree) // 2]:.0f}%, largest {100 * max(agree):.0f}%.** The machine runs the "
                "master, the clients and other engineers' jobs on 2 cores, so a measured row can be slower than any "
                "model of an unloaded cluster.", "",
-               fmt_table(["mode", "varied", "clients", "prefetch", "codec", "affinity", "measured fps", "simulated fps",
-                          "deviation"],
+               fmt_table(["mode", "varied", "clients", "prefetch", "codec", "affinity", "measured fps (runs)",
+                          "simulated fps", "deviation"],
                          [[v["mode"] + (" (fitted)" if v["fitted"] else ""), v["vary"], v["clients"], v["prefetch"],
-                           v["codec"], "on" if v["affinity"] else "off", f"{v['measured_fps']:.1f}",
+                           v["codec"], "on" if v["affinity"] else "off",
+                           f"{v['measured_fps']:.1f} (" + ", ".join(f"{x:.1f}" for x in v["measured_fps_runs"]) + ")",
                            f"{v['simulated_fps']:.1f}", f"{100 * (v['simulated_fps'] / v['measured_fps'] - 1):+.0f}%"]
                           for v in validation]), ""]
     md += ["## Where methods break down", ""]
@@ -559,7 +627,8 @@ def write_docs(path, figs, points_by_scene, scaling_by_scene, text_rows, affinit
            "move across the screen, the queues no longer match the work, and clients steal from each other at the "
            "end of the frame. Simulated: 8 clients x 1 thread, the knot scene at 800x600 with 32-pixel tiles, "
            "per-tile render times recorded along the orbit, links unlimited. The simulation does not model what "
-           "affinity is for (warm caches of a client's part of the scene), so it shows only its cost.", "",
+           "affinity is for (warm caches of a client's part of the scene), so it shows only its cost. " +
+           affinity_summary(affinity), "",
            fmt_table(["degrees per frame", "affinity", "frames/s", "stolen tiles per frame", "tiles kept their client",
                       "client utilisation"],
                      [[a["degrees_per_frame"], "on" if a["affinity"] else "off", f"{a['fps']:.2f}",
@@ -569,7 +638,8 @@ def write_docs(path, figs, points_by_scene, scaling_by_scene, text_rows, affinit
            "Prefetch hides the round trip by keeping several tiles in flight per client. A latency spike on one "
            "link delays every message behind it (TCP keeps order), so the deeper the prefetch, the more tiles wait "
            "behind one spike; tiles are re-issued to other clients only after they count as stragglers (4 median "
-           "latencies). Simulated: knot scene, 8 clients x 2 threads, 1 Gbit/s links, 0.1 ms base latency.", "",
+           "latencies). Simulated: knot scene, 8 clients x 2 threads, 1 Gbit/s links, 0.1 ms base latency. " +
+           prefetch_summary(prefetch), "",
            fmt_table(["spike probability per message", "spike ms", "prefetch", "frames/s", "re-issued tiles per frame"],
                      [[p["spike_probability"], p["spike_ms"], p["prefetch"], f"{p['fps']:.1f}",
                        f"{p['reissued_per_frame']:.1f}"] for p in prefetch]), ""]
@@ -585,7 +655,9 @@ def main():
     ap.add_argument("--docs", default=str(ROOT / "docs"))
     ap.add_argument("--quick", action="store_true", help="one setting per control (a smoke test of the pipeline)")
     ap.add_argument("--skip-validation", action="store_true", help="no real cluster runs")
-    ap.add_argument("--reuse", action="store_true", help="reuse raw results of an earlier run in --work (charts and docs only)")
+    ap.add_argument("--reuse", action="store_true",
+                    help="reuse the sweep, scaling and failure results of an earlier run in --work; validation runs "
+                         "again unless --skip-validation (then its earlier results are reused too)")
     args = ap.parse_args()
     t0 = time.time()
     r = Runner(args.build, args.work, args.quick)
@@ -600,8 +672,12 @@ def main():
             scaling_by_scene[scene.name] = json.loads((r.raw / f"scaling-{scene.name}.json").read_text())
         f = json.loads((r.raw / "failures.json").read_text())
         text_rows, affinity, prefetch = f["jpeg_text"], f["affinity"], f["prefetch"]
-        validation = json.loads((r.raw / "validation.json").read_text())
         diff_dir = r.raw / "text-codecs"
+        if args.skip_validation:
+            validation = json.loads((r.raw / "validation.json").read_text())
+        else:
+            validation = validate(r)
+            (r.raw / "validation.json").write_text(json.dumps(validation, indent=1))
     for scene in SCENES if not args.reuse else []:
         ref = reference(r, scene)
         points = sweep(r, scene, ref)

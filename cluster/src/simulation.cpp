@@ -154,16 +154,18 @@ private:
         events_.push(std::move(e));
     }
 
-    double latency(const SimLink& link) {
-        double l = link.latencySeconds;
+    // A latency spike: the message (and, since order is kept, every later one on the same link
+    // and direction) arrives spikeSeconds late. It delays delivery, not the shared master link's
+    // other traffic.
+    double spike(const SimLink& link) {
         if (link.spikeProbability > 0 && std::uniform_real_distribution<double>(0.0, 1.0)(rng_) < link.spikeProbability)
-            l += link.spikeSeconds;
-        return l;
+            return link.spikeSeconds;
+        return 0.0;
     }
 
     // Master -> client: latency only, in order.
     double down(SimClient& c) {
-        c.lastDown = std::max(now_ + latency(config_.clientLink), c.lastDown);
+        c.lastDown = std::max(now_ + config_.clientLink.latencySeconds + spike(config_.clientLink), c.lastDown);
         return c.lastDown;
     }
 
@@ -175,7 +177,7 @@ private:
         const double txEnd = txStart + txTime;
         c.linkFree = txEnd;
         if (measuring_) c.linkBusy += txTime;
-        const double lat = latency(config_.clientLink);
+        const double lat = config_.clientLink.latencySeconds;
         double arrive = txEnd + lat;
         if (config_.masterBitsPerSecond > 0) {
             const double mTime = bits / config_.masterBitsPerSecond;
@@ -183,7 +185,7 @@ private:
             arrive = std::max(mStart + mTime, arrive);
             masterLinkFree_ = arrive;
         }
-        c.lastUp = std::max(arrive, c.lastUp);
+        c.lastUp = std::max(arrive + spike(config_.clientLink), c.lastUp);
         return c.lastUp;
     }
 
