@@ -32,6 +32,7 @@ PACKAGES=(
   nftables             # nft: packet loss in the fault tests' own namespaces (no sch_netem here)
   iptables libnetfilter-queue-dev  # NFQUEUE: netjitter's delay, jitter and reordering in those namespaces
   python3
+  python3-matplotlib   # charts of tools/speed_accuracy.py (speed against accuracy)
 )
 
 say() { printf '[bootstrap] %s\n' "$*"; }

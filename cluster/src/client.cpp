@@ -187,7 +187,16 @@ private:
                 session_ = h.session;
                 id_ = w.clientId;
                 backoffMs_ = 100;
-                codec_ = w.codec;
+                {
+                    // A Welcome within the session changes the codec (Master::setCodec): render
+                    // threads read it under workMutex_, and replayed bytes of the old one go.
+                    std::lock_guard lock(workMutex_);
+                    if (!(w.codec == codec_)) {
+                        std::lock_guard replayLock(replayMutex_);
+                        replay_.clear();
+                    }
+                    codec_ = w.codec;
+                }
                 prefetch_ = std::max(1u, w.prefetch);
                 heartbeatMs_ = int(std::max(10u, w.heartbeatMs));
                 timeoutMs_ = int(std::max(std::max(50u, w.timeoutMs), 2 * uint32_t(heartbeatMs_)));
@@ -412,11 +421,11 @@ private:
             std::lock_guard lock(replayMutex_);
             auto it = replay_.find(w.tile);
             if (it == replay_.end()) return false;
-            result.pixels = it->second;  // renderMicros stays 0: a replay costs no rendering
+            result.codec = it->second.first;
+            result.pixels = it->second.second;  // renderMicros stays 0: a replay costs no rendering
         }
         result.frame = w.frame;
         result.tile = w.tile;
-        result.codec = codec_.codec;
         const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame), result);
         sendResult(out, bytes);
         return true;
@@ -441,6 +450,7 @@ private:
         out.set(zmq::sockopt::linger, 0);
         out.connect(kResultsAddress);
         std::vector<uint8_t> pixels;
+        CodecSettings codec;  // this tile's, copied with it under workMutex_
         for (;;) {
             Work w;
             {
@@ -449,6 +459,7 @@ private:
                 if (stopping_) return;
                 w = work_.front();
                 work_.pop_front();
+                codec = codec_;
             }
             try {
                 std::shared_lock lock(sceneMutex_);
@@ -465,12 +476,12 @@ private:
                 TileResult result;
                 result.frame = w.frame;
                 result.tile = w.tile;
-                result.codec = codec_.codec;
+                result.codec = codec.codec;
                 result.renderMicros = uint32_t(std::min(seconds * 1e6, 4e9));
-                encodeTile(codec_, pixels.data(), r.width(), r.height(), size_t(r.width()) * 3, result.pixels);
+                encodeTile(codec, pixels.data(), r.width(), r.height(), size_t(r.width()) * 3, result.pixels);
                 if (settings_.replay) {
                     std::lock_guard replayLock(replayMutex_);
-                    replay_[w.tile] = result.pixels;
+                    replay_[w.tile] = {codec.codec, result.pixels};
                 }
                 const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame), result);
                 sendResult(out, bytes);
@@ -494,7 +505,7 @@ private:
 
     std::atomic<uint64_t> session_{0};  // read by render threads when they write results
     uint32_t id_ = 0;
-    CodecSettings codec_;
+    CodecSettings codec_;  // guarded by workMutex_ (Master::setCodec changes it mid-session)
     uint32_t prefetch_ = 4;
     int heartbeatMs_ = 250;
     int timeoutMs_ = 3000;
@@ -524,7 +535,7 @@ private:
     std::atomic<uint32_t> frame_{0};
 
     std::mutex replayMutex_;
-    std::map<uint32_t, std::vector<uint8_t>> replay_;  // tile -> encoded bytes
+    std::map<uint32_t, std::pair<TileCodec, std::vector<uint8_t>>> replay_;  // tile -> codec, encoded bytes
 
     std::mutex workMutex_;
     std::condition_variable workCv_;

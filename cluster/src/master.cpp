@@ -122,11 +122,12 @@ private:
 constexpr uint32_t kMaxCredits = 64;
 
 struct Command {
-    enum Kind { kUpdate, kBeginFrame, kStop } kind;
+    enum Kind { kUpdate, kBeginFrame, kStop, kCodec } kind;
     Update update;              // kUpdate; for kBeginFrame only its seq: the state the frame renders
     uint32_t frame = 0;
     RenderSettings settings;    // kBeginFrame: image and tile size at that state
     std::shared_ptr<const SceneSnapshot> state;  // kBeginFrame: the whole state the frame renders
+    CodecSettings codec;        // kCodec
 };
 
 }  // namespace
@@ -581,6 +582,13 @@ struct Master::Impl {
             // Never merge across a frame: a frame's state must be a point in the sequence.
             flushUpdates();
             if (cmd.kind == Command::kBeginFrame) beginFrame(cmd.frame, cmd.update.seq, cmd.settings, std::move(cmd.state));
+            if (cmd.kind == Command::kCodec) {
+                settings.codec = cmd.codec;  // for clients that join later
+                for (auto& [peer, c] : clients) {
+                    const Welcome w{c.id, settings.codec, uint32_t(settings.prefetch), uint32_t(settings.heartbeatMs)};
+                    if (!c.deathReason && !send(c, w)) markDead(c, "its queue is full or it is unreachable");
+                }
+            }
         }
         if (nowSeconds() - lastUpdateSent > kUpdateIntervalSeconds) flushUpdates();
     }
@@ -714,7 +722,7 @@ Master::~Master() {
     Impl& s = *impl_;
     {
         std::lock_guard lock(s.m);
-        s.commands.push_back({Command::kStop, {}, 0, {}, nullptr});
+        s.commands.push_back({Command::kStop, {}, 0, {}, nullptr, {}});
     }
     s.wake();
     if (s.net.joinable()) s.net.join();
@@ -739,7 +747,7 @@ bool Master::waitForClients(int count, int timeoutMs) {
 namespace {
 
 void pushUpdate(Master::Impl& s, Change change) {
-    Command cmd{Command::kUpdate, {}, 0, {}, nullptr};
+    Command cmd{Command::kUpdate, {}, 0, {}, nullptr, {}};
     {
         std::lock_guard lock(s.stateMutex);
         applyChange(s.scene, s.camera, change);  // throws for an index out of range, before anything changed
@@ -765,11 +773,20 @@ void Master::setMaterial(uint32_t material, const Material& value) { pushUpdate(
 void Master::setLight(uint32_t light, const Light& value) { pushUpdate(*impl_, LightChange{light, value}); }
 void Master::setRenderSettings(const RenderSettings& settings) { pushUpdate(*impl_, SettingsChange{settings}); }
 
+void Master::setCodec(const CodecSettings& codec) {
+    Command cmd{Command::kCodec, {}, 0, {}, nullptr, codec};
+    {
+        std::lock_guard lock(impl_->m);
+        impl_->commands.push_back(std::move(cmd));
+    }
+    impl_->wake();
+}
+
 Image Master::renderFrame(FrameReport* report) {
     Impl& s = *impl_;
     auto begin = [&] {
         const uint32_t frame = ++s.lastBegun;
-        Command cmd{Command::kBeginFrame, {}, frame, {}, nullptr};
+        Command cmd{Command::kBeginFrame, {}, frame, {}, nullptr, {}};
         {
             // The frame renders the state as it is now; later updates belong to later frames.
             std::lock_guard lock(s.stateMutex);

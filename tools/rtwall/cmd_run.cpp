@@ -8,6 +8,7 @@
 #include <rtwall/cluster.h>
 #include <rtwall/engine.h>
 #include <rtwall/toml_reader.h>
+#include <rtwall/tune.h>
 
 #include <algorithm>
 #include <atomic>
@@ -18,6 +19,7 @@
 #include <memory>
 #include <numbers>
 #include <optional>
+#include <tuple>
 
 namespace rtwall::cli {
 
@@ -160,6 +162,68 @@ RunConfig readRunConfig(const std::filesystem::path& file, const toml::table& ro
 
 std::atomic<bool> gStop{false};
 
+// ---- Operating point (--target-fps) ----------------------------------------------------------
+// The controls `rtwall run` can change between frames, by the names a front uses. Adding one
+// (pruning threshold, GI samples per pixel, volume step) is one entry here plus its column in
+// the sweep (tools/speed_accuracy.py).
+struct Knobs {
+    RenderSettings settings;  // tile size, resolution, ...
+    CodecSettings codec;
+};
+
+void applyControl(Knobs& k, const RenderSettings& base, const std::string& name, double v, const std::string& point) {
+    if (name == "tile") k.settings.tileSize = int(v);
+    else if (name == "codec") k.codec.codec = TileCodec(int(v));  // 0 raw, 1 lz4, 2 zstd, 3 jpeg (TileCodec)
+    else if (name == "jpeg_quality") k.codec.jpegQuality = int(v);
+    else if (name == "scale") {
+        k.settings.width = std::max(16, int(std::lround(base.width * v)));
+        k.settings.height = std::max(16, int(std::lround(base.height * v)));
+    } else if (name == "supersample") k.settings.supersample = int(v);
+    else
+        throw InputError("operating point '" + point + "': this build cannot set control '" + name +
+                         "' (it can: tile, codec, jpeg_quality, scale, supersample)");
+}
+
+Knobs knobsOf(const OperatingPoint& p, const RenderSettings& base, const CodecSettings& baseCodec) {
+    Knobs k{base, baseCodec};
+    for (const auto& [name, v] : p.controls) applyControl(k, base, name, v, p.name);
+    return k;
+}
+
+// A front written by tools/speed_accuracy.py: [[point]] name, frame_s, error, [point.controls].
+std::vector<OperatingPoint> readFront(const std::filesystem::path& file) {
+    using namespace toml_reader;
+    const toml::table root = parseFile(file);
+    Reader top(file, root, "");
+    std::vector<OperatingPoint> points;
+    top.string("scene", "");
+    top.number("target_fps_hint", 0, 0, 1e6);
+    forEachTable(top, file, "point", [&](Reader& r, const toml::table& t) {
+        OperatingPoint p;
+        p.name = r.string("name", "", true);
+        p.frameSeconds = r.number("frame_s", 0, 1e-9, 1e6);
+        p.error = r.number("error", 0, 0, 1e9);
+        r.number("psnr_db", 0, -1e9, 1e9);
+        if (const toml::table* c = t["controls"].as_table()) {
+            for (const auto& [key, value] : *c) {
+                const std::optional<double> v = value.value<double>();
+                if (!v) r.fail(&value, "point '" + p.name + "': control '" + std::string(key.str()) + "' must be a number");
+                p.controls.emplace_back(std::string(key.str()), *v);
+            }
+            r.find("controls");
+        }
+        points.push_back(p);
+    });
+    top.finish();
+    return points;
+}
+
+std::string codecPointName(const CodecSettings& c, int tile) {
+    std::string n = tileCodecName(c.codec);
+    if (c.codec == TileCodec::Jpeg) n += " q" + std::to_string(c.jpegQuality);
+    return n + ", tile " + std::to_string(tile);
+}
+
 CameraDesc orbited(const CameraDesc& c, double degrees) {
     const double a = degrees * std::numbers::pi / 180.0, ca = std::cos(a), sa = std::sin(a);
     const double x = c.position.x - c.lookAt.x, z = c.position.z - c.lookAt.z;
@@ -175,8 +239,9 @@ void addRun(CLI::App& app, Run& run) {
     struct Options {
         std::string config;
         int frames = -1, clients = -1, writeEvery = -1;
-        std::string out, bind, cameraPath, wall;
+        std::string out, bind, cameraPath, wall, front;
         bool insecure = false, headless = false;
+        double targetFps = 0;
     };
     auto o = std::make_shared<Options>();
     CLI::App* cmd = app.add_subcommand("run", "Run the display master with local render clients (default: a built-in demo)");
@@ -190,6 +255,12 @@ void addRun(CLI::App& app, Run& run) {
     cmd->add_flag("--headless", o->headless, "Never open windows, even where a display is available");
     cmd->add_flag("--insecure", o->insecure, "Allow a non-loopback bind without CURVE keys (says so loudly)");
     cmd->add_option("--bind", o->bind, "Endpoint for clients, e.g. tcp://0.0.0.0:7700 (default: loopback, any port)");
+    cmd->add_option("--target-fps", o->targetFps,
+                    "Hold this frame rate: pick the most accurate settings on the front that do (codec, JPEG quality, tile size)")
+        ->check(CLI::Range(0.1, 10000.0));
+    cmd->add_option("--front", o->front,
+                    "Measured front for --target-fps (.toml from tools/speed_accuracy.py); default: calibrate codecs and tile "
+                    "sizes on the first frames");
     cmd->callback([&run, o] {
         run = [o] {
             RunConfig c = o->config.empty() ? readRunConfig({}, toml::parse(kEmbeddedDefault))
@@ -232,6 +303,11 @@ void addRun(CLI::App& app, Run& run) {
             const CameraDesc start = desc.cameras.front();
             const std::vector<CameraKey> path = c.cameraPath.empty() ? std::vector<CameraKey>{} : readCameraPath(c.cameraPath);
 
+            // A given front is checked before anything starts: a mistake in it is one line, at once.
+            const std::vector<OperatingPoint> givenFront = o->front.empty() ? std::vector<OperatingPoint>{} : readFront(o->front);
+            if (!o->front.empty() && o->targetFps <= 0) throw InputError("--front needs --target-fps");
+            for (const OperatingPoint& p : givenFront) knobsOf(p, desc.settings, c.cluster.codec);  // unknown controls fail now
+
             Master master(desc, c.cluster);
             std::printf("rtwall master at %s, %dx%d, %d local clients, codec %s%s\n", master.endpoint().c_str(),
                         desc.settings.width, desc.settings.height, c.cluster.localClients,
@@ -256,6 +332,63 @@ void addRun(CLI::App& app, Run& run) {
             WallView view(wall, desc, start, vo);
             // In a window the wall runs until it is closed, unless a frame count was asked for.
             if (view.windowed() && o->frames < 0) c.frames = 0;
+            // Operating point: a front (given, or measured now on a still camera), a controller.
+            std::unique_ptr<OperatingPointController> controller;
+            const RenderSettings baseSettings = desc.settings;
+            const CodecSettings baseCodec = c.cluster.codec;
+            auto apply = [&](const OperatingPoint& p) {
+                const Knobs k = knobsOf(p, baseSettings, baseCodec);
+                master.setRenderSettings(k.settings);
+                master.setCodec(k.codec);
+            };
+            if (o->targetFps > 0) {
+                std::vector<OperatingPoint> points;
+                if (!givenFront.empty()) {
+                    points = givenFront;
+                } else {
+                    // Calibration: each codec and tile size for three frames of the first view;
+                    // error = 1 - SSIM against the lossless frame.
+                    std::printf("calibrating the operating points (codec x tile size, and resolution, 3 frames each)\n");
+                    std::fflush(stdout);
+                    const Image lossless = master.renderFrame();
+                    std::vector<std::tuple<int, int, double>> grid;  // JPEG quality (0: LZ4), tile, scale
+                    for (int q : {0, 95, 90, 75, 50})
+                        for (int tile : {32, 64, 128}) grid.emplace_back(q, tile, 1.0);
+                    for (double scale : {0.75, 0.5}) grid.emplace_back(0, 64, scale);
+                    for (const auto& [q, tile, scale] : grid) {
+                            OperatingPoint p;
+                            CodecSettings cs = baseCodec;
+                            cs.codec = q == 0 ? TileCodec::Lz4 : TileCodec::Jpeg;
+                            if (q) cs.jpegQuality = q;
+                            p.name = codecPointName(cs, tile);
+                            p.controls = {{"tile", tile}, {"codec", double(int(cs.codec))}, {"scale", scale}};
+                            if (scale != 1.0) p.name += ", scale " + std::to_string(scale).substr(0, 4);
+                            if (q) p.controls.emplace_back("jpeg_quality", q);
+                            apply(p);
+                            std::vector<double> times;
+                            Image img;
+                            for (int i = 0; i < 3 && !gStop; ++i) {
+                                FrameReport r;
+                                img = master.renderFrame(&r);
+                                if (i > 0) times.push_back(r.seconds);
+                            }
+                            if (gStop) return 0;
+                            std::sort(times.begin(), times.end());
+                            p.frameSeconds = std::max(1e-6, times.front());
+                            p.error = std::max(0.0, 1.0 - ssimLuminance(resizeBilinear(img, lossless.width, lossless.height), lossless));
+                            std::printf("  %-20s %7.1f ms  1-SSIM %.5f\n", p.name.c_str(), p.frameSeconds * 1e3, p.error);
+                            points.push_back(p);
+                        }
+                }
+                ControllerOptions co;
+                co.targetFps = o->targetFps;
+                controller = std::make_unique<OperatingPointController>(points, co);
+                apply(controller->current());
+                std::printf("target %.1f fps: starting at '%s' (front of %zu points)\n", o->targetFps,
+                            controller->current().name.c_str(), controller->front().size());
+                std::fflush(stdout);
+            }
+            int framesOnTarget = 0;
 
             std::signal(SIGINT, [](int) { gStop = true; });
             std::signal(SIGTERM, [](int) { gStop = true; });
@@ -288,10 +421,20 @@ void addRun(CLI::App& app, Run& run) {
                 last = now;
                 view.show(shown, report, frameTimes.back());
                 bytes += report.bytes;
+                if (controller) {
+                    framesOnTarget += report.seconds <= 1.0 / o->targetFps;
+                    if (controller->observe(report.seconds)) {
+                        apply(controller->current());
+                        std::printf("frame %d: %.1f ms (budget %.1f ms): operating point -> '%s'\n", f, report.seconds * 1e3,
+                                    controller->budgetSeconds() * 1e3, controller->current().name.c_str());
+                        std::fflush(stdout);
+                    }
+                }
                 if (c.writeEvery > 0 && f % c.writeEvery == 0) {
                     char name[64];
                     std::snprintf(name, sizeof name, "frame_%06u.png", report.frame);
-                    writePng(img, std::filesystem::path(c.out) / name);
+                    // A frame rendered at a lower resolution (operating point) is shown upscaled.
+                    writePng(resizeBilinear(img, baseSettings.width, baseSettings.height), std::filesystem::path(c.out) / name);
                     std::printf("wrote %s\n", (std::filesystem::path(c.out) / name).c_str());
                 }
                 if (f % 10 == 0 || f == c.frames) {
@@ -309,6 +452,11 @@ void addRun(CLI::App& app, Run& run) {
                 std::sort(sorted.begin(), sorted.end());
                 std::printf("%zu frames, median %.1f fps, %.2f MB of tiles per frame\n", frameTimes.size(),
                             1.0 / sorted[sorted.size() / 2], double(bytes) * 1e-6 / double(frameTimes.size()));
+                if (controller)
+                    std::printf("target %.1f fps: %d of %zu frames within budget (master frame time), %llu operating-point "
+                                "changes, ending at '%s'\n",
+                                o->targetFps, framesOnTarget, frameTimes.size(), (unsigned long long)controller->changes(),
+                                controller->current().name.c_str());
             }
             return 0;
         };

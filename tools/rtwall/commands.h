@@ -22,5 +22,11 @@ void addCheck(CLI::App& app, Run& run);
 void addBenchDisplay(CLI::App& bench, Run& run);
 void addGen(CLI::App& app, Run& run);
 void addBenchScene(CLI::App& bench, Run& run);
+// Speed against accuracy (cmd_speed.cpp).
+void addCompare(CLI::App& app, Run& run);
+void addReference(CLI::App& app, Run& run);
+void addSimulate(CLI::App& app, Run& run);
+void addBenchTiles(CLI::App& bench, Run& run);
+void addBenchCodecs(CLI::App& bench, Run& run);
 
 }  // namespace rtwall::cli

@@ -16,6 +16,9 @@ int main(int argc, char** argv) {
     rtwall::cli::addRun(app, run);
     rtwall::cli::addKeys(app, run);
     rtwall::cli::addGen(app, run);
+    rtwall::cli::addCompare(app, run);
+    rtwall::cli::addReference(app, run);
+    rtwall::cli::addSimulate(app, run);
     CLI::App* bench = app.add_subcommand("bench", "Benchmarks that print their figures (JSON with --json)");
     bench->require_subcommand(1);
     rtwall::cli::addBenchKernel(*bench, run);
@@ -24,6 +27,8 @@ int main(int argc, char** argv) {
     rtwall::cli::addCheck(app, run);
     rtwall::cli::addBenchDisplay(*bench, run);
     rtwall::cli::addBenchScene(*bench, run);
+    rtwall::cli::addBenchTiles(*bench, run);
+    rtwall::cli::addBenchCodecs(*bench, run);
 
     try {
         app.parse(argc, argv);

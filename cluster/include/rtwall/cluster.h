@@ -28,6 +28,7 @@ struct CodecSettings {
     int jpegQuality = 90;         // 1..100
     bool jpegSubsample = false;   // 4:2:0 chroma subsampling (else 4:4:4)
     int zstdLevel = 1;            // 1..19
+    bool operator==(const CodecSettings&) const = default;
 };
 
 struct ClusterSettings {
@@ -91,6 +92,9 @@ public:
     void setMaterial(uint32_t material, const Material& value);
     void setLight(uint32_t light, const Light& value);
     void setRenderSettings(const RenderSettings& settings);
+    // Changes the tile codec of every client from their next tile on (a Welcome within the
+    // session carries it); results in flight keep their own codec, which each result names.
+    void setCodec(const CodecSettings& codec);
 
     // Renders one frame with the current state and returns it. With async on, the next
     // frame's updates already stream to the clients while this one renders.
@@ -127,5 +131,87 @@ void writeNewKeyPair(const std::filesystem::path& stem);
 // Runs a render client until the master says goodbye (or exitAfterIdleMs passes).
 // Returns the process exit status.
 int runClient(const ClientSettings& settings);
+
+
+// ---- Tile profiles and the cluster simulation (speed against accuracy) -------------------------
+
+// What each tile of a scene costs, measured on this PC: render time per tile (one thread, so a
+// client with T threads renders T tiles at a time at this speed), and for every codec its
+// encoded size and encode/decode times. Recorded by profileTiles, stored as TOML
+// (writeTileProfile), replayed by simulateCluster.
+struct TileProfile {
+    std::string scene;  // for the record
+    int width = 0, height = 0, tileSize = 0;
+    std::vector<std::vector<double>> renderSeconds;  // [frame][tile]: renderTile on one thread
+    struct CodecCost {
+        CodecSettings codec;
+        std::vector<uint32_t> bytes;        // [tile] encoded size (frame 0)
+        std::vector<double> encodeSeconds;  // [tile] on the client, one thread
+        std::vector<double> decodeSeconds;  // [tile] on the master, one thread
+    };
+    std::vector<CodecCost> codecs;
+    size_t tileCount() const { return renderSeconds.empty() ? 0 : renderSeconds.front().size(); }
+};
+
+// Renders one frame per camera, tile by tile on the calling thread, timing every renderTile
+// call; then encodes and decodes frame 0's tiles with every codec. `lossless` receives frame
+// 0's image, `decoded` (when given) frame 0 as the master would assemble it with each codec.
+TileProfile profileTiles(const Scene& scene, const std::vector<CameraDesc>& cameras, const RenderSettings& settings,
+                         const std::vector<CodecSettings>& codecs, Image* lossless = nullptr,
+                         std::vector<Image>* decoded = nullptr);
+
+// An image as it arrives at the master through a codec, tile by tile; `bytes` gets the total size.
+Image codecRoundTrip(const Image& image, int tileSize, const CodecSettings& codec, uint64_t* bytes = nullptr);
+
+void writeTileProfile(const TileProfile& profile, const std::filesystem::path& file);  // throws InputError
+TileProfile readTileProfile(const std::filesystem::path& file);                         // throws InputError
+
+// One direction of a link: rate and one-way latency, with optional latency spikes (a message
+// is delayed by spikeSeconds with probability spikeProbability; order is kept, as with TCP).
+struct SimLink {
+    double bitsPerSecond = 0;  // 0 = unlimited
+    double latencySeconds = 0;
+    double spikeProbability = 0;
+    double spikeSeconds = 0;
+};
+
+struct SimConfig {
+    int clients = 1;
+    int threadsPerClient = 1;
+    double clientSpeed = 1.0;        // render and encode times are divided by this
+    int prefetch = 4;
+    bool affinity = true;
+    double stragglerFactor = 4.0;
+    size_t codec = 0;                // index into TileProfile::codecs
+    SimLink clientLink;              // every client's own link to the switch
+    double masterBitsPerSecond = 0;  // the master's uplink, shared by all results (0 = unlimited)
+    double masterSecondsPerMessage = 0;  // the master's network thread, per message handled
+    int decodeThreads = 2;           // the master's decode pool
+    double decodeSpeed = 1.0;        // decode times are divided by this
+    uint32_t messageOverheadBytes = 0;  // header bytes per result message on the wire
+    double housekeepingSeconds = 0.002;  // the master re-serves waiting clients this often (stragglers)
+    int frames = 10;                 // measured frames
+    int warmupFrames = 1;            // frames run first and not reported (affinity needs one)
+    uint64_t seed = 1;               // latency spikes and the scheduler's steal victims
+};
+
+struct SimReport {
+    std::vector<double> frameSeconds;  // measured frames
+    double fps = 0;                    // frames / their total time
+    double bytesPerFrame = 0;          // result bytes on the master's link
+    double masterLinkLoad = 0;         // busy fraction of the master's link (0 when unlimited)
+    double maxClientLinkLoad = 0;      // busiest client link
+    double masterCpuLoad = 0;          // busy fraction of the master's network thread
+    std::vector<double> clientUtilisation;  // render threads' busy fraction, per client
+    double meanUtilisation = 0;
+    double stolenPerFrame = 0, reissuedPerFrame = 0, duplicatesPerFrame = 0;
+    double affinityHitFraction = 0;    // of the measured frames' tiles
+};
+
+// Event-driven, deterministic simulation of the master's TileScheduler (the same class, same
+// calls as the master: request on a client's credits, complete on each result, housekeeping
+// re-serves) against simulated clients and links fed with a tile profile. Frames follow each
+// other as in `rtwall run`: FrameBegin, TileRequest(prefetch), assignments, results.
+SimReport simulateCluster(const TileProfile& profile, const SimConfig& config);
 
 }  // namespace rtwall

@@ -1,0 +1,344 @@
+// The cluster simulation: the master's TileScheduler, driven exactly as the master drives it,
+// against simulated render clients and links. Event-driven on a simulated clock, so the same
+// profile and configuration give the same figures on any machine, for 1 or 256 clients.
+//
+// What is modelled, and how (the real code it stands for in brackets):
+// - Frames follow each other: beginFrame, FrameBegin to every client (Impl::beginFrame).
+// - A client that receives FrameBegin drops its queued work and asks for `prefetch` tiles
+//   (Client::onFrameBegin); every result is also a request for one more tile
+//   (Impl::onTileResult: credits += 1, serve). Credits are capped at 64, as in the master.
+// - The master's network thread handles one message at a time, masterSecondsPerMessage each;
+//   every housekeepingSeconds it re-serves every client (stragglers, returned tiles).
+// - A client renders with threadsPerClient threads; a tile costs its recorded render time plus
+//   its encode time, divided by clientSpeed.
+// - A result crosses the client's link and then the master's shared uplink. Both are FIFO; a
+//   message pipelines through them (packets, not store-and-forward of whole messages): it
+//   occupies the master's link for its size over that rate, starting no earlier than its first
+//   bytes arrive and ending no earlier than its last. Messages to the clients (FrameBegin,
+//   assignments) are small: they cost latency only. Order per direction is kept, as with TCP.
+// - Accepted tiles are decoded by decodeThreads threads; a frame ends when its last tile is
+//   decoded (Impl::finishFrameIfDone).
+// Not modelled: heartbeats, timeouts and dead clients, scene updates, TCP congestion control.
+#include "scheduler.h"
+
+#include <rtwall/cluster.h>
+
+#include <algorithm>
+#include <deque>
+#include <queue>
+#include <random>
+#include <stdexcept>
+
+namespace rtwall {
+
+using namespace cluster;
+
+namespace {
+
+enum class Ev { FrameBeginAtClient, AssignAtClient, RenderDone, RequestAtMaster, ResultAtMaster, MasterHandle, Housekeeping, FrameDone };
+
+struct Event {
+    double t;
+    uint64_t seq;  // ties broken by creation order: deterministic
+    Ev kind;
+    uint32_t client = 0, frame = 0;
+    std::vector<uint32_t> tiles;  // assignment; or one tile (result, render)
+    bool isResult = false;        // MasterHandle: a result (else a request)
+    uint32_t count = 0;           // request count
+};
+
+Event makeEvent(double t, Ev kind, uint32_t client, uint32_t frame) {
+    Event e;
+    e.t = t;
+    e.seq = 0;
+    e.kind = kind;
+    e.client = client;
+    e.frame = frame;
+    return e;
+}
+
+struct Later {
+    bool operator()(const Event& a, const Event& b) const { return a.t != b.t ? a.t > b.t : a.seq > b.seq; }
+};
+
+struct SimClient {
+    uint32_t frame = 0;                 // the frame it works on (0 = none)
+    std::deque<uint32_t> queue;         // assigned tiles of that frame, not started
+    int idle = 0;
+    uint32_t credits = 0;               // master side
+    double linkFree = 0, linkBusy = 0;  // its uplink
+    double lastUp = 0, lastDown = 0;    // arrival times, for in-order delivery
+    double busy = 0;                    // render time started in the measured window
+};
+
+class Simulation {
+public:
+    Simulation(const TileProfile& p, const SimConfig& c)
+        : profile_(p), config_(c), scheduler_(SchedulerOptions{c.affinity, c.stragglerFactor, 0.05, c.seed}),
+          rng_(c.seed ^ 0x9e3779b97f4a7c15ull), clients_(size_t(c.clients)) {
+        if (c.clients < 1) throw InputError("simulation: at least one client");
+        if (c.threadsPerClient < 1 || c.prefetch < 1 || c.decodeThreads < 1 || c.frames < 1 || c.warmupFrames < 0)
+            throw InputError("simulation: threads, prefetch, decode threads and frames must be positive");
+        if (!(c.clientSpeed > 0) || !(c.decodeSpeed > 0)) throw InputError("simulation: speeds must be positive");
+        if (p.tileCount() == 0) throw InputError("simulation: the tile profile has no tiles");
+        if (c.codec >= p.codecs.size()) throw InputError("simulation: the tile profile has no codec #" + std::to_string(c.codec));
+        for (const auto& f : p.renderSeconds)
+            if (f.size() != p.tileCount()) throw InputError("simulation: the profile's frames differ in tile count");
+        const auto& cc = p.codecs[c.codec];
+        if (cc.bytes.size() != p.tileCount() || cc.encodeSeconds.size() != p.tileCount() || cc.decodeSeconds.size() != p.tileCount())
+            throw InputError("simulation: the profile's codec data do not match its tile count");
+        for (uint32_t i = 0; i < uint32_t(c.clients); ++i) {
+            scheduler_.addClient(i);
+            clients_[i].idle = c.threadsPerClient;
+        }
+        decoders_.assign(size_t(c.decodeThreads), 0.0);
+    }
+
+    SimReport run() {
+        const int total = config_.warmupFrames + config_.frames;
+        beginFrame(1, 0.0);
+        while (!events_.empty()) {
+            Event e = events_.top();
+            events_.pop();
+            now_ = e.t;
+            dispatch(e);
+            if (finished_ == uint32_t(total)) break;
+        }
+        SimReport r;
+        r.frameSeconds = frameSeconds_;
+        const double window = measureEnd_ - measureStart_;
+        r.fps = window > 0 ? double(config_.frames) / window : 0.0;
+        r.bytesPerFrame = double(measuredBytes_) / config_.frames;
+        if (config_.masterBitsPerSecond > 0 && window > 0) r.masterLinkLoad = measuredBytes_ * 8.0 / config_.masterBitsPerSecond / window;
+        r.masterCpuLoad = window > 0 ? masterBusy_ / window : 0.0;
+        double sum = 0;
+        for (const SimClient& c : clients_) {
+            const double u = window > 0 ? c.busy / (window * config_.threadsPerClient) : 0.0;
+            r.clientUtilisation.push_back(u);
+            sum += u;
+            if (config_.clientLink.bitsPerSecond > 0 && window > 0)
+                r.maxClientLinkLoad = std::max(r.maxClientLinkLoad, c.linkBusy / window);
+        }
+        r.meanUtilisation = sum / double(clients_.size());
+        r.stolenPerFrame = double(stolen_) / config_.frames;
+        r.reissuedPerFrame = double(reissued_) / config_.frames;
+        r.duplicatesPerFrame = double(duplicates_) / config_.frames;
+        r.affinityHitFraction = double(affinityHits_) / (double(config_.frames) * double(profile_.tileCount()));
+        return r;
+    }
+
+private:
+    const TileProfile& profile_;
+    SimConfig config_;
+    TileScheduler scheduler_;
+    std::mt19937_64 rng_;
+    std::vector<SimClient> clients_;
+    std::priority_queue<Event, std::vector<Event>, Later> events_;
+    uint64_t seq_ = 0;
+    double now_ = 0;
+    double masterFree_ = 0, masterBusy_ = 0, masterLinkFree_ = 0;
+    std::vector<double> decoders_;  // when each decode thread is free
+    bool frameActive_ = false;
+    uint32_t frame_ = 0;
+    double frameStart_ = 0, frameDecodeEnd_ = 0;
+    bool frameDoneScheduled_ = false;
+    uint32_t finished_ = 0;
+    double measureStart_ = 0, measureEnd_ = 0;
+    bool measuring_ = false;
+    uint64_t measuredBytes_ = 0, frameBytes_ = 0;
+    uint64_t stolen_ = 0, reissued_ = 0, duplicates_ = 0, affinityHits_ = 0;
+    std::vector<double> frameSeconds_;
+
+    void push(Event e) {
+        e.seq = seq_++;
+        events_.push(std::move(e));
+    }
+
+    // A latency spike: the message (and, since order is kept, every later one on the same link
+    // and direction) arrives spikeSeconds late. It delays delivery, not the shared master link's
+    // other traffic.
+    double spike(const SimLink& link) {
+        if (link.spikeProbability > 0 && std::uniform_real_distribution<double>(0.0, 1.0)(rng_) < link.spikeProbability)
+            return link.spikeSeconds;
+        return 0.0;
+    }
+
+    // Master -> client: latency only, in order.
+    double down(SimClient& c) {
+        c.lastDown = std::max(now_ + config_.clientLink.latencySeconds + spike(config_.clientLink), c.lastDown);
+        return c.lastDown;
+    }
+
+    // Client -> master through the client's link and the master's shared uplink.
+    double up(SimClient& c, double bytes) {
+        const double bits = bytes * 8.0;
+        const double txStart = std::max(now_, c.linkFree);
+        const double txTime = config_.clientLink.bitsPerSecond > 0 ? bits / config_.clientLink.bitsPerSecond : 0.0;
+        const double txEnd = txStart + txTime;
+        c.linkFree = txEnd;
+        if (measuring_) c.linkBusy += txTime;
+        const double lat = config_.clientLink.latencySeconds;
+        double arrive = txEnd + lat;
+        if (config_.masterBitsPerSecond > 0) {
+            const double mTime = bits / config_.masterBitsPerSecond;
+            const double mStart = std::max(txStart + lat, masterLinkFree_);
+            arrive = std::max(mStart + mTime, arrive);
+            masterLinkFree_ = arrive;
+        }
+        c.lastUp = std::max(arrive + spike(config_.clientLink), c.lastUp);
+        return c.lastUp;
+    }
+
+    void beginFrame(uint32_t frame, double t) {
+        frame_ = frame;
+        frameActive_ = true;
+        frameStart_ = t;
+        frameDecodeEnd_ = t;
+        frameDoneScheduled_ = false;
+        frameBytes_ = 0;
+        if (frame == uint32_t(config_.warmupFrames) + 1) {
+            measuring_ = true;
+            measureStart_ = t;
+        }
+        scheduler_.beginFrame(frame, uint32_t(profile_.tileCount()));
+        for (uint32_t i = 0; i < clients_.size(); ++i) {
+            clients_[i].credits = 0;
+            Event e = makeEvent(down(clients_[i]), Ev::FrameBeginAtClient, i, frame);
+            push(std::move(e));
+        }
+        if (config_.housekeepingSeconds > 0) push(makeEvent(t + config_.housekeepingSeconds, Ev::Housekeeping, 0, frame));
+    }
+
+    void serve(uint32_t id) {
+        SimClient& c = clients_[id];
+        if (!frameActive_ || c.credits == 0) return;
+        std::vector<uint32_t> tiles = scheduler_.request(id, c.credits, now_);
+        if (tiles.empty()) return;
+        c.credits -= uint32_t(tiles.size());
+        Event e = makeEvent(down(c), Ev::AssignAtClient, id, frame_);
+        e.tiles = std::move(tiles);
+        push(std::move(e));
+    }
+
+    void startWork(uint32_t id) {
+        SimClient& c = clients_[id];
+        const auto& codec = profile_.codecs[config_.codec];
+        const auto& render = profile_.renderSeconds[(c.frame - 1) % profile_.renderSeconds.size()];
+        while (c.idle > 0 && !c.queue.empty()) {
+            const uint32_t tile = c.queue.front();
+            c.queue.pop_front();
+            --c.idle;
+            const double cost = (render[tile] + codec.encodeSeconds[tile]) / config_.clientSpeed;
+            if (measuring_) c.busy += cost;
+            Event e = makeEvent(now_ + cost, Ev::RenderDone, id, c.frame);
+            e.tiles = {tile};
+            push(std::move(e));
+        }
+    }
+
+    // The master's network thread: one message at a time.
+    void toMaster(Event e) {
+        const double start = std::max(now_, masterFree_);
+        masterFree_ = start + config_.masterSecondsPerMessage;
+        if (measuring_) masterBusy_ += config_.masterSecondsPerMessage;
+        e.kind = Ev::MasterHandle;
+        e.t = masterFree_;
+        push(std::move(e));
+    }
+
+    void dispatch(Event& e) {
+        switch (e.kind) {
+        case Ev::FrameBeginAtClient: {
+            SimClient& c = clients_[e.client];
+            c.queue.clear();  // dropWork
+            c.frame = e.frame;
+            Event r = makeEvent(up(c, config_.messageOverheadBytes), Ev::RequestAtMaster, e.client, e.frame);
+            r.count = uint32_t(config_.prefetch);
+            push(std::move(r));
+            break;
+        }
+        case Ev::AssignAtClient: {
+            SimClient& c = clients_[e.client];
+            if (e.frame != c.frame) break;  // dropped, as the client does
+            for (uint32_t t : e.tiles) c.queue.push_back(t);
+            startWork(e.client);
+            break;
+        }
+        case Ev::RenderDone: {
+            SimClient& c = clients_[e.client];
+            ++c.idle;
+            const uint32_t tile = e.tiles.front();
+            const double bytes = double(profile_.codecs[config_.codec].bytes[tile]) + config_.messageOverheadBytes;
+            Event r = makeEvent(up(c, bytes), Ev::ResultAtMaster, e.client, e.frame);
+            r.tiles = {tile};
+            push(std::move(r));
+            startWork(e.client);
+            break;
+        }
+        case Ev::RequestAtMaster:
+        case Ev::ResultAtMaster:
+            e.isResult = e.kind == Ev::ResultAtMaster;
+            toMaster(std::move(e));
+            break;
+        case Ev::MasterHandle: handle(e); break;
+        case Ev::Housekeeping:
+            if (!frameActive_ || e.frame != frame_) break;
+            for (uint32_t i = 0; i < clients_.size(); ++i) serve(i);
+            push(makeEvent(now_ + config_.housekeepingSeconds, Ev::Housekeeping, 0, e.frame));
+            break;
+        case Ev::FrameDone: finishFrame(); break;
+        }
+    }
+
+    void handle(const Event& e) {
+        SimClient& c = clients_[e.client];
+        if (!e.isResult) {
+            if (frameActive_ && e.frame == frame_) {
+                c.credits = std::min<uint32_t>(c.credits + e.count, 64);
+                serve(e.client);
+            }
+            return;
+        }
+        if (!frameActive_ || e.frame != frame_) return;  // a tile of a frame no longer current
+        const uint32_t tile = e.tiles.front();
+        const auto result = scheduler_.complete(e.client, e.frame, tile, now_);
+        c.credits += 1;
+        if (result == TileScheduler::Result::Accepted) {
+            const auto& codec = profile_.codecs[config_.codec];
+            frameBytes_ += codec.bytes[tile] + config_.messageOverheadBytes;
+            auto free = std::min_element(decoders_.begin(), decoders_.end());
+            const double start = std::max(now_, *free);
+            *free = start + codec.decodeSeconds[tile] / config_.decodeSpeed;
+            frameDecodeEnd_ = std::max(frameDecodeEnd_, *free);
+            if (scheduler_.frameComplete() && !frameDoneScheduled_) {
+                frameDoneScheduled_ = true;
+                push(makeEvent(frameDecodeEnd_, Ev::FrameDone, 0, frame_));
+            }
+        }
+        serve(e.client);
+    }
+
+    void finishFrame() {
+        frameActive_ = false;
+        ++finished_;
+        if (measuring_) {
+            const SchedulerStats& st = scheduler_.stats();
+            frameSeconds_.push_back(now_ - frameStart_);
+            measuredBytes_ += frameBytes_;
+            stolen_ += st.stolen;
+            reissued_ += st.reissued;
+            duplicates_ += st.duplicates;
+            affinityHits_ += st.affinityHits;
+            measureEnd_ = now_;
+        }
+        if (finished_ < uint32_t(config_.warmupFrames + config_.frames)) beginFrame(frame_ + 1, now_);
+    }
+};
+
+}  // namespace
+
+SimReport simulateCluster(const TileProfile& profile, const SimConfig& config) {
+    return Simulation(profile, config).run();
+}
+
+}  // namespace rtwall

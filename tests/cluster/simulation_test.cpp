@@ -1,0 +1,186 @@
+// The cluster simulation against results computed by hand, and the tile profile file.
+// Times are powers of two so that every sum is exact in floating point: the expectations are
+// exact equalities, not tolerances.
+#include <rtwall/cluster.h>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+namespace rtwall {
+namespace {
+
+// n tiles of 64x64 in one row, each costing `render` seconds and `bytes` bytes, no encode or
+// decode cost unless given.
+TileProfile uniformProfile(int tiles, double render, uint32_t bytes, double decode = 0) {
+    TileProfile p;
+    p.width = 64 * tiles;
+    p.height = 64;
+    p.tileSize = 64;
+    p.renderSeconds = {std::vector<double>(size_t(tiles), render)};
+    TileProfile::CodecCost c;
+    c.codec.codec = TileCodec::Raw;
+    c.bytes.assign(size_t(tiles), bytes);
+    c.encodeSeconds.assign(size_t(tiles), 0.0);
+    c.decodeSeconds.assign(size_t(tiles), decode);
+    p.codecs = {c};
+    return p;
+}
+
+SimConfig trivial() {
+    SimConfig c;
+    c.clients = 1;
+    c.threadsPerClient = 1;
+    c.prefetch = 1;
+    c.clientLink.latencySeconds = 1.0 / 1024;
+    c.decodeThreads = 1;
+    c.frames = 3;
+    c.warmupFrames = 1;
+    c.housekeepingSeconds = 0;
+    return c;
+}
+
+TEST(ClusterSimulation, OneClientPrefetchOneWaitsARoundTripPerTile) {
+    // FrameBegin reaches the client at L, its request the master at 2L, the first tile the
+    // client at 3L; each tile then takes c to render and L + L for its result and the next
+    // assignment. The last of n results arrives at (2n + 2) L + n c.
+    const int n = 8;
+    const double L = 1.0 / 1024, c = 1.0 / 64;
+    const SimReport r = simulateCluster(uniformProfile(n, c, 1000), trivial());
+    ASSERT_EQ(r.frameSeconds.size(), 3u);
+    for (double s : r.frameSeconds) EXPECT_EQ(s, (2 * n + 2) * L + n * c);
+    EXPECT_EQ(r.fps, 1.0 / ((2 * n + 2) * L + n * c));
+    EXPECT_EQ(r.bytesPerFrame, n * 1000.0);
+    EXPECT_EQ(r.stolenPerFrame, 0.0);
+    EXPECT_EQ(r.affinityHitFraction, 1.0);  // one client renders everything every frame
+    ASSERT_EQ(r.clientUtilisation.size(), 1u);
+    EXPECT_DOUBLE_EQ(r.clientUtilisation[0], n * c / ((2 * n + 2) * L + n * c));
+}
+
+TEST(ClusterSimulation, PrefetchHidesTheRoundTrip) {
+    // With every tile in flight at once: 3L to the first assignment, n c of rendering, L back.
+    const int n = 8;
+    const double L = 1.0 / 1024, c = 1.0 / 64;
+    SimConfig cfg = trivial();
+    cfg.prefetch = n;
+    const SimReport r = simulateCluster(uniformProfile(n, c, 1000), cfg);
+    for (double s : r.frameSeconds) EXPECT_EQ(s, 4 * L + n * c);
+}
+
+TEST(ClusterSimulation, LinksMasterCostAndDecodeAddUpAsComputedByHand) {
+    // Prefetch n, a 8 Mbit/s client link (1000 bytes take 1/1000 s... use 2^13 bytes at 2^16
+    // bits/s = 1 s per tile is too slow; take 2^10 bytes at 2^20 bit/s = 1/128 s), a master link
+    // twice as fast (never the bottleneck: its share ends when the client link's does), a
+    // master cost m per message and a decode time d.
+    const int n = 4;
+    const double L = 1.0 / 1024, c = 1.0 / 64, tx = 1.0 / 128, m = 1.0 / 4096, d = 1.0 / 256;
+    SimConfig cfg = trivial();
+    cfg.prefetch = n;
+    cfg.clientLink.bitsPerSecond = 1024.0 * 1024;
+    cfg.masterBitsPerSecond = 2.0 * 1024 * 1024;
+    cfg.masterSecondsPerMessage = m;
+    const SimReport r = simulateCluster(uniformProfile(n, c, 1024, d), cfg);
+    // The request is handled at 2L + m (it has 0 bytes), tiles reach the client at 3L + m.
+    // Renders end at 3L + m + k c (k = 1..n); each result leaves within c (tx < c), arriving
+    // L + tx later, handled m later, decoded d later. The last: 3L + m + n c + tx + L + m + d.
+    for (double s : r.frameSeconds) EXPECT_EQ(s, 4 * L + 2 * m + n * c + tx + d);
+    EXPECT_EQ(r.bytesPerFrame, n * 1024.0);
+}
+
+TEST(ClusterSimulation, TheLinkBoundsFramesPerSecond) {
+    // Rendering is free and the master link carries 2^20 bit/s: a frame of 64 tiles of 2^12 bytes
+    // (2^21 bits) cannot take less than 2 s, whatever the client count.
+    SimConfig cfg = trivial();
+    cfg.clients = 8;
+    cfg.prefetch = 4;
+    cfg.masterBitsPerSecond = 1024.0 * 1024;
+    const SimReport r = simulateCluster(uniformProfile(64, 0.0, 4096), cfg);
+    EXPECT_LE(r.fps, 0.5);
+    EXPECT_GT(r.fps, 0.49);
+    EXPECT_GT(r.masterLinkLoad, 0.99);
+}
+
+TEST(ClusterSimulation, MoreClientsRenderFasterUntilTheMasterIsTheLimit) {
+    SimConfig cfg = trivial();
+    cfg.prefetch = 4;
+    cfg.masterSecondsPerMessage = 1.0 / 65536;
+    const TileProfile p = uniformProfile(256, 1.0 / 256, 100);
+    double last = 0;
+    for (int clients : {1, 2, 4}) {
+        cfg.clients = clients;
+        const double fps = simulateCluster(p, cfg).fps;
+        EXPECT_GT(fps, last * 1.8) << clients << " clients";
+        last = fps;
+    }
+}
+
+TEST(ClusterSimulation, IsDeterministic) {
+    SimConfig cfg = trivial();
+    cfg.clients = 5;
+    cfg.prefetch = 3;
+    cfg.clientLink.spikeProbability = 0.1;
+    cfg.clientLink.spikeSeconds = 0.01;
+    TileProfile p = uniformProfile(40, 0.001, 500);
+    for (size_t i = 0; i < 40; ++i) p.renderSeconds[0][i] = 0.0005 * double(1 + i % 7);
+    const SimReport a = simulateCluster(p, cfg), b = simulateCluster(p, cfg);
+    EXPECT_EQ(a.frameSeconds, b.frameSeconds);
+    EXPECT_EQ(a.stolenPerFrame, b.stolenPerFrame);
+}
+
+TEST(ClusterSimulation, RejectsBadConfigurations) {
+    const TileProfile p = uniformProfile(4, 0.01, 10);
+    SimConfig cfg = trivial();
+    cfg.clients = 0;
+    EXPECT_THROW(simulateCluster(p, cfg), InputError);
+    cfg = trivial();
+    cfg.codec = 1;
+    EXPECT_THROW(simulateCluster(p, cfg), InputError);
+}
+
+TEST(TileProfile, WritesAndReadsBack) {
+    TileProfile p = uniformProfile(3, 0.25, 77, 0.5);
+    p.scene = "test";
+    p.renderSeconds.push_back({0.125, 0.25, 0.5});
+    const std::filesystem::path file = std::filesystem::path(RTWALL_BINARY_DIR) / "tile_profile_test.toml";
+    writeTileProfile(p, file);
+    const TileProfile q = readTileProfile(file);
+    EXPECT_EQ(q.scene, "test");
+    EXPECT_EQ(q.width, p.width);
+    EXPECT_EQ(q.renderSeconds, p.renderSeconds);
+    ASSERT_EQ(q.codecs.size(), 1u);
+    EXPECT_EQ(q.codecs[0].bytes, p.codecs[0].bytes);
+    EXPECT_EQ(q.codecs[0].decodeSeconds, p.codecs[0].decodeSeconds);
+    EXPECT_EQ(q.codecs[0].codec.codec, TileCodec::Raw);
+    std::filesystem::remove(file);
+    EXPECT_THROW(readTileProfile(file), InputError);
+}
+
+TEST(TileProfile, RecordsEveryTileOfARealRender) {
+    SceneDesc desc = builtinScene("knots", 5000);
+    desc.settings.width = 96;
+    desc.settings.height = 64;
+    desc.settings.tileSize = 32;
+    desc.settings.threads = 1;
+    const Scene scene(desc);
+    CodecSettings jpeg;
+    jpeg.codec = TileCodec::Jpeg;
+    Image lossless;
+    std::vector<Image> decoded;
+    const TileProfile p = profileTiles(scene, {desc.cameras.front(), desc.cameras.front()}, desc.settings,
+                                       {CodecSettings{TileCodec::Raw}, jpeg}, &lossless, &decoded);
+    ASSERT_EQ(p.renderSeconds.size(), 2u);
+    EXPECT_EQ(p.tileCount(), 6u);
+    EXPECT_EQ(p.codecs[0].bytes[0], 32u * 32 * 3);  // raw: the pixels
+    EXPECT_EQ(decoded.at(0).rgb, lossless.rgb);      // raw round trip is exact
+    const Image single = renderFrame(scene, Camera(desc.cameras.front(), 96, 64), desc.settings);
+    EXPECT_EQ(lossless.rgb, single.rgb);  // tile by tile is the same image
+    uint64_t bytes = 0;
+    const Image viaJpeg = codecRoundTrip(lossless, 32, jpeg, &bytes);
+    EXPECT_EQ(viaJpeg.rgb, decoded.at(1).rgb);
+    uint64_t sum = 0;
+    for (uint32_t b : p.codecs[1].bytes) sum += b;
+    EXPECT_EQ(bytes, sum);
+}
+
+}  // namespace
+}  // namespace rtwall
