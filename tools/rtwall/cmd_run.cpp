@@ -229,12 +229,20 @@ void addRun(CLI::App& app, Run& run) {
             std::vector<double> frameTimes;
             auto last = std::chrono::steady_clock::now();
             uint64_t bytes = 0;
+            // A still view refines progressively (each frame has its own sampling seeds); a
+            // moving camera restarts the accumulation every frame.
+            const bool still = path.empty() && c.orbit == 0.0;
+            Accumulator progressive;
             for (int f = 1; (c.frames == 0 || f <= c.frames) && !gStop; ++f) {
                 // Differential updates: only the camera changes from frame to frame.
                 if (!path.empty()) master.setCamera(cameraAt(path, f));
                 else if (c.orbit != 0.0) master.setCamera(orbited(start, c.orbit * f));
                 FrameReport report;
-                const Image img = master.renderFrame(&report);
+                Image img = master.renderFrame(&report);
+                if (still) {
+                    progressive.add(img);
+                    img = progressive.resolve();
+                }
                 const auto now = std::chrono::steady_clock::now();
                 frameTimes.push_back(std::chrono::duration<double>(now - last).count());
                 last = now;

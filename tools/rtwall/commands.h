@@ -18,5 +18,8 @@ void addKeys(CLI::App& app, Run& run);
 void addBenchKernel(CLI::App& bench, Run& run);
 void addBenchCluster(CLI::App& bench, Run& run);
 void addBenchFaults(CLI::App& bench, Run& run);
+void addBenchShading(CLI::App& bench, Run& run);
+// `rtwall gen office|headlight` (the shading demos), added to the `gen` command.
+void addGenShading(CLI::App& gen, Run& run);
 
 }  // namespace rtwall::cli

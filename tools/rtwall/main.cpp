@@ -20,6 +20,10 @@ int main(int argc, char** argv) {
     rtwall::cli::addBenchKernel(*bench, run);
     rtwall::cli::addBenchCluster(*bench, run);
     rtwall::cli::addBenchFaults(*bench, run);
+    rtwall::cli::addBenchShading(*bench, run);
+    CLI::App* gen = app.add_subcommand("gen", "Write demo scenes (a scene file and its meshes, textures, volumes)");
+    gen->require_subcommand(1);
+    rtwall::cli::addGenShading(*gen, run);
 
     try {
         app.parse(argc, argv);
