@@ -24,6 +24,7 @@ PACKAGES=(
   libzmq3-dev cppzmq-dev  # ZeroMQ: master/client transport
   liblz4-dev libzstd-dev libturbojpeg0-dev  # tile codecs
   libxxhash-dev        # content hashes of meshes and scene states
+  libvtk9-dev          # VTK: volume data sets (.vti, legacy .vtk), used only by rtwall_volume_io
   clang libclang-rt-14-dev  # libFuzzer with ASan/UBSan for the fuzz targets
   python3
 )

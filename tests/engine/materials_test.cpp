@@ -391,3 +391,145 @@ TEST(Accumulator, MeanOfFramesInLinearLight) {
 
 }  // namespace
 }  // namespace rtwall
+
+namespace rtwall {
+namespace {
+
+// Scene-file mistakes in the shading keys: one line naming the file, the line and the key.
+TEST(ShadingSceneFile, BadInputNamesFileLineAndKey) {
+    const auto dir = test::scratchDir();
+    test::writeFile(dir / "garbage.png", "not an image at all");
+    test::writeFile(dir / "garbage.vti", "<VTKFile nonsense");
+    const std::string head = "[[mesh]]\nname = \"b\"\nshape = \"box\"\n";
+    struct Case {
+        std::string body, expect;
+    };
+    const std::vector<Case> cases = {
+        {"[[material]]\nname = \"m\"\ntexture = \"image\"\ntexture_file = \"missing.png\"\n", ":7: [[material]] #1: key 'texture_file'"},
+        {"[[material]]\nname = \"m\"\ntexture = \"image\"\ntexture_file = \"garbage.png\"\n", "texture must be a PNG or a JPEG"},
+        {"[[material]]\nname = \"m\"\ntexture = \"plaid\"\n", "key 'texture'"},
+        {"[[material]]\nname = \"m\"\ntype = \"volume\"\nvolume_file = \"garbage.vti\"\n", "key 'volume_file'"},
+        {"[[material]]\nname = \"m\"\ntype = \"volume\"\n", "missing required key 'volume_file'"},
+        {"[[material]]\nname = \"m\"\ntype = \"metal\"\nroughness = 2\n", "key 'roughness'"},
+        {"[[material]]\nname = \"m\"\ntype = \"glass\"\nabsorption = [-1, 0, 0]\n", "key 'absorption'"},
+        {"[render]\nview = \"xray\"\n", "key 'view'"},
+        {"[render]\nprune_threshold = -0.1\n", "key 'prune_threshold'"},
+        {"[[light]]\ntype = \"area\"\nposition = [0, 0, 0]\nedge1 = [1, 0, 0]\nedge2 = [2, 0, 0]\n", "no area"},
+    };
+    for (const Case& c : cases) {
+        const auto file = test::writeFile(dir / "s.toml", head + c.body);
+        const std::string msg = test::inputErrorOf([&] { loadSceneFile(file); });
+        EXPECT_NE(msg.find(c.expect), std::string::npos) << msg;
+        EXPECT_NE(msg.find("s.toml:"), std::string::npos) << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    }
+    // A volume file that is not there, handed straight to the engine: an InputError, not a crash.
+    Material m;
+    m.type = MaterialType::Volume;
+    m.volumeFile = (dir / "nope.vti").string();
+    SceneDesc d = test::furnace(m, true);
+    EXPECT_NE(test::inputErrorOf([&] { Scene s(d); }).find("nope.vti"), std::string::npos);
+}
+
+// Every key of the format, read back.
+TEST(ShadingSceneFile, ReadsEveryShadingKey) {
+    const auto dir = test::scratchDir();
+    const std::string tex = test::writeTestTexture(dir), vol = test::writeTestVolume(dir);
+    const auto file = test::writeFile(dir / "s.toml", R"(
+[render]
+prune_threshold = 0.01
+gi = true
+samples = 3
+view = "depth"
+[[mesh]]
+name = "b"
+shape = "box"
+[[material]]
+name = "m"
+type = "metal"
+roughness = 0.3
+texture = "image"
+texture_file = "texture.png"
+texture_scale = 2
+texture_mapping = "xy"
+bump = 0.5
+bump_scale = 0.2
+alpha = "checker"
+alpha_color2 = [0, 0, 0]
+alpha_cutoff = 0.25
+emission = [0.5, 0, 0]
+[[material]]
+name = "v"
+type = "volume"
+volume_file = "blob.vti"
+volume_step = 0.3
+transfer = [[0, 1, 1, 1, 0], [1, 1, 0.5, 0, 4]]
+[[material]]
+name = "g"
+type = "glass"
+absorption = [0.1, 0.2, 0.3]
+[[light]]
+type = "area"
+position = [0, 2, 0]
+edge1 = [1, 0, 0]
+edge2 = [0, 0, -1]
+intensity = 3
+)");
+    const SceneDesc s = loadSceneFile(file);
+    EXPECT_FLOAT_EQ(s.settings.pruneThreshold, 0.01f);
+    EXPECT_TRUE(s.settings.gi);
+    EXPECT_EQ(s.settings.samples, 3);
+    EXPECT_EQ(s.settings.view, ViewMode::Depth);
+    const Material& m = s.materials[0];
+    EXPECT_EQ(m.type, MaterialType::Metal);
+    EXPECT_FLOAT_EQ(m.roughness, 0.3f);
+    EXPECT_EQ(m.texture.kind, TextureKind::Image);
+    EXPECT_EQ(m.texture.mapping, TextureMapping::PlanarXY);
+    EXPECT_FLOAT_EQ(m.bump, 0.5f);
+    EXPECT_EQ(m.alpha.kind, TextureKind::Checker);
+    EXPECT_FLOAT_EQ(m.alphaCutoff, 0.25f);
+    EXPECT_FLOAT_EQ(m.emission.x, 0.5f);
+    EXPECT_EQ(s.materials[1].transfer.size(), 2u);
+    EXPECT_FLOAT_EQ(s.materials[1].volumeStep, 0.3f);
+    EXPECT_FLOAT_EQ(s.materials[2].absorption.z, 0.3f);
+    EXPECT_EQ(s.lights[0].type, LightType::Area);
+    const Scene scene(s);  // textures and volume load
+}
+
+}  // namespace
+}  // namespace rtwall
+
+#include "texture.h"
+
+#include <turbojpeg.h>
+
+namespace rtwall {
+namespace {
+
+// Image textures: PNG and JPEG decode to the same linear values (JPEG within its loss), and a
+// truncated JPEG is an InputError naming the file.
+TEST(ImageTexture, PngAndJpegLoad) {
+    const auto dir = test::scratchDir();
+    const std::string png = test::writeTestTexture(dir);
+    const Image src = readPng(png);
+    tjhandle tj = tjInitCompress();
+    unsigned char* jpeg = nullptr;
+    unsigned long size = 0;
+    ASSERT_EQ(tjCompress2(tj, src.rgb.data(), src.width, src.width * 3, src.height, TJPF_RGB, &jpeg, &size, TJSAMP_444,
+                          100, 0),
+              0);
+    test::writeFile(dir / "t.jpg", std::string(reinterpret_cast<const char*>(jpeg), size));
+    test::writeFile(dir / "cut.jpg", std::string(reinterpret_cast<const char*>(jpeg), size / 3));
+    tjFree(jpeg);
+    tjDestroy(tj);
+    const auto a = loadTextureImage(png), b = loadTextureImage((dir / "t.jpg").string());
+    ASSERT_EQ(a->width, b->width);
+    ASSERT_EQ(a->height, b->height);
+    double worst = 0;
+    for (size_t i = 0; i < a->rgb.size(); ++i) worst = std::max(worst, double(std::fabs(a->rgb[i] - b->rgb[i])));
+    EXPECT_LT(worst, 0.1);
+    EXPECT_NE(test::inputErrorOf([&] { loadTextureImage((dir / "cut.jpg").string()); }).find("cut.jpg"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rtwall
