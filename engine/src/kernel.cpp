@@ -243,7 +243,9 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
                             const bool inside = i < w && j < h;
                             valid[k] = inside ? -1 : 0;
                             pixel[k] = inside ? uint32_t(j * w + i) : 0;
-                            seed[k] = pixelSeed(uint32_t(rect.x0 + i), uint32_t(rect.y0 + j), frame, sampleIndex);
+                            // Eyelight previews use no random numbers: keep their loop bare.
+                            seed[k] = eyeLight ? 0u
+                                               : pixelSeed(uint32_t(rect.x0 + i), uint32_t(rect.y0 + j), frame, sampleIndex);
                             float ox = (float(sx) + 0.5f) / float(ss), oy = (float(sy) + 0.5f) / float(ss);
                             if (jitter) {
                                 ox = (float(sx) + randomFloat(seed[k], 1000)) / float(ss);
