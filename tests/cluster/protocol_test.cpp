@@ -378,7 +378,8 @@ TEST(Protocol, EncodeSetsTypeAndLength) {
 }
 
 TEST(Protocol, GoldenBytes) {
-    // The exact layout of a header and a small payload; a change here breaks every deployed peer.
+    // The exact layout of a header and a small payload; a change here breaks every deployed peer
+    // (version 2: the shading fields of materials, lights and settings).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -386,7 +387,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x01, 0x00,                                      // version
+        0x02, 0x00,                                      // version 2
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
