@@ -25,6 +25,7 @@ PACKAGES=(
   libzmq3-dev cppzmq-dev  # ZeroMQ: master/client transport
   liblz4-dev libzstd-dev libturbojpeg0-dev  # tile codecs
   libxxhash-dev        # content hashes of meshes and scene states
+  libvtk9-dev          # VTK: volume data sets (.vti, legacy .vtk), used only by rtwall_volume_io
   clang libclang-rt-14-dev  # libFuzzer with ASan/UBSan for the fuzz targets
   libglfw3-dev libgl-dev  # GLFW and OpenGL 3.3: the wall's windows and input
   glslang-dev          # glslang: every wall shader is compiled at `rtwall check` and in the tests

@@ -340,6 +340,7 @@ private:
             camera_ = snapshot_->camera;
             renderSettings_ = snapshot_->settings;
             renderSettings_.threads = 1;
+            renderSettings_.clientId = id_;  // the id the master gave us, for the client false-colour view
             tiles_ = makeTiles(renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
             stateSeq_ = snapshot_->updateSeq;
         }
@@ -372,6 +373,7 @@ private:
                 else if (auto* st = std::get_if<SettingsChange>(&c)) {
                     renderSettings_ = st->settings;
                     renderSettings_.threads = 1;
+                    renderSettings_.clientId = id_;  // the id the master gave us, for the client false-colour view
                     tiles_ = makeTiles(renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
                 }
             }

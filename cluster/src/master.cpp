@@ -309,6 +309,7 @@ struct Master::Impl {
         const double seconds = nowSeconds() - frameStart;
         FrameReport r;
         r.frame = currentFrame;
+        r.stateSeq = frameSeq;
         r.seconds = seconds;
         r.bytes = frameBytes;
         const SchedulerStats& st = scheduler.stats();

@@ -100,6 +100,37 @@ void read(Reader& r, Transform& t) {
     for (double& v : t.m) v = r.f64();
 }
 
+void write(Writer& w, const TextureDesc& t) {
+    writeEnum(w, t.kind);
+    w.string(t.file);
+    write(w, t.color2);
+    w.f32(t.scale);
+    writeEnum(w, t.mapping);
+}
+
+void read(Reader& r, TextureDesc& t) {
+    t.kind = readEnum(r, TextureKind::Image, "texture kind");
+    // Clients open texture files themselves (a shared file system), like mesh sources.
+    t.file = r.string(kMaxStringBytes);
+    t.color2 = readUnitColor(r, "texture color2");
+    t.scale = r.f32();
+    if (!(t.scale > 0.0f && std::isfinite(t.scale))) fail("texture scale " + std::to_string(t.scale) + " is not positive");
+    t.mapping = readEnum(r, TextureMapping::PlanarYZ, "texture mapping");
+}
+
+Color readNonNegativeColor(Reader& r, const char* what) {
+    const Color c = readFloat3(r);
+    for (float v : {c.x, c.y, c.z})
+        if (!(v >= 0.0f && std::isfinite(v))) fail(std::string(what) + " component " + std::to_string(v) + " is negative");
+    return c;
+}
+
+float readFloatIn(Reader& r, float lo, float hi, const char* what) {
+    const float v = r.f32();
+    if (!(v >= lo && v <= hi)) fail(std::string(what) + " " + std::to_string(v) + " is out of range");
+    return v;
+}
+
 void write(Writer& w, const Material& m) {
     w.string(m.name);
     writeEnum(w, m.type);
@@ -107,11 +138,27 @@ void write(Writer& w, const Material& m) {
     write(w, m.specular);
     w.f32(m.shininess);
     w.f32(m.ior);
+    w.f32(m.roughness);
+    write(w, m.absorption);
+    write(w, m.emission);
+    write(w, m.texture);
+    w.f32(m.bump);
+    w.f32(m.bumpScale);
+    write(w, m.alpha);
+    w.f32(m.alphaCutoff);
+    w.string(m.volumeFile);
+    w.u32(uint32_t(m.transfer.size()));
+    for (const TransferPoint& p : m.transfer) {
+        w.f32(p.value);
+        write(w, p.color);
+        w.f32(p.density);
+    }
+    w.f32(m.volumeStep);
 }
 
 void read(Reader& r, Material& m) {
     m.name = r.string(kMaxStringBytes);
-    m.type = readEnum(r, MaterialType::Glass, "material type");
+    m.type = readEnum(r, MaterialType::Volume, "material type");
     m.color = readUnitColor(r, "material color");
     m.specular = readUnitColor(r, "material specular");
     m.shininess = r.f32();
@@ -119,20 +166,49 @@ void read(Reader& r, Material& m) {
     if (m.shininess < 0.0f) fail("material shininess " + std::to_string(m.shininess) + " is negative");
     m.ior = r.f32();
     if (!(m.ior >= 1.0f && m.ior <= 4.0f)) fail("material ior " + std::to_string(m.ior) + " is outside [1, 4]");
+    m.roughness = readFloatIn(r, 0.0f, 1.0f, "material roughness");
+    m.absorption = readNonNegativeColor(r, "material absorption");
+    m.emission = readNonNegativeColor(r, "material emission");
+    read(r, m.texture);
+    m.bump = readFloatIn(r, 0.0f, 100.0f, "material bump");
+    m.bumpScale = readFloatIn(r, 1e-6f, 1e6f, "material bump scale");
+    read(r, m.alpha);
+    m.alphaCutoff = readFloatIn(r, 0.0f, 1.0f, "material alpha cutoff");
+    m.volumeFile = r.string(kMaxStringBytes);
+    const uint32_t points = r.u32();
+    if (points > 4096) fail("transfer function of " + std::to_string(points) + " points exceeds the limit");
+    m.transfer.clear();
+    for (uint32_t i = 0; i < points; ++i) {
+        TransferPoint p;
+        p.value = r.f32();
+        if (!std::isfinite(p.value)) fail("transfer function value is not finite");
+        p.color = readNonNegativeColor(r, "transfer function colour");
+        p.density = readFloatIn(r, 0.0f, 3.4e38f, "transfer function density");
+        m.transfer.push_back(p);
+    }
+    m.volumeStep = readFloatIn(r, 0.01f, 100.0f, "volume step");
+    // A volume material without a file cannot be built; refuse it here rather than in the engine.
+    if (m.type == MaterialType::Volume && m.volumeFile.empty()) fail("volume material without a volume file");
+    if (m.texture.kind == TextureKind::Image && m.texture.file.empty()) fail("image texture without a file");
+    if (m.alpha.kind == TextureKind::Image && m.alpha.file.empty()) fail("image alpha mask without a file");
 }
 
 void write(Writer& w, const Light& l) {
     writeEnum(w, l.type);
     write(w, l.position);
     write(w, l.direction);
+    write(w, l.edge1);
+    write(w, l.edge2);
     write(w, l.color);
     w.f32(l.intensity);
 }
 
 void read(Reader& r, Light& l) {
-    l.type = readEnum(r, LightType::Directional, "light type");
+    l.type = readEnum(r, LightType::Area, "light type");
     l.position = readFloat3(r);
     l.direction = readFloat3(r);
+    l.edge1 = readFloat3(r);
+    l.edge2 = readFloat3(r);
     l.color = readFloat3(r);
     l.intensity = r.f32();
     if (l.intensity < 0.0f) fail("light intensity " + std::to_string(l.intensity) + " is negative");
@@ -179,6 +255,10 @@ void write(Writer& w, const RenderSettings& s) {
     write(w, s.background);
     write(w, s.ambient);
     w.i32(s.threads);
+    w.f32(s.pruneThreshold);
+    w.boolean(s.gi);
+    w.i32(s.samples);
+    writeEnum(w, s.view);
 }
 
 void read(Reader& r, RenderSettings& s) {
@@ -193,6 +273,10 @@ void read(Reader& r, RenderSettings& s) {
     s.background = readFloat3(r);
     s.ambient = readFloat3(r);
     s.threads = readInt(r, 0, kMaxThreads, "thread count");
+    s.pruneThreshold = readFloatIn(r, 0.0f, 1.0f, "prune threshold");
+    s.gi = r.boolean();
+    s.samples = readInt(r, 1, 4096, "samples");
+    s.view = readEnum(r, ViewMode::Client, "view mode");
 }
 
 void write(Writer& w, const MeshRef& m) {

@@ -1,4 +1,5 @@
-// The rtwall wire protocol, version 2 (2 added the master's peer timeout to Welcome).
+// The rtwall wire protocol, version 3 (2 added the master's peer timeout to Welcome; 3 added
+// materials, area lights and shading settings).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one writer and one
@@ -24,7 +25,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 2;
+inline constexpr uint16_t kProtocolVersion = 3;
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).

@@ -18,8 +18,15 @@ SceneDesc knotField(int64_t triangles) {
     const int sides = 48;
     const int segments = std::max<int>(8, int(std::max<int64_t>(triangles, 1000) / knots / (2 * sides)));
     const int pq[knots][2] = {{2, 3}, {3, 2}, {2, 5}, {3, 4}, {3, 5}, {4, 3}, {2, 7}, {5, 2}, {3, 7}, {5, 3}, {4, 5}, {5, 4}};
-    Material floor{"floor", MaterialType::Lambert, {0.6f, 0.6f, 0.6f}};
-    Material knot{"knot", MaterialType::Phong, {0.7f, 0.35f, 0.2f}, {0.3f, 0.3f, 0.3f}, 40.0f};
+    Material floor;
+    floor.name = "floor";
+    floor.color = {0.6f, 0.6f, 0.6f};
+    Material knot;
+    knot.name = "knot";
+    knot.type = MaterialType::Phong;
+    knot.color = {0.7f, 0.35f, 0.2f};
+    knot.specular = {0.3f, 0.3f, 0.3f};
+    knot.shininess = 40.0f;
     s.materials = {floor, knot};
     s.meshes.push_back({"floor", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
     s.instances.push_back({0, 0, Transform::translate(0, -1.1, 0) * Transform::scale(6, 1, 6)});

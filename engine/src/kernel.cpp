@@ -7,12 +7,14 @@
 // single-ray kernel (rtcIntersect1/rtcOccluded1); everything else, including the order in which
 // each pixel's contributions are summed, is shared. That is what makes the two kernels give
 // bit-identical images.
+#include "sampling.h"
 #include "scene_impl.h"
 #include "shading.h"
 #include "vec.h"
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <mutex>
 #include <stdexcept>
@@ -26,9 +28,12 @@ namespace {
 struct Scratch {
     std::vector<RayTask> rays, next;
     std::vector<Hit> hits;
-    std::vector<ShadowTask> shadows;
+    std::vector<ShadowTask> shadows, walk, walkNext;
+    std::vector<RayTask> walkRays;
     std::vector<uint8_t> occluded;
     std::vector<Color> accum;
+    std::vector<uint32_t> pixelRays;   // false-colour views: rays per pixel
+    std::vector<uint16_t> pixelDepth;  // and the deepest ray of each pixel
 };
 
 // Per-thread scratch buffers: grown to the largest tile once, then reused, so the hot path
@@ -59,7 +64,7 @@ template <> struct Packet<16> {
 };
 
 template <class RayK>
-inline void setRay(RayK& r, int k, const Float3& org, const Float3& dir, float tfar) {
+inline void setRay(RayK& r, int k, const Float3& org, const Float3& dir, float tfar, uint32_t mask = kMaskAll) {
     r.org_x[k] = org.x;
     r.org_y[k] = org.y;
     r.org_z[k] = org.z;
@@ -69,7 +74,7 @@ inline void setRay(RayK& r, int k, const Float3& org, const Float3& dir, float t
     r.tnear[k] = 0.0f;
     r.tfar[k] = tfar;
     r.time[k] = 0.0f;
-    r.mask[k] = 0xFFFFFFFFu;
+    r.mask[k] = mask;
     r.id[k] = 0;
     r.flags[k] = 0;
 }
@@ -92,7 +97,7 @@ void initContext(RTCIntersectContext& ctx, bool coherent) {
 }
 
 template <int K>
-void traceClosestPacket(RTCScene scene, const RayTask* rays, Hit* hits, size_t n, bool coherent) {
+void traceClosestPacket(RTCScene scene, const RayTask* rays, Hit* hits, size_t n, bool coherent, uint32_t mask) {
     using P = Packet<K>;
     RTCIntersectContext ctx;
     initContext(ctx, coherent);
@@ -103,7 +108,7 @@ void traceClosestPacket(RTCScene scene, const RayTask* rays, Hit* hits, size_t n
         for (int k = 0; k < K; ++k) {
             valid[k] = k < count ? -1 : 0;
             const RayTask& t = rays[base + (k < count ? k : 0)];
-            setRay(rh.ray, k, t.org, t.dir, t.tfar);
+            setRay(rh.ray, k, t.org, t.dir, t.tfar, mask);
             rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
             rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
@@ -112,7 +117,7 @@ void traceClosestPacket(RTCScene scene, const RayTask* rays, Hit* hits, size_t n
     }
 }
 
-void traceClosestSingle(RTCScene scene, const RayTask* rays, Hit* hits, size_t n, bool coherent) {
+void traceClosestSingle(RTCScene scene, const RayTask* rays, Hit* hits, size_t n, bool coherent, uint32_t mask) {
     RTCIntersectContext ctx;
     initContext(ctx, coherent);
     alignas(16) RTCRayHit rh;
@@ -127,7 +132,7 @@ void traceClosestSingle(RTCScene scene, const RayTask* rays, Hit* hits, size_t n
         rh.ray.tnear = 0.0f;
         rh.ray.tfar = t.tfar;
         rh.ray.time = 0.0f;
-        rh.ray.mask = 0xFFFFFFFFu;
+        rh.ray.mask = mask;
         rh.ray.id = 0;
         rh.ray.flags = 0;
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
@@ -144,7 +149,7 @@ void traceClosestSingle(RTCScene scene, const RayTask* rays, Hit* hits, size_t n
 }
 
 template <int K>
-void traceShadowPacket(RTCScene scene, const ShadowTask* rays, uint8_t* occluded, size_t n) {
+void traceShadowPacket(RTCScene scene, const ShadowTask* rays, uint8_t* occluded, size_t n, uint32_t mask) {
     using P = Packet<K>;
     RTCIntersectContext ctx;
     initContext(ctx, true);
@@ -155,14 +160,14 @@ void traceShadowPacket(RTCScene scene, const ShadowTask* rays, uint8_t* occluded
         for (int k = 0; k < K; ++k) {
             valid[k] = k < count ? -1 : 0;
             const ShadowTask& t = rays[base + (k < count ? k : 0)];
-            setRay(r, k, t.org, t.dir, t.tfar);
+            setRay(r, k, t.org, t.dir, t.tfar, mask);
         }
         P::occluded(valid, scene, &ctx, &r);
         for (int k = 0; k < count; ++k) occluded[base + k] = r.tfar[k] == -INFINITY;
     }
 }
 
-void traceShadowSingle(RTCScene scene, const ShadowTask* rays, uint8_t* occluded, size_t n) {
+void traceShadowSingle(RTCScene scene, const ShadowTask* rays, uint8_t* occluded, size_t n, uint32_t mask) {
     RTCIntersectContext ctx;
     initContext(ctx, true);
     alignas(16) RTCRay r;
@@ -177,7 +182,7 @@ void traceShadowSingle(RTCScene scene, const ShadowTask* rays, uint8_t* occluded
         r.tnear = 0.0f;
         r.tfar = t.tfar;
         r.time = 0.0f;
-        r.mask = 0xFFFFFFFFu;
+        r.mask = mask;
         r.id = 0;
         r.flags = 0;
         rtcOccluded1(scene, &ctx, &r);
@@ -186,8 +191,8 @@ void traceShadowSingle(RTCScene scene, const ShadowTask* rays, uint8_t* occluded
 }
 
 struct Tracer {
-    void (*closest)(RTCScene, const RayTask*, Hit*, size_t, bool);
-    void (*shadow)(RTCScene, const ShadowTask*, uint8_t*, size_t);
+    void (*closest)(RTCScene, const RayTask*, Hit*, size_t, bool, uint32_t);
+    void (*shadow)(RTCScene, const ShadowTask*, uint8_t*, size_t, uint32_t);
 };
 
 template <int K> Tracer packetTracer() {
@@ -198,98 +203,115 @@ template <int K> Tracer packetTracer() {
 // the packet is handed to Embree: whole (rtcIntersectK) or lane by lane (rtcIntersect1, with
 // the results written back into the packet), so every value downstream is identical.
 template <int K, bool kUsePackets>
-void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& rect, const RenderSettings& settings,
-                  Scratch& sc) {
+void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& rect, uint32_t frame,
+                  const ShadingContext& shading, Scratch& sc) {
     using P = Packet<K>;
     constexpr int bw = P::blockW, bh = P::blockH;
+    const RenderSettings& settings = shading.settings;
     const int w = rect.width(), h = rect.height();
     const int ss = std::max(1, settings.supersample);
-    const float sampleWeight = 1.0f / float(ss * ss);
-    const ShadingContext shading{s, settings};
+    const int spp = std::max(1, settings.samples);
+    const float sampleWeight = shading.sampleWeight;
     const bool eyeLight = settings.shading == ShadingMode::EyeLight;
+    // Path tracing also jitters the sub-pixel position, so progressive frames anti-alias.
+    const bool jitter = settings.gi && !eyeLight;
     const Float3 org = camera.origin();
 
     RTCIntersectContext ctx;
     initContext(ctx, true);
     alignas(64) typename P::RayHit rh;
     alignas(64) int valid[K];
-    uint32_t pixel[K];
+    uint32_t pixel[K], seed[K] = {};
+    float ox[K], oy[K];
     for (int k = 0; k < K; ++k) {
         rh.ray.org_x[k] = org.x;
         rh.ray.org_y[k] = org.y;
         rh.ray.org_z[k] = org.z;
         rh.ray.tnear[k] = 0.0f;
         rh.ray.time[k] = 0.0f;
-        rh.ray.mask[k] = 0xFFFFFFFFu;
+        rh.ray.mask[k] = kMaskAll;
         rh.ray.id[k] = 0;
         rh.ray.flags[k] = 0;
     }
     for (int sy = 0; sy < ss; ++sy)
-        for (int sx = 0; sx < ss; ++sx) {
-            const float ox = (float(sx) + 0.5f) / float(ss), oy = (float(sy) + 0.5f) / float(ss);
-            for (int by = 0; by < h; by += bh)
-                for (int bx = 0; bx < w; bx += bw) {
-                    for (int k = 0; k < K; ++k) {
-                        const int i = bx + k % bw, j = by + k / bw;
-                        const bool inside = i < w && j < h;
-                        valid[k] = inside ? -1 : 0;
-                        pixel[k] = inside ? uint32_t(j * w + i) : 0;
-                        const Float3 d = camera.direction(float(rect.x0 + i) + ox, float(rect.y0 + j) + oy);
-                        const float inv = 1.0f / std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-                        rh.ray.dir_x[k] = d.x * inv;
-                        rh.ray.dir_y[k] = d.y * inv;
-                        rh.ray.dir_z[k] = d.z * inv;
-                        rh.ray.tfar[k] = INFINITY;
-                        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-                        rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-                    }
-                    if constexpr (kUsePackets) {
-                        P::intersect(valid, s.top, &ctx, &rh);
-                    } else {
+        for (int sx = 0; sx < ss; ++sx)
+            for (int si = 0; si < spp; ++si) {
+                const uint32_t sampleIndex = uint32_t((sy * ss + sx) * spp + si);
+                const float cx = (float(sx) + 0.5f) / float(ss), cy = (float(sy) + 0.5f) / float(ss);
+                for (int by = 0; by < h; by += bh)
+                    for (int bx = 0; bx < w; bx += bw) {
+                        // Random numbers only where they are used: eyelight previews keep the
+                        // generation loop below as bare as the benchmark's reference loop.
+                        if (!eyeLight)
+                            for (int k = 0; k < K; ++k)
+                                seed[k] = pixelSeed(uint32_t(rect.x0 + bx + k % bw), uint32_t(rect.y0 + by + k / bw), frame,
+                                                    sampleIndex);
+                        for (int k = 0; k < K; ++k) {
+                            ox[k] = jitter ? (float(sx) + randomFloat(seed[k], 1000)) / float(ss) : cx;
+                            oy[k] = jitter ? (float(sy) + randomFloat(seed[k], 1001)) / float(ss) : cy;
+                        }
+                        for (int k = 0; k < K; ++k) {
+                            const int i = bx + k % bw, j = by + k / bw;
+                            const bool inside = i < w && j < h;
+                            valid[k] = inside ? -1 : 0;
+                            pixel[k] = inside ? uint32_t(j * w + i) : 0;
+                            const Float3 d = camera.direction(float(rect.x0 + i) + ox[k], float(rect.y0 + j) + oy[k]);
+                            const float inv = 1.0f / std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+                            rh.ray.dir_x[k] = d.x * inv;
+                            rh.ray.dir_y[k] = d.y * inv;
+                            rh.ray.dir_z[k] = d.z * inv;
+                            rh.ray.tfar[k] = INFINITY;
+                            rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+                            rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+                        }
+                        if constexpr (kUsePackets) {
+                            P::intersect(valid, s.top, &ctx, &rh);
+                        } else {
+                            for (int k = 0; k < K; ++k) {
+                                if (!valid[k]) continue;
+                                RTCRayHit one;
+                                one.ray = {rh.ray.org_x[k], rh.ray.org_y[k], rh.ray.org_z[k], 0.0f, rh.ray.dir_x[k],
+                                           rh.ray.dir_y[k], rh.ray.dir_z[k], 0.0f, INFINITY, kMaskAll, 0, 0};
+                                one.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                                one.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+                                rtcIntersect1(s.top, &ctx, &one);
+                                rh.ray.tfar[k] = one.ray.tfar;
+                                rh.hit.Ng_x[k] = one.hit.Ng_x;
+                                rh.hit.Ng_y[k] = one.hit.Ng_y;
+                                rh.hit.Ng_z[k] = one.hit.Ng_z;
+                                rh.hit.u[k] = one.hit.u;
+                                rh.hit.v[k] = one.hit.v;
+                                rh.hit.primID[k] = one.hit.primID;
+                                rh.hit.geomID[k] = one.hit.geomID;
+                                rh.hit.instID[0][k] = one.hit.instID[0];
+                            }
+                        }
+                        if (eyeLight) {
+                            shadeEyeLightPacket<K>(shading, rh, valid, pixel, sampleWeight, sc.accum.data());
+                            continue;
+                        }
                         for (int k = 0; k < K; ++k) {
                             if (!valid[k]) continue;
-                            RTCRayHit one;
-                            one.ray = {rh.ray.org_x[k], rh.ray.org_y[k], rh.ray.org_z[k], 0.0f, rh.ray.dir_x[k],
-                                       rh.ray.dir_y[k], rh.ray.dir_z[k], 0.0f, INFINITY, 0xFFFFFFFFu, 0, 0};
-                            one.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                            one.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-                            rtcIntersect1(s.top, &ctx, &one);
-                            rh.ray.tfar[k] = one.ray.tfar;
-                            rh.hit.Ng_x[k] = one.hit.Ng_x;
-                            rh.hit.Ng_y[k] = one.hit.Ng_y;
-                            rh.hit.Ng_z[k] = one.hit.Ng_z;
-                            rh.hit.u[k] = one.hit.u;
-                            rh.hit.v[k] = one.hit.v;
-                            rh.hit.primID[k] = one.hit.primID;
-                            rh.hit.geomID[k] = one.hit.geomID;
-                            rh.hit.instID[0][k] = one.hit.instID[0];
+                            RayTask t;
+                            t.org = org;
+                            t.dir = {rh.ray.dir_x[k], rh.ray.dir_y[k], rh.ray.dir_z[k]};
+                            t.tfar = INFINITY;
+                            t.weight = {sampleWeight, sampleWeight, sampleWeight};
+                            t.pixel = pixel[k];
+                            t.depth = 1;
+                            t.seed = seed[k];
+                            shadeHit(shading, t, hitOf(rh, k), sc.accum[t.pixel], sc.shadows, sc.next);
                         }
                     }
-                    if (eyeLight) {
-                        shadeEyeLightPacket<K>(shading, rh, valid, pixel, sampleWeight, sc.accum.data());
-                        continue;
-                    }
-                    for (int k = 0; k < K; ++k) {
-                        if (!valid[k]) continue;
-                        RayTask t;
-                        t.org = org;
-                        t.dir = {rh.ray.dir_x[k], rh.ray.dir_y[k], rh.ray.dir_z[k]};
-                        t.tfar = INFINITY;
-                        t.weight = {sampleWeight, sampleWeight, sampleWeight};
-                        t.pixel = pixel[k];
-                        t.depth = 1;
-                        shadeHit(shading, t, hitOf(rh, k), sc.accum[t.pixel], sc.shadows, sc.next);
-                    }
-                }
-        }
+            }
 }
 
 template <bool kUsePackets>
-void primaryPassFor(int width, const Scene::Impl& s, const Camera& camera, const TileRect& rect,
-                    const RenderSettings& settings, Scratch& sc) {
-    if (width == 16) primaryPassK<16, kUsePackets>(s, camera, rect, settings, sc);
-    else if (width == 8) primaryPassK<8, kUsePackets>(s, camera, rect, settings, sc);
-    else primaryPassK<4, kUsePackets>(s, camera, rect, settings, sc);
+void primaryPassFor(int width, const Scene::Impl& s, const Camera& camera, const TileRect& rect, uint32_t frame,
+                    const ShadingContext& shading, Scratch& sc) {
+    if (width == 16) primaryPassK<16, kUsePackets>(s, camera, rect, frame, shading, sc);
+    else if (width == 8) primaryPassK<8, kUsePackets>(s, camera, rect, frame, shading, sc);
+    else primaryPassK<4, kUsePackets>(s, camera, rect, frame, shading, sc);
 }
 
 int detectPacketWidth() {
@@ -298,6 +320,75 @@ int detectPacketWidth() {
     if (__builtin_cpu_supports("avx")) return 8;
     return 4;
 }
+
+// Shadow rays: first the fast occlusion query against opaque instances only; the survivors
+// then walk the shadow-transparent instances (glass, volumes) hit by hit, in order, each
+// taking away its share of the light. Walking in order keeps every product in the same order
+// for both kernels, so they stay bit-identical.
+void traceShadows(const Tracer& tracer, const ShadingContext& shading, Scratch& sc, TileStats& stats,
+                  bool trackRays) {
+    const Scene::Impl& s = shading.scene;
+    sc.occluded.resize(sc.shadows.size());
+    const uint32_t firstMask = s.anyShadowTransparent ? kMaskOpaque : kMaskAll;
+    tracer.shadow(s.top, sc.shadows.data(), sc.occluded.data(), sc.shadows.size(), firstMask);
+    stats.shadowRays += sc.shadows.size();
+    if (trackRays)
+        for (const ShadowTask& t : sc.shadows) ++sc.pixelRays[t.pixel];
+    if (!s.anyShadowTransparent) {
+        for (size_t i = 0; i < sc.shadows.size(); ++i)
+            if (!sc.occluded[i]) sc.accum[sc.shadows[i].pixel] += sc.shadows[i].contribution;
+        return;
+    }
+    sc.walk.clear();
+    for (size_t i = 0; i < sc.shadows.size(); ++i)
+        if (!sc.occluded[i]) sc.walk.push_back(sc.shadows[i]);
+    for (int step = 0; step < 256 && !sc.walk.empty(); ++step) {
+        sc.walkRays.resize(sc.walk.size());
+        for (size_t i = 0; i < sc.walk.size(); ++i) {
+            const ShadowTask& t = sc.walk[i];
+            sc.walkRays[i] = RayTask{t.org, t.dir, t.tfar, t.contribution, t.pixel, 0, 0};
+        }
+        sc.hits.resize(sc.walk.size());
+        tracer.closest(s.top, sc.walkRays.data(), sc.hits.data(), sc.walk.size(), false, kMaskShadowTransparent);
+        stats.shadowRays += sc.walk.size();
+        sc.walkNext.clear();
+        for (size_t i = 0; i < sc.walk.size(); ++i) {
+            ShadowTask t = sc.walk[i];
+            const Hit& hit = sc.hits[i];
+            if (hit.inst == kNoHit) {
+                sc.accum[t.pixel] += t.contribution;
+                continue;
+            }
+            const ShadowPass pass = shadowPassAt(shading, t, hit);
+            t.contribution = t.contribution * pass.transmittance;
+            if (!(maxComponent(t.contribution) > 0.0f)) continue;
+            const float at = std::max(hit.t, pass.continueAt);
+            const Float3 p = t.org + t.dir * at;
+            const float eps = (1.0f + maxAbsComponent(p)) * (1.0f / 65536.0f);
+            if (!(at + eps < t.tfar)) {
+                sc.accum[t.pixel] += t.contribution;
+                continue;
+            }
+            t.org = p + t.dir * eps;
+            t.tfar -= at + eps;
+            sc.walkNext.push_back(t);
+        }
+        sc.walk.swap(sc.walkNext);
+    }
+}
+
+// False colours: a blue-to-red ramp over [0, 1] (red at 1 and above).
+Color ramp(float x) {
+    x = std::clamp(x, 0.0f, 1.0f);
+    if (x < 0.25f) return {0.0f, 4.0f * x, 1.0f};
+    if (x < 0.5f) return {0.0f, 1.0f, 1.0f - 4.0f * (x - 0.25f)};
+    if (x < 0.75f) return {4.0f * (x - 0.5f), 1.0f, 0.0f};
+    return {1.0f, 1.0f - 4.0f * (x - 0.75f), 0.0f};
+}
+
+// The whole tile into sc.accum (linear RGB), and the per-pixel counts a false-colour view needs.
+TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileRect& rect, uint32_t frame,
+                         const RenderSettings& settings, Scratch& sc);
 
 Tracer tracerFor(KernelType kernel) {
     if (kernel == KernelType::Single) return {traceClosestSingle, traceShadowSingle};
@@ -313,51 +404,37 @@ int packetWidth() {
     return width;
 }
 
-TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t /*frame*/,
+TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
                      const RenderSettings& settings, TileView out) {
-    const Scene::Impl& s = scene.impl();
-    const Tracer tracer = tracerFor(settings.kernel);
     Scratch& sc = tScratch;
-    TileStats stats;
-
+    const auto t0 = std::chrono::steady_clock::now();
+    const TileStats stats = renderTileInto(scene.impl(), camera, rect, frame, settings, sc);
     const int w = rect.width(), h = rect.height();
     if (w <= 0 || h <= 0) return stats;
-    const int ss = std::max(1, settings.supersample);
-    const ShadingContext shading{s, settings};
 
-    sc.accum.assign(size_t(w) * h, Color{0, 0, 0});
-    sc.shadows.clear();
-    sc.next.clear();
-    // Primary rays: sub-pixel sample outermost, then one coherent packet-shaped pixel block
-    // per batch, generated straight into Embree's SoA packet, traced and shaded while hot in L1.
-    if (settings.kernel == KernelType::Packet) primaryPassFor<true>(packetWidth(), s, camera, rect, settings, sc);
-    else primaryPassFor<false>(packetWidth(), s, camera, rect, settings, sc);
-    stats.rays += uint64_t(w) * h * ss * ss;
-
-    // Then generation by generation: the shadow rays of the last one, and the rays it spawned.
-    for (;;) {
-        if (!sc.shadows.empty()) {
-            sc.occluded.resize(sc.shadows.size());
-            tracer.shadow(s.top, sc.shadows.data(), sc.occluded.data(), sc.shadows.size());
-            stats.shadowRays += sc.shadows.size();
-            for (size_t i = 0; i < sc.shadows.size(); ++i)
-                if (!sc.occluded[i]) sc.accum[sc.shadows[i].pixel] += sc.shadows[i].contribution;
-            sc.shadows.clear();
-        }
-        if (sc.next.empty()) break;
-        sc.rays.swap(sc.next);
-        sc.next.clear();
-        sc.hits.resize(sc.rays.size());
-        tracer.closest(s.top, sc.rays.data(), sc.hits.data(), sc.rays.size(), false);
-        stats.rays += sc.rays.size();
-        for (size_t i = 0; i < sc.rays.size(); ++i)
-            shadeHit(shading, sc.rays[i], sc.hits[i], sc.accum[sc.rays[i].pixel], sc.shadows, sc.next);
+    // False-colour views replace the shaded colour.
+    Color tileColor{0, 0, 0};
+    if (settings.view == ViewMode::TileTime) {
+        // Log scale: 0.1 ms blue ... 100 ms and more red.
+        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        tileColor = ramp(float((std::log10(std::max(ms, 1e-3)) + 1.0) / 3.0));
+    } else if (settings.view == ViewMode::Client) {
+        const uint32_t hsh = fmix32(settings.clientId + 1u);
+        tileColor = ramp(float(hsh & 0xFFFF) / 65535.0f);
     }
-
+    const int spp = std::max(1, settings.supersample) * std::max(1, settings.supersample) * std::max(1, settings.samples);
     for (int j = 0; j < h; ++j) {
         uint8_t* row = out.data + size_t(j) * out.stride;
         for (int i = 0; i < w; ++i) {
-            const Color& c = sc.accum[size_t(j) * w + i];
+            const size_t px = size_t(j) * w + i;
+            Color c = sc.accum[px];
+            switch (settings.view) {
+            case ViewMode::Shaded: break;
+            case ViewMode::Depth: c = ramp(float(sc.pixelDepth[px]) / 25.0f); break;
+            case ViewMode::Rays: c = ramp(float(std::log2(1.0 + double(sc.pixelRays[px]) / spp) / 6.0)); break;
+            case ViewMode::TileTime:
+            case ViewMode::Client: c = tileColor; break;
+            }
             row[3 * i + 0] = linearToSrgb8(c.x);
             row[3 * i + 1] = linearToSrgb8(c.y);
             row[3 * i + 2] = linearToSrgb8(c.z);
@@ -365,6 +442,72 @@ TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& r
     }
     return stats;
 }
+
+TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
+                           const RenderSettings& settings, float* out, size_t stride) {
+    Scratch& sc = tScratch;
+    const TileStats stats = renderTileInto(scene.impl(), camera, rect, frame, settings, sc);
+    const int w = rect.width(), h = rect.height();
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) {
+            const Color& c = sc.accum[size_t(j) * w + i];
+            float* o = out + size_t(j) * stride + 3 * size_t(i);
+            o[0] = c.x;
+            o[1] = c.y;
+            o[2] = c.z;
+        }
+    return stats;
+}
+
+namespace {
+
+TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileRect& rect, uint32_t frame,
+                         const RenderSettings& settings, Scratch& sc) {
+    const Tracer tracer = tracerFor(settings.kernel);
+    TileStats stats;
+
+    const int w = rect.width(), h = rect.height();
+    if (w <= 0 || h <= 0) return stats;
+    const int ss = std::max(1, settings.supersample);
+    const int spp = std::max(1, settings.samples);
+    ShadingContext shading{s, settings, 1.0f / float(ss * ss * spp)};
+    const bool trackDepth = settings.view == ViewMode::Depth, trackRays = settings.view == ViewMode::Rays;
+
+    sc.accum.assign(size_t(w) * h, Color{0, 0, 0});
+    sc.shadows.clear();
+    sc.next.clear();
+    if (trackDepth) sc.pixelDepth.assign(size_t(w) * h, uint16_t(1));
+    if (trackRays) sc.pixelRays.assign(size_t(w) * h, uint32_t(ss * ss * spp));
+    // Primary rays: sub-pixel sample outermost, then one coherent packet-shaped pixel block
+    // per batch, generated straight into Embree's SoA packet, traced and shaded while hot in L1.
+    if (settings.kernel == KernelType::Packet) primaryPassFor<true>(packetWidth(), s, camera, rect, frame, shading, sc);
+    else primaryPassFor<false>(packetWidth(), s, camera, rect, frame, shading, sc);
+    stats.rays += uint64_t(w) * h * ss * ss * spp;
+
+    // Then generation by generation: the shadow rays of the last one, and the rays it spawned.
+    for (;;) {
+        if (!sc.shadows.empty()) {
+            traceShadows(tracer, shading, sc, stats, trackRays);
+            sc.shadows.clear();
+        }
+        if (sc.next.empty()) break;
+        sc.rays.swap(sc.next);
+        sc.next.clear();
+        sc.hits.resize(sc.rays.size());
+        tracer.closest(s.top, sc.rays.data(), sc.hits.data(), sc.rays.size(), false, kMaskAll);
+        stats.rays += sc.rays.size();
+        if (trackDepth)
+            for (const RayTask& r : sc.rays)
+                sc.pixelDepth[r.pixel] = std::max<uint16_t>(sc.pixelDepth[r.pixel], uint16_t(r.depth));
+        if (trackRays)
+            for (const RayTask& r : sc.rays) ++sc.pixelRays[r.pixel];
+        for (size_t i = 0; i < sc.rays.size(); ++i)
+            shadeHit(shading, sc.rays[i], sc.hits[i], sc.accum[sc.rays[i].pixel], sc.shadows, sc.next);
+    }
+    return stats;
+}
+
+}  // namespace
 
 std::vector<TileRect> makeTiles(int width, int height, int tileSize) {
     std::vector<TileRect> tiles;

@@ -1,3 +1,4 @@
+#include "material.h"
 #include "scene_impl.h"
 #include "vec.h"
 
@@ -7,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <set>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -75,7 +77,68 @@ RTCSceneFlags sceneFlags(const BvhSettings& b) {
     return RTCSceneFlags(f);
 }
 
+// Inverse of the affine object-to-world transform, in double precision.
+void worldToObjectOf(const Transform& t, float out[12]) {
+    const auto& m = t.m;
+    const double a = m[0], b = m[1], c = m[2], d = m[4], e = m[5], f = m[6], g = m[8], h = m[9], i = m[10];
+    const double A = e * i - f * h, B = -(d * i - f * g), C = d * h - e * g;
+    const double D = -(b * i - c * h), E = a * i - c * g, F = -(a * h - b * g);
+    const double G = b * f - c * e, H = -(a * f - c * d), I = a * e - b * d;
+    const double det = a * A + b * B + c * C;
+    const double inv[9] = {A / det, D / det, G / det, B / det, E / det, H / det, C / det, F / det, I / det};
+    for (int r = 0; r < 3; ++r) {
+        const double tr = -(inv[3 * r] * m[3] + inv[3 * r + 1] * m[7] + inv[3 * r + 2] * m[11]);
+        out[4 * r] = float(inv[3 * r]);
+        out[4 * r + 1] = float(inv[3 * r + 1]);
+        out[4 * r + 2] = float(inv[3 * r + 2]);
+        out[4 * r + 3] = float(tr);
+    }
+}
+
+// Alpha masks: Embree calls this for every candidate hit of camera, secondary and shadow rays
+// (intersection and occlusion filter alike); a hit where the mask is below its cutoff is
+// rejected, so the ray goes on through the hole. Accepting or rejecting depends on the hit
+// alone, so packet and single-ray traversal still agree.
+void alphaFilter(const RTCFilterFunctionNArguments* args) {
+    const auto* s = static_cast<const Scene::Impl*>(args->geometryUserPtr);
+    const unsigned inst = args->context->instID[0];
+    if (inst >= s->instances.size()) return;
+    const InstanceData& data = s->instances[inst];
+    const MaterialModel& model = *s->models[data.material];
+    if (!model.alphaMasked()) return;
+    for (unsigned k = 0; k < args->N; ++k) {
+        if (args->valid[k] != -1) continue;
+        const unsigned prim = RTCHitN_primID(args->hit, args->N, k);
+        const float u = RTCHitN_u(args->hit, args->N, k), v = RTCHitN_v(args->hit, args->N, k);
+        if (!model.alphaAt(objectPosition(*data.mesh, prim, u, v))) args->valid[k] = 0;
+    }
+}
+
+void installAlphaFilters(Scene::Impl& s) {
+    for (RTCScene ms : s.meshScenes) {
+        RTCGeometry g = rtcGetGeometry(ms, 0);
+        if (!g) continue;
+        rtcSetGeometryUserData(g, &s);
+        rtcSetGeometryIntersectFilterFunction(g, alphaFilter);
+        rtcSetGeometryOccludedFilterFunction(g, alphaFilter);
+        rtcCommitGeometry(g);
+        rtcCommitScene(ms);
+    }
+    s.filtersInstalled = true;
+}
+
+unsigned instanceMask(const Scene::Impl& s, const InstanceData& data) {
+    return s.models[data.material]->shadowTransparent() ? kMaskShadowTransparent : kMaskOpaque;
+}
+
+void updateShadowTransparency(Scene::Impl& s) {
+    s.anyShadowTransparent = false;
+    for (const InstanceData& d : s.instances) s.anyShadowTransparent |= s.models[d.material]->shadowTransparent();
+}
+
 }  // namespace
+
+Scene::Impl::~Impl() = default;
 
 Scene::Scene(const SceneDesc& desc) : Scene(desc, ProgressFn{}) {}
 
@@ -91,6 +154,14 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
     for (const MeshDesc& md : s.desc.meshes) s.trianglesTotal += double(md.mesh->triangleCount());
 
     try {
+        s.models.reserve(s.desc.materials.size());
+        bool anyAlpha = false;
+        for (const Material& m : s.desc.materials) {
+            s.models.push_back(makeMaterialModel(m));
+            anyAlpha |= s.models.back()->alphaMasked();
+        }
+        std::vector<Bounds3> meshBounds(s.desc.meshes.size());
+        for (size_t i = 0; i < s.desc.meshes.size(); ++i) meshBounds[i] = s.desc.meshes[i].mesh->bounds();
         s.meshScenes.reserve(s.desc.meshes.size());
         for (const MeshDesc& md : s.desc.meshes) {
             const TriangleMesh& mesh = *md.mesh;
@@ -109,6 +180,12 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
                                            3 * sizeof(float), mesh.vertexCount());
                 rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, mesh.indices(), 0,
                                            3 * sizeof(uint32_t), mesh.triangleCount());
+                rtcSetGeometryMask(g, kMaskAll);  // instances carry the masks that matter
+                if (anyAlpha) {
+                    rtcSetGeometryUserData(g, &s);
+                    rtcSetGeometryIntersectFilterFunction(g, alphaFilter);
+                    rtcSetGeometryOccludedFilterFunction(g, alphaFilter);
+                }
                 rtcCommitGeometry(g);
                 rtcAttachGeometryByID(ms, g, 0);
                 rtcReleaseGeometry(g);
@@ -120,6 +197,7 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
         }
         s.progress = nullptr;
         s.meshBvhBytes = s.embreeBytes.load();
+        s.filtersInstalled = anyAlpha;
 
         s.top = rtcNewScene(s.device);
         rtcSetSceneFlags(s.top, sceneFlags(s.desc.bvh));
@@ -128,17 +206,24 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
             const InstanceDesc& in = s.desc.instances[i];
             InstanceData& data = s.instances[i];
             data.mesh = s.desc.meshes.at(in.mesh).mesh.get();
-            data.material = &s.desc.materials.at(in.material);
+            if (in.material >= s.desc.materials.size())
+                throw std::out_of_range("instance " + std::to_string(i) + ": material " + std::to_string(in.material) +
+                                        " does not exist");
+            data.material = in.material;
+            data.meshBounds = meshBounds[in.mesh];
             for (int k = 0; k < 12; ++k) data.objectToWorld[k] = float(in.transform.m[k]);
             normalMatrixOf(in.transform, data.normalMatrix);
+            worldToObjectOf(in.transform, data.worldToObject);
 
             RTCGeometry g = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_INSTANCE);
             rtcSetGeometryInstancedScene(g, s.meshScenes[in.mesh]);
             rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, data.objectToWorld);
+            rtcSetGeometryMask(g, instanceMask(s, data));
             rtcCommitGeometry(g);
             rtcAttachGeometryByID(s.top, g, unsigned(i));
             rtcReleaseGeometry(g);
         }
+        updateShadowTransparency(s);
         rtcCommitScene(s.top);
         checkDevice(s.device, lastError, "building the top-level BVH");
     } catch (...) {
@@ -167,6 +252,7 @@ void Scene::setInstanceTransform(uint32_t instance, const Transform& transform) 
     s.desc.instances[instance].transform = transform;
     for (int k = 0; k < 12; ++k) data.objectToWorld[k] = float(transform.m[k]);
     std::copy(normal, normal + 9, data.normalMatrix);
+    worldToObjectOf(transform, data.worldToObject);
     RTCGeometry g = rtcGetGeometry(s.top, instance);
     rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, data.objectToWorld);
     rtcCommitGeometry(g);
@@ -177,7 +263,20 @@ void Scene::setMaterial(uint32_t material, const Material& value) {
     Impl& s = *impl_;
     if (material >= s.desc.materials.size())
         throw std::out_of_range("material " + std::to_string(material) + " does not exist");
-    s.desc.materials[material] = value;  // instances point at this element; the vector never grows
+    // Built first: a texture or volume that cannot be read throws before anything changes.
+    std::unique_ptr<MaterialModel> model = makeMaterialModel(value);
+    s.desc.materials[material] = value;
+    s.models[material] = std::move(model);
+    if (s.models[material]->alphaMasked() && !s.filtersInstalled) installAlphaFilters(s);
+    // Shadow rays find shadow-transparent instances by their Embree mask.
+    for (size_t i = 0; i < s.instances.size(); ++i) {
+        if (s.instances[i].material != material) continue;
+        RTCGeometry g = rtcGetGeometry(s.top, unsigned(i));
+        rtcSetGeometryMask(g, instanceMask(s, s.instances[i]));
+        rtcCommitGeometry(g);
+    }
+    updateShadowTransparency(s);
+    s.dirty = true;
 }
 
 void Scene::setLight(uint32_t light, const Light& value) {

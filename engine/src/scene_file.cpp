@@ -1,5 +1,7 @@
 // TOML scene files (format documented in configs/README.md).
+#include "texture.h"
 #include "vec.h"
+#include "volume.h"
 
 #include <rtwall/engine.h>
 #include <rtwall/toml_reader.h>
@@ -16,12 +18,67 @@
 
 namespace rtwall {
 
+ViewMode viewModeFromName(const std::string& name) {
+    if (name == "shaded") return ViewMode::Shaded;
+    if (name == "depth") return ViewMode::Depth;
+    if (name == "rays") return ViewMode::Rays;
+    if (name == "tile_time") return ViewMode::TileTime;
+    if (name == "client") return ViewMode::Client;
+    throw InputError("unknown view '" + name + "' (shaded, depth, rays, tile_time, client)");
+}
+
 namespace {
+
+MaterialType materialTypeFromName(const std::string& type) {
+    return type == "phong"      ? MaterialType::Phong
+           : type == "mirror"   ? MaterialType::Mirror
+           : type == "glass"    ? MaterialType::Glass
+           : type == "metal"    ? MaterialType::Metal
+           : type == "emissive" ? MaterialType::Emissive
+           : type == "volume"   ? MaterialType::Volume
+                                : MaterialType::Lambert;
+}
 
 using toml_reader::Reader;
 using toml_reader::forEachTable;
 using toml_reader::subTable;
 using toml_reader::where;
+
+// A texture given by `<prefix>` (a pattern name or "image") and its `<prefix>_...` keys.
+TextureDesc readTexture(Reader& r, const std::filesystem::path& dir, const std::string& prefix) {
+    TextureDesc t;
+    if (!r.has(prefix)) return t;
+    const std::string kind = r.choice(prefix, "", {"checker", "marble", "wood", "image"});
+    t.kind = kind == "checker" ? TextureKind::Checker
+             : kind == "marble" ? TextureKind::Marble
+             : kind == "wood"   ? TextureKind::Wood
+                                : TextureKind::Image;
+    if (t.kind == TextureKind::Image) {
+        const std::string file = r.string(prefix + "_file", "", true);
+        t.file = (dir / file).string();
+        try {
+            loadTextureImage(t.file);
+        } catch (const InputError& e) {
+            r.fail(r.find(prefix + "_file"), std::string("key '") + prefix + "_file': " + e.what());
+        }
+    }
+    t.color2 = r.vec3(prefix + "_color2", t.color2);
+    t.scale = float(r.number(prefix + "_scale", t.scale, 1e-6, 1e6));
+    const std::string mapping = r.choice(prefix + "_mapping", "xz", {"xz", "xy", "yz"});
+    t.mapping = mapping == "xy" ? TextureMapping::PlanarXY
+                : mapping == "yz" ? TextureMapping::PlanarYZ
+                                  : TextureMapping::PlanarXZ;
+    return t;
+}
+
+void checkUnit(Reader& r, const std::string& key, const Color& c) {
+    if (maxComponent(c) > 1.0f || std::min({c.x, c.y, c.z}) < 0.0f)
+        r.fail(r.find(key), "key '" + key + "': components must lie in [0, 1]");
+}
+
+void checkNonNegative(Reader& r, const std::string& key, const Color& c) {
+    if (std::min({c.x, c.y, c.z}) < 0.0f) r.fail(r.find(key), "key '" + key + "': components must not be negative");
+}
 
 void readSettings(Reader& top, const std::filesystem::path& file, RenderSettings& s) {
     if (const toml::table* t = subTable(top, "image")) {
@@ -43,6 +100,10 @@ void readSettings(Reader& top, const std::filesystem::path& file, RenderSettings
         s.background = r.vec3("background", s.background);
         s.ambient = r.vec3("ambient", s.ambient);
         s.threads = r.integer("threads", s.threads, 0, 1024);
+        s.pruneThreshold = float(r.number("prune_threshold", s.pruneThreshold, 0.0, 1.0));
+        s.gi = r.boolean("gi", s.gi);
+        s.samples = r.integer("samples", s.samples, 1, 4096);
+        s.view = viewModeFromName(r.choice("view", "shaded", {"shaded", "depth", "rays", "tile_time", "client"}));
         r.finish();
     }
 }
@@ -274,14 +335,53 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
         Material m;
         m.name = r.string("name", "", true);
         if (materialIndex.count(m.name)) r.fail(r.find("name"), "material name '" + m.name + "' is used twice");
-        const std::string type = r.choice("type", "lambert", {"lambert", "phong", "mirror", "glass"});
-        m.type = type == "phong"    ? MaterialType::Phong
-                 : type == "mirror" ? MaterialType::Mirror
-                 : type == "glass"  ? MaterialType::Glass
-                                    : MaterialType::Lambert;
-        m.color = r.vec3("color", m.type == MaterialType::Lambert || m.type == MaterialType::Phong
-                                      ? Color{0.8f, 0.8f, 0.8f}
-                                      : Color{1, 1, 1});
+        const std::string type =
+            r.choice("type", "lambert", {"lambert", "phong", "mirror", "glass", "metal", "emissive", "volume"});
+        m.type = materialTypeFromName(type);
+        const bool diffuse = m.type == MaterialType::Lambert || m.type == MaterialType::Phong;
+        m.texture = readTexture(r, dir, "texture");
+        m.color = r.vec3("color", diffuse && m.texture.kind != TextureKind::Image ? Color{0.8f, 0.8f, 0.8f}
+                                                                                  : Color{1, 1, 1});
+        checkUnit(r, "texture_color2", m.texture.color2);
+        if (m.type == MaterialType::Metal) m.roughness = float(r.number("roughness", m.roughness, 0.0, 1.0));
+        if (m.type == MaterialType::Glass) {
+            m.absorption = r.vec3("absorption", m.absorption);
+            checkNonNegative(r, "absorption", m.absorption);
+        }
+        m.emission = r.vec3("emission", m.type == MaterialType::Emissive ? Color{1, 1, 1} : Color{0, 0, 0});
+        checkNonNegative(r, "emission", m.emission);
+        m.bump = float(r.number("bump", m.bump, 0.0, 100.0));
+        m.bumpScale = float(r.number("bump_scale", m.bumpScale, 1e-6, 1e6));
+        m.alpha = readTexture(r, dir, "alpha");
+        m.alphaCutoff = float(r.number("alpha_cutoff", m.alphaCutoff, 0.0, 1.0));
+        if (m.type == MaterialType::Volume) {
+            m.volumeFile = (dir / r.string("volume_file", "", true)).string();
+            try {
+                loadVolume(m.volumeFile);
+            } catch (const InputError& e) {
+                r.fail(r.find("volume_file"), std::string("key 'volume_file': ") + e.what());
+            }
+            m.volumeStep = float(r.number("volume_step", m.volumeStep, 0.01, 100.0));
+            if (const toml::node* n = r.find("transfer")) {
+                const toml::array* a = n->as_array();
+                if (!a || a->empty()) r.fail(n, "key 'transfer': expected an array of [value, r, g, b, density]");
+                for (const toml::node& e : *a) {
+                    const toml::array* p = e.as_array();
+                    double v[5];
+                    if (!p || p->size() != 5) r.fail(&e, "key 'transfer': each point is [value, r, g, b, density]");
+                    for (int k = 0; k < 5; ++k) {
+                        const auto* x = p->get(size_t(k));
+                        if (auto i = x->as_integer()) v[k] = double(i->get());
+                        else if (auto f = x->as_floating_point()) v[k] = f->get();
+                        else r.fail(x, "key 'transfer': expected numbers");
+                        if (!std::isfinite(v[k])) r.fail(x, "key 'transfer': values must be finite");
+                    }
+                    if (v[1] < 0 || v[2] < 0 || v[3] < 0 || v[4] < 0)
+                        r.fail(&e, "key 'transfer': colour and density must not be negative");
+                    m.transfer.push_back({float(v[0]), {float(v[1]), float(v[2]), float(v[3])}, float(v[4])});
+                }
+            }
+        }
         if (m.type == MaterialType::Phong) {
             m.specular = r.vec3("specular", {0.5f, 0.5f, 0.5f});
             m.shininess = float(r.number("shininess", m.shininess, 1.0, 1e5));
@@ -402,10 +502,15 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
     forEachTable(top, file, "light", [&](Reader& r, const toml::table&) {
         Light l;
         std::array<double, 3> position{0, 10, 0};
-        l.type = r.choice("type", "point", {"point", "directional"}) == "directional" ? LightType::Directional
-                                                                                     : LightType::Point;
+        const std::string type = r.choice("type", "point", {"point", "directional", "area"});
+        l.type = type == "directional" ? LightType::Directional : type == "area" ? LightType::Area : LightType::Point;
         if (l.type == LightType::Point) position = vec3d(r, "position", {}, true);
-        else {
+        else if (l.type == LightType::Area) {
+            position = vec3d(r, "position", {}, true);
+            l.edge1 = r.vec3("edge1", {}, true);
+            l.edge2 = r.vec3("edge2", {}, true);
+            if (length(cross(l.edge1, l.edge2)) == 0.0f) r.fail(r.find("edge2"), "key 'edge2': the area light has no area");
+        } else {
             l.direction = r.vec3("direction", {}, true);
             if (dot(l.direction, l.direction) == 0.0f) r.fail(r.find("direction"), "key 'direction' must not be zero");
         }
@@ -443,7 +548,7 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
         in.transform.m[11] -= o[2];
     }
     for (size_t i = 0; i < scene.lights.size(); ++i)
-        if (scene.lights[i].type == LightType::Point) scene.lights[i].position = rel(lightPositions[i]);
+        if (scene.lights[i].type != LightType::Directional) scene.lights[i].position = rel(lightPositions[i]);
     for (size_t i = 0; i < scene.cameras.size(); ++i) {
         scene.cameras[i].position = rel(cameraPositions[i]);
         scene.cameras[i].lookAt = rel(cameraTargets[i]);

@@ -1,5 +1,6 @@
 // Shading: turns one hit into contributions, shadow rays and secondary rays. Scalar code used
-// unchanged by the packet and single-ray kernels.
+// unchanged by the packet and single-ray kernels. The materials themselves live behind the
+// MaterialModel interface (material.h); this file holds what every material shares.
 #pragma once
 
 #include "scene_impl.h"
@@ -12,12 +13,19 @@ namespace rtwall {
 
 inline constexpr uint32_t kNoHit = 0xFFFFFFFFu;
 
+// Embree ray masks: shadow rays first test only opaque instances with the fast occlusion
+// query, then walk the shadow-transparent ones (glass, volumes) hit by hit.
+inline constexpr uint32_t kMaskOpaque = 1u;
+inline constexpr uint32_t kMaskShadowTransparent = 2u;
+inline constexpr uint32_t kMaskAll = 0xFFFFFFFFu;
+
 struct RayTask {
     Float3 org, dir;  // dir is unit length
     float tfar;
     Color weight;     // throughput from the pixel to this ray, including the sample weight
     uint32_t pixel;   // index into the tile's accumulation buffer
     int depth;        // 1 for primary rays
+    uint32_t seed;    // random-number seed of this path vertex (sampling.h)
 };
 
 struct Hit {
@@ -30,13 +38,14 @@ struct Hit {
 struct ShadowTask {
     Float3 org, dir;
     float tfar;
-    Color contribution;  // added to the pixel if the light is visible
+    Color contribution;  // added to the pixel if the light is visible, times what passes
     uint32_t pixel;
 };
 
 struct ShadingContext {
     const Scene::Impl& scene;
     const RenderSettings& settings;
+    float sampleWeight = 1.0f;  // weight of one primary sample in its pixel (pruning is relative to it)
 };
 
 inline Float3 transformNormal(const float n[9], const Float3& v) {
@@ -67,9 +76,10 @@ inline void shadeEyeLightPacket(const ShadingContext& ctx, const RayHitK& rh, co
         nx[k] = ng.x;
         ny[k] = ng.y;
         nz[k] = ng.z;
-        cr[k] = inst.material->color.x;
-        cg[k] = inst.material->color.y;
-        cb[k] = inst.material->color.z;
+        const Material& m = ctx.scene.desc.materials[inst.material];
+        cr[k] = m.color.x;
+        cg[k] = m.color.y;
+        cb[k] = m.color.z;
     }
     for (int k = 0; k < K; ++k) {
         const float nn = nx[k] * nx[k] + ny[k] * ny[k] + nz[k] * nz[k];
@@ -87,9 +97,22 @@ inline void shadeEyeLightPacket(const ShadingContext& ctx, const RayHitK& rh, co
 }
 
 // Adds what is known now to `pixel`, appends the shadow rays whose contribution depends on
-// visibility to `shadows`, and the reflection/refraction rays to `next`.
+// visibility to `shadows`, and the secondary rays to `next`.
 void shadeHit(const ShadingContext& ctx, const RayTask& ray, const Hit& hit, Color& pixel,
               std::vector<ShadowTask>& shadows, std::vector<RayTask>& next);
+
+// What part of a shadow ray's light passes its hit `hit`, and where the walk goes on (the
+// ray parameter to continue from). Used only for instances whose material is shadow-transparent.
+struct ShadowPass {
+    Color transmittance{0, 0, 0};
+    float continueAt = 0.0f;
+};
+ShadowPass shadowPassAt(const ShadingContext& ctx, const ShadowTask& ray, const Hit& hit);
+
+// Scale-aware offset for secondary-ray origins: a fixed epsilon is too small far from the
+// origin and too large for small models. 2^-16 relative to the coordinate magnitude is about
+// 128 float ulps, well above intersection error and well below any modelled feature.
+Float3 offsetOrigin(const Float3& p, const Float3& ng, float side);
 
 // Correctly rounded linear-to-sRGB quantisation: a bucket table gives the code at the start of
 // each of 4096 equal linear intervals. Codes are at least 1/(12.92*255) = 3.0e-4 apart in

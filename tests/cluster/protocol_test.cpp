@@ -380,7 +380,8 @@ TEST(Protocol, EncodeSetsTypeAndLength) {
 }
 
 TEST(Protocol, GoldenBytes) {
-    // The exact layout of a header and a small payload; a change here breaks every deployed peer.
+    // The exact layout of a header and a small payload; a change here breaks every deployed peer
+    // (version 2: the shading fields of materials, lights and settings).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -388,7 +389,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x02, 0x00,                                      // version (2: Welcome carries the timeout)
+        0x03, 0x00,                                      // version (3: Welcome carries the timeout; materials, area lights)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -565,7 +566,17 @@ TEST(Protocol, SnapshotRejectsValuesOutOfRange) {
         {"fov -10", [](SceneSnapshot& s) { s.camera.fovY = -10; }},
         {"camera NaN", [=](SceneSnapshot& s) { s.camera.lookAt.x = nan; }},
         {"camera name too long", [](SceneSnapshot& s) { s.camera.name.assign(kMaxStringBytes + 1, 'c'); }},
-        {"material type 4", [](SceneSnapshot& s) { s.materials[1].type = MaterialType(4); }},
+        {"material type 7", [](SceneSnapshot& s) { s.materials[1].type = MaterialType(7); }},
+        {"roughness 1.5", [](SceneSnapshot& s) { s.materials[0].roughness = 1.5f; }},
+        {"absorption -1", [](SceneSnapshot& s) { s.materials[0].absorption.y = -1.0f; }},
+        {"emission NaN", [=](SceneSnapshot& s) { s.materials[0].emission.x = nan; }},
+        {"texture kind 5", [](SceneSnapshot& s) { s.materials[0].texture.kind = TextureKind(5); }},
+        {"image texture without file", [](SceneSnapshot& s) { s.materials[0].texture.kind = TextureKind::Image; }},
+        {"volume without file", [](SceneSnapshot& s) { s.materials[0].type = MaterialType::Volume; }},
+        {"volume step 0", [](SceneSnapshot& s) { s.materials[0].volumeStep = 0.0f; }},
+        {"prune threshold -0.1", [](SceneSnapshot& s) { s.settings.pruneThreshold = -0.1f; }},
+        {"samples 0", [](SceneSnapshot& s) { s.settings.samples = 0; }},
+        {"view 5", [](SceneSnapshot& s) { s.settings.view = ViewMode(5); }},
         {"color 1.01", [](SceneSnapshot& s) { s.materials[0].color.x = 1.01f; }},
         {"color -0.1", [](SceneSnapshot& s) { s.materials[0].color.z = -0.1f; }},
         {"specular 2", [](SceneSnapshot& s) { s.materials[1].specular.y = 2.0f; }},
@@ -574,7 +585,7 @@ TEST(Protocol, SnapshotRejectsValuesOutOfRange) {
         {"ior 4.01", [](SceneSnapshot& s) { s.materials[1].ior = 4.01f; }},
         {"shininess -1", [](SceneSnapshot& s) { s.materials[0].shininess = -1; }},
         {"shininess inf", [=](SceneSnapshot& s) { s.materials[0].shininess = inf; }},
-        {"light type 2", [](SceneSnapshot& s) { s.lights[0].type = LightType(2); }},
+        {"light type 3", [](SceneSnapshot& s) { s.lights[0].type = LightType(3); }},
         {"intensity -1", [](SceneSnapshot& s) { s.lights[0].intensity = -1; }},
         {"light position NaN", [=](SceneSnapshot& s) { s.lights[1].position.x = nan; }},
         {"light direction inf", [=](SceneSnapshot& s) { s.lights[1].direction.z = -inf; }},

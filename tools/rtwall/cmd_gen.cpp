@@ -2,6 +2,7 @@
 #include "commands.h"
 
 #include "../gen/generators.h"
+#include "gen_shading.h"
 
 #include <rtwall/mesh.h>
 
@@ -15,9 +16,18 @@ void addGen(CLI::App& app, Run& run) {
     auto o = std::make_shared<gen::GenOptions>();
     auto name = std::make_shared<std::string>();
     CLI::App* cmd = app.add_subcommand("gen", "Generate a test or benchmark scene: mesh files plus scene.toml");
+    // The CAD generators (tools/gen/) and the shading demos (gen_shading.cpp), one list.
+    static const std::map<std::string, gen::Generator> all = [] {
+        std::map<std::string, gen::Generator> m = gen::generators();
+        m["office"] = {"the office demo: shadows, mirror, glass, textures, alpha-masked leaves, a volume",
+                       [](const gen::GenOptions& g) { writeShadingDemo("office", g.out); }};
+        m["headlight"] = {"the headlight demo: parabolic reflector, bulb, structured lens glass, deep paths",
+                          [](const gen::GenOptions& g) { writeShadingDemo("headlight", g.out); }};
+        return m;
+    }();
     std::string list;
     std::vector<std::string> names;
-    for (const auto& [n, g] : gen::generators()) {
+    for (const auto& [n, g] : all) {
         list += "\n  " + n + ": " + g.help;
         names.push_back(n);
     }
@@ -36,13 +46,13 @@ void addGen(CLI::App& app, Run& run) {
         run = [o, name] {
             const auto t0 = std::chrono::steady_clock::now();
             try {
-                gen::generators().at(*name).run(*o);
+                all.at(*name).run(*o);
             } catch (const std::filesystem::filesystem_error& e) {
                 throw InputError(std::string("gen: ") + e.what());
             } catch (const std::runtime_error& e) {
                 throw InputError(std::string("gen: ") + e.what());
             }
-            std::fprintf(stderr, "rtwall gen %s: wrote %s in %.1f s\n", name->c_str(), (o->out / "scene.toml").c_str(),
+            std::fprintf(stderr, "rtwall gen %s: wrote %s in %.1f s\n", name->c_str(), o->out.c_str(),
                          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
             return 0;
         };

@@ -15,8 +15,11 @@ namespace rtwall::cli {
 namespace {
 
 struct RenderOptions {
-    std::string scene, out, camera, kernel, region, codec = "lz4";
+    std::string scene, out, camera, kernel, region, codec = "lz4", view;
     int width = 0, height = 0, threads = -1, tile = 0, clients = 0, prefetch = 4;
+    int samples = 0, maxDepth = 0, frames = 1;
+    double prune = -1;
+    bool gi = false;
 };
 
 bool isSceneFile(const std::filesystem::path& p) {
@@ -48,7 +51,11 @@ Image renderWithClients(SceneDesc desc, const CameraDesc& camera, const RenderOp
     if (!master.waitForClients(o.clients, 60'000))
         throw InputError("only " + std::to_string(master.connectedClients()) + " of " + std::to_string(o.clients) +
                          " local render clients joined within 60 s");
-    return master.renderFrame(&report);
+    // Progressive: frames 1..N of a still view, averaged (the same bytes as one machine).
+    if (o.frames == 1) return master.renderFrame(&report);
+    Accumulator acc;
+    for (int f = 0; f < o.frames; ++f) acc.add(master.renderFrame(&report));
+    return acc.resolve();
 }
 
 // Scene files may name gigabytes of meshes: a progress bar on a terminal, and Ctrl-C stops.
@@ -79,6 +86,14 @@ void addRender(CLI::App& app, Run& run) {
     cmd->add_option("--prefetch", o->prefetch, "Tiles each client keeps in flight (with --clients)")->check(CLI::Range(1, 64));
     cmd->add_option("--codec", o->codec, "Tile codec (with --clients); jpeg is lossy")
         ->check(CLI::IsMember({"raw", "lz4", "zstd", "jpeg"}));
+    cmd->add_option("--view", o->view, "False-colour view (overrides the scene)")
+        ->check(CLI::IsMember({"shaded", "depth", "rays", "tile_time", "client"}));
+    cmd->add_flag("--gi", o->gi, "Global illumination: path tracing with next-event estimation");
+    cmd->add_option("--samples", o->samples, "Random samples per pixel sample and frame")->check(CLI::Range(1, 4096));
+    cmd->add_option("--prune", o->prune, "Ray-tree pruning threshold (0 = off)")->check(CLI::Range(0.0, 1.0));
+    cmd->add_option("--max-depth", o->maxDepth, "Longest ray path")->check(CLI::Range(1, 64));
+    cmd->add_option("--frames", o->frames, "Average this many frames, each with its own seeds (progressive refinement)")
+        ->check(CLI::Range(1, 100000));
     cmd->add_option("--region", o->region, "Render only pixels x0,y0,x1,y1 (half-open; the rest stays black), to replay one tile");
 
     cmd->callback([&run, o] {
@@ -94,6 +109,11 @@ void addRender(CLI::App& app, Run& run) {
             if (o->threads >= 0) s.threads = o->threads;
             if (o->tile) s.tileSize = o->tile;
             if (!o->kernel.empty()) s.kernel = o->kernel == "single" ? KernelType::Single : KernelType::Packet;
+            if (!o->view.empty()) s.view = viewModeFromName(o->view);
+            if (o->gi) s.gi = true;
+            if (o->samples) s.samples = o->samples;
+            if (o->prune >= 0) s.pruneThreshold = float(o->prune);
+            if (o->maxDepth) s.maxDepth = o->maxDepth;
             const CameraDesc* cam = o->camera.empty() ? &desc.cameras.front() : desc.findCamera(o->camera);
             if (!cam) {
                 std::string names;
@@ -124,7 +144,16 @@ void addRender(CLI::App& app, Run& run) {
             TileStats stats;
             Image img;
             if (o->region.empty()) {
-                img = renderFrame(scene, camera, s, 0, &stats);
+                // The cluster numbers its frames from 1; so do we, so both give the same bytes.
+                Accumulator acc;
+                for (int f = 0; f < o->frames; ++f) {
+                    TileStats fs;
+                    img = renderFrame(scene, camera, s, uint32_t(f + 1), &fs);
+                    if (o->frames > 1) acc.add(img);
+                    stats.rays += fs.rays;
+                    stats.shadowRays += fs.shadowRays;
+                }
+                if (o->frames > 1) img = acc.resolve();
             } else {
                 const TileRect r = parseRegion(o->region, s);
                 img.width = s.width;

@@ -395,6 +395,10 @@ void addRun(CLI::App& app, Run& run) {
             std::vector<double> frameTimes;
             auto last = std::chrono::steady_clock::now();
             uint64_t bytes = 0;
+            // A still view refines progressively (each frame has its own sampling seeds); a
+            // moving camera restarts the accumulation every frame.
+            uint32_t accumulatedSeq = UINT32_MAX;
+            Accumulator progressive;
             for (int f = 1; (c.frames == 0 || f <= c.frames) && !gStop; ++f) {
                 // Differential updates: only what changes goes to the clients (the camera; objects the
                 // user moves on the wall).
@@ -416,6 +420,14 @@ void addRun(CLI::App& app, Run& run) {
                 }
                 shown.number = report.frame;
                 const Image& img = shown.left;
+                if (!stereo) {
+                    // A still view refines: each frame has its own sampling seeds; any change to
+                    // the scene state (camera, objects, materials) restarts the accumulation.
+                    if (report.stateSeq != accumulatedSeq) progressive.reset();
+                    accumulatedSeq = report.stateSeq;
+                    progressive.add(shown.left);
+                    shown.left = progressive.resolve();
+                }
                 const auto now = std::chrono::steady_clock::now();
                 frameTimes.push_back(std::chrono::duration<double>(now - last).count());
                 last = now;

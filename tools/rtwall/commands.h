@@ -28,5 +28,6 @@ void addReference(CLI::App& app, Run& run);
 void addSimulate(CLI::App& app, Run& run);
 void addBenchTiles(CLI::App& bench, Run& run);
 void addBenchCodecs(CLI::App& bench, Run& run);
+void addBenchShading(CLI::App& bench, Run& run);
 
 }  // namespace rtwall::cli

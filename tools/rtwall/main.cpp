@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
     rtwall::cli::addBenchScene(*bench, run);
     rtwall::cli::addBenchTiles(*bench, run);
     rtwall::cli::addBenchCodecs(*bench, run);
+    rtwall::cli::addBenchShading(*bench, run);
 
     try {
         app.parse(argc, argv);

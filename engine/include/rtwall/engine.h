@@ -35,25 +35,60 @@ struct Transform {
     Float3 applyPoint(const Float3& p) const;
 };
 
-enum class MaterialType { Lambert, Phong, Mirror, Glass };
+// Material kinds. Each is one class behind the MaterialModel interface (engine/src/material.h);
+// adding one means a class, a factory line in materials.cpp and a name here.
+enum class MaterialType { Lambert, Phong, Mirror, Glass, Metal, Emissive, Volume };
+
+// A colour pattern (modulates `color`) or a mask (alpha), looked up at the hit's object-space
+// position: meshes carry no texture coordinates, so (u, v) come from a planar projection.
+enum class TextureKind { None, Checker, Marble, Wood, Image };
+enum class TextureMapping { PlanarXZ, PlanarXY, PlanarYZ };
+
+struct TextureDesc {
+    TextureKind kind = TextureKind::None;
+    std::string file;                           // image: a PNG or JPEG, path as the renderer opens it
+    Color color2{0.1f, 0.1f, 0.1f};             // checker: second colour; marble/wood: vein/ring colour
+    float scale = 1.0f;                         // object units per texture repeat (uv = position / scale)
+    TextureMapping mapping = TextureMapping::PlanarXZ;
+};
+
+// A transfer function control point: scalar value -> colour and extinction (per object unit).
+struct TransferPoint {
+    float value = 0.0f;
+    Color color{1, 1, 1};
+    float density = 0.0f;
+};
 
 struct Material {
     std::string name;
     MaterialType type = MaterialType::Lambert;
-    Color color{0.8f, 0.8f, 0.8f};     // diffuse albedo (lambert, phong); reflectance (mirror); tint (glass)
+    Color color{0.8f, 0.8f, 0.8f};     // diffuse albedo (lambert, phong); reflectance (mirror, metal); tint (glass)
     Color specular{0.0f, 0.0f, 0.0f};  // phong: specular reflectance
     float shininess = 32.0f;           // phong: Blinn-Phong exponent
     float ior = 1.5f;                  // glass: index of refraction
+    float roughness = 0.0f;            // metal: 0 = mirror, 1 = very rough (Phong lobe of exponent 2/r^2 - 2)
+    Color absorption{0, 0, 0};         // glass: Beer-Lambert absorption coefficient per world unit of path inside
+    Color emission{0, 0, 0};           // emissive: radiance leaving the surface (any material may add it)
+    TextureDesc texture;               // modulates `color`
+    float bump = 0.0f;                 // bump mapping: amplitude of the noise height field (0 = off)
+    float bumpScale = 0.1f;            // bump mapping: feature size in object units
+    TextureDesc alpha;                 // alpha mask: red channel / pattern below `alphaCutoff` is a hole
+    float alphaCutoff = 0.5f;
+    std::string volumeFile;            // volume: VTK image data (.vti, or legacy .vtk structured points)
+    std::vector<TransferPoint> transfer;  // volume: transfer function, sorted by value
+    float volumeStep = 0.5f;           // volume: ray-march step in voxels (speed/accuracy control)
 };
-
-enum class LightType { Point, Directional };
+enum class LightType { Point, Directional, Area };
 
 struct Light {
     LightType type = LightType::Point;
     Float3 position{0, 10, 0};   // point
     Float3 direction{0, -1, 0};  // directional: the direction the light travels
     Color color{1, 1, 1};
-    float intensity = 1.0f;  // point: radiant intensity (falls off as 1/r^2); directional: irradiance
+    float intensity = 1.0f;  // point: radiant intensity (falls off as 1/r^2); directional: irradiance;
+                             // area: radiance
+    Float3 edge1{1, 0, 0};   // area: a parallelogram at `position` spanned by edge1 and edge2; it emits
+    Float3 edge2{0, 0, 1};   //   to the side of cross(edge1, edge2) only
 };
 
 struct CameraDesc {
@@ -78,6 +113,8 @@ struct InstanceDesc {
 
 enum class KernelType { Packet, Single };
 enum class ShadingMode { Full, EyeLight };
+// What a pixel shows: the shaded image or a false-colour view of how it was made.
+enum class ViewMode { Shaded, Depth, Rays, TileTime, Client };
 
 struct RenderSettings {
     int width = 800;                      // image size in pixels
@@ -91,6 +128,11 @@ struct RenderSettings {
     Color background{0.05f, 0.05f, 0.08f};
     Color ambient{0.0f, 0.0f, 0.0f};      // constant ambient light, times diffuse albedo
     int threads = 0;                      // 0 = one per hardware thread
+    float pruneThreshold = 0.002f;        // drop rays whose throughput to the pixel is below this (0 = never)
+    bool gi = false;                      // path tracing: indirect light by cosine-sampled bounces
+    int samples = 1;                      // random samples per pixel sample and frame (GI, glossy, area lights)
+    ViewMode view = ViewMode::Shaded;
+    uint32_t clientId = 0;                // not on the wire: each render client sets the id the master gave it
 };
 
 // How each mesh's BVH is built ([bvh] in scene files): memory against build and render speed.
@@ -119,6 +161,9 @@ struct SceneDesc {
     const CameraDesc* findCamera(const std::string& name) const;  // nullptr if absent
     Bounds3 worldBounds() const;
 };
+
+// "shaded", "depth", "rays", "tile_time", "client"; anything else is an InputError.
+ViewMode viewModeFromName(const std::string& name);
 
 // Loads a TOML scene file (format: configs/README.md). Throws InputError naming the file, the
 // line and the key on any problem, including unknown keys and wrong types.
@@ -211,10 +256,31 @@ struct TileStats {
     uint64_t shadowRays = 0;  // occlusion rays traced
 };
 
-// The one tile-render function. `frame` is part of the signature for per-frame sampling
-// sequences (it does not change the image of a still scene today).
+// The one tile-render function. Random numbers (GI, glossy reflection, area lights, volume
+// jitter) are a hash of the pixel's image coordinates, the frame and the sample, so a pixel's
+// bytes never depend on which tile or client rendered it.
 TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
                      const RenderSettings& settings, TileView out);
+
+// The same, in linear RGB floats (3 per pixel, `stride` floats per row), before quantisation:
+// for tests of the estimators. False-colour views are not applied.
+TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
+                           const RenderSettings& settings, float* out, size_t stride);
+
+// Progressive refinement of a still view: the mean of the frames added since the last reset,
+// in linear light (each sRGB8 frame is converted back exactly and summed in double). The
+// cluster and one machine add the same bytes, so they give the same refined image.
+class Accumulator {
+public:
+    void reset() { frames_ = 0; }
+    void add(const Image& frame);  // a frame of another size resets first
+    Image resolve() const;
+    int frames() const { return frames_; }
+
+private:
+    int width_ = 0, height_ = 0, frames_ = 0;
+    std::vector<double> sum_;
+};
 
 std::vector<TileRect> makeTiles(int width, int height, int tileSize);
 

@@ -1,0 +1,156 @@
+// The material interface. A material is one class: the kernel knows only this interface, so a
+// new material plugs in by adding a class and a line in makeMaterialModel() (materials.cpp).
+//
+//   shade()        evaluates the material at a hit: adds what is known now (emission, ambient),
+//                  asks for shadow rays (directLight) and spawns secondary rays (spawn).
+//   shadowPass()   how much light a shadow ray keeps when it crosses this surface; opaque
+//                  materials never see shadow rays (Embree's mask skips the fast path for them).
+//   alphaAt()      alpha-masked materials: whether the surface exists at a point; Embree's
+//                  intersection and occlusion filter functions call it, so holes are holes for
+//                  camera, secondary and shadow rays alike.
+#pragma once
+
+#include "sampling.h"
+#include "shading.h"
+#include "texture.h"
+#include "volume.h"
+
+#include <memory>
+#include <vector>
+
+namespace rtwall {
+
+struct SurfacePoint {
+    Float3 p;        // world position
+    Float3 ng;       // unit geometric normal, facing the incoming ray
+    Float3 ns;       // unit shading normal, same hemisphere as ng (bumped where the material says)
+    Float3 po;       // object-space position (textures, bumps, volumes)
+    bool frontFace;  // the ray hit the side the triangle's winding calls "outside"
+    float t;         // hit distance
+    const InstanceData* instance;
+};
+
+// Object-space position from barycentrics: exact whatever space Embree traversed in.
+inline Float3 objectPosition(const TriangleMesh& mesh, uint32_t prim, float u, float v) {
+    const uint32_t* tri = mesh.indices() + 3 * size_t(prim);
+    return mesh.position(tri[0]) * (1.0f - u - v) + mesh.position(tri[1]) * u + mesh.position(tri[2]) * v;
+}
+
+// What a material's shade() may do. Spawned rays are pruned here by their contribution.
+class ShadeContext {
+public:
+    ShadeContext(const ShadingContext& c, Color& pixel, std::vector<ShadowTask>& shadows, std::vector<RayTask>& next)
+        : ctx(c), pixel_(pixel), shadows_(shadows), next_(next) {}
+
+    const ShadingContext& ctx;
+
+    float random(const RayTask& ray, uint32_t dim) const { return randomFloat(ray.seed, dim); }
+    bool canSpawn(const RayTask& ray) const { return ray.depth < ctx.settings.maxDepth; }
+    void add(const Color& c) { pixel_ += c; }
+
+    // A secondary ray with throughput `weight`; `branch` tells apart the rays one hit spawns.
+    void spawn(const RayTask& parent, const Float3& org, const Float3& dir, const Color& weight, uint32_t branch) {
+        // Ray-tree pruning: a ray that can change its pixel by less than the threshold (relative
+        // to one sample's share) is not traced. At threshold 0 only zero-weight rays are dropped.
+        const float m = maxComponent(weight);
+        if (!(m > 0.0f) || m < ctx.settings.pruneThreshold * ctx.sampleWeight) return;
+        RayTask r;
+        r.org = org;
+        r.dir = dir;
+        r.tfar = INFINITY;
+        r.weight = weight;
+        r.pixel = parent.pixel;
+        r.depth = parent.depth + 1;
+        r.seed = hashCombine(parent.seed, 0xB5297A4Du + branch);
+        next_.push_back(r);
+    }
+
+    // Direct light from every light, with shadow rays. brdfCos(wi) returns the BRDF times the
+    // cosine at the shading normal (the material decides how to treat the cosine).
+    template <class F> void directLight(const RayTask& ray, const SurfacePoint& sp, F&& brdfCos);
+
+private:
+    Color& pixel_;
+    std::vector<ShadowTask>& shadows_;
+    std::vector<RayTask>& next_;
+};
+
+class MaterialModel {
+public:
+    explicit MaterialModel(const Material& desc);
+    virtual ~MaterialModel() = default;
+    MaterialModel(const MaterialModel&) = delete;
+    MaterialModel& operator=(const MaterialModel&) = delete;
+
+    virtual void shade(ShadeContext& c, const RayTask& ray, const SurfacePoint& sp) const = 0;
+    virtual ShadowPass shadowPass(const ShadingContext&, const ShadowTask&, const SurfacePoint&) const { return {}; }
+    virtual bool shadowTransparent() const { return false; }
+
+    bool alphaMasked() const { return alpha_.active(); }
+    bool alphaAt(const Float3& objectPos) const { return alpha_.alpha(objectPos) >= desc_.alphaCutoff; }
+    bool needsObjectPosition() const { return needsObjectPosition_; }
+    // The shading normal after bump mapping (unchanged without a bump).
+    Float3 bumpedNormal(const InstanceData& inst, const Float3& po, const Float3& ns) const;
+    Color albedo(const Float3& po) const { return texture_.active() ? texture_.color(po) : desc_.color; }
+    const Material& desc() const { return desc_; }
+
+protected:
+    Material desc_;
+    Texture texture_, alpha_;
+    bool needsObjectPosition_ = false;
+};
+
+// Throws InputError (naming the file) when a texture or volume cannot be read.
+std::unique_ptr<MaterialModel> makeMaterialModel(const Material& desc);
+
+// -- inline ------------------------------------------------------------------------------------
+
+template <class F> void ShadeContext::directLight(const RayTask& ray, const SurfacePoint& sp, F&& brdfCos) {
+    const RenderSettings& settings = ctx.settings;
+    uint32_t dim = 64;  // random dimensions 0..63 are the materials' own
+    for (const Light& light : ctx.scene.desc.lights) {
+        Float3 l;
+        float dist = INFINITY;
+        Color e = light.color * light.intensity;
+        if (light.type == LightType::Point) {
+            const Float3 toLight = light.position - sp.p;
+            dist = length(toLight);
+            if (!(dist > 0.0f)) continue;
+            l = toLight * (1.0f / dist);
+            e = e * (1.0f / (dist * dist));
+        } else if (light.type == LightType::Directional) {
+            l = normalize(-light.direction);
+        } else {
+            // Area light: one uniformly sampled point per shading point and path sample.
+            const float u1 = randomFloat(ray.seed, dim++), u2 = randomFloat(ray.seed, dim++);
+            const Float3 q = light.position + light.edge1 * u1 + light.edge2 * u2;
+            const Float3 c = cross(light.edge1, light.edge2);
+            const float area = length(c);
+            const Float3 toLight = q - sp.p;
+            const float d2 = dot(toLight, toLight);
+            dist = std::sqrt(d2);
+            if (!(dist > 0.0f) || !(area > 0.0f)) continue;
+            l = toLight * (1.0f / dist);
+            const float cosL = -dot(l, c) / area;
+            if (cosL <= 0.0f) continue;  // the back of the light is dark
+            e = e * (cosL * area / d2);
+        }
+        if (dot(sp.ng, l) <= 0.0f) continue;
+        const Color f = brdfCos(l);
+        if (!(maxComponent(f) > 0.0f)) continue;
+        const Color contribution = ray.weight * f * e;
+        if (!settings.shadows) {
+            pixel_ += contribution;
+            continue;
+        }
+        ShadowTask st;
+        st.org = offsetOrigin(sp.p, sp.ng, 1.0f);
+        st.dir = l;
+        st.tfar = std::isinf(dist) ? INFINITY : dist * 0.9999f;
+        st.contribution = contribution;
+        st.pixel = ray.pixel;
+        shadows_.push_back(st);
+    }
+}
+
+}  // namespace rtwall

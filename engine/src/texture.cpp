@@ -1,0 +1,158 @@
+#include "texture.h"
+
+#include "shading.h"
+
+#include <rtwall/image.h>
+
+#include <turbojpeg.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+
+namespace rtwall {
+
+namespace {
+
+std::shared_ptr<TextureImage> fromSrgb8(int width, int height, const uint8_t* rgb) {
+    auto img = std::make_shared<TextureImage>();
+    img->width = width;
+    img->height = height;
+    img->rgb.resize(size_t(width) * height * 3);
+    for (size_t i = 0; i < img->rgb.size(); ++i) img->rgb[i] = srgb8ToLinear(rgb[i]);
+    return img;
+}
+
+std::shared_ptr<const TextureImage> loadJpeg(const std::string& file, const std::vector<unsigned char>& bytes) {
+    tjhandle tj = tjInitDecompress();
+    if (!tj) throw InputError(file + ": cannot start the JPEG decoder");
+    int w = 0, h = 0, sub = 0, cs = 0;
+    if (tjDecompressHeader3(tj, bytes.data(), (unsigned long)bytes.size(), &w, &h, &sub, &cs) != 0 || w <= 0 ||
+        h <= 0 || w > 16384 || h > 16384) {
+        const std::string why = tjGetErrorStr2(tj);
+        tjDestroy(tj);
+        throw InputError(file + ": not a readable JPEG (" + why + ")");
+    }
+    std::vector<uint8_t> rgb(size_t(w) * h * 3);
+    if (tjDecompress2(tj, bytes.data(), (unsigned long)bytes.size(), rgb.data(), w, w * 3, h, TJPF_RGB, 0) != 0) {
+        const std::string why = tjGetErrorStr2(tj);
+        tjDestroy(tj);
+        throw InputError(file + ": corrupt JPEG (" + why + ")");
+    }
+    tjDestroy(tj);
+    return fromSrgb8(w, h, rgb.data());
+}
+
+// Ken Perlin's reference permutation.
+constexpr std::array<uint8_t, 256> kPerm = {
+    151, 160, 137, 91,  90,  15,  131, 13,  201, 95,  96,  53,  194, 233, 7,   225, 140, 36,  103, 30,  69,  142,
+    8,   99,  37,  240, 21,  10,  23,  190, 6,   148, 247, 120, 234, 75,  0,   26,  197, 62,  94,  252, 219, 203,
+    117, 35,  11,  32,  57,  177, 33,  88,  237, 149, 56,  87,  174, 20,  125, 136, 171, 168, 68,  175, 74,  165,
+    71,  134, 139, 48,  27,  166, 77,  146, 158, 231, 83,  111, 229, 122, 60,  211, 133, 230, 220, 105, 92,  41,
+    55,  46,  245, 40,  244, 102, 143, 54,  65,  25,  63,  161, 1,   216, 80,  73,  209, 76,  132, 187, 208, 89,
+    18,  169, 200, 196, 135, 130, 116, 188, 159, 86,  164, 100, 109, 198, 173, 186, 3,   64,  52,  217, 226, 250,
+    124, 123, 5,   202, 38,  147, 118, 126, 255, 82,  85,  212, 207, 206, 59,  227, 47,  16,  58,  17,  182, 189,
+    28,  42,  223, 183, 170, 213, 119, 248, 152, 2,   44,  154, 163, 70,  221, 153, 101, 155, 167, 43,  172, 9,
+    129, 22,  39,  253, 19,  98,  108, 110, 79,  113, 224, 232, 178, 185, 112, 104, 218, 246, 97,  228, 251, 34,
+    242, 193, 238, 210, 144, 12,  191, 179, 162, 241, 81,  51,  145, 235, 249, 14,  239, 107, 49,  192, 214, 31,
+    181, 199, 106, 157, 184, 84,  204, 176, 115, 121, 50,  45,  127, 4,   150, 254, 138, 236, 205, 93,  222, 114,
+    67,  29,  24,  72,  243, 141, 128, 195, 78,  66,  215, 61,  156, 180};
+
+inline int perm(int i) { return kPerm[i & 255]; }
+inline float fade(float t) { return t * t * t * (t * (t * 6.0f - 15.0f) + 10.0f); }
+inline float lerp(float t, float a, float b) { return a + t * (b - a); }
+inline float grad(int hash, float x, float y, float z) {
+    const int h = hash & 15;
+    const float u = h < 8 ? x : y, v = h < 4 ? y : (h == 12 || h == 14 ? x : z);
+    return ((h & 1) ? -u : u) + ((h & 2) ? -v : v);
+}
+
+Color mix(const Color& a, const Color& b, float t) { return a * (1.0f - t) + b * t; }
+
+}  // namespace
+
+std::shared_ptr<const TextureImage> loadTextureImage(const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw InputError(file + ": cannot open the texture");
+    std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (bytes.size() >= 8 && bytes[0] == 0x89 && bytes[1] == 'P' && bytes[2] == 'N' && bytes[3] == 'G') {
+        const Image img = readPng(file);
+        return fromSrgb8(img.width, img.height, img.rgb.data());
+    }
+    if (bytes.size() >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 && bytes[2] == 0xFF) return loadJpeg(file, bytes);
+    throw InputError(file + ": a texture must be a PNG or a JPEG image");
+}
+
+float perlinNoise(const Float3& p) {
+    const float fx = std::floor(p.x), fy = std::floor(p.y), fz = std::floor(p.z);
+    const int X = int(int64_t(fx) & 255), Y = int(int64_t(fy) & 255), Z = int(int64_t(fz) & 255);
+    const float x = p.x - fx, y = p.y - fy, z = p.z - fz;
+    const float u = fade(x), v = fade(y), w = fade(z);
+    const int A = perm(X) + Y, AA = perm(A) + Z, AB = perm(A + 1) + Z;
+    const int B = perm(X + 1) + Y, BA = perm(B) + Z, BB = perm(B + 1) + Z;
+    return lerp(w,
+                lerp(v, lerp(u, grad(perm(AA), x, y, z), grad(perm(BA), x - 1, y, z)),
+                     lerp(u, grad(perm(AB), x, y - 1, z), grad(perm(BB), x - 1, y - 1, z))),
+                lerp(v, lerp(u, grad(perm(AA + 1), x, y, z - 1), grad(perm(BA + 1), x - 1, y, z - 1)),
+                     lerp(u, grad(perm(AB + 1), x, y - 1, z - 1), grad(perm(BB + 1), x - 1, y - 1, z - 1))));
+}
+
+float turbulence(const Float3& p, int octaves) {
+    float sum = 0.0f, amp = 1.0f;
+    Float3 q = p;
+    for (int i = 0; i < octaves; ++i) {
+        sum += amp * std::fabs(perlinNoise(q));
+        amp *= 0.5f;
+        q = q * 2.0f;
+    }
+    return sum;
+}
+
+Texture::Texture(const TextureDesc& desc, const Color& base) : desc_(desc), base_(base) {
+    if (desc_.kind == TextureKind::Image) image_ = loadTextureImage(desc_.file);
+    if (!(desc_.scale > 0.0f)) desc_.scale = 1.0f;
+}
+
+Color Texture::color(const Float3& objectPos) const {
+    const Float3 p = objectPos * (1.0f / desc_.scale);
+    float u = p.x, v = p.z;
+    if (desc_.mapping == TextureMapping::PlanarXY) v = p.y;
+    else if (desc_.mapping == TextureMapping::PlanarYZ) u = p.z, v = p.y;
+    switch (desc_.kind) {
+    case TextureKind::None: return base_;
+    case TextureKind::Checker: {
+        const int parity = int(int64_t(std::floor(u)) + int64_t(std::floor(v))) & 1;
+        return parity ? desc_.color2 : base_;
+    }
+    case TextureKind::Marble: {
+        const float t = 0.5f + 0.5f * std::sin(4.0f * p.x + 6.0f * turbulence(p, 5));
+        return mix(desc_.color2, base_, t);
+    }
+    case TextureKind::Wood: {
+        const float r = std::sqrt(p.x * p.x + p.z * p.z) * 8.0f + 1.5f * perlinNoise(p * 2.0f);
+        const float ring = r - std::floor(r);
+        return mix(base_, desc_.color2, ring * ring);
+    }
+    case TextureKind::Image: {
+        // Bilinear, repeating; image row 0 is at v = 1 (the top).
+        const TextureImage& img = *image_;
+        const float x = (u - std::floor(u)) * float(img.width) - 0.5f;
+        const float y = (1.0f - (v - std::floor(v))) * float(img.height) - 0.5f;
+        const float x0f = std::floor(x), y0f = std::floor(y);
+        const float tx = x - x0f, ty = y - y0f;
+        auto wrap = [](int i, int n) { return ((i % n) + n) % n; };
+        const int x0 = wrap(int(x0f), img.width), x1 = wrap(int(x0f) + 1, img.width);
+        const int y0 = wrap(int(y0f), img.height), y1 = wrap(int(y0f) + 1, img.height);
+        auto at = [&](int xi, int yi) {
+            const float* t = img.rgb.data() + (size_t(yi) * img.width + xi) * 3;
+            return Color{t[0], t[1], t[2]};
+        };
+        return mix(mix(at(x0, y0), at(x1, y0), tx), mix(at(x0, y1), at(x1, y1), tx), ty) * base_;
+    }
+    }
+    return base_;
+}
+
+}  // namespace rtwall

@@ -1,0 +1,42 @@
+// Textures: colour patterns and alpha masks evaluated at an object-space position.
+#pragma once
+
+#include "vec.h"
+
+#include <rtwall/engine.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace rtwall {
+
+// Linear RGB image for texturing, decoded once from PNG or JPEG.
+struct TextureImage {
+    int width = 0, height = 0;
+    std::vector<float> rgb;  // linear, 3 per texel
+};
+
+// Reads a PNG or JPEG (chosen by content, not extension). Throws InputError "file: what".
+std::shared_ptr<const TextureImage> loadTextureImage(const std::string& file);
+
+// Improved Perlin noise (fixed permutation, so every machine gets the same pattern), in [-1, 1].
+float perlinNoise(const Float3& p);
+// Sum of |noise| over octaves: the classic turbulence for marble and bumps.
+float turbulence(const Float3& p, int octaves);
+
+class Texture {
+public:
+    // `base` is the material colour the pattern modulates (or replaces, for images).
+    Texture(const TextureDesc& desc, const Color& base);
+    Color color(const Float3& objectPos) const;
+    float alpha(const Float3& objectPos) const { return color(objectPos).x; }  // masks use the red channel
+    bool active() const { return desc_.kind != TextureKind::None; }
+
+private:
+    TextureDesc desc_;
+    Color base_;
+    std::shared_ptr<const TextureImage> image_;
+};
+
+}  // namespace rtwall

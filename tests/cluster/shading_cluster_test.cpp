@@ -1,0 +1,120 @@
+// Shading over the cluster: every material, GI with progressive frames, material updates and
+// the client false-colour view give exactly the single-machine bytes (or, for the client view,
+// the ids the master assigned).
+#include "shading_scenes.h"
+#include "test_util.h"
+
+#include <rtwall/cluster.h>
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <set>
+#include <thread>
+
+namespace rtwall {
+namespace {
+
+struct LocalCluster {
+    LocalCluster(const SceneDesc& desc, const ClusterSettings& cs, int clientCount)
+        : master(std::make_unique<Master>(desc, cs)) {
+        for (int i = 0; i < clientCount; ++i) {
+            ClientSettings c;
+            c.connect = master->endpoint();
+            c.threads = 1;
+            c.exitAfterIdleMs = 4000;
+            threads.emplace_back([c] { runClient(c); });
+        }
+    }
+    ~LocalCluster() {
+        master.reset();  // its goodbye ends the clients
+        for (auto& t : threads) t.join();
+    }
+    std::unique_ptr<Master> master;
+    std::vector<std::thread> threads;
+};
+
+Image singleMachine(const SceneDesc& d, uint32_t frame) {
+    const Scene scene(d);
+    return renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings, frame);
+}
+
+size_t differingBytes(const Image& a, const Image& b) {
+    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
+    size_t n = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
+    return n;
+}
+
+TEST(ClusterShading, EveryMaterialAndGiBitIdenticalToOneMachine) {
+    const auto dir = test::scratchDir();
+    SceneDesc desc = test::materialZoo(dir, 64, 48);
+    desc.settings.tileSize = 8;
+    ClusterSettings cs;
+    cs.async = false;
+    cs.prefetch = 2;
+    LocalCluster cluster(desc, cs, 3);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(3, 30000));
+    FrameReport r;
+    Image img = master.renderFrame(&r);
+    EXPECT_EQ(differingBytes(img, singleMachine(desc, r.frame)), 0u) << "whitted";
+
+    // GI: each frame has its own seeds; the cluster's progressive mean equals one machine's.
+    SceneDesc gi = desc;
+    gi.settings.gi = true;
+    gi.settings.samples = 2;
+    master.setRenderSettings(gi.settings);
+    Accumulator clusterAcc, localAcc;
+    for (int f = 0; f < 3; ++f) {
+        img = master.renderFrame(&r);
+        const Image local = singleMachine(gi, r.frame);
+        EXPECT_EQ(differingBytes(img, local), 0u) << "gi frame " << r.frame;
+        clusterAcc.add(img);
+        localAcc.add(local);
+    }
+    EXPECT_EQ(differingBytes(clusterAcc.resolve(), localAcc.resolve()), 0u);
+
+    // A material changed at run time (glass becomes rough metal, the floor gets marble).
+    SceneDesc changed = gi;
+    changed.materials[4].type = MaterialType::Metal;
+    changed.materials[4].roughness = 0.2f;
+    changed.materials[0].texture.kind = TextureKind::Marble;
+    master.setMaterial(4, changed.materials[4]);
+    master.setMaterial(0, changed.materials[0]);
+    img = master.renderFrame(&r);
+    EXPECT_EQ(differingBytes(img, singleMachine(changed, r.frame)), 0u) << "after material updates";
+}
+
+TEST(ClusterShading, ClientViewShowsTheIdsTheMasterAssigned) {
+    const auto dir = test::scratchDir();
+    SceneDesc desc = test::materialZoo(dir, 64, 48);
+    desc.settings.tileSize = 8;
+    desc.settings.view = ViewMode::Client;
+    ClusterSettings cs;
+    cs.async = false;
+    cs.prefetch = 1;
+    LocalCluster cluster(desc, cs, 3);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(3, 30000));
+    FrameReport r;
+    const Image img = master.renderFrame(&r);
+    std::set<uint32_t> colours;
+    for (size_t i = 0; i + 2 < img.rgb.size(); i += 3)
+        colours.insert(uint32_t(img.rgb[i]) << 16 | uint32_t(img.rgb[i + 1]) << 8 | img.rgb[i + 2]);
+    size_t busy = 0;
+    for (const ClientReport& c : r.clients) busy += c.tiles > 0;
+    EXPECT_EQ(colours.size(), busy) << "one colour per client that rendered tiles";
+    // Each colour is the one its id gives on one machine.
+    for (const ClientReport& c : r.clients) {
+        if (c.tiles == 0) continue;
+        SceneDesc one = desc;
+        one.settings.clientId = c.id;
+        const Image ref = singleMachine(one, r.frame);
+        const uint32_t colour = uint32_t(ref.rgb[0]) << 16 | uint32_t(ref.rgb[1]) << 8 | ref.rgb[2];
+        EXPECT_TRUE(colours.count(colour)) << "client " << c.id;
+    }
+}
+
+}  // namespace
+}  // namespace rtwall

@@ -1,0 +1,535 @@
+// The materials against analytic values: white furnace energy conservation for every
+// material, transparent shadows through a glass slab, alpha masks for camera and shadow rays,
+// ray-tree pruning, GI unbiasedness, and determinism across kernels for every material.
+#include "shading_scenes.h"
+#include "test_util.h"
+
+#include "shading.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <set>
+
+namespace rtwall {
+namespace {
+
+// Linear RGB of a whole frame, rendered tile by tile through renderTileLinear.
+std::vector<float> renderLinear(const Scene& scene, const SceneDesc& d, uint32_t frame = 0) {
+    const RenderSettings& s = d.settings;
+    std::vector<float> out(size_t(s.width) * s.height * 3);
+    const Camera cam(d.cameras.front(), s.width, s.height);
+    for (const TileRect& r : makeTiles(s.width, s.height, s.tileSize))
+        renderTileLinear(scene, cam, r, frame, s, out.data() + (size_t(r.y0) * s.width + r.x0) * 3, size_t(s.width) * 3);
+    return out;
+}
+
+Image render(const Scene& scene, const SceneDesc& d, uint32_t frame = 0) {
+    return renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings, frame);
+}
+
+size_t differingBytes(const Image& a, const Image& b) {
+    size_t n = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
+    return n;
+}
+
+struct FurnaceCase {
+    const char* name;
+    Material material;
+    bool box = false;
+};
+
+std::vector<FurnaceCase> furnaceCases() {
+    std::vector<FurnaceCase> v;
+    auto m = [](MaterialType t, Color c) {
+        Material x;
+        x.type = t;
+        x.color = c;
+        return x;
+    };
+    v.push_back({"lambert", m(MaterialType::Lambert, {1, 1, 1})});
+    Material phong = m(MaterialType::Phong, {0.6f, 0.6f, 0.6f});
+    phong.specular = {0.4f, 0.4f, 0.4f};
+    phong.shininess = 20.0f;
+    v.push_back({"phong", phong});
+    v.push_back({"mirror", m(MaterialType::Mirror, {1, 1, 1})});
+    Material metal = m(MaterialType::Metal, {1, 1, 1});
+    metal.roughness = 0.4f;
+    v.push_back({"metal", metal});
+    v.push_back({"glass", m(MaterialType::Glass, {1, 1, 1})});
+    Material checker = m(MaterialType::Lambert, {1, 1, 1});
+    checker.texture.kind = TextureKind::Checker;
+    checker.texture.color2 = {1, 1, 1};
+    checker.texture.scale = 0.3f;
+    v.push_back({"checker", checker});
+    Material marble = checker;
+    marble.texture.kind = TextureKind::Marble;
+    v.push_back({"marble", marble});
+    Material bumped = m(MaterialType::Lambert, {1, 1, 1});
+    bumped.bump = 0.5f;
+    bumped.bumpScale = 0.2f;
+    v.push_back({"bump", bumped});
+    Material masked = m(MaterialType::Lambert, {1, 1, 1});
+    masked.alpha.kind = TextureKind::Checker;
+    masked.alpha.color2 = {0, 0, 0};
+    masked.alpha.scale = 0.25f;
+    v.push_back({"alpha_mask", masked});
+    return v;
+}
+
+// pbrt's furnace tolerance: 1.0 within 2.5% (here per colour channel, over the object's pixels).
+TEST(WhiteFurnace, EveryMaterialConservesEnergy) {
+    const auto dir = test::scratchDir();
+    std::vector<FurnaceCase> cases = furnaceCases();
+    Material volume;
+    volume.type = MaterialType::Volume;
+    volume.volumeFile = test::writeTestVolume(dir);
+    volume.transfer = {{0.0f, {1, 1, 1}, 0.0f}, {1.0f, {1, 1, 1}, 30.0f}};
+    volume.volumeStep = 0.25f;
+    cases.push_back({"volume", volume, true});
+    for (const FurnaceCase& c : cases) {
+        const SceneDesc d = test::furnace(c.material, c.box);
+        const Scene scene(d);
+        const std::vector<float> img = renderLinear(scene, d);
+        // The object covers the centre of the image (radius 1 at distance 4 with a 30 degree view).
+        double sum = 0, minV = 1e9, maxV = -1e9;
+        int n = 0;
+        for (int y = 8; y < 16; ++y)
+            for (int x = 8; x < 16; ++x)
+                for (int ch = 0; ch < 3; ++ch) {
+                    const double v = img[(size_t(y) * 24 + x) * 3 + ch];
+                    sum += v;
+                    minV = std::min(minV, v);
+                    maxV = std::max(maxV, v);
+                    ++n;
+                }
+        const double mean = sum / n;
+        std::printf("furnace %-10s mean %.4f (min %.4f, max %.4f)\n", c.name, mean, minV, maxV);
+        EXPECT_NEAR(mean, 1.0, 0.025) << c.name << " (min " << minV << ", max " << maxV << ")";
+    }
+}
+
+// A glass slab of thickness d with absorption a between a directional light and a white floor:
+// the shadow keeps (1 - F)^2 exp(-a d) of the light at normal incidence (docs/shading.md).
+TEST(TransparentShadows, GlassSlabAttenuatesByFresnelAndAbsorption) {
+    SceneDesc s;
+    s.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
+    s.meshes.push_back({"box", "shape:box", std::make_shared<const TriangleMesh>(makeBox())});
+    Material floor;
+    floor.color = {1, 1, 1};
+    Material glass;
+    glass.type = MaterialType::Glass;
+    glass.color = {1, 1, 1};
+    glass.absorption = {0.5f, 1.0f, 2.0f};
+    s.materials = {floor, glass};
+    s.instances.push_back({0, 0, Transform::scale(10, 1, 10)});
+    const double thickness = 0.4;
+    s.instances.push_back({1, 1, Transform::translate(0, 1, 0) * Transform::scale(3, thickness / 2, 3)});
+    Light sun;
+    sun.type = LightType::Directional;
+    sun.direction = {0, -1, 0};
+    sun.intensity = 1.0f;
+    s.lights = {sun};
+    CameraDesc cam;
+    cam.position = {0, 0.5f, 0};  // under the slab, looking straight down at the floor
+    cam.lookAt = {0, 0, 0};
+    cam.up = {0, 0, -1};
+    cam.fovY = 10.0f;
+    s.cameras = {cam};
+    s.settings.width = s.settings.height = 4;
+    s.settings.background = {0, 0, 0};
+    const Scene scene(s);
+    const std::vector<float> img = renderLinear(scene, s);
+    const double f = std::pow((1.5 - 1.0) / (1.5 + 1.0), 2.0);
+    const double abs[3] = {0.5, 1.0, 2.0};
+    for (int ch = 0; ch < 3; ++ch) {
+        const double expected = (1.0 / std::numbers::pi) * (1 - f) * (1 - f) * std::exp(-abs[ch] * thickness);
+        EXPECT_NEAR(img[(1 * 4 + 1) * 3 + ch], expected, 1e-4 * 1.0 + 2e-3 * expected) << "channel " << ch;
+    }
+}
+
+// A checker alpha mask: camera rays see through the holes, and shadow rays pass them.
+TEST(AlphaMask, HolesAreHolesForCameraAndShadowRays) {
+    SceneDesc s;
+    s.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
+    Material floor;
+    floor.color = {1, 1, 1};
+    Material leaf;
+    leaf.color = {0, 1, 0};
+    leaf.alpha.kind = TextureKind::Checker;
+    leaf.alpha.color2 = {0, 0, 0};
+    leaf.alpha.scale = 1.0f;  // cells of 1 x 1 in object units: [-1,1]^2 has 4 cells, 2 of them holes
+    s.materials = {floor, leaf};
+    s.instances.push_back({0, 0, Transform::scale(10, 1, 10)});
+    s.instances.push_back({0, 1, Transform::translate(0, 1, 0)});
+    Light sun;
+    sun.type = LightType::Directional;
+    sun.direction = {0, -1, 0};
+    s.lights = {sun};
+    s.settings.background = {0, 0, 0};
+    s.settings.width = s.settings.height = 32;
+    // From above: half the leaf is green, half shows the lit floor (1/pi).
+    CameraDesc above;
+    above.position = {0, 5, 0};
+    above.lookAt = {0, 0, 0};
+    above.up = {0, 0, -1};
+    above.fovY = 20.0f;  // covers |x|, |z| < 0.88: only the leaf
+    // From below the leaf, between it and the floor: the floor shows the leaf's shadow pattern.
+    CameraDesc below = above;
+    below.position = {0, 0.9f, 0};
+    below.fovY = 60.0f;  // covers |x|, |z| < 0.52 on the floor
+    s.cameras = {above, below};
+    const Scene scene(s);
+    int green = 0, floorLit = 0;
+    std::vector<float> img = renderLinear(scene, s);
+    for (size_t p = 0; p < 32 * 32; ++p) {
+        green += img[3 * p] < 0.01f && img[3 * p + 1] > 0.3f;
+        floorLit += std::fabs(img[3 * p] - float(1.0 / std::numbers::pi)) < 1e-3f;
+    }
+    EXPECT_EQ(green, 512);
+    EXPECT_EQ(floorLit, 512);
+    SceneDesc s2 = s;
+    s2.cameras = {below};
+    img = renderLinear(scene, s2);
+    int lit = 0, dark = 0;
+    for (size_t p = 0; p < 32 * 32; ++p) {
+        lit += std::fabs(img[3 * p] - float(1.0 / std::numbers::pi)) < 1e-3f;
+        dark += img[3 * p] == 0.0f;
+    }
+    EXPECT_EQ(lit, 512);
+    EXPECT_EQ(dark, 512);
+}
+
+class Zoo : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        dir_ = new std::filesystem::path(std::filesystem::path(RTWALL_BINARY_DIR) / "test-scratch" / "zoo");
+        std::filesystem::create_directories(*dir_);
+        desc_ = new SceneDesc(test::materialZoo(*dir_, 64, 48));
+        scene_ = new Scene(*desc_);
+    }
+    static void TearDownTestSuite() {
+        delete scene_;
+        delete desc_;
+        delete dir_;
+    }
+    static std::filesystem::path* dir_;
+    static SceneDesc* desc_;
+    static Scene* scene_;
+};
+std::filesystem::path* Zoo::dir_ = nullptr;
+SceneDesc* Zoo::desc_ = nullptr;
+Scene* Zoo::scene_ = nullptr;
+
+TEST_F(Zoo, WritesItsImages) {
+    for (bool gi : {false, true}) {
+        SceneDesc d = *desc_;
+        d.settings.width = 320;
+        d.settings.height = 240;
+        d.settings.gi = gi;
+        d.settings.samples = gi ? 16 : 4;
+        const Image img = render(*scene_, d);
+        writePng(img, *dir_ / (gi ? "zoo_gi.png" : "zoo.png"));
+    }
+}
+
+TEST_F(Zoo, PacketAndSingleKernelsBitIdenticalForEveryMaterialAndGi) {
+    for (bool gi : {false, true}) {
+        SceneDesc d = *desc_;
+        d.settings.gi = gi;
+        d.settings.samples = gi ? 2 : 1;
+        SceneDesc single = d;
+        single.settings.kernel = KernelType::Single;
+        const Image a = render(*scene_, d, 3), b = render(*scene_, single, 3);
+        EXPECT_EQ(differingBytes(a, b), 0u) << "gi " << gi;
+        // Tile size and thread count do not matter either.
+        SceneDesc other = d;
+        other.settings.tileSize = 7;
+        other.settings.threads = 3;
+        EXPECT_EQ(differingBytes(a, render(*scene_, other, 3)), 0u) << "gi " << gi;
+    }
+}
+
+TEST_F(Zoo, PruningAtZeroIsExactlyUnprunedAndDefaultIsClose) {
+    SceneDesc off = *desc_;
+    off.settings.pruneThreshold = -1.0f;  // no ray can fall below: pruning switched off
+    SceneDesc zero = *desc_;
+    zero.settings.pruneThreshold = 0.0f;
+    SceneDesc def = *desc_;
+    def.settings.pruneThreshold = 0.002f;
+    TileStats so, sz, sd;
+    const Camera cam(desc_->cameras.front(), desc_->settings.width, desc_->settings.height);
+    const Image a = renderFrame(*scene_, cam, off.settings, 0, &so);
+    const Image b = renderFrame(*scene_, cam, zero.settings, 0, &sz);
+    const Image c = renderFrame(*scene_, cam, def.settings, 0, &sd);
+    EXPECT_EQ(differingBytes(a, b), 0u);
+    EXPECT_EQ(so.rays, sz.rays);
+    EXPECT_LT(sd.rays, so.rays);
+    // Stated error at the default 0.002: no channel more than 2 levels off, mean below 0.05 levels.
+    int maxDiff = 0;
+    double sum = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) {
+        const int dlt = std::abs(int(a.rgb[i]) - int(c.rgb[i]));
+        maxDiff = std::max(maxDiff, dlt);
+        sum += dlt;
+    }
+    EXPECT_LE(maxDiff, 2);
+    EXPECT_LT(sum / double(a.rgb.size()), 0.05);
+}
+
+TEST_F(Zoo, FalseColourViewsRender) {
+    for (ViewMode v : {ViewMode::Depth, ViewMode::Rays, ViewMode::TileTime, ViewMode::Client}) {
+        SceneDesc d = *desc_;
+        d.settings.view = v;
+        const Image img = render(*scene_, d);
+        std::set<uint32_t> colours;
+        for (size_t i = 0; i + 2 < img.rgb.size(); i += 3)
+            colours.insert(uint32_t(img.rgb[i]) << 16 | uint32_t(img.rgb[i + 1]) << 8 | img.rgb[i + 2]);
+        if (v == ViewMode::Client) EXPECT_EQ(colours.size(), 1u);  // one machine: one client
+        else EXPECT_GT(colours.size(), 1u);
+    }
+}
+
+// GI is unbiased: the mean of many independent low-sample frames matches a high-sample
+// reference per pixel. Per-pixel z-test (Welch's statistic with the reference's own variance)
+// at alpha = 0.01 with Sidak correction over every pixel and channel.
+TEST(GlobalIllumination, EstimatorIsUnbiased) {
+    SceneDesc s;
+    s.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
+    s.meshes.push_back({"box", "shape:box", std::make_shared<const TriangleMesh>(makeBox())});
+    Material white;
+    white.color = {0.8f, 0.8f, 0.8f};
+    Material red;
+    red.color = {0.8f, 0.2f, 0.2f};
+    s.materials = {white, red};
+    s.instances.push_back({0, 0, Transform::scale(4, 1, 4)});
+    s.instances.push_back({1, 1, Transform::translate(0, 0.5, 0) * Transform::scale(0.5, 0.5, 0.5)});
+    Light area;
+    area.type = LightType::Area;
+    area.position = {-0.5f, 2.5f, 0.5f};
+    area.edge1 = {1, 0, 0};
+    area.edge2 = {0, 0, -1};
+    area.intensity = 4.0f;
+    s.lights = {area};
+    CameraDesc cam;
+    cam.position = {2, 2, 3};
+    cam.lookAt = {0, 0.3f, 0};
+    s.cameras = {cam};
+    s.settings.width = 8;
+    s.settings.height = 6;
+    s.settings.tileSize = 8;
+    s.settings.gi = true;
+    s.settings.maxDepth = 6;
+    s.settings.pruneThreshold = 0.0f;
+    s.settings.background = {0.1f, 0.1f, 0.1f};
+    const Scene scene(s);
+    auto stats = [&](int frames, uint32_t firstFrame, int spp, std::vector<double>& mean, std::vector<double>& var) {
+        SceneDesc d = s;
+        d.settings.samples = spp;
+        const size_t n = size_t(d.settings.width) * d.settings.height * 3;
+        std::vector<double> sum(n, 0.0), sum2(n, 0.0);
+        for (int f = 0; f < frames; ++f) {
+            const std::vector<float> img = renderLinear(scene, d, firstFrame + uint32_t(f));
+            for (size_t i = 0; i < n; ++i) {
+                sum[i] += img[i];
+                sum2[i] += double(img[i]) * img[i];
+            }
+        }
+        mean.resize(n);
+        var.resize(n);
+        for (size_t i = 0; i < n; ++i) {
+            mean[i] = sum[i] / frames;
+            var[i] = std::max(0.0, (sum2[i] / frames - mean[i] * mean[i]) * frames / (frames - 1)) / frames;  // of the mean
+        }
+    };
+    std::vector<double> m, v, rm, rv;
+    stats(200, 0, 2, m, v);        // the estimator under test: 200 frames of 2 samples
+    stats(100, 100000, 32, rm, rv);  // reference: independent seeds, 3200 samples per pixel
+    const size_t n = m.size();
+    const double alpha = 0.01, perTest = 1.0 - std::pow(1.0 - alpha, 1.0 / double(n));
+    // Two-sided normal quantile for perTest (about 3.9 for n = 144), by bisection on erfc.
+    double lo = 0, hi = 10;
+    for (int i = 0; i < 100; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (std::erfc(mid / std::sqrt(2.0)) > perTest ? lo : hi) = mid;
+    }
+    int failures = 0;
+    for (size_t i = 0; i < n; ++i) {
+        const double se = std::sqrt(v[i] + rv[i]);
+        if (se == 0.0) {
+            EXPECT_NEAR(m[i], rm[i], 1e-6);  // no variance: a background pixel
+            continue;
+        }
+        const double z = std::fabs(m[i] - rm[i]) / se;
+        if (z > lo) ++failures;
+    }
+    EXPECT_EQ(failures, 0) << "z threshold " << lo;
+    std::printf("GI z-test: %zu values, threshold |z| > %.2f, %d failures\n", n, lo, failures);
+}
+
+TEST(Accumulator, MeanOfFramesInLinearLight) {
+    Image a, b;
+    a.width = b.width = 1;
+    a.height = b.height = 1;
+    a.rgb = {0, 255, 128};
+    b.rgb = {255, 255, 128};
+    Accumulator acc;
+    acc.add(a);
+    acc.add(b);
+    const Image r = acc.resolve();
+    EXPECT_EQ(acc.frames(), 2);
+    EXPECT_EQ(r.rgb[0], linearToSrgb8(0.5f));
+    EXPECT_EQ(r.rgb[1], 255);
+    EXPECT_EQ(r.rgb[2], 128);
+    acc.reset();
+    acc.add(a);
+    EXPECT_EQ(acc.resolve().rgb, a.rgb);
+}
+
+}  // namespace
+}  // namespace rtwall
+
+namespace rtwall {
+namespace {
+
+// Scene-file mistakes in the shading keys: one line naming the file, the line and the key.
+TEST(ShadingSceneFile, BadInputNamesFileLineAndKey) {
+    const auto dir = test::scratchDir();
+    test::writeFile(dir / "garbage.png", "not an image at all");
+    test::writeFile(dir / "garbage.vti", "<VTKFile nonsense");
+    const std::string head = "[[mesh]]\nname = \"b\"\nshape = \"box\"\n";
+    struct Case {
+        std::string body, expect;
+    };
+    const std::vector<Case> cases = {
+        {"[[material]]\nname = \"m\"\ntexture = \"image\"\ntexture_file = \"missing.png\"\n", ":7: [[material]] #1: key 'texture_file'"},
+        {"[[material]]\nname = \"m\"\ntexture = \"image\"\ntexture_file = \"garbage.png\"\n", "texture must be a PNG or a JPEG"},
+        {"[[material]]\nname = \"m\"\ntexture = \"plaid\"\n", "key 'texture'"},
+        {"[[material]]\nname = \"m\"\ntype = \"volume\"\nvolume_file = \"garbage.vti\"\n", "key 'volume_file'"},
+        {"[[material]]\nname = \"m\"\ntype = \"volume\"\n", "missing required key 'volume_file'"},
+        {"[[material]]\nname = \"m\"\ntype = \"metal\"\nroughness = 2\n", "key 'roughness'"},
+        {"[[material]]\nname = \"m\"\ntype = \"glass\"\nabsorption = [-1, 0, 0]\n", "key 'absorption'"},
+        {"[render]\nview = \"xray\"\n", "key 'view'"},
+        {"[render]\nprune_threshold = -0.1\n", "key 'prune_threshold'"},
+        {"[[light]]\ntype = \"area\"\nposition = [0, 0, 0]\nedge1 = [1, 0, 0]\nedge2 = [2, 0, 0]\n", "no area"},
+    };
+    for (const Case& c : cases) {
+        const auto file = test::writeFile(dir / "s.toml", head + c.body);
+        const std::string msg = test::inputErrorOf([&] { loadSceneFile(file); });
+        EXPECT_NE(msg.find(c.expect), std::string::npos) << msg;
+        EXPECT_NE(msg.find("s.toml:"), std::string::npos) << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    }
+    // A volume file that is not there, handed straight to the engine: an InputError, not a crash.
+    Material m;
+    m.type = MaterialType::Volume;
+    m.volumeFile = (dir / "nope.vti").string();
+    SceneDesc d = test::furnace(m, true);
+    EXPECT_NE(test::inputErrorOf([&] { Scene s(d); }).find("nope.vti"), std::string::npos);
+}
+
+// Every key of the format, read back.
+TEST(ShadingSceneFile, ReadsEveryShadingKey) {
+    const auto dir = test::scratchDir();
+    const std::string tex = test::writeTestTexture(dir), vol = test::writeTestVolume(dir);
+    const auto file = test::writeFile(dir / "s.toml", R"(
+[render]
+prune_threshold = 0.01
+gi = true
+samples = 3
+view = "depth"
+[[mesh]]
+name = "b"
+shape = "box"
+[[material]]
+name = "m"
+type = "metal"
+roughness = 0.3
+texture = "image"
+texture_file = "texture.png"
+texture_scale = 2
+texture_mapping = "xy"
+bump = 0.5
+bump_scale = 0.2
+alpha = "checker"
+alpha_color2 = [0, 0, 0]
+alpha_cutoff = 0.25
+emission = [0.5, 0, 0]
+[[material]]
+name = "v"
+type = "volume"
+volume_file = "blob.vti"
+volume_step = 0.3
+transfer = [[0, 1, 1, 1, 0], [1, 1, 0.5, 0, 4]]
+[[material]]
+name = "g"
+type = "glass"
+absorption = [0.1, 0.2, 0.3]
+[[light]]
+type = "area"
+position = [0, 2, 0]
+edge1 = [1, 0, 0]
+edge2 = [0, 0, -1]
+intensity = 3
+)");
+    const SceneDesc s = loadSceneFile(file);
+    EXPECT_FLOAT_EQ(s.settings.pruneThreshold, 0.01f);
+    EXPECT_TRUE(s.settings.gi);
+    EXPECT_EQ(s.settings.samples, 3);
+    EXPECT_EQ(s.settings.view, ViewMode::Depth);
+    const Material& m = s.materials[0];
+    EXPECT_EQ(m.type, MaterialType::Metal);
+    EXPECT_FLOAT_EQ(m.roughness, 0.3f);
+    EXPECT_EQ(m.texture.kind, TextureKind::Image);
+    EXPECT_EQ(m.texture.mapping, TextureMapping::PlanarXY);
+    EXPECT_FLOAT_EQ(m.bump, 0.5f);
+    EXPECT_EQ(m.alpha.kind, TextureKind::Checker);
+    EXPECT_FLOAT_EQ(m.alphaCutoff, 0.25f);
+    EXPECT_FLOAT_EQ(m.emission.x, 0.5f);
+    EXPECT_EQ(s.materials[1].transfer.size(), 2u);
+    EXPECT_FLOAT_EQ(s.materials[1].volumeStep, 0.3f);
+    EXPECT_FLOAT_EQ(s.materials[2].absorption.z, 0.3f);
+    EXPECT_EQ(s.lights[0].type, LightType::Area);
+    const Scene scene(s);  // textures and volume load
+}
+
+}  // namespace
+}  // namespace rtwall
+
+#include "texture.h"
+
+#include <turbojpeg.h>
+
+namespace rtwall {
+namespace {
+
+// Image textures: PNG and JPEG decode to the same linear values (JPEG within its loss), and a
+// truncated JPEG is an InputError naming the file.
+TEST(ImageTexture, PngAndJpegLoad) {
+    const auto dir = test::scratchDir();
+    const std::string png = test::writeTestTexture(dir);
+    const Image src = readPng(png);
+    tjhandle tj = tjInitCompress();
+    unsigned char* jpeg = nullptr;
+    unsigned long size = 0;
+    ASSERT_EQ(tjCompress2(tj, src.rgb.data(), src.width, src.width * 3, src.height, TJPF_RGB, &jpeg, &size, TJSAMP_444,
+                          100, 0),
+              0);
+    test::writeFile(dir / "t.jpg", std::string(reinterpret_cast<const char*>(jpeg), size));
+    test::writeFile(dir / "cut.jpg", std::string(reinterpret_cast<const char*>(jpeg), size / 3));
+    tjFree(jpeg);
+    tjDestroy(tj);
+    const auto a = loadTextureImage(png), b = loadTextureImage((dir / "t.jpg").string());
+    ASSERT_EQ(a->width, b->width);
+    ASSERT_EQ(a->height, b->height);
+    double worst = 0;
+    for (size_t i = 0; i < a->rgb.size(); ++i) worst = std::max(worst, double(std::fabs(a->rgb[i] - b->rgb[i])));
+    EXPECT_LT(worst, 0.1);
+    EXPECT_NE(test::inputErrorOf([&] { loadTextureImage((dir / "cut.jpg").string()); }).find("cut.jpg"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rtwall

@@ -1,0 +1,153 @@
+// rtwall bench shading: frame time and error against a converged reference for the shading
+// demos, as the speed/accuracy controls vary: the ray-tree pruning threshold (office and
+// headlight, against the unpruned image), GI samples per pixel (office, against a many-sample
+// mean) and the volume step (office, against a fine step). PSNR over the whole image; FLIP is
+// not computed (no FLIP implementation in the dependencies).
+#include "commands.h"
+#include "gen_shading.h"
+
+#include <rtwall/engine.h>
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+namespace rtwall::cli {
+
+namespace {
+
+struct Options {
+    bool json = false;
+    int width = 1600, height = 1200, rounds = 3, referenceFrames = 64, threads = 0;
+    std::string dir = "out/bench-shading";
+};
+
+double psnr(const Image& a, const Image& b) {
+    double se = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) {
+        const double d = double(a.rgb[i]) - double(b.rgb[i]);
+        se += d * d;
+    }
+    if (se == 0) return INFINITY;
+    return 10.0 * std::log10(255.0 * 255.0 / (se / double(a.rgb.size())));
+}
+
+// Median frame time over `rounds` frames (frames 1..rounds: GI changes seeds each frame), and
+// the mean of those frames (one frame when the image has no randomness).
+Image timed(const Scene& scene, const Camera& cam, const RenderSettings& s, int rounds, double& seconds, TileStats& st) {
+    std::vector<double> t;
+    Accumulator acc;
+    for (int r = 0; r < rounds; ++r) {
+        const auto t0 = std::chrono::steady_clock::now();
+        const Image img = renderFrame(scene, cam, s, uint32_t(r + 1), &st);
+        t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        if (r == 0) acc.add(img);  // the error of one frame, as the viewer sees it
+    }
+    std::sort(t.begin(), t.end());
+    seconds = t[t.size() / 2];
+    return acc.resolve();
+}
+
+toml::table point(const char* control, double value, double seconds, double db, const TileStats& st) {
+    return toml::table{{control, value}, {"frame_s", seconds}, {"psnr_db", std::isinf(db) ? 999.0 : db},
+                       {"mrays", double(st.rays + st.shadowRays) * 1e-6}};
+}
+
+}  // namespace
+
+void addBenchShading(CLI::App& bench, Run& run) {
+    auto o = std::make_shared<Options>();
+    CLI::App* cmd = bench.add_subcommand("shading", "Shading demos: frame time and PSNR vs pruning, GI samples, volume step");
+    cmd->add_flag("--json", o->json, "Print JSON");
+    cmd->add_option("--width", o->width, "Image width")->check(CLI::Range(16, 8192));
+    cmd->add_option("--height", o->height, "Image height")->check(CLI::Range(16, 8192));
+    cmd->add_option("--rounds", o->rounds, "Frames timed per point (median)")->check(CLI::Range(1, 100));
+    cmd->add_option("--reference-frames", o->referenceFrames, "Frames averaged for the GI reference")->check(CLI::Range(1, 100000));
+    cmd->add_option("--threads", o->threads, "Render threads (0 = all)")->check(CLI::Range(0, 1024));
+    cmd->add_option("--dir", o->dir, "Where the demo scenes are written");
+    cmd->callback([&run, o] {
+        run = [o] {
+            toml::table out{{"width", o->width}, {"height", o->height}, {"rounds", o->rounds}, {"flip", "not computed"},
+                            {"sunflowers", "not in this branch (rtwall gen sunflowers comes with the cad branch)"}};
+            for (const char* name : {"office", "headlight"}) {
+                SceneDesc desc = loadSceneFile(writeShadingDemo(name, std::filesystem::path(o->dir) / name));
+                desc.settings.width = o->width;
+                desc.settings.height = o->height;
+                desc.settings.threads = o->threads;
+                const Scene scene(desc);
+                const Camera cam(desc.cameras.front(), o->width, o->height);
+                toml::table sceneOut;
+                double sec;
+                TileStats st;
+
+                // Pruning threshold, against the unpruned image. The headlight's glass splits
+                // every path in two at each of its many interfaces: unpruned, its ray tree grows
+                // as 2^depth, so its reference is threshold 1e-4 instead.
+                const bool deep = std::string(name) == "headlight";
+                const float referenceThreshold = deep ? 1e-4f : 0.0f;
+                RenderSettings s = desc.settings;
+                s.pruneThreshold = referenceThreshold;
+                const Image unpruned = timed(scene, cam, s, o->rounds, sec, st);
+                toml::array prune;
+                prune.push_back(point("threshold", referenceThreshold, sec, INFINITY, st));
+                sceneOut.insert("prune_reference_threshold", referenceThreshold);
+                for (float th : {0.0005f, 0.002f, 0.01f, 0.05f}) {
+                    s.pruneThreshold = th;
+                    const Image img = timed(scene, cam, s, o->rounds, sec, st);
+                    prune.push_back(point("threshold", th, sec, psnr(img, unpruned), st));
+                }
+                sceneOut.insert("prune", prune);
+
+                if (std::string(name) == "office") {
+                    // GI samples per pixel (one frame), against the mean of many frames.
+                    RenderSettings g = desc.settings;
+                    g.gi = true;
+                    g.samples = 4;
+                    Accumulator acc;
+                    for (int f = 0; f < o->referenceFrames; ++f)
+                        acc.add(renderFrame(scene, cam, g, uint32_t(100000 + f)));
+                    const Image reference = acc.resolve();
+                    toml::array gi;
+                    for (int spp : {1, 2, 4, 8, 16}) {
+                        g.samples = spp;
+                        const Image img = timed(scene, cam, g, o->rounds, sec, st);
+                        gi.push_back(point("spp", spp, sec, psnr(img, reference), st));
+                    }
+                    sceneOut.insert("gi_spp", gi);
+                    sceneOut.insert("gi_reference_spp", 4 * o->referenceFrames);
+
+                    // Volume step (voxels), against step 0.05.
+                    auto withStep = [&](float step) {
+                        SceneDesc d = desc;
+                        for (Material& m : d.materials)
+                            if (m.type == MaterialType::Volume) m.volumeStep = step;
+                        return d;
+                    };
+                    const SceneDesc fine = withStep(0.05f);
+                    const Scene fineScene(fine);
+                    const Image volumeRef = timed(fineScene, cam, fine.settings, 1, sec, st);
+                    toml::array vol;
+                    for (float step : {0.25f, 0.5f, 1.0f, 2.0f, 4.0f}) {
+                        const SceneDesc d = withStep(step);
+                        const Scene sc(d);
+                        const Image img = timed(sc, cam, d.settings, o->rounds, sec, st);
+                        vol.push_back(point("step_voxels", step, sec, psnr(img, volumeRef), st));
+                    }
+                    sceneOut.insert("volume_step", vol);
+                }
+                out.insert(name, sceneOut);
+                std::fprintf(stderr, "bench shading: %s done\n", name);
+            }
+            if (o->json) std::cout << toml::json_formatter{out} << "\n";
+            else std::cout << out << "\n";
+            return 0;
+        };
+    });
+}
+
+}  // namespace rtwall::cli
