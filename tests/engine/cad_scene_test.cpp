@@ -373,6 +373,19 @@ TEST(GeneratedScenes, SunflowerFieldInstancesEveryPlantFromSharedMeshes) {
     const Image img = renderScene(s, 64, 48);
     std::set<uint8_t> values(img.rgb.begin(), img.rgb.end());
     EXPECT_GT(values.size(), 10u);
+
+    // Alpha-masked foliage: the leaves' mask cuts holes that camera and shadow rays pass through,
+    // so the same field with solid leaves renders differently.
+    SceneDesc solid = s;
+    bool masked = false;
+    for (Material& m : solid.materials)
+        if (m.name == "leaf") {
+            masked = m.alpha.kind != TextureKind::None;
+            m.alpha.kind = TextureKind::None;
+        }
+    ASSERT_TRUE(masked);
+    const Image solidImg = renderScene(solid, 64, 48);
+    EXPECT_NE(img.rgb, solidImg.rgb);
 }
 
 }  // namespace

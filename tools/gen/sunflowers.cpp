@@ -155,7 +155,9 @@ void genSunflowers(const GenOptions& o) {
           << " --tree-triangles " << treeTriangles << " --seed " << o.seed << "\n\n"
           << "[image]\nwidth = 1600\nheight = 1200\n\n[render]\nambient = [0.15, 0.16, 0.2]\nbackground = [0.45, 0.6, 0.85]\n\n"
           << "[bvh]\nquality = \"medium\"\n\n[load]\ncache = " << (o.cache ? "true" : "false") << "\n\n"
-          << "[[material]]\nname = \"stem\"\ncolor = [0.25, 0.5, 0.15]\n\n[[material]]\nname = \"leaf\"\ncolor = [0.2, 0.45, 0.12]\n\n"
+          << "[[material]]\nname = \"stem\"\ncolor = [0.25, 0.5, 0.15]\n\n[[material]]\nname = \"leaf\"\ncolor = [0.2, 0.45, 0.12]\n"
+             "# Alpha-masked foliage: marble veins cut holes in the leaves, for camera and shadow rays.\n"
+             "alpha = \"marble\"\nalpha_color2 = [0, 0, 0]\nalpha_scale = 0.25\nalpha_cutoff = 0.35\n\n"
           << "[[material]]\nname = \"seeds\"\ncolor = [0.25, 0.15, 0.05]\n\n[[material]]\nname = \"petal\"\ntype = \"phong\"\ncolor = [0.95, 0.75, 0.1]\nspecular = [0.1, 0.1, 0.1]\n\n"
           << "[[material]]\nname = \"bark\"\ncolor = [0.35, 0.25, 0.18]\n\n";
 
