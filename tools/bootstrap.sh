@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # One entry point for a fresh Debian 12 machine:
-#   tools/bootstrap.sh demo   install what is missing, build, run the master with local clients
+#   tools/bootstrap.sh demo [NAME [gen options]]   install what is missing, build, run the master with
+#             local clients (NAME: office, headlight, sunflowers or powerplant, generated first)
 #   tools/bootstrap.sh test   install what is missing, build, run the whole test suite
 #   tools/bootstrap.sh deps   only install what is missing
 #   tools/bootstrap.sh build  install and build
@@ -69,9 +70,25 @@ case "${1:-}" in
   build) install_missing; build ;;
   demo)
     install_missing; build
-    say "running the master with two local render clients on the built-in scene (rtwall run)"
-    "$BUILD_DIR/tools/rtwall" run --frames 60 --write-every 30 --out out/frames
-    say "frames are in $(pwd)/out/frames/"
+    if [ -z "${2:-}" ]; then
+      say "running the master with two local render clients on the built-in scene (rtwall run)"
+      "$BUILD_DIR/tools/rtwall" run --frames 60 --write-every 30 --out out/frames
+      say "frames are in $(pwd)/out/frames/"
+    else
+      # A named demo scene: generated (rtwall gen NAME, extra arguments passed on), then run on
+      # the cluster path like the default.
+      name=$2; shift 2
+      dir=$(pwd)/out/$name
+      say "generating the '$name' scene into $dir (rtwall gen $name $*)"
+      "$BUILD_DIR/tools/rtwall" gen "$name" --out "$dir" "$@"
+      scene=$dir/scene.toml
+      [ -f "$scene" ] || scene=$dir/$name.toml
+      printf 'scene = "%s"\n[image]\nwidth = 800\nheight = 600\n[cluster]\nclients = 2\n[run]\nframes = 10\nwrite_every = 5\nout = "%s/frames"\n' \
+        "$scene" "$dir" > "$dir/run.toml"
+      say "running the master with two local render clients on $scene (rtwall run $dir/run.toml)"
+      "$BUILD_DIR/tools/rtwall" run "$dir/run.toml"
+      say "frames are in $dir/frames/"
+    fi
     ;;
   test)
     install_missing; build
