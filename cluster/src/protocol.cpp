@@ -220,6 +220,12 @@ void write(Writer& w, const CameraDesc& c) {
     write(w, c.lookAt);
     write(w, c.up);
     w.f32(c.fovY);
+    w.boolean(c.window.has_value());
+    if (c.window) {
+        write(w, c.window->lowerLeft);
+        write(w, c.window->right);
+        write(w, c.window->up);
+    }
 }
 
 void read(Reader& r, CameraDesc& c) {
@@ -229,6 +235,16 @@ void read(Reader& r, CameraDesc& c) {
     c.up = readFloat3(r);
     c.fovY = r.f32();
     if (!(c.fovY > 0.0f && c.fovY < 180.0f)) fail("camera fov " + std::to_string(c.fovY) + " is outside (0, 180)");
+    c.window.reset();
+    if (r.boolean()) {
+        ProjectionWindow w;
+        w.lowerLeft = readFloat3(r);
+        w.right = readFloat3(r);
+        w.up = readFloat3(r);
+        for (const Float3& v : {w.lowerLeft, w.right, w.up})
+            if (!(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z))) fail("camera window is not finite");
+        c.window = w;
+    }
 }
 
 void write(Writer& w, const InstanceDesc& in) {

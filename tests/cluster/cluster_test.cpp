@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
@@ -221,6 +222,48 @@ TEST(Cluster, TransformMaterialAndLightUpdatesMatchARebuiltScene) {
     master.setMaterial(1, changed.materials[1]);
     master.setLight(0, changed.lights[0]);
     EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(changed)), 0u);
+}
+
+// An off-axis camera (a projection window, as stereo walls use) travels in the snapshot and in
+// updates, and the cluster renders it bit-identical to one machine.
+TEST(Cluster, OffAxisCameraBitIdenticalToOneMachine) {
+    SceneDesc desc = demoScene(96, 72);
+    const CameraDesc plain = desc.cameras.front();
+    auto offAxis = [&](float eyeX) {
+        // A window 1 unit in front of the camera, shifted left of the eye: an asymmetric frustum.
+        CameraDesc c = plain;
+        c.position = {plain.position.x + eyeX, plain.position.y, plain.position.z};
+        const Float3 f{plain.lookAt.x - plain.position.x, plain.lookAt.y - plain.position.y,
+                       plain.lookAt.z - plain.position.z};
+        const float fl = std::sqrt(f.x * f.x + f.y * f.y + f.z * f.z);
+        const Float3 w{f.x / fl, f.y / fl, f.z / fl};
+        Float3 r{w.y * plain.up.z - w.z * plain.up.y, w.z * plain.up.x - w.x * plain.up.z, w.x * plain.up.y - w.y * plain.up.x};
+        const float rl = std::sqrt(r.x * r.x + r.y * r.y + r.z * r.z);
+        r = {r.x / rl, r.y / rl, r.z / rl};
+        const Float3 u{r.y * w.z - r.z * w.y, r.z * w.x - r.x * w.z, r.x * w.y - r.y * w.x};
+        const Float3 centre{plain.position.x + w.x, plain.position.y + w.y, plain.position.z + w.z};
+        const float hw = 0.55f, hh = 0.4f, shift = -0.2f;  // the window is off the eye's axis
+        c.window = ProjectionWindow{{centre.x + r.x * (shift - hw) - u.x * hh, centre.y + r.y * (shift - hw) - u.y * hh,
+                                     centre.z + r.z * (shift - hw) - u.z * hh},
+                                    {r.x * 2 * hw, r.y * 2 * hw, r.z * 2 * hw},
+                                    {u.x * 2 * hh, u.y * 2 * hh, u.z * 2 * hh}};
+        return c;
+    };
+    SceneDesc first = desc, second = desc;
+    first.cameras = {offAxis(0.0f)};
+    second.cameras = {offAxis(0.3f)};
+    ASSERT_GT(differingBytes(singleMachine(first), singleMachine(desc)), 0u) << "the window must change the image";
+
+    ClusterSettings cs;
+    cs.async = false;
+    LocalCluster cluster(first, cs, 2);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(2, 30000));
+    EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(first)), 0u) << "in the snapshot";
+    master.setCamera(second.cameras.front());
+    EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(second)), 0u) << "in an update";
+    master.setCamera(plain);
+    EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(desc)), 0u) << "back to the symmetric camera";
 }
 
 // Lost update messages (fault injection drops every second one per client): each client sees

@@ -55,6 +55,12 @@ void expectSame(const CameraDesc& a, const CameraDesc& b) {
     expectSame(a.lookAt, b.lookAt);
     expectSame(a.up, b.up);
     EXPECT_EQ(a.fovY, b.fovY);
+    ASSERT_EQ(a.window.has_value(), b.window.has_value());
+    if (a.window) {
+        expectSame(a.window->lowerLeft, b.window->lowerLeft);
+        expectSame(a.window->right, b.window->right);
+        expectSame(a.window->up, b.window->up);
+    }
 }
 void expectSame(const InstanceDesc& a, const InstanceDesc& b) {
     EXPECT_EQ(a.mesh, b.mesh);
@@ -197,6 +203,13 @@ CameraDesc sampleCamera() {
     return c;
 }
 
+CameraDesc sampleOffAxisCamera() {
+    CameraDesc c = sampleCamera();
+    c.name = "wall-left-eye";
+    c.window = ProjectionWindow{{-1.25f, -0.75f, 0.5f}, {2.5f, 0.0f, -0.125f}, {0.0f, 1.5f, 0.0f}};
+    return c;
+}
+
 Transform sampleTransform(int k) {
     Transform t;
     for (size_t i = 0; i < t.m.size(); ++i) t.m[i] = 0.1 * double(i + 1) + 1e-9 * k - 0.5;
@@ -262,6 +275,7 @@ Update sampleUpdate() {
     u.changes.push_back(MaterialChange{5, sampleMaterial(3)});
     u.changes.push_back(LightChange{2, sampleLight(1)});
     u.changes.push_back(SettingsChange{sampleSettings()});
+    u.changes.push_back(CameraChange{sampleOffAxisCamera()});
     return u;
 }
 
@@ -368,6 +382,21 @@ TEST(Protocol, RoundTripEmptyAndLimitValues) {
     edges.lights[0].intensity = 0;
     edges.camera.fovY = 179.9f;
     expectSame(edges, decode<SceneSnapshot>(payloadOf(edges)));
+}
+
+TEST(Protocol, RoundTripOffAxisCamera) {
+    SceneSnapshot s = sampleSnapshot();
+    s.camera = sampleOffAxisCamera();
+    expectSame(s, decode<SceneSnapshot>(payloadOf(s)));
+    Update u;
+    u.seq = 2;
+    u.baseSeq = 1;
+    u.changes.push_back(CameraChange{sampleOffAxisCamera()});
+    u.changes.push_back(CameraChange{sampleCamera()});  // and back to symmetric
+    expectSame(u, decode<Update>(payloadOf(u)));
+    // The window costs a flag byte plus three Float3s; an absent window costs only the flag.
+    SceneSnapshot plain = sampleSnapshot();
+    EXPECT_EQ(payloadOf(s).size(), payloadOf(plain).size() + 36 + (s.camera.name.size() - plain.camera.name.size()));
 }
 
 TEST(Protocol, EncodeSetsTypeAndLength) {
@@ -564,6 +593,12 @@ TEST(Protocol, SnapshotRejectsValuesOutOfRange) {
         {"fov 0", [](SceneSnapshot& s) { s.camera.fovY = 0; }},
         {"fov 180", [](SceneSnapshot& s) { s.camera.fovY = 180; }},
         {"fov -10", [](SceneSnapshot& s) { s.camera.fovY = -10; }},
+        {"window NaN", [=](SceneSnapshot& s) {
+             s.camera.window = ProjectionWindow{{0, 0, 0}, {nan, 0, 0}, {0, 1, 0}};
+         }},
+        {"window inf", [=](SceneSnapshot& s) {
+             s.camera.window = ProjectionWindow{{0, 0, inf}, {1, 0, 0}, {0, 1, 0}};
+         }},
         {"camera NaN", [=](SceneSnapshot& s) { s.camera.lookAt.x = nan; }},
         {"camera name too long", [](SceneSnapshot& s) { s.camera.name.assign(kMaxStringBytes + 1, 'c'); }},
         {"material type 7", [](SceneSnapshot& s) { s.materials[1].type = MaterialType(7); }},
@@ -823,6 +858,7 @@ TEST(Protocol, StateHash) {
         [](SceneSnapshot& x) { std::swap(x.instances[0], x.instances[1]); },
         [](SceneSnapshot& x) { x.lights[1].intensity *= 2; },
         [](SceneSnapshot& x) { x.camera.fovY += 1; },
+        [](SceneSnapshot& x) { x.camera.window = ProjectionWindow{{-1, -1, 0}, {2, 0, 0}, {0, 2, 0}}; },
         [](SceneSnapshot& x) { x.settings.shadows = true; },
         [](SceneSnapshot& x) { x.settings.threads = 3; },
     };

@@ -78,6 +78,31 @@ TEST(WallCli, RunWithoutADisplayWritesWhatEachProjectorGets) {
     }
 }
 
+// The shipped stereo wall: each eye gets its own off-axis view of the wall (from the wall's
+// physical corners, the viewer and the eye separation), so the two eyes' images differ.
+TEST(WallCli, TheStereoWallWritesDifferentEyes) {
+    const auto dir = test::displayScratchDir();
+    const Result r = run("run --wall " + (test::sourceDir() / "configs/wall/stereo-passive.toml").string() +
+                         " --headless --frames 1 --write-every 1 --out " + dir.string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    // A stereo frame is two rendered frames (left, then right) and is named after the second.
+    std::filesystem::path leftFile, rightFile;
+    for (const auto& e : std::filesystem::directory_iterator(dir)) {
+        const std::string n = e.path().filename().string();
+        if (n.ends_with("_left-eye.png")) leftFile = e.path();
+        if (n.ends_with("_right-eye.png")) rightFile = e.path();
+    }
+    ASSERT_FALSE(leftFile.empty()) << r.output;
+    ASSERT_FALSE(rightFile.empty()) << r.output;
+    const Image left = readPng(leftFile), right = readPng(rightFile);
+    ASSERT_EQ(left.width, 1600);
+    ASSERT_EQ(right.width, 1600);
+    ASSERT_EQ(left.rgb.size(), right.rgb.size());
+    size_t differ = 0;
+    for (size_t i = 0; i < left.rgb.size(); ++i) differ += left.rgb[i] != right.rgb[i];
+    EXPECT_GT(differ, left.rgb.size() / 1000) << "the eyes see the scene from different places";
+}
+
 TEST(WallCli, TheShippedWallRunConfigRunsHeadless) {
     const auto dir = test::displayScratchDir();
     const Result r = run("run " + (test::sourceDir() / "configs/run/wall-2x2.toml").string() + " --frames 1 --write-every 1 --out " +

@@ -90,6 +90,13 @@ int main(int argc, char** argv) {
     update.changes = {CameraChange{CameraDesc{}}, TransformChange{0, translation(0, 1, 0)},
                       MaterialChange{1, Material{}}, LightChange{0, Light{}}, SettingsChange{RenderSettings{}}};
     seedMessage("update", update);
+    CameraDesc offAxis;  // a stereo eye: the projection window travels with the camera
+    offAxis.window = ProjectionWindow{{-1.6f, -1.2f, 0.0f}, {3.2f, 0.0f, 0.0f}, {0.0f, 2.4f, 0.0f}};
+    Update eye;
+    eye.seq = 4;
+    eye.baseSeq = 3;
+    eye.changes = {CameraChange{offAxis}};
+    seedMessage("update-off-axis", eye);
     seedMessage("frame-begin", FrameBegin{3, 2});
     seedMessage("tile-request", TileRequest{3, 4});
     seedMessage("tile-assign", TileAssign{3, {0, 1, 2, 17}});

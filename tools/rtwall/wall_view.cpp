@@ -47,17 +47,14 @@ CameraDesc WallView::camera() const { return cameraOf(base_, nav_->pose()); }
 CameraDesc WallView::eyeCamera(int eye) const {
     CameraDesc c = camera();
     if (wall_.stereo.mode == StereoMode::None) return c;
-    // Parallel eye axes, each shifted by half the separation along the camera's right vector.
+    // Off-axis: each eye sees the wall's physical rectangle as a projection window. The wall frame
+    // is carried into the world by the navigation pose (wall x, y, z = camera right, up, back; the
+    // viewer's head = the camera position; 1 metre = 1 world unit): see eyeWindowInWorld.
+    const EyeWindow w = eyeWindowInWorld(wallEyeWindow(wall_.stereo, eye), wall_.stereo.viewer, nav_->pose());
     const Float3 f{c.lookAt.x - c.position.x, c.lookAt.y - c.position.y, c.lookAt.z - c.position.z};
-    Float3 r{f.y * c.up.z - f.z * c.up.y, f.z * c.up.x - f.x * c.up.z, f.x * c.up.y - f.y * c.up.x};
-    const float l = length(r);
-    if (l <= 0) return c;
-    const float s = float(wall_.stereo.eyeSeparation * 0.5) * (eye == 0 ? -1.0f : 1.0f) / l;
-    for (Float3* p : {&c.position, &c.lookAt}) {
-        p->x += r.x * s;
-        p->y += r.y * s;
-        p->z += r.z * s;
-    }
+    c.position = w.eye;
+    c.lookAt = {w.eye.x + f.x, w.eye.y + f.y, w.eye.z + f.z};  // unused by the window; kept sensible
+    c.window = ProjectionWindow{w.lowerLeft, w.right, w.up};
     return c;
 }
 

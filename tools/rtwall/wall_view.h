@@ -34,7 +34,7 @@ public:
     bool handleInput(Master& master, double dt);
     // The cameras each eye needs for the next frame (one for mono walls).
     CameraDesc camera() const;
-    CameraDesc eyeCamera(int eye) const;  // stereo: shifted by half the eye separation
+    CameraDesc eyeCamera(int eye) const;  // stereo: off-axis window from the wall corners (0 left, 1 right)
     void setCamera(const CameraDesc& c);  // a camera path or orbit moved it
     void show(WallFrame& frame, const FrameReport& report, double frameSeconds);
 

@@ -218,6 +218,23 @@ struct ViewPose {
     float fovY = 45.0f;
 };
 
+// Off-axis stereo (generalised perspective, Kooima): what one eye sees of the physical wall is the
+// wall rectangle as a projection window seen from that eye. Plain floats, no engine types: the
+// tools glue turns this into an engine CameraDesc (position = eye, window = lowerLeft/right/up).
+struct EyeWindow {
+    Float3 eye;                   // the eye's position
+    Float3 lowerLeft, right, up;  // the wall: lower-left corner, edge to lower-right, edge to upper-left
+};
+// In wall coordinates (metres). eye: 0 left, 1 right, anything else the head itself (mono). The
+// eyes sit half the separation either side of `viewer` along the wall's right edge direction
+// (lowerRight - lowerLeft, normalised): the viewer faces the wall with level eyes.
+EyeWindow wallEyeWindow(const StereoConfig& stereo, int eye);
+// Maps a wall-coordinate EyeWindow into the world through the navigation pose: the wall frame's
+// x, y, z axes become the camera's right, up and back (= -forward) axes, 1 metre becomes 1 world
+// unit, and the viewer's physical head position `viewer` becomes the camera position. So the
+// pose steers the whole physical room through the scene; pose.fovY is unused.
+EyeWindow eyeWindowInWorld(const EyeWindow& wall, const Float3& viewer, const ViewPose& pose);
+
 // Fly (WASD + mouse look) and orbit (drag around the look-at point, scroll to zoom), camera
 // bookmarks and camera-path recording. Plain state: fed InputState, tested without a window.
 class Navigator {

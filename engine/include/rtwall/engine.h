@@ -91,12 +91,21 @@ struct Light {
     Float3 edge2{0, 0, 1};   //   to the side of cross(edge1, edge2) only
 };
 
+// An off-axis (generalised perspective) projection: the image is the world-space rectangle with
+// lower-left corner `lowerLeft` and edges `right` (to the lower-right corner) and `up` (to the
+// upper-left corner), seen from the camera's `position`. Pixel (0, 0)'s corner is lowerLeft + up,
+// pixel (width, height)'s corner is lowerLeft + right. lookAt, up and fovY are then unused.
+struct ProjectionWindow {
+    Float3 lowerLeft, right, up;
+};
+
 struct CameraDesc {
     std::string name = "default";
     Float3 position{0, 0, 5};
     Float3 lookAt{0, 0, 0};
     Float3 up{0, 1, 0};
     float fovY = 45.0f;  // vertical field of view in degrees
+    std::optional<ProjectionWindow> window;  // absent: the symmetric camera above
 };
 
 struct MeshDesc {
