@@ -44,6 +44,7 @@ struct ClientState {
     uint64_t updatesSent = 0; // for fault injection
     uint32_t threads = 0;
     double busySeconds = 0;   // render time reported this frame
+    uint64_t frameBytes = 0;  // encoded bytes of its results accepted this frame
     const char* deathReason = nullptr;  // set when it must go; reaped outside any iteration
 };
 
@@ -299,6 +300,7 @@ struct Master::Impl {
         for (auto& [peer, c] : clients) {
             c.credits = 0;
             c.busySeconds = 0;
+            c.frameBytes = 0;
             if (c.ready && c.stateSeq <= frameSeq && !send(c, fb, frame)) markDead(c, "its queue is full or it is unreachable");
         }
     }
@@ -330,6 +332,7 @@ struct Master::Impl {
             cr.tiles = done == st.completedBy.end() ? 0 : done->second;
             auto stolen = st.stolenBy.find(c.id);
             cr.stolen = stolen == st.stolenBy.end() ? 0 : stolen->second;
+            cr.bytes = c.frameBytes;
             cr.busyFraction = seconds > 0 ? c.busySeconds / (seconds * std::max(1u, c.threads)) : 0;
             r.clients.push_back(cr);
         }
@@ -436,6 +439,7 @@ struct Master::Impl {
             TileView view;
             if (assembler.claim(r.frame, r.tile, rect, view) == FrameAssembler::Claim::Granted) {
                 frameBytes += r.pixels.size();
+                c.frameBytes += r.pixels.size();
                 decoder->push({std::move(r.pixels), r.codec, r.tile, rect, view});
             }
         }

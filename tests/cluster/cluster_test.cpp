@@ -109,6 +109,15 @@ TEST_P(ClusterImage, BitIdenticalToOneMachine) {
     ASSERT_EQ(report.tileOwners.size(), makeTiles(160, 120, l.tile).size());
     for (const ClientReport& c : report.clients)
         EXPECT_EQ(uint64_t(std::count(report.tileOwners.begin(), report.tileOwners.end(), c.id)), c.tiles);
+    // Per-client bytes (the status overlay's throughput) add up to the frame's bytes; a raw
+    // tile's size is known exactly.
+    uint64_t bytes = 0;
+    for (const ClientReport& c : report.clients) {
+        bytes += c.bytes;
+        if (c.tiles > 0) EXPECT_GT(c.bytes, 0u);
+    }
+    EXPECT_EQ(bytes, report.bytes);
+    if (l.codec == TileCodec::Raw) EXPECT_EQ(report.bytes, uint64_t(160) * 120 * 3);
 }
 
 INSTANTIATE_TEST_SUITE_P(Layouts, ClusterImage,

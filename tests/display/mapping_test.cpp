@@ -2,7 +2,10 @@
 #include "display_test_util.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 
 namespace rtwall {
 namespace {
@@ -148,6 +151,44 @@ TEST(Mapping, HeadlessPresenterWritesEveryNthFramePerScreen) {
     EXPECT_EQ(p.written()[0].filename(), "frame_000002_c0r0.png");
     const Image img = readPng(dir / "frame_000004_c1r1.png");
     EXPECT_EQ(img.rgb, presentScreen(w, 3, f).rgb);
+}
+
+// The video path pipes every wall frame, as raw RGB, into the ffmpeg program. A stand-in
+// `ffmpeg` on PATH records its arguments and what it was sent, so the test checks exactly what
+// a real ffmpeg would get (CI has no ffmpeg installed).
+TEST(Mapping, HeadlessPresenterPipesEveryFrameToFfmpeg) {
+    const auto dir = test::displayScratchDir();
+    const auto bin = dir / "bin";
+    std::filesystem::create_directories(bin);
+    {
+        std::ofstream script(bin / "ffmpeg");
+        script << "#!/bin/sh\necho \"$@\" > '" << (dir / "ffmpeg.args").string() << "'\ncat > '"
+               << (dir / "ffmpeg.stdin").string() << "'\n";
+    }
+    std::filesystem::permissions(bin / "ffmpeg", std::filesystem::perms::owner_all);
+    const std::string oldPath = std::getenv("PATH") ? std::getenv("PATH") : "";
+    setenv("PATH", (bin.string() + ":" + oldPath).c_str(), 1);
+    WallConfig w = singleScreenWall(64, 48);
+    w.video = "wall.mp4";
+    w.writeEvery = 0;
+    WallFrame f = gradientFrame(64, 48);
+    {
+        HeadlessPresenter p(w, dir);
+        for (uint32_t n = 1; n <= 3; ++n) {
+            f.number = n;
+            p.present(f);
+        }
+    }  // closing the presenter closes the pipe and waits for ffmpeg
+    setenv("PATH", oldPath.c_str(), 1);
+    std::ifstream in(dir / "ffmpeg.stdin", std::ios::binary);
+    const std::vector<char> sent((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ASSERT_EQ(sent.size(), 3 * f.left.rgb.size());
+    EXPECT_EQ(0, std::memcmp(sent.data() + 2 * f.left.rgb.size(), f.left.rgb.data(), f.left.rgb.size()));
+    std::ifstream argsFile(dir / "ffmpeg.args");
+    std::string args;
+    std::getline(argsFile, args);
+    EXPECT_NE(args.find("-pix_fmt rgb24 -s 64x48"), std::string::npos) << args;
+    EXPECT_NE(args.find((dir / "wall.mp4").string()), std::string::npos) << args;
 }
 
 TEST(Mapping, StatusTextAndItsOverlay) {

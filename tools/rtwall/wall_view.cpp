@@ -126,9 +126,7 @@ void WallView::show(WallFrame& frame, const FrameReport& report, double frameSec
             std::string status = line, overlay = line;
             for (const ClientReport& c : report.clients) {
                 std::snprintf(line, sizeof line, " | client %u: %llu tiles (%.2f MB/s) %.0f%% busy", c.id, (unsigned long long)c.tiles,
-                              report.seconds > 0 && !report.tileOwners.empty()
-                                  ? double(report.bytes) * double(c.tiles) / double(report.tileOwners.size()) / report.seconds * 1e-6
-                                  : 0.0,
+                              report.seconds > 0 ? double(c.bytes) / report.seconds * 1e-6 : 0.0,
                               100.0 * c.busyFraction);
                 status += line;
                 overlay += "\n" + std::string(line + 3);

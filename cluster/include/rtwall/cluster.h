@@ -56,6 +56,7 @@ struct ClientReport {
     uint32_t id = 0;
     uint64_t tiles = 0;         // results accepted this frame
     uint64_t stolen = 0;        // of which taken from another client's queue
+    uint64_t bytes = 0;         // encoded tile bytes of its accepted results
     double busyFraction = 0;    // render time / frame time
 };
 
