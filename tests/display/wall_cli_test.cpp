@@ -1,6 +1,7 @@
 // `rtwall check` and `rtwall run --wall` as a user meets them: exit codes, one-line errors,
 // the headless presenter's per-screen images.
 #include "display_test_util.h"
+#include "cli_util.h"
 
 #include <sys/wait.h>
 
@@ -10,24 +11,10 @@
 namespace rtwall {
 namespace {
 
-struct Result {
-    int status = -1;
-    std::string output;  // stdout and stderr together
-};
+// No display: the wall must fall back to headless by itself.
+using Result = test::CliResult;
 
-Result run(const std::string& args) {
-    // No display: the wall must fall back to headless by itself.
-    const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY timeout 300 " + std::string(RTWALL_EXE) + " " + args + " 2>&1";
-    Result r;
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-    const int st = pclose(p);
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-    return r;
-}
+Result run(const std::string& args) { return test::runCli(RTWALL_EXE, args, 300, "env -u DISPLAY -u WAYLAND_DISPLAY"); }
 
 TEST(WallCli, CheckAcceptsEveryShippedWall) {
     for (const char* w : {"desktop", "projectors-2x2", "monitors-3x2-bezels", "projector-pair-blend", "stereo-passive"}) {

@@ -1,6 +1,7 @@
 // The command line for CAD scenes: rtwall info on every VTK format, rtwall gen, and one-line
 // errors for bad files, bad scenes and bad arguments.
 #include "test_util.h"
+#include "cli_util.h"
 
 #include <gtest/gtest.h>
 
@@ -13,23 +14,9 @@
 namespace rtwall {
 namespace {
 
-struct Result {
-    int status = -1;
-    std::string output;  // stdout and stderr together
-};
+using Result = test::CliResult;
 
-Result run(const std::string& args) {
-    const std::string cmd = "timeout 300 " + std::string(RTWALL_EXE) + " " + args + " 2>&1";
-    Result r;
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-    const int st = pclose(p);
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-    return r;
-}
+Result run(const std::string& args) { return test::runCli(RTWALL_EXE, args, 300); }
 
 void expectOneLineError(const Result& r, int status, const std::string& mustContain) {
     EXPECT_EQ(r.status, status) << r.output;

@@ -1,6 +1,7 @@
 // The shading commands as a user meets them: `rtwall gen` writes demos that render (also
 // through local client processes, to the same bytes), and bad shading arguments end with one line.
 #include "test_util.h"
+#include "cli_util.h"
 
 #include <rtwall/image.h>
 
@@ -14,23 +15,9 @@
 namespace rtwall {
 namespace {
 
-struct Result {
-    int status = -1;
-    std::string output;
-};
+using Result = test::CliResult;
 
-Result run(const std::string& args) {
-    const std::string cmd = "timeout 300 " + std::string(RTWALL_EXE) + " " + args + " 2>&1";
-    Result r;
-    FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
-    const int st = pclose(p);
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-    return r;
-}
+Result run(const std::string& args) { return test::runCli(RTWALL_EXE, args, 300); }
 
 TEST(CliShading, GeneratedDemosRenderAndTheClusterGivesTheSameBytes) {
     const auto dir = test::scratchDir();
