@@ -4,6 +4,7 @@
 #include <rtwall/toml_reader.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -259,6 +260,12 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
         Reader r(file, *t, "[headless]: ");
         w.writeEvery = r.integer("write_every", w.writeEvery, 0, 100'000'000);
         w.video = r.string("video", "");
+        // The name goes to the ffmpeg program on a shell command line: a plain file name only.
+        for (char ch : w.video)
+            if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '.' || ch == '-' || ch == '_'))
+                r.fail(r.find("video"), "key 'video': a plain file name of letters, digits, '.', '-' and '_' (it goes to ffmpeg)");
+        if (w.video.starts_with("-") || w.video.starts_with("."))
+            r.fail(r.find("video"), "key 'video': a plain file name of letters, digits, '.', '-' and '_' (it goes to ffmpeg)");
         r.finish();
     }
     top.finish();
