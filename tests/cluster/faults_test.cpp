@@ -119,9 +119,13 @@ TEST(Faults, FrozenClientMidFrameThenWakesUp) {
     ASSERT_TRUE(waitUntil([&] { return master.connectedClients() == 1; }, 5000)) << "timed out by heartbeat";
     const uint64_t droppedBefore = master.droppedMessages();
     kill(b.pid, SIGCONT);
-    // It wakes up with results of a frame that is gone: dropped and counted, never used.
-    EXPECT_TRUE(waitUntil([&] { return master.droppedMessages() > droppedBefore; }, 5000));
-    // Then it notices the master ignores it, reconnects and proves its state: back in.
+    // It wakes up either with results of a frame that is gone (dropped and counted, never used),
+    // or, when its own clock tells it the master's timeout passed before it sends anything, by
+    // reconnecting at once with nothing stale to send. Which comes first depends on where
+    // SIGSTOP caught it; the master's handling of the late results themselves is tested
+    // deterministically in Attack.ReplayedMessagesOfAnAuthenticatedPeerAreDroppedAndCounted.
+    ASSERT_TRUE(waitUntil([&] { return master.droppedMessages() > droppedBefore || master.connectedClients() == 2; }, 5000));
+    // Either way it proves its state and is back in.
     EXPECT_TRUE(waitUntil([&] { return master.connectedClients() == 2; }, 10000)) << "rejoined";
     FrameReport r;
     EXPECT_EQ(master.renderFrame(&r).rgb, expected.rgb);
