@@ -552,7 +552,6 @@ vtkSmartPointer<vtkPolyData> vrmlWorld(vtkRenderer* renderer, RecordingOutputWin
 
     auto append = vtkSmartPointer<vtkAppendPolyData>::New();
     append->SetOutputPointsPrecision(vtkAlgorithm::DOUBLE_PRECISION);
-    std::vector<vtkSmartPointer<vtkPolyData>> keep;
     for (const Part& part : parts) {
         vtkPolyData* in = part.pd;
         const vtkIdType n = in->GetNumberOfPoints();
@@ -608,8 +607,7 @@ vtkSmartPointer<vtkPolyData> vrmlWorld(vtkRenderer* renderer, RecordingOutputWin
             }
             out->GetPointData()->SetScalars(colors);
         }
-        append->AddInputData(out);
-        keep.push_back(out);
+        append->AddInputData(out);  // holds a reference
     }
     runVtk(append.Get(), window, name);
     vtkSmartPointer<vtkPolyData> merged = append->GetOutput();
@@ -662,6 +660,31 @@ bool writeAll(int fd, const unsigned char* p, size_t n);
 struct Closer {
     int fd;
     ~Closer() { ::close(fd); }
+};
+
+// Points this process's stderr at `fd` for the object's lifetime, whatever leaves the scope.
+class StderrTo {
+public:
+    explicit StderrTo(int fd) {
+        std::fflush(stderr);
+        saved_ = ::dup(2);
+        if (saved_ >= 0 && ::dup2(fd, 2) < 0) {
+            ::close(saved_);
+            saved_ = -1;
+        }
+    }
+    ~StderrTo() {
+        if (saved_ < 0) return;
+        std::fflush(stderr);
+        ::dup2(saved_, 2);
+        ::close(saved_);
+    }
+    StderrTo(const StderrTo&) = delete;
+    StderrTo& operator=(const StderrTo&) = delete;
+    bool ok() const { return saved_ >= 0; }
+
+private:
+    int saved_ = -1;
 };
 
 // The first error line VTK's VRML parser printed into `fd`, on one printable line; empty if none.
@@ -742,13 +765,11 @@ TriangleMesh loadVtkHere(VtkKind kind, const std::string& data, const std::strin
             const int errFd = ::memfd_create("rtwall-vrml-errors", MFD_CLOEXEC);
             if (errFd < 0) fail(name, std::string("cannot capture VTK's messages: ") + std::strerror(errno));
             Closer errCloser{errFd};
-            std::fflush(stderr);
-            const int savedErr = ::dup(2);
-            if (savedErr < 0 || ::dup2(errFd, 2) < 0) fail(name, std::string("cannot capture VTK's messages: ") + std::strerror(errno));
-            importer->Read();
-            std::fflush(stderr);
-            ::dup2(savedErr, 2);
-            ::close(savedErr);
+            {
+                const StderrTo capture(errFd);
+                if (!capture.ok()) fail(name, std::string("cannot capture VTK's messages: ") + std::strerror(errno));
+                importer->Read();
+            }
             if (const std::string parseError = vrmlParseError(errFd); !parseError.empty()) {
                 // "Error near line 8: parse error" -> FILE:line 8: VRML parse error
                 unsigned line = 0;

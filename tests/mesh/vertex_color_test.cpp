@@ -40,7 +40,7 @@ TEST_P(ColoredTriangle, KeepsEveryVertexColour) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Files, ColoredTriangle,
-                         ::testing::Values("tri_colors_ascii.ply", "tri_colors_float_le.ply", "tri_colors.off",
+                         ::testing::Values("tri_colors_ascii.ply", "tri_colors_float_le.ply", "tri_colors.off", "tri_colors.obj",
                                            "tri_colors.vtk", "tri_colors.vtp"),
                          [](const ::testing::TestParamInfo<const char*>& p) {
                              std::string name = p.param;
