@@ -311,6 +311,8 @@ private:
         desc.lights = snapshot_->lights;
         desc.cameras = {snapshot_->camera};
         desc.settings = snapshot_->settings;
+        desc.bvh = snapshot_->bvh;
+        desc.origin = snapshot_->origin;
         building_ = std::async(std::launch::async, [desc = std::move(desc), delay = settings_.extraSceneBuildMs] {
             if (delay > 0) std::this_thread::sleep_for(std::chrono::milliseconds(delay));
             return std::make_unique<Scene>(desc);

@@ -203,6 +203,8 @@ struct Master::Impl {
         snap.lights = scene.lights;
         snap.camera = camera;
         snap.settings = scene.settings;
+        snap.bvh = scene.bvh;
+        snap.origin = scene.origin;
         return snap;
     }
 

@@ -450,6 +450,10 @@ void writeState(Writer& w, const SceneSnapshot& m) {
     writeVector(w, m.lights);
     write(w, m.camera);
     write(w, m.settings);
+    w.u8(uint8_t(m.bvh.quality));
+    w.boolean(m.bvh.compact);
+    w.boolean(m.bvh.robust);
+    for (double o : m.origin) w.f64(o);
 }
 
 void write(Writer& w, const SceneSnapshot& m) {
@@ -468,6 +472,12 @@ void read(Reader& r, SceneSnapshot& m) {
     readVector(r, m.lights, lightBytes, kMaxSceneObjects);
     read(r, m.camera);
     read(r, m.settings);
+    const uint8_t quality = r.u8();
+    if (quality > uint8_t(BvhSettings::Quality::High)) fail("BVH quality " + std::to_string(quality) + " is out of range");
+    m.bvh.quality = BvhSettings::Quality(quality);
+    m.bvh.compact = r.boolean();
+    m.bvh.robust = r.boolean();
+    for (double& o : m.origin) o = r.f64();  // f64 rejects NaN and infinity
     // The engine indexes meshes and materials with these without further checks.
     for (size_t i = 0; i < m.instances.size(); ++i) {
         const InstanceDesc& in = m.instances[i];
@@ -705,6 +715,9 @@ void writeMesh(Writer& w, const TriangleMesh& mesh) {
     w.boolean(mesh.hasNormals());
     if (const float* n = mesh.normals())
         for (size_t i = 0; i < 3 * vertices; ++i) w.f32(n[i]);
+    // Version 4: vertex colours, after the normals.
+    w.boolean(mesh.hasColors());
+    if (const uint8_t* c = mesh.colors()) w.bytes(c, 3 * vertices);
 }
 
 }  // namespace
@@ -747,6 +760,13 @@ TriangleMesh decodeMesh(const uint8_t* data, size_t size) {
         std::vector<float> normals(size_t(3 * vertices));
         for (float& n : normals) n = r.f32();
         mesh.setNormals(std::move(normals));
+    }
+    if (r.boolean()) {
+        if (vertices == 0) fail("colours flag set on a mesh without vertices");
+        r.expectElements(vertices, 3, std::numeric_limits<uint32_t>::max());
+        std::vector<uint8_t> colors(size_t(3 * vertices));
+        r.bytes(colors.data(), colors.size());
+        mesh.setColors(std::move(colors));
     }
     r.expectEnd();
     return mesh;

@@ -1,5 +1,6 @@
-// The rtwall wire protocol, version 3 (2 added the master's peer timeout to Welcome; 3 added
-// materials, area lights and shading settings).
+// The rtwall wire protocol, version 4 (2 added the master's peer timeout to Welcome; 3 added
+// materials, area lights and shading settings; 4 added vertex colours to meshes and the scene's
+// origin and [bvh] settings to the snapshot).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one writer and one
@@ -25,7 +26,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 3;
+inline constexpr uint16_t kProtocolVersion = 4;
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -95,6 +96,10 @@ struct SceneSnapshot {
     std::vector<Light> lights;
     CameraDesc camera;
     RenderSettings settings;
+    // Version 4: so that a client builds the same BVHs as the master, and knows where the
+    // (rebased) coordinates lie in the world.
+    BvhSettings bvh;
+    std::array<double, 3> origin{0, 0, 0};
 };
 
 struct MeshRequest {
@@ -200,7 +205,7 @@ MsgType messageTypeOf(const Ready&);
 MsgType messageTypeOf(const ResyncRequest&);
 
 // Canonical mesh bytes (vertex count, positions, triangle count, indices, normals flag and
-// normals, all little-endian), their hash (XXH3 128-bit) and the way back. decodeMesh
+// normals, colours flag and RGB bytes, all little-endian), their hash (XXH3 128-bit) and the way back. decodeMesh
 // validates counts against the size and every index against the vertex count.
 std::vector<uint8_t> encodeMesh(const TriangleMesh& mesh);
 TriangleMesh decodeMesh(const uint8_t* data, size_t size);

@@ -28,6 +28,7 @@ struct SurfacePoint {
     bool frontFace;  // the ray hit the side the triangle's winding calls "outside"
     float t;         // hit distance
     const InstanceData* instance;
+    Color tint{1, 1, 1};  // the mesh's interpolated vertex colour (linear), white without one
 };
 
 // Object-space position from barycentrics: exact whatever space Embree traversed in.
@@ -91,7 +92,8 @@ public:
     bool needsObjectPosition() const { return needsObjectPosition_; }
     // The shading normal after bump mapping (unchanged without a bump).
     Float3 bumpedNormal(const InstanceData& inst, const Float3& po, const Float3& ns) const;
-    Color albedo(const Float3& po) const { return texture_.active() ? texture_.color(po) : desc_.color; }
+    // The material's colour (or texture) times the vertex colour at the point.
+    Color albedo(const SurfacePoint& sp) const { return (texture_.active() ? texture_.color(sp.po) : desc_.color) * sp.tint; }
     const Material& desc() const { return desc_; }
 
 protected:

@@ -29,7 +29,7 @@ class LambertModel : public MaterialModel {
 public:
     using MaterialModel::MaterialModel;
     void shade(ShadeContext& c, const RayTask& ray, const SurfacePoint& sp) const override {
-        const Color a = albedo(sp.po);
+        const Color a = albedo(sp);
         addEmissionAndAmbient(c, ray, desc_, a);
         c.directLight(ray, sp, [&](const Float3& l) { return a * (kInvPi * std::max(0.0f, dot(sp.ns, l))); });
         // Path tracing: indirect light by one cosine-sampled bounce (pdf cos/pi cancels the BRDF).
@@ -46,7 +46,7 @@ class PhongModel : public MaterialModel {
 public:
     using MaterialModel::MaterialModel;
     void shade(ShadeContext& c, const RayTask& ray, const SurfacePoint& sp) const override {
-        const Color a = albedo(sp.po);
+        const Color a = albedo(sp);
         addEmissionAndAmbient(c, ray, desc_, a);
         const Float3 wo = -ray.dir;
         const float n = desc_.shininess;
@@ -79,7 +79,7 @@ public:
         addEmissionAndAmbient(c, ray, desc_, {0, 0, 0});
         if (c.canSpawn(ray))
             c.spawn(ray, offsetOrigin(sp.p, sp.ng, 1.0f), keepAbove(reflect(ray.dir, sp.ns), sp.ng),
-                    ray.weight * albedo(sp.po), 0);
+                    ray.weight * albedo(sp), 0);
     }
 };
 
@@ -93,7 +93,7 @@ public:
         exponent_ = r > 0.0f ? std::max(0.0f, 2.0f / (r * r) - 2.0f) : -1.0f;
     }
     void shade(ShadeContext& c, const RayTask& ray, const SurfacePoint& sp) const override {
-        const Color a = albedo(sp.po);
+        const Color a = albedo(sp);
         addEmissionAndAmbient(c, ray, desc_, {0, 0, 0});
         const Float3 r = reflect(ray.dir, sp.ns);
         const Float3 org = offsetOrigin(sp.p, sp.ng, 1.0f);
@@ -136,7 +136,7 @@ public:
         Float3 t;
         const bool refracts = fr < 1.0f && refractDirection(ray.dir, sp.ns, eta, t);
         c.spawn(ray, offsetOrigin(sp.p, sp.ng, 1.0f), reflect(ray.dir, sp.ns), w * (refracts ? fr : 1.0f), 0);
-        if (refracts) c.spawn(ray, offsetOrigin(sp.p, sp.ng, -1.0f), t, w * albedo(sp.po) * (1.0f - fr), 1);
+        if (refracts) c.spawn(ray, offsetOrigin(sp.p, sp.ng, -1.0f), t, w * albedo(sp) * (1.0f - fr), 1);
     }
 
     // Approximation (docs/shading.md): shadow rays go straight through, losing the Fresnel
@@ -146,7 +146,7 @@ public:
     ShadowPass shadowPass(const ShadingContext&, const ShadowTask& ray, const SurfacePoint& sp) const override {
         ShadowPass p;
         const float cosI = std::fabs(dot(ray.dir, sp.ns));
-        p.transmittance = albedo(sp.po) * (1.0f - fresnelDielectric(cosI, 1.0f / desc_.ior));
+        p.transmittance = albedo(sp) * (1.0f - fresnelDielectric(cosI, 1.0f / desc_.ior));
         if (!sp.frontFace && maxComponent(desc_.absorption) > 0.0f)
             p.transmittance = p.transmittance * expColor(desc_.absorption * -sp.t);
         p.continueAt = sp.t;
@@ -158,7 +158,7 @@ class EmissiveModel : public MaterialModel {
 public:
     using MaterialModel::MaterialModel;
     void shade(ShadeContext& c, const RayTask& ray, const SurfacePoint& sp) const override {
-        c.add(ray.weight * desc_.emission * albedo(sp.po));
+        c.add(ray.weight * desc_.emission * albedo(sp));
     }
 };
 

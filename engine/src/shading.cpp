@@ -31,6 +31,7 @@ SurfacePoint surfaceAt(const InstanceData& inst, const MaterialModel& model, con
         if (!isFinite(ns) || dot(ns, ns) == 0.0f) ns = ng;
     }
     sp.po = model.needsObjectPosition() ? objectPosition(mesh, hit.prim, hit.u, hit.v) : Float3{};
+    if (mesh.hasColors()) sp.tint = vertexColorAt(mesh, hit.prim, hit.u, hit.v);
     sp.frontFace = dot(ng, dir) < 0.0f;
     if (!sp.frontFace) ng = -ng;
     if (dot(ns, ng) < 0.0f) ns = -ns;

@@ -48,6 +48,10 @@ struct ShadingContext {
     float sampleWeight = 1.0f;  // weight of one primary sample in its pixel (pruning is relative to it)
 };
 
+// A mesh's vertex colour at barycentrics (u, v) of triangle `prim`: the three 8-bit sRGB colours
+// decoded to linear and interpolated there (colour in linear light, like everything shaded).
+inline Color vertexColorAt(const TriangleMesh& mesh, uint32_t prim, float u, float v);
+
 inline Float3 transformNormal(const float n[9], const Float3& v) {
     return {n[0] * v.x + n[1] * v.y + n[2] * v.z, n[3] * v.x + n[4] * v.y + n[5] * v.z,
             n[6] * v.x + n[7] * v.y + n[8] * v.z};
@@ -80,6 +84,12 @@ inline void shadeEyeLightPacket(const ShadingContext& ctx, const RayHitK& rh, co
         cr[k] = m.color.x;
         cg[k] = m.color.y;
         cb[k] = m.color.z;
+        if (inst.mesh->hasColors()) {
+            const Color tint = vertexColorAt(*inst.mesh, rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k]);
+            cr[k] *= tint.x;
+            cg[k] *= tint.y;
+            cb[k] *= tint.z;
+        }
     }
     for (int k = 0; k < K; ++k) {
         const float nn = nx[k] * nx[k] + ny[k] * ny[k] + nz[k] * nz[k];
@@ -135,6 +145,20 @@ inline uint8_t linearToSrgb8(float linear) {
     return uint8_t(c + (linear >= kSrgb.thresholds[c + 1]));
 }
 inline float srgb8ToLinear(uint8_t value) { return kSrgb.toLinear[value]; }
+
+inline Color vertexColorAt(const TriangleMesh& mesh, uint32_t prim, float u, float v) {
+    const uint32_t* tri = mesh.indices() + 3 * size_t(prim);
+    const uint8_t* c = mesh.colors();
+    const float w[3] = {1.0f - u - v, u, v};
+    Color out{0, 0, 0};
+    for (int k = 0; k < 3; ++k) {
+        const uint8_t* ck = c + 3 * size_t(tri[k]);
+        out.x += w[k] * srgb8ToLinear(ck[0]);
+        out.y += w[k] * srgb8ToLinear(ck[1]);
+        out.z += w[k] * srgb8ToLinear(ck[2]);
+    }
+    return out;
+}
 
 // Exact dielectric Fresnel reflectance for unpolarised light; cosI > 0 is the cosine on the
 // incident side, eta = n_incident / n_transmitted. Returns 1 for total internal reflection.

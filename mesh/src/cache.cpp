@@ -9,7 +9,7 @@
 //   24  i64      source modification time, nanoseconds since the epoch
 //   32  u64      vertex count V
 //   40  u64      triangle count T
-//   48  u32      flags: bit 0 = vertex normals
+//   48  u32      flags: bit 0 = vertex normals, bit 1 = vertex colours
 //   52  u32      zero
 //   56  f64[3]   mesh origin (TriangleMesh::origin)
 //   80  u64[4]   import report: polygons triangulated, degenerate triangles, strips, cells skipped
@@ -18,6 +18,8 @@
 //   128 f32[3V+1] positions (with Embree's padding float), then zeros to a multiple of 64
 //       f32[3V+1] normals, if flagged, padded likewise
 //       u32[3T]   triangle indices, padded likewise
+//       u8[3V]    vertex colours (sRGB-encoded RGB), if flagged, padded likewise (version 2; last,
+//                 so that the other sections sit where version 1 put them)
 // The file size must be exactly what the counts give. Sections start on 64-byte boundaries so
 // that the file can be mapped and its arrays used in place.
 #include "mesh_internal.h"
@@ -44,7 +46,7 @@ namespace fs = std::filesystem;
 using detail::MeshAccess;
 
 constexpr char kMagic[8] = {'R', 'T', 'W', 'M', 'E', 'S', 'H', 0};
-constexpr uint32_t kCacheVersion = 1;
+constexpr uint32_t kCacheVersion = 2;
 constexpr size_t kHeaderSize = 128;
 constexpr size_t kChecksumAt = 120;
 
@@ -171,7 +173,8 @@ std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const Impor
     const size_t posBytes = align64((3 * V + 1) * 4);
     const size_t nrmBytes = mesh.hasNormals() ? align64((3 * V + 1) * 4) : 0;
     const size_t idxBytes = align64(3 * T * 4);
-    const size_t total = kHeaderSize + posBytes + nrmBytes + idxBytes;
+    const size_t colBytes = mesh.hasColors() ? align64(3 * V) : 0;
+    const size_t total = kHeaderSize + posBytes + nrmBytes + idxBytes + colBytes;
 
     std::vector<unsigned char> bytes(total, 0);
     unsigned char* h = bytes.data();
@@ -182,7 +185,7 @@ std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const Impor
     putLE<int64_t>(h + 24, sourceMtime);
     putLE<uint64_t>(h + 32, V);
     putLE<uint64_t>(h + 40, T);
-    putLE<uint32_t>(h + 48, mesh.hasNormals() ? 1u : 0u);
+    putLE<uint32_t>(h + 48, (mesh.hasNormals() ? 1u : 0u) | (mesh.hasColors() ? 2u : 0u));
     for (int k = 0; k < 3; ++k) putLE<double>(h + 56 + 8 * k, mesh.origin()[size_t(k)]);
     putLE<uint64_t>(h + 80, report.polygonsTriangulated);
     putLE<uint64_t>(h + 88, report.degenerateTriangles);
@@ -197,6 +200,8 @@ std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const Impor
         at += nrmBytes;
     }
     copyArrayLE(h + at, mesh.indices(), 3 * T);
+    at += idxBytes;
+    if (mesh.hasColors()) std::memcpy(h + at, mesh.colors(), 3 * V);
     putLE<uint64_t>(h + kChecksumAt, checksum(h, total));
     return bytes;
 }
@@ -256,13 +261,14 @@ TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t so
         throw bad(16, "stale: the source file changed since the cache was written");
     const uint64_t V = getLE<uint64_t>(data + 32), T = getLE<uint64_t>(data + 40);
     const uint32_t flags = getLE<uint32_t>(data + 48);
-    if (flags > 1 || getLE<uint32_t>(data + 52) != 0) throw bad(48, "unknown flags");
+    if (flags > 3 || getLE<uint32_t>(data + 52) != 0) throw bad(48, "unknown flags");
     // Counts must fit the file before anything is computed from them.
     if (V == 0 || T == 0 || V >= std::numeric_limits<uint32_t>::max() || V > size / 12 || T > size / 12)
         throw bad(32, "vertex or triangle count does not fit the file");
-    const bool normals = flags & 1;
+    const bool normals = flags & 1, colors = flags & 2;
     const size_t posBytes = align64((3 * V + 1) * 4), nrmBytes = normals ? posBytes : 0, idxBytes = align64(3 * T * 4);
-    const size_t expected = kHeaderSize + posBytes + nrmBytes + idxBytes;
+    const size_t colBytes = colors ? align64(3 * V) : 0;
+    const size_t expected = kHeaderSize + posBytes + nrmBytes + idxBytes + colBytes;
     if (size != expected)
         throw bad(std::min(size, expected), (size < expected ? "truncated: " : "trailing bytes: ") + std::to_string(size) +
                                                 " bytes, the counts give " + std::to_string(expected));
@@ -289,6 +295,10 @@ TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t so
     // The last line before Embree: an index past the vertices would be an out-of-bounds read.
     for (size_t i = 0; i < 3 * T; ++i)
         if (idx[i] >= V) throw bad(idxAt + 4 * i, "vertex index " + std::to_string(idx[i]) + " out of range");
+    if (colors) {
+        const unsigned char* c = data + idxAt + idxBytes;
+        MeshAccess::colors(mesh).assign(c, c + 3 * V);
+    }
     std::array<double, 3> origin{};
     for (int k = 0; k < 3; ++k) {
         origin[size_t(k)] = getLE<double>(data + 56 + 8 * k);

@@ -89,6 +89,13 @@ public:
         mesh_.setNormals(std::move(normals_));
     }
 
+    // Colours likewise: only when every vertex got one (PLY red/green/blue, OFF COFF).
+    void finishColors() {
+        if (colorsSet_ == 0 || colorsSet_ != mesh_.vertexCount()) return;
+        colors_.resize(3 * mesh_.vertexCount());
+        mesh_.setColors(std::move(colors_));
+    }
+
     // -- geometry ------------------------------------------------------------------------------
 
     OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3f& p) override {
@@ -181,10 +188,14 @@ public:
     void add_face_texcoords(FaceHandle, OpenMesh::VertexHandle, const std::vector<OpenMesh::Vec3f>&) override {}
     void set_face_texindex(FaceHandle, int) override {}
     void set_halfedge(OpenMesh::VertexHandle, OpenMesh::HalfedgeHandle) override {}
-    void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec3uc&) override {}
-    void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec4uc&) override {}
-    void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
-    void set_color(OpenMesh::VertexHandle, const OpenMesh::Vec4f&) override {}
+    void set_color(OpenMesh::VertexHandle vh, const OpenMesh::Vec3uc& c) override { storeColor(vh, c[0], c[1], c[2]); }
+    void set_color(OpenMesh::VertexHandle vh, const OpenMesh::Vec4uc& c) override { storeColor(vh, c[0], c[1], c[2]); }
+    void set_color(OpenMesh::VertexHandle vh, const OpenMesh::Vec3f& c) override {
+        storeColor(vh, unitToByte(c[0]), unitToByte(c[1]), unitToByte(c[2]));
+    }
+    void set_color(OpenMesh::VertexHandle vh, const OpenMesh::Vec4f& c) override {
+        storeColor(vh, unitToByte(c[0]), unitToByte(c[1]), unitToByte(c[2]));
+    }
     void set_texcoord(OpenMesh::VertexHandle, const OpenMesh::Vec2f&) override {}
     void set_texcoord(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
     void set_texcoord(OpenMesh::HalfedgeHandle, const OpenMesh::Vec2f&) override {}
@@ -213,6 +224,25 @@ private:
     // callback is ignored.
     void fail(std::string what) {
         if (error_.empty()) error_ = std::move(what);
+    }
+
+    // Float colours are fractions of full intensity; NaN becomes 0.
+    static uint8_t unitToByte(float f) { return f > 0.0f ? uint8_t(std::lround(std::min(f, 1.0f) * 255.0f)) : 0; }
+
+    void storeColor(OpenMesh::VertexHandle vh, uint8_t r, uint8_t g, uint8_t b) {
+        if (!error_.empty() || !validVertex(vh)) return;
+        const size_t v = size_t(vh.idx());
+        if (colors_.size() < 3 * (v + 1)) {
+            colors_.resize(3 * std::max(v + 1, mesh_.vertexCount()));
+            hasColor_.resize(colors_.size() / 3);
+        }
+        colors_[3 * v] = r;
+        colors_[3 * v + 1] = g;
+        colors_[3 * v + 2] = b;
+        if (!hasColor_[v]) {
+            hasColor_[v] = true;
+            ++colorsSet_;
+        }
     }
 
     bool validVertex(OpenMesh::VertexHandle vh) const { return vh.idx() >= 0 && size_t(vh.idx()) < mesh_.vertexCount(); }
@@ -269,6 +299,10 @@ private:
     std::vector<bool> hasNormal_;
     size_t normalsSet_ = 0;
     bool normalsInvalid_ = false;
+
+    std::vector<uint8_t> colors_;
+    std::vector<bool> hasColor_;
+    size_t colorsSet_ = 0;
 
     std::vector<int> toVertex_;      // per halfedge
     std::vector<int> next_;          // per halfedge
@@ -390,13 +424,13 @@ FormatInfo formatFromExtension(const fs::path& file, const std::string& name) {
     if (ext == ".stl") return {MeshFormat::Stl, "stl"};
     if (ext == ".om") return {MeshFormat::Om, "om"};
     throw InputError(name + ": unknown mesh format " + (ext.empty() ? std::string("(no extension)") : "'" + ext + "'") +
-                     "; expected .obj, .off, .ply, .stl, .om, .vtk, .vtp or .vtu");
+                     "; expected .obj, .off, .ply, .stl, .om, .vtk, .vtp, .vtu or .wrl");
 }
 
 bool isVtkExtension(const fs::path& file) {
     std::string ext = file.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return ext == ".vtk" || ext == ".vtp" || ext == ".vtu";
+    return ext == ".vtk" || ext == ".vtp" || ext == ".vtu" || ext == ".wrl";
 }
 
 void requireRegularFile(const fs::path& file, const std::string& name) {
@@ -460,6 +494,7 @@ TriangleMesh importOpenMesh(const fs::path& file, const FormatInfo& format, std:
         BufferStreamBuf buffer(data);
         std::istream in(&buffer);
         OmIo::Options options = OmIo::Options::VertexNormal;
+        options += OmIo::Options::VertexColor;
         if (pre.binaryStl) options += OmIo::Options::Binary;
         try {
             // The OFF reader takes its header flags (normals, colours, binary) from sniffing a
@@ -488,6 +523,7 @@ TriangleMesh importOpenMesh(const fs::path& file, const FormatInfo& format, std:
     if (!importer.error().empty()) throw InputError(name + ": " + importer.error());
     if (mesh.triangleCount() == 0) throw InputError(name + ": contains no triangles");
     importer.finishNormals();
+    importer.finishColors();
 
     if (report) {
         report->format = format.name;
@@ -524,7 +560,9 @@ TriangleMesh importMesh(const fs::path& file, ImportReport* report) {
         return mesh;
     }
     if (vtkExt)
-        throw InputError(name + ": not a VTK file (expected '# vtk DataFile Version' or an XML <VTKFile> of type PolyData or UnstructuredGrid)");
+        throw InputError(name + (data.rfind("#VRML V1.0", 0) == 0
+                                     ? std::string(": VRML 1.0 is not supported (VTK reads VRML 2.0, '#VRML V2.0 utf8')")
+                                     : std::string(": not a VTK file (expected '# vtk DataFile Version', an XML <VTKFile> of type PolyData or UnstructuredGrid, or '#VRML V2.0')")));
     if (!format) throw InputError(unknownFormat);
     return importOpenMesh(file, *format, data, name, report);
 }

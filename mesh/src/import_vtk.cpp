@@ -1,8 +1,16 @@
-// VTK importers: legacy .vtk (polydata, unstructured grids), XML .vtp and .vtu.
+// VTK importers: legacy .vtk (polydata, unstructured grids), XML .vtp and .vtu, and VRML 2.0
+// .wrl through vtkVRMLImporter.
 //
 // VTK parses into its own data set; the triangles are copied once into the TriangleMesh buffers
 // that Embree reads, and the VTK objects are destroyed before loadMesh returns, so after the
-// import the geometry exists once. Attribute arrays other than point normals are dropped.
+// import the geometry exists once. Attribute arrays other than point normals and RGB(A) point
+// colours are dropped.
+//
+// VRML: vtkVRMLImporter builds actors in a vtkRenderer. A vtkRenderWindow and vtkRenderer from
+// RenderingCore alone (no OpenGL module linked, nothing rendered) are enough to hold them, so the
+// import runs headless. Each actor's mapper input is transformed by the actor's matrix in double
+// precision, and the actors are appended into one polydata that takes the same path as the
+// other formats.
 //
 // VTK's readers trust header counts (POINTS n allocates n points before reading any), and they
 // report problems through a global output window. So the counts are checked against the file
@@ -12,6 +20,9 @@
 
 #include "mesh_internal.h"
 
+#include <vtkActor.h>
+#include <vtkActorCollection.h>
+#include <vtkAppendPolyData.h>
 #include <vtkCellArray.h>
 #include <vtkCellArrayIterator.h>
 #include <vtkCommand.h>
@@ -21,14 +32,22 @@
 #include <vtkDoubleArray.h>
 #include <vtkFloatArray.h>
 #include <vtkLogger.h>
+#include <vtkMapper.h>
+#include <vtkMatrix4x4.h>
 #include <vtkObjectFactory.h>
 #include <vtkOutputWindow.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+#include <vtkProperty.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+#include <vtkScalarsToColors.h>
 #include <vtkSmartPointer.h>
+#include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPolyDataReader.h>
+#include <vtkVRMLImporter.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
 #include <fcntl.h>
@@ -475,7 +494,124 @@ TriangleMesh toTriangles(vtkPolyData* pd, const std::string& name, ImportReport&
         }
         if (ok) mesh.setNormals(std::move(normals));
     }
+
+    // Point colours: active point scalars with 3 or 4 components, either unsigned char (0..255)
+    // or floating point (0..1, as VTK's colour arrays hold them); alpha is dropped. One-component
+    // scalars are data to be mapped through a lookup table, not colours, and are not kept.
+    if (vtkDataArray* c = pd->GetPointData() ? pd->GetPointData()->GetScalars() : nullptr;
+        c && (c->GetNumberOfComponents() == 3 || c->GetNumberOfComponents() == 4) && c->GetNumberOfTuples() == nPoints) {
+        const int type = c->GetDataType();
+        const bool bytes = type == VTK_UNSIGNED_CHAR;
+        if (bytes || type == VTK_FLOAT || type == VTK_DOUBLE) {
+            std::vector<uint8_t> colors(3 * size_t(nPoints));
+            for (vtkIdType i = 0; i < nPoints; ++i)
+                for (int k = 0; k < 3; ++k) {
+                    const double v = c->GetComponent(i, k);
+                    const double unit = bytes ? v / 255.0 : v;
+                    colors[3 * size_t(i) + size_t(k)] = unit > 0.0 ? uint8_t(std::lround(std::min(unit, 1.0) * 255.0)) : 0;
+                }
+            mesh.setColors(std::move(colors));
+        }
+    }
     return mesh;
+}
+
+template <class Algorithm>
+void runVtk(Algorithm* algorithm, RecordingOutputWindow& window, const std::string& name);
+
+// VRML: one polydata in world coordinates from the importer's actors. Each actor's points are
+// transformed by its matrix in double precision (the actor's own points are float), normals by
+// the inverse transpose, and each point gets the colour VTK would draw it with: the Color node's
+// entry through the mapper's lookup table where the mapper shows scalars, else the actor's
+// diffuse colour. Colours are kept when any actor has a Color node or a Material colour;
+// normals when every actor has them (vtkAppendPolyData keeps only arrays all inputs have).
+vtkSmartPointer<vtkPolyData> vrmlWorld(vtkRenderer* renderer, RecordingOutputWindow& window, const std::string& name) {
+    struct Part {
+        vtkPolyData* pd;
+        vtkActor* actor;
+        vtkMapper* mapper;
+        bool scalarColors;
+    };
+    std::vector<Part> parts;
+    bool anyColor = false;
+    vtkActorCollection* actors = renderer->GetActors();
+    vtkCollectionSimpleIterator it;
+    actors->InitTraversal(it);
+    while (vtkActor* actor = actors->GetNextActor(it)) {
+        vtkMapper* mapper = actor->GetMapper();
+        auto* pd = vtkPolyData::SafeDownCast(mapper ? mapper->GetInputAsDataSet() : nullptr);
+        if (!pd || !pd->GetPoints() || pd->GetNumberOfPoints() == 0) continue;
+        vtkDataArray* s = pd->GetPointData()->GetScalars();
+        const bool scalarColors = mapper->GetScalarVisibility() && s && mapper->GetLookupTable() &&
+                                  s->GetNumberOfComponents() == 1 && s->GetNumberOfTuples() >= pd->GetNumberOfPoints();
+        const double* d = actor->GetProperty()->GetDiffuseColor();
+        anyColor = anyColor || scalarColors || d[0] != 1.0 || d[1] != 1.0 || d[2] != 1.0;
+        parts.push_back({pd, actor, mapper, scalarColors});
+    }
+    if (parts.empty()) fail(name, "VRML: contains no shapes with geometry");
+
+    auto append = vtkSmartPointer<vtkAppendPolyData>::New();
+    append->SetOutputPointsPrecision(vtkAlgorithm::DOUBLE_PRECISION);
+    for (const Part& part : parts) {
+        vtkPolyData* in = part.pd;
+        const vtkIdType n = in->GetNumberOfPoints();
+        double m[16];
+        vtkMatrix4x4::DeepCopy(m, part.actor->GetMatrix());
+        double inv[16];
+        vtkMatrix4x4::Invert(m, inv);  // a singular matrix leaves zeros: normals are then dropped below
+
+        auto points = vtkSmartPointer<vtkPoints>::New();
+        points->SetDataTypeToDouble();
+        points->SetNumberOfPoints(n);
+        for (vtkIdType i = 0; i < n; ++i) {
+            double p[3];
+            in->GetPoint(i, p);
+            double q[3];
+            for (int r = 0; r < 3; ++r) q[r] = m[4 * r] * p[0] + m[4 * r + 1] * p[1] + m[4 * r + 2] * p[2] + m[4 * r + 3];
+            points->SetPoint(i, q);
+        }
+        auto out = vtkSmartPointer<vtkPolyData>::New();
+        out->SetPoints(points);
+        out->SetPolys(in->GetPolys());
+        out->SetStrips(in->GetStrips());
+        out->SetLines(in->GetLines());
+        out->SetVerts(in->GetVerts());
+
+        if (vtkDataArray* nin = in->GetPointData()->GetNormals(); nin && nin->GetNumberOfComponents() == 3 && nin->GetNumberOfTuples() == n) {
+            auto normals = vtkSmartPointer<vtkDoubleArray>::New();
+            normals->SetNumberOfComponents(3);
+            normals->SetNumberOfTuples(n);
+            for (vtkIdType i = 0; i < n; ++i) {
+                double v[3], w[3];
+                nin->GetTuple(i, v);
+                // Inverse transpose: column r of the inverse.
+                for (int r = 0; r < 3; ++r) w[r] = inv[r] * v[0] + inv[4 + r] * v[1] + inv[8 + r] * v[2];
+                normals->SetTuple(i, w);
+            }
+            out->GetPointData()->SetNormals(normals);
+        }
+        if (anyColor) {
+            auto colors = vtkSmartPointer<vtkUnsignedCharArray>::New();
+            colors->SetNumberOfComponents(3);
+            colors->SetNumberOfTuples(n);
+            const double* diffuse = part.actor->GetProperty()->GetDiffuseColor();
+            vtkDataArray* s = in->GetPointData()->GetScalars();
+            vtkScalarsToColors* lut = part.mapper->GetLookupTable();
+            for (vtkIdType i = 0; i < n; ++i) {
+                double rgb[3] = {diffuse[0], diffuse[1], diffuse[2]};
+                if (part.scalarColors) lut->GetColor(s->GetComponent(i, 0), rgb);
+                for (int k = 0; k < 3; ++k) {
+                    const double v = std::isfinite(rgb[k]) ? std::clamp(rgb[k], 0.0, 1.0) : 0.0;
+                    colors->SetComponent(i, k, std::round(v * 255.0));
+                }
+            }
+            out->GetPointData()->SetScalars(colors);
+        }
+        append->AddInputData(out);  // holds a reference
+    }
+    runVtk(append.Get(), window, name);
+    vtkSmartPointer<vtkPolyData> merged = append->GetOutput();
+    return merged;
 }
 
 // Runs a reader (and the surface filter for unstructured grids), turning VTK's recorded
@@ -501,6 +637,7 @@ vtkSmartPointer<vtkPolyData> surfaceOf(vtkDataSet* ds, RecordingOutputWindow& wi
 
 VtkKind sniffVtk(std::string_view head) {
     if (startsWith(head, "# vtk DataFile Version")) return VtkKind::Legacy;
+    if (startsWith(head, "#VRML V2.0")) return VtkKind::Vrml;
     head = head.substr(0, 4096);
     const size_t file = head.find("<VTKFile");
     if (file == std::string_view::npos) return VtkKind::None;
@@ -513,10 +650,65 @@ VtkKind sniffVtk(std::string_view head) {
 
 void checkVtkCounts(VtkKind kind, std::string_view data, const std::string& name) {
     if (kind == VtkKind::Legacy) checkLegacy(data, name);
-    else checkXml(data, name);
+    else if (kind != VtkKind::Vrml) checkXml(data, name);  // VRML has no counts: its arrays grow as read
 }
 
 namespace {
+
+bool writeAll(int fd, const unsigned char* p, size_t n);
+
+struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+};
+
+// Points this process's stderr at `fd` for the object's lifetime, whatever leaves the scope.
+class StderrTo {
+public:
+    explicit StderrTo(int fd) {
+        std::fflush(stderr);
+        saved_ = ::dup(2);
+        if (saved_ >= 0 && ::dup2(fd, 2) < 0) {
+            ::close(saved_);
+            saved_ = -1;
+        }
+    }
+    ~StderrTo() {
+        if (saved_ < 0) return;
+        std::fflush(stderr);
+        ::dup2(saved_, 2);
+        ::close(saved_);
+    }
+    StderrTo(const StderrTo&) = delete;
+    StderrTo& operator=(const StderrTo&) = delete;
+    bool ok() const { return saved_ >= 0; }
+
+private:
+    int saved_ = -1;
+};
+
+// The first error line VTK's VRML parser printed into `fd`, on one printable line; empty if none.
+std::string vrmlParseError(int fd) {
+    std::string text;
+    char buf[4096];
+    for (off_t at = 0; text.size() < 65536;) {
+        const ssize_t n = ::pread(fd, buf, sizeof buf, at);
+        if (n <= 0) break;
+        text.append(buf, size_t(n));
+        at += n;
+    }
+    for (size_t pos = 0; pos < text.size();) {
+        const size_t end = std::min(text.find('\n', pos), text.size());
+        std::string line = text.substr(pos, end - pos);
+        if (line.rfind("Error", 0) == 0) {
+            for (char& c : line)
+                if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+            return line.substr(0, 200);
+        }
+        pos = end + 1;
+    }
+    return {};
+}
 
 TriangleMesh loadVtkHere(VtkKind kind, const std::string& data, const std::string& name, ImportReport& report) {
     const std::lock_guard<std::mutex> lock(vtkMutex());
@@ -548,6 +740,48 @@ TriangleMesh loadVtkHere(VtkKind kind, const std::string& data, const std::strin
             vtkDataSet* ds = reader->GetOutput();
             if (!ds) fail(name, "VTK read no data set");
             vtkSmartPointer<vtkPolyData> pd = surfaceOf(ds, window, name);
+            return toTriangles(pd, name, report);
+        }
+        if (kind == VtkKind::Vrml) {
+            report.format = "wrl";
+            // vtkVRMLImporter reads only from a named file: the validated bytes go to an
+            // anonymous in-memory file, read through its /proc path.
+            const int fd = ::memfd_create("rtwall-vrml", MFD_CLOEXEC);
+            if (fd < 0) fail(name, std::string("cannot hand the file to VTK: ") + std::strerror(errno));
+            Closer closer{fd};
+            if (!writeAll(fd, reinterpret_cast<const unsigned char*>(data.data()), data.size()))
+                fail(name, std::string("cannot hand the file to VTK: ") + std::strerror(errno));
+            auto window3d = vtkSmartPointer<vtkRenderWindow>::New();  // never rendered: holds the renderer
+            auto renderer = vtkSmartPointer<vtkRenderer>::New();
+            window3d->AddRenderer(renderer);
+            auto importer = vtkSmartPointer<vtkVRMLImporter>::New();
+            importer->SetFileName(("/proc/self/fd/" + std::to_string(fd)).c_str());
+            importer->SetRenderWindow(window3d);
+            window.clear();
+            // VTK's VRML parser (lex/yacc) reports syntax errors by printing "Error near line N:
+            // ..." to stderr and keeps what it parsed so far, so a truncated file would load in
+            // part. Its stderr is captured while it runs (VTK imports run one at a time, and in a
+            // child process by default) and any error there rejects the file.
+            const int errFd = ::memfd_create("rtwall-vrml-errors", MFD_CLOEXEC);
+            if (errFd < 0) fail(name, std::string("cannot capture VTK's messages: ") + std::strerror(errno));
+            Closer errCloser{errFd};
+            {
+                const StderrTo capture(errFd);
+                if (!capture.ok()) fail(name, std::string("cannot capture VTK's messages: ") + std::strerror(errno));
+                importer->Read();
+            }
+            if (const std::string parseError = vrmlParseError(errFd); !parseError.empty()) {
+                // "Error near line 8: parse error" -> FILE:line 8: VRML parse error
+                unsigned line = 0;
+                if (std::sscanf(parseError.c_str(), "Error near line %u", &line) == 1) {
+                    const size_t colon = parseError.find(": ");
+                    fail(name + ":line " + std::to_string(line),
+                         "VRML: " + (colon == std::string::npos ? parseError : parseError.substr(colon + 2)));
+                }
+                fail(name, "VRML: " + parseError);
+            }
+            if (!window.empty()) fail(name, "VTK: " + window.message());
+            vtkSmartPointer<vtkPolyData> pd = vrmlWorld(renderer, window, name);
             return toTriangles(pd, name, report);
         }
         if (kind == VtkKind::XmlPolyData) {
@@ -653,10 +887,7 @@ TriangleMesh loadVtk(VtkKind kind, const std::string& data, const std::string& n
     }
     for (ssize_t n; (n = ::read(errPipe[0], buf, sizeof buf)) > 0 && message.size() < 4096;) message.append(buf, size_t(n));
     ::close(errPipe[0]);
-    struct Closer {
-        int fd;
-        ~Closer() { ::close(fd); }
-    } closer{memfd};
+    Closer closer{memfd};
     if (WIFSIGNALED(status)) fail(name, "VTK crashed reading the file (signal " + std::to_string(WTERMSIG(status)) + "); the file is malformed");
     const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     if (code == 3 && !message.empty()) {

@@ -1,4 +1,4 @@
-// VTK-based importers (legacy .vtk, XML .vtp and .vtu). Internal to rtwall_mesh: VTK stays
+// VTK-based importers (legacy .vtk, XML .vtp and .vtu, VRML 2.0 .wrl). Internal to rtwall_mesh: VTK stays
 // private to this library and nothing of it appears in rtwall/mesh.h.
 #pragma once
 
@@ -9,7 +9,7 @@
 
 namespace rtwall::detail {
 
-enum class VtkKind { None, Legacy, XmlPolyData, XmlUnstructuredGrid };
+enum class VtkKind { None, Legacy, XmlPolyData, XmlUnstructuredGrid, Vrml };
 
 // What the bytes of a file say it is, whatever its extension.
 VtkKind sniffVtk(std::string_view head);

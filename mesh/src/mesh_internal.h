@@ -13,6 +13,7 @@ struct MeshAccess {
     static std::vector<float>& positions(TriangleMesh& m) { return m.positions_; }
     static std::vector<float>& normals(TriangleMesh& m) { return m.normals_; }
     static std::vector<uint32_t>& indices(TriangleMesh& m) { return m.indices_; }
+    static std::vector<uint8_t>& colors(TriangleMesh& m) { return m.colors_; }
     static void setVertexCount(TriangleMesh& m, size_t n) { m.vertexCount_ = n; }
 };
 

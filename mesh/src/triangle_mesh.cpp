@@ -23,7 +23,7 @@ void TriangleMesh::reserve(size_t vertices, size_t triangles) {
 uint32_t TriangleMesh::addVertex(const Float3& p) {
     // Normals are attached once all vertices exist; a vertex added later would leave the
     // normal buffer one entry short, which Embree would read past.
-    if (!normals_.empty()) throw std::logic_error("TriangleMesh::addVertex after setNormals");
+    if (!normals_.empty() || !colors_.empty()) throw std::logic_error("TriangleMesh::addVertex after setNormals or setColors");
     if (vertexCount_ >= std::numeric_limits<uint32_t>::max())
         throw std::length_error("TriangleMesh: more vertices than 32-bit indices can address");
     // The padding float becomes x, and a new padding float goes on the end.
@@ -67,6 +67,13 @@ void TriangleMesh::setNormals(std::vector<float> normalsXYZ) {
     normals_ = std::move(normalsXYZ);
 }
 
+void TriangleMesh::setColors(std::vector<uint8_t> colorsRGB) {
+    if (!colorsRGB.empty() && colorsRGB.size() != 3 * vertexCount_)
+        throw std::invalid_argument("TriangleMesh::setColors: got " + std::to_string(colorsRGB.size()) +
+                                    " bytes for " + std::to_string(vertexCount_) + " vertices");
+    colors_ = std::move(colorsRGB);
+}
+
 Bounds3 TriangleMesh::bounds() const {
     Bounds3 b;
     for (size_t v = 0; v < vertexCount_; ++v) b.extend(position(v));
@@ -75,7 +82,7 @@ Bounds3 TriangleMesh::bounds() const {
 
 size_t TriangleMesh::residentBytes() const {
     return positions_.capacity() * sizeof(float) + normals_.capacity() * sizeof(float) +
-           indices_.capacity() * sizeof(uint32_t);
+           indices_.capacity() * sizeof(uint32_t) + colors_.capacity();
 }
 
 namespace detail {

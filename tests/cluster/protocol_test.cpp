@@ -114,6 +114,10 @@ void expectSame(const SceneSnapshot& a, const SceneSnapshot& b) {
     expectSame(a.lights, b.lights);
     expectSame(a.camera, b.camera);
     expectSame(a.settings, b.settings);
+    EXPECT_EQ(a.bvh.quality, b.bvh.quality);
+    EXPECT_EQ(a.bvh.compact, b.bvh.compact);
+    EXPECT_EQ(a.bvh.robust, b.bvh.robust);
+    EXPECT_EQ(a.origin, b.origin);
 }
 void expectSame(const MeshRequest& a, const MeshRequest& b) { EXPECT_EQ(a.hash, b.hash); }
 void expectSame(const MeshData& a, const MeshData& b) {
@@ -256,6 +260,8 @@ SceneSnapshot sampleSnapshot() {
     s.lights = {sampleLight(0), sampleLight(1)};
     s.camera = sampleCamera();
     s.settings = sampleSettings();
+    s.bvh = {BvhSettings::Quality::High, true, true};
+    s.origin = {1e6 + 0.25, -2e5, 3.0e5 + 1.0 / 1024};
     return s;
 }
 
@@ -418,7 +424,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x03, 0x00,                                      // version (3: Welcome carries the timeout; materials, area lights)
+        0x04, 0x00,                                      // version (4: mesh colours, snapshot bvh and origin)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -590,6 +596,9 @@ TEST(Protocol, SnapshotRejectsValuesOutOfRange) {
         {"shading 2", [](SceneSnapshot& s) { s.settings.shading = ShadingMode(2); }},
         {"background NaN", [=](SceneSnapshot& s) { s.settings.background.y = nan; }},
         {"ambient inf", [=](SceneSnapshot& s) { s.settings.ambient.z = inf; }},
+        {"bvh quality 3", [](SceneSnapshot& s) { s.bvh.quality = BvhSettings::Quality(3); }},
+        {"origin NaN", [](SceneSnapshot& s) { s.origin[1] = std::numeric_limits<double>::quiet_NaN(); }},
+        {"origin inf", [](SceneSnapshot& s) { s.origin[0] = -std::numeric_limits<double>::infinity(); }},
         {"fov 0", [](SceneSnapshot& s) { s.camera.fovY = 0; }},
         {"fov 180", [](SceneSnapshot& s) { s.camera.fovY = 180; }},
         {"fov -10", [](SceneSnapshot& s) { s.camera.fovY = -10; }},
@@ -643,7 +652,8 @@ TEST(Protocol, SnapshotRejectsValuesOutOfRange) {
                      SettingsChange{s.settings}};
         const std::string name = what;
         const bool crossReference = name.find("out of range") != std::string::npos || name.find("mesh bytes") == 0;
-        if (!crossReference) {
+        const bool snapshotOnly = name.find("bvh") == 0 || name.find("origin") == 0;  // no change carries these
+        if (!crossReference && !snapshotOnly) {
             EXPECT_THROW(decode<Update>(payloadOf(u)), DecodeError) << what;
         }
     }
@@ -714,7 +724,7 @@ TEST(ProtocolMesh, RoundTrip) {
     for (const TriangleMesh& mesh : {makeBox(), makeSphere(5, 7), makeTorusKnot(2, 3, 40, 6, 0.2f), TriangleMesh{}}) {
         const std::vector<uint8_t> bytes = encodeMesh(mesh);
         EXPECT_EQ(bytes.size(), 8 + 12 * mesh.vertexCount() + 8 + 12 * mesh.triangleCount() + 1 +
-                                    (mesh.hasNormals() ? 12 * mesh.vertexCount() : 0));
+                                    (mesh.hasNormals() ? 12 * mesh.vertexCount() : 0) + 1);
         const TriangleMesh back = decodeMesh(bytes.data(), bytes.size());
         expectSameMesh(mesh, back);
         EXPECT_EQ(encodeMesh(back), bytes);
@@ -728,12 +738,38 @@ TEST(ProtocolMesh, Layout) {
     m.addVertex({0.0f, 0.0f, 1.0f});
     m.addTriangle(0, 1, 2);
     const std::vector<uint8_t> bytes = encodeMesh(m);
-    ASSERT_EQ(bytes.size(), 8u + 36u + 8u + 12u + 1u);
+    ASSERT_EQ(bytes.size(), 8u + 36u + 8u + 12u + 1u + 1u);
     EXPECT_EQ(bytes[0], 3);                            // vertex count
     EXPECT_EQ(bytes[8 + 3], 0x3F);                     // 1.0f, little-endian
     EXPECT_EQ(bytes[44], 1);                           // triangle count
     EXPECT_EQ(bytes[52 + 4], 1);                       // second index
     EXPECT_EQ(bytes[64], 0);                           // no normals
+    EXPECT_EQ(bytes[65], 0);                           // no colours
+    m.setColors({255, 128, 0, 0, 255, 0, 0, 0, 255});
+    const std::vector<uint8_t> colored = encodeMesh(m);
+    ASSERT_EQ(colored.size(), 8u + 36u + 8u + 12u + 1u + 1u + 9u);
+    EXPECT_EQ(colored[65], 1);
+    EXPECT_EQ(std::vector<uint8_t>(colored.begin() + 66, colored.end()), (std::vector<uint8_t>{255, 128, 0, 0, 255, 0, 0, 0, 255}));
+}
+
+// Vertex colours (version 4) survive the trip byte for byte and change the hash.
+TEST(ProtocolMesh, ColorsRoundTrip) {
+    TriangleMesh m = makeSphere(3, 4);
+    const std::vector<uint8_t> plain = encodeMesh(m);
+    std::vector<uint8_t> colors(3 * m.vertexCount());
+    for (size_t i = 0; i < colors.size(); ++i) colors[i] = uint8_t(i * 37);
+    m.setColors(colors);
+    const std::vector<uint8_t> bytes = encodeMesh(m);
+    const TriangleMesh back = decodeMesh(bytes.data(), bytes.size());
+    ASSERT_TRUE(back.hasColors());
+    EXPECT_EQ(std::vector<uint8_t>(back.colors(), back.colors() + colors.size()), colors);
+    EXPECT_EQ(encodeMesh(back), bytes);
+    EXPECT_NE(hashBytes(bytes.data(), bytes.size()), hashBytes(plain.data(), plain.size()));
+    for (size_t cut = bytes.size() - colors.size() - 1; cut < bytes.size(); ++cut)
+        EXPECT_THROW(decodeMesh(bytes.data(), cut), DecodeError) << cut;
+    std::vector<uint8_t> flag2 = bytes;
+    flag2[bytes.size() - colors.size() - 1] = 2;
+    EXPECT_THROW(decodeMesh(flag2.data(), flag2.size()), DecodeError);
 }
 
 TEST(ProtocolMesh, HashIsStableAndSeesEveryByte) {
@@ -799,8 +835,11 @@ TEST(ProtocolMesh, RejectsMalformed) {
     }
     // A normals flag on a mesh without vertices would not re-encode to the same bytes.
     std::vector<uint8_t> empty = encodeMesh(TriangleMesh{});
-    empty.back() = 1;
+    empty[empty.size() - 2] = 1;
     rejects(empty, "normals without vertices");
+    empty = encodeMesh(TriangleMesh{});
+    empty.back() = 1;
+    rejects(empty, "colours without vertices");
 }
 
 // -- Scene state ---------------------------------------------------------------------------------
@@ -861,6 +900,10 @@ TEST(Protocol, StateHash) {
         [](SceneSnapshot& x) { x.camera.window = ProjectionWindow{{-1, -1, 0}, {2, 0, 0}, {0, 2, 0}}; },
         [](SceneSnapshot& x) { x.settings.shadows = true; },
         [](SceneSnapshot& x) { x.settings.threads = 3; },
+        [](SceneSnapshot& x) { x.bvh.quality = BvhSettings::Quality::Low; },
+        [](SceneSnapshot& x) { x.bvh.compact = false; },
+        [](SceneSnapshot& x) { x.bvh.robust = false; },
+        [](SceneSnapshot& x) { x.origin[2] += 1; },
     };
     std::set<Hash128> seen{h};
     for (size_t i = 0; i < changes.size(); ++i) {

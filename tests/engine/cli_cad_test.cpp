@@ -3,6 +3,8 @@
 #include "test_util.h"
 #include "cli_util.h"
 
+#include <rtwall/image.h>
+
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -35,6 +37,61 @@ TEST(CliCad, InfoOnEveryVtkFormat) {
     }
     const Result far = run("info --json " + (kMeshes / "box_far.vtp").string());
     EXPECT_NE(far.output.find("148377"), std::string::npos) << far.output;  // the origin
+}
+
+// VRML through VTK, and its colours, as rtwall info reports them.
+TEST(CliCad, InfoOnVrml) {
+    const Result r = run("info --json " + (kMeshes / "box_color_transform.wrl").string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("\"format\" : \"wrl\""), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("\"triangles\" : 12"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("\"colors\" : true"), std::string::npos) << r.output;
+    expectOneLineError(run("info " + (kMeshes / "bad_truncated.wrl").string()), 1, "bad_truncated.wrl:line 8: VRML: parse error");
+}
+
+// A camera path is in world coordinates, like the scene file: for a scene at (1e6, -2e5, 3e5)
+// (rebased on load) a one-key path at the scene camera's world pose renders the very frame the
+// scene camera does. Read as rebased coordinates it would look 1e6 units away, at nothing.
+TEST(CliCad, CameraPathIsInWorldCoordinates) {
+    const auto dir = test::scratchDir();
+    test::writeFile(dir / "far.toml", R"([image]
+width = 96
+height = 72
+[render]
+ambient = [0.1, 0.1, 0.1]
+[[mesh]]
+name = "ball"
+shape = "sphere"
+rings = 16
+segments = 32
+[[instance]]
+mesh = "ball"
+translate = [1000000.5, -200000.25, 300000.125]
+[[light]]
+position = [1000002.5, -199994, 300003]
+intensity = 60
+[[camera]]
+name = "main"
+position = [1000001.75, -199997.25, 300007.5]
+look_at = [1000000.5, -200000.25, 300000.125]
+fov = 40
+)");
+    auto config = [&](const std::string& name) {
+        return test::writeFile(dir / (name + ".toml"), "scene = \"far.toml\"\ncamera = \"main\"\n[cluster]\nclients = 1\nasync = false\n"
+                                                       "[run]\nframes = 1\nwrite_every = 1\norbit = 0\nout = \"" + (dir / name).string() + "\"\n");
+    };
+    const auto path = test::writeFile(dir / "path.toml", "[[key]]\nframe = 0\nposition = [1000001.75, -199997.25, 300007.5]\n"
+                                                          "look_at = [1000000.5, -200000.25, 300000.125]\nfov = 40\n");
+    const Result still = run("run --headless " + config("still").string());
+    ASSERT_EQ(still.status, 0) << still.output;
+    const Result replay = run("run --headless " + config("replay").string() + " --camera-path " + path.string());
+    ASSERT_EQ(replay.status, 0) << replay.output;
+    const Image a = readPng(dir / "still" / "frame_000001.png"), b = readPng(dir / "replay" / "frame_000001.png");
+    ASSERT_EQ(a.rgb.size(), b.rgb.size());
+    EXPECT_EQ(a.rgb, b.rgb);
+    size_t lit = 0;
+    for (uint8_t v : a.rgb) lit += v > 40;
+    EXPECT_GT(lit, a.rgb.size() / 20) << "the ball is in view";
 }
 
 TEST(CliCad, BadFilesGiveOneLine) {

@@ -1,6 +1,7 @@
 // libFuzzer targets for the mesh importers and the mesh cache reader. One source, built once per
 // target with FUZZ_MESH_FORMAT set (tests/fuzz/CMakeLists.txt):
 //   fuzz_import_vtk, fuzz_import_vtp, fuzz_import_vtu   the input is a whole .vtk/.vtp/.vtu file
+//   fuzz_import_wrl                                      the input is a whole VRML 2.0 .wrl file
 //   fuzz_import_openmesh  the first byte picks obj/off/ply/stl/om (its value modulo 5), the rest is the file
 //   fuzz_mesh_cache       the input is a cache file, given to decodeMeshCache with the source stamp it
 //                         claims, so the fuzzer gets past the staleness check
@@ -43,6 +44,12 @@ void checkMesh(const rtwall::TriangleMesh& m) {
         if (m.indices()[i] >= m.vertexCount()) std::abort();
     for (size_t i = 0; i < 3 * m.vertexCount(); ++i)
         if (!std::isfinite(m.positions()[i])) std::abort();
+    // Colours, when present, cover every vertex (AddressSanitizer catches a short buffer).
+    if (const uint8_t* c = m.colors()) {
+        unsigned sum = 0;
+        for (size_t i = 0; i < 3 * m.vertexCount(); ++i) sum += c[i];
+        if (sum > 255u * 3u * m.vertexCount()) std::abort();
+    }
 }
 
 std::filesystem::path scratch(const char* ext) {

@@ -25,6 +25,7 @@ toml::table meshInfo(const std::filesystem::path& path) {
                        {"vertices", int64_t(mesh.vertexCount())},
                        {"bounds", boundsArray(mesh.bounds())},
                        {"normals", mesh.hasNormals()},
+                       {"colors", mesh.hasColors()},
                        {"polygons_triangulated", int64_t(report.polygonsTriangulated)},
                        {"degenerate_triangles", int64_t(report.degenerateTriangles)},
                        {"strips_triangulated", int64_t(report.stripsTriangulated)},

@@ -45,7 +45,27 @@ struct CameraKey {
     CameraDesc camera;
 };
 
-std::vector<CameraKey> readCameraPath(const std::filesystem::path& file) {
+// An [x, y, z] of world coordinates, in double precision.
+std::array<double, 3> worldPoint(toml_reader::Reader& r, const std::string& key) {
+    const toml::node* n = r.find(key);
+    if (!n) r.fail(nullptr, "missing required key '" + key + "'");
+    const toml::array* a = n->as_array();
+    if (!a || a->size() != 3) r.fail(n, "key '" + key + "': expected an array of 3 numbers");
+    std::array<double, 3> v{};
+    for (size_t i = 0; i < 3; ++i) {
+        const toml::node& e = *a->get(i);
+        if (auto x = e.as_integer()) v[i] = double(x->get());
+        else if (auto f = e.as_floating_point()) v[i] = f->get();
+        else r.fail(n, "key '" + key + "': element " + std::to_string(i) + " is " + toml_reader::Reader::typeName(e) + ", not a number");
+        if (!std::isfinite(v[i]) || std::fabs(v[i]) > 1e15)
+            r.fail(n, "key '" + key + "': element " + std::to_string(i) + " must be finite and within 1e15");
+    }
+    return v;
+}
+
+// Positions are world coordinates (double), made relative to the scene's rebased `origin` here,
+// so a path survives a change of origin (a recorded path is written the same way).
+std::vector<CameraKey> readCameraPath(const std::filesystem::path& file, const std::array<double, 3>& origin) {
     using namespace toml_reader;
     const toml::table root = parseFile(file);
     Reader top(file, root, "");
@@ -55,8 +75,11 @@ std::vector<CameraKey> readCameraPath(const std::filesystem::path& file) {
         k.frame = r.integer("frame", 0, 0, 100'000'000);
         if (!keys.empty() && k.frame <= keys.back().frame)
             r.fail(r.find("frame"), "key 'frame': keyframes must have increasing frame numbers");
-        k.camera.position = r.vec3("position", {}, true);
-        k.camera.lookAt = r.vec3("look_at", {}, true);
+        auto rel = [&](const std::array<double, 3>& p) {
+            return Float3{float(p[0] - origin[0]), float(p[1] - origin[1]), float(p[2] - origin[2])};
+        };
+        k.camera.position = rel(worldPoint(r, "position"));
+        k.camera.lookAt = rel(worldPoint(r, "look_at"));
         k.camera.up = r.vec3("up", k.camera.up);
         k.camera.fovY = float(r.number("fov", k.camera.fovY, 0.01, 179.0));
         keys.push_back(k);
@@ -301,7 +324,7 @@ void addRun(CLI::App& app, Run& run) {
                 desc.cameras = {*cam};
             }
             const CameraDesc start = desc.cameras.front();
-            const std::vector<CameraKey> path = c.cameraPath.empty() ? std::vector<CameraKey>{} : readCameraPath(c.cameraPath);
+            const std::vector<CameraKey> path = c.cameraPath.empty() ? std::vector<CameraKey>{} : readCameraPath(c.cameraPath, desc.origin);
 
             // A given front is checked before anything starts: a mistake in it is one line, at once.
             const std::vector<OperatingPoint> givenFront = o->front.empty() ? std::vector<OperatingPoint>{} : readFront(o->front);

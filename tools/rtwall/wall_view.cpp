@@ -77,7 +77,7 @@ bool WallView::handleInput(Master& master, double dt) {
     if (wasRecording && !nav_->recording()) {
         const auto file = options_.outDir / ("camera_path_" + std::to_string(++recordings_) + ".toml");
         std::filesystem::create_directories(options_.outDir);
-        std::ofstream(file) << Navigator::cameraPathToml(nav_->recorded());
+        std::ofstream(file) << Navigator::cameraPathToml(nav_->recorded(), scene_.origin);
         std::printf("recorded %zu cameras to %s (replay: rtwall run --camera-path %s)\n", nav_->recorded().size(),
                     file.c_str(), file.c_str());
     }

@@ -252,7 +252,9 @@ public:
     // Recording (key R): one pose per update while on. Written as a camera path (configs/README.md).
     bool recording() const { return recording_; }
     const std::vector<ViewPose>& recorded() const { return path_; }
-    static std::string cameraPathToml(const std::vector<ViewPose>& poses);
+    // Poses are in the scene's (rebased) coordinates; the file gets world coordinates, pose +
+    // `origin` in double precision, so that it replays after the scene's origin changes.
+    static std::string cameraPathToml(const std::vector<ViewPose>& poses, const std::array<double, 3>& origin = {0, 0, 0});
 
 private:
     ViewPose pose_;

@@ -41,16 +41,21 @@ struct Bounds3 {
 
 // Indexed triangle mesh in exactly the layout Embree reads: float3 positions (12-byte stride)
 // with 4 bytes of tail padding, because Embree loads the last vertex with a 16-byte read;
-// uint32 triangle indices. Optional per-vertex normals use the same layout.
+// uint32 triangle indices. Optional per-vertex normals use the same layout. Optional per-vertex
+// colours are 8-bit sRGB-encoded RGB, 3 bytes per vertex, as the files store them (float colours
+// are rounded to 8 bits); the renderer decodes them to linear and multiplies the material colour
+// by their interpolation. Embree never reads the colours.
 class TriangleMesh {
 public:
     size_t vertexCount() const { return vertexCount_; }
     size_t triangleCount() const { return indices_.size() / 3; }
     bool hasNormals() const { return !normals_.empty(); }
+    bool hasColors() const { return !colors_.empty(); }
 
     const float* positions() const { return positions_.data(); }  // 3 floats per vertex
     const float* normals() const { return normals_.empty() ? nullptr : normals_.data(); }
     const uint32_t* indices() const { return indices_.data(); }  // 3 per triangle
+    const uint8_t* colors() const { return colors_.empty() ? nullptr : colors_.data(); }  // 3 per vertex (RGB)
 
     Float3 position(size_t v) const { return {positions_[3 * v], positions_[3 * v + 1], positions_[3 * v + 2]}; }
     Float3 normal(size_t v) const { return {normals_[3 * v], normals_[3 * v + 1], normals_[3 * v + 2]}; }
@@ -60,6 +65,7 @@ public:
     void setPosition(uint32_t v, const Float3& p);         // v must be < vertexCount()
     void addTriangle(uint32_t a, uint32_t b, uint32_t c);  // indices must already be valid
     void setNormals(std::vector<float> normalsXYZ);       // 3 per vertex (padding is added here)
+    void setColors(std::vector<uint8_t> colorsRGB);       // 3 per vertex, or empty for none
 
     Bounds3 bounds() const;        // of the float buffers, i.e. relative to origin()
     size_t residentBytes() const;  // heap bytes of the buffers
@@ -76,12 +82,13 @@ private:
     std::vector<float> positions_{0.0f};  // always ends with one padding float
     std::vector<float> normals_;          // empty, or 3 per vertex + one padding float
     std::vector<uint32_t> indices_;
+    std::vector<uint8_t> colors_;         // empty, or 3 per vertex (no padding: Embree never reads it)
     size_t vertexCount_ = 0;
     std::array<double, 3> origin_{0, 0, 0};
 };
 
 struct ImportReport {
-    std::string format;               // "obj", "off", "ply", "stl", "om", "vtk", "vtp", "vtu"
+    std::string format;               // "obj", "off", "ply", "stl", "om", "vtk", "vtp", "vtu", "wrl"
     size_t polygonsTriangulated = 0;  // faces with more than three corners, fan-triangulated
     size_t degenerateTriangles = 0;   // zero-area triangles (kept, never hit, counted), plus faces
                                       // the OBJ and STL readers drop because corners repeat
@@ -117,6 +124,11 @@ struct LoadOptions {
 // XML .vtp and .vtu (raw, base64 or compressed; an unstructured grid becomes its outer surface).
 // The reader is chosen by content for VTK files (a legacy file named .vtp is read as legacy)
 // and by extension otherwise. Meshes far from their file's origin are recentred (origin()).
+// VRML 2.0 .wrl goes through VTK's VRML importer: every shape's polygons, in world coordinates
+// (Transform nodes applied in double precision), with normals where every shape has them.
+//
+// Per-vertex colours are kept when the file gives every vertex one: PLY red/green/blue, OFF
+// COFF, OBJ "v x y z r g b", VTK RGB(A) point scalars, VRML Color nodes and Material colours.
 TriangleMesh loadMesh(const std::filesystem::path& file, ImportReport* report = nullptr);
 TriangleMesh loadMesh(const std::filesystem::path& file, const LoadOptions& options, ImportReport* report = nullptr);
 

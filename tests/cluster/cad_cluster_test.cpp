@@ -1,0 +1,146 @@
+// CAD scenes over the cluster (issue 3): a mesh with vertex colours, and a far-from-origin scene
+// with non-default [bvh] settings, render bit-identically on one machine and on two clients on
+// loopback (protocol version 4 sends colours, the BVH settings and the scene origin).
+#include "test_util.h"
+
+#include <rtwall/cluster.h>
+#include <rtwall/mesh.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <memory>
+#include <thread>
+
+namespace rtwall {
+namespace {
+
+struct LocalCluster {
+    LocalCluster(const SceneDesc& desc, const ClusterSettings& cs, int clientCount)
+        : master(std::make_unique<Master>(desc, cs)) {
+        for (int i = 0; i < clientCount; ++i) {
+            ClientSettings c;
+            c.connect = master->endpoint();
+            c.threads = 1;
+            c.exitAfterIdleMs = 4000;
+            threads.emplace_back([c] { runClient(c); });
+        }
+    }
+    ~LocalCluster() {
+        master.reset();  // its goodbye ends the clients
+        for (auto& t : threads) t.join();
+    }
+    std::unique_ptr<Master> master;
+    std::vector<std::thread> threads;
+};
+
+Image singleMachine(const SceneDesc& d, uint32_t frame) {
+    const Scene scene(d);
+    return renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings, frame);
+}
+
+// Every tile came from a client.
+bool complete(const FrameReport& r) {
+    return !r.tileOwners.empty() && std::count(r.tileOwners.begin(), r.tileOwners.end(), UINT32_MAX) == 0;
+}
+
+Image onTwoClients(const SceneDesc& d, FrameReport* report) {
+    ClusterSettings cs;
+    cs.async = false;
+    cs.prefetch = 2;
+    LocalCluster cluster(d, cs, 2);
+    EXPECT_TRUE(cluster.master->waitForClients(2, 30000));
+    return cluster.master->renderFrame(report);
+}
+
+size_t differingBytes(const Image& a, const Image& b) {
+    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
+    size_t n = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
+    return n;
+}
+
+TEST(CadCluster, ColouredMeshBitIdenticalToOneMachine) {
+    const auto dir = test::scratchDir();
+    SceneDesc d = sceneFromMeshFile(test::dataDir() / "meshes" / "tri_colors_ascii.ply");
+    ASSERT_TRUE(d.meshes[0].mesh->hasColors());
+    d.settings.width = 64;
+    d.settings.height = 48;
+    d.settings.tileSize = 8;
+    const Image one = singleMachine(d, 0);
+    // The colours show: some pixel is strongly green and some strongly blue.
+    bool green = false, blue = false;
+    for (size_t i = 0; i + 2 < one.rgb.size(); i += 3) {
+        green = green || (one.rgb[i + 1] > 2 * one.rgb[i] + 20 && one.rgb[i + 1] > 2 * one.rgb[i + 2] + 20);
+        blue = blue || (one.rgb[i + 2] > 2 * one.rgb[i] + 20 && one.rgb[i + 2] > 2 * one.rgb[i + 1] + 20);
+    }
+    EXPECT_TRUE(green && blue);
+    FrameReport r;
+    const Image cluster = onTwoClients(d, &r);
+    EXPECT_TRUE(complete(r));
+    EXPECT_EQ(differingBytes(singleMachine(d, r.frame), cluster), 0u);
+}
+
+// A sphere and a floor at (1e6, -2e5, 3e5), rebased on load, built with high quality, compact
+// and robust BVHs: the clients get the same settings and origin, and the same bytes come back.
+TEST(CadCluster, FarSceneWithBvhSettingsBitIdenticalToOneMachine) {
+    const auto dir = test::scratchDir();
+    const double x = 1e6, y = -2e5, z = 3e5;
+    char text[2048];
+    std::snprintf(text, sizeof text, R"([image]
+width = 80
+height = 60
+tile = 8
+[render]
+ambient = [0.1, 0.1, 0.1]
+[bvh]
+quality = "high"
+compact = true
+robust = true
+[[mesh]]
+name = "ball"
+shape = "sphere"
+rings = 24
+segments = 48
+[[mesh]]
+name = "floor"
+shape = "quad"
+[[material]]
+name = "white"
+type = "phong"
+color = [0.8, 0.8, 0.8]
+[[instance]]
+mesh = "ball"
+material = "white"
+translate = [%.17g, %.17g, %.17g]
+[[instance]]
+mesh = "floor"
+scale = 6
+translate = [%.17g, %.17g, %.17g]
+[[light]]
+position = [%.17g, %.17g, %.17g]
+intensity = 60
+[[camera]]
+position = [%.17g, %.17g, %.17g]
+look_at = [%.17g, %.17g, %.17g]
+fov = 40
+)",
+                  x, y + 1.0, z, x, y, z, x + 2, y + 6, z + 3, x + 1.5, y + 3, z + 7, x, y + 0.8, z);
+    const SceneDesc d = loadSceneFile(test::writeFile(dir / "far.toml", text));
+    ASSERT_NE(d.origin, (std::array<double, 3>{0, 0, 0})) << "the scene was rebased";
+    ASSERT_EQ(d.bvh.quality, BvhSettings::Quality::High);
+    ASSERT_TRUE(d.bvh.compact && d.bvh.robust);
+    ASSERT_EQ(d.settings.tileSize, 8);
+    const Image one = singleMachine(d, 0);
+    size_t lit = 0;
+    for (uint8_t b : one.rgb) lit += b > 40;
+    EXPECT_GT(lit, one.rgb.size() / 10) << "the scene is in view";
+    FrameReport r;
+    const Image cluster = onTwoClients(d, &r);
+    EXPECT_TRUE(complete(r));
+    EXPECT_EQ(differingBytes(singleMachine(d, r.frame), cluster), 0u);
+}
+
+}  // namespace
+}  // namespace rtwall

@@ -1,0 +1,163 @@
+// VRML 2.0 through VTK's vtkVRMLImporter (mesh/src/import_vtk.cpp), headless: hand-written files
+// with and without colour, a Transform, a Group of shapes, and malformed files.
+#include "mesh_test_util.h"
+#include "rtwall/mesh.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace rtwall {
+namespace {
+
+namespace fs = std::filesystem;
+using test::signedVolume;
+
+const fs::path kMeshes = fs::path(RTWALL_TEST_DATA_DIR) / "meshes";
+
+using Rgb = std::array<int, 3>;
+
+void expectBounds(const TriangleMesh& m, Float3 lo, Float3 hi) {
+    const Bounds3 b = m.bounds();
+    EXPECT_EQ(b.lo.x, lo.x);
+    EXPECT_EQ(b.lo.y, lo.y);
+    EXPECT_EQ(b.lo.z, lo.z);
+    EXPECT_EQ(b.hi.x, hi.x);
+    EXPECT_EQ(b.hi.y, hi.y);
+    EXPECT_EQ(b.hi.z, hi.z);
+}
+
+// Index of the vertex at p (the importer may reorder nothing, but say so through positions).
+size_t vertexAt(const TriangleMesh& m, Float3 p) {
+    for (size_t v = 0; v < m.vertexCount(); ++v) {
+        const Float3 q = m.position(v);
+        if (q.x == p.x && q.y == p.y && q.z == p.z) return v;
+    }
+    ADD_FAILURE() << "no vertex at " << p.x << " " << p.y << " " << p.z;
+    return 0;
+}
+
+TEST(Vrml, PlainBoxWithoutColour) {
+    ImportReport report;
+    const TriangleMesh mesh = loadMesh(kMeshes / "box_plain.wrl", &report);
+    EXPECT_EQ(report.format, "wrl");
+    EXPECT_EQ(mesh.vertexCount(), 8u);
+    EXPECT_EQ(mesh.triangleCount(), 12u);
+    EXPECT_EQ(report.polygonsTriangulated, 6u);
+    EXPECT_FALSE(mesh.hasColors());
+    expectBounds(mesh, {0, 0, 0}, {1, 2, 3});
+    EXPECT_NEAR(std::fabs(signedVolume(mesh)), 6.0, 1e-9);
+    EXPECT_EQ(mesh.origin(), (std::array<double, 3>{0, 0, 0}));
+}
+
+// A Transform moves the box to (10, 20, 30); the Color node's colours stay with their points.
+TEST(Vrml, TransformAndPerVertexColours) {
+    const TriangleMesh mesh = loadMesh(kMeshes / "box_color_transform.wrl");
+    EXPECT_EQ(mesh.triangleCount(), 12u);
+    expectBounds(mesh, {10, 20, 30}, {11, 22, 33});
+    EXPECT_NEAR(std::fabs(signedVolume(mesh)) , 6.0, 1e-3);
+    ASSERT_TRUE(mesh.hasColors());
+    auto color = [&](Float3 p) {
+        const uint8_t* c = mesh.colors() + 3 * vertexAt(mesh, p);
+        return Rgb{c[0], c[1], c[2]};
+    };
+    EXPECT_EQ(color({10, 20, 30}), (Rgb{255, 0, 0}));
+    EXPECT_EQ(color({11, 20, 30}), (Rgb{0, 255, 0}));
+    EXPECT_EQ(color({11, 22, 30}), (Rgb{0, 0, 255}));
+    EXPECT_EQ(color({10, 22, 33}), (Rgb{0, 0, 0}));
+    EXPECT_EQ(color({11, 22, 33}), (Rgb{255, 255, 255}));
+}
+
+// Two shapes in a Group: a Material-coloured triangle at the origin, and a quad scaled by 2 and
+// moved to (5, 0, -1) without colour, which takes white.
+TEST(Vrml, ShapesInAGroupAreMergedInWorldCoordinates) {
+    const TriangleMesh mesh = loadMesh(kMeshes / "group_shapes.wrl");
+    EXPECT_EQ(mesh.vertexCount(), 7u);
+    EXPECT_EQ(mesh.triangleCount(), 3u);
+    expectBounds(mesh, {0, 0, -1}, {7, 2, 0});
+    ASSERT_TRUE(mesh.hasColors());
+    auto color = [&](Float3 p) {
+        const uint8_t* c = mesh.colors() + 3 * vertexAt(mesh, p);
+        return Rgb{c[0], c[1], c[2]};
+    };
+    EXPECT_EQ(color({1, 0, 0}), (Rgb{0, 128, 255}));  // diffuseColor 0 0.5 1
+    EXPECT_EQ(color({7, 2, -1}), (Rgb{255, 255, 255}));
+    // Winding survives the transform: both shapes face +z.
+    for (size_t t = 0; t < mesh.triangleCount(); ++t) EXPECT_GT(test::geometricNormal(mesh, t).z, 0.0f) << t;
+}
+
+// A Transform to (148376, 1234, -223423) is applied in double precision and the result
+// recentred, so the float buffers hold the box exactly.
+TEST(Vrml, FarTransformIsRecentredWithoutLoss) {
+    const TriangleMesh mesh = loadMesh(kMeshes / "box_far.wrl");
+    const auto o = mesh.origin();
+    EXPECT_EQ(o, (std::array<double, 3>{148377.0, 1235.0, -223422.0}));
+    const Bounds3 b = mesh.bounds();
+    EXPECT_EQ(double(b.lo.x) + o[0], 148376.0);
+    EXPECT_EQ(double(b.hi.y) + o[1], 1236.0);
+    EXPECT_EQ(double(b.lo.z) + o[2], -223423.0);
+    EXPECT_NEAR(std::fabs(signedVolume(mesh)), 6.0, 1e-9);
+}
+
+// Recognised by content too: a VRML file without the .wrl extension.
+TEST(Vrml, RecognisedByContent) {
+    const fs::path dir = fs::path(::testing::TempDir()) / "rtwall_vrml_tests";
+    fs::create_directories(dir);
+    fs::copy_file(kMeshes / "box_plain.wrl", dir / "box_vrml", fs::copy_options::overwrite_existing);
+    ImportReport report;
+    EXPECT_EQ(loadMesh(dir / "box_vrml", &report).triangleCount(), 12u);
+    EXPECT_EQ(report.format, "wrl");
+}
+
+struct BadVrml {
+    const char* file;
+    const char* expect;
+};
+std::ostream& operator<<(std::ostream& os, const BadVrml& f) { return os << f.file; }
+class VrmlBad : public ::testing::TestWithParam<BadVrml> {};
+
+// One line naming the file (and the line where VTK's parser says), never a crash of rtwall
+// (VTK's parser runs in a child process), and never a partial mesh from a truncated file.
+TEST_P(VrmlBad, IsRejectedWithAReason) {
+    const fs::path file = kMeshes / GetParam().file;
+    ASSERT_TRUE(fs::exists(file)) << file;
+    std::string message = "(no InputError)";
+    try {
+        loadMesh(file);
+    } catch (const InputError& e) {
+        message = e.what();
+    }
+    EXPECT_EQ(message.rfind(file.string(), 0), 0u) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << "not one line: " << message;
+    EXPECT_NE(message.find(GetParam().expect), std::string::npos) << "no '" << GetParam().expect << "' in: " << message;
+}
+
+INSTANTIATE_TEST_SUITE_P(Files, VrmlBad,
+                         ::testing::Values(BadVrml{"bad_truncated.wrl", ":line 8: VRML: parse error"},
+                                           BadVrml{"bad_garbage.wrl", ":line 1: VRML: Unknown node type"},
+                                           // VTK's parser reads indices as int: 4000000000 wraps negative.
+                                           BadVrml{"bad_index_huge.wrl", "polygon 0: point index -294967296 is out of range"},
+                                           BadVrml{"bad_no_geometry.wrl", "no shapes"},
+                                           BadVrml{"bad_vrml1.wrl", "VRML 1.0 is not supported"}),
+                         [](const ::testing::TestParamInfo<BadVrml>& p) {
+                             std::string name = p.param.file;
+                             for (char& c : name)
+                                 if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+                             return name;
+                         });
+
+// VTK's VRML parser prints nothing to the terminal either.
+TEST(Vrml, PrintsNothing) {
+    ::testing::internal::CaptureStderr();
+    ::testing::internal::CaptureStdout();
+    EXPECT_THROW(loadMesh(kMeshes / "bad_garbage.wrl"), InputError);
+    EXPECT_EQ(loadMesh(kMeshes / "box_plain.wrl").triangleCount(), 12u);
+    EXPECT_EQ(::testing::internal::GetCapturedStdout(), "");
+    EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+}
+
+}  // namespace
+}  // namespace rtwall
