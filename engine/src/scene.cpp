@@ -4,6 +4,10 @@
 
 #include <rtwall/engine_embree.h>
 
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -59,6 +63,11 @@ bool buildProgress(void* userPtr, double n) {
     return true;
 }
 
+// Embree 3 (scene.cpp, createTriangleAccel) picks its triangle BVH from the scene's flags
+// before the quality: only a scene that is neither robust nor compact gets the spatial-split
+// builder for RTC_BUILD_QUALITY_HIGH; a robust or compact scene is built by the same builder
+// as medium, so "high" then changes nothing (the same bytes, the same BVH). The per-geometry
+// quality only matters for dynamic two-level scenes, which rtwall does not use.
 RTCBuildQuality buildQuality(BvhSettings::Quality q) {
     switch (q) {
     case BvhSettings::Quality::Low: return RTC_BUILD_QUALITY_LOW;
@@ -174,8 +183,9 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
             if (mesh.triangleCount() > 0) {
                 RTCGeometry g = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_TRIANGLE);
                 rtcSetGeometryBuildQuality(g, buildQuality(s.desc.bvh.quality));
-                // Shared buffers: Embree reads the importer's arrays in place. The positions
-                // buffer carries the tail padding Embree's 16-byte loads need.
+                // Shared buffers: Embree reads the mesh's arrays in place, whether the importer
+                // filled them or they are the pages of a mapped cache file (TriangleMesh's
+                // MeshArray); both carry the 16 bytes of tail padding Embree's SIMD loads need.
                 rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, mesh.positions(), 0,
                                            3 * sizeof(float), mesh.vertexCount());
                 rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, mesh.indices(), 0,
@@ -226,6 +236,12 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
         updateShadowTransparency(s);
         rtcCommitScene(s.top);
         checkDevice(s.device, lastError, "building the top-level BVH");
+#ifdef __GLIBC__
+        // The builds free hundreds of MB of scratch (primitive arrays, per-thread blocks) in
+        // pieces below glibc's mmap threshold; glibc keeps such freed memory resident unless it
+        // sits at the top of the heap. Hand it back once, now that the scene holds what it needs.
+        ::malloc_trim(0);
+#endif
     } catch (...) {
         for (RTCScene ms : s.meshScenes) rtcReleaseScene(ms);
         if (s.top) rtcReleaseScene(s.top);

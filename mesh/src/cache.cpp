@@ -15,13 +15,17 @@
 //   80  u64[4]   import report: polygons triangulated, degenerate triangles, strips, cells skipped
 //   112 char[8]  import format name, zero-padded
 //   120 u64      XXH3-64 of the whole file with these 8 bytes taken as zero
-//   128 f32[3V+1] positions (with Embree's padding float), then zeros to a multiple of 64
-//       f32[3V+1] normals, if flagged, padded likewise
+//   128 f32[3V]   positions, then zeros: at least 16 bytes (Embree's SIMD loads read past the
+//                 last element), up to a multiple of 64
+//       f32[3V]   normals, if flagged, padded likewise
 //       u32[3T]   triangle indices, padded likewise
-//       u8[3V]    vertex colours (sRGB-encoded RGB), if flagged, padded likewise (version 2; last,
-//                 so that the other sections sit where version 1 put them)
-// The file size must be exactly what the counts give. Sections start on 64-byte boundaries so
-// that the file can be mapped and its arrays used in place.
+//       u8[3V]    vertex colours (sRGB-encoded RGB), if flagged, then at least 16 zero bytes, up
+//                 to a multiple of 64 (version 3)
+// The file size must be exactly what the counts give. Sections start on 64-byte boundaries, so
+// in a mapping (page-aligned) every array is 64-byte aligned, and the arrays are used in place:
+// a mesh read from its cache is a view of the mapped file (MeshArray), the buffers Embree reads.
+// Version 1 had only 4 bytes of padding after the positions and none after the indices, so its
+// arrays could not be handed to Embree in place; version 2 had no colours. Both are rebuilt.
 #include "mesh_internal.h"
 
 #include <xxhash.h>
@@ -34,9 +38,11 @@
 #include <bit>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <memory>
 
 namespace rtwall {
 
@@ -46,11 +52,13 @@ namespace fs = std::filesystem;
 using detail::MeshAccess;
 
 constexpr char kMagic[8] = {'R', 'T', 'W', 'M', 'E', 'S', 'H', 0};
-constexpr uint32_t kCacheVersion = 2;
+constexpr uint32_t kCacheVersion = 3;
 constexpr size_t kHeaderSize = 128;
 constexpr size_t kChecksumAt = 120;
 
 constexpr size_t align64(size_t n) { return (n + 63) & ~size_t(63); }
+// Bytes of a section of n 4-byte values: the values, 16 bytes of zeros, rounded up to 64.
+constexpr size_t sectionBytes(size_t n) { return align64(4 * n + 16); }
 
 // --- little-endian encoding -------------------------------------------------------------------
 
@@ -85,12 +93,6 @@ void copyArrayLE(unsigned char* dst, const T* src, size_t n) {
         for (size_t i = 0; i < n; ++i) putLE(dst + i * sizeof(T), src[i]);
 }
 
-template <class T>
-void readArrayLE(T* dst, const unsigned char* src, size_t n) {
-    if constexpr (std::endian::native == std::endian::little) std::memcpy(dst, src, n * sizeof(T));
-    else
-        for (size_t i = 0; i < n; ++i) dst[i] = getLE<T>(src + i * sizeof(T));
-}
 
 struct SourceStamp {
     uint64_t size = 0;
@@ -118,36 +120,40 @@ uint64_t checksum(const unsigned char* data, size_t size) {
     return h;
 }
 
-// A read-only mapping of a whole file.
+// A read-only mapping of a whole file. The descriptor is closed once the file is mapped (the
+// mapping keeps the file), so a scene of thousands of cached meshes holds no descriptors.
 class Mapping {
 public:
     explicit Mapping(const fs::path& file) {
-        fd_ = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
-        if (fd_ < 0) return;
+        const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+        if (fd < 0) return;
+        opened_ = true;
         struct stat st {};
-        if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) return;
+        void* p = MAP_FAILED;
+        if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0)
+            p = ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
+        ::close(fd);
+        if (p == MAP_FAILED) return;
         size_ = size_t(st.st_size);
-        if (size_ == 0) return;
-        void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd_, 0);
-        if (p == MAP_FAILED) {
-            size_ = 0;
-            return;
-        }
         data_ = static_cast<const unsigned char*>(p);
+        // The checksum reads the file once from start to end.
         ::madvise(p, size_, MADV_SEQUENTIAL);
+    }
+    // After validation, the arrays are read in BVH-build and traversal order.
+    void accessRandomly() const {
+        if (data_) ::madvise(const_cast<unsigned char*>(data_), size_, MADV_NORMAL);
     }
     ~Mapping() {
         if (data_) ::munmap(const_cast<unsigned char*>(data_), size_);
-        if (fd_ >= 0) ::close(fd_);
     }
     Mapping(const Mapping&) = delete;
     Mapping& operator=(const Mapping&) = delete;
-    bool ok() const { return fd_ >= 0; }
+    bool ok() const { return opened_; }
     const unsigned char* data() const { return data_; }
     size_t size() const { return size_; }
 
 private:
-    int fd_ = -1;
+    bool opened_ = false;
     const unsigned char* data_ = nullptr;
     size_t size_ = 0;
 };
@@ -170,10 +176,10 @@ namespace detail {
 std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const ImportReport& report, uint64_t sourceSize,
                                            int64_t sourceMtime) {
     const size_t V = mesh.vertexCount(), T = mesh.triangleCount();
-    const size_t posBytes = align64((3 * V + 1) * 4);
-    const size_t nrmBytes = mesh.hasNormals() ? align64((3 * V + 1) * 4) : 0;
-    const size_t idxBytes = align64(3 * T * 4);
-    const size_t colBytes = mesh.hasColors() ? align64(3 * V) : 0;
+    const size_t posBytes = sectionBytes(3 * V);
+    const size_t nrmBytes = mesh.hasNormals() ? sectionBytes(3 * V) : 0;
+    const size_t idxBytes = sectionBytes(3 * T);
+    const size_t colBytes = mesh.hasColors() ? align64(3 * V + 16) : 0;
     const size_t total = kHeaderSize + posBytes + nrmBytes + idxBytes + colBytes;
 
     std::vector<unsigned char> bytes(total, 0);
@@ -193,10 +199,10 @@ std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const Impor
     putLE<uint64_t>(h + 104, report.cellsSkipped);
     std::memcpy(h + 112, report.format.data(), std::min<size_t>(report.format.size(), 8));
     size_t at = kHeaderSize;
-    copyArrayLE(h + at, mesh.positions(), 3 * V + 1);
+    copyArrayLE(h + at, mesh.positions(), 3 * V);
     at += posBytes;
     if (mesh.hasNormals()) {
-        copyArrayLE(h + at, mesh.normals(), 3 * V + 1);
+        copyArrayLE(h + at, mesh.normals(), 3 * V);
         at += nrmBytes;
     }
     copyArrayLE(h + at, mesh.indices(), 3 * T);
@@ -246,8 +252,10 @@ void writeMeshCache(const TriangleMesh& mesh, const ImportReport& report, const 
     if (progress) progress(1.0);
 }
 
+namespace detail {
+
 TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t sourceSize, int64_t sourceMtime,
-                             const std::string& name, ImportReport* report) {
+                             const std::string& name, ImportReport* report, std::shared_ptr<const void> keepAlive) {
     auto bad = [&](size_t offset, const std::string& what) -> InputError {
         return InputError(name + ":offset " + std::to_string(offset) + ": " + what);
     };
@@ -266,44 +274,58 @@ TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t so
     if (V == 0 || T == 0 || V >= std::numeric_limits<uint32_t>::max() || V > size / 12 || T > size / 12)
         throw bad(32, "vertex or triangle count does not fit the file");
     const bool normals = flags & 1, colors = flags & 2;
-    const size_t posBytes = align64((3 * V + 1) * 4), nrmBytes = normals ? posBytes : 0, idxBytes = align64(3 * T * 4);
-    const size_t colBytes = colors ? align64(3 * V) : 0;
+    const size_t posBytes = sectionBytes(3 * V), nrmBytes = normals ? posBytes : 0, idxBytes = sectionBytes(3 * T);
+    const size_t colBytes = colors ? align64(3 * V + 16) : 0;
     const size_t expected = kHeaderSize + posBytes + nrmBytes + idxBytes + colBytes;
     if (size != expected)
         throw bad(std::min(size, expected), (size < expected ? "truncated: " : "trailing bytes: ") + std::to_string(size) +
                                                 " bytes, the counts give " + std::to_string(expected));
     if (getLE<uint64_t>(data + kChecksumAt) != checksum(data, size)) throw bad(kChecksumAt, "checksum mismatch: the cache is corrupt");
 
-    TriangleMesh mesh;
-    std::vector<float>& pos = MeshAccess::positions(mesh);
-    pos.resize(3 * V + 1);
-    readArrayLE(pos.data(), data + kHeaderSize, 3 * V + 1);
+    // Validated where the bytes lie, before any array is used: the checksum only says the file
+    // is the one that was written, not that whoever wrote it was right.
+    const size_t nrmAt = kHeaderSize + posBytes, idxAt = nrmAt + nrmBytes;
     for (size_t i = 0; i < 3 * V; ++i)
-        if (!std::isfinite(pos[i])) throw bad(kHeaderSize + 4 * i, "non-finite coordinate");
-    MeshAccess::setVertexCount(mesh, V);
-    if (normals) {
-        std::vector<float>& nrm = MeshAccess::normals(mesh);
-        nrm.resize(3 * V + 1);
-        readArrayLE(nrm.data(), data + kHeaderSize + posBytes, 3 * V + 1);
+        if (!std::isfinite(getLE<float>(data + kHeaderSize + 4 * i))) throw bad(kHeaderSize + 4 * i, "non-finite coordinate");
+    if (normals)
         for (size_t i = 0; i < 3 * V; ++i)
-            if (!std::isfinite(nrm[i])) throw bad(kHeaderSize + posBytes + 4 * i, "non-finite normal");
-    }
-    std::vector<uint32_t>& idx = MeshAccess::indices(mesh);
-    idx.resize(3 * T);
-    const size_t idxAt = kHeaderSize + posBytes + nrmBytes;
-    readArrayLE(idx.data(), data + idxAt, 3 * T);
+            if (!std::isfinite(getLE<float>(data + nrmAt + 4 * i))) throw bad(nrmAt + 4 * i, "non-finite normal");
     // The last line before Embree: an index past the vertices would be an out-of-bounds read.
     for (size_t i = 0; i < 3 * T; ++i)
-        if (idx[i] >= V) throw bad(idxAt + 4 * i, "vertex index " + std::to_string(idx[i]) + " out of range");
-    if (colors) {
-        const unsigned char* c = data + idxAt + idxBytes;
-        MeshAccess::colors(mesh).assign(c, c + 3 * V);
-    }
+        if (const uint32_t v = getLE<uint32_t>(data + idxAt + 4 * i); v >= V)
+            throw bad(idxAt + 4 * i, "vertex index " + std::to_string(v) + " out of range");
+    const size_t colAt = idxAt + idxBytes;
     std::array<double, 3> origin{};
     for (int k = 0; k < 3; ++k) {
         origin[size_t(k)] = getLE<double>(data + 56 + 8 * k);
         if (!std::isfinite(origin[size_t(k)])) throw bad(56, "non-finite origin");
     }
+
+    TriangleMesh mesh;
+    MeshArray<float>& pos = MeshAccess::positions(mesh);
+    MeshArray<float>& nrm = MeshAccess::normals(mesh);
+    MeshArray<uint32_t>& idx = MeshAccess::indices(mesh);
+    // In place needs the host's byte order and 4-byte alignment (a mapping is page-aligned).
+    const bool inPlace = keepAlive && std::endian::native == std::endian::little &&
+                         reinterpret_cast<uintptr_t>(data) % alignof(float) == 0;
+    if (inPlace) {
+        pos.view(reinterpret_cast<const float*>(data + kHeaderSize), 3 * V, keepAlive);
+        if (normals) nrm.view(reinterpret_cast<const float*>(data + nrmAt), 3 * V, keepAlive);
+        idx.view(reinterpret_cast<const uint32_t*>(data + idxAt), 3 * T, keepAlive);
+        if (colors) MeshAccess::colors(mesh).view(data + colAt, 3 * V, keepAlive);
+    } else {
+        auto copy = [](const unsigned char* src, size_t n, auto tag) {
+            using Elem = decltype(tag);
+            std::vector<Elem> v(n);
+            for (size_t i = 0; i < n; ++i) v[i] = getLE<Elem>(src + 4 * i);
+            return v;
+        };
+        pos.assign(copy(data + kHeaderSize, 3 * V, float{}));
+        if (normals) nrm.assign(copy(data + nrmAt, 3 * V, float{}));
+        idx.assign(copy(data + idxAt, 3 * T, uint32_t{}));
+        if (colors) MeshAccess::colors(mesh).assign(std::vector<uint8_t>(data + colAt, data + colAt + 3 * V));
+    }
+    MeshAccess::setVertexCount(mesh, V);
     mesh.setOrigin(origin);
     if (report) {
         report->polygonsTriangulated = getLE<uint64_t>(data + 80);
@@ -317,6 +339,13 @@ TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t so
     return mesh;
 }
 
+}  // namespace detail
+
+TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t sourceSize, int64_t sourceMtime,
+                             const std::string& name, ImportReport* report) {
+    return detail::decodeMeshCache(data, size, sourceSize, sourceMtime, name, report, nullptr);
+}
+
 std::optional<TriangleMesh> readMeshCache(const fs::path& cacheFile, const fs::path& source, ImportReport* report,
                                           std::string* whyNot) {
     auto no = [&](const std::string& why) -> std::optional<TriangleMesh> {
@@ -325,11 +354,15 @@ std::optional<TriangleMesh> readMeshCache(const fs::path& cacheFile, const fs::p
     };
     SourceStamp stamp;
     if (!stampOf(source, stamp)) return no("the source file cannot be read");
-    const Mapping map(cacheFile);
-    if (!map.ok()) return no("no cache");
-    if (!map.data()) return no("the cache is empty or cannot be mapped");
+    // Shared: the mesh's arrays view the mapping and keep it alive; a rejected cache unmaps here.
+    const auto map = std::make_shared<const Mapping>(cacheFile);
+    if (!map->ok()) return no("no cache");
+    if (!map->data()) return no("the cache is empty or cannot be mapped");
     try {
-        return decodeMeshCache(map.data(), map.size(), stamp.size, stamp.mtimeNs, cacheFile.string(), report);
+        TriangleMesh mesh = detail::decodeMeshCache(map->data(), map->size(), stamp.size, stamp.mtimeNs,
+                                                    cacheFile.string(), report, map);
+        map->accessRandomly();
+        return mesh;
     } catch (const InputError& e) {
         return no(e.what());
     } catch (const std::bad_alloc&) {

@@ -524,6 +524,10 @@ TriangleMesh importOpenMesh(const fs::path& file, const FormatInfo& format, std:
     if (mesh.triangleCount() == 0) throw InputError(name + ": contains no triangles");
     importer.finishNormals();
     importer.finishColors();
+    // The reserve above follows the pre-pass, which counts STL corners before they are merged
+    // into shared vertices (about six times too many): spare capacity would stay resident for
+    // as long as the mesh is rendered.
+    mesh.shrinkToFit();
 
     if (report) {
         report->format = format.name;

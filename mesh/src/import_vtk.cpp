@@ -899,14 +899,11 @@ TriangleMesh loadVtk(VtkKind kind, const std::string& data, const std::string& n
     if (::fstat(memfd, &st) != 0 || st.st_size <= 0) fail(name, "the VTK reader returned no mesh");
     void* map = ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, memfd, 0);
     if (map == MAP_FAILED) fail(name, "cannot map the mesh the VTK reader returned");
-    try {
-        TriangleMesh mesh = decodeMeshCache(static_cast<const unsigned char*>(map), size_t(st.st_size), 0, 0, name, &report);
-        ::munmap(map, size_t(st.st_size));
-        return mesh;
-    } catch (...) {
-        ::munmap(map, size_t(st.st_size));
-        throw;
-    }
+    // The mesh's arrays stay where the child wrote them (a view of the memfd's pages), so the
+    // parent never makes its own copy; the mapping goes with the last array that uses it.
+    const size_t length = size_t(st.st_size);
+    const std::shared_ptr<const void> keep(map, [length](const void* p) { ::munmap(const_cast<void*>(p), length); });
+    return decodeMeshCache(static_cast<const unsigned char*>(map), length, 0, 0, name, &report, keep);
 }
 
 }  // namespace rtwall::detail

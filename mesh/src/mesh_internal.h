@@ -10,10 +10,10 @@ namespace rtwall::detail {
 
 // The cache reader and the recentring step work on the buffers directly.
 struct MeshAccess {
-    static std::vector<float>& positions(TriangleMesh& m) { return m.positions_; }
-    static std::vector<float>& normals(TriangleMesh& m) { return m.normals_; }
-    static std::vector<uint32_t>& indices(TriangleMesh& m) { return m.indices_; }
-    static std::vector<uint8_t>& colors(TriangleMesh& m) { return m.colors_; }
+    static MeshArray<float>& positions(TriangleMesh& m) { return m.positions_; }
+    static MeshArray<float>& normals(TriangleMesh& m) { return m.normals_; }
+    static MeshArray<uint32_t>& indices(TriangleMesh& m) { return m.indices_; }
+    static MeshArray<uint8_t>& colors(TriangleMesh& m) { return m.colors_; }
     static void setVertexCount(TriangleMesh& m, size_t n) { m.vertexCount_ = n; }
 };
 
@@ -37,6 +37,11 @@ namespace rtwall::detail {
 // the child process it runs in.
 std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const ImportReport& report, uint64_t sourceSize,
                                            int64_t sourceMtime);
+
+// Decodes and validates cache bytes (cache.cpp). With `keepAlive` (the owner of `data`, e.g. a
+// mapping) on a little-endian host, the mesh's arrays are views of `data`; otherwise copies.
+TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t sourceSize, int64_t sourceMtime,
+                             const std::string& name, ImportReport* report, std::shared_ptr<const void> keepAlive);
 
 // Reads any supported mesh file, without a cache (import.cpp).
 TriangleMesh importMesh(const std::filesystem::path& file, ImportReport* report);

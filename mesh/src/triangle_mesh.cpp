@@ -16,7 +16,7 @@ void Bounds3::extend(const Float3& p) {
 }
 
 void TriangleMesh::reserve(size_t vertices, size_t triangles) {
-    positions_.reserve(3 * vertices + 1);
+    positions_.reserve(3 * vertices);
     indices_.reserve(3 * triangles);
 }
 
@@ -26,11 +26,9 @@ uint32_t TriangleMesh::addVertex(const Float3& p) {
     if (!normals_.empty() || !colors_.empty()) throw std::logic_error("TriangleMesh::addVertex after setNormals or setColors");
     if (vertexCount_ >= std::numeric_limits<uint32_t>::max())
         throw std::length_error("TriangleMesh: more vertices than 32-bit indices can address");
-    // The padding float becomes x, and a new padding float goes on the end.
-    positions_.back() = p.x;
+    positions_.push_back(p.x);
     positions_.push_back(p.y);
     positions_.push_back(p.z);
-    positions_.push_back(0.0f);
     return static_cast<uint32_t>(vertexCount_++);
 }
 
@@ -38,9 +36,10 @@ void TriangleMesh::setPosition(uint32_t v, const Float3& p) {
     if (v >= vertexCount_)
         throw std::out_of_range("TriangleMesh::setPosition: index " + std::to_string(v) + " >= vertex count " +
                                 std::to_string(vertexCount_));
-    positions_[3 * size_t(v)] = p.x;
-    positions_[3 * size_t(v) + 1] = p.y;
-    positions_[3 * size_t(v) + 2] = p.z;
+    float* at = positions_.mutableData() + 3 * size_t(v);
+    at[0] = p.x;
+    at[1] = p.y;
+    at[2] = p.z;
 }
 
 void TriangleMesh::addTriangle(uint32_t a, uint32_t b, uint32_t c) {
@@ -59,19 +58,21 @@ void TriangleMesh::setNormals(std::vector<float> normalsXYZ) {
     if (normalsXYZ.size() != 3 * vertexCount_)
         throw std::invalid_argument("TriangleMesh::setNormals: got " + std::to_string(normalsXYZ.size()) +
                                     " floats for " + std::to_string(vertexCount_) + " vertices");
-    if (normalsXYZ.empty()) {
-        normals_.clear();
-        return;
-    }
-    normalsXYZ.push_back(0.0f);
-    normals_ = std::move(normalsXYZ);
+    normals_.assign(std::move(normalsXYZ));
+}
+
+void TriangleMesh::shrinkToFit() {
+    positions_.shrinkToFit();
+    normals_.shrinkToFit();
+    indices_.shrinkToFit();
+    colors_.shrinkToFit();
 }
 
 void TriangleMesh::setColors(std::vector<uint8_t> colorsRGB) {
     if (!colorsRGB.empty() && colorsRGB.size() != 3 * vertexCount_)
         throw std::invalid_argument("TriangleMesh::setColors: got " + std::to_string(colorsRGB.size()) +
                                     " bytes for " + std::to_string(vertexCount_) + " vertices");
-    colors_ = std::move(colorsRGB);
+    colors_.assign(std::move(colorsRGB));
 }
 
 Bounds3 TriangleMesh::bounds() const {
@@ -81,8 +82,12 @@ Bounds3 TriangleMesh::bounds() const {
 }
 
 size_t TriangleMesh::residentBytes() const {
-    return positions_.capacity() * sizeof(float) + normals_.capacity() * sizeof(float) +
-           indices_.capacity() * sizeof(uint32_t) + colors_.capacity();
+    return positions_.heapBytes() + normals_.heapBytes() + indices_.heapBytes() + (colors_.empty() ? 0 : colors_.heapBytes()) +
+           mappedBytes();
+}
+
+size_t TriangleMesh::mappedBytes() const {
+    return positions_.viewBytes() + normals_.viewBytes() + indices_.viewBytes() + colors_.viewBytes();
 }
 
 namespace detail {
@@ -105,7 +110,7 @@ void recentre(TriangleMesh& mesh) {
     const double lo[3] = {b.lo.x, b.lo.y, b.lo.z}, hi[3] = {b.hi.x, b.hi.y, b.hi.z};
     const std::array<double, 3> o = chooseOrigin(lo, hi);
     if (o == std::array<double, 3>{0, 0, 0}) return;
-    std::vector<float>& p = MeshAccess::positions(mesh);
+    float* p = MeshAccess::positions(mesh).mutableData();
     for (size_t v = 0; v < mesh.vertexCount(); ++v)
         for (size_t k = 0; k < 3; ++k) p[3 * v + k] = float(double(p[3 * v + k]) - o[k]);
     const std::array<double, 3> old = mesh.origin();

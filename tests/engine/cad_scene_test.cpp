@@ -6,6 +6,8 @@
 #include <rtwall/engine.h>
 #include <rtwall/engine_embree.h>
 
+#include "scene_impl.h"
+
 #include "generators.h"
 
 #include <gtest/gtest.h>
@@ -345,6 +347,22 @@ TEST(GeneratedScenes, PowerplantRendersIdenticallyFromSourcesAndCache) {
     for (const MeshDesc& m : fromFiles.meshes) unique += int64_t(m.mesh->triangleCount());
     EXPECT_GE(unique, 60000);
     EXPECT_EQ(fromFiles.instances.size(), fromCache.instances.size());
+    // The cached meshes are the mapped cache files, and those pages are what Embree reads: the
+    // buffers of every mesh geometry are the mesh's own arrays, not copies.
+    {
+        const Scene scene(fromCache);
+        ASSERT_EQ(scene.impl().meshScenes.size(), fromCache.meshes.size());
+        for (size_t i = 0; i < fromCache.meshes.size(); ++i) {
+            const TriangleMesh& mesh = *fromCache.meshes[i].mesh;
+            EXPECT_TRUE(mesh.isMapped()) << fromCache.meshes[i].name;
+            EXPECT_NE(fromFiles.meshes[i].mesh->positions(), mesh.positions());
+            RTCGeometry g = rtcGetGeometry(scene.impl().meshScenes[i], 0);
+            ASSERT_NE(g, nullptr);
+            EXPECT_EQ(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_VERTEX, 0), static_cast<const void*>(mesh.positions()));
+            EXPECT_EQ(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_INDEX, 0), static_cast<const void*>(mesh.indices()));
+        }
+        EXPECT_GT(scene.geometryBytes(), 0u);
+    }
     const Image a = renderScene(fromFiles, 96, 72), b = renderScene(fromCache, 96, 72);
     EXPECT_EQ(a.rgb, b.rgb);
     // Not a blank picture: the plant is in view.

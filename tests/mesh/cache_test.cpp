@@ -4,11 +4,18 @@
 
 #include <gtest/gtest.h>
 
+// Header-only, to sign hand-made caches the way the writer does.
+#define XXH_INLINE_ALL
+#include <xxhash.h>
+
 #include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <thread>
+#include <utility>
+#include <vector>
 
 namespace rtwall {
 namespace {
@@ -165,6 +172,153 @@ TEST(MeshCache, CacheDirKeepsSameNamesApart) {
     loadMesh(src, opt, &r);
     EXPECT_EQ(r.cache, "written");
     EXPECT_TRUE(fs::exists(meshCachePath(src, dir / "cache")));
+}
+
+// The address ranges at which this process maps `file` (from /proc/self/maps).
+std::vector<std::pair<uintptr_t, uintptr_t>> mappingsOf(const fs::path& file) {
+    const std::string want = fs::canonical(file).string();
+    std::ifstream maps("/proc/self/maps");
+    std::vector<std::pair<uintptr_t, uintptr_t>> out;
+    for (std::string line; std::getline(maps, line);) {
+        const size_t slash = line.find('/');
+        if (slash == std::string::npos || line.substr(slash) != want) continue;
+        out.emplace_back(std::stoull(line.substr(0, line.find('-')), nullptr, 16),
+                         std::stoull(line.substr(line.find('-') + 1), nullptr, 16));
+    }
+    return out;
+}
+
+// [p, p + bytes) lies inside one of the ranges.
+bool inside(const void* p, size_t bytes, const std::vector<std::pair<uintptr_t, uintptr_t>>& ranges) {
+    const auto at = reinterpret_cast<uintptr_t>(p);
+    for (const auto& [lo, hi] : ranges)
+        if (at >= lo && at + bytes <= hi) return true;
+    return false;
+}
+
+// A mesh read from its cache is the mapped file: its arrays (the pointers the engine gives
+// Embree as shared buffers) lie inside the mapping, 64-byte aligned, with 16 zero bytes after
+// each that Embree's SIMD loads may read; the mapping goes away with the last mesh using it.
+TEST(MeshCache, CachedMeshIsTheMappedFileNotACopy) {
+    const fs::path dir = scratch("inplace");
+    const fs::path src = copyMesh(dir, "box_normals.obj");
+    LoadOptions opt;
+    opt.cache = true;
+    const TriangleMesh imported = loadMesh(src, opt);
+    EXPECT_FALSE(imported.isMapped());
+    EXPECT_EQ(imported.mappedBytes(), 0u);
+    const fs::path cache = meshCachePath(src);
+    {
+        ImportReport r;
+        const TriangleMesh cached = loadMesh(src, opt, &r);
+        ASSERT_EQ(r.cache, "hit");
+        ASSERT_TRUE(cached.isMapped());
+        ASSERT_TRUE(cached.hasNormals());
+        const auto ranges = mappingsOf(cache);
+        ASSERT_FALSE(ranges.empty()) << "the cache file is not mapped";
+        const size_t V = cached.vertexCount(), T = cached.triangleCount();
+        EXPECT_TRUE(inside(cached.positions(), 12 * V + 16, ranges));
+        EXPECT_TRUE(inside(cached.normals(), 12 * V + 16, ranges));
+        EXPECT_TRUE(inside(cached.indices(), 12 * T + 16, ranges));
+        for (const void* p : {static_cast<const void*>(cached.positions()), static_cast<const void*>(cached.normals()),
+                              static_cast<const void*>(cached.indices())})
+            EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % 64, 0u);
+        const unsigned char zeros[16] = {};
+        EXPECT_EQ(std::memcmp(cached.positions() + 3 * V, zeros, 16), 0);
+        EXPECT_EQ(std::memcmp(cached.normals() + 3 * V, zeros, 16), 0);
+        EXPECT_EQ(std::memcmp(cached.indices() + 3 * T, zeros, 16), 0);
+        EXPECT_EQ(cached.mappedBytes(), (24 * V + 12 * T) + 3 * 16);
+        EXPECT_EQ(cached.residentBytes(), cached.mappedBytes());  // nothing on the heap
+        expectSameMesh(imported, cached);
+
+        // A copy shares the pages; writing to it copies its own arrays, and the cached mesh and
+        // the file stay as they were.
+        TriangleMesh edited = cached;
+        EXPECT_EQ(edited.positions(), cached.positions());
+        edited.setPosition(0, {9, 9, 9});
+        EXPECT_FALSE(edited.isMapped() && edited.positions() == cached.positions());
+        EXPECT_EQ(edited.position(0).x, 9.0f);
+        EXPECT_EQ(edited.positions()[3 * V], 0.0f);
+        expectSameMesh(imported, cached);
+    }
+    EXPECT_TRUE(mappingsOf(cache).empty()) << "the mapping outlived every mesh using it";
+    ImportReport again;
+    EXPECT_TRUE(loadMesh(src, opt, &again).isMapped());
+    EXPECT_EQ(again.cache, "hit");
+}
+
+// A cache in the version-1 layout (too little padding for Embree to read it in place) is
+// refused with its version named, rebuilt, and the rebuilt one is used.
+TEST(MeshCache, OldVersionIsRebuilt) {
+    const fs::path dir = scratch("oldversion");
+    const fs::path src = copyMesh(dir, "tet_binary_le.ply");
+    LoadOptions opt;
+    opt.cache = true;
+    const TriangleMesh original = loadMesh(src, opt);
+    std::string bytes = readBytes(meshCachePath(src));
+    ASSERT_EQ(bytes[8], 3);
+    bytes[8] = 1;
+    writeBytes(meshCachePath(src), bytes);
+    ImportReport r1, r2;
+    const TriangleMesh rebuilt = loadMesh(src, opt, &r1);
+    EXPECT_EQ(r1.cache.rfind("rebuilt: ", 0), 0u) << r1.cache;
+    EXPECT_NE(r1.cache.find("cache version 1"), std::string::npos) << r1.cache;
+    EXPECT_FALSE(rebuilt.isMapped());
+    expectSameMesh(original, rebuilt);
+    const TriangleMesh cached = loadMesh(src, opt, &r2);
+    EXPECT_EQ(r2.cache, "hit");
+    EXPECT_TRUE(cached.isMapped());
+    expectSameMesh(original, cached);
+}
+
+// A valid checksum does not make an index or coordinate trustworthy: the values are checked in
+// the mapped file before the mesh is handed out.
+TEST(MeshCache, BadValuesUnderAGoodChecksumAreCaught) {
+    const fs::path dir = scratch("badvalues");
+    const fs::path src = copyMesh(dir, "box_quads.obj");
+    const TriangleMesh mesh = loadMesh(src);
+    ASSERT_FALSE(mesh.hasNormals());
+    const fs::path cache = meshCachePath(src);
+    writeMeshCache(mesh, ImportReport{}, src, cache);
+    std::string bytes = readBytes(cache);
+    const size_t V = mesh.vertexCount(), T = mesh.triangleCount();
+    const size_t posBytes = (12 * V + 16 + 63) / 64 * 64, idxAt = 128 + posBytes;
+    ASSERT_EQ(bytes.size(), idxAt + (12 * T + 16 + 63) / 64 * 64);
+    // Re-signed as the writer would: the checksum is then right, the values are not.
+    auto resign = [](std::string& b) {
+        std::memset(&b[120], 0, 8);
+        const uint64_t h = XXH3_64bits(b.data(), b.size());
+        std::memcpy(&b[120], &h, 8);  // little-endian host (the test machines)
+    };
+    auto error = [](const std::string& b) -> std::string {
+        try {
+            (void)decodeMeshCache(reinterpret_cast<const unsigned char*>(b.data()), b.size(), 0, 0, "c");
+        } catch (const InputError& e) {
+            return e.what();
+        }
+        return "";
+    };
+    std::memset(&bytes[16], 0, 16);  // source stamp 0/0, as decodeMeshCache is asked for below
+    std::string good = bytes;
+    resign(good);
+    EXPECT_EQ(error(good), "");
+    std::string badIndex = bytes;
+    const uint32_t outOfRange = uint32_t(V);
+    std::memcpy(&badIndex[idxAt + 12 * (T - 1)], &outOfRange, 4);
+    resign(badIndex);
+    EXPECT_EQ(error(badIndex), "c:offset " + std::to_string(idxAt + 12 * (T - 1)) + ": vertex index " + std::to_string(V) + " out of range");
+    std::string badCoordinate = bytes;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    std::memcpy(&badCoordinate[128 + 4], &nan, 4);
+    resign(badCoordinate);
+    EXPECT_EQ(error(badCoordinate), "c:offset 132: non-finite coordinate");
+    // And through readMeshCache, which would otherwise hand the mapping to Embree.
+    std::memcpy(&badIndex[16], readBytes(cache).data() + 16, 16);
+    resign(badIndex);
+    writeBytes(cache, badIndex);
+    std::string why;
+    EXPECT_FALSE(readMeshCache(cache, src, nullptr, &why).has_value());
+    EXPECT_NE(why.find("out of range"), std::string::npos) << why;
 }
 
 // The decoder on arbitrary bytes never reads past them (the fuzz target does this at scale).

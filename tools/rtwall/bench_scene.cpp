@@ -62,6 +62,7 @@ void addBenchScene(CLI::App& bench, Run& run) {
         std::string scene, camera;
         int width = 1600, height = 1200, threads = 0, frames = 3;
         bool json = false, sweep = false, skipParse = false;
+        std::string robust = "scene";
     };
     auto o = std::make_shared<Options>();
     CLI::App* cmd = bench.add_subcommand("scene", "Import, cache, BVH build, memory and frame time of a scene file");
@@ -73,6 +74,8 @@ void addBenchScene(CLI::App& bench, Run& run) {
     cmd->add_option("--frames", o->frames, "Frames per setting; the median is reported")->check(CLI::Range(1, 100));
     cmd->add_flag("--sweep", o->sweep, "Also build and render with every BVH quality, compact off and on");
     cmd->add_flag("--skip-parse", o->skipParse, "Do not time a load without caches");
+    cmd->add_option("--robust", o->robust, "Robust traversal: as the scene file says, or on/off for every row")
+        ->check(CLI::IsMember({"scene", "on", "off"}));
     cmd->add_flag("--json", o->json, "Print JSON");
     cmd->callback([&run, o] {
         run = [o] {
@@ -136,6 +139,7 @@ void addBenchScene(CLI::App& bench, Run& run) {
             s.maxDepth = 1;  // primary rays plus shadow rays
             s.supersample = 1;
 
+            if (o->robust != "scene") desc.bvh.robust = o->robust == "on";
             std::vector<BvhSettings> settings{desc.bvh};
             if (o->sweep)
                 for (auto q : {BvhSettings::Quality::Low, BvhSettings::Quality::Medium, BvhSettings::Quality::High})
@@ -156,6 +160,10 @@ void addBenchScene(CLI::App& bench, Run& run) {
                 for (int f = 0; f < o->frames; ++f) frames.push_back(seconds([&] { renderFrame(*scene, c, s, 0); }));
                 const double frameCpu = (cpuSeconds() - cpu1) / o->frames;
                 const double geometry = double(scene->geometryBytes()), embree = double(scene->embreeBytes());
+                size_t mapped = 0;
+                std::set<const TriangleMesh*> counted;
+                for (const MeshDesc& m : desc.meshes)
+                    if (counted.insert(m.mesh.get()).second) mapped += m.mesh->mappedBytes();
                 toml::table row{{"quality", qualityName(desc.bvh.quality)},
                                 {"compact", desc.bvh.compact},
                                 {"robust", desc.bvh.robust},
@@ -169,6 +177,15 @@ void addBenchScene(CLI::App& bench, Run& run) {
                                 {"bytes_per_unique_triangle", (geometry + embree) / double(std::max<int64_t>(1, unique))},
                                 {"rss_bytes", procStatus("VmRSS:")},
                                 {"rss_bytes_per_unique_triangle", double(procStatus("VmRSS:")) / double(std::max<int64_t>(1, unique))},
+                                // Where the resident bytes are: heap and Embree (anonymous), mapped
+                                // mesh caches (file), VTK import results (shared memory).
+                                {"rss_anon_bytes", procStatus("RssAnon:")},
+                                {"rss_file_bytes", procStatus("RssFile:")},
+                                {"rss_shmem_bytes", procStatus("RssShmem:")},
+                                {"mapped_geometry_bytes", int64_t(mapped)},
+                                // Embree 3 builds spatial splits only for quality high on a scene
+                                // that is neither robust nor compact; otherwise high is medium.
+                                {"spatial_splits", desc.bvh.quality == BvhSettings::Quality::High && !desc.bvh.robust && !desc.bvh.compact},
                                 {"frame_s", medianOf(frames)},
                                 {"frame_cpu_s", frameCpu},
                                 {"rays_per_frame", int64_t(stats.rays + stats.shadowRays)}};

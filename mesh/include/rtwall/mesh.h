@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -39,12 +40,83 @@ struct Bounds3 {
     void extend(const Float3& p);
 };
 
-// Indexed triangle mesh in exactly the layout Embree reads: float3 positions (12-byte stride)
-// with 4 bytes of tail padding, because Embree loads the last vertex with a 16-byte read;
-// uint32 triangle indices. Optional per-vertex normals use the same layout. Optional per-vertex
-// colours are 8-bit sRGB-encoded RGB, 3 bytes per vertex, as the files store them (float colours
-// are rounded to 8 bits); the renderer decodes them to linear and multiplies the material colour
-// by their interpolation. Embree never reads the colours.
+// One array of a mesh, in the layout Embree reads: either owned (a vector) or a read-only view
+// of memory that something else keeps alive (the pages of a mapped mesh cache), so a cached mesh
+// is rendered where it lies instead of being copied. Either way kPad zero elements (16 bytes)
+// follow the data, because Embree reads the last element with a 16-byte SIMD load. Writing to a
+// view first copies it into owned storage. Any per-vertex or per-triangle array of TriangleMesh
+// is one of these, so a further optional array is one more member, with nothing else to change.
+template <class T>
+class MeshArray {
+public:
+    static constexpr size_t kPad = 16 / sizeof(T);
+
+    MeshArray() : owned_(kPad, T{}) {}
+    const T* data() const { return view_ ? view_ : owned_.data(); }
+    size_t size() const { return size_; }  // without the padding
+    bool empty() const { return size_ == 0; }
+    const T& operator[](size_t i) const { return data()[i]; }
+    bool isView() const { return view_ != nullptr; }
+    size_t heapBytes() const { return owned_.capacity() * sizeof(T); }             // owned storage
+    size_t viewBytes() const { return view_ ? (size_ + kPad) * sizeof(T) : 0; }  // mapped storage
+
+    T* mutableData() {
+        makeOwned();
+        return owned_.data();
+    }
+    void reserve(size_t n) {
+        makeOwned();
+        owned_.reserve(n + kPad);
+    }
+    void push_back(T v) {
+        makeOwned();
+        owned_.push_back(T{});  // the padding moves one element on
+        owned_[size_++] = v;
+    }
+    // Takes `values` as the whole array (the padding is appended here).
+    void assign(std::vector<T> values) {
+        size_ = values.size();
+        values.resize(size_ + kPad, T{});
+        owned_ = std::move(values);
+        view_ = nullptr;
+        keepAlive_.reset();
+    }
+    // Uses n elements at `at` in place; at[n .. n + kPad) must be readable too. `keepAlive` owns
+    // the memory (e.g. the mapping) and is released with the last array that uses it.
+    void view(const T* at, size_t n, std::shared_ptr<const void> keepAlive) {
+        owned_.clear();
+        owned_.shrink_to_fit();
+        view_ = at;
+        size_ = n;
+        keepAlive_ = std::move(keepAlive);
+    }
+    void clear() { assign({}); }
+    void shrinkToFit() {
+        if (!view_) owned_.shrink_to_fit();
+    }
+
+private:
+    void makeOwned() {
+        if (!view_) return;
+        std::vector<T> copy(view_, view_ + size_ + kPad);
+        owned_ = std::move(copy);
+        view_ = nullptr;
+        keepAlive_.reset();
+    }
+
+    std::vector<T> owned_;  // size_ + kPad elements when owned; empty when a view
+    const T* view_ = nullptr;
+    size_t size_ = 0;
+    std::shared_ptr<const void> keepAlive_;
+};
+
+// Indexed triangle mesh in exactly the layout Embree reads: float3 positions (12-byte stride),
+// uint32 triangle indices, each followed by 16 bytes of zero padding (MeshArray). Optional
+// per-vertex normals use the same layout. Optional per-vertex colours are 8-bit sRGB-encoded RGB,
+// 3 bytes per vertex, as the files store them (float colours are rounded to 8 bits); the renderer
+// decodes them to linear and multiplies the material colour by their interpolation. Embree never
+// reads the colours. Copying a mesh that views a mapping shares the mapping (the copy views the
+// same pages).
 class TriangleMesh {
 public:
     size_t vertexCount() const { return vertexCount_; }
@@ -66,9 +138,14 @@ public:
     void addTriangle(uint32_t a, uint32_t b, uint32_t c);  // indices must already be valid
     void setNormals(std::vector<float> normalsXYZ);       // 3 per vertex (padding is added here)
     void setColors(std::vector<uint8_t> colorsRGB);       // 3 per vertex, or empty for none
+    void shrinkToFit();                                   // drops spare capacity left by reserve
 
     Bounds3 bounds() const;        // of the float buffers, i.e. relative to origin()
-    size_t residentBytes() const;  // heap bytes of the buffers
+    size_t residentBytes() const;  // bytes of the buffers: owned heap capacity plus mapped arrays
+    size_t mappedBytes() const;    // the part of residentBytes() that is a view of a mapped file
+    // True when the arrays are views of a mapping, not heap copies: a mesh loaded from its cache
+    // (the cache file's pages) or read by VTK (the pages its reader process wrote).
+    bool isMapped() const { return positions_.isView(); }
 
     // Where the buffers' origin lies in the file's coordinates, in double precision. CAD files
     // often place a model 1e5..1e6 units from their origin, where a float keeps only centimetres;
@@ -79,10 +156,10 @@ public:
 
 private:
     friend struct detail::MeshAccess;
-    std::vector<float> positions_{0.0f};  // always ends with one padding float
-    std::vector<float> normals_;          // empty, or 3 per vertex + one padding float
-    std::vector<uint32_t> indices_;
-    std::vector<uint8_t> colors_;         // empty, or 3 per vertex (no padding: Embree never reads it)
+    MeshArray<float> positions_;   // 3 per vertex
+    MeshArray<float> normals_;     // empty, or 3 per vertex
+    MeshArray<uint32_t> indices_;  // 3 per triangle
+    MeshArray<uint8_t> colors_;    // empty, or 3 per vertex (RGB)
     size_t vertexCount_ = 0;
     std::array<double, 3> origin_{0, 0, 0};
 };
@@ -141,11 +218,16 @@ std::filesystem::path meshCachePath(const std::filesystem::path& source, const s
 void writeMeshCache(const TriangleMesh& mesh, const ImportReport& report, const std::filesystem::path& source,
                     const std::filesystem::path& cacheFile, const ProgressFn& progress = {});
 // The mesh in a cache file if the cache is valid and matches `source` as it is now; otherwise
-// nothing, with the reason in *whyNot. Never throws for a bad cache file.
+// nothing, with the reason in *whyNot. Never throws for a bad cache file. The whole file is
+// validated (checksum, counts, finite coordinates, index range) before the mesh is returned; on
+// a little-endian host the mesh's arrays are then views of the mapped file (isMapped()), which
+// the mesh keeps mapped for as long as it or a copy of it lives. The cache is replaced by
+// rename, never rewritten in place, so a mapped cache's pages cannot change under a renderer.
 std::optional<TriangleMesh> readMeshCache(const std::filesystem::path& cacheFile, const std::filesystem::path& source,
                                           ImportReport* report = nullptr, std::string* whyNot = nullptr);
 // The decoder behind readMeshCache, on bytes in memory (for the fuzz target). `sourceSize` and
 // `sourceMtime` are what the cache must have been made from. Throws InputError naming `name`.
+// The mesh returned owns copies of the arrays.
 TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t sourceSize, int64_t sourceMtime,
                              const std::string& name, ImportReport* report = nullptr);
 
