@@ -46,29 +46,57 @@ class Control:
 @dataclass
 class Scene:
     name: str
-    source: str
+    source: str          # "{work}" stands for --work (scenes written by `rtwall gen`)
     wall: tuple          # the wall's resolution: the reference and every error are at this size
     extra: list = field(default_factory=list)  # arguments for every rtwall call on this scene
+    sweep: dict = field(default_factory=dict)  # control name -> the values swept on this scene
+    reference: dict = field(default_factory=dict)  # converged settings: control name -> value
+    gen: list = field(default_factory=list)    # `rtwall gen` arguments that write the scene first
+    note: str = ""       # how this scene is swept, for the docs
 
 
-# The swept controls that change what is rendered. Codecs are applied to each render (CODECS).
+# Every swept control and its `rtwall bench tiles` / `rtwall reference` arguments. The name is
+# also the key in a front's [point.controls], which `rtwall run --target-fps` applies
+# (tools/rtwall/cmd_run.cpp, applyControl). Which values each scene sweeps: SCENES. Codecs are
+# applied to each render (CODECS).
 CONTROLS = [
     Control("tile", [32, 64, 128], lambda v: ["--tile", str(v)]),
     Control("scale", [0.5, 0.75, 1.0], lambda v: ["--scale", str(v)], lambda v: f"{v:g}x"),
     Control("supersample", [1, 2], lambda v: ["--supersample", str(v)], lambda v: f"{v}x{v}"),
-    # Control("prune", [0.0, 0.01, 0.05], lambda v: ["--prune", str(v)]),        # with the shading issue
-    # Control("gi_spp", [1, 4, 16], lambda v: ["--gi-spp", str(v)]),             # with the shading issue
-    # Control("volume_step", [0.01, 0.05], lambda v: ["--volume-step", str(v)]), # with the shading issue
+    Control("prune", [0.0005, 0.002, 0.01, 0.05], lambda v: ["--prune", str(v)], lambda v: f"{v:g}"),
+    Control("gi_spp", [1, 4, 16], lambda v: ["--gi-spp", str(v)], lambda v: f"{v} spp"),
+    Control("volume_step", [0.25, 1.0, 4.0], lambda v: ["--volume-step", str(v)], lambda v: f"{v:g} voxels"),
 ]
+CONTROL = {c.name: c for c in CONTROLS}
 CODECS = ["raw", "lz4", "zstd", "jpeg:50", "jpeg:75", "jpeg:90", "jpeg:95"]
 # A front point's codec control: TileCodec numbers (cluster.h) and the JPEG quality.
 CODEC_IDS = {"raw": 0, "lz4": 1, "zstd": 2, "jpeg": 3}
 
+GRID = {"tile": [32, 64, 128], "scale": [0.5, 0.75, 1.0], "supersample": [1, 2]}
+REFERENCE_SUPERSAMPLE = 8  # 64 samples per pixel where a scene has no stochastic effects
 SCENES = [
-    Scene("knots", "builtin:knots", (1600, 1200), ["--triangles", "3000000"]),
-    Scene("demo", "configs/demo.toml", (800, 600)),
+    Scene("knots", "builtin:knots", (1600, 1200), ["--triangles", "3000000"], sweep=GRID),
+    Scene("demo", "configs/demo.toml", (800, 600), sweep=GRID),
+    # The shading demos cost far more per pixel (GI, glass, a volume): modest walls keep the
+    # whole regeneration under 30 minutes on the 2-core PC.
+    Scene("office", "{work}/scenes/office/office.toml", (400, 300), gen=["office"],
+          sweep={"tile": [32], "scale": [0.5, 1.0], "gi_spp": [1, 4, 16], "volume_step": [0.25, 1.0, 4.0],
+                 "prune": [0.002, 0.05]},
+          reference={"supersample": 4, "gi_spp": 16, "volume_step": 0.1, "prune": 0},
+          note="400x300 wall (GI, glass, a smoke volume); reference 4x4 samples x 16 GI samples per pixel, "
+               "volume step 0.1 voxels, no pruning"),
+    Scene("headlight", "{work}/scenes/headlight/headlight.toml", (200, 150), gen=["headlight"],
+          sweep={"tile": [32], "scale": [0.5, 1.0], "prune": [0.0005, 0.002, 0.01, 0.05]},
+          reference={"supersample": 3, "prune": 0.0001},
+          note="200x150 wall: paths of up to 32 bounces through glass cost seconds per frame even at this size; "
+               "reference 3x3 samples per pixel at pruning threshold 1e-4 (unpruned, the ray tree grows as 2^depth)"),
+    Scene("sunflowers", "{work}/scenes/sunflowers/sunflowers.toml", (800, 600),
+          gen=["sunflowers", "--instances", "2000", "--trees", "2"],
+          sweep={"tile": [32, 64, 128], "scale": [0.5, 1.0], "supersample": [1, 2]},
+          note="800x600 wall, a field of 2,000 instanced plants (not the full demo's 112,005, so that each of the "
+               "sweep's processes loads it in seconds)"),
 ]
-REFERENCE_SUPERSAMPLE = 8  # 64 samples per pixel: the scenes have no stochastic effects yet
+
 
 # Where the frame time of a sweep point comes from: its measured tile profile on this cluster.
 TOPOLOGY = dict(clients=8, threads=2, client_link="1gbit", master_link="1gbit", prefetch=8, latency_ms=0.1)
@@ -88,7 +116,7 @@ def log(*a):
 class Runner:
     def __init__(self, build, work, quick):
         self.exe = str(Path(build) / "tools" / "rtwall")
-        self.work = Path(work)
+        self.work = Path(work).resolve()
         self.raw = self.work / "raw"
         self.quick = quick
         self.raw.mkdir(parents=True, exist_ok=True)
@@ -105,11 +133,26 @@ class Runner:
 
 # ---- 1. references ---------------------------------------------------------------------------
 
-def scene_hash(scene, settings):
+def source(r, scene):
+    return scene.source.format(work=r.work)
+
+
+def generate(r, scene):
+    """Writes a generated demo scene (rtwall gen) unless it is there from an earlier run."""
+    if scene.gen and not Path(source(r, scene)).exists():
+        log(f"{scene.name}: rtwall gen {' '.join(scene.gen)}")
+        r.run("gen", *scene.gen, "--out", Path(source(r, scene)).parent, parse=False)
+
+
+def reference_settings(scene):
+    return scene.reference or {"supersample": REFERENCE_SUPERSAMPLE}
+
+
+def scene_hash(r, scene, settings):
     h = hashlib.sha256()
-    h.update(json.dumps([scene.source, scene.wall, scene.extra, settings], sort_keys=True).encode())
+    h.update(json.dumps([scene.source, scene.wall, scene.extra, scene.gen, settings], sort_keys=True).encode())
     if not scene.source.startswith("builtin:"):
-        path = ROOT / scene.source
+        path = ROOT / source(r, scene)
         h.update(path.read_bytes())
         import tomllib
         for mesh in tomllib.loads(path.read_text()).get("mesh", []):
@@ -123,16 +166,19 @@ def scene_hash(scene, settings):
 
 
 def reference(r, scene):
-    settings = {"supersample": REFERENCE_SUPERSAMPLE}
+    settings = reference_settings(scene)
     cache = r.work / "references"
     cache.mkdir(parents=True, exist_ok=True)
-    path = cache / f"{scene.name}-{scene_hash(scene, settings)}.png"
+    path = cache / f"{scene.name}-{scene_hash(r, scene, settings)}.png"
     if path.exists():
         log(f"reference {scene.name}: cached {path}")
     else:
-        log(f"reference {scene.name}: rendering {REFERENCE_SUPERSAMPLE}x{REFERENCE_SUPERSAMPLE} samples per pixel")
-        r.run("reference", scene.source, "--out", path, "--width", scene.wall[0], "--height", scene.wall[1],
-              "--supersample", REFERENCE_SUPERSAMPLE, *scene.extra, parse=False)
+        log(f"reference {scene.name}: rendering with {settings}")
+        args = [a for name, v in settings.items() for a in CONTROL[name].args(v)]
+        t0 = time.time()
+        r.run("reference", source(r, scene), "--out", path, "--width", scene.wall[0], "--height", scene.wall[1],
+              *args, *scene.extra, parse=False)
+        log(f"reference {scene.name}: {time.time() - t0:.0f} s")
     return path
 
 
@@ -152,15 +198,15 @@ def simulate(r, profile, codec, **kw):
 
 
 def sweep(r, scene, ref):
-    controls = CONTROLS
+    controls = [Control(name, values, CONTROL[name].args, CONTROL[name].label) for name, values in scene.sweep.items()]
     if r.quick:
-        controls = [Control(c.name, [c.values[-1]] if c.name != "tile" else [64], c.args, c.label) for c in CONTROLS]
+        controls = [Control(c.name, [c.values[-1]], c.args, c.label) for c in controls]
     points = []
     for values in itertools.product(*[c.values for c in controls]):
         setting = dict(zip([c.name for c in controls], values))
         tag = "-".join(f"{k}{v}" for k, v in setting.items())
         profile = r.raw / f"profile-{scene.name}-{tag}.toml"
-        args = ["bench", "tiles", scene.source, "--width", scene.wall[0], "--height", scene.wall[1],
+        args = ["bench", "tiles", source(r, scene), "--width", scene.wall[0], "--height", scene.wall[1],
                 "--codecs", ",".join(CODECS), "--reference", ref, "--profile-out", profile, "--json", *scene.extra]
         for c in controls:
             args += c.args(setting[c.name])
@@ -172,6 +218,7 @@ def sweep(r, scene, ref):
             sims[codec["codec"]] = sim
             points.append({"scene": scene.name, **setting, "codec": codec["codec"],
                            "psnr_db": codec["error"]["psnr_db"], "ssim": codec["error"]["ssim"],
+                           "flip": codec["error"]["flip"],
                            "rmse": codec["error"]["rmse"], "max_error": codec["error"]["max_error"],
                            "bytes_per_frame": codec["bytes_per_frame"],
                            "render_s_one_thread": bench["render_s_per_frame"][0],
@@ -219,7 +266,7 @@ def write_front(points, path):
 def scaling(r, scene, ref):
     s = SCALING_POINT
     profile = r.raw / f"profile-{scene.name}-scaling.toml"
-    r.run("bench", "tiles", scene.source, "--width", scene.wall[0], "--height", scene.wall[1], "--tile", s["tile"],
+    r.run("bench", "tiles", source(r, scene), "--width", scene.wall[0], "--height", scene.wall[1], "--tile", s["tile"],
           "--scale", s["scale"], "--supersample", s["supersample"], "--codecs", ",".join(SCALING_CODECS),
           "--profile-out", profile, "--json", *scene.extra)
     out = {}
@@ -704,6 +751,7 @@ def main():
             validation = validate(r)
             (r.raw / "validation.json").write_text(json.dumps(validation, indent=1))
     for scene in SCENES if not args.reuse else []:
+        generate(r, scene)
         ref = reference(r, scene)
         points = sweep(r, scene, ref)
         points_by_scene[scene.name] = points
