@@ -20,7 +20,8 @@
 //   decoded (Impl::finishFrameIfDone).
 // - With hostCores > 0 (local clients on the master's PC) every thread's CPU work, renders,
 //   the network thread's messages and decodes, runs on one pool of that many cores under
-//   processor sharing: n running threads progress at min(1, cores / n) each. This is what
+//   processor sharing: n running threads progress at min(1, cores / (n + b)) each, b being
+//   other jobs' runnable threads on a shared PC (hostBackgroundThreads). This is what
 //   makes 4 local clients on 2 cores no faster than 2, and slows the master's replies when the
 //   clients saturate the cores.
 // Not modelled: heartbeats, timeouts and dead clients, scene updates, TCP congestion control.
@@ -100,7 +101,8 @@ public:
             scheduler_.addClient(i);
             clients_[i].idle = c.threadsPerClient;
         }
-        if (c.hostCores < 0) throw InputError("simulation: host cores must be zero (no sharing) or positive");
+        if (c.hostCores < 0 || !(c.hostBackgroundThreads >= 0))
+            throw InputError("simulation: host cores and background threads must be zero or positive");
         decoders_.assign(size_t(c.decodeThreads), 0.0);
     }
 
@@ -173,7 +175,9 @@ private:
     int decodesRunning_ = 0;
 
     bool shared() const { return config_.hostCores > 0; }
-    double cpuRate() const { return std::min(1.0, double(config_.hostCores) / double(std::max<size_t>(1, cpu_.size()))); }
+    double cpuRate() const {
+        return std::min(1.0, double(config_.hostCores) / std::max(1.0, double(cpu_.size()) + config_.hostBackgroundThreads));
+    }
 
     void cpuAdvance() {
         const double done = (now_ - cpuLast_) * cpuRate();

@@ -379,7 +379,7 @@ void addSimulate(CLI::App& app, Run& run) {
     struct Options {
         std::string profile, codec, clients = "1,2,4,8,16,32,64,128,256", clientLink = "100mbit", masterLink = "1gbit";
         int threads = 1, prefetch = 4, frames = 10, decodeThreads = 2, overhead = 40, hostCores = 0;
-        double latencyMs = 0.1, spikeProb = 0, spikeMs = 0, masterUs = 28, clientSpeed = 1, decodeSpeed = 1, straggler = 4;
+        double latencyMs = 0.1, hostLoad = 0, spikeProb = 0, spikeMs = 0, masterUs = 28, clientSpeed = 1, decodeSpeed = 1, straggler = 4;
         bool noAffinity = false, json = false;
         uint64_t seed = 1;
     };
@@ -406,6 +406,8 @@ void addSimulate(CLI::App& app, Run& run) {
     cmd->add_option("--host-cores", o->hostCores,
                     "Clients and master share this many cores (local clients on one PC); 0: each has its own")
         ->check(CLI::Range(0, 100000));
+    cmd->add_option("--host-load", o->hostLoad, "With --host-cores: other jobs' runnable threads on those cores")
+        ->check(CLI::Range(0.0, 100000.0));
     cmd->add_option("--frames", o->frames, "Simulated frames per client count (after one warm-up frame)")->check(CLI::Range(1, 100000));
     cmd->add_option("--seed", o->seed, "Seed for latency spikes and steal victims");
     cmd->add_flag("--json", o->json, "Print JSON");
@@ -437,6 +439,7 @@ void addSimulate(CLI::App& app, Run& run) {
             cfg.frames = o->frames;
             cfg.seed = o->seed;
             cfg.hostCores = o->hostCores;
+            cfg.hostBackgroundThreads = o->hostLoad;
             double bytes = 0, render = 0;
             for (uint32_t b : profile.codecs[cfg.codec].bytes) bytes += b + o->overhead;
             for (double r : profile.renderSeconds.front()) render += r;

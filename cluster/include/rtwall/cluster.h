@@ -144,7 +144,7 @@ int runClient(const ClientSettings& settings);
 struct TileProfile {
     std::string scene;  // for the record
     int width = 0, height = 0, tileSize = 0;
-    std::vector<std::vector<double>> renderSeconds;  // [frame][tile]: renderTile on one thread
+    std::vector<std::vector<double>> renderSeconds;  // [frame][tile]: renderTile on one thread, CPU seconds
     struct CodecCost {
         CodecSettings codec;
         std::vector<uint32_t> bytes;        // [tile] encoded size (frame 0)
@@ -197,6 +197,7 @@ struct SimConfig {
     // the cores shared equally among the running threads (processor sharing, as the kernel's
     // fair scheduler does). 0: every client has its own machine and the master its own cores.
     int hostCores = 0;
+    double hostBackgroundThreads = 0;  // with hostCores: other jobs' runnable threads, always competing
     int frames = 10;                 // measured frames
     int warmupFrames = 1;            // frames run first and not reported (affinity needs one)
     uint64_t seed = 1;               // latency spikes and the scheduler's steal victims

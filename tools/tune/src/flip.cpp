@@ -101,12 +101,15 @@ void filterSeparable(const std::vector<double>& in, std::vector<double>& out, st
                      const std::vector<double>& kx, const std::vector<double>& ky) {
     const int rx = int(kx.size() / 2), ry = int(ky.size() / 2);
     tmp.assign(in.size(), 0.0);
+    std::vector<double> row(size_t(w + 2 * rx));  // one row with its extended edges
     for (int y = 0; y < h; ++y) {
-        const double* row = &in[size_t(y) * w];
-        for (int x = 0; x < w; ++x) {
-            double s = 0;
-            for (int k = -rx; k <= rx; ++k) s += kx[size_t(k + rx)] * row[std::clamp(x + k, 0, w - 1)];
-            tmp[size_t(y) * w + x] = s;
+        const double* src = &in[size_t(y) * w];
+        for (int x = -rx; x < w + rx; ++x) row[size_t(x + rx)] = src[std::clamp(x, 0, w - 1)];
+        double* dst = &tmp[size_t(y) * w];
+        for (size_t k = 0; k < kx.size(); ++k) {
+            const double c = kx[k];
+            const double* r = &row[k];
+            for (int x = 0; x < w; ++x) dst[x] += c * r[x];
         }
     }
     out.assign(in.size(), 0.0);
