@@ -18,6 +18,12 @@
 //   assignments) are small: they cost latency only. Order per direction is kept, as with TCP.
 // - Accepted tiles are decoded by decodeThreads threads; a frame ends when its last tile is
 //   decoded (Impl::finishFrameIfDone).
+// - With hostCores > 0 (local clients on the master's PC) every thread's CPU work, renders,
+//   the network thread's messages and decodes, runs on one pool of that many cores under
+//   processor sharing: n running threads progress at min(1, cores / (n + b)) each, b being
+//   other jobs' runnable threads on a shared PC (hostBackgroundThreads). This is what
+//   makes 4 local clients on 2 cores no faster than 2, and slows the master's replies when the
+//   clients saturate the cores.
 // Not modelled: heartbeats, timeouts and dead clients, scene updates, TCP congestion control.
 #include "scheduler.h"
 
@@ -35,7 +41,11 @@ using namespace cluster;
 
 namespace {
 
-enum class Ev { FrameBeginAtClient, AssignAtClient, RenderDone, RequestAtMaster, ResultAtMaster, MasterHandle, Housekeeping, FrameDone };
+enum class Ev {
+    FrameBeginAtClient, AssignAtClient, RenderDone, RequestAtMaster, ResultAtMaster, MasterHandle, Housekeeping, FrameDone,
+    CpuTick,     // shared cores: the next CPU job may have finished (count = the pool's generation)
+    DecodeDone,  // shared cores: a decode finished (frame = its frame)
+};
 
 struct Event {
     double t;
@@ -91,6 +101,8 @@ public:
             scheduler_.addClient(i);
             clients_[i].idle = c.threadsPerClient;
         }
+        if (c.hostCores < 0 || !(c.hostBackgroundThreads >= 0))
+            throw InputError("simulation: host cores and background threads must be zero or positive");
         decoders_.assign(size_t(c.decodeThreads), 0.0);
     }
 
@@ -148,6 +160,90 @@ private:
     uint64_t measuredBytes_ = 0, frameBytes_ = 0;
     uint64_t stolen_ = 0, reissued_ = 0, duplicates_ = 0, affinityHits_ = 0;
     std::vector<double> frameSeconds_;
+
+    // Shared cores (hostCores > 0): the running CPU jobs, each finishing with its event.
+    struct CpuJob {
+        double remaining;  // seconds of one core
+        Event done;
+    };
+    std::vector<CpuJob> cpu_;
+    double cpuLast_ = 0;
+    uint64_t cpuGeneration_ = 0;
+    std::deque<Event> masterQueue_;  // messages waiting for the network thread
+    bool masterRunning_ = false;
+    std::deque<double> decodeQueue_;  // decode costs waiting for a decode thread
+    int decodesRunning_ = 0;
+
+    bool shared() const { return config_.hostCores > 0; }
+    double cpuRate() const {
+        return std::min(1.0, double(config_.hostCores) / std::max(1.0, double(cpu_.size()) + config_.hostBackgroundThreads));
+    }
+
+    void cpuAdvance() {
+        const double done = (now_ - cpuLast_) * cpuRate();
+        for (CpuJob& j : cpu_) j.remaining -= done;
+        cpuLast_ = now_;
+    }
+
+    void cpuSchedule() {
+        ++cpuGeneration_;
+        if (cpu_.empty()) return;
+        double least = cpu_.front().remaining;
+        for (const CpuJob& j : cpu_) least = std::min(least, j.remaining);
+        Event tick = makeEvent(now_ + std::max(0.0, least) / cpuRate(), Ev::CpuTick, 0, 0);
+        tick.count = uint32_t(cpuGeneration_);
+        push(std::move(tick));
+    }
+
+    void cpuSubmit(double seconds, Event done) {
+        cpuAdvance();
+        cpu_.push_back({seconds, std::move(done)});
+        cpuSchedule();
+    }
+
+    void cpuTick(const Event& e) {
+        if (e.count != uint32_t(cpuGeneration_)) return;  // the pool changed since: a later tick stands
+        cpuAdvance();
+        // Jobs finish in submission order when several end together (deterministic).
+        constexpr double kEps = 1e-12;
+        for (size_t i = 0; i < cpu_.size();) {
+            if (cpu_[i].remaining <= kEps) {
+                Event d = std::move(cpu_[i].done);
+                d.t = now_;
+                push(std::move(d));
+                cpu_.erase(cpu_.begin() + std::ptrdiff_t(i));
+            } else {
+                ++i;
+            }
+        }
+        cpuSchedule();
+    }
+
+    void startMaster() {
+        if (masterRunning_ || masterQueue_.empty()) return;
+        masterRunning_ = true;
+        Event e = std::move(masterQueue_.front());
+        masterQueue_.pop_front();
+        if (measuring_) masterBusy_ += config_.masterSecondsPerMessage;
+        e.kind = Ev::MasterHandle;
+        cpuSubmit(config_.masterSecondsPerMessage, std::move(e));
+    }
+
+    void startDecodes() {
+        while (decodesRunning_ < config_.decodeThreads && !decodeQueue_.empty()) {
+            ++decodesRunning_;
+            const double cost = decodeQueue_.front();
+            decodeQueue_.pop_front();
+            cpuSubmit(cost, makeEvent(0, Ev::DecodeDone, 0, frame_));
+        }
+    }
+
+    void maybeFinishShared() {
+        if (frameActive_ && scheduler_.frameComplete() && decodesRunning_ == 0 && decodeQueue_.empty() && !frameDoneScheduled_) {
+            frameDoneScheduled_ = true;
+            push(makeEvent(now_, Ev::FrameDone, 0, frame_));
+        }
+    }
 
     void push(Event e) {
         e.seq = seq_++;
@@ -232,12 +328,18 @@ private:
             if (measuring_) c.busy += cost;
             Event e = makeEvent(now_ + cost, Ev::RenderDone, id, c.frame);
             e.tiles = {tile};
-            push(std::move(e));
+            if (shared()) cpuSubmit(cost, std::move(e));
+            else push(std::move(e));
         }
     }
 
     // The master's network thread: one message at a time.
     void toMaster(Event e) {
+        if (shared()) {
+            masterQueue_.push_back(std::move(e));
+            startMaster();
+            return;
+        }
         const double start = std::max(now_, masterFree_);
         masterFree_ = start + config_.masterSecondsPerMessage;
         if (measuring_) masterBusy_ += config_.masterSecondsPerMessage;
@@ -280,7 +382,17 @@ private:
             e.isResult = e.kind == Ev::ResultAtMaster;
             toMaster(std::move(e));
             break;
-        case Ev::MasterHandle: handle(e); break;
+        case Ev::MasterHandle:
+            if (shared()) masterRunning_ = false;
+            handle(e);
+            if (shared()) startMaster();
+            break;
+        case Ev::CpuTick: cpuTick(e); break;
+        case Ev::DecodeDone:
+            --decodesRunning_;
+            startDecodes();
+            if (e.frame == frame_) maybeFinishShared();
+            break;
         case Ev::Housekeeping:
             if (!frameActive_ || e.frame != frame_) break;
             for (uint32_t i = 0; i < clients_.size(); ++i) serve(i);
@@ -306,6 +418,13 @@ private:
         if (result == TileScheduler::Result::Accepted) {
             const auto& codec = profile_.codecs[config_.codec];
             frameBytes_ += codec.bytes[tile] + config_.messageOverheadBytes;
+            if (shared()) {
+                decodeQueue_.push_back(codec.decodeSeconds[tile] / config_.decodeSpeed);
+                startDecodes();
+                maybeFinishShared();
+                serve(e.client);
+                return;
+            }
             auto free = std::min_element(decoders_.begin(), decoders_.end());
             const double start = std::max(now_, *free);
             *free = start + codec.decodeSeconds[tile] / config_.decodeSpeed;

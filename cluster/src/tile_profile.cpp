@@ -1,13 +1,19 @@
 // Tile profiles: what each tile costs to render, encode and decode, measured on this PC, for
 // the cluster simulation. Stored as TOML so that the C++ side reads it with the project's one
 // config parser and Python's tomllib reads it too.
+//
+// Times are the calling thread's CPU time, not wall-clock time: on a PC shared with other jobs
+// a tile's wall time includes whatever ran in between, and the simulation would replay that
+// load as if it were the tile's cost. Frame 0 is rendered once untimed first (primary rays only), so that first-touch
+// costs (page faults in the BVH and textures, cold caches) are not recorded either: the clients
+// the profile stands for render frame after frame.
 #include "codec.h"
 
 #include <rtwall/cluster.h>
 
 #include <toml++/toml.h>
 
-#include <chrono>
+#include <ctime>
 #include <fstream>
 
 namespace rtwall {
@@ -16,8 +22,10 @@ using namespace cluster;
 
 namespace {
 
-double secondsSince(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+double threadCpuSeconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
 template <class T> toml::array arrayOf(const std::vector<T>& v) {
@@ -41,15 +49,26 @@ TileProfile profileTiles(const Scene& scene, const std::vector<CameraDesc>& came
     const std::vector<TileRect> tiles = makeTiles(settings.width, settings.height, settings.tileSize);
     Image frame0{settings.width, settings.height, std::vector<uint8_t>(size_t(settings.width) * settings.height * 3)};
     Image scratch = frame0;
+    {
+        // Primary rays only: they touch the visible part of the BVH and textures at a fraction
+        // of a full frame's cost (the sweep profiles every setting).
+        RenderSettings eye = settings;
+        eye.shading = ShadingMode::EyeLight;
+        eye.supersample = 1;
+        eye.gi = false;
+        eye.samples = 1;
+        const Camera warm(cameras.front(), settings.width, settings.height);
+        for (const TileRect& r : tiles) renderTile(scene, warm, r, 1, eye, {scratch.pixel(r.x0, r.y0), size_t(scratch.width) * 3});
+    }
     for (size_t f = 0; f < cameras.size(); ++f) {
         Image& img = f == 0 ? frame0 : scratch;
         const Camera camera(cameras[f], settings.width, settings.height);
         std::vector<double> times;
         times.reserve(tiles.size());
         for (const TileRect& r : tiles) {
-            const auto t0 = std::chrono::steady_clock::now();
+            const double t0 = threadCpuSeconds();
             renderTile(scene, camera, r, uint32_t(f + 1), settings, {img.pixel(r.x0, r.y0), size_t(img.width) * 3});
-            times.push_back(secondsSince(t0));
+            times.push_back(threadCpuSeconds() - t0);
         }
         p.renderSeconds.push_back(std::move(times));
     }
@@ -61,13 +80,13 @@ TileProfile profileTiles(const Scene& scene, const std::vector<CameraDesc>& came
         Image out = frame0;
         for (const TileRect& r : tiles) {
             bytes.clear();
-            auto t0 = std::chrono::steady_clock::now();
+            double t0 = threadCpuSeconds();
             encodeTile(cs, frame0.pixel(r.x0, r.y0), r.width(), r.height(), size_t(frame0.width) * 3, bytes);
-            cost.encodeSeconds.push_back(secondsSince(t0));
+            cost.encodeSeconds.push_back(threadCpuSeconds() - t0);
             cost.bytes.push_back(uint32_t(bytes.size()));
-            t0 = std::chrono::steady_clock::now();
+            t0 = threadCpuSeconds();
             decodeTile(cs.codec, bytes.data(), bytes.size(), r.width(), r.height(), out.pixel(r.x0, r.y0), size_t(out.width) * 3);
-            cost.decodeSeconds.push_back(secondsSince(t0));
+            cost.decodeSeconds.push_back(threadCpuSeconds() - t0);
         }
         p.codecs.push_back(std::move(cost));
         if (decoded) decoded->push_back(std::move(out));

@@ -114,6 +114,46 @@ TEST(ClusterSimulation, MoreClientsRenderFasterUntilTheMasterIsTheLimit) {
     }
 }
 
+TEST(ClusterSimulation, SharedCoresAreWorkConserving) {
+    // Local clients on the master's PC: with no latency and no master cost, the cores are busy
+    // from the first assignment to the last result, so a frame of 8 tiles of cost c takes 8c on
+    // one core whatever the client count, 4c on two cores for two or four clients (equal shares,
+    // all finishing together), and 8 tiles on 2 clients without sharing also 4c. Prefetch 2:
+    // every client starts with two tiles and gets one more per result.
+    const double c = 1.0 / 64;
+    const TileProfile p = uniformProfile(8, c, 1000);
+    SimConfig cfg = trivial();
+    cfg.clientLink.latencySeconds = 0;
+    cfg.prefetch = 2;  // 4 clients x 2: every client starts with work
+    cfg.housekeepingSeconds = 0;
+    for (int clients : {1, 2, 4}) {
+        cfg.clients = clients;
+        cfg.hostCores = 1;
+        for (double s : simulateCluster(p, cfg).frameSeconds) EXPECT_EQ(s, 8 * c) << clients << " clients on 1 core";
+        cfg.hostCores = 2;
+        const double two = clients == 1 ? 8 * c : 4 * c;  // one thread uses one core at most
+        for (double s : simulateCluster(p, cfg).frameSeconds) EXPECT_EQ(s, two) << clients << " clients on 2 cores";
+    }
+    cfg.clients = 2;
+    cfg.hostCores = 0;
+    for (double s : simulateCluster(p, cfg).frameSeconds) EXPECT_EQ(s, 4 * c);
+}
+
+TEST(ClusterSimulation, SharedCoresSlowTheMasterWhenClientsSaturateThem) {
+    // One core, one client rendering with a tile in reserve (prefetch 2): the master's network
+    // thread handles each result while the next tile renders, and then gets only half the core.
+    SimConfig cfg = trivial();
+    cfg.prefetch = 2;
+    cfg.masterSecondsPerMessage = 1.0 / 1024;
+    const TileProfile p = uniformProfile(8, 1.0 / 64, 1000);
+    const double alone = simulateCluster(p, cfg).fps;
+    cfg.hostCores = 1;
+    const double shared = simulateCluster(p, cfg).fps;
+    EXPECT_LT(shared, alone);
+    cfg.hostCores = 64;  // plenty of cores: the same as no sharing
+    EXPECT_DOUBLE_EQ(simulateCluster(p, cfg).fps, alone);
+}
+
 TEST(ClusterSimulation, IsDeterministic) {
     SimConfig cfg = trivial();
     cfg.clients = 5;

@@ -41,6 +41,7 @@ void addBenchCluster(CLI::App& bench, Run& run) {
         int64_t triangles = 200'000;
         bool json = false, render = false, insecure = false;
         std::string bind = "tcp://127.0.0.1:0", netns, link = "loopback";
+        std::vector<int> clientCounts;
     };
     auto o = std::make_shared<Options>();
     CLI::App* cmd = bench.add_subcommand("cluster", "Frames/s, bytes, stealing and busy time of master and local clients");
@@ -55,6 +56,10 @@ void addBenchCluster(CLI::App& bench, Run& run) {
     cmd->add_option("--client-netns", o->netns, "Start client i in network namespace <prefix><i> (tools/netem.sh)");
     cmd->add_option("--link", o->link, "Description of the link, copied into the output");
     cmd->add_flag("--insecure", o->insecure, "Allow a non-loopback --bind without CURVE keys (tools/netem.sh namespaces)");
+    cmd->add_option("--client-counts", o->clientCounts,
+                    "Only these client counts (prefetch 4, LZ4, affinity on), e.g. 1,2,3,4: the simulation's validation")
+        ->delimiter(',')
+        ->check(CLI::Range(1, 256));
     cmd->add_flag("--json", o->json, "Print JSON");
     cmd->callback([&run, o] {
         run = [o] {
@@ -72,6 +77,10 @@ void addBenchCluster(CLI::App& bench, Run& run) {
             // The targets: raw pixels against the link's limit, and a codec at >= 40 dB.
             for (TileCodec c : {TileCodec::Raw, TileCodec::Lz4, TileCodec::Jpeg})
                 points.push_back({"target", o->maxClients, 8, c, true});
+            if (!o->clientCounts.empty()) {
+                points.clear();
+                for (int c : o->clientCounts) points.push_back({"clients", c, 4, TileCodec::Lz4, true});
+            }
 
             // Reference for the error of each setting: the single-machine image.
             const Image reference = [&] {

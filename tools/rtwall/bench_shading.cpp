@@ -1,12 +1,13 @@
 // rtwall bench shading: frame time and error against a converged reference for the shading
 // demos, as the speed/accuracy controls vary: the ray-tree pruning threshold (office and
 // headlight, against the unpruned image), GI samples per pixel (office, against a many-sample
-// mean) and the volume step (office, against a fine step). PSNR over the whole image; FLIP is
-// not computed (no FLIP implementation in the dependencies).
+// mean) and the volume step (office, against a fine step). PSNR over the whole image, and mean
+// LDR-FLIP (rtwall::tune, 67 pixels per degree).
 #include "commands.h"
 #include "gen_shading.h"
 
 #include <rtwall/engine.h>
+#include <rtwall/tune.h>
 
 #include <toml++/toml.h>
 
@@ -53,8 +54,8 @@ Image timed(const Scene& scene, const Camera& cam, const RenderSettings& s, int 
     return acc.resolve();
 }
 
-toml::table point(const char* control, double value, double seconds, double db, const TileStats& st) {
-    return toml::table{{control, value}, {"frame_s", seconds}, {"psnr_db", std::isinf(db) ? 999.0 : db},
+toml::table point(const char* control, double value, double seconds, double db, const TileStats& st, double flip = 0) {
+    return toml::table{{control, value}, {"frame_s", seconds}, {"psnr_db", std::isinf(db) ? 999.0 : db}, {"flip", flip},
                        {"mrays", double(st.rays + st.shadowRays) * 1e-6}};
 }
 
@@ -72,7 +73,7 @@ void addBenchShading(CLI::App& bench, Run& run) {
     cmd->add_option("--dir", o->dir, "Where the demo scenes are written");
     cmd->callback([&run, o] {
         run = [o] {
-            toml::table out{{"width", o->width}, {"height", o->height}, {"rounds", o->rounds}, {"flip", "not computed"},
+            toml::table out{{"width", o->width}, {"height", o->height}, {"rounds", o->rounds}, {"flip", "mean LDR-FLIP, 67 pixels per degree"},
                             {"sunflowers", "not in this branch (rtwall gen sunflowers comes with the cad branch)"}};
             for (const char* name : {"office", "headlight"}) {
                 SceneDesc desc = loadSceneFile(writeShadingDemo(name, std::filesystem::path(o->dir) / name));
@@ -99,7 +100,7 @@ void addBenchShading(CLI::App& bench, Run& run) {
                 for (float th : {0.0005f, 0.002f, 0.01f, 0.05f}) {
                     s.pruneThreshold = th;
                     const Image img = timed(scene, cam, s, o->rounds, sec, st);
-                    prune.push_back(point("threshold", th, sec, psnr(img, unpruned), st));
+                    prune.push_back(point("threshold", th, sec, psnr(img, unpruned), st, flipMean(img, unpruned)));
                 }
                 sceneOut.insert("prune", prune);
 
@@ -116,7 +117,7 @@ void addBenchShading(CLI::App& bench, Run& run) {
                     for (int spp : {1, 2, 4, 8, 16}) {
                         g.samples = spp;
                         const Image img = timed(scene, cam, g, o->rounds, sec, st);
-                        gi.push_back(point("spp", spp, sec, psnr(img, reference), st));
+                        gi.push_back(point("spp", spp, sec, psnr(img, reference), st, flipMean(img, reference)));
                     }
                     sceneOut.insert("gi_spp", gi);
                     sceneOut.insert("gi_reference_spp", 4 * o->referenceFrames);
@@ -136,7 +137,7 @@ void addBenchShading(CLI::App& bench, Run& run) {
                         const SceneDesc d = withStep(step);
                         const Scene sc(d);
                         const Image img = timed(sc, cam, d.settings, o->rounds, sec, st);
-                        vol.push_back(point("step_voxels", step, sec, psnr(img, volumeRef), st));
+                        vol.push_back(point("step_voxels", step, sec, psnr(img, volumeRef), st, flipMean(img, volumeRef)));
                     }
                     sceneOut.insert("volume_step", vol);
                 }

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <fstream>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -192,6 +193,7 @@ std::atomic<bool> gStop{false};
 struct Knobs {
     RenderSettings settings;  // tile size, resolution, ...
     CodecSettings codec;
+    float volumeStep = 0;     // > 0: every volume material's ray-march step, in voxels
 };
 
 void applyControl(Knobs& k, const RenderSettings& base, const std::string& name, double v, const std::string& point) {
@@ -202,9 +204,14 @@ void applyControl(Knobs& k, const RenderSettings& base, const std::string& name,
         k.settings.width = std::max(16, int(std::lround(base.width * v)));
         k.settings.height = std::max(16, int(std::lround(base.height * v)));
     } else if (name == "supersample") k.settings.supersample = int(v);
+    else if (name == "prune") k.settings.pruneThreshold = float(v);
+    else if (name == "gi_spp") {  // 0: no GI; n: path tracing with n samples per pixel sample
+        k.settings.gi = v > 0;
+        k.settings.samples = std::max(1, int(v));
+    } else if (name == "volume_step") k.volumeStep = float(v);
     else
         throw InputError("operating point '" + point + "': this build cannot set control '" + name +
-                         "' (it can: tile, codec, jpeg_quality, scale, supersample)");
+                         "' (it can: tile, codec, jpeg_quality, scale, supersample, prune, gi_spp, volume_step)");
 }
 
 Knobs knobsOf(const OperatingPoint& p, const RenderSettings& base, const CodecSettings& baseCodec) {
@@ -262,7 +269,7 @@ void addRun(CLI::App& app, Run& run) {
     struct Options {
         std::string config;
         int frames = -1, clients = -1, writeEvery = -1;
-        std::string out, bind, cameraPath, wall, front;
+        std::string out, bind, cameraPath, wall, front, trace;
         bool insecure = false, headless = false;
         double targetFps = 0;
     };
@@ -284,6 +291,8 @@ void addRun(CLI::App& app, Run& run) {
     cmd->add_option("--front", o->front,
                     "Measured front for --target-fps (.toml from tools/speed_accuracy.py); default: calibrate codecs and tile "
                     "sizes on the first frames");
+    cmd->add_option("--trace", o->trace,
+                    "With --target-fps: write one CSV line per frame (frame, seconds, clients, operating point)");
     cmd->callback([&run, o] {
         run = [o] {
             RunConfig c = o->config.empty() ? readRunConfig({}, toml::parse(kEmbeddedDefault))
@@ -363,6 +372,12 @@ void addRun(CLI::App& app, Run& run) {
                 const Knobs k = knobsOf(p, baseSettings, baseCodec);
                 master.setRenderSettings(k.settings);
                 master.setCodec(k.codec);
+                for (size_t m = 0; m < desc.materials.size(); ++m)
+                    if (desc.materials[m].type == MaterialType::Volume) {
+                        Material mat = desc.materials[m];
+                        if (k.volumeStep > 0) mat.volumeStep = k.volumeStep;
+                        master.setMaterial(uint32_t(m), mat);
+                    }
             };
             if (o->targetFps > 0) {
                 std::vector<OperatingPoint> points;
@@ -412,6 +427,13 @@ void addRun(CLI::App& app, Run& run) {
                 std::fflush(stdout);
             }
             int framesOnTarget = 0;
+            std::ofstream trace;
+            if (!o->trace.empty()) {
+                if (!controller) throw InputError("--trace needs --target-fps");
+                trace.open(o->trace);
+                if (!trace) throw InputError("--trace: cannot write " + o->trace);
+                trace << "frame,seconds,clients,point_index,point\n";
+            }
 
             std::signal(SIGINT, [](int) { gStop = true; });
             std::signal(SIGTERM, [](int) { gStop = true; });
@@ -457,6 +479,9 @@ void addRun(CLI::App& app, Run& run) {
                 view.show(shown, report, frameTimes.back());
                 bytes += report.bytes;
                 if (controller) {
+                    if (trace.is_open())
+                        trace << f << ',' << report.seconds << ',' << master.connectedClients() << ','
+                              << controller->currentIndex() << ",\"" << controller->current().name << "\"" << std::endl;
                     framesOnTarget += report.seconds <= 1.0 / o->targetFps;
                     if (controller->observe(report.seconds)) {
                         apply(controller->current());

@@ -93,8 +93,21 @@ double parseRate(const std::string& text) {
 }
 
 toml::table errorTable(const ImageError& e) {
-    return toml::table{{"rmse", e.rmse},        {"psnr_db", e.psnrDb}, {"ssim", e.ssim},
+    return toml::table{{"rmse", e.rmse},        {"psnr_db", e.psnrDb}, {"ssim", e.ssim},       {"flip", e.flip},
                        {"max_error", e.maxError}, {"mean_abs_error", e.meanAbs}, {"identical", e.identical()}};
+}
+
+// The shading controls of the sweep, as `rtwall run` applies a front's: a negative prune or
+// GI count and a zero step leave the scene's own.
+void applyShadingControls(SceneDesc& desc, double prune, int giSpp, double volumeStep) {
+    if (prune >= 0) desc.settings.pruneThreshold = float(prune);
+    if (giSpp >= 0) {
+        desc.settings.gi = giSpp > 0;
+        desc.settings.samples = std::max(1, giSpp);
+    }
+    if (volumeStep > 0)
+        for (Material& m : desc.materials)
+            if (m.type == MaterialType::Volume) m.volumeStep = float(volumeStep);
 }
 
 double sum(const std::vector<double>& v) {
@@ -136,13 +149,14 @@ void addCompare(CLI::App& app, Run& run) {
                 t.insert("max_error_at", toml::array{e.maxX, e.maxY});
                 t.insert("ssim_method", "mean SSIM of luminance (0.299 R + 0.587 G + 0.114 B), 11x11 Gaussian window, "
                                         "sigma 1.5, K1 0.01, K2 0.03, valid windows");
+                t.insert("flip_method", "mean LDR-FLIP (Andersson et al. 2020), 67 pixels per degree, edges extended");
                 if (!o->diff.empty()) t.insert("diff", o->diff);
                 std::cout << toml::json_formatter{t} << "\n";
             } else {
-                std::printf("%s against %s (%dx%d): RMSE %.3f levels, PSNR %s dB, SSIM %.5f, largest error %d levels at "
-                            "(%d, %d)%s\n",
+                std::printf("%s against %s (%dx%d): RMSE %.3f levels, PSNR %s dB, SSIM %.5f, FLIP %.4f, largest error %d "
+                            "levels at (%d, %d)%s\n",
                             o->test.c_str(), o->reference.c_str(), a.width, a.height, e.rmse,
-                            e.identical() ? "inf" : std::to_string(e.psnrDb).c_str(), e.ssim, e.maxError, e.maxX, e.maxY,
+                            e.identical() ? "inf" : std::to_string(e.psnrDb).c_str(), e.ssim, e.flip, e.maxError, e.maxX, e.maxY,
                             o->diff.empty() ? "" : (", difference in " + o->diff).c_str());
             }
             return 0;
@@ -153,7 +167,8 @@ void addCompare(CLI::App& app, Run& run) {
 void addReference(CLI::App& app, Run& run) {
     struct Options {
         std::string scene, out, camera;
-        int width = 0, height = 0, supersample = 8, threads = 0;
+        int width = 0, height = 0, supersample = 8, threads = 0, giSpp = -1;
+        double prune = -1, volumeStep = 0;
         int64_t triangles = 3'000'000;
     };
     auto o = std::make_shared<Options>();
@@ -166,6 +181,12 @@ void addReference(CLI::App& app, Run& run) {
     cmd->add_option("--camera", o->camera, "Scene camera (default: the first)");
     cmd->add_option("--supersample", o->supersample, "n x n samples per pixel")->check(CLI::Range(1, 32));
     cmd->add_option("--threads", o->threads, "Render threads (0 = all)")->check(CLI::Range(0, 1024));
+    cmd->add_option("--prune", o->prune, "Ray-tree pruning threshold (0 = never prune; overrides the scene)")
+        ->check(CLI::Range(0.0, 1.0));
+    cmd->add_option("--gi-spp", o->giSpp, "GI samples per pixel sample (0 = GI off; overrides the scene)")
+        ->check(CLI::Range(0, 4096));
+    cmd->add_option("--volume-step", o->volumeStep, "Ray-march step of every volume material, in voxels")
+        ->check(CLI::Range(0.01, 100.0));
     cmd->add_option("--triangles", o->triangles, "Triangles of a builtin scene")->check(CLI::Range(int64_t(1000), int64_t(100'000'000)));
     cmd->callback([&run, o] {
         run = [o] {
@@ -173,6 +194,7 @@ void addReference(CLI::App& app, Run& run) {
             RenderSettings& s = desc.settings;
             if (o->width) s.width = o->width;
             if (o->height) s.height = o->height;
+            applyShadingControls(desc, o->prune, o->giSpp, o->volumeStep);
             s.supersample = o->supersample;
             s.threads = o->threads;
             const CameraDesc cam = pickCamera(desc, o->scene, o->camera);
@@ -189,8 +211,8 @@ void addBenchTiles(CLI::App& bench, Run& run) {
     struct Options {
         std::string scene, camera, codecs = "raw,lz4,zstd,jpeg:50,jpeg:75,jpeg:90,jpeg:95", reference, profileOut, saveImage,
             shading;
-        int width = 0, height = 0, tile = 0, supersample = 0, frames = 1;
-        double scale = 1.0, orbitDegrees = 1.0;
+        int width = 0, height = 0, tile = 0, supersample = 0, frames = 1, giSpp = -1;
+        double scale = 1.0, orbitDegrees = 1.0, prune = -1, volumeStep = 0;
         int64_t triangles = 3'000'000;
         bool json = false;
     };
@@ -205,6 +227,12 @@ void addBenchTiles(CLI::App& bench, Run& run) {
     cmd->add_option("--tile", o->tile, "Tile size (overrides the scene)")->check(CLI::Range(4, 1024));
     cmd->add_option("--supersample", o->supersample, "n x n samples per pixel (overrides the scene)")->check(CLI::Range(1, 32));
     cmd->add_option("--shading", o->shading, "full or eyelight (overrides the scene)")->check(CLI::IsMember({"full", "eyelight"}));
+    cmd->add_option("--prune", o->prune, "Ray-tree pruning threshold (0 = never prune; overrides the scene)")
+        ->check(CLI::Range(0.0, 1.0));
+    cmd->add_option("--gi-spp", o->giSpp, "GI samples per pixel sample (0 = GI off; overrides the scene)")
+        ->check(CLI::Range(0, 4096));
+    cmd->add_option("--volume-step", o->volumeStep, "Ray-march step of every volume material, in voxels")
+        ->check(CLI::Range(0.01, 100.0));
     cmd->add_option("--camera", o->camera, "Scene camera (default: the first)");
     cmd->add_option("--frames", o->frames, "Frames to time, the camera orbiting --orbit degrees per frame")->check(CLI::Range(1, 1000));
     cmd->add_option("--orbit", o->orbitDegrees, "Degrees per frame around the camera's look-at point")->check(CLI::Range(-360.0, 360.0));
@@ -226,6 +254,7 @@ void addBenchTiles(CLI::App& bench, Run& run) {
             if (o->tile) s.tileSize = o->tile;
             if (o->supersample) s.supersample = o->supersample;
             if (!o->shading.empty()) s.shading = o->shading == "eyelight" ? ShadingMode::EyeLight : ShadingMode::Full;
+            applyShadingControls(desc, o->prune, o->giSpp, o->volumeStep);
             s.threads = 1;
             std::vector<CodecSettings> codecs;
             for (const std::string& c : splitList(o->codecs)) codecs.push_back(parseCodec(c));
@@ -349,8 +378,8 @@ void addBenchCodecs(CLI::App& bench, Run& run) {
 void addSimulate(CLI::App& app, Run& run) {
     struct Options {
         std::string profile, codec, clients = "1,2,4,8,16,32,64,128,256", clientLink = "100mbit", masterLink = "1gbit";
-        int threads = 1, prefetch = 4, frames = 10, decodeThreads = 2, overhead = 40;
-        double latencyMs = 0.1, spikeProb = 0, spikeMs = 0, masterUs = 28, clientSpeed = 1, decodeSpeed = 1, straggler = 4;
+        int threads = 1, prefetch = 4, frames = 10, decodeThreads = 2, overhead = 40, hostCores = 0;
+        double latencyMs = 0.1, hostLoad = 0, spikeProb = 0, spikeMs = 0, masterUs = 28, clientSpeed = 1, decodeSpeed = 1, straggler = 4;
         bool noAffinity = false, json = false;
         uint64_t seed = 1;
     };
@@ -374,6 +403,11 @@ void addSimulate(CLI::App& app, Run& run) {
     cmd->add_option("--decode-threads", o->decodeThreads, "Master decode threads")->check(CLI::Range(1, 1024));
     cmd->add_option("--decode-speed", o->decodeSpeed, "Master decode speed relative to the recording PC")->check(CLI::Range(0.001, 1000.0));
     cmd->add_option("--overhead-bytes", o->overhead, "Protocol bytes per result message")->check(CLI::Range(0, 100000));
+    cmd->add_option("--host-cores", o->hostCores,
+                    "Clients and master share this many cores (local clients on one PC); 0: each has its own")
+        ->check(CLI::Range(0, 100000));
+    cmd->add_option("--host-load", o->hostLoad, "With --host-cores: other jobs' runnable threads on those cores")
+        ->check(CLI::Range(0.0, 100000.0));
     cmd->add_option("--frames", o->frames, "Simulated frames per client count (after one warm-up frame)")->check(CLI::Range(1, 100000));
     cmd->add_option("--seed", o->seed, "Seed for latency spikes and steal victims");
     cmd->add_flag("--json", o->json, "Print JSON");
@@ -404,6 +438,8 @@ void addSimulate(CLI::App& app, Run& run) {
             cfg.messageOverheadBytes = uint32_t(o->overhead);
             cfg.frames = o->frames;
             cfg.seed = o->seed;
+            cfg.hostCores = o->hostCores;
+            cfg.hostBackgroundThreads = o->hostLoad;
             double bytes = 0, render = 0;
             for (uint32_t b : profile.codecs[cfg.codec].bytes) bytes += b + o->overhead;
             for (double r : profile.renderSeconds.front()) render += r;

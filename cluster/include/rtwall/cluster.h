@@ -144,7 +144,7 @@ int runClient(const ClientSettings& settings);
 struct TileProfile {
     std::string scene;  // for the record
     int width = 0, height = 0, tileSize = 0;
-    std::vector<std::vector<double>> renderSeconds;  // [frame][tile]: renderTile on one thread
+    std::vector<std::vector<double>> renderSeconds;  // [frame][tile]: renderTile on one thread, CPU seconds
     struct CodecCost {
         CodecSettings codec;
         std::vector<uint32_t> bytes;        // [tile] encoded size (frame 0)
@@ -192,6 +192,12 @@ struct SimConfig {
     double decodeSpeed = 1.0;        // decode times are divided by this
     uint32_t messageOverheadBytes = 0;  // header bytes per result message on the wire
     double housekeepingSeconds = 0.002;  // the master re-serves waiting clients this often (stragglers)
+    // > 0: the clients' render threads, the master's network thread and its decode threads all
+    // share this many cores (local clients on the master's PC), each thread at most one core,
+    // the cores shared equally among the running threads (processor sharing, as the kernel's
+    // fair scheduler does). 0: every client has its own machine and the master its own cores.
+    int hostCores = 0;
+    double hostBackgroundThreads = 0;  // with hostCores: other jobs' runnable threads, always competing
     int frames = 10;                 // measured frames
     int warmupFrames = 1;            // frames run first and not reported (affinity needs one)
     uint64_t seed = 1;               // latency spikes and the scheduler's steal victims

@@ -43,6 +43,13 @@ TEST(SpeedCli, CompareReportsKnownValuesAndWritesTheDifference) {
     EXPECT_NE(r.output.find("\"rmse\" : 4.0"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("\"max_error\" : 4"), std::string::npos) << r.output;
     EXPECT_EQ(readPng(diff).width, 32);
+    // FLIP as the library computes it for the same pair (uniform greys: the colour term alone).
+    const size_t at = r.output.find("\"flip\" : ");
+    ASSERT_NE(at, std::string::npos) << r.output;
+    const double flip = std::stod(r.output.substr(at + 9));
+    EXPECT_NEAR(flip, flipMean(readPng(a), readPng(b)), 1e-9);
+    EXPECT_GT(flip, 0.0);
+    EXPECT_LT(flip, 0.5);
 }
 
 TEST(SpeedCli, CompareFailsWithOneLineForBadInputs) {

@@ -107,6 +107,7 @@ ImageError compareImages(const Image& test, const Image& reference) {
     e.meanAbs = n > 0 ? abs / n : 0.0;
     e.psnrDb = e.rmse == 0 ? kIdenticalPsnr : 20.0 * std::log10(255.0 / e.rmse);
     e.ssim = ssimLuminance(test, reference);
+    e.flip = e.identical() ? 0.0 : flipMean(test, reference);
     return e;
 }
 

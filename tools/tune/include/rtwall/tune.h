@@ -1,6 +1,6 @@
 // rtwall tune: speed against accuracy, the one public header.
 //
-// - Error metrics of an image against a reference (RMSE, PSNR, SSIM, largest error) and a
+// - Error metrics of an image against a reference (RMSE, PSNR, SSIM, FLIP, largest error) and a
 //   false-colour difference image: `rtwall compare`, the sweep driver and the tests.
 // - Bilinear resampling, so that a frame rendered at a lower resolution is compared with the
 //   reference at the wall's resolution, as the wall would show it.
@@ -29,6 +29,7 @@ struct ImageError {
     int maxError = 0;       // largest absolute difference of any channel, in levels
     int maxX = 0, maxY = 0; // where it is (the first such pixel in row order)
     double meanAbs = 0;     // mean absolute difference per channel, in levels
+    double flip = 0;        // mean LDR-FLIP at kFlipPixelsPerDegree (see flipMean): 0 identical, 1 worst
     bool identical() const { return maxError == 0; }
 };
 
@@ -45,6 +46,18 @@ ImageError compareImages(const Image& test, const Image& reference);
 // This is the reference implementation's ssim_index.m on rgb2gray input, without its
 // optional downsampling.
 double ssimLuminance(const Image& a, const Image& b);
+
+// LDR-FLIP (Andersson et al. 2020, "FLIP: A Difference Evaluator for Alternating Images"), per
+// pixel in [0, 1] (0: no perceived difference), for sRGB images seen at `pixelsPerDegree` (the
+// paper's default 67: a 0.7 m wide 3840-pixel monitor at 0.7 m). Colour: YCxCz, contrast
+// sensitivity filters, Hunt-adjusted L*a*b*, HyAB distance; features: edges and points of the
+// achromatic channel; combined as colour ^ (1 - feature). Borders extend their edge pixels.
+// Throws InputError for images of different sizes or a ppd outside (0, 10000].
+inline constexpr double kFlipPixelsPerDegree = 67.0;
+std::vector<float> flipErrorMap(const Image& test, const Image& reference,
+                                double pixelsPerDegree = kFlipPixelsPerDegree);
+// The mean of flipErrorMap: the number FLIP reports for an image pair.
+double flipMean(const Image& test, const Image& reference, double pixelsPerDegree = kFlipPixelsPerDegree);
 
 // Per-pixel largest channel difference mapped to a false-colour scale (black 0, then blue,
 // green, yellow, red at `scaleLevels` and above). scaleLevels <= 0: the largest error.
