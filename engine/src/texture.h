@@ -24,6 +24,11 @@ std::shared_ptr<const TextureImage> loadTextureImage(const std::string& file);
 float perlinNoise(const Float3& p);
 // Sum of |noise| over octaves: the classic turbulence for marble and bumps.
 float turbulence(const Float3& p, int octaves);
+// The same with the analytic gradient (for bump mapping: one evaluation instead of six for
+// central differences). Where |noise| has its kink the gradient is that of the side the
+// noise's sign picks.
+float perlinNoiseGrad(const Float3& p, Float3& gradient);
+float turbulenceGrad(const Float3& p, int octaves, Float3& gradient);
 
 class Texture {
 public:
