@@ -6,11 +6,13 @@
 
 #include <turbojpeg.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <numbers>
 
 namespace rtwall {
 
@@ -164,6 +166,32 @@ float turbulence(const Float3& p, int octaves) {
     return sum;
 }
 
+void textureCoordinates(TextureMapping mapping, const Float3& po, float scale, float& u, float& v) {
+    const float inv = 1.0f / scale;
+    switch (mapping) {
+    case TextureMapping::PlanarXZ: u = po.x * inv, v = po.z * inv; return;
+    case TextureMapping::PlanarXY: u = po.x * inv, v = po.y * inv; return;
+    case TextureMapping::PlanarYZ: u = po.z * inv, v = po.y * inv; return;
+    case TextureMapping::Spherical:
+    case TextureMapping::Cylindrical: {
+        // Longitude: 0 on +z, growing towards +x (counter-clockwise seen from +y), in turns.
+        float turn = std::atan2(po.x, po.z) * float(0.5 / std::numbers::pi);
+        if (turn < 0.0f) turn += 1.0f;
+        u = turn * inv;
+        if (mapping == TextureMapping::Cylindrical) {
+            v = po.y * inv;
+            return;
+        }
+        // Latitude: 0 at the -y pole, 1 at the +y pole (the top of an image is at v = 1).
+        const float r = length(po);
+        const float c = r > 0.0f ? std::clamp(po.y / r, -1.0f, 1.0f) : 0.0f;
+        v = (1.0f - std::acos(c) * float(1.0 / std::numbers::pi)) * inv;
+        return;
+    }
+    }
+    u = po.x * inv, v = po.z * inv;
+}
+
 Texture::Texture(const TextureDesc& desc, const Color& base) : desc_(desc), base_(base) {
     if (desc_.kind == TextureKind::Image) image_ = loadTextureImage(desc_.file);
     if (!(desc_.scale > 0.0f)) desc_.scale = 1.0f;
@@ -171,9 +199,8 @@ Texture::Texture(const TextureDesc& desc, const Color& base) : desc_(desc), base
 
 Color Texture::color(const Float3& objectPos) const {
     const Float3 p = objectPos * (1.0f / desc_.scale);
-    float u = p.x, v = p.z;
-    if (desc_.mapping == TextureMapping::PlanarXY) v = p.y;
-    else if (desc_.mapping == TextureMapping::PlanarYZ) u = p.z, v = p.y;
+    float u, v;
+    textureCoordinates(desc_.mapping, objectPos, desc_.scale, u, v);
     switch (desc_.kind) {
     case TextureKind::None: return base_;
     case TextureKind::Checker: {

@@ -30,6 +30,12 @@ float turbulence(const Float3& p, int octaves);
 float perlinNoiseGrad(const Float3& p, Float3& gradient);
 float turbulenceGrad(const Float3& p, int octaves, Float3& gradient);
 
+// Texture coordinates of an object-space position for a mapping (before wrapping into [0, 1)):
+// planar projections divide by the scale; spherical and cylindrical are around the object-space
+// origin with y as the axis, u in turns from +z towards +x, v from the -y pole (spherical, in
+// half turns) or along y in object units (cylindrical); both divided by the scale.
+void textureCoordinates(TextureMapping mapping, const Float3& objectPos, float scale, float& u, float& v);
+
 class Texture {
 public:
     // `base` is the material colour the pattern modulates (or replaces, for images).

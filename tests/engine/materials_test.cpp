@@ -5,11 +5,13 @@
 #include "test_util.h"
 
 #include "shading.h"
+#include "vec.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <numeric>
 #include <set>
 
@@ -343,6 +345,69 @@ TEST(Pruning, RouletteAtTheDefaultIsUnbiasedThroughDeepGlass) {
     EXPECT_NEAR(eb / ea, 1.0, 0.005);
     // The scene is deep enough that the threshold matters at all.
     EXPECT_LT(double(ds.rays) / 256, 0.5 * double(rs.rays));
+}
+
+// Spherical and cylindrical texture mappings on a unit sphere, against the checker each pixel
+// must show by spherical trigonometry: the camera ray is intersected with the ideal sphere, and
+// its longitude (degrees from +z towards +x) and latitude (degrees from the -y pole) or height
+// pick the check. An emissive material shows the texture unlit, so the linear pixel is exactly
+// one of the two colours. Pixels within 2 degrees (0.01 in height) of a check edge or near the
+// silhouette are skipped: the tessellated sphere moves hits by less than that.
+TEST(TextureMappings, SphericalAndCylindricalCheckersMatchAnalyticPixels) {
+    for (TextureMapping mapping : {TextureMapping::Spherical, TextureMapping::Cylindrical}) {
+        SceneDesc s;
+        s.meshes.push_back({"sphere", "shape:sphere", std::make_shared<const TriangleMesh>(makeSphere(64, 128))});
+        Material m = test::material("globe", MaterialType::Emissive, {0.8f, 0.8f, 0.8f});
+        m.emission = {1, 1, 1};
+        m.texture.kind = TextureKind::Checker;
+        m.texture.color2 = {0.2f, 0.2f, 0.2f};
+        m.texture.scale = 0.125f;  // 8 checks around, 8 from pole to pole (or 1/8 unit high)
+        m.texture.mapping = mapping;
+        s.materials = {m};
+        s.instances.push_back({0, 0, Transform{}});
+        CameraDesc cam;
+        cam.position = {1.5f, 1.8f, 3.0f};  // sees the +y pole and the +x/+z quadrant
+        cam.lookAt = {0, 0, 0};
+        cam.fovY = 45.0f;
+        s.cameras = {cam};
+        s.settings.width = 48;
+        s.settings.height = 40;
+        s.settings.tileSize = 16;
+        s.settings.background = {0, 0, 0};
+        s.settings.ambient = {0, 0, 0};
+        const Scene scene(s);
+        const std::vector<float> img = renderLinear(scene, s);
+        const Camera camera(cam, s.settings.width, s.settings.height);
+        const Float3 o = camera.origin();
+        int checked = 0, light = 0;
+        for (int y = 0; y < s.settings.height; ++y)
+            for (int x = 0; x < s.settings.width; ++x) {
+                const Float3 d = normalize(camera.direction(x + 0.5f, y + 0.5f));
+                const float b = dot(o, d), c = dot(o, o) - 1.0f, disc = b * b - c;
+                if (disc < 0.05f) continue;  // a miss, or too near the silhouette
+                const Float3 p = o + d * (-b - std::sqrt(disc));
+                const double deg = 180.0 / std::numbers::pi;
+                double lon = std::atan2(double(p.x), double(p.z)) * deg;
+                if (lon < 0) lon += 360.0;
+                const double column = lon / 45.0;
+                double row;
+                if (mapping == TextureMapping::Spherical) row = (90.0 + std::asin(double(p.y)) * deg) / 22.5;
+                else row = double(p.y) / 0.125;
+                const double rowMargin = mapping == TextureMapping::Spherical ? 2.0 / 22.5 : 0.01 / 0.125;
+                if (std::fabs(column - std::round(column)) < 2.0 / 45.0 || std::fabs(row - std::round(row)) < rowMargin)
+                    continue;
+                const bool odd = (int(std::floor(column)) + int(std::floor(row))) & 1;
+                const float expected = odd ? 0.2f : 0.8f;
+                const float* px = &img[(size_t(y) * s.settings.width + x) * 3];
+                EXPECT_EQ(px[0], expected) << (mapping == TextureMapping::Spherical ? "spherical" : "cylindrical")
+                                           << " pixel " << x << "," << y << " lon " << lon << " row " << row;
+                ++checked;
+                light += !odd;
+            }
+        EXPECT_GT(checked, 300);
+        EXPECT_GT(light, checked / 4);
+        EXPECT_LT(light, 3 * checked / 4);
+    }
 }
 
 TEST_F(Zoo, FalseColourViewsRender) {
