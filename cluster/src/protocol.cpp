@@ -115,7 +115,7 @@ void read(Reader& r, TextureDesc& t) {
     t.color2 = readUnitColor(r, "texture color2");
     t.scale = r.f32();
     if (!(t.scale > 0.0f && std::isfinite(t.scale))) fail("texture scale " + std::to_string(t.scale) + " is not positive");
-    t.mapping = readEnum(r, TextureMapping::PlanarYZ, "texture mapping");
+    t.mapping = readEnum(r, TextureMapping::Cylindrical, "texture mapping");
 }
 
 Color readNonNegativeColor(Reader& r, const char* what) {

@@ -221,7 +221,7 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
     initContext(ctx, true);
     alignas(64) typename P::RayHit rh;
     alignas(64) int valid[K];
-    uint32_t pixel[K], seed[K] = {};
+    uint32_t pixel[K], seed[K] = {}, rouletteSeed[K] = {};
     float ox[K], oy[K];
     for (int k = 0; k < K; ++k) {
         rh.ray.org_x[k] = org.x;
@@ -243,9 +243,11 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
                         // Random numbers only where they are used: eyelight previews keep the
                         // generation loop below as bare as the benchmark's reference loop.
                         if (!eyeLight)
-                            for (int k = 0; k < K; ++k)
-                                seed[k] = pixelSeed(uint32_t(rect.x0 + bx + k % bw), uint32_t(rect.y0 + by + k / bw), frame,
-                                                    sampleIndex);
+                            for (int k = 0; k < K; ++k) {
+                                const uint32_t px = uint32_t(rect.x0 + bx + k % bw), py = uint32_t(rect.y0 + by + k / bw);
+                                seed[k] = pixelSeed(px, py, frame, sampleIndex);
+                                rouletteSeed[k] = settings.gi ? seed[k] : pixelSeed(px, py, 0, sampleIndex);
+                            }
                         for (int k = 0; k < K; ++k) {
                             ox[k] = jitter ? (float(sx) + randomFloat(seed[k], 1000)) / float(ss) : cx;
                             oy[k] = jitter ? (float(sy) + randomFloat(seed[k], 1001)) / float(ss) : cy;
@@ -300,6 +302,7 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
                             t.pixel = pixel[k];
                             t.depth = 1;
                             t.seed = seed[k];
+                            t.rouletteSeed = rouletteSeed[k];
                             shadeHit(shading, t, hitOf(rh, k), sc.accum[t.pixel], sc.shadows, sc.next);
                         }
                     }
@@ -346,7 +349,7 @@ void traceShadows(const Tracer& tracer, const ShadingContext& shading, Scratch& 
         sc.walkRays.resize(sc.walk.size());
         for (size_t i = 0; i < sc.walk.size(); ++i) {
             const ShadowTask& t = sc.walk[i];
-            sc.walkRays[i] = RayTask{t.org, t.dir, t.tfar, t.contribution, t.pixel, 0, 0};
+            sc.walkRays[i] = RayTask{t.org, t.dir, t.tfar, t.contribution, t.pixel, 0, 0, 0};
         }
         sc.hits.resize(sc.walk.size());
         tracer.closest(s.top, sc.walkRays.data(), sc.hits.data(), sc.walk.size(), false, kMaskShadowTransparent);

@@ -40,6 +40,10 @@ inline Float3 objectPosition(const TriangleMesh& mesh, uint32_t prim, float u, f
 // What a material's shade() may do. Spawned rays are pruned here by their contribution.
 class ShadeContext {
 public:
+    // The random dimension of a path vertex's seed that decides its roulette (materials use
+    // 0..63, directLight 64 and up).
+    static constexpr uint32_t kRouletteDim = 0x7F000001u;
+
     ShadeContext(const ShadingContext& c, Color& pixel, std::vector<ShadowTask>& shadows, std::vector<RayTask>& next)
         : ctx(c), pixel_(pixel), shadows_(shadows), next_(next) {}
 
@@ -51,18 +55,30 @@ public:
 
     // A secondary ray with throughput `weight`; `branch` tells apart the rays one hit spawns.
     void spawn(const RayTask& parent, const Float3& org, const Float3& dir, const Color& weight, uint32_t branch) {
-        // Ray-tree pruning: a ray that can change its pixel by less than the threshold (relative
-        // to one sample's share) is not traced. At threshold 0 only zero-weight rays are dropped.
         const float m = maxComponent(weight);
-        if (!(m > 0.0f) || m < ctx.settings.pruneThreshold * ctx.sampleWeight) return;
+        if (!(m > 0.0f)) return;
+        const uint32_t rouletteSeed = hashCombine(parent.rouletteSeed, 0xB5297A4Du + branch);
+        Color w = weight;
+        // Ray-tree pruning by Russian roulette: a ray whose throughput to its pixel is below the
+        // threshold (relative to one sample's share) survives with probability m / limit and
+        // then carries the limit. Dropping such rays outright loses the energy of thousands of
+        // tiny glass reflections (a systematically dark image); the roulette keeps the
+        // expectation exact and bounds the work. The coin is a hash of the child's path seed
+        // (RayTask::rouletteSeed): the same for every tile split and render client. At threshold 0 nothing is dropped.
+        const float limit = ctx.settings.pruneThreshold * ctx.sampleWeight;
+        if (m < limit) {
+            if (!(randomFloat(rouletteSeed, kRouletteDim) * limit < m)) return;
+            w = weight * (limit / m);
+        }
         RayTask r;
         r.org = org;
         r.dir = dir;
         r.tfar = INFINITY;
-        r.weight = weight;
+        r.weight = w;
         r.pixel = parent.pixel;
         r.depth = parent.depth + 1;
         r.seed = hashCombine(parent.seed, 0xB5297A4Du + branch);
+        r.rouletteSeed = rouletteSeed;
         next_.push_back(r);
     }
 

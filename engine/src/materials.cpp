@@ -303,15 +303,12 @@ MaterialModel::MaterialModel(const Material& desc)
 
 Float3 MaterialModel::bumpedNormal(const InstanceData& inst, const Float3& po, const Float3& ns) const {
     if (!(desc_.bump > 0.0f)) return ns;
-    // Gradient of the height field h = bump * turbulence(p / scale), by central differences in
-    // object space; a gradient is a covector, so it goes to world space with the normal matrix.
-    const float s = std::max(1e-6f, desc_.bumpScale), e = 0.05f;
-    const Float3 q = po * (1.0f / s);
-    auto h = [&](const Float3& x) { return turbulence(x, 4); };
-    const Float3 gObj{(h(q + Float3{e, 0, 0}) - h(q - Float3{e, 0, 0})),
-                      (h(q + Float3{0, e, 0}) - h(q - Float3{0, e, 0})),
-                      (h(q + Float3{0, 0, e}) - h(q - Float3{0, 0, e}))};
-    const Float3 g = transformNormal(inst.normalMatrix, gObj * (desc_.bump / (2.0f * e * s)));
+    // Gradient of the height field h = bump * turbulence(p / scale), analytic, in object space;
+    // a gradient is a covector, so it goes to world space with the normal matrix.
+    const float s = std::max(1e-6f, desc_.bumpScale);
+    Float3 gObj;
+    turbulenceGrad(po * (1.0f / s), 4, gObj);
+    const Float3 g = transformNormal(inst.normalMatrix, gObj * (desc_.bump / s));
     const Float3 tangential = g - ns * dot(g, ns);
     const Float3 n = normalize(ns - tangential);
     return isFinite(n) ? n : ns;

@@ -64,10 +64,13 @@ TextureDesc readTexture(Reader& r, const std::filesystem::path& dir, const std::
     }
     t.color2 = r.vec3(prefix + "_color2", t.color2);
     t.scale = float(r.number(prefix + "_scale", t.scale, 1e-6, 1e6));
-    const std::string mapping = r.choice(prefix + "_mapping", "xz", {"xz", "xy", "yz"});
-    t.mapping = mapping == "xy" ? TextureMapping::PlanarXY
-                : mapping == "yz" ? TextureMapping::PlanarYZ
-                                  : TextureMapping::PlanarXZ;
+    const std::string mapping =
+        r.choice(prefix + "_mapping", "xz", {"xz", "xy", "yz", "spherical", "cylindrical"});
+    t.mapping = mapping == "xy"            ? TextureMapping::PlanarXY
+                : mapping == "yz"          ? TextureMapping::PlanarYZ
+                : mapping == "spherical"   ? TextureMapping::Spherical
+                : mapping == "cylindrical" ? TextureMapping::Cylindrical
+                                           : TextureMapping::PlanarXZ;
     return t;
 }
 

@@ -26,6 +26,9 @@ struct RayTask {
     uint32_t pixel;   // index into the tile's accumulation buffer
     int depth;        // 1 for primary rays
     uint32_t seed;    // random-number seed of this path vertex (sampling.h)
+    // Seed of the pruning roulette along this path: per frame with GI (progressive frames
+    // average its noise away), the same every frame without (a still Whitted view is stable).
+    uint32_t rouletteSeed;
 };
 
 struct Hit {

@@ -6,11 +6,13 @@
 
 #include <turbojpeg.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <numbers>
 
 namespace rtwall {
 
@@ -99,6 +101,60 @@ float perlinNoise(const Float3& p) {
                      lerp(u, grad(perm(AB + 1), x, y - 1, z - 1), grad(perm(BB + 1), x - 1, y - 1, z - 1))));
 }
 
+namespace {
+// The gradient vector that grad(hash, ...) takes the dot product with.
+inline Float3 gradVector(int hash) {
+    const int h = hash & 15;
+    Float3 g{0, 0, 0};
+    float* c = &g.x;
+    const int ui = h < 8 ? 0 : 1, vi = h < 4 ? 1 : (h == 12 || h == 14 ? 0 : 2);
+    c[ui] += (h & 1) ? -1.0f : 1.0f;
+    c[vi] += (h & 2) ? -1.0f : 1.0f;
+    return g;
+}
+inline float fadeDerivative(float t) { return 30.0f * t * t * (t * (t - 2.0f) + 1.0f); }
+}  // namespace
+
+float perlinNoiseGrad(const Float3& p, Float3& gradient) {
+    const float fx = std::floor(p.x), fy = std::floor(p.y), fz = std::floor(p.z);
+    const int X = int(int64_t(fx) & 255), Y = int(int64_t(fy) & 255), Z = int(int64_t(fz) & 255);
+    const float x = p.x - fx, y = p.y - fy, z = p.z - fz;
+    const float u = fade(x), v = fade(y), w = fade(z);
+    const int A = perm(X) + Y, AA = perm(A) + Z, AB = perm(A + 1) + Z;
+    const int B = perm(X + 1) + Y, BA = perm(B) + Z, BB = perm(B + 1) + Z;
+    // Corner gradients g and their dot products n with the offset to the corner; the noise is
+    // the trilinear blend n = k0 + k1 u + k2 v + k3 w + k4 uv + k5 vw + k6 wu + k7 uvw.
+    const Float3 ga = gradVector(perm(AA)), gb = gradVector(perm(BA)), gc = gradVector(perm(AB)),
+                 gd = gradVector(perm(BB)), ge = gradVector(perm(AA + 1)), gf = gradVector(perm(BA + 1)),
+                 gg = gradVector(perm(AB + 1)), gh = gradVector(perm(BB + 1));
+    const float a = dot(ga, {x, y, z}), b = dot(gb, {x - 1, y, z}), c = dot(gc, {x, y - 1, z}),
+                d = dot(gd, {x - 1, y - 1, z}), e = dot(ge, {x, y, z - 1}), f = dot(gf, {x - 1, y, z - 1}),
+                g = dot(gg, {x, y - 1, z - 1}), h = dot(gh, {x - 1, y - 1, z - 1});
+    const float k1 = b - a, k2 = c - a, k3 = e - a, k4 = a - b - c + d, k5 = a - c - e + g, k6 = a - b - e + f,
+                k7 = -a + b + c - d + e - f - g + h;
+    const Float3 G1 = gb - ga, G2 = gc - ga, G3 = ge - ga, G4 = ga - gb - gc + gd, G5 = ga - gc - ge + gg,
+                 G6 = ga - gb - ge + gf, G7 = gb + gc + ge + gh - ga - gd - gf - gg;
+    const Float3 blended = ga + G1 * u + G2 * v + G3 * w + G4 * (u * v) + G5 * (v * w) + G6 * (w * u) + G7 * (u * v * w);
+    gradient = blended + Float3{fadeDerivative(x) * (k1 + k4 * v + k6 * w + k7 * v * w),
+                                fadeDerivative(y) * (k2 + k4 * u + k5 * w + k7 * u * w),
+                                fadeDerivative(z) * (k3 + k5 * v + k6 * u + k7 * u * v)};
+    return a + k1 * u + k2 * v + k3 * w + k4 * u * v + k5 * v * w + k6 * w * u + k7 * u * v * w;
+}
+
+float turbulenceGrad(const Float3& p, int octaves, Float3& gradient) {
+    float sum = 0.0f, amp = 1.0f, freq = 1.0f;
+    gradient = {0, 0, 0};
+    for (int i = 0; i < octaves; ++i) {
+        Float3 gi;
+        const float n = perlinNoiseGrad(p * freq, gi);
+        sum += amp * std::fabs(n);
+        gradient += gi * (n < 0.0f ? -amp * freq : amp * freq);
+        amp *= 0.5f;
+        freq *= 2.0f;
+    }
+    return sum;
+}
+
 float turbulence(const Float3& p, int octaves) {
     float sum = 0.0f, amp = 1.0f;
     Float3 q = p;
@@ -110,6 +166,32 @@ float turbulence(const Float3& p, int octaves) {
     return sum;
 }
 
+void textureCoordinates(TextureMapping mapping, const Float3& po, float scale, float& u, float& v) {
+    const float inv = 1.0f / scale;
+    switch (mapping) {
+    case TextureMapping::PlanarXZ: u = po.x * inv, v = po.z * inv; return;
+    case TextureMapping::PlanarXY: u = po.x * inv, v = po.y * inv; return;
+    case TextureMapping::PlanarYZ: u = po.z * inv, v = po.y * inv; return;
+    case TextureMapping::Spherical:
+    case TextureMapping::Cylindrical: {
+        // Longitude: 0 on +z, growing towards +x (counter-clockwise seen from +y), in turns.
+        float turn = std::atan2(po.x, po.z) * float(0.5 / std::numbers::pi);
+        if (turn < 0.0f) turn += 1.0f;
+        u = turn * inv;
+        if (mapping == TextureMapping::Cylindrical) {
+            v = po.y * inv;
+            return;
+        }
+        // Latitude: 0 at the -y pole, 1 at the +y pole (the top of an image is at v = 1).
+        const float r = length(po);
+        const float c = r > 0.0f ? std::clamp(po.y / r, -1.0f, 1.0f) : 0.0f;
+        v = (1.0f - std::acos(c) * float(1.0 / std::numbers::pi)) * inv;
+        return;
+    }
+    }
+    u = po.x * inv, v = po.z * inv;
+}
+
 Texture::Texture(const TextureDesc& desc, const Color& base) : desc_(desc), base_(base) {
     if (desc_.kind == TextureKind::Image) image_ = loadTextureImage(desc_.file);
     if (!(desc_.scale > 0.0f)) desc_.scale = 1.0f;
@@ -117,9 +199,8 @@ Texture::Texture(const TextureDesc& desc, const Color& base) : desc_(desc), base
 
 Color Texture::color(const Float3& objectPos) const {
     const Float3 p = objectPos * (1.0f / desc_.scale);
-    float u = p.x, v = p.z;
-    if (desc_.mapping == TextureMapping::PlanarXY) v = p.y;
-    else if (desc_.mapping == TextureMapping::PlanarYZ) u = p.z, v = p.y;
+    float u, v;
+    textureCoordinates(desc_.mapping, objectPos, desc_.scale, u, v);
     switch (desc_.kind) {
     case TextureKind::None: return base_;
     case TextureKind::Checker: {

@@ -24,6 +24,17 @@ std::shared_ptr<const TextureImage> loadTextureImage(const std::string& file);
 float perlinNoise(const Float3& p);
 // Sum of |noise| over octaves: the classic turbulence for marble and bumps.
 float turbulence(const Float3& p, int octaves);
+// The same with the analytic gradient (for bump mapping: one evaluation instead of six for
+// central differences). Where |noise| has its kink the gradient is that of the side the
+// noise's sign picks.
+float perlinNoiseGrad(const Float3& p, Float3& gradient);
+float turbulenceGrad(const Float3& p, int octaves, Float3& gradient);
+
+// Texture coordinates of an object-space position for a mapping (before wrapping into [0, 1)):
+// planar projections divide by the scale; spherical and cylindrical are around the object-space
+// origin with y as the axis, u in turns from +z towards +x, v from the -y pole (spherical, in
+// half turns) or along y in object units (cylindrical); both divided by the scale.
+void textureCoordinates(TextureMapping mapping, const Float3& objectPos, float scale, float& u, float& v);
 
 class Texture {
 public:

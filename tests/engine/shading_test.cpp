@@ -1,5 +1,6 @@
 // Fresnel, refraction and sRGB quantisation against analytic values.
 #include "shading.h"
+#include "texture.h"
 #include "vec.h"
 
 #include <gtest/gtest.h>
@@ -73,6 +74,42 @@ TEST(Srgb, QuantisationIsCorrectlyRoundedAndMonotonic) {
     EXPECT_EQ(linearToSrgb8(NAN), 0);
     EXPECT_EQ(linearToSrgb8(INFINITY), 255);
     EXPECT_EQ(linearToSrgb8(7.0f), 255);
+}
+
+// Bump mapping takes the analytic gradient of the noise: it must match central differences
+// (in double-checked small steps, away from the kinks of |noise| where the one-sided
+// derivatives differ) to 1e-3 relative.
+TEST(Noise, AnalyticGradientMatchesFiniteDifferences) {
+    int checked = 0;
+    for (int i = 0; i < 400; ++i) {
+        const Float3 p{0.037f * i - 7.0f, std::cos(0.31f * i) * 7.0f, std::sin(0.7f * i) * 9.0f};
+        Float3 g;
+        const float n = perlinNoiseGrad(p, g);
+        EXPECT_NEAR(n, perlinNoise(p), 1e-5f) << i;  // the same value, summed in another order
+        const float e = 1e-3f;
+        const Float3 fd{(perlinNoise(p + Float3{e, 0, 0}) - perlinNoise(p - Float3{e, 0, 0})) / (2 * e),
+                        (perlinNoise(p + Float3{0, e, 0}) - perlinNoise(p - Float3{0, e, 0})) / (2 * e),
+                        (perlinNoise(p + Float3{0, 0, e}) - perlinNoise(p - Float3{0, 0, e})) / (2 * e)};
+        EXPECT_NEAR(g.x, fd.x, 2e-3f * (1.0f + std::fabs(fd.x))) << i;
+        EXPECT_NEAR(g.y, fd.y, 2e-3f * (1.0f + std::fabs(fd.y))) << i;
+        EXPECT_NEAR(g.z, fd.z, 2e-3f * (1.0f + std::fabs(fd.z))) << i;
+
+        Float3 tg;
+        const float t = turbulenceGrad(p, 4, tg);
+        EXPECT_NEAR(t, turbulence(p, 4), 1e-5f) << i;
+        // Skip points where an octave's noise is near zero (the kink of |noise|).
+        bool nearKink = false;
+        for (int o = 0; o < 4; ++o) nearKink |= std::fabs(perlinNoise(p * float(1 << o))) < 0.02f;
+        if (nearKink) continue;
+        const Float3 tfd{(turbulence(p + Float3{e, 0, 0}, 4) - turbulence(p - Float3{e, 0, 0}, 4)) / (2 * e),
+                         (turbulence(p + Float3{0, e, 0}, 4) - turbulence(p - Float3{0, e, 0}, 4)) / (2 * e),
+                         (turbulence(p + Float3{0, 0, e}, 4) - turbulence(p - Float3{0, 0, e}, 4)) / (2 * e)};
+        EXPECT_NEAR(tg.x, tfd.x, 1e-2f * (1.0f + std::fabs(tfd.x))) << i;
+        EXPECT_NEAR(tg.y, tfd.y, 1e-2f * (1.0f + std::fabs(tfd.y))) << i;
+        EXPECT_NEAR(tg.z, tfd.z, 1e-2f * (1.0f + std::fabs(tfd.z))) << i;
+        ++checked;
+    }
+    EXPECT_GT(checked, 100);
 }
 
 }  // namespace

@@ -26,6 +26,10 @@ struct Options {
     bool json = false;
     int width = 1600, height = 1200, rounds = 3, referenceFrames = 64, threads = 0;
     std::string dir = "out/bench-shading";
+    std::vector<std::string> scenes{"office", "headlight"};
+    std::vector<float> thresholds{0.0005f, 0.002f, 0.01f, 0.05f};
+    std::vector<int> giSamples{1, 2, 4, 8, 16};
+    std::vector<float> volumeSteps{0.25f, 0.5f, 1.0f, 2.0f, 4.0f};
 };
 
 double psnr(const Image& a, const Image& b) {
@@ -38,20 +42,28 @@ double psnr(const Image& a, const Image& b) {
     return 10.0 * std::log10(255.0 * 255.0 / (se / double(a.rgb.size())));
 }
 
-// Median frame time over `rounds` frames (frames 1..rounds: GI changes seeds each frame), and
-// the mean of those frames (one frame when the image has no randomness).
-Image timed(const Scene& scene, const Camera& cam, const RenderSettings& s, int rounds, double& seconds, TileStats& st) {
+// Median frame time over `rounds` frames (frames 1..rounds: seeds change each frame). `first`
+// is frame 1, the error one frame shows as the viewer sees it; `mean` the average of all of
+// them (what progressive refinement converges to: its error against the reference's mean over
+// the same frames is the bias, with the noise averaged down).
+struct Timed {
+    Image first, mean;
+};
+Timed timed(const Scene& scene, const Camera& cam, const RenderSettings& s, int rounds, double& seconds, TileStats& st) {
     std::vector<double> t;
     Accumulator acc;
+    Timed out;
     for (int r = 0; r < rounds; ++r) {
         const auto t0 = std::chrono::steady_clock::now();
         const Image img = renderFrame(scene, cam, s, uint32_t(r + 1), &st);
         t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-        if (r == 0) acc.add(img);  // the error of one frame, as the viewer sees it
+        if (r == 0) out.first = img;
+        acc.add(img);
     }
     std::sort(t.begin(), t.end());
     seconds = t[t.size() / 2];
-    return acc.resolve();
+    out.mean = acc.resolve();
+    return out;
 }
 
 toml::table point(const char* control, double value, double seconds, double db, const TileStats& st, double flip = 0) {
@@ -71,11 +83,23 @@ void addBenchShading(CLI::App& bench, Run& run) {
     cmd->add_option("--reference-frames", o->referenceFrames, "Frames averaged for the GI reference")->check(CLI::Range(1, 100000));
     cmd->add_option("--threads", o->threads, "Render threads (0 = all)")->check(CLI::Range(0, 1024));
     cmd->add_option("--dir", o->dir, "Where the demo scenes are written");
+    cmd->add_option("--scenes", o->scenes, "Scenes to run (office, headlight)")
+        ->check(CLI::IsMember({"office", "headlight"}))
+        ->delimiter(',');
+    cmd->add_option("--thresholds", o->thresholds, "Pruning thresholds to measure")
+        ->check(CLI::Range(0.0f, 1.0f))
+        ->delimiter(',');
+    cmd->add_option("--gi-samples", o->giSamples, "GI samples per pixel to measure (office)")
+        ->check(CLI::Range(1, 4096))
+        ->delimiter(',');
+    cmd->add_option("--volume-steps", o->volumeSteps, "Volume steps in voxels to measure (office)")
+        ->check(CLI::Range(0.01f, 64.0f))
+        ->delimiter(',');
     cmd->callback([&run, o] {
         run = [o] {
             toml::table out{{"width", o->width}, {"height", o->height}, {"rounds", o->rounds}, {"flip", "mean LDR-FLIP, 67 pixels per degree"},
                             {"sunflowers", "not in this branch (rtwall gen sunflowers comes with the cad branch)"}};
-            for (const char* name : {"office", "headlight"}) {
+            for (const std::string& name : o->scenes) {
                 SceneDesc desc = loadSceneFile(writeShadingDemo(name, std::filesystem::path(o->dir) / name));
                 desc.settings.width = o->width;
                 desc.settings.height = o->height;
@@ -89,22 +113,25 @@ void addBenchShading(CLI::App& bench, Run& run) {
                 // Pruning threshold, against the unpruned image. The headlight's glass splits
                 // every path in two at each of its many interfaces: unpruned, its ray tree grows
                 // as 2^depth, so its reference is threshold 1e-4 instead.
-                const bool deep = std::string(name) == "headlight";
+                const bool deep = name == "headlight";
                 const float referenceThreshold = deep ? 1e-4f : 0.0f;
                 RenderSettings s = desc.settings;
                 s.pruneThreshold = referenceThreshold;
-                const Image unpruned = timed(scene, cam, s, o->rounds, sec, st);
+                const Timed unpruned = timed(scene, cam, s, o->rounds, sec, st);
                 toml::array prune;
                 prune.push_back(point("threshold", referenceThreshold, sec, INFINITY, st));
                 sceneOut.insert("prune_reference_threshold", referenceThreshold);
-                for (float th : {0.0005f, 0.002f, 0.01f, 0.05f}) {
+                for (float th : o->thresholds) {
                     s.pruneThreshold = th;
-                    const Image img = timed(scene, cam, s, o->rounds, sec, st);
-                    prune.push_back(point("threshold", th, sec, psnr(img, unpruned), st, flipMean(img, unpruned)));
+                    const Timed img = timed(scene, cam, s, o->rounds, sec, st);
+                    toml::table pt = point("threshold", th, sec, psnr(img.first, unpruned.first), st, flipMean(img.first, unpruned.first));
+                    const double meanDb = psnr(img.mean, unpruned.mean);
+                    pt.insert("psnr_mean_db", std::isinf(meanDb) ? 999.0 : meanDb);
+                    prune.push_back(std::move(pt));
                 }
                 sceneOut.insert("prune", prune);
 
-                if (std::string(name) == "office") {
+                if (name == "office") {
                     // GI samples per pixel (one frame), against the mean of many frames.
                     RenderSettings g = desc.settings;
                     g.gi = true;
@@ -114,9 +141,9 @@ void addBenchShading(CLI::App& bench, Run& run) {
                         acc.add(renderFrame(scene, cam, g, uint32_t(100000 + f)));
                     const Image reference = acc.resolve();
                     toml::array gi;
-                    for (int spp : {1, 2, 4, 8, 16}) {
+                    for (int spp : o->giSamples) {
                         g.samples = spp;
-                        const Image img = timed(scene, cam, g, o->rounds, sec, st);
+                        const Image img = timed(scene, cam, g, o->rounds, sec, st).first;
                         gi.push_back(point("spp", spp, sec, psnr(img, reference), st, flipMean(img, reference)));
                     }
                     sceneOut.insert("gi_spp", gi);
@@ -131,18 +158,18 @@ void addBenchShading(CLI::App& bench, Run& run) {
                     };
                     const SceneDesc fine = withStep(0.05f);
                     const Scene fineScene(fine);
-                    const Image volumeRef = timed(fineScene, cam, fine.settings, 1, sec, st);
+                    const Image volumeRef = timed(fineScene, cam, fine.settings, 1, sec, st).first;
                     toml::array vol;
-                    for (float step : {0.25f, 0.5f, 1.0f, 2.0f, 4.0f}) {
+                    for (float step : o->volumeSteps) {
                         const SceneDesc d = withStep(step);
                         const Scene sc(d);
-                        const Image img = timed(sc, cam, d.settings, o->rounds, sec, st);
+                        const Image img = timed(sc, cam, d.settings, o->rounds, sec, st).first;
                         vol.push_back(point("step_voxels", step, sec, psnr(img, volumeRef), st, flipMean(img, volumeRef)));
                     }
                     sceneOut.insert("volume_step", vol);
                 }
                 out.insert(name, sceneOut);
-                std::fprintf(stderr, "bench shading: %s done\n", name);
+                std::fprintf(stderr, "bench shading: %s done\n", name.c_str());
             }
             if (o->json) std::cout << toml::json_formatter{out} << "\n";
             else std::cout << out << "\n";

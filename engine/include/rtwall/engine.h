@@ -40,15 +40,18 @@ struct Transform {
 enum class MaterialType { Lambert, Phong, Mirror, Glass, Metal, Emissive, Volume };
 
 // A colour pattern (modulates `color`) or a mask (alpha), looked up at the hit's object-space
-// position: meshes carry no texture coordinates, so (u, v) come from a planar projection.
+// position: meshes carry no texture coordinates, so (u, v) come from a projection: planar, or
+// spherical / cylindrical around the object-space origin with y as the axis (docs/shading.md).
 enum class TextureKind { None, Checker, Marble, Wood, Image };
-enum class TextureMapping { PlanarXZ, PlanarXY, PlanarYZ };
+enum class TextureMapping { PlanarXZ, PlanarXY, PlanarYZ, Spherical, Cylindrical };
 
 struct TextureDesc {
     TextureKind kind = TextureKind::None;
     std::string file;                           // image: a PNG or JPEG, path as the renderer opens it
     Color color2{0.1f, 0.1f, 0.1f};             // checker: second colour; marble/wood: vein/ring colour
-    float scale = 1.0f;                         // object units per texture repeat (uv = position / scale)
+    float scale = 1.0f;                         // planar: object units per repeat (uv = position / scale);
+                                                // spherical: fraction of the turn (u) and of pole-to-pole (v)
+                                                // per repeat; cylindrical: of the turn (u), object units along y (v)
     TextureMapping mapping = TextureMapping::PlanarXZ;
 };
 
