@@ -3,7 +3,7 @@
 //
 // Input layout: the first byte picks the decoder (its value modulo 20), the rest is its input.
 //   0      a whole message: decodeHeader, then the payload decoder its type names
-//   1..14  decodePayload<T> for MsgType(n)
+//   1..16  decodePayload<T> for MsgType(n)
 //   15     decodeMesh
 //   16..19 decodeTile for TileCodec(n - 16); three more bytes give the width (1 + b % 64),
 //          the height (1 + b % 64) and the destination's row padding (b % 8)
@@ -66,9 +66,9 @@ template <class... Msgs> struct Table {
     static constexpr PayloadCheck payload[] = {checkPayload<Msgs>...};
     static constexpr MessageCheck message[] = {checkMessage<Msgs>...};
 };
-// In MsgType order, 1..14.
+// In MsgType order, 1..16.
 using Messages = Table<Hello, Welcome, SceneSnapshot, MeshRequest, MeshData, Update, FrameBegin, TileRequest,
-                       TileAssign, TileResult, Heartbeat, Goodbye, Ready, ResyncRequest>;
+                       TileAssign, TileResult, Heartbeat, Goodbye, Ready, ResyncRequest, AssetRequest, AssetData>;
 static_assert(std::size(Messages::payload) == kMaxMsgType);
 
 void checkMesh(const uint8_t* data, size_t size) {

@@ -15,6 +15,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -166,6 +167,9 @@ struct SceneDesc {
     std::vector<Light> lights;
     std::vector<CameraDesc> cameras;
     RenderSettings settings;
+    // Contents of texture image and volume files by the path a material names: a path found
+    // here is decoded from these bytes, not opened (a render client gets them from the master).
+    std::map<std::string, std::shared_ptr<const std::vector<uint8_t>>> files;
 
     const CameraDesc* findCamera(const std::string& name) const;  // nullptr if absent
     Bounds3 worldBounds() const;
@@ -283,6 +287,11 @@ class Accumulator {
 public:
     void reset() { frames_ = 0; }
     void add(const Image& frame);  // a frame of another size resets first
+    // A frame in linear RGB (3 floats a pixel, as renderTileLinear writes them), without the
+    // 8-bit quantisation's bias. Each value is rounded to IEEE half precision (11 significant
+    // bits) first: the precision the cluster sends accumulated tiles in, so that one machine and
+    // the cluster sum the same values. Frames added with add() and addLinear() must not be mixed.
+    void addLinear(const float* rgb, int width, int height);
     Image resolve() const;
     int frames() const { return frames_; }
 
@@ -290,6 +299,14 @@ private:
     int width_ = 0, height_ = 0, frames_ = 0;
     std::vector<double> sum_;
 };
+
+// The 8-bit sRGB quantisation renderTile applies, for `count` linear values.
+void linearToSrgb8(const float* linear, size_t count, uint8_t* out);
+
+// True when a frame's pixels depend on the frame number, i.e. when averaging frames refines
+// the image: path tracing, area lights, rough metal or a volume (per-frame random sampling) in
+// the shaded view with full shading. A deterministic scene renders the same bytes every frame.
+bool rendersStochastically(const SceneDesc& scene);
 
 std::vector<TileRect> makeTiles(int width, int height, int tileSize);
 
