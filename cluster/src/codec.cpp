@@ -7,7 +7,6 @@
 #include <zstd.h>
 
 #include <algorithm>
-#include <bit>
 #include <climits>
 #include <cstring>
 #include <memory>
@@ -225,23 +224,25 @@ void decodeTile(TileCodec codec, const uint8_t* data, size_t size, int width, in
 
 TileCodec wideCodec(TileCodec codec) { return codec == TileCodec::Jpeg ? TileCodec::Lz4 : codec; }
 
-float roundToHalf(float v) { return float(_Float16(v)); }
+float roundToHalf(float v) { return floatFromHalf(halfFromFloat(v)); }
 
 void encodeWideTile(const CodecSettings& codec, const float* rgb, int width, int height, size_t stride,
                     std::vector<uint8_t>& scratch, std::vector<uint8_t>& out) {
     if (width < 1 || height < 1 || width > kMaxTileSide / 2 || height > kMaxTileSide || stride < size_t(width) * 3)
         throw std::invalid_argument("encodeWideTile: tile size " + std::to_string(width) + "x" + std::to_string(height));
-    const size_t values = size_t(width) * height * 3;
-    scratch.resize(2 * values);
+    const size_t values = size_t(width) * height * 3, rowValues = size_t(width) * 3;
+    scratch.resize(2 * values);  // the two byte planes
     uint8_t* lo = scratch.data();
     uint8_t* hi = scratch.data() + values;
+    uint16_t row[3 * (kMaxTileSide / 2)];  // one row of half floats (48 KB of stack at most)
     size_t k = 0;
-    for (int y = 0; y < height; ++y)
-        for (int i = 0; i < width * 3; ++i, ++k) {
-            const uint16_t bits = std::bit_cast<uint16_t>(_Float16(rgb[size_t(y) * stride + size_t(i)]));
-            lo[k] = uint8_t(bits & 0xFF);
-            hi[k] = uint8_t(bits >> 8);
+    for (int y = 0; y < height; ++y) {
+        halfFromFloat(rgb + size_t(y) * stride, rowValues, row);
+        for (size_t i = 0; i < rowValues; ++i, ++k) {
+            lo[k] = uint8_t(row[i] & 0xFF);
+            hi[k] = uint8_t(row[i] >> 8);
         }
+    }
     CodecSettings c = codec;
     c.codec = wideCodec(codec.codec);
     encodeTile(c, scratch.data(), 2 * width, height, size_t(width) * 6, out);
@@ -252,15 +253,17 @@ void decodeWideTile(TileCodec codec, const uint8_t* data, size_t size, int width
     if (codec == TileCodec::Jpeg) throw DecodeError("a linear tile cannot be JPEG");
     if (width < 1 || height < 1 || width > kMaxTileSide / 2 || height > kMaxTileSide || dstStride < size_t(width) * 3)
         throw std::invalid_argument("decodeWideTile: tile size " + std::to_string(width) + "x" + std::to_string(height));
-    const size_t values = size_t(width) * height * 3;
+    const size_t values = size_t(width) * height * 3, rowValues = size_t(width) * 3;
     scratch.resize(2 * values);
     decodeTile(codec, data, size, 2 * width, height, scratch.data(), size_t(width) * 6);
     const uint8_t* lo = scratch.data();
     const uint8_t* hi = scratch.data() + values;
+    uint16_t row[3 * (kMaxTileSide / 2)];
     size_t k = 0;
-    for (int y = 0; y < height; ++y)
-        for (int i = 0; i < width * 3; ++i, ++k)
-            dst[size_t(y) * dstStride + size_t(i)] = float(std::bit_cast<_Float16>(uint16_t(lo[k] | (hi[k] << 8))));
+    for (int y = 0; y < height; ++y) {
+        for (size_t i = 0; i < rowValues; ++i, ++k) row[i] = uint16_t(lo[k] | (hi[k] << 8));
+        floatFromHalf(row, rowValues, dst + size_t(y) * dstStride);
+    }
 }
 
 size_t maxEncodedTileBytes(int width, int height) {

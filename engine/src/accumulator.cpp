@@ -23,7 +23,15 @@ void Accumulator::addLinear(const float* rgb, int width, int height) {
         sum_.assign(n, 0.0);
         frames_ = 0;
     }
-    for (size_t i = 0; i < n; ++i) sum_[i] += double(float(_Float16(rgb[i])));
+    // Row-sized chunks through the bulk conversions: no allocation, no per-value library call.
+    uint16_t half[1024];
+    float rounded[1024];
+    for (size_t i = 0; i < n; i += 1024) {
+        const size_t m = std::min<size_t>(1024, n - i);
+        halfFromFloat(rgb + i, m, half);
+        floatFromHalf(half, m, rounded);
+        for (size_t k = 0; k < m; ++k) sum_[i + k] += double(rounded[k]);
+    }
     ++frames_;
 }
 

@@ -300,6 +300,13 @@ private:
     std::vector<double> sum_;
 };
 
+// IEEE 754 half precision (round to nearest even): the precision accumulated frames travel in.
+uint16_t halfFromFloat(float v);
+float floatFromHalf(uint16_t bits);
+// The same for `count` values (F16C instructions where the CPU has them: identical results).
+void halfFromFloat(const float* in, size_t count, uint16_t* out);
+void floatFromHalf(const uint16_t* in, size_t count, float* out);
+
 // The 8-bit sRGB quantisation renderTile applies, for `count` linear values.
 void linearToSrgb8(const float* linear, size_t count, uint8_t* out);
 
