@@ -64,9 +64,14 @@ public:
 private:
     static constexpr const char* kResultsAddress = "inproc://rtwall-client-results";
 
+    // A tile to render with everything the render thread needs from the network thread's state,
+    // captured when the assignment arrives: render threads never read what that thread writes.
     struct Work {
-        uint32_t frame;
-        uint32_t tile;
+        uint32_t frame = 0;
+        uint32_t tile = 0;
+        uint32_t stateSeq = 0;  // for the result's header
+        CodecSettings codec;
+        TilePixels pixels = TilePixels::Srgb8;
     };
 
     // ---- network thread -------------------------------------------------------------------
@@ -100,12 +105,13 @@ private:
     // The master's peer timeout, from its Welcome (before the first Welcome: the default).
     int timeoutMs() const { return timeoutMs_; }
 
-    Header header(MsgType type, uint32_t frame = 0) const {
+    Header header(MsgType type, uint32_t frame = 0) const { return header(type, frame, stateSeq_); }
+    Header header(MsgType type, uint32_t frame, uint32_t stateSeq) const {
         Header h;
         h.type = type;
         h.session = session_.load();
         h.frame = frame;
-        h.sceneVersion = stateSeq_;
+        h.sceneVersion = stateSeq;
         return h;
     }
 
@@ -187,16 +193,13 @@ private:
                 session_ = h.session;
                 id_ = w.clientId;
                 backoffMs_ = 100;
-                {
-                    // A Welcome within the session changes the codec (Master::setCodec): render
-                    // threads read it under workMutex_, and replayed bytes of the old one go.
-                    std::lock_guard lock(workMutex_);
-                    if (!(w.codec == codec_)) {
-                        std::lock_guard replayLock(replayMutex_);
-                        replay_.clear();
-                    }
-                    codec_ = w.codec;
+                // A Welcome within the session changes the codec (Master::setCodec) for tiles
+                // assigned from now on; replayed bytes of the old one go.
+                if (!(w.codec == codec_)) {
+                    std::lock_guard replayLock(replayMutex_);
+                    replay_.clear();
                 }
+                codec_ = w.codec;
                 prefetch_ = std::max(1u, w.prefetch);
                 heartbeatMs_ = int(std::max(10u, w.heartbeatMs));
                 timeoutMs_ = int(std::max(std::max(50u, w.timeoutMs), 2 * uint32_t(heartbeatMs_)));
@@ -209,6 +212,7 @@ private:
             switch (h.type) {
             case MsgType::SceneSnapshot: onSnapshot(decodePayload<SceneSnapshot>(p, n)); break;
             case MsgType::MeshData: onMeshData(decodePayload<MeshData>(p, n)); break;
+            case MsgType::AssetData: onAssetData(decodePayload<AssetData>(p, n)); break;
             case MsgType::Update:
                 if (!updates_.add(decodePayload<Update>(p, n))) requestResync();
                 break;
@@ -226,6 +230,7 @@ private:
             }
         } catch (const DecodeError&) {
             ++dropped_;
+            if (settings_.counters) ++settings_.counters->droppedMessages;
         } catch (const std::exception& e) {
             std::lock_guard lock(workMutex_);
             failure_ = std::string("cannot use the master's scene: ") + e.what();
@@ -260,6 +265,60 @@ private:
         return nullptr;
     }
 
+    // A texture or volume file by content hash: from memory, the material's path on this PC or
+    // the cache, each used only when its bytes have the hash (another file of the same name is
+    // not trusted).
+    std::shared_ptr<const std::vector<uint8_t>> localAsset(const AssetRef& ref) {
+        if (auto it = assets_.find(ref.hash); it != assets_.end()) return it->second;
+        std::vector<std::filesystem::path> candidates{ref.path};
+        if (!settings_.cacheDir.empty()) candidates.push_back(settings_.cacheDir / (hexOf(ref.hash) + ".rtasset"));
+        for (const auto& path : candidates) {
+            std::error_code ec;
+            if (!std::filesystem::is_regular_file(path, ec)) continue;
+            const auto size = std::filesystem::file_size(path, ec);
+            if (ec || size != ref.bytes) continue;  // also bounds what is read (ref.bytes <= kMaxAssetBytes)
+            auto bytes = std::make_shared<std::vector<uint8_t>>(size_t(size));
+            std::ifstream in(path, std::ios::binary);
+            if (!in.read(reinterpret_cast<char*>(bytes->data()), std::streamsize(size))) continue;
+            if (hashBytes(bytes->data(), bytes->size()) != ref.hash) continue;
+            assets_[ref.hash] = bytes;
+            if (settings_.counters) ++settings_.counters->assetsLocal;
+            return bytes;
+        }
+        return nullptr;
+    }
+
+    void onAssetData(AssetData ad) {
+        const AssetRef* ref = nullptr;
+        if (snapshot_)
+            for (const AssetRef& a : snapshot_->assets)
+                if (a.hash == ad.hash) ref = &a;
+        if (!ref || assets_.count(ad.hash)) {
+            ++dropped_;  // not asked for by this state, or already here
+            if (settings_.counters) ++settings_.counters->droppedMessages;
+            return;
+        }
+        if (ad.bytes.size() != ref->bytes || hashBytes(ad.bytes.data(), ad.bytes.size()) != ad.hash) {
+            ++dropped_;
+            if (settings_.counters) ++settings_.counters->rejectedAssets;
+            std::fprintf(stderr, "rtwall client %u: %s: %zu bytes from the master do not match the file's hash %s: rejected\n",
+                         id_, ref->path.c_str(), ad.bytes.size(), hexOf(ad.hash).c_str());
+            return;
+        }
+        auto bytes = std::make_shared<const std::vector<uint8_t>>(std::move(ad.bytes));
+        assets_[ad.hash] = bytes;
+        if (settings_.counters) ++settings_.counters->assetsReceived;
+        if (!settings_.cacheDir.empty()) {
+            std::error_code ec;
+            std::filesystem::create_directories(settings_.cacheDir, ec);
+            const auto path = settings_.cacheDir / (hexOf(ad.hash) + ".rtasset");
+            const auto tmp = path.string() + ".tmp";
+            std::ofstream(tmp, std::ios::binary).write(reinterpret_cast<const char*>(bytes->data()), std::streamsize(bytes->size()));
+            std::filesystem::rename(tmp, path, ec);
+        }
+        tryBuildScene();
+    }
+
     void onSnapshot(SceneSnapshot snap) {
         // Within a session the master's states to one client never go back in time (it sends
         // the current frame's state): one older than what this client holds is a replay.
@@ -274,6 +333,8 @@ private:
         updates_.reset(snapshot_->updateSeq);
         for (const MeshRef& ref : snapshot_->meshes)
             if (!localMesh(ref)) send(MeshRequest{ref.hash});
+        for (const AssetRef& ref : snapshot_->assets)
+            if (!localAsset(ref)) send(AssetRequest{ref.hash});
         tryBuildScene();
     }
 
@@ -305,6 +366,11 @@ private:
             auto it = meshes_.find(ref.hash);
             if (it == meshes_.end()) return;  // still waiting for a mesh
             desc.meshes.push_back({ref.name, ref.source, it->second});
+        }
+        for (const AssetRef& ref : snapshot_->assets) {
+            auto it = assets_.find(ref.hash);
+            if (it == assets_.end()) return;  // still waiting for a texture or volume
+            desc.files[ref.path] = it->second;
         }
         desc.materials = snapshot_->materials;
         desc.instances = snapshot_->instances;
@@ -394,6 +460,7 @@ private:
         }
         dropWork();
         if (!ready_ || !catchUp(fb.updateSeq)) return;
+        framePixels_ = fb.pixels;
         frame_.store(fb.frame);
         lastFrameBegun_ = fb.frame;
         send(TileRequest{fb.frame, prefetch_}, fb.frame);
@@ -406,7 +473,7 @@ private:
         }
         {
             std::lock_guard lock(workMutex_);
-            for (uint32_t t : a.tiles) work_.push_back({a.frame, t});
+            for (uint32_t t : a.tiles) work_.push_back({a.frame, t, stateSeq_, codec_, framePixels_});
         }
         workCv_.notify_all();
     }
@@ -430,7 +497,7 @@ private:
         }
         result.frame = w.frame;
         result.tile = w.tile;
-        const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame), result);
+        const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame, w.stateSeq), result);
         sendResult(out, bytes);
         return true;
     }
@@ -453,8 +520,8 @@ private:
         zmq::socket_t out(ctx_, zmq::socket_type::push);
         out.set(zmq::sockopt::linger, 0);
         out.connect(kResultsAddress);
-        std::vector<uint8_t> pixels;
-        CodecSettings codec;  // this tile's, copied with it under workMutex_
+        std::vector<uint8_t> pixels, scratch;
+        std::vector<float> linear;
         for (;;) {
             Work w;
             {
@@ -463,31 +530,44 @@ private:
                 if (stopping_) return;
                 w = work_.front();
                 work_.pop_front();
-                codec = codec_;
             }
+            const CodecSettings& codec = w.codec;
+            const bool wide = w.pixels == TilePixels::LinearHalf;
             try {
                 std::shared_lock lock(sceneMutex_);
                 if (w.frame != frame_.load() || !scene_ || w.tile >= tiles_.size()) continue;  // stale or bogus
-                if (settings_.replay && replaySend(out, w)) continue;
+                if (settings_.replay && !wide && replaySend(out, w)) continue;
                 const TileRect r = tiles_[w.tile];
-                pixels.resize(size_t(r.width()) * r.height() * 3);
                 const auto t0 = std::chrono::steady_clock::now();
-                renderTile(*scene_, Camera(camera_, renderSettings_.width, renderSettings_.height), r, w.frame,
-                           renderSettings_, {pixels.data(), size_t(r.width()) * 3});
+                const Camera camera(camera_, renderSettings_.width, renderSettings_.height);
+                if (wide) {
+                    // Part of an accumulation: linear, before the 8-bit quantisation.
+                    linear.resize(size_t(r.width()) * r.height() * 3);
+                    renderTileLinear(*scene_, camera, r, w.frame, renderSettings_, linear.data(), size_t(r.width()) * 3);
+                } else {
+                    pixels.resize(size_t(r.width()) * r.height() * 3);
+                    renderTile(*scene_, camera, r, w.frame, renderSettings_, {pixels.data(), size_t(r.width()) * 3});
+                }
                 if (settings_.extraTileDelayMs > 0)
                     std::this_thread::sleep_for(std::chrono::milliseconds(settings_.extraTileDelayMs));
                 const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 TileResult result;
                 result.frame = w.frame;
                 result.tile = w.tile;
-                result.codec = codec.codec;
                 result.renderMicros = uint32_t(std::min(seconds * 1e6, 4e9));
-                encodeTile(codec, pixels.data(), r.width(), r.height(), size_t(r.width()) * 3, result.pixels);
-                if (settings_.replay) {
+                if (wide) {
+                    result.codec = wideCodec(codec.codec);
+                    result.format = TilePixels::LinearHalf;
+                    encodeWideTile(codec, linear.data(), r.width(), r.height(), size_t(r.width()) * 3, scratch, result.pixels);
+                } else {
+                    result.codec = codec.codec;
+                    encodeTile(codec, pixels.data(), r.width(), r.height(), size_t(r.width()) * 3, result.pixels);
+                }
+                if (settings_.replay && !wide) {
                     std::lock_guard replayLock(replayMutex_);
                     replay_[w.tile] = {codec.codec, result.pixels};
                 }
-                const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame), result);
+                const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame, w.stateSeq), result);
                 sendResult(out, bytes);
             } catch (const std::exception& e) {
                 // Tell the master why before going away (the network thread sends it).
@@ -509,7 +589,8 @@ private:
 
     std::atomic<uint64_t> session_{0};  // read by render threads when they write results
     uint32_t id_ = 0;
-    CodecSettings codec_;  // guarded by workMutex_ (Master::setCodec changes it mid-session)
+    CodecSettings codec_;  // network thread only (Master::setCodec changes it mid-session); copied into each Work
+    TilePixels framePixels_ = TilePixels::Srgb8;  // the current frame's tile format, copied into each Work
     uint32_t prefetch_ = 4;
     int heartbeatMs_ = 250;
     int timeoutMs_ = 3000;
@@ -526,9 +607,10 @@ private:
     uint64_t buildGeneration_ = 0;  // bumped by every snapshot (and reconnect): older builds are stale
     uint64_t buildingFor_ = 0;
     std::map<Hash128, std::shared_ptr<const TriangleMesh>> meshes_;
+    std::map<Hash128, std::shared_ptr<const std::vector<uint8_t>>> assets_;  // texture and volume files
     UpdateSequencer updates_;
     bool ready_ = false;
-    uint32_t stateSeq_ = 0;
+    uint32_t stateSeq_ = 0;  // network thread only; render threads get it in each Work
 
     // Shared with the render threads.
     std::shared_mutex sceneMutex_;  // render threads read; the network thread changes the scene

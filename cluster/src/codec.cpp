@@ -222,6 +222,50 @@ void decodeTile(TileCodec codec, const uint8_t* data, size_t size, int width, in
     if (target != dst) unpack(target, width, height, dst, dstStride);
 }
 
+TileCodec wideCodec(TileCodec codec) { return codec == TileCodec::Jpeg ? TileCodec::Lz4 : codec; }
+
+float roundToHalf(float v) { return floatFromHalf(halfFromFloat(v)); }
+
+void encodeWideTile(const CodecSettings& codec, const float* rgb, int width, int height, size_t stride,
+                    std::vector<uint8_t>& scratch, std::vector<uint8_t>& out) {
+    if (width < 1 || height < 1 || width > kMaxTileSide / 2 || height > kMaxTileSide || stride < size_t(width) * 3)
+        throw std::invalid_argument("encodeWideTile: tile size " + std::to_string(width) + "x" + std::to_string(height));
+    const size_t values = size_t(width) * height * 3, rowValues = size_t(width) * 3;
+    scratch.resize(2 * values);  // the two byte planes
+    uint8_t* lo = scratch.data();
+    uint8_t* hi = scratch.data() + values;
+    uint16_t row[3 * (kMaxTileSide / 2)];  // one row of half floats (48 KB of stack at most)
+    size_t k = 0;
+    for (int y = 0; y < height; ++y) {
+        halfFromFloat(rgb + size_t(y) * stride, rowValues, row);
+        for (size_t i = 0; i < rowValues; ++i, ++k) {
+            lo[k] = uint8_t(row[i] & 0xFF);
+            hi[k] = uint8_t(row[i] >> 8);
+        }
+    }
+    CodecSettings c = codec;
+    c.codec = wideCodec(codec.codec);
+    encodeTile(c, scratch.data(), 2 * width, height, size_t(width) * 6, out);
+}
+
+void decodeWideTile(TileCodec codec, const uint8_t* data, size_t size, int width, int height, float* dst,
+                    size_t dstStride, std::vector<uint8_t>& scratch) {
+    if (codec == TileCodec::Jpeg) throw DecodeError("a linear tile cannot be JPEG");
+    if (width < 1 || height < 1 || width > kMaxTileSide / 2 || height > kMaxTileSide || dstStride < size_t(width) * 3)
+        throw std::invalid_argument("decodeWideTile: tile size " + std::to_string(width) + "x" + std::to_string(height));
+    const size_t values = size_t(width) * height * 3, rowValues = size_t(width) * 3;
+    scratch.resize(2 * values);
+    decodeTile(codec, data, size, 2 * width, height, scratch.data(), size_t(width) * 6);
+    const uint8_t* lo = scratch.data();
+    const uint8_t* hi = scratch.data() + values;
+    uint16_t row[3 * (kMaxTileSide / 2)];
+    size_t k = 0;
+    for (int y = 0; y < height; ++y) {
+        for (size_t i = 0; i < rowValues; ++i, ++k) row[i] = uint16_t(lo[k] | (hi[k] << 8));
+        floatFromHalf(row, rowValues, dst + size_t(y) * dstStride);
+    }
+}
+
 size_t maxEncodedTileBytes(int width, int height) {
     const size_t n = tileBytes(width, height, size_t(width) * 3, "maxEncodedTileBytes");
     // 4:2:0 pads to 16x16 blocks and can exceed 4:4:4's bound for small tiles, so take both.

@@ -19,6 +19,19 @@ void encodeTile(const CodecSettings& codec, const uint8_t* rgb, int width, int h
 void decodeTile(TileCodec codec, const uint8_t* data, size_t size, int width, int height, uint8_t* dst,
                 size_t dstStride);
 
+// Linear RGB tiles for accumulated frames: each float rounded to an IEEE half (roundToHalf),
+// stored as two byte planes (all low bytes, then all high bytes: the high bytes of neighbouring
+// pixels repeat, which the compressors find), then compressed with a lossless codec as if it
+// were an 8-bit tile twice as wide. JPEG would defeat the purpose: it becomes LZ4 (wideCodec).
+TileCodec wideCodec(TileCodec codec);
+float roundToHalf(float v);
+// `stride` and `dstStride` count floats. `scratch` is reused between calls (no allocation per tile).
+void encodeWideTile(const CodecSettings& codec, const float* rgb, int width, int height, size_t stride,
+                    std::vector<uint8_t>& scratch, std::vector<uint8_t>& out);
+// Throws DecodeError as decodeTile; never writes outside dst.
+void decodeWideTile(TileCodec codec, const uint8_t* data, size_t size, int width, int height, float* dst,
+                    size_t dstStride, std::vector<uint8_t>& scratch);
+
 // Upper bound of an encoded tile's size, for ZMQ_MAXMSGSIZE.
 size_t maxEncodedTileBytes(int width, int height);
 

@@ -18,6 +18,7 @@
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <random>
@@ -39,6 +40,7 @@ struct ClientState {
     bool ready = false;       // proved it holds the state at stateSeq
     bool stateInFlight = false;  // a state was sent and not yet proved: another resync request adds nothing
     std::set<Hash128> meshesSent;  // each mesh goes to a client once: repeated requests cannot pile up meshes in its queue
+    std::set<Hash128> assetsSent;  // likewise each texture or volume file
     uint32_t stateSeq = 0;    // the snapshot it was sent; it also has every update after it
     uint32_t credits = 0;     // tiles it asked for and has not been given
     uint64_t updatesSent = 0; // for fault injection
@@ -57,6 +59,9 @@ public:
         uint32_t tile;
         TileRect rect;
         TileView view;
+        TilePixels format = TilePixels::Srgb8;
+        float* linear = nullptr;  // LinearHalf: the frame's linear buffer (image width x 3 floats a row)
+        int imageWidth = 0;
     };
 
     DecodePool(FrameAssembler& assembler, int threads, std::function<void()> onComplete,
@@ -83,6 +88,7 @@ public:
 
 private:
     void run() {
+        std::vector<uint8_t> scratch;  // a linear tile's half floats, reused
         for (;;) {
             Job job;
             {
@@ -93,8 +99,19 @@ private:
                 jobs_.pop_front();
             }
             try {
-                decodeTile(job.codec, job.pixels.data(), job.pixels.size(), job.rect.width(), job.rect.height(),
-                           job.view.data, job.view.stride);
+                if (job.format == TilePixels::LinearHalf) {
+                    // Into the linear frame, and quantised into the 8-bit one for display.
+                    const size_t stride = size_t(job.imageWidth) * 3;
+                    float* dst = job.linear + size_t(job.rect.y0) * stride + size_t(job.rect.x0) * 3;
+                    decodeWideTile(job.codec, job.pixels.data(), job.pixels.size(), job.rect.width(),
+                                   job.rect.height(), dst, stride, scratch);
+                    for (int y = 0; y < job.rect.height(); ++y)
+                        linearToSrgb8(dst + size_t(y) * stride, size_t(job.rect.width()) * 3,
+                                      job.view.data + size_t(y) * job.view.stride);
+                } else {
+                    decodeTile(job.codec, job.pixels.data(), job.pixels.size(), job.rect.width(), job.rect.height(),
+                               job.view.data, job.view.stride);
+                }
                 assembler_.commit(job.tile);
                 if (assembler_.complete()) onComplete_();
             } catch (const std::exception&) {
@@ -129,6 +146,8 @@ struct Command {
     RenderSettings settings;    // kBeginFrame: image and tile size at that state
     std::shared_ptr<const SceneSnapshot> state;  // kBeginFrame: the whole state the frame renders
     CodecSettings codec;        // kCodec
+    TilePixels pixels = TilePixels::Srgb8;  // kBeginFrame: how its tiles travel
+    bool stochastic = false;    // kBeginFrame: its state renders stochastically
 };
 
 }  // namespace
@@ -138,6 +157,8 @@ struct Master::Impl {
     SceneDesc scene;       // the master's state: geometry once, shared with nobody
     CameraDesc camera;
     std::vector<MeshRef> meshRefs;
+    std::vector<AssetRef> assetRefs;  // texture and volume files, read once: clients fetch them by hash
+    std::map<Hash128, std::shared_ptr<const std::vector<uint8_t>>> assetBytes;
     // The scene state above is written by the application thread (set*) and read by the
     // network thread (snapshots for joining clients): stateMutex guards it, seq and hashAt.
     mutable std::mutex stateMutex;
@@ -159,6 +180,7 @@ struct Master::Impl {
     uint32_t completedFrame = 0;
     Image completedImage;
     FrameReport completedReport;
+    std::vector<float> completedLinear;  // the completed frame's linear pixels, when it had linear tiles
     int readyClients = 0;
 
     // Network-thread state.
@@ -170,6 +192,9 @@ struct Master::Impl {
     uint32_t currentFrame = 0;
     uint32_t frameSeq = 0;        // state the current frame renders
     std::shared_ptr<const SceneSnapshot> frameState;  // that state in full (null before the first frame)
+    TilePixels framePixels = TilePixels::Srgb8;  // how the current frame's tiles travel
+    bool frameStochastic = false;
+    std::vector<float> linear;    // the current frame in linear RGB (LinearHalf frames)
     std::deque<Update> sentUpdates;  // updates already sent to everyone, newest last, for joiners
     bool frameActive = false;
     double frameStart = 0;
@@ -205,6 +230,7 @@ struct Master::Impl {
         snap.settings = scene.settings;
         snap.bvh = scene.bvh;
         snap.origin = scene.origin;
+        snap.assets = assetRefs;
         return snap;
     }
 
@@ -287,8 +313,13 @@ struct Master::Impl {
     }
 
     void beginFrame(uint32_t frame, uint32_t stateSeq, const RenderSettings& rs,
-                    std::shared_ptr<const SceneSnapshot> state) {
+                    std::shared_ptr<const SceneSnapshot> state, TilePixels pixels, bool stochastic) {
         currentFrame = frame;
+        framePixels = pixels;
+        frameStochastic = stochastic;
+        // Every tile writes its part; no clearing. (Swapped with the completed frame's buffer,
+        // so a still view allocates nothing.)
+        if (pixels == TilePixels::LinearHalf) linear.resize(size_t(rs.width) * size_t(rs.height) * 3);
         frameSeq = stateSeq;
         frameState = std::move(state);
         while (!sentUpdates.empty() && sentUpdates.front().seq <= frameSeq) sentUpdates.pop_front();
@@ -298,7 +329,7 @@ struct Master::Impl {
         frameDecoded = false;
         assembler.beginFrame(frame, rs.width, rs.height, rs.tileSize);
         scheduler.beginFrame(frame, uint32_t(assembler.tiles().size()));
-        FrameBegin fb{frame, frameSeq};
+        FrameBegin fb{frame, frameSeq, framePixels};
         for (auto& [peer, c] : clients) {
             c.credits = 0;
             c.busySeconds = 0;
@@ -323,6 +354,8 @@ struct Master::Impl {
         r.staleDropped = st.stale;
         r.affinityHits = st.affinityHits;
         r.tileOwners.assign(scheduler.owners().begin(), scheduler.owners().end());
+        r.stochastic = frameStochastic;
+        r.linear = framePixels == TilePixels::LinearHalf;
         const std::vector<double>& lat = scheduler.latencies();
         double sum = 0;
         for (double l : lat) sum += l;
@@ -341,6 +374,8 @@ struct Master::Impl {
         {
             std::lock_guard lock(m);
             completedImage = std::exchange(assembler.image(), Image{});  // the assembler starts the next frame afresh
+            if (framePixels == TilePixels::LinearHalf) completedLinear.swap(linear);
+            else completedLinear.clear();
             completedReport = std::move(r);
             completedFrame = currentFrame;
         }
@@ -403,7 +438,7 @@ struct Master::Impl {
             }
             cv.notify_all();
         }
-        if (frameActive && c.stateSeq <= frameSeq) send(c, FrameBegin{currentFrame, frameSeq}, currentFrame);
+        if (frameActive && c.stateSeq <= frameSeq) send(c, FrameBegin{currentFrame, frameSeq, framePixels}, currentFrame);
     }
 
     void onMeshRequest(ClientState& c, const uint8_t* data, size_t size) {
@@ -421,10 +456,24 @@ struct Master::Impl {
         ++dropped;
     }
 
+    void onAssetRequest(ClientState& c, const uint8_t* data, size_t size) {
+        const AssetRequest req = decodePayload<AssetRequest>(data, size);
+        if (!c.assetsSent.insert(req.hash).second) {
+            ++dropped;  // asked before: it has it, or it is replaying requests to fill its queue
+            return;
+        }
+        auto it = assetBytes.find(req.hash);
+        if (it == assetBytes.end()) {
+            ++dropped;  // not a file of this scene
+            return;
+        }
+        if (!send(c, AssetData{req.hash, *it->second})) markDead(c, "unreachable while sending a texture or volume");
+    }
+
     void onTileResult(ClientState& c, const Header& h, const uint8_t* data, size_t size) {
         TileResult r = decodePayload<TileResult>(data, size);
         c.busySeconds += r.renderMicros * 1e-6;
-        if (!frameActive || h.frame != currentFrame || r.frame != currentFrame) {
+        if (!frameActive || h.frame != currentFrame || r.frame != currentFrame || r.format != framePixels) {
             ++dropped;  // a tile of a frame that is no longer current
             return;
         }
@@ -442,7 +491,8 @@ struct Master::Impl {
             if (assembler.claim(r.frame, r.tile, rect, view) == FrameAssembler::Claim::Granted) {
                 frameBytes += r.pixels.size();
                 c.frameBytes += r.pixels.size();
-                decoder->push({std::move(r.pixels), r.codec, r.tile, rect, view});
+                decoder->push({std::move(r.pixels), r.codec, r.tile, rect, view, r.format,
+                               r.format == TilePixels::LinearHalf ? linear.data() : nullptr, assembler.image().width});
             }
         }
         serve(c);
@@ -475,6 +525,7 @@ struct Master::Impl {
             switch (h.type) {
             case MsgType::Ready: onReady(c, payload, payloadSize); break;
             case MsgType::MeshRequest: onMeshRequest(c, payload, payloadSize); break;
+            case MsgType::AssetRequest: onAssetRequest(c, payload, payloadSize); break;
             case MsgType::TileRequest: {
                 const TileRequest req = decodePayload<TileRequest>(payload, payloadSize);
                 if (frameActive && req.frame == currentFrame) {
@@ -588,13 +639,17 @@ struct Master::Impl {
             }
             // Never merge across a frame: a frame's state must be a point in the sequence.
             flushUpdates();
-            if (cmd.kind == Command::kBeginFrame) beginFrame(cmd.frame, cmd.update.seq, cmd.settings, std::move(cmd.state));
+            if (cmd.kind == Command::kBeginFrame)
+                beginFrame(cmd.frame, cmd.update.seq, cmd.settings, std::move(cmd.state), cmd.pixels, cmd.stochastic);
             if (cmd.kind == Command::kCodec) {
                 settings.codec = cmd.codec;  // for clients that join later
                 for (auto& [peer, c] : clients) {
                     const Welcome w{c.id, settings.codec, uint32_t(settings.prefetch), uint32_t(settings.heartbeatMs)};
                     if (!c.deathReason && !send(c, w)) markDead(c, "its queue is full or it is unreachable");
                 }
+                // The state's sequence number moves on (an update without changes), so frames
+                // after the switch are seen as another state and an accumulation restarts.
+                mergeInto(unsent, std::move(cmd.update));
             }
         }
         if (nowSeconds() - lastUpdateSent > kUpdateIntervalSeconds) flushUpdates();
@@ -667,10 +722,43 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
         const std::vector<uint8_t> bytes = encodeMesh(*md.mesh);  // only to hash it; freed at once
         s.meshRefs.push_back({md.name, md.source, hashBytes(bytes.data(), bytes.size()), bytes.size()});
     }
+    // Texture images and volume files: read once, sent to clients that do not have them.
+    auto addAsset = [&](const std::string& path) {
+        if (path.empty()) return;
+        for (const AssetRef& a : s.assetRefs)
+            if (a.path == path) return;
+        std::shared_ptr<const std::vector<uint8_t>> bytes;
+        if (auto it = scene.files.find(path); it != scene.files.end() && it->second) {
+            bytes = it->second;
+        } else {
+            std::error_code ec;
+            const auto size = std::filesystem::file_size(path, ec);
+            if (ec) throw InputError(path + ": cannot read the file a material names (" + ec.message() + ")");
+            if (size > kMaxAssetBytes)
+                throw InputError(path + ": " + std::to_string(size) + " bytes is more than the cluster sends (" +
+                                 std::to_string(kMaxAssetBytes) + ")");
+            std::ifstream in(path, std::ios::binary);
+            auto v = std::make_shared<std::vector<uint8_t>>(size_t(size));
+            if (!in.read(reinterpret_cast<char*>(v->data()), std::streamsize(size)))
+                throw InputError(path + ": cannot read the file a material names");
+            bytes = std::move(v);
+        }
+        if (bytes->size() > kMaxAssetBytes)
+            throw InputError(path + ": more bytes than the cluster sends (" + std::to_string(kMaxAssetBytes) + ")");
+        const Hash128 hash = hashBytes(bytes->data(), bytes->size());
+        s.assetRefs.push_back({path, hash, bytes->size()});
+        s.assetBytes[hash] = bytes;
+    };
+    for (const Material& m : scene.materials) {
+        if (m.texture.kind == TextureKind::Image) addAsset(m.texture.file);
+        if (m.alpha.kind == TextureKind::Image) addAsset(m.alpha.file);
+        if (m.type == MaterialType::Volume) addAsset(m.volumeFile);
+    }
     s.hashAt[s.seq] = stateHash(s.snapshotLocked());
 
     // The largest legitimate message a client sends is a result for the largest tile allowed.
-    const int64_t maxResult = int64_t(kHeaderSize + 64 + maxEncodedTileBytes(1024, 1024));
+    // (A linear tile is encoded as an 8-bit tile twice as wide.)
+    const int64_t maxResult = int64_t(kHeaderSize + 64 + maxEncodedTileBytes(2048, 1024));
     if (settings.highWaterMark < 1) throw InputError("the high-water mark must be at least 1 message");
     configureSocket(s.router, maxResult, settings.heartbeatMs, settings.timeoutMs, settings.highWaterMark);
     s.router.set(zmq::sockopt::router_mandatory, 1);
@@ -729,7 +817,7 @@ Master::~Master() {
     Impl& s = *impl_;
     {
         std::lock_guard lock(s.m);
-        s.commands.push_back({Command::kStop, {}, 0, {}, nullptr, {}});
+        s.commands.push_back({Command::kStop, {}, 0, {}, nullptr, {}, TilePixels::Srgb8, false});
     }
     s.wake();
     if (s.net.joinable()) s.net.join();
@@ -754,7 +842,7 @@ bool Master::waitForClients(int count, int timeoutMs) {
 namespace {
 
 void pushUpdate(Master::Impl& s, Change change) {
-    Command cmd{Command::kUpdate, {}, 0, {}, nullptr, {}};
+    Command cmd{Command::kUpdate, {}, 0, {}, nullptr, {}, TilePixels::Srgb8, false};
     {
         std::lock_guard lock(s.stateMutex);
         applyChange(s.scene, s.camera, change);  // throws for an index out of range, before anything changed
@@ -776,12 +864,33 @@ void pushUpdate(Master::Impl& s, Change change) {
 
 void Master::setCamera(const CameraDesc& camera) { pushUpdate(*impl_, CameraChange{camera}); }
 void Master::setInstanceTransform(uint32_t instance, const Transform& t) { pushUpdate(*impl_, TransformChange{instance, t}); }
-void Master::setMaterial(uint32_t material, const Material& value) { pushUpdate(*impl_, MaterialChange{material, value}); }
+void Master::setMaterial(uint32_t material, const Material& value) {
+    // The files travel with the scene state only: one the scene did not name must exist at the
+    // same path on every client PC (a shared file system).
+    for (const std::string* path : {&value.texture.file, &value.alpha.file, &value.volumeFile}) {
+        if (path->empty()) continue;
+        const bool known = std::any_of(impl_->assetRefs.begin(), impl_->assetRefs.end(),
+                                       [&](const AssetRef& a) { return a.path == *path; });
+        if (!known)
+            std::fprintf(stderr, "rtwall master: WARNING: material %u now names %s, which the scene did not load: "
+                                 "clients must find it at that path\n", material, path->c_str());
+    }
+    pushUpdate(*impl_, MaterialChange{material, value});
+}
 void Master::setLight(uint32_t light, const Light& value) { pushUpdate(*impl_, LightChange{light, value}); }
 void Master::setRenderSettings(const RenderSettings& settings) { pushUpdate(*impl_, SettingsChange{settings}); }
 
 void Master::setCodec(const CodecSettings& codec) {
-    Command cmd{Command::kCodec, {}, 0, {}, nullptr, codec};
+    Command cmd{Command::kCodec, {}, 0, {}, nullptr, codec, TilePixels::Srgb8, false};
+    {
+        std::lock_guard lock(impl_->stateMutex);
+        Impl& s = *impl_;
+        ++s.seq;
+        s.hashAt[s.seq] = stateHash(s.snapshotLocked());
+        while (s.hashAt.size() > 1024) s.hashAt.erase(s.hashAt.begin());
+        cmd.update.seq = s.seq;
+        cmd.update.baseSeq = s.seq - 1;
+    }
     {
         std::lock_guard lock(impl_->m);
         impl_->commands.push_back(std::move(cmd));
@@ -789,17 +898,19 @@ void Master::setCodec(const CodecSettings& codec) {
     impl_->wake();
 }
 
-Image Master::renderFrame(FrameReport* report) {
+Image Master::renderFrame(FrameReport* report, std::vector<float>* linear) {
     Impl& s = *impl_;
     auto begin = [&] {
         const uint32_t frame = ++s.lastBegun;
-        Command cmd{Command::kBeginFrame, {}, frame, {}, nullptr, {}};
+        Command cmd{Command::kBeginFrame, {}, frame, {}, nullptr, {}, TilePixels::Srgb8, false};
         {
             // The frame renders the state as it is now; later updates belong to later frames.
             std::lock_guard lock(s.stateMutex);
             cmd.update.seq = s.seq;
             cmd.settings = s.scene.settings;
             cmd.state = std::make_shared<const SceneSnapshot>(s.snapshotLocked());
+            cmd.stochastic = rendersStochastically(s.scene);
+            if (cmd.stochastic && s.settings.wideAccumulation) cmd.pixels = TilePixels::LinearHalf;
         }
         {
             std::lock_guard lock(s.m);
@@ -822,6 +933,10 @@ Image Master::renderFrame(FrameReport* report) {
         }
         s.inFlight = false;
         if (report) *report = s.completedReport;
+        if (linear) {
+            linear->clear();
+            linear->swap(s.completedLinear);  // the caller's buffer comes back for a later frame
+        }
         return std::move(s.completedImage);
     };
     if (!s.settings.async) return wait(begin());

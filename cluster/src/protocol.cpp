@@ -310,6 +310,20 @@ void read(Reader& r, MeshRef& m) {
     if (m.bytes > kMaxMeshBytes) fail("mesh size " + std::to_string(m.bytes) + " exceeds the limit");
 }
 
+void write(Writer& w, const AssetRef& m) {
+    w.string(m.path);
+    write(w, m.hash);
+    w.u64(m.bytes);
+}
+
+void read(Reader& r, AssetRef& m) {
+    m.path = r.string(kMaxStringBytes);
+    if (m.path.empty()) fail("asset with an empty path");
+    m.hash = readHash(r);
+    m.bytes = r.u64();
+    if (m.bytes > kMaxAssetBytes) fail("asset size " + std::to_string(m.bytes) + " exceeds the limit");
+}
+
 // Defined with the changes below; declared here for the vector helpers, which unqualified
 // lookup at their definition must find (these overloads are invisible to ADL).
 void write(Writer& w, const Change& c);
@@ -454,6 +468,7 @@ void writeState(Writer& w, const SceneSnapshot& m) {
     w.boolean(m.bvh.compact);
     w.boolean(m.bvh.robust);
     for (double o : m.origin) w.f64(o);
+    writeVector(w, m.assets);
 }
 
 void write(Writer& w, const SceneSnapshot& m) {
@@ -478,6 +493,8 @@ void read(Reader& r, SceneSnapshot& m) {
     m.bvh.compact = r.boolean();
     m.bvh.robust = r.boolean();
     for (double& o : m.origin) o = r.f64();  // f64 rejects NaN and infinity
+    static const size_t assetBytes = minEncodedSize(AssetRef{});
+    readVector(r, m.assets, assetBytes, kMaxSceneObjects);
     // The engine indexes meshes and materials with these without further checks.
     for (size_t i = 0; i < m.instances.size(); ++i) {
         const InstanceDesc& in = m.instances[i];
@@ -505,6 +522,19 @@ void read(Reader& r, MeshData& m) {
     m.mesh.assign(p, p + n);
 }
 
+void write(Writer& w, const AssetRequest& m) { write(w, m.hash); }
+void read(Reader& r, AssetRequest& m) { m.hash = readHash(r); }
+
+void write(Writer& w, const AssetData& m) {
+    write(w, m.hash);
+    w.blob(m.bytes.data(), m.bytes.size());
+}
+void read(Reader& r, AssetData& m) {
+    m.hash = readHash(r);
+    const auto [p, n] = r.blobView(kMaxAssetBytes);
+    m.bytes.assign(p, p + n);
+}
+
 void write(Writer& w, const Update& m) {
     w.u32(m.seq);
     writeVector(w, m.changes);
@@ -520,10 +550,12 @@ void read(Reader& r, Update& m) {
 void write(Writer& w, const FrameBegin& m) {
     w.u32(m.frame);
     w.u32(m.updateSeq);
+    writeEnum(w, m.pixels);
 }
 void read(Reader& r, FrameBegin& m) {
     m.frame = r.u32();
     m.updateSeq = r.u32();
+    m.pixels = readEnum(r, TilePixels::LinearHalf, "tile pixel format");
 }
 
 void write(Writer& w, const TileRequest& m) {
@@ -557,14 +589,17 @@ void write(Writer& w, const TileResult& m) {
     writeEnum(w, m.codec);
     w.u32(m.renderMicros);
     w.blob(m.pixels.data(), m.pixels.size());
+    writeEnum(w, m.format);
 }
 void read(Reader& r, TileResult& m) {
-    static const size_t maxPixelBytes = maxEncodedTileBytes(kMaxTileSize, kMaxTileSize);
+    // A half-float tile is encoded as an 8-bit tile twice as wide.
+    static const size_t maxPixelBytes = maxEncodedTileBytes(2 * kMaxTileSize, kMaxTileSize);
     m.frame = r.u32();
     m.tile = r.u32();
     m.codec = readEnum(r, TileCodec::Jpeg, "tile codec");
     m.renderMicros = r.u32();
     m.pixels = r.blob(maxPixelBytes);
+    m.format = readEnum(r, TilePixels::LinearHalf, "tile pixel format");
 }
 
 void write(Writer&, const Heartbeat&) {}
@@ -680,6 +715,8 @@ MsgType messageTypeOf(const Heartbeat&) { return MsgType::Heartbeat; }
 MsgType messageTypeOf(const Goodbye&) { return MsgType::Goodbye; }
 MsgType messageTypeOf(const Ready&) { return MsgType::Ready; }
 MsgType messageTypeOf(const ResyncRequest&) { return MsgType::ResyncRequest; }
+MsgType messageTypeOf(const AssetRequest&) { return MsgType::AssetRequest; }
+MsgType messageTypeOf(const AssetData&) { return MsgType::AssetData; }
 
 #define RTWALL_INSTANTIATE_MESSAGE(Msg)                                                    \
     template std::vector<uint8_t> encodeMessage<Msg>(Header header, const Msg& msg); \
@@ -698,6 +735,8 @@ RTWALL_INSTANTIATE_MESSAGE(Heartbeat)
 RTWALL_INSTANTIATE_MESSAGE(Goodbye)
 RTWALL_INSTANTIATE_MESSAGE(Ready)
 RTWALL_INSTANTIATE_MESSAGE(ResyncRequest)
+RTWALL_INSTANTIATE_MESSAGE(AssetRequest)
+RTWALL_INSTANTIATE_MESSAGE(AssetData)
 #undef RTWALL_INSTANTIATE_MESSAGE
 
 // -- Meshes --------------------------------------------------------------------------------------

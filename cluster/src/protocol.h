@@ -1,6 +1,8 @@
 // The rtwall wire protocol, version 4 (2 added the master's peer timeout to Welcome; 3 added
-// materials, area lights and shading settings; 4 added vertex colours to meshes and the scene's
-// origin and [bvh] settings to the snapshot).
+// materials, area lights and shading settings; 4 added vertex colours to meshes, the scene's
+// origin and [bvh] settings to the snapshot, spherical and cylindrical texture mappings, texture
+// and volume files by content hash (AssetRequest, AssetData, SceneSnapshot::assets) and linear
+// half-float tiles for accumulation (FrameBegin::pixels, TileResult::pixels)).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one writer and one
@@ -35,6 +37,7 @@ inline constexpr uint32_t kMaxTilesPerMessage = 1 << 16;
 inline constexpr uint32_t kMaxChangesPerUpdate = 1 << 16;
 inline constexpr uint32_t kMaxSceneObjects = 1 << 24;  // meshes, instances, materials, lights, cameras
 inline constexpr uint64_t kMaxMeshBytes = uint64_t(1) << 31;
+inline constexpr uint64_t kMaxAssetBytes = uint64_t(1) << 30;  // one texture image or volume file
 inline constexpr uint32_t kMaxTimeoutMs = 3'600'000;  // heartbeat and timeout: an hour at most
 
 enum class MsgType : uint16_t {
@@ -52,8 +55,10 @@ enum class MsgType : uint16_t {
     Goodbye = 12,       // both ways, with the reason
     Ready = 13,         // client -> master: holds the state at a sequence number with this hash
     ResyncRequest = 14, // client -> master: saw a gap after this sequence number
+    AssetRequest = 15,  // client -> master: a texture or volume file by content hash
+    AssetData = 16,     // master -> client
 };
-inline constexpr uint16_t kMaxMsgType = 14;
+inline constexpr uint16_t kMaxMsgType = 16;
 
 struct Header {
     uint16_t version = kProtocolVersion;
@@ -87,6 +92,18 @@ struct MeshRef {
     uint64_t bytes = 0;  // size of those bytes
 };
 
+// A texture image or volume file a material names, by the path the material uses (the key of
+// SceneDesc::files on the client) and the hash of the file's bytes.
+struct AssetRef {
+    std::string path;
+    Hash128 hash{};      // XXH3 128-bit of the file's bytes
+    uint64_t bytes = 0;  // the file's size, at most kMaxAssetBytes
+};
+
+// How a frame's tiles travel: 8-bit sRGB (the displayed frame) or linear RGB as IEEE half
+// floats, little-endian (frames that are accumulated: the master sums them in float).
+enum class TilePixels : uint8_t { Srgb8 = 0, LinearHalf = 1 };
+
 // The scene without geometry: meshes are referenced by content hash.
 struct SceneSnapshot {
     uint32_t updateSeq = 0;
@@ -100,6 +117,7 @@ struct SceneSnapshot {
     // (rebased) coordinates lie in the world.
     BvhSettings bvh;
     std::array<double, 3> origin{0, 0, 0};
+    std::vector<AssetRef> assets;  // every texture image and volume file the materials name
 };
 
 struct MeshRequest {
@@ -109,6 +127,17 @@ struct MeshRequest {
 struct MeshData {
     Hash128 hash{};
     std::vector<uint8_t> mesh;  // encodeMesh bytes
+};
+
+struct AssetRequest {
+    Hash128 hash{};
+};
+
+// The file's bytes. The decoder checks the size bound only: the receiver checks the hash, so
+// that it can count and report a mismatch.
+struct AssetData {
+    Hash128 hash{};
+    std::vector<uint8_t> bytes;
 };
 
 struct CameraChange {
@@ -143,6 +172,7 @@ struct Update {
 struct FrameBegin {
     uint32_t frame = 0;
     uint32_t updateSeq = 0;  // the frame renders the state at exactly this sequence number
+    TilePixels pixels = TilePixels::Srgb8;  // how its tiles are sent
 };
 
 struct TileRequest {
@@ -161,6 +191,7 @@ struct TileResult {
     TileCodec codec = TileCodec::Raw;
     uint32_t renderMicros = 0;
     std::vector<uint8_t> pixels;  // encoded
+    TilePixels format = TilePixels::Srgb8;  // LinearHalf: `pixels` are 6 bytes a pixel before the codec
 };
 
 struct Heartbeat {};
@@ -203,6 +234,8 @@ MsgType messageTypeOf(const Heartbeat&);
 MsgType messageTypeOf(const Goodbye&);
 MsgType messageTypeOf(const Ready&);
 MsgType messageTypeOf(const ResyncRequest&);
+MsgType messageTypeOf(const AssetRequest&);
+MsgType messageTypeOf(const AssetData&);
 
 // Canonical mesh bytes (vertex count, positions, triangle count, indices, normals flag and
 // normals, colours flag and RGB bytes, all little-endian), their hash (XXH3 128-bit) and the way back. decodeMesh

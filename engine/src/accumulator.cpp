@@ -15,6 +15,48 @@ void Accumulator::add(const Image& frame) {
     ++frames_;
 }
 
+void Accumulator::addLinear(const float* rgb, int width, int height) {
+    const size_t n = size_t(width) * size_t(height) * 3;
+    if (width != width_ || height != height_ || frames_ == 0) {
+        width_ = width;
+        height_ = height;
+        sum_.assign(n, 0.0);
+        frames_ = 0;
+    }
+    // Row-sized chunks through the bulk conversions: no allocation, no per-value library call.
+    uint16_t half[1024];
+    float rounded[1024];
+    for (size_t i = 0; i < n; i += 1024) {
+        const size_t m = std::min<size_t>(1024, n - i);
+        halfFromFloat(rgb + i, m, half);
+        floatFromHalf(half, m, rounded);
+        for (size_t k = 0; k < m; ++k) sum_[i + k] += double(rounded[k]);
+    }
+    ++frames_;
+}
+
+void linearToSrgb8(const float* linear, size_t count, uint8_t* out) {
+    for (size_t i = 0; i < count; ++i) out[i] = linearToSrgb8(linear[i]);
+}
+
+bool rendersStochastically(const SceneDesc& scene) {
+    const RenderSettings& s = scene.settings;
+    if (s.view != ViewMode::Shaded || s.shading != ShadingMode::Full) return false;
+    if (s.gi) return true;
+    for (const Light& l : scene.lights)
+        if (l.type == LightType::Area) return true;  // a random point on the light per shading point
+    std::vector<bool> used(scene.materials.size(), false);
+    for (const InstanceDesc& in : scene.instances)
+        if (in.material < used.size()) used[in.material] = true;
+    for (size_t i = 0; i < scene.materials.size(); ++i) {
+        const Material& m = scene.materials[i];
+        if (!used[i]) continue;
+        if (m.type == MaterialType::Metal && m.roughness > 0.0f) return true;  // a sampled glossy lobe
+        if (m.type == MaterialType::Volume) return true;                        // a jittered first step
+    }
+    return false;
+}
+
 Image Accumulator::resolve() const {
     Image img;
     img.width = width_;

@@ -1,4 +1,5 @@
 #include "material.h"
+#include "scene_files.h"
 #include "scene_impl.h"
 #include "vec.h"
 
@@ -165,6 +166,7 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
     try {
         s.models.reserve(s.desc.materials.size());
         bool anyAlpha = false;
+        const ScopedSceneFiles files(&s.desc.files);  // textures and volumes given in memory
         for (const Material& m : s.desc.materials) {
             s.models.push_back(makeMaterialModel(m));
             anyAlpha |= s.models.back()->alphaMasked();
@@ -280,6 +282,7 @@ void Scene::setMaterial(uint32_t material, const Material& value) {
     if (material >= s.desc.materials.size())
         throw std::out_of_range("material " + std::to_string(material) + " does not exist");
     // Built first: a texture or volume that cannot be read throws before anything changes.
+    const ScopedSceneFiles files(&s.desc.files);
     std::unique_ptr<MaterialModel> model = makeMaterialModel(value);
     s.desc.materials[material] = value;
     s.models[material] = std::move(model);

@@ -1,16 +1,17 @@
 #include "texture.h"
 
+#include "scene_files.h"
 #include "shading.h"
 
 #include <rtwall/image.h>
 
+#include <png.h>
 #include <turbojpeg.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <iterator>
 #include <numbers>
 
@@ -47,6 +48,27 @@ std::shared_ptr<const TextureImage> loadJpeg(const std::string& file, const std:
     return fromSrgb8(w, h, rgb.data());
 }
 
+std::shared_ptr<const TextureImage> loadPng(const std::string& file, const std::vector<unsigned char>& bytes) {
+    // libpng's simplified API, as rtwall::readPng uses for files.
+    png_image png{};
+    png.version = PNG_IMAGE_VERSION;
+    if (!png_image_begin_read_from_memory(&png, bytes.data(), bytes.size()))
+        throw InputError(file + ": cannot read PNG: " + png.message);
+    png.format = PNG_FORMAT_RGB;
+    if (png.width == 0 || png.height == 0 || png.width > 16384 || png.height > 16384) {
+        png_image_free(&png);
+        throw InputError(file + ": PNG size " + std::to_string(png.width) + "x" + std::to_string(png.height) +
+                         " is out of range");
+    }
+    std::vector<uint8_t> rgb(PNG_IMAGE_SIZE(png));
+    if (!png_image_finish_read(&png, nullptr, rgb.data(), 0, nullptr)) {
+        const std::string why = png.message;
+        png_image_free(&png);
+        throw InputError(file + ": cannot read PNG: " + why);
+    }
+    return fromSrgb8(int(png.width), int(png.height), rgb.data());
+}
+
 // Ken Perlin's reference permutation.
 constexpr std::array<uint8_t, 256> kPerm = {
     151, 160, 137, 91,  90,  15,  131, 13,  201, 95,  96,  53,  194, 233, 7,   225, 140, 36,  103, 30,  69,  142,
@@ -76,13 +98,11 @@ Color mix(const Color& a, const Color& b, float t) { return a * (1.0f - t) + b *
 }  // namespace
 
 std::shared_ptr<const TextureImage> loadTextureImage(const std::string& file) {
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw InputError(file + ": cannot open the texture");
-    std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (bytes.size() >= 8 && bytes[0] == 0x89 && bytes[1] == 'P' && bytes[2] == 'N' && bytes[3] == 'G') {
-        const Image img = readPng(file);
-        return fromSrgb8(img.width, img.height, img.rgb.data());
-    }
+    // Decoded from memory whether the bytes come from the disk or from the scene's files (a
+    // render client's copy of the master's file), so both give the same texels.
+    const std::shared_ptr<const std::vector<uint8_t>> data = readSceneFile(file, "texture");
+    const std::vector<unsigned char>& bytes = *data;
+    if (bytes.size() >= 8 && bytes[0] == 0x89 && bytes[1] == 'P' && bytes[2] == 'N' && bytes[3] == 'G') return loadPng(file, bytes);
     if (bytes.size() >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 && bytes[2] == 0xFF) return loadJpeg(file, bytes);
     throw InputError(file + ": a texture must be a PNG or a JPEG image");
 }

@@ -1,6 +1,8 @@
 // The only file that sees VTK (target rtwall_volume_io): reads image data into a VolumeGrid.
 #include "volume.h"
 
+#include "scene_files.h"
+
 #include <vtkDataArray.h>
 #include <vtkImageData.h>
 #include <vtkNew.h>
@@ -11,6 +13,7 @@
 #include <vtkXMLImageDataReader.h>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <fstream>
 #include <mutex>
@@ -56,23 +59,29 @@ std::shared_ptr<const VolumeGrid> fromImage(vtkImageData* img, const std::string
 
 std::shared_ptr<const VolumeGrid> loadVolume(const std::filesystem::path& file) {
     const std::string name = file.string();
-    if (!std::ifstream(file)) throw InputError(name + ": cannot open the volume");
+    // Parsed from memory whether the bytes come from the disk or from the scene's files (a
+    // render client's copy of the master's file), so both give the same grid.
+    const std::shared_ptr<const std::vector<uint8_t>> bytes = readSceneFile(name, "volume");
+    const std::string text(bytes->begin(), bytes->end());
     // VTK readers print to stderr on errors; turn that off and check the outcome ourselves.
     static std::mutex vtkMutex;  // VTK readers are not documented as thread-safe
     std::lock_guard lock(vtkMutex);
     vtkObject::GlobalWarningDisplayOff();
     const std::string ext = file.extension().string();
     if (ext == ".vti") {
+        if (text.find("<VTKFile") == std::string::npos || text.find("ImageData") == std::string::npos)
+            throw InputError(name + ": not a VTK XML image data file");
         vtkNew<vtkXMLImageDataReader> reader;
-        if (!reader->CanReadFile(name.c_str())) throw InputError(name + ": not a VTK XML image data file");
-        reader->SetFileName(name.c_str());
+        reader->ReadFromInputStringOn();
+        reader->SetInputString(text);
         reader->Update();
         if (reader->GetErrorCode() != 0) throw InputError(name + ": unreadable VTK XML image data");
         return fromImage(reader->GetOutput(), name);
     }
     if (ext == ".vtk") {
         vtkNew<vtkStructuredPointsReader> reader;
-        reader->SetFileName(name.c_str());
+        reader->ReadFromInputStringOn();
+        reader->SetInputString(text.data(), int(std::min<size_t>(text.size(), size_t(INT_MAX))));
         if (!reader->IsFileStructuredPoints()) throw InputError(name + ": not a legacy VTK structured points file");
         reader->Update();
         if (reader->GetErrorCode() != 0) throw InputError(name + ": unreadable legacy VTK file");

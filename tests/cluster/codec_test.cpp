@@ -334,3 +334,58 @@ TEST(Codec, Names) {
 
 }  // namespace
 }  // namespace rtwall::cluster
+
+namespace rtwall::cluster {
+namespace {
+
+// Half precision: the documented IEEE values, ties to even, overflow to infinity.
+TEST(WideTile, HalfRoundingIsIeee) {
+    EXPECT_EQ(halfFromFloat(1.0f), 0x3C00);
+    EXPECT_EQ(halfFromFloat(-2.0f), 0xC000);
+    EXPECT_EQ(halfFromFloat(65504.0f), 0x7BFF);
+    EXPECT_EQ(halfFromFloat(65520.0f), 0x7C00);                    // rounds up to infinity
+    EXPECT_EQ(halfFromFloat(1.0f + std::ldexp(1.0f, -11)), 0x3C00);  // a tie: to even
+    EXPECT_EQ(halfFromFloat(1.0f + 3 * std::ldexp(1.0f, -11)), 0x3C02);
+    EXPECT_EQ(halfFromFloat(std::ldexp(1.0f, -24)), 0x0001);        // the smallest subnormal
+    EXPECT_EQ(floatFromHalf(0x3555), 0.333251953125f);
+    EXPECT_EQ(roundToHalf(0.1f), floatFromHalf(halfFromFloat(0.1f)));
+    for (uint32_t h = 0; h < 0x7C00; ++h) EXPECT_EQ(halfFromFloat(floatFromHalf(uint16_t(h))), h);
+}
+
+// Linear tiles: every lossless codec (and JPEG, which becomes LZ4) gives back exactly the
+// half-rounded values, whatever the strides; malformed data throws, JPEG-labelled data too.
+TEST(WideTile, RoundTripsExactlyAtHalfPrecision) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> value(0.0f, 4.0f);
+    for (const Size s : kSizes) {
+        const size_t stride = size_t(s.w) * 3 + 5;
+        std::vector<float> rgb(stride * size_t(s.h));
+        for (float& v : rgb) v = value(rng);
+        for (TileCodec c : kAllCodecs) {
+            CodecSettings cs;
+            cs.codec = c;
+            std::vector<uint8_t> scratch, encoded;
+            encodeWideTile(cs, rgb.data(), s.w, s.h, stride, scratch, encoded);
+            const size_t dstStride = size_t(s.w) * 3 + 2;
+            std::vector<float> back(dstStride * size_t(s.h), -1.0f);
+            decodeWideTile(wideCodec(c), encoded.data(), encoded.size(), s.w, s.h, back.data(), dstStride, scratch);
+            for (int y = 0; y < s.h; ++y)
+                for (int i = 0; i < s.w * 3; ++i)
+                    ASSERT_EQ(back[size_t(y) * dstStride + size_t(i)], roundToHalf(rgb[size_t(y) * stride + size_t(i)]))
+                        << codecName(c) << " " << s.w << "x" << s.h;
+            for (int y = 0; y < s.h; ++y)
+                for (size_t i = size_t(s.w) * 3; i < dstStride; ++i) ASSERT_EQ(back[size_t(y) * dstStride + i], -1.0f);
+            if (encoded.size() > 1) {
+                std::vector<uint8_t> cut(encoded.begin(), encoded.end() - 1);
+                EXPECT_THROW(decodeWideTile(wideCodec(c), cut.data(), cut.size(), s.w, s.h, back.data(), dstStride, scratch),
+                             DecodeError);
+            }
+            EXPECT_THROW(decodeWideTile(TileCodec::Jpeg, encoded.data(), encoded.size(), s.w, s.h, back.data(), dstStride,
+                                        scratch),
+                         DecodeError);
+        }
+    }
+}
+
+}  // namespace
+}  // namespace rtwall::cluster

@@ -118,6 +118,12 @@ void expectSame(const SceneSnapshot& a, const SceneSnapshot& b) {
     EXPECT_EQ(a.bvh.compact, b.bvh.compact);
     EXPECT_EQ(a.bvh.robust, b.bvh.robust);
     EXPECT_EQ(a.origin, b.origin);
+    ASSERT_EQ(a.assets.size(), b.assets.size());
+    for (size_t i = 0; i < a.assets.size(); ++i) {
+        EXPECT_EQ(a.assets[i].path, b.assets[i].path);
+        EXPECT_EQ(a.assets[i].hash, b.assets[i].hash);
+        EXPECT_EQ(a.assets[i].bytes, b.assets[i].bytes);
+    }
 }
 void expectSame(const MeshRequest& a, const MeshRequest& b) { EXPECT_EQ(a.hash, b.hash); }
 void expectSame(const MeshData& a, const MeshData& b) {
@@ -150,6 +156,7 @@ void expectSame(const Update& a, const Update& b) {
 void expectSame(const FrameBegin& a, const FrameBegin& b) {
     EXPECT_EQ(a.frame, b.frame);
     EXPECT_EQ(a.updateSeq, b.updateSeq);
+    EXPECT_EQ(a.pixels, b.pixels);
 }
 void expectSame(const TileRequest& a, const TileRequest& b) {
     EXPECT_EQ(a.frame, b.frame);
@@ -165,6 +172,7 @@ void expectSame(const TileResult& a, const TileResult& b) {
     EXPECT_EQ(a.codec, b.codec);
     EXPECT_EQ(a.renderMicros, b.renderMicros);
     EXPECT_EQ(a.pixels, b.pixels);
+    EXPECT_EQ(a.format, b.format);
 }
 void expectSame(const Heartbeat&, const Heartbeat&) {}
 void expectSame(const Goodbye& a, const Goodbye& b) { EXPECT_EQ(a.reason, b.reason); }
@@ -173,6 +181,11 @@ void expectSame(const Ready& a, const Ready& b) {
     EXPECT_EQ(a.stateHash, b.stateHash);
 }
 void expectSame(const ResyncRequest& a, const ResyncRequest& b) { EXPECT_EQ(a.lastSeq, b.lastSeq); }
+void expectSame(const AssetRequest& a, const AssetRequest& b) { EXPECT_EQ(a.hash, b.hash); }
+void expectSame(const AssetData& a, const AssetData& b) {
+    EXPECT_EQ(a.hash, b.hash);
+    EXPECT_EQ(a.bytes, b.bytes);
+}
 
 // -- Sample values: every field differs from its default ----------------------------------------
 
@@ -262,6 +275,8 @@ SceneSnapshot sampleSnapshot() {
     s.settings = sampleSettings();
     s.bvh = {BvhSettings::Quality::High, true, true};
     s.origin = {1e6 + 0.25, -2e5, 3.0e5 + 1.0 / 1024};
+    s.assets.push_back({"textures/bark.png", {0x5555666677778888ull, 0x9999aaaabbbbccccull}, 123456});
+    s.assets.push_back({"/data/ct.vti", {1, 2}, kMaxAssetBytes});
     return s;
 }
 
@@ -292,6 +307,7 @@ TileResult sampleTileResult() {
     t.codec = TileCodec::Jpeg;
     t.renderMicros = 4567;
     for (int i = 0; i < 300; ++i) t.pixels.push_back(uint8_t(i * 7));
+    t.format = TilePixels::LinearHalf;
     return t;
 }
 
@@ -313,7 +329,7 @@ template <class F> void forEachSample(F&& f) {
     f(MeshRequest{{0xaaaabbbbccccddddull, 0x1111222233334444ull}});
     f(sampleMeshData());
     f(sampleUpdate());
-    f(FrameBegin{1234, 99});
+    f(FrameBegin{1234, 99, TilePixels::LinearHalf});
     f(TileRequest{55, 8});
     f(TileAssign{56, {0, 7, 1u << 20, 0xFFFFFFFFu}});
     f(sampleTileResult());
@@ -321,6 +337,8 @@ template <class F> void forEachSample(F&& f) {
     f(Goodbye{"shutting down: operator request"});
     f(Ready{99, {0x0102030405060708ull, 0x1112131415161718ull}});
     f(ResyncRequest{98});
+    f(AssetRequest{{0x0102030405060708ull, 0x1112131415161718ull}});
+    f(AssetData{{7, 8}, {1, 2, 3, 4, 5}});
 }
 
 template <class Msg> std::vector<uint8_t> payloadOf(const Msg& msg) {
@@ -416,7 +434,7 @@ TEST(Protocol, EncodeSetsTypeAndLength) {
 
 TEST(Protocol, GoldenBytes) {
     // The exact layout of a header and a small payload; a change here breaks every deployed peer
-    // (version 2: the shading fields of materials, lights and settings).
+    // (version 2: the shading fields of materials, lights and settings; 4: FrameBegin's tile format).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -429,9 +447,10 @@ TEST(Protocol, GoldenBytes) {
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
         0x0D, 0x0E, 0x0F, 0x10,                          // scene version
-        0x08, 0x00, 0x00, 0x00,                          // payload length
+        0x09, 0x00, 0x00, 0x00,                          // payload length
         0x00, 0x00, 0x00, 0x00,                          // reserved
-        0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88,  // payload
+        0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88,  // payload: frame, update sequence
+        0x00,                                            // tile pixels: 8-bit sRGB
     };
     EXPECT_EQ(bytes, expected);
 }
@@ -459,7 +478,7 @@ TEST(Protocol, HeaderRejectsMalformed) {
     b = good;
     putU32(b, 24, 0xFFFFFFFFu);
     rejects(b, "huge length");
-    for (uint16_t type : {uint16_t(0), uint16_t(15), uint16_t(0xFFFF)}) {
+    for (uint16_t type : {uint16_t(0), uint16_t(kMaxMsgType + 1), uint16_t(0xFFFF)}) {
         b = good;
         b[6] = uint8_t(type);
         b[7] = uint8_t(type >> 8);
@@ -911,6 +930,32 @@ TEST(Protocol, StateHash) {
         changes[i](changed);
         EXPECT_TRUE(seen.insert(stateHash(changed)).second) << "change " << i;
     }
+}
+
+}  // namespace
+}  // namespace rtwall::cluster
+
+namespace rtwall::cluster {
+namespace {
+
+TEST(Protocol, AssetsAndLinearTilesRejectValuesOutOfRange) {
+    // An asset larger than the bound, or without a path; an unknown tile format.
+    SceneSnapshot s = sampleSnapshot();
+    s.assets[0].bytes = kMaxAssetBytes + 1;
+    EXPECT_THROW(decode<SceneSnapshot>(payloadOf(s)), DecodeError);
+    s = sampleSnapshot();
+    s.assets[0].path.clear();
+    EXPECT_THROW(decode<SceneSnapshot>(payloadOf(s)), DecodeError);
+    std::vector<uint8_t> p = payloadOf(FrameBegin{1, 2, TilePixels::LinearHalf});
+    p.back() = 2;
+    EXPECT_THROW(decode<FrameBegin>(p), DecodeError);
+    p = payloadOf(sampleTileResult());
+    p.back() = 7;
+    EXPECT_THROW(decode<TileResult>(p), DecodeError);
+    // AssetData claiming more bytes than the bound throws before allocating.
+    p = payloadOf(AssetData{{1, 2}, {}});
+    putU32(p, 16, 0xFFFFFFF0u);
+    EXPECT_THROW(decode<AssetData>(p), DecodeError);
 }
 
 }  // namespace

@@ -53,6 +53,9 @@ TEST(ClusterShading, EveryMaterialAndGiBitIdenticalToOneMachine) {
     ClusterSettings cs;
     cs.async = false;
     cs.prefetch = 2;
+    // 8-bit tiles, compared with one machine's 8-bit frames (linear tiles for accumulation:
+    // assets_accumulation_test.cpp).
+    cs.wideAccumulation = false;
     LocalCluster cluster(desc, cs, 3);
     Master& master = *cluster.master;
     ASSERT_TRUE(master.waitForClients(3, 30000));

@@ -1,12 +1,15 @@
 // libFuzzer target for every decoder that reads bytes from the network: the message header,
 // every message payload, canonical meshes and the four tile codecs.
 //
-// Input layout: the first byte picks the decoder (its value modulo 20), the rest is its input.
+// Input layout: the first byte picks the decoder (its value modulo 24), the rest is its input.
 //   0      a whole message: decodeHeader, then the payload decoder its type names
-//   1..14  decodePayload<T> for MsgType(n)
-//   15     decodeMesh
-//   16..19 decodeTile for TileCodec(n - 16); three more bytes give the width (1 + b % 64),
+//   1..16  decodePayload<T> for MsgType(n)
+//   17     decodeMesh
+//   18..21 decodeTile for TileCodec(n - 18); three more bytes give the width (1 + b % 64),
 //          the height (1 + b % 64) and the destination's row padding (b % 8)
+//   22..23 decodeWideTile (linear half-float tiles) for LZ4 and zstd, the same three bytes
+// (Protocol version 4 moved the mesh and tile selectors up by 2; make_protocol_corpus writes
+// the seeds with the new ones.)
 // Besides the sanitizers, the target checks that whatever decodes re-encodes to the very same
 // bytes (the encodings are canonical) and that decodeTile writes no byte outside the tile.
 // Only DecodeError is an expected outcome; any other exception aborts as a finding.
@@ -16,7 +19,7 @@
 //   clang++-14 -std=c++20 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
 //     -Icluster/src -Icluster/include -Iengine/include -Imesh/include \
 //     tests/fuzz/fuzz_protocol.cpp cluster/src/wire.cpp cluster/src/protocol.cpp cluster/src/codec.cpp \
-//     mesh/src/triangle_mesh.cpp -llz4 -lzstd -lturbojpeg -lxxhash -o build-fuzz/fuzz_protocol
+//     mesh/src/triangle_mesh.cpp engine/src/half.cpp -llz4 -lzstd -lturbojpeg -lxxhash -o build-fuzz/fuzz_protocol
 // Run (new inputs go to the first directory, the committed seeds are only read):
 //   mkdir -p build-fuzz/corpus
 //   build-fuzz/fuzz_protocol -max_total_time=120 -malloc_limit_mb=256 -timeout=10 \
@@ -66,9 +69,9 @@ template <class... Msgs> struct Table {
     static constexpr PayloadCheck payload[] = {checkPayload<Msgs>...};
     static constexpr MessageCheck message[] = {checkMessage<Msgs>...};
 };
-// In MsgType order, 1..14.
+// In MsgType order, 1..16.
 using Messages = Table<Hello, Welcome, SceneSnapshot, MeshRequest, MeshData, Update, FrameBegin, TileRequest,
-                       TileAssign, TileResult, Heartbeat, Goodbye, Ready, ResyncRequest>;
+                       TileAssign, TileResult, Heartbeat, Goodbye, Ready, ResyncRequest, AssetRequest, AssetData>;
 static_assert(std::size(Messages::payload) == kMaxMsgType);
 
 void checkMesh(const uint8_t* data, size_t size) {
@@ -107,11 +110,27 @@ void checkTile(TileCodec codec, const uint8_t* data, size_t size) {
     }
 }
 
+void checkWideTile(TileCodec codec, const uint8_t* data, size_t size) {
+    if (size < 3) return;
+    const int width = 1 + data[0] % 64, height = 1 + data[1] % 64;
+    const size_t rowFloats = size_t(width) * 3, stride = rowFloats + data[2] % 8;
+    data += 3;
+    size -= 3;
+    // Exactly as large as the tile needs (no padding after the last row), padding checked by hand.
+    const float kGuard = -7.0f;
+    std::vector<float> dst(stride * size_t(height - 1) + rowFloats, kGuard);
+    std::vector<uint8_t> scratch;
+    decodeWideTile(codec, data, size, width, height, dst.data(), stride, scratch);
+    for (int y = 0; y + 1 < height; ++y)
+        for (size_t i = rowFloats; i < stride; ++i)
+            if (dst[size_t(y) * stride + i] != kGuard) finding("decodeWideTile wrote into the row padding");
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (size < 1) return 0;
-    const unsigned selector = data[0] % 20u;
+    const unsigned selector = data[0] % 24u;
     ++data;
     --size;
     try {
@@ -120,10 +139,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             Messages::message[size_t(header.type) - 1](header, data, size);
         } else if (selector <= kMaxMsgType) {
             Messages::payload[selector - 1](data, size);
-        } else if (selector == 15) {
+        } else if (selector == 17) {
             checkMesh(data, size);
+        } else if (selector <= 21) {
+            checkTile(TileCodec(selector - 18), data, size);
         } else {
-            checkTile(TileCodec(selector - 16), data, size);
+            checkWideTile(selector == 22 ? TileCodec::Lz4 : TileCodec::Zstd, data, size);
         }
     } catch (const DecodeError&) {
         // The expected outcome for malformed input.

@@ -105,9 +105,11 @@ int main(int argc, char** argv) {
     seedMessage("goodbye", Goodbye{"done"});
     seedMessage("ready", Ready{2, {3, 4}});
     seedMessage("resync-request", ResyncRequest{1});
+    seedMessage("asset-request", AssetRequest{{5, 6}});
+    seedMessage("asset-data", AssetData{{5, 6}, {0x89, 'P', 'N', 'G', 1, 2, 3}});
 
-    writeSeed("mesh-box", 15, encodeMesh(makeBox()));
-    writeSeed("mesh-sphere-normals", 15, encodeMesh(makeSphere(3, 5)));
+    writeSeed("mesh-box", 17, encodeMesh(makeBox()));
+    writeSeed("mesh-sphere-normals", 17, encodeMesh(makeSphere(3, 5)));
 
     // An 8x6 gradient tile per codec; the three bytes after the selector give 8x6 and 3 bytes of padding.
     const int w = 8, h = 6;
@@ -120,7 +122,17 @@ int main(int argc, char** argv) {
         settings.codec = codec;
         std::vector<uint8_t> bytes{uint8_t(w - 1), uint8_t(h - 1), 3};
         encodeTile(settings, rgb.data(), w, h, size_t(w) * 3, bytes);
-        writeSeed(std::string("tile-") + codecName(codec), uint8_t(16 + int(codec)), bytes);
+        writeSeed(std::string("tile-") + codecName(codec), uint8_t(18 + int(codec)), bytes);
+    }
+    // The same gradient as a linear half-float tile, LZ4 and zstd.
+    std::vector<float> linear(rgb.size());
+    for (size_t i = 0; i < rgb.size(); ++i) linear[i] = float(rgb[i]) / 255.0f;
+    for (TileCodec codec : {TileCodec::Lz4, TileCodec::Zstd}) {
+        CodecSettings settings;
+        settings.codec = codec;
+        std::vector<uint8_t> scratch, bytes{uint8_t(w - 1), uint8_t(h - 1), 3};
+        encodeWideTile(settings, linear.data(), w, h, size_t(w) * 3, scratch, bytes);
+        writeSeed(std::string("wide-tile-") + codecName(codec), codec == TileCodec::Lz4 ? 22 : 23, bytes);
     }
     return 0;
 }

@@ -12,7 +12,7 @@ void addClient(CLI::App& app, Run& run) {
     CLI::App* cmd = app.add_subcommand("client", "Join a master as a render client");
     cmd->add_option("--connect", o->connect, "The master's endpoint, tcp://HOST:PORT")->required();
     cmd->add_option("--threads", o->threads, "Render threads (0 = one per hardware thread)")->check(CLI::Range(0, 1024));
-    cmd->add_option("--cache", o->cacheDir, "Directory for meshes received from the master (by content hash)");
+    cmd->add_option("--cache", o->cacheDir, "Directory for meshes, textures and volumes received from the master (by content hash)");
     cmd->add_option("--exit-after-idle", o->exitAfterIdleMs, "Exit when the master says goodbye or none answers for this many ms (0 = wait for a master forever)")
         ->check(CLI::Range(0, 86'400'000));
     cmd->add_option("--max-reconnect", o->maxReconnectMs, "Longest pause between reconnection attempts, in ms (jittered, doubling from 100)")

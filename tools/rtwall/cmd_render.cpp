@@ -46,6 +46,8 @@ Image renderWithClients(SceneDesc desc, const CameraDesc& camera, const RenderOp
     cs.prefetch = o.prefetch;
     cs.async = false;
     cs.codec.codec = tileCodecFromName(o.codec);
+    // The single-machine path below accumulates 8-bit frames; so does this one, to give its bytes.
+    cs.wideAccumulation = false;
     Master master(desc, cs);
     LocalClients clients(o.clients, master.endpoint(), cs.threadsPerClient);
     if (!master.waitForClients(o.clients, 60'000))

@@ -153,6 +153,7 @@ RunConfig readRunConfig(const std::filesystem::path& file, const toml::table& ro
         cs.heartbeatMs = r.integer("heartbeat_ms", cs.heartbeatMs, 10, 60000);
         cs.timeoutMs = r.integer("timeout_ms", cs.timeoutMs, 50, 600000);
         cs.stragglerFactor = r.number("straggler_factor", cs.stragglerFactor, 1.0, 1000.0);
+        cs.wideAccumulation = r.boolean("wide_accumulation", cs.wideAccumulation);
         if (cs.timeoutMs <= cs.heartbeatMs) r.fail(r.find("timeout_ms"), "timeout_ms must exceed heartbeat_ms");
         const std::string key = r.string("key", "");
         if (!key.empty()) cs.keyFile = file.parent_path() / key;
@@ -440,10 +441,12 @@ void addRun(CLI::App& app, Run& run) {
             std::vector<double> frameTimes;
             auto last = std::chrono::steady_clock::now();
             uint64_t bytes = 0;
-            // A still view refines progressively (each frame has its own sampling seeds); a
-            // moving camera restarts the accumulation every frame.
+            // A still view of a stochastic scene refines progressively (each frame has its own
+            // sampling seeds); a moving camera restarts the accumulation every frame.
             uint32_t accumulatedSeq = UINT32_MAX;
             Accumulator progressive;
+            std::vector<float> linear;  // the frame in linear RGB when it came as linear tiles
+            int accumulatedFrames = 0, linearFrames = 0;
             for (int f = 1; (c.frames == 0 || f <= c.frames) && !gStop; ++f) {
                 // Differential updates: only what changes goes to the clients (the camera; objects the
                 // user moves on the wall).
@@ -461,17 +464,25 @@ void addRun(CLI::App& app, Run& run) {
                     shown.right = master.renderFrame(&report);
                 } else {
                     if (scripted) master.setCamera(*scripted);
-                    shown.left = master.renderFrame(&report);
+                    shown.left = master.renderFrame(&report, &linear);
                 }
                 shown.number = report.frame;
                 const Image& img = shown.left;
-                if (!stereo) {
+                if (!stereo && report.stochastic) {
                     // A still view refines: each frame has its own sampling seeds; any change to
-                    // the scene state (camera, objects, materials) restarts the accumulation.
+                    // the scene state (camera, objects, materials, codec) restarts the accumulation.
+                    // Linear frames are summed without the 8-bit quantisation.
                     if (report.stateSeq != accumulatedSeq) progressive.reset();
                     accumulatedSeq = report.stateSeq;
-                    progressive.add(shown.left);
+                    if (report.linear) progressive.addLinear(linear.data(), shown.left.width, shown.left.height);
+                    else progressive.add(shown.left);
+                    ++accumulatedFrames;
+                    linearFrames += report.linear;
                     shown.left = progressive.resolve();
+                } else {
+                    // Deterministic: every frame of a state is the same image; averaging would
+                    // only cost time.
+                    accumulatedSeq = UINT32_MAX;
                 }
                 const auto now = std::chrono::steady_clock::now();
                 frameTimes.push_back(std::chrono::duration<double>(now - last).count());
@@ -512,6 +523,11 @@ void addRun(CLI::App& app, Run& run) {
                 std::sort(sorted.begin(), sorted.end());
                 std::printf("%zu frames, median %.1f fps, %.2f MB of tiles per frame\n", frameTimes.size(),
                             1.0 / sorted[sorted.size() / 2], double(bytes) * 1e-6 / double(frameTimes.size()));
+                if (accumulatedFrames > 0)
+                    std::printf("progressive refinement: %d of %zu frames accumulated (stochastic scene), %d of them as linear tiles\n",
+                                accumulatedFrames, frameTimes.size(), linearFrames);
+                else
+                    std::printf("no accumulation: the scene is deterministic (every frame of a view is the same image)\n");
                 if (controller)
                     std::printf("target %.1f fps: %d of %zu frames within budget (master frame time), %llu operating-point "
                                 "changes, ending at '%s'\n",

@@ -8,6 +8,7 @@
 
 #include <rtwall/engine.h>
 
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -45,6 +46,11 @@ struct ClusterSettings {
     double stragglerFactor = 4.0;             // re-issue tiles outstanding this many median tile times
     int dropEveryNthUpdate = 0;               // fault injection for tests: lose every Nth update message per client
     int consumeDelayUs = 0;                   // fault injection for tests: the network thread pauses this long per received message (a slow display PC)
+    // Frames of a stochastic scene (rendersStochastically: GI, area lights, ...) travel as linear
+    // half-float tiles, so that averaging them (progressive refinement) has no 8-bit bias and
+    // equals one machine's Accumulator::addLinear exactly. They cost about twice the bytes of
+    // 8-bit tiles (JPEG is replaced by LZ4 for them); off: 8-bit tiles, accumulated as 8-bit.
+    bool wideAccumulation = true;
     // Security: with a key pair every link is CURVE-encrypted and only the listed client public
     // keys get in. Without keys the master listens on loopback only, unless `insecure`.
     std::filesystem::path keyFile;                  // the master's key pair (rtwall keys)
@@ -73,6 +79,8 @@ struct FrameReport {
     double meanTileLatency = 0;     // seconds from assignment to result
     std::vector<ClientReport> clients;
     std::vector<uint32_t> tileOwners;  // client id that rendered each tile (makeTiles order); UINT32_MAX: none
+    bool stochastic = false;        // the frame's state renders stochastically: frames of one state refine by averaging
+    bool linear = false;            // its tiles came as linear half floats (renderFrame can give them)
 };
 
 // The display master: owns the scene state, hands out tiles, assembles frames.
@@ -96,11 +104,15 @@ public:
     void setRenderSettings(const RenderSettings& settings);
     // Changes the tile codec of every client from their next tile on (a Welcome within the
     // session carries it); results in flight keep their own codec, which each result names.
+    // It counts as a state change (FrameReport::stateSeq moves on): with a lossy codec the
+    // frames change, so an accumulation must restart.
     void setCodec(const CodecSettings& codec);
 
     // Renders one frame with the current state and returns it. With async on, the next
-    // frame's updates already stream to the clients while this one renders.
-    Image renderFrame(FrameReport* report = nullptr);
+    // frame's updates already stream to the clients while this one renders. When the frame came
+    // as linear tiles (report->linear), `linear` receives it in linear RGB (3 floats a pixel,
+    // each exactly a half float), for Accumulator::addLinear; otherwise it is emptied.
+    Image renderFrame(FrameReport* report = nullptr, std::vector<float>* linear = nullptr);
 
     uint64_t droppedMessages() const;  // malformed, stale, replayed or unexpected messages dropped
     uint64_t failedSends() const;      // messages not sent because a peer's queue was full or it was gone
@@ -114,10 +126,18 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
+// What a running client counts, for tests and monitoring (ClientSettings::counters).
+struct ClientCounters {
+    std::atomic<uint64_t> droppedMessages{0};  // malformed, stale, replayed or unexpected
+    std::atomic<uint64_t> rejectedAssets{0};   // texture or volume bytes from the master that do not match their hash
+    std::atomic<uint64_t> assetsReceived{0};   // texture or volume files received from the master (and accepted)
+    std::atomic<uint64_t> assetsLocal{0};      // found on this PC (at the material's path or in the cache) with the right hash
+};
+
 struct ClientSettings {
     std::string connect;                // tcp://HOST:PORT
     int threads = 0;                    // render threads, 0 = hardware threads
-    std::filesystem::path cacheDir;     // meshes received from the master, by content hash
+    std::filesystem::path cacheDir;     // meshes, textures and volumes received from the master, by content hash
     int maxReconnectMs = 5000;          // back-off ceiling
     int exitAfterIdleMs = 0;            // > 0: exit when no master answers for this long
     bool replay = false;                // benchmarks: render each tile once, then resend its bytes
@@ -125,6 +145,7 @@ struct ClientSettings {
     int extraSceneBuildMs = 0;          // fault injection for tests: a PC slow to build the scene
     std::filesystem::path keyFile;      // this client's key pair: CURVE on (needs serverKeyFile)
     std::filesystem::path serverKeyFile;  // the master's public key: the client checks it
+    std::shared_ptr<ClientCounters> counters;  // optional: updated while it runs
 };
 
 // Writes a new CURVE key pair to STEM.key (secret, mode 0600) and STEM.pub (public).

@@ -15,6 +15,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -169,6 +170,9 @@ struct SceneDesc {
     std::vector<Light> lights;
     std::vector<CameraDesc> cameras;
     RenderSettings settings;
+    // Contents of texture image and volume files by the path a material names: a path found
+    // here is decoded from these bytes, not opened (a render client gets them from the master).
+    std::map<std::string, std::shared_ptr<const std::vector<uint8_t>>> files;
 
     const CameraDesc* findCamera(const std::string& name) const;  // nullptr if absent
     Bounds3 worldBounds() const;
@@ -286,6 +290,11 @@ class Accumulator {
 public:
     void reset() { frames_ = 0; }
     void add(const Image& frame);  // a frame of another size resets first
+    // A frame in linear RGB (3 floats a pixel, as renderTileLinear writes them), without the
+    // 8-bit quantisation's bias. Each value is rounded to IEEE half precision (11 significant
+    // bits) first: the precision the cluster sends accumulated tiles in, so that one machine and
+    // the cluster sum the same values. Frames added with add() and addLinear() must not be mixed.
+    void addLinear(const float* rgb, int width, int height);
     Image resolve() const;
     int frames() const { return frames_; }
 
@@ -293,6 +302,21 @@ private:
     int width_ = 0, height_ = 0, frames_ = 0;
     std::vector<double> sum_;
 };
+
+// IEEE 754 half precision (round to nearest even): the precision accumulated frames travel in.
+uint16_t halfFromFloat(float v);
+float floatFromHalf(uint16_t bits);
+// The same for `count` values (F16C instructions where the CPU has them: identical results).
+void halfFromFloat(const float* in, size_t count, uint16_t* out);
+void floatFromHalf(const uint16_t* in, size_t count, float* out);
+
+// The 8-bit sRGB quantisation renderTile applies, for `count` linear values.
+void linearToSrgb8(const float* linear, size_t count, uint8_t* out);
+
+// True when a frame's pixels depend on the frame number, i.e. when averaging frames refines
+// the image: path tracing, area lights, rough metal or a volume (per-frame random sampling) in
+// the shaded view with full shading. A deterministic scene renders the same bytes every frame.
+bool rendersStochastically(const SceneDesc& scene);
 
 std::vector<TileRect> makeTiles(int width, int height, int tileSize);
 

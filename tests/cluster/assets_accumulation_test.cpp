@@ -1,0 +1,464 @@
+// Issue 7, cluster part: texture images and volume files travel to the clients by content hash
+// (clients need no copy of them), a tampered asset is rejected and counted, accumulated frames
+// travel as linear half floats and sum exactly as one machine's Accumulator::addLinear, and
+// only stochastic scenes are accumulated.
+#include "codec.h"
+#include "protocol.h"
+#include "shading_scenes.h"
+#include "test_util.h"
+#include "../cli_util.h"
+
+#include <rtwall/cluster.h>
+
+#include <gtest/gtest.h>
+#include <zmq.hpp>
+
+#include <fstream>
+#include <future>
+#include <iterator>
+#include <memory>
+#include <optional>
+#include <thread>
+
+namespace rtwall {
+namespace {
+
+struct LocalCluster {
+    LocalCluster(const SceneDesc& desc, const ClusterSettings& cs, int clientCount,
+                 const std::filesystem::path& cacheDir = {})
+        : master(std::make_unique<Master>(desc, cs)) {
+        for (int i = 0; i < clientCount; ++i) {
+            ClientSettings c;
+            c.connect = master->endpoint();
+            c.threads = 1;
+            c.exitAfterIdleMs = 4000;
+            c.cacheDir = cacheDir;
+            c.counters = std::make_shared<ClientCounters>();
+            counters.push_back(c.counters);
+            threads.emplace_back([c] { runClient(c); });
+        }
+    }
+    ~LocalCluster() {
+        master.reset();  // its goodbye ends the clients
+        for (auto& t : threads) t.join();
+    }
+    uint64_t sum(std::atomic<uint64_t> ClientCounters::*field) const {
+        uint64_t n = 0;
+        for (const auto& c : counters) n += (*c).*field;
+        return n;
+    }
+    std::unique_ptr<Master> master;
+    std::vector<std::thread> threads;
+    std::vector<std::shared_ptr<ClientCounters>> counters;
+};
+
+Image singleMachine(const Scene& scene, const SceneDesc& d, uint32_t frame) {
+    return renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings, frame);
+}
+
+// One machine's frame in linear RGB (the whole image as one tile: pixels do not depend on tiles).
+std::vector<float> singleMachineLinear(const Scene& scene, const SceneDesc& d, uint32_t frame) {
+    const int w = d.settings.width, h = d.settings.height;
+    std::vector<float> out(size_t(w) * h * 3);
+    RenderSettings s = d.settings;
+    s.threads = 1;
+    renderTileLinear(scene, Camera(d.cameras.front(), w, h), TileRect{0, 0, w, h}, frame, s, out.data(), size_t(w) * 3);
+    return out;
+}
+
+std::vector<uint8_t> readFileForTest(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+size_t differingBytes(const Image& a, const Image& b) {
+    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
+    size_t n = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
+    return n;
+}
+
+// A legacy VTK structured-points volume (ASCII), the other format a volume material reads.
+std::string writeLegacyVolume(const std::filesystem::path& dir) {
+    std::string text = "# vtk DataFile Version 3.0\nramp\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 5 5 5\n"
+                       "ORIGIN 0 0 0\nSPACING 1 1 1\nPOINT_DATA 125\nSCALARS density float 1\nLOOKUP_TABLE default\n";
+    for (int k = 0; k < 5; ++k)
+        for (int j = 0; j < 5; ++j)
+            for (int i = 0; i < 5; ++i) text += std::to_string(0.1f * float(i + j + k) / 1.2f) + "\n";
+    return test::writeFile(dir / "ramp.vtk", text).string();
+}
+
+// The material zoo (a PNG texture and a .vti volume among every material) plus a second volume
+// from a legacy .vtk file; 3 files in all.
+SceneDesc sceneWithFiles(const std::filesystem::path& dir) {
+    SceneDesc d = test::materialZoo(dir, 64, 48);
+    d.settings.tileSize = 8;
+    Material legacy = test::material("legacy", MaterialType::Volume, {1, 1, 1});
+    legacy.volumeFile = writeLegacyVolume(dir);
+    legacy.transfer = {{0.0f, {0.2f, 0.4f, 1.0f}, 0.5f}, {1.0f, {1, 1, 1}, 4.0f}};
+    d.materials.push_back(legacy);
+    d.instances.push_back({2, uint32_t(d.materials.size() - 1),
+                           Transform::translate(-2.2, 0.4, -1.0) * Transform::scale(0.5, 0.5, 0.5)});
+    return d;
+}
+
+// Clients run where the files do not exist (the directory is moved away after the master read
+// them): they get the bytes from the master, and the frames are bit-identical to one machine.
+TEST(ClusterAssets, TexturesAndVolumesTravelToClientsWithoutTheFiles) {
+    const auto dir = test::scratchDir();
+    const auto files = dir / "files";
+    std::filesystem::create_directories(files);
+    const SceneDesc desc = sceneWithFiles(files);
+    const Scene reference(desc);  // reads the files while they are there
+    ClusterSettings cs;
+    cs.async = false;
+    cs.wideAccumulation = false;  // 8-bit frames, compared with one machine's 8-bit frames
+    const auto cache = dir / "cache";
+    {
+        LocalCluster cluster(desc, cs, 0);
+        std::filesystem::rename(files, dir / "elsewhere");  // no client can open the paths now
+        ASSERT_FALSE(std::filesystem::exists(desc.materials[6].texture.file));
+        // Two clients, one with a cache directory.
+        ClientSettings c;
+        c.connect = cluster.master->endpoint();
+        c.threads = 1;
+        c.exitAfterIdleMs = 4000;
+        for (int i = 0; i < 2; ++i) {
+            c.counters = std::make_shared<ClientCounters>();
+            c.cacheDir = i == 0 ? cache : std::filesystem::path();
+            cluster.counters.push_back(c.counters);
+            cluster.threads.emplace_back([c] { runClient(c); });
+        }
+        ASSERT_TRUE(cluster.master->waitForClients(2, 30000));
+        for (int f = 0; f < 2; ++f) {
+            FrameReport r;
+            const Image img = cluster.master->renderFrame(&r);
+            EXPECT_EQ(differingBytes(img, singleMachine(reference, desc, r.frame)), 0u) << "frame " << r.frame;
+        }
+        EXPECT_EQ(cluster.sum(&ClientCounters::assetsReceived), 6u) << "3 files to each of 2 clients";
+        EXPECT_EQ(cluster.sum(&ClientCounters::assetsLocal), 0u);
+        EXPECT_EQ(cluster.sum(&ClientCounters::rejectedAssets), 0u);
+    }
+    size_t cached = 0;
+    std::filesystem::path oneCached;
+    for (const auto& e : std::filesystem::directory_iterator(cache))
+        if (e.path().extension() == ".rtasset") {
+            ++cached;
+            oneCached = e.path();
+        }
+    EXPECT_EQ(cached, 3u) << "every file was cached by content hash";
+
+    // A client with that cache takes them from it; a cache file changed on disk (same size,
+    // other bytes) is not trusted: that one file is fetched from the master again.
+    {
+        std::fstream f(oneCached, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(0);
+        f.put('#');
+    }
+    SceneDesc inMemory = desc;  // the files are gone from their paths: the master gets them in memory
+    for (const auto& e : std::filesystem::directory_iterator(dir / "elsewhere"))
+        inMemory.files[(files / e.path().filename()).string()] =
+            std::make_shared<const std::vector<uint8_t>>(readFileForTest(e.path().string()));
+    LocalCluster again(inMemory, cs, 1, cache);
+    ASSERT_TRUE(again.master->waitForClients(1, 30000));
+    FrameReport r;
+    const Image img = again.master->renderFrame(&r);
+    EXPECT_EQ(differingBytes(img, singleMachine(reference, desc, r.frame)), 0u);
+    EXPECT_EQ(again.sum(&ClientCounters::assetsLocal), 2u);
+    EXPECT_EQ(again.sum(&ClientCounters::assetsReceived), 1u);
+}
+
+// A master given the files in memory (SceneDesc::files, keyed by the materials' paths) needs
+// them nowhere on disk either; its clients render the same bytes.
+TEST(ClusterAssets, AMasterWithFilesInMemory) {
+    const auto dir = test::scratchDir();
+    const SceneDesc onDisk = sceneWithFiles(dir);
+    const Scene reference(onDisk);
+    SceneDesc inMemory = onDisk;
+    for (const std::string& path : {onDisk.materials[6].texture.file, onDisk.materials[9].volumeFile,
+                                    onDisk.materials.back().volumeFile}) {
+        inMemory.files[path] = std::make_shared<const std::vector<uint8_t>>(readFileForTest(path));
+        std::filesystem::remove(path);
+    }
+    const Scene fromMemory(inMemory);  // the engine decodes them from memory too
+    ClusterSettings cs;
+    cs.async = false;
+    cs.wideAccumulation = false;
+    LocalCluster cluster(inMemory, cs, 2);
+    ASSERT_TRUE(cluster.master->waitForClients(2, 30000));
+    FrameReport r;
+    const Image img = cluster.master->renderFrame(&r);
+    const Image expected = singleMachine(reference, onDisk, r.frame);
+    EXPECT_EQ(differingBytes(img, expected), 0u);
+    EXPECT_EQ(differingBytes(singleMachine(fromMemory, inMemory, r.frame), expected), 0u);
+    EXPECT_EQ(cluster.sum(&ClientCounters::assetsReceived), 6u);
+}
+
+// A stand-in master, to send what a real one never sends: asset bytes that are not the file's.
+class FakeMaster {
+public:
+    FakeMaster() : router_(ctx_, zmq::socket_type::router) {
+        router_.set(zmq::sockopt::linger, 0);
+        router_.bind("tcp://127.0.0.1:0");
+        endpoint = router_.get(zmq::sockopt::last_endpoint);
+    }
+    struct Received {
+        std::string peer;
+        cluster::Header header;
+        std::vector<uint8_t> payload;
+    };
+    std::optional<Received> expect(cluster::MsgType type, int ms) {
+        const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
+        while (std::chrono::steady_clock::now() < end) {
+            zmq::pollitem_t item{router_.handle(), 0, ZMQ_POLLIN, 0};
+            zmq::poll(&item, 1, std::chrono::milliseconds(10));
+            zmq::message_t id, msg;
+            if (!router_.recv(id, zmq::recv_flags::dontwait)) continue;
+            if (!router_.recv(msg, zmq::recv_flags::dontwait)) continue;
+            const auto* p = static_cast<const uint8_t*>(msg.data());
+            Received r{id.to_string(), cluster::decodeHeader(p, msg.size()),
+                       std::vector<uint8_t>(p + cluster::kHeaderSize, p + msg.size())};
+            if (r.header.type == type) return r;
+        }
+        return std::nullopt;
+    }
+    template <class Msg> void send(const std::string& peer, const Msg& m, uint32_t frame = 0) {
+        cluster::Header h;
+        h.session = kSession;
+        h.frame = frame;
+        const std::vector<uint8_t> bytes = cluster::encodeMessage(h, m);
+        router_.send(zmq::buffer(peer), zmq::send_flags::sndmore);
+        router_.send(zmq::buffer(bytes));
+    }
+    static constexpr uint64_t kSession = 0xA55E7;
+    std::string endpoint;
+
+private:
+    zmq::context_t ctx_;
+    zmq::socket_t router_;
+};
+
+TEST(ClusterAssets, ATamperedAssetIsRejectedAndCounted) {
+    using namespace cluster;
+    const auto dir = test::scratchDir();
+    SceneDesc desc = test::materialZoo(dir, 32, 24);
+    const std::string texture = desc.materials[6].texture.file;
+    const std::vector<uint8_t> realBytes = readFileForTest(texture);
+    ASSERT_FALSE(realBytes.empty());
+    std::filesystem::remove(texture);  // the client must get it from the (fake) master
+
+    FakeMaster fake;
+    ClientSettings cs;
+    cs.connect = fake.endpoint;
+    cs.threads = 1;
+    cs.exitAfterIdleMs = 3000;
+    cs.counters = std::make_shared<ClientCounters>();
+    auto client = std::async(std::launch::async, [cs] { return runClient(cs); });
+    const auto hello = fake.expect(MsgType::Hello, 10000);
+    ASSERT_TRUE(hello);
+    const std::string peer = hello->peer;
+    fake.send(peer, Welcome{1, CodecSettings{}, 4, 100, 3000});
+
+    // The state: the zoo without its volume (so that only the texture is an asset).
+    desc.materials[9] = test::material("plain", MaterialType::Lambert, {0.5f, 0.5f, 0.5f});
+    SceneSnapshot snap;
+    std::vector<std::vector<uint8_t>> meshBytes;
+    for (const MeshDesc& m : desc.meshes) {
+        meshBytes.push_back(encodeMesh(*m.mesh));
+        snap.meshes.push_back({m.name, "shape:none", hashBytes(meshBytes.back().data(), meshBytes.back().size()),
+                               meshBytes.back().size()});
+    }
+    snap.materials = desc.materials;
+    snap.instances = desc.instances;
+    snap.lights = desc.lights;
+    snap.camera = desc.cameras.front();
+    snap.settings = desc.settings;
+    const Hash128 textureHash = hashBytes(realBytes.data(), realBytes.size());
+    snap.assets.push_back({texture, textureHash, realBytes.size()});
+    fake.send(peer, snap);
+    for (size_t i = 0; i < desc.meshes.size(); ++i) {
+        const auto req = fake.expect(MsgType::MeshRequest, 10000);
+        ASSERT_TRUE(req);
+        const MeshRequest r = decodePayload<MeshRequest>(req->payload.data(), req->payload.size());
+        for (size_t k = 0; k < snap.meshes.size(); ++k)
+            if (snap.meshes[k].hash == r.hash) fake.send(peer, MeshData{r.hash, meshBytes[k]});
+    }
+    const auto assetReq = fake.expect(MsgType::AssetRequest, 10000);
+    ASSERT_TRUE(assetReq) << "the client asks for the file it does not have";
+    EXPECT_EQ(decodePayload<AssetRequest>(assetReq->payload.data(), assetReq->payload.size()).hash, textureHash);
+
+    // Tampered: one byte changed (same size), then one byte short, then a file it never asked for.
+    std::vector<uint8_t> tampered = realBytes;
+    tampered[tampered.size() / 2] ^= 0x40;
+    fake.send(peer, AssetData{textureHash, tampered});
+    fake.send(peer, AssetData{textureHash, std::vector<uint8_t>(realBytes.begin(), realBytes.end() - 1)});
+    fake.send(peer, AssetData{Hash128{1, 2}, realBytes});
+    EXPECT_FALSE(fake.expect(MsgType::Ready, 1000)) << "no scene without the true file";
+    EXPECT_EQ(cs.counters->rejectedAssets.load(), 2u);
+    EXPECT_GE(cs.counters->droppedMessages.load(), 1u) << "the unrequested file";
+
+    // The true bytes: the client builds the scene and proves the state.
+    fake.send(peer, AssetData{textureHash, realBytes});
+    const auto ready = fake.expect(MsgType::Ready, 30000);
+    ASSERT_TRUE(ready);
+    const Ready r = decodePayload<Ready>(ready->payload.data(), ready->payload.size());
+    EXPECT_EQ(r.stateHash, stateHash(snap));
+    EXPECT_EQ(cs.counters->assetsReceived.load(), 1u);
+    EXPECT_EQ(cs.counters->rejectedAssets.load(), 2u);
+    fake.send(peer, Goodbye{"done"});
+    EXPECT_EQ(client.get(), 0);
+}
+
+// Progressive GI over the cluster: N frames accumulated from linear half-float tiles equal one
+// machine's N-frame Accumulator::addLinear bit for bit, with any codec (JPEG becomes lossless for
+// them). The 8-bit accumulation they replace differs (its quantisation bias).
+TEST(ClusterAccumulation, LinearTilesAccumulateExactlyAsOneMachine) {
+    const auto dir = test::scratchDir();
+    SceneDesc desc = test::materialZoo(dir, 64, 48);
+    desc.settings.tileSize = 8;
+    desc.settings.gi = true;
+    desc.settings.samples = 1;
+    const Scene scene(desc);
+    ClusterSettings cs;
+    cs.async = false;
+    cs.prefetch = 2;
+    LocalCluster cluster(desc, cs, 3);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(3, 30000));
+    constexpr int kFrames = 6;
+    Accumulator clusterAcc, localAcc, local8;
+    std::vector<float> linear;
+    uint64_t wideBytes = 0;
+    for (int f = 0; f < kFrames; ++f) {
+        if (f == kFrames / 2) {
+            CodecSettings jpeg;
+            jpeg.codec = TileCodec::Jpeg;
+            master.setCodec(jpeg);
+        }
+        FrameReport r;
+        const Image img = master.renderFrame(&r, &linear);
+        ASSERT_TRUE(r.stochastic);
+        ASSERT_TRUE(r.linear);
+        ASSERT_EQ(linear.size(), size_t(64 * 48 * 3));
+        const std::vector<float> local = singleMachineLinear(scene, desc, r.frame);
+        size_t differing = 0;
+        for (size_t i = 0; i < local.size(); ++i) differing += cluster::roundToHalf(local[i]) != linear[i];
+        EXPECT_EQ(differing, 0u) << "frame " << r.frame << ": the half-float tiles carry one machine's values";
+        clusterAcc.addLinear(linear.data(), img.width, img.height);
+        localAcc.addLinear(local.data(), 64, 48);
+        local8.add(singleMachine(scene, desc, r.frame));
+        wideBytes += r.bytes;
+    }
+    EXPECT_EQ(differingBytes(clusterAcc.resolve(), localAcc.resolve()), 0u);
+    EXPECT_GT(differingBytes(local8.resolve(), localAcc.resolve()), 0u) << "8-bit accumulation is biased";
+    std::printf("linear tiles: %.0f bytes per frame (64x48, lz4 then jpeg->lz4)\n", double(wideBytes) / kFrames);
+}
+
+// Only stochastic frames are accumulated (rtwall run follows FrameReport::stochastic); the
+// predicate agrees with what rendering does: a deterministic scene gives the same bytes every
+// frame, each stochastic feature alone makes frames differ.
+TEST(ClusterAccumulation, OnlyStochasticScenesAccumulate) {
+    const auto dir = test::scratchDir();
+    SceneDesc base = test::materialZoo(dir, 48, 32);
+    base.settings.tileSize = 16;
+    // Deterministic: no area light, the metal polished, no volume.
+    base.lights.resize(1);
+    base.materials[3].roughness = 0.0f;
+    base.materials[9] = test::material("plain", MaterialType::Lambert, {0.5f, 0.5f, 0.5f});
+    // In linear values: a small light's sampling noise may stay within one 8-bit level.
+    auto framesDiffer = [](const SceneDesc& d) {
+        const Scene s(d);
+        return singleMachineLinear(s, d, 1) != singleMachineLinear(s, d, 2);
+    };
+    EXPECT_FALSE(rendersStochastically(base));
+    EXPECT_FALSE(framesDiffer(base));
+    std::vector<std::pair<std::string, SceneDesc>> variants;
+    SceneDesc v = base;
+    v.settings.gi = true;
+    variants.emplace_back("gi", v);
+    v = base;
+    // (Not the zoo's area light: cross(edge1, edge2) of that one points up, away from the scene.)
+    Light area;
+    area.type = LightType::Area;
+    area.position = {0.5f, 3.5f, -0.5f};
+    area.edge1 = {1, 0, 0};
+    area.edge2 = {0, 0, 1};  // cross points down
+    area.intensity = 3.0f;
+    v.lights.push_back(area);
+    variants.emplace_back("area light", v);
+    v = base;
+    v.materials[3].roughness = 0.3f;
+    variants.emplace_back("rough metal", v);
+    v = base;
+    v.materials[9] = test::materialZoo(dir, 48, 32).materials[9];
+    variants.emplace_back("volume", v);
+    for (const auto& [name, d] : variants) {
+        EXPECT_TRUE(rendersStochastically(d)) << name;
+        EXPECT_TRUE(framesDiffer(d)) << name;
+    }
+    SceneDesc depth = variants[0].second;
+    depth.settings.view = ViewMode::Depth;
+    EXPECT_FALSE(rendersStochastically(depth)) << "false-colour views are not refined";
+
+    // The master reports it per frame, and sends linear tiles for stochastic frames only.
+    ClusterSettings cs;
+    cs.async = false;
+    LocalCluster cluster(base, cs, 1);
+    ASSERT_TRUE(cluster.master->waitForClients(1, 30000));
+    FrameReport r;
+    std::vector<float> linear{1.0f};
+    cluster.master->renderFrame(&r, &linear);
+    EXPECT_FALSE(r.stochastic);
+    EXPECT_FALSE(r.linear);
+    EXPECT_TRUE(linear.empty());
+    cluster.master->setRenderSettings(variants[0].second.settings);
+    cluster.master->renderFrame(&r, &linear);
+    EXPECT_TRUE(r.stochastic);
+    EXPECT_TRUE(r.linear);
+    EXPECT_EQ(linear.size(), size_t(48 * 32 * 3));
+}
+
+// A codec change is a state change: an accumulation over it restarts.
+TEST(ClusterAccumulation, SetCodecMovesTheStateOn) {
+    const auto dir = test::scratchDir();
+    SceneDesc desc = test::materialZoo(dir, 32, 24);
+    ClusterSettings cs;
+    cs.async = false;
+    LocalCluster cluster(desc, cs, 1);
+    ASSERT_TRUE(cluster.master->waitForClients(1, 30000));
+    FrameReport a, b, c;
+    cluster.master->renderFrame(&a);
+    cluster.master->renderFrame(&b);
+    EXPECT_EQ(a.stateSeq, b.stateSeq);
+    CodecSettings zstd;
+    zstd.codec = TileCodec::Zstd;
+    cluster.master->setCodec(zstd);
+    cluster.master->renderFrame(&c);
+    EXPECT_NE(c.stateSeq, b.stateSeq);
+}
+
+// rtwall run accumulates a stochastic scene's frames only.
+TEST(ClusterAccumulation, RunAccumulatesOnlyStochasticScenes) {
+    const auto dir = test::scratchDir();
+    auto run = [](const std::string& args) { return test::runCli(RTWALL_EXE, args, 300); };
+    // A mesh with the default point light: deterministic.
+    test::writeFile(dir / "plain.toml", "scene = \"" + (test::dataDir() / "meshes/box_quads.obj").string() +
+                                            "\"\n[image]\nwidth = 48\nheight = 32\n"
+                                            "[cluster]\nclients = 1\n[run]\nframes = 3\nwrite_every = 0\norbit = 0\n");
+    test::CliResult r = run("run " + (dir / "plain.toml").string() + " --headless");
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("no accumulation: the scene is deterministic"), std::string::npos) << r.output;
+    // The office (a volume on the desk, an area light): every frame of the still view is
+    // accumulated, as linear tiles.
+    ASSERT_EQ(run("gen office --out " + (dir / "office").string()).status, 0);
+    test::writeFile(dir / "run.toml", "scene = \"office/office.toml\"\n[image]\nwidth = 48\nheight = 32\n"
+                                      "[cluster]\nclients = 1\n[run]\nframes = 3\nwrite_every = 0\norbit = 0\n");
+    r = run("run " + (dir / "run.toml").string() + " --headless");
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("progressive refinement: 3 of 3 frames accumulated (stochastic scene), 3 of them as linear tiles"),
+              std::string::npos)
+        << r.output;
+}
+
+}  // namespace
+}  // namespace rtwall
