@@ -1,10 +1,11 @@
 // rtwall bench shading: frame time and error against a converged reference for the shading
-// demos, as the speed/accuracy controls vary: the ray-tree pruning threshold (office and
-// headlight, against the unpruned image), GI samples per pixel (office, against a many-sample
-// mean) and the volume step (office, against a fine step). PSNR over the whole image, and mean
+// demos, as the speed/accuracy controls vary: the ray-tree pruning threshold (every scene,
+// against the unpruned image), GI samples per pixel (office and the alpha-masked sunflower field,
+// against a many-sample mean) and the volume step (office, against a fine step). PSNR over the whole image, and mean
 // LDR-FLIP (rtwall::tune, 67 pixels per degree).
 #include "commands.h"
 #include "gen_shading.h"
+#include "generators.h"
 
 #include <rtwall/engine.h>
 #include <rtwall/tune.h>
@@ -26,7 +27,9 @@ struct Options {
     bool json = false;
     int width = 1600, height = 1200, rounds = 3, referenceFrames = 64, threads = 0;
     std::string dir = "out/bench-shading";
-    std::vector<std::string> scenes{"office", "headlight"};
+    std::vector<std::string> scenes{"office", "headlight", "sunflowers"};
+    int64_t sunflowerPlants = 2000;  // the field is generated at this size (rtwall gen sunflowers --instances)
+    int sunflowerTrees = 1;
     std::vector<float> thresholds{0.0005f, 0.002f, 0.01f, 0.05f};
     std::vector<int> giSamples{1, 2, 4, 8, 16};
     std::vector<float> volumeSteps{0.25f, 0.5f, 1.0f, 2.0f, 4.0f};
@@ -83,13 +86,17 @@ void addBenchShading(CLI::App& bench, Run& run) {
     cmd->add_option("--reference-frames", o->referenceFrames, "Frames averaged for the GI reference")->check(CLI::Range(1, 100000));
     cmd->add_option("--threads", o->threads, "Render threads (0 = all)")->check(CLI::Range(0, 1024));
     cmd->add_option("--dir", o->dir, "Where the demo scenes are written");
-    cmd->add_option("--scenes", o->scenes, "Scenes to run (office, headlight)")
-        ->check(CLI::IsMember({"office", "headlight"}))
+    cmd->add_option("--scenes", o->scenes, "Scenes to run (office, headlight, sunflowers)")
+        ->check(CLI::IsMember({"office", "headlight", "sunflowers"}))
         ->delimiter(',');
+    cmd->add_option("--sunflower-plants", o->sunflowerPlants, "Plants in the generated sunflower field")
+        ->check(CLI::Range(int64_t(1), int64_t(10'000'000)));
+    cmd->add_option("--sunflower-trees", o->sunflowerTrees, "Large trees in the generated sunflower field")
+        ->check(CLI::Range(0, 64));
     cmd->add_option("--thresholds", o->thresholds, "Pruning thresholds to measure")
         ->check(CLI::Range(0.0f, 1.0f))
         ->delimiter(',');
-    cmd->add_option("--gi-samples", o->giSamples, "GI samples per pixel to measure (office)")
+    cmd->add_option("--gi-samples", o->giSamples, "GI samples per pixel to measure (office, sunflowers)")
         ->check(CLI::Range(1, 4096))
         ->delimiter(',');
     cmd->add_option("--volume-steps", o->volumeSteps, "Volume steps in voxels to measure (office)")
@@ -97,10 +104,21 @@ void addBenchShading(CLI::App& bench, Run& run) {
         ->delimiter(',');
     cmd->callback([&run, o] {
         run = [o] {
-            toml::table out{{"width", o->width}, {"height", o->height}, {"rounds", o->rounds}, {"flip", "mean LDR-FLIP, 67 pixels per degree"},
-                            {"sunflowers", "not in this branch (rtwall gen sunflowers comes with the cad branch)"}};
+            toml::table out{{"width", o->width}, {"height", o->height}, {"rounds", o->rounds}, {"flip", "mean LDR-FLIP, 67 pixels per degree"}};
             for (const std::string& name : o->scenes) {
-                SceneDesc desc = loadSceneFile(writeShadingDemo(name, std::filesystem::path(o->dir) / name));
+                SceneDesc desc;
+                if (name == "sunflowers") {
+                    gen::GenOptions g;
+                    g.out = std::filesystem::path(o->dir) / name;
+                    g.instances = o->sunflowerPlants;
+                    g.trees = o->sunflowerTrees;
+                    gen::genSunflowers(g);
+                    desc = loadSceneFile(g.out / "scene.toml");
+                    out.insert("sunflower_plants", o->sunflowerPlants);
+                    out.insert("sunflower_trees", o->sunflowerTrees);
+                } else {
+                    desc = loadSceneFile(writeShadingDemo(name, std::filesystem::path(o->dir) / name));
+                }
                 desc.settings.width = o->width;
                 desc.settings.height = o->height;
                 desc.settings.threads = o->threads;
@@ -131,7 +149,7 @@ void addBenchShading(CLI::App& bench, Run& run) {
                 }
                 sceneOut.insert("prune", prune);
 
-                if (name == "office") {
+                if (name == "office" || name == "sunflowers") {
                     // GI samples per pixel (one frame), against the mean of many frames.
                     RenderSettings g = desc.settings;
                     g.gi = true;
@@ -148,6 +166,8 @@ void addBenchShading(CLI::App& bench, Run& run) {
                     }
                     sceneOut.insert("gi_spp", gi);
                     sceneOut.insert("gi_reference_spp", 4 * o->referenceFrames);
+                }
+                if (name == "office") {
 
                     // Volume step (voxels), against step 0.05.
                     auto withStep = [&](float step) {
