@@ -5,6 +5,7 @@
 #include "codec.h"
 #include "protocol.h"
 #include "shading_scenes.h"
+#include "local_cluster.h"
 #include "test_util.h"
 #include "../cli_util.h"
 
@@ -23,38 +24,8 @@
 namespace rtwall {
 namespace {
 
-struct LocalCluster {
-    LocalCluster(const SceneDesc& desc, const ClusterSettings& cs, int clientCount,
-                 const std::filesystem::path& cacheDir = {})
-        : master(std::make_unique<Master>(desc, cs)) {
-        for (int i = 0; i < clientCount; ++i) {
-            ClientSettings c;
-            c.connect = master->endpoint();
-            c.threads = 1;
-            c.exitAfterIdleMs = 4000;
-            c.cacheDir = cacheDir;
-            c.counters = std::make_shared<ClientCounters>();
-            counters.push_back(c.counters);
-            threads.emplace_back([c] { runClient(c); });
-        }
-    }
-    ~LocalCluster() {
-        master.reset();  // its goodbye ends the clients
-        for (auto& t : threads) t.join();
-    }
-    uint64_t sum(std::atomic<uint64_t> ClientCounters::*field) const {
-        uint64_t n = 0;
-        for (const auto& c : counters) n += (*c).*field;
-        return n;
-    }
-    std::unique_ptr<Master> master;
-    std::vector<std::thread> threads;
-    std::vector<std::shared_ptr<ClientCounters>> counters;
-};
-
-Image singleMachine(const Scene& scene, const SceneDesc& d, uint32_t frame) {
-    return renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings, frame);
-}
+using test::LocalCluster;
+using test::singleMachine;
 
 // One machine's frame in linear RGB (the whole image as one tile: pixels do not depend on tiles).
 std::vector<float> singleMachineLinear(const Scene& scene, const SceneDesc& d, uint32_t frame) {

@@ -1,6 +1,7 @@
 // CAD scenes over the cluster (issue 3): a mesh with vertex colours, and a far-from-origin scene
 // with non-default [bvh] settings, render bit-identically on one machine and on two clients on
 // loopback (protocol version 4 sends colours, the BVH settings and the scene origin).
+#include "local_cluster.h"
 #include "test_util.h"
 
 #include <rtwall/cluster.h>
@@ -16,29 +17,8 @@
 namespace rtwall {
 namespace {
 
-struct LocalCluster {
-    LocalCluster(const SceneDesc& desc, const ClusterSettings& cs, int clientCount)
-        : master(std::make_unique<Master>(desc, cs)) {
-        for (int i = 0; i < clientCount; ++i) {
-            ClientSettings c;
-            c.connect = master->endpoint();
-            c.threads = 1;
-            c.exitAfterIdleMs = 4000;
-            threads.emplace_back([c] { runClient(c); });
-        }
-    }
-    ~LocalCluster() {
-        master.reset();  // its goodbye ends the clients
-        for (auto& t : threads) t.join();
-    }
-    std::unique_ptr<Master> master;
-    std::vector<std::thread> threads;
-};
-
-Image singleMachine(const SceneDesc& d, uint32_t frame) {
-    const Scene scene(d);
-    return renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings, frame);
-}
+using test::LocalCluster;
+using test::singleMachine;
 
 // Every tile came from a client.
 bool complete(const FrameReport& r) {

@@ -2,6 +2,7 @@
 // the client false-colour view give exactly the single-machine bytes (or, for the client view,
 // the ids the master assigned).
 #include "shading_scenes.h"
+#include "local_cluster.h"
 #include "test_util.h"
 
 #include <rtwall/cluster.h>
@@ -15,29 +16,8 @@
 namespace rtwall {
 namespace {
 
-struct LocalCluster {
-    LocalCluster(const SceneDesc& desc, const ClusterSettings& cs, int clientCount)
-        : master(std::make_unique<Master>(desc, cs)) {
-        for (int i = 0; i < clientCount; ++i) {
-            ClientSettings c;
-            c.connect = master->endpoint();
-            c.threads = 1;
-            c.exitAfterIdleMs = 4000;
-            threads.emplace_back([c] { runClient(c); });
-        }
-    }
-    ~LocalCluster() {
-        master.reset();  // its goodbye ends the clients
-        for (auto& t : threads) t.join();
-    }
-    std::unique_ptr<Master> master;
-    std::vector<std::thread> threads;
-};
-
-Image singleMachine(const SceneDesc& d, uint32_t frame) {
-    const Scene scene(d);
-    return renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings, frame);
-}
+using test::LocalCluster;
+using test::singleMachine;
 
 size_t differingBytes(const Image& a, const Image& b) {
     if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
