@@ -139,27 +139,6 @@ LoadSettings readLoad(Reader& top, const std::filesystem::path& file) {
     return l;
 }
 
-// A 3-vector in double precision: positions in CAD scenes need more than a float's 24 bits.
-std::array<double, 3> vec3d(Reader& r, const std::string& key, std::array<double, 3> def, bool required = false) {
-    const toml::node* n = r.find(key);
-    if (!n) {
-        if (required) r.fail(nullptr, "missing required key '" + key + "'");
-        return def;
-    }
-    auto a = n->as_array();
-    if (!a || a->size() != 3) r.fail(n, "key '" + key + "': expected an array of 3 numbers");
-    std::array<double, 3> v{};
-    for (size_t i = 0; i < 3; ++i) {
-        const toml::node& e = *a->get(i);
-        if (auto x = e.as_integer()) v[i] = double(x->get());
-        else if (auto f = e.as_floating_point()) v[i] = f->get();
-        else r.fail(n, "key '" + key + "': element " + std::to_string(i) + " is " + Reader::typeName(e) + ", not a number");
-        if (!std::isfinite(v[i]) || std::fabs(v[i]) > 1e15)
-            r.fail(n, "key '" + key + "': element " + std::to_string(i) + " must be finite and within 1e15");
-    }
-    return v;
-}
-
 std::shared_ptr<const TriangleMesh> makeShape(Reader& r, const std::string& shape) {
     if (shape == "sphere") {
         const int rings = r.integer("rings", 32, 2, 4096), segments = r.integer("segments", 64, 3, 8192);
@@ -185,16 +164,16 @@ Transform readTransform(Reader& r) {
             const double s = r.number("scale", 1.0, 1e-12, 1e12);
             t = Transform::scale(s, s, s);
         } else {
-            const std::array<double, 3> s = vec3d(r, "scale", {1, 1, 1});
+            const std::array<double, 3> s = r.vec3d("scale", {1, 1, 1});
             if (s[0] == 0 || s[1] == 0 || s[2] == 0) r.fail(n, "key 'scale': factors must not be zero");
             t = Transform::scale(s[0], s[1], s[2]);
         }
     }
-    const std::array<double, 3> rot = vec3d(r, "rotate", {0, 0, 0});
+    const std::array<double, 3> rot = r.vec3d("rotate", {0, 0, 0});
     t = Transform::rotateDegrees(1, 0, 0, rot[0]) * t;
     t = Transform::rotateDegrees(0, 1, 0, rot[1]) * t;
     t = Transform::rotateDegrees(0, 0, 1, rot[2]) * t;
-    const std::array<double, 3> tr = vec3d(r, "translate", {0, 0, 0});
+    const std::array<double, 3> tr = r.vec3d("translate", {0, 0, 0});
     return Transform::translate(tr[0], tr[1], tr[2]) * t;
 }
 
@@ -507,9 +486,9 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
         std::array<double, 3> position{0, 10, 0};
         const std::string type = r.choice("type", "point", {"point", "directional", "area"});
         l.type = type == "directional" ? LightType::Directional : type == "area" ? LightType::Area : LightType::Point;
-        if (l.type == LightType::Point) position = vec3d(r, "position", {}, true);
+        if (l.type == LightType::Point) position = r.vec3d("position", {}, true);
         else if (l.type == LightType::Area) {
-            position = vec3d(r, "position", {}, true);
+            position = r.vec3d("position", {}, true);
             l.edge1 = r.vec3("edge1", {}, true);
             l.edge2 = r.vec3("edge2", {}, true);
             if (length(cross(l.edge1, l.edge2)) == 0.0f) r.fail(r.find("edge2"), "key 'edge2': the area light has no area");
@@ -528,7 +507,7 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
         CameraDesc c;
         c.name = r.string("name", "camera" + std::to_string(scene.cameras.size() + 1));
         if (scene.findCamera(c.name)) r.fail(r.find("name"), "camera name '" + c.name + "' is used twice");
-        const std::array<double, 3> p = vec3d(r, "position", {}, true), at = vec3d(r, "look_at", {}, true);
+        const std::array<double, 3> p = r.vec3d("position", {}, true), at = r.vec3d("look_at", {}, true);
         c.up = r.vec3("up", c.up);
         c.fovY = float(r.number("fov", c.fovY, 0.01, 179.0));
         const Float3 view{float(at[0] - p[0]), float(at[1] - p[1]), float(at[2] - p[2])};

@@ -46,24 +46,6 @@ struct CameraKey {
     CameraDesc camera;
 };
 
-// An [x, y, z] of world coordinates, in double precision.
-std::array<double, 3> worldPoint(toml_reader::Reader& r, const std::string& key) {
-    const toml::node* n = r.find(key);
-    if (!n) r.fail(nullptr, "missing required key '" + key + "'");
-    const toml::array* a = n->as_array();
-    if (!a || a->size() != 3) r.fail(n, "key '" + key + "': expected an array of 3 numbers");
-    std::array<double, 3> v{};
-    for (size_t i = 0; i < 3; ++i) {
-        const toml::node& e = *a->get(i);
-        if (auto x = e.as_integer()) v[i] = double(x->get());
-        else if (auto f = e.as_floating_point()) v[i] = f->get();
-        else r.fail(n, "key '" + key + "': element " + std::to_string(i) + " is " + toml_reader::Reader::typeName(e) + ", not a number");
-        if (!std::isfinite(v[i]) || std::fabs(v[i]) > 1e15)
-            r.fail(n, "key '" + key + "': element " + std::to_string(i) + " must be finite and within 1e15");
-    }
-    return v;
-}
-
 // Positions are world coordinates (double), made relative to the scene's rebased `origin` here,
 // so a path survives a change of origin (a recorded path is written the same way).
 std::vector<CameraKey> readCameraPath(const std::filesystem::path& file, const std::array<double, 3>& origin) {
@@ -79,8 +61,8 @@ std::vector<CameraKey> readCameraPath(const std::filesystem::path& file, const s
         auto rel = [&](const std::array<double, 3>& p) {
             return Float3{float(p[0] - origin[0]), float(p[1] - origin[1]), float(p[2] - origin[2])};
         };
-        k.camera.position = rel(worldPoint(r, "position"));
-        k.camera.lookAt = rel(worldPoint(r, "look_at"));
+        k.camera.position = rel(r.vec3d("position", {}, true));
+        k.camera.lookAt = rel(r.vec3d("look_at", {}, true));
         k.camera.up = r.vec3("up", k.camera.up);
         k.camera.fovY = float(r.number("fov", k.camera.fovY, 0.01, 179.0));
         keys.push_back(k);

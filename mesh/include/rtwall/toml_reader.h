@@ -9,6 +9,7 @@
 
 #include <toml++/toml.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <initializer_list>
@@ -118,6 +119,27 @@ public:
             v[i] = float(d);
         }
         return {v[0], v[1], v[2]};
+    }
+
+    // An [x, y, z] in double precision (world placements, CAD coordinates): within 1e15.
+    std::array<double, 3> vec3d(const std::string& key, std::array<double, 3> def, bool required = false) {
+        const toml::node* n = find(key);
+        if (!n) {
+            if (required) fail(nullptr, "missing required key '" + key + "'");
+            return def;
+        }
+        auto a = n->as_array();
+        if (!a || a->size() != 3) fail(n, "key '" + key + "': expected an array of 3 numbers");
+        std::array<double, 3> v{};
+        for (size_t i = 0; i < 3; ++i) {
+            const toml::node& e = *a->get(i);
+            if (auto x = e.as_integer()) v[i] = double(x->get());
+            else if (auto f = e.as_floating_point()) v[i] = f->get();
+            else fail(n, "key '" + key + "': element " + std::to_string(i) + " is " + typeName(e) + ", not a number");
+            if (!std::isfinite(v[i]) || std::fabs(v[i]) > 1e15)
+                fail(n, "key '" + key + "': element " + std::to_string(i) + " must be finite and within 1e15");
+        }
+        return v;
     }
 
     // Reports the first key that was never read: a typo or a key in the wrong table.
