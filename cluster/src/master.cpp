@@ -626,12 +626,17 @@ struct Master::Impl {
         lastUpdateSent = nowSeconds();
     }
 
-    void runCommands() {
+    // Runs the queued commands; false when one of them is kStop (the loop then ends). The stop
+    // is seen in the list taken here: checking the shared queue first and taking it afterwards
+    // could swallow a stop queued in between, and the destructor would wait forever.
+    bool runCommands() {
         std::deque<Command> pending;
         {
             std::lock_guard lock(m);
             pending.swap(commands);
         }
+        for (const Command& cmd : pending)
+            if (cmd.kind == Command::kStop) return false;
         for (Command& cmd : pending) {
             if (cmd.kind == Command::kUpdate) {
                 mergeInto(unsent, std::move(cmd.update));
@@ -653,6 +658,7 @@ struct Master::Impl {
             }
         }
         if (nowSeconds() - lastUpdateSent > kUpdateIntervalSeconds) flushUpdates();
+        return true;
     }
 
     void checkTimeouts() {
@@ -673,12 +679,7 @@ struct Master::Impl {
                 zmq::message_t ignored;
                 while (wakeRecv.recv(ignored, zmq::recv_flags::dontwait)) {
                 }
-                {
-                    std::lock_guard lock(m);
-                    for (const Command& c : commands)
-                        if (c.kind == Command::kStop) return;
-                }
-                runCommands();
+                if (!runCommands()) return;
                 reopenFailedTiles();
             }
             // Drain what is queued, bounded so commands and timers are not starved.
