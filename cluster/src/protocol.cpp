@@ -115,7 +115,7 @@ void read(Reader& r, TextureDesc& t) {
     t.color2 = readUnitColor(r, "texture color2");
     t.scale = r.f32();
     if (!(t.scale > 0.0f && std::isfinite(t.scale))) fail("texture scale " + std::to_string(t.scale) + " is not positive");
-    t.mapping = readEnum(r, TextureMapping::Cylindrical, "texture mapping");
+    t.mapping = readEnum(r, TextureMapping::Auto, "texture mapping");
 }
 
 Color readNonNegativeColor(Reader& r, const char* what) {
@@ -144,6 +144,7 @@ void write(Writer& w, const Material& m) {
     write(w, m.texture);
     w.f32(m.bump);
     w.f32(m.bumpScale);
+    writeEnum(w, m.bumpMapping);  // version 5
     write(w, m.alpha);
     w.f32(m.alphaCutoff);
     w.string(m.volumeFile);
@@ -172,6 +173,9 @@ void read(Reader& r, Material& m) {
     read(r, m.texture);
     m.bump = readFloatIn(r, 0.0f, 100.0f, "material bump");
     m.bumpScale = readFloatIn(r, 1e-6f, 1e6f, "material bump scale");
+    m.bumpMapping = readEnum(r, TextureMapping::Object, "bump mapping");
+    if (m.bumpMapping != TextureMapping::Auto && m.bumpMapping != TextureMapping::Uv && m.bumpMapping != TextureMapping::Object)
+        fail("bump mapping must be auto, uv or object");
     read(r, m.alpha);
     m.alphaCutoff = readFloatIn(r, 0.0f, 1.0f, "material alpha cutoff");
     m.volumeFile = r.string(kMaxStringBytes);
@@ -757,6 +761,10 @@ void writeMesh(Writer& w, const TriangleMesh& mesh) {
     // Version 4: vertex colours, after the normals.
     w.boolean(mesh.hasColors());
     if (const uint8_t* c = mesh.colors()) w.bytes(c, 3 * vertices);
+    // Version 5: texture coordinates (u, v per vertex), after the colours.
+    w.boolean(mesh.hasUVs());
+    if (const float* t = mesh.uvs())
+        for (size_t i = 0; i < 2 * vertices; ++i) w.f32(t[i]);
 }
 
 }  // namespace
@@ -806,6 +814,16 @@ TriangleMesh decodeMesh(const uint8_t* data, size_t size) {
         std::vector<uint8_t> colors(size_t(3 * vertices));
         r.bytes(colors.data(), colors.size());
         mesh.setColors(std::move(colors));
+    }
+    if (r.boolean()) {
+        if (vertices == 0) fail("texture coordinates flag set on a mesh without vertices");
+        r.expectElements(vertices, 2 * sizeof(float), std::numeric_limits<uint32_t>::max());
+        std::vector<float> uv(size_t(2 * vertices));
+        for (size_t i = 0; i < uv.size(); ++i) {
+            uv[i] = r.f32();
+            if (!std::isfinite(uv[i])) fail("vertex " + std::to_string(i / 2) + " has a non-finite texture coordinate");
+        }
+        mesh.setUVs(std::move(uv));
     }
     r.expectEnd();
     return mesh;

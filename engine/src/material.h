@@ -29,6 +29,10 @@ struct SurfacePoint {
     float t;         // hit distance
     const InstanceData* instance;
     Color tint{1, 1, 1};  // the mesh's interpolated vertex colour (linear), white without one
+    uint32_t prim = 0;    // the triangle hit (for the UV tangent frame)
+    bool hasUV = false;   // the mesh has texture coordinates; then uv holds them at the hit
+    float uv[2] = {0, 0};
+    const float* uvOrNull() const { return hasUV ? uv : nullptr; }
 };
 
 // Object-space position from barycentrics: exact whatever space Embree traversed in.
@@ -104,12 +108,16 @@ public:
     virtual bool shadowTransparent() const { return false; }
 
     bool alphaMasked() const { return alpha_.active(); }
-    bool alphaAt(const Float3& objectPos) const { return alpha_.alpha(objectPos) >= desc_.alphaCutoff; }
+    bool alphaAt(const Float3& objectPos, const float* uv) const { return alpha_.alpha(objectPos, uv) >= desc_.alphaCutoff; }
     bool needsObjectPosition() const { return needsObjectPosition_; }
     // The shading normal after bump mapping (unchanged without a bump).
-    Float3 bumpedNormal(const InstanceData& inst, const Float3& po, const Float3& ns) const;
+    // Object mapping: the noise of the object-space position sp.po; Uv mapping: the noise of sp.uv
+    // through the triangle's tangent frame (dP/du, dP/dv).
+    Float3 bumpedNormal(const InstanceData& inst, const SurfacePoint& sp, const Float3& ns) const;
     // The material's colour (or texture) times the vertex colour at the point.
-    Color albedo(const SurfacePoint& sp) const { return (texture_.active() ? texture_.color(sp.po) : desc_.color) * sp.tint; }
+    Color albedo(const SurfacePoint& sp) const {
+        return (texture_.active() ? texture_.color(sp.po, sp.uvOrNull()) : desc_.color) * sp.tint;
+    }
     const Material& desc() const { return desc_; }
 
 protected:

@@ -301,13 +301,24 @@ MaterialModel::MaterialModel(const Material& desc)
     needsObjectPosition_ = texture_.active() || desc_.bump > 0.0f;
 }
 
-Float3 MaterialModel::bumpedNormal(const InstanceData& inst, const Float3& po, const Float3& ns) const {
+Float3 MaterialModel::bumpedNormal(const InstanceData& inst, const SurfacePoint& sp, const Float3& ns) const {
     if (!(desc_.bump > 0.0f)) return ns;
     // Gradient of the height field h = bump * turbulence(p / scale), analytic, in object space;
     // a gradient is a covector, so it goes to world space with the normal matrix.
     const float s = std::max(1e-6f, desc_.bumpScale);
     Float3 gObj;
-    turbulenceGrad(po * (1.0f / s), 4, gObj);
+    const bool uvBump = desc_.bumpMapping == TextureMapping::Uv || (desc_.bumpMapping == TextureMapping::Auto && sp.hasUV);
+    if (uvBump) {
+        // h = bump * turbulence((u, 0, v) / scale): its (u, v) derivatives, carried onto the
+        // surface by the triangle's tangent frame.
+        Float3 dPdu, dPdv;
+        if (!sp.hasUV || !uvTangents(*inst.mesh, sp.prim, dPdu, dPdv)) return ns;
+        Float3 gUV;
+        turbulenceGrad(Float3{sp.uv[0], 0.0f, sp.uv[1]} * (1.0f / s), 4, gUV);
+        gObj = uvSurfaceGradient(dPdu, dPdv, gUV.x, gUV.z);
+    } else {
+        turbulenceGrad(sp.po * (1.0f / s), 4, gObj);
+    }
     const Float3 g = transformNormal(inst.normalMatrix, gObj * (desc_.bump / s));
     const Float3 tangential = g - ns * dot(g, ns);
     const Float3 n = normalize(ns - tangential);

@@ -120,7 +120,10 @@ void alphaFilter(const RTCFilterFunctionNArguments* args) {
         if (args->valid[k] != -1) continue;
         const unsigned prim = RTCHitN_primID(args->hit, args->N, k);
         const float u = RTCHitN_u(args->hit, args->N, k), v = RTCHitN_v(args->hit, args->N, k);
-        if (!model.alphaAt(objectPosition(*data.mesh, prim, u, v))) args->valid[k] = 0;
+        float uv[2];
+        const bool hasUV = data.mesh->hasUVs();
+        if (hasUV) meshUVAt(*data.mesh, prim, u, v, uv);
+        if (!model.alphaAt(objectPosition(*data.mesh, prim, u, v), hasUV ? uv : nullptr)) args->valid[k] = 0;
     }
 }
 

@@ -64,13 +64,16 @@ TextureDesc readTexture(Reader& r, const std::filesystem::path& dir, const std::
     }
     t.color2 = r.vec3(prefix + "_color2", t.color2);
     t.scale = float(r.number(prefix + "_scale", t.scale, 1e-6, 1e6));
+    // Without a mapping: the mesh's UVs where it has them, else xz ("auto").
     const std::string mapping =
-        r.choice(prefix + "_mapping", "xz", {"xz", "xy", "yz", "spherical", "cylindrical"});
+        r.choice(prefix + "_mapping", "auto", {"auto", "uv", "xz", "xy", "yz", "spherical", "cylindrical"});
     t.mapping = mapping == "xy"            ? TextureMapping::PlanarXY
                 : mapping == "yz"          ? TextureMapping::PlanarYZ
                 : mapping == "spherical"   ? TextureMapping::Spherical
                 : mapping == "cylindrical" ? TextureMapping::Cylindrical
-                                           : TextureMapping::PlanarXZ;
+                : mapping == "uv"          ? TextureMapping::Uv
+                : mapping == "xz"          ? TextureMapping::PlanarXZ
+                                           : TextureMapping::Auto;
     return t;
 }
 
@@ -334,6 +337,10 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
         checkNonNegative(r, "emission", m.emission);
         m.bump = float(r.number("bump", m.bump, 0.0, 100.0));
         m.bumpScale = float(r.number("bump_scale", m.bumpScale, 1e-6, 1e6));
+        const std::string bumpMapping = r.choice("bump_mapping", "auto", {"auto", "uv", "object"});
+        m.bumpMapping = bumpMapping == "uv"       ? TextureMapping::Uv
+                        : bumpMapping == "object" ? TextureMapping::Object
+                                                  : TextureMapping::Auto;
         m.alpha = readTexture(r, dir, "alpha");
         m.alphaCutoff = float(r.number("alpha_cutoff", m.alphaCutoff, 0.0, 1.0));
         if (m.type == MaterialType::Volume) {
@@ -455,11 +462,28 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
         }
         return defaultMaterial;
     };
+    // An explicit "uv" mapping needs the mesh's texture coordinates; checked per (material, mesh)
+    // pair as the instances expand, and reported at the top-level [[instance]] that places it.
+    Reader* placing = nullptr;
+    std::set<std::pair<uint32_t, uint32_t>> uvChecked;
+    auto requireUVs = [&](uint32_t material, uint32_t mesh) {
+        if (!uvChecked.insert({material, mesh}).second) return;
+        const Material& m = scene.materials[material];
+        const MeshDesc& md = scene.meshes[mesh];
+        const char* what = m.texture.kind != TextureKind::None && m.texture.mapping == TextureMapping::Uv ? "texture_mapping"
+                           : m.alpha.kind != TextureKind::None && m.alpha.mapping == TextureMapping::Uv ? "alpha_mapping"
+                           : m.bump > 0.0f && m.bumpMapping == TextureMapping::Uv                      ? "bump_mapping"
+                                                                                                         : nullptr;
+        if (!what || md.mesh->hasUVs() || !placing) return;
+        placing->fail(nullptr, "material '" + m.name + "' has " + what + " = \"uv\", but mesh '" + md.name + "' (" +
+                                   md.source + ") has no texture coordinates");
+    };
     // Mesh origins (far-from-origin files are stored recentred) go into the transform here.
     auto emit = [&](const Child& leaf, const Transform& parent, uint32_t inherited) {
         InstanceDesc in;
         in.mesh = leaf.target;
         in.material = materialOrDefault(leaf.material != kNoMaterial ? leaf.material : inherited);
+        requireUVs(in.material, in.mesh);
         const auto& o = scene.meshes[leaf.target].mesh->origin();
         in.transform = parent * leaf.transform * Transform::translate(o[0], o[1], o[2]);
         scene.instances.push_back(in);
@@ -477,7 +501,9 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
         total += expandedOf(c);
         if (total > kMaxInstances)
             r.fail(nullptr, "the scene expands to more than " + std::to_string(kMaxInstances) + " mesh instances");
+        placing = &r;
         expand(c, Transform{}, kNoMaterial);
+        placing = nullptr;
     });
 
     std::vector<std::array<double, 3>> lightPositions;

@@ -32,10 +32,15 @@ SurfacePoint surfaceAt(const InstanceData& inst, const MaterialModel& model, con
     }
     sp.po = model.needsObjectPosition() ? objectPosition(mesh, hit.prim, hit.u, hit.v) : Float3{};
     if (mesh.hasColors()) sp.tint = vertexColorAt(mesh, hit.prim, hit.u, hit.v);
+    sp.prim = hit.prim;
+    if (mesh.hasUVs()) {
+        sp.hasUV = true;
+        meshUVAt(mesh, hit.prim, hit.u, hit.v, sp.uv);
+    }
     sp.frontFace = dot(ng, dir) < 0.0f;
     if (!sp.frontFace) ng = -ng;
     if (dot(ns, ng) < 0.0f) ns = -ns;
-    ns = model.bumpedNormal(inst, sp.po, ns);
+    ns = model.bumpedNormal(inst, sp, ns);
     if (dot(ns, ng) < 0.0f) ns = ng;
     sp.ng = ng;
     sp.ns = ns;

@@ -208,8 +208,44 @@ void textureCoordinates(TextureMapping mapping, const Float3& po, float scale, f
         v = (1.0f - std::acos(c) * float(1.0 / std::numbers::pi)) * inv;
         return;
     }
+    case TextureMapping::Uv:
+    case TextureMapping::Auto:
+    case TextureMapping::Object: break;
     }
     u = po.x * inv, v = po.z * inv;
+}
+
+void meshUVAt(const TriangleMesh& mesh, uint32_t prim, float u, float v, float out[2]) {
+    const uint32_t* tri = mesh.indices() + 3 * size_t(prim);
+    const float* t = mesh.uvs();
+    const float w = 1.0f - u - v;
+    for (int k = 0; k < 2; ++k)
+        out[k] = t[2 * size_t(tri[0]) + k] * w + t[2 * size_t(tri[1]) + k] * u + t[2 * size_t(tri[2]) + k] * v;
+}
+
+bool uvTangents(const TriangleMesh& mesh, uint32_t prim, Float3& dPdu, Float3& dPdv) {
+    const uint32_t* tri = mesh.indices() + 3 * size_t(prim);
+    const float* t = mesh.uvs();
+    const Float3 p0 = mesh.position(tri[0]);
+    const Float3 e1 = mesh.position(tri[1]) - p0, e2 = mesh.position(tri[2]) - p0;
+    const float du1 = t[2 * size_t(tri[1])] - t[2 * size_t(tri[0])], dv1 = t[2 * size_t(tri[1]) + 1] - t[2 * size_t(tri[0]) + 1];
+    const float du2 = t[2 * size_t(tri[2])] - t[2 * size_t(tri[0])], dv2 = t[2 * size_t(tri[2]) + 1] - t[2 * size_t(tri[0]) + 1];
+    // e1 = dPdu du1 + dPdv dv1, e2 = dPdu du2 + dPdv dv2, solved for dPdu and dPdv.
+    const float det = du1 * dv2 - du2 * dv1;
+    if (!(std::fabs(det) > 0.0f)) return false;
+    const float inv = 1.0f / det;
+    dPdu = (e1 * dv2 - e2 * dv1) * inv;
+    dPdv = (e2 * du1 - e1 * du2) * inv;
+    return isFinite(dPdu) && isFinite(dPdv);
+}
+
+Float3 uvSurfaceGradient(const Float3& dPdu, const Float3& dPdv, float dhdu, float dhdv) {
+    // grad(u) . dPdu = 1, grad(u) . dPdv = 0 (and the same for v), both in the plane:
+    // grad(u) = (dPdv x N) / |N|^2, grad(v) = (N x dPdu) / |N|^2 with N = dPdu x dPdv.
+    const Float3 n = cross(dPdu, dPdv);
+    const float nn = dot(n, n);
+    if (!(nn > 0.0f)) return {0, 0, 0};
+    return (cross(dPdv, n) * dhdu + cross(n, dPdu) * dhdv) * (1.0f / nn);
 }
 
 Texture::Texture(const TextureDesc& desc, const Color& base) : desc_(desc), base_(base) {
@@ -217,10 +253,19 @@ Texture::Texture(const TextureDesc& desc, const Color& base) : desc_(desc), base
     if (!(desc_.scale > 0.0f)) desc_.scale = 1.0f;
 }
 
-Color Texture::color(const Float3& objectPos) const {
-    const Float3 p = objectPos * (1.0f / desc_.scale);
+Color Texture::color(const Float3& objectPos, const float* uv) const {
+    Float3 p;
     float u, v;
-    textureCoordinates(desc_.mapping, objectPos, desc_.scale, u, v);
+    if (desc_.mapping == TextureMapping::Uv || (desc_.mapping == TextureMapping::Auto && uv)) {
+        // The patterns see (u, 0, v) as their position, so marble and wood follow the UVs too.
+        const float inv = 1.0f / desc_.scale;
+        u = (uv ? uv[0] : 0.0f) * inv;
+        v = (uv ? uv[1] : 0.0f) * inv;
+        p = {u, 0.0f, v};
+    } else {
+        p = objectPos * (1.0f / desc_.scale);
+        textureCoordinates(desc_.mapping, objectPos, desc_.scale, u, v);
+    }
     switch (desc_.kind) {
     case TextureKind::None: return base_;
     case TextureKind::Checker: {

@@ -34,14 +34,30 @@ float turbulenceGrad(const Float3& p, int octaves, Float3& gradient);
 // planar projections divide by the scale; spherical and cylindrical are around the object-space
 // origin with y as the axis, u in turns from +z towards +x, v from the -y pole (spherical, in
 // half turns) or along y in object units (cylindrical); both divided by the scale.
+// Uv, Auto and Object fall back to PlanarXZ here (they need the mesh: see Texture::color).
 void textureCoordinates(TextureMapping mapping, const Float3& objectPos, float scale, float& u, float& v);
+
+// A mesh's texture coordinates at barycentrics (u, v) of triangle `prim` (the mesh has UVs).
+void meshUVAt(const TriangleMesh& mesh, uint32_t prim, float u, float v, float out[2]);
+
+// The tangent frame of triangle `prim` from its texture coordinates: dP/du and dP/dv in object
+// space, the derivatives of position along u and along v. False when the triangle's (u, v) are
+// degenerate (zero area in texture space): there is no frame.
+bool uvTangents(const TriangleMesh& mesh, uint32_t prim, Float3& dPdu, Float3& dPdv);
+
+// The surface gradient (object space, in the triangle's plane) of a height field h(u, v) with
+// derivatives dh/du, dh/dv: dh/du grad(u) + dh/dv grad(v), with grad(u), grad(v) the dual basis
+// of dP/du, dP/dv in the plane.
+Float3 uvSurfaceGradient(const Float3& dPdu, const Float3& dPdv, float dhdu, float dhdv);
 
 class Texture {
 public:
     // `base` is the material colour the pattern modulates (or replaces, for images).
     Texture(const TextureDesc& desc, const Color& base);
-    Color color(const Float3& objectPos) const;
-    float alpha(const Float3& objectPos) const { return color(objectPos).x; }  // masks use the red channel
+    // `uv`: the mesh's texture coordinates at the point, or null when the mesh has none (the
+    // Uv mapping then reads (0, 0); scenes refuse that combination when they load).
+    Color color(const Float3& objectPos, const float* uv) const;
+    float alpha(const Float3& objectPos, const float* uv) const { return color(objectPos, uv).x; }  // masks use the red channel
     bool active() const { return desc_.kind != TextureKind::None; }
 
 private:

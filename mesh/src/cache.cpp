@@ -9,7 +9,7 @@
 //   24  i64      source modification time, nanoseconds since the epoch
 //   32  u64      vertex count V
 //   40  u64      triangle count T
-//   48  u32      flags: bit 0 = vertex normals, bit 1 = vertex colours
+//   48  u32      flags: bit 0 = vertex normals, bit 1 = vertex colours, bit 2 = texture coordinates
 //   52  u32      zero
 //   56  f64[3]   mesh origin (TriangleMesh::origin)
 //   80  u64[4]   import report: polygons triangulated, degenerate triangles, strips, cells skipped
@@ -21,11 +21,14 @@
 //       u32[3T]   triangle indices, padded likewise
 //       u8[3V]    vertex colours (sRGB-encoded RGB), if flagged, then at least 16 zero bytes, up
 //                 to a multiple of 64 (version 3)
+//       f32[2V]   texture coordinates (u, v per vertex), if flagged, then at least 16 zero bytes,
+//                 up to a multiple of 64 (version 4)
 // The file size must be exactly what the counts give. Sections start on 64-byte boundaries, so
 // in a mapping (page-aligned) every array is 64-byte aligned, and the arrays are used in place:
 // a mesh read from its cache is a view of the mapped file (MeshArray), the buffers Embree reads.
 // Version 1 had only 4 bytes of padding after the positions and none after the indices, so its
-// arrays could not be handed to Embree in place; version 2 had no colours. Both are rebuilt.
+// arrays could not be handed to Embree in place; version 2 had no colours, version 3 no texture
+// coordinates. All are rebuilt.
 #include "mesh_internal.h"
 
 #include <xxhash.h>
@@ -52,7 +55,7 @@ namespace fs = std::filesystem;
 using detail::MeshAccess;
 
 constexpr char kMagic[8] = {'R', 'T', 'W', 'M', 'E', 'S', 'H', 0};
-constexpr uint32_t kCacheVersion = 3;
+constexpr uint32_t kCacheVersion = 4;
 constexpr size_t kHeaderSize = 128;
 constexpr size_t kChecksumAt = 120;
 
@@ -180,7 +183,8 @@ std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const Impor
     const size_t nrmBytes = mesh.hasNormals() ? sectionBytes(3 * V) : 0;
     const size_t idxBytes = sectionBytes(3 * T);
     const size_t colBytes = mesh.hasColors() ? align64(3 * V + 16) : 0;
-    const size_t total = kHeaderSize + posBytes + nrmBytes + idxBytes + colBytes;
+    const size_t uvBytes = mesh.hasUVs() ? sectionBytes(2 * V) : 0;
+    const size_t total = kHeaderSize + posBytes + nrmBytes + idxBytes + colBytes + uvBytes;
 
     std::vector<unsigned char> bytes(total, 0);
     unsigned char* h = bytes.data();
@@ -191,7 +195,7 @@ std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const Impor
     putLE<int64_t>(h + 24, sourceMtime);
     putLE<uint64_t>(h + 32, V);
     putLE<uint64_t>(h + 40, T);
-    putLE<uint32_t>(h + 48, (mesh.hasNormals() ? 1u : 0u) | (mesh.hasColors() ? 2u : 0u));
+    putLE<uint32_t>(h + 48, (mesh.hasNormals() ? 1u : 0u) | (mesh.hasColors() ? 2u : 0u) | (mesh.hasUVs() ? 4u : 0u));
     for (int k = 0; k < 3; ++k) putLE<double>(h + 56 + 8 * k, mesh.origin()[size_t(k)]);
     putLE<uint64_t>(h + 80, report.polygonsTriangulated);
     putLE<uint64_t>(h + 88, report.degenerateTriangles);
@@ -207,7 +211,11 @@ std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const Impor
     }
     copyArrayLE(h + at, mesh.indices(), 3 * T);
     at += idxBytes;
-    if (mesh.hasColors()) std::memcpy(h + at, mesh.colors(), 3 * V);
+    if (mesh.hasColors()) {
+        std::memcpy(h + at, mesh.colors(), 3 * V);
+        at += colBytes;
+    }
+    if (mesh.hasUVs()) copyArrayLE(h + at, mesh.uvs(), 2 * V);
     putLE<uint64_t>(h + kChecksumAt, checksum(h, total));
     return bytes;
 }
@@ -269,14 +277,15 @@ TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t so
         throw bad(16, "stale: the source file changed since the cache was written");
     const uint64_t V = getLE<uint64_t>(data + 32), T = getLE<uint64_t>(data + 40);
     const uint32_t flags = getLE<uint32_t>(data + 48);
-    if (flags > 3 || getLE<uint32_t>(data + 52) != 0) throw bad(48, "unknown flags");
+    if (flags > 7 || getLE<uint32_t>(data + 52) != 0) throw bad(48, "unknown flags");
     // Counts must fit the file before anything is computed from them.
     if (V == 0 || T == 0 || V >= std::numeric_limits<uint32_t>::max() || V > size / 12 || T > size / 12)
         throw bad(32, "vertex or triangle count does not fit the file");
-    const bool normals = flags & 1, colors = flags & 2;
+    const bool normals = flags & 1, colors = flags & 2, uvs = flags & 4;
     const size_t posBytes = sectionBytes(3 * V), nrmBytes = normals ? posBytes : 0, idxBytes = sectionBytes(3 * T);
     const size_t colBytes = colors ? align64(3 * V + 16) : 0;
-    const size_t expected = kHeaderSize + posBytes + nrmBytes + idxBytes + colBytes;
+    const size_t uvBytes = uvs ? sectionBytes(2 * V) : 0;
+    const size_t expected = kHeaderSize + posBytes + nrmBytes + idxBytes + colBytes + uvBytes;
     if (size != expected)
         throw bad(std::min(size, expected), (size < expected ? "truncated: " : "trailing bytes: ") + std::to_string(size) +
                                                 " bytes, the counts give " + std::to_string(expected));
@@ -294,7 +303,10 @@ TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t so
     for (size_t i = 0; i < 3 * T; ++i)
         if (const uint32_t v = getLE<uint32_t>(data + idxAt + 4 * i); v >= V)
             throw bad(idxAt + 4 * i, "vertex index " + std::to_string(v) + " out of range");
-    const size_t colAt = idxAt + idxBytes;
+    const size_t colAt = idxAt + idxBytes, uvAt = colAt + colBytes;
+    if (uvs)
+        for (size_t i = 0; i < 2 * V; ++i)
+            if (!std::isfinite(getLE<float>(data + uvAt + 4 * i))) throw bad(uvAt + 4 * i, "non-finite texture coordinate");
     std::array<double, 3> origin{};
     for (int k = 0; k < 3; ++k) {
         origin[size_t(k)] = getLE<double>(data + 56 + 8 * k);
@@ -313,6 +325,7 @@ TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t so
         if (normals) nrm.view(reinterpret_cast<const float*>(data + nrmAt), 3 * V, keepAlive);
         idx.view(reinterpret_cast<const uint32_t*>(data + idxAt), 3 * T, keepAlive);
         if (colors) MeshAccess::colors(mesh).view(data + colAt, 3 * V, keepAlive);
+        if (uvs) MeshAccess::uvs(mesh).view(reinterpret_cast<const float*>(data + uvAt), 2 * V, keepAlive);
     } else {
         auto copy = [](const unsigned char* src, size_t n, auto tag) {
             using Elem = decltype(tag);
@@ -324,6 +337,7 @@ TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t so
         if (normals) nrm.assign(copy(data + nrmAt, 3 * V, float{}));
         idx.assign(copy(data + idxAt, 3 * T, uint32_t{}));
         if (colors) MeshAccess::colors(mesh).assign(std::vector<uint8_t>(data + colAt, data + colAt + 3 * V));
+        if (uvs) MeshAccess::uvs(mesh).assign(copy(data + uvAt, 2 * V, float{}));
     }
     MeshAccess::setVertexCount(mesh, V);
     mesh.setOrigin(origin);

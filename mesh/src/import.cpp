@@ -51,11 +51,14 @@ class MeshImporter final : public OmIo::BaseImporter {
 public:
     using FaceHandle = OpenMesh::FaceHandle;
 
-    explicit MeshImporter(TriangleMesh& mesh) : mesh_(mesh) {}
+    // `cornerTexcoords`: the reader gives texture coordinates per face corner (OBJ: while it
+    // parses a face, before add_face), not per vertex.
+    MeshImporter(TriangleMesh& mesh, bool cornerTexcoords) : mesh_(mesh), cornerTexcoords_(cornerTexcoords) {}
 
     const std::string& error() const { return error_; }
     size_t polygonsTriangulated() const { return polygonsTriangulated_; }
     size_t degenerateTriangles() const { return degenerateTriangles_; }
+    size_t seamVerticesSplit() const { return seamVerticesSplit_; }
 
     // OM files from format 2.0 on describe faces by halfedge loops; they are turned into
     // polygons once the whole file has been read.
@@ -96,6 +99,29 @@ public:
         mesh_.setColors(std::move(colors_));
     }
 
+    // Texture coordinates: per vertex, every vertex needs one; per corner, every face needs them
+    // (a face without, among faces with, is an error rather than a mesh half textured).
+    void finishUVs() {
+        if (!error_.empty()) return;
+        if (cornerTexcoords_) {
+            if (facesWithUV_ == 0) return;
+            if (facesWithoutUV_ > 0) {
+                fail("face " + std::to_string(firstFaceWithoutUV_) + " has no texture coordinates, but " +
+                     std::to_string(facesWithUV_) + " other faces have them (give every face vt indices, or none)");
+                return;
+            }
+        } else {
+            if (uvsSet_ == 0) return;
+            if (uvsSet_ != mesh_.vertexCount()) {
+                fail(std::to_string(uvsSet_) + " of " + std::to_string(mesh_.vertexCount()) +
+                     " vertices have texture coordinates (UV count mismatch)");
+                return;
+            }
+        }
+        uvs_.resize(2 * mesh_.vertexCount());  // vertices no face uses keep (0, 0)
+        mesh_.setUVs(std::move(uvs_));
+    }
+
     // -- geometry ------------------------------------------------------------------------------
 
     OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3f& p) override {
@@ -127,7 +153,12 @@ public:
         storePoint(size_t(vh.idx()), OpenMesh::Vec3d(p[0], p[1], p[2]));
     }
 
-    FaceHandle add_face(const VHandles& corners) override { return addPolygon(corners, faceCount_); }
+    FaceHandle add_face(const VHandles& corners) override {
+        if (!cornerTexcoords_) return addPolygon(corners, faceCount_);
+        const FaceHandle fh = addPolygon(resolveCornerUVs(corners), faceCount_);
+        pendingCorners_.clear();
+        return fh;
+    }
 
     void set_normal(OpenMesh::VertexHandle vh, const OpenMesh::Vec3f& n) override {
         set_normal(vh, OpenMesh::Vec3d(n[0], n[1], n[2]));
@@ -182,7 +213,7 @@ public:
     size_t n_faces() const override { return faceCount_ + faceHalfedge_.size(); }
     size_t n_edges() const override { return toVertex_.size() / 2; }
 
-    // -- ignored: rtwall reads no colours, texture coordinates, status bits or face normals ---
+    // -- ignored: rtwall reads no face texture coordinates, status bits or face normals -------
 
     void add_face_texcoords(FaceHandle, OpenMesh::VertexHandle, const std::vector<OpenMesh::Vec2f>&) override {}
     void add_face_texcoords(FaceHandle, OpenMesh::VertexHandle, const std::vector<OpenMesh::Vec3f>&) override {}
@@ -196,7 +227,14 @@ public:
     void set_color(OpenMesh::VertexHandle vh, const OpenMesh::Vec4f& c) override {
         storeColor(vh, unitToByte(c[0]), unitToByte(c[1]), unitToByte(c[2]));
     }
-    void set_texcoord(OpenMesh::VertexHandle, const OpenMesh::Vec2f&) override {}
+    void set_texcoord(OpenMesh::VertexHandle vh, const OpenMesh::Vec2f& t) override {
+        if (!error_.empty()) return;
+        if (cornerTexcoords_)
+            pendingCorners_.push_back({vh.idx(), t[0], t[1]});
+        else if (validVertex(vh))
+            storeUV(size_t(vh.idx()), t[0], t[1]);
+    }
+    // The OBJ reader sends a 3D "vt u v w" as (u, v) first, then again with w: w is dropped.
     void set_texcoord(OpenMesh::VertexHandle, const OpenMesh::Vec3f&) override {}
     void set_texcoord(OpenMesh::HalfedgeHandle, const OpenMesh::Vec2f&) override {}
     void set_texcoord(OpenMesh::HalfedgeHandle, const OpenMesh::Vec3f&) override {}
@@ -243,6 +281,96 @@ private:
             hasColor_[v] = true;
             ++colorsSet_;
         }
+    }
+
+    void storeUV(size_t v, float u, float w) {
+        if (!std::isfinite(u) || !std::isfinite(w)) {
+            fail("vertex " + std::to_string(v) + " has a NaN or infinite texture coordinate");
+            return;
+        }
+        if (uvs_.size() < 2 * (v + 1)) {
+            uvs_.resize(2 * std::max(v + 1, mesh_.vertexCount()));
+            hasUV_.resize(uvs_.size() / 2);
+        }
+        uvs_[2 * v] = u;
+        uvs_[2 * v + 1] = w;
+        if (!hasUV_[v]) {
+            hasUV_[v] = true;
+            ++uvsSet_;
+        }
+    }
+
+    // OBJ corners: each corner's (u, v) goes to its vertex; a vertex that already has another
+    // (u, v) (a texture seam) is split: the corner gets a copy of the vertex (position, normal,
+    // colour) with its own (u, v), found again by the chain of copies when another corner has
+    // the same pair. Returns the face's corners with the copies in place.
+    const VHandles& resolveCornerUVs(const VHandles& corners) {
+        resolved_ = corners;
+        if (!error_.empty()) return resolved_;
+        const size_t face = faceCount_;
+        if (pendingCorners_.empty()) {
+            if (facesWithoutUV_++ == 0) firstFaceWithoutUV_ = face;
+            return resolved_;
+        }
+        ++facesWithUV_;
+        for (auto& corner : resolved_) {
+            if (!validVertex(corner)) return resolved_;  // addPolygon reports it
+            const auto it = std::find_if(pendingCorners_.begin(), pendingCorners_.end(),
+                                         [&](const PendingCorner& p) { return p.vertex == corner.idx(); });
+            if (it == pendingCorners_.end()) {
+                fail("face " + std::to_string(face) + ": vertex " + std::to_string(corner.idx() + 1) +
+                     " has no texture coordinate, but other corners of the face have one");
+                return resolved_;
+            }
+            if (!std::isfinite(it->u) || !std::isfinite(it->v)) {
+                fail("face " + std::to_string(face) + ": a NaN or infinite texture coordinate");
+                return resolved_;
+            }
+            size_t v = size_t(corner.idx());
+            if (v >= hasUV_.size() || !hasUV_[v]) {
+                storeUV(v, it->u, it->v);
+                continue;
+            }
+            while (!(uvs_[2 * v] == it->u && uvs_[2 * v + 1] == it->v)) {
+                if (v < seamNext_.size() && seamNext_[v] != kNoCopy) {
+                    v = seamNext_[v];
+                    continue;
+                }
+                v = splitVertex(v);
+                if (!error_.empty()) return resolved_;
+                storeUV(v, it->u, it->v);
+                break;
+            }
+            corner = OpenMesh::VertexHandle(int(v));
+        }
+        return resolved_;
+    }
+
+    // A copy of vertex `v` at the end of the chain of its copies.
+    size_t splitVertex(size_t v) {
+        if (mesh_.vertexCount() >= size_t(std::numeric_limits<int>::max())) {
+            fail("more vertices than the reader can address");
+            return v;
+        }
+        const size_t copy = mesh_.addVertex(mesh_.position(v));
+        ++seamVerticesSplit_;
+        if (seamNext_.size() <= copy) seamNext_.resize(copy + 1, kNoCopy);
+        seamNext_[v] = uint32_t(copy);
+        if (v < hasNormal_.size() && hasNormal_[v]) {
+            normals_.resize(std::max(normals_.size(), 3 * (copy + 1)));
+            hasNormal_.resize(normals_.size() / 3);
+            for (size_t k = 0; k < 3; ++k) normals_[3 * copy + k] = normals_[3 * v + k];
+            hasNormal_[copy] = true;
+            ++normalsSet_;
+        }
+        if (v < hasColor_.size() && hasColor_[v]) {
+            colors_.resize(std::max(colors_.size(), 3 * (copy + 1)));
+            hasColor_.resize(colors_.size() / 3);
+            for (size_t k = 0; k < 3; ++k) colors_[3 * copy + k] = colors_[3 * v + k];
+            hasColor_[copy] = true;
+            ++colorsSet_;
+        }
+        return copy;
     }
 
     bool validVertex(OpenMesh::VertexHandle vh) const { return vh.idx() >= 0 && size_t(vh.idx()) < mesh_.vertexCount(); }
@@ -303,6 +431,21 @@ private:
     std::vector<uint8_t> colors_;
     std::vector<bool> hasColor_;
     size_t colorsSet_ = 0;
+
+    struct PendingCorner {
+        int vertex;
+        float u, v;
+    };
+    static constexpr uint32_t kNoCopy = 0xFFFFFFFFu;
+    bool cornerTexcoords_ = false;
+    std::vector<float> uvs_;
+    std::vector<bool> hasUV_;
+    size_t uvsSet_ = 0;
+    std::vector<PendingCorner> pendingCorners_;  // the face being read (OBJ)
+    VHandles resolved_;
+    std::vector<uint32_t> seamNext_;  // per vertex: its next copy with another (u, v), or kNoCopy
+    size_t seamVerticesSplit_ = 0;
+    size_t facesWithUV_ = 0, facesWithoutUV_ = 0, firstFaceWithoutUV_ = 0;
 
     std::vector<int> toVertex_;      // per halfedge
     std::vector<int> next_;          // per halfedge
@@ -485,7 +628,7 @@ TriangleMesh importOpenMesh(const fs::path& file, const FormatInfo& format, std:
     // The pre-pass counts are backed by data; the cap (every vertex and triangle takes some
     // bytes of the file) only guards this promise against a slip in a validator.
     mesh.reserve(std::min(pre.vertices, data.size() / 4), std::min(pre.triangles, data.size()));
-    MeshImporter importer(mesh);
+    MeshImporter importer(mesh, format.format == MeshFormat::Obj);
     bool ok = false;
     std::string readerMessage;
     {
@@ -495,6 +638,7 @@ TriangleMesh importOpenMesh(const fs::path& file, const FormatInfo& format, std:
         std::istream in(&buffer);
         OmIo::Options options = OmIo::Options::VertexNormal;
         options += OmIo::Options::VertexColor;
+        options += OmIo::Options::VertexTexCoord;
         if (pre.binaryStl) options += OmIo::Options::Binary;
         try {
             // The OFF reader takes its header flags (normals, colours, binary) from sniffing a
@@ -524,6 +668,8 @@ TriangleMesh importOpenMesh(const fs::path& file, const FormatInfo& format, std:
     if (mesh.triangleCount() == 0) throw InputError(name + ": contains no triangles");
     importer.finishNormals();
     importer.finishColors();
+    importer.finishUVs();
+    if (!importer.error().empty()) throw InputError(name + ": " + importer.error());
     // The reserve above follows the pre-pass, which counts STL corners before they are merged
     // into shared vertices (about six times too many): spare capacity would stay resident for
     // as long as the mesh is rendered.
@@ -533,6 +679,7 @@ TriangleMesh importOpenMesh(const fs::path& file, const FormatInfo& format, std:
         report->format = format.name;
         report->polygonsTriangulated = importer.polygonsTriangulated();
         report->degenerateTriangles = importer.degenerateTriangles() + pre.droppedDegenerate;
+        report->seamVerticesSplit = importer.seamVerticesSplit();
     }
     detail::recentre(mesh);
     return mesh;

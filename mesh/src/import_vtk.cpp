@@ -513,6 +513,26 @@ TriangleMesh toTriangles(vtkPolyData* pd, const std::string& name, ImportReport&
             mesh.setColors(std::move(colors));
         }
     }
+
+    // Point texture coordinates (TCoords, VRML TextureCoordinate): the first two components of
+    // 2- or 3-component coordinates. Like the points, a bad value rejects the file.
+    if (vtkDataArray* t = pd->GetPointData() ? pd->GetPointData()->GetTCoords() : nullptr) {
+        const int comps = t->GetNumberOfComponents();
+        if (comps != 2 && comps != 3)
+            fail(name, "point texture coordinates have " + std::to_string(comps) + " components; expected 2 or 3");
+        if (t->GetNumberOfTuples() != nPoints)
+            fail(name, "UV count mismatch: " + std::to_string(t->GetNumberOfTuples()) + " texture coordinates for " +
+                           std::to_string(nPoints) + " points");
+        std::vector<float> uv(2 * size_t(nPoints));
+        for (vtkIdType i = 0; i < nPoints; ++i)
+            for (int k = 0; k < 2; ++k) {
+                const double v = t->GetComponent(i, k);
+                if (!std::isfinite(v) || std::fabs(v) > double(std::numeric_limits<float>::max()))
+                    fail(name, "point " + std::to_string(i) + " has a NaN or infinite texture coordinate");
+                uv[2 * size_t(i) + size_t(k)] = float(v);
+            }
+        mesh.setUVs(std::move(uv));
+    }
     return mesh;
 }
 
@@ -590,6 +610,9 @@ vtkSmartPointer<vtkPolyData> vrmlWorld(vtkRenderer* renderer, RecordingOutputWin
             }
             out->GetPointData()->SetNormals(normals);
         }
+        // Texture coordinates pass through unchanged (kept by the append only where every shape has them).
+        if (vtkDataArray* tin = in->GetPointData()->GetTCoords(); tin && tin->GetNumberOfTuples() == n)
+            out->GetPointData()->SetTCoords(tin);
         if (anyColor) {
             auto colors = vtkSmartPointer<vtkUnsignedCharArray>::New();
             colors->SetNumberOfComponents(3);

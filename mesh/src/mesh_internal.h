@@ -14,6 +14,7 @@ struct MeshAccess {
     static MeshArray<float>& normals(TriangleMesh& m) { return m.normals_; }
     static MeshArray<uint32_t>& indices(TriangleMesh& m) { return m.indices_; }
     static MeshArray<uint8_t>& colors(TriangleMesh& m) { return m.colors_; }
+    static MeshArray<float>& uvs(TriangleMesh& m) { return m.uvs_; }
     static void setVertexCount(TriangleMesh& m, size_t n) { m.vertexCount_ = n; }
 };
 

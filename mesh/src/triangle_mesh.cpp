@@ -23,7 +23,8 @@ void TriangleMesh::reserve(size_t vertices, size_t triangles) {
 uint32_t TriangleMesh::addVertex(const Float3& p) {
     // Normals are attached once all vertices exist; a vertex added later would leave the
     // normal buffer one entry short, which Embree would read past.
-    if (!normals_.empty() || !colors_.empty()) throw std::logic_error("TriangleMesh::addVertex after setNormals or setColors");
+    if (!normals_.empty() || !colors_.empty() || !uvs_.empty())
+        throw std::logic_error("TriangleMesh::addVertex after setNormals, setColors or setUVs");
     if (vertexCount_ >= std::numeric_limits<uint32_t>::max())
         throw std::length_error("TriangleMesh: more vertices than 32-bit indices can address");
     positions_.push_back(p.x);
@@ -66,6 +67,18 @@ void TriangleMesh::shrinkToFit() {
     normals_.shrinkToFit();
     indices_.shrinkToFit();
     colors_.shrinkToFit();
+    uvs_.shrinkToFit();
+}
+
+void TriangleMesh::setUVs(std::vector<float> uv) {
+    if (!uv.empty() && uv.size() != 2 * vertexCount_)
+        throw std::invalid_argument("TriangleMesh::setUVs: got " + std::to_string(uv.size()) + " floats for " +
+                                    std::to_string(vertexCount_) + " vertices");
+    for (size_t i = 0; i < uv.size(); ++i)
+        if (!std::isfinite(uv[i]))
+            throw std::invalid_argument("TriangleMesh::setUVs: vertex " + std::to_string(i / 2) +
+                                        " has a NaN or infinite texture coordinate");
+    uvs_.assign(std::move(uv));
 }
 
 void TriangleMesh::setColors(std::vector<uint8_t> colorsRGB) {
@@ -83,11 +96,11 @@ Bounds3 TriangleMesh::bounds() const {
 
 size_t TriangleMesh::residentBytes() const {
     return positions_.heapBytes() + normals_.heapBytes() + indices_.heapBytes() + (colors_.empty() ? 0 : colors_.heapBytes()) +
-           mappedBytes();
+           (uvs_.empty() ? 0 : uvs_.heapBytes()) + mappedBytes();
 }
 
 size_t TriangleMesh::mappedBytes() const {
-    return positions_.viewBytes() + normals_.viewBytes() + indices_.viewBytes() + colors_.viewBytes();
+    return positions_.viewBytes() + normals_.viewBytes() + indices_.viewBytes() + colors_.viewBytes() + uvs_.viewBytes();
 }
 
 namespace detail {

@@ -714,6 +714,17 @@ PlyHeader parsePlyHeader(std::string& data, const std::string& name) {
                 p.type = findPlyType(tokens[1]);
                 if (!p.type) failLine(name, line, "unknown property type " + quote(tokens[1]));
                 p.name = tokens[2];
+                // OpenMesh knows texture coordinates as u/v or s/t only; texture_u/texture_v
+                // (and texture_s/texture_t) are renamed in place, padded with blanks in front so
+                // that every byte after the header keeps its offset.
+                if (e.name == "vertex" && (p.name == "texture_u" || p.name == "texture_v" || p.name == "texture_s" ||
+                                           p.name == "texture_t")) {
+                    const char last = p.name.back();
+                    char* at = data.data() + (tokens[2].data() - data.data());
+                    std::fill(at, at + tokens[2].size() - 1, ' ');
+                    at[tokens[2].size() - 1] = last;
+                    p.name = std::string(1, last);
+                }
             }
             // The reader finds the type by looking at both words, so a name that is a type name
             // could be taken for the type.

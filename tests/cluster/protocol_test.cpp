@@ -41,6 +41,9 @@ void expectSame(const Material& a, const Material& b) {
     expectSame(a.specular, b.specular);
     EXPECT_EQ(a.shininess, b.shininess);
     EXPECT_EQ(a.ior, b.ior);
+    EXPECT_EQ(a.texture.mapping, b.texture.mapping);
+    EXPECT_EQ(a.alpha.mapping, b.alpha.mapping);
+    EXPECT_EQ(a.bumpMapping, b.bumpMapping);
 }
 void expectSame(const Light& a, const Light& b) {
     EXPECT_EQ(a.type, b.type);
@@ -197,6 +200,10 @@ Material sampleMaterial(int k) {
     m.specular = {0.125f, 0.375f, 1.0f};
     m.shininess = 77.5f + float(k);
     m.ior = 1.33f + 0.1f * float(k);
+    // Version 5: the uv and auto mappings, and the bump's own mapping.
+    m.texture.mapping = k % 2 ? TextureMapping::Uv : TextureMapping::Spherical;
+    m.alpha.mapping = k % 2 ? TextureMapping::Auto : TextureMapping::Uv;
+    m.bumpMapping = k % 2 ? TextureMapping::Object : TextureMapping::Uv;
     return m;
 }
 
@@ -442,7 +449,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x04, 0x00,                                      // version (4: mesh colours, snapshot bvh and origin, texture mappings, assets, linear tiles)
+        0x05, 0x00,                                      // version (5: mesh texture coordinates, uv/auto mappings, bump mapping)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -634,6 +641,10 @@ TEST(Protocol, SnapshotRejectsValuesOutOfRange) {
         {"absorption -1", [](SceneSnapshot& s) { s.materials[0].absorption.y = -1.0f; }},
         {"emission NaN", [=](SceneSnapshot& s) { s.materials[0].emission.x = nan; }},
         {"texture kind 5", [](SceneSnapshot& s) { s.materials[0].texture.kind = TextureKind(5); }},
+        {"texture mapping object", [](SceneSnapshot& s) { s.materials[0].texture.mapping = TextureMapping::Object; }},
+        {"texture mapping 8", [](SceneSnapshot& s) { s.materials[0].alpha.mapping = TextureMapping(8); }},
+        {"bump mapping xy", [](SceneSnapshot& s) { s.materials[1].bumpMapping = TextureMapping::PlanarXY; }},
+        {"bump mapping 8", [](SceneSnapshot& s) { s.materials[1].bumpMapping = TextureMapping(8); }},
         {"image texture without file", [](SceneSnapshot& s) { s.materials[0].texture.kind = TextureKind::Image; }},
         {"volume without file", [](SceneSnapshot& s) { s.materials[0].type = MaterialType::Volume; }},
         {"volume step 0", [](SceneSnapshot& s) { s.materials[0].volumeStep = 0.0f; }},
@@ -743,7 +754,7 @@ TEST(ProtocolMesh, RoundTrip) {
     for (const TriangleMesh& mesh : {makeBox(), makeSphere(5, 7), makeTorusKnot(2, 3, 40, 6, 0.2f), TriangleMesh{}}) {
         const std::vector<uint8_t> bytes = encodeMesh(mesh);
         EXPECT_EQ(bytes.size(), 8 + 12 * mesh.vertexCount() + 8 + 12 * mesh.triangleCount() + 1 +
-                                    (mesh.hasNormals() ? 12 * mesh.vertexCount() : 0) + 1);
+                                    (mesh.hasNormals() ? 12 * mesh.vertexCount() : 0) + 1 + 1);
         const TriangleMesh back = decodeMesh(bytes.data(), bytes.size());
         expectSameMesh(mesh, back);
         EXPECT_EQ(encodeMesh(back), bytes);
@@ -757,18 +768,25 @@ TEST(ProtocolMesh, Layout) {
     m.addVertex({0.0f, 0.0f, 1.0f});
     m.addTriangle(0, 1, 2);
     const std::vector<uint8_t> bytes = encodeMesh(m);
-    ASSERT_EQ(bytes.size(), 8u + 36u + 8u + 12u + 1u + 1u);
+    ASSERT_EQ(bytes.size(), 8u + 36u + 8u + 12u + 1u + 1u + 1u);
     EXPECT_EQ(bytes[0], 3);                            // vertex count
     EXPECT_EQ(bytes[8 + 3], 0x3F);                     // 1.0f, little-endian
     EXPECT_EQ(bytes[44], 1);                           // triangle count
     EXPECT_EQ(bytes[52 + 4], 1);                       // second index
     EXPECT_EQ(bytes[64], 0);                           // no normals
     EXPECT_EQ(bytes[65], 0);                           // no colours
+    EXPECT_EQ(bytes[66], 0);                           // no texture coordinates (version 5)
     m.setColors({255, 128, 0, 0, 255, 0, 0, 0, 255});
     const std::vector<uint8_t> colored = encodeMesh(m);
-    ASSERT_EQ(colored.size(), 8u + 36u + 8u + 12u + 1u + 1u + 9u);
+    ASSERT_EQ(colored.size(), 8u + 36u + 8u + 12u + 1u + 1u + 9u + 1u);
     EXPECT_EQ(colored[65], 1);
-    EXPECT_EQ(std::vector<uint8_t>(colored.begin() + 66, colored.end()), (std::vector<uint8_t>{255, 128, 0, 0, 255, 0, 0, 0, 255}));
+    EXPECT_EQ(std::vector<uint8_t>(colored.begin() + 66, colored.end() - 1), (std::vector<uint8_t>{255, 128, 0, 0, 255, 0, 0, 0, 255}));
+    m.setUVs({0.25f, 0.5f, 1.0f, 0.0f, -2.0f, 3.0f});
+    const std::vector<uint8_t> textured = encodeMesh(m);
+    ASSERT_EQ(textured.size(), colored.size() + 24u);
+    EXPECT_EQ(textured[75], 1);                        // the UV flag, after the colours
+    EXPECT_EQ(textured[76 + 3], 0x3E);                 // 0.25f, little-endian
+    EXPECT_EQ(textured[76 + 20 + 3], 0x40);            // 3.0f
 }
 
 // Vertex colours (version 4) survive the trip byte for byte and change the hash.
@@ -784,10 +802,10 @@ TEST(ProtocolMesh, ColorsRoundTrip) {
     EXPECT_EQ(std::vector<uint8_t>(back.colors(), back.colors() + colors.size()), colors);
     EXPECT_EQ(encodeMesh(back), bytes);
     EXPECT_NE(hashBytes(bytes.data(), bytes.size()), hashBytes(plain.data(), plain.size()));
-    for (size_t cut = bytes.size() - colors.size() - 1; cut < bytes.size(); ++cut)
+    for (size_t cut = bytes.size() - colors.size() - 2; cut < bytes.size(); ++cut)
         EXPECT_THROW(decodeMesh(bytes.data(), cut), DecodeError) << cut;
     std::vector<uint8_t> flag2 = bytes;
-    flag2[bytes.size() - colors.size() - 1] = 2;
+    flag2[bytes.size() - colors.size() - 2] = 2;
     EXPECT_THROW(decodeMesh(flag2.data(), flag2.size()), DecodeError);
 }
 
@@ -854,11 +872,45 @@ TEST(ProtocolMesh, RejectsMalformed) {
     }
     // A normals flag on a mesh without vertices would not re-encode to the same bytes.
     std::vector<uint8_t> empty = encodeMesh(TriangleMesh{});
-    empty[empty.size() - 2] = 1;
+    empty[empty.size() - 3] = 1;
     rejects(empty, "normals without vertices");
     empty = encodeMesh(TriangleMesh{});
-    empty.back() = 1;
+    empty[empty.size() - 2] = 1;
     rejects(empty, "colours without vertices");
+    empty = encodeMesh(TriangleMesh{});
+    empty.back() = 1;
+    rejects(empty, "texture coordinates without vertices");
+}
+
+// Texture coordinates (version 5) survive the trip bit for bit, with normals and colours
+// beside them, change the hash, and a NaN, a flag of 2 or a cut in their section is refused.
+TEST(ProtocolMesh, UVsRoundTrip) {
+    TriangleMesh m = makeSphere(3, 4);
+    m.setColors(std::vector<uint8_t>(3 * m.vertexCount(), 200));
+    const std::vector<uint8_t> plain = encodeMesh(m);
+    std::vector<float> uv(2 * m.vertexCount());
+    for (size_t i = 0; i < uv.size(); ++i) uv[i] = float(i) * 0.125f - 3.0f;
+    m.setUVs(uv);
+    const std::vector<uint8_t> bytes = encodeMesh(m);
+    ASSERT_EQ(bytes.size(), plain.size() + 4 * uv.size());
+    const TriangleMesh back = decodeMesh(bytes.data(), bytes.size());
+    ASSERT_TRUE(back.hasUVs());
+    ASSERT_TRUE(back.hasColors());
+    ASSERT_TRUE(back.hasNormals());
+    EXPECT_EQ(std::vector<float>(back.uvs(), back.uvs() + uv.size()), uv);
+    EXPECT_EQ(encodeMesh(back), bytes);
+    EXPECT_NE(hashBytes(bytes.data(), bytes.size()), hashBytes(plain.data(), plain.size()));
+    const size_t flagAt = plain.size() - 1, uvAt = flagAt + 1;
+    for (size_t cut = flagAt; cut < bytes.size(); cut += 3) EXPECT_THROW(decodeMesh(bytes.data(), cut), DecodeError) << cut;
+    std::vector<uint8_t> b = bytes;
+    b[flagAt] = 2;
+    EXPECT_THROW(decodeMesh(b.data(), b.size()), DecodeError);
+    b = bytes;
+    putU32(b, uvAt + 4 * 5, 0x7FC00000u);  // NaN
+    EXPECT_THROW(decodeMesh(b.data(), b.size()), DecodeError);
+    b = bytes;
+    putU32(b, uvAt + 4 * 6, 0xFF800000u);  // -inf
+    EXPECT_THROW(decodeMesh(b.data(), b.size()), DecodeError);
 }
 
 // -- Scene state ---------------------------------------------------------------------------------

@@ -127,9 +127,55 @@ INSTANTIATE_TEST_SUITE_P(
         BadScene{"DegenerateCamera", "[[camera]]\nposition = [0,0,0]\nlook_at = [0,0,0]\n", "3", "own position"},
         BadScene{"HugeShape", "[[mesh]]\nname = \"k\"\nshape = \"torus_knot\"\nsegments = 1000000\nsides = 4000\n", "4",
                  "below 2^26"},
+        BadScene{"UvMappingOnAMeshWithoutUVs",
+                 "[[mesh]]\nname = \"b\"\nshape = \"box\"\n[[material]]\nname = \"m\"\ntexture = \"checker\"\n"
+                 "texture_mapping = \"uv\"\n[[instance]]\nmesh = \"b\"\nmaterial = \"m\"\n",
+                 "8", "material 'm' has texture_mapping = \"uv\", but mesh 'b' (shape:box) has no texture coordinates"},
+        BadScene{"UvBumpInAGroupOnAMeshWithoutUVs",
+                 "[[mesh]]\nname = \"b\"\nshape = \"box\"\n[[material]]\nname = \"m\"\nbump = 0.5\nbump_mapping = \"uv\"\n"
+                 "[[group]]\nname = \"g\"\n[[group.instance]]\nmesh = \"b\"\n[[instance]]\ngroup = \"g\"\nmaterial = \"m\"\n",
+                 "12", "material 'm' has bump_mapping = \"uv\", but mesh 'b'"},
+        BadScene{"UnknownMapping", "[[material]]\nname = \"m\"\nalpha = \"checker\"\nalpha_mapping = \"uvw\"\n", "4",
+                 "'uvw' is not one of auto, uv, xz"},
         BadScene{"ZeroScale", "[[mesh]]\nname = \"b\"\nshape = \"box\"\n[[instance]]\nmesh = \"b\"\nscale = [1, 0, 1]\n",
                  "6", "must not be zero"}),
     [](const auto& param) { return std::string(param.param.name); });
+
+// A mesh with texture coordinates takes "uv" (and "auto", the default); the keys are read.
+TEST(SceneFile, UvMappingsOnAMeshWithUVs) {
+    const auto dir = scratchDir();
+    std::filesystem::copy_file(test::dataDir() / "meshes/uv_seam.obj", dir / "uv.obj", std::filesystem::copy_options::overwrite_existing);
+    const auto file = writeFile(dir / "s.toml", R"(
+[[mesh]]
+name = "q"
+file = "uv.obj"
+[[material]]
+name = "m"
+texture = "checker"
+texture_mapping = "uv"
+alpha = "checker"
+bump = 0.5
+bump_mapping = "object"
+[[material]]
+name = "d"
+texture = "checker"
+bump = 0.5
+[[instance]]
+mesh = "q"
+material = "m"
+[[instance]]
+mesh = "q"
+material = "d"
+)");
+    const SceneDesc s = loadSceneFile(file);
+    ASSERT_EQ(s.materials.size(), 2u);
+    EXPECT_EQ(s.materials[0].texture.mapping, TextureMapping::Uv);
+    EXPECT_EQ(s.materials[0].alpha.mapping, TextureMapping::Auto);
+    EXPECT_EQ(s.materials[0].bumpMapping, TextureMapping::Object);
+    EXPECT_EQ(s.materials[1].texture.mapping, TextureMapping::Auto);
+    EXPECT_EQ(s.materials[1].bumpMapping, TextureMapping::Auto);
+    EXPECT_TRUE(s.meshes[0].mesh->hasUVs());
+}
 
 TEST(SceneFile, MissingFileIsAnInputError) {
     const std::string msg = inputErrorOf([] { loadSceneFile("/nonexistent/scene.toml"); });

@@ -256,7 +256,7 @@ TEST(MeshCache, OldVersionIsRebuilt) {
     opt.cache = true;
     const TriangleMesh original = loadMesh(src, opt);
     std::string bytes = readBytes(meshCachePath(src));
-    ASSERT_EQ(bytes[8], 3);
+    ASSERT_EQ(bytes[8], 4);
     bytes[8] = 1;
     writeBytes(meshCachePath(src), bytes);
     ImportReport r1, r2;

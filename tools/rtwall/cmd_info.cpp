@@ -26,6 +26,7 @@ toml::table meshInfo(const std::filesystem::path& path) {
                        {"bounds", boundsArray(mesh.bounds())},
                        {"normals", mesh.hasNormals()},
                        {"colors", mesh.hasColors()},
+                       {"uvs", mesh.hasUVs()},
                        {"polygons_triangulated", int64_t(report.polygonsTriangulated)},
                        {"degenerate_triangles", int64_t(report.degenerateTriangles)},
                        {"strips_triangulated", int64_t(report.stripsTriangulated)},

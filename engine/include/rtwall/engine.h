@@ -44,7 +44,10 @@ enum class MaterialType { Lambert, Phong, Mirror, Glass, Metal, Emissive, Volume
 // position: meshes carry no texture coordinates, so (u, v) come from a projection: planar, or
 // spherical / cylindrical around the object-space origin with y as the axis (docs/shading.md).
 enum class TextureKind { None, Checker, Marble, Wood, Image };
-enum class TextureMapping { PlanarXZ, PlanarXY, PlanarYZ, Spherical, Cylindrical };
+// Uv: the mesh's own texture coordinates (interpolated at the hit). Auto (the default): Uv where
+// the hit mesh has texture coordinates, PlanarXZ where it has none. Object is for bump_mapping
+// only: the noise of the object-space position (what PlanarXZ etc. mean for a bump).
+enum class TextureMapping { PlanarXZ, PlanarXY, PlanarYZ, Spherical, Cylindrical, Uv, Auto, Object };
 
 struct TextureDesc {
     TextureKind kind = TextureKind::None;
@@ -53,7 +56,7 @@ struct TextureDesc {
     float scale = 1.0f;                         // planar: object units per repeat (uv = position / scale);
                                                 // spherical: fraction of the turn (u) and of pole-to-pole (v)
                                                 // per repeat; cylindrical: of the turn (u), object units along y (v)
-    TextureMapping mapping = TextureMapping::PlanarXZ;
+    TextureMapping mapping = TextureMapping::Auto;
 };
 
 // A transfer function control point: scalar value -> colour and extinction (per object unit).
@@ -75,7 +78,10 @@ struct Material {
     Color emission{0, 0, 0};           // emissive: radiance leaving the surface (any material may add it)
     TextureDesc texture;               // modulates `color`
     float bump = 0.0f;                 // bump mapping: amplitude of the noise height field (0 = off)
-    float bumpScale = 0.1f;            // bump mapping: feature size in object units
+    float bumpScale = 0.1f;            // bump mapping: feature size in object units (in (u, v) units with Uv)
+    TextureMapping bumpMapping = TextureMapping::Auto;  // Object: noise of the object-space position;
+                                                        // Uv: noise of (u, v), tangent frame dP/du, dP/dv;
+                                                        // Auto: Uv where the mesh has texture coordinates
     TextureDesc alpha;                 // alpha mask: red channel / pattern below `alphaCutoff` is a hole
     float alphaCutoff = 0.5f;
     std::string volumeFile;            // volume: VTK image data (.vti, or legacy .vtk structured points)

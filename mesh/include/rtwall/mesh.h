@@ -115,19 +115,23 @@ private:
 // per-vertex normals use the same layout. Optional per-vertex colours are 8-bit sRGB-encoded RGB,
 // 3 bytes per vertex, as the files store them (float colours are rounded to 8 bits); the renderer
 // decodes them to linear and multiplies the material colour by their interpolation. Embree never
-// reads the colours. Copying a mesh that views a mapping shares the mapping (the copy views the
-// same pages).
+// reads the colours. Optional per-vertex texture coordinates are two floats (u, v) per vertex,
+// kept only when the file gives them (OBJ vt, PLY u/v, s/t or texture_u/texture_v, OFF ST, VTK
+// point TCoords, VRML TextureCoordinate); the renderer interpolates them for the "uv" texture
+// mapping. Copying a mesh that views a mapping shares the mapping (the copy views the same pages).
 class TriangleMesh {
 public:
     size_t vertexCount() const { return vertexCount_; }
     size_t triangleCount() const { return indices_.size() / 3; }
     bool hasNormals() const { return !normals_.empty(); }
     bool hasColors() const { return !colors_.empty(); }
+    bool hasUVs() const { return !uvs_.empty(); }
 
     const float* positions() const { return positions_.data(); }  // 3 floats per vertex
     const float* normals() const { return normals_.empty() ? nullptr : normals_.data(); }
     const uint32_t* indices() const { return indices_.data(); }  // 3 per triangle
     const uint8_t* colors() const { return colors_.empty() ? nullptr : colors_.data(); }  // 3 per vertex (RGB)
+    const float* uvs() const { return uvs_.empty() ? nullptr : uvs_.data(); }  // 2 per vertex (u, v)
 
     Float3 position(size_t v) const { return {positions_[3 * v], positions_[3 * v + 1], positions_[3 * v + 2]}; }
     Float3 normal(size_t v) const { return {normals_[3 * v], normals_[3 * v + 1], normals_[3 * v + 2]}; }
@@ -138,6 +142,7 @@ public:
     void addTriangle(uint32_t a, uint32_t b, uint32_t c);  // indices must already be valid
     void setNormals(std::vector<float> normalsXYZ);       // 3 per vertex (padding is added here)
     void setColors(std::vector<uint8_t> colorsRGB);       // 3 per vertex, or empty for none
+    void setUVs(std::vector<float> uv);                   // 2 per vertex, all finite, or empty for none
     void shrinkToFit();                                   // drops spare capacity left by reserve
 
     Bounds3 bounds() const;        // of the float buffers, i.e. relative to origin()
@@ -160,6 +165,7 @@ private:
     MeshArray<float> normals_;     // empty, or 3 per vertex
     MeshArray<uint32_t> indices_;  // 3 per triangle
     MeshArray<uint8_t> colors_;    // empty, or 3 per vertex (RGB)
+    MeshArray<float> uvs_;         // empty, or 2 per vertex (u, v)
     size_t vertexCount_ = 0;
     std::array<double, 3> origin_{0, 0, 0};
 };
@@ -172,6 +178,7 @@ struct ImportReport {
     size_t stripsTriangulated = 0;    // VTK triangle strips turned into triangles
     size_t cellsSkipped = 0;          // VTK vertices and lines (nothing to render), counted
     std::string cache;                // loadMesh with a cache: "hit", "written", or "rebuilt: <why>"
+    size_t seamVerticesSplit = 0;     // OBJ: vertices copied because their corners have different vt
 };
 
 // Optional progress report for long steps: called with the fraction done in [0, 1]; returning
@@ -206,6 +213,12 @@ struct LoadOptions {
 //
 // Per-vertex colours are kept when the file gives every vertex one: PLY red/green/blue, OFF
 // COFF, OBJ "v x y z r g b", VTK RGB(A) point scalars, VRML Color nodes and Material colours.
+// Texture coordinates likewise, only when every vertex (OBJ: every face corner) has one. OBJ gives
+// them per face corner: a vertex whose corners name different vt (a seam) is split into one
+// vertex per distinct (u, v), each a copy of the position, normal and colour, and the split
+// corners' triangles use the copies (ImportReport::seamVerticesSplit counts them). A NaN or
+// infinite texture coordinate, or UVs on some vertices or corners only, is an InputError naming
+// the file and the vertex or face.
 TriangleMesh loadMesh(const std::filesystem::path& file, ImportReport* report = nullptr);
 TriangleMesh loadMesh(const std::filesystem::path& file, const LoadOptions& options, ImportReport* report = nullptr);
 
