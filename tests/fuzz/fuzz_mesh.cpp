@@ -50,6 +50,10 @@ void checkMesh(const rtwall::TriangleMesh& m) {
         for (size_t i = 0; i < 3 * m.vertexCount(); ++i) sum += c[i];
         if (sum > 255u * 3u * m.vertexCount()) std::abort();
     }
+    // Texture coordinates, when present, cover every vertex and are finite.
+    if (const float* t = m.uvs())
+        for (size_t i = 0; i < 2 * m.vertexCount(); ++i)
+            if (!std::isfinite(t[i])) std::abort();
 }
 
 std::filesystem::path scratch(const char* ext) {
