@@ -78,6 +78,33 @@ TEST(MeshUVs, ObjSeamSplitsTheVertex) {
               (std::vector<float>{0.125f, 0.25f, 0.875f, 0.25f, 0.875f, 0.75f, 0.125f, 0.75f, 0.5f, 0.0625f}));
 }
 
+// VRML texCoordIndex gives (u, v) per face corner: each triangle corner gets the (u, v) its index
+// names, at the position its coordIndex names (VTK's importer unshares the corners).
+TEST(MeshUVs, VrmlTexCoordIndexPerCorner) {
+    const TriangleMesh mesh = loadMesh(kMeshes / "uv_texcoordindex.wrl");
+    ASSERT_TRUE(mesh.hasUVs());
+    ASSERT_EQ(mesh.triangleCount(), 2u);
+    const float P[4][3] = {{0, 0, 0}, {2, 0, 0}, {2, 0, 1}, {0, 0, 1}};
+    const float T[5][2] = {{0.5f, 0.5f}, {0.125f, 0.0625f}, {0.25f, 0.75f}, {0.375f, 1.0f}, {1.0f, 0.875f}};
+    const int coordIndex[6] = {0, 2, 1, 0, 3, 2}, texIndex[6] = {4, 3, 2, 1, 0, 3};
+    for (size_t t = 0; t < 2; ++t) {
+        // VTK may start a triangle's corner list anywhere: match corners by position.
+        for (int k = 0; k < 3; ++k) {
+            const int c = coordIndex[3 * t + size_t(k)], ti = texIndex[3 * t + size_t(k)];
+            bool found = false;
+            for (int j = 0; j < 3; ++j) {
+                const uint32_t v = mesh.indices()[3 * t + size_t(j)];
+                const Float3 p = mesh.position(v);
+                if (p.x != P[c][0] || p.y != P[c][1] || p.z != P[c][2]) continue;
+                found = true;
+                EXPECT_EQ(mesh.uvs()[2 * v], T[ti][0]) << "triangle " << t << " corner " << k;
+                EXPECT_EQ(mesh.uvs()[2 * v + 1], T[ti][1]) << "triangle " << t << " corner " << k;
+            }
+            EXPECT_TRUE(found) << "triangle " << t << " corner " << k;
+        }
+    }
+}
+
 // Files without texture coordinates get none; so do MeshLab's per-face texcoord lists, which
 // the PLY validator drops (they are not per-vertex).
 TEST(MeshUVs, FilesWithoutThemHaveNone) {

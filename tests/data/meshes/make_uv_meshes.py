@@ -110,6 +110,18 @@ Shape {{
 """
     write("uv_quad.wrl", wrl)
 
+    # texCoordIndex: (u, v) per face corner; VTK's importer gives every corner its own point.
+    write("uv_texcoordindex.wrl", """#VRML V2.0 utf8
+Shape {
+  geometry IndexedFaceSet {
+    coord Coordinate { point [ 0 0 0, 2 0 0, 2 0 1, 0 0 1 ] }
+    coordIndex [ 0, 2, 1, -1, 0, 3, 2, -1 ]
+    texCoord TextureCoordinate { point [ 0.5 0.5, 0.125 0.0625, 0.25 0.75, 0.375 1, 1 0.875 ] }
+    texCoordIndex [ 4, 3, 2, -1, 1, 0, 3, -1 ]
+  }
+}
+""")
+
 
 if __name__ == "__main__":
     main()
