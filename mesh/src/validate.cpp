@@ -105,8 +105,10 @@ public:
         std::replace_if(data_.begin() + long(begin_), data_.begin() + long(end_), [](char c) { return c == '\v' || c == '\f'; }, ' ');
     }
     void blankComment() {
-        const size_t hash = data_.find('#', begin_);
-        if (hash != std::string::npos && hash < end_) blankFrom(hash);
+        // Searched within the line only: searching the rest of the buffer made a file without
+        // any '#' quadratic (a 63 MB OBJ ran for minutes in this pre-pass).
+        const size_t hash = view().find('#');
+        if (hash != std::string_view::npos) blankFrom(begin_ + hash);
     }
 
 private:
