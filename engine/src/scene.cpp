@@ -137,34 +137,26 @@ MeshPrimitives pairIntoQuads(const TriangleMesh& mesh) {
     mp.pairsSharingEdge = paired;
     if (4 * paired < 3 * pairs) return mp;
 
-    // One code for every quad when the paired ones agree; an unpaired pair's degenerate quad
-    // then takes the same first corner (its second triangle is never hit, so j does not matter).
-    uint8_t common = kUnpaired;
-    bool uniform = true;
-    for (uint8_t c : codes) {
-        if (c == kUnpaired) continue;
-        if (common == kUnpaired) common = c;
-        else if (c != common) uniform = false;
-    }
+    // An unpaired pair's quad is degenerate, (a0,a1,a2,a2): triangle 2k alone, with code
+    // kNoSecond (q0 at corner 0, no second triangle), so that a hit on it rounded just past its
+    // diagonal (u + v a hair over 1) is not taken for triangle 2k+1.
+    for (uint8_t& c : codes)
+        if (c == kUnpaired) c = kQuadWithoutSecondTriangle;
+    const bool uniform = std::all_of(codes.begin(), codes.end(), [&](uint8_t c) { return c == codes[0]; });
     mp.quads = uint32_t(pairs);
+    if (uniform) mp.code = codes[0];
+    else mp.codes = codes;
     // The window layout (code 1: first corner of 2k at 1, of 2k+1 at 0) lets Embree read the
     // quads straight from the triangle index array: no quad buffer at all.
-    const bool window = uniform && common == 1 && paired == pairs;
-    if (uniform) mp.code = common;
-    else {
-        mp.codes = codes;
-        for (uint8_t& c : mp.codes)
-            if (c == kUnpaired) c = 0;
-    }
+    const bool window = uniform && codes[0] == 1;
     if (!window) {
         mp.quadIndex.resize(4 * pairs + 4);  // + 16 bytes of tail padding for Embree's SIMD loads
         for (size_t k = 0; k < pairs; ++k) {
             const uint32_t* a = idx + 6 * k;
             const uint32_t* b = a + 3;
             uint32_t* q = mp.quadIndex.data() + 4 * k;
-            if (codes[k] == kUnpaired) {
-                const unsigned i = uniform ? (mp.code & 3u) : 0u;
-                q[0] = a[i], q[1] = a[(i + 1) % 3], q[2] = a[(i + 2) % 3], q[3] = a[(i + 2) % 3];
+            if (codes[k] == kQuadWithoutSecondTriangle) {
+                q[0] = a[0], q[1] = a[1], q[2] = a[2], q[3] = a[2];
                 mp.single.push_back(uint32_t(2 * k + 1));
             } else {
                 const unsigned i = codes[k] & 3u, j = codes[k] >> 2;
@@ -173,10 +165,16 @@ MeshPrimitives pairIntoQuads(const TriangleMesh& mesh) {
         }
     }
     if (mesh.triangleCount() % 2) mp.single.push_back(uint32_t(mesh.triangleCount() - 1));
+    // The triangles no pair holds, as degenerate quads (t0,t1,t2,t2) in a second quad geometry:
+    // Embree builds one BVH per primitive type in a scene, so a triangle geometry here would give
+    // the mesh two BVHs to traverse; quads of both geometries share one.
     if (!mp.single.empty()) {
-        mp.singleIndex.resize(3 * mp.single.size() + 4);
-        for (size_t t = 0; t < mp.single.size(); ++t)
-            for (int c = 0; c < 3; ++c) mp.singleIndex[3 * t + size_t(c)] = idx[3 * size_t(mp.single[t]) + size_t(c)];
+        mp.singleIndex.resize(4 * mp.single.size() + 4);
+        for (size_t t = 0; t < mp.single.size(); ++t) {
+            const uint32_t* tri = idx + 3 * size_t(mp.single[t]);
+            uint32_t* q = mp.singleIndex.data() + 4 * t;
+            q[0] = tri[0], q[1] = tri[1], q[2] = tri[2], q[3] = tri[2];
+        }
     }
     return mp;
 }
@@ -298,8 +296,8 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
                     attach(RTC_GEOMETRY_TYPE_QUAD, RTC_FORMAT_UINT4, mp.quadIndex.data(), 0, 4 * sizeof(uint32_t),
                            mp.quads, 0);
                 if (!mp.single.empty())
-                    attach(RTC_GEOMETRY_TYPE_TRIANGLE, RTC_FORMAT_UINT3, mp.singleIndex.data(), 0,
-                           3 * sizeof(uint32_t), mp.single.size(), 1);
+                    attach(RTC_GEOMETRY_TYPE_QUAD, RTC_FORMAT_UINT4, mp.singleIndex.data(), 0, 4 * sizeof(uint32_t),
+                           mp.single.size(), 1);
             } else if (mesh.triangleCount() > 0) {
                 attach(RTC_GEOMETRY_TYPE_TRIANGLE, RTC_FORMAT_UINT3, mesh.indices(), 0, 3 * sizeof(uint32_t),
                        mesh.triangleCount(), 0);

@@ -18,11 +18,14 @@ class MaterialModel;
 // triangles. In quad form, geometry 0 holds quad k for the triangle pair (2k, 2k+1) when the two
 // share an edge (Embree splits quad (q0,q1,q2,q3) into (q0,q1,q3) and (q2,q3,q1): the pair's two
 // triangles exactly, same orientation), or a degenerate quad (q0,q1,q3,q3) holding 2k alone when
-// they do not; geometry 1 holds the triangles no quad holds (2k+1 of such pairs, an odd last one).
+// they do not; geometry 1 holds the triangles no pair holds (2k+1 of such pairs, an odd last one)
+// as degenerate quads (t0,t1,t2,t2), so the mesh keeps one BVH (Embree builds one per type).
+inline constexpr uint8_t kQuadWithoutSecondTriangle = 3u << 2;  // code of an unpaired pair's quad
 struct MeshPrimitives {
     uint32_t quads = 0;  // 0: the mesh went to Embree as plain triangles, primID is the triangle
     // Per quad, which corner of each triangle is not on the shared edge: bits 0-1 the position of
-    // q0 in triangle 2k, bits 2-3 the position of q2 in triangle 2k+1. `code` when every quad has
+    // q0 in triangle 2k, bits 2-3 the position of q2 in triangle 2k+1 (3: there is no second
+    // triangle, kQuadWithoutSecondTriangle). `code` when every quad has
     // the same (the usual case: one generator or importer makes every pair alike), else `codes`.
     uint8_t code = 0;
     std::vector<uint8_t> codes;
@@ -30,8 +33,8 @@ struct MeshPrimitives {
     // triangle index array: a pair stored as (q3,q0,q1),(q2,q3,q1) holds the quad's four indices
     // contiguously from its second index on (byte offset 4, stride 24), so it costs nothing.
     std::vector<uint32_t> quadIndex;
-    std::vector<uint32_t> singleIndex;  // geometry 1: 3 indices per triangle plus padding
-    std::vector<uint32_t> single;       // geometry 1: the mesh triangle of each of its triangles
+    std::vector<uint32_t> singleIndex;  // geometry 1: a degenerate quad per triangle, plus padding
+    std::vector<uint32_t> single;       // geometry 1: the mesh triangle of each of its quads
     size_t pairsSharingEdge = 0;        // of the mesh's triangleCount()/2 pairs
     size_t bytes() const {
         return codes.capacity() + 4 * (quadIndex.capacity() + singleIndex.capacity() + single.capacity());
@@ -54,7 +57,7 @@ inline TriangleHit triangleHit(const MeshPrimitives& mp, uint32_t geom, uint32_t
     const unsigned code = mp.codes.empty() ? mp.code : mp.codes[prim];
     float w[3];  // weights of the corners starting at the triangle's corner off the shared edge
     unsigned first;
-    if (u + v <= 1.0f) {
+    if (u + v <= 1.0f || code == kQuadWithoutSecondTriangle) {
         w[0] = 1.0f - u - v;  // q0, then q1 (u) and q3 (v)
         w[1] = u;
         w[2] = v;
