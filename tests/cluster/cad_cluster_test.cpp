@@ -120,6 +120,19 @@ fov = 40
     const Image cluster = onTwoClients(d, &r);
     EXPECT_TRUE(complete(r));
     EXPECT_EQ(differingBytes(singleMachine(d, r.frame), cluster), 0u);
+
+    // [bvh] primitives travels too (protocol 5): the same scene as plain triangles renders a
+    // few bytes differently from quads (other intersection arithmetic), and the clients must
+    // build what the master says to give the master's bytes.
+    ASSERT_EQ(d.bvh.primitives, BvhSettings::Primitives::Auto);
+    SceneDesc t = d;
+    t.bvh.primitives = BvhSettings::Primitives::Triangles;
+    const Image oneT = singleMachine(t, 0);
+    EXPECT_GT(differingBytes(one, oneT), 0u) << "quads and triangles differ somewhere, so the check below can fail";
+    FrameReport rt;
+    const Image clusterT = onTwoClients(t, &rt);
+    EXPECT_TRUE(complete(rt));
+    EXPECT_EQ(differingBytes(singleMachine(t, rt.frame), clusterT), 0u);
 }
 
 }  // namespace

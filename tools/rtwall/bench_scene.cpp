@@ -191,6 +191,8 @@ void addBenchScene(CLI::App& bench, Run& run) {
                                 {"quads_in_place", int64_t(ps.quadsInPlace)},
                                 {"separate_triangles", int64_t(ps.separateTriangles)},
                                 {"quad_index_bytes", int64_t(ps.quadIndexBytes)},
+                                {"meshes_as_quads", int64_t(ps.meshesAsQuads)},
+                                {"meshes_as_triangles", int64_t(ps.meshesAsTriangles)},
                                 {"compact", desc.bvh.compact},
                                 {"robust", desc.bvh.robust},
                                 {"bvh_build_s", build},
