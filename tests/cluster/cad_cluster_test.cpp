@@ -121,14 +121,13 @@ fov = 40
     EXPECT_TRUE(complete(r));
     EXPECT_EQ(differingBytes(singleMachine(d, r.frame), cluster), 0u);
 
-    // [bvh] primitives travels too (protocol 5): the same scene as plain triangles renders a
-    // few bytes differently from quads (other intersection arithmetic), and the clients must
-    // build what the master says to give the master's bytes.
+    // [bvh] primitives travels too (protocol 5): the scene as plain triangles is bit-identical
+    // on the cluster as well. (At this size quads and triangles happen to give the same bytes,
+    // robust/compact or not, so this cannot tell which the clients built; protocol_test checks
+    // that the field is encoded, range-checked and part of the state hash.)
     ASSERT_EQ(d.bvh.primitives, BvhSettings::Primitives::Auto);
     SceneDesc t = d;
     t.bvh.primitives = BvhSettings::Primitives::Triangles;
-    const Image oneT = singleMachine(t, 0);
-    EXPECT_GT(differingBytes(one, oneT), 0u) << "quads and triangles differ somewhere, so the check below can fail";
     FrameReport rt;
     const Image clusterT = onTwoClients(t, &rt);
     EXPECT_TRUE(complete(rt));
