@@ -107,8 +107,8 @@ void worldToObjectOf(const Transform& t, float out[12]) {
 
 // Pairs triangles (2k, 2k+1) into quads (see MeshPrimitives). Two triangles pair when they
 // share an edge walked in opposite directions (same orientation) and have four distinct corners.
-// Quads are used when at least 3/4 of the pairs pair; below that the degenerate quads and the
-// extra triangle geometry would cost more than the quads save.
+// Quads are used when at least 3/4 of the pairs pair; below that the degenerate quads (a slot
+// for one triangle, and one more for its unpaired neighbour) would cost more than the quads save.
 MeshPrimitives pairIntoQuads(const TriangleMesh& mesh) {
     MeshPrimitives mp;
     const size_t pairs = mesh.triangleCount() / 2;
@@ -125,7 +125,7 @@ MeshPrimitives pairIntoQuads(const TriangleMesh& mesh) {
         if (a[0] != a[1] && a[1] != a[2] && a[0] != a[2])
             for (unsigned i = 0; i < 3 && code == kUnpaired; ++i)
                 for (unsigned j = 0; j < 3; ++j)
-                    // Shared edge a[i+1]->a[i+2] in a is b[j+2]->b[j+1]... i.e. b[j+1] == a[i+2], b[j+2] == a[i+1].
+                    // a's edge a[i+1]->a[i+2] is b's edge b[j+1]->b[j+2] walked backwards; a[i], b[j] are off it.
                     if (b[(j + 1) % 3] == a[(i + 2) % 3] && b[(j + 2) % 3] == a[(i + 1) % 3] && b[j] != a[0] &&
                         b[j] != a[1] && b[j] != a[2]) {
                         code = uint8_t(i | (j << 2));
@@ -138,7 +138,7 @@ MeshPrimitives pairIntoQuads(const TriangleMesh& mesh) {
     if (4 * paired < 3 * pairs) return mp;
 
     // An unpaired pair's quad is degenerate, (a0,a1,a2,a2): triangle 2k alone, with code
-    // kNoSecond (q0 at corner 0, no second triangle), so that a hit on it rounded just past its
+    // kQuadWithoutSecondTriangle (q0 at corner 0, no second triangle), so that a hit on it rounded just past its
     // diagonal (u + v a hair over 1) is not taken for triangle 2k+1.
     for (uint8_t& c : codes)
         if (c == kUnpaired) c = kQuadWithoutSecondTriangle;
