@@ -471,6 +471,7 @@ void writeState(Writer& w, const SceneSnapshot& m) {
     w.u8(uint8_t(m.bvh.quality));
     w.boolean(m.bvh.compact);
     w.boolean(m.bvh.robust);
+    w.u8(uint8_t(m.bvh.primitives));
     for (double o : m.origin) w.f64(o);
     writeVector(w, m.assets);
 }
@@ -496,6 +497,10 @@ void read(Reader& r, SceneSnapshot& m) {
     m.bvh.quality = BvhSettings::Quality(quality);
     m.bvh.compact = r.boolean();
     m.bvh.robust = r.boolean();
+    const uint8_t primitives = r.u8();
+    if (primitives > uint8_t(BvhSettings::Primitives::Triangles))
+        fail("BVH primitives " + std::to_string(primitives) + " is out of range");
+    m.bvh.primitives = BvhSettings::Primitives(primitives);
     for (double& o : m.origin) o = r.f64();  // f64 rejects NaN and infinity
     static const size_t assetBytes = minEncodedSize(AssetRef{});
     readVector(r, m.assets, assetBytes, kMaxSceneObjects);

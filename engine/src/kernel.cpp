@@ -84,6 +84,7 @@ template <class RayHitK> inline Hit hitOf(const RayHitK& rh, int k) {
     Hit h;
     h.inst = rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID ? kNoHit : rh.hit.instID[0][k];
     h.prim = rh.hit.primID[k];
+    h.geom = rh.hit.geomID[k];
     h.t = rh.ray.tfar[k];
     h.u = rh.hit.u[k];
     h.v = rh.hit.v[k];
@@ -141,6 +142,7 @@ void traceClosestSingle(RTCScene scene, const RayTask* rays, Hit* hits, size_t n
         Hit& h = hits[i];
         h.inst = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? kNoHit : rh.hit.instID[0];
         h.prim = rh.hit.primID;
+        h.geom = rh.hit.geomID;
         h.t = rh.ray.tfar;
         h.u = rh.hit.u;
         h.v = rh.hit.v;

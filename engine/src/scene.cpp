@@ -105,6 +105,80 @@ void worldToObjectOf(const Transform& t, float out[12]) {
     }
 }
 
+// Pairs triangles (2k, 2k+1) into quads (see MeshPrimitives). Two triangles pair when they
+// share an edge walked in opposite directions (same orientation) and have four distinct corners.
+// Quads are used when at least 3/4 of the pairs pair; below that the degenerate quads (a slot
+// for one triangle, and one more for its unpaired neighbour) would cost more than the quads save.
+MeshPrimitives pairIntoQuads(const TriangleMesh& mesh) {
+    MeshPrimitives mp;
+    const size_t pairs = mesh.triangleCount() / 2;
+    if (pairs == 0) return mp;
+    const uint32_t* idx = mesh.indices();
+    std::vector<uint8_t> codes(pairs);
+    constexpr uint8_t kUnpaired = 0xFF;
+    // Pass 1: the code of every pair (or kUnpaired), and how many pair.
+    size_t paired = 0;
+    for (size_t k = 0; k < pairs; ++k) {
+        const uint32_t* a = idx + 6 * k;
+        const uint32_t* b = a + 3;
+        uint8_t code = kUnpaired;
+        if (a[0] != a[1] && a[1] != a[2] && a[0] != a[2])
+            for (unsigned i = 0; i < 3 && code == kUnpaired; ++i)
+                for (unsigned j = 0; j < 3; ++j)
+                    // a's edge a[i+1]->a[i+2] is b's edge b[j+1]->b[j+2] walked backwards; a[i], b[j] are off it.
+                    if (b[(j + 1) % 3] == a[(i + 2) % 3] && b[(j + 2) % 3] == a[(i + 1) % 3] && b[j] != a[0] &&
+                        b[j] != a[1] && b[j] != a[2]) {
+                        code = uint8_t(i | (j << 2));
+                        break;
+                    }
+        codes[k] = code;
+        paired += code != kUnpaired;
+    }
+    mp.pairsSharingEdge = paired;
+    if (4 * paired < 3 * pairs) return mp;
+
+    // An unpaired pair's quad is degenerate, (a0,a1,a2,a2): triangle 2k alone, with code
+    // kQuadWithoutSecondTriangle (q0 at corner 0, no second triangle), so that a hit on it rounded just past its
+    // diagonal (u + v a hair over 1) is not taken for triangle 2k+1.
+    for (uint8_t& c : codes)
+        if (c == kUnpaired) c = kQuadWithoutSecondTriangle;
+    const bool uniform = std::all_of(codes.begin(), codes.end(), [&](uint8_t c) { return c == codes[0]; });
+    mp.quads = uint32_t(pairs);
+    if (uniform) mp.code = codes[0];
+    else mp.codes = codes;
+    // The window layout (code 1: first corner of 2k at 1, of 2k+1 at 0) lets Embree read the
+    // quads straight from the triangle index array: no quad buffer at all.
+    const bool window = uniform && codes[0] == 1;
+    if (!window) {
+        mp.quadIndex.resize(4 * pairs + 4);  // + 16 bytes of tail padding for Embree's SIMD loads
+        for (size_t k = 0; k < pairs; ++k) {
+            const uint32_t* a = idx + 6 * k;
+            const uint32_t* b = a + 3;
+            uint32_t* q = mp.quadIndex.data() + 4 * k;
+            if (codes[k] == kQuadWithoutSecondTriangle) {
+                q[0] = a[0], q[1] = a[1], q[2] = a[2], q[3] = a[2];
+                mp.single.push_back(uint32_t(2 * k + 1));
+            } else {
+                const unsigned i = codes[k] & 3u, j = codes[k] >> 2;
+                q[0] = a[i], q[1] = a[(i + 1) % 3], q[2] = b[j], q[3] = a[(i + 2) % 3];
+            }
+        }
+    }
+    if (mesh.triangleCount() % 2) mp.single.push_back(uint32_t(mesh.triangleCount() - 1));
+    // The triangles no pair holds, as degenerate quads (t0,t1,t2,t2) in a second quad geometry:
+    // Embree builds one BVH per primitive type in a scene, so a triangle geometry here would give
+    // the mesh two BVHs to traverse; quads of both geometries share one.
+    if (!mp.single.empty()) {
+        mp.singleIndex.resize(4 * mp.single.size() + 4);
+        for (size_t t = 0; t < mp.single.size(); ++t) {
+            const uint32_t* tri = idx + 3 * size_t(mp.single[t]);
+            uint32_t* q = mp.singleIndex.data() + 4 * t;
+            q[0] = tri[0], q[1] = tri[1], q[2] = tri[2], q[3] = tri[2];
+        }
+    }
+    return mp;
+}
+
 // Alpha masks: Embree calls this for every candidate hit of camera, secondary and shadow rays
 // (intersection and occlusion filter alike); a hit where the mask is below its cutoff is
 // rejected, so the ray goes on through the hole. Accepting or rejecting depends on the hit
@@ -118,24 +192,32 @@ void alphaFilter(const RTCFilterFunctionNArguments* args) {
     if (!model.alphaMasked()) return;
     for (unsigned k = 0; k < args->N; ++k) {
         if (args->valid[k] != -1) continue;
-        const unsigned prim = RTCHitN_primID(args->hit, args->N, k);
-        const float u = RTCHitN_u(args->hit, args->N, k), v = RTCHitN_v(args->hit, args->N, k);
+        const TriangleHit h = triangleHit(*data.prims, RTCHitN_geomID(args->hit, args->N, k),
+                                          RTCHitN_primID(args->hit, args->N, k), RTCHitN_u(args->hit, args->N, k),
+                                          RTCHitN_v(args->hit, args->N, k));
         float uv[2];
         const bool hasUV = data.mesh->hasUVs();
-        if (hasUV) meshUVAt(*data.mesh, prim, u, v, uv);
-        if (!model.alphaAt(objectPosition(*data.mesh, prim, u, v), hasUV ? uv : nullptr)) args->valid[k] = 0;
+        if (hasUV) meshUVAt(*data.mesh, h.prim, h.u, h.v, uv);
+        if (!model.alphaAt(objectPosition(*data.mesh, h.prim, h.u, h.v), hasUV ? uv : nullptr)) args->valid[k] = 0;
     }
 }
 
 void installAlphaFilters(Scene::Impl& s) {
-    for (RTCScene ms : s.meshScenes) {
-        RTCGeometry g = rtcGetGeometry(ms, 0);
-        if (!g) continue;
-        rtcSetGeometryUserData(g, &s);
-        rtcSetGeometryIntersectFilterFunction(g, alphaFilter);
-        rtcSetGeometryOccludedFilterFunction(g, alphaFilter);
-        rtcCommitGeometry(g);
-        rtcCommitScene(ms);
+    for (size_t mi = 0; mi < s.meshScenes.size(); ++mi) {
+        // rtcGetGeometry does not check its ID (release builds): ask only for what was attached.
+        const RTCScene ms = s.meshScenes[mi];
+        const MeshPrimitives& mp = s.meshPrims[mi];
+        const unsigned count = s.desc.meshes[mi].mesh->triangleCount() == 0 ? 0u : mp.quads > 0 && !mp.single.empty() ? 2u : 1u;
+        bool any = false;
+        for (unsigned id = 0; id < count; ++id) {
+            RTCGeometry g = rtcGetGeometry(ms, id);
+            rtcSetGeometryUserData(g, &s);
+            rtcSetGeometryIntersectFilterFunction(g, alphaFilter);
+            rtcSetGeometryOccludedFilterFunction(g, alphaFilter);
+            rtcCommitGeometry(g);
+            any = true;
+        }
+        if (any) rtcCommitScene(ms);
     }
     s.filtersInstalled = true;
 }
@@ -177,24 +259,28 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
         std::vector<Bounds3> meshBounds(s.desc.meshes.size());
         for (size_t i = 0; i < s.desc.meshes.size(); ++i) meshBounds[i] = s.desc.meshes[i].mesh->bounds();
         s.meshScenes.reserve(s.desc.meshes.size());
-        for (const MeshDesc& md : s.desc.meshes) {
+        s.meshPrims.resize(s.desc.meshes.size());  // not resized again: instances point into it
+        for (size_t mi = 0; mi < s.desc.meshes.size(); ++mi) {
+            const MeshDesc& md = s.desc.meshes[mi];
             const TriangleMesh& mesh = *md.mesh;
+            MeshPrimitives& mp = s.meshPrims[mi];
+            if (s.desc.bvh.primitives == BvhSettings::Primitives::Auto) mp = pairIntoQuads(mesh);
             RTCScene ms = rtcNewScene(s.device);
             s.meshScenes.push_back(ms);
             rtcSetSceneBuildQuality(ms, buildQuality(s.desc.bvh.quality));
             rtcSetSceneFlags(ms, sceneFlags(s.desc.bvh));
             rtcSetSceneProgressMonitorFunction(ms, buildProgress, &s);
             s.currentMesh = double(mesh.triangleCount());
-            if (mesh.triangleCount() > 0) {
-                RTCGeometry g = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+            // Shared buffers: Embree reads the mesh's arrays in place, whether the importer
+            // filled them or they are the pages of a mapped cache file (TriangleMesh's
+            // MeshArray); both carry the 16 bytes of tail padding Embree's SIMD loads need.
+            auto attach = [&](RTCGeometryType type, RTCFormat format, const uint32_t* index, size_t byteOffset,
+                              size_t byteStride, size_t count, unsigned id) {
+                RTCGeometry g = rtcNewGeometry(s.device, type);
                 rtcSetGeometryBuildQuality(g, buildQuality(s.desc.bvh.quality));
-                // Shared buffers: Embree reads the mesh's arrays in place, whether the importer
-                // filled them or they are the pages of a mapped cache file (TriangleMesh's
-                // MeshArray); both carry the 16 bytes of tail padding Embree's SIMD loads need.
                 rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, mesh.positions(), 0,
                                            3 * sizeof(float), mesh.vertexCount());
-                rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, mesh.indices(), 0,
-                                           3 * sizeof(uint32_t), mesh.triangleCount());
+                rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, format, index, byteOffset, byteStride, count);
                 rtcSetGeometryMask(g, kMaskAll);  // instances carry the masks that matter
                 if (anyAlpha) {
                     rtcSetGeometryUserData(g, &s);
@@ -202,8 +288,22 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
                     rtcSetGeometryOccludedFilterFunction(g, alphaFilter);
                 }
                 rtcCommitGeometry(g);
-                rtcAttachGeometryByID(ms, g, 0);
+                rtcAttachGeometryByID(ms, g, id);
                 rtcReleaseGeometry(g);
+            };
+            if (mp.quads > 0) {
+                if (mp.quadIndex.empty())  // the window view of the triangle index array
+                    attach(RTC_GEOMETRY_TYPE_QUAD, RTC_FORMAT_UINT4, mesh.indices(), sizeof(uint32_t),
+                           6 * sizeof(uint32_t), mp.quads, 0);
+                else
+                    attach(RTC_GEOMETRY_TYPE_QUAD, RTC_FORMAT_UINT4, mp.quadIndex.data(), 0, 4 * sizeof(uint32_t),
+                           mp.quads, 0);
+                if (!mp.single.empty())
+                    attach(RTC_GEOMETRY_TYPE_QUAD, RTC_FORMAT_UINT4, mp.singleIndex.data(), 0, 4 * sizeof(uint32_t),
+                           mp.single.size(), 1);
+            } else if (mesh.triangleCount() > 0) {
+                attach(RTC_GEOMETRY_TYPE_TRIANGLE, RTC_FORMAT_UINT3, mesh.indices(), 0, 3 * sizeof(uint32_t),
+                       mesh.triangleCount(), 0);
             }
             rtcCommitScene(ms);
             if (s.cancelled) throw Cancelled();
@@ -221,6 +321,7 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
             const InstanceDesc& in = s.desc.instances[i];
             InstanceData& data = s.instances[i];
             data.mesh = s.desc.meshes.at(in.mesh).mesh.get();
+            data.prims = &s.meshPrims[in.mesh];
             if (in.material >= s.desc.materials.size())
                 throw std::out_of_range("instance " + std::to_string(i) + ": material " + std::to_string(in.material) +
                                         " does not exist");
@@ -327,7 +428,25 @@ size_t Scene::geometryBytes() const {
     size_t bytes = 0;
     for (const MeshDesc& md : impl_->desc.meshes)
         if (seen.insert(md.mesh.get()).second) bytes += md.mesh->residentBytes();
+    for (const MeshPrimitives& mp : impl_->meshPrims) bytes += mp.bytes();  // quad and leftover index buffers
     return bytes;
+}
+
+Scene::PrimitiveStats Scene::primitiveStats() const {
+    PrimitiveStats st;
+    for (size_t i = 0; i < impl_->meshPrims.size(); ++i) {
+        const MeshPrimitives& mp = impl_->meshPrims[i];
+        const size_t tris = impl_->desc.meshes[i].mesh->triangleCount();
+        st.triangles += tris;
+        st.pairs += tris / 2;
+        st.pairsSharingEdge += mp.pairsSharingEdge;
+        st.quads += mp.quads;
+        st.separateTriangles += mp.quads > 0 ? mp.single.size() : tris;
+        st.quadIndexBytes += mp.bytes();
+        (mp.quads > 0 ? st.meshesAsQuads : st.meshesAsTriangles) += 1;
+        st.quadsInPlace += mp.quads > 0 && mp.quadIndex.empty() ? mp.quads : 0;
+    }
+    return st;
 }
 
 RTCScene embreeScene(const Scene& scene) { return scene.impl().top; }

@@ -122,6 +122,8 @@ void readBvh(Reader& top, const std::filesystem::path& file, BvhSettings& b) {
     b.quality = q == "low" ? BvhSettings::Quality::Low : q == "high" ? BvhSettings::Quality::High : BvhSettings::Quality::Medium;
     b.compact = r.boolean("compact", b.compact);
     b.robust = r.boolean("robust", b.robust);
+    const std::string prims = r.choice("primitives", "auto", {"auto", "triangles"});
+    b.primitives = prims == "triangles" ? BvhSettings::Primitives::Triangles : BvhSettings::Primitives::Auto;
     r.finish();
 }
 

@@ -14,8 +14,69 @@ namespace rtwall {
 
 class MaterialModel;
 
+// How one mesh was handed to Embree ([bvh] primitives), and what maps a hit back to one of its
+// triangles. In quad form, geometry 0 holds quad k for the triangle pair (2k, 2k+1) when the two
+// share an edge (Embree splits quad (q0,q1,q2,q3) into (q0,q1,q3) and (q2,q3,q1): the pair's two
+// triangles exactly, same orientation), or a degenerate quad (q0,q1,q3,q3) holding 2k alone when
+// they do not; geometry 1 holds the triangles no pair holds (2k+1 of such pairs, an odd last one)
+// as degenerate quads (t0,t1,t2,t2), so the mesh keeps one BVH (Embree builds one per type).
+inline constexpr uint8_t kQuadWithoutSecondTriangle = 3u << 2;  // code of an unpaired pair's quad
+struct MeshPrimitives {
+    uint32_t quads = 0;  // 0: the mesh went to Embree as plain triangles, primID is the triangle
+    // Per quad, which corner of each triangle is not on the shared edge: bits 0-1 the position of
+    // q0 in triangle 2k, bits 2-3 the position of q2 in triangle 2k+1 (3: there is no second
+    // triangle, kQuadWithoutSecondTriangle). `code` when every quad has
+    // the same (the usual case: one generator or importer makes every pair alike), else `codes`.
+    uint8_t code = 0;
+    std::vector<uint8_t> codes;
+    // The quad index buffer, 4 per quad plus padding; empty when it is a view into the mesh's own
+    // triangle index array: a pair stored as (q3,q0,q1),(q2,q3,q1) holds the quad's four indices
+    // contiguously from its second index on (byte offset 4, stride 24), so it costs nothing.
+    std::vector<uint32_t> quadIndex;
+    std::vector<uint32_t> singleIndex;  // geometry 1: a degenerate quad per triangle, plus padding
+    std::vector<uint32_t> single;       // geometry 1: the mesh triangle of each of its quads
+    size_t pairsSharingEdge = 0;        // of the mesh's triangleCount()/2 pairs
+    size_t bytes() const {
+        return codes.capacity() + 4 * (quadIndex.capacity() + singleIndex.capacity() + single.capacity());
+    }
+};
+
+// Embree's hit (geometry in the mesh's scene, primID, u, v) as the mesh triangle and its
+// barycentrics (u for the triangle's vertex 1, v for vertex 2). Everything that reads a hit's
+// primitive goes through this: surface points (normals, colours, object positions), the
+// eye-light preview and the alpha-mask filter. A quad's u, v are Embree's quad parametrisation:
+// on (q0,q1,q3) the barycentrics of q1 and q3; on (q2,q3,q1), u = 1 - (weight of q3) and
+// v = 1 - (weight of q1), so u + v >= 1 there. On the diagonal both readings give the same point.
+struct TriangleHit {
+    uint32_t prim;
+    float u, v;
+};
+inline TriangleHit triangleHit(const MeshPrimitives& mp, uint32_t geom, uint32_t prim, float u, float v) {
+    if (mp.quads == 0) return {prim, u, v};
+    if (geom != 0) return {mp.single[prim], u, v};
+    const unsigned code = mp.codes.empty() ? mp.code : mp.codes[prim];
+    float w[3];  // weights of the corners starting at the triangle's corner off the shared edge
+    unsigned first;
+    if (u + v <= 1.0f || code == kQuadWithoutSecondTriangle) {
+        w[0] = 1.0f - u - v;  // q0, then q1 (u) and q3 (v)
+        w[1] = u;
+        w[2] = v;
+        first = code & 3u;
+        prim = 2 * prim;
+    } else {
+        w[0] = u + v - 1.0f;  // q2, then q3 and q1
+        w[1] = 1.0f - u;
+        w[2] = 1.0f - v;
+        first = (code >> 2) & 3u;
+        prim = 2 * prim + 1;
+    }
+    // Corner c of the triangle carries w[(c - first) mod 3].
+    return {prim, w[(4 - first) % 3], w[(5 - first) % 3]};
+}
+
 struct InstanceData {
     const TriangleMesh* mesh = nullptr;
+    const MeshPrimitives* prims = nullptr;  // how the mesh went to Embree
     uint32_t material = 0;       // index into desc.materials and models
     float normalMatrix[9] = {};  // row-major inverse transpose of the object-to-world 3x3
     float objectToWorld[12] = {};
@@ -29,6 +90,7 @@ struct Scene::Impl {
     RTCDevice device = nullptr;
     RTCScene top = nullptr;
     std::vector<RTCScene> meshScenes;      // one BVH per unique mesh
+    std::vector<MeshPrimitives> meshPrims; // per desc.meshes entry: quads or triangles
     std::vector<InstanceData> instances;   // indexed by the instance geometry ID in `top`
     std::atomic<int64_t> embreeBytes{0};   // Embree's memory monitor: BVHs, instances, build scratch
     int64_t meshBvhBytes = 0;              // embreeBytes once every mesh BVH is built

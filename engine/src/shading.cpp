@@ -23,19 +23,20 @@ SurfacePoint surfaceAt(const InstanceData& inst, const MaterialModel& model, con
     Float3 ng = normalize(transformNormal(inst.normalMatrix, hit.ng));
     Float3 ns = ng;
     const TriangleMesh& mesh = *inst.mesh;
+    const TriangleHit th = triangleHit(*inst.prims, hit.geom, hit.prim, hit.u, hit.v);
     if (mesh.hasNormals()) {
-        const uint32_t* tri = mesh.indices() + 3 * size_t(hit.prim);
-        const float w = 1.0f - hit.u - hit.v;
-        const Float3 n = mesh.normal(tri[0]) * w + mesh.normal(tri[1]) * hit.u + mesh.normal(tri[2]) * hit.v;
+        const uint32_t* tri = mesh.indices() + 3 * size_t(th.prim);
+        const float w = 1.0f - th.u - th.v;
+        const Float3 n = mesh.normal(tri[0]) * w + mesh.normal(tri[1]) * th.u + mesh.normal(tri[2]) * th.v;
         ns = normalize(transformNormal(inst.normalMatrix, n));
         if (!isFinite(ns) || dot(ns, ns) == 0.0f) ns = ng;
     }
-    sp.po = model.needsObjectPosition() ? objectPosition(mesh, hit.prim, hit.u, hit.v) : Float3{};
-    if (mesh.hasColors()) sp.tint = vertexColorAt(mesh, hit.prim, hit.u, hit.v);
-    sp.prim = hit.prim;
+    sp.po = model.needsObjectPosition() ? objectPosition(mesh, th.prim, th.u, th.v) : Float3{};
+    if (mesh.hasColors()) sp.tint = vertexColorAt(mesh, th.prim, th.u, th.v);
+    sp.prim = th.prim;
     if (mesh.hasUVs()) {
         sp.hasUV = true;
-        meshUVAt(mesh, hit.prim, hit.u, hit.v, sp.uv);
+        meshUVAt(mesh, th.prim, th.u, th.v, sp.uv);
     }
     sp.frontFace = dot(ng, dir) < 0.0f;
     if (!sp.frontFace) ng = -ng;

@@ -32,10 +32,11 @@ struct RayTask {
 };
 
 struct Hit {
-    float t, u, v;  // Embree's distance and barycentrics (u for vertex 1, v for vertex 2)
+    float t, u, v;  // Embree's distance and primitive parametrisation (triangleHit() maps it)
     Float3 ng;      // Embree's unnormalised geometric normal, in the instance's object space
     uint32_t inst;  // instance index, kNoHit for a miss
-    uint32_t prim;
+    uint32_t prim;  // Embree's primID and geomID in the instance's mesh scene
+    uint32_t geom;
 };
 
 struct ShadowTask {
@@ -88,7 +89,8 @@ inline void shadeEyeLightPacket(const ShadingContext& ctx, const RayHitK& rh, co
         cg[k] = m.color.y;
         cb[k] = m.color.z;
         if (inst.mesh->hasColors()) {
-            const Color tint = vertexColorAt(*inst.mesh, rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k]);
+            const TriangleHit th = triangleHit(*inst.prims, rh.hit.geomID[k], rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k]);
+            const Color tint = vertexColorAt(*inst.mesh, th.prim, th.u, th.v);
             cr[k] *= tint.x;
             cg[k] *= tint.y;
             cb[k] *= tint.z;

@@ -120,6 +120,18 @@ fov = 40
     const Image cluster = onTwoClients(d, &r);
     EXPECT_TRUE(complete(r));
     EXPECT_EQ(differingBytes(singleMachine(d, r.frame), cluster), 0u);
+
+    // [bvh] primitives travels too (protocol 5): the scene as plain triangles is bit-identical
+    // on the cluster as well. (At this size quads and triangles happen to give the same bytes,
+    // robust/compact or not, so this cannot tell which the clients built; protocol_test checks
+    // that the field is encoded, range-checked and part of the state hash.)
+    ASSERT_EQ(d.bvh.primitives, BvhSettings::Primitives::Auto);
+    SceneDesc t = d;
+    t.bvh.primitives = BvhSettings::Primitives::Triangles;
+    FrameReport rt;
+    const Image clusterT = onTwoClients(t, &rt);
+    EXPECT_TRUE(complete(rt));
+    EXPECT_EQ(differingBytes(singleMachine(t, rt.frame), clusterT), 0u);
 }
 
 }  // namespace

@@ -120,6 +120,7 @@ void expectSame(const SceneSnapshot& a, const SceneSnapshot& b) {
     EXPECT_EQ(a.bvh.quality, b.bvh.quality);
     EXPECT_EQ(a.bvh.compact, b.bvh.compact);
     EXPECT_EQ(a.bvh.robust, b.bvh.robust);
+    EXPECT_EQ(a.bvh.primitives, b.bvh.primitives);
     EXPECT_EQ(a.origin, b.origin);
     ASSERT_EQ(a.assets.size(), b.assets.size());
     for (size_t i = 0; i < a.assets.size(); ++i) {
@@ -280,7 +281,7 @@ SceneSnapshot sampleSnapshot() {
     s.lights = {sampleLight(0), sampleLight(1)};
     s.camera = sampleCamera();
     s.settings = sampleSettings();
-    s.bvh = {BvhSettings::Quality::High, true, true};
+    s.bvh = {BvhSettings::Quality::High, true, true, BvhSettings::Primitives::Triangles};
     s.origin = {1e6 + 0.25, -2e5, 3.0e5 + 1.0 / 1024};
     s.assets.push_back({"textures/bark.png", {0x5555666677778888ull, 0x9999aaaabbbbccccull}, 123456});
     s.assets.push_back({"/data/ct.vti", {1, 2}, kMaxAssetBytes});
@@ -441,7 +442,8 @@ TEST(Protocol, EncodeSetsTypeAndLength) {
 
 TEST(Protocol, GoldenBytes) {
     // The exact layout of a header and a small payload; a change here breaks every deployed peer
-    // (version 2: the shading fields of materials, lights and settings; 4: FrameBegin's tile format).
+    // (version 2: the shading fields of materials, lights and settings; 4: FrameBegin's tile format;
+    // 5: the snapshot's BVH primitives).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -449,7 +451,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x05, 0x00,                                      // version (5: mesh texture coordinates, uv/auto mappings, bump mapping)
+        0x05, 0x00,                                      // version (5: mesh texture coordinates, uv/auto mappings, bump mapping, snapshot bvh primitives, a material change's files)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -623,6 +625,7 @@ TEST(Protocol, SnapshotRejectsValuesOutOfRange) {
         {"background NaN", [=](SceneSnapshot& s) { s.settings.background.y = nan; }},
         {"ambient inf", [=](SceneSnapshot& s) { s.settings.ambient.z = inf; }},
         {"bvh quality 3", [](SceneSnapshot& s) { s.bvh.quality = BvhSettings::Quality(3); }},
+        {"bvh primitives 2", [](SceneSnapshot& s) { s.bvh.primitives = BvhSettings::Primitives(2); }},
         {"origin NaN", [](SceneSnapshot& s) { s.origin[1] = std::numeric_limits<double>::quiet_NaN(); }},
         {"origin inf", [](SceneSnapshot& s) { s.origin[0] = -std::numeric_limits<double>::infinity(); }},
         {"fov 0", [](SceneSnapshot& s) { s.camera.fovY = 0; }},
@@ -974,6 +977,7 @@ TEST(Protocol, StateHash) {
         [](SceneSnapshot& x) { x.bvh.quality = BvhSettings::Quality::Low; },
         [](SceneSnapshot& x) { x.bvh.compact = false; },
         [](SceneSnapshot& x) { x.bvh.robust = false; },
+        [](SceneSnapshot& x) { x.bvh.primitives = BvhSettings::Primitives::Auto; },
         [](SceneSnapshot& x) { x.origin[2] += 1; },
     };
     std::set<Hash128> seen{h};

@@ -348,7 +348,9 @@ TEST(GeneratedScenes, PowerplantRendersIdenticallyFromSourcesAndCache) {
     EXPECT_GE(unique, 60000);
     EXPECT_EQ(fromFiles.instances.size(), fromCache.instances.size());
     // The cached meshes are the mapped cache files, and those pages are what Embree reads: the
-    // buffers of every mesh geometry are the mesh's own arrays, not copies.
+    // buffers of every mesh geometry are the mesh's own arrays, not copies. The index buffer is
+    // the mesh's own too where the mesh went to Embree as triangles or as quads read in place;
+    // other quads have the quad index buffer made for them (MeshPrimitives::quadIndex).
     {
         const Scene scene(fromCache);
         ASSERT_EQ(scene.impl().meshScenes.size(), fromCache.meshes.size());
@@ -359,7 +361,10 @@ TEST(GeneratedScenes, PowerplantRendersIdenticallyFromSourcesAndCache) {
             RTCGeometry g = rtcGetGeometry(scene.impl().meshScenes[i], 0);
             ASSERT_NE(g, nullptr);
             EXPECT_EQ(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_VERTEX, 0), static_cast<const void*>(mesh.positions()));
-            EXPECT_EQ(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_INDEX, 0), static_cast<const void*>(mesh.indices()));
+            const MeshPrimitives& mp = scene.impl().meshPrims[i];
+            const void* index = mp.quads > 0 && !mp.quadIndex.empty() ? static_cast<const void*>(mp.quadIndex.data())
+                                                                         : static_cast<const void*>(mesh.indices());
+            EXPECT_EQ(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_INDEX, 0), index);
         }
         EXPECT_GT(scene.geometryBytes(), 0u);
     }

@@ -1,6 +1,7 @@
 // rtwall bench scene SCENE: what loading and rendering a big scene costs. Load from the mesh
 // files (parse), from the caches, the BVH build, resident bytes, and frame times at 1600x1200
-// with primary rays and shadows; with --sweep, the same for every BVH quality and compact mode.
+// with primary rays and shadows, for the scene's [bvh] primitives and the other choice; with
+// --sweep, the same for every BVH quality and compact mode.
 #include "commands.h"
 #include "progress.h"
 
@@ -51,6 +52,10 @@ int64_t procStatus(const char* key) {
     return -1;
 }
 
+const char* primitivesName(BvhSettings::Primitives p) {
+    return p == BvhSettings::Primitives::Triangles ? "triangles" : "auto";
+}
+
 const char* qualityName(BvhSettings::Quality q) {
     return q == BvhSettings::Quality::Low ? "low" : q == BvhSettings::Quality::High ? "high" : "medium";
 }
@@ -61,7 +66,7 @@ void addBenchScene(CLI::App& bench, Run& run) {
     struct Options {
         std::string scene, camera;
         int width = 1600, height = 1200, threads = 0, frames = 3;
-        bool json = false, sweep = false, skipParse = false;
+        bool json = false, sweep = false, skipParse = false, otherPrimitives = true;
         std::string robust = "scene";
     };
     auto o = std::make_shared<Options>();
@@ -74,6 +79,8 @@ void addBenchScene(CLI::App& bench, Run& run) {
     cmd->add_option("--frames", o->frames, "Frames per setting; the median is reported")->check(CLI::Range(1, 100));
     cmd->add_flag("--sweep", o->sweep, "Also build and render with every BVH quality, compact off and on");
     cmd->add_flag("--skip-parse", o->skipParse, "Do not time a load without caches");
+    cmd->add_flag("!--no-other-primitives", o->otherPrimitives,
+                  "Do not also build and render with the other [bvh] primitives (auto/triangles)");
     cmd->add_option("--robust", o->robust, "Robust traversal: as the scene file says, or on/off for every row")
         ->check(CLI::IsMember({"scene", "on", "off"}));
     cmd->add_flag("--json", o->json, "Print JSON");
@@ -141,9 +148,17 @@ void addBenchScene(CLI::App& bench, Run& run) {
 
             if (o->robust != "scene") desc.bvh.robust = o->robust == "on";
             std::vector<BvhSettings> settings{desc.bvh};
+            // Row 1 (key "other_primitives"): the scene's settings with the other primitives choice.
+            if (o->otherPrimitives) {
+                BvhSettings other = desc.bvh;
+                other.primitives = other.primitives == BvhSettings::Primitives::Auto ? BvhSettings::Primitives::Triangles
+                                                                                    : BvhSettings::Primitives::Auto;
+                settings.push_back(other);
+            }
+            const size_t firstSweepRow = settings.size();
             if (o->sweep)
                 for (auto q : {BvhSettings::Quality::Low, BvhSettings::Quality::Medium, BvhSettings::Quality::High})
-                    for (bool compact : {false, true}) settings.push_back({q, compact, desc.bvh.robust});
+                    for (bool compact : {false, true}) settings.push_back({q, compact, desc.bvh.robust, desc.bvh.primitives});
             toml::array rows;
             for (size_t i = 0; i < settings.size(); ++i) {
                 desc.bvh = settings[i];
@@ -164,7 +179,20 @@ void addBenchScene(CLI::App& bench, Run& run) {
                 std::set<const TriangleMesh*> counted;
                 for (const MeshDesc& m : desc.meshes)
                     if (counted.insert(m.mesh.get()).second) mapped += m.mesh->mappedBytes();
+                const Scene::PrimitiveStats ps = scene->primitiveStats();
                 toml::table row{{"quality", qualityName(desc.bvh.quality)},
+                                {"primitives", primitivesName(desc.bvh.primitives)},
+                                // Triangle pairs (2k, 2k+1), those sharing an edge, the quads Embree
+                                // got (read in place from the meshes' index arrays or from a buffer
+                                // made for it, quad_index_bytes) and the triangles it got as such.
+                                {"triangle_pairs", int64_t(ps.pairs)},
+                                {"pairs_sharing_edge", int64_t(ps.pairsSharingEdge)},
+                                {"quads", int64_t(ps.quads)},
+                                {"quads_in_place", int64_t(ps.quadsInPlace)},
+                                {"separate_triangles", int64_t(ps.separateTriangles)},
+                                {"quad_index_bytes", int64_t(ps.quadIndexBytes)},
+                                {"meshes_as_quads", int64_t(ps.meshesAsQuads)},
+                                {"meshes_as_triangles", int64_t(ps.meshesAsTriangles)},
                                 {"compact", desc.bvh.compact},
                                 {"robust", desc.bvh.robust},
                                 {"bvh_build_s", build},
@@ -190,10 +218,11 @@ void addBenchScene(CLI::App& bench, Run& run) {
                                 {"frame_cpu_s", frameCpu},
                                 {"rays_per_frame", int64_t(stats.rays + stats.shadowRays)}};
                 if (i == 0) out.insert("default", row);
+                else if (i < firstSweepRow) out.insert("other_primitives", row);
                 else rows.push_back(row);
                 if (!o->json)
-                    std::printf("bvh %-6s compact=%d: build %.2f s, %.1f B/unique tri (geometry+Embree), rss %.2f GB, frame %.3f s\n",
-                                qualityName(desc.bvh.quality), int(desc.bvh.compact), build, (geometry + embree) / double(std::max<int64_t>(1, unique)),
+                    std::printf("bvh %-9s %-6s compact=%d: build %.2f s, %.1f B/unique tri (geometry+Embree), rss %.2f GB, frame %.3f s\n",
+                                primitivesName(desc.bvh.primitives), qualityName(desc.bvh.quality), int(desc.bvh.compact), build, (geometry + embree) / double(std::max<int64_t>(1, unique)),
                                 double(procStatus("VmRSS:")) * 1e-9, medianOf(frames));
             }
             if (o->sweep) out.insert("sweep", rows);

@@ -160,6 +160,11 @@ struct BvhSettings {
     Quality quality = Quality::Medium;  // Embree build quality (high: spatial splits, slower builds)
     bool compact = false;               // RTC_SCENE_FLAG_COMPACT: smaller BVH, slower traversal
     bool robust = false;                // RTC_SCENE_FLAG_ROBUST: exact traversal (thin, far triangles)
+    // What Embree is given: Auto hands it quads (RTC_GEOMETRY_TYPE_QUAD) for the consecutive
+    // triangle pairs (2k, 2k+1) that share an edge, the rest as triangles (a smaller BVH with
+    // half the leaves); Triangles hands it every triangle as it is.
+    enum class Primitives { Auto, Triangles };
+    Primitives primitives = Primitives::Auto;
 };
 
 struct SceneDesc {
@@ -225,6 +230,15 @@ public:
     size_t embreeBytes() const;
     size_t embreeTopLevelBytes() const;  // the part for instances and the top-level BVH
     size_t geometryBytes() const;
+    // What the mesh BVHs were built from ([bvh] primitives), over desc().meshes: triangle pairs
+    // (2k, 2k+1), the pairs that share an edge, the quads Embree got (those read in place from the
+    // meshes' own index arrays among them), the triangles it got as triangles, and the bytes of
+    // the quad/triangle index buffers made for it (part of geometryBytes()).
+    struct PrimitiveStats {
+        size_t triangles = 0, pairs = 0, pairsSharingEdge = 0, quads = 0, quadsInPlace = 0, separateTriangles = 0;
+        size_t quadIndexBytes = 0, meshesAsQuads = 0, meshesAsTriangles = 0;
+    };
+    PrimitiveStats primitiveStats() const;
     Scene(const Scene&) = delete;
     Scene& operator=(const Scene&) = delete;
 
