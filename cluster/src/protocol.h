@@ -28,7 +28,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 4;
+inline constexpr uint16_t kProtocolVersion = 5;
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -38,6 +38,7 @@ inline constexpr uint32_t kMaxChangesPerUpdate = 1 << 16;
 inline constexpr uint32_t kMaxSceneObjects = 1 << 24;  // meshes, instances, materials, lights, cameras
 inline constexpr uint64_t kMaxMeshBytes = uint64_t(1) << 31;
 inline constexpr uint64_t kMaxAssetBytes = uint64_t(1) << 30;  // one texture image or volume file
+inline constexpr uint32_t kMaxFilesPerMaterial = 3;  // texture, alpha mask, volume
 inline constexpr uint32_t kMaxTimeoutMs = 3'600'000;  // heartbeat and timeout: an hour at most
 
 enum class MsgType : uint16_t {
@@ -150,6 +151,9 @@ struct TransformChange {
 struct MaterialChange {
     uint32_t material = 0;
     Material value;
+    // Version 5: the texture, alpha and volume files `value` names, by hash, so that a file the
+    // scene never loaded reaches the clients like the snapshot's (they fetch it by hash).
+    std::vector<AssetRef> files;
 };
 struct LightChange {
     uint32_t light = 0;
