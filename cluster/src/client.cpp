@@ -91,6 +91,7 @@ private:
         session_ = 0;
         ready_ = false;
         snapshot_.reset();
+        forgetPendingFiles();
         ++buildGeneration_;
         lastFrameBegun_ = 0;
         Hello hello;
@@ -186,6 +187,7 @@ private:
                 const Welcome w = decodePayload<Welcome>(p, n);
                 if (h.session != session_.load()) {  // a new master session: nothing of the old one counts
                     snapshot_.reset();
+                    forgetPendingFiles();
                     ++buildGeneration_;
                     ready_ = false;
                     lastFrameBegun_ = 0;
@@ -213,9 +215,12 @@ private:
             case MsgType::SceneSnapshot: onSnapshot(decodePayload<SceneSnapshot>(p, n)); break;
             case MsgType::MeshData: onMeshData(decodePayload<MeshData>(p, n)); break;
             case MsgType::AssetData: onAssetData(decodePayload<AssetData>(p, n)); break;
-            case MsgType::Update:
-                if (!updates_.add(decodePayload<Update>(p, n))) requestResync();
+            case MsgType::Update: {
+                Update u = decodePayload<Update>(p, n);
+                fetchFilesOf(u);
+                if (!updates_.add(std::move(u))) requestResync();
                 break;
+            }
             case MsgType::FrameBegin: onFrameBegin(decodePayload<FrameBegin>(p, n)); break;
             case MsgType::TileAssign: onAssign(decodePayload<TileAssign>(p, n)); break;
             case MsgType::Heartbeat: decodePayload<Heartbeat>(p, n); break;
@@ -288,11 +293,35 @@ private:
         return nullptr;
     }
 
+    // Files that an update's material change names: fetched as soon as the update arrives (it
+    // comes before the frame that needs it), unless this PC has the same bytes.
+    void fetchFilesOf(const Update& u) {
+        for (const Change& c : u.changes)
+            if (auto* m = std::get_if<MaterialChange>(&c))
+                for (const AssetRef& ref : m->files) {
+                    if (assets_.count(ref.hash) || updateFiles_.count(ref.hash)) continue;
+                    updateFiles_[ref.hash] = ref;
+                    if (!localAsset(ref)) send(AssetRequest{ref.hash});
+                }
+    }
+    // A new connection or session: files still on their way may never come (what arrived stays,
+    // by hash).
+    void forgetPendingFiles() {
+        std::erase_if(updateFiles_, [&](const auto& e) { return !assets_.count(e.first); });
+        deferredFrame_.reset();
+    }
+    bool updateFilesMissing() const {
+        for (const auto& [hash, ref] : updateFiles_)
+            if (!assets_.count(hash)) return true;
+        return false;
+    }
+
     void onAssetData(AssetData ad) {
         const AssetRef* ref = nullptr;
         if (snapshot_)
             for (const AssetRef& a : snapshot_->assets)
                 if (a.hash == ad.hash) ref = &a;
+        if (auto it = updateFiles_.find(ad.hash); !ref && it != updateFiles_.end()) ref = &it->second;
         if (!ref || assets_.count(ad.hash)) {
             ++dropped_;  // not asked for by this state, or already here
             if (settings_.counters) ++settings_.counters->droppedMessages;
@@ -317,6 +346,11 @@ private:
             std::filesystem::rename(tmp, path, ec);
         }
         tryBuildScene();
+        if (deferredFrame_ && !updateFilesMissing()) {  // the frame that waited for this file
+            const FrameBegin fb = *deferredFrame_;
+            deferredFrame_.reset();
+            onFrameBegin(fb);
+        }
     }
 
     void onSnapshot(SceneSnapshot snap) {
@@ -436,7 +470,10 @@ private:
             for (const Change& c : u.changes) {
                 if (auto* cam = std::get_if<CameraChange>(&c)) camera_ = cam->camera;
                 else if (auto* t = std::get_if<TransformChange>(&c)) scene_->setInstanceTransform(t->instance, t->transform);
-                else if (auto* m = std::get_if<MaterialChange>(&c)) scene_->setMaterial(m->material, m->value);
+                else if (auto* m = std::get_if<MaterialChange>(&c)) {
+                    for (const AssetRef& ref : m->files) scene_->addFile(ref.path, assets_.at(ref.hash));
+                    scene_->setMaterial(m->material, m->value);
+                }
                 else if (auto* l = std::get_if<LightChange>(&c)) scene_->setLight(l->light, l->value);
                 else if (auto* st = std::get_if<SettingsChange>(&c)) {
                     renderSettings_ = st->settings;
@@ -459,6 +496,11 @@ private:
             return;
         }
         dropWork();
+        deferredFrame_.reset();
+        if (ready_ && updateFilesMissing()) {  // a changed material's file is on its way
+            deferredFrame_ = fb;
+            return;
+        }
         if (!ready_ || !catchUp(fb.updateSeq)) return;
         framePixels_ = fb.pixels;
         frame_.store(fb.frame);
@@ -608,6 +650,8 @@ private:
     uint64_t buildingFor_ = 0;
     std::map<Hash128, std::shared_ptr<const TriangleMesh>> meshes_;
     std::map<Hash128, std::shared_ptr<const std::vector<uint8_t>>> assets_;  // texture and volume files
+    std::map<Hash128, AssetRef> updateFiles_;  // files named by updates' material changes
+    std::optional<FrameBegin> deferredFrame_;  // a frame waiting for one of them
     UpdateSequencer updates_;
     bool ready_ = false;
     uint32_t stateSeq_ = 0;  // network thread only; render threads get it in each Work

@@ -18,9 +18,11 @@
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <set>
 #include <thread>
@@ -135,6 +137,42 @@ private:
     std::vector<std::thread> workers_;
 };
 
+using FileBytes = std::shared_ptr<const std::vector<uint8_t>>;
+using Asset = std::pair<AssetRef, FileBytes>;
+
+// The files a material names: its texture image, alpha-mask image and volume.
+std::vector<std::string> filesNamedBy(const Material& m) {
+    std::vector<std::string> paths;
+    if (m.texture.kind == TextureKind::Image && !m.texture.file.empty()) paths.push_back(m.texture.file);
+    if (m.alpha.kind == TextureKind::Image && !m.alpha.file.empty()) paths.push_back(m.alpha.file);
+    if (m.type == MaterialType::Volume && !m.volumeFile.empty()) paths.push_back(m.volumeFile);
+    return paths;
+}
+
+// A file a material names, from `files` (SceneDesc::files) when they hold it, else from disk,
+// with its hash. Throws InputError naming the file when it cannot be read or is too large.
+Asset readAsset(const std::string& path, const decltype(SceneDesc::files)& files) {
+    FileBytes bytes;
+    if (auto it = files.find(path); it != files.end() && it->second) {
+        bytes = it->second;
+    } else {
+        std::error_code ec;
+        const auto size = std::filesystem::file_size(path, ec);
+        if (ec) throw InputError(path + ": cannot read the file a material names (" + ec.message() + ")");
+        if (size > kMaxAssetBytes)
+            throw InputError(path + ": " + std::to_string(size) + " bytes is more than the cluster sends (" +
+                             std::to_string(kMaxAssetBytes) + ")");
+        std::ifstream in(path, std::ios::binary);
+        auto v = std::make_shared<std::vector<uint8_t>>(size_t(size));
+        if (!in.read(reinterpret_cast<char*>(v->data()), std::streamsize(size)))
+            throw InputError(path + ": cannot read the file a material names");
+        bytes = std::move(v);
+    }
+    if (bytes->size() > kMaxAssetBytes)
+        throw InputError(path + ": more bytes than the cluster sends (" + std::to_string(kMaxAssetBytes) + ")");
+    return {AssetRef{path, hashBytes(bytes->data(), bytes->size()), bytes->size()}, bytes};
+}
+
 // Tiles a client may be owed at once: bounds what a client (or a replay of its requests) can
 // make the master queue for it.
 constexpr uint32_t kMaxCredits = 64;
@@ -232,6 +270,18 @@ struct Master::Impl {
         snap.origin = scene.origin;
         snap.assets = assetRefs;
         return snap;
+    }
+
+    // A file of the state by the path materials use (under stateMutex once the network runs).
+    // A path is read once per session: later changes to the file on disk are not seen.
+    const AssetRef* findAsset(const std::string& path) const {
+        for (const AssetRef& a : assetRefs)
+            if (a.path == path) return &a;
+        return nullptr;
+    }
+    void addAsset(Asset asset) {
+        assetBytes[asset.first.hash] = std::move(asset.second);
+        assetRefs.push_back(std::move(asset.first));
     }
 
     Header header(MsgType type, uint32_t frame = 0) const {
@@ -458,16 +508,20 @@ struct Master::Impl {
 
     void onAssetRequest(ClientState& c, const uint8_t* data, size_t size) {
         const AssetRequest req = decodePayload<AssetRequest>(data, size);
+        FileBytes bytes;
+        {
+            std::lock_guard lock(stateMutex);  // Master::setMaterial may add files meanwhile
+            if (auto it = assetBytes.find(req.hash); it != assetBytes.end()) bytes = it->second;
+        }
+        if (!bytes) {
+            ++dropped;  // not a file of this scene
+            return;
+        }
         if (!c.assetsSent.insert(req.hash).second) {
             ++dropped;  // asked before: it has it, or it is replaying requests to fill its queue
             return;
         }
-        auto it = assetBytes.find(req.hash);
-        if (it == assetBytes.end()) {
-            ++dropped;  // not a file of this scene
-            return;
-        }
-        if (!send(c, AssetData{req.hash, *it->second})) markDead(c, "unreachable while sending a texture or volume");
+        if (!send(c, AssetData{req.hash, *bytes})) markDead(c, "unreachable while sending a texture or volume");
     }
 
     void onTileResult(ClientState& c, const Header& h, const uint8_t* data, size_t size) {
@@ -724,37 +778,9 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
         s.meshRefs.push_back({md.name, md.source, hashBytes(bytes.data(), bytes.size()), bytes.size()});
     }
     // Texture images and volume files: read once, sent to clients that do not have them.
-    auto addAsset = [&](const std::string& path) {
-        if (path.empty()) return;
-        for (const AssetRef& a : s.assetRefs)
-            if (a.path == path) return;
-        std::shared_ptr<const std::vector<uint8_t>> bytes;
-        if (auto it = scene.files.find(path); it != scene.files.end() && it->second) {
-            bytes = it->second;
-        } else {
-            std::error_code ec;
-            const auto size = std::filesystem::file_size(path, ec);
-            if (ec) throw InputError(path + ": cannot read the file a material names (" + ec.message() + ")");
-            if (size > kMaxAssetBytes)
-                throw InputError(path + ": " + std::to_string(size) + " bytes is more than the cluster sends (" +
-                                 std::to_string(kMaxAssetBytes) + ")");
-            std::ifstream in(path, std::ios::binary);
-            auto v = std::make_shared<std::vector<uint8_t>>(size_t(size));
-            if (!in.read(reinterpret_cast<char*>(v->data()), std::streamsize(size)))
-                throw InputError(path + ": cannot read the file a material names");
-            bytes = std::move(v);
-        }
-        if (bytes->size() > kMaxAssetBytes)
-            throw InputError(path + ": more bytes than the cluster sends (" + std::to_string(kMaxAssetBytes) + ")");
-        const Hash128 hash = hashBytes(bytes->data(), bytes->size());
-        s.assetRefs.push_back({path, hash, bytes->size()});
-        s.assetBytes[hash] = bytes;
-    };
-    for (const Material& m : scene.materials) {
-        if (m.texture.kind == TextureKind::Image) addAsset(m.texture.file);
-        if (m.alpha.kind == TextureKind::Image) addAsset(m.alpha.file);
-        if (m.type == MaterialType::Volume) addAsset(m.volumeFile);
-    }
+    for (const Material& m : scene.materials)
+        for (const std::string& path : filesNamedBy(m))
+            if (!s.findAsset(path)) s.addAsset(readAsset(path, scene.files));
     s.hashAt[s.seq] = stateHash(s.snapshotLocked());
 
     // The largest legitimate message a client sends is a result for the largest tile allowed.
@@ -842,11 +868,14 @@ bool Master::waitForClients(int count, int timeoutMs) {
 
 namespace {
 
-void pushUpdate(Master::Impl& s, Change change) {
+// `files`: ones the change names that the state does not hold yet; they join it with the change.
+void pushUpdate(Master::Impl& s, Change change, std::vector<Asset> files = {}) {
     Command cmd{Command::kUpdate, {}, 0, {}, nullptr, {}, TilePixels::Srgb8, false};
     {
         std::lock_guard lock(s.stateMutex);
         applyChange(s.scene, s.camera, change);  // throws for an index out of range, before anything changed
+        for (Asset& file : files)
+            if (!s.findAsset(file.first.path)) s.addAsset(std::move(file));
         ++s.seq;
         s.hashAt[s.seq] = stateHash(s.snapshotLocked());
         while (s.hashAt.size() > 1024) s.hashAt.erase(s.hashAt.begin());
@@ -866,17 +895,27 @@ void pushUpdate(Master::Impl& s, Change change) {
 void Master::setCamera(const CameraDesc& camera) { pushUpdate(*impl_, CameraChange{camera}); }
 void Master::setInstanceTransform(uint32_t instance, const Transform& t) { pushUpdate(*impl_, TransformChange{instance, t}); }
 void Master::setMaterial(uint32_t material, const Material& value) {
-    // The files travel with the scene state only: one the scene did not name must exist at the
-    // same path on every client PC (a shared file system).
-    for (const std::string* path : {&value.texture.file, &value.alpha.file, &value.volumeFile}) {
-        if (path->empty()) continue;
-        const bool known = std::any_of(impl_->assetRefs.begin(), impl_->assetRefs.end(),
-                                       [&](const AssetRef& a) { return a.path == *path; });
-        if (!known)
-            std::fprintf(stderr, "rtwall master: WARNING: material %u now names %s, which the scene did not load: "
-                                 "clients must find it at that path\n", material, path->c_str());
+    // The change names its files by hash. One the scene did not load is read now (an unreadable
+    // file throws here, before anything changed) and travels like the snapshot's: each client
+    // fetches it by hash unless it has the same bytes already.
+    Impl& s = *impl_;
+    MaterialChange change{material, value, {}};
+    std::vector<Asset> fresh;
+    for (const std::string& path : filesNamedBy(value)) {
+        std::optional<AssetRef> known;
+        {
+            std::lock_guard lock(s.stateMutex);
+            if (const AssetRef* a = s.findAsset(path)) known = *a;
+        }
+        if (known) {
+            change.files.push_back(*known);
+        } else {
+            auto asset = readAsset(path, s.scene.files);
+            change.files.push_back(asset.first);
+            fresh.push_back(std::move(asset));
+        }
     }
-    pushUpdate(*impl_, MaterialChange{material, value});
+    pushUpdate(s, std::move(change), std::move(fresh));
 }
 void Master::setLight(uint32_t light, const Light& value) { pushUpdate(*impl_, LightChange{light, value}); }
 void Master::setRenderSettings(const RenderSettings& settings) { pushUpdate(*impl_, SettingsChange{settings}); }

@@ -372,10 +372,13 @@ void read(Reader& r, TransformChange& c) {
 void write(Writer& w, const MaterialChange& c) {
     w.u32(c.material);
     write(w, c.value);
+    writeVector(w, c.files);
 }
 void read(Reader& r, MaterialChange& c) {
     c.material = r.u32();
     read(r, c.value);
+    static const size_t assetBytes = minEncodedSize(AssetRef{});
+    readVector(r, c.files, assetBytes, kMaxFilesPerMaterial);
 }
 
 void write(Writer& w, const LightChange& c) {

@@ -39,6 +39,7 @@ inline constexpr uint32_t kMaxChangesPerUpdate = 1 << 16;
 inline constexpr uint32_t kMaxSceneObjects = 1 << 24;  // meshes, instances, materials, lights, cameras
 inline constexpr uint64_t kMaxMeshBytes = uint64_t(1) << 31;
 inline constexpr uint64_t kMaxAssetBytes = uint64_t(1) << 30;  // one texture image or volume file
+inline constexpr uint32_t kMaxFilesPerMaterial = 3;  // texture, alpha mask, volume
 inline constexpr uint32_t kMaxTimeoutMs = 3'600'000;  // heartbeat and timeout: an hour at most
 
 enum class MsgType : uint16_t {
@@ -151,6 +152,9 @@ struct TransformChange {
 struct MaterialChange {
     uint32_t material = 0;
     Material value;
+    // Version 5: the texture, alpha and volume files `value` names, by hash, so that a file the
+    // scene never loaded reaches the clients like the snapshot's (they fetch it by hash).
+    std::vector<AssetRef> files;
 };
 struct LightChange {
     uint32_t light = 0;

@@ -402,6 +402,10 @@ void Scene::setMaterial(uint32_t material, const Material& value) {
     s.dirty = true;
 }
 
+void Scene::addFile(const std::string& path, std::shared_ptr<const std::vector<uint8_t>> bytes) {
+    impl_->desc.files[path] = std::move(bytes);
+}
+
 void Scene::setLight(uint32_t light, const Light& value) {
     Impl& s = *impl_;
     if (light >= s.desc.lights.size()) throw std::out_of_range("light " + std::to_string(light) + " does not exist");

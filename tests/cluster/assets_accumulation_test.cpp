@@ -165,6 +165,72 @@ TEST(ClusterAssets, AMasterWithFilesInMemory) {
     EXPECT_EQ(cluster.sum(&ClientCounters::assetsReceived), 6u);
 }
 
+// A material changed at run time to an image the scene never loaded: the change names the file
+// by hash and the clients fetch it from the master (the path exists nowhere: the master has the
+// bytes in memory), so the frame is one machine's with that image. A client that joins later
+// gets it with the state; a file that cannot be read is refused before anything changes.
+TEST(ClusterAssets, AMaterialChangedToANewFileTravels) {
+    const auto dir = test::scratchDir();
+    SceneDesc desc = sceneWithFiles(dir);
+    Image stripes;
+    stripes.width = stripes.height = 8;
+    stripes.rgb.resize(8 * 8 * 3);
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) {
+            uint8_t* p = stripes.pixel(x, y);
+            p[0] = uint8_t(x & 1 ? 250 : 10);
+            p[1] = uint8_t(y * 30);
+            p[2] = 128;
+        }
+    writePng(stripes, dir / "stripes.png");
+    const std::string path = (dir / "nowhere" / "stripes.png").string();
+    desc.files[path] = std::make_shared<const std::vector<uint8_t>>(readFileForTest((dir / "stripes.png").string()));
+    ASSERT_FALSE(std::filesystem::exists(path));
+
+    ClusterSettings cs;
+    cs.async = false;
+    cs.wideAccumulation = false;
+    LocalCluster cluster(desc, cs, 2);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(2, 30000));
+    FrameReport r;
+    const Image before = master.renderFrame(&r);
+    EXPECT_EQ(differingBytes(before, singleMachine(desc, r.frame)), 0u);
+
+    SceneDesc changed = desc;
+    changed.materials[0].texture.kind = TextureKind::Image;  // the floor
+    changed.materials[0].texture.file = path;
+    changed.materials[0].texture.scale = 0.5f;
+    master.setMaterial(0, changed.materials[0]);
+    const Image after = master.renderFrame(&r);
+    EXPECT_EQ(differingBytes(after, singleMachine(changed, r.frame)), 0u);
+    EXPECT_GT(differingBytes(after, before), after.rgb.size() / 10) << "the floor shows the new image";
+    EXPECT_EQ(cluster.sum(&ClientCounters::assetsReceived), 2u) << "the new file, to each client";
+    EXPECT_EQ(cluster.sum(&ClientCounters::rejectedAssets), 0u);
+
+    ClientSettings late;
+    late.connect = master.endpoint();
+    late.threads = 1;
+    late.exitAfterIdleMs = 4000;
+    late.counters = std::make_shared<ClientCounters>();
+    cluster.counters.push_back(late.counters);
+    cluster.threads.emplace_back([late] { runClient(late); });
+    ASSERT_TRUE(master.waitForClients(3, 30000));
+    Material unreadable = changed.materials[0];
+    unreadable.texture.file = (dir / "missing.png").string();
+    try {
+        master.setMaterial(0, unreadable);
+        ADD_FAILURE() << "a material naming a missing file was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("missing.png"), std::string::npos) << e.what();
+    }
+    for (int f = 0; f < 2; ++f) {
+        const Image img = master.renderFrame(&r);
+        EXPECT_EQ(differingBytes(img, singleMachine(changed, r.frame)), 0u) << "frame " << r.frame;
+    }
+    EXPECT_EQ(late.counters->assetsReceived.load(), 1u) << "the late client fetched the new file with the state";
+}
+
 // A stand-in master, to send what a real one never sends: asset bytes that are not the file's.
 class FakeMaster {
 public:

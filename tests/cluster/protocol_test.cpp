@@ -142,6 +142,12 @@ void expectSame(const TransformChange& a, const TransformChange& b) {
 void expectSame(const MaterialChange& a, const MaterialChange& b) {
     EXPECT_EQ(a.material, b.material);
     expectSame(a.value, b.value);
+    ASSERT_EQ(a.files.size(), b.files.size());
+    for (size_t i = 0; i < a.files.size(); ++i) {
+        EXPECT_EQ(a.files[i].path, b.files[i].path);
+        EXPECT_EQ(a.files[i].hash, b.files[i].hash);
+        EXPECT_EQ(a.files[i].bytes, b.files[i].bytes);
+    }
 }
 void expectSame(const LightChange& a, const LightChange& b) {
     EXPECT_EQ(a.light, b.light);
@@ -301,7 +307,9 @@ Update sampleUpdate() {
     u.baseSeq = 12;
     u.changes.push_back(CameraChange{sampleCamera()});
     u.changes.push_back(TransformChange{3, sampleTransform(2)});
-    u.changes.push_back(MaterialChange{5, sampleMaterial(3)});
+    u.changes.push_back(MaterialChange{5, sampleMaterial(3), {}});
+    u.changes.push_back(MaterialChange{6, sampleMaterial(4), {AssetRef{"tex/rust.png", Hash128{0x1234, 0x5678}, 4096},
+                                                          AssetRef{"vol/smoke.vti", Hash128{0x9abc, 0xdef0}, 1 << 20}}});
     u.changes.push_back(LightChange{2, sampleLight(1)});
     u.changes.push_back(SettingsChange{sampleSettings()});
     u.changes.push_back(CameraChange{sampleOffAxisCamera()});

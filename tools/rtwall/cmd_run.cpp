@@ -17,6 +17,7 @@
 #include <csignal>
 #include <cstdio>
 #include <fstream>
+#include <future>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -169,6 +170,48 @@ RunConfig readRunConfig(const std::filesystem::path& file, const toml::table& ro
 
 std::atomic<bool> gStop{false};
 
+// `rtwall run --watch`: the scene file is reloaded on a background thread whenever it changes on
+// disk, so that the wall keeps running while a large scene loads again.
+class SceneWatcher {
+public:
+    SceneWatcher(std::filesystem::path file, std::function<SceneDesc()> load)
+        : file_(std::move(file)), load_(std::move(load)), lastWrite_(writeTime()) {}
+
+    // The reloaded scene once the file changed and its load finished. A file that does not load
+    // (an edit half-written, a typo) is reported in one line and the running scene stays.
+    std::optional<SceneDesc> poll() {
+        const auto now = std::chrono::steady_clock::now();
+        if (!loading_.valid() && now - lastCheck_ > std::chrono::milliseconds(200)) {
+            lastCheck_ = now;
+            const auto t = writeTime();
+            if (t && t != lastWrite_) {
+                lastWrite_ = t;
+                loading_ = std::async(std::launch::async, load_);
+            }
+        }
+        if (!loading_.valid() || loading_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return std::nullopt;
+        try {
+            return loading_.get();
+        } catch (const std::exception& e) {
+            std::printf("rtwall run: --watch: %s (the running scene stays)\n", e.what());
+            std::fflush(stdout);
+            return std::nullopt;
+        }
+    }
+
+private:
+    std::optional<std::filesystem::file_time_type> writeTime() const {
+        std::error_code ec;
+        const auto t = std::filesystem::last_write_time(file_, ec);
+        return ec ? std::nullopt : std::optional(t);
+    }
+    std::filesystem::path file_;
+    std::function<SceneDesc()> load_;
+    std::optional<std::filesystem::file_time_type> lastWrite_;
+    std::chrono::steady_clock::time_point lastCheck_{};
+    std::future<SceneDesc> loading_;
+};
+
 // ---- Operating point (--target-fps) ----------------------------------------------------------
 // The controls `rtwall run` can change between frames, by the names a front uses. Adding one
 // (pruning threshold, GI samples per pixel, volume step) is one entry here plus its column in
@@ -253,7 +296,7 @@ void addRun(CLI::App& app, Run& run) {
         std::string config;
         int frames = -1, clients = -1, writeEvery = -1;
         std::string out, bind, cameraPath, wall, front, trace;
-        bool insecure = false, headless = false;
+        bool insecure = false, headless = false, watch = false;
         double targetFps = 0;
     };
     auto o = std::make_shared<Options>();
@@ -266,6 +309,9 @@ void addRun(CLI::App& app, Run& run) {
     cmd->add_option("--camera-path", o->cameraPath, "Camera path file (.toml keyframes, see configs/README.md)");
     cmd->add_option("--wall", o->wall, "Wall config (configs/wall/*.toml; default: one window of the image's size)");
     cmd->add_flag("--headless", o->headless, "Never open windows, even where a display is available");
+    cmd->add_flag("--watch", o->watch,
+                  "Reload the scene file when it changes on disk and send what changed (materials, lights, instance "
+                  "transforms, render settings, the camera) as differential updates");
     cmd->add_flag("--insecure", o->insecure, "Allow a non-loopback bind without CURVE keys (says so loudly)");
     cmd->add_option("--bind", o->bind, "Endpoint for clients, e.g. tcp://0.0.0.0:7700 (default: loopback, any port)");
     cmd->add_option("--target-fps", o->targetFps,
@@ -293,6 +339,8 @@ void addRun(CLI::App& app, Run& run) {
             SceneDesc desc = c.scene.starts_with("builtin:") ? builtinScene(c.scene.substr(8), 3'000'000)
                              : scenePath.extension() == ".toml" ? loadSceneFile(scenePath)
                                                                 : sceneFromMeshFile(scenePath);
+            if (o->watch && !(scenePath.extension() == ".toml" && !c.scene.starts_with("builtin:")))
+                throw InputError("--watch needs a scene file (.toml); " + c.scene + " is not one");
             if (c.width) desc.settings.width = c.width;
             if (c.height) desc.settings.height = c.height;
             // The wall decides the image size; its config and shaders are checked before anything starts.
@@ -301,20 +349,28 @@ void addRun(CLI::App& app, Run& run) {
                 const std::vector<std::string> problems = checkWall(c.wall);
                 if (!problems.empty()) throw InputError(problems.front());
                 wall = loadWallConfig(c.wall);
-                desc.settings.width = wall.width;
-                desc.settings.height = wall.height;
             }
+            // What the run config and the wall decide over the scene file (also for a reloaded one).
+            auto fit = [&c, &wall](SceneDesc& d) {
+                if (c.width) d.settings.width = c.width;
+                if (c.height) d.settings.height = c.height;
+                if (!c.wall.empty()) {
+                    d.settings.width = wall.width;
+                    d.settings.height = wall.height;
+                }
+                if (!c.camera.empty()) {
+                    const CameraDesc* cam = d.findCamera(c.camera);
+                    if (!cam) throw InputError(c.scene + ": no camera named '" + c.camera + "'");
+                    d.cameras = {*cam};
+                }
+            };
             const bool stereo = wall.stereo.mode != StereoMode::None;
             if (stereo && c.cluster.async) {
                 // Two renders per frame, one per eye: asynchronous mode would give each eye the other's camera.
                 std::printf("stereo wall: asynchronous rendering off, each frame renders the left then the right eye\n");
                 c.cluster.async = false;
             }
-            if (!c.camera.empty()) {
-                const CameraDesc* cam = desc.findCamera(c.camera);
-                if (!cam) throw InputError(c.scene + ": no camera named '" + c.camera + "'");
-                desc.cameras = {*cam};
-            }
+            fit(desc);
             const CameraDesc start = desc.cameras.front();
             const std::vector<CameraKey> path = c.cameraPath.empty() ? std::vector<CameraKey>{} : readCameraPath(c.cameraPath, desc.origin);
 
@@ -351,13 +407,14 @@ void addRun(CLI::App& app, Run& run) {
             std::unique_ptr<OperatingPointController> controller;
             const RenderSettings baseSettings = desc.settings;
             const CodecSettings baseCodec = c.cluster.codec;
+            SceneDesc current = desc;  // the state the clients hold, as --watch edits it
             auto apply = [&](const OperatingPoint& p) {
                 const Knobs k = knobsOf(p, baseSettings, baseCodec);
                 master.setRenderSettings(k.settings);
                 master.setCodec(k.codec);
-                for (size_t m = 0; m < desc.materials.size(); ++m)
-                    if (desc.materials[m].type == MaterialType::Volume) {
-                        Material mat = desc.materials[m];
+                for (size_t m = 0; m < current.materials.size(); ++m)
+                    if (current.materials[m].type == MaterialType::Volume) {
+                        Material mat = current.materials[m];
                         if (k.volumeStep > 0) mat.volumeStep = k.volumeStep;
                         master.setMaterial(uint32_t(m), mat);
                     }
@@ -418,6 +475,62 @@ void addRun(CLI::App& app, Run& run) {
                 trace << "frame,seconds,clients,point_index,point\n";
             }
 
+            std::unique_ptr<SceneWatcher> watcher;
+            if (o->watch) {
+                watcher = std::make_unique<SceneWatcher>(scenePath, [scenePath, fit] {
+                    SceneDesc d = loadSceneFile(scenePath);
+                    fit(d);
+                    return d;
+                });
+                std::printf("watching %s: edits to materials, lights, instance transforms, render settings and the "
+                            "camera are sent as they are saved\n", scenePath.c_str());
+            }
+            // A reloaded scene file: what changed goes to the clients as differential updates.
+            auto applyEdit = [&](const SceneDesc& edited) {
+                SceneEdit e = diffScenes(current, edited);
+                if (e.settings && controller) {
+                    e.refused.push_back("[render] changed, but --target-fps sets the render settings");
+                    e.settings.reset();
+                }
+                if (e.camera && (!path.empty() || c.orbit != 0.0)) {
+                    e.refused.push_back("the camera changed, but a camera path or orbit moves it");
+                    e.camera.reset();
+                }
+                size_t materials = 0;
+                for (const auto& [i, m] : e.materials) {
+                    try {
+                        master.setMaterial(i, m);
+                        current.materials[i] = m;
+                        ++materials;
+                    } catch (const InputError& err) {
+                        e.refused.push_back("material '" + m.name + "': " + err.what());
+                    }
+                }
+                for (const auto& [i, l] : e.lights) {
+                    master.setLight(i, l);
+                    current.lights[i] = l;
+                }
+                for (const auto& [i, t] : e.transforms) {
+                    master.setInstanceTransform(i, t);
+                    current.instances[i].transform = t;
+                }
+                if (e.settings) {
+                    master.setRenderSettings(*e.settings);
+                    current.settings = *e.settings;
+                }
+                if (e.camera) {
+                    master.setCamera(*e.camera);
+                    view.setCamera(*e.camera);
+                    current.cameras.front() = *e.camera;
+                }
+                for (const std::string& r : e.refused)
+                    std::printf("rtwall run: %s: %s (not applied)\n", scenePath.c_str(), r.c_str());
+                std::printf("rtwall run: %s changed: %zu materials, %zu lights, %zu instance transforms, render settings %s, "
+                            "camera %s\n", scenePath.c_str(), materials, e.lights.size(), e.transforms.size(),
+                            e.settings ? "changed" : "same", e.camera ? "moved" : "same");
+                std::fflush(stdout);
+            };
+
             std::signal(SIGINT, [](int) { gStop = true; });
             std::signal(SIGTERM, [](int) { gStop = true; });
             std::vector<double> frameTimes;
@@ -433,6 +546,8 @@ void addRun(CLI::App& app, Run& run) {
                 // Differential updates: only what changes goes to the clients (the camera; objects the
                 // user moves on the wall).
                 if (!view.handleInput(master, frameTimes.empty() ? 0.0 : frameTimes.back())) break;
+                if (watcher)
+                    if (std::optional<SceneDesc> edited = watcher->poll()) applyEdit(*edited);
                 std::optional<CameraDesc> scripted;
                 if (!path.empty()) scripted = cameraAt(path, f);
                 else if (c.orbit != 0.0 && !view.windowed()) scripted = orbited(start, c.orbit * f);

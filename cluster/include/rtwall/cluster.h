@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -82,6 +83,24 @@ struct FrameReport {
     bool stochastic = false;        // the frame's state renders stochastically: frames of one state refine by averaging
     bool linear = false;            // its tiles came as linear half floats (renderFrame can give them)
 };
+
+// The differential updates that turn scene `before` into `after` (a scene file edited while the
+// wall runs: `rtwall run --watch`). Objects are compared as they travel to the clients, so a
+// change counts exactly when it would change what they render. What updates cannot express is
+// listed in `refused`, one line each: other meshes or mesh contents, other numbers of materials,
+// lights or instances, an instance's mesh or material, the BVH settings, the origin.
+struct SceneEdit {
+    std::vector<std::pair<uint32_t, Material>> materials;
+    std::vector<std::pair<uint32_t, Light>> lights;
+    std::vector<std::pair<uint32_t, Transform>> transforms;
+    std::optional<RenderSettings> settings;
+    std::optional<CameraDesc> camera;  // the first camera, when it changed
+    std::vector<std::string> refused;
+    bool empty() const {
+        return materials.empty() && lights.empty() && transforms.empty() && !settings && !camera && refused.empty();
+    }
+};
+SceneEdit diffScenes(const SceneDesc& before, const SceneDesc& after);
 
 // The display master: owns the scene state, hands out tiles, assembles frames.
 class Master {

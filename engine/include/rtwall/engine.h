@@ -248,6 +248,9 @@ public:
     // any mesh's BVH (a transform only refits the top level). Not safe while tiles render.
     void setInstanceTransform(uint32_t instance, const Transform& transform);  // throws std::out_of_range
     void setMaterial(uint32_t material, const Material& value);
+    // The contents of a file that materials set from now on may name (as SceneDesc::files): a
+    // render client gets them from the master by hash.
+    void addFile(const std::string& path, std::shared_ptr<const std::vector<uint8_t>> bytes);
     void setLight(uint32_t light, const Light& value);
     void commit();
 

@@ -1,0 +1,95 @@
+// diffScenes: a scene file edited at run time, as differential updates.
+#include "protocol.h"
+
+#include <rtwall/cluster.h>
+
+#include <cstring>
+
+namespace rtwall {
+
+using namespace cluster;
+
+namespace {
+
+// A change as the clients get it: two values differ for the renderer exactly when these differ.
+std::vector<uint8_t> wireBytes(Change change) {
+    Update u;
+    u.seq = 1;
+    u.changes.push_back(std::move(change));
+    return encodeMessage(Header{}, u);
+}
+
+template <class T> bool sameArray(const T* a, const T* b, size_t n) {
+    if ((a == nullptr) != (b == nullptr)) return false;
+    return a == b || n == 0 || std::memcmp(a, b, n * sizeof(T)) == 0;
+}
+
+bool sameMesh(const MeshDesc& a, const MeshDesc& b) {
+    if (a.name != b.name || a.source != b.source) return false;
+    if (a.mesh == b.mesh) return true;
+    if (!a.mesh || !b.mesh) return false;
+    const TriangleMesh &x = *a.mesh, &y = *b.mesh;
+    return x.vertexCount() == y.vertexCount() && x.triangleCount() == y.triangleCount() && x.origin() == y.origin() &&
+           sameArray(x.positions(), y.positions(), x.vertexCount() * 3) &&
+           sameArray(x.indices(), y.indices(), x.triangleCount() * 3) &&
+           sameArray(x.normals(), y.normals(), x.vertexCount() * 3) &&
+           sameArray(x.colors(), y.colors(), x.vertexCount() * 3);
+}
+
+std::string countChange(const char* what, size_t before, size_t after) {
+    return std::to_string(before) + " " + what + " became " + std::to_string(after) +
+           ": changing the number needs a restart";
+}
+
+}  // namespace
+
+SceneEdit diffScenes(const SceneDesc& before, const SceneDesc& after) {
+    SceneEdit e;
+    if (before.meshes.size() != after.meshes.size()) {
+        e.refused.push_back(countChange("meshes", before.meshes.size(), after.meshes.size()));
+    } else {
+        for (size_t i = 0; i < before.meshes.size(); ++i)
+            if (!sameMesh(before.meshes[i], after.meshes[i]))
+                e.refused.push_back("mesh '" + after.meshes[i].name + "' (" + after.meshes[i].source +
+                                    ") changed: new geometry needs a restart");
+    }
+    if (before.origin != after.origin) e.refused.push_back("the scene's origin moved: that needs a restart");
+    if (before.bvh.quality != after.bvh.quality || before.bvh.compact != after.bvh.compact ||
+        before.bvh.robust != after.bvh.robust)
+        e.refused.push_back("[bvh] changed: rebuilding the BVHs needs a restart");
+
+    if (before.materials.size() != after.materials.size()) {
+        e.refused.push_back(countChange("materials", before.materials.size(), after.materials.size()));
+    } else {
+        for (uint32_t i = 0; i < after.materials.size(); ++i)
+            if (wireBytes(MaterialChange{0, before.materials[i], {}}) != wireBytes(MaterialChange{0, after.materials[i], {}}))
+                e.materials.emplace_back(i, after.materials[i]);
+    }
+    if (before.lights.size() != after.lights.size()) {
+        e.refused.push_back(countChange("lights", before.lights.size(), after.lights.size()));
+    } else {
+        for (uint32_t i = 0; i < after.lights.size(); ++i)
+            if (wireBytes(LightChange{0, before.lights[i]}) != wireBytes(LightChange{0, after.lights[i]}))
+                e.lights.emplace_back(i, after.lights[i]);
+    }
+    if (before.instances.size() != after.instances.size()) {
+        e.refused.push_back(countChange("instances", before.instances.size(), after.instances.size()));
+    } else {
+        for (uint32_t i = 0; i < after.instances.size(); ++i) {
+            const InstanceDesc &a = before.instances[i], &b = after.instances[i];
+            if (a.mesh != b.mesh || a.material != b.material)
+                e.refused.push_back("instance " + std::to_string(i) +
+                                    " has another mesh or material: that needs a restart");
+            else if (a.transform.m != b.transform.m)
+                e.transforms.emplace_back(i, b.transform);
+        }
+    }
+    if (wireBytes(SettingsChange{before.settings}) != wireBytes(SettingsChange{after.settings}))
+        e.settings = after.settings;
+    if (!after.cameras.empty() &&
+        (before.cameras.empty() || wireBytes(CameraChange{before.cameras.front()}) != wireBytes(CameraChange{after.cameras.front()})))
+        e.camera = after.cameras.front();
+    return e;
+}
+
+}  // namespace rtwall
