@@ -33,7 +33,8 @@ bool sameMesh(const MeshDesc& a, const MeshDesc& b) {
            sameArray(x.positions(), y.positions(), x.vertexCount() * 3) &&
            sameArray(x.indices(), y.indices(), x.triangleCount() * 3) &&
            sameArray(x.normals(), y.normals(), x.vertexCount() * 3) &&
-           sameArray(x.colors(), y.colors(), x.vertexCount() * 3);
+           sameArray(x.colors(), y.colors(), x.vertexCount() * 3) &&
+           sameArray(x.uvs(), y.uvs(), x.vertexCount() * 2);
 }
 
 std::string countChange(const char* what, size_t before, size_t after) {
