@@ -69,8 +69,14 @@ public:
         // tiny glass reflections (a systematically dark image); the roulette keeps the
         // expectation exact and bounds the work. The coin is a hash of the child's path seed
         // (RayTask::rouletteSeed): the same for every tile split and render client. At threshold 0 nothing is dropped.
+        // A dominant child (at least half its parent's throughput: the refraction of a path at
+        // the limit, total internal reflection, a mirror) that still carries at least half the
+        // limit goes on without a coin: its roulette would be the largest noise of a limit
+        // path (the whole path lost 4% of the time at every glass interface) for a saving of
+        // 4% of its rays (headlight at the default: +0.75 dB, +10% rays).
         const float limit = ctx.settings.pruneThreshold * ctx.sampleWeight;
-        if (m < limit) {
+        const bool dominant = m >= 0.5f * limit && m >= 0.5f * maxComponent(parent.weight);
+        if (m < limit && !dominant) {
             if (!(randomFloat(rouletteSeed, kRouletteDim) * limit < m)) return;
             w = weight * (limit / m);
         }
@@ -133,8 +139,14 @@ std::unique_ptr<MaterialModel> makeMaterialModel(const Material& desc);
 
 template <class F> void ShadeContext::directLight(const RayTask& ray, const SurfacePoint& sp, F&& brdfCos) {
     const RenderSettings& settings = ctx.settings;
+    // Shadow rays are pruned at a quarter of the path limit (see below): measured on the
+    // headlight at the default, a quarter gives 10.5 shadow rays per pixel and 41.3 dB against
+    // the unpruned image, the full limit 6.2 and 40.4 dB, no pruning 29.2.
+    const float limit = 0.25f * settings.pruneThreshold * ctx.sampleWeight;
     uint32_t dim = 64;  // random dimensions 0..63 are the materials' own
+    uint32_t lightIndex = 0;
     for (const Light& light : ctx.scene.desc.lights) {
+        const uint32_t branch = lightIndex++;
         Float3 l;
         float dist = INFINITY;
         Color e = light.color * light.intensity;
@@ -164,7 +176,19 @@ template <class F> void ShadeContext::directLight(const RayTask& ray, const Surf
         if (dot(sp.ng, l) <= 0.0f) continue;
         const Color f = brdfCos(l);
         if (!(maxComponent(f) > 0.0f)) continue;
-        const Color contribution = ray.weight * f * e;
+        Color contribution = ray.weight * f * e;
+        // Pruning by contribution, as for spawned rays, on what the shadow ray can add to the
+        // pixel (an upper bound: what passes is at most all of it). Below the limit it plays
+        // Russian roulette and carries the limit when it survives: the expectation is exact and
+        // the noise of one shadow ray at most the limit, without the radiance factor a pruned
+        // path's future carries. Paths at the limit deep in glass light the floor through
+        // several layers of it: their shadow rays (and the walks through the glass) were most
+        // of the shadow rays. The coin is hashed from the path's roulette seed and the light.
+        const float m = maxComponent(contribution);
+        if (m < limit) {
+            if (!(randomFloat(hashCombine(ray.rouletteSeed, 0x51ED27A3u + branch), kRouletteDim) * limit < m)) continue;
+            contribution = contribution * (limit / m);
+        }
         if (!settings.shadows) {
             pixel_ += contribution;
             continue;

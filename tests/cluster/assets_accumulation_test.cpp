@@ -414,7 +414,8 @@ TEST(ClusterAccumulation, OnlyStochasticScenesAccumulate) {
     v.settings.gi = true;
     variants.emplace_back("gi", v);
     v = base;
-    // (Not the zoo's area light: cross(edge1, edge2) of that one points up, away from the scene.)
+    // Its own area light, the same as the zoo's (which pointed up, away from the scene, before
+    // issue 7's fix).
     Light area;
     area.type = LightType::Area;
     area.position = {0.5f, 3.5f, -0.5f};

@@ -167,9 +167,12 @@ void addRender(CLI::App& app, Run& run) {
             writePng(img, o->out);
             const double build = std::chrono::duration<double>(t1 - t0).count();
             const double render = std::chrono::duration<double>(t2 - t1).count();
-            std::printf("wrote %s (%dx%d, camera '%s', %s kernel): BVH build %.3f s, render %.3f s, %.2f Mrays/s\n",
+            const double pixels = double(s.width) * s.height * std::max(1, o->frames);
+            std::printf("wrote %s (%dx%d, camera '%s', %s kernel): BVH build %.3f s, render %.3f s, %.2f Mrays/s "
+                        "(%.1f rays + %.1f shadow rays per pixel and frame)\n",
                         o->out.c_str(), s.width, s.height, cam->name.c_str(), kernel, build, render,
-                        double(stats.rays + stats.shadowRays) / render * 1e-6);
+                        double(stats.rays + stats.shadowRays) / render * 1e-6, double(stats.rays) / pixels,
+                        double(stats.shadowRays) / pixels);
             return 0;
         };
     });

@@ -427,11 +427,14 @@ shape = "box"
 name = "quad"
 shape = "quad"
 
+# A polished reflector, as real headlight reflectors (vacuum-metallised) are: it images the
+# filament. A glossy one (roughness > 0) shows the point light's highlight instead, whose
+# one-sample lobe is the noisiest thing a pruned deep path can reach.
 [[material]]
 name = "chrome"
 type = "metal"
 color = [0.92, 0.92, 0.95]
-roughness = 0.03
+roughness = 0
 
 [[material]]
 name = "bulb_glass"
@@ -491,7 +494,9 @@ material = "filament"
 scale = [0.05, 0.05, 0.12]
 translate = [0, 0, 0.75]
 
-# The lens: a bumped glass plate with a 5 x 5 grid of flattened glass lenslets in front.
+# The lens: a bumped glass plate with a 5 x 5 grid of flattened glass lenslets just in front
+# (not overlapping it: every glass surface has air on its other side, which is what the glass
+# material assumes; overlapping solids gave rays a glass-to-glass interface it treats as air).
 [[instance]]
 mesh = "box"
 material = "lens"
@@ -556,7 +561,7 @@ std::filesystem::path writeShadingDemo(const std::string& name, const std::files
             char buf[200];
             std::snprintf(buf, sizeof buf,
                           "\n[[instance]]\nmesh = \"sphere\"\nmaterial = \"lenslet\"\nscale = [0.5, 0.5, 0.12]\n"
-                          "translate = [%.2f, %.2f, 2.45]\n",
+                          "translate = [%.2f, %.2f, 2.56]\n",
                           (i - 2) * 1.1, (j - 2) * 1.1);
             scene += buf;
         }

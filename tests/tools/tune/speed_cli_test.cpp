@@ -81,8 +81,8 @@ TEST(SpeedCli, SimulateAndRunFrontsReportMistakesWithTheirFile) {
 }
 
 // bench shading on the alpha-masked sunflower field (generated small): the unpruned reference
-// row is exact, pruning changes nothing where no ray spawns children (the field has no mirrors or
-// glass), and 4 GI samples per pixel are closer to the many-sample mean than 1 (variance a quarter:
+// row is exact, pruning changes little where no ray spawns children (the field has no mirrors or
+// glass: only shadow rays of dim contributions play the roulette; 75 dB at 0.05), and 4 GI samples per pixel are closer to the many-sample mean than 1 (variance a quarter:
 // about 6 dB; asserted 3 dB over 19,200 pixels).
 TEST(SpeedCli, BenchShadingCoversTheSunflowerField) {
     const auto dir = test::scratchDir();
@@ -105,7 +105,7 @@ TEST(SpeedCli, BenchShadingCoversTheSunflowerField) {
     EXPECT_GT(giDb[1], giDb[0] + 3.0) << r.output;
     ASSERT_EQ(pruneDb.size(), 2u) << r.output;
     EXPECT_EQ(pruneDb[0], 999.0);  // the reference row
-    EXPECT_EQ(pruneDb[1], 999.0);  // identical: nothing to prune
+    EXPECT_GT(pruneDb[1], 50.0) << r.output;  // only dim shadow rays are pruned
     EXPECT_NE(r.output.find("\"sunflower_plants\" : 200"), std::string::npos) << r.output;
 }
 
