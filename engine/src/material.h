@@ -25,9 +25,9 @@ struct SurfacePoint {
     Float3 ng;       // unit geometric normal, facing the incoming ray
     Float3 ns;       // unit shading normal, same hemisphere as ng (bumped where the material says)
     Float3 po;       // object-space position (textures, bumps, volumes)
-    bool frontFace;  // the ray hit the side the triangle's winding calls "outside"
-    float t;         // hit distance
-    const InstanceData* instance;
+    bool frontFace = true;  // the ray hit the side the triangle's winding calls "outside"
+    float t = 0;            // hit distance
+    const InstanceData* instance = nullptr;
     Color tint{1, 1, 1};  // the mesh's interpolated vertex colour (linear), white without one
     uint32_t prim = 0;    // the triangle hit (for the UV tangent frame)
     bool hasUV = false;   // the mesh has texture coordinates; then uv holds them at the hit

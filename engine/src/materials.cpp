@@ -320,8 +320,10 @@ Float3 MaterialModel::bumpedNormal(const InstanceData& inst, const SurfacePoint&
         turbulenceGrad(sp.po * (1.0f / s), 4, gObj);
     }
     const Float3 g = transformNormal(inst.normalMatrix, gObj * (desc_.bump / s));
+    // The height field raises the surface along its outside normal; seen from behind, ns points
+    // inside, and the same bump tilts the normal the other way round (n_back = -n_front).
     const Float3 tangential = g - ns * dot(g, ns);
-    const Float3 n = normalize(ns - tangential);
+    const Float3 n = normalize(sp.frontFace ? ns - tangential : ns + tangential);
     return isFinite(n) ? n : ns;
 }
 

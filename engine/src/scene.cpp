@@ -79,11 +79,14 @@ RTCBuildQuality buildQuality(BvhSettings::Quality q) {
 
 // RTC_SCENE_FLAG_ROBUST, where the scene asks for it, goes on every mesh BVH and on the top
 // level: it makes traversal conservative, so rays along shared edges of thin triangles (common
-// in CAD) do not slip through between boxes.
-RTCSceneFlags sceneFlags(const BvhSettings& b) {
+// in CAD) do not slip through between boxes. A mesh BVH of quads is always robust: Embree's
+// fast quad test is not watertight on the diagonal (a ray exactly along it, as pixel centres
+// of an axis-aligned view of a symmetric part are, passes between the two triangles), and a
+// line of missing pixels is not a speed/accuracy trade a user chose.
+RTCSceneFlags sceneFlags(const BvhSettings& b, bool quads = false) {
     int f = RTC_SCENE_FLAG_NONE;
     if (b.compact) f |= RTC_SCENE_FLAG_COMPACT;
-    if (b.robust) f |= RTC_SCENE_FLAG_ROBUST;
+    if (b.robust || quads) f |= RTC_SCENE_FLAG_ROBUST;
     return RTCSceneFlags(f);
 }
 
@@ -268,7 +271,7 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
             RTCScene ms = rtcNewScene(s.device);
             s.meshScenes.push_back(ms);
             rtcSetSceneBuildQuality(ms, buildQuality(s.desc.bvh.quality));
-            rtcSetSceneFlags(ms, sceneFlags(s.desc.bvh));
+            rtcSetSceneFlags(ms, sceneFlags(s.desc.bvh, mp.quads > 0));
             rtcSetSceneProgressMonitorFunction(ms, buildProgress, &s);
             s.currentMesh = double(mesh.triangleCount());
             // Shared buffers: Embree reads the mesh's arrays in place, whether the importer

@@ -223,6 +223,22 @@ TEST(UVMapping, BumpedNormalIsTheAnalyticOneFromTheTangentFrame) {
             }
         }
     EXPECT_GT(tested, 6);  // the bump does tilt the normal
+    // Seen from behind (shading normal flipped), the same bump: the bumped normal is the front
+    // one flipped, not its mirror image in the surface.
+    for (float bu : {0.1f, 0.3f}) {
+        SurfacePoint front;
+        front.prim = 0;
+        front.hasUV = true;
+        meshUVAt(mesh, 0, bu, 0.2f, front.uv);
+        SurfacePoint back = front;
+        back.frontFace = false;
+        const Float3 nf = model->bumpedNormal(inst, front, {0, 1, 0});
+        const Float3 nb = model->bumpedNormal(inst, back, {0, -1, 0});
+        EXPECT_FLOAT_EQ(nb.x, -nf.x) << bu;
+        EXPECT_FLOAT_EQ(nb.y, -nf.y);
+        EXPECT_FLOAT_EQ(nb.z, -nf.z);
+        EXPECT_GT(std::fabs(nf.x) + std::fabs(nf.z), 1e-3f) << "tilted";
+    }
     // Object mapping on the same point uses the position instead: a different normal.
     Material objDesc = desc;
     objDesc.bumpMapping = TextureMapping::Object;
