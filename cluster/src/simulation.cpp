@@ -107,7 +107,7 @@ public:
             scheduler_.addClient(i);
             clients_[i].idle = c.threadsPerClient;
         }
-        if (c.hostCores < 0 || !(c.hostBackgroundThreads >= 0))
+        if (!(c.hostCores >= 0) || !(c.hostBackgroundThreads >= 0))
             throw InputError("simulation: host cores and background threads must be zero or positive");
         for (double x : {c.clientSecondsPerResult, c.clientSecondsPerByte, c.masterSecondsPerResult, c.masterSecondsPerByte,
                          c.masterSecondsPerFrame})
@@ -223,7 +223,7 @@ private:
 
     bool shared() const { return config_.hostCores > 0; }
     double cpuRate() const {
-        return std::min(1.0, double(config_.hostCores) / std::max(1.0, double(cpu_.size()) + config_.hostBackgroundThreads));
+        return std::min(1.0, config_.hostCores / std::max(1.0, double(cpu_.size()) + config_.hostBackgroundThreads));
     }
 
     void cpuAdvance() {

@@ -170,9 +170,11 @@ void addReference(CLI::App& app, Run& run) {
     struct Options {
         std::string scene, out, camera;
         int width = 0, height = 0, supersample = 8, threads = 0, giSpp = -1, frames = 1;
+        uint32_t firstFrame = 1u << 20;  // independent of the frames the sweep renders (1, 2, ...)
         double prune = -1, volumeStep = 0;
         int64_t triangles = 3'000'000;
         bool json = false;
+        std::string progressOut;
     };
     auto o = std::make_shared<Options>();
     CLI::App* cmd = app.add_subcommand(
@@ -195,6 +197,9 @@ void addReference(CLI::App& app, Run& run) {
                     "Average this many frames in linear light (path tracing jitters samples per frame; an even count "
                     "also reports the error between its two halves, an estimate of the reference's own error)")
         ->check(CLI::Range(1, 1 << 20));
+    cmd->add_option("--first-frame", o->firstFrame, "Frame number of the first frame (seeds its random numbers)");
+    cmd->add_option("--progress-out", o->progressOut,
+                    "Also write the mean of the first 1, 2, 4, 8, ... frames to PREFIX-N.png (progressive refinement)");
     cmd->add_flag("--json", o->json, "Print JSON");
     cmd->callback([&run, o] {
         run = [o] {
@@ -208,15 +213,13 @@ void addReference(CLI::App& app, Run& run) {
             const CameraDesc cam = pickCamera(desc, o->scene, o->camera);
             const Scene scene(desc);
             const Camera camera(cam, s.width, s.height);
-            if (o->frames == 1) {
+            if (o->frames == 1 && o->progressOut.empty() && o->firstFrame == 1u << 20) {
                 writePng(renderFrame(scene, camera, s), o->out);
                 if (o->json) std::cout << toml::json_formatter{toml::table{{"out", o->out}, {"frames", 1}}} << "\n";
                 else std::printf("wrote %s (%dx%d, %dx%d samples per pixel)\n", o->out.c_str(), s.width, s.height,
                                  o->supersample, o->supersample);
                 return 0;
             }
-            // Frames numbered from 2^20 on: independent of the frames the sweep renders (1, 2, ...).
-            constexpr uint32_t kFirstFrame = 1u << 20;
             const std::vector<TileRect> tiles = makeTiles(s.width, s.height, s.tileSize > 0 ? s.tileSize : 32);
             const int threads = s.threads > 0 ? s.threads : int(std::max(1u, std::thread::hardware_concurrency()));
             std::vector<float> linear(size_t(s.width) * s.height * 3);
@@ -226,7 +229,7 @@ void addReference(CLI::App& app, Run& run) {
                 auto worker = [&] {
                     for (size_t i; (i = next.fetch_add(1)) < tiles.size();) {
                         const TileRect& r = tiles[i];
-                        renderTileLinear(scene, camera, r, kFirstFrame + uint32_t(f), s,
+                        renderTileLinear(scene, camera, r, o->firstFrame + uint32_t(f), s,
                                          linear.data() + (size_t(r.y0) * s.width + r.x0) * 3, size_t(s.width) * 3);
                     }
                 };
@@ -236,6 +239,8 @@ void addReference(CLI::App& app, Run& run) {
                 for (std::thread& t : pool) t.join();
                 all.addLinear(linear.data(), s.width, s.height);
                 half[2 * f < o->frames ? 0 : 1].addLinear(linear.data(), s.width, s.height);
+                if (!o->progressOut.empty() && (all.frames() & (all.frames() - 1)) == 0)
+                    writePng(all.resolve(), o->progressOut + "-" + std::to_string(all.frames()) + ".png");
             }
             writePng(all.resolve(), o->out);
             // Two independent halves: their difference has twice one half's variance, and the
@@ -431,7 +436,8 @@ void addBenchCodecs(CLI::App& bench, Run& run) {
 void addSimulate(CLI::App& app, Run& run) {
     struct Options {
         std::string profile, codec, clients = "1,2,4,8,16,32,64,128,256", clientLink = "100mbit", masterLink = "1gbit";
-        int threads = 1, prefetch = 4, frames = 10, decodeThreads = 2, overhead = 40, hostCores = 0;
+        int threads = 1, prefetch = 4, frames = 10, decodeThreads = 2, overhead = 40;
+        double hostCores = 0;
         double clientUsPerResult = 0, clientNsPerByte = 0, masterUsPerResult = 0, masterNsPerByte = 0, masterMsPerFrame = 0;
         double latencyMs = 0.1, hostLoad = 0, spikeProb = 0, spikeMs = 0, masterUs = 28, clientSpeed = 1, decodeSpeed = 1, straggler = 4;
         bool noAffinity = false, json = false;
@@ -459,7 +465,7 @@ void addSimulate(CLI::App& app, Run& run) {
     cmd->add_option("--overhead-bytes", o->overhead, "Protocol bytes per result message")->check(CLI::Range(0, 100000));
     cmd->add_option("--host-cores", o->hostCores,
                     "Clients and master share this many cores (local clients on one PC); 0: each has its own")
-        ->check(CLI::Range(0, 100000));
+        ->check(CLI::Range(0.0, 100000.0));
     cmd->add_option("--host-load", o->hostLoad, "With --host-cores: other jobs' runnable threads on those cores")
         ->check(CLI::Range(0.0, 100000.0));
     // Host costs besides rendering, from `rtwall bench cluster --json` (cpu_per_frame); see

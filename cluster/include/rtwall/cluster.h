@@ -217,7 +217,8 @@ struct SimConfig {
     // share this many cores (local clients on the master's PC), each thread at most one core,
     // the cores shared equally among the running threads (processor sharing, as the kernel's
     // fair scheduler does). 0: every client has its own machine and the master its own cores.
-    int hostCores = 0;
+    // May be fractional: the share of the PC the cluster's processes get beside other jobs.
+    double hostCores = 0;
     double hostBackgroundThreads = 0;  // with hostCores: other jobs' runnable threads, always competing
     // Host costs outside the render threads and the network thread's per-message cost, as
     // measured by `rtwall bench cluster` (its cpu_per_frame, per thread): a client's CPU per result
