@@ -758,9 +758,11 @@ def charts(docs, points_by_scene, scaling_by_scene, affinity, prefetch, validati
             ax.scatter([v["clients"]] * len(v["runs"]), [x["measured_fps"] for x in v["runs"]], color="C0", s=12, alpha=0.5)
         ax.plot(xs, [v["measured_fps"] for v in validation], "o-", color="C0", label="measured (median; dots: runs)")
         ax.plot(xs, [v["simulated_fps"] for v in validation], "s-", color="C1",
-                label=f"simulated: {VALIDATION_CORES} shared cores + measured background load")
+                label="simulated: the cores this job got (measured), host costs calibrated")
+        ax.plot(xs, [v["simulated_fps_without_host_costs"] for v in validation], "x-.", color="C4",
+                label="simulated: the same without host costs (the model before)")
         ax.plot(xs, [v["simulated_fps_idle_pc"] for v in validation], "^--", color="C2",
-                label=f"simulated: {VALIDATION_CORES} shared cores, idle PC")
+                label=f"simulated: {VALIDATION_CORES} shared cores, idle PC, host costs calibrated")
         ax.plot(xs, [v["simulated_fps_no_sharing"] for v in validation], "v:", color="C3",
                 label="simulated: one machine per client (old model)")
         ax.set_xticks(xs)
