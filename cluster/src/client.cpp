@@ -9,6 +9,7 @@
 
 #include <rtwall/cluster.h>
 
+#include <pthread.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -559,6 +560,7 @@ private:
     // ---- render threads -------------------------------------------------------------------
 
     void workerLoop() {
+        pthread_setname_np(pthread_self(), "rtw-render");  // rtwall bench cluster attributes CPU time by thread name
         zmq::socket_t out(ctx_, zmq::socket_type::push);
         out.set(zmq::sockopt::linger, 0);
         out.connect(kResultsAddress);

@@ -13,6 +13,8 @@
 
 #include <rtwall/cluster.h>
 
+#include <pthread.h>
+
 #include <algorithm>
 #include <atomic>
 #include <condition_variable>
@@ -69,7 +71,10 @@ public:
     DecodePool(FrameAssembler& assembler, int threads, std::function<void()> onComplete,
                std::function<void(uint32_t)> onFailure)
         : assembler_(assembler), onComplete_(std::move(onComplete)), onFailure_(std::move(onFailure)) {
-        for (int i = 0; i < threads; ++i) workers_.emplace_back([this] { run(); });
+        for (int i = 0; i < threads; ++i) workers_.emplace_back([this] {
+            pthread_setname_np(pthread_self(), "rtw-decode");  // for rtwall bench cluster's CPU split
+            run();
+        });
     }
     ~DecodePool() {
         {
@@ -831,6 +836,7 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
             impl_->wake();
         });
     s.net = std::thread([this] {
+        pthread_setname_np(pthread_self(), "rtw-net");  // for rtwall bench cluster's CPU split
         try {
             impl_->loop();
         } catch (const std::exception& e) {

@@ -24,6 +24,10 @@
 //   other jobs' runnable threads on a shared PC (hostBackgroundThreads). This is what
 //   makes 4 local clients on 2 cores no faster than 2, and slows the master's replies when the
 //   clients saturate the cores.
+// - Host costs besides rendering (SimConfig::clientSecondsPerResult and the rest, measured by
+//   rtwall bench cluster per thread): a client's network work per result delays its send; the
+//   master's receive per result (one I/O thread, FIFO) comes before its network thread; the
+//   master's per-frame work follows the last decode. On shared cores all are CPU jobs there.
 // Not modelled: heartbeats, timeouts and dead clients, scene updates, TCP congestion control.
 #include "scheduler.h"
 
@@ -45,6 +49,8 @@ enum class Ev {
     FrameBeginAtClient, AssignAtClient, RenderDone, RequestAtMaster, ResultAtMaster, MasterHandle, Housekeeping, FrameDone,
     CpuTick,     // shared cores: the next CPU job may have finished (count = the pool's generation)
     DecodeDone,  // shared cores: a decode finished (frame = its frame)
+    ClientSend,  // a client's network work for a result is done: it leaves
+    MasterIoDone,  // the master's I/O thread has received a result: on to the network thread
 };
 
 struct Event {
@@ -101,8 +107,11 @@ public:
             scheduler_.addClient(i);
             clients_[i].idle = c.threadsPerClient;
         }
-        if (c.hostCores < 0 || !(c.hostBackgroundThreads >= 0))
+        if (!(c.hostCores >= 0) || !(c.hostBackgroundThreads >= 0))
             throw InputError("simulation: host cores and background threads must be zero or positive");
+        for (double x : {c.clientSecondsPerResult, c.clientSecondsPerByte, c.masterSecondsPerResult, c.masterSecondsPerByte,
+                         c.masterSecondsPerFrame})
+            if (!(x >= 0)) throw InputError("simulation: host costs must be zero or positive");
         decoders_.assign(size_t(c.decodeThreads), 0.0);
     }
 
@@ -173,10 +182,48 @@ private:
     bool masterRunning_ = false;
     std::deque<double> decodeQueue_;  // decode costs waiting for a decode thread
     int decodesRunning_ = 0;
+    std::deque<Event> ioQueue_;  // results waiting for the master's I/O thread
+    bool ioRunning_ = false;
+
+    double resultBytes(uint32_t tile) const {
+        return double(profile_.codecs[config_.codec].bytes[tile]) + config_.messageOverheadBytes;
+    }
+
+    // A CPU job: on the shared cores, or a plain delay on a machine of its own.
+    void work(double seconds, Event done) {
+        if (shared()) {
+            cpuSubmit(seconds, std::move(done));
+        } else {
+            done.t = now_ + seconds;
+            push(std::move(done));
+        }
+    }
+
+    void startIo() {
+        if (ioRunning_ || ioQueue_.empty()) return;
+        ioRunning_ = true;
+        Event e = std::move(ioQueue_.front());
+        ioQueue_.pop_front();
+        const double cost = config_.masterSecondsPerResult + resultBytes(e.tiles.front()) * config_.masterSecondsPerByte;
+        e.kind = Ev::MasterIoDone;
+        work(cost, std::move(e));
+    }
+
+    void sendResult(uint32_t id, uint32_t frame, uint32_t tile) {
+        Event r = makeEvent(up(clients_[id], resultBytes(tile)), Ev::ResultAtMaster, id, frame);
+        r.tiles = {tile};
+        push(std::move(r));
+    }
+
+    void frameDone() {
+        Event done = makeEvent(now_, Ev::FrameDone, 0, frame_);
+        if (config_.masterSecondsPerFrame > 0) work(config_.masterSecondsPerFrame, std::move(done));
+        else push(std::move(done));
+    }
 
     bool shared() const { return config_.hostCores > 0; }
     double cpuRate() const {
-        return std::min(1.0, double(config_.hostCores) / std::max(1.0, double(cpu_.size()) + config_.hostBackgroundThreads));
+        return std::min(1.0, config_.hostCores / std::max(1.0, double(cpu_.size()) + config_.hostBackgroundThreads));
     }
 
     void cpuAdvance() {
@@ -241,7 +288,7 @@ private:
     void maybeFinishShared() {
         if (frameActive_ && scheduler_.frameComplete() && decodesRunning_ == 0 && decodeQueue_.empty() && !frameDoneScheduled_) {
             frameDoneScheduled_ = true;
-            push(makeEvent(now_, Ev::FrameDone, 0, frame_));
+            frameDone();
         }
     }
 
@@ -370,15 +417,32 @@ private:
             SimClient& c = clients_[e.client];
             ++c.idle;
             const uint32_t tile = e.tiles.front();
-            const double bytes = double(profile_.codecs[config_.codec].bytes[tile]) + config_.messageOverheadBytes;
-            Event r = makeEvent(up(c, bytes), Ev::ResultAtMaster, e.client, e.frame);
-            r.tiles = {tile};
-            push(std::move(r));
+            const double send = config_.clientSecondsPerResult + resultBytes(tile) * config_.clientSecondsPerByte;
+            if (send > 0) {
+                Event s = makeEvent(0, Ev::ClientSend, e.client, e.frame);
+                s.tiles = {tile};
+                work(send, std::move(s));
+            } else {
+                sendResult(e.client, e.frame, tile);
+            }
             startWork(e.client);
             break;
         }
-        case Ev::RequestAtMaster:
+        case Ev::ClientSend: sendResult(e.client, e.frame, e.tiles.front()); break;
+        case Ev::MasterIoDone:
+            ioRunning_ = false;
+            e.isResult = true;
+            toMaster(std::move(e));
+            startIo();
+            break;
         case Ev::ResultAtMaster:
+            if (config_.masterSecondsPerResult > 0 || config_.masterSecondsPerByte > 0) {
+                ioQueue_.push_back(std::move(e));
+                startIo();
+                break;
+            }
+            [[fallthrough]];
+        case Ev::RequestAtMaster:
             e.isResult = e.kind == Ev::ResultAtMaster;
             toMaster(std::move(e));
             break;
@@ -431,7 +495,7 @@ private:
             frameDecodeEnd_ = std::max(frameDecodeEnd_, *free);
             if (scheduler_.frameComplete() && !frameDoneScheduled_) {
                 frameDoneScheduled_ = true;
-                push(makeEvent(frameDecodeEnd_, Ev::FrameDone, 0, frame_));
+                push(makeEvent(frameDecodeEnd_ + config_.masterSecondsPerFrame, Ev::FrameDone, 0, frame_));
             }
         }
         serve(e.client);

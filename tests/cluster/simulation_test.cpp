@@ -154,6 +154,50 @@ TEST(ClusterSimulation, SharedCoresSlowTheMasterWhenClientsSaturateThem) {
     EXPECT_DOUBLE_EQ(simulateCluster(p, cfg).fps, alone);
 }
 
+TEST(ClusterSimulation, HostCostsBesidesRenderingAddUpAsComputedByHand) {
+    // As OneClientPrefetchOneWaitsARoundTripPerTile, plus each result's network work on the
+    // client (s per result + 2^-20 s per byte of its 1024 bytes, so s + 1/1024), on the master's
+    // I/O thread (r), and the master's work per frame (f): every tile's round trip grows by
+    // s + 1/1024 + r, the frame by f once. On one shared core nothing runs at the same time
+    // (prefetch 1), so the figures are the same.
+    const int n = 8;
+    const double L = 1.0 / 1024, c = 1.0 / 64, s = 1.0 / 512, sb = 1.0 / (1024 * 1024), r = 1.0 / 256, f = 1.0 / 32;
+    SimConfig cfg = trivial();
+    cfg.clientSecondsPerResult = s;
+    cfg.clientSecondsPerByte = sb;
+    cfg.masterSecondsPerResult = r;
+    cfg.masterSecondsPerFrame = f;
+    const double expected = (2 * n + 2) * L + n * (c + s + 1024 * sb + r) + f;
+    for (int cores : {0, 1}) {
+        cfg.hostCores = cores;
+        const SimReport rep = simulateCluster(uniformProfile(n, c, 1024), cfg);
+        ASSERT_EQ(rep.frameSeconds.size(), 3u);
+        for (double t : rep.frameSeconds) EXPECT_EQ(t, expected) << cores << " shared cores";
+    }
+    // The master's per-byte cost: 2^-18 s per byte, 1024 bytes, 1/256 s per result like r.
+    cfg = trivial();
+    cfg.masterSecondsPerByte = 1.0 / (256 * 1024);
+    for (double t : simulateCluster(uniformProfile(n, c, 1024), cfg).frameSeconds) EXPECT_EQ(t, (2 * n + 2) * L + n * (c + r));
+}
+
+TEST(ClusterSimulation, HostCostsShareTheCoresWithRendering) {
+    // No latency, one core, every tile assigned at once: the core is never idle from the first
+    // render to the frame's end, so a frame is exactly the sum of its CPU work, n (c + s + r) + f,
+    // although sends and the master's receives run beside the renders.
+    const int n = 8;
+    const double c = 1.0 / 64, s = 1.0 / 128, r = 1.0 / 256, f = 1.0 / 32;
+    SimConfig cfg = trivial();
+    cfg.clientLink.latencySeconds = 0;
+    cfg.prefetch = n;
+    cfg.hostCores = 1;
+    cfg.clientSecondsPerResult = s;
+    cfg.masterSecondsPerResult = r;
+    cfg.masterSecondsPerFrame = f;
+    for (double t : simulateCluster(uniformProfile(n, c, 1000), cfg).frameSeconds) EXPECT_DOUBLE_EQ(t, n * (c + s + r) + f);
+    cfg.hostCores = 0;  // own cores: the sends and receives overlap the renders; only the last tile's show
+    for (double t : simulateCluster(uniformProfile(n, c, 1000), cfg).frameSeconds) EXPECT_EQ(t, n * c + s + r + f);
+}
+
 TEST(ClusterSimulation, IsDeterministic) {
     SimConfig cfg = trivial();
     cfg.clients = 5;
@@ -174,6 +218,9 @@ TEST(ClusterSimulation, RejectsBadConfigurations) {
     EXPECT_THROW(simulateCluster(p, cfg), InputError);
     cfg = trivial();
     cfg.codec = 1;
+    EXPECT_THROW(simulateCluster(p, cfg), InputError);
+    cfg = trivial();
+    cfg.masterSecondsPerResult = -1e-6;
     EXPECT_THROW(simulateCluster(p, cfg), InputError);
 }
 

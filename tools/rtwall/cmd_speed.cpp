@@ -13,8 +13,10 @@
 
 #include <toml++/toml.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <thread>
 #include <iostream>
 #include <memory>
 #include <numbers>
@@ -167,9 +169,12 @@ void addCompare(CLI::App& app, Run& run) {
 void addReference(CLI::App& app, Run& run) {
     struct Options {
         std::string scene, out, camera;
-        int width = 0, height = 0, supersample = 8, threads = 0, giSpp = -1;
+        int width = 0, height = 0, supersample = 8, threads = 0, giSpp = -1, frames = 1;
+        uint32_t firstFrame = 1u << 20;  // independent of the frames the sweep renders (1, 2, ...)
         double prune = -1, volumeStep = 0;
         int64_t triangles = 3'000'000;
+        bool json = false;
+        std::string progressOut;
     };
     auto o = std::make_shared<Options>();
     CLI::App* cmd = app.add_subcommand(
@@ -188,6 +193,14 @@ void addReference(CLI::App& app, Run& run) {
     cmd->add_option("--volume-step", o->volumeStep, "Ray-march step of every volume material, in voxels")
         ->check(CLI::Range(0.01, 100.0));
     cmd->add_option("--triangles", o->triangles, "Triangles of a builtin scene")->check(CLI::Range(int64_t(1000), int64_t(100'000'000)));
+    cmd->add_option("--frames", o->frames,
+                    "Average this many frames in linear light (path tracing jitters samples per frame; an even count "
+                    "also reports the error between its two halves, an estimate of the reference's own error)")
+        ->check(CLI::Range(1, 1 << 20));
+    cmd->add_option("--first-frame", o->firstFrame, "Frame number of the first frame (seeds its random numbers)");
+    cmd->add_option("--progress-out", o->progressOut,
+                    "Also write the mean of the first 1, 2, 4, 8, ... frames to PREFIX-N.png (progressive refinement)");
+    cmd->add_flag("--json", o->json, "Print JSON");
     cmd->callback([&run, o] {
         run = [o] {
             SceneDesc desc = loadScene(o->scene, o->triangles);
@@ -199,9 +212,54 @@ void addReference(CLI::App& app, Run& run) {
             s.threads = o->threads;
             const CameraDesc cam = pickCamera(desc, o->scene, o->camera);
             const Scene scene(desc);
-            writePng(renderFrame(scene, Camera(cam, s.width, s.height), s), o->out);
-            std::printf("wrote %s (%dx%d, %dx%d samples per pixel)\n", o->out.c_str(), s.width, s.height, o->supersample,
-                        o->supersample);
+            const Camera camera(cam, s.width, s.height);
+            if (o->frames == 1 && o->progressOut.empty() && o->firstFrame == 1u << 20) {
+                writePng(renderFrame(scene, camera, s), o->out);
+                if (o->json) std::cout << toml::json_formatter{toml::table{{"out", o->out}, {"frames", 1}}} << "\n";
+                else std::printf("wrote %s (%dx%d, %dx%d samples per pixel)\n", o->out.c_str(), s.width, s.height,
+                                 o->supersample, o->supersample);
+                return 0;
+            }
+            const std::vector<TileRect> tiles = makeTiles(s.width, s.height, s.tileSize > 0 ? s.tileSize : 32);
+            const int threads = s.threads > 0 ? s.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+            std::vector<float> linear(size_t(s.width) * s.height * 3);
+            Accumulator all, half[2];
+            for (int f = 0; f < o->frames; ++f) {
+                std::atomic<size_t> next{0};
+                auto worker = [&] {
+                    for (size_t i; (i = next.fetch_add(1)) < tiles.size();) {
+                        const TileRect& r = tiles[i];
+                        renderTileLinear(scene, camera, r, o->firstFrame + uint32_t(f), s,
+                                         linear.data() + (size_t(r.y0) * s.width + r.x0) * 3, size_t(s.width) * 3);
+                    }
+                };
+                std::vector<std::thread> pool;
+                for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
+                worker();
+                for (std::thread& t : pool) t.join();
+                all.addLinear(linear.data(), s.width, s.height);
+                half[2 * f < o->frames ? 0 : 1].addLinear(linear.data(), s.width, s.height);
+                if (!o->progressOut.empty() && (all.frames() & (all.frames() - 1)) == 0)
+                    writePng(all.resolve(), o->progressOut + "-" + std::to_string(all.frames()) + ".png");
+            }
+            writePng(all.resolve(), o->out);
+            // Two independent halves: their difference has twice one half's variance, and the
+            // whole has half of it, so the whole's own error is a quarter of the halves' squared
+            // difference: 6.02 dB above their PSNR (noise only; a bias both share is not seen).
+            toml::table out{{"out", o->out}, {"frames", o->frames}};
+            if (o->frames % 2 == 0) {
+                const ImageError e = compareImages(half[0].resolve(), half[1].resolve());
+                out.insert("halves_psnr_db", e.psnrDb);
+                out.insert("own_psnr_db_estimate", e.psnrDb + 20 * std::log10(2.0));
+            }
+            if (o->json) {
+                std::cout << toml::json_formatter{out} << "\n";
+            } else {
+                std::printf("wrote %s (%dx%d, %dx%d samples per pixel x %d frames)\n", o->out.c_str(), s.width, s.height,
+                            o->supersample, o->supersample, o->frames);
+                if (auto e = out["own_psnr_db_estimate"].value<double>())
+                    std::printf("its own error, from its two halves: about %.1f dB PSNR\n", *e);
+            }
             return 0;
         };
     });
@@ -378,7 +436,9 @@ void addBenchCodecs(CLI::App& bench, Run& run) {
 void addSimulate(CLI::App& app, Run& run) {
     struct Options {
         std::string profile, codec, clients = "1,2,4,8,16,32,64,128,256", clientLink = "100mbit", masterLink = "1gbit";
-        int threads = 1, prefetch = 4, frames = 10, decodeThreads = 2, overhead = 40, hostCores = 0;
+        int threads = 1, prefetch = 4, frames = 10, decodeThreads = 2, overhead = 40;
+        double hostCores = 0;
+        double clientUsPerResult = 0, clientNsPerByte = 0, masterUsPerResult = 0, masterNsPerByte = 0, masterMsPerFrame = 0;
         double latencyMs = 0.1, hostLoad = 0, spikeProb = 0, spikeMs = 0, masterUs = 28, clientSpeed = 1, decodeSpeed = 1, straggler = 4;
         bool noAffinity = false, json = false;
         uint64_t seed = 1;
@@ -405,9 +465,21 @@ void addSimulate(CLI::App& app, Run& run) {
     cmd->add_option("--overhead-bytes", o->overhead, "Protocol bytes per result message")->check(CLI::Range(0, 100000));
     cmd->add_option("--host-cores", o->hostCores,
                     "Clients and master share this many cores (local clients on one PC); 0: each has its own")
-        ->check(CLI::Range(0, 100000));
+        ->check(CLI::Range(0.0, 100000.0));
     cmd->add_option("--host-load", o->hostLoad, "With --host-cores: other jobs' runnable threads on those cores")
         ->check(CLI::Range(0.0, 100000.0));
+    // Host costs besides rendering, from `rtwall bench cluster --json` (cpu_per_frame); see
+    // docs/speed-accuracy.md, Validation, for how they are measured and calibrated.
+    cmd->add_option("--client-us-per-result", o->clientUsPerResult,
+                    "A client's CPU per result outside its render threads (network, ZeroMQ, kernel TCP), µs")
+        ->check(CLI::Range(0.0, 1e6));
+    cmd->add_option("--client-ns-per-byte", o->clientNsPerByte, "... and per result byte, ns")->check(CLI::Range(0.0, 1e6));
+    cmd->add_option("--master-us-per-result", o->masterUsPerResult,
+                    "The master's CPU per result before its network thread (ZeroMQ I/O thread, kernel TCP), µs")
+        ->check(CLI::Range(0.0, 1e6));
+    cmd->add_option("--master-ns-per-byte", o->masterNsPerByte, "... and per result byte, ns")->check(CLI::Range(0.0, 1e6));
+    cmd->add_option("--master-ms-per-frame", o->masterMsPerFrame, "The master's CPU per frame after the last decode, ms")
+        ->check(CLI::Range(0.0, 1e6));
     cmd->add_option("--frames", o->frames, "Simulated frames per client count (after one warm-up frame)")->check(CLI::Range(1, 100000));
     cmd->add_option("--seed", o->seed, "Seed for latency spikes and steal victims");
     cmd->add_flag("--json", o->json, "Print JSON");
@@ -440,6 +512,11 @@ void addSimulate(CLI::App& app, Run& run) {
             cfg.seed = o->seed;
             cfg.hostCores = o->hostCores;
             cfg.hostBackgroundThreads = o->hostLoad;
+            cfg.clientSecondsPerResult = o->clientUsPerResult * 1e-6;
+            cfg.clientSecondsPerByte = o->clientNsPerByte * 1e-9;
+            cfg.masterSecondsPerResult = o->masterUsPerResult * 1e-6;
+            cfg.masterSecondsPerByte = o->masterNsPerByte * 1e-9;
+            cfg.masterSecondsPerFrame = o->masterMsPerFrame * 1e-3;
             double bytes = 0, render = 0;
             for (uint32_t b : profile.codecs[cfg.codec].bytes) bytes += b + o->overhead;
             for (double r : profile.renderSeconds.front()) render += r;

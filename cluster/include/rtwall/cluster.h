@@ -236,8 +236,20 @@ struct SimConfig {
     // share this many cores (local clients on the master's PC), each thread at most one core,
     // the cores shared equally among the running threads (processor sharing, as the kernel's
     // fair scheduler does). 0: every client has its own machine and the master its own cores.
-    int hostCores = 0;
+    // May be fractional: the share of the PC the cluster's processes get beside other jobs.
+    double hostCores = 0;
     double hostBackgroundThreads = 0;  // with hostCores: other jobs' runnable threads, always competing
+    // Host costs outside the render threads and the network thread's per-message cost, as
+    // measured by `rtwall bench cluster` (its cpu_per_frame, per thread): a client's CPU per result
+    // besides rendering and encoding it (its network thread, ZeroMQ's I/O thread, the kernel's
+    // TCP send), spent after the render and before the result leaves; the master's per result
+    // before its network thread sees it (ZeroMQ's I/O thread and the kernel's receive: one
+    // thread, results queue for it); and the master's per frame after the last decode (the
+    // caller takes the assembled frame). With hostCores they run on the shared cores; without,
+    // they are delays on machines with a core to spare.
+    double clientSecondsPerResult = 0, clientSecondsPerByte = 0;
+    double masterSecondsPerResult = 0, masterSecondsPerByte = 0;
+    double masterSecondsPerFrame = 0;
     int frames = 10;                 // measured frames
     int warmupFrames = 1;            // frames run first and not reported (affinity needs one)
     uint64_t seed = 1;               // latency spikes and the scheduler's steal victims
