@@ -261,11 +261,12 @@ void perlinNoiseGrad4(const Lanes& p, float noise[4], float gx[4], float gy[4], 
 float turbulenceGrad(const Float3& p, int octaves, Float3& gradient) {
     float sum = 0.0f, amp = 1.0f, freq = 1.0f;
     gradient = {0, 0, 0};
+    int i = 0;
 #if defined(__SSE2__)
-    // Four octaves per call of the lane version; the sums below stay in octave order.
+    // Four octaves per call of the lane version; the sums below stay in octave order, and the
+    // scalar loop after it does the octaves left over (or all of them for far-out points).
     const float limit = 1.0e9f / float(1 << std::min(std::max(octaves, 1), 30));
     if (octaves >= 4 && maxAbsComponent(p) < limit) {
-        int i = 0;
         for (; i + 4 <= octaves; i += 4) {
             float fr[4];
             for (int k = 0; k < 4; ++k) fr[k] = freq * float(1 << k);
@@ -280,18 +281,9 @@ float turbulenceGrad(const Float3& p, int octaves, Float3& gradient) {
                 freq *= 2.0f;
             }
         }
-        for (; i < octaves; ++i) {
-            Float3 gi;
-            const float n = perlinNoiseGrad(p * freq, gi);
-            sum += amp * std::fabs(n);
-            gradient += gi * (n < 0.0f ? -amp * freq : amp * freq);
-            amp *= 0.5f;
-            freq *= 2.0f;
-        }
-        return sum;
     }
 #endif
-    for (int i = 0; i < octaves; ++i) {
+    for (; i < octaves; ++i) {
         Float3 gi;
         const float n = perlinNoiseGrad(p * freq, gi);
         sum += amp * std::fabs(n);
