@@ -6,6 +6,7 @@
 #include "protocol.h"
 #include "shading_scenes.h"
 #include "local_cluster.h"
+#include "fake_master.h"
 #include "test_util.h"
 #include "../cli_util.h"
 
@@ -26,6 +27,7 @@ namespace {
 
 using test::LocalCluster;
 using test::singleMachine;
+using test::FakeMaster;
 
 // One machine's frame in linear RGB (the whole image as one tile: pixels do not depend on tiles).
 std::vector<float> singleMachineLinear(const Scene& scene, const SceneDesc& d, uint32_t frame) {
@@ -231,49 +233,6 @@ TEST(ClusterAssets, AMaterialChangedToANewFileTravels) {
     EXPECT_EQ(late.counters->assetsReceived.load(), 1u) << "the late client fetched the new file with the state";
 }
 
-// A stand-in master, to send what a real one never sends: asset bytes that are not the file's.
-class FakeMaster {
-public:
-    FakeMaster() : router_(ctx_, zmq::socket_type::router) {
-        router_.set(zmq::sockopt::linger, 0);
-        router_.bind("tcp://127.0.0.1:0");
-        endpoint = router_.get(zmq::sockopt::last_endpoint);
-    }
-    struct Received {
-        std::string peer;
-        cluster::Header header;
-        std::vector<uint8_t> payload;
-    };
-    std::optional<Received> expect(cluster::MsgType type, int ms) {
-        const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
-        while (std::chrono::steady_clock::now() < end) {
-            zmq::pollitem_t item{router_.handle(), 0, ZMQ_POLLIN, 0};
-            zmq::poll(&item, 1, std::chrono::milliseconds(10));
-            zmq::message_t id, msg;
-            if (!router_.recv(id, zmq::recv_flags::dontwait)) continue;
-            if (!router_.recv(msg, zmq::recv_flags::dontwait)) continue;
-            const auto* p = static_cast<const uint8_t*>(msg.data());
-            Received r{id.to_string(), cluster::decodeHeader(p, msg.size()),
-                       std::vector<uint8_t>(p + cluster::kHeaderSize, p + msg.size())};
-            if (r.header.type == type) return r;
-        }
-        return std::nullopt;
-    }
-    template <class Msg> void send(const std::string& peer, const Msg& m, uint32_t frame = 0) {
-        cluster::Header h;
-        h.session = kSession;
-        h.frame = frame;
-        const std::vector<uint8_t> bytes = cluster::encodeMessage(h, m);
-        router_.send(zmq::buffer(peer), zmq::send_flags::sndmore);
-        router_.send(zmq::buffer(bytes));
-    }
-    static constexpr uint64_t kSession = 0xA55E7;
-    std::string endpoint;
-
-private:
-    zmq::context_t ctx_;
-    zmq::socket_t router_;
-};
 
 TEST(ClusterAssets, ATamperedAssetIsRejectedAndCounted) {
     using namespace cluster;

@@ -6,6 +6,7 @@
 #include "codec.h"
 #include "net.h"
 #include "protocol.h"
+#include "fake_master.h"
 
 #include <rtwall/cluster.h>
 
@@ -26,6 +27,7 @@
 
 namespace rtwall {
 namespace {
+using test::FakeMaster;
 
 class ClientThreads {
 public:
@@ -766,56 +768,6 @@ TEST(Cluster, APeerThatStopsReadingBlocksNothing) {
     EXPECT_EQ(master.connectedClients(), 1);
 }
 
-// A stand-in master written by hand, to test what a client does with messages a real master
-// never sends: Welcome with another timeout, and old messages sent again (replays).
-class FakeMaster {
-public:
-    FakeMaster() : router_(ctx_, zmq::socket_type::router) {
-        router_.set(zmq::sockopt::linger, 0);
-        router_.bind("tcp://127.0.0.1:0");
-        endpoint = router_.get(zmq::sockopt::last_endpoint);
-    }
-    struct Received {
-        std::string peer;
-        cluster::Header header;
-        std::vector<uint8_t> payload;
-    };
-    // The next message of the given type (others are skipped), within ms.
-    std::optional<Received> expect(cluster::MsgType type, int ms) {
-        const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
-        while (std::chrono::steady_clock::now() < end) {
-            zmq::pollitem_t item{router_.handle(), 0, ZMQ_POLLIN, 0};
-            zmq::poll(&item, 1, std::chrono::milliseconds(10));
-            zmq::message_t id, msg;
-            if (!router_.recv(id, zmq::recv_flags::dontwait)) continue;
-            if (!router_.recv(msg, zmq::recv_flags::dontwait)) continue;
-            const auto* p = static_cast<const uint8_t*>(msg.data());
-            Received r{id.to_string(), cluster::decodeHeader(p, msg.size()),
-                       std::vector<uint8_t>(p + cluster::kHeaderSize, p + msg.size())};
-            if (r.header.type == type) return r;
-        }
-        return std::nullopt;
-    }
-    template <class Msg> std::vector<uint8_t> send(const std::string& peer, const Msg& m, uint32_t frame = 0) {
-        cluster::Header h;
-        h.type = cluster::messageTypeOf(m);
-        h.session = kSession;
-        h.frame = frame;
-        std::vector<uint8_t> bytes = cluster::encodeMessage(h, m);
-        resend(peer, bytes);
-        return bytes;
-    }
-    void resend(const std::string& peer, const std::vector<uint8_t>& bytes) {
-        router_.send(zmq::buffer(peer), zmq::send_flags::sndmore);
-        router_.send(zmq::buffer(bytes));
-    }
-    static constexpr uint64_t kSession = 0xFACE;
-    std::string endpoint;
-
-private:
-    zmq::context_t ctx_;
-    zmq::socket_t router_;
-};
 
 // The client's peer timeout is the master's (Welcome), not a fixed 3 s: a master that says
 // 300 ms and then falls silent gets a new Hello well within 2.5 s (with the old fixed 3 s, none).
