@@ -39,10 +39,7 @@ void linearToSrgb8(const float* linear, size_t count, uint8_t* out) {
     for (size_t i = 0; i < count; ++i) out[i] = linearToSrgb8(linear[i]);
 }
 
-bool rendersStochastically(const SceneDesc& scene) {
-    const RenderSettings& s = scene.settings;
-    if (s.view != ViewMode::Shaded || s.shading != ShadingMode::Full) return false;
-    if (s.gi) return true;
+bool samplesRandomly(const SceneDesc& scene) {
     for (const Light& l : scene.lights)
         if (l.type == LightType::Area) return true;  // a random point on the light per shading point
     std::vector<bool> used(scene.materials.size(), false);
@@ -55,6 +52,15 @@ bool rendersStochastically(const SceneDesc& scene) {
         if (m.type == MaterialType::Volume) return true;                        // a jittered first step
     }
     return false;
+}
+
+bool rendersStochastically(const RenderSettings& s, bool randomContent) {
+    if (s.view != ViewMode::Shaded || s.shading != ShadingMode::Full) return false;
+    return s.gi || randomContent;
+}
+
+bool rendersStochastically(const SceneDesc& scene) {
+    return rendersStochastically(scene.settings, samplesRandomly(scene));
 }
 
 Image Accumulator::resolve() const {

@@ -215,8 +215,12 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
     const int spp = std::max(1, settings.samples);
     const float sampleWeight = shading.sampleWeight;
     const bool eyeLight = settings.shading == ShadingMode::EyeLight;
-    // Path tracing also jitters the sub-pixel position, so progressive frames anti-alias.
-    const bool jitter = settings.gi && !eyeLight;
+    // Where frames differ anyway (path tracing, area lights, a rough metal, a volume: what the
+    // master averages while the view is still), each frame also takes its own sub-pixel
+    // positions and pruning coins, so that the average anti-aliases and every pruned ray tree
+    // is drawn anew: it converges to the box-filtered, unpruned image. A deterministic scene
+    // samples pixel centres and frame 0's coins every frame, so its frames do not flicker.
+    const bool perFrame = rendersStochastically(settings, s.randomContent);
     const Float3 org = camera.origin();
 
     RTCIntersectContext ctx;
@@ -248,11 +252,11 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
                             for (int k = 0; k < K; ++k) {
                                 const uint32_t px = uint32_t(rect.x0 + bx + k % bw), py = uint32_t(rect.y0 + by + k / bw);
                                 seed[k] = pixelSeed(px, py, frame, sampleIndex);
-                                rouletteSeed[k] = settings.gi ? seed[k] : pixelSeed(px, py, 0, sampleIndex);
+                                rouletteSeed[k] = perFrame ? seed[k] : pixelSeed(px, py, 0, sampleIndex);
                             }
                         for (int k = 0; k < K; ++k) {
-                            ox[k] = jitter ? (float(sx) + randomFloat(seed[k], 1000)) / float(ss) : cx;
-                            oy[k] = jitter ? (float(sy) + randomFloat(seed[k], 1001)) / float(ss) : cy;
+                            ox[k] = perFrame ? (float(sx) + randomFloat(seed[k], 1000)) / float(ss) : cx;
+                            oy[k] = perFrame ? (float(sy) + randomFloat(seed[k], 1001)) / float(ss) : cy;
                         }
                         for (int k = 0; k < K; ++k) {
                             const int i = bx + k % bw, j = by + k / bw;

@@ -243,6 +243,7 @@ Scene::Scene(const SceneDesc& desc) : Scene(desc, ProgressFn{}) {}
 Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::make_unique<Impl>()) {
     Impl& s = *impl_;
     s.desc = desc;
+    s.randomContent = samplesRandomly(s.desc);
     s.progress = progress;
     std::string& lastError = s.lastError;
     s.device = rtcNewDevice(nullptr);
@@ -402,6 +403,7 @@ void Scene::setMaterial(uint32_t material, const Material& value) {
         rtcCommitGeometry(g);
     }
     updateShadowTransparency(s);
+    s.randomContent = samplesRandomly(s.desc);
     s.dirty = true;
 }
 
@@ -413,6 +415,7 @@ void Scene::setLight(uint32_t light, const Light& value) {
     Impl& s = *impl_;
     if (light >= s.desc.lights.size()) throw std::out_of_range("light " + std::to_string(light) + " does not exist");
     s.desc.lights[light] = value;
+    s.randomContent = samplesRandomly(s.desc);
 }
 
 void Scene::commit() {

@@ -84,6 +84,14 @@ struct InstanceData {
     Bounds3 meshBounds;            // object-space bounds of the mesh (the box a volume fills)
 };
 
+// True when the scene samples something at random whatever the settings: an area light, a rough
+// metal or a volume in use (rendersStochastically adds path tracing and the view).
+bool samplesRandomly(const SceneDesc& scene);
+// The criterion of rendersStochastically(SceneDesc) for a scene whose content part is known:
+// when it holds, frames differ and averaging them converges, so the kernel varies the sub-pixel
+// position and the pruning roulette per frame too.
+bool rendersStochastically(const RenderSettings& settings, bool randomContent);
+
 struct Scene::Impl {
     SceneDesc desc;  // meshes are shared pointers: no second copy of any geometry
     std::string lastError;  // written by Embree's error callback
@@ -101,6 +109,7 @@ struct Scene::Impl {
     bool anyShadowTransparent = false;     // some instance lets shadow rays through (glass, volume)
     bool filtersInstalled = false;         // alpha-mask filter functions are set on the mesh geometries
     bool dirty = false;                    // instance transforms or masks changed since the last commit
+    bool randomContent = false;            // samplesRandomly(desc): kept current by setMaterial/setLight
 
     ~Impl();
 };

@@ -338,7 +338,9 @@ void linearToSrgb8(const float* linear, size_t count, uint8_t* out);
 
 // True when a frame's pixels depend on the frame number, i.e. when averaging frames refines
 // the image: path tracing, area lights, rough metal or a volume (per-frame random sampling) in
-// the shaded view with full shading. A deterministic scene renders the same bytes every frame.
+// the shaded view with full shading. Such frames also jitter their sub-pixel positions and draw
+// their own pruning coins, so their mean converges to the box-filtered, unpruned image. A
+// deterministic scene renders the same bytes every frame.
 bool rendersStochastically(const SceneDesc& scene);
 
 std::vector<TileRect> makeTiles(int width, int height, int tileSize);
