@@ -392,7 +392,7 @@ TEST(Pruning, RouletteAtTheDefaultIsUnbiasedThroughDeepGlass) {
 // beyond 4.5 standard deviations, and the image's energy (the sum of all values) within 4.5 of
 // its standard deviations. Before, every frame sampled the pixel centres with frame 0's coins:
 // the lamp's and the slabs' edge pixels and the pruned paths never converged (144 of the 576
-// values beyond, the energy 11 standard deviations off). (The glass ball
+// values beyond, the energy 13% low). (The glass ball
 // of the deep-glass scene is left out, and the floor is not a rough metal: each focuses the
 // lamp, radiance 30, into a few of 256 samples, which all 256 frames miss often enough to make
 // the per-pixel spread an underestimate.)
