@@ -649,7 +649,7 @@ struct Master::Impl {
             auto same = [&](const Change& old) {
                 if (old.index() != c.index()) return false;
                 if (auto* t = std::get_if<TransformChange>(&c)) return std::get<TransformChange>(old).instance == t->instance;
-                if (auto* m = std::get_if<MaterialChange>(&c)) return std::get<MaterialChange>(old).material == m->material;
+                if (auto* mc = std::get_if<MaterialChange>(&c)) return std::get<MaterialChange>(old).material == mc->material;
                 if (auto* l = std::get_if<LightChange>(&c)) return std::get<LightChange>(old).light == l->light;
                 return true;  // camera, settings: one of each
             };

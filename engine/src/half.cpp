@@ -14,12 +14,18 @@ namespace rtwall {
 
 namespace {
 
+// One value through F16C. Not _cvtss_sh: clang's headers define it as a C99 compound literal
+// (a -Wc99-extensions warning in C++); this is the same instruction on the low lane.
+__attribute__((target("f16c"))) inline uint16_t halfOfF16c(float v) {
+    return static_cast<uint16_t>(_mm_extract_epi16(_mm_cvtps_ph(_mm_set_ss(v), _MM_FROUND_TO_NEAREST_INT), 0));
+}
+
 __attribute__((target("f16c,avx"))) void toHalfF16c(const float* in, size_t count, uint16_t* out) {
     size_t i = 0;
     for (; i + 8 <= count; i += 8)
         _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i),
                          _mm256_cvtps_ph(_mm256_loadu_ps(in + i), _MM_FROUND_TO_NEAREST_INT));
-    for (; i < count; ++i) out[i] = static_cast<uint16_t>(_cvtss_sh(in[i], _MM_FROUND_TO_NEAREST_INT));
+    for (; i < count; ++i) out[i] = halfOfF16c(in[i]);
 }
 
 __attribute__((target("f16c,avx"))) void fromHalfF16c(const uint16_t* in, size_t count, float* out) {
@@ -56,7 +62,7 @@ void floatFromHalf(const uint16_t* in, size_t count, float* out) {
 #else
 
 __attribute__((target("f16c"))) uint16_t halfFromFloat(float v) {
-    return static_cast<uint16_t>(_cvtss_sh(v, _MM_FROUND_TO_NEAREST_INT));
+    return halfOfF16c(v);
 }
 __attribute__((target("f16c"))) float floatFromHalf(uint16_t bits) { return _cvtsh_ss(bits); }
 void halfFromFloat(const float* in, size_t count, uint16_t* out) { toHalfF16c(in, count, out); }

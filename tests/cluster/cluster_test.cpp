@@ -116,10 +116,14 @@ TEST_P(ClusterImage, BitIdenticalToOneMachine) {
     uint64_t bytes = 0;
     for (const ClientReport& c : report.clients) {
         bytes += c.bytes;
-        if (c.tiles > 0) EXPECT_GT(c.bytes, 0u);
+        if (c.tiles > 0) {
+            EXPECT_GT(c.bytes, 0u);
+        }
     }
     EXPECT_EQ(bytes, report.bytes);
-    if (l.codec == TileCodec::Raw) EXPECT_EQ(report.bytes, uint64_t(160) * 120 * 3);
+    if (l.codec == TileCodec::Raw) {
+        EXPECT_EQ(report.bytes, uint64_t(160) * 120 * 3);
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Layouts, ClusterImage,

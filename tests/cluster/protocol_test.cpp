@@ -687,7 +687,7 @@ TEST(Protocol, SnapshotRejectsValuesOutOfRange) {
         EXPECT_THROW(decode<SceneSnapshot>(payloadOf(s)), DecodeError) << what;
         // The same values arrive in changes, and must be rejected there too.
         Update u;
-        u.changes = {CameraChange{s.camera}, MaterialChange{0, s.materials[0]}, MaterialChange{1, s.materials[1]},
+        u.changes = {CameraChange{s.camera}, MaterialChange{0, s.materials[0], {}}, MaterialChange{1, s.materials[1], {}},
                      LightChange{0, s.lights[0]}, LightChange{1, s.lights[1]},
                      TransformChange{0, s.instances[0].transform}, TransformChange{1, s.instances[1].transform},
                      SettingsChange{s.settings}};
@@ -945,7 +945,7 @@ TEST(Protocol, ApplyChange) {
     expectSame(scene.instances[0].transform, Transform{});
     EXPECT_EQ(scene.instances[1].material, 1u);  // only the transform changes
 
-    applyChange(scene, camera, MaterialChange{0, sampleMaterial(7)});
+    applyChange(scene, camera, MaterialChange{0, sampleMaterial(7), {}});
     expectSame(scene.materials[0], sampleMaterial(7));
     expectSame(scene.materials[1], sampleMaterial(1));
 
@@ -956,7 +956,7 @@ TEST(Protocol, ApplyChange) {
     expectSame(scene.settings, sampleSettings());
 
     EXPECT_THROW(applyChange(scene, camera, TransformChange{2, {}}), DecodeError);
-    EXPECT_THROW(applyChange(scene, camera, MaterialChange{2, {}}), DecodeError);
+    EXPECT_THROW(applyChange(scene, camera, MaterialChange{2, {}, {}}), DecodeError);
     EXPECT_THROW(applyChange(scene, camera, LightChange{1, {}}), DecodeError);
     EXPECT_THROW(applyChange(scene, camera, LightChange{0xFFFFFFFFu, {}}), DecodeError);
     expectSame(scene.lights[0], sampleLight(3));  // a failed change leaves the scene alone

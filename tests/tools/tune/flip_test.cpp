@@ -88,8 +88,11 @@ TEST(Flip, ErrorStaysNearWhereTheImagesDiffer) {
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const float v = map[size_t(y) * w + x];
-            if (x < 60 - 20 || x > 62 + 20) ASSERT_EQ(v, 0.0f) << x;
-            else if (x == 60 || x == 61) ASSERT_GT(v, 0.5f) << x;  // black against white, plus the edge moved
+            if (x < 60 - 20 || x > 62 + 20) {
+                ASSERT_EQ(v, 0.0f) << x;
+            } else if (x == 60 || x == 61) {
+                ASSERT_GT(v, 0.5f) << x;  // black against white, plus the edge moved
+            }
         }
 }
 
