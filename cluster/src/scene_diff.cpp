@@ -55,8 +55,7 @@ SceneEdit diffScenes(const SceneDesc& before, const SceneDesc& after) {
                                     ") changed: new geometry needs a restart");
     }
     if (before.origin != after.origin) e.refused.push_back("the scene's origin moved: that needs a restart");
-    if (before.bvh.quality != after.bvh.quality || before.bvh.compact != after.bvh.compact ||
-        before.bvh.robust != after.bvh.robust)
+    if (before.bvh != after.bvh)
         e.refused.push_back("[bvh] changed: rebuilding the BVHs needs a restart");
 
     if (before.materials.size() != after.materials.size()) {

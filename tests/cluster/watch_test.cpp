@@ -69,6 +69,7 @@ TEST(SceneDiff, WhatUpdatesCannotExpressIsRefusedInOneLineEach) {
     EXPECT_TRUE(mentions(refused([](SceneDesc& e) { e.instances[0].material = 1 - e.instances[0].material % 2; }),
                          "instance 0 has another mesh or material"));
     EXPECT_TRUE(mentions(refused([](SceneDesc& e) { e.bvh.compact = !e.bvh.compact; }), "[bvh]"));
+    EXPECT_TRUE(mentions(refused([](SceneDesc& e) { e.bvh.primitives = BvhSettings::Primitives::Triangles; }), "[bvh]"));
     EXPECT_TRUE(mentions(refused([](SceneDesc& e) { e.origin[0] += 1e6; }), "origin"));
     // A mesh whose file now holds other geometry (one vertex moved).
     const std::vector<std::string> meshLines = refused([](SceneDesc& e) {

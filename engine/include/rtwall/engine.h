@@ -165,6 +165,7 @@ struct BvhSettings {
     // half the leaves); Triangles hands it every triangle as it is.
     enum class Primitives { Auto, Triangles };
     Primitives primitives = Primitives::Auto;
+    bool operator==(const BvhSettings&) const = default;
 };
 
 struct SceneDesc {
