@@ -307,8 +307,7 @@ Float3 MaterialModel::bumpedNormal(const InstanceData& inst, const SurfacePoint&
     // a gradient is a covector, so it goes to world space with the normal matrix.
     const float s = std::max(1e-6f, desc_.bumpScale);
     Float3 gObj;
-    const bool uvBump = desc_.bumpMapping == TextureMapping::Uv || (desc_.bumpMapping == TextureMapping::Auto && sp.hasUV);
-    if (uvBump) {
+    if (readsMeshUVs(desc_.bumpMapping, sp.hasUV)) {
         // h = bump * turbulence((u, 0, v) / scale): its (u, v) derivatives, carried onto the
         // surface by the triangle's tangent frame.
         Float3 dPdu, dPdv;

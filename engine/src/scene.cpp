@@ -205,22 +205,22 @@ void alphaFilter(const RTCFilterFunctionNArguments* args) {
     }
 }
 
+void setAlphaFilter(RTCGeometry g, Scene::Impl& s) {
+    rtcSetGeometryUserData(g, &s);
+    rtcSetGeometryIntersectFilterFunction(g, alphaFilter);
+    rtcSetGeometryOccludedFilterFunction(g, alphaFilter);
+}
+
 void installAlphaFilters(Scene::Impl& s) {
     for (size_t mi = 0; mi < s.meshScenes.size(); ++mi) {
         // rtcGetGeometry does not check its ID (release builds): ask only for what was attached.
-        const RTCScene ms = s.meshScenes[mi];
-        const MeshPrimitives& mp = s.meshPrims[mi];
-        const unsigned count = s.desc.meshes[mi].mesh->triangleCount() == 0 ? 0u : mp.quads > 0 && !mp.single.empty() ? 2u : 1u;
-        bool any = false;
+        const unsigned count = s.meshPrims[mi].geometries;
         for (unsigned id = 0; id < count; ++id) {
-            RTCGeometry g = rtcGetGeometry(ms, id);
-            rtcSetGeometryUserData(g, &s);
-            rtcSetGeometryIntersectFilterFunction(g, alphaFilter);
-            rtcSetGeometryOccludedFilterFunction(g, alphaFilter);
+            RTCGeometry g = rtcGetGeometry(s.meshScenes[mi], id);
+            setAlphaFilter(g, s);
             rtcCommitGeometry(g);
-            any = true;
         }
-        if (any) rtcCommitScene(ms);
+        if (count > 0) rtcCommitScene(s.meshScenes[mi]);
     }
     s.filtersInstalled = true;
 }
@@ -286,13 +286,10 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
                                            3 * sizeof(float), mesh.vertexCount());
                 rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, format, index, byteOffset, byteStride, count);
                 rtcSetGeometryMask(g, kMaskAll);  // instances carry the masks that matter
-                if (anyAlpha) {
-                    rtcSetGeometryUserData(g, &s);
-                    rtcSetGeometryIntersectFilterFunction(g, alphaFilter);
-                    rtcSetGeometryOccludedFilterFunction(g, alphaFilter);
-                }
+                if (anyAlpha) setAlphaFilter(g, s);
                 rtcCommitGeometry(g);
                 rtcAttachGeometryByID(ms, g, id);
+                mp.geometries = id + 1;
                 rtcReleaseGeometry(g);
             };
             if (mp.quads > 0) {

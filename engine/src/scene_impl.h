@@ -36,6 +36,7 @@ struct MeshPrimitives {
     std::vector<uint32_t> singleIndex;  // geometry 1: a degenerate quad per triangle, plus padding
     std::vector<uint32_t> single;       // geometry 1: the mesh triangle of each of its quads
     size_t pairsSharingEdge = 0;        // of the mesh's triangleCount()/2 pairs
+    unsigned geometries = 0;            // Embree geometries in the mesh's scene: IDs 0 .. geometries-1
     size_t bytes() const {
         return codes.capacity() + 4 * (quadIndex.capacity() + singleIndex.capacity() + single.capacity());
     }

@@ -375,7 +375,7 @@ Texture::Texture(const TextureDesc& desc, const Color& base) : desc_(desc), base
 Color Texture::color(const Float3& objectPos, const float* uv) const {
     Float3 p;
     float u, v;
-    if (desc_.mapping == TextureMapping::Uv || (desc_.mapping == TextureMapping::Auto && uv)) {
+    if (readsMeshUVs(desc_.mapping, uv != nullptr)) {
         // The patterns see (u, 0, v) as their position, so marble and wood follow the UVs too.
         const float inv = 1.0f / desc_.scale;
         u = (uv ? uv[0] : 0.0f) * inv;

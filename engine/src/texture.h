@@ -37,6 +37,12 @@ float turbulenceGrad(const Float3& p, int octaves, Float3& gradient);
 // Uv, Auto and Object fall back to PlanarXZ here (they need the mesh: see Texture::color).
 void textureCoordinates(TextureMapping mapping, const Float3& objectPos, float scale, float& u, float& v);
 
+// Whether a mapping reads the mesh's texture coordinates: Uv always, Auto where the mesh has them
+// (textures, alpha masks and bumps alike).
+inline bool readsMeshUVs(TextureMapping mapping, bool meshHasUVs) {
+    return mapping == TextureMapping::Uv || (mapping == TextureMapping::Auto && meshHasUVs);
+}
+
 // A mesh's texture coordinates at barycentrics (u, v) of triangle `prim` (the mesh has UVs).
 void meshUVAt(const TriangleMesh& mesh, uint32_t prim, float u, float v, float out[2]);
 
