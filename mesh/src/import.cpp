@@ -356,20 +356,17 @@ private:
         ++seamVerticesSplit_;
         if (seamNext_.size() <= copy) seamNext_.resize(copy + 1, kNoCopy);
         seamNext_[v] = uint32_t(copy);
-        if (v < hasNormal_.size() && hasNormal_[v]) {
-            normals_.resize(std::max(normals_.size(), 3 * (copy + 1)));
-            hasNormal_.resize(normals_.size() / 3);
-            for (size_t k = 0; k < 3; ++k) normals_[3 * copy + k] = normals_[3 * v + k];
-            hasNormal_[copy] = true;
-            ++normalsSet_;
-        }
-        if (v < hasColor_.size() && hasColor_[v]) {
-            colors_.resize(std::max(colors_.size(), 3 * (copy + 1)));
-            hasColor_.resize(colors_.size() / 3);
-            for (size_t k = 0; k < 3; ++k) colors_[3 * copy + k] = colors_[3 * v + k];
-            hasColor_[copy] = true;
-            ++colorsSet_;
-        }
+        // The copy takes the vertex's normal and colour where it has them.
+        auto copyAttribute = [&](auto& values, std::vector<bool>& has, size_t& set) {
+            if (v >= has.size() || !has[v]) return;
+            values.resize(std::max(values.size(), 3 * (copy + 1)));
+            has.resize(values.size() / 3);
+            for (size_t k = 0; k < 3; ++k) values[3 * copy + k] = values[3 * v + k];
+            has[copy] = true;
+            ++set;
+        };
+        copyAttribute(normals_, hasNormal_, normalsSet_);
+        copyAttribute(colors_, hasColor_, colorsSet_);
         return copy;
     }
 

@@ -78,6 +78,25 @@ TEST(MeshUVs, ObjSeamSplitsTheVertex) {
               (std::vector<float>{0.125f, 0.25f, 0.875f, 0.25f, 0.875f, 0.75f, 0.125f, 0.75f, 0.5f, 0.0625f}));
 }
 
+// The seam's copy of a vertex is the vertex with another (u, v): same position, normal and colour.
+TEST(MeshUVs, ObjSeamCopyKeepsNormalAndColour) {
+    ImportReport report;
+    const TriangleMesh mesh = loadMesh(kMeshes / "uv_seam_attrs.obj", &report);
+    ASSERT_EQ(mesh.vertexCount(), 5u);
+    ASSERT_EQ(report.seamVerticesSplit, 1u);
+    ASSERT_TRUE(mesh.hasNormals());
+    ASSERT_TRUE(mesh.hasColors());
+    EXPECT_EQ(mesh.uvs()[8], 0.5f);  // the copy (vertex 4) has vt 5
+    EXPECT_EQ(mesh.uvs()[9], 0.0625f);
+    for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(mesh.normals()[12 + k], mesh.normals()[k]) << k;
+        EXPECT_EQ(mesh.colors()[12 + k], mesh.colors()[k]) << k;
+    }
+    EXPECT_EQ(mesh.normals()[1], 1.0f);  // vertex 1's own normal, (0, 1, 0)
+    EXPECT_EQ(mesh.colors()[0], 255);    // and colour, red
+    EXPECT_EQ(mesh.colors()[1], 0);
+}
+
 // VRML texCoordIndex gives (u, v) per face corner: each triangle corner gets the (u, v) its index
 // names, at the position its coordIndex names (VTK's importer unshares the corners).
 TEST(MeshUVs, VrmlTexCoordIndexPerCorner) {

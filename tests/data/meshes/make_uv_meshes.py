@@ -58,6 +58,14 @@ def main():
     seam += ["f 1/1 3/3 2/2", "f 1/5 4/4 3/3"]
     write("uv_seam.obj", "\n".join(seam) + "\n")
 
+    # The same seam with vertex colours and normals: the copy of vertex 1 must carry both.
+    colours = ["1 0 0", "0 1 0", "0 0 1", "1 1 0"]
+    normals = ["0 1 0", "0 0.6 0.8", "0.6 0.8 0", "0 0.8 0.6"]
+    attrs = ["# uv_seam.obj with vertex colours and normals: the seam's copy of vertex 1 must carry both"]
+    attrs += [f"v {p[0]} {p[1]} {p[2]} {c}" for p, c in zip(P, colours)] + [f"vt {t[0]} {t[1]}" for t in UV]
+    attrs += ["vt 0.5 0.0625"] + [f"vn {n}" for n in normals] + ["f 1/1/1 3/3/3 2/2/2", "f 1/5/1 4/4/4 3/3/3"]
+    write("uv_seam_attrs.obj", "\n".join(attrs) + "\n")
+
     partial = [f"v {p[0]} {p[1]} {p[2]}" for p in P] + [f"vt {t[0]} {t[1]}" for t in UV]
     write("bad_uv_partial_face.obj", "\n".join(partial + ["f 1/1 3/3 2/2", "f 1/1 4 3/3"]) + "\n")
     write("bad_uv_face_without.obj", "\n".join(partial + ["f 1/1 3/3 2/2", "f 1 4 3"]) + "\n")
