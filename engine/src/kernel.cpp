@@ -527,14 +527,14 @@ std::vector<TileRect> makeTiles(int width, int height, int tileSize) {
     return tiles;
 }
 
-Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings& settings, uint32_t frame,
-                  TileStats* stats) {
-    Image img;
-    img.width = settings.width;
-    img.height = settings.height;
-    img.rgb.assign(size_t(img.width) * img.height * 3, 0);
-    const std::vector<TileRect> tiles = makeTiles(img.width, img.height, settings.tileSize);
+namespace {
 
+// Renders every tile of a frame with `renderOne(rect)` on settings.threads threads, tiles handed
+// out on demand; a tile that throws stops the frame and is reported with a command line that
+// replays it. Returns the rays traced.
+template <class RenderOne>
+TileStats renderTilesInParallel(const Scene& scene, const RenderSettings& settings, uint32_t frame, RenderOne&& renderOne) {
+    const std::vector<TileRect> tiles = makeTiles(settings.width, settings.height, settings.tileSize);
     int threads = settings.threads > 0 ? settings.threads : int(std::max(1u, std::thread::hardware_concurrency()));
     threads = std::max(1, std::min<int>(threads, int(tiles.size())));
 
@@ -547,7 +547,7 @@ Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings
         for (size_t t; (t = nextTile.fetch_add(1, std::memory_order_relaxed)) < tiles.size();) {
             const TileRect& r = tiles[t];
             try {
-                TileStats ts = renderTile(scene, camera, r, frame, settings, {img.pixel(r.x0, r.y0), size_t(img.width) * 3});
+                const TileStats ts = renderOne(r);
                 local.rays += ts.rays;
                 local.shadowRays += ts.shadowRays;
             } catch (const std::exception& e) {
@@ -571,8 +571,33 @@ Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings
     worker();
     for (auto& t : pool) t.join();
     if (!failure.empty()) throw std::runtime_error(failure);
-    if (stats) *stats = {rays.load(), shadowRays.load()};
+    return {rays.load(), shadowRays.load()};
+}
+
+}  // namespace
+
+Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings& settings, uint32_t frame,
+                  TileStats* stats) {
+    Image img;
+    img.width = settings.width;
+    img.height = settings.height;
+    img.rgb.assign(size_t(img.width) * img.height * 3, 0);
+    const TileStats st = renderTilesInParallel(scene, settings, frame, [&](const TileRect& r) {
+        return renderTile(scene, camera, r, frame, settings, {img.pixel(r.x0, r.y0), size_t(img.width) * 3});
+    });
+    if (stats) *stats = st;
     return img;
+}
+
+std::vector<float> renderFrameLinear(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+                                     uint32_t frame) {
+    std::vector<float> out(size_t(std::max(0, settings.width)) * size_t(std::max(0, settings.height)) * 3, 0.0f);
+    const size_t stride = size_t(std::max(0, settings.width)) * 3;
+    renderTilesInParallel(scene, settings, frame, [&](const TileRect& r) {
+        return renderTileLinear(scene, camera, r, frame, settings, out.data() + size_t(r.y0) * stride + size_t(r.x0) * 3,
+                                stride);
+    });
+    return out;
 }
 
 }  // namespace rtwall

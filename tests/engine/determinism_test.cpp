@@ -99,5 +99,32 @@ TEST_F(Determinism, SingleTilesMatchTheFullFrame) {
     EXPECT_EQ(bad, 0u);
 }
 
+// renderFrameLinear is the frame before quantisation: the same bytes as renderFrame once
+// quantised, the same values as a single linear tile anywhere, whatever the thread count.
+TEST_F(Determinism, LinearFrameIsTheFrameBeforeQuantisation) {
+    RenderSettings s = desc_->settings;
+    s.threads = 2;
+    const Camera camera(desc_->cameras.front(), s.width, s.height);
+    const Image full = render(s);
+    expectRichImage(full);
+    const std::vector<float> linear = renderFrameLinear(*scene_, camera, s, 0);
+    ASSERT_EQ(linear.size(), full.rgb.size());
+    std::vector<uint8_t> quantised(linear.size());
+    linearToSrgb8(linear.data(), linear.size(), quantised.data());
+    EXPECT_EQ(quantised, full.rgb);
+    s.threads = 1;
+    EXPECT_EQ(renderFrameLinear(*scene_, camera, s, 0), linear);
+    const TileRect rect{37, 21, 101, 64};
+    std::vector<float> tile(size_t(rect.width()) * rect.height() * 3);
+    renderTileLinear(*scene_, camera, rect, 0, s, tile.data(), size_t(rect.width()) * 3);
+    size_t bad = 0;
+    for (int y = rect.y0; y < rect.y1; ++y)
+        for (int x = rect.x0; x < rect.x1; ++x)
+            for (int c = 0; c < 3; ++c)
+                bad += tile[(size_t(y - rect.y0) * rect.width() + (x - rect.x0)) * 3 + c] !=
+                       linear[(size_t(y) * s.width + x) * 3 + c];
+    EXPECT_EQ(bad, 0u);
+}
+
 }  // namespace
 }  // namespace rtwall

@@ -13,10 +13,8 @@
 
 #include <toml++/toml.h>
 
-#include <atomic>
 #include <cmath>
 #include <cstdio>
-#include <thread>
 #include <iostream>
 #include <memory>
 #include <numbers>
@@ -220,23 +218,9 @@ void addReference(CLI::App& app, Run& run) {
                                  o->supersample, o->supersample);
                 return 0;
             }
-            const std::vector<TileRect> tiles = makeTiles(s.width, s.height, s.tileSize > 0 ? s.tileSize : 32);
-            const int threads = s.threads > 0 ? s.threads : int(std::max(1u, std::thread::hardware_concurrency()));
-            std::vector<float> linear(size_t(s.width) * s.height * 3);
             Accumulator all, half[2];
             for (int f = 0; f < o->frames; ++f) {
-                std::atomic<size_t> next{0};
-                auto worker = [&] {
-                    for (size_t i; (i = next.fetch_add(1)) < tiles.size();) {
-                        const TileRect& r = tiles[i];
-                        renderTileLinear(scene, camera, r, o->firstFrame + uint32_t(f), s,
-                                         linear.data() + (size_t(r.y0) * s.width + r.x0) * 3, size_t(s.width) * 3);
-                    }
-                };
-                std::vector<std::thread> pool;
-                for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
-                worker();
-                for (std::thread& t : pool) t.join();
+                const std::vector<float> linear = renderFrameLinear(scene, camera, s, o->firstFrame + uint32_t(f));
                 all.addLinear(linear.data(), s.width, s.height);
                 half[2 * f < o->frames ? 0 : 1].addLinear(linear.data(), s.width, s.height);
                 if (!o->progressOut.empty() && (all.frames() & (all.frames() - 1)) == 0)

@@ -349,6 +349,10 @@ std::vector<TileRect> makeTiles(int width, int height, int tileSize);
 // Renders a whole frame on settings.threads threads (tiles handed out on demand).
 Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings& settings, uint32_t frame = 0,
                   TileStats* stats = nullptr);
+// The same frame in linear RGB floats (3 per pixel, rows of settings.width pixels), as
+// renderTileLinear writes them: what Accumulator::addLinear averages.
+std::vector<float> renderFrameLinear(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+                                     uint32_t frame = 0);
 
 // Picking: the instance that the primary ray through image position (px, py) (pixels from the
 // top-left corner) hits first, where, and how far along the ray (in units of the ray
