@@ -30,6 +30,7 @@ PACKAGES=(
   clang libclang-rt-14-dev  # libFuzzer with ASan/UBSan for the fuzz targets
   libglfw3-dev libgl-dev  # GLFW and OpenGL 3.3: the wall's windows and input
   glslang-dev          # glslang: every wall shader is compiled at `rtwall check` and in the tests
+  glslang-tools        # glslangValidator: glslang-dev's CMake targets reference it, but it only Suggests it
   xvfb xauth libgl1-mesa-dri  # gui tests and bench display: Xvfb with Mesa's software OpenGL (llvmpipe)
   nftables             # nft: packet loss in the fault tests' own namespaces (no sch_netem here)
   iptables libnetfilter-queue-dev  # NFQUEUE: netjitter's delay, jitter and reordering in those namespaces
