@@ -441,14 +441,20 @@ private:
             std::unique_lock lock(sceneMutex_);
             scene_ = std::move(scene);
             camera_ = snapshot_->camera;
-            renderSettings_ = snapshot_->settings;
-            renderSettings_.threads = 1;
-            renderSettings_.clientId = id_;  // the id the master gave us, for the client false-colour view
-            tiles_ = makeTiles(renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
+            setRenderSettings(snapshot_->settings);
             stateSeq_ = snapshot_->updateSeq;
         }
         ready_ = true;
         send(Ready{stateSeq_, hash});
+    }
+
+    // The master's settings plus what is this client's own (under sceneMutex_).
+    void setRenderSettings(const RenderSettings& fromMaster) {
+        renderSettings_ = fromMaster;
+        renderSettings_.threads = 1;  // each render thread renders its own tiles
+        renderSettings_.clientId = id_;  // the id the master gave us, for the client false-colour view
+        renderSettings_.packetWidth = settings_.packetWidth;  // this PC's CPU decides
+        tiles_ = makeTiles(renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
     }
 
     void requestResync() {
@@ -476,12 +482,7 @@ private:
                     scene_->setMaterial(m->material, m->value);
                 }
                 else if (auto* l = std::get_if<LightChange>(&c)) scene_->setLight(l->light, l->value);
-                else if (auto* st = std::get_if<SettingsChange>(&c)) {
-                    renderSettings_ = st->settings;
-                    renderSettings_.threads = 1;
-                    renderSettings_.clientId = id_;  // the id the master gave us, for the client false-colour view
-                    tiles_ = makeTiles(renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
-                }
+                else if (auto* st = std::get_if<SettingsChange>(&c)) setRenderSettings(st->settings);
             }
         scene_->commit();
         stateSeq_ = seq;
@@ -681,6 +682,8 @@ private:
 void writeNewKeyPair(const std::filesystem::path& stem) { writeKeyFiles(makeKeyPair(), stem); }
 
 int runClient(const ClientSettings& settings) {
+    if (settings.packetWidth != 0 && settings.packetWidth != 4 && settings.packetWidth != 8 && settings.packetWidth != 16)
+        throw InputError("packet width " + std::to_string(settings.packetWidth) + ": expected 0 (this CPU's widest), 4, 8 or 16");
     ClientRuntime client(settings);
     return client.run();
 }

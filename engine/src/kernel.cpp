@@ -151,10 +151,10 @@ void traceClosestSingle(RTCScene scene, const RayTask* rays, Hit* hits, size_t n
 }
 
 template <int K>
-void traceShadowPacket(RTCScene scene, const ShadowTask* rays, uint8_t* occluded, size_t n, uint32_t mask) {
+void traceShadowPacket(RTCScene scene, const ShadowTask* rays, uint8_t* occluded, size_t n, uint32_t mask, bool coherent) {
     using P = Packet<K>;
     RTCIntersectContext ctx;
-    initContext(ctx, true);
+    initContext(ctx, coherent);
     alignas(64) typename P::Ray r;
     alignas(64) int valid[K];
     for (size_t base = 0; base < n; base += K) {
@@ -169,7 +169,7 @@ void traceShadowPacket(RTCScene scene, const ShadowTask* rays, uint8_t* occluded
     }
 }
 
-void traceShadowSingle(RTCScene scene, const ShadowTask* rays, uint8_t* occluded, size_t n, uint32_t mask) {
+void traceShadowSingle(RTCScene scene, const ShadowTask* rays, uint8_t* occluded, size_t n, uint32_t mask, bool) {
     RTCIntersectContext ctx;
     initContext(ctx, true);
     alignas(16) RTCRay r;
@@ -194,7 +194,7 @@ void traceShadowSingle(RTCScene scene, const ShadowTask* rays, uint8_t* occluded
 
 struct Tracer {
     void (*closest)(RTCScene, const RayTask*, Hit*, size_t, bool, uint32_t);
-    void (*shadow)(RTCScene, const ShadowTask*, uint8_t*, size_t, uint32_t);
+    void (*shadow)(RTCScene, const ShadowTask*, uint8_t*, size_t, uint32_t, bool coherent);
 };
 
 template <int K> Tracer packetTracer() {
@@ -330,6 +330,14 @@ int detectPacketWidth() {
     return 4;
 }
 
+// The packet width a tile is traced with: the setting, or this CPU's widest.
+int widthFor(const RenderSettings& settings) {
+    const int w = settings.packetWidth == 0 ? packetWidth() : settings.packetWidth;
+    if (w != 4 && w != 8 && w != 16)
+        throw std::invalid_argument("packet width " + std::to_string(settings.packetWidth) + " is not 0, 4, 8 or 16");
+    return w;
+}
+
 // Shadow rays: first the fast occlusion query against opaque instances only; the survivors
 // then walk the shadow-transparent instances (glass, volumes) hit by hit, in order, each
 // taking away its share of the light. Walking in order keeps every product in the same order
@@ -339,7 +347,7 @@ void traceShadows(const Tracer& tracer, const ShadingContext& shading, Scratch& 
     const Scene::Impl& s = shading.scene;
     sc.occluded.resize(sc.shadows.size());
     const uint32_t firstMask = s.anyShadowTransparent ? kMaskOpaque : kMaskAll;
-    tracer.shadow(s.top, sc.shadows.data(), sc.occluded.data(), sc.shadows.size(), firstMask);
+    tracer.shadow(s.top, sc.shadows.data(), sc.occluded.data(), sc.shadows.size(), firstMask, s.coherentOcclusion);
     stats.shadowRays += sc.shadows.size();
     if (trackRays)
         for (const ShadowTask& t : sc.shadows) ++sc.pixelRays[t.pixel];
@@ -399,10 +407,10 @@ Color ramp(float x) {
 TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileRect& rect, uint32_t frame,
                          const RenderSettings& settings, Scratch& sc);
 
-Tracer tracerFor(KernelType kernel) {
+Tracer tracerFor(KernelType kernel, int width) {
     if (kernel == KernelType::Single) return {traceClosestSingle, traceShadowSingle};
-    if (packetWidth() == 16) return packetTracer<16>();
-    if (packetWidth() == 8) return packetTracer<8>();
+    if (width == 16) return packetTracer<16>();
+    if (width == 8) return packetTracer<8>();
     return packetTracer<4>();
 }
 
@@ -411,6 +419,26 @@ Tracer tracerFor(KernelType kernel) {
 int packetWidth() {
     static const int width = detectPacketWidth();
     return width;
+}
+
+// Embree 3's coherent occlusion traversal (BVHNIntersectorKHybrid::occludedCoherent, chosen by
+// RTC_INTERSECT_CONTEXT_FLAG_COHERENT) keeps the bits of its active rays in a size_t filled
+// from an AVX-512 mask register. GCC before 14 can leave garbage in the bits above the packet
+// width there, so the loop over octants never runs out of rays: rtcOccluded16 spins for ever,
+// depending on what the registers held before the call, which made the hang come and go with
+// the stack's address (11 of 16 stack offsets hung one tile of builtin:knots).
+// Debian's Embree 3.13.5 is built with GCC 12; upstream worked around it in Embree 4.4.1
+// (RenderKit/embree#574), whose API rtwall does not use. The incoherent path has no such loop.
+// 8- and 4-wide packets run the same function in the AVX-512 kernels; they never hung in our
+// trials, but the incoherent path costs nothing measurable there (docs/benchmarks.md), so no
+// width bets on it. Closest-hit queries keep the coherent path: its source has the same loop,
+// but upstream had to mend only the occlusion function once its CI built AVX-512 with GCC, and
+// rtcIntersect16 on the very packets that hung rtcOccluded16 here never hung. Where Embree
+// does not run AVX-512 kernels (no native 16-wide packets) nothing changes.
+bool coherentOcclusionIsSafe(RTCDevice device) {
+    const bool avx512Kernels = rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
+    const long version = rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_VERSION);
+    return !avx512Kernels || version >= 40401;
 }
 
 TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
@@ -472,7 +500,8 @@ namespace {
 
 TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileRect& rect, uint32_t frame,
                          const RenderSettings& settings, Scratch& sc) {
-    const Tracer tracer = tracerFor(settings.kernel);
+    const int width = widthFor(settings);
+    const Tracer tracer = tracerFor(settings.kernel, width);
     TileStats stats;
 
     const int w = rect.width(), h = rect.height();
@@ -489,8 +518,8 @@ TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileR
     if (trackRays) sc.pixelRays.assign(size_t(w) * h, uint32_t(ss * ss * spp));
     // Primary rays: sub-pixel sample outermost, then one coherent packet-shaped pixel block
     // per batch, generated straight into Embree's SoA packet, traced and shaded while hot in L1.
-    if (settings.kernel == KernelType::Packet) primaryPassFor<true>(packetWidth(), s, camera, rect, frame, shading, sc);
-    else primaryPassFor<false>(packetWidth(), s, camera, rect, frame, shading, sc);
+    if (settings.kernel == KernelType::Packet) primaryPassFor<true>(width, s, camera, rect, frame, shading, sc);
+    else primaryPassFor<false>(width, s, camera, rect, frame, shading, sc);
     stats.rays += uint64_t(w) * h * ss * ss * spp;
 
     // Then generation by generation: the shadow rays of the last one, and the rays it spawned.

@@ -250,6 +250,7 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
     if (!s.device) throw std::runtime_error("cannot create an Embree device (rtcNewDevice failed)");
     rtcSetDeviceErrorFunction(s.device, embreeErrorHandler, &lastError);
     rtcSetDeviceMemoryMonitorFunction(s.device, memoryMonitor, &s.embreeBytes);
+    s.coherentOcclusion = coherentOcclusionIsSafe(s.device);
     for (const MeshDesc& md : s.desc.meshes) s.trianglesTotal += double(md.mesh->triangleCount());
 
     try {
@@ -457,5 +458,6 @@ Scene::PrimitiveStats Scene::primitiveStats() const {
 }
 
 RTCScene embreeScene(const Scene& scene) { return scene.impl().top; }
+bool coherentOcclusion(const Scene& scene) { return scene.impl().coherentOcclusion; }
 
 }  // namespace rtwall

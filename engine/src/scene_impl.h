@@ -93,6 +93,10 @@ bool samplesRandomly(const SceneDesc& scene);
 // position and the pruning roulette per frame too.
 bool rendersStochastically(const RenderSettings& settings, bool randomContent);
 
+// False where Embree's coherent occlusion traversal is known to hang: Embree 3 running its
+// AVX-512 kernels (kernel.cpp).
+bool coherentOcclusionIsSafe(RTCDevice device);
+
 struct Scene::Impl {
     SceneDesc desc;  // meshes are shared pointers: no second copy of any geometry
     std::string lastError;  // written by Embree's error callback
@@ -111,6 +115,9 @@ struct Scene::Impl {
     bool filtersInstalled = false;         // alpha-mask filter functions are set on the mesh geometries
     bool dirty = false;                    // instance transforms or masks changed since the last commit
     bool randomContent = false;            // samplesRandomly(desc): kept current by setMaterial/setLight
+    // Whether shadow packets may ask for Embree's coherent occlusion traversal: false where
+    // Embree's AVX-512 kernels run (coherentOcclusionIsSafe in kernel.cpp says why).
+    bool coherentOcclusion = true;
 
     ~Impl();
 };

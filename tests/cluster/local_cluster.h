@@ -15,13 +15,15 @@
 namespace rtwall::test {
 
 struct LocalCluster {
+    // Client i traces packets of packetWidths[i % size] rays (empty: each its CPU's widest).
     LocalCluster(const SceneDesc& desc, const ClusterSettings& cs, int clientCount,
-                 const std::filesystem::path& cacheDir = {})
+                 const std::filesystem::path& cacheDir = {}, const std::vector<int>& packetWidths = {})
         : master(std::make_unique<Master>(desc, cs)) {
         for (int i = 0; i < clientCount; ++i) {
             ClientSettings c;
             c.connect = master->endpoint();
             c.threads = 1;
+            if (!packetWidths.empty()) c.packetWidth = packetWidths[size_t(i) % packetWidths.size()];
             c.exitAfterIdleMs = 4000;
             c.cacheDir = cacheDir;
             c.counters = std::make_shared<ClientCounters>();

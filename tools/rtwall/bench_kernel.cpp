@@ -94,10 +94,10 @@ void bareFrame(RTCScene scene, const Camera& camera, int width, int height, int 
     for (auto& t : pool) t.join();
 }
 
-void bareFrameFor(RTCScene scene, const Camera& camera, int width, int height, int tileSize, int threads,
+void bareFrameFor(int packetWidth, RTCScene scene, const Camera& camera, int width, int height, int tileSize, int threads,
                   std::vector<uint32_t>& ids) {
-    if (packetWidth() == 16) bareFrame<16>(scene, camera, width, height, tileSize, threads, ids);
-    else if (packetWidth() == 8) bareFrame<8>(scene, camera, width, height, tileSize, threads, ids);
+    if (packetWidth == 16) bareFrame<16>(scene, camera, width, height, tileSize, threads, ids);
+    else if (packetWidth == 8) bareFrame<8>(scene, camera, width, height, tileSize, threads, ids);
     else bareFrame<4>(scene, camera, width, height, tileSize, threads, ids);
 }
 
@@ -111,7 +111,7 @@ template <class F> double seconds(F&& f) {
 
 void addBenchKernel(CLI::App& bench, Run& run) {
     struct Options {
-        int width = 1600, height = 1200, threads = 0, rounds = 7, tile = 32;
+        int width = 1600, height = 1200, threads = 0, rounds = 7, tile = 32, packetWidth = 0;
         int64_t triangles = 3'000'000;
         bool json = false;
     };
@@ -123,6 +123,8 @@ void addBenchKernel(CLI::App& bench, Run& run) {
     cmd->add_option("--threads", o->threads, "Threads (0 = one per hardware thread)")->check(CLI::Range(0, 1024));
     cmd->add_option("--rounds", o->rounds, "Interleaved rounds; medians are reported")->check(CLI::Range(1, 1000));
     cmd->add_option("--tile", o->tile, "Tile size")->check(CLI::Range(2, 1024));
+    cmd->add_option("--packet-width", o->packetWidth, "Rays per packet, kernel and bare loop (0 = this CPU's widest)")
+        ->check(CLI::IsMember({0, 4, 8, 16}));
     cmd->add_flag("--json", o->json, "Print JSON");
     cmd->callback([&run, o] {
         run = [o] {
@@ -132,12 +134,14 @@ void addBenchKernel(CLI::App& bench, Run& run) {
             Scene scene(desc);
             const int threads = o->threads > 0 ? o->threads : int(std::max(1u, std::thread::hardware_concurrency()));
             const Camera camera(desc.cameras.front(), o->width, o->height);
+            const int lanes = o->packetWidth > 0 ? o->packetWidth : packetWidth();
 
             RenderSettings s = desc.settings;
             s.width = o->width;
             s.height = o->height;
             s.tileSize = o->tile;
             s.threads = threads;
+            s.packetWidth = lanes;
             s.shading = ShadingMode::EyeLight;  // primary rays only, as in the bare loop
             RenderSettings single = s;
             single.kernel = KernelType::Single;
@@ -148,11 +152,11 @@ void addBenchKernel(CLI::App& bench, Run& run) {
             std::vector<double> bare, packet, one, shaded;
             TileStats fullStats;
             // Warm-up: page in the BVH and the scratch buffers.
-            bareFrameFor(embreeScene(scene), camera, o->width, o->height, o->tile, threads, ids);
+            bareFrameFor(lanes, embreeScene(scene), camera, o->width, o->height, o->tile, threads, ids);
             renderFrame(scene, camera, s);
             renderFrame(scene, camera, single);
             for (int r = 0; r < o->rounds; ++r) {
-                bare.push_back(seconds([&] { bareFrameFor(embreeScene(scene), camera, o->width, o->height, o->tile, threads, ids); }));
+                bare.push_back(seconds([&] { bareFrameFor(lanes, embreeScene(scene), camera, o->width, o->height, o->tile, threads, ids); }));
                 packet.push_back(seconds([&] { renderFrame(scene, camera, s); }));
                 one.push_back(seconds([&] { renderFrame(scene, camera, single); }));
                 shaded.push_back(seconds([&] { renderFrame(scene, camera, full, 0, &fullStats); }));
@@ -169,7 +173,9 @@ void addBenchKernel(CLI::App& bench, Run& run) {
                             {"width", o->width},
                             {"height", o->height},
                             {"threads", threads},
-                            {"packet_width", packetWidth()},
+                            {"packet_width", lanes},
+                            {"cpu_packet_width", packetWidth()},
+                            {"coherent_occlusion", coherentOcclusion(scene)},
                             {"triangles", tris},
                             {"rounds", o->rounds},
                             {"bare_mrays_per_s", mBare},
@@ -182,9 +188,10 @@ void addBenchKernel(CLI::App& bench, Run& run) {
                             {"frame_seconds", toml::table{{"bare", arr(bare)}, {"packet", arr(packet)}, {"single", arr(one)}, {"full_shading", arr(shaded)}}}};
             if (o->json) std::cout << toml::json_formatter{out} << "\n";
             else
-                std::printf("%dx%d, %lld triangles, %d threads, packets of %d: bare %.2f, packet %.2f, single %.2f Mrays/s "
-                            "(packet/bare %.3f, packet/single %.3f); full shading %.3f s/frame\n",
-                            o->width, o->height, (long long)tris, threads, packetWidth(), mBare, mPacket, mSingle,
+                std::printf("%dx%d, %lld triangles, %d threads, packets of %d (%s occlusion): bare %.2f, packet %.2f, "
+                            "single %.2f Mrays/s (packet/bare %.3f, packet/single %.3f); full shading %.3f s/frame\n",
+                            o->width, o->height, (long long)tris, threads, lanes,
+                            coherentOcclusion(scene) ? "coherent" : "incoherent", mBare, mPacket, mSingle,
                             mPacket / mBare, mPacket / mSingle, median(shaded));
             return 0;
         };

@@ -12,6 +12,8 @@ void addClient(CLI::App& app, Run& run) {
     CLI::App* cmd = app.add_subcommand("client", "Join a master as a render client");
     cmd->add_option("--connect", o->connect, "The master's endpoint, tcp://HOST:PORT")->required();
     cmd->add_option("--threads", o->threads, "Render threads (0 = one per hardware thread)")->check(CLI::Range(0, 1024));
+    cmd->add_option("--packet-width", o->packetWidth, "Rays per Embree packet (0 = this CPU's widest; 4, 8, 16 force one)")
+        ->check(CLI::IsMember({0, 4, 8, 16}));
     cmd->add_option("--cache", o->cacheDir, "Directory for meshes, textures and volumes received from the master (by content hash)");
     cmd->add_option("--exit-after-idle", o->exitAfterIdleMs, "Exit when the master says goodbye or none answers for this many ms (0 = wait for a master forever)")
         ->check(CLI::Range(0, 86'400'000));

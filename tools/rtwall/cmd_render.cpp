@@ -17,7 +17,7 @@ namespace {
 struct RenderOptions {
     std::string scene, out, camera, kernel, region, codec = "lz4", view;
     int width = 0, height = 0, threads = -1, tile = 0, clients = 0, prefetch = 4;
-    int samples = 0, maxDepth = 0, frames = 1;
+    int samples = 0, maxDepth = 0, frames = 1, packetWidth = 0;
     double prune = -1;
     bool gi = false;
 };
@@ -82,6 +82,8 @@ void addRender(CLI::App& app, Run& run) {
     cmd->add_option("--threads", o->threads, "Render threads (0 = one per hardware thread)")->check(CLI::Range(0, 1024));
     cmd->add_option("--tile", o->tile, "Tile size in pixels (overrides the scene)")->check(CLI::Range(1, 1024));
     cmd->add_option("--kernel", o->kernel, "Ray kernel (overrides the scene)")->check(CLI::IsMember({"packet", "single"}));
+    cmd->add_option("--packet-width", o->packetWidth, "Rays per Embree packet on this machine (0 = this CPU's widest; 4, 8, 16 force one)")
+        ->check(CLI::IsMember({0, 4, 8, 16}));
     cmd->add_option("--clients", o->clients,
                     "Render through a master and this many local client processes (the cluster path)")
         ->check(CLI::Range(0, 256));
@@ -111,6 +113,7 @@ void addRender(CLI::App& app, Run& run) {
             if (o->threads >= 0) s.threads = o->threads;
             if (o->tile) s.tileSize = o->tile;
             if (!o->kernel.empty()) s.kernel = o->kernel == "single" ? KernelType::Single : KernelType::Packet;
+            s.packetWidth = o->packetWidth;
             if (!o->view.empty()) s.view = viewModeFromName(o->view);
             if (o->gi) s.gi = true;
             if (o->samples) s.samples = o->samples;

@@ -156,6 +156,7 @@ struct ClientCounters {
 struct ClientSettings {
     std::string connect;                // tcp://HOST:PORT
     int threads = 0;                    // render threads, 0 = hardware threads
+    int packetWidth = 0;                // rays per Embree packet: 0 = this CPU's widest, or 4, 8, 16
     std::filesystem::path cacheDir;     // meshes, textures and volumes received from the master, by content hash
     int maxReconnectMs = 5000;          // back-off ceiling
     int exitAfterIdleMs = 0;            // > 0: exit when no master answers for this long

@@ -140,6 +140,10 @@ struct RenderSettings {
     int height = 600;
     int tileSize = 32;                    // square tiles, in pixels
     KernelType kernel = KernelType::Packet;
+    // Rays per Embree packet (the packet kernel, and the primary-ray blocks of both kernels): 0 =
+    // this CPU's widest (packetWidth()), or 4, 8 or 16 forced. Every width gives the same bytes.
+    // Not on the wire: each render client traces with its own.
+    int packetWidth = 0;
     ShadingMode shading = ShadingMode::Full;  // eyelight: primary rays only, for fast previews
     int maxDepth = 8;                     // primary ray = depth 1; reflection/refraction add one each
     int supersample = 1;                  // n x n regular sub-pixel grid
@@ -364,7 +368,8 @@ struct PickResult {
 };
 std::optional<PickResult> pick(const Scene& scene, const Camera& camera, float px, float py);
 
-// Number of rays per Embree packet the packet kernel uses on this CPU (4, 8 or 16).
+// Number of rays per Embree packet the packet kernel uses on this CPU (4, 8 or 16) where
+// RenderSettings::packetWidth is 0: 16 with AVX-512, 8 with AVX, else 4.
 int packetWidth();
 
 }  // namespace rtwall

@@ -10,4 +10,8 @@ namespace rtwall {
 
 RTCScene embreeScene(const Scene& scene);
 
+// Whether the scene's shadow packets ask Embree for its coherent occlusion traversal (off where
+// Embree runs its AVX-512 kernels: that path can hang there; kernel.cpp says why).
+bool coherentOcclusion(const Scene& scene);
+
 }  // namespace rtwall
