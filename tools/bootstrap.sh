@@ -32,6 +32,7 @@ PACKAGES=(
   glslang-dev          # glslang: every wall shader is compiled at `rtwall check` and in the tests
   glslang-tools        # glslangValidator: glslang-dev's CMake targets reference it, but it only Suggests it
   xvfb xauth libgl1-mesa-dri  # gui tests and bench display: Xvfb with Mesa's software OpenGL (llvmpipe)
+  iproute2             # ip netns/veth and tc: the fault tests' and tools/netem.sh's own namespaces and links
   nftables             # nft: packet loss in the fault tests' own namespaces (no sch_netem here)
   iptables libnetfilter-queue-dev  # NFQUEUE: netjitter's delay, jitter and reordering in those namespaces
   python3
