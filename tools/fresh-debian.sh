@@ -56,11 +56,13 @@ if [ $refresh -eq 1 ] || [ ! -s "$tarball" ]; then
 fi
 
 root=$(mktemp -d /var/tmp/rtwall-fresh-debian.XXXXXX)
-mounted=()
+mounted=0
 cleanup() {
   local rc=$?
   trap - EXIT INT TERM
-  for ((i = ${#mounted[@]} - 1; i >= 0; i--)); do umount -R "${mounted[i]}" 2>/dev/null || umount -l "${mounted[i]}" 2>/dev/null || true; done
+  # Everything the run mounted lies under the root, which is a mount of its own (below),
+  # including what the tests mount inside (ip netns mounts /run/netns).
+  if [ $mounted -eq 1 ]; then umount -R "$root" 2>/dev/null || umount -R -l "$root" 2>/dev/null || true; fi
   if [ $keep -eq 1 ]; then
     say "kept the system in $root (unmounted)"
   elif grep -q " $root" /proc/mounts; then
@@ -76,13 +78,16 @@ bind() {  # bind HOST_PATH PATH_IN_ROOT
   mkdir -p "$root$2"
   mount --rbind "$1" "$root$2"
   mount --make-rslave "$root$2"
-  mounted+=("$root$2")
 }
 
+# The root is a mount point of its own, private to this run, as / is on a real machine:
+# `ip netns add` remounts / (mount --make-rslave /) and fails where / is a plain directory.
+mount --bind "$root" "$root"
+mount --make-private "$root"
+mounted=1
 tar -xf "$tarball" -C "$root"
 cp /etc/resolv.conf "$root/etc/resolv.conf" 2>/dev/null || true
 mount -t proc proc "$root/proc"
-mounted+=("$root/proc")
 bind /sys /sys
 bind /dev /dev
 bind "$archives" /var/cache/apt/archives
