@@ -83,7 +83,15 @@ struct InstanceData {
     float objectToWorld[12] = {};
     float worldToObject[12] = {};  // for materials that work in object space (volumes)
     Bounds3 meshBounds;            // object-space bounds of the mesh (the box a volume fills)
+    int32_t areaLight = -1;        // the area light this emitter is the visible face of (light_faces.cpp), or -1
 };
+
+// How an area light is seen by rays (light_faces.cpp): not at all (next-event estimation alone
+// finds it), through emitters that cover its whole parallelogram (Covered: light samples and
+// hits on them are weighted by multiple importance sampling), or through emitters that cover
+// part of it (Partial: light samples count in full, and so do hits on the emitters where no light
+// sample could have found them).
+enum class LightFace : uint8_t { None, Partial, Covered };
 
 // True when the scene samples something at random whatever the settings: an area light, a rough
 // metal or a volume in use (rendersStochastically adds path tracing and the view).
@@ -92,6 +100,11 @@ bool samplesRandomly(const SceneDesc& scene);
 // when it holds, frames differ and averaging them converges, so the kernel varies the sub-pixel
 // position and the pruning roulette per frame too.
 bool rendersStochastically(const RenderSettings& settings, bool randomContent);
+
+// Finds which emitting instances are the visible faces of which area lights and sets
+// InstanceData::areaLight and Impl::lightFaces; run whenever instances, materials or lights
+// change.
+void findLightFaces(Scene::Impl& s);
 
 struct Scene::Impl {
     SceneDesc desc;  // meshes are shared pointers: no second copy of any geometry
@@ -111,6 +124,8 @@ struct Scene::Impl {
     bool filtersInstalled = false;         // alpha-mask filter functions are set on the mesh geometries
     bool dirty = false;                    // instance transforms or masks changed since the last commit
     bool randomContent = false;            // samplesRandomly(desc): kept current by setMaterial/setLight
+    std::vector<LightFace> lightFaces;     // per desc.lights entry (findLightFaces)
+    bool anyLightFace = false;             // some entry of lightFaces is not None
 
     ~Impl();
 };
