@@ -155,6 +155,7 @@ void write(Writer& w, const Material& m) {
         w.f32(p.density);
     }
     w.f32(m.volumeStep);
+    w.boolean(m.twoSided);  // version 6
 }
 
 void read(Reader& r, Material& m) {
@@ -191,6 +192,7 @@ void read(Reader& r, Material& m) {
         m.transfer.push_back(p);
     }
     m.volumeStep = readFloatIn(r, 0.01f, 100.0f, "volume step");
+    m.twoSided = r.boolean();
     // A volume material without a file cannot be built; refuse it here rather than in the engine.
     if (m.type == MaterialType::Volume && m.volumeFile.empty()) fail("volume material without a volume file");
     if (m.texture.kind == TextureKind::Image && m.texture.file.empty()) fail("image texture without a file");
@@ -205,6 +207,7 @@ void write(Writer& w, const Light& l) {
     write(w, l.edge2);
     write(w, l.color);
     w.f32(l.intensity);
+    w.boolean(l.twoSided);  // version 6
 }
 
 void read(Reader& r, Light& l) {
@@ -216,6 +219,7 @@ void read(Reader& r, Light& l) {
     l.color = readFloat3(r);
     l.intensity = r.f32();
     if (l.intensity < 0.0f) fail("light intensity " + std::to_string(l.intensity) + " is negative");
+    l.twoSided = r.boolean();
 }
 
 void write(Writer& w, const CameraDesc& c) {

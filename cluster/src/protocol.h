@@ -1,9 +1,10 @@
-// The rtwall wire protocol, version 4 (2 added the master's peer timeout to Welcome; 3 added
+// The rtwall wire protocol, version 6 (2 added the master's peer timeout to Welcome; 3 added
 // materials, area lights and shading settings; 4 added vertex colours to meshes, the scene's
 // origin and [bvh] settings to the snapshot, spherical and cylindrical texture mappings, texture
 // and volume files by content hash (AssetRequest, AssetData, SceneSnapshot::assets) and linear
 // half-float tiles for accumulation (FrameBegin::pixels, TileResult::pixels); 5 added texture
-// coordinates to meshes, the uv and auto texture mappings and Material::bumpMapping).
+// coordinates to meshes, the uv and auto texture mappings and Material::bumpMapping; 6 added
+// Material::twoSided and Light::twoSided, which side emits).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one writer and one
@@ -29,7 +30,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 5;
+inline constexpr uint16_t kProtocolVersion = 6;
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).

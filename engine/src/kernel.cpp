@@ -619,13 +619,14 @@ Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings
 }
 
 std::vector<float> renderFrameLinear(const Scene& scene, const Camera& camera, const RenderSettings& settings,
-                                     uint32_t frame) {
+                                     uint32_t frame, TileStats* stats) {
     std::vector<float> out(size_t(std::max(0, settings.width)) * size_t(std::max(0, settings.height)) * 3, 0.0f);
     const size_t stride = size_t(std::max(0, settings.width)) * 3;
-    renderTilesInParallel(scene, settings, frame, [&](const TileRect& r) {
+    const TileStats st = renderTilesInParallel(scene, settings, frame, [&](const TileRect& r) {
         return renderTileLinear(scene, camera, r, frame, settings, out.data() + size_t(r.y0) * stride + size_t(r.x0) * 3,
                                 stride);
     });
+    if (stats) *stats = st;
     return out;
 }
 

@@ -41,6 +41,12 @@ inline Float3 objectPosition(const TriangleMesh& mesh, uint32_t prim, float u, f
     return mesh.position(tri[0]) * (1.0f - u - v) + mesh.position(tri[1]) * u + mesh.position(tri[2]) * v;
 }
 
+// The weight of a hit by `ray` on the visible face of an area light (sp.instance->areaLight),
+// where the ray's origin also sampled that light (ray.bsdfPdf > 0): 1 where no light sample could
+// have found the same path, else the power heuristic's share of the bounce (Covered) or 0
+// (Partial: the light sample counted it in full).
+float lightFaceWeight(const ShadingContext& ctx, const RayTask& ray, const SurfacePoint& sp);
+
 // What a material's shade() may do. Spawned rays are pruned here by their contribution.
 class ShadeContext {
 public:
@@ -56,9 +62,31 @@ public:
     float random(const RayTask& ray, uint32_t dim) const { return randomFloat(ray.seed, dim); }
     bool canSpawn(const RayTask& ray) const { return ray.depth < ctx.settings.maxDepth; }
     void add(const Color& c) { pixel_ += c; }
+    // Whether some area light has a visible face (light_faces.cpp): only then do the sampling
+    // densities of bounces matter, so materials compute them only then.
+    bool weighsLightFaces() const { return ctx.scene.anyLightFace; }
+
+    // Emission seen by `ray` at `sp`: `contribution` is the ray's weight times the radiance. The
+    // back of a one-sided emitter is dark. A hit on the visible face of an area light, by a ray
+    // whose origin also sampled that light, counts with the multiple importance sampling weight
+    // that makes the two ways of finding the light add up to it once (lightFaceWeight).
+    void addEmission(const RayTask& ray, const SurfacePoint& sp, const Color& contribution, bool twoSided) {
+        if (!sp.frontFace && !twoSided) return;
+        if (ray.bsdfPdf > 0.0f && sp.instance->areaLight >= 0) {
+            const float w = lightFaceWeight(ctx, ray, sp);
+            if (w < 1.0f) {
+                if (w > 0.0f) pixel_ += contribution * w;
+                return;
+            }
+        }
+        pixel_ += contribution;
+    }
 
     // A secondary ray with throughput `weight`; `branch` tells apart the rays one hit spawns.
-    void spawn(const RayTask& parent, const Float3& org, const Float3& dir, const Color& weight, uint32_t branch) {
+    // `pdf`: the density per solid angle with which `dir` was sampled, when this vertex also
+    // sampled the area lights with directLight (for multiple importance sampling); 0 otherwise.
+    void spawn(const RayTask& parent, const Float3& org, const Float3& dir, const Color& weight, uint32_t branch,
+               float pdf = 0.0f, float travelled = 0.0f) {
         const float m = maxComponent(weight);
         if (!(m > 0.0f)) return;
         const uint32_t rouletteSeed = hashCombine(parent.rouletteSeed, 0xB5297A4Du + branch);
@@ -89,12 +117,17 @@ public:
         r.depth = parent.depth + 1;
         r.seed = hashCombine(parent.seed, 0xB5297A4Du + branch);
         r.rouletteSeed = rouletteSeed;
+        r.bsdfPdf = pdf;
+        r.travelled = travelled;
         next_.push_back(r);
     }
 
     // Direct light from every light, with shadow rays. brdfCos(wi) returns the BRDF times the
-    // cosine at the shading normal (the material decides how to treat the cosine).
-    template <class F> void directLight(const RayTask& ray, const SurfacePoint& sp, F&& brdfCos);
+    // cosine at the shading normal (the material decides how to treat the cosine). bsdfPdf(wi)
+    // returns the density per solid angle with which this vertex's bounce (spawned after this
+    // call) samples wi, 0 when it spawns none: light samples of an area light with a visible face
+    // are weighted against it (multiple importance sampling, light_faces.cpp).
+    template <class F, class P> void directLight(const RayTask& ray, const SurfacePoint& sp, F&& brdfCos, P&& bsdfPdf);
 
 private:
     Color& pixel_;
@@ -135,9 +168,11 @@ protected:
 // Throws InputError (naming the file) when a texture or volume cannot be read.
 std::unique_ptr<MaterialModel> makeMaterialModel(const Material& desc);
 
+
 // -- inline ------------------------------------------------------------------------------------
 
-template <class F> void ShadeContext::directLight(const RayTask& ray, const SurfacePoint& sp, F&& brdfCos) {
+template <class F, class P>
+void ShadeContext::directLight(const RayTask& ray, const SurfacePoint& sp, F&& brdfCos, P&& bsdfPdf) {
     const RenderSettings& settings = ctx.settings;
     // Shadow rays are pruned at a quarter of the path limit (see below): measured on the
     // headlight at the default, a quarter gives 10.5 shadow rays per pixel and 41.3 dB against
@@ -149,6 +184,7 @@ template <class F> void ShadeContext::directLight(const RayTask& ray, const Surf
         const uint32_t branch = lightIndex++;
         Float3 l;
         float dist = INFINITY;
+        float lightPdf = 0.0f;  // area lights: density per solid angle of the sampled direction
         Color e = light.color * light.intensity;
         if (light.type == LightType::Point) {
             const Float3 toLight = light.position - sp.p;
@@ -169,14 +205,26 @@ template <class F> void ShadeContext::directLight(const RayTask& ray, const Surf
             dist = std::sqrt(d2);
             if (!(dist > 0.0f) || !(area > 0.0f)) continue;
             l = toLight * (1.0f / dist);
-            const float cosL = -dot(l, c) / area;
-            if (cosL <= 0.0f) continue;  // the back of the light is dark
+            float cosL = -dot(l, c) / area;
+            if (light.twoSided) cosL = std::fabs(cosL);
+            if (cosL <= 0.0f) continue;  // the back of a one-sided light is dark
             e = e * (cosL * area / d2);
+            lightPdf = d2 / (cosL * area);
         }
         if (dot(sp.ng, l) <= 0.0f) continue;
         const Color f = brdfCos(l);
         if (!(maxComponent(f) > 0.0f)) continue;
         Color contribution = ray.weight * f * e;
+        // A light whose whole parallelogram is also a visible emitter is found by this vertex's
+        // bounce too: the power heuristic splits each direction between the two strategies
+        // (ShadeContext::addEmission gives the bounce the rest).
+        if (lightPdf > 0.0f && ctx.scene.lightFaces[branch] == LightFace::Covered) {
+            const float pb = bsdfPdf(l);
+            if (pb > 0.0f) {
+                const float r = pb / lightPdf;
+                contribution = contribution * (1.0f / (1.0f + r * r));
+            }
+        }
         // Pruning by contribution, as for spawned rays, on what the shadow ray can add to the
         // pixel (an upper bound: what passes is at most all of it). Below the limit it plays
         // Russian roulette and carries the limit when it survives: the expectation is exact and

@@ -20,9 +20,17 @@ Color expColor(const Color& c) { return {std::exp(c.x), std::exp(c.y), std::exp(
 enum Dim : uint32_t { kLobe = 0, kDir1 = 1, kDir2 = 2, kVolumeJitter = 3 };
 
 // The parts of shade() every material shares: emission and the constant ambient term.
-void addEmissionAndAmbient(ShadeContext& c, const RayTask& ray, const Material& m, const Color& albedo) {
-    if (maxComponent(m.emission) > 0.0f) c.add(ray.weight * m.emission);
+void addEmissionAndAmbient(ShadeContext& c, const RayTask& ray, const SurfacePoint& sp, const Material& m,
+                           const Color& albedo) {
+    if (maxComponent(m.emission) > 0.0f) c.addEmission(ray, sp, ray.weight * m.emission, m.twoSided);
     if (maxComponent(c.ctx.settings.ambient) > 0.0f) c.add(ray.weight * c.ctx.settings.ambient * albedo);
+}
+
+// Sampling densities per solid angle, for weighing light samples against bounces (multiple
+// importance sampling): cosine-weighted around n, and a Phong lobe of exponent e around axis r.
+float cosinePdf(const Float3& n, const Float3& d) { return std::max(0.0f, dot(n, d)) * kInvPi; }
+float phongLobePdf(const Float3& r, float e, const Float3& d) {
+    return (e + 1.0f) * kInv2Pi * std::pow(std::max(0.0f, dot(r, d)), e);
 }
 
 class LambertModel : public MaterialModel {
@@ -30,45 +38,65 @@ public:
     using MaterialModel::MaterialModel;
     void shade(ShadeContext& c, const RayTask& ray, const SurfacePoint& sp) const override {
         const Color a = albedo(sp);
-        addEmissionAndAmbient(c, ray, desc_, a);
-        c.directLight(ray, sp, [&](const Float3& l) { return a * (kInvPi * std::max(0.0f, dot(sp.ns, l))); });
+        addEmissionAndAmbient(c, ray, sp, desc_, a);
+        const bool bounce = c.ctx.settings.gi && c.canSpawn(ray);
+        const bool weigh = bounce && c.weighsLightFaces();
+        auto pdf = [&](const Float3& d) { return weigh ? cosinePdf(sp.ns, d) : 0.0f; };
+        c.directLight(ray, sp, [&](const Float3& l) { return a * (kInvPi * std::max(0.0f, dot(sp.ns, l))); }, pdf);
         // Path tracing: indirect light by one cosine-sampled bounce (pdf cos/pi cancels the BRDF).
-        if (c.ctx.settings.gi && c.canSpawn(ray)) {
+        if (bounce) {
             const Float3 d = keepAbove(sampleCosine(sp.ns, c.random(ray, kDir1), c.random(ray, kDir2)), sp.ng);
-            c.spawn(ray, offsetOrigin(sp.p, sp.ng, 1.0f), d, ray.weight * a, 0);
+            c.spawn(ray, offsetOrigin(sp.p, sp.ng, 1.0f), d, ray.weight * a, 0, pdf(d));
         }
     }
 };
 
-// Normalised Blinn-Phong for light sources; with GI the indirect part picks the diffuse or the
-// specular lobe (a Phong lobe around the mirror direction) in proportion to their weights.
+// Lambert plus normalised Blinn-Phong. With GI the bounce picks the diffuse lobe (cosine) or the
+// specular one (a half vector from the Blinn-Phong lobe cos^n around the normal, the ray
+// reflected about it) in proportion to their weights, and weighs the direction with the BRDF
+// itself over the mixture's density: light samples and bounces see the same surface, so the two
+// find a lamp with the same expectation (multiple importance sampling needs that; until issue
+// 15 the specular bounce followed a Phong lobe around the mirror direction, a different BRDF).
 class PhongModel : public MaterialModel {
 public:
     using MaterialModel::MaterialModel;
     void shade(ShadeContext& c, const RayTask& ray, const SurfacePoint& sp) const override {
         const Color a = albedo(sp);
-        addEmissionAndAmbient(c, ray, desc_, a);
+        addEmissionAndAmbient(c, ray, sp, desc_, a);
         const Float3 wo = -ray.dir;
         const float n = desc_.shininess;
-        c.directLight(ray, sp, [&](const Float3& l) {
+        auto brdfCos = [&](const Float3& l) {
             const float cosN = std::max(0.0f, dot(sp.ns, l));
             const Float3 hv = normalize(l + wo);
             const float spec = std::pow(std::max(0.0f, dot(sp.ns, hv)), n) * (n + 8.0f) * (0.125f * kInvPi);
             return (a * kInvPi + desc_.specular * spec) * cosN;
-        });
-        if (!c.ctx.settings.gi || !c.canSpawn(ray)) return;
+        };
         const float wd = maxComponent(a), ws = maxComponent(desc_.specular);
-        if (!(wd + ws > 0.0f)) return;
-        const float pd = wd / (wd + ws);
-        const Float3 org = offsetOrigin(sp.p, sp.ng, 1.0f);
+        const bool bounce = c.ctx.settings.gi && c.canSpawn(ray) && wd + ws > 0.0f;
+        const float pd = bounce ? wd / (wd + ws) : 0.0f;
+        auto mixturePdf = [&](const Float3& l) {
+            float p = pd * cosinePdf(sp.ns, l);
+            const Float3 hv = normalize(l + wo);
+            const float oh = dot(wo, hv);
+            if (pd < 1.0f && oh > 0.0f) p += (1.0f - pd) * phongLobePdf(sp.ns, n, hv) / (4.0f * oh);
+            return p;
+        };
+        const bool weigh = bounce && c.weighsLightFaces();
+        c.directLight(ray, sp, brdfCos, [&](const Float3& l) { return weigh ? mixturePdf(l) : 0.0f; });
+        if (!bounce) return;
+        Float3 d;
         if (c.random(ray, kLobe) < pd) {
-            const Float3 d = keepAbove(sampleCosine(sp.ns, c.random(ray, kDir1), c.random(ray, kDir2)), sp.ng);
-            c.spawn(ray, org, d, ray.weight * a * (1.0f / pd), 0);
+            d = sampleCosine(sp.ns, c.random(ray, kDir1), c.random(ray, kDir2));
         } else {
-            const Float3 r = reflect(ray.dir, sp.ns);
-            const Float3 d = keepAbove(samplePhongLobe(r, n, c.random(ray, kDir1), c.random(ray, kDir2)), sp.ng);
-            c.spawn(ray, org, d, ray.weight * desc_.specular * (1.0f / (1.0f - pd)), 0);
+            const Float3 h = samplePhongLobe(sp.ns, n, c.random(ray, kDir1), c.random(ray, kDir2));
+            d = reflect(ray.dir, h);
         }
+        // A direction into the surface is lost (light samples skip those too), rather than
+        // mirrored: the estimate stays the integral of this BRDF.
+        if (!(dot(d, sp.ng) > 0.0f)) return;
+        const float p = mixturePdf(d);
+        if (!(p > 0.0f)) return;
+        c.spawn(ray, offsetOrigin(sp.p, sp.ng, 1.0f), d, ray.weight * brdfCos(d) * (1.0f / p), 0, weigh ? p : 0.0f);
     }
 };
 
@@ -76,7 +104,7 @@ class MirrorModel : public MaterialModel {
 public:
     using MaterialModel::MaterialModel;
     void shade(ShadeContext& c, const RayTask& ray, const SurfacePoint& sp) const override {
-        addEmissionAndAmbient(c, ray, desc_, {0, 0, 0});
+        addEmissionAndAmbient(c, ray, sp, desc_, {0, 0, 0});
         if (c.canSpawn(ray))
             c.spawn(ray, offsetOrigin(sp.p, sp.ng, 1.0f), keepAbove(reflect(ray.dir, sp.ns), sp.ng),
                     ray.weight * albedo(sp), 0);
@@ -94,7 +122,7 @@ public:
     }
     void shade(ShadeContext& c, const RayTask& ray, const SurfacePoint& sp) const override {
         const Color a = albedo(sp);
-        addEmissionAndAmbient(c, ray, desc_, {0, 0, 0});
+        addEmissionAndAmbient(c, ray, sp, desc_, {0, 0, 0});
         const Float3 r = reflect(ray.dir, sp.ns);
         const Float3 org = offsetOrigin(sp.p, sp.ng, 1.0f);
         if (exponent_ < 0.0f) {
@@ -102,13 +130,20 @@ public:
             return;
         }
         const float n = exponent_;
-        c.directLight(ray, sp, [&](const Float3& l) {
-            const float cosA = std::max(0.0f, dot(r, l));
-            return a * ((n + 1.0f) * kInv2Pi * std::pow(cosA, n));
-        });
-        if (c.canSpawn(ray)) {
+        // The lobe is sampled with or without GI, so light samples are weighed against it always.
+        const bool bounce = c.canSpawn(ray);
+        const bool weigh = bounce && c.weighsLightFaces();
+        auto pdf = [&](const Float3& d) { return weigh ? phongLobePdf(r, n, d) : 0.0f; };
+        c.directLight(
+            ray, sp,
+            [&](const Float3& l) {
+                const float cosA = std::max(0.0f, dot(r, l));
+                return a * ((n + 1.0f) * kInv2Pi * std::pow(cosA, n));
+            },
+            pdf);
+        if (bounce) {
             const Float3 d = keepAbove(samplePhongLobe(r, n, c.random(ray, kDir1), c.random(ray, kDir2)), sp.ng);
-            c.spawn(ray, org, d, ray.weight * a, 0);
+            c.spawn(ray, org, d, ray.weight * a, 0, pdf(d));
         }
     }
 
@@ -125,7 +160,7 @@ public:
     bool shadowTransparent() const override { return true; }
 
     void shade(ShadeContext& c, const RayTask& ray, const SurfacePoint& sp) const override {
-        addEmissionAndAmbient(c, ray, desc_, {0, 0, 0});
+        addEmissionAndAmbient(c, ray, sp, desc_, {0, 0, 0});
         if (!c.canSpawn(ray)) return;
         Color w = ray.weight;
         if (!sp.frontFace && maxComponent(desc_.absorption) > 0.0f) w = w * expColor(desc_.absorption * -sp.t);
@@ -158,7 +193,7 @@ class EmissiveModel : public MaterialModel {
 public:
     using MaterialModel::MaterialModel;
     void shade(ShadeContext& c, const RayTask& ray, const SurfacePoint& sp) const override {
-        c.add(ray.weight * desc_.emission * albedo(sp));
+        c.addEmission(ray, sp, ray.weight * desc_.emission * albedo(sp), desc_.twoSided);
     }
 };
 
@@ -186,9 +221,10 @@ public:
         march(iv, c.random(ray, kVolumeJitter), &L, T);
         c.add(ray.weight * L);
         if (c.canSpawn(ray)) {
+            // The same line goes on: it keeps its sampling density, and how far it has come.
             const Float3 exit = ray.org + ray.dir * iv.t1;
-            c.spawn(ray, exit + ray.dir * ((1.0f + maxAbsComponent(exit)) * (1.0f / 65536.0f)), ray.dir,
-                    ray.weight * T, 0);
+            const float eps = (1.0f + maxAbsComponent(exit)) * (1.0f / 65536.0f);
+            c.spawn(ray, exit + ray.dir * eps, ray.dir, ray.weight * T, 0, ray.bsdfPdf, ray.travelled + iv.t1 + eps);
         }
     }
 

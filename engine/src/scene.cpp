@@ -342,6 +342,7 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
             rtcReleaseGeometry(g);
         }
         updateShadowTransparency(s);
+        findLightFaces(s);
         rtcCommitScene(s.top);
         checkDevice(s.device, lastError, "building the top-level BVH");
 #ifdef __GLIBC__
@@ -380,6 +381,7 @@ void Scene::setInstanceTransform(uint32_t instance, const Transform& transform) 
     RTCGeometry g = rtcGetGeometry(s.top, instance);
     rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, data.objectToWorld);
     rtcCommitGeometry(g);
+    findLightFaces(s);  // a lamp panel moved onto or off an area light
     s.dirty = true;
 }
 
@@ -402,6 +404,7 @@ void Scene::setMaterial(uint32_t material, const Material& value) {
     }
     updateShadowTransparency(s);
     s.randomContent = samplesRandomly(s.desc);
+    findLightFaces(s);  // an emission turned on or off, or made two-sided
     s.dirty = true;
 }
 
@@ -414,6 +417,7 @@ void Scene::setLight(uint32_t light, const Light& value) {
     if (light >= s.desc.lights.size()) throw std::out_of_range("light " + std::to_string(light) + " does not exist");
     s.desc.lights[light] = value;
     s.randomContent = samplesRandomly(s.desc);
+    findLightFaces(s);
 }
 
 void Scene::commit() {

@@ -337,6 +337,7 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
         }
         m.emission = r.vec3("emission", m.type == MaterialType::Emissive ? Color{1, 1, 1} : Color{0, 0, 0});
         checkNonNegative(r, "emission", m.emission);
+        if (m.type != MaterialType::Volume) m.twoSided = r.boolean("two_sided", m.twoSided);
         m.bump = float(r.number("bump", m.bump, 0.0, 100.0));
         m.bumpScale = float(r.number("bump_scale", m.bumpScale, 1e-6, 1e6));
         const std::string bumpMapping = r.choice("bump_mapping", "auto", {"auto", "uv", "object"});
@@ -520,10 +521,13 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
             l.edge1 = r.vec3("edge1", {}, true);
             l.edge2 = r.vec3("edge2", {}, true);
             if (length(cross(l.edge1, l.edge2)) == 0.0f) r.fail(r.find("edge2"), "key 'edge2': the area light has no area");
+            l.twoSided = r.boolean("two_sided", l.twoSided);
         } else {
             l.direction = r.vec3("direction", {}, true);
             if (dot(l.direction, l.direction) == 0.0f) r.fail(r.find("direction"), "key 'direction' must not be zero");
         }
+        if (l.type != LightType::Area && r.has("two_sided"))
+            r.fail(r.find("two_sided"), "key 'two_sided': only area lights have sides");
         l.color = r.vec3("color", l.color);
         l.intensity = float(r.number("intensity", 1.0, 0.0, 1e12));
         scene.lights.push_back(l);

@@ -83,7 +83,15 @@ struct InstanceData {
     float objectToWorld[12] = {};
     float worldToObject[12] = {};  // for materials that work in object space (volumes)
     Bounds3 meshBounds;            // object-space bounds of the mesh (the box a volume fills)
+    int32_t areaLight = -1;        // the area light this emitter is the visible face of (light_faces.cpp), or -1
 };
+
+// How an area light is seen by rays (light_faces.cpp): not at all (next-event estimation alone
+// finds it), through emitters that cover its whole parallelogram (Covered: light samples and
+// hits on them are weighted by multiple importance sampling), or through emitters that cover
+// part of it (Partial: light samples count in full, and so do hits on the emitters where no light
+// sample could have found them).
+enum class LightFace : uint8_t { None, Partial, Covered };
 
 // True when the scene samples something at random whatever the settings: an area light, a rough
 // metal or a volume in use (rendersStochastically adds path tracing and the view).
@@ -96,6 +104,10 @@ bool rendersStochastically(const RenderSettings& settings, bool randomContent);
 // False where Embree's coherent occlusion traversal is known to hang: Embree 3 running its
 // AVX-512 kernels (kernel.cpp).
 bool coherentOcclusionIsSafe(RTCDevice device);
+// Finds which emitting instances are the visible faces of which area lights and sets
+// InstanceData::areaLight and Impl::lightFaces; run whenever instances, materials or lights
+// change.
+void findLightFaces(Scene::Impl& s);
 
 struct Scene::Impl {
     SceneDesc desc;  // meshes are shared pointers: no second copy of any geometry
@@ -118,6 +130,8 @@ struct Scene::Impl {
     // Whether shadow packets may ask for Embree's coherent occlusion traversal: false where
     // Embree's AVX-512 kernels run (coherentOcclusionIsSafe in kernel.cpp says why).
     bool coherentOcclusion = true;
+    std::vector<LightFace> lightFaces;     // per desc.lights entry (findLightFaces)
+    bool anyLightFace = false;             // some entry of lightFaces is not None
 
     ~Impl();
 };

@@ -94,6 +94,38 @@ ShadowPass shadowPassAt(const ShadingContext& ctx, const ShadowTask& ray, const 
     return model.shadowPass(ctx, ray, sp);
 }
 
+float areaLightPdf(const Light& light, const Float3& org, const Float3& dir, float tBlock, float travelled) {
+    if (light.type != LightType::Area) return 0.0f;
+    const Float3 c = cross(light.edge1, light.edge2);
+    const float area = length(c);
+    const float facing = dot(dir, c);
+    if (!(area > 0.0f) || facing == 0.0f) return 0.0f;
+    const float t = dot(light.position - org, c) / facing;
+    if (!(t > 0.0f)) return 0.0f;
+    // directLight's shadow ray stops at 0.9999 of the light's distance: whatever lies beyond
+    // (the emitter of a visible face just behind the light) does not block it.
+    const float dist = travelled + t;
+    if (travelled + tBlock < 0.9999f * dist) return 0.0f;
+    // (u, v) of the crossing in the parallelogram, by the dual basis of (edge1, edge2).
+    const Float3 n = c * (1.0f / area);
+    const Float3 q = org + dir * t - light.position;
+    const float u = dot(q, cross(light.edge2, n)) / area, v = dot(q, cross(n, light.edge1)) / area;
+    if (!(u >= 0.0f && u <= 1.0f && v >= 0.0f && v <= 1.0f)) return 0.0f;
+    float cosL = -facing / area;
+    if (light.twoSided) cosL = std::fabs(cosL);
+    if (!(cosL > 0.0f)) return 0.0f;  // the dark side of a one-sided light
+    return dist * dist / (cosL * area);
+}
+
+float lightFaceWeight(const ShadingContext& ctx, const RayTask& ray, const SurfacePoint& sp) {
+    const uint32_t index = uint32_t(sp.instance->areaLight);
+    const float pl = areaLightPdf(ctx.scene.desc.lights[index], ray.org, ray.dir, sp.t, ray.travelled);
+    if (!(pl > 0.0f)) return 1.0f;  // no light sample finds this path: the bounce is all there is
+    if (ctx.scene.lightFaces[index] != LightFace::Covered) return 0.0f;  // the light sample counted it
+    const float r = pl / ray.bsdfPdf;
+    return 1.0f / (1.0f + r * r);
+}
+
 namespace {
 double srgbToLinearD(double s) { return s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4); }
 }  // namespace

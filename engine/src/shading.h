@@ -29,6 +29,13 @@ struct RayTask {
     // Seed of the pruning roulette along this path: per frame with GI (progressive frames
     // average its noise away), the same every frame without (a still Whitted view is stable).
     uint32_t rouletteSeed;
+    // Multiple importance sampling (light_faces.cpp): the density per solid angle with which the
+    // vertex that chose this direction sampled it, where that vertex also sampled the area lights
+    // (next-event estimation); 0 for camera rays and specular rays, whose emission counts in
+    // full. `travelled` is how far this ray's origin lies from that vertex along the same line
+    // (a ray that went on through a volume keeps its direction and its density).
+    float bsdfPdf = 0.0f;
+    float travelled = 0.0f;
 };
 
 struct Hit {
@@ -123,6 +130,12 @@ struct ShadowPass {
     float continueAt = 0.0f;
 };
 ShadowPass shadowPassAt(const ShadingContext& ctx, const ShadowTask& ray, const Hit& hit);
+
+// The density per solid angle with which next-event estimation samples the direction `dir` from
+// `org` on area light `light` (uniform over its area), or 0 where it cannot: the ray misses the
+// parallelogram, meets its dark side, or something at `tBlock` or nearer would block the shadow
+// ray (which stops at 0.9999 of the light's distance). `travelled` is added to both distances.
+float areaLightPdf(const Light& light, const Float3& org, const Float3& dir, float tBlock, float travelled = 0.0f);
 
 // Scale-aware offset for secondary-ray origins: a fixed epsilon is too small far from the
 // origin and too large for small models. 2^-16 relative to the coordinate magnitude is about

@@ -44,6 +44,7 @@ void expectSame(const Material& a, const Material& b) {
     EXPECT_EQ(a.texture.mapping, b.texture.mapping);
     EXPECT_EQ(a.alpha.mapping, b.alpha.mapping);
     EXPECT_EQ(a.bumpMapping, b.bumpMapping);
+    EXPECT_EQ(a.twoSided, b.twoSided);
 }
 void expectSame(const Light& a, const Light& b) {
     EXPECT_EQ(a.type, b.type);
@@ -51,6 +52,9 @@ void expectSame(const Light& a, const Light& b) {
     expectSame(a.direction, b.direction);
     expectSame(a.color, b.color);
     EXPECT_EQ(a.intensity, b.intensity);
+    expectSame(a.edge1, b.edge1);
+    expectSame(a.edge2, b.edge2);
+    EXPECT_EQ(a.twoSided, b.twoSided);
 }
 void expectSame(const CameraDesc& a, const CameraDesc& b) {
     EXPECT_EQ(a.name, b.name);
@@ -211,6 +215,7 @@ Material sampleMaterial(int k) {
     m.texture.mapping = k % 2 ? TextureMapping::Uv : TextureMapping::Spherical;
     m.alpha.mapping = k % 2 ? TextureMapping::Auto : TextureMapping::Uv;
     m.bumpMapping = k % 2 ? TextureMapping::Object : TextureMapping::Uv;
+    m.twoSided = true;  // version 6
     return m;
 }
 
@@ -221,6 +226,9 @@ Light sampleLight(int k) {
     l.direction = {0.5f, -0.75f, 0.25f};
     l.color = {0.9f, 0.8f, 0.7f};
     l.intensity = 123.5f + float(k);
+    l.edge1 = {2.0f, 0.0f, 0.5f};
+    l.edge2 = {0.0f, 0.25f, 1.5f + float(k)};
+    l.twoSided = true;  // version 6
     return l;
 }
 
@@ -451,7 +459,7 @@ TEST(Protocol, EncodeSetsTypeAndLength) {
 TEST(Protocol, GoldenBytes) {
     // The exact layout of a header and a small payload; a change here breaks every deployed peer
     // (version 2: the shading fields of materials, lights and settings; 4: FrameBegin's tile format;
-    // 5: the snapshot's BVH primitives).
+    // 5: the snapshot's BVH primitives; 6: two-sided emission of materials and area lights).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -459,7 +467,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x05, 0x00,                                      // version (5: mesh texture coordinates, uv/auto mappings, bump mapping, snapshot bvh primitives, a material change's files)
+        0x06, 0x00,                                      // version (6: two-sided materials and area lights)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -978,6 +986,8 @@ TEST(Protocol, StateHash) {
         [](SceneSnapshot& x) { x.instances[0].transform.m[3] += 1e-12; },
         [](SceneSnapshot& x) { std::swap(x.instances[0], x.instances[1]); },
         [](SceneSnapshot& x) { x.lights[1].intensity *= 2; },
+        [](SceneSnapshot& x) { x.lights[0].twoSided = !x.lights[0].twoSided; },
+        [](SceneSnapshot& x) { x.materials[0].twoSided = !x.materials[0].twoSided; },
         [](SceneSnapshot& x) { x.camera.fovY += 1; },
         [](SceneSnapshot& x) { x.camera.window = ProjectionWindow{{-1, -1, 0}, {2, 0, 0}, {0, 2, 0}}; },
         [](SceneSnapshot& x) { x.settings.shadows = true; },

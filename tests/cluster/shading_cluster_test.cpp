@@ -5,6 +5,8 @@
 #include "local_cluster.h"
 #include "test_util.h"
 
+#include "scene_impl.h"  // engine/src: the faces the scene found
+
 #include <rtwall/cluster.h>
 
 #include <gtest/gtest.h>
@@ -67,6 +69,46 @@ TEST(ClusterShading, EveryMaterialAndGiBitIdenticalToOneMachine) {
     master.setMaterial(0, changed.materials[0]);
     img = master.renderFrame(&r);
     EXPECT_EQ(differingBytes(img, singleMachine(changed, r.frame)), 0u) << "after material updates";
+}
+
+// An area light with a visible face (an emitting panel in its place, counted once by multiple
+// importance sampling) and two-sided emission (protocol version 6): GI frames over three clients
+// equal one machine's, also after updates that make the lamp two-sided and move the light off
+// its panel (each client finds the faces again, as one machine does).
+TEST(ClusterShading, LampFacesAndTwoSidedEmissionBitIdenticalToOneMachine) {
+    const auto dir = test::scratchDir();
+    SceneDesc desc = test::materialZoo(dir, 48, 36);
+    desc.settings.tileSize = 8;
+    desc.settings.gi = true;
+    desc.settings.samples = 2;
+    Material panel = test::material("panel", MaterialType::Emissive, {1, 1, 1});
+    panel.emission = {3, 3, 3};  // the zoo's area light: radiance 3 over [0.5, 1.5] x [-1.5, -0.5] at y 3.5
+    desc.materials.push_back(panel);
+    desc.instances.push_back({1, uint32_t(desc.materials.size() - 1),
+                              Transform::translate(1.0, 3.505, -1.0) * Transform::rotateDegrees(1, 0, 0, 180) *
+                                  Transform::scale(0.5, 1, 0.5)});
+    ASSERT_EQ(Scene(desc).impl().lightFaces[1], LightFace::Covered);
+    ClusterSettings cs;
+    cs.async = false;
+    cs.prefetch = 2;
+    cs.wideAccumulation = false;  // 8-bit tiles, compared with one machine's 8-bit frames
+    LocalCluster cluster(desc, cs, 3);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(3, 30000));
+    FrameReport r;
+    for (int f = 0; f < 2; ++f) {
+        const Image img = master.renderFrame(&r);
+        EXPECT_EQ(differingBytes(img, singleMachine(desc, r.frame)), 0u) << "frame " << r.frame;
+    }
+    SceneDesc changed = desc;
+    changed.materials.back().twoSided = true;
+    changed.lights[1].twoSided = true;
+    changed.lights[1].position.y = 3.0f;  // off its panel: the panel is an emitter of its own again
+    ASSERT_EQ(Scene(changed).impl().lightFaces[1], LightFace::None);
+    master.setMaterial(uint32_t(changed.materials.size() - 1), changed.materials.back());
+    master.setLight(1, changed.lights[1]);
+    const Image img = master.renderFrame(&r);
+    EXPECT_EQ(differingBytes(img, singleMachine(changed, r.frame)), 0u) << "after the updates";
 }
 
 // Texture coordinates travel with the mesh (protocol version 5): a UV-textured OBJ (an image by

@@ -56,6 +56,23 @@ TEST(SceneDiff, ChangesBecomeUpdatesOfExactlyWhatChanged) {
     EXPECT_EQ(edit.camera->position.y, e.cameras.front().position.y);
 }
 
+// Which side emits is part of a material and of an area light (protocol version 6): an edit that
+// only turns two-sided emission on is a material or light update.
+TEST(SceneDiff, TwoSidedEmissionIsAnEdit) {
+    const SceneDesc d = test::materialZoo(test::scratchDir(), 32, 24);
+    SceneDesc e = d;
+    e.materials[8].twoSided = true;  // the zoo's emissive lamp
+    e.lights[1].twoSided = true;     // its area light
+    const SceneEdit edit = diffScenes(d, e);
+    EXPECT_TRUE(edit.refused.empty());
+    ASSERT_EQ(edit.materials.size(), 1u);
+    EXPECT_EQ(edit.materials[0].first, 8u);
+    EXPECT_TRUE(edit.materials[0].second.twoSided);
+    ASSERT_EQ(edit.lights.size(), 1u);
+    EXPECT_EQ(edit.lights[0].first, 1u);
+    EXPECT_TRUE(edit.lights[0].second.twoSided);
+}
+
 TEST(SceneDiff, WhatUpdatesCannotExpressIsRefusedInOneLineEach) {
     const SceneDesc d = test::materialZoo(test::scratchDir(), 32, 24);
     auto refused = [&](auto change) {

@@ -3,6 +3,7 @@
 #include "test_util.h"
 #include "cli_util.h"
 
+#include <rtwall/engine.h>
 #include <rtwall/image.h>
 
 #include <gtest/gtest.h>
@@ -67,6 +68,104 @@ TEST(CliShading, HeadlightAtTheDefaultThresholdWithin40DbOfUnpruned) {
     EXPECT_GE(db, 40.0);
     ASSERT_GT(defaultRays, 0.0) << r.output;
     EXPECT_LT(defaultRays, 0.4 * referenceRays);
+}
+
+// `rtwall render --frames N` averages in linear light, on one machine and over the cluster
+// (`--clients`), as `rtwall run` does. The scene: a closed room lit only by a small emissive panel
+// under the ceiling, path traced: a bounce that finds the panel carries radiance far above 1, so
+// each frame is noise with values above 1.0 that 8-bit frames clip (averaging them kept 17% of
+// the light). Expected: the frames' linear mean, computed here from renderFrameLinear
+// (independently of the command's accumulation), which the written PNG must equal to within its
+// quantisation; and bit for bit Accumulator::addLinear's mean of those frames, on both paths.
+TEST(CliShading, FramesAverageInLinearLightOnOneMachineAndTheCluster) {
+    const auto dir = test::scratchDir();
+    std::string walls;
+    const char* placements[] = {
+        "scale = [2, 1, 2]",
+        "scale = [2, 1, 2]\nrotate = [180, 0, 0]\ntranslate = [0, 3, 0]",
+        "scale = [2, 1, 1.5]\nrotate = [90, 0, 0]\ntranslate = [0, 1.5, -2]",
+        "scale = [2, 1, 1.5]\nrotate = [-90, 0, 0]\ntranslate = [0, 1.5, 2]",
+        "scale = [1.5, 1, 2]\nrotate = [0, 0, -90]\ntranslate = [-2, 1.5, 0]",
+        "scale = [1.5, 1, 2]\nrotate = [0, 0, 90]\ntranslate = [2, 1.5, 0]",
+    };
+    for (const char* p : placements) walls += std::string("[[instance]]\nmesh = \"quad\"\nmaterial = \"white\"\n") + p + "\n\n";
+    const auto file = test::writeFile(dir / "room.toml", R"([image]
+width = 48
+height = 36
+tile = 16
+[render]
+gi = true
+max_depth = 6
+background = [0, 0, 0]
+[[mesh]]
+name = "quad"
+shape = "quad"
+[[material]]
+name = "white"
+color = [0.7, 0.7, 0.7]
+[[material]]
+name = "lamp"
+type = "emissive"
+emission = [20, 20, 20]
+)" + walls + R"([[instance]]
+mesh = "quad"
+material = "lamp"
+scale = [0.3, 1, 0.3]
+rotate = [180, 0, 0]
+translate = [0, 2.99, 0]
+[[camera]]
+position = [1.5, 1.5, 1.8]
+look_at = [-0.5, 0.5, -1.0]
+fov = 60
+)");
+    const int frames = 8;
+    Result r = run("render " + file.string() + " --frames " + std::to_string(frames) + " --out " + (dir / "one.png").string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    r = run("render " + file.string() + " --frames " + std::to_string(frames) + " --clients 2 --out " +
+            (dir / "cluster.png").string());
+    ASSERT_EQ(r.status, 0) << r.output;
+
+    const SceneDesc desc = loadSceneFile(file);
+    const Scene scene(desc);
+    const RenderSettings& s = desc.settings;
+    const Camera camera(desc.cameras.front(), s.width, s.height);
+    const size_t n = size_t(s.width) * s.height * 3;
+    std::vector<double> sum(n, 0.0);
+    Accumulator linear, eightBit;
+    size_t above = 0;
+    for (int f = 1; f <= frames; ++f) {  // the command numbers its frames from 1
+        const std::vector<float> img = renderFrameLinear(scene, camera, s, uint32_t(f));
+        for (size_t i = 0; i < n; ++i) {
+            sum[i] += img[i];
+            above += img[i] > 1.0f;
+        }
+        linear.addLinear(img.data(), s.width, s.height);
+        Image q;
+        q.width = s.width;
+        q.height = s.height;
+        q.rgb.resize(n);
+        linearToSrgb8(img.data(), n, q.rgb.data());
+        eightBit.add(q);
+    }
+    // The test means something only where frames exceed 1.0.
+    ASSERT_GT(above, n * frames / 100) << "too few frame values above 1.0";
+    double expected = 0;  // what a display shows of the linear mean: each value up to 1.0
+    for (double v : sum) expected += std::min(1.0, v / frames);
+    expected /= double(n);
+    auto meanOf = [](const Image& img) {
+        double m = 0;
+        for (uint8_t b : img.rgb) {
+            const double c = b / 255.0;
+            m += c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+        }
+        return m / double(img.rgb.size());
+    };
+    const Image one = readPng(dir / "one.png"), cluster = readPng(dir / "cluster.png");
+    std::printf("frame values above 1.0: %.1f%%; mean: linear %.5f, rtwall render %.5f, 8-bit frames averaged %.5f\n",
+                100.0 * double(above) / double(n * frames), expected, meanOf(one), meanOf(eightBit.resolve()));
+    EXPECT_NEAR(meanOf(one), expected, 0.005 * expected);
+    EXPECT_EQ(one.rgb, linear.resolve().rgb);
+    EXPECT_EQ(cluster.rgb, one.rgb);
 }
 
 TEST(CliShading, BadArgumentsEndWithOneLine) {

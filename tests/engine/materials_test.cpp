@@ -676,6 +676,10 @@ TEST(ShadingSceneFile, BadInputNamesFileLineAndKey) {
         {"[render]\nview = \"xray\"\n", "key 'view'"},
         {"[render]\nprune_threshold = -0.1\n", "key 'prune_threshold'"},
         {"[[light]]\ntype = \"area\"\nposition = [0, 0, 0]\nedge1 = [1, 0, 0]\nedge2 = [2, 0, 0]\n", "no area"},
+        {"[[light]]\nposition = [0, 0, 0]\ntwo_sided = true\n", ":6: [[light]] #1: key 'two_sided': only area lights have sides"},
+        {"[[light]]\ntype = \"area\"\nposition = [0, 0, 0]\nedge1 = [1, 0, 0]\nedge2 = [0, 0, 1]\ntwo_sided = 1\n",
+         "key 'two_sided'"},
+        {"[[material]]\nname = \"m\"\ntype = \"emissive\"\ntwo_sided = \"yes\"\n", ":7: [[material]] #1: key 'two_sided'"},
     };
     for (const Case& c : cases) {
         const auto file = test::writeFile(dir / "s.toml", head + c.body);
@@ -719,6 +723,7 @@ alpha = "checker"
 alpha_color2 = [0, 0, 0]
 alpha_cutoff = 0.25
 emission = [0.5, 0, 0]
+two_sided = true
 [[material]]
 name = "v"
 type = "volume"
@@ -735,6 +740,12 @@ position = [0, 2, 0]
 edge1 = [1, 0, 0]
 edge2 = [0, 0, -1]
 intensity = 3
+two_sided = true
+[[light]]
+type = "area"
+position = [0, 2, 0]
+edge1 = [1, 0, 0]
+edge2 = [0, 0, 1]
 )");
     const SceneDesc s = loadSceneFile(file);
     EXPECT_FLOAT_EQ(s.settings.pruneThreshold, 0.01f);
@@ -754,6 +765,10 @@ intensity = 3
     EXPECT_FLOAT_EQ(s.materials[1].volumeStep, 0.3f);
     EXPECT_FLOAT_EQ(s.materials[2].absorption.z, 0.3f);
     EXPECT_EQ(s.lights[0].type, LightType::Area);
+    EXPECT_TRUE(m.twoSided);
+    EXPECT_FALSE(s.materials[2].twoSided);  // one-sided unless asked (docs/shading.md)
+    EXPECT_TRUE(s.lights[0].twoSided);
+    EXPECT_FALSE(s.lights[1].twoSided);
     const Scene scene(s);  // textures and volume load
 }
 

@@ -48,20 +48,32 @@ double psnr(const Image& a, const Image& b) {
 // Median frame time over `rounds` frames (frames 1..rounds: seeds change each frame). `first`
 // is frame 1, the error one frame shows as the viewer sees it; `mean` the average of all of
 // them (what progressive refinement converges to: its error against the reference's mean over
-// the same frames is the bias, with the noise averaged down).
+// the same frames is the bias, with the noise averaged down). Frames are rendered in linear
+// light and quantised here (renderFrame's bytes), so that a stochastic scene's mean is taken in
+// linear light, as `rtwall render --frames` and `rtwall run` take it, not from frames each
+// clipped at 1.0.
 struct Timed {
     Image first, mean;
 };
 Timed timed(const Scene& scene, const Camera& cam, const RenderSettings& s, int rounds, double& seconds, TileStats& st) {
+    SceneDesc d = scene.desc();
+    d.settings = s;
+    const bool stochastic = rendersStochastically(d);
     std::vector<double> t;
     Accumulator acc;
     Timed out;
     for (int r = 0; r < rounds; ++r) {
         const auto t0 = std::chrono::steady_clock::now();
-        const Image img = renderFrame(scene, cam, s, uint32_t(r + 1), &st);
+        const std::vector<float> linear = renderFrameLinear(scene, cam, s, uint32_t(r + 1), &st);
+        Image img;
+        img.width = s.width;
+        img.height = s.height;
+        img.rgb.resize(linear.size());
+        linearToSrgb8(linear.data(), linear.size(), img.rgb.data());
         t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         if (r == 0) out.first = img;
-        acc.add(img);
+        if (stochastic) acc.addLinear(linear.data(), s.width, s.height);
+        else acc.add(img);  // the same image every frame
     }
     std::sort(t.begin(), t.end());
     seconds = t[t.size() / 2];
@@ -150,13 +162,14 @@ void addBenchShading(CLI::App& bench, Run& run) {
                 sceneOut.insert("prune", prune);
 
                 if (name == "office" || name == "sunflowers") {
-                    // GI samples per pixel (one frame), against the mean of many frames.
+                    // GI samples per pixel (one frame), against the mean of many frames (in
+                    // linear light).
                     RenderSettings g = desc.settings;
                     g.gi = true;
                     g.samples = 4;
                     Accumulator acc;
                     for (int f = 0; f < o->referenceFrames; ++f)
-                        acc.add(renderFrame(scene, cam, g, uint32_t(100000 + f)));
+                        acc.addLinear(renderFrameLinear(scene, cam, g, uint32_t(100000 + f)).data(), g.width, g.height);
                     const Image reference = acc.resolve();
                     toml::array gi;
                     for (int spp : o->giSamples) {

@@ -46,17 +46,26 @@ Image renderWithClients(SceneDesc desc, const CameraDesc& camera, const RenderOp
     cs.prefetch = o.prefetch;
     cs.async = false;
     cs.codec.codec = tileCodecFromName(o.codec);
-    // The single-machine path below accumulates 8-bit frames; so does this one, to give its bytes.
-    cs.wideAccumulation = false;
+    // Frames that are averaged travel as linear half-float tiles, to be averaged in linear light
+    // as the single-machine path below does; one frame comes as 8-bit tiles, the bytes
+    // renderFrame gives (a linear tile would be rounded to half precision first).
+    cs.wideAccumulation = o.frames > 1;
     Master master(desc, cs);
     LocalClients clients(o.clients, master.endpoint(), cs.threadsPerClient);
     if (!master.waitForClients(o.clients, 60'000))
         throw InputError("only " + std::to_string(master.connectedClients()) + " of " + std::to_string(o.clients) +
                          " local render clients joined within 60 s");
-    // Progressive: frames 1..N of a still view, averaged (the same bytes as one machine).
+    // Progressive: frames 1..N of a still view, averaged (the same bytes as one machine). A
+    // stochastic scene's frames come as linear tiles; a deterministic scene's as 8-bit tiles,
+    // every frame the same image, which their 8-bit mean is exactly.
     if (o.frames == 1) return master.renderFrame(&report);
     Accumulator acc;
-    for (int f = 0; f < o.frames; ++f) acc.add(master.renderFrame(&report));
+    std::vector<float> linear;
+    for (int f = 0; f < o.frames; ++f) {
+        const Image img = master.renderFrame(&report, &linear);
+        if (report.linear) acc.addLinear(linear.data(), img.width, img.height);
+        else acc.add(img);
+    }
     return acc.resolve();
 }
 
@@ -96,7 +105,8 @@ void addRender(CLI::App& app, Run& run) {
     cmd->add_option("--samples", o->samples, "Random samples per pixel sample and frame")->check(CLI::Range(1, 4096));
     cmd->add_option("--prune", o->prune, "Ray-tree pruning threshold (0 = off)")->check(CLI::Range(0.0, 1.0));
     cmd->add_option("--max-depth", o->maxDepth, "Longest ray path")->check(CLI::Range(1, 64));
-    cmd->add_option("--frames", o->frames, "Average this many frames, each with its own seeds (progressive refinement)")
+    cmd->add_option("--frames", o->frames,
+                    "Average this many frames in linear light, each with its own seeds (progressive refinement)")
         ->check(CLI::Range(1, 100000));
     cmd->add_option("--region", o->region, "Render only pixels x0,y0,x1,y1 (half-open; the rest stays black), to replay one tile");
 
@@ -150,11 +160,21 @@ void addRender(CLI::App& app, Run& run) {
             Image img;
             if (o->region.empty()) {
                 // The cluster numbers its frames from 1; so do we, so both give the same bytes.
+                // Frames are averaged in linear light, before the 8-bit quantisation clips each
+                // at 1.0 (a GI sample far above 1 would lose its excess in every frame), at the
+                // half precision the cluster sends them in (Accumulator::addLinear). A
+                // deterministic scene renders the same image every frame: its 8-bit mean is it.
+                const bool linear = o->frames > 1 && rendersStochastically(desc);
                 Accumulator acc;
                 for (int f = 0; f < o->frames; ++f) {
                     TileStats fs;
-                    img = renderFrame(scene, camera, s, uint32_t(f + 1), &fs);
-                    if (o->frames > 1) acc.add(img);
+                    if (linear) {
+                        const std::vector<float> frame = renderFrameLinear(scene, camera, s, uint32_t(f + 1), &fs);
+                        acc.addLinear(frame.data(), s.width, s.height);
+                    } else {
+                        img = renderFrame(scene, camera, s, uint32_t(f + 1), &fs);
+                        if (o->frames > 1) acc.add(img);
+                    }
                     stats.rays += fs.rays;
                     stats.shadowRays += fs.shadowRays;
                 }

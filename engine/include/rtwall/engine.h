@@ -76,6 +76,8 @@ struct Material {
     float roughness = 0.0f;            // metal: 0 = mirror, 1 = very rough (Phong lobe of exponent 2/r^2 - 2)
     Color absorption{0, 0, 0};         // glass: Beer-Lambert absorption coefficient per world unit of path inside
     Color emission{0, 0, 0};           // emissive: radiance leaving the surface (any material may add it)
+    bool twoSided = false;             // emission leaves both sides (default: the front only, where the
+                                       // triangle's winding faces, as area lights emit to one side)
     TextureDesc texture;               // modulates `color`
     float bump = 0.0f;                 // bump mapping: amplitude of the noise height field (0 = off)
     float bumpScale = 0.1f;            // bump mapping: feature size in object units (in (u, v) units with Uv)
@@ -99,6 +101,7 @@ struct Light {
                              // area: radiance
     Float3 edge1{1, 0, 0};   // area: a parallelogram at `position` spanned by edge1 and edge2; it emits
     Float3 edge2{0, 0, 1};   //   to the side of cross(edge1, edge2) only
+    bool twoSided = false;   // area: emits to both sides
 };
 
 // An off-axis (generalised perspective) projection: the image is the world-space rectangle with
@@ -356,7 +359,7 @@ Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings
 // The same frame in linear RGB floats (3 per pixel, rows of settings.width pixels), as
 // renderTileLinear writes them: what Accumulator::addLinear averages.
 std::vector<float> renderFrameLinear(const Scene& scene, const Camera& camera, const RenderSettings& settings,
-                                     uint32_t frame = 0);
+                                     uint32_t frame = 0, TileStats* stats = nullptr);
 
 // Picking: the instance that the primary ray through image position (px, py) (pixels from the
 // top-left corner) hits first, where, and how far along the ray (in units of the ray
