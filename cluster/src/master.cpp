@@ -594,7 +594,6 @@ struct Master::Impl {
         c.peer = peer;
         c.lastSeen = nowSeconds();
         c.threads = std::max(1u, hello.threads);
-        scheduler.addClient(c.id);
         auto& ref = clients[peer] = c;
         const SendResult r = send(ref, welcomeFor(ref));
         if (r == SendResult::Gone) return;
@@ -624,6 +623,10 @@ struct Master::Impl {
             return;
         }
         c.stateInFlight = false;
+        // In the scheduler from its first proof on: a peer that never proves a state is no
+        // client the scheduler waits for (a stuck tile avoids its client only while another
+        // client could render it).
+        scheduler.addClient(c.id);
         if (!c.ready) {
             c.ready = true;
             {
@@ -1349,7 +1352,7 @@ std::string describeCounters(const MasterCounters& c) {
     part(out, c.failedHandshakes, "handshakes broken off");
     part(out, c.failedSends, "sends failed");
     part(out, c.lostHandOuts, "lost tiles handed out again");
-    part(out, c.stalledTiles, "stuck tiles handed out again");
+    part(out, c.stalledTiles, "stuck tiles reported");
     part(out, c.clientsDropped, "clients left");
     return out.empty() ? "nothing dropped, refused or lost" : out;
 }
