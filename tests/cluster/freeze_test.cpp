@@ -103,6 +103,7 @@ TEST(Issue16, ALostTileResultIsRecoveredWithOneClient) {
     const Image expected = test::singleMachine(desc, 0);
     ClusterSettings cs;
     cs.async = false;
+    std::future<int> client;  // destroyed after the master, whose goodbye ends it
     auto master = std::make_unique<Master>(desc, cs);
     std::atomic<bool> stop{false};
     master->setStopFlag(&stop);
@@ -111,7 +112,7 @@ TEST(Issue16, ALostTileResultIsRecoveredWithOneClient) {
     c.threads = 1;
     c.exitAfterIdleMs = 4000;
     c.dropEveryNthResult = 5;
-    auto client = std::async(std::launch::async, [c] { return runClient(c); });
+    client = std::async(std::launch::async, [c] { return runClient(c); });
     ASSERT_TRUE(master->waitForClients(1, 30000));
     for (int f = 0; f < 3; ++f) {
         const auto img = frameWithin(*master, stop, 30);
