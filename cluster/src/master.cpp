@@ -597,7 +597,11 @@ struct Master::Impl {
         auto& ref = clients[peer] = c;
         const SendResult r = send(ref, welcomeFor(ref));
         if (r == SendResult::Gone) return;
-        ref.needsWelcome = r == SendResult::Full;
+        if (r == SendResult::Full) {
+            // Both again, in this order: a state before its Welcome would be thrown away.
+            ref.needsWelcome = ref.needsState = true;
+            return;
+        }
         sendState(ref);
     }
 
