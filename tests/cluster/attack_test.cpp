@@ -145,7 +145,9 @@ TEST_P(MasterUnderAttack, FramesStayBitIdenticalAndEveryMessageIsCounted) {
         EXPECT_EQ(master.connectedClients(), 3);
     } else {
         EXPECT_EQ(sent.joined, 0u);
-        EXPECT_EQ(d.dropped(), 0u) << "with CURVE nothing of the attacker reaches the application";
+        // With CURVE nothing of the attacker reaches the application (the real clients may
+        // still send a late result now and then: stale).
+        EXPECT_EQ(d.malformed + d.unknownPeer + d.replayed + d.unexpected + d.undecodableTiles, 0u) << describeCounters(d);
         EXPECT_GE(d.refused, 1u) << "ZAP refused the attacker's keys";
         EXPECT_EQ(master.connectedClients(), 2);
     }
