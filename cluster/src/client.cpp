@@ -15,6 +15,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdio>
+#include <cstring>
 #include <deque>
 #include <fstream>
 #include <future>
@@ -51,12 +52,14 @@ public:
 
     int run() {
         results_.bind(kResultsAddress);
-        for (int i = 0; i < threads_; ++i) workers_.emplace_back([this] { workerLoop(); });
+        slots_ = std::make_unique<Slot[]>(size_t(threads_));
+        for (int i = 0; i < threads_; ++i) workers_.emplace_back([this, i] { workerLoop(slots_[size_t(i)]); });
         const int status = networkLoop();
         {
             std::lock_guard lock(workMutex_);
             stopping_ = true;
         }
+        stopRequested_ = true;
         workCv_.notify_all();
         for (auto& t : workers_) t.join();
         return status;
@@ -75,6 +78,23 @@ private:
         TilePixels pixels = TilePixels::Srgb8;
     };
 
+    // What a render thread is rendering, for the network thread's stall watch. Written per tile
+    // with two atomic stores (no lock on the render path); read consistently by checking that
+    // the start time did not change around the read.
+    struct Slot {
+        std::atomic<uint64_t> job{0};      // frame << 32 | tile
+        std::atomic<int64_t> startNs{0};   // 0: idle
+        int64_t reportedStartNs = 0;       // network thread only: the stall already reported
+    };
+
+    // More tiles than any master gives a client (64 credits) are not queued: a master that
+    // assigns without end must not fill this client's memory.
+    static constexpr size_t kMaxQueuedTiles = 4096;
+
+    static int64_t steadyNs() {
+        return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+    }
+
     // ---- network thread -------------------------------------------------------------------
 
     void connect() {
@@ -88,8 +108,19 @@ private:
             dealer_.set(zmq::sockopt::curve_publickey, keys_.publicKey);
             dealer_.set(zmq::sockopt::curve_secretkey, keys_.secretKey);
         }
+        // The handshake's outcome (a refused key, no CURVE on one side) is said in one line.
+        const std::string monitorAddress = "inproc://rtwall-client-monitor-" + std::to_string(++monitorSeq_);
+        if (zmq_socket_monitor(dealer_.handle(), monitorAddress.c_str(),
+                               ZMQ_EVENT_HANDSHAKE_FAILED_AUTH | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
+                                   ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_SUCCEEDED) == 0) {
+            monitor_ = zmq::socket_t(ctx_, zmq::socket_type::pair);
+            monitor_.set(zmq::sockopt::linger, 0);
+            monitor_.connect(monitorAddress);
+        }
         dealer_.connect(settings_.connect);
         session_ = 0;
+        assignFrame_ = 0;
+        assignSeen_ = 0;
         ready_ = false;
         snapshot_.reset();
         forgetPendingFiles();
@@ -127,39 +158,70 @@ private:
         double idleSince = nowSeconds();
         std::mt19937 jitter(std::random_device{}());
         for (;;) {
-            zmq::pollitem_t items[] = {{dealer_.handle(), 0, ZMQ_POLLIN, 0}, {results_.handle(), 0, ZMQ_POLLIN, 0}};
-            zmq::poll(items, 2, std::chrono::milliseconds(20));
+            zmq::pollitem_t items[] = {{dealer_.handle(), 0, ZMQ_POLLIN, 0},
+                                       {results_.handle(), 0, ZMQ_POLLIN, 0},
+                                       {monitor_.handle(), 0, ZMQ_POLLIN, 0}};
+            zmq::poll(items, monitor_ ? 3 : 2, std::chrono::milliseconds(20));
             if (items[0].revents & ZMQ_POLLIN) {
                 for (int i = 0; i < 256; ++i) {
                     zmq::message_t msg;
                     if (!dealer_.recv(msg, zmq::recv_flags::dontwait)) break;
-                    lastHeard_ = idleSince = nowSeconds();
+                    // One frame per message: a multi-frame one goes whole (each part read once).
+                    if (discardRestOf(dealer_, msg) > 0) {
+                        drop();
+                        continue;
+                    }
+                    // Only messages this client can use count as the master being there: a
+                    // peer that sends garbage does not keep it waiting for ever.
+                    const uint64_t droppedBefore = dropped_;
                     if (auto status = handle(msg)) return *status;
+                    if (dropped_ == droppedBefore) lastHeard_ = idleSince = nowSeconds();
                 }
             }
             if (items[1].revents & ZMQ_POLLIN) {
                 for (int i = 0; i < 256; ++i) {
                     zmq::message_t msg;
                     if (!results_.recv(msg, zmq::recv_flags::dontwait)) break;
-                    if (!dealer_.send(msg, zmq::send_flags::dontwait)) ++dropped_;  // the master re-issues it
+                    // Lost if its queue is full: the master hands the tile out again when this
+                    // client is idle without it (its heartbeat says so).
+                    const int n = settings_.dropEveryNthResult;
+                    if (n > 0 && ++resultsOut_ % uint64_t(n) == 0) {
+                        // Injected loss.
+                    } else if (!dealer_.send(msg, zmq::send_flags::dontwait)) {
+                        ++lostResults_;
+                    }
+                    --held_;
                     lastSent_ = nowSeconds();
                 }
             }
+            if (monitor_ && (items[2].revents & ZMQ_POLLIN)) readMonitor();
             finishBuild();
+            watchStalls();
+            if (blockedFrame_) {
+                const FrameBegin fb = *blockedFrame_;
+                onFrameBegin(fb);
+                if (blockedFrame_ && !blockedLogged_ && nowSeconds() - blockedSince_ > settings_.minStallMs * 1e-3) {
+                    blockedLogged_ = true;
+                    std::fprintf(stderr, "rtwall client %u: frame %u waits: a render thread is still inside the scene\n", id_, fb.frame);
+                }
+            }
             if (std::string why = failure(); !why.empty()) {
                 send(Goodbye{why});
                 std::fprintf(stderr, "rtwall client: %s\n", why.c_str());
                 return 1;
             }
             const double now = nowSeconds();
-            if (session_.load() && now - lastSent_ > heartbeatMs_ * 1e-3) send(Heartbeat{});
+            // The heartbeat says what this client holds, so that the master can tell a lost
+            // hand-out from a slow one.
+            if (session_.load() && now - lastSent_ > heartbeatMs_ * 1e-3)
+                send(Heartbeat{assignFrame_, assignSeen_, held_.load() == 0});
             if (reconnectRequested_ || now - lastHeard_ > timeoutMs() * 1e-3) {
                 // The master went silent or away: start over with a fresh connection after an
                 // exponentially growing, jittered pause, so that a restarted master is not hit by
                 // every client in the same millisecond.
                 if (settings_.exitAfterIdleMs > 0 && now - idleSince > settings_.exitAfterIdleMs * 1e-3) {
-                    std::fprintf(stderr, "rtwall client: no master at %s for %d ms, giving up\n",
-                                 settings_.connect.c_str(), settings_.exitAfterIdleMs);
+                    std::fprintf(stderr, "rtwall client: no master at %s for %d ms, giving up%s\n",
+                                 settings_.connect.c_str(), settings_.exitAfterIdleMs, handshakeNote().c_str());
                     return 1;
                 }
                 reconnectRequested_ = false;
@@ -187,6 +249,8 @@ private:
             if (h.type == MsgType::Welcome) {
                 const Welcome w = decodePayload<Welcome>(p, n);
                 if (h.session != session_.load()) {  // a new master session: nothing of the old one counts
+                    assignFrame_ = 0;
+                    assignSeen_ = 0;
                     snapshot_.reset();
                     forgetPendingFiles();
                     ++buildGeneration_;
@@ -209,7 +273,7 @@ private:
                 return std::nullopt;
             }
             if (h.session != session_.load() || session_.load() == 0) {
-                ++dropped_;  // from another master session, or before the handshake
+                drop();  // from another master session, or before the handshake
                 return std::nullopt;
             }
             switch (h.type) {
@@ -232,11 +296,10 @@ private:
                 reconnectRequested_ = true;  // a master that restarts finds this client waiting
                 break;
             }
-            default: ++dropped_; break;
+            default: drop(); break;  // a type only clients send
             }
         } catch (const DecodeError&) {
-            ++dropped_;
-            if (settings_.counters) ++settings_.counters->droppedMessages;
+            drop();
         } catch (const std::exception& e) {
             std::lock_guard lock(workMutex_);
             failure_ = std::string("cannot use the master's scene: ") + e.what();
@@ -310,6 +373,7 @@ private:
     void forgetPendingFiles() {
         std::erase_if(updateFiles_, [&](const auto& e) { return !assets_.count(e.first); });
         deferredFrame_.reset();
+        blockedFrame_.reset();
     }
     bool updateFilesMissing() const {
         for (const auto& [hash, ref] : updateFiles_)
@@ -324,8 +388,7 @@ private:
                 if (a.hash == ad.hash) ref = &a;
         if (auto it = updateFiles_.find(ad.hash); !ref && it != updateFiles_.end()) ref = &it->second;
         if (!ref || assets_.count(ad.hash)) {
-            ++dropped_;  // not asked for by this state, or already here
-            if (settings_.counters) ++settings_.counters->droppedMessages;
+            drop();  // not asked for by this state, or already here
             return;
         }
         if (ad.bytes.size() != ref->bytes || hashBytes(ad.bytes.data(), ad.bytes.size()) != ad.hash) {
@@ -358,7 +421,7 @@ private:
         // Within a session the master's states to one client never go back in time (it sends
         // the current frame's state): one older than what this client holds is a replay.
         if (snapshot_ && snap.updateSeq < stateSeq_) {
-            ++dropped_;
+            drop();
             return;
         }
         dropWork();
@@ -375,7 +438,7 @@ private:
 
     void onMeshData(MeshData md) {
         if (hashBytes(md.mesh.data(), md.mesh.size()) != md.hash) {
-            ++dropped_;
+            drop();
             return;
         }
         meshes_[md.hash] = std::make_shared<const TriangleMesh>(decodeMesh(md.mesh.data(), md.mesh.size()));
@@ -395,7 +458,7 @@ private:
     // went silent for longer than the master's timeout would be dropped and, rejoining, build
     // again, never getting in.
     void tryBuildScene() {
-        if (!snapshot_ || ready_ || building_.valid()) return;  // a stale build is redone when it ends
+        if (!snapshot_ || ready_ || building_.valid() || built_) return;  // a stale build is redone when it ends
         SceneDesc desc;
         for (const MeshRef& ref : snapshot_->meshes) {
             auto it = meshes_.find(ref.hash);
@@ -422,28 +485,32 @@ private:
     }
 
     // Installs a finished build if it is still for the current snapshot, and proves the state.
+    // The scene is swapped only while no render thread is inside the old one; one that is stuck
+    // there must not block this thread, so the built scene waits and the swap is tried again.
     void finishBuild() {
-        if (!building_.valid() || building_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
-        std::unique_ptr<Scene> scene;
-        try {
-            scene = building_.get();
-        } catch (const std::exception& e) {
-            std::lock_guard lock(workMutex_);
-            failure_ = std::string("cannot use the master's scene: ") + e.what();
-            return;
+        if (!built_) {
+            if (!building_.valid() || building_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+            try {
+                built_ = building_.get();
+            } catch (const std::exception& e) {
+                std::lock_guard lock(workMutex_);
+                failure_ = std::string("cannot use the master's scene: ") + e.what();
+                return;
+            }
         }
         if (buildingFor_ != buildGeneration_ || !snapshot_) {  // another snapshot came meanwhile
+            built_.reset();
             tryBuildScene();
             return;
         }
+        std::unique_lock lock(sceneMutex_, std::chrono::milliseconds(20));
+        if (!lock.owns_lock()) return;
         const Hash128 hash = stateHash(*snapshot_);
-        {
-            std::unique_lock lock(sceneMutex_);
-            scene_ = std::move(scene);
-            camera_ = snapshot_->camera;
-            setRenderSettings(snapshot_->settings);
-            stateSeq_ = snapshot_->updateSeq;
-        }
+        scene_ = std::move(built_);
+        camera_ = snapshot_->camera;
+        setRenderSettings(snapshot_->settings);
+        stateSeq_ = snapshot_->updateSeq;
+        lock.unlock();
         ready_ = true;
         send(Ready{stateSeq_, hash});
     }
@@ -462,17 +529,21 @@ private:
         send(ResyncRequest{stateSeq_});
     }
 
-    // Applies the buffered updates up to `seq`. False when this frame cannot be rendered here:
-    // an update is missing (a resync is requested) or our state is already newer.
-    bool catchUp(uint32_t seq) {
+    // Applies the buffered updates up to `seq`. CannotRender: an update is missing (a resync is
+    // requested) or our state is already newer. Busy: a render thread is still inside the scene
+    // (a stuck one holds it for good); the frame is tried again later, this thread never waits.
+    enum class CatchUp { Done, CannotRender, Busy };
+    CatchUp catchUp(uint32_t seq) {
+        if (seq == updates_.state()) return CatchUp::Done;
+        if (seq < updates_.state()) return CatchUp::CannotRender;
+        std::unique_lock lock(sceneMutex_, std::chrono::milliseconds(20));
+        if (!lock.owns_lock()) return CatchUp::Busy;
         std::vector<Update> ups;
-        switch (updates_.catchUp(seq, ups)) {
-        case UpdateSequencer::CatchUp::Gap: requestResync(); return false;
-        case UpdateSequencer::CatchUp::Ahead: return false;
-        case UpdateSequencer::CatchUp::Ready: break;
+        if (updates_.catchUp(seq, ups) != UpdateSequencer::CatchUp::Ready) {
+            lock.unlock();
+            requestResync();
+            return CatchUp::CannotRender;
         }
-        if (ups.empty()) return true;
-        std::unique_lock lock(sceneMutex_);
         for (const Update& u : ups)
             for (const Change& c : u.changes) {
                 if (auto* cam = std::get_if<CameraChange>(&c)) camera_ = cam->camera;
@@ -486,7 +557,7 @@ private:
             }
         scene_->commit();
         stateSeq_ = seq;
-        return true;
+        return CatchUp::Done;
     }
 
     void onFrameBegin(const FrameBegin& fb) {
@@ -494,16 +565,27 @@ private:
         // replay: obeying it would throw away the work in progress. (The master repeats the
         // current frame's FrameBegin after a resync, when this client renders nothing.)
         if (fb.frame < lastFrameBegun_ || (fb.frame != 0 && fb.frame == frame_.load())) {
-            ++dropped_;
+            drop();
             return;
         }
         dropWork();
         deferredFrame_.reset();
+        blockedFrame_.reset();
         if (ready_ && updateFilesMissing()) {  // a changed material's file is on its way
             deferredFrame_ = fb;
             return;
         }
-        if (!ready_ || !catchUp(fb.updateSeq)) return;
+        if (!ready_) return;
+        switch (catchUp(fb.updateSeq)) {
+        case CatchUp::CannotRender: return;
+        case CatchUp::Busy:
+            blockedFrame_ = fb;
+            if (blockedSince_ == 0) blockedSince_ = nowSeconds();
+            return;
+        case CatchUp::Done: break;
+        }
+        blockedSince_ = 0;
+        blockedLogged_ = false;
         framePixels_ = fb.pixels;
         frame_.store(fb.frame);
         lastFrameBegun_ = fb.frame;
@@ -511,21 +593,109 @@ private:
     }
 
     void onAssign(const TileAssign& a) {
+        // Every tile the master sent for a frame counts as seen, used or not: the heartbeat's
+        // tilesSeen tells the master that nothing it sent is still on its way.
+        if (a.frame > assignFrame_) {
+            assignFrame_ = a.frame;
+            assignSeen_ = 0;
+        }
+        if (a.frame == assignFrame_) assignSeen_ += uint32_t(a.tiles.size());
         if (!ready_ || a.frame != frame_.load()) {
-            ++dropped_;
+            drop();
             return;
         }
+        size_t queued = 0;
         {
             std::lock_guard lock(workMutex_);
-            for (uint32_t t : a.tiles) work_.push_back({a.frame, t, stateSeq_, codec_, framePixels_});
+            for (uint32_t t : a.tiles) {
+                if (work_.size() >= kMaxQueuedTiles) break;
+                work_.push_back({a.frame, t, stateSeq_, codec_, framePixels_});
+                ++queued;
+            }
+            held_ += int64_t(queued);
         }
+        if (queued < a.tiles.size() && settings_.counters) settings_.counters->droppedAssignments += a.tiles.size() - queued;
         workCv_.notify_all();
     }
 
     void dropWork() {
         std::lock_guard lock(workMutex_);
+        held_ -= int64_t(work_.size());
         work_.clear();
         frame_.store(0);
+    }
+
+    void drop() {
+        ++dropped_;
+        if (settings_.counters) ++settings_.counters->droppedMessages;
+    }
+
+    // A render thread far past its expected time on a tile of the current frame is reported
+    // (once per tile): the master hands the tile to another client, or to this one's other
+    // threads. "Expected": 16 times this client's mean tile time, at least minStallMs.
+    void watchStalls() {
+        const uint64_t timed = tilesTimed_.load();
+        const double meanNs = timed ? double(tileNs_.load()) / double(timed) : 0.0;
+        const int64_t threshold = std::max<int64_t>(int64_t(settings_.minStallMs) * 1'000'000, int64_t(16.0 * meanNs));
+        const int64_t now = steadyNs();
+        for (int i = 0; i < threads_; ++i) {
+            Slot& slot = slots_[size_t(i)];
+            const int64_t start = slot.startNs.load();
+            if (start == 0 || start == slot.reportedStartNs || now - start < threshold) continue;
+            const uint64_t job = slot.job.load();
+            if (slot.startNs.load() != start) continue;  // it moved on meanwhile
+            slot.reportedStartNs = start;
+            const uint32_t frame = uint32_t(job >> 32), tile = uint32_t(job);
+            const uint32_t ms = uint32_t(std::min<int64_t>((now - start) / 1'000'000, UINT32_MAX));
+            std::fprintf(stderr, "rtwall client %u: render thread %d has been on frame %u, tile %u for %u ms (mean tile %.1f ms): "
+                         "reported to the master\n", id_, i, frame, tile, ms, meanNs * 1e-6);
+            if (settings_.counters) ++settings_.counters->stalledTiles;
+            if (session_.load()) send(TileStalled{frame, tile, ms});
+        }
+    }
+
+    // Handshake events of the connection to the master: a refusal is said, not just "no master".
+    void readMonitor() {
+        for (int i = 0; i < 16; ++i) {
+            zmq::message_t event, address;
+            if (!monitor_.recv(event, zmq::recv_flags::dontwait)) return;
+            if (!event.more() || !monitor_.recv(address, zmq::recv_flags::dontwait) || event.size() < 6) continue;
+            discardRestOf(monitor_, address);
+            uint16_t id;
+            uint32_t value;
+            std::memcpy(&id, event.data(), 2);
+            std::memcpy(&value, static_cast<const uint8_t*>(event.data()) + 2, 4);
+            std::string why;
+            if (id == ZMQ_EVENT_HANDSHAKE_SUCCEEDED) {
+                handshakeTrouble_.clear();
+                handshakeFailures_ = 0;
+                continue;
+            }
+            if (id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) {
+                if (settings_.counters) ++settings_.counters->refusedHandshakes;
+                why = "the master refused this client's key (status " + std::to_string(value) + "): is " +
+                      (keys_.publicKey.empty() ? std::string("its key") : keys_.publicKey) + " in the master's client_keys?";
+            } else {
+                if (settings_.counters) ++settings_.counters->failedHandshakes;
+                if (id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL && value == ZMQ_PROTOCOL_ERROR_ZMTP_MECHANISM_MISMATCH)
+                    why = "the master and this client disagree on security: one uses CURVE keys, the other not";
+                else if (id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL)
+                    why = "the handshake failed (ZMTP protocol error " + std::to_string(value) + ")";
+                else
+                    why = settings_.keyFile.empty() ? "the master broke off the handshake"
+                                                    : "the master broke off the CURVE handshake: is --server-key its public key?";
+            }
+            if (why != handshakeTrouble_)
+                std::fprintf(stderr, "rtwall client: %s: %s\n", settings_.connect.c_str(), why.c_str());
+            handshakeTrouble_ = why;
+            ++handshakeFailures_;
+        }
+    }
+
+    std::string handshakeNote() const {
+        if (handshakeTrouble_.empty()) return {};
+        return " (" + handshakeTrouble_ + "; " + std::to_string(handshakeFailures_) + " failed handshake" +
+               (handshakeFailures_ == 1 ? "" : "s") + ")";
     }
 
     // Replay mode (benchmarks of the master and the link): a tile rendered once is sent again
@@ -550,7 +720,18 @@ private:
     // full (the master reads slowly and the network thread's own queue is full too) the result
     // is dropped and counted, and the master re-issues the tile as a straggler.
     void sendResult(zmq::socket_t& out, const std::vector<uint8_t>& bytes) {
-        if (!sendNow(out, bytes)) ++droppedResults_;
+        if (!sendNow(out, bytes)) {
+            ++droppedResults_;
+            --held_;
+        }
+    }
+
+    // The injected stall (ClientSettings::stallMs): once, cut short when the client stops.
+    void maybeStall(uint32_t frame) {
+        if (settings_.stallMs <= 0 || frame < settings_.stallFrame || stallInjected_.exchange(true)) return;
+        const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(settings_.stallMs);
+        while (std::chrono::steady_clock::now() < end && !stopRequested_.load())
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
 
     std::string failure() {
@@ -560,7 +741,7 @@ private:
 
     // ---- render threads -------------------------------------------------------------------
 
-    void workerLoop() {
+    void workerLoop(Slot& slot) {
         pthread_setname_np(pthread_self(), "rtw-render");  // rtwall bench cluster attributes CPU time by thread name
         zmq::socket_t out(ctx_, zmq::socket_type::push);
         out.set(zmq::sockopt::linger, 0);
@@ -580,10 +761,16 @@ private:
             const bool wide = w.pixels == TilePixels::LinearHalf;
             try {
                 std::shared_lock lock(sceneMutex_);
-                if (w.frame != frame_.load() || !scene_ || w.tile >= tiles_.size()) continue;  // stale or bogus
+                if (w.frame != frame_.load() || !scene_ || w.tile >= tiles_.size()) {  // stale or bogus
+                    --held_;
+                    continue;
+                }
                 if (settings_.replay && !wide && replaySend(out, w)) continue;
                 const TileRect r = tiles_[w.tile];
                 const auto t0 = std::chrono::steady_clock::now();
+                // For the stall watch (watchStalls): this thread is on this tile since now.
+                slot.job.store(uint64_t(w.frame) << 32 | w.tile);
+                slot.startNs.store(steadyNs());
                 const Camera camera(camera_, renderSettings_.width, renderSettings_.height);
                 if (wide) {
                     // Part of an accumulation: linear, before the 8-bit quantisation.
@@ -595,7 +782,11 @@ private:
                 }
                 if (settings_.extraTileDelayMs > 0)
                     std::this_thread::sleep_for(std::chrono::milliseconds(settings_.extraTileDelayMs));
+                maybeStall(w.frame);
+                slot.startNs.store(0);
                 const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                tileNs_ += uint64_t(seconds * 1e9);
+                ++tilesTimed_;
                 TileResult result;
                 result.frame = w.frame;
                 result.tile = w.tile;
@@ -645,6 +836,21 @@ private:
     int backoffMs_ = 100;  // next reconnection pause (jittered), doubled up to maxReconnectMs
     uint64_t dropped_ = 0;
     std::atomic<uint64_t> droppedResults_{0};
+    uint64_t lostResults_ = 0;  // results the connection did not take (its queue to the master full)
+    uint64_t resultsOut_ = 0;   // for dropEveryNthResult
+    // Tiles this client holds: queued, being rendered, or rendered and not yet handed to the
+    // master's connection. 0 = idle (Heartbeat::idle).
+    std::atomic<int64_t> held_{0};
+    uint32_t assignFrame_ = 0;  // the newest frame it was assigned tiles for
+    uint32_t assignSeen_ = 0;   // tiles of that frame's assignments that arrived
+    zmq::socket_t monitor_;     // handshake events of dealer_
+    uint64_t monitorSeq_ = 0;
+    std::string handshakeTrouble_;  // the last failed handshake, said when giving up
+    uint64_t handshakeFailures_ = 0;
+    std::unique_ptr<Slot[]> slots_;  // one per render thread
+    std::atomic<uint64_t> tileNs_{0}, tilesTimed_{0};  // render time of this client's tiles, for "expected"
+    std::atomic<bool> stallInjected_{false};
+    std::atomic<bool> stopRequested_{false};
     std::string failure_;  // guarded by workMutex_
 
     std::optional<SceneSnapshot> snapshot_;
@@ -655,12 +861,16 @@ private:
     std::map<Hash128, std::shared_ptr<const std::vector<uint8_t>>> assets_;  // texture and volume files
     std::map<Hash128, AssetRef> updateFiles_;  // files named by updates' material changes
     std::optional<FrameBegin> deferredFrame_;  // a frame waiting for one of them
+    std::optional<FrameBegin> blockedFrame_;   // a frame whose updates wait for the render threads to leave the scene
+    double blockedSince_ = 0;
+    bool blockedLogged_ = false;
+    std::unique_ptr<Scene> built_;             // a finished build waiting for the same
     UpdateSequencer updates_;
     bool ready_ = false;
     uint32_t stateSeq_ = 0;  // network thread only; render threads get it in each Work
 
     // Shared with the render threads.
-    std::shared_mutex sceneMutex_;  // render threads read; the network thread changes the scene
+    std::shared_timed_mutex sceneMutex_;  // render threads read; the network thread changes the scene (never waiting long)
     std::unique_ptr<Scene> scene_;
     CameraDesc camera_;
     RenderSettings renderSettings_;

@@ -14,9 +14,11 @@
 #include <rtwall/cluster.h>
 
 #include <pthread.h>
+#include <stdlib.h>
 
 #include <algorithm>
 #include <atomic>
+#include <cstring>
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
@@ -47,12 +49,29 @@ struct ClientState {
     std::set<Hash128> assetsSent;  // likewise each texture or volume file
     uint32_t stateSeq = 0;    // the snapshot it was sent; it also has every update after it
     uint32_t credits = 0;     // tiles it asked for and has not been given
+    uint32_t window = 0;      // tiles it asked to keep in flight this frame (its TileRequest)
+    uint32_t tilesAssigned = 0;  // tiles sent to it this frame: its idle heartbeat must have seen them all
+    uint32_t frameBegun = 0;  // the frame whose FrameBegin reached its queue (a failed send is retried)
+    bool needsState = false;  // a state message did not fit its queue: the state goes again
+    bool needsWelcome = false;  // a codec change did not fit its queue
+    double fullSince = 0;     // its queue has been full since then (0: not full); too long and it goes
+    double retryAt = 0;       // with a full queue: optional sends wait until then
     uint64_t updatesSent = 0; // for fault injection
     uint32_t threads = 0;
     double busySeconds = 0;   // render time reported this frame
     uint64_t frameBytes = 0;  // encoded bytes of its results accepted this frame
     const char* deathReason = nullptr;  // set when it must go; reaped outside any iteration
 };
+
+std::string hex(uint32_t v) {
+    char buf[16];
+    std::snprintf(buf, sizeof buf, "%x", v);
+    return buf;
+}
+
+// How many of each kind of dropped message are logged (with the peer's address) before the
+// rest are only counted: a flood must not flood the log too.
+constexpr uint64_t kLoggedPerKind = 5;
 
 // Decodes accepted tiles into the framebuffer on a few threads.
 class DecodePool {
@@ -212,9 +231,12 @@ struct Master::Impl {
     zmq::context_t ctx{1};
     std::unique_ptr<ZapHandler> zap;  // before the router: it must answer the first handshake
     zmq::socket_t router{ctx, zmq::socket_type::router};
+    zmq::socket_t monitor{ctx, zmq::socket_type::pair};  // the router's failed handshakes
     zmq::socket_t wakeSend{ctx, zmq::socket_type::pair};
     zmq::socket_t wakeRecv{ctx, zmq::socket_type::pair};
     std::string boundEndpoint;
+    std::filesystem::path localKeyDir;  // the local clients' session key pair (removed with the master)
+    std::vector<std::string> localArgs;
 
     std::mutex m;                 // guards commands, the frame hand-over and counters below
     std::condition_variable cv;
@@ -225,6 +247,7 @@ struct Master::Impl {
     FrameReport completedReport;
     std::vector<float> completedLinear;  // the completed frame's linear pixels, when it had linear tiles
     int readyClients = 0;
+    std::atomic<const std::atomic<bool>*> stopFlag{nullptr};
 
     // Network-thread state.
     std::map<std::string, ClientState> clients;  // by ZMQ peer identity
@@ -245,10 +268,15 @@ struct Master::Impl {
     std::atomic<bool> frameDecoded{false};
     std::mutex failedMutex;
     std::vector<uint32_t> failedTiles;  // accepted results of the current frame that did not decode
-    std::atomic<uint64_t> dropped{0};
     std::atomic<uint64_t> resyncCount{0};
-    std::atomic<uint64_t> sendFailures{0};
     std::atomic<uint64_t> injectedLosses{0};
+
+    // Counters by kind (MasterCounters); the network thread writes, anyone reads.
+    mutable std::mutex countersMutex;
+    MasterCounters counts;
+    // The message being handled, for the peer's address in a log line.
+    const zmq::message_t* current = nullptr;
+    const ClientState* currentClient = nullptr;
 
     uint32_t lastBegun = 0;       // application side
     bool inFlight = false;
@@ -256,6 +284,52 @@ struct Master::Impl {
 
     Impl(const SceneDesc& s, const ClusterSettings& cs)
         : settings(cs), scene(s), scheduler(SchedulerOptions{cs.affinity, cs.stragglerFactor, 0.05, 1}) {}
+
+    ~Impl() {
+        if (!localKeyDir.empty()) {
+            std::error_code ec;
+            std::filesystem::remove_all(localKeyDir, ec);
+        }
+    }
+
+    MasterCounters countersNow() const {
+        MasterCounters c;
+        {
+            std::lock_guard lock(countersMutex);
+            c = counts;
+        }
+        if (zap) c.refused += zap->denied();
+        return c;
+    }
+
+    // "client 3 at 127.0.0.1" or "127.0.0.1 (not a client)", for log lines.
+    std::string who() const {
+        std::string s;
+        if (currentClient) s = "client " + std::to_string(currentClient->id) + " at ";
+        s += current ? peerAddressOf(*current) : std::string("?");
+        if (!currentClient) s += " (not a client)";
+        return s;
+    }
+
+    // Counts one event of a kind; the first few are logged with what and from whom.
+    void count(uint64_t MasterCounters::*kind, const char* kindName, const std::string& what) {
+        uint64_t n;
+        {
+            std::lock_guard lock(countersMutex);
+            n = ++(counts.*kind);
+        }
+        if (n <= kLoggedPerKind)
+            std::fprintf(stderr, "rtwall master: %s from %s: %s%s\n", kindName, who().c_str(), what.c_str(),
+                         n == kLoggedPerKind ? " (more of this kind are counted, not logged)" : "");
+    }
+    void malformed(const std::string& what) { count(&MasterCounters::malformed, "dropped a malformed message", what); }
+    void stale(const std::string& what) { count(&MasterCounters::stale, "dropped a stale message", what); }
+    void replayed(const std::string& what) { count(&MasterCounters::replayed, "dropped a repeated message", what); }
+    void unexpected(const std::string& what) { count(&MasterCounters::unexpected, "dropped an unexpected message", what); }
+    void add(uint64_t MasterCounters::*kind, uint64_t n) {
+        std::lock_guard lock(countersMutex);
+        counts.*kind += n;
+    }
 
     // The current state and its sequence number, consistent with each other.
     SceneSnapshot snapshot() const {
@@ -298,11 +372,33 @@ struct Master::Impl {
         return h;
     }
 
-    template <class Msg> bool send(ClientState& c, const Msg& msg, uint32_t frame = 0) {
-        const bool ok = sendToPeer(router, c.peer, encodeMessage(header(messageTypeOf(msg), frame), msg));
-        c.lastSent = nowSeconds();
-        if (!ok) ++sendFailures;
-        return ok;
+    // A send never blocks. A full queue is not death (a live client can be busy for a moment):
+    // the caller repairs what was lost, optional sends pause for 10 ms, and only a queue full
+    // for longer than the timeout drops the client. A closed connection does.
+    template <class Msg> SendResult send(ClientState& c, const Msg& msg, uint32_t frame = 0) {
+        const SendResult r = sendToPeerResult(router, c.peer, encodeMessage(header(messageTypeOf(msg), frame), msg));
+        const double now = nowSeconds();
+        if (r == SendResult::Sent) {
+            c.lastSent = now;
+            c.fullSince = 0;
+            return r;
+        }
+        uint64_t n;
+        {
+            std::lock_guard lock(countersMutex);
+            n = ++counts.failedSends;
+        }
+        if (n <= kLoggedPerKind)
+            std::fprintf(stderr, "rtwall master: could not send a message (type %d) to client %u: %s%s\n",
+                         int(messageTypeOf(msg)), c.id, r == SendResult::Full ? "its queue is full" : "it is gone",
+                         n == kLoggedPerKind ? " (more failed sends are counted, not logged)" : "");
+        if (r == SendResult::Gone) {
+            markDead(c, "its connection is gone");
+        } else {
+            if (c.fullSince == 0) c.fullSince = now;
+            c.retryAt = now + 0.01;
+        }
+        return r;
     }
 
     void wake() {
@@ -330,19 +426,27 @@ struct Master::Impl {
                 --readyClients;
             }
             it = clients.erase(it);
+            add(&MasterCounters::clientsDropped, 1);
             any = true;
         }
         if (any) serveAll();
     }
 
     void serve(ClientState& c) {
-        if (!frameActive || !c.ready || c.credits == 0 || c.stateSeq > frameSeq) return;
+        if (!frameActive || !c.ready || c.credits == 0 || c.stateSeq > frameSeq || c.deathReason) return;
+        const double now = nowSeconds();
+        if (now < c.retryAt) return;
         TileAssign assign;
         assign.frame = currentFrame;
-        assign.tiles = scheduler.request(c.id, c.credits, nowSeconds());
+        assign.tiles = scheduler.request(c.id, c.credits, now);
         if (assign.tiles.empty()) return;
-        c.credits -= uint32_t(assign.tiles.size());
-        if (!send(c, assign, currentFrame)) markDead(c, "its queue is full or it is unreachable");
+        if (send(c, assign, currentFrame) == SendResult::Sent) {
+            c.credits -= uint32_t(assign.tiles.size());
+            c.tilesAssigned += uint32_t(assign.tiles.size());
+            return;
+        }
+        // They never reached it: back to the queue for whoever asks next (this client too, later).
+        for (uint32_t t : assign.tiles) scheduler.release(c.id, currentFrame, t, false);
     }
 
     void serveAll() {
@@ -350,21 +454,51 @@ struct Master::Impl {
             if (!c.deathReason) serve(c);
     }
 
+    Welcome welcomeFor(const ClientState& c) const {
+        return Welcome{c.id, settings.codec, uint32_t(settings.prefetch), uint32_t(settings.heartbeatMs),
+                       uint32_t(settings.timeoutMs)};
+    }
+
     // A joining or resyncing client gets the state of the frame being rendered (so that it can
     // help with it at once) and then the updates sent since, exactly as the others got them.
+    // What does not fit its queue is sent again, whole, by retryPending.
     void sendState(ClientState& c) {
         const SceneSnapshot snap = frameState ? *frameState : snapshot();
+        c.needsState = false;
         c.stateSeq = snap.updateSeq;
-        c.stateInFlight = true;
-        if (!send(c, snap)) {
-            markDead(c, "unreachable while sending the scene state");
+        if (send(c, snap) != SendResult::Sent) {
+            c.needsState = !c.deathReason;
             return;
         }
+        c.stateInFlight = true;
         // The history since the snapshot, merged into one message whatever its length.
         Update since;
         for (const Update& u : sentUpdates)
             if (u.baseSeq >= snap.updateSeq) mergeInto(since, Update(u));
-        if (since.seq != 0 && !send(c, since)) markDead(c, "unreachable while sending the scene state");
+        if (since.seq != 0 && send(c, since) != SendResult::Sent) c.needsState = !c.deathReason;
+    }
+
+    void sendFrameBegin(ClientState& c) {
+        if (send(c, FrameBegin{currentFrame, frameSeq, framePixels}, currentFrame) == SendResult::Sent)
+            c.frameBegun = currentFrame;
+    }
+
+    // Messages that did not fit a client's queue and that it cannot do without: a codec change,
+    // its state, the current frame's FrameBegin. Tried again every 10 ms while the queue is full.
+    void retryPending() {
+        const double now = nowSeconds();
+        for (auto& [peer, c] : clients) {
+            if (c.deathReason || now < c.retryAt) continue;
+            if (c.needsWelcome) {
+                if (send(c, welcomeFor(c)) != SendResult::Sent) continue;
+                c.needsWelcome = false;
+            }
+            if (c.needsState) {
+                sendState(c);
+                if (c.needsState) continue;
+            }
+            if (frameActive && c.ready && c.frameBegun != currentFrame && c.stateSeq <= frameSeq) sendFrameBegin(c);
+        }
     }
 
     void beginFrame(uint32_t frame, uint32_t stateSeq, const RenderSettings& rs,
@@ -384,12 +518,13 @@ struct Master::Impl {
         frameDecoded = false;
         assembler.beginFrame(frame, rs.width, rs.height, rs.tileSize);
         scheduler.beginFrame(frame, uint32_t(assembler.tiles().size()));
-        FrameBegin fb{frame, frameSeq, framePixels};
         for (auto& [peer, c] : clients) {
             c.credits = 0;
+            c.window = 0;
+            c.tilesAssigned = 0;
             c.busySeconds = 0;
             c.frameBytes = 0;
-            if (c.ready && c.stateSeq <= frameSeq && !send(c, fb, frame)) markDead(c, "its queue is full or it is unreachable");
+            if (c.ready && c.stateSeq <= frameSeq && !c.deathReason) sendFrameBegin(c);
         }
     }
 
@@ -411,6 +546,7 @@ struct Master::Impl {
         r.tileOwners.assign(scheduler.owners().begin(), scheduler.owners().end());
         r.stochastic = frameStochastic;
         r.linear = framePixels == TilePixels::LinearHalf;
+        r.counters = countersNow();
         const std::vector<double>& lat = scheduler.latencies();
         double sum = 0;
         for (double l : lat) sum += l;
@@ -442,13 +578,15 @@ struct Master::Impl {
         if (h.version != kProtocolVersion || hello.protocolVersion != kProtocolVersion) {
             Goodbye bye{"protocol version " + std::to_string(hello.protocolVersion) + " is not the master's " +
                         std::to_string(kProtocolVersion)};
-            if (!sendToPeer(router, peer, encodeMessage(header(MsgType::Goodbye), bye))) ++sendFailures;
-            std::fprintf(stderr, "rtwall master: refused a client speaking protocol version %u (master: %u)\n",
-                         unsigned(hello.protocolVersion), unsigned(kProtocolVersion));
+            if (!sendToPeer(router, peer, encodeMessage(header(MsgType::Goodbye), bye))) add(&MasterCounters::failedSends, 1);
+            const unsigned theirs = h.version != kProtocolVersion ? h.version : hello.protocolVersion;
+            count(&MasterCounters::refused, "refused a client",
+                  "it speaks protocol version " + std::to_string(theirs) + " (master: " + std::to_string(kProtocolVersion) + ")");
             return;
         }
         if (auto old = clients.find(peer); old != clients.end()) {
             markDead(old->second, "said hello again");
+            currentClient = nullptr;
             reap();
         }
         ClientState c;
@@ -456,12 +594,15 @@ struct Master::Impl {
         c.peer = peer;
         c.lastSeen = nowSeconds();
         c.threads = std::max(1u, hello.threads);
-        scheduler.addClient(c.id);
         auto& ref = clients[peer] = c;
-        Welcome w{ref.id, settings.codec, uint32_t(settings.prefetch), uint32_t(settings.heartbeatMs),
-                  uint32_t(settings.timeoutMs)};
-        if (!send(ref, w)) markDead(ref, "unreachable during the handshake");
-        else sendState(ref);
+        const SendResult r = send(ref, welcomeFor(ref));
+        if (r == SendResult::Gone) return;
+        if (r == SendResult::Full) {
+            // Both again, in this order: a state before its Welcome would be thrown away.
+            ref.needsWelcome = ref.needsState = true;
+            return;
+        }
+        sendState(ref);
     }
 
     void onReady(ClientState& c, const uint8_t* data, size_t size) {
@@ -469,7 +610,7 @@ struct Master::Impl {
         if (!c.stateInFlight) {
             // Nothing to prove: a replayed or repeated Ready. Answering it with the state again
             // would let one message cost a whole snapshot.
-            ++dropped;
+            replayed("a Ready with no state on its way to the client");
             return;
         }
         bool matches;
@@ -480,11 +621,16 @@ struct Master::Impl {
         }
         if (!matches) {
             // It does not hold the state we sent: never accept its tiles; send the state again.
-            ++dropped;
+            unexpected("a Ready for state " + std::to_string(r.updateSeq) + " that is not the state it was sent (" +
+                       std::to_string(c.stateSeq) + ")");
             sendState(c);
             return;
         }
         c.stateInFlight = false;
+        // In the scheduler from its first proof on: a peer that never proves a state is no
+        // client the scheduler waits for (a stuck tile avoids its client only while another
+        // client could render it).
+        scheduler.addClient(c.id);
         if (!c.ready) {
             c.ready = true;
             {
@@ -493,22 +639,28 @@ struct Master::Impl {
             }
             cv.notify_all();
         }
-        if (frameActive && c.stateSeq <= frameSeq) send(c, FrameBegin{currentFrame, frameSeq, framePixels}, currentFrame);
+        if (frameActive && c.stateSeq <= frameSeq) sendFrameBegin(c);
     }
 
     void onMeshRequest(ClientState& c, const uint8_t* data, size_t size) {
         const MeshRequest req = decodePayload<MeshRequest>(data, size);
-        if (!c.meshesSent.insert(req.hash).second) {
-            ++dropped;  // asked before: it has it, or it is replaying requests to fill its queue
+        size_t i = 0;
+        while (i < meshRefs.size() && meshRefs[i].hash != req.hash) ++i;
+        if (i == meshRefs.size()) {
+            unexpected("a request for a mesh this scene does not have");
             return;
         }
-        for (size_t i = 0; i < meshRefs.size(); ++i)
-            if (meshRefs[i].hash == req.hash) {
-                MeshData md{req.hash, encodeMesh(*scene.meshes[i].mesh)};
-                if (!send(c, md)) markDead(c, "unreachable while sending a mesh");
-                return;
-            }
-        ++dropped;
+        if (!c.meshesSent.insert(req.hash).second) {
+            // Asked before: it has it, or it is replaying requests to fill its queue.
+            replayed("a request for a mesh it was sent before");
+            return;
+        }
+        MeshData md{req.hash, encodeMesh(*scene.meshes[i].mesh)};
+        if (send(c, md) == SendResult::Full) {
+            // It asks again when the state comes again.
+            c.meshesSent.erase(req.hash);
+            c.needsState = true;
+        }
     }
 
     void onAssetRequest(ClientState& c, const uint8_t* data, size_t size) {
@@ -519,26 +671,34 @@ struct Master::Impl {
             if (auto it = assetBytes.find(req.hash); it != assetBytes.end()) bytes = it->second;
         }
         if (!bytes) {
-            ++dropped;  // not a file of this scene
+            unexpected("a request for a file this scene does not have");
             return;
         }
         if (!c.assetsSent.insert(req.hash).second) {
-            ++dropped;  // asked before: it has it, or it is replaying requests to fill its queue
+            replayed("a request for a file it was sent before");
             return;
         }
-        if (!send(c, AssetData{req.hash, *bytes})) markDead(c, "unreachable while sending a texture or volume");
+        if (send(c, AssetData{req.hash, *bytes}) == SendResult::Full) {
+            c.assetsSent.erase(req.hash);
+            c.needsState = true;
+        }
     }
 
     void onTileResult(ClientState& c, const Header& h, const uint8_t* data, size_t size) {
         TileResult r = decodePayload<TileResult>(data, size);
         c.busySeconds += r.renderMicros * 1e-6;
-        if (!frameActive || h.frame != currentFrame || r.frame != currentFrame || r.format != framePixels) {
-            ++dropped;  // a tile of a frame that is no longer current
+        if (!frameActive || h.frame != currentFrame || r.frame != currentFrame) {
+            stale("a result for frame " + std::to_string(r.frame) + ", which is not being rendered");
+            return;
+        }
+        if (r.format != framePixels) {
+            unexpected("a result in another pixel format than the frame's");
             return;
         }
         const auto result = scheduler.complete(c.id, r.frame, r.tile, nowSeconds());
         if (result == TileScheduler::Result::Unexpected) {
-            ++dropped;  // a tile never handed to this client (replayed from another frame's hand-outs, or made up)
+            // A tile never handed to this client (replayed from another frame's hand-outs, or made up).
+            unexpected("a result for tile " + std::to_string(r.tile) + ", which it was not given");
             return;
         }
         // A result for a tile it was given is also a request for the next tile; a duplicate
@@ -557,14 +717,78 @@ struct Master::Impl {
         serve(c);
     }
 
+    // An idle client that has seen every tile it was sent this frame holds none of its
+    // hand-outs: those still awaiting a result are lost (dropped on the way, or never rendered)
+    // and go to the next client that asks, this one included. This is what recovers a lost
+    // result when it is the only client.
+    void onHeartbeat(ClientState& c, const Heartbeat& hb) {
+        if (!hb.idle || !frameActive || hb.frame != currentFrame || hb.tilesSeen != c.tilesAssigned ||
+            c.frameBegun != currentFrame)
+            return;
+        const size_t lost = scheduler.release(c.id);
+        // Everything it asked for is free again, also credits of results that were lost.
+        c.credits = std::min(kMaxCredits, std::max(c.credits, c.window));
+        if (lost == 0) {
+            serve(c);
+            return;
+        }
+        uint64_t n;
+        {
+            std::lock_guard lock(countersMutex);
+            n = (counts.lostHandOuts += lost);
+        }
+        if (n - lost < kLoggedPerKind)
+            std::fprintf(stderr, "rtwall master: client %u is idle without %zu tile%s of frame %u it was given: handed out again\n",
+                         c.id, lost, lost == 1 ? "" : "s", currentFrame);
+        serveAll();
+    }
+
+    // A render thread of this client is stuck on a tile: the tile goes to another client, or
+    // to another thread of this one when it is the only client (it still renders tiles on its
+    // other threads, so its stuck slot is given back as a credit).
+    // A report for a tile that is done already (a straggler re-issue finished it, or the frame
+    // completed) is still counted and logged: the operator should know about a stuck thread.
+    void onTileStalled(ClientState& c, const TileStalled& st) {
+        const bool outstanding = frameActive && st.frame == currentFrame && scheduler.release(c.id, st.frame, st.tile, true);
+        count(&MasterCounters::stalledTiles, "a stuck render thread",
+              "frame " + std::to_string(st.frame) + ", tile " + std::to_string(st.tile) + " has been rendering for " +
+                  std::to_string(st.elapsedMs) + " ms" + (outstanding ? ": handed out again" : " (done by another)"));
+        if (!outstanding) return;
+        c.credits = std::min<uint32_t>(c.credits + 1, kMaxCredits);
+        serveAll();
+    }
+
+    void onResyncRequest(ClientState& c, const uint8_t* data, size_t size) {
+        decodePayload<ResyncRequest>(data, size);
+        if (c.stateInFlight) {
+            replayed("a resync request while its state is on its way");  // or the request is a replay
+            return;
+        }
+        ++resyncCount;
+        if (c.ready) {
+            c.ready = false;
+            std::lock_guard lock(m);
+            --readyClients;
+        }
+        // It drops its work when the state arrives: what it was given goes to whoever asks.
+        const size_t lost = scheduler.release(c.id);
+        add(&MasterCounters::lostHandOuts, lost);
+        c.credits = 0;
+        c.window = 0;
+        sendState(c);
+        if (lost > 0) serveAll();
+    }
+
     void handle(zmq::message_t& identity, zmq::message_t& msg) {
         const std::string peer(static_cast<const char*>(identity.data()), identity.size());
         const auto* bytes = static_cast<const uint8_t*>(msg.data());
+        auto known = clients.find(peer);
+        currentClient = known == clients.end() ? nullptr : &known->second;
         Header h;
         try {
             h = decodeHeader(bytes, msg.size());
-        } catch (const DecodeError&) {
-            ++dropped;
+        } catch (const DecodeError& e) {
+            malformed(e.what());
             return;
         }
         const uint8_t* payload = bytes + kHeaderSize;
@@ -574,12 +798,13 @@ struct Master::Impl {
                 onHello(peer, h, payload, payloadSize);
                 return;
             }
-            auto it = clients.find(peer);
-            if (it == clients.end() || h.session != session || h.version != kProtocolVersion) {
-                ++dropped;  // not (or no longer) one of ours
+            if (known == clients.end() || h.session != session || h.version != kProtocolVersion) {
+                // Not (or no longer) one of ours.
+                count(&MasterCounters::unknownPeer, "dropped a message",
+                      known == clients.end() ? "it is not a client (no hello, or dropped)" : "another session or protocol version");
                 return;
             }
-            ClientState& c = it->second;
+            ClientState& c = known->second;
             c.lastSeen = nowSeconds();
             switch (h.type) {
             case MsgType::Ready: onReady(c, payload, payloadSize); break;
@@ -589,38 +814,29 @@ struct Master::Impl {
                 const TileRequest req = decodePayload<TileRequest>(payload, payloadSize);
                 if (frameActive && req.frame == currentFrame) {
                     c.credits = std::min<uint32_t>(c.credits + req.count, kMaxCredits);
+                    c.window = std::max(c.window, std::min<uint32_t>(req.count, kMaxCredits));
                     serve(c);
                 } else {
-                    ++dropped;
+                    stale("a tile request for frame " + std::to_string(req.frame) + ", which is not being rendered");
                 }
                 break;
             }
             case MsgType::TileResult: onTileResult(c, h, payload, payloadSize); break;
-            case MsgType::Heartbeat: decodePayload<Heartbeat>(payload, payloadSize); break;
-            case MsgType::ResyncRequest:
-                decodePayload<ResyncRequest>(payload, payloadSize);
-                if (c.stateInFlight) {
-                    ++dropped;  // the state on its way already covers it (or the request is a replay)
-                    break;
-                }
-                ++resyncCount;
-                if (c.ready) {
-                    c.ready = false;
-                    std::lock_guard lock(m);
-                    --readyClients;
-                }
-                sendState(c);
-                break;
+            case MsgType::Heartbeat: onHeartbeat(c, decodePayload<Heartbeat>(payload, payloadSize)); break;
+            case MsgType::TileStalled: onTileStalled(c, decodePayload<TileStalled>(payload, payloadSize)); break;
+            case MsgType::ResyncRequest: onResyncRequest(c, payload, payloadSize); break;
             case MsgType::Goodbye: {
                 const Goodbye bye = decodePayload<Goodbye>(payload, payloadSize);
                 std::fprintf(stderr, "rtwall master: client %u says goodbye: %s\n", c.id, bye.reason.c_str());
                 markDead(c, "it said goodbye");
                 break;
             }
-            default: ++dropped; break;  // a master-to-client type from a client
+            default:  // a master-to-client type from a client
+                unexpected("a message of type " + std::to_string(int(h.type)) + ", which only the master sends");
+                break;
             }
-        } catch (const DecodeError&) {
-            ++dropped;
+        } catch (const DecodeError& e) {
+            malformed(std::string("message type ") + std::to_string(int(h.type)) + ": " + e.what());
         }
     }
 
@@ -631,7 +847,7 @@ struct Master::Impl {
             failed.swap(failedTiles);
         }
         if (failed.empty()) return;
-        dropped += failed.size();
+        add(&MasterCounters::undecodableTiles, failed.size());
         for (uint32_t t : failed) scheduler.reopen(currentFrame, t);
         serveAll();
     }
@@ -659,14 +875,17 @@ struct Master::Impl {
         }
     }
 
+    // An update that does not fit a client's queue is lost to it like a dropped packet: the
+    // client sees the gap when a frame needs the update and asks for a resync.
     void sendUpdate(const Update& update) {
         for (auto& [peer, c] : clients) {
+            if (c.deathReason) continue;
             const int n = settings.dropEveryNthUpdate;
             if (n > 0 && ++c.updatesSent % uint64_t(n) == 0) {  // injected loss
                 ++injectedLosses;
                 continue;
             }
-            if (!send(c, update)) markDead(c, "its queue is full or it is unreachable");
+            send(c, update);
         }
         sentUpdates.push_back(update);
         if (sentUpdates.size() > 4096) sentUpdates.pop_front();
@@ -707,10 +926,8 @@ struct Master::Impl {
                 beginFrame(cmd.frame, cmd.update.seq, cmd.settings, std::move(cmd.state), cmd.pixels, cmd.stochastic);
             if (cmd.kind == Command::kCodec) {
                 settings.codec = cmd.codec;  // for clients that join later
-                for (auto& [peer, c] : clients) {
-                    const Welcome w{c.id, settings.codec, uint32_t(settings.prefetch), uint32_t(settings.heartbeatMs)};
-                    if (!c.deathReason && !send(c, w)) markDead(c, "its queue is full or it is unreachable");
-                }
+                for (auto& [peer, c] : clients)
+                    if (!c.deathReason) c.needsWelcome = send(c, welcomeFor(c)) == SendResult::Full;
                 // The state's sequence number moves on (an update without changes), so frames
                 // after the switch are seen as another state and an accumulation restarts.
                 mergeInto(unsent, std::move(cmd.update));
@@ -724,16 +941,49 @@ struct Master::Impl {
         const double now = nowSeconds();
         const double timeout = settings.timeoutMs * 1e-3, beat = settings.heartbeatMs * 1e-3;
         for (auto& [peer, c] : clients) {
+            if (c.deathReason) continue;
             if (now - c.lastSeen > timeout) markDead(c, "heartbeat timeout");
-            else if (now - c.lastSent > beat && !send(c, Heartbeat{})) markDead(c, "its queue is full or it is unreachable");
+            else if (c.fullSince != 0 && now - c.fullSince > timeout) markDead(c, "its queue has been full for longer than the timeout");
+            else if (now - c.lastSent > beat && now >= c.retryAt) send(c, Heartbeat{});
+        }
+    }
+
+    // Connections that broke off in the handshake (the router's monitor): ZMTP garbage, a peer
+    // without CURVE or with another server key. Key refusals are the ZAP handler's to count.
+    void readMonitor() {
+        for (int i = 0; i < 64; ++i) {
+            zmq::message_t event, address;
+            if (!monitor.recv(event, zmq::recv_flags::dontwait)) return;
+            if (!event.more() || !monitor.recv(address, zmq::recv_flags::dontwait) || event.size() < 6) continue;
+            discardRestOf(monitor, address);
+            uint16_t id;
+            uint32_t value;
+            std::memcpy(&id, event.data(), 2);
+            std::memcpy(&value, static_cast<const uint8_t*>(event.data()) + 2, 4);
+            uint64_t n;
+            {
+                std::lock_guard lock(countersMutex);
+                n = ++counts.failedHandshakes;
+            }
+            if (n > kLoggedPerKind) continue;
+            // The monitor names the listening endpoint, not the peer.
+            std::string why;
+            if (id != ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL) why = "it broke off (error " + std::to_string(value) + ")";
+            else if (value == ZMQ_PROTOCOL_ERROR_ZMTP_MECHANISM_MISMATCH) why = "the peer uses another security mechanism (no CURVE key?)";
+            else if (value == ZMQ_PROTOCOL_ERROR_ZMTP_CRYPTOGRAPHIC) why = "CURVE failed (a client with another server key?)";
+            else why = "ZMTP protocol error 0x" + hex(value) + " (not a ZeroMQ peer?)";
+            std::fprintf(stderr, "rtwall master: a connection to %s failed its handshake: %s%s\n", address.to_string().c_str(),
+                         why.c_str(), n == kLoggedPerKind ? " (more are counted, not logged)" : "");
         }
     }
 
     void loop() {
-        zmq::pollitem_t items[] = {{router.handle(), 0, ZMQ_POLLIN, 0}, {wakeRecv.handle(), 0, ZMQ_POLLIN, 0}};
+        zmq::pollitem_t items[] = {{router.handle(), 0, ZMQ_POLLIN, 0},
+                                   {wakeRecv.handle(), 0, ZMQ_POLLIN, 0},
+                                   {monitor.handle(), 0, ZMQ_POLLIN, 0}};
         double lastHousekeeping = 0;
         for (;;) {
-            zmq::poll(items, 2, std::chrono::milliseconds(frameActive ? 2 : 20));
+            zmq::poll(items, 3, std::chrono::milliseconds(frameActive ? 2 : 20));
             if (items[1].revents & ZMQ_POLLIN) {
                 zmq::message_t ignored;
                 while (wakeRecv.recv(ignored, zmq::recv_flags::dontwait)) {
@@ -741,23 +991,35 @@ struct Master::Impl {
                 if (!runCommands()) return;
                 reopenFailedTiles();
             }
+            if (items[2].revents & ZMQ_POLLIN) readMonitor();
             // Drain what is queued, bounded so commands and timers are not starved.
             for (int i = 0; i < 256 && (items[0].revents & ZMQ_POLLIN); ++i) {
                 zmq::message_t identity, msg;
                 if (!router.recv(identity, zmq::recv_flags::dontwait)) break;
-                if (!identity.more() || !router.recv(msg, zmq::recv_flags::dontwait)) {
-                    ++dropped;
+                current = &identity;
+                currentClient = nullptr;
+                if (!identity.more()) {
+                    malformed("a frame without a routing id");
                     continue;
                 }
-                while (msg.more()) {  // extra frames: not ours
-                    zmq::message_t extra;
-                    if (!router.recv(extra, zmq::recv_flags::dontwait)) break;
-                    ++dropped;
+                if (!router.recv(msg, zmq::recv_flags::dontwait)) break;
+                current = &msg;
+                // rtwall messages are one frame: the extra frames of a message that has more go
+                // with it (each recv here reads the next part, not the first part's flag again).
+                if (const size_t extra = discardRestOf(router, msg); extra > 0) {
+                    auto known = clients.find(identity.to_string());
+                    currentClient = known == clients.end() ? nullptr : &known->second;
+                    malformed("a message of " + std::to_string(extra + 1) + " frames (rtwall messages are one frame)");
+                    continue;
                 }
                 handle(identity, msg);
+                current = nullptr;
+                currentClient = nullptr;
                 if (settings.consumeDelayUs > 0)
                     std::this_thread::sleep_for(std::chrono::microseconds(settings.consumeDelayUs));
             }
+            current = nullptr;
+            currentClient = nullptr;
             reap();
             finishFrameIfDone();
             const double now = nowSeconds();
@@ -766,11 +1028,13 @@ struct Master::Impl {
                 flushUpdates();
                 checkTimeouts();
                 reap();
+                retryPending();
                 serveAll();  // re-queued tiles of departed clients, stragglers
             }
         }
     }
 };
+
 
 Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(std::make_unique<Impl>(scene, settings)) {
     Impl& s = *impl_;
@@ -799,7 +1063,21 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
         const KeyPair keys = readKeyPair(settings.keyFile);
         std::vector<std::string> allowed;
         for (const auto& f : settings.clientKeys) allowed.push_back(readPublicKey(f));
-        if (allowed.empty()) throw InputError(settings.keyFile.string() + ": a master key needs at least one client key");
+        if (allowed.empty() && settings.localClients == 0)
+            throw InputError(settings.keyFile.string() + ": a master key needs at least one client key");
+        if (settings.localClients > 0) {
+            // Local clients get a key pair of their own, made for this session: a private
+            // directory only this user can enter, removed with the master.
+            std::string dir = (std::filesystem::temp_directory_path() / "rtwall-keys-XXXXXX").string();
+            if (!mkdtemp(dir.data())) throw InputError(dir + ": cannot make a private directory for the local clients' keys");
+            s.localKeyDir = dir;
+            const KeyPair local = makeKeyPair();
+            writeKeyFiles(local, s.localKeyDir / "local");
+            writePublicKeyFile(keys.publicKey, s.localKeyDir / "master.pub");
+            allowed.push_back(local.publicKey);
+            s.localArgs = {"--key", (s.localKeyDir / "local.key").string(), "--server-key",
+                           (s.localKeyDir / "master.pub").string()};
+        }
         s.zap = std::make_unique<ZapHandler>(s.ctx, allowed);
         s.router.set(zmq::sockopt::zap_domain, "rtwall");
         s.router.set(zmq::sockopt::curve_server, 1);
@@ -815,6 +1093,12 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
             std::fprintf(stderr, "rtwall master: WARNING: listening on %s WITHOUT authentication or encryption "
                                  "(--insecure): anyone who reaches this port can join and read the model\n", b.c_str());
     }
+    // Connections that break off in the handshake are counted (MasterCounters::failedHandshakes).
+    s.monitor.set(zmq::sockopt::linger, 0);
+    if (zmq_socket_monitor(s.router.handle(), "inproc://rtwall-master-monitor",
+                           ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL) != 0)
+        throw std::runtime_error(std::string("zmq_socket_monitor: ") + zmq_strerror(zmq_errno()));
+    s.monitor.connect("inproc://rtwall-master-monitor");
     s.router.bind(settings.bind);
     s.boundEndpoint = s.router.get(zmq::sockopt::last_endpoint);
     const std::string wakeAddress = "inproc://rtwall-master-wake";
@@ -854,8 +1138,11 @@ Master::~Master() {
     }
     s.wake();
     if (s.net.joinable()) s.net.join();
-    for (auto& [peer, c] : s.clients) s.send(c, Goodbye{"the master is shutting down"});
+    for (auto& [peer, c] : s.clients)  // a client already gone needs no goodbye (nor a log line)
+        sendToPeer(s.router, c.peer, encodeMessage(s.header(MsgType::Goodbye), Goodbye{"the master is shutting down"}));
     s.decoder.reset();
+    zmq_socket_monitor(s.router.handle(), nullptr, 0);
+    s.monitor.close();
     s.router.close();
     s.zap.reset();
 }
@@ -867,10 +1154,50 @@ int Master::connectedClients() const {
     return impl_->readyClients;
 }
 
-bool Master::waitForClients(int count, int timeoutMs) {
-    std::unique_lock lock(impl_->m);
-    return impl_->cv.wait_for(lock, std::chrono::milliseconds(timeoutMs), [&] { return impl_->readyClients >= count; });
+namespace {
+
+void throwIfStopped(const Master::Impl& s) {
+    const std::atomic<bool>* flag = s.stopFlag.load();
+    if (flag && flag->load()) throw Cancelled();
 }
+
+}  // namespace
+
+bool Master::waitForClients(int count, int timeoutMs) {
+    Impl& s = *impl_;
+    std::unique_lock lock(s.m);
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
+    while (s.readyClients < count) {
+        throwIfStopped(s);
+        const auto now = std::chrono::steady_clock::now();
+        if (now >= end) return false;
+        s.cv.wait_for(lock, std::min<std::chrono::steady_clock::duration>(end - now, std::chrono::milliseconds(100)));
+    }
+    return true;
+}
+
+int Master::awaitClients(int wanted, int timeoutMs, int settleMs) {
+    Impl& s = *impl_;
+    std::unique_lock lock(s.m);
+    const auto start = std::chrono::steady_clock::now(), end = start + std::chrono::milliseconds(timeoutMs);
+    int seen = s.readyClients;
+    auto lastJoin = start;
+    while (s.readyClients < wanted) {
+        throwIfStopped(s);
+        const auto now = std::chrono::steady_clock::now();
+        if (s.readyClients != seen) {
+            seen = s.readyClients;
+            lastJoin = now;
+        }
+        if (now >= end || (seen > 0 && now - lastJoin >= std::chrono::milliseconds(settleMs))) break;
+        s.cv.wait_for(lock, std::chrono::milliseconds(100));
+    }
+    return s.readyClients;
+}
+
+void Master::setStopFlag(const std::atomic<bool>* flag) { impl_->stopFlag = flag; }
+
+std::vector<std::string> Master::localClientArgs() const { return impl_->localArgs; }
 
 namespace {
 
@@ -972,6 +1299,11 @@ Image Master::renderFrame(FrameReport* report, std::vector<float>* linear) {
         const auto patience = std::chrono::milliseconds(std::max(5000, 2 * s.settings.timeoutMs));
         auto lastSeenClients = std::chrono::steady_clock::now();
         while (!s.cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return s.completedFrame >= frame; })) {
+            if (const std::atomic<bool>* flag = s.stopFlag.load(); flag && flag->load()) {
+                std::fprintf(stderr, "rtwall master: stopped while frame %u was rendering (%d clients ready)\n", frame,
+                             s.readyClients);
+                throw Cancelled();
+            }
             const auto now = std::chrono::steady_clock::now();
             if (s.readyClients > 0) lastSeenClients = now;
             else if (now - lastSeenClients > patience)
@@ -994,10 +1326,39 @@ Image Master::renderFrame(FrameReport* report, std::vector<float>* linear) {
     return img;
 }
 
-uint64_t Master::droppedMessages() const { return impl_->dropped.load(); }
+MasterCounters Master::counters() const { return impl_->countersNow(); }
+uint64_t Master::droppedMessages() const { return counters().dropped(); }
 uint64_t Master::resyncs() const { return impl_->resyncCount.load(); }
-uint64_t Master::failedSends() const { return impl_->sendFailures.load(); }
+uint64_t Master::failedSends() const { return counters().failedSends; }
 uint64_t Master::injectedUpdateLosses() const { return impl_->injectedLosses.load(); }
 uint64_t Master::refusedConnections() const { return impl_->zap ? impl_->zap->denied() : 0; }
+
+}  // namespace rtwall
+
+namespace rtwall {
+
+std::string describeCounters(const MasterCounters& c) {
+    std::string out;
+    auto part = [](std::string& s, uint64_t n, const char* what) {
+        if (n == 0) return;
+        if (!s.empty()) s += ", ";
+        s += std::to_string(n) + " " + what;
+    };
+    std::string dropped;
+    part(dropped, c.malformed, "malformed");
+    part(dropped, c.unknownPeer, "from unknown peers");
+    part(dropped, c.stale, "stale");
+    part(dropped, c.replayed, "repeated");
+    part(dropped, c.unexpected, "unexpected");
+    part(dropped, c.undecodableTiles, "undecodable tiles");
+    if (!dropped.empty()) out = "dropped " + std::to_string(c.dropped()) + " messages (" + dropped + ")";
+    part(out, c.refused, "handshakes refused");
+    part(out, c.failedHandshakes, "handshakes broken off");
+    part(out, c.failedSends, "sends failed");
+    part(out, c.lostHandOuts, "lost tiles handed out again");
+    part(out, c.stalledTiles, "stuck tiles reported");
+    part(out, c.clientsDropped, "clients left");
+    return out.empty() ? "nothing dropped, refused or lost" : out;
+}
 
 }  // namespace rtwall

@@ -48,13 +48,43 @@ inline bool sendNow(zmq::socket_t& s, const std::vector<uint8_t>& bytes) {
     }
 }
 
-inline bool sendToPeer(zmq::socket_t& router, const std::string& peer, const std::vector<uint8_t>& bytes) {
+// What became of a send to one peer of a ROUTER (ZMQ_ROUTER_MANDATORY). Full (EAGAIN) is not
+// death: a live peer busy for a moment can be at its high-water mark; Gone (EHOSTUNREACH) means
+// its connection has closed.
+enum class SendResult { Sent, Full, Gone };
+
+inline SendResult sendToPeerResult(zmq::socket_t& router, const std::string& peer, const std::vector<uint8_t>& bytes) {
     try {
-        if (!router.send(zmq::buffer(peer), zmq::send_flags::sndmore | zmq::send_flags::dontwait)) return false;
-        return router.send(zmq::const_buffer(bytes.data(), bytes.size()), zmq::send_flags::dontwait).has_value();
-    } catch (const zmq::error_t&) {
-        return false;
+        if (!router.send(zmq::buffer(peer), zmq::send_flags::sndmore | zmq::send_flags::dontwait)) return SendResult::Full;
+        // The high-water mark is checked at the first frame; the second cannot find it full.
+        if (!router.send(zmq::const_buffer(bytes.data(), bytes.size()), zmq::send_flags::dontwait)) return SendResult::Full;
+        return SendResult::Sent;
+    } catch (const zmq::error_t& e) {
+        return e.num() == EAGAIN ? SendResult::Full : SendResult::Gone;
     }
+}
+
+inline bool sendToPeer(zmq::socket_t& router, const std::string& peer, const std::vector<uint8_t>& bytes) {
+    return sendToPeerResult(router, peer, bytes) == SendResult::Sent;
+}
+
+// Reads the rest of a multi-frame message after `first` (rtwall messages are one frame; the
+// rest is thrown away). Returns how many frames followed it. Parts of one message arrive
+// together, so this never waits.
+inline size_t discardRestOf(zmq::socket_t& s, const zmq::message_t& first) {
+    size_t extra = 0;
+    for (bool more = first.more(); more; ++extra) {
+        zmq::message_t part;
+        if (!s.recv(part, zmq::recv_flags::dontwait)) break;
+        more = part.more();
+    }
+    return extra;
+}
+
+// The address a received message came from ("Peer-Address", libzmq >= 4.1), or "?".
+inline std::string peerAddressOf(const zmq::message_t& msg) {
+    const char* a = zmq_msg_gets(msg.handle(), "Peer-Address");
+    return a ? std::string(a) : std::string("?");
 }
 
 }  // namespace rtwall::cluster

@@ -618,8 +618,27 @@ void read(Reader& r, TileResult& m) {
     m.format = readEnum(r, TilePixels::LinearHalf, "tile pixel format");
 }
 
-void write(Writer&, const Heartbeat&) {}
-void read(Reader&, Heartbeat&) {}
+void write(Writer& w, const Heartbeat& m) {
+    w.u32(m.frame);
+    w.u32(m.tilesSeen);
+    w.boolean(m.idle);
+}
+void read(Reader& r, Heartbeat& m) {
+    m.frame = r.u32();
+    m.tilesSeen = r.u32();
+    m.idle = r.boolean();
+}
+
+void write(Writer& w, const TileStalled& m) {
+    w.u32(m.frame);
+    w.u32(m.tile);
+    w.u32(m.elapsedMs);
+}
+void read(Reader& r, TileStalled& m) {
+    m.frame = r.u32();
+    m.tile = r.u32();
+    m.elapsedMs = r.u32();
+}
 
 void write(Writer& w, const Goodbye& m) { w.string(m.reason); }
 void read(Reader& r, Goodbye& m) { m.reason = r.string(kMaxStringBytes); }
@@ -733,6 +752,7 @@ MsgType messageTypeOf(const Ready&) { return MsgType::Ready; }
 MsgType messageTypeOf(const ResyncRequest&) { return MsgType::ResyncRequest; }
 MsgType messageTypeOf(const AssetRequest&) { return MsgType::AssetRequest; }
 MsgType messageTypeOf(const AssetData&) { return MsgType::AssetData; }
+MsgType messageTypeOf(const TileStalled&) { return MsgType::TileStalled; }
 
 #define RTWALL_INSTANTIATE_MESSAGE(Msg)                                                    \
     template std::vector<uint8_t> encodeMessage<Msg>(Header header, const Msg& msg); \
@@ -753,6 +773,7 @@ RTWALL_INSTANTIATE_MESSAGE(Ready)
 RTWALL_INSTANTIATE_MESSAGE(ResyncRequest)
 RTWALL_INSTANTIATE_MESSAGE(AssetRequest)
 RTWALL_INSTANTIATE_MESSAGE(AssetData)
+RTWALL_INSTANTIATE_MESSAGE(TileStalled)
 #undef RTWALL_INSTANTIATE_MESSAGE
 
 // -- Meshes --------------------------------------------------------------------------------------

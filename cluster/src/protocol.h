@@ -1,10 +1,13 @@
-// The rtwall wire protocol, version 6 (2 added the master's peer timeout to Welcome; 3 added
+// The rtwall wire protocol, version 7 (2 added the master's peer timeout to Welcome; 3 added
 // materials, area lights and shading settings; 4 added vertex colours to meshes, the scene's
 // origin and [bvh] settings to the snapshot, spherical and cylindrical texture mappings, texture
 // and volume files by content hash (AssetRequest, AssetData, SceneSnapshot::assets) and linear
 // half-float tiles for accumulation (FrameBegin::pixels, TileResult::pixels); 5 added texture
 // coordinates to meshes, the uv and auto texture mappings and Material::bumpMapping; 6 added
-// Material::twoSided and Light::twoSided, which side emits).
+// Material::twoSided and Light::twoSided, which side emits; 7 added the client's work report to
+// Heartbeat (the frame, the tiles of its assignments that arrived, and whether it holds any tile:
+// the master releases hand-outs an idle client no longer holds) and TileStalled (a render thread
+// stuck on a tile)).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one writer and one
@@ -30,7 +33,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 6;
+inline constexpr uint16_t kProtocolVersion = 7;
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -60,8 +63,9 @@ enum class MsgType : uint16_t {
     ResyncRequest = 14, // client -> master: saw a gap after this sequence number
     AssetRequest = 15,  // client -> master: a texture or volume file by content hash
     AssetData = 16,     // master -> client
+    TileStalled = 17,   // client -> master: a render thread has been on this tile far too long
 };
-inline constexpr uint16_t kMaxMsgType = 16;
+inline constexpr uint16_t kMaxMsgType = 17;
 
 struct Header {
     uint16_t version = kProtocolVersion;
@@ -200,7 +204,25 @@ struct TileResult {
     TilePixels format = TilePixels::Srgb8;  // LinearHalf: `pixels` are 6 bytes a pixel before the codec
 };
 
-struct Heartbeat {};
+// From the master all fields are 0. From a client: what it holds, so that the master can tell a
+// lost hand-out from a slow one. `tilesSeen` counts the tiles of every assignment for `frame`
+// that reached the client (used or not); with `idle` it holds no tile at all (none queued,
+// rendering or on its way out). Messages on one connection arrive in order, so when a client
+// says idle and has seen every tile the master sent it for the frame, every hand-out still
+// awaiting its result is lost: its result was dropped on the way (a full queue) or never made.
+struct Heartbeat {
+    uint32_t frame = 0;
+    uint32_t tilesSeen = 0;
+    bool idle = false;
+};
+
+// A client's render thread has been on this tile far longer than its tiles take: the master
+// logs it and hands the tile to another client (or another thread of this one).
+struct TileStalled {
+    uint32_t frame = 0;
+    uint32_t tile = 0;
+    uint32_t elapsedMs = 0;
+};
 
 struct Goodbye {
     std::string reason;
@@ -242,6 +264,7 @@ MsgType messageTypeOf(const Ready&);
 MsgType messageTypeOf(const ResyncRequest&);
 MsgType messageTypeOf(const AssetRequest&);
 MsgType messageTypeOf(const AssetData&);
+MsgType messageTypeOf(const TileStalled&);
 
 // Canonical mesh bytes (vertex count, positions, triangle count, indices, normals flag and
 // normals, colours flag and RGB bytes, all little-endian), their hash (XXH3 128-bit) and the way back. decodeMesh

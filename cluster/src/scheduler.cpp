@@ -47,6 +47,7 @@ size_t TileScheduler::removeClient(ClientId client) {
             ++returned;
         }
     }
+    for (auto it = avoid_.begin(); it != avoid_.end();) it = it->second == client ? avoid_.erase(it) : std::next(it);
     // Its late results must not count: forget which tiles it was handed.
     for (auto it = handed_.begin(); it != handed_.end();) {
         it = it->second == client ? handed_.erase(it) : std::next(it);
@@ -56,6 +57,46 @@ size_t TileScheduler::removeClient(ClientId client) {
     std::replace(owner_.begin(), owner_.end(), client, kNobody);
     std::replace(lastOwner_.begin(), lastOwner_.end(), client, kNobody);
     return returned;
+}
+
+void TileScheduler::requeueIfOrphaned(uint32_t tile) {
+    if (!done_[tile] && outstanding_.count(tile) == 0) shared_.insert(tile);
+}
+
+size_t TileScheduler::release(ClientId client) {
+    std::vector<uint32_t> held;
+    for (auto it = outstanding_.begin(); it != outstanding_.end();) {
+        if (it->second.client == client) {
+            held.push_back(it->first);
+            it = outstanding_.erase(it);
+        } else {
+            ++it;
+        }
+    }
+    // handed_ keeps the pairs: a result that was only late after all is still accepted.
+    for (uint32_t t : held) requeueIfOrphaned(t);
+    stats_.released += held.size();
+    return held.size();
+}
+
+bool TileScheduler::release(ClientId client, uint32_t frame, uint32_t tile, bool avoid) {
+    if (frame != frame_ || tile >= tileCount_) return false;
+    auto [first, last] = outstanding_.equal_range(tile);
+    for (auto it = first; it != last; ++it) {
+        if (it->second.client != client) continue;
+        outstanding_.erase(it);
+        ++stats_.released;
+        if (avoid) avoid_[tile] = client;
+        requeueIfOrphaned(tile);
+        return true;
+    }
+    return false;
+}
+
+size_t TileScheduler::outstanding(ClientId client) const {
+    size_t n = 0;
+    for (const auto& [tile, o] : outstanding_) n += o.client == client;
+    return n;
 }
 
 bool TileScheduler::reopen(uint32_t frame, uint32_t tile) {
@@ -90,6 +131,7 @@ void TileScheduler::beginFrame(uint32_t frame, uint32_t tileCount) {
     latencies_.clear();
     stats_ = {};
     shared_.clear();
+    avoid_.clear();
     for (auto& [client, queue] : queues_) queue.clear();
 
     for (uint32_t t = 0; t < tileCount; ++t) {
@@ -180,13 +222,23 @@ std::vector<uint32_t> TileScheduler::request(ClientId client, uint32_t count, do
         queue.pop_front();
         handOut(client, out.back(), now);
     }
-    while (out.size() < count && !shared_.empty()) {
-        out.push_back(*shared_.begin());
-        shared_.erase(shared_.begin());
+    for (auto it = shared_.begin(); out.size() < count && it != shared_.end();) {
+        const auto avoided = avoid_.find(*it);
+        if (avoided != avoid_.end()) {
+            // Stuck on this client: someone else's, unless nobody else is left.
+            if (avoided->second == client && clients_.size() > 1) {
+                ++it;
+                continue;
+            }
+            avoid_.erase(avoided);
+        }
+        out.push_back(*it);
+        it = shared_.erase(it);
         handOut(client, out.back(), now);
     }
     if (out.size() < count) stealInto(client, count - uint32_t(out.size()), now, out);
-    // Every queue is empty now (stealing leaves none behind while it still needs tiles).
+    // Every queue is empty now (stealing leaves none behind while it still needs tiles), but for
+    // tiles this client is to avoid.
     if (out.size() < count) reissueInto(client, count - uint32_t(out.size()), now, out);
     return out;
 }
@@ -214,6 +266,9 @@ TileScheduler::Result TileScheduler::complete(ClientId client, uint32_t frame, u
         }
     }
     outstanding_.erase(first, last);
+    // A released hand-out's result may beat the tile's next hand-out: it leaves the queue.
+    shared_.erase(tile);
+    avoid_.erase(tile);
 
     done_[tile] = 1;
     ++doneCount_;

@@ -11,6 +11,12 @@
 //   times the frame's median assignment-to-result time (and at least minStragglerSeconds) is
 //   handed to the asking client as well; the first result wins, later ones are duplicates.
 // - A departed client's outstanding and queued tiles go back to the shared queue.
+// - Lost hand-outs: a client that holds none of its hand-outs any more (its idle report says so,
+//   it asked for a resync, the assignment could not be sent) or whose render thread is stuck on
+//   a tile has them released: they go back to the shared queue, so the next client to ask gets
+//   them, the same one included. That is what recovers a lost result when only one client is
+//   left; a stuck tile avoids its client while another is present. A released hand-out's late
+//   result still counts (the first result wins).
 #pragma once
 
 #include <cstdint>
@@ -41,6 +47,7 @@ struct SchedulerStats {
     uint64_t duplicates = 0;     // results for a tile already done
     uint64_t stale = 0;          // results for another frame
     uint64_t unexpected = 0;     // results for a tile never handed to that client
+    uint64_t released = 0;       // hand-outs released (lost or stuck): their tiles were queued again
     std::map<ClientId, uint64_t> completedBy;
     std::map<ClientId, uint64_t> stolenBy;
 };
@@ -68,6 +75,17 @@ public:
     // A tile's pixels arrived. Only Accepted results may be written to the frame.
     Result complete(ClientId client, uint32_t frame, uint32_t tile, double now);
 
+    // Releases every outstanding hand-out of `client` in this frame: it holds none of them (its
+    // results were lost on the way, or it dropped its work). Their tiles go back to the shared
+    // queue unless another client is rendering them too. Returns how many hand-outs were released.
+    size_t release(ClientId client);
+    // Releases one hand-out: `tile` of `frame` given to `client` (a stuck render thread, an
+    // assignment that could not be sent). With `avoid` the tile is not handed to that client
+    // again while another client is present. False if there was no such outstanding hand-out.
+    bool release(ClientId client, uint32_t frame, uint32_t tile, bool avoid);
+    // Hand-outs to `client` still awaiting a result.
+    size_t outstanding(ClientId client) const;
+
     // An accepted result turned out unusable (its pixels did not decode): the tile is open
     // again and goes to the shared queue. False if it was not done or belongs to another frame.
     bool reopen(uint32_t frame, uint32_t tile);
@@ -93,9 +111,11 @@ private:
     uint32_t tileCount_ = 0;
     std::vector<ClientId> clients_;
     // Invariant: a tile not yet done is either in exactly one queue (own or shared) and not
-    // outstanding, or outstanding with one client or more (re-issues) and in no queue.
+    // outstanding, or outstanding with one client or more (re-issues) and in no queue. A done
+    // tile is in no queue (a released hand-out whose late result wins leaves the shared queue).
     std::map<ClientId, std::deque<uint32_t>> queues_;  // affinity queues, image order, next tile at front
     std::set<uint32_t> shared_;                         // image order by construction
+    std::map<uint32_t, ClientId> avoid_;                // tiles in shared_ not to hand back to a client stuck on them
     std::vector<uint8_t> done_;
     uint32_t doneCount_ = 0;
     std::vector<ClientId> lastOwner_;     // who rendered each tile last frame (kNobody if none)
@@ -108,6 +128,7 @@ private:
     SchedulerStats stats_;
 
     void handOut(ClientId client, uint32_t tile, double now);
+    void requeueIfOrphaned(uint32_t tile);
     void stealInto(ClientId thief, uint32_t need, double now, std::vector<uint32_t>& out);
     void reissueInto(ClientId client, uint32_t need, double now, std::vector<uint32_t>& out);
     double medianLatency() const;

@@ -41,6 +41,16 @@ KeyPair makeKeyPair() {
 
 void writeKeyFiles(const KeyPair& keys, const std::filesystem::path& stem) {
     const std::filesystem::path secretFile = stem.string() + ".key", publicFile = stem.string() + ".pub";
+    // `rtwall keys keys/master` in a fresh checkout: the directory is made (only this user may
+    // enter one it makes: it holds secrets).
+    if (const auto dir = stem.parent_path(); !dir.empty()) {
+        std::error_code ec;
+        if (!std::filesystem::is_directory(dir, ec)) {
+            std::filesystem::create_directories(dir, ec);
+            if (ec) throw InputError(dir.string() + ": cannot make the directory for the keys (" + ec.message() + ")");
+            std::filesystem::permissions(dir, std::filesystem::perms::owner_all, ec);
+        }
+    }
     {
         // Created with mode 0600 before anything secret is written into it.
         std::FILE* f = std::fopen(secretFile.c_str(), "w");
@@ -50,9 +60,14 @@ void writeKeyFiles(const KeyPair& keys, const std::filesystem::path& stem) {
                      keys.publicKey.c_str(), keys.secretKey.c_str());
         std::fclose(f);
     }
-    std::ofstream pub(publicFile);
-    if (!pub) throw InputError(publicFile.string() + ": cannot write");
-    pub << "# rtwall CURVE public key\npublic = \"" << keys.publicKey << "\"\n";
+    writePublicKeyFile(keys.publicKey, publicFile);
+}
+
+void writePublicKeyFile(const std::string& publicKeyZ85, const std::filesystem::path& file) {
+    std::ofstream pub(file);
+    if (!pub) throw InputError(file.string() + ": cannot write");
+    pub << "# rtwall CURVE public key\npublic = \"" << publicKeyZ85 << "\"\n";
+    if (!pub.flush()) throw InputError(file.string() + ": cannot write");
 }
 
 KeyPair readKeyPair(const std::filesystem::path& file) { return {keyFrom(file, "public"), keyFrom(file, "secret")}; }
@@ -100,11 +115,13 @@ void ZapHandler::run() {
         const std::string key = frames.size() > 6 ? frames[6].to_string() : std::string();
         const bool ok = mechanism == "CURVE" && key.size() == 32 && allowed_.count(key);
         if (!ok) {
-            ++denied_;
+            // The first few are logged; a flood of strangers is counted (MasterCounters::refused).
+            const uint64_t n = ++denied_;
             char z85[41] = "-";
             if (key.size() == 32) zmq_z85_encode(z85, reinterpret_cast<const uint8_t*>(key.data()), 32);
-            std::fprintf(stderr, "rtwall master: refused a client from %s (mechanism %s, key %s): not in the config's client keys\n",
-                         address.c_str(), mechanism.c_str(), z85);
+            if (n <= 5)
+                std::fprintf(stderr, "rtwall master: refused a client from %s (mechanism %s, key %s): not in the config's client keys%s\n",
+                             address.c_str(), mechanism.c_str(), z85, n == 5 ? " (more refusals are counted, not logged)" : "");
         }
         const std::string status = ok ? "200" : "400", text = ok ? "OK" : "unknown client key";
         // Non-blocking like every other send: if libzmq's side of the ZAP exchange is gone or

@@ -21,7 +21,8 @@ struct KeyPair {
 };
 
 KeyPair makeKeyPair();
-void writeKeyFiles(const KeyPair& keys, const std::filesystem::path& stem);  // stem.key, stem.pub
+void writeKeyFiles(const KeyPair& keys, const std::filesystem::path& stem);  // stem.key, stem.pub (directories made)
+void writePublicKeyFile(const std::string& publicKeyZ85, const std::filesystem::path& file);
 KeyPair readKeyPair(const std::filesystem::path& file);                       // throws InputError
 std::string readPublicKey(const std::filesystem::path& file);                 // .pub or .key
 

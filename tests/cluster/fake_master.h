@@ -8,6 +8,7 @@
 #include <zmq.hpp>
 
 #include <chrono>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -38,6 +39,7 @@ public:
             const auto* p = static_cast<const uint8_t*>(msg.data());
             Received r{id.to_string(), cluster::decodeHeader(p, msg.size()),
                        std::vector<uint8_t>(p + cluster::kHeaderSize, p + msg.size())};
+            if (onOther && r.header.type != type) onOther(r);
             if (r.header.type == type) return r;
         }
         return std::nullopt;
@@ -55,8 +57,16 @@ public:
         router_.send(zmq::buffer(peer), zmq::send_flags::sndmore);
         router_.send(zmq::buffer(bytes));
     }
+    // One message of several frames (a hostile master).
+    void sendParts(const std::string& peer, const std::vector<std::vector<uint8_t>>& parts) {
+        router_.send(zmq::buffer(peer), zmq::send_flags::sndmore);
+        for (size_t i = 0; i < parts.size(); ++i)
+            router_.send(zmq::buffer(parts[i]), i + 1 < parts.size() ? zmq::send_flags::sndmore : zmq::send_flags::none);
+    }
     static constexpr uint64_t kSession = 0xFACE;
     std::string endpoint;
+    // Called with every message expect() skips (to answer mesh requests on the way, say).
+    std::function<void(const Received&)> onOther;
 
 private:
     zmq::context_t ctx_;

@@ -188,7 +188,16 @@ void expectSame(const TileResult& a, const TileResult& b) {
     EXPECT_EQ(a.pixels, b.pixels);
     EXPECT_EQ(a.format, b.format);
 }
-void expectSame(const Heartbeat&, const Heartbeat&) {}
+void expectSame(const Heartbeat& a, const Heartbeat& b) {
+    EXPECT_EQ(a.frame, b.frame);
+    EXPECT_EQ(a.tilesSeen, b.tilesSeen);
+    EXPECT_EQ(a.idle, b.idle);
+}
+void expectSame(const TileStalled& a, const TileStalled& b) {
+    EXPECT_EQ(a.frame, b.frame);
+    EXPECT_EQ(a.tile, b.tile);
+    EXPECT_EQ(a.elapsedMs, b.elapsedMs);
+}
 void expectSame(const Goodbye& a, const Goodbye& b) { EXPECT_EQ(a.reason, b.reason); }
 void expectSame(const Ready& a, const Ready& b) {
     EXPECT_EQ(a.updateSeq, b.updateSeq);
@@ -357,12 +366,13 @@ template <class F> void forEachSample(F&& f) {
     f(TileRequest{55, 8});
     f(TileAssign{56, {0, 7, 1u << 20, 0xFFFFFFFFu}});
     f(sampleTileResult());
-    f(Heartbeat{});
+    f(Heartbeat{77, 9, true});
     f(Goodbye{"shutting down: operator request"});
     f(Ready{99, {0x0102030405060708ull, 0x1112131415161718ull}});
     f(ResyncRequest{98});
     f(AssetRequest{{0x0102030405060708ull, 0x1112131415161718ull}});
     f(AssetData{{7, 8}, {1, 2, 3, 4, 5}});
+    f(TileStalled{78, 12, 61000});
 }
 
 template <class Msg> std::vector<uint8_t> payloadOf(const Msg& msg) {
@@ -459,7 +469,8 @@ TEST(Protocol, EncodeSetsTypeAndLength) {
 TEST(Protocol, GoldenBytes) {
     // The exact layout of a header and a small payload; a change here breaks every deployed peer
     // (version 2: the shading fields of materials, lights and settings; 4: FrameBegin's tile format;
-    // 5: the snapshot's BVH primitives; 6: two-sided emission of materials and area lights).
+    // 5: the snapshot's BVH primitives; 6: two-sided emission of materials and area lights; 7: the
+    // client's work report in Heartbeat, TileStalled).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -467,7 +478,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x06, 0x00,                                      // version (6: two-sided materials and area lights)
+        0x07, 0x00,                                      // version (7: Heartbeat's work report, TileStalled)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -527,12 +538,29 @@ TEST(Protocol, HeaderReturnsOtherVersions) {
     EXPECT_EQ(decodePayload<Hello>(bytes.data() + kHeaderSize, bytes.size() - kHeaderSize).protocolVersion, 2);
 }
 
-TEST(Protocol, HeaderAloneIsAValidEmptyMessage) {
-    const std::vector<uint8_t> bytes = encodeMessage(sampleHeader(), Heartbeat{});
-    ASSERT_EQ(bytes.size(), kHeaderSize);
+TEST(Protocol, HeaderAloneIsAValidHeader) {
+    // A version-5 heartbeat was the header alone: the header still decodes (so the peer can be
+    // told its version), the empty payload no longer does.
+    Header h = sampleHeader();
+    h.type = MsgType::Heartbeat;
+    std::vector<uint8_t> bytes = encodeMessage(h, Heartbeat{});
+    bytes.resize(kHeaderSize);
+    putU32(bytes, 24, 0);
     EXPECT_EQ(decodeHeader(bytes.data(), bytes.size()).type, MsgType::Heartbeat);
-    EXPECT_NO_THROW(decodePayload<Heartbeat>(bytes.data() + kHeaderSize, 0));
-    EXPECT_THROW(decodePayload<Heartbeat>(bytes.data(), 1), DecodeError);
+    EXPECT_THROW(decodePayload<Heartbeat>(bytes.data() + kHeaderSize, 0), DecodeError);
+}
+
+// Version 6: a heartbeat carries the client's work report; its flag is a strict boolean.
+TEST(Protocol, HeartbeatReportGoldenBytes) {
+    Header h;
+    const std::vector<uint8_t> bytes = encodeMessage(h, Heartbeat{0x04030201u, 0x08070605u, true});
+    const std::vector<uint8_t> payload(bytes.begin() + kHeaderSize, bytes.end());
+    EXPECT_EQ(payload, (std::vector<uint8_t>{1, 2, 3, 4, 5, 6, 7, 8, 1}));
+    std::vector<uint8_t> bad = payload;
+    bad[8] = 2;
+    EXPECT_THROW(decode<Heartbeat>(bad), DecodeError);
+    EXPECT_THROW(decode<Heartbeat>(std::vector<uint8_t>(payload.begin(), payload.end() - 1)), DecodeError);
+    EXPECT_EQ(payloadOf(TileStalled{1, 2, 3}).size(), 12u);
 }
 
 // -- Truncation and trailing bytes ---------------------------------------------------------------

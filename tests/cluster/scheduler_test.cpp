@@ -675,6 +675,81 @@ TEST(SchedulerStragglers, QueuedTilesComeBeforeReissues) {
 
 // --- Properties over random sequences ------------------------------------------------------------
 
+// Issue 16: a lost result when one client is left. The scheduler re-issues an overdue tile only
+// to another client; the client's idle report (Heartbeat) releases its hand-outs instead, and
+// they go back to it.
+TEST(SchedulerLostHandOuts, ReleasedTilesGoBackToTheOnlyClient) {
+    TileScheduler s;
+    s.addClient(1);
+    s.beginFrame(1, 4);
+    EXPECT_EQ(s.request(1, 4, 0.0), range(0, 4));
+    EXPECT_EQ(s.complete(1, 1, 0, 0.01), Result::Accepted);
+    EXPECT_EQ(s.complete(1, 1, 1, 0.02), Result::Accepted);
+    // Tiles 2 and 3: their results were lost. Without a release nothing ever gives them out again.
+    EXPECT_TRUE(s.request(1, 4, 100.0).empty()) << "never re-issued to the client holding them";
+    EXPECT_EQ(s.outstanding(1), 2u);
+    EXPECT_EQ(s.release(1), 2u);
+    EXPECT_EQ(s.outstanding(1), 0u);
+    EXPECT_EQ(s.stats().released, 2u);
+    EXPECT_EQ(s.request(1, 4, 100.0), range(2, 4));
+    EXPECT_EQ(s.complete(1, 1, 2, 100.1), Result::Accepted);
+    EXPECT_EQ(s.complete(1, 1, 3, 100.1), Result::Accepted);
+    EXPECT_TRUE(s.frameComplete());
+}
+
+TEST(SchedulerLostHandOuts, AReleasedHandOutsLateResultStillCountsOnce) {
+    TileScheduler s;
+    s.addClient(1);
+    s.beginFrame(1, 2);
+    EXPECT_EQ(s.request(1, 2, 0.0), range(0, 2));
+    EXPECT_EQ(s.release(1), 2u);
+    // Only late, not lost: the first result wins and the tile leaves the queue.
+    EXPECT_EQ(s.complete(1, 1, 0, 1.0), Result::Accepted);
+    EXPECT_EQ(s.request(1, 4, 1.0), std::vector<uint32_t>{1}) << "the done tile is not handed out again";
+    EXPECT_EQ(s.complete(1, 1, 0, 1.1), Result::Duplicate);
+    EXPECT_EQ(s.complete(1, 1, 1, 1.2), Result::Accepted);
+    EXPECT_TRUE(s.frameComplete());
+    EXPECT_EQ(s.stats().completed, 2u);
+}
+
+TEST(SchedulerLostHandOuts, ATileStillRenderedElsewhereIsNotQueuedAgain) {
+    TileScheduler s(SchedulerOptions{false, 2.0, 0.05, 1});
+    s.addClient(1);
+    s.addClient(2);
+    s.beginFrame(1, 2);
+    EXPECT_EQ(s.request(1, 1, 0.0), std::vector<uint32_t>{0});
+    EXPECT_EQ(s.request(2, 1, 0.0), std::vector<uint32_t>{1});
+    EXPECT_EQ(s.complete(2, 1, 1, 0.1), Result::Accepted);
+    EXPECT_EQ(s.request(2, 1, 1.0), std::vector<uint32_t>{0}) << "a straggler re-issue";
+    EXPECT_EQ(s.release(1), 1u);
+    EXPECT_TRUE(s.request(1, 1, 1.0).empty()) << "client 2 still renders it: not queued a third time";
+    EXPECT_EQ(s.complete(2, 1, 0, 1.1), Result::Accepted);
+    EXPECT_TRUE(s.frameComplete());
+}
+
+// Issue 15: a render thread stuck on a tile. The tile goes to another client while there is one,
+// and to the same client (its other threads) when it is the only one left.
+TEST(SchedulerLostHandOuts, AStuckTileAvoidsItsClientWhileAnotherIsPresent) {
+    TileScheduler s(SchedulerOptions{false, 4.0, 0.05, 1});
+    s.addClient(1);
+    s.addClient(2);
+    s.beginFrame(1, 4);
+    EXPECT_EQ(s.request(1, 2, 0.0), range(0, 2));
+    EXPECT_FALSE(s.release(1, 1, 3, true)) << "not its tile";
+    EXPECT_FALSE(s.release(1, 2, 0, true)) << "another frame";
+    EXPECT_TRUE(s.release(1, 1, 0, true));
+    EXPECT_FALSE(s.release(1, 1, 0, true)) << "released already";
+    EXPECT_EQ(s.request(1, 4, 0.1), range(2, 4)) << "client 1 gets the other tiles, not the stuck one";
+    EXPECT_EQ(s.request(2, 4, 0.1), std::vector<uint32_t>{0});
+    EXPECT_EQ(s.complete(2, 1, 0, 0.2), Result::Accepted);
+
+    s.beginFrame(2, 4);
+    EXPECT_EQ(s.request(1, 1, 0.0), std::vector<uint32_t>{0});
+    EXPECT_TRUE(s.release(1, 2, 0, true));
+    s.removeClient(2);
+    EXPECT_EQ(s.request(1, 1, 0.1), std::vector<uint32_t>{0}) << "the only client left: its other threads take it";
+}
+
 TEST(SchedulerProperty, RandomSequencesKeepTheInvariants) {
     for (uint64_t seed = 1; seed <= 150; ++seed) {
         SCOPED_TRACE("seed " + std::to_string(seed));
@@ -707,6 +782,7 @@ TEST(SchedulerProperty, RandomSequencesKeepTheInvariants) {
             std::vector<int> accepted(tiles, 0);
             std::set<std::pair<uint32_t, ClientId>> handed;    // this frame, present clients
             std::vector<std::set<ClientId>> holders(tiles);    // awaiting a result, present clients
+            std::set<std::pair<uint32_t, ClientId>> released;  // hand-outs released: may be handed to it again
             uint64_t assigned = 0, acceptedCount = 0;
 
             auto request = [&](ClientId c, uint32_t n) {
@@ -722,7 +798,9 @@ TEST(SchedulerProperty, RandomSequencesKeepTheInvariants) {
                     ASSERT_LT(t, tiles);
                     EXPECT_TRUE(unique.insert(t).second) << "tile " << t << " twice in one request";
                     EXPECT_EQ(accepted[t], 0) << "done tile " << t << " handed out";
-                    EXPECT_EQ(handed.count({t, c}), 0u) << "tile " << t << " handed to " << c << " twice";
+                    if (handed.count({t, c})) {  // only after its hand-out was released
+                        EXPECT_EQ(released.erase({t, c}), 1u) << "tile " << t << " handed to " << c << " twice";
+                    }
                     heldElsewhere += !holders[t].empty();
                     holders[t].insert(c);
                     handed.insert({t, c});
@@ -758,6 +836,7 @@ TEST(SchedulerProperty, RandomSequencesKeepTheInvariants) {
                     holders[t].erase(c);
                 }
                 for (auto it = handed.begin(); it != handed.end();) it = it->second == c ? handed.erase(it) : std::next(it);
+                for (auto it = released.begin(); it != released.end();) it = it->second == c ? released.erase(it) : std::next(it);
                 EXPECT_GE(s.removeClient(c), onlyHeldByIt);
             };
             auto pick = [&](const std::set<ClientId>& from) {
@@ -768,7 +847,7 @@ TEST(SchedulerProperty, RandomSequencesKeepTheInvariants) {
 
             for (int step = 0; step < 300; ++step) {
                 now += rng() % 50 == 0 ? 1.0 : double(rng() % 10) * 0.001;
-                const uint64_t op = rng() % 20;
+                const uint64_t op = rng() % 21;
                 if (op < 8 && !live.empty()) {
                     request(pick(live), 1 + uint32_t(rng() % 4));
                 } else if (op < 15 && !held.empty()) {
@@ -784,6 +863,24 @@ TEST(SchedulerProperty, RandomSequencesKeepTheInvariants) {
                     removeClient(pick(live));
                 } else if (op == 18) {
                     addClient();
+                } else if (op == 19 && !live.empty()) {
+                    // Lost hand-outs: all of a client's (idle report), or one stuck tile.
+                    const ClientId c = pick(live);
+                    size_t holding = 0;
+                    for (uint32_t t = 0; t < tiles; ++t) holding += holders[t].count(c);
+                    if (rng() % 2 == 0) {
+                        EXPECT_EQ(s.release(c), holding);
+                        for (uint32_t t = 0; t < tiles; ++t)
+                            if (holders[t].erase(c)) released.insert({t, c});
+                    } else {
+                        const uint32_t t = uint32_t(rng() % (tiles + 1));
+                        const bool holds = t < tiles && holders[t].count(c);
+                        EXPECT_EQ(s.release(c, frame, t, rng() % 2 == 0), holds);
+                        if (holds) {
+                            holders[t].erase(c);
+                            released.insert({t, c});
+                        }
+                    }
                 }
                 ASSERT_EQ(s.remaining(), tiles - acceptedCount);
                 ASSERT_EQ(s.frameComplete(), acceptedCount == tiles);

@@ -1,15 +1,15 @@
 // libFuzzer target for every decoder that reads bytes from the network: the message header,
 // every message payload, canonical meshes and the four tile codecs.
 //
-// Input layout: the first byte picks the decoder (its value modulo 24), the rest is its input.
+// Input layout: the first byte picks the decoder (its value modulo 25), the rest is its input.
 //   0      a whole message: decodeHeader, then the payload decoder its type names
-//   1..16  decodePayload<T> for MsgType(n)
-//   17     decodeMesh
-//   18..21 decodeTile for TileCodec(n - 18); three more bytes give the width (1 + b % 64),
+//   1..17  decodePayload<T> for MsgType(n)
+//   18     decodeMesh
+//   19..22 decodeTile for TileCodec(n - 19); three more bytes give the width (1 + b % 64),
 //          the height (1 + b % 64) and the destination's row padding (b % 8)
-//   22..23 decodeWideTile (linear half-float tiles) for LZ4 and zstd, the same three bytes
-// (Protocol version 4 moved the mesh and tile selectors up by 2; make_protocol_corpus writes
-// the seeds with the new ones.)
+//   23..24 decodeWideTile (linear half-float tiles) for LZ4 and zstd, the same three bytes
+// (Protocol version 4 moved the mesh and tile selectors up by 2, version 7 by 1 more;
+// make_protocol_corpus writes the seeds with the new ones.)
 // Besides the sanitizers, the target checks that whatever decodes re-encodes to the very same
 // bytes (the encodings are canonical) and that decodeTile writes no byte outside the tile.
 // Only DecodeError is an expected outcome; any other exception aborts as a finding.
@@ -69,9 +69,10 @@ template <class... Msgs> struct Table {
     static constexpr PayloadCheck payload[] = {checkPayload<Msgs>...};
     static constexpr MessageCheck message[] = {checkMessage<Msgs>...};
 };
-// In MsgType order, 1..16.
+// In MsgType order, 1..17.
 using Messages = Table<Hello, Welcome, SceneSnapshot, MeshRequest, MeshData, Update, FrameBegin, TileRequest,
-                       TileAssign, TileResult, Heartbeat, Goodbye, Ready, ResyncRequest, AssetRequest, AssetData>;
+                       TileAssign, TileResult, Heartbeat, Goodbye, Ready, ResyncRequest, AssetRequest, AssetData,
+                       TileStalled>;
 static_assert(std::size(Messages::payload) == kMaxMsgType);
 
 void checkMesh(const uint8_t* data, size_t size) {
@@ -130,7 +131,7 @@ void checkWideTile(TileCodec codec, const uint8_t* data, size_t size) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (size < 1) return 0;
-    const unsigned selector = data[0] % 24u;
+    const unsigned selector = data[0] % 25u;
     ++data;
     --size;
     try {
@@ -139,12 +140,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             Messages::message[size_t(header.type) - 1](header, data, size);
         } else if (selector <= kMaxMsgType) {
             Messages::payload[selector - 1](data, size);
-        } else if (selector == 17) {
+        } else if (selector == 18) {
             checkMesh(data, size);
-        } else if (selector <= 21) {
-            checkTile(TileCodec(selector - 18), data, size);
+        } else if (selector <= 22) {
+            checkTile(TileCodec(selector - 19), data, size);
         } else {
-            checkWideTile(selector == 22 ? TileCodec::Lz4 : TileCodec::Zstd, data, size);
+            checkWideTile(selector == 23 ? TileCodec::Lz4 : TileCodec::Zstd, data, size);
         }
     } catch (const DecodeError&) {
         // The expected outcome for malformed input.

@@ -103,14 +103,16 @@ int main(int argc, char** argv) {
     seedMessage("tile-assign", TileAssign{3, {0, 1, 2, 17}});
     seedMessage("tile-result", TileResult{3, 17, TileCodec::Lz4, 1500, {1, 2, 3, 4, 5}});
     seedMessage("heartbeat", Heartbeat{});
+    seedMessage("heartbeat-idle", Heartbeat{3, 12, true});
+    seedMessage("tile-stalled", TileStalled{3, 17, 61000});
     seedMessage("goodbye", Goodbye{"done"});
     seedMessage("ready", Ready{2, {3, 4}});
     seedMessage("resync-request", ResyncRequest{1});
     seedMessage("asset-request", AssetRequest{{5, 6}});
     seedMessage("asset-data", AssetData{{5, 6}, {0x89, 'P', 'N', 'G', 1, 2, 3}});
 
-    writeSeed("mesh-box", 17, encodeMesh(makeBox()));
-    writeSeed("mesh-sphere-normals", 17, encodeMesh(makeSphere(3, 5)));
+    writeSeed("mesh-box", 18, encodeMesh(makeBox()));
+    writeSeed("mesh-sphere-normals", 18, encodeMesh(makeSphere(3, 5)));
 
     // An 8x6 gradient tile per codec; the three bytes after the selector give 8x6 and 3 bytes of padding.
     const int w = 8, h = 6;
@@ -123,7 +125,7 @@ int main(int argc, char** argv) {
         settings.codec = codec;
         std::vector<uint8_t> bytes{uint8_t(w - 1), uint8_t(h - 1), 3};
         encodeTile(settings, rgb.data(), w, h, size_t(w) * 3, bytes);
-        writeSeed(std::string("tile-") + codecName(codec), uint8_t(18 + int(codec)), bytes);
+        writeSeed(std::string("tile-") + codecName(codec), uint8_t(19 + int(codec)), bytes);
     }
     // The same gradient as a linear half-float tile, LZ4 and zstd.
     std::vector<float> linear(rgb.size());
@@ -133,7 +135,7 @@ int main(int argc, char** argv) {
         settings.codec = codec;
         std::vector<uint8_t> scratch, bytes{uint8_t(w - 1), uint8_t(h - 1), 3};
         encodeWideTile(settings, linear.data(), w, h, size_t(w) * 3, scratch, bytes);
-        writeSeed(std::string("wide-tile-") + codecName(codec), codec == TileCodec::Lz4 ? 22 : 23, bytes);
+        writeSeed(std::string("wide-tile-") + codecName(codec), codec == TileCodec::Lz4 ? 23 : 24, bytes);
     }
     return 0;
 }

@@ -52,21 +52,27 @@ Image renderWithClients(SceneDesc desc, const CameraDesc& camera, const RenderOp
     cs.wideAccumulation = o.frames > 1;
     Master master(desc, cs);
     LocalClients clients(o.clients, master.endpoint(), cs.threadsPerClient);
-    if (!master.waitForClients(o.clients, 60'000))
-        throw InputError("only " + std::to_string(master.connectedClients()) + " of " + std::to_string(o.clients) +
-                         " local render clients joined within 60 s");
+    // A client that dies or freezes while starting must not hold the frame back: the others
+    // render it (the bytes are the same whoever renders).
+    const int joined = master.awaitClients(o.clients, 60'000, std::max(3000, 2 * cs.timeoutMs));
+    if (joined == 0) throw InputError("no local render client joined within 60 s");
+    if (joined < o.clients)
+        std::printf("only %d of %d local render clients joined; rendering with them\n", joined, o.clients);
     // Progressive: frames 1..N of a still view, averaged (the same bytes as one machine). A
     // stochastic scene's frames come as linear tiles; a deterministic scene's as 8-bit tiles,
     // every frame the same image, which their 8-bit mean is exactly.
-    if (o.frames == 1) return master.renderFrame(&report);
     Accumulator acc;
     std::vector<float> linear;
+    Image one;
     for (int f = 0; f < o.frames; ++f) {
-        const Image img = master.renderFrame(&report, &linear);
-        if (report.linear) acc.addLinear(linear.data(), img.width, img.height);
-        else acc.add(img);
+        one = master.renderFrame(&report, &linear);
+        if (o.frames == 1) break;
+        if (report.linear) acc.addLinear(linear.data(), one.width, one.height);
+        else acc.add(one);
     }
-    return acc.resolve();
+    if (const MasterCounters c = master.counters(); c.dropped() + c.failedSends + c.lostHandOuts + c.clientsDropped > 0)
+        std::printf("master: %s\n", describeCounters(c).c_str());
+    return o.frames == 1 ? one : acc.resolve();
 }
 
 // Scene files may name gigabytes of meshes: a progress bar on a terminal, and Ctrl-C stops.

@@ -379,20 +379,37 @@ void addRun(CLI::App& app, Run& run) {
             if (!o->front.empty() && o->targetFps <= 0) throw InputError("--front needs --target-fps");
             for (const OperatingPoint& p : givenFront) knobsOf(p, desc.settings, c.cluster.codec);  // unknown controls fail now
 
+            // Ctrl-C and SIGTERM stop the run between frames, and a frame that cannot finish
+            // gives up (Cancelled: "interrupted", exit status 130).
+            std::signal(SIGINT, [](int) { gStop = true; });
+            std::signal(SIGTERM, [](int) { gStop = true; });
             Master master(desc, c.cluster);
+            master.setStopFlag(&gStop);
+            // What the master dropped, refused or lost, said when the run ends, however it ends.
+            struct CountersAtExit {
+                const Master& master;
+                ~CountersAtExit() { std::printf("master: %s\n", describeCounters(master.counters()).c_str()); }
+            } countersAtExit{master};
             std::printf("rtwall master at %s, %dx%d, %d local clients, codec %s%s\n", master.endpoint().c_str(),
                         desc.settings.width, desc.settings.height, c.cluster.localClients,
                         tileCodecName(c.cluster.codec.codec),
                         c.cluster.async ? ", asynchronous" : "");
             std::fflush(stdout);
-            LocalClients clients(c.cluster.localClients, master.endpoint(), std::max(1, c.cluster.threadsPerClient));
-            // Remote clients may take a while to be started; local ones are here in seconds.
+            LocalClients clients(c.cluster.localClients, master.endpoint(), std::max(1, c.cluster.threadsPerClient), false,
+                                 {}, master.localClientArgs());
+            // Remote clients may take a while to be started; local ones are here in seconds, and
+            // one that died or froze on the way must not keep the wall dark: go on with the others.
             const int needed = std::max(1, c.cluster.localClients);
             const int waitMs = c.cluster.localClients > 0 ? 60'000 : 600'000;
             if (c.cluster.localClients == 0)
                 std::printf("waiting for clients: rtwall client --connect %s\n", master.endpoint().c_str());
-            if (!master.waitForClients(needed, waitMs))
-                throw InputError("no render client joined " + master.endpoint() + " in time");
+            const int joined = master.awaitClients(needed, waitMs, c.cluster.localClients > 0 ? std::max(3000, 2 * c.cluster.timeoutMs) : waitMs);
+            if (joined == 0)
+                throw InputError("no render client joined " + master.endpoint() + " in time" +
+                                 (c.cluster.keyFile.empty() ? "" : " (" + describeCounters(master.counters()) +
+                                                                   "; each client needs --key with its public key in client_keys)"));
+            if (joined < needed)
+                std::printf("only %d of %d render clients joined; rendering with them (the others join when they can)\n", joined, needed);
 
             WallView::Options vo;
             vo.forceHeadless = o->headless;
@@ -531,8 +548,6 @@ void addRun(CLI::App& app, Run& run) {
                 std::fflush(stdout);
             };
 
-            std::signal(SIGINT, [](int) { gStop = true; });
-            std::signal(SIGTERM, [](int) { gStop = true; });
             std::vector<double> frameTimes;
             auto last = std::chrono::steady_clock::now();
             uint64_t bytes = 0;

@@ -18,6 +18,8 @@ void addKeys(CLI::App& app, Run& run);
 void addBenchKernel(CLI::App& bench, Run& run);
 void addBenchCluster(CLI::App& bench, Run& run);
 void addBenchFaults(CLI::App& bench, Run& run);
+void addBenchAttack(CLI::App& bench, Run& run);  // bench_attack.cpp (issue 16)
+void addBenchChaos(CLI::App& bench, Run& run);
 void addCheck(CLI::App& app, Run& run);
 void addBenchDisplay(CLI::App& bench, Run& run);
 void addGen(CLI::App& app, Run& run);

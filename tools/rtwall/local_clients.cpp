@@ -46,7 +46,11 @@ LocalClients::LocalClients(int count, const std::string& endpoint, int threadsEa
 }
 
 LocalClients::~LocalClients() {
-    for (pid_t pid : pids_) kill(pid, SIGTERM);
+    // A frozen client (SIGSTOP) acts on SIGTERM only once it runs again.
+    for (pid_t pid : pids_) {
+        kill(pid, SIGTERM);
+        kill(pid, SIGCONT);
+    }
     // Bounded wait: a client that ignores SIGTERM for 2 s is killed.
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
     for (pid_t pid : pids_) {

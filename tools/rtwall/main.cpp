@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
     rtwall::cli::addBenchKernel(*bench, run);
     rtwall::cli::addBenchCluster(*bench, run);
     rtwall::cli::addBenchFaults(*bench, run);
+    rtwall::cli::addBenchAttack(*bench, run);
+    rtwall::cli::addBenchChaos(*bench, run);
     rtwall::cli::addCheck(app, run);
     rtwall::cli::addBenchDisplay(*bench, run);
     rtwall::cli::addBenchScene(*bench, run);

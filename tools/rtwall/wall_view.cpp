@@ -131,6 +131,10 @@ void WallView::show(WallFrame& frame, const FrameReport& report, double frameSec
                 status += line;
                 overlay += "\n" + std::string(line + 3);
             }
+            // What the master dropped, refused or lost so far (issue 16: an operator must see it).
+            const std::string counters = "master: " + describeCounters(report.counters);
+            status += " | " + counters;
+            overlay += "\n" + counters;
             gl_->setStatus(status);
             statusImage_ = textImage(overlay, 2);  // shown from the next frame on
             std::printf("%s\n", status.c_str());

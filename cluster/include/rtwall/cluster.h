@@ -59,6 +59,29 @@ struct ClusterSettings {
     bool insecure = false;
 };
 
+// What the master dropped, refused or could not send, by kind, since it started
+// (Master::counters, FrameReport::counters). Every message a peer sends that the master does not
+// use is counted exactly once, in one of the first six kinds; the first few of each kind are
+// logged with the peer's address.
+struct MasterCounters {
+    uint64_t malformed = 0;         // not an rtwall message: bad header or payload, or more than one frame
+    uint64_t unknownPeer = 0;       // well-formed, but from a peer that is not a client (no hello, dropped, another session)
+    uint64_t stale = 0;             // for a frame that is no longer current (late results after a fault or a re-issue)
+    uint64_t replayed = 0;          // a repeat of what the client sent before (Ready, mesh, file and resync requests)
+    uint64_t unexpected = 0;        // a type clients never send, a result for a tile never handed to that client, ...
+    uint64_t undecodableTiles = 0;  // results whose pixels did not decode (the tile is rendered again)
+    uint64_t refused = 0;           // handshakes refused: keys not in the config (ZAP), other protocol versions
+    uint64_t failedHandshakes = 0;  // connections that broke off in the ZMTP handshake (garbage, wrong mechanism or server key)
+    uint64_t failedSends = 0;       // messages not sent: a peer's queue was full, or it was gone
+    uint64_t lostHandOuts = 0;      // tiles whose result will never come (the client holds none of them): handed out again
+    uint64_t stalledTiles = 0;      // tiles a client reported stuck on a render thread: handed out again
+    uint64_t clientsDropped = 0;    // clients that left or were dropped (goodbye, timeout, gone, queue full too long)
+    uint64_t dropped() const { return malformed + unknownPeer + stale + replayed + unexpected + undecodableTiles; }
+};
+// One line for an operator: "dropped 12 messages (3 malformed, 9 from unknown peers), ..." or
+// "nothing dropped, refused or lost".
+std::string describeCounters(const MasterCounters& c);
+
 struct ClientReport {
     uint32_t id = 0;
     uint64_t tiles = 0;         // results accepted this frame
@@ -82,6 +105,7 @@ struct FrameReport {
     std::vector<uint32_t> tileOwners;  // client id that rendered each tile (makeTiles order); UINT32_MAX: none
     bool stochastic = false;        // the frame's state renders stochastically: frames of one state refine by averaging
     bool linear = false;            // its tiles came as linear half floats (renderFrame can give them)
+    MasterCounters counters;        // the master's counters when the frame completed
 };
 
 // The differential updates that turn scene `before` into `after` (a scene file edited while the
@@ -113,6 +137,21 @@ public:
     std::string endpoint() const;  // where clients connect, with the bound port
     int connectedClients() const;  // clients that hold the current scene state
     bool waitForClients(int count, int timeoutMs);
+    // Waits for `wanted` clients, but goes on with fewer once at least one is there and no other
+    // joined for `settleMs` (a local client that died or froze while starting must not keep the
+    // wall dark). Returns how many are there (0 when none came within timeoutMs).
+    int awaitClients(int wanted, int timeoutMs, int settleMs);
+
+    // While *flag is true, renderFrame, waitForClients and awaitClients give up within 100 ms by
+    // throwing Cancelled (a signal handler sets the flag: Ctrl-C during a frame that cannot
+    // finish). The flag must outlive the master.
+    void setStopFlag(const std::atomic<bool>* flag);
+
+    // Arguments for `rtwall client` processes this master starts on its own PC
+    // (ClusterSettings::localClients): with keys, a key pair made for this session (in a private
+    // temporary directory, removed with the master; its public key is allowed) and the master's
+    // public key. Empty without keys.
+    std::vector<std::string> localClientArgs() const;
 
     // Differential scene updates: only what changes is sent to the clients. They take effect
     // in the next frame that begins after the call.
@@ -133,8 +172,9 @@ public:
     // each exactly a half float), for Accumulator::addLinear; otherwise it is emptied.
     Image renderFrame(FrameReport* report = nullptr, std::vector<float>* linear = nullptr);
 
-    uint64_t droppedMessages() const;  // malformed, stale, replayed or unexpected messages dropped
-    uint64_t failedSends() const;      // messages not sent because a peer's queue was full or it was gone
+    MasterCounters counters() const;
+    uint64_t droppedMessages() const;  // counters().dropped()
+    uint64_t failedSends() const;      // counters().failedSends
     uint64_t injectedUpdateLosses() const;  // update messages dropped by dropEveryNthUpdate
     uint64_t resyncs() const;          // full states sent again after a client found a gap
     uint64_t refusedConnections() const;  // CURVE clients whose key is not in the config
@@ -147,10 +187,14 @@ private:
 
 // What a running client counts, for tests and monitoring (ClientSettings::counters).
 struct ClientCounters {
-    std::atomic<uint64_t> droppedMessages{0};  // malformed, stale, replayed or unexpected
+    std::atomic<uint64_t> droppedMessages{0};  // malformed (multi-frame included), stale, replayed or unexpected
     std::atomic<uint64_t> rejectedAssets{0};   // texture or volume bytes from the master that do not match their hash
     std::atomic<uint64_t> assetsReceived{0};   // texture or volume files received from the master (and accepted)
     std::atomic<uint64_t> assetsLocal{0};      // found on this PC (at the material's path or in the cache) with the right hash
+    std::atomic<uint64_t> droppedAssignments{0};  // assigned tiles beyond what a client queues (a master gone mad)
+    std::atomic<uint64_t> stalledTiles{0};     // tiles reported to the master as stuck on a render thread
+    std::atomic<uint64_t> refusedHandshakes{0};  // the master refused this client's key (CURVE)
+    std::atomic<uint64_t> failedHandshakes{0};   // other broken handshakes (no CURVE on one side, wrong server key)
 };
 
 struct ClientSettings {
@@ -163,6 +207,14 @@ struct ClientSettings {
     bool replay = false;                // benchmarks: render each tile once, then resend its bytes
     int extraTileDelayMs = 0;           // fault injection for tests: emulate a slower PC
     int extraSceneBuildMs = 0;          // fault injection for tests: a PC slow to build the scene
+    int dropEveryNthResult = 0;         // fault injection for tests: lose every Nth tile result on its way out
+    // A render thread that does not return: the first tile of frame stallFrame or later that this
+    // client renders sleeps stallMs on its thread (once; cut short when the client stops).
+    int stallMs = 0;                    // fault injection for tests
+    uint32_t stallFrame = 0;
+    // A tile rendering longer than max(minStallMs, 16 x this client's mean tile time) is
+    // reported to the master, which hands it to another client (or another thread of this one).
+    int minStallMs = 1000;
     std::filesystem::path keyFile;      // this client's key pair: CURVE on (needs serverKeyFile)
     std::filesystem::path serverKeyFile;  // the master's public key: the client checks it
     std::shared_ptr<ClientCounters> counters;  // optional: updated while it runs
