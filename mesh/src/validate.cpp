@@ -254,7 +254,8 @@ Prepass validateObj(std::string& data, const std::string& name) {
     static const char* kinds[3] = {"vertex", "texture coordinate", "normal"};
 
     std::vector<std::string_view> tokens;
-    std::vector<int64_t> corners;
+    std::vector<int64_t> corners, sorted;
+    size_t facesPassedOn = 0;
     Lines lines(data);
     while (lines.next()) {
         lines.plainBlanks();
@@ -320,13 +321,22 @@ Prepass validateObj(std::string& data, const std::string& name) {
                     if (k == 0) corners.push_back(resolved);
                 }
             }
-            // OpenMesh removes repeated corners and drops what falls below a triangle.
-            std::sort(corners.begin(), corners.end());
-            const size_t distinct = size_t(std::unique(corners.begin(), corners.end()) - corners.begin());
-            if (distinct < 3)
+            // OpenMesh removes repeated corners and drops what falls below a triangle; where it
+            // passes on what is left, the importer puts the repeats back.
+            sorted.assign(corners.begin(), corners.end());
+            std::sort(sorted.begin(), sorted.end());
+            const size_t distinct = size_t(std::unique(sorted.begin(), sorted.end()) - sorted.begin());
+            if (distinct < 3) {
                 ++out.droppedDegenerate;
-            else
-                out.triangles += distinct - 2;
+            } else {
+                if (distinct < corners.size()) {
+                    RepeatedCornerFace& face = out.repeatedCorners.emplace_back();
+                    face.face = facesPassedOn;
+                    for (const int64_t c : corners) face.corners.push_back(uint32_t(c - 1));
+                }
+                out.triangles += corners.size() - 2;
+                ++facesPassedOn;
+            }
         } else if (key == "mtllib") {
             // The reader would open the material file relative to the working directory, and
             // rtwall has no use for OBJ materials.
