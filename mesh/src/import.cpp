@@ -727,9 +727,11 @@ TriangleMesh importOpenMesh(const fs::path& file, const FormatInfo& format, std:
     if (report) {
         report->format = format.name;
         importer.reportPolygons(*report);
+        report->warnings = pre.warnings;
         report->degenerateTriangles = importer.degenerateTriangles() + pre.droppedDegenerate;
         report->seamVerticesSplit = importer.seamVerticesSplit();
     }
+    for (const std::string& warning : pre.warnings) std::cerr << "warning: " + warning + "\n";
     detail::recentre(mesh);
     return mesh;
 }

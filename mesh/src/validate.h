@@ -30,6 +30,7 @@ struct Prepass {
     size_t triangles = 0;          // upper bound after triangulation
     size_t droppedDegenerate = 0;  // faces the reader drops because corners coincide (OBJ, STL)
     std::vector<RepeatedCornerFace> repeatedCorners;  // OBJ, in face order
+    std::vector<std::string> warnings;                // "<name>:line N: ..." each
 };
 
 // Throws InputError naming `name` and, where known, the line or byte offset. May rewrite bytes

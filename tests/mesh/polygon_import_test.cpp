@@ -3,7 +3,7 @@
 // polygons. Whatever library reads the file, each face must come out as triangles that cover it
 // exactly: the triangles of a face add up to its exact area (to 2e-6 of it: float corners), all
 // face the way the face does, and points sampled over it are covered once inside and never
-// outside or in a hole.
+// outside or in a hole. Also the Blender 2.47 PLY header line, and what stays refused.
 #include "polygon_shapes.h"
 #include "rtwall/mesh.h"
 
@@ -153,6 +153,99 @@ TEST(PolygonImport, ObjKeyholeKeepsBothVisitsWithTheirTextureCoordinates) {
     EXPECT_EQ(mesh.uvs()[2 * 10], 0.25f);
     EXPECT_EQ(mesh.uvs()[2 * 10 + 1], 0.75f);
     EXPECT_EQ(mesh.uvs()[0], -1.0f);
+}
+
+// --------------------------------------------------------------------------- PLY header lines
+
+// loadMesh with stderr captured into `err`, also when it throws (a capture left running would
+// swallow the test's own failure report).
+TriangleMesh loadCapturingStderr(const fs::path& file, ImportReport* report, std::string& err) {
+    ::testing::internal::CaptureStderr();
+    try {
+        TriangleMesh mesh = loadMesh(file, report);
+        err = ::testing::internal::GetCapturedStderr();
+        return mesh;
+    } catch (...) {
+        err = ::testing::internal::GetCapturedStderr();
+        throw;
+    }
+}
+
+std::string tetPly(const std::string& extraHeaderLine) {
+    return "ply\nformat ascii 1.0\n" + extraHeaderLine + "element vertex 4\nproperty float x\nproperty float y\n"
+           "property float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n"
+           "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+}
+
+// assimp's Wuson.ply (Blender 2.47) has this line in its header; it lays nothing out, so it is
+// skipped with one warning that names the file and the line.
+TEST(PlyHeader, Blender247LineIsSkippedWithOneWarning) {
+    const fs::path file = kMeshes / "blender_247.ply";
+    ImportReport report;
+    std::string err;
+    const TriangleMesh mesh = loadCapturingStderr(file, &report, err);
+    EXPECT_EQ(mesh.triangleCount(), 4u);
+    ASSERT_EQ(report.warnings.size(), 1u);
+    const std::string& w = report.warnings[0];
+    EXPECT_EQ(w.rfind(file.string() + ":line 3: ", 0), 0u) << w;
+    EXPECT_NE(w.find("'Created by Blender3D 247 - www.b"), std::string::npos) << w;
+    EXPECT_EQ(w.find('\n'), std::string::npos);
+    EXPECT_EQ(err, "warning: " + w + "\n");
+}
+
+// Lines that could be meant to lay out the data stay errors, one line each: a misspelt keyword,
+// or a line shaped like a property or an element line.
+TEST(PlyHeader, LinesThatCouldChangeTheLayoutAreRefused) {
+    const struct {
+        const char* line;
+        const char* error;
+    } cases[] = {
+        {"elment face 4\n", ":line 3: unknown PLY header keyword 'elment'"},
+        {"propery float nx\n", ":line 3: unknown PLY header keyword 'propery'"},
+        {"Property float nx\n", ":line 3: unknown PLY header keyword 'Property'"},
+        {"vertex_normal float nx\n", ":line 3: unknown PLY header keyword 'vertex_normal'"},
+        {"normals list uchar float n\n", ":line 3: unknown PLY header keyword 'normals'"},
+        {"normal vertex 4\n", ":line 3: unknown PLY header keyword 'normal'"},
+        {"end_headr\n", ":line 3: unknown PLY header keyword 'end_headr'"},
+    };
+    for (const auto& c : cases) {
+        const fs::path file = writeTemp("layout.ply", tetPly(c.line));
+        try {
+            loadMesh(file);
+            ADD_FAILURE() << c.line << " was accepted";
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_EQ(what.rfind(file.string() + c.error, 0), 0u) << what;
+            EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+        }
+    }
+    // And what changes the layout for sure stays refused as before.
+    const fs::path badFormat = writeTemp("format.ply", "ply\nformat binary_middle_endian 1.0\nelement vertex 0\nend_header\n");
+    EXPECT_THROW(
+        {
+            try {
+                loadMesh(badFormat);
+            } catch (const InputError& e) {
+                EXPECT_NE(std::string(e.what()).find(":line 2: unknown PLY format 'binary_middle_endian'"), std::string::npos) << e.what();
+                throw;
+            }
+        },
+        InputError);
+}
+
+// Other lines that are no keyword are skipped, each with its warning; a file without any has none.
+TEST(PlyHeader, EveryOtherUnknownLineIsWarnedAbout) {
+    ImportReport report;
+    std::string err;
+    const TriangleMesh mesh = loadCapturingStderr(writeTemp("two.ply", tetPly("exported by some tool\nunits: millimetres\n")), &report, err);
+    EXPECT_EQ(mesh.triangleCount(), 4u);
+    ASSERT_EQ(report.warnings.size(), 2u);
+    EXPECT_NE(report.warnings[0].find(":line 3: "), std::string::npos);
+    EXPECT_NE(report.warnings[1].find(":line 4: "), std::string::npos);
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 2);
+    ImportReport clean;
+    loadMesh(writeTemp("clean.ply", tetPly("")), &clean);
+    EXPECT_TRUE(clean.warnings.empty());
 }
 
 }  // namespace

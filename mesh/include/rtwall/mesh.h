@@ -186,6 +186,9 @@ struct ImportReport {
     size_t cellsSkipped = 0;          // VTK vertices and lines (nothing to render), counted
     std::string cache;                // loadMesh with a cache: "hit", "written", or "rebuilt: <why>"
     size_t seamVerticesSplit = 0;     // OBJ: vertices copied because their corners have different vt
+    // Input accepted with a doubt, one line each naming the file and the place (e.g. a PLY header
+    // line that is no PLY keyword). loadMesh also prints each to stderr, prefixed "warning: ".
+    std::vector<std::string> warnings;
 };
 
 // Optional progress report for long steps: called with the fraction done in [0, 1]; returning

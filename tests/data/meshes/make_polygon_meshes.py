@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Writes the polygon test files (issue 15): polygons.{obj,off,vtk,vtp,vtu,wrl},
-polygons_ascii.ply, polygons_le.ply and ring.obj (the ring face alone, for the render test).
+polygons_ascii.ply, polygons_le.ply, ring.obj (the ring face alone, for the render test) and
+blender_247.ply.
 
 Each polygons.* file holds the same nine faces, one per shape, the way CAD exporters write
 them: a ring as one keyhole face (LightWave's concave_polygon.obj: round the outer circle, across
@@ -12,6 +13,9 @@ shapes and where they lie are defined again in tests/mesh/polygon_shapes.h, whic
 check against; only the standard library is used here, so a reader bug cannot hide behind a
 writer with the same bug. Within a face every distinct point is one vertex, so repeated
 corners repeat vertex indices.
+
+blender_247.ply is the tetrahedron with the header line Blender 2.47's PLY exporter writes
+("Created by Blender3D 247 - www.blender.org, source file: ..."), which is no PLY keyword.
 
 Run from anywhere: python3 tests/data/meshes/make_polygon_meshes.py
 """
@@ -101,14 +105,14 @@ def off(vertices, faces):
     return "\n".join(lines) + "\n"
 
 
-def ply_header(encoding, vertices, faces):
-    return ["ply", "format %s 1.0" % encoding, "element vertex %d" % len(vertices), "property float x",
+def ply_header(encoding, vertices, faces, extra=()):
+    return ["ply", "format %s 1.0" % encoding, *extra, "element vertex %d" % len(vertices), "property float x",
             "property float y", "property float z", "element face %d" % len(faces),
             "property list uchar int vertex_indices", "end_header"]
 
 
-def ply_ascii(vertices, faces):
-    lines = ply_header("ascii", vertices, faces)
+def ply_ascii(vertices, faces, extra=()):
+    lines = ply_header("ascii", vertices, faces, extra)
     lines += ["%s %s %s" % tuple(map(num, v)) for v in vertices]
     lines += [" ".join(map(str, [len(f)] + f)) for f in faces]
     return "\n".join(lines) + "\n"
@@ -198,6 +202,11 @@ def main():
     write("polygons.vtu", vtu(vertices, faces))
     write("polygons.wrl", wrl(vertices, faces))
     write("ring.obj", obj(*mesh([0])))
+
+    tet_v = [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)]
+    tet_f = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+    blender = "Created by Blender3D 247 - www.blender.org, source file: 'tet.blend'"
+    write("blender_247.ply", ply_ascii(tet_v, tet_f, extra=(blender,)).replace("list uchar int", "list uchar uint"))
 
 
 if __name__ == "__main__":
