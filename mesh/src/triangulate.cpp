@@ -129,7 +129,21 @@ void PolygonTriangulator::classify(int i) {
     ++blockingCount_;
     if (listed_[size_t(i)]) return;
     listed_[size_t(i)] = 1;
-    (gridX_ > 0 ? late_ : blockers_).push_back(i);
+    if (gridX_ > 0) {
+        const size_t cell = cellOf(i);
+        cellItems_[size_t(cellEnd_[cell]++)] = i;
+        return;
+    }
+    blockers_.push_back(i);
+    // Corners that start blocking while ears are cut (float rounding can make a nearly flat
+    // corner reflex) go to the grid once there are many, not to an ever longer list.
+    if (clipping_ && blockers_.size() > 4 * kGridMinBlockers) buildGrid();
+}
+
+size_t PolygonTriangulator::cellOf(int i) const {
+    const int cx = std::clamp(int((u_[size_t(i)] - gridU0_) * gridInvU_), 0, gridX_ - 1);
+    const int cy = std::clamp(int((v_[size_t(i)] - gridV0_) * gridInvV_), 0, gridY_ - 1);
+    return size_t(cy) * size_t(gridX_) + size_t(cx);
 }
 
 void PolygonTriangulator::unlink(int i) {
@@ -146,6 +160,9 @@ void PolygonTriangulator::unlink(int i) {
     classify(q);
 }
 
+// A uniform grid over the polygon's bounds with about one blocking corner a cell, in cells as
+// square as the bounds allow. Each cell has room for every corner that lies in it, so a corner
+// that starts blocking later goes back into its own cell.
 void PolygonTriangulator::buildGrid() {
     double u0 = u_[0], u1 = u_[0], v0 = v_[0], v1 = v_[0];
     for (size_t i = 1; i < u_.size(); ++i) {
@@ -154,7 +171,6 @@ void PolygonTriangulator::buildGrid() {
         v0 = std::min(v0, v_[i]);
         v1 = std::max(v1, v_[i]);
     }
-    // About one blocking corner a cell, in cells as square as the bounds allow.
     const double target = double(blockers_.size()), w = u1 - u0, h = v1 - v0;
     int gx = 1, gy = 1;
     if (w > 0 && h > 0) {
@@ -171,17 +187,18 @@ void PolygonTriangulator::buildGrid() {
     gridV0_ = v0;
     gridInvU_ = w > 0 ? gx / w : 0;
     gridInvV_ = h > 0 ? gy / h : 0;
-    auto cellOf = [&](int i) {
-        const int cx = std::min(gx - 1, int((u_[size_t(i)] - u0) * gridInvU_));
-        const int cy = std::min(gy - 1, int((v_[size_t(i)] - v0) * gridInvV_));
-        return size_t(cy) * size_t(gx) + size_t(cx);
-    };
     cellStart_.assign(size_t(gx) * size_t(gy) + 1, 0);
-    for (const int i : blockers_) ++cellStart_[cellOf(i) + 1];
+    for (int i = 0; i < int(u_.size()); ++i) ++cellStart_[cellOf(i) + 1];
     for (size_t c = 1; c < cellStart_.size(); ++c) cellStart_[c] += cellStart_[c - 1];
-    cellItems_.resize(blockers_.size());
+    cellItems_.resize(u_.size());
     cellEnd_.assign(cellStart_.begin(), cellStart_.end() - 1);
-    for (const int i : blockers_) cellItems_[size_t(cellEnd_[cellOf(i)]++)] = i;
+    for (const int i : blockers_) {
+        listed_[size_t(i)] = 0;
+        if (alive_[size_t(i)] && blocking_[size_t(i)]) {
+            listed_[size_t(i)] = 1;
+            cellItems_[size_t(cellEnd_[cellOf(i)]++)] = i;
+        }
+    }
     blockers_.clear();
 }
 
@@ -218,25 +235,43 @@ bool PolygonTriangulator::isEar(int a, int b, int c) {
         }
         return false;
     };
-    int end = int(late_.size());
-    const bool blockedLate = scan(late_, 0, end);
-    late_.resize(size_t(end));
-    if (blockedLate) return false;
     if (gridX_ == 0) {
-        end = int(blockers_.size());
+        int end = int(blockers_.size());
         const bool blocked = scan(blockers_, 0, end);
         blockers_.resize(size_t(end));
         return !blocked;
     }
-    const int cx0 = std::clamp(int((u0 - gridU0_) * gridInvU_), 0, gridX_ - 1);
-    const int cx1 = std::clamp(int((u1 - gridU0_) * gridInvU_), 0, gridX_ - 1);
+    // Row by row, only the cells the triangle crosses: a long thin diagonal ear (a star's spike)
+    // crosses a few cells of each row but its bounding box would cover a square of them. The
+    // row's band and the triangle's extent in it get a margin of a millionth of a cell, far
+    // more than the rounding that assigns corners to cells.
     const int cy0 = std::clamp(int((v0 - gridV0_) * gridInvV_), 0, gridY_ - 1);
     const int cy1 = std::clamp(int((v1 - gridV0_) * gridInvV_), 0, gridY_ - 1);
-    for (int cy = cy0; cy <= cy1; ++cy)
+    const double cellV = gridInvV_ > 0 ? 1 / gridInvV_ : 0, marginU = gridInvU_ > 0 ? 1e-6 / gridInvU_ : 0;
+    const double tu[3] = {ua, ub, uc}, tv[3] = {va, vb, vc};
+    for (int cy = cy0; cy <= cy1; ++cy) {
+        double lo = u0, hi = u1;
+        if (gridY_ > 1) {
+            const double bandLo = gridV0_ + cy * cellV - 1e-6 * cellV, bandHi = gridV0_ + (cy + 1) * cellV + 1e-6 * cellV;
+            lo = INFINITY, hi = -INFINITY;
+            for (int k = 0; k < 3; ++k) {
+                if (tv[k] >= bandLo && tv[k] <= bandHi) lo = std::min(lo, tu[k]), hi = std::max(hi, tu[k]);
+                const int n = k == 2 ? 0 : k + 1;
+                for (const double line : {bandLo, bandHi}) {
+                    if ((tv[k] - line) * (tv[n] - line) >= 0) continue;
+                    const double u = tu[k] + (line - tv[k]) * (tu[n] - tu[k]) / (tv[n] - tv[k]);
+                    lo = std::min(lo, u), hi = std::max(hi, u);
+                }
+            }
+            if (lo > hi) continue;
+        }
+        const int cx0 = std::clamp(int((lo - marginU - gridU0_) * gridInvU_), 0, gridX_ - 1);
+        const int cx1 = std::clamp(int((hi + marginU - gridU0_) * gridInvU_), 0, gridX_ - 1);
         for (int cx = cx0; cx <= cx1; ++cx) {
             const size_t cell = size_t(cy) * size_t(gridX_) + size_t(cx);
             if (scan(cellItems_, cellStart_[cell], cellEnd_[cell])) return false;
         }
+    }
     return true;
 }
 
@@ -256,7 +291,7 @@ void PolygonTriangulator::earClip() {
     blocking_.assign(size_t(m), 0);
     listed_.assign(size_t(m), 0);
     blockers_.clear();
-    late_.clear();
+    clipping_ = false;
     blockingCount_ = 0;
     gridX_ = gridY_ = 0;
     selfIntersecting_ = false;
@@ -266,6 +301,7 @@ void PolygonTriangulator::earClip() {
     }
     for (int i = 0; i < m; ++i) classify(i);
     if (blockers_.size() > kGridMinBlockers) buildGrid();
+    clipping_ = true;
 
     // A corner is tried at its last place in the queue only: the neighbours of an ear just cut
     // off wait for the next round instead of being tried at once, so ears are cut from all

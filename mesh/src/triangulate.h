@@ -54,6 +54,7 @@ private:
     double cross(int a, int b, int c) const;
     bool flatInSpace(int a, int b, int c) const;
     void buildGrid();
+    size_t cellOf(int i) const;
     void emit(int a, int b, int c);
 
     std::vector<uint32_t> out_;
@@ -70,13 +71,14 @@ private:
     std::vector<size_t> queued_;     // per corner: its last place in queue_
     int start_ = 0;                  // a corner not yet cut off
     bool selfIntersecting_ = false;
+    bool clipping_ = false;
     // For large polygons, a uniform grid over the blocking corners so that an ear test looks at
     // the corners near the ear only. Cells drop corners that stopped blocking as they are
-    // scanned; corners that start blocking later are scanned from late_.
+    // scanned; a corner that starts blocking again goes back into its cell.
     int gridX_ = 0, gridY_ = 0;
     double gridU0_ = 0, gridV0_ = 0, gridInvU_ = 0, gridInvV_ = 0;
-    std::vector<int> cellStart_, cellEnd_, cellItems_, late_;
-    std::vector<uint8_t> listed_;  // in a grid cell or in late_
+    std::vector<int> cellStart_, cellEnd_, cellItems_;
+    std::vector<uint8_t> listed_;  // in blockers_ or in a grid cell
 };
 
 // Adds the outcome for one face to the report's polygon counts.
