@@ -4,7 +4,7 @@
 //   0   char[8]  magic "RTWMESH\0"
 //   8   u32      format version (kCacheVersion; bumped whenever the layout or an importer's
 //                output changes, so an old cache is rebuilt rather than misread)
-//   12  u32      header size (128)
+//   12  u32      header size (192)
 //   16  u64      source file size in bytes
 //   24  i64      source modification time, nanoseconds since the epoch
 //   32  u64      vertex count V
@@ -15,7 +15,10 @@
 //   80  u64[4]   import report: polygons triangulated, degenerate triangles, strips, cells skipped
 //   112 char[8]  import format name, zero-padded
 //   120 u64      XXH3-64 of the whole file with these 8 bytes taken as zero
-//   128 f32[3V]   positions, then zeros: at least 16 bytes (Embree's SIMD loads read past the
+//   128 u64[5]   import report (version 5): polygons fanned, ear-clipped, degenerate and
+//                self-intersecting, OBJ seam vertices split
+//   168 u8[24]   zero
+//   192 f32[3V]   positions, then zeros: at least 16 bytes (Embree's SIMD loads read past the
 //                 last element), up to a multiple of 64
 //       f32[3V]   normals, if flagged, padded likewise
 //       u32[3T]   triangle indices, padded likewise
@@ -28,7 +31,8 @@
 // a mesh read from its cache is a view of the mapped file (MeshArray), the buffers Embree reads.
 // Version 1 had only 4 bytes of padding after the positions and none after the indices, so its
 // arrays could not be handed to Embree in place; version 2 had no colours, version 3 no texture
-// coordinates. All are rebuilt.
+// coordinates, version 4 fanned concave polygons (a 128-byte header without their counts). All
+// are rebuilt.
 #include "mesh_internal.h"
 
 #include <xxhash.h>
@@ -55,8 +59,8 @@ namespace fs = std::filesystem;
 using detail::MeshAccess;
 
 constexpr char kMagic[8] = {'R', 'T', 'W', 'M', 'E', 'S', 'H', 0};
-constexpr uint32_t kCacheVersion = 4;
-constexpr size_t kHeaderSize = 128;
+constexpr uint32_t kCacheVersion = 5;
+constexpr size_t kHeaderSize = 192;
 constexpr size_t kChecksumAt = 120;
 
 constexpr size_t align64(size_t n) { return (n + 63) & ~size_t(63); }
@@ -202,6 +206,11 @@ std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const Impor
     putLE<uint64_t>(h + 96, report.stripsTriangulated);
     putLE<uint64_t>(h + 104, report.cellsSkipped);
     std::memcpy(h + 112, report.format.data(), std::min<size_t>(report.format.size(), 8));
+    putLE<uint64_t>(h + 128, report.polygonsFanned);
+    putLE<uint64_t>(h + 136, report.polygonsEarClipped);
+    putLE<uint64_t>(h + 144, report.polygonsDegenerate);
+    putLE<uint64_t>(h + 152, report.polygonsSelfIntersecting);
+    putLE<uint64_t>(h + 160, report.seamVerticesSplit);
     size_t at = kHeaderSize;
     copyArrayLE(h + at, mesh.positions(), 3 * V);
     at += posBytes;
@@ -278,6 +287,8 @@ TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t so
     const uint64_t V = getLE<uint64_t>(data + 32), T = getLE<uint64_t>(data + 40);
     const uint32_t flags = getLE<uint32_t>(data + 48);
     if (flags > 7 || getLE<uint32_t>(data + 52) != 0) throw bad(48, "unknown flags");
+    for (size_t at = 168; at < kHeaderSize; ++at)
+        if (data[at] != 0) throw bad(at, "reserved header bytes are not zero");
     // Counts must fit the file before anything is computed from them.
     if (V == 0 || T == 0 || V >= std::numeric_limits<uint32_t>::max() || V > size / 12 || T > size / 12)
         throw bad(32, "vertex or triangle count does not fit the file");
@@ -346,6 +357,11 @@ TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t so
         report->degenerateTriangles = getLE<uint64_t>(data + 88);
         report->stripsTriangulated = getLE<uint64_t>(data + 96);
         report->cellsSkipped = getLE<uint64_t>(data + 104);
+        report->polygonsFanned = getLE<uint64_t>(data + 128);
+        report->polygonsEarClipped = getLE<uint64_t>(data + 136);
+        report->polygonsDegenerate = getLE<uint64_t>(data + 144);
+        report->polygonsSelfIntersecting = getLE<uint64_t>(data + 152);
+        report->seamVerticesSplit = getLE<uint64_t>(data + 160);
         const char* f = reinterpret_cast<const char*>(data + 112);
         report->format.clear();
         for (int k = 0; k < 8 && f[k] >= 'a' && f[k] <= 'z'; ++k) report->format += f[k];

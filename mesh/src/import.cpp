@@ -9,6 +9,7 @@
 
 #include "import_vtk.h"
 #include "mesh_internal.h"
+#include "triangulate.h"
 #include "validate.h"
 
 #include <OpenMesh/Core/IO/IOManager.hh>
@@ -35,6 +36,7 @@
 #include <streambuf>
 #include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 namespace rtwall {
@@ -56,7 +58,14 @@ public:
     MeshImporter(TriangleMesh& mesh, bool cornerTexcoords) : mesh_(mesh), cornerTexcoords_(cornerTexcoords) {}
 
     const std::string& error() const { return error_; }
-    size_t polygonsTriangulated() const { return polygonsTriangulated_; }
+    // Copies the polygon counts (polygonsTriangulated and its parts) into `report`.
+    void reportPolygons(ImportReport& report) const {
+        report.polygonsTriangulated = polygons_.polygonsTriangulated;
+        report.polygonsFanned = polygons_.polygonsFanned;
+        report.polygonsEarClipped = polygons_.polygonsEarClipped;
+        report.polygonsDegenerate = polygons_.polygonsDegenerate;
+        report.polygonsSelfIntersecting = polygons_.polygonsSelfIntersecting;
+    }
     size_t degenerateTriangles() const { return degenerateTriangles_; }
     size_t seamVerticesSplit() const { return seamVerticesSplit_; }
 
@@ -153,9 +162,13 @@ public:
         storePoint(size_t(vh.idx()), OpenMesh::Vec3d(p[0], p[1], p[2]));
     }
 
+    // OBJ: the faces whose repeated corners OpenMesh's reader removed (validate.h).
+    void restoreRepeatedCorners(const std::vector<detail::RepeatedCornerFace>* faces) { repeated_ = faces; }
+
     FaceHandle add_face(const VHandles& corners) override {
-        if (!cornerTexcoords_) return addPolygon(corners, faceCount_);
-        const FaceHandle fh = addPolygon(resolveCornerUVs(corners), faceCount_);
+        const VHandles& face = withRepeatedCorners(corners);
+        if (!cornerTexcoords_) return addPolygon(face, faceCount_);
+        const FaceHandle fh = addPolygon(resolveCornerUVs(face), faceCount_);
         pendingCorners_.clear();
         return fh;
     }
@@ -300,6 +313,37 @@ private:
         }
     }
 
+    // The face as the file gives it, where the reader removed repeated corners: a keyhole
+    // polygon visits its bridge corners twice, and without the second visits its hole is cut
+    // open. The pre-pass's corners must be the reader's once repeats are removed, or the two
+    // disagree about the file and it is refused.
+    const VHandles& withRepeatedCorners(const VHandles& corners) {
+        if (!error_.empty() || !repeated_ || nextRepeated_ >= repeated_->size() || (*repeated_)[nextRepeated_].face != faceCount_)
+            return corners;
+        const std::vector<uint32_t>& full = (*repeated_)[nextRepeated_++].corners;
+        // The first visit of each vertex, found by sorting (vertex, corner) pairs.
+        visits_.clear();
+        for (size_t k = 0; k < full.size(); ++k) visits_.emplace_back(full[k], uint32_t(k));
+        std::sort(visits_.begin(), visits_.end());
+        firstVisit_.assign(full.size(), 0);
+        for (size_t k = 0; k < visits_.size(); ++k)
+            if (k == 0 || visits_[k].first != visits_[k - 1].first) firstVisit_[visits_[k].second] = 1;
+        restored_.clear();
+        size_t kept = 0;
+        bool same = true;
+        for (size_t k = 0; k < full.size(); ++k) {
+            restored_.emplace_back(int(full[k]));
+            if (!firstVisit_[k]) continue;
+            same = same && kept < corners.size() && corners[kept].idx() == int(full[k]);
+            ++kept;
+        }
+        if (!same || kept != corners.size()) {
+            fail("face " + std::to_string(faceCount_) + ": OpenMesh read other corners than the file lists");
+            return corners;
+        }
+        return restored_;
+    }
+
     // OBJ corners: each corner's (u, v) goes to its vertex; a vertex that already has another
     // (u, v) (a texture seam) is split: the corner gets a copy of the vertex (position, normal,
     // colour) with its own (u, v), found again by the chain of copies when another corner has
@@ -313,10 +357,15 @@ private:
             return resolved_;
         }
         ++facesWithUV_;
-        for (auto& corner : resolved_) {
+        for (size_t k = 0; k < resolved_.size(); ++k) {
+            auto& corner = resolved_[k];
             if (!validVertex(corner)) return resolved_;  // addPolygon reports it
-            const auto it = std::find_if(pendingCorners_.begin(), pendingCorners_.end(),
-                                         [&](const PendingCorner& p) { return p.vertex == corner.idx(); });
+            // Corner k's own (u, v) where every corner has one: a vertex visited twice (a keyhole's
+            // bridge corner) may have a different one on each visit.
+            const auto it = k < pendingCorners_.size() && pendingCorners_[k].vertex == corner.idx()
+                                ? pendingCorners_.begin() + long(k)
+                                : std::find_if(pendingCorners_.begin(), pendingCorners_.end(),
+                                               [&](const PendingCorner& p) { return p.vertex == corner.idx(); });
             if (it == pendingCorners_.end()) {
                 fail("face " + std::to_string(face) + ": vertex " + std::to_string(corner.idx() + 1) +
                      " has no texture coordinate, but other corners of the face have one");
@@ -396,29 +445,26 @@ private:
                 return FaceHandle();
             }
         }
-        if (corners.size() > 3) ++polygonsTriangulated_;
-        const auto first = uint32_t(corners[0].idx());
-        for (size_t k = 1; k + 1 < corners.size(); ++k) {
-            const auto b = uint32_t(corners[k].idx()), c = uint32_t(corners[k + 1].idx());
-            if (zeroArea(first, b, c)) ++degenerateTriangles_;
-            mesh_.addTriangle(first, b, c);
+        polygon_.clear();
+        for (const auto vh : corners) polygon_.push_back(uint32_t(vh.idx()));
+        const detail::PolygonKind kind = triangulator_.triangulate(mesh_.positions(), polygon_.data(), polygon_.size());
+        detail::countPolygon(polygons_, kind);
+        const std::vector<uint32_t>& t = triangulator_.triangles();
+        for (size_t k = 0; k + 2 < t.size(); k += 3) {
+            if (detail::zeroArea(mesh_, t[k], t[k + 1], t[k + 2])) ++degenerateTriangles_;
+            mesh_.addTriangle(t[k], t[k + 1], t[k + 2]);
         }
         ++faceCount_;
         return FaceHandle(int(faceCount_ - 1));
     }
 
-    bool zeroArea(uint32_t a, uint32_t b, uint32_t c) const {
-        const Float3 pa = mesh_.position(a), pb = mesh_.position(b), pc = mesh_.position(c);
-        const double ux = double(pb.x) - pa.x, uy = double(pb.y) - pa.y, uz = double(pb.z) - pa.z;
-        const double vx = double(pc.x) - pa.x, vy = double(pc.y) - pa.y, vz = double(pc.z) - pa.z;
-        return uy * vz - uz * vy == 0.0 && uz * vx - ux * vz == 0.0 && ux * vy - uy * vx == 0.0;
-    }
-
     TriangleMesh& mesh_;
     std::string error_;
     size_t faceCount_ = 0;
-    size_t polygonsTriangulated_ = 0;
+    ImportReport polygons_;  // the polygon counts only
     size_t degenerateTriangles_ = 0;
+    detail::PolygonTriangulator triangulator_;
+    std::vector<uint32_t> polygon_;
 
     std::vector<float> normals_;
     std::vector<bool> hasNormal_;
@@ -440,6 +486,11 @@ private:
     size_t uvsSet_ = 0;
     std::vector<PendingCorner> pendingCorners_;  // the face being read (OBJ)
     VHandles resolved_;
+    const std::vector<detail::RepeatedCornerFace>* repeated_ = nullptr;
+    size_t nextRepeated_ = 0;
+    VHandles restored_;
+    std::vector<std::pair<uint32_t, uint32_t>> visits_;
+    std::vector<uint8_t> firstVisit_;
     std::vector<uint32_t> seamNext_;  // per vertex: its next copy with another (u, v), or kNoCopy
     size_t seamVerticesSplit_ = 0;
     size_t facesWithUV_ = 0, facesWithoutUV_ = 0, firstFaceWithoutUV_ = 0;
@@ -626,6 +677,7 @@ TriangleMesh importOpenMesh(const fs::path& file, const FormatInfo& format, std:
     // bytes of the file) only guards this promise against a slip in a validator.
     mesh.reserve(std::min(pre.vertices, data.size() / 4), std::min(pre.triangles, data.size()));
     MeshImporter importer(mesh, format.format == MeshFormat::Obj);
+    importer.restoreRepeatedCorners(&pre.repeatedCorners);
     bool ok = false;
     std::string readerMessage;
     {
@@ -674,10 +726,12 @@ TriangleMesh importOpenMesh(const fs::path& file, const FormatInfo& format, std:
 
     if (report) {
         report->format = format.name;
-        report->polygonsTriangulated = importer.polygonsTriangulated();
+        importer.reportPolygons(*report);
+        report->warnings = pre.warnings;
         report->degenerateTriangles = importer.degenerateTriangles() + pre.droppedDegenerate;
         report->seamVerticesSplit = importer.seamVerticesSplit();
     }
+    for (const std::string& warning : pre.warnings) std::cerr << "warning: " + warning + "\n";
     detail::recentre(mesh);
     return mesh;
 }

@@ -19,6 +19,7 @@
 #include "import_vtk.h"
 
 #include "mesh_internal.h"
+#include "triangulate.h"
 
 #include <vtkActor.h>
 #include <vtkActorCollection.h>
@@ -441,6 +442,8 @@ TriangleMesh toTriangles(vtkPolyData* pd, const std::string& name, ImportReport&
     };
     if (polys) {
         auto it = vtkSmartPointer<vtkCellArrayIterator>::Take(polys->NewIterator());
+        PolygonTriangulator triangulator;
+        std::vector<uint32_t> polygon;
         vtkIdType cell = 0;
         for (it->GoToFirstCell(); !it->IsDoneWithTraversal(); it->GoToNextCell(), ++cell) {
             vtkIdType n = 0;
@@ -448,11 +451,12 @@ TriangleMesh toTriangles(vtkPolyData* pd, const std::string& name, ImportReport&
             it->GetCurrentCell(n, ids);
             if (n < 3) fail(name, "polygon " + std::to_string(cell) + " has fewer than 3 corners");
             checkIds("polygon", cell, n, ids);
-            if (n > 3) ++report.polygonsTriangulated;
-            for (vtkIdType k = 1; k + 1 < n; ++k) {
-                const auto a = uint32_t(ids[0]), b = uint32_t(ids[k]), c = uint32_t(ids[k + 1]);
-                if (zeroArea(mesh, a, b, c)) ++report.degenerateTriangles;
-                mesh.addTriangle(a, b, c);
+            polygon.assign(ids, ids + n);
+            countPolygon(report, triangulator.triangulate(mesh.positions(), polygon.data(), polygon.size()));
+            const std::vector<uint32_t>& t = triangulator.triangles();
+            for (size_t k = 0; k + 2 < t.size(); k += 3) {
+                if (zeroArea(mesh, t[k], t[k + 1], t[k + 2])) ++report.degenerateTriangles;
+                mesh.addTriangle(t[k], t[k + 1], t[k + 2]);
             }
         }
     }

@@ -254,7 +254,8 @@ Prepass validateObj(std::string& data, const std::string& name) {
     static const char* kinds[3] = {"vertex", "texture coordinate", "normal"};
 
     std::vector<std::string_view> tokens;
-    std::vector<int64_t> corners;
+    std::vector<int64_t> corners, sorted;
+    size_t facesPassedOn = 0;
     Lines lines(data);
     while (lines.next()) {
         lines.plainBlanks();
@@ -320,13 +321,22 @@ Prepass validateObj(std::string& data, const std::string& name) {
                     if (k == 0) corners.push_back(resolved);
                 }
             }
-            // OpenMesh removes repeated corners and drops what falls below a triangle.
-            std::sort(corners.begin(), corners.end());
-            const size_t distinct = size_t(std::unique(corners.begin(), corners.end()) - corners.begin());
-            if (distinct < 3)
+            // OpenMesh removes repeated corners and drops what falls below a triangle; where it
+            // passes on what is left, the importer puts the repeats back.
+            sorted.assign(corners.begin(), corners.end());
+            std::sort(sorted.begin(), sorted.end());
+            const size_t distinct = size_t(std::unique(sorted.begin(), sorted.end()) - sorted.begin());
+            if (distinct < 3) {
                 ++out.droppedDegenerate;
-            else
-                out.triangles += distinct - 2;
+            } else {
+                if (distinct < corners.size()) {
+                    RepeatedCornerFace& face = out.repeatedCorners.emplace_back();
+                    face.face = facesPassedOn;
+                    for (const int64_t c : corners) face.corners.push_back(uint32_t(c - 1));
+                }
+                out.triangles += corners.size() - 2;
+                ++facesPassedOn;
+            }
         } else if (key == "mtllib") {
             // The reader would open the material file relative to the working directory, and
             // rtwall has no use for OBJ materials.
@@ -630,7 +640,37 @@ struct PlyHeader {
     size_t dataOffset = 0;  // first byte after the end_header line
     size_t dataLine = 0;    // line number of the end_header line
     int vertexElement = -1, faceElement = -1;
+    std::vector<std::string> warnings;  // header lines skipped
 };
+
+// Levenshtein distance, for header keywords (a few letters each).
+size_t editDistance(std::string_view a, std::string_view b) {
+    std::vector<size_t> row(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+        size_t diagonal = row[0];
+        row[0] = i;
+        for (size_t j = 1; j <= b.size(); ++j) {
+            const size_t above = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (lower(a[i - 1]) == lower(b[j - 1]) ? 0 : 1)});
+            diagonal = above;
+        }
+    }
+    return row[b.size()];
+}
+
+// A header line that is no keyword could still be meant as one that lays out the data: a
+// misspelt keyword, or the shape of a property line ("<word> <type> <name>", "<word> list ...")
+// or an element line ("<word> <name> <count>"). Skipping such a line would misread every value
+// after it, so it stays an error; any other line cannot change the layout.
+bool mayChangePlyLayout(const std::vector<std::string_view>& tokens) {
+    const std::string_view key = tokens[0].substr(0, 16);
+    for (const std::string_view keyword : {"format", "element", "property", "end_header"})
+        if (editDistance(key, keyword) <= 2) return true;
+    if (tokens.size() >= 2 && (tokens[1] == "list" || findPlyType(tokens[1]))) return true;
+    int64_t count = 0;
+    return tokens.size() == 3 && parseInteger(tokens[2], count);
+}
 
 bool isColorName(std::string_view n) {
     return n == "red" || n == "green" || n == "blue" || n == "alpha" || n == "diffuse_red" || n == "diffuse_green" ||
@@ -766,8 +806,15 @@ PlyHeader parsePlyHeader(std::string& data, const std::string& name) {
             if (binary && p.role == PlyRole::Integer && p.type->isFloat)
                 failLine(name, line, "property " + quote(p.name) + " must be an integer type");
             e.props.push_back(std::move(p));
+        } else if (mayChangePlyLayout(tokens)) {
+            failLine(name, line, "unknown PLY header keyword " + quote(key) +
+                                     " (it could be a misspelt format, element or property line, which would change how the data is read)");
         } else {
-            failLine(name, line, "unknown PLY header keyword " + quote(key));
+            // Blender 2.4x writes "Created by Blender3D 247 - www.blender.org, source file: ..." as
+            // a bare line; other readers skip such lines, and only format, element and property
+            // lines say how the data is laid out.
+            h.warnings.push_back(name + ":line " + std::to_string(line) + ": ignored a PLY header line that is no PLY keyword: " +
+                                 quote(text.substr(0, 60)));
         }
     }
     if (!ended) fail(name, "truncated PLY header: no end_header line");
@@ -966,6 +1013,7 @@ Prepass validatePly(std::string& data, const std::string& name) {
     Prepass out = h.encoding == PlyHeader::Encoding::Ascii ? validatePlyAscii(data, name, h)
                                                            : validatePlyBinary(data, name, h, compacted);
     rewritePlyHeader(data, h, compacted);
+    out.warnings = h.warnings;
     return out;
 }
 

@@ -57,6 +57,26 @@ TEST(Cli, InfoJsonOnAMesh) {
     EXPECT_NE(r.output.find("\"bounds\""), std::string::npos) << r.output;
 }
 
+// Issue 15: how the polygons became triangles, in rtwall info (text and JSON); a PLY header line
+// that is no keyword is one warning line on stderr.
+TEST(Cli, InfoCountsHowPolygonsWereTriangulated) {
+    const std::string file = (std::filesystem::path(RTWALL_TEST_DATA_DIR) / "meshes" / "polygons.obj").string();
+    const Result json = run("info --json " + file);
+    ASSERT_EQ(json.status, 0) << json.output;
+    for (const char* field : {"\"polygons_triangulated\" : 9", "\"polygons_fanned\" : 1", "\"polygons_ear_clipped\" : 6",
+                              "\"polygons_degenerate\" : 1", "\"polygons_self_intersecting\" : 1", "\"degenerate_triangles\" : 2"})
+        EXPECT_NE(json.output.find(field), std::string::npos) << field << "\n" << json.output;
+    const Result text = run("info " + file);
+    ASSERT_EQ(text.status, 0) << text.output;
+    EXPECT_NE(text.output.find("polygons_ear_clipped = 6"), std::string::npos) << text.output;
+    const std::string blender = (std::filesystem::path(RTWALL_TEST_DATA_DIR) / "meshes" / "blender_247.ply").string();
+    const Result warned = run("info " + blender);
+    ASSERT_EQ(warned.status, 0) << warned.output;
+    EXPECT_NE(warned.output.find("warning: " + blender + ":line 3: "), std::string::npos) << warned.output;
+    const size_t first = warned.output.find("warning:");
+    EXPECT_EQ(warned.output.find("warning:", first + 1), std::string::npos) << "one warning only\n" << warned.output;
+}
+
 TEST(Cli, RenderThroughLocalClientsGivesTheSameBytes) {
     const auto dir = test::scratchDir();
     const std::string scene = (test::sourceDir() / "configs/demo.toml").string();

@@ -74,6 +74,12 @@ TEST_P(CacheRoundTrip, GivesIdenticalGeometry) {
     expectSameMesh(imported, cached);
     EXPECT_EQ(first.format, second.format);
     EXPECT_EQ(first.polygonsTriangulated, second.polygonsTriangulated);
+    EXPECT_EQ(first.polygonsFanned, second.polygonsFanned);
+    EXPECT_EQ(first.polygonsEarClipped, second.polygonsEarClipped);
+    EXPECT_EQ(first.polygonsDegenerate, second.polygonsDegenerate);
+    EXPECT_EQ(first.polygonsSelfIntersecting, second.polygonsSelfIntersecting);
+    EXPECT_EQ(first.degenerateTriangles, second.degenerateTriangles);
+    EXPECT_EQ(first.seamVerticesSplit, second.seamVerticesSplit);
     EXPECT_EQ(first.cellsSkipped, second.cellsSkipped);
     // The cache file itself: 64-byte aligned sections, so its size is a multiple of 64.
     EXPECT_EQ(fs::file_size(meshCachePath(src)) % 64, 0u);
@@ -106,7 +112,7 @@ TEST(MeshCache, TruncationAndTrailingBytesAreCaught) {
     const fs::path src = copyMesh(dir, "box_ascii.vtk");
     writeMeshCache(loadMesh(src), ImportReport{}, src, meshCachePath(src));
     const std::string good = readBytes(meshCachePath(src));
-    for (size_t size : {size_t(0), size_t(7), size_t(127), size_t(128), good.size() / 2, good.size() - 1}) {
+    for (size_t size : {size_t(0), size_t(7), size_t(127), size_t(128), size_t(191), size_t(192), good.size() / 2, good.size() - 1}) {
         writeBytes(meshCachePath(src), good.substr(0, size));
         std::string why;
         EXPECT_FALSE(readMeshCache(meshCachePath(src), src, nullptr, &why).has_value()) << size;
@@ -149,7 +155,7 @@ TEST(MeshCache, CorruptCacheIsRebuiltNotTrusted) {
     opt.cache = true;
     const TriangleMesh original = loadMesh(src, opt);
     std::string bytes = readBytes(meshCachePath(src));
-    bytes[200] = char(bytes[200] ^ 1);  // inside the positions
+    bytes[200] = char(bytes[200] ^ 1);  // inside the positions (from byte 192)
     writeBytes(meshCachePath(src), bytes);
     ImportReport r;
     const TriangleMesh again = loadMesh(src, opt, &r);
@@ -256,7 +262,7 @@ TEST(MeshCache, OldVersionIsRebuilt) {
     opt.cache = true;
     const TriangleMesh original = loadMesh(src, opt);
     std::string bytes = readBytes(meshCachePath(src));
-    ASSERT_EQ(bytes[8], 4);
+    ASSERT_EQ(bytes[8], 5);
     bytes[8] = 1;
     writeBytes(meshCachePath(src), bytes);
     ImportReport r1, r2;
@@ -282,7 +288,7 @@ TEST(MeshCache, BadValuesUnderAGoodChecksumAreCaught) {
     writeMeshCache(mesh, ImportReport{}, src, cache);
     std::string bytes = readBytes(cache);
     const size_t V = mesh.vertexCount(), T = mesh.triangleCount();
-    const size_t posBytes = (12 * V + 16 + 63) / 64 * 64, idxAt = 128 + posBytes;
+    const size_t posBytes = (12 * V + 16 + 63) / 64 * 64, idxAt = 192 + posBytes;
     ASSERT_EQ(bytes.size(), idxAt + (12 * T + 16 + 63) / 64 * 64);
     // Re-signed as the writer would: the checksum is then right, the values are not.
     auto resign = [](std::string& b) {
@@ -309,9 +315,9 @@ TEST(MeshCache, BadValuesUnderAGoodChecksumAreCaught) {
     EXPECT_EQ(error(badIndex), "c:offset " + std::to_string(idxAt + 12 * (T - 1)) + ": vertex index " + std::to_string(V) + " out of range");
     std::string badCoordinate = bytes;
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    std::memcpy(&badCoordinate[128 + 4], &nan, 4);
+    std::memcpy(&badCoordinate[192 + 4], &nan, 4);
     resign(badCoordinate);
-    EXPECT_EQ(error(badCoordinate), "c:offset 132: non-finite coordinate");
+    EXPECT_EQ(error(badCoordinate), "c:offset 196: non-finite coordinate");
     // And through readMeshCache, which would otherwise hand the mapping to Embree.
     std::memcpy(&badIndex[16], readBytes(cache).data() + 16, 16);
     resign(badIndex);

@@ -204,7 +204,7 @@ TEST(MeshUVs, CacheRoundTripAndAFlippedUVByte) {
     const fs::path cache = meshCachePath(src);
     std::string bytes = readAll(cache);
     ASSERT_EQ(bytes.size() % 64, 0u);
-    EXPECT_EQ(uint32_t(uint8_t(bytes[8])), 4u);       // cache version 4
+    EXPECT_EQ(uint32_t(uint8_t(bytes[8])), 5u);       // cache version 5
     EXPECT_EQ(uint32_t(uint8_t(bytes[48])) & 4u, 4u);  // flag bit 2: texture coordinates
     const size_t uvAt = bytes.size() - 64;
     float u0;
@@ -235,7 +235,7 @@ TEST(MeshUVs, Version3CacheIsRebuilt) {
     ImportReport r;
     const TriangleMesh mesh = loadMesh(src, lo, &r);
     EXPECT_NE(r.cache.find("rebuilt: "), std::string::npos) << r.cache;
-    EXPECT_NE(r.cache.find("cache version 3, this rtwall reads version 4"), std::string::npos) << r.cache;
+    EXPECT_NE(r.cache.find("cache version 3, this rtwall reads version 5"), std::string::npos) << r.cache;
     EXPECT_TRUE(mesh.hasUVs());
     ImportReport again;
     loadMesh(src, lo, &again);

@@ -28,6 +28,12 @@ toml::table meshInfo(const std::filesystem::path& path) {
                        {"colors", mesh.hasColors()},
                        {"uvs", mesh.hasUVs()},
                        {"polygons_triangulated", int64_t(report.polygonsTriangulated)},
+                       // how: convex ones fanned, the rest ear-clipped; those with no area, or whose
+                       // boundary crosses itself, fanned (in part) and counted apart
+                       {"polygons_fanned", int64_t(report.polygonsFanned)},
+                       {"polygons_ear_clipped", int64_t(report.polygonsEarClipped)},
+                       {"polygons_degenerate", int64_t(report.polygonsDegenerate)},
+                       {"polygons_self_intersecting", int64_t(report.polygonsSelfIntersecting)},
                        {"degenerate_triangles", int64_t(report.degenerateTriangles)},
                        {"strips_triangulated", int64_t(report.stripsTriangulated)},
                        {"cells_skipped", int64_t(report.cellsSkipped)},

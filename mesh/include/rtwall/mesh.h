@@ -172,13 +172,23 @@ private:
 
 struct ImportReport {
     std::string format;               // "obj", "off", "ply", "stl", "om", "vtk", "vtp", "vtu", "wrl"
-    size_t polygonsTriangulated = 0;  // faces with more than three corners, fan-triangulated
+    size_t polygonsTriangulated = 0;  // faces with more than three corners: the sum of the next four
+    size_t polygonsFanned = 0;        // strictly convex in their plane: a fan from the first corner
+    size_t polygonsEarClipped = 0;    // concave or keyhole (a hole bridged to the outline), or with
+                                      // repeated corners or collinear runs: ear-clipped in their plane
+    size_t polygonsDegenerate = 0;    // no area at all (every corner on one line or point): fanned
+                                      // into zero-area triangles, which degenerateTriangles counts
+    size_t polygonsSelfIntersecting = 0;  // ear clipping ran out of ears because the boundary crosses
+                                          // itself: what was left is fanned
     size_t degenerateTriangles = 0;   // zero-area triangles (kept, never hit, counted), plus faces
                                       // the OBJ and STL readers drop because corners repeat
     size_t stripsTriangulated = 0;    // VTK triangle strips turned into triangles
     size_t cellsSkipped = 0;          // VTK vertices and lines (nothing to render), counted
     std::string cache;                // loadMesh with a cache: "hit", "written", or "rebuilt: <why>"
     size_t seamVerticesSplit = 0;     // OBJ: vertices copied because their corners have different vt
+    // Input accepted with a doubt, one line each naming the file and the place (e.g. a PLY header
+    // line that is no PLY keyword). loadMesh also prints each to stderr, prefixed "warning: ".
+    std::vector<std::string> warnings;
 };
 
 // Optional progress report for long steps: called with the fraction done in [0, 1]; returning
@@ -199,7 +209,10 @@ struct LoadOptions {
 // Reads OBJ, OFF, PLY (ASCII/binary), STL (ASCII/binary) and OM. The format is chosen from
 // the extension and checked against the content. Throws InputError on any malformed input,
 // naming the file and the place; never crashes, never hangs, never allocates much more than
-// the file's size before the data has been validated. Polygons are fan-triangulated. Vertex
+// the file's size before the data has been validated. Polygons, in every format, become
+// triangles by one routine: a fan where they are strictly convex, ear clipping in their plane
+// where they are not (concave and keyhole polygons, repeated corners, collinear runs; OBJ faces
+// keep the corners OpenMesh's reader would drop as repeats). ImportReport counts each kind. Vertex
 // normals are kept, normalised, only when the file gives every vertex one. STL corners at the
 // same position become one shared vertex, as in OpenMesh's reader, so an STL mesh is indexed
 // like the others. Safe to call from several threads (the OpenMesh part runs one at a time).
