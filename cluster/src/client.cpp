@@ -4,6 +4,7 @@
 #include "codec.h"
 #include "net.h"
 #include "protocol.h"
+#include "scene_state.h"
 #include "security.h"
 #include "update_sequencer.h"
 
@@ -459,25 +460,9 @@ private:
     // again, never getting in.
     void tryBuildScene() {
         if (!snapshot_ || ready_ || building_.valid() || built_) return;  // a stale build is redone when it ends
-        SceneDesc desc;
-        for (const MeshRef& ref : snapshot_->meshes) {
-            auto it = meshes_.find(ref.hash);
-            if (it == meshes_.end()) return;  // still waiting for a mesh
-            desc.meshes.push_back({ref.name, ref.source, it->second});
-        }
-        for (const AssetRef& ref : snapshot_->assets) {
-            auto it = assets_.find(ref.hash);
-            if (it == assets_.end()) return;  // still waiting for a texture or volume
-            desc.files[ref.path] = it->second;
-        }
-        desc.materials = snapshot_->materials;
-        desc.instances = snapshot_->instances;
-        desc.lights = snapshot_->lights;
-        desc.cameras = {snapshot_->camera};
-        desc.settings = snapshot_->settings;
-        desc.bvh = snapshot_->bvh;
-        desc.origin = snapshot_->origin;
-        building_ = std::async(std::launch::async, [desc = std::move(desc), delay = settings_.extraSceneBuildMs] {
+        std::optional<SceneDesc> desc = sceneOf(*snapshot_, meshes_, assets_);
+        if (!desc) return;  // still waiting for a mesh, texture or volume
+        building_ = std::async(std::launch::async, [desc = std::move(*desc), delay = settings_.extraSceneBuildMs] {
             if (delay > 0) std::this_thread::sleep_for(std::chrono::milliseconds(delay));
             return std::make_unique<Scene>(desc);
         });
@@ -545,20 +530,23 @@ private:
             return CatchUp::CannotRender;
         }
         for (const Update& u : ups)
-            for (const Change& c : u.changes) {
-                if (auto* cam = std::get_if<CameraChange>(&c)) camera_ = cam->camera;
-                else if (auto* t = std::get_if<TransformChange>(&c)) scene_->setInstanceTransform(t->instance, t->transform);
-                else if (auto* m = std::get_if<MaterialChange>(&c)) {
-                    for (const AssetRef& ref : m->files) scene_->addFile(ref.path, assets_.at(ref.hash));
-                    scene_->setMaterial(m->material, m->value);
-                }
-                else if (auto* l = std::get_if<LightChange>(&c)) scene_->setLight(l->light, l->value);
-                else if (auto* st = std::get_if<SettingsChange>(&c)) setRenderSettings(st->settings);
-            }
+            for (const Change& c : u.changes) std::visit([this](const auto& change) { apply(change); }, c);
         scene_->commit();
         stateSeq_ = seq;
         return CatchUp::Done;
     }
+
+    // A change to the engine scene (under sceneMutex_). What each change writes is
+    // scene_state.h's; these are the engine's differential calls for it, one per kind of change
+    // (a new kind fails to compile in catchUp's std::visit until it has one).
+    void apply(const CameraChange& c) { camera_ = c.camera; }
+    void apply(const TransformChange& c) { scene_->setInstanceTransform(c.instance, c.transform); }
+    void apply(const MaterialChange& c) {
+        for (const AssetRef& ref : c.files) scene_->addFile(ref.path, assets_.at(ref.hash));
+        scene_->setMaterial(c.material, c.value);
+    }
+    void apply(const LightChange& c) { scene_->setLight(c.light, c.value); }
+    void apply(const SettingsChange& c) { setRenderSettings(c.settings); }
 
     void onFrameBegin(const FrameBegin& fb) {
         // Frames only move forward. An older FrameBegin, or the one being rendered again, is a

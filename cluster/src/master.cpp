@@ -8,6 +8,7 @@
 #include "codec.h"
 #include "net.h"
 #include "protocol.h"
+#include "scene_state.h"
 #include "scheduler.h"
 #include "security.h"
 
@@ -18,6 +19,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <cstring>
 #include <condition_variable>
 #include <cstdio>
@@ -48,6 +50,7 @@ struct ClientState {
     std::set<Hash128> meshesSent;  // each mesh goes to a client once: repeated requests cannot pile up meshes in its queue
     std::set<Hash128> assetsSent;  // likewise each texture or volume file
     uint32_t stateSeq = 0;    // the snapshot it was sent; it also has every update after it
+    Hash128 stateHash{};      // that snapshot's stateHash: its Ready must say exactly this
     uint32_t credits = 0;     // tiles it asked for and has not been given
     uint32_t window = 0;      // tiles it asked to keep in flight this frame (its TileRequest)
     uint32_t tilesAssigned = 0;  // tiles sent to it this frame: its idle heartbeat must have seen them all
@@ -161,7 +164,6 @@ private:
     std::vector<std::thread> workers_;
 };
 
-using FileBytes = std::shared_ptr<const std::vector<uint8_t>>;
 using Asset = std::pair<AssetRef, FileBytes>;
 
 // The files a material names: its texture image, alpha-mask image and volume.
@@ -201,13 +203,14 @@ Asset readAsset(const std::string& path, const decltype(SceneDesc::files)& files
 // make the master queue for it.
 constexpr uint32_t kMaxCredits = 64;
 
+// Queued in sequence order: each is pushed while stateMutex is held, so a frame's command
+// comes after every update it renders and before every later one.
 struct Command {
     enum Kind { kUpdate, kBeginFrame, kStop, kCodec } kind;
-    Update update;              // kUpdate; for kBeginFrame only its seq: the state the frame renders
+    Update update{};            // kUpdate; for kBeginFrame only its seq: the state the frame renders
     uint32_t frame = 0;
-    RenderSettings settings;    // kBeginFrame: image and tile size at that state
-    std::shared_ptr<const SceneSnapshot> state;  // kBeginFrame: the whole state the frame renders
-    CodecSettings codec;        // kCodec
+    RenderSettings settings{};  // kBeginFrame: image and tile size at that state
+    CodecSettings codec{};      // kCodec
     TilePixels pixels = TilePixels::Srgb8;  // kBeginFrame: how its tiles travel
     bool stochastic = false;    // kBeginFrame: its state renders stochastically
 };
@@ -216,16 +219,21 @@ struct Command {
 
 struct Master::Impl {
     ClusterSettings settings;
-    SceneDesc scene;       // the master's state: geometry once, shared with nobody
+    // The application's state, at sequence number seq: the application thread changes it (set*),
+    // O(1) per change; clients get the network thread's copy (frameState). stateMutex guards it,
+    // seq, the stochastic flag, and the order of the commands it queues (held while queueing).
+    SceneDesc scene;       // geometry once, shared with nobody
     CameraDesc camera;
-    std::vector<MeshRef> meshRefs;
+    std::vector<MeshRef> meshRefs;    // constant once the network thread runs, which reads it
     std::vector<AssetRef> assetRefs;  // texture and volume files, read once: clients fetch them by hash
     std::map<Hash128, std::shared_ptr<const std::vector<uint8_t>>> assetBytes;
-    // The scene state above is written by the application thread (set*) and read by the
-    // network thread (snapshots for joining clients): stateMutex guards it, seq and hashAt.
     mutable std::mutex stateMutex;
     uint32_t seq = 0;      // state sequence number
-    std::map<uint32_t, Hash128> hashAt;  // recent states, to check a client's Ready
+    // rendersStochastically(scene), recomputed (O(instances)) only after a change that can alter
+    // it: a material, light or settings change (it reads which materials instances use, never
+    // their transforms).
+    bool stateStochastic = false;
+    bool stochasticStale = true;
     uint64_t session = 0;
 
     zmq::context_t ctx{1};
@@ -257,11 +265,15 @@ struct Master::Impl {
     std::unique_ptr<DecodePool> decoder;
     uint32_t currentFrame = 0;
     uint32_t frameSeq = 0;        // state the current frame renders
-    std::shared_ptr<const SceneSnapshot> frameState;  // that state in full (null before the first frame)
+    // That state in full (before the first frame: the initial state), kept by applying the
+    // updates sent since when a frame begins: O(changes), not a copy of the state per frame.
+    // A joining client gets it, and the updates sent since, so that it can help at once.
+    SceneSnapshot frameState;
+    std::optional<EncodedSnapshot> frameStateMessage;  // frameState encoded and hashed, once per frame that needs it
+    MergedUpdate sentSince;       // the updates sent since frameState, merged, for joiners
     TilePixels framePixels = TilePixels::Srgb8;  // how the current frame's tiles travel
     bool frameStochastic = false;
     std::vector<float> linear;    // the current frame in linear RGB (LinearHalf frames)
-    std::deque<Update> sentUpdates;  // updates already sent to everyone, newest last, for joiners
     bool frameActive = false;
     double frameStart = 0;
     uint64_t frameBytes = 0;
@@ -331,26 +343,6 @@ struct Master::Impl {
         counts.*kind += n;
     }
 
-    // The current state and its sequence number, consistent with each other.
-    SceneSnapshot snapshot() const {
-        std::lock_guard lock(stateMutex);
-        return snapshotLocked();
-    }
-    SceneSnapshot snapshotLocked() const {
-        SceneSnapshot snap;
-        snap.updateSeq = seq;
-        snap.meshes = meshRefs;
-        snap.materials = scene.materials;
-        snap.instances = scene.instances;
-        snap.lights = scene.lights;
-        snap.camera = camera;
-        snap.settings = scene.settings;
-        snap.bvh = scene.bvh;
-        snap.origin = scene.origin;
-        snap.assets = assetRefs;
-        return snap;
-    }
-
     // A file of the state by the path materials use (under stateMutex once the network runs).
     // A path is read once per session: later changes to the file on disk are not seen.
     const AssetRef* findAsset(const std::string& path) const {
@@ -376,7 +368,10 @@ struct Master::Impl {
     // the caller repairs what was lost, optional sends pause for 10 ms, and only a queue full
     // for longer than the timeout drops the client. A closed connection does.
     template <class Msg> SendResult send(ClientState& c, const Msg& msg, uint32_t frame = 0) {
-        const SendResult r = sendToPeerResult(router, c.peer, encodeMessage(header(messageTypeOf(msg), frame), msg));
+        return sendBytes(c, messageTypeOf(msg), encodeMessage(header(messageTypeOf(msg), frame), msg));
+    }
+    SendResult sendBytes(ClientState& c, MsgType type, const std::vector<uint8_t>& bytes) {
+        const SendResult r = sendToPeerResult(router, c.peer, bytes);
         const double now = nowSeconds();
         if (r == SendResult::Sent) {
             c.lastSent = now;
@@ -390,7 +385,7 @@ struct Master::Impl {
         }
         if (n <= kLoggedPerKind)
             std::fprintf(stderr, "rtwall master: could not send a message (type %d) to client %u: %s%s\n",
-                         int(messageTypeOf(msg)), c.id, r == SendResult::Full ? "its queue is full" : "it is gone",
+                         int(type), c.id, r == SendResult::Full ? "its queue is full" : "it is gone",
                          n == kLoggedPerKind ? " (more failed sends are counted, not logged)" : "");
         if (r == SendResult::Gone) {
             markDead(c, "its connection is gone");
@@ -461,21 +456,21 @@ struct Master::Impl {
 
     // A joining or resyncing client gets the state of the frame being rendered (so that it can
     // help with it at once) and then the updates sent since, exactly as the others got them.
-    // What does not fit its queue is sent again, whole, by retryPending.
+    // What does not fit its queue is sent again, whole, by retryPending. The state is encoded
+    // and hashed here, once per frame state however many clients need it, not at every update:
+    // a client proves the state it was sent (Ready), and only that one.
     void sendState(ClientState& c) {
-        const SceneSnapshot snap = frameState ? *frameState : snapshot();
+        if (!frameStateMessage) frameStateMessage = encodeSnapshot(header(MsgType::SceneSnapshot), frameState);
         c.needsState = false;
-        c.stateSeq = snap.updateSeq;
-        if (send(c, snap) != SendResult::Sent) {
+        c.stateSeq = frameState.updateSeq;
+        c.stateHash = frameStateMessage->stateHash;
+        if (sendBytes(c, MsgType::SceneSnapshot, frameStateMessage->message) != SendResult::Sent) {
             c.needsState = !c.deathReason;
             return;
         }
         c.stateInFlight = true;
         // The history since the snapshot, merged into one message whatever its length.
-        Update since;
-        for (const Update& u : sentUpdates)
-            if (u.baseSeq >= snap.updateSeq) mergeInto(since, Update(u));
-        if (since.seq != 0 && send(c, since) != SendResult::Sent) c.needsState = !c.deathReason;
+        if (!sentSince.empty() && send(c, sentSince.update()) != SendResult::Sent) c.needsState = !c.deathReason;
     }
 
     void sendFrameBegin(ClientState& c) {
@@ -501,8 +496,7 @@ struct Master::Impl {
         }
     }
 
-    void beginFrame(uint32_t frame, uint32_t stateSeq, const RenderSettings& rs,
-                    std::shared_ptr<const SceneSnapshot> state, TilePixels pixels, bool stochastic) {
+    void beginFrame(uint32_t frame, uint32_t stateSeq, const RenderSettings& rs, TilePixels pixels, bool stochastic) {
         currentFrame = frame;
         framePixels = pixels;
         frameStochastic = stochastic;
@@ -510,8 +504,22 @@ struct Master::Impl {
         // so a still view allocates nothing.)
         if (pixels == TilePixels::LinearHalf) linear.resize(size_t(rs.width) * size_t(rs.height) * 3);
         frameSeq = stateSeq;
-        frameState = std::move(state);
-        while (!sentUpdates.empty() && sentUpdates.front().seq <= frameSeq) sentUpdates.pop_front();
+        // The frame's state: the last one and every update up to stateSeq, which were all sent
+        // before this frame began (runCommands flushes first) and no later one was (commands
+        // come in sequence order).
+        if (!sentSince.empty() || frameState.updateSeq != stateSeq) {
+            const Update since = sentSince.take();
+            if (since.seq != stateSeq || since.baseSeq != frameState.updateSeq) {
+                // An invariant, not an input: going on would hand out tiles of a state nobody holds.
+                std::fprintf(stderr, "rtwall master: internal error: frame %u renders state %u, but the updates sent "
+                                     "since state %u cover %u to %u\n",
+                             frame, stateSeq, frameState.updateSeq, since.baseSeq, since.seq);
+                std::abort();
+            }
+            for (const Change& change : since.changes) applyChange(frameState, change);
+            frameState.updateSeq = stateSeq;
+            frameStateMessage.reset();
+        }
         frameActive = true;
         frameStart = nowSeconds();
         frameBytes = 0;
@@ -613,13 +621,7 @@ struct Master::Impl {
             replayed("a Ready with no state on its way to the client");
             return;
         }
-        bool matches;
-        {
-            std::lock_guard lock(stateMutex);
-            auto it = hashAt.find(r.updateSeq);
-            matches = r.updateSeq == c.stateSeq && it != hashAt.end() && it->second == r.stateHash;
-        }
-        if (!matches) {
+        if (r.updateSeq != c.stateSeq || r.stateHash != c.stateHash) {
             // It does not hold the state we sent: never accept its tiles; send the state again.
             unexpected("a Ready for state " + std::to_string(r.updateSeq) + " that is not the state it was sent (" +
                        std::to_string(c.stateSeq) + ")");
@@ -852,29 +854,6 @@ struct Master::Impl {
         serveAll();
     }
 
-    // Merges consecutive updates into one message: the last change to each object wins, and the
-    // message covers the whole range of sequence numbers. A burst of application calls (a
-    // script, a dragged object) then costs a few messages instead of filling every queue.
-    static void mergeInto(Update& merged, Update&& u) {
-        if (merged.changes.empty() && merged.seq == 0) {
-            merged = std::move(u);
-            return;
-        }
-        merged.seq = u.seq;
-        for (Change& c : u.changes) {
-            auto same = [&](const Change& old) {
-                if (old.index() != c.index()) return false;
-                if (auto* t = std::get_if<TransformChange>(&c)) return std::get<TransformChange>(old).instance == t->instance;
-                if (auto* mc = std::get_if<MaterialChange>(&c)) return std::get<MaterialChange>(old).material == mc->material;
-                if (auto* l = std::get_if<LightChange>(&c)) return std::get<LightChange>(old).light == l->light;
-                return true;  // camera, settings: one of each
-            };
-            auto it = std::find_if(merged.changes.begin(), merged.changes.end(), same);
-            if (it != merged.changes.end()) *it = std::move(c);
-            else merged.changes.push_back(std::move(c));
-        }
-    }
-
     // An update that does not fit a client's queue is lost to it like a dropped packet: the
     // client sees the gap when a frame needs the update and asks for a resync.
     void sendUpdate(const Update& update) {
@@ -887,20 +866,19 @@ struct Master::Impl {
             }
             send(c, update);
         }
-        sentUpdates.push_back(update);
-        if (sentUpdates.size() > 4096) sentUpdates.pop_front();
+        sentSince.add(Update(update));
     }
 
     // Updates are merged and sent at most every kUpdateIntervalSeconds (and always before a
-    // frame begins), so a burst of application calls cannot flood a client's queue.
+    // frame begins), so a burst of application calls (a script, a dragged object) costs a few
+    // messages instead of filling every queue.
     static constexpr double kUpdateIntervalSeconds = 0.002;
-    Update unsent;               // merged updates not sent yet
+    MergedUpdate unsent;         // merged updates not sent yet
     double lastUpdateSent = 0;
 
     void flushUpdates() {
-        if (unsent.seq == 0) return;
-        sendUpdate(unsent);
-        unsent = Update{};
+        if (unsent.empty()) return;
+        sendUpdate(unsent.take());
         lastUpdateSent = nowSeconds();
     }
 
@@ -917,20 +895,20 @@ struct Master::Impl {
             if (cmd.kind == Command::kStop) return false;
         for (Command& cmd : pending) {
             if (cmd.kind == Command::kUpdate) {
-                mergeInto(unsent, std::move(cmd.update));
+                unsent.add(std::move(cmd.update));
                 continue;
             }
             // Never merge across a frame: a frame's state must be a point in the sequence.
             flushUpdates();
             if (cmd.kind == Command::kBeginFrame)
-                beginFrame(cmd.frame, cmd.update.seq, cmd.settings, std::move(cmd.state), cmd.pixels, cmd.stochastic);
+                beginFrame(cmd.frame, cmd.update.seq, cmd.settings, cmd.pixels, cmd.stochastic);
             if (cmd.kind == Command::kCodec) {
                 settings.codec = cmd.codec;  // for clients that join later
                 for (auto& [peer, c] : clients)
                     if (!c.deathReason) c.needsWelcome = send(c, welcomeFor(c)) == SendResult::Full;
                 // The state's sequence number moves on (an update without changes), so frames
                 // after the switch are seen as another state and an accumulation restarts.
-                mergeInto(unsent, std::move(cmd.update));
+                unsent.add(std::move(cmd.update));
             }
         }
         if (nowSeconds() - lastUpdateSent > kUpdateIntervalSeconds) flushUpdates();
@@ -1042,15 +1020,12 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
     s.camera = scene.cameras.front();
     std::random_device rd;
     s.session = (uint64_t(rd()) << 32) ^ rd();
-    for (const MeshDesc& md : scene.meshes) {
-        const std::vector<uint8_t> bytes = encodeMesh(*md.mesh);  // only to hash it; freed at once
-        s.meshRefs.push_back({md.name, md.source, hashBytes(bytes.data(), bytes.size()), bytes.size()});
-    }
+    for (const MeshDesc& md : scene.meshes) s.meshRefs.push_back(meshRefOf(md));
     // Texture images and volume files: read once, sent to clients that do not have them.
     for (const Material& m : scene.materials)
         for (const std::string& path : filesNamedBy(m))
             if (!s.findAsset(path)) s.addAsset(readAsset(path, scene.files));
-    s.hashAt[s.seq] = stateHash(s.snapshotLocked());
+    s.frameState = snapshotOf(s.scene, s.camera, s.meshRefs, s.assetRefs, s.seq);
 
     // The largest legitimate message a client sends is a result for the largest tile allowed.
     // (A linear tile is encoded as an 8-bit tile twice as wide.)
@@ -1134,7 +1109,7 @@ Master::~Master() {
     Impl& s = *impl_;
     {
         std::lock_guard lock(s.m);
-        s.commands.push_back({Command::kStop, {}, 0, {}, nullptr, {}, TilePixels::Srgb8, false});
+        s.commands.push_back(Command{.kind = Command::kStop});
     }
     s.wake();
     if (s.net.joinable()) s.net.join();
@@ -1201,24 +1176,29 @@ std::vector<std::string> Master::localClientArgs() const { return impl_->localAr
 
 namespace {
 
+// Queues a command under stateMutex (the caller holds it), so that commands are in sequence order.
+void queueLocked(Master::Impl& s, Command&& cmd) {
+    std::lock_guard lock(s.m);
+    s.commands.push_back(std::move(cmd));
+}
+
+// O(1) in the size of the scene: the change is applied to the application's state and queued;
+// nothing is copied, serialised or hashed whole.
 // `files`: ones the change names that the state does not hold yet; they join it with the change.
 void pushUpdate(Master::Impl& s, Change change, std::vector<Asset> files = {}) {
-    Command cmd{Command::kUpdate, {}, 0, {}, nullptr, {}, TilePixels::Srgb8, false};
     {
         std::lock_guard lock(s.stateMutex);
         applyChange(s.scene, s.camera, change);  // throws for an index out of range, before anything changed
         for (Asset& file : files)
             if (!s.findAsset(file.first.path)) s.addAsset(std::move(file));
+        if (!std::holds_alternative<CameraChange>(change) && !std::holds_alternative<TransformChange>(change))
+            s.stochasticStale = true;
         ++s.seq;
-        s.hashAt[s.seq] = stateHash(s.snapshotLocked());
-        while (s.hashAt.size() > 1024) s.hashAt.erase(s.hashAt.begin());
+        Command cmd{.kind = Command::kUpdate};
         cmd.update.seq = s.seq;
         cmd.update.baseSeq = s.seq - 1;
-    }
-    cmd.update.changes.push_back(std::move(change));
-    {
-        std::lock_guard lock(s.m);
-        s.commands.push_back(std::move(cmd));
+        cmd.update.changes.push_back(std::move(change));
+        queueLocked(s, std::move(cmd));
     }
     s.wake();
 }
@@ -1254,40 +1234,35 @@ void Master::setLight(uint32_t light, const Light& value) { pushUpdate(*impl_, L
 void Master::setRenderSettings(const RenderSettings& settings) { pushUpdate(*impl_, SettingsChange{settings}); }
 
 void Master::setCodec(const CodecSettings& codec) {
-    Command cmd{Command::kCodec, {}, 0, {}, nullptr, codec, TilePixels::Srgb8, false};
+    Impl& s = *impl_;
     {
-        std::lock_guard lock(impl_->stateMutex);
-        Impl& s = *impl_;
+        std::lock_guard lock(s.stateMutex);
         ++s.seq;
-        s.hashAt[s.seq] = stateHash(s.snapshotLocked());
-        while (s.hashAt.size() > 1024) s.hashAt.erase(s.hashAt.begin());
+        Command cmd{.kind = Command::kCodec, .codec = codec};
         cmd.update.seq = s.seq;
         cmd.update.baseSeq = s.seq - 1;
+        queueLocked(s, std::move(cmd));
     }
-    {
-        std::lock_guard lock(impl_->m);
-        impl_->commands.push_back(std::move(cmd));
-    }
-    impl_->wake();
+    s.wake();
 }
 
 Image Master::renderFrame(FrameReport* report, std::vector<float>* linear) {
     Impl& s = *impl_;
     auto begin = [&] {
         const uint32_t frame = ++s.lastBegun;
-        Command cmd{Command::kBeginFrame, {}, frame, {}, nullptr, {}, TilePixels::Srgb8, false};
         {
             // The frame renders the state as it is now; later updates belong to later frames.
+            // O(1): the network thread brings its copy of the state up to this sequence number.
             std::lock_guard lock(s.stateMutex);
+            Command cmd{.kind = Command::kBeginFrame, .frame = frame, .settings = s.scene.settings};
             cmd.update.seq = s.seq;
-            cmd.settings = s.scene.settings;
-            cmd.state = std::make_shared<const SceneSnapshot>(s.snapshotLocked());
-            cmd.stochastic = rendersStochastically(s.scene);
+            if (s.stochasticStale) {
+                s.stateStochastic = rendersStochastically(s.scene);
+                s.stochasticStale = false;
+            }
+            cmd.stochastic = s.stateStochastic;
             if (cmd.stochastic && s.settings.wideAccumulation) cmd.pixels = TilePixels::LinearHalf;
-        }
-        {
-            std::lock_guard lock(s.m);
-            s.commands.push_back(std::move(cmd));
+            queueLocked(s, std::move(cmd));
         }
         s.wake();
         s.inFlight = true;

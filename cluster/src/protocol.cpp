@@ -1,6 +1,7 @@
 #include "protocol.h"
 
 #include "codec.h"
+#include "fields.h"
 
 #include <xxhash.h>
 
@@ -23,6 +24,20 @@ constexpr int kMaxThreads = 1024;
 
 [[noreturn]] void fail(const std::string& what) { throw DecodeError(what); }
 
+// Next to every writer: the struct has exactly the members this writer and its reader handle.
+// A member added to one of these structs fails the build here until it is written and read
+// (and set to a non-default value in the round-trip tests, which check that they set them all).
+#define RTWALL_WIRE_FIELDS(T, n)                                                                     \
+    static_assert(fieldCount<T>() == (n), #T " has a member that its wire writer does not handle: " \
+                                              "write and read it here and update this count")
+
+// RenderSettings members that are each process's own, not the scene's: not on the wire (a render
+// client sets them itself). Counted where they exist, so that the guard holds with them in
+// RenderSettings and once they live elsewhere.
+template <class S> constexpr size_t localRenderSettings() {
+    return size_t(requires(const S& s) { s.clientId; }) + size_t(requires(const S& s) { s.packetWidth; });
+}
+
 // -- Field helpers -----------------------------------------------------------------------------
 
 int readInt(Reader& r, int lo, int hi, const char* what) {
@@ -41,6 +56,7 @@ template <class E> E readEnum(Reader& r, E last, const char* what) {
     return E(v);
 }
 
+RTWALL_WIRE_FIELDS(Float3, 3);
 void write(Writer& w, const Float3& v) {
     w.f32(v.x);
     w.f32(v.y);
@@ -78,6 +94,7 @@ Hash128 readHash(Reader& r) {
 
 // -- Scene values --------------------------------------------------------------------------------
 
+RTWALL_WIRE_FIELDS(CodecSettings, 4);
 void write(Writer& w, const CodecSettings& c) {
     writeEnum(w, c.codec);
     w.i32(c.jpegQuality);
@@ -92,6 +109,7 @@ void read(Reader& r, CodecSettings& c) {
     c.zstdLevel = readInt(r, 1, 19, "zstd level");
 }
 
+RTWALL_WIRE_FIELDS(Transform, 1);
 void write(Writer& w, const Transform& t) {
     for (double v : t.m) w.f64(v);
 }
@@ -100,6 +118,7 @@ void read(Reader& r, Transform& t) {
     for (double& v : t.m) v = r.f64();
 }
 
+RTWALL_WIRE_FIELDS(TextureDesc, 5);
 void write(Writer& w, const TextureDesc& t) {
     writeEnum(w, t.kind);
     w.string(t.file);
@@ -131,6 +150,8 @@ float readFloatIn(Reader& r, float lo, float hi, const char* what) {
     return v;
 }
 
+RTWALL_WIRE_FIELDS(Material, 19);
+RTWALL_WIRE_FIELDS(TransferPoint, 3);  // written with the material
 void write(Writer& w, const Material& m) {
     w.string(m.name);
     writeEnum(w, m.type);
@@ -199,6 +220,7 @@ void read(Reader& r, Material& m) {
     if (m.alpha.kind == TextureKind::Image && m.alpha.file.empty()) fail("image alpha mask without a file");
 }
 
+RTWALL_WIRE_FIELDS(Light, 8);
 void write(Writer& w, const Light& l) {
     writeEnum(w, l.type);
     write(w, l.position);
@@ -222,6 +244,8 @@ void read(Reader& r, Light& l) {
     l.twoSided = r.boolean();
 }
 
+RTWALL_WIRE_FIELDS(CameraDesc, 6);
+RTWALL_WIRE_FIELDS(ProjectionWindow, 3);  // written with the camera
 void write(Writer& w, const CameraDesc& c) {
     w.string(c.name);
     write(w, c.position);
@@ -255,6 +279,7 @@ void read(Reader& r, CameraDesc& c) {
     }
 }
 
+RTWALL_WIRE_FIELDS(InstanceDesc, 3);
 void write(Writer& w, const InstanceDesc& in) {
     w.u32(in.mesh);
     w.u32(in.material);
@@ -267,6 +292,8 @@ void read(Reader& r, InstanceDesc& in) {
     read(r, in.transform);
 }
 
+// Everything but the process-local members (localRenderSettings).
+RTWALL_WIRE_FIELDS(RenderSettings, 15 + localRenderSettings<RenderSettings>());
 void write(Writer& w, const RenderSettings& s) {
     w.i32(s.width);
     w.i32(s.height);
@@ -303,6 +330,7 @@ void read(Reader& r, RenderSettings& s) {
     s.view = readEnum(r, ViewMode::Client, "view mode");
 }
 
+RTWALL_WIRE_FIELDS(MeshRef, 4);
 void write(Writer& w, const MeshRef& m) {
     w.string(m.name);
     w.string(m.source);
@@ -318,6 +346,7 @@ void read(Reader& r, MeshRef& m) {
     if (m.bytes > kMaxMeshBytes) fail("mesh size " + std::to_string(m.bytes) + " exceeds the limit");
 }
 
+RTWALL_WIRE_FIELDS(AssetRef, 3);
 void write(Writer& w, const AssetRef& m) {
     w.string(m.path);
     write(w, m.hash);
@@ -361,9 +390,11 @@ template <class T> void readVector(Reader& r, std::vector<T>& v, size_t minEleme
 
 // -- Changes -------------------------------------------------------------------------------------
 
+RTWALL_WIRE_FIELDS(CameraChange, 1);
 void write(Writer& w, const CameraChange& c) { write(w, c.camera); }
 void read(Reader& r, CameraChange& c) { read(r, c.camera); }
 
+RTWALL_WIRE_FIELDS(TransformChange, 2);
 void write(Writer& w, const TransformChange& c) {
     w.u32(c.instance);
     write(w, c.transform);
@@ -373,6 +404,7 @@ void read(Reader& r, TransformChange& c) {
     read(r, c.transform);
 }
 
+RTWALL_WIRE_FIELDS(MaterialChange, 3);
 void write(Writer& w, const MaterialChange& c) {
     w.u32(c.material);
     write(w, c.value);
@@ -385,6 +417,7 @@ void read(Reader& r, MaterialChange& c) {
     readVector(r, c.files, assetBytes, kMaxFilesPerMaterial);
 }
 
+RTWALL_WIRE_FIELDS(LightChange, 2);
 void write(Writer& w, const LightChange& c) {
     w.u32(c.light);
     write(w, c.value);
@@ -394,6 +427,7 @@ void read(Reader& r, LightChange& c) {
     read(r, c.value);
 }
 
+RTWALL_WIRE_FIELDS(SettingsChange, 1);
 void write(Writer& w, const SettingsChange& c) { write(w, c.settings); }
 void read(Reader& r, SettingsChange& c) { read(r, c.settings); }
 
@@ -433,6 +467,7 @@ size_t minChangeSize() {
 
 // -- Messages ------------------------------------------------------------------------------------
 
+RTWALL_WIRE_FIELDS(Hello, 3);
 void write(Writer& w, const Hello& m) {
     w.u16(m.protocolVersion);
     w.u32(m.threads);
@@ -445,6 +480,7 @@ void read(Reader& r, Hello& m) {
     m.host = r.string(kMaxStringBytes);
 }
 
+RTWALL_WIRE_FIELDS(Welcome, 5);
 void write(Writer& w, const Welcome& m) {
     w.u32(m.clientId);
     write(w, m.codec);
@@ -466,6 +502,8 @@ void read(Reader& r, Welcome& m) {
              " ms exceeds the limit");
 }
 
+RTWALL_WIRE_FIELDS(SceneSnapshot, 10);
+RTWALL_WIRE_FIELDS(BvhSettings, 4);  // written with the snapshot
 // Everything that affects the image, i.e. the snapshot without its sequence number; stateHash
 // hashes exactly these bytes.
 void writeState(Writer& w, const SceneSnapshot& m) {
@@ -523,9 +561,11 @@ void read(Reader& r, SceneSnapshot& m) {
     }
 }
 
+RTWALL_WIRE_FIELDS(MeshRequest, 1);
 void write(Writer& w, const MeshRequest& m) { write(w, m.hash); }
 void read(Reader& r, MeshRequest& m) { m.hash = readHash(r); }
 
+RTWALL_WIRE_FIELDS(MeshData, 2);
 void write(Writer& w, const MeshData& m) {
     write(w, m.hash);
     w.blob(m.mesh.data(), m.mesh.size());
@@ -538,9 +578,11 @@ void read(Reader& r, MeshData& m) {
     m.mesh.assign(p, p + n);
 }
 
+RTWALL_WIRE_FIELDS(AssetRequest, 1);
 void write(Writer& w, const AssetRequest& m) { write(w, m.hash); }
 void read(Reader& r, AssetRequest& m) { m.hash = readHash(r); }
 
+RTWALL_WIRE_FIELDS(AssetData, 2);
 void write(Writer& w, const AssetData& m) {
     write(w, m.hash);
     w.blob(m.bytes.data(), m.bytes.size());
@@ -551,6 +593,7 @@ void read(Reader& r, AssetData& m) {
     m.bytes.assign(p, p + n);
 }
 
+RTWALL_WIRE_FIELDS(Update, 3);
 void write(Writer& w, const Update& m) {
     w.u32(m.seq);
     writeVector(w, m.changes);
@@ -563,6 +606,7 @@ void read(Reader& r, Update& m) {
     m.baseSeq = r.u32();
 }
 
+RTWALL_WIRE_FIELDS(FrameBegin, 3);
 void write(Writer& w, const FrameBegin& m) {
     w.u32(m.frame);
     w.u32(m.updateSeq);
@@ -574,6 +618,7 @@ void read(Reader& r, FrameBegin& m) {
     m.pixels = readEnum(r, TilePixels::LinearHalf, "tile pixel format");
 }
 
+RTWALL_WIRE_FIELDS(TileRequest, 2);
 void write(Writer& w, const TileRequest& m) {
     w.u32(m.frame);
     w.u32(m.count);
@@ -584,6 +629,7 @@ void read(Reader& r, TileRequest& m) {
     if (m.count > kMaxTilesPerMessage) fail("tile request for " + std::to_string(m.count) + " tiles exceeds the limit");
 }
 
+RTWALL_WIRE_FIELDS(TileAssign, 2);
 void write(Writer& w, const TileAssign& m) {
     w.u32(m.frame);
     if (m.tiles.size() > std::numeric_limits<uint32_t>::max())
@@ -599,6 +645,7 @@ void read(Reader& r, TileAssign& m) {
     for (uint32_t& t : m.tiles) t = r.u32();
 }
 
+RTWALL_WIRE_FIELDS(TileResult, 6);
 void write(Writer& w, const TileResult& m) {
     w.u32(m.frame);
     w.u32(m.tile);
@@ -618,6 +665,7 @@ void read(Reader& r, TileResult& m) {
     m.format = readEnum(r, TilePixels::LinearHalf, "tile pixel format");
 }
 
+RTWALL_WIRE_FIELDS(Heartbeat, 3);
 void write(Writer& w, const Heartbeat& m) {
     w.u32(m.frame);
     w.u32(m.tilesSeen);
@@ -629,6 +677,7 @@ void read(Reader& r, Heartbeat& m) {
     m.idle = r.boolean();
 }
 
+RTWALL_WIRE_FIELDS(TileStalled, 3);
 void write(Writer& w, const TileStalled& m) {
     w.u32(m.frame);
     w.u32(m.tile);
@@ -640,9 +689,11 @@ void read(Reader& r, TileStalled& m) {
     m.elapsedMs = r.u32();
 }
 
+RTWALL_WIRE_FIELDS(Goodbye, 1);
 void write(Writer& w, const Goodbye& m) { w.string(m.reason); }
 void read(Reader& r, Goodbye& m) { m.reason = r.string(kMaxStringBytes); }
 
+RTWALL_WIRE_FIELDS(Ready, 2);
 void write(Writer& w, const Ready& m) {
     w.u32(m.updateSeq);
     write(w, m.stateHash);
@@ -652,9 +703,11 @@ void read(Reader& r, Ready& m) {
     m.stateHash = readHash(r);
 }
 
+RTWALL_WIRE_FIELDS(ResyncRequest, 1);
 void write(Writer& w, const ResyncRequest& m) { w.u32(m.lastSeq); }
 void read(Reader& r, ResyncRequest& m) { m.lastSeq = r.u32(); }
 
+RTWALL_WIRE_FIELDS(Header, 6);
 void writeHeader(Writer& w, const Header& h) {
     w.u32(kMagic);
     w.u16(h.version);
@@ -869,31 +922,27 @@ Hash128 hashBytes(const uint8_t* data, size_t size) {
 
 // -- Scene state -----------------------------------------------------------------------------------
 
-void applyChange(SceneDesc& scene, CameraDesc& camera, const Change& change) {
-    auto element = [](auto& v, uint32_t i, const char* what) -> auto& {
-        if (i >= v.size())
-            fail(std::string(what) + " " + std::to_string(i) + " does not exist (the scene has " +
-                 std::to_string(v.size()) + ")");
-        return v[i];
-    };
-    struct Visitor {
-        SceneDesc& scene;
-        CameraDesc& camera;
-        decltype(element)& at;
-        void operator()(const CameraChange& c) const { camera = c.camera; }
-        void operator()(const TransformChange& c) const {
-            at(scene.instances, c.instance, "instance").transform = c.transform;
-        }
-        void operator()(const MaterialChange& c) const { at(scene.materials, c.material, "material") = c.value; }
-        void operator()(const LightChange& c) const { at(scene.lights, c.light, "light") = c.value; }
-        void operator()(const SettingsChange& c) const { scene.settings = c.settings; }
-    };
-    std::visit(Visitor{scene, camera, element}, change);
+template <class T> std::vector<uint8_t> encodeValue(const T& value) {
+    return measureAndWrite([&](Writer& w) { write(w, value); });
 }
+template std::vector<uint8_t> encodeValue(const Material&);
+template std::vector<uint8_t> encodeValue(const Light&);
+template std::vector<uint8_t> encodeValue(const CameraDesc&);
+template std::vector<uint8_t> encodeValue(const InstanceDesc&);
+template std::vector<uint8_t> encodeValue(const RenderSettings&);
 
 Hash128 stateHash(const SceneSnapshot& snapshot) {
     const std::vector<uint8_t> bytes = measureAndWrite([&](Writer& w) { writeState(w, snapshot); });
     return hashBytes(bytes.data(), bytes.size());
+}
+
+EncodedSnapshot encodeSnapshot(const Header& header, const SceneSnapshot& snapshot) {
+    EncodedSnapshot out;
+    out.message = encodeMessage(header, snapshot);
+    // The payload is the sequence number (u32) and then writeState's bytes: hashed in place.
+    constexpr size_t kState = kHeaderSize + sizeof(uint32_t);
+    out.stateHash = hashBytes(out.message.data() + kState, out.message.size() - kState);
+    return out;
 }
 
 }  // namespace rtwall::cluster

@@ -97,6 +97,7 @@ struct MeshRef {
     std::string source;  // a path the client may load directly on a shared file system
     Hash128 hash{};      // of the canonical mesh bytes (encodeMesh)
     uint64_t bytes = 0;  // size of those bytes
+    bool operator==(const MeshRef&) const = default;
 };
 
 // A texture image or volume file a material names, by the path the material uses (the key of
@@ -105,6 +106,7 @@ struct AssetRef {
     std::string path;
     Hash128 hash{};      // XXH3 128-bit of the file's bytes
     uint64_t bytes = 0;  // the file's size, at most kMaxAssetBytes
+    bool operator==(const AssetRef&) const = default;
 };
 
 // How a frame's tiles travel: 8-bit sRGB (the displayed frame) or linear RGB as IEEE half
@@ -125,6 +127,7 @@ struct SceneSnapshot {
     BvhSettings bvh;
     std::array<double, 3> origin{0, 0, 0};
     std::vector<AssetRef> assets;  // every texture image and volume file the materials name
+    bool operator==(const SceneSnapshot&) const = default;
 };
 
 struct MeshRequest {
@@ -149,10 +152,12 @@ struct AssetData {
 
 struct CameraChange {
     CameraDesc camera;
+    bool operator==(const CameraChange&) const = default;
 };
 struct TransformChange {
     uint32_t instance = 0;
     Transform transform;
+    bool operator==(const TransformChange&) const = default;
 };
 struct MaterialChange {
     uint32_t material = 0;
@@ -160,13 +165,16 @@ struct MaterialChange {
     // Version 5: the texture, alpha and volume files `value` names, by hash, so that a file the
     // scene never loaded reaches the clients like the snapshot's (they fetch it by hash).
     std::vector<AssetRef> files;
+    bool operator==(const MaterialChange&) const = default;
 };
 struct LightChange {
     uint32_t light = 0;
     Light value;
+    bool operator==(const LightChange&) const = default;
 };
 struct SettingsChange {
     RenderSettings settings;
+    bool operator==(const SettingsChange&) const = default;
 };
 using Change = std::variant<CameraChange, TransformChange, MaterialChange, LightChange, SettingsChange>;
 
@@ -177,6 +185,7 @@ struct Update {
     uint32_t seq = 0;  // the state's sequence number after applying this update
     std::vector<Change> changes;
     uint32_t baseSeq = 0;  // the state it applies to (seq - 1 unless merged)
+    bool operator==(const Update&) const = default;
 };
 
 struct FrameBegin {
@@ -273,11 +282,21 @@ std::vector<uint8_t> encodeMesh(const TriangleMesh& mesh);
 TriangleMesh decodeMesh(const uint8_t* data, size_t size);
 Hash128 hashBytes(const uint8_t* data, size_t size);
 
-// Applies one change to a scene description; throws DecodeError for an index out of range.
-void applyChange(SceneDesc& scene, CameraDesc& camera, const Change& change);
+// The bytes a scene value travels as, inside a snapshot or a change (Material, Light, CameraDesc,
+// InstanceDesc, RenderSettings): two values render alike for the clients exactly when these are
+// equal (scene_state.h's sameOnWire).
+template <class T> std::vector<uint8_t> encodeValue(const T& value);
 
 // A hash of everything that affects the image (all of SceneSnapshot except updateSeq, with
 // meshes by content hash). Master and client compare it before a client's tiles are accepted.
 Hash128 stateHash(const SceneSnapshot& snapshot);
+
+// A snapshot message and the stateHash of the state it carries, from one serialisation: the
+// master hashes a state only when it sends it (a client proves what it was sent).
+struct EncodedSnapshot {
+    std::vector<uint8_t> message;
+    Hash128 stateHash{};
+};
+EncodedSnapshot encodeSnapshot(const Header& header, const SceneSnapshot& snapshot);
 
 }  // namespace rtwall::cluster

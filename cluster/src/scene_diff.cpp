@@ -1,5 +1,6 @@
 // diffScenes: a scene file edited at run time, as differential updates.
-#include "protocol.h"
+#include "fields.h"
+#include "scene_state.h"
 
 #include <rtwall/cluster.h>
 
@@ -10,14 +11,6 @@ namespace rtwall {
 using namespace cluster;
 
 namespace {
-
-// A change as the clients get it: two values differ for the renderer exactly when these differ.
-std::vector<uint8_t> wireBytes(Change change) {
-    Update u;
-    u.seq = 1;
-    u.changes.push_back(std::move(change));
-    return encodeMessage(Header{}, u);
-}
 
 template <class T> bool sameArray(const T* a, const T* b, size_t n) {
     if ((a == nullptr) != (b == nullptr)) return false;
@@ -45,6 +38,10 @@ std::string countChange(const char* what, size_t before, size_t after) {
 }  // namespace
 
 SceneEdit diffScenes(const SceneDesc& before, const SceneDesc& after) {
+    // Every member of SceneDesc is either an update below or a restart; the snapshot's mapping
+    // (scene_state.cpp) asserts the same count. sourceFile and files (bytes by path) are the
+    // scene file's own business: a material naming another file is a material edit.
+    static_assert(fieldCount<SceneDesc>() == 10, "SceneDesc has a member diffScenes does not compare");
     SceneEdit e;
     if (before.meshes.size() != after.meshes.size()) {
         e.refused.push_back(countChange("meshes", before.meshes.size(), after.meshes.size()));
@@ -62,14 +59,14 @@ SceneEdit diffScenes(const SceneDesc& before, const SceneDesc& after) {
         e.refused.push_back(countChange("materials", before.materials.size(), after.materials.size()));
     } else {
         for (uint32_t i = 0; i < after.materials.size(); ++i)
-            if (wireBytes(MaterialChange{0, before.materials[i], {}}) != wireBytes(MaterialChange{0, after.materials[i], {}}))
+            if (!sameOnWire(before.materials[i], after.materials[i]))
                 e.materials.emplace_back(i, after.materials[i]);
     }
     if (before.lights.size() != after.lights.size()) {
         e.refused.push_back(countChange("lights", before.lights.size(), after.lights.size()));
     } else {
         for (uint32_t i = 0; i < after.lights.size(); ++i)
-            if (wireBytes(LightChange{0, before.lights[i]}) != wireBytes(LightChange{0, after.lights[i]}))
+            if (!sameOnWire(before.lights[i], after.lights[i]))
                 e.lights.emplace_back(i, after.lights[i]);
     }
     if (before.instances.size() != after.instances.size()) {
@@ -80,14 +77,12 @@ SceneEdit diffScenes(const SceneDesc& before, const SceneDesc& after) {
             if (a.mesh != b.mesh || a.material != b.material)
                 e.refused.push_back("instance " + std::to_string(i) +
                                     " has another mesh or material: that needs a restart");
-            else if (a.transform.m != b.transform.m)
+            else if (!sameOnWire(a, b))  // the same mesh and material: the transform
                 e.transforms.emplace_back(i, b.transform);
         }
     }
-    if (wireBytes(SettingsChange{before.settings}) != wireBytes(SettingsChange{after.settings}))
-        e.settings = after.settings;
-    if (!after.cameras.empty() &&
-        (before.cameras.empty() || wireBytes(CameraChange{before.cameras.front()}) != wireBytes(CameraChange{after.cameras.front()})))
+    if (!sameOnWire(before.settings, after.settings)) e.settings = after.settings;
+    if (!after.cameras.empty() && (before.cameras.empty() || !sameOnWire(before.cameras.front(), after.cameras.front())))
         e.camera = after.cameras.front();
     return e;
 }

@@ -338,6 +338,56 @@ TEST(Cluster, LateJoinerGetsTheCurrentStateFirst) {
     }
 }
 
+// Issue 17: the master keeps the state of the frame being rendered by applying the updates sent
+// since the last frame, instead of copying the whole state per frame. A client that joins before
+// the first frame gets the initial state and every update made so far; one that joins while a
+// frame renders gets that frame's state (so that it helps with it at once) and the updates made
+// during it, of every kind. Client 1 is slow (20 ms a tile), so the joiner renders most tiles.
+TEST(Cluster, JoinersGetTheFrameStateAndTheUpdatesSince) {
+    const SceneDesc desc = demoScene(96, 72);
+    ClusterSettings cs;
+    cs.async = true;
+    LocalCluster cluster(desc, cs, 0);
+    Master& master = *cluster.master;
+
+    SceneDesc first = desc;  // updates made before the first frame
+    first.cameras = {*desc.findCamera("top")};
+    first.lights[0].intensity *= 1.5f;
+    master.setCamera(first.cameras.front());
+    master.setLight(0, first.lights[0]);
+    cluster.clients.add(master.endpoint(), 1, {}, 20);
+    ASSERT_TRUE(master.waitForClients(1, 30000));
+    FrameReport r1;
+    const Image f1 = master.renderFrame(&r1);  // frame 1; frame 2 begins with the same state
+    EXPECT_EQ(differingBytes(f1, singleMachine(first)), 0u) << "frame " << r1.frame;
+
+    // While frame 2 renders: one update of every kind, then a second client joins.
+    SceneDesc second = first;
+    second.cameras = {desc.cameras.front()};
+    second.instances[1].transform = Transform::translate(0.25, 0.5, -0.25) * second.instances[1].transform;
+    second.materials[1].color = {0.25f, 0.75f, 0.5f};
+    second.lights[1].intensity *= 0.5f;
+    second.settings.background = {0.25f, 0.125f, 0.0625f};
+    master.setCamera(second.cameras.front());
+    master.setInstanceTransform(1, second.instances[1].transform);
+    master.setMaterial(1, second.materials[1]);
+    master.setLight(1, second.lights[1]);
+    master.setRenderSettings(second.settings);
+    cluster.clients.add(master.endpoint());
+    ASSERT_TRUE(master.waitForClients(2, 30000));
+
+    FrameReport r2, r3;
+    const Image f2 = master.renderFrame(&r2);  // frame 2: begun before the updates
+    const Image f3 = master.renderFrame(&r3);  // frame 3: with them
+    EXPECT_EQ(differingBytes(f2, singleMachine(first)), 0u) << "frame " << r2.frame;
+    EXPECT_EQ(differingBytes(f3, singleMachine(second)), 0u) << "frame " << r3.frame;
+    uint64_t byJoiner = 0;
+    for (const FrameReport* r : {&r2, &r3})
+        for (const ClientReport& c : r->clients)
+            if (c.id == 2) byJoiner += c.tiles;
+    EXPECT_GT(byJoiner, 0u) << "the joiner rendered tiles of frames 2 and 3";
+}
+
 TEST(Cluster, AFrameWithoutAnyClientFailsInsteadOfHanging) {
     SceneDesc desc = demoScene(32, 24);
     ClusterSettings cs;

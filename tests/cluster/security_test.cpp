@@ -5,6 +5,7 @@
 
 #include "codec.h"
 #include "protocol.h"
+#include "scene_state.h"
 #include "security.h"
 
 #include <rtwall/cluster.h>

@@ -34,6 +34,7 @@ struct Transform {
     static Transform rotateDegrees(double axisX, double axisY, double axisZ, double degrees);
     Transform operator*(const Transform& b) const;  // apply b first, then *this
     Float3 applyPoint(const Float3& p) const;
+    bool operator==(const Transform&) const = default;
 };
 
 // Material kinds. Each is one class behind the MaterialModel interface (engine/src/material.h);
@@ -57,6 +58,7 @@ struct TextureDesc {
                                                 // spherical: fraction of the turn (u) and of pole-to-pole (v)
                                                 // per repeat; cylindrical: of the turn (u), object units along y (v)
     TextureMapping mapping = TextureMapping::Auto;
+    bool operator==(const TextureDesc&) const = default;
 };
 
 // A transfer function control point: scalar value -> colour and extinction (per object unit).
@@ -64,6 +66,7 @@ struct TransferPoint {
     float value = 0.0f;
     Color color{1, 1, 1};
     float density = 0.0f;
+    bool operator==(const TransferPoint&) const = default;
 };
 
 struct Material {
@@ -89,6 +92,7 @@ struct Material {
     std::string volumeFile;            // volume: VTK image data (.vti, or legacy .vtk structured points)
     std::vector<TransferPoint> transfer;  // volume: transfer function, sorted by value
     float volumeStep = 0.5f;           // volume: ray-march step in voxels (speed/accuracy control)
+    bool operator==(const Material&) const = default;
 };
 enum class LightType { Point, Directional, Area };
 
@@ -102,6 +106,7 @@ struct Light {
     Float3 edge1{1, 0, 0};   // area: a parallelogram at `position` spanned by edge1 and edge2; it emits
     Float3 edge2{0, 0, 1};   //   to the side of cross(edge1, edge2) only
     bool twoSided = false;   // area: emits to both sides
+    bool operator==(const Light&) const = default;
 };
 
 // An off-axis (generalised perspective) projection: the image is the world-space rectangle with
@@ -110,6 +115,7 @@ struct Light {
 // pixel (width, height)'s corner is lowerLeft + right. lookAt, up and fovY are then unused.
 struct ProjectionWindow {
     Float3 lowerLeft, right, up;
+    bool operator==(const ProjectionWindow&) const = default;
 };
 
 struct CameraDesc {
@@ -119,6 +125,7 @@ struct CameraDesc {
     Float3 up{0, 1, 0};
     float fovY = 45.0f;  // vertical field of view in degrees
     std::optional<ProjectionWindow> window;  // absent: the symmetric camera above
+    bool operator==(const CameraDesc&) const = default;
 };
 
 struct MeshDesc {
@@ -131,6 +138,7 @@ struct InstanceDesc {
     uint32_t mesh = 0;      // index into SceneDesc::meshes
     uint32_t material = 0;  // index into SceneDesc::materials
     Transform transform;
+    bool operator==(const InstanceDesc&) const = default;
 };
 
 enum class KernelType { Packet, Single };
@@ -159,6 +167,7 @@ struct RenderSettings {
     int samples = 1;                      // random samples per pixel sample and frame (GI, glossy, area lights)
     ViewMode view = ViewMode::Shaded;
     uint32_t clientId = 0;                // not on the wire: each render client sets the id the master gave it
+    bool operator==(const RenderSettings&) const = default;
 };
 
 // How each mesh's BVH is built ([bvh] in scene files): memory against build and render speed.

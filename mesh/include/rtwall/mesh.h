@@ -31,6 +31,7 @@ struct MeshAccess;  // the cache reader fills the buffers directly
 
 struct Float3 {
     float x = 0, y = 0, z = 0;
+    bool operator==(const Float3&) const = default;
 };
 
 struct Bounds3 {
