@@ -127,8 +127,20 @@ void MergedUpdate::add(Update&& update) {
     update_.seq = update.seq;
     for (Change& c : update.changes) {
         const auto [it, fresh] = index_.try_emplace(objectOf(c), update_.changes.size());
-        if (fresh) update_.changes.push_back(std::move(c));
-        else update_.changes[it->second] = std::move(c);
+        if (fresh) {
+            update_.changes.push_back(std::move(c));
+            continue;
+        }
+        Change& old = update_.changes[it->second];
+        // A file a replaced material change brought stays: a later change (to this material or
+        // another) may use it without naming it, since the state already held it by then.
+        if (auto* later = std::get_if<MaterialChange>(&c))
+            for (AssetRef& file : std::get<MaterialChange>(old).files) {
+                bool named = false;
+                for (const AssetRef& f : later->files) named = named || f.path == file.path;
+                if (!named) later->files.push_back(std::move(file));
+            }
+        old = std::move(c);
     }
 }
 

@@ -50,7 +50,8 @@ void applyChange(SceneSnapshot& snapshot, const Change& change);
 uint64_t objectOf(const Change& change);
 
 // Consecutive updates merged into one message: the last change to each object (in the place of
-// its first), covering the whole range of sequence numbers. O(1) per change.
+// its first), covering the whole range of sequence numbers, and every file the merged changes
+// brought (a material change that replaces another keeps its files). O(1) per change.
 class MergedUpdate {
 public:
     void add(Update&& update);

@@ -478,6 +478,38 @@ TEST(SceneState, MergedUpdatesKeepTheLastChangeToEachObject) {
     EXPECT_EQ(merged.update().changes.size(), 1u);
 }
 
+// Material 0 gets a new texture (the change brings its file), material 1 then uses it too (the
+// state holds it: its change brings nothing) and material 0 goes back to the old one. Merged,
+// the last change to material 0 must still bring the file, or whoever applies the merged update
+// (a joining client, the master's frame state) lacks a file that material 1 names.
+TEST(SceneState, MergedUpdatesKeepEveryFileTheChangesBrought) {
+    const SceneDesc d = sampleScene();
+    const Sent sent = sentFor(d);
+    const AssetRef fresh = refOf("tex/new.png", bytesOf("new"));
+    Material textured = d.materials[0];
+    textured.texture.file = fresh.path;
+    Material alsoTextured = d.materials[1];
+    alsoTextured.texture.file = fresh.path;
+    MergedUpdate merged;
+    uint32_t seq = 4;
+    for (Change c : std::vector<Change>{MaterialChange{0, textured, {fresh}}, MaterialChange{1, alsoTextured, {}},
+                                        MaterialChange{0, d.materials[0], {}}}) {
+        Update u;
+        u.baseSeq = seq;
+        u.seq = ++seq;
+        u.changes.push_back(std::move(c));
+        merged.add(std::move(u));
+    }
+    SceneSnapshot one = snapshotOf(d, d.cameras[0], sent.meshes, sent.assets, 4), all = one;
+    applyChange(one, MaterialChange{0, textured, {fresh}});
+    applyChange(one, MaterialChange{1, alsoTextured, {}});
+    applyChange(one, MaterialChange{0, d.materials[0], {}});
+    for (const Change& c : merged.update().changes) applyChange(all, c);
+    EXPECT_TRUE(one == all);
+    ASSERT_EQ(merged.update().changes.size(), 2u);
+    EXPECT_TRUE(std::get<MaterialChange>(merged.update().changes[0]).files == std::vector<AssetRef>{fresh});
+}
+
 TEST(SceneState, ASnapshotIsHashedFromTheBytesSent) {
     const SceneDesc d = sampleScene();
     const Sent sent = sentFor(d);
