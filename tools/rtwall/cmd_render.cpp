@@ -1,8 +1,8 @@
 #include "commands.h"
-#include "local_clients.h"
 #include "progress.h"
 
 #include <rtwall/cluster.h>
+#include <rtwall/wall.h>
 #include <rtwall/engine.h>
 
 #include <chrono>
@@ -37,10 +37,13 @@ TileRect parseRegion(const std::string& text, const RenderSettings& s) {
     return r;
 }
 
-// The cluster path: a master on loopback and local client processes, one frame.
+// The cluster path: the wall's session (rtwall/wall.h) with local client processes, headless,
+// frames 1..N of a still view, averaged as one machine averages them (the same bytes).
 Image renderWithClients(SceneDesc desc, const CameraDesc& camera, const RenderOptions& o, FrameReport& report) {
     desc.cameras = {camera};
-    ClusterSettings cs;
+    RunConfig c;
+    c.scene = o.scene;
+    ClusterSettings& cs = c.cluster;
     cs.localClients = o.clients;
     cs.threadsPerClient = desc.settings.threads > 0 ? std::max(1, desc.settings.threads / o.clients) : 1;
     cs.prefetch = o.prefetch;
@@ -50,29 +53,24 @@ Image renderWithClients(SceneDesc desc, const CameraDesc& camera, const RenderOp
     // as the single-machine path below does; one frame comes as 8-bit tiles, the bytes
     // renderFrame gives (a linear tile would be rounded to half precision first).
     cs.wideAccumulation = o.frames > 1;
-    Master master(desc, cs);
-    LocalClients clients(o.clients, master.endpoint(), cs.threadsPerClient);
-    // A client that dies or freezes while starting must not hold the frame back: the others
-    // render it (the bytes are the same whoever renders).
-    const int joined = master.awaitClients(o.clients, 60'000, std::max(3000, 2 * cs.timeoutMs));
-    if (joined == 0) throw InputError("no local render client joined within 60 s");
-    if (joined < o.clients)
-        std::printf("only %d of %d local render clients joined; rendering with them\n", joined, o.clients);
-    // Progressive: frames 1..N of a still view, averaged (the same bytes as one machine). A
-    // stochastic scene's frames come as linear tiles; a deterministic scene's as 8-bit tiles,
-    // every frame the same image, which their 8-bit mean is exactly.
-    Accumulator acc;
-    std::vector<float> linear;
-    Image one;
-    for (int f = 0; f < o.frames; ++f) {
-        one = master.renderFrame(&report, &linear);
-        if (o.frames == 1) break;
-        if (report.linear) acc.addLinear(linear.data(), one.width, one.height);
-        else acc.add(one);
+    c.loaded = std::move(desc);
+    c.frames = o.frames;
+    c.framesGiven = true;
+    c.orbit = 0.0;
+    c.writeEvery = 0;
+    c.headless = true;
+    c.log = [](const std::string& line) {
+        if (line.starts_with("only ")) std::printf("%s\n", line.c_str());  // a client that did not join
+    };
+    WallSession session(c);
+    while (session.step()) {
     }
-    if (const MasterCounters c = master.counters(); c.dropped() + c.failedSends + c.lostHandOuts + c.clientsDropped > 0)
-        std::printf("master: %s\n", describeCounters(c).c_str());
-    return o.frames == 1 ? one : acc.resolve();
+    report = session.lastReport();
+    if (const MasterCounters m = session.summary().counters; m.dropped() + m.failedSends + m.lostHandOuts + m.clientsDropped > 0)
+        std::printf("master: %s\n", describeCounters(m).c_str());
+    // A stochastic scene's frames are averaged while the view stays (the progressive mean); a
+    // deterministic scene's are every one the same image.
+    return session.lastFrame().left;
 }
 
 // Scene files may name gigabytes of meshes: a progress bar on a terminal, and Ctrl-C stops.

@@ -220,6 +220,24 @@ struct ClientSettings {
     std::shared_ptr<ClientCounters> counters;  // optional: updated while it runs
 };
 
+// Render-client processes on this PC: `EXECUTABLE client --connect ENDPOINT ...` children (the
+// same executable by default, so client and master speak the same protocol version), stopped
+// (SIGTERM and SIGCONT, then SIGKILL after 2 s) when the object goes away.
+class LocalClients {
+public:
+    // With a netns prefix, client i runs in network namespace <prefix><i> (tools/netem.sh).
+    LocalClients(int count, const std::string& endpoint, int threadsEach, bool replay = false,
+                 const std::string& netnsPrefix = {}, const std::vector<std::string>& extraArgs = {},
+                 const std::filesystem::path& executable = "/proc/self/exe");
+    ~LocalClients();
+    LocalClients(const LocalClients&) = delete;
+    LocalClients& operator=(const LocalClients&) = delete;
+    const std::vector<int>& pids() const { return pids_; }
+
+private:
+    std::vector<int> pids_;
+};
+
 // Writes a new CURVE key pair to STEM.key (secret, mode 0600) and STEM.pub (public).
 void writeNewKeyPair(const std::filesystem::path& stem);
 

@@ -121,6 +121,10 @@ struct CameraDesc {
     std::optional<ProjectionWindow> window;  // absent: the symmetric camera above
 };
 
+// The camera turned `degrees` about the vertical axis through its look-at point (a demo's and a
+// benchmark's orbit): position moves, look-at, up and field of view stay.
+CameraDesc orbitCamera(const CameraDesc& camera, double degrees);
+
 struct MeshDesc {
     std::string name;
     std::string source;  // file path or "shape:<kind>", for messages and hashing
