@@ -4,6 +4,9 @@
 
 #include <rtwall/wall.h>
 
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>  // key codes, as the wall's windows report them
+
 #include <fstream>
 
 namespace rtwall {
@@ -203,6 +206,59 @@ tile = 16
         EXPECT_EQ(img.width, 48) << screen;
         EXPECT_EQ(img.height, 64) << screen;
     }
+}
+
+InputState keyPress(int key, int mods = 0) {
+    InputState in;
+    in.keysPressed = {key};
+    in.modsPressed = {mods};
+    return in;
+}
+
+// The wall's keys and mouse, as its windows would report them (injected: the same code path,
+// headless): Ctrl+drag moves an object through the one state, a drag orbits the camera, R records
+// a camera path that replays, Esc ends the run.
+TEST(WallSession, KeysAndMouseChangeTheSceneThroughItsOneState) {
+    const auto dir = test::displayScratchDir();
+    WallSession s(sessionConfig(dir, test::writeText(dir / "scene.toml", sceneText(0.0))));
+    ASSERT_TRUE(s.step());
+    // Ctrl+click on the box, then drag it 20 pixels to the right.
+    const auto [x, y] = pixelOf(s, {0, 0.5f, 0});
+    InputState press;
+    press.leftPressed = press.leftDown = true;
+    press.clickMods = GLFW_MOD_CONTROL;
+    press.wallX = x;
+    press.wallY = y;
+    InputState drag = press;
+    drag.leftPressed = false;
+    drag.wallX = x + 20;
+    s.inject(press);
+    s.inject(drag);
+    ASSERT_TRUE(s.step());
+    EXPECT_GT(s.scene().instances[0].transform.m[3], 0.1) << "the box moved right";
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u) << "and the clients render it there";
+    // Release, then R, an orbiting drag, R: a recorded camera path.
+    InputState release;
+    s.inject(release);
+    s.inject(keyPress(GLFW_KEY_R));
+    InputState orbit;
+    orbit.leftDown = true;
+    orbit.mouseDx = 40;
+    s.inject(orbit);
+    s.inject(orbit);
+    s.inject(keyPress(GLFW_KEY_R));
+    const CameraDesc before = s.camera();
+    ASSERT_TRUE(s.step());
+    EXPECT_NE(s.camera().position.x, before.position.x) << "the drag orbited the camera";
+    EXPECT_EQ(s.scene().cameras.front().position.x, s.camera().position.x) << "the state holds the camera the wall shows";
+    const std::vector<CameraKey> path = readCameraPath(dir / "camera_path_1.toml", s.scene().origin);
+    ASSERT_GE(path.size(), 2u);
+    EXPECT_EQ(path.back().camera.position.x, s.camera().position.x);
+    // Esc ends the run before another frame.
+    InputState esc;
+    esc.keyDown[GLFW_KEY_ESCAPE] = true;
+    s.inject(esc);
+    EXPECT_FALSE(s.step());
 }
 
 }  // namespace

@@ -161,6 +161,9 @@ public:
     // The instance under wall pixel (x, y) for the viewer's camera.
     std::optional<PickResult> pick(double wallX, double wallY);
     void showTileOwners(bool on);  // the false-colour view of who rendered each tile (key T)
+    // Input as if from the wall's windows, applied at the next step() (keys, mouse, picking:
+    // display.h's InputState): scripted control and tests; it works headless too.
+    void inject(const InputState& input);
 
     // What the last step showed and measured.
     const WallFrame& lastFrame() const;

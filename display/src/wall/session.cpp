@@ -431,6 +431,7 @@ void WallSession::setCodec(const CodecSettings& codec) { impl_->master->setCodec
 SceneEdit WallSession::applyEdit(const SceneDesc& edited) { return impl_->applyEdit(edited); }
 std::optional<PickResult> WallSession::pick(double wallX, double wallY) { return impl_->input->pick(*impl_->live, wallX, wallY); }
 void WallSession::showTileOwners(bool on) { impl_->input->showTileOwners(on); }
+void WallSession::inject(const InputState& input) { impl_->input->inject(input); }
 const WallFrame& WallSession::lastFrame() const { return impl_->shown; }
 const FrameReport& WallSession::lastReport() const { return impl_->report; }
 std::string WallSession::endpoint() const { return impl_->master->endpoint(); }

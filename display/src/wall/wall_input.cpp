@@ -66,8 +66,16 @@ std::optional<PickResult> WallInput::pick(LiveScene& scene, double wallX, double
 }
 
 bool WallInput::handle(LiveScene& scene, double dt) {
-    if (!gl_) return true;
-    const InputState in = gl_->poll();
+    std::vector<InputState> inputs;
+    inputs.swap(injected_);
+    if (gl_) inputs.push_back(gl_->poll());
+    for (const InputState& in : inputs)
+        if (!apply(scene, in, dt)) return false;
+    return true;
+}
+
+// One poll's input. A new key binding goes here.
+bool WallInput::apply(LiveScene& scene, const InputState& in, double dt) {
     if (in.closeRequested || in.keyDown[GLFW_KEY_ESCAPE]) return false;
     for (int key : in.keysPressed) {
         if (key == GLFW_KEY_H) {

@@ -12,6 +12,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace rtwall::wall {
 
@@ -29,9 +30,15 @@ public:
     ~WallInput();
 
     bool windowed() const { return gl_ != nullptr; }
-    // Polls input and applies it to the scene: camera, moved objects. False once the user
-    // closed the wall (Esc or a window's close button).
+    // Polls the windows' input (and takes what inject() queued) and applies it to the scene:
+    // camera, moved objects, the overlay and the views. False once the user closed the wall (Esc
+    // or a window's close button).
     bool handle(LiveScene& scene, double dt);
+    // Input as if from the windows, for the next handle(): scripted control and tests (it works
+    // headless too).
+    void inject(const InputState& input) { injected_.push_back(input); }
+    bool showingStatus() const { return showStatus_; }
+    bool showingTileOwners() const { return present_.falseColour; }
     // The viewer's camera, from the navigation pose, and each eye's (stereo walls: an off-axis
     // window from the wall's corners; 0 left, 1 right).
     CameraDesc camera() const;
@@ -57,6 +64,8 @@ private:
     Image statusImage_;  // the overlay (H): frame rate, bytes, codec, per-client figures, counters
     double statusClock_ = 0;
     int recordings_ = 0;
+    std::vector<InputState> injected_;
+    bool apply(LiveScene& scene, const InputState& in, double dt);
     std::optional<PickResult> grabbed_;
     Transform grabbedStart_;
 };
