@@ -176,9 +176,10 @@ TEST(ClusterShading, ClientViewShowsTheIdsTheMasterAssigned) {
     // Each colour is the one its id gives on one machine.
     for (const ClientReport& c : r.clients) {
         if (c.tiles == 0) continue;
-        SceneDesc one = desc;
-        one.settings.clientId = c.id;
-        const Image ref = singleMachine(one, r.frame);
+        TraceOptions trace;
+        trace.clientId = c.id;
+        const Image ref = renderFrame(Scene(desc), Camera(desc.cameras.front(), desc.settings.width, desc.settings.height),
+                                      desc.settings, r.frame, nullptr, trace);
         const uint32_t colour = uint32_t(ref.rgb[0]) << 16 | uint32_t(ref.rgb[1]) << 8 | ref.rgb[2];
         EXPECT_TRUE(colours.count(colour)) << "client " << c.id;
     }
