@@ -872,5 +872,63 @@ TEST(Cluster, TheClientIgnoresReplayedMasterMessages) {
     EXPECT_EQ(client.get(), 0);
 }
 
+// A tile that throws on a render client (issue 17): the client tells the master which frame
+// and which tile, with its pixels and why, before it goes away; nothing is lost silently.
+TEST(Cluster, AClientReportsAFailedTileWithItsFrameAndPixels) {
+    using namespace cluster;
+    SceneDesc desc = demoScene(64, 48);
+    desc.settings.tileSize = 16;
+    FakeMaster fake;
+    ClientSettings cs;
+    cs.connect = fake.endpoint;
+    cs.threads = 1;
+    cs.exitAfterIdleMs = 3000;
+    cs.tileFault = InjectedTileFault{2, 20, 20};  // frame 2, in tile 5: pixels 16,16 to 32,32
+    auto client = std::async(std::launch::async, [cs] { return runClient(cs); });
+    const auto hello = fake.expect(MsgType::Hello, 10000);
+    ASSERT_TRUE(hello);
+    const std::string peer = hello->peer;
+    fake.send(peer, Welcome{1, CodecSettings{}, 4, 100, 3000});
+    SceneSnapshot snap;
+    std::vector<std::vector<uint8_t>> meshBytes;
+    for (const MeshDesc& m : desc.meshes) {
+        meshBytes.push_back(encodeMesh(*m.mesh));
+        snap.meshes.push_back({m.name, "shape:none", hashBytes(meshBytes.back().data(), meshBytes.back().size()),
+                               meshBytes.back().size()});
+    }
+    snap.materials = desc.materials;
+    snap.instances = desc.instances;
+    snap.lights = desc.lights;
+    snap.camera = desc.cameras.front();
+    snap.settings = desc.settings;
+    fake.send(peer, snap);
+    for (size_t i = 0; i < desc.meshes.size(); ++i) {
+        const auto req = fake.expect(MsgType::MeshRequest, 10000);
+        ASSERT_TRUE(req);
+        const MeshRequest r = decodePayload<MeshRequest>(req->payload.data(), req->payload.size());
+        for (size_t k = 0; k < snap.meshes.size(); ++k)
+            if (snap.meshes[k].hash == r.hash) fake.send(peer, MeshData{r.hash, meshBytes[k]});
+    }
+    ASSERT_TRUE(fake.expect(MsgType::Ready, 30000));
+    // Frame 1's tile 5 renders; frame 2's tile 0 too, its tile 5 fails.
+    fake.send(peer, FrameBegin{1, 0}, 1);
+    ASSERT_TRUE(fake.expect(MsgType::TileRequest, 10000));
+    fake.send(peer, TileAssign{1, {5}}, 1);
+    ASSERT_TRUE(fake.expect(MsgType::TileResult, 10000)) << "the fault fired in another frame";
+    fake.send(peer, FrameBegin{2, 0}, 2);
+    fake.send(peer, TileAssign{2, {0, 5}}, 2);
+    std::vector<uint32_t> results;
+    fake.onOther = [&](const FakeMaster::Received& m) {
+        if (m.header.type == MsgType::TileResult)
+            results.push_back(decodePayload<TileResult>(m.payload.data(), m.payload.size()).tile);
+    };
+    const auto bye = fake.expect(MsgType::Goodbye, 10000);
+    ASSERT_TRUE(bye) << "the client did not say why it stopped";
+    EXPECT_EQ(decodePayload<Goodbye>(bye->payload.data(), bye->payload.size()).reason,
+              "frame 2, tile 5 (pixels 16,16,32,32): injected fault at pixel 20,20");
+    EXPECT_EQ(results, std::vector<uint32_t>{0}) << "the tile before the failed one was delivered";
+    EXPECT_EQ(client.get(), 1);
+}
+
 }  // namespace
 }  // namespace rtwall
