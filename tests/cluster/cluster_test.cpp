@@ -154,7 +154,16 @@ TEST(Cluster, JpegIsCloseButLossy) {
 // this 2-core test machine the clients and the master share the CPUs, and whichever process the
 // kernel runs less would have its tiles stolen; a fixed 2 ms per tile (sleep, no CPU) makes
 // the pace of both clients the same.
-double affinityFraction(bool affinity, uint64_t* stolenOut) {
+struct AffinityRun {
+    bool joined = false;
+    uint64_t tiles = 0;     // tiles of the frames measured
+    uint64_t rendered = 0;  // results the master accepted for them
+    uint64_t ownerless = 0; // tiles of them that no client rendered
+    uint64_t hits = 0;      // tiles rendered by last frame's client
+    uint64_t stolen = 0;
+    double kept() const { return tiles ? double(hits) / double(tiles) : 0.0; }
+};
+AffinityRun affinityRun(bool affinity) {
     SceneDesc desc = demoScene(320, 240);
     desc.settings.tileSize = 16;
     ClusterSettings cs;
@@ -163,36 +172,47 @@ double affinityFraction(bool affinity, uint64_t* stolenOut) {
     LocalCluster cluster(desc, cs, 0);
     for (int i = 0; i < 2; ++i) cluster.clients.add(cluster.master->endpoint(), 1, {}, 2);
     Master& master = *cluster.master;
-    if (!master.waitForClients(2, 30000)) return -1;
+    AffinityRun run;
+    run.joined = master.waitForClients(2, 30000);
+    if (!run.joined) return run;
     master.renderFrame();
     const size_t tiles = makeTiles(320, 240, 16).size();
-    uint64_t hits = 0, total = 0;
     for (int f = 0; f < 4; ++f) {
         FrameReport r;
         master.renderFrame(&r);
-        hits += r.affinityHits;
-        *stolenOut += r.tilesStolen;
-        total += tiles;
+        run.tiles += tiles;
+        run.hits += r.affinityHits;
+        run.stolen += r.tilesStolen;
+        for (const ClientReport& c : r.clients) {
+            run.rendered += c.tiles;
+            run.stolen += c.stolen;
+        }
+        for (uint32_t owner : r.tileOwners) run.ownerless += owner == UINT32_MAX;
+        run.ownerless += tiles - std::min(tiles, r.tileOwners.size());
     }
-    return double(hits) / double(total);
+    return run;
 }
 
 TEST(Cluster, AffinityKeepsTilesWithTheirClient) {
     // A still camera: at least 90% of tiles go back to the client that rendered them last frame.
-    uint64_t stolen = 0;
-    EXPECT_GE(affinityFraction(true, &stolen), 0.9) << stolen << " stolen";
+    const AffinityRun run = affinityRun(true);
+    ASSERT_TRUE(run.joined);
+    EXPECT_GE(run.kept(), 0.9) << run.stolen << " stolen";
+    EXPECT_EQ(run.rendered, run.tiles);
 }
 
 TEST(Cluster, WithoutAffinityNothingIsStolen) {
     // With affinity off every tile starts in the shared queue, so there are no per-client
-    // queues to steal from. How many tiles land on last frame's client is then down to timing
-    // (two evenly paced clients can take turns identically frame after frame), so that share is
-    // reported, not asserted; the scheduler tests compare the two policies deterministically.
-    uint64_t stolen = 0;
-    const double kept = affinityFraction(false, &stolen);
-    EXPECT_GE(kept, 0.0);
-    EXPECT_EQ(stolen, 0u);
-    std::printf("affinity off: %.0f%% of tiles kept their client\n", 100.0 * kept);
+    // queues to steal from, and every tile is still rendered, once. How many tiles land on last
+    // frame's client is then down to timing (two evenly paced clients can take turns identically
+    // frame after frame), so that share is reported, not asserted; the scheduler tests compare
+    // the two policies deterministically.
+    const AffinityRun run = affinityRun(false);
+    ASSERT_TRUE(run.joined) << "the two clients did not join";
+    EXPECT_EQ(run.stolen, 0u);
+    EXPECT_EQ(run.rendered, run.tiles) << "each tile of each frame is rendered once";
+    EXPECT_EQ(run.ownerless, 0u);
+    std::printf("affinity off: %.0f%% of tiles kept their client\n", 100.0 * run.kept());
 }
 
 TEST(Cluster, UpdatesShowInTheNextFrameOnly) {

@@ -229,7 +229,12 @@ std::filesystem::path* Zoo::dir_ = nullptr;
 SceneDesc* Zoo::desc_ = nullptr;
 Scene* Zoo::scene_ = nullptr;
 
+// The zoo's pictures, for people to look at (test-scratch/zoo/zoo.png and zoo_gi.png): each file
+// holds what was rendered, shows the scene (many colours, not just the background), and path
+// tracing adds light: the background's sky and the bounces between objects, which the Whitted
+// image lacks (the zoo has no ambient term), so the GI image is brighter on average.
 TEST_F(Zoo, WritesItsImages) {
+    double meanLinear[2] = {0, 0};
     for (bool gi : {false, true}) {
         SceneDesc d = *desc_;
         d.settings.width = 320;
@@ -237,8 +242,33 @@ TEST_F(Zoo, WritesItsImages) {
         d.settings.gi = gi;
         d.settings.samples = gi ? 16 : 4;
         const Image img = render(*scene_, d);
-        writePng(img, *dir_ / (gi ? "zoo_gi.png" : "zoo.png"));
+        const auto file = *dir_ / (gi ? "zoo_gi.png" : "zoo.png");
+        std::filesystem::remove(file);
+        writePng(img, file);
+        const Image back = readPng(file);
+        EXPECT_EQ(back.width, 320);
+        EXPECT_EQ(back.height, 240);
+        EXPECT_EQ(back.rgb, img.rgb) << file;
+        std::set<uint32_t> colours;
+        size_t background = 0;
+        const float bgLinear[3] = {d.settings.background.x, d.settings.background.y, d.settings.background.z};
+        uint8_t bg[3];
+        linearToSrgb8(bgLinear, 3, bg);
+        double sum = 0;
+        for (size_t i = 0; i + 2 < img.rgb.size(); i += 3) {
+            colours.insert(uint32_t(img.rgb[i]) << 16 | uint32_t(img.rgb[i + 1]) << 8 | img.rgb[i + 2]);
+            background += img.rgb[i] == bg[0] && img.rgb[i + 1] == bg[1] && img.rgb[i + 2] == bg[2];
+            for (int c = 0; c < 3; ++c) {
+                const double v = img.rgb[i + size_t(c)] / 255.0;
+                sum += v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+            }
+        }
+        meanLinear[gi] = sum / double(img.rgb.size());
+        EXPECT_GT(colours.size(), 2000u) << file;
+        EXPECT_LT(background, img.rgb.size() / 3 / 2) << file << ": mostly background";
     }
+    std::printf("mean linear value: Whitted %.4f, GI %.4f\n", meanLinear[0], meanLinear[1]);
+    EXPECT_GT(meanLinear[1], meanLinear[0] * 1.1) << "path tracing should add the sky's and the bounces' light";
 }
 
 TEST_F(Zoo, PacketAndSingleKernelsBitIdenticalForEveryMaterialAndGi) {
