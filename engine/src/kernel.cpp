@@ -10,7 +10,8 @@
 #include "sampling.h"
 #include "scene_impl.h"
 #include "shading.h"
-#include "vec.h"
+
+#include <rtwall/vec.h>
 
 #include <algorithm>
 #include <atomic>
@@ -615,8 +616,9 @@ TileStats renderTilesInParallel(const RenderSettings& settings, RenderOne&& rend
                 const TileStats ts = renderOne(tiles[t]);
                 local.rays += ts.rays;
                 local.shadowRays += ts.shadowRays;
-            } catch (const TileError&) {
-                // No thread dies silently: stop handing out tiles and report this one.
+            } catch (...) {
+                // No thread dies silently: stop handing out tiles and report this one (a
+                // TileError: renderTile makes every exception one).
                 nextTile = tiles.size();
                 std::lock_guard lock(failureMutex);
                 if (!failure) failure = std::current_exception();

@@ -6,6 +6,7 @@
 #include "cli_util.h"
 
 #include <rtwall/engine.h>
+#include <rtwall/vec.h>
 
 #include <gtest/gtest.h>
 
@@ -15,8 +16,6 @@
 
 namespace rtwall {
 namespace {
-
-Float3 plus(const Float3& a, const Float3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
 
 test::CliResult run(const std::string& args) { return test::runCli(RTWALL_EXE, args, 120); }
 
@@ -203,13 +202,13 @@ TEST(ReplayCommand, ReplaysCamerasAndSettingsThatAreNotTheSceneFiles) {
 
     CameraDesc orbiting = desc.cameras.front();
     orbiting.name = "not in the file";
-    orbiting.position = plus(orbiting.position, {0.3127f, 0.0419f, -0.771f});
-    orbiting.lookAt = plus(orbiting.lookAt, {0.0123f, -0.2f, 0.1f});
+    orbiting.position = orbiting.position + Float3{0.3127f, 0.0419f, -0.771f};
+    orbiting.lookAt = orbiting.lookAt + Float3{0.0123f, -0.2f, 0.1f};
     orbiting.up = {0.05f, 1.0f, 0.02f};
     orbiting.fovY = 38.5f;
     CameraDesc offAxis = orbiting;
     offAxis.window =
-        ProjectionWindow{plus(desc.cameras.front().lookAt, {-1.7f, -0.9f, 0.3f}), {3.1f, 0.0f, -0.2f}, {0.0f, 2.3f, 0.1f}};
+        ProjectionWindow{desc.cameras.front().lookAt + Float3{-1.7f, -0.9f, 0.3f}, {3.1f, 0.0f, -0.2f}, {0.0f, 2.3f, 0.1f}};
 
     RenderSettings base = desc.settings;
     base.width = 64;

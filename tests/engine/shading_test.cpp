@@ -1,7 +1,8 @@
 // Fresnel, refraction and sRGB quantisation against analytic values.
 #include "shading.h"
 #include "texture.h"
-#include "vec.h"
+
+#include <rtwall/vec.h>
 
 #include <gtest/gtest.h>
 

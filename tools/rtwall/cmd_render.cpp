@@ -5,6 +5,7 @@
 
 #include <rtwall/cluster.h>
 #include <rtwall/engine.h>
+#include <rtwall/vec.h>
 
 #include <array>
 #include <charconv>
@@ -58,12 +59,6 @@ Float3 parsePoint(const std::string& text, const std::string& option, const std:
     return {float(v[0] - origin[0]), float(v[1] - origin[1]), float(v[2] - origin[2])};
 }
 
-Float3 minus(const Float3& a, const Float3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-bool isZero(const Float3& a) { return a.x == 0.0f && a.y == 0.0f && a.z == 0.0f; }
-Float3 cross(const Float3& a, const Float3& b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-
 // The camera: a scene camera by name (or the first), with what the options give instead.
 CameraDesc chooseCamera(const SceneDesc& desc, const RenderOptions& o) {
     const CameraDesc* named = o.camera.empty() ? &desc.cameras.front() : desc.findCamera(o.camera);
@@ -84,11 +79,11 @@ CameraDesc chooseCamera(const SceneDesc& desc, const RenderOptions& o) {
         w.lowerLeft = {float(v[0] - org[0]), float(v[1] - org[1]), float(v[2] - org[2])};
         w.right = {float(v[3]), float(v[4]), float(v[5])};
         w.up = {float(v[6]), float(v[7]), float(v[8])};
-        if (isZero(cross(w.right, w.up))) throw InputError("--camera-window '" + o.cameraWindow + "': the window has no area");
+        if (length(cross(w.right, w.up)) == 0.0f) throw InputError("--camera-window '" + o.cameraWindow + "': the window has no area");
         c.window = w;
     }
-    if (isZero(minus(c.lookAt, c.position))) throw InputError("the camera looks at its own position");
-    if (isZero(cross(minus(c.lookAt, c.position), c.up))) throw InputError("the camera's up is parallel to its viewing direction");
+    if (length(c.lookAt - c.position) == 0.0f) throw InputError("the camera looks at its own position");
+    if (length(cross(c.lookAt - c.position, c.up)) == 0.0f) throw InputError("the camera's up is parallel to its viewing direction");
     return c;
 }
 

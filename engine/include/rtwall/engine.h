@@ -232,6 +232,10 @@ struct SceneLoadOptions {
 };
 SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOptions& options);
 
+// Writes a regular grid of scalars (`values`: nx * ny * nz, x fastest, at least 2 per axis) as
+// ASCII VTK image data (.vti), which volume materials read; for generators and tests.
+void writeVolumeVti(const std::filesystem::path& file, int nx, int ny, int nz, const std::vector<float>& values);
+
 // A scene made of one mesh file, with a camera that frames its bounds and a default light.
 SceneDesc sceneFromMeshFile(const std::filesystem::path& file);
 
@@ -247,6 +251,13 @@ SceneSourceKind sceneSourceKind(const std::string& nameOrPath);
 // The one way every command loads a scene by name: builtinScene, loadSceneFile or
 // sceneFromMeshFile, as sceneSourceKind says.
 SceneDesc loadScene(const std::string& nameOrPath, const SceneLoadOptions& options = {});
+
+// How an area light is seen by rays (engine/src/light_faces.cpp, configs/README.md [[light]]):
+// not at all (next-event estimation alone finds it), through emitters that cover its whole
+// parallelogram (Covered: light samples and hits on them are weighted by multiple importance
+// sampling), or through emitters that cover part of it (Partial: light samples count in full,
+// and so do hits on the emitters where no light sample could have found them).
+enum class LightFace : uint8_t { None, Partial, Covered };
 
 // A loaded scene ready to render: Embree device, one BVH per mesh, instances on top.
 class Scene {
@@ -285,6 +296,12 @@ public:
     void addFile(const std::string& path, std::shared_ptr<const std::vector<uint8_t>> bytes);
     void setLight(uint32_t light, const Light& value);
     void commit();
+
+    // What the scene recognised as the visible faces of its area lights, as of the last change:
+    // per light (None for point and directional lights), and the area light an instance is the
+    // visible face of (-1: none). Both throw std::out_of_range for an index that does not exist.
+    LightFace lightFace(uint32_t light) const;
+    int32_t areaLightOf(uint32_t instance) const;
 
     struct Impl;
     const Impl& impl() const { return *impl_; }
@@ -404,6 +421,9 @@ void floatFromHalf(const uint16_t* in, size_t count, float* out);
 
 // The 8-bit sRGB quantisation renderTile applies, for `count` linear values.
 void linearToSrgb8(const float* linear, size_t count, uint8_t* out);
+// Its inverse for `count` 8-bit values: the linear value each code stands for (what
+// Accumulator::add sums), exactly.
+void srgb8ToLinear(const uint8_t* srgb, size_t count, float* out);
 
 // True when a frame's pixels depend on the frame number, i.e. when averaging frames refines
 // the image: path tracing, area lights, rough metal or a volume (per-frame random sampling) in
