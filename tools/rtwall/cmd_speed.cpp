@@ -6,6 +6,7 @@
 //   rtwall simulate --profile P     the real TileScheduler against simulated clients and links
 // The libraries do the work (rtwall::tune, rtwall::cluster); this file parses and prints.
 #include "commands.h"
+#include "tile_failure.h"
 
 #include <rtwall/cluster.h>
 #include <rtwall/engine.h>
@@ -27,14 +28,6 @@
 namespace rtwall::cli {
 
 namespace {
-
-SceneDesc loadScene(const std::string& scene, int64_t triangles) {
-    const std::filesystem::path path(scene);
-    if (scene.starts_with("builtin:")) return builtinScene(scene.substr(8), triangles);
-    std::string ext = path.extension().string();
-    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return ext == ".toml" ? loadSceneFile(path) : sceneFromMeshFile(path);
-}
 
 const CameraDesc& pickCamera(const SceneDesc& desc, const std::string& scene, const std::string& name) {
     if (name.empty()) return desc.cameras.front();
@@ -204,7 +197,9 @@ void addReference(CLI::App& app, Run& run) {
     cmd->add_flag("--json", o->json, "Print JSON");
     cmd->callback([&run, o] {
         run = [o] {
-            SceneDesc desc = loadScene(o->scene, o->triangles);
+            SceneLoadOptions load;
+            load.builtinTriangles = o->triangles;
+            SceneDesc desc = loadScene(o->scene, load);
             RenderSettings& s = desc.settings;
             if (o->width) s.width = o->width;
             if (o->height) s.height = o->height;
@@ -214,8 +209,16 @@ void addReference(CLI::App& app, Run& run) {
             const CameraDesc cam = pickCamera(desc, o->scene, o->camera);
             const Scene scene(desc);
             const Camera camera(cam, s.width, s.height);
+            // A tile that fails is reported with the command that renders it again.
+            auto replayable = [&](auto&& render) {
+                try {
+                    return render();
+                } catch (const TileError& e) {
+                    throw withReplay(e, {o->scene, o->triangles, desc.origin, cam, s, {}, 0, {}});
+                }
+            };
             if (o->frames == 1 && o->progressOut.empty() && o->firstFrame == 1u << 20) {
-                writePng(renderFrame(scene, camera, s), o->out);
+                writePng(replayable([&] { return renderFrame(scene, camera, s); }), o->out);
                 if (o->json) std::cout << toml::json_formatter{toml::table{{"out", o->out}, {"frames", 1}}} << "\n";
                 else std::printf("wrote %s (%dx%d, %dx%d samples per pixel)\n", o->out.c_str(), s.width, s.height,
                                  s.supersample, s.supersample);
@@ -223,7 +226,8 @@ void addReference(CLI::App& app, Run& run) {
             }
             Accumulator all, half[2];
             for (int f = 0; f < o->frames; ++f) {
-                const std::vector<float> linear = renderFrameLinear(scene, camera, s, o->firstFrame + uint32_t(f));
+                const std::vector<float> linear =
+                    replayable([&] { return renderFrameLinear(scene, camera, s, o->firstFrame + uint32_t(f)); });
                 all.addLinear(linear.data(), s.width, s.height);
                 half[2 * f < o->frames ? 0 : 1].addLinear(linear.data(), s.width, s.height);
                 if (!o->progressOut.empty() && (all.frames() & (all.frames() - 1)) == 0)
@@ -281,7 +285,9 @@ void addBenchTiles(CLI::App& bench, Run& run) {
     cmd->add_flag("--json", o->json, "Print JSON");
     cmd->callback([&run, o] {
         run = [o] {
-            SceneDesc desc = loadScene(o->scene, o->triangles);
+            SceneLoadOptions load;
+            load.builtinTriangles = o->triangles;
+            SceneDesc desc = loadScene(o->scene, load);
             RenderSettings& s = desc.settings;
             if (o->width) s.width = o->width;
             if (o->height) s.height = o->height;
@@ -306,7 +312,14 @@ void addBenchTiles(CLI::App& bench, Run& run) {
             const Scene scene(desc);
             Image lossless;
             std::vector<Image> decoded;
-            TileProfile profile = profileTiles(scene, cameras, s, codecs, &lossless, &decoded);
+            TileProfile profile;
+            try {
+                profile = profileTiles(scene, cameras, s, codecs, &lossless, &decoded);
+            } catch (const TileError& e) {
+                // Frame f + 1 is cameras[f] (frame 1's eye-light warm-up pass is reported as frame 1).
+                const size_t f = std::min<size_t>(std::max<uint32_t>(e.frame(), 1) - 1, cameras.size() - 1);
+                throw withReplay(e, {o->scene, o->triangles, desc.origin, cameras[f], s, {}, 0, {}});
+            }
             profile.scene = o->scene;
             if (!o->profileOut.empty()) writeTileProfile(profile, o->profileOut);
             if (!o->saveImage.empty()) writePng(lossless, o->saveImage);

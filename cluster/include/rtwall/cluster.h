@@ -208,6 +208,7 @@ struct ClientSettings {
     int extraTileDelayMs = 0;           // fault injection for tests: emulate a slower PC
     int extraSceneBuildMs = 0;          // fault injection for tests: a PC slow to build the scene
     int dropEveryNthResult = 0;         // fault injection for tests: lose every Nth tile result on its way out
+    std::optional<InjectedTileFault> tileFault;  // fault injection for tests: a tile that throws
     // A render thread that does not return: the first tile of frame stallFrame or later that this
     // client renders sleeps stallMs on its thread (once; cut short when the client stops).
     int stallMs = 0;                    // fault injection for tests

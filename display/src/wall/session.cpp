@@ -41,17 +41,6 @@ std::string codecPointName(const CodecSettings& c, int tile) {
     return n + ", tile " + std::to_string(tile);
 }
 
-// A scene by name: builtin:NAME, a scene file (.toml, any case) or a mesh file.
-bool isSceneFileName(const std::string& name) {
-    std::string ext = std::filesystem::path(name).extension().string();
-    for (char& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
-    return !name.starts_with("builtin:") && ext == ".toml";
-}
-SceneDesc loadNamedScene(const std::string& name) {
-    if (name.starts_with("builtin:")) return builtinScene(name.substr(8), 3'000'000);
-    return isSceneFileName(name) ? loadSceneFile(name) : sceneFromMeshFile(name);
-}
-
 std::string format(const char* fmt, auto... args) {
     char buf[512];
     std::snprintf(buf, sizeof buf, fmt, args...);
@@ -315,9 +304,9 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
         std::fflush(stdout);
     };
     RunConfig& c = s.config;
-    if (c.watch && (c.loaded || !isSceneFileName(c.scene)))
+    if (c.watch && (c.loaded || sceneSourceKind(c.scene) != SceneSourceKind::SceneFile))
         throw InputError("--watch needs a scene file (.toml); " + c.scene + " is not one");
-    SceneDesc desc = c.loaded ? std::move(*c.loaded) : loadNamedScene(c.scene);
+    SceneDesc desc = c.loaded ? std::move(*c.loaded) : loadScene(c.scene);
     c.loaded.reset();
     if (c.width) desc.settings.width = c.width;
     if (c.height) desc.settings.height = c.height;
