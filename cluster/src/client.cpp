@@ -99,6 +99,10 @@ private:
     // ---- network thread -------------------------------------------------------------------
 
     void connect() {
+        // The old connection's unsent messages go with it: kept (zmq's default linger), its Hello
+        // would reach a restarted master once the port answers again and be taken for another
+        // client, one that never renders.
+        if (dealer_) dealer_.set(zmq::sockopt::linger, 0);
         dealer_ = zmq::socket_t(ctx_, zmq::socket_type::dealer);
         // The largest legitimate message from the master is a mesh.
         configureSocket(dealer_, int64_t(kHeaderSize + 64 + kMaxMeshBytes), heartbeatMs_, timeoutMs());
