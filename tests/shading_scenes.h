@@ -5,12 +5,12 @@
 #include <rtwall/engine.h>
 #include <rtwall/image.h>
 
-#include "volume.h"  // engine/src: writeVolumeVti, for the test volume
-
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace rtwall::test {
 
@@ -32,16 +32,15 @@ inline std::string writeTestTexture(const std::filesystem::path& dir) {
 
 // A blob: density falls off from the centre of a 12^3 grid.
 inline std::string writeTestVolume(const std::filesystem::path& dir) {
-    VolumeGrid g;
-    g.nx = g.ny = g.nz = 12;
+    std::vector<float> values;
     for (int k = 0; k < 12; ++k)
         for (int j = 0; j < 12; ++j)
             for (int i = 0; i < 12; ++i) {
                 const float x = (i - 5.5f) / 5.5f, y = (j - 5.5f) / 5.5f, z = (k - 5.5f) / 5.5f;
-                g.values.push_back(std::max(0.0f, 1.0f - std::sqrt(x * x + y * y + z * z)));
+                values.push_back(std::max(0.0f, 1.0f - std::sqrt(x * x + y * y + z * z)));
             }
     const auto file = dir / "blob.vti";
-    writeVolumeVti(g, file);
+    writeVolumeVti(file, 12, 12, 12, values);
     return file.string();
 }
 

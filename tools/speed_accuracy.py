@@ -16,7 +16,7 @@ Steps (each writes raw JSON under --work/raw/, charts under docs/speed-accuracy/
   6. docs       the charts and docs/speed-accuracy.md, plus a front per scene for
                 `rtwall run --target-fps N --front docs/speed-accuracy/front-SCENE.toml`
 
-A control is one entry in CONTROLS: its values and the `rtwall bench tiles` arguments that set it.
+A control is one entry of rtwall's control table (`rtwall controls --json`): its option and label.
 Pruning threshold, GI samples per pixel and volume step go there once the renderer has them.
 """
 import argparse
@@ -61,19 +61,28 @@ class Scene:
     note: str = ""       # how this scene is swept, for the docs
 
 
-# Every swept control and its `rtwall bench tiles` / `rtwall reference` arguments. The name is
-# also the key in a front's [point.controls], which `rtwall run --target-fps` applies
-# (tools/rtwall/cmd_run.cpp, applyControl). Which values each scene sweeps: SCENES. Codecs are
-# applied to each render (CODECS).
-CONTROLS = [
-    Control("tile", [32, 64, 128], lambda v: ["--tile", str(v)]),
-    Control("scale", [0.5, 0.75, 1.0], lambda v: ["--scale", str(v)], lambda v: f"{v:g}x"),
-    Control("supersample", [1, 2], lambda v: ["--supersample", str(v)], lambda v: f"{v}x{v}"),
-    Control("prune", [0.0005, 0.002, 0.01, 0.05], lambda v: ["--prune", str(v)], lambda v: f"{v:g}"),
-    Control("gi_spp", [1, 4, 16], lambda v: ["--gi-spp", str(v)], lambda v: f"{v} spp"),
-    Control("volume_step", [0.25, 1.0, 4.0], lambda v: ["--volume-step", str(v)], lambda v: f"{v:g} voxels"),
-]
-CONTROL = {c.name: c for c in CONTROLS}
+# Every control the sweep can set: read from `rtwall controls --json` (one table, in
+# display/src/wall/controls.cpp; `rtwall run --target-fps` applies a front's [point.controls] by
+# the same names), with its `rtwall bench tiles` / `rtwall reference` option and label. Which
+# values each scene sweeps: SCENES. Codecs are applied to each render (CODECS).
+CONTROLS = []
+CONTROL = {}
+
+
+def load_controls(r):
+    global CONTROLS, CONTROL
+
+    def fmt(v):
+        return f"{v:g}"
+
+    def control(c):
+        option, label = c["option"], c["label"]
+        return Control(c["name"], c["sweep"], lambda v: [option, fmt(v)], lambda v: label.replace("{}", fmt(v)))
+
+    CONTROLS = [control(c) for c in r.run("controls", "--json")["controls"] if c["option"]]
+    CONTROL = {c.name: c for c in CONTROLS}
+
+
 CODECS = ["raw", "lz4", "zstd", "jpeg:50", "jpeg:75", "jpeg:90", "jpeg:95"]
 # A front point's codec control: TileCodec numbers (cluster.h) and the JPEG quality.
 CODEC_IDS = {"raw": 0, "lz4": 1, "zstd": 2, "jpeg": 3}
@@ -1173,6 +1182,7 @@ def main():
     args.start_load = os.getloadavg()[0]  # how busy the PC was: the page says so
     t0 = time.time()
     r = Runner(args.build, args.work, args.quick)
+    load_controls(r)
     docs = Path(args.docs)
     figdir = docs / "speed-accuracy"
     figdir.mkdir(parents=True, exist_ok=True)

@@ -20,6 +20,7 @@
 #include <deque>
 #include <fstream>
 #include <future>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -99,6 +100,10 @@ private:
     // ---- network thread -------------------------------------------------------------------
 
     void connect() {
+        // The old connection's unsent messages go with it: kept (zmq's default linger), its Hello
+        // would reach a restarted master once the port answers again and be taken for another
+        // client, one that never renders.
+        if (dealer_) dealer_.set(zmq::sockopt::linger, 0);
         dealer_ = zmq::socket_t(ctx_, zmq::socket_type::dealer);
         // The largest legitimate message from the master is a mesh.
         configureSocket(dealer_, int64_t(kHeaderSize + 64 + kMaxMeshBytes), heartbeatMs_, timeoutMs());
@@ -179,22 +184,7 @@ private:
                     if (dropped_ == droppedBefore) lastHeard_ = idleSince = nowSeconds();
                 }
             }
-            if (items[1].revents & ZMQ_POLLIN) {
-                for (int i = 0; i < 256; ++i) {
-                    zmq::message_t msg;
-                    if (!results_.recv(msg, zmq::recv_flags::dontwait)) break;
-                    // Lost if its queue is full: the master hands the tile out again when this
-                    // client is idle without it (its heartbeat says so).
-                    const int n = settings_.dropEveryNthResult;
-                    if (n > 0 && ++resultsOut_ % uint64_t(n) == 0) {
-                        // Injected loss.
-                    } else if (!dealer_.send(msg, zmq::send_flags::dontwait)) {
-                        ++lostResults_;
-                    }
-                    --held_;
-                    lastSent_ = nowSeconds();
-                }
-            }
+            if (items[1].revents & ZMQ_POLLIN) forwardResults(256);
             if (monitor_ && (items[2].revents & ZMQ_POLLIN)) readMonitor();
             finishBuild();
             watchStalls();
@@ -207,6 +197,8 @@ private:
                 }
             }
             if (std::string why = failure(); !why.empty()) {
+                // The tiles rendered before the failure go first: they are not lost with it.
+                forwardResults(std::numeric_limits<int>::max());
                 send(Goodbye{why});
                 std::fprintf(stderr, "rtwall client: %s\n", why.c_str());
                 return 1;
@@ -232,6 +224,24 @@ private:
                 std::this_thread::sleep_for(std::chrono::milliseconds(pause));
                 connect();
             }
+        }
+    }
+
+    // Hands up to `max` finished tiles from the render threads to the master's connection.
+    void forwardResults(int max) {
+        for (int i = 0; i < max; ++i) {
+            zmq::message_t msg;
+            if (!results_.recv(msg, zmq::recv_flags::dontwait)) break;
+            // Lost if its queue is full: the master hands the tile out again when this
+            // client is idle without it (its heartbeat says so).
+            const int n = settings_.dropEveryNthResult;
+            if (n > 0 && ++resultsOut_ % uint64_t(n) == 0) {
+                // Injected loss.
+            } else if (!dealer_.send(msg, zmq::send_flags::dontwait)) {
+                ++lostResults_;
+            }
+            --held_;
+            lastSent_ = nowSeconds();
         }
     }
 
@@ -504,8 +514,9 @@ private:
     void setRenderSettings(const RenderSettings& fromMaster) {
         renderSettings_ = fromMaster;
         renderSettings_.threads = 1;  // each render thread renders its own tiles
-        renderSettings_.clientId = id_;  // the id the master gave us, for the client false-colour view
-        renderSettings_.packetWidth = settings_.packetWidth;  // this PC's CPU decides
+        trace_.clientId = id_;  // the id the master gave us, for the client false-colour view
+        trace_.packetWidth = settings_.packetWidth;  // this PC's CPU decides
+        trace_.fault = settings_.tileFault;
         tiles_ = makeTiles(renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
     }
 
@@ -763,10 +774,10 @@ private:
                 if (wide) {
                     // Part of an accumulation: linear, before the 8-bit quantisation.
                     linear.resize(size_t(r.width()) * r.height() * 3);
-                    renderTileLinear(*scene_, camera, r, w.frame, renderSettings_, linear.data(), size_t(r.width()) * 3);
+                    renderTileLinear(*scene_, camera, r, w.frame, renderSettings_, linear.data(), size_t(r.width()) * 3, trace_);
                 } else {
                     pixels.resize(size_t(r.width()) * r.height() * 3);
-                    renderTile(*scene_, camera, r, w.frame, renderSettings_, {pixels.data(), size_t(r.width()) * 3});
+                    renderTile(*scene_, camera, r, w.frame, renderSettings_, {pixels.data(), size_t(r.width()) * 3}, trace_);
                 }
                 if (settings_.extraTileDelayMs > 0)
                     std::this_thread::sleep_for(std::chrono::milliseconds(settings_.extraTileDelayMs));
@@ -793,8 +804,17 @@ private:
                 }
                 const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame, w.stateSeq), result);
                 sendResult(out, bytes);
+            } catch (const TileError& e) {
+                // Tell the master why before going away (the network thread sends it): the
+                // frame, the tile's number and pixels, and what went wrong.
+                const TileRect& r = e.rect();
+                std::lock_guard lock(workMutex_);
+                if (failure_.empty())
+                    failure_ = "frame " + std::to_string(e.frame()) + ", tile " + std::to_string(w.tile) + " (pixels " +
+                               std::to_string(r.x0) + "," + std::to_string(r.y0) + "," + std::to_string(r.x1) + "," +
+                               std::to_string(r.y1) + "): " + e.reason();
+                return;
             } catch (const std::exception& e) {
-                // Tell the master why before going away (the network thread sends it).
                 std::lock_guard lock(workMutex_);
                 if (failure_.empty())
                     failure_ = "frame " + std::to_string(w.frame) + ", tile " + std::to_string(w.tile) + ": " + e.what();
@@ -862,6 +882,7 @@ private:
     std::unique_ptr<Scene> scene_;
     CameraDesc camera_;
     RenderSettings renderSettings_;
+    TraceOptions trace_;  // this client's own: packet width, id, injected fault
     std::vector<TileRect> tiles_;
     std::atomic<uint32_t> frame_{0};
 

@@ -31,13 +31,6 @@ constexpr int kMaxThreads = 1024;
     static_assert(fieldCount<T>() == (n), #T " has a member that its wire writer does not handle: " \
                                               "write and read it here and update this count")
 
-// RenderSettings members that are each process's own, not the scene's: not on the wire (a render
-// client sets them itself). Counted where they exist, so that the guard holds with them in
-// RenderSettings and once they live elsewhere.
-template <class S> constexpr size_t localRenderSettings() {
-    return size_t(requires(const S& s) { s.clientId; }) + size_t(requires(const S& s) { s.packetWidth; });
-}
-
 // -- Field helpers -----------------------------------------------------------------------------
 
 int readInt(Reader& r, int lo, int hi, const char* what) {
@@ -292,8 +285,7 @@ void read(Reader& r, InstanceDesc& in) {
     read(r, in.transform);
 }
 
-// Everything but the process-local members (localRenderSettings).
-RTWALL_WIRE_FIELDS(RenderSettings, 15 + localRenderSettings<RenderSettings>());
+RTWALL_WIRE_FIELDS(RenderSettings, 15);  // what is each process's own is TraceOptions, not sent
 void write(Writer& w, const RenderSettings& s) {
     w.i32(s.width);
     w.i32(s.height);

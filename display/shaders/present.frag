@@ -13,7 +13,9 @@ uniform ivec4 blendWidth;     // ramp widths at the left, right, top, bottom edg
 uniform vec4 blendInvGamma;   // 1 / display gamma per edge
 uniform float invGamma;       // colour correction: out = brightness * in^invGamma
 uniform float brightness;
-uniform int tileSize;         // > 0: tint each tile with its client's colour
+uniform int tileSize;         // > 0: tint each tile with its client's colour (tiles in frame pixels)
+uniform ivec2 wallSize;       // the wall image's pixels
+uniform ivec2 frameSize;      // the frame's: the wall's, or fewer (rendered at a fraction, shown upscaled)
 out vec4 colour;
 
 float ramp(int width, float d) {
@@ -40,8 +42,15 @@ void main() {
     // Nearest wall pixel to the output pixel's centre, in integers (as mapPixel does).
     int wx = viewport.x + ((2 * x + 1) * viewport.z) / (2 * ow);
     int wy = viewport.y + ((2 * oy + 1) * viewport.w) / (2 * outputSize.y);
-    vec3 c = eye == 1 ? texelFetch(wallRight, ivec2(wx, wy), 0).rgb : texelFetch(wallLeft, ivec2(wx, wy), 0).rgb;
-    if (tileSize > 0) c = 0.5 * (c + texelFetch(owners, ivec2(wx / tileSize, wy / tileSize), 0).rgb);
+    vec3 c;
+    if (frameSize == wallSize) {
+        c = eye == 1 ? texelFetch(wallRight, ivec2(wx, wy), 0).rgb : texelFetch(wallLeft, ivec2(wx, wy), 0).rgb;
+    } else {  // bilinear, the wall pixel's centre in the frame (the textures filter linearly)
+        vec2 uv = (vec2(wx, wy) + 0.5) / vec2(wallSize);
+        c = eye == 1 ? texture(wallRight, uv).rgb : texture(wallLeft, uv).rgb;
+    }
+    ivec2 f = ivec2(wx, wy) * frameSize / wallSize;  // the frame pixel the wall pixel scales to
+    if (tileSize > 0) c = 0.5 * (c + texelFetch(owners, f / tileSize, 0).rgb);
     float w = 1.0;
     if (blendWidth.x > 0) w *= pow(ramp(blendWidth.x, float(wx - viewport.x) + 0.5), blendInvGamma.x);
     if (blendWidth.y > 0) w *= pow(ramp(blendWidth.y, float(viewport.x + viewport.z - wx) - 0.5), blendInvGamma.y);

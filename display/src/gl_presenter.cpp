@@ -46,7 +46,7 @@ struct Screen {
     GLFWwindow* window = nullptr;
     GLuint vao = 0, program = 0;
     GLint uViewport = -1, uOutputSize = -1, uEyeMode = -1, uBlendWidth = -1, uBlendInvGamma = -1, uInvGamma = -1,
-          uBrightness = -1, uTileSize = -1;
+          uBrightness = -1, uTileSize = -1, uWallSize = -1, uFrameSize = -1;
 };
 
 }  // namespace
@@ -58,6 +58,7 @@ struct GlPresenter::Impl {
     Options options;
     std::vector<Screen> screens;
     GLuint wallTex[2] = {0, 0}, ownerTex = 0, pbo[2][2] = {{0, 0}, {0, 0}};
+    int texW = 0, texH = 0;  // the frame size the wall textures hold (the wall's, or less: scaled frames)
     GLuint overlayTex = 0, overlayFbo = 0;  // first context only: framebuffer objects are not shared
     int overlayW = 0, overlayH = 0;
     int pboNext = 0;
@@ -87,6 +88,15 @@ struct GlPresenter::Impl {
                 glfwDestroyWindow(s.window);
             }
         glfwTerminate();
+    }
+
+    void allocateWallTextures(int w, int h) {
+        for (int e = 0; e < 2; ++e) {
+            glBindTexture(GL_TEXTURE_2D, wallTex[e]);
+            glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, w, h, 0, GL_RGB, GL_UNSIGNED_BYTE, nullptr);
+        }
+        texW = w;
+        texH = h;
     }
 
     void upload(GLuint tex, GLuint* pbos, const Image& img) {
@@ -151,6 +161,8 @@ struct GlPresenter::Impl {
         glUniform1f(s.uInvGamma, float(1.0 / c.gamma));
         glUniform1f(s.uBrightness, float(c.brightness));
         glUniform1i(s.uTileSize, tileSize);
+        glUniform2i(s.uWallSize, wall.width, wall.height);
+        glUniform2i(s.uFrameSize, texW, texH);
         glBindVertexArray(s.vao);
         glDrawArrays(GL_TRIANGLES, 0, 3);
     }
@@ -240,6 +252,8 @@ std::unique_ptr<GlPresenter> GlPresenter::open(const WallConfig& wall, const Opt
         s.uInvGamma = glGetUniformLocation(s.program, "invGamma");
         s.uBrightness = glGetUniformLocation(s.program, "brightness");
         s.uTileSize = glGetUniformLocation(s.program, "tileSize");
+        s.uWallSize = glGetUniformLocation(s.program, "wallSize");
+        s.uFrameSize = glGetUniformLocation(s.program, "frameSize");
         glGenVertexArrays(1, &s.vao);  // vertex arrays are not shared between contexts
 
         glfwSetKeyCallback(win, [](GLFWwindow* w, int key, int, int action, int mods) {
@@ -294,15 +308,15 @@ std::unique_ptr<GlPresenter> GlPresenter::open(const WallConfig& wall, const Opt
     glGenBuffers(4, &im.pbo[0][0]);
     for (GLuint t : {im.wallTex[0], im.wallTex[1], im.ownerTex}) {
         glBindTexture(GL_TEXTURE_2D, t);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        // The wall textures are read with texelFetch at the wall's size, and filtered (bilinear,
+        // as presentScreen's resizeBilinear) when a frame is smaller; the owner texture per tile.
+        const GLint filter = t == im.ownerTex ? GL_NEAREST : GL_LINEAR;
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filter);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, filter);
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     }
-    for (int e = 0; e < 2; ++e) {
-        glBindTexture(GL_TEXTURE_2D, im.wallTex[e]);
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, wall.width, wall.height, 0, GL_RGB, GL_UNSIGNED_BYTE, nullptr);
-    }
+    im.allocateWallTextures(wall.width, wall.height);
     if (glGetError() != GL_NO_ERROR) return no("OpenGL refuses a " + std::to_string(wall.width) + "x" + std::to_string(wall.height) + " texture");
     return std::unique_ptr<GlPresenter>(new GlPresenter(std::move(impl)));
 }
@@ -310,19 +324,19 @@ std::unique_ptr<GlPresenter> GlPresenter::open(const WallConfig& wall, const Opt
 void GlPresenter::present(const WallFrame& frame, const PresentOptions& options, std::vector<Image>* capture) {
     Impl& im = *impl_;
     const WallConfig& wall = im.wall;
-    if (frame.left.width != wall.width || frame.left.height != wall.height)
-        throw std::invalid_argument("GlPresenter::present: the frame is not the wall's size");
-    const bool haveRight = frame.right.width == wall.width && frame.right.height == wall.height;
+    checkFrameSize(wall, frame, "GlPresenter::present");
+    const bool haveRight = !frame.right.rgb.empty();
 
     double t0 = now();
     glfwMakeContextCurrent(im.screens[0].window);
+    if (frame.left.width != im.texW || frame.left.height != im.texH) im.allocateWallTextures(frame.left.width, frame.left.height);
     im.upload(im.wallTex[0], im.pbo[0], frame.left);
     if (haveRight) im.upload(im.wallTex[1], im.pbo[1], frame.right);
     im.pboNext ^= 1;
     const int tileSize = options.falseColour && frame.tileSize > 0 ? frame.tileSize : 0;
     if (tileSize > 0) {
         // One texel per tile with the colour of its client: tiny, uploaded directly.
-        const int tw = (wall.width + tileSize - 1) / tileSize, th = (wall.height + tileSize - 1) / tileSize;
+        const int tw = (frame.left.width + tileSize - 1) / tileSize, th = (frame.left.height + tileSize - 1) / tileSize;
         std::vector<uint8_t> rgb(size_t(tw) * th * 3);
         for (size_t t = 0; t < size_t(tw) * th; ++t) {
             const auto c = ownerColour(t < frame.tileOwners.size() ? frame.tileOwners[t] : UINT32_MAX);

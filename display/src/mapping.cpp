@@ -2,6 +2,7 @@
 // weight and its colour correction. The GL presenter must agree with this to within rounding
 // (tests/display/gl_presenter_test.cpp), so keep both in step.
 #include <rtwall/display.h>
+#include <rtwall/tune.h>
 
 #include <algorithm>
 #include <cmath>
@@ -69,15 +70,30 @@ std::array<uint8_t, 3> ownerColour(uint32_t client) {
     return palette[client % palette.size()];
 }
 
+void checkFrameSize(const WallConfig& wall, const WallFrame& frame, const char* who) {
+    const Image& f = frame.left;
+    if (f.width < 1 || f.height < 1 || f.width > wall.width || f.height > wall.height ||
+        (!frame.right.rgb.empty() && (frame.right.width != f.width || frame.right.height != f.height)))
+        throw std::invalid_argument(std::string(who) + ": the frame is " + std::to_string(f.width) + "x" +
+                                    std::to_string(f.height) + " (right eye " + std::to_string(frame.right.width) + "x" +
+                                    std::to_string(frame.right.height) + "), the wall " + std::to_string(wall.width) + "x" +
+                                    std::to_string(wall.height) + ": a frame is at most the wall's size");
+}
+
 Image presentScreen(const WallConfig& wall, size_t index, const WallFrame& frame, const PresentOptions& options) {
     const ScreenConfig& s = wall.screens.at(index);
-    if (frame.left.width != wall.width || frame.left.height != wall.height)
-        throw std::invalid_argument("presentScreen: the frame is " + std::to_string(frame.left.width) + "x" +
-                                    std::to_string(frame.left.height) + ", the wall " + std::to_string(wall.width) + "x" +
-                                    std::to_string(wall.height));
-    const bool haveRight = frame.right.width == wall.width && frame.right.height == wall.height;
+    checkFrameSize(wall, frame, "presentScreen");
+    // A frame rendered at a fraction of the wall's resolution is shown upscaled (bilinear, pixel
+    // centres aligned, edges clamped: what the GL presenter's linear filtering does).
+    const bool scaled = frame.left.width != wall.width || frame.left.height != wall.height;
+    const Image left = scaled ? resizeBilinear(frame.left, wall.width, wall.height) : Image{};
+    const Image right = scaled && !frame.right.rgb.empty() ? resizeBilinear(frame.right, wall.width, wall.height) : Image{};
+    const Image& wallLeft = scaled ? left : frame.left;
+    const Image& wallRight = scaled ? right : frame.right;
+    const bool haveRight = !frame.right.rgb.empty();
     const bool quad = s.eye == Eye::Both && wall.stereo.mode == StereoMode::QuadBuffer;
-    const int tilesX = frame.tileSize > 0 ? (wall.width + frame.tileSize - 1) / frame.tileSize : 0;
+    // Tiles are the frame's: a wall pixel belongs to the tile of the frame pixel it scales to.
+    const int tilesX = frame.tileSize > 0 ? (frame.left.width + frame.tileSize - 1) / frame.tileSize : 0;
     Image out;
     out.width = s.outputWidth;
     out.height = s.outputHeight;
@@ -86,11 +102,12 @@ Image presentScreen(const WallConfig& wall, size_t index, const WallFrame& frame
         for (int x = 0; x < out.width; ++x) {
             const ScreenSample m = mapPixel(s, wall.stereo.mode, x, y);
             const int eye = quad ? options.quadBufferEye : m.eye;
-            const Image& src = eye == 1 && haveRight ? frame.right : frame.left;
+            const Image& src = eye == 1 && haveRight ? wallRight : wallLeft;
             const uint8_t* p = src.pixel(m.wallX, m.wallY);
             float c[3] = {p[0] / 255.0f, p[1] / 255.0f, p[2] / 255.0f};
             if (options.falseColour && tilesX > 0) {
-                const size_t tile = size_t(m.wallY / frame.tileSize) * tilesX + size_t(m.wallX / frame.tileSize);
+                const int fx = m.wallX * frame.left.width / wall.width, fy = m.wallY * frame.left.height / wall.height;
+                const size_t tile = size_t(fy / frame.tileSize) * tilesX + size_t(fx / frame.tileSize);
                 const auto o = ownerColour(tile < frame.tileOwners.size() ? frame.tileOwners[tile] : UINT32_MAX);
                 for (int k = 0; k < 3; ++k) c[k] = 0.5f * (c[k] + o[k] / 255.0f);
             }

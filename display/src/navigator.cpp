@@ -123,28 +123,5 @@ bool Navigator::update(const InputState& in, double dt) {
     return changed;
 }
 
-std::string Navigator::cameraPathToml(const std::vector<ViewPose>& poses, const std::array<double, 3>& origin) {
-    std::ostringstream os;
-    os << std::setprecision(9) << "# A camera path recorded by rtwall run: replay with rtwall run --camera-path FILE\n"
-       << "# Positions in world coordinates (the scene file's), whatever origin the scene was rebased to.\n";
-    auto f3 = [&](Float3 a) { os << "[" << a.x << ", " << a.y << ", " << a.z << "]"; };
-    // Sum and print in double: 17 significant digits keep the float pose exact at 1e6 and beyond.
-    auto world = [&](Float3 a) {
-        char buf[128];
-        std::snprintf(buf, sizeof buf, "[%.17g, %.17g, %.17g]", double(a.x) + origin[0], double(a.y) + origin[1],
-                      double(a.z) + origin[2]);
-        os << buf;
-    };
-    for (size_t i = 0; i < poses.size(); ++i) {
-        os << "\n[[key]]\nframe = " << i << "\nposition = ";
-        world(poses[i].position);
-        os << "\nlook_at = ";
-        world(poses[i].lookAt);
-        os << "\nup = ";
-        f3(poses[i].up);
-        os << "\nfov = " << poses[i].fovY << "\n";
-    }
-    return os.str();
-}
 
 }  // namespace rtwall

@@ -39,6 +39,10 @@ void linearToSrgb8(const float* linear, size_t count, uint8_t* out) {
     for (size_t i = 0; i < count; ++i) out[i] = linearToSrgb8(linear[i]);
 }
 
+void srgb8ToLinear(const uint8_t* srgb, size_t count, float* out) {
+    for (size_t i = 0; i < count; ++i) out[i] = srgb8ToLinear(srgb[i]);
+}
+
 bool samplesRandomly(const SceneDesc& scene) {
     for (const Light& l : scene.lights)
         if (l.type == LightType::Area) return true;  // a random point on the light per shading point

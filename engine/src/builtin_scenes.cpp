@@ -1,7 +1,7 @@
 // Scenes built in code, shared by tests, benchmarks and examples.
-#include "vec.h"
 
 #include <rtwall/engine.h>
+#include <rtwall/vec.h>
 
 #include <algorithm>
 #include <cmath>

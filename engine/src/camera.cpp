@@ -1,6 +1,5 @@
-#include "vec.h"
-
 #include <rtwall/engine.h>
+#include <rtwall/vec.h>
 
 #include <cmath>
 #include <numbers>
@@ -28,6 +27,15 @@ Camera::Camera(const CameraDesc& desc, int width, int height) {
     du_ = u * (2.0f * halfW / float(width));
     dv_ = v * (-2.0f * halfH / float(height));
     corner_ = w - u * halfW + v * halfH;
+}
+
+CameraDesc orbitCamera(const CameraDesc& c, double degrees) {
+    const double a = degrees * std::numbers::pi / 180.0, ca = std::cos(a), sa = std::sin(a);
+    const double x = c.position.x - c.lookAt.x, z = c.position.z - c.lookAt.z;
+    CameraDesc o = c;
+    o.position.x = float(c.lookAt.x + ca * x + sa * z);
+    o.position.z = float(c.lookAt.z - sa * x + ca * z);
+    return o;
 }
 
 }  // namespace rtwall

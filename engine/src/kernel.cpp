@@ -10,12 +10,14 @@
 #include "sampling.h"
 #include "scene_impl.h"
 #include "shading.h"
-#include "vec.h"
+
+#include <rtwall/vec.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -330,11 +332,11 @@ int detectPacketWidth() {
     return 4;
 }
 
-// The packet width a tile is traced with: the setting, or this CPU's widest.
-int widthFor(const RenderSettings& settings) {
-    const int w = settings.packetWidth == 0 ? packetWidth() : settings.packetWidth;
+// The packet width a tile is traced with: the option, or this CPU's widest.
+int widthFor(const TraceOptions& trace) {
+    const int w = trace.packetWidth == 0 ? packetWidth() : trace.packetWidth;
     if (w != 4 && w != 8 && w != 16)
-        throw std::invalid_argument("packet width " + std::to_string(settings.packetWidth) + " is not 0, 4, 8 or 16");
+        throw std::invalid_argument("packet width " + std::to_string(trace.packetWidth) + " is not 0, 4, 8 or 16");
     return w;
 }
 
@@ -405,7 +407,30 @@ Color ramp(float x) {
 
 // The whole tile into sc.accum (linear RGB), and the per-pixel counts a false-colour view needs.
 TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileRect& rect, uint32_t frame,
-                         const RenderSettings& settings, Scratch& sc);
+                         const RenderSettings& settings, const TraceOptions& trace, Scratch& sc);
+// The same, then quantised (or false-coloured) into `out`.
+TileStats renderTileTo(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
+                       const RenderSettings& settings, TileView out, const TraceOptions& trace);
+
+// Runs one tile's work; whatever it throws leaves as a TileError that says which tile of which
+// frame failed (renderFrame's threads, a render client's threads and the CLI all report it).
+// A try block costs nothing until something throws.
+template <class Work>
+TileStats asTileWork(const TileRect& rect, uint32_t frame, const TraceOptions& trace, Work&& work) {
+    try {
+        if (trace.fault && trace.fault->frame == frame && trace.fault->x >= rect.x0 && trace.fault->x < rect.x1 &&
+            trace.fault->y >= rect.y0 && trace.fault->y < rect.y1)
+            throw std::runtime_error("injected fault at pixel " + std::to_string(trace.fault->x) + "," +
+                                     std::to_string(trace.fault->y));
+        return work();
+    } catch (const TileError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw TileError(frame, rect, e.what());
+    } catch (...) {
+        throw TileError(frame, rect, "an exception that is no std::exception");
+    }
+}
 
 Tracer tracerFor(KernelType kernel, int width) {
     if (kernel == KernelType::Single) return {traceClosestSingle, traceShadowSingle};
@@ -441,11 +466,42 @@ bool coherentOcclusionIsSafe(RTCDevice device) {
     return !avx512Kernels || version >= 40401;
 }
 
+TileError::TileError(uint32_t frame, const TileRect& rect, const std::string& reason)
+    : std::runtime_error("frame " + std::to_string(frame) + ", tile " + std::to_string(rect.x0) + "," +
+                         std::to_string(rect.y0) + "," + std::to_string(rect.x1) + "," + std::to_string(rect.y1) + ": " +
+                         reason),
+      frame_(frame), rect_(rect), reason_(reason) {}
+
 TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
-                     const RenderSettings& settings, TileView out) {
+                     const RenderSettings& settings, TileView out, const TraceOptions& trace) {
+    return asTileWork(rect, frame, trace, [&] { return renderTileTo(scene, camera, rect, frame, settings, out, trace); });
+}
+
+TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
+                           const RenderSettings& settings, float* out, size_t stride, const TraceOptions& trace) {
+    return asTileWork(rect, frame, trace, [&] {
+        Scratch& sc = tScratch;
+        const TileStats stats = renderTileInto(scene.impl(), camera, rect, frame, settings, trace, sc);
+        const int w = rect.width(), h = rect.height();
+        for (int j = 0; j < h; ++j)
+            for (int i = 0; i < w; ++i) {
+                const Color& c = sc.accum[size_t(j) * w + i];
+                float* o = out + size_t(j) * stride + 3 * size_t(i);
+                o[0] = c.x;
+                o[1] = c.y;
+                o[2] = c.z;
+            }
+        return stats;
+    });
+}
+
+namespace {
+
+TileStats renderTileTo(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
+                       const RenderSettings& settings, TileView out, const TraceOptions& trace) {
     Scratch& sc = tScratch;
     const auto t0 = std::chrono::steady_clock::now();
-    const TileStats stats = renderTileInto(scene.impl(), camera, rect, frame, settings, sc);
+    const TileStats stats = renderTileInto(scene.impl(), camera, rect, frame, settings, trace, sc);
     const int w = rect.width(), h = rect.height();
     if (w <= 0 || h <= 0) return stats;
 
@@ -456,7 +512,7 @@ TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& r
         const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         tileColor = ramp(float((std::log10(std::max(ms, 1e-3)) + 1.0) / 3.0));
     } else if (settings.view == ViewMode::Client) {
-        const uint32_t hsh = fmix32(settings.clientId + 1u);
+        const uint32_t hsh = fmix32(trace.clientId + 1u);
         tileColor = ramp(float(hsh & 0xFFFF) / 65535.0f);
     }
     const int spp = std::max(1, settings.supersample) * std::max(1, settings.supersample) * std::max(1, settings.samples);
@@ -480,27 +536,9 @@ TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& r
     return stats;
 }
 
-TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
-                           const RenderSettings& settings, float* out, size_t stride) {
-    Scratch& sc = tScratch;
-    const TileStats stats = renderTileInto(scene.impl(), camera, rect, frame, settings, sc);
-    const int w = rect.width(), h = rect.height();
-    for (int j = 0; j < h; ++j)
-        for (int i = 0; i < w; ++i) {
-            const Color& c = sc.accum[size_t(j) * w + i];
-            float* o = out + size_t(j) * stride + 3 * size_t(i);
-            o[0] = c.x;
-            o[1] = c.y;
-            o[2] = c.z;
-        }
-    return stats;
-}
-
-namespace {
-
 TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileRect& rect, uint32_t frame,
-                         const RenderSettings& settings, Scratch& sc) {
-    const int width = widthFor(settings);
+                         const RenderSettings& settings, const TraceOptions& trace, Scratch& sc) {
+    const int width = widthFor(trace);
     const Tracer tracer = tracerFor(settings.kernel, width);
     TileStats stats;
 
@@ -559,10 +597,10 @@ std::vector<TileRect> makeTiles(int width, int height, int tileSize) {
 namespace {
 
 // Renders every tile of a frame with `renderOne(rect)` on settings.threads threads, tiles handed
-// out on demand; a tile that throws stops the frame and is reported with a command line that
-// replays it. Returns the rays traced.
+// out on demand; a tile that throws stops the frame, and the first TileError is rethrown once
+// every thread has stopped. Returns the rays traced.
 template <class RenderOne>
-TileStats renderTilesInParallel(const Scene& scene, const RenderSettings& settings, uint32_t frame, RenderOne&& renderOne) {
+TileStats renderTilesInParallel(const RenderSettings& settings, RenderOne&& renderOne) {
     const std::vector<TileRect> tiles = makeTiles(settings.width, settings.height, settings.tileSize);
     int threads = settings.threads > 0 ? settings.threads : int(std::max(1u, std::thread::hardware_concurrency()));
     threads = std::max(1, std::min<int>(threads, int(tiles.size())));
@@ -570,26 +608,20 @@ TileStats renderTilesInParallel(const Scene& scene, const RenderSettings& settin
     std::atomic<size_t> nextTile{0};
     std::atomic<uint64_t> rays{0}, shadowRays{0};
     std::mutex failureMutex;
-    std::string failure;  // the first tile that threw, with a command line that replays it
+    std::exception_ptr failure;  // the first tile that threw
     auto worker = [&] {
         TileStats local;
         for (size_t t; (t = nextTile.fetch_add(1, std::memory_order_relaxed)) < tiles.size();) {
-            const TileRect& r = tiles[t];
             try {
-                const TileStats ts = renderOne(r);
+                const TileStats ts = renderOne(tiles[t]);
                 local.rays += ts.rays;
                 local.shadowRays += ts.shadowRays;
-            } catch (const std::exception& e) {
-                // No thread dies silently: stop handing out tiles and report this one.
+            } catch (...) {
+                // No thread dies silently: stop handing out tiles and report this one (a
+                // TileError: renderTile makes every exception one).
                 nextTile = tiles.size();
                 std::lock_guard lock(failureMutex);
-                if (failure.empty())
-                    failure = "frame " + std::to_string(frame) + ", tile " + std::to_string(r.x0) + "," +
-                              std::to_string(r.y0) + "," + std::to_string(r.x1) + "," + std::to_string(r.y1) + ": " +
-                              e.what() + " (replay: rtwall render " + scene.desc().sourceFile.string() + " --width " +
-                              std::to_string(settings.width) + " --height " + std::to_string(settings.height) +
-                              " --region " + std::to_string(r.x0) + "," + std::to_string(r.y0) + "," +
-                              std::to_string(r.x1) + "," + std::to_string(r.y1) + " --out tile.png)";
+                if (!failure) failure = std::current_exception();
             }
         }
         rays += local.rays;
@@ -599,32 +631,32 @@ TileStats renderTilesInParallel(const Scene& scene, const RenderSettings& settin
     for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
     worker();
     for (auto& t : pool) t.join();
-    if (!failure.empty()) throw std::runtime_error(failure);
+    if (failure) std::rethrow_exception(failure);
     return {rays.load(), shadowRays.load()};
 }
 
 }  // namespace
 
 Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings& settings, uint32_t frame,
-                  TileStats* stats) {
+                  TileStats* stats, const TraceOptions& trace) {
     Image img;
     img.width = settings.width;
     img.height = settings.height;
     img.rgb.assign(size_t(img.width) * img.height * 3, 0);
-    const TileStats st = renderTilesInParallel(scene, settings, frame, [&](const TileRect& r) {
-        return renderTile(scene, camera, r, frame, settings, {img.pixel(r.x0, r.y0), size_t(img.width) * 3});
+    const TileStats st = renderTilesInParallel(settings, [&](const TileRect& r) {
+        return renderTile(scene, camera, r, frame, settings, {img.pixel(r.x0, r.y0), size_t(img.width) * 3}, trace);
     });
     if (stats) *stats = st;
     return img;
 }
 
 std::vector<float> renderFrameLinear(const Scene& scene, const Camera& camera, const RenderSettings& settings,
-                                     uint32_t frame, TileStats* stats) {
+                                     uint32_t frame, TileStats* stats, const TraceOptions& trace) {
     std::vector<float> out(size_t(std::max(0, settings.width)) * size_t(std::max(0, settings.height)) * 3, 0.0f);
     const size_t stride = size_t(std::max(0, settings.width)) * 3;
-    const TileStats st = renderTilesInParallel(scene, settings, frame, [&](const TileRect& r) {
+    const TileStats st = renderTilesInParallel(settings, [&](const TileRect& r) {
         return renderTileLinear(scene, camera, r, frame, settings, out.data() + size_t(r.y0) * stride + size_t(r.x0) * 3,
-                                stride);
+                                stride, trace);
     });
     if (stats) *stats = st;
     return out;

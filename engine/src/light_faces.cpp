@@ -17,10 +17,13 @@
 // finds those paths. The recognition is geometric, so a scene file needs no extra key, and it is
 // recomputed whenever instances, materials or lights change (identically on every render client).
 #include "scene_impl.h"
-#include "vec.h"
+
+#include <rtwall/vec.h>
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace rtwall {
 
@@ -196,6 +199,17 @@ void findLightFaces(Scene::Impl& s) {
         if (s.lightFaces[li] == LightFace::Partial && covered[0][li] >= 0.999 &&
             (!d.lights[li].twoSided || covered[1][li] >= 0.999))
             s.lightFaces[li] = LightFace::Covered;
+}
+
+LightFace Scene::lightFace(uint32_t light) const {
+    if (light >= impl_->lightFaces.size()) throw std::out_of_range("light " + std::to_string(light) + " does not exist");
+    return impl_->lightFaces[light];
+}
+
+int32_t Scene::areaLightOf(uint32_t instance) const {
+    if (instance >= impl_->instances.size())
+        throw std::out_of_range("instance " + std::to_string(instance) + " does not exist");
+    return impl_->instances[instance].areaLight;
 }
 
 }  // namespace rtwall

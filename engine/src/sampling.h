@@ -6,7 +6,7 @@
 // client computes it, which is what keeps the cluster bit-identical to one machine.
 #pragma once
 
-#include "vec.h"
+#include <rtwall/vec.h>
 
 #include <cmath>
 #include <cstdint>

@@ -1,9 +1,9 @@
 #include "material.h"
 #include "scene_files.h"
 #include "scene_impl.h"
-#include "vec.h"
 
 #include <rtwall/engine_embree.h>
+#include <rtwall/vec.h>
 
 #ifdef __GLIBC__
 #include <malloc.h>

@@ -1,6 +1,5 @@
-#include "vec.h"
-
 #include <rtwall/engine.h>
+#include <rtwall/vec.h>
 
 #include <cmath>
 #include <numbers>

@@ -1,10 +1,10 @@
 // TOML scene files (format documented in configs/README.md).
 #include "texture.h"
-#include "vec.h"
 #include "volume.h"
 
 #include <rtwall/engine.h>
 #include <rtwall/toml_reader.h>
+#include <rtwall/vec.h>
 
 #include <toml++/toml.h>
 

@@ -86,13 +86,6 @@ struct InstanceData {
     int32_t areaLight = -1;        // the area light this emitter is the visible face of (light_faces.cpp), or -1
 };
 
-// How an area light is seen by rays (light_faces.cpp): not at all (next-event estimation alone
-// finds it), through emitters that cover its whole parallelogram (Covered: light samples and
-// hits on them are weighted by multiple importance sampling), or through emitters that cover
-// part of it (Partial: light samples count in full, and so do hits on the emitters where no light
-// sample could have found them).
-enum class LightFace : uint8_t { None, Partial, Covered };
-
 // True when the scene samples something at random whatever the settings: an area light, a rough
 // metal or a volume in use (rendersStochastically adds path tracing and the view).
 bool samplesRandomly(const SceneDesc& scene);

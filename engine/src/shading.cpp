@@ -1,7 +1,8 @@
 #include "shading.h"
 
 #include "material.h"
-#include "vec.h"
+
+#include <rtwall/vec.h>
 
 #include <algorithm>
 #include <array>

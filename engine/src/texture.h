@@ -1,9 +1,8 @@
 // Textures: colour patterns and alpha masks evaluated at an object-space position.
 #pragma once
 
-#include "vec.h"
-
 #include <rtwall/engine.h>
+#include <rtwall/vec.h>
 
 #include <memory>
 #include <string>

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <stdexcept>
 
 namespace rtwall {
 
@@ -25,7 +26,14 @@ float VolumeGrid::sample(float x, float y, float z) const {
     return lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz);
 }
 
-void writeVolumeVti(const VolumeGrid& g, const std::filesystem::path& file) {
+void writeVolumeVti(const std::filesystem::path& file, int nx, int ny, int nz, const std::vector<float>& values) {
+    if (nx < 2 || ny < 2 || nz < 2 || values.size() != size_t(nx) * size_t(ny) * size_t(nz))
+        throw std::invalid_argument(file.string() + ": a volume needs at least 2 samples per axis and nx*ny*nz values");
+    VolumeGrid g;
+    g.nx = nx;
+    g.ny = ny;
+    g.nz = nz;
+    g.values = values;
     std::ofstream out(file);
     if (!out) throw InputError(file.string() + ": cannot write");
     out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\" version=\"0.1\" byte_order=\"LittleEndian\">\n"

@@ -25,7 +25,4 @@ struct VolumeGrid {
 // (its first component). Throws InputError "file: what".
 std::shared_ptr<const VolumeGrid> loadVolume(const std::filesystem::path& file);
 
-// Writes a grid as ASCII .vti (for `rtwall gen` and tests).
-void writeVolumeVti(const VolumeGrid& grid, const std::filesystem::path& file);
-
 }  // namespace rtwall

@@ -367,16 +367,13 @@ TEST(WideTile, BulkHalfConversionsMatchTheScalarOnes) {
     std::vector<float> in(1027);
     std::vector<uint16_t> out(in.size());
     uint64_t bits = 0;
-    size_t checked = 0;
     while (bits < (uint64_t(1) << 32)) {
         size_t n = 0;
         for (; n < in.size() && bits < (uint64_t(1) << 32); ++n, bits += 977) in[n] = std::bit_cast<float>(uint32_t(bits));
         halfFromFloat(in.data(), n, out.data());
         for (size_t i = 0; i < n; ++i)
             ASSERT_EQ(out[i], halfFromFloat(in[i])) << "float bits " << std::bit_cast<uint32_t>(in[i]);
-        checked += n;
     }
-    EXPECT_GT(checked, size_t(4'000'000));
 }
 
 // Linear tiles: every lossless codec (and JPEG, which becomes LZ4) gives back exactly the

@@ -4,6 +4,7 @@
 // that wakes up has its late results dropped, and it rejoins. Every wait is bounded.
 #include "test_util.h"
 
+#include <algorithm>
 #include <rtwall/cluster.h>
 
 #include <gtest/gtest.h>
@@ -234,13 +235,20 @@ TEST(Faults, MasterRestartWithoutAReconnectionStorm) {
     ASSERT_GE(attempts, 0) << "could not listen on the master's port";
     EXPECT_GE(attempts, kClients) << "every client kept trying";
     EXPECT_LE(attempts, kClients * 5) << "back-off: a few attempts each, not a storm";
-    ClusterSettings cs = faultSettings();
+    // The new master keeps the default heartbeat (250 ms) and timeout (3 s): this part checks that
+    // every client comes back, not that a 400 ms timeout survives a loaded machine (under a load
+    // of 10 on 2 cores such stalls dropped and re-admitted clients here until the wait ran out).
+    ClusterSettings cs;
+    cs.async = false;
     cs.bind = endpoint;
     Master second(desc, cs);
-    ASSERT_TRUE(second.waitForClients(kClients, 20000)) << "every client came back";
+    ASSERT_TRUE(second.waitForClients(kClients, 60000)) << "every client came back";
     FrameReport r;
     EXPECT_EQ(second.renderFrame(&r).rgb, expected.rgb);
-    EXPECT_EQ(r.clients.size(), size_t(kClients));
+    // Every client renders. The report may also list a connection a client gave up on while its
+    // Hello was on the way (the master drops it at its heartbeat timeout); it renders nothing.
+    const auto rendering = std::count_if(r.clients.begin(), r.clients.end(), [](const ClientReport& c) { return c.tiles > 0; });
+    EXPECT_EQ(rendering, kClients);
 }
 
 // A namespace with one end of a veth pair: taking the link down cuts the client off without a

@@ -130,23 +130,6 @@ template <class T> void expectEqualMembers(const T& x, const T& y, const std::st
     }
 }
 
-// RenderSettings members that are each process's own and not on the wire; whether they are
-// still in RenderSettings or not.
-template <class S> void setLocalSettings(S& s) {
-    if constexpr (requires { s.clientId; }) s.clientId = 5;
-    if constexpr (requires { s.packetWidth; }) s.packetWidth = 8;
-}
-template <class S> void clearLocalSettings(S& s) {
-    if constexpr (requires { s.clientId; }) s.clientId = S{}.clientId;
-    if constexpr (requires { s.packetWidth; }) s.packetWidth = S{}.packetWidth;
-}
-template <class S, class M> bool isLocalSetting(const S& s, const M& member) {
-    bool local = false;
-    if constexpr (requires { s.clientId; }) local = local || static_cast<const void*>(&member) == &s.clientId;
-    if constexpr (requires { s.packetWidth; }) local = local || static_cast<const void*>(&member) == &s.packetWidth;
-    return local;
-}
-
 // -- Samples: every member other than its default, and valid for the decoders --------------------
 
 Float3 f3(float x, float y, float z) { return {x, y, z}; }
@@ -232,7 +215,6 @@ RenderSettings sampleSettings() {
     s.gi = true;
     s.samples = 4;
     s.view = ViewMode::Client;
-    setLocalSettings(s);
     return s;
 }
 
@@ -305,8 +287,8 @@ TEST(SceneState, TheSamplesSetEveryMember) {
 }
 
 // SceneDesc -> snapshot -> bytes -> snapshot -> SceneDesc: every member comes back, but for what
-// does not travel: the scene file's path, cameras other than the current one, and the settings
-// that are each process's own.
+// does not travel: the scene file's path and cameras other than the current one. (What is each
+// process's own, the packet width and a client's id, is TraceOptions, never on the wire.)
 TEST(SceneState, EveryMemberTravelsAndComesBack) {
     const SceneDesc d = sampleScene();
     const Sent sent = sentFor(d);
@@ -316,8 +298,7 @@ TEST(SceneState, EveryMemberTravelsAndComesBack) {
     Header h;
     h.session = 7;
     const std::vector<uint8_t> bytes = encodeMessage(h, snap);
-    SceneSnapshot sentSnap = snap;
-    clearLocalSettings(sentSnap.settings);
+    const SceneSnapshot& sentSnap = snap;
     const SceneSnapshot decoded = decodePayload<SceneSnapshot>(bytes.data() + kHeaderSize, bytes.size() - kHeaderSize);
     expectEqualMembers(decoded, sentSnap, "SceneSnapshot");
     EXPECT_TRUE(decoded == sentSnap);
@@ -327,7 +308,6 @@ TEST(SceneState, EveryMemberTravelsAndComesBack) {
     SceneDesc expected = d;
     expected.sourceFile.clear();
     expected.cameras = {current};
-    clearLocalSettings(expected.settings);
     expectEqualMembers(*back, expected, "SceneDesc");
 }
 
@@ -343,9 +323,7 @@ TEST(SceneState, EveryChangeTravelsAndComesBack) {
     expectAllSet(std::get<LightChange>(u.changes[3]).value, Light{}, "LightChange");
     expectAllSet(std::get<SettingsChange>(u.changes[4]).settings, RenderSettings{}, "SettingsChange");
     const std::vector<uint8_t> bytes = encodeMessage(Header{}, u);
-    Update expected = u;
-    clearLocalSettings(std::get<SettingsChange>(expected.changes[4]).settings);
-    EXPECT_TRUE(decodePayload<Update>(bytes.data() + kHeaderSize, bytes.size() - kHeaderSize) == expected);
+    EXPECT_TRUE(decodePayload<Update>(bytes.data() + kHeaderSize, bytes.size() - kHeaderSize) == u);
 }
 
 // Each member on its own changes a value's wire bytes: what diffScenes compares, so an edit of
@@ -358,12 +336,6 @@ template <class T> void expectEveryMemberOnTheWire(const T& sample, const char* 
             T changed = defaults;
             auto& member = std::get<K>(tieFields(changed));
             member = std::get<K>(from);
-            if constexpr (std::is_same_v<T, RenderSettings>) {
-                if (isLocalSetting(changed, member)) {
-                    EXPECT_TRUE(sameOnWire(defaults, changed)) << name << " member " << K << " is not on the wire";
-                    return;
-                }
-            }
             EXPECT_FALSE(sameOnWire(defaults, changed)) << name << " member " << K << " does not reach the wire";
         };
         (one(std::integral_constant<size_t, I>{}), ...);

@@ -5,8 +5,6 @@
 #include "local_cluster.h"
 #include "test_util.h"
 
-#include "scene_impl.h"  // engine/src: the faces the scene found
-
 #include <rtwall/cluster.h>
 
 #include <gtest/gtest.h>
@@ -87,7 +85,7 @@ TEST(ClusterShading, LampFacesAndTwoSidedEmissionBitIdenticalToOneMachine) {
     desc.instances.push_back({1, uint32_t(desc.materials.size() - 1),
                               Transform::translate(1.0, 3.505, -1.0) * Transform::rotateDegrees(1, 0, 0, 180) *
                                   Transform::scale(0.5, 1, 0.5)});
-    ASSERT_EQ(Scene(desc).impl().lightFaces[1], LightFace::Covered);
+    ASSERT_EQ(Scene(desc).lightFace(1), LightFace::Covered);
     ClusterSettings cs;
     cs.async = false;
     cs.prefetch = 2;
@@ -104,7 +102,7 @@ TEST(ClusterShading, LampFacesAndTwoSidedEmissionBitIdenticalToOneMachine) {
     changed.materials.back().twoSided = true;
     changed.lights[1].twoSided = true;
     changed.lights[1].position.y = 3.0f;  // off its panel: the panel is an emitter of its own again
-    ASSERT_EQ(Scene(changed).impl().lightFaces[1], LightFace::None);
+    ASSERT_EQ(Scene(changed).lightFace(1), LightFace::None);
     master.setMaterial(uint32_t(changed.materials.size() - 1), changed.materials.back());
     master.setLight(1, changed.lights[1]);
     const Image img = master.renderFrame(&r);
@@ -176,9 +174,10 @@ TEST(ClusterShading, ClientViewShowsTheIdsTheMasterAssigned) {
     // Each colour is the one its id gives on one machine.
     for (const ClientReport& c : r.clients) {
         if (c.tiles == 0) continue;
-        SceneDesc one = desc;
-        one.settings.clientId = c.id;
-        const Image ref = singleMachine(one, r.frame);
+        TraceOptions trace;
+        trace.clientId = c.id;
+        const Image ref = renderFrame(Scene(desc), Camera(desc.cameras.front(), desc.settings.width, desc.settings.height),
+                                      desc.settings, r.frame, nullptr, trace);
         const uint32_t colour = uint32_t(ref.rgb[0]) << 16 | uint32_t(ref.rgb[1]) << 8 | ref.rgb[2];
         EXPECT_TRUE(colours.count(colour)) << "client " << c.id;
     }

@@ -182,6 +182,66 @@ TEST(GlPresenter, ABrokenConfigShaderIsRefusedBeforeAnyWindowOpens) {
     EXPECT_THROW(GlPresenter::open(loadWallConfig(file), {}, &why), InputError);
 }
 
+// A frame rendered at a fraction of the wall's resolution (the `scale` control) is shown
+// upscaled, bilinearly, by the GPU's filtering: within two levels of the CPU reference, which
+// resamples in integer steps; the tile-owner view uses the frame's tiles.
+TEST(GlPresenter, AFrameAtHalfTheWallsResolutionIsShownUpscaled) {
+    const WallConfig wall = loadWallConfig(test::sourceDir() / "configs/wall/projectors-2x2.toml");
+    std::string why;
+    auto gl = GlPresenter::open(wall, {}, &why);
+    ASSERT_TRUE(gl) << why;
+    for (bool falseColour : {false, true}) {
+        WallFrame frame = renderedFrame(wall.width / 2, wall.height / 2, 1, 0.0f);
+        PresentOptions options;
+        options.falseColour = falseColour;
+        std::vector<Image> shown;
+        gl->present(frame, options, &shown);
+        ASSERT_EQ(shown.size(), wall.screens.size());
+        for (size_t s = 0; s < wall.screens.size(); ++s) {
+            const Image expected = presentScreen(wall, s, frame, options);
+            EXPECT_EQ(expected.width, 800);
+            EXPECT_LE(maxDifference(shown[s], expected), 2) << "screen " << wall.screens[s].name << ", false colour " << falseColour;
+        }
+    }
+    // And back to a full-size frame: the textures follow the frame's size.
+    const WallFrame full = renderedFrame(wall.width, wall.height, 2, 0.0f);
+    std::vector<Image> shown;
+    gl->present(full, {}, &shown);
+    EXPECT_EQ(maxDifference(shown[0], presentScreen(wall, 0, full, {})), 0);
+    // Larger than the wall is a mistake, said as one.
+    WallFrame tooBig = full;
+    tooBig.left = Image{wall.width + 1, wall.height, std::vector<uint8_t>(size_t(wall.width + 1) * wall.height * 3)};
+    EXPECT_THROW(gl->present(tooBig, {}), std::invalid_argument);
+}
+
+// Issue 17: `rtwall run --target-fps` in a window stopped with an error when the controller took
+// an operating point with a scale below 1 (the presenter refused a frame smaller than the wall).
+TEST(GlPresenter, RunInAWindowAtAScaledOperatingPoint) {
+    const auto dir = test::displayScratchDir();
+    const auto front = test::writeText(dir / "front.toml", R"([[point]]
+name = "half resolution"
+frame_s = 0.0001
+error = 0.2
+[point.controls]
+scale = 0.5
+tile = 32
+)");
+    const std::string cmd = "timeout 300 " + std::string(RTWALL_EXE) + " run " + (test::sourceDir() / "configs/run/demo.toml").string() +
+                            " --wall " + (test::sourceDir() / "configs/wall/projectors-2x2.toml").string() +
+                            " --target-fps 1 --front " + front.string() + " --frames 3 --write-every 3 --out " + dir.string() +
+                            " 2>&1";
+    std::string output;
+    FILE* p = popen(cmd.c_str(), "r");
+    ASSERT_TRUE(p);
+    char buf[4096];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, p)) > 0) output.append(buf, n);
+    EXPECT_EQ(pclose(p), 0) << output;
+    EXPECT_NE(output.find("4 windows"), std::string::npos) << output;
+    EXPECT_NE(output.find("starting at 'half resolution'"), std::string::npos) << output;
+    EXPECT_EQ(readPng(dir / "frame_000003.png").width, 1600) << output;
+}
+
 // `rtwall run` opens the wall by itself when there is a display (this test's Xvfb).
 TEST(GlPresenter, RunShowsTheWallInWindowsWhereThereIsADisplay) {
     const auto dir = test::displayScratchDir();

@@ -1,6 +1,8 @@
 // The wall-to-screen mapping on the CPU, against values worked out by hand.
 #include "display_test_util.h"
 
+#include <rtwall/tune.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -213,9 +215,32 @@ TEST(Mapping, StatusTextAndItsOverlay) {
     EXPECT_EQ(presentScreen(w, 1, f, o).rgb, presentScreen(w, 1, f).rgb);
 }
 
-TEST(Mapping, AFrameOfTheWrongSizeIsRefused) {
+TEST(Mapping, AFrameLargerThanTheWallOrWithUnlikeEyesIsRefused) {
     const WallConfig w = singleScreenWall(64, 32);
-    EXPECT_THROW(presentScreen(w, 0, gradientFrame(32, 32)), std::invalid_argument);
+    EXPECT_THROW(presentScreen(w, 0, gradientFrame(65, 32)), std::invalid_argument);
+    EXPECT_THROW(presentScreen(w, 0, gradientFrame(64, 33)), std::invalid_argument);
+    WallFrame eyes = gradientFrame(64, 32);
+    eyes.right = gradientFrame(32, 32).left;
+    EXPECT_THROW(presentScreen(w, 0, eyes), std::invalid_argument);
+    EXPECT_THROW(presentScreen(w, 0, WallFrame{}), std::invalid_argument);
+}
+
+// A frame rendered at a fraction of the wall's resolution (the scale control) is shown upscaled:
+// exactly the bilinear resampling of tune's resizeBilinear, and the tile-owner view uses the
+// frame's tiles (a wall pixel takes the tile of the frame pixel it scales to).
+TEST(Mapping, ASmallerFrameIsShownUpscaled) {
+    const WallConfig w = loadWallConfig(test::sourceDir() / "configs/wall/projectors-2x2.toml");
+    WallFrame half = gradientFrame(800, 600);
+    WallFrame full = half;
+    full.left = resizeBilinear(half.left, 1600, 1200);
+    for (size_t s = 0; s < w.screens.size(); ++s) EXPECT_EQ(presentScreen(w, s, half).rgb, presentScreen(w, s, full).rgb) << s;
+    half.tileSize = 100;  // 8 x 6 tiles of the frame: 200 wall pixels each
+    for (uint32_t t = 0; t < 48; ++t) half.tileOwners.push_back(t % 5);
+    full.tileSize = 200;
+    full.tileOwners = half.tileOwners;
+    PresentOptions o;
+    o.falseColour = true;
+    for (size_t s = 0; s < w.screens.size(); ++s) EXPECT_EQ(presentScreen(w, s, half, o).rgb, presentScreen(w, s, full, o).rgb) << s;
 }
 
 }  // namespace

@@ -92,21 +92,7 @@ TEST(Navigator, RecordsACameraPath) {
     n.update(r, 0.0);
     EXPECT_FALSE(n.recording());
     ASSERT_EQ(n.recorded().size(), 3u);
-    const std::string toml = Navigator::cameraPathToml(n.recorded());
-    EXPECT_NE(toml.find("[[key]]\nframe = 2\n"), std::string::npos) << toml;
-}
-
-// Recorded paths are written in world coordinates: the scene's rebasing origin is added back in
-// double precision, so a float pose at 1e6 comes out exact.
-TEST(Navigator, RecordedPathIsInWorldCoordinates) {
-    ViewPose p;
-    p.position = {0.25f, 1.0f, -2.0f};
-    p.lookAt = {0.0f, 0.0f, 0.0f};
-    const std::string toml = Navigator::cameraPathToml({p}, {1e6, -2e5, 3e5 + 0.5});
-    EXPECT_NE(toml.find("position = [1000000.25, -199999, 299998.5]"), std::string::npos) << toml;
-    EXPECT_NE(toml.find("look_at = [1000000, -200000, 300000.5]"), std::string::npos) << toml;
-    // Without an origin the file is what it always was.
-    EXPECT_NE(Navigator::cameraPathToml({p}).find("position = [0.25, 1, -2]"), std::string::npos);
+    EXPECT_NE(n.recorded()[1].position.x, n.recorded()[0].position.x) << "the drag between the presses is recorded";
 }
 
 TEST(Navigator, ACtrlDragIsPickingNotOrbiting) {

@@ -1,6 +1,8 @@
 // `rtwall check` and `rtwall run --wall` as a user meets them: exit codes, one-line errors,
 // the headless presenter's per-screen images.
 #include "display_test_util.h"
+
+#include <rtwall/wall.h>
 #include "cli_util.h"
 
 #include <sys/wait.h>
@@ -102,10 +104,13 @@ TEST(WallCli, TheShippedWallRunConfigRunsHeadless) {
 
 TEST(WallCli, ARecordedCameraPathReplays) {
     const auto dir = test::displayScratchDir();
-    ViewPose a, b;
-    a.position = {0, 2, 8};
-    b.position = {3, 2, 8};
-    const auto path = test::writeText(dir / "recorded.toml", Navigator::cameraPathToml({a, b, b}));
+    CameraKey a, b, c;
+    a.camera.position = {0, 2, 8};
+    b.frame = 1;
+    b.camera.position = {3, 2, 8};
+    c.frame = 2;
+    c.camera.position = {3, 2, 8};
+    const auto path = test::writeText(dir / "recorded.toml", writeCameraPath({a, b, c}, {0, 0, 0}));
     const Result r = run("run " + (test::sourceDir() / "configs/run/demo.toml").string() + " --camera-path " + path.string() +
                          " --frames 3 --write-every 0 --out " + dir.string());
     EXPECT_EQ(r.status, 0) << r.output;

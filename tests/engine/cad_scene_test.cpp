@@ -1,10 +1,10 @@
 // Massive-CAD support in the engine: groups of groups flattened in double precision, scene
 // rebasing far from the origin (watertightness, self-intersection and image equality against the
 // same scene at the origin), BVH settings, and generated scenes loaded from files and caches.
-#include "vec.h"
 
 #include <rtwall/engine.h>
 #include <rtwall/engine_embree.h>
+#include <rtwall/vec.h>
 
 #include "scene_impl.h"
 

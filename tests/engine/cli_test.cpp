@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <cctype>
 #include <cstdio>
 
 namespace rtwall {
@@ -118,6 +119,37 @@ TEST(Cli, RunFollowsACameraPath) {
     expectOneLineError(run("run --camera-path " + bad.string() + " --frames 1"), bad.string() + ":6");
 }
 
+// Issue 17: every command loads scenes the same way: .TOML is a scene file, KNOT.PLY and
+// MODEL.OBJ mesh files, as their lower-case twins.
+TEST(Cli, UpperCaseExtensionsAreTheSameFiles) {
+    const auto dir = test::scratchDir();
+    std::filesystem::copy_file(test::sourceDir() / "configs/meshes/knot.ply", dir / "KNOT.PLY");
+    std::filesystem::copy_file(test::sourceDir() / "configs/meshes/knot.ply", dir / "knot.ply");
+    std::filesystem::copy_file(test::dataDir() / "meshes/box_normals.obj", dir / "MODEL.OBJ");
+    std::filesystem::copy_file(test::dataDir() / "meshes/box_normals.obj", dir / "model.obj");
+    const std::string scene = "[[mesh]]\nname = \"knot\"\nfile = \"KNOT.PLY\"\n[[instance]]\nmesh = \"knot\"\n";
+    test::writeFile(dir / "SCENE.TOML", scene);
+    test::writeFile(dir / "scene.toml", scene);
+    for (const char* name : {"SCENE.TOML", "KNOT.PLY", "MODEL.OBJ"}) {
+        std::string lower = name;
+        for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+        for (const std::string& n : {std::string(name), lower}) {
+            const Result r = run("render " + (dir / n).string() + " --width 32 --height 24 --out " + (dir / (n + ".png")).string());
+            ASSERT_EQ(r.status, 0) << n << ": " << r.output;
+        }
+        EXPECT_EQ(readPng(dir / (std::string(name) + ".png")).rgb, readPng(dir / (lower + ".png")).rgb) << name;
+        const Result ref = run("reference " + (dir / name).string() + " --width 16 --height 12 --supersample 1 --out " +
+                               (dir / "ref.png").string());
+        EXPECT_EQ(ref.status, 0) << name << ": " << ref.output;
+    }
+    const Result info = run("info --json " + (dir / "SCENE.TOML").string());
+    ASSERT_EQ(info.status, 0) << info.output;
+    EXPECT_NE(info.output.find("\"instanced_triangles\" : 17280"), std::string::npos) << info.output;
+    const Result mesh = run("info --json " + (dir / "KNOT.PLY").string());
+    ASSERT_EQ(mesh.status, 0) << mesh.output;
+    EXPECT_NE(mesh.output.find("\"triangles\" : 17280"), std::string::npos) << mesh.output;
+}
+
 TEST(Cli, ClientRejectsABadEndpoint) { expectOneLineError(run("client --connect localhost:1"), "tcp://HOST:PORT"); }
 
 TEST(Cli, MissingSceneFile) { expectOneLineError(run("render /no/such.toml --out x.png"), "/no/such.toml"); }
@@ -136,6 +168,21 @@ TEST(Cli, BadArguments) {
     expectOneLineError(run("render a.toml --out x.png --kernel simd"), "kernel");
     expectOneLineError(run("frobnicate"), "error");
     expectOneLineError(run("render a.toml --out x.png --threads lots"), "threads");
+}
+
+// The options a replay command uses (issue 17), given bad values.
+TEST(Cli, ReplayOptionsRejectBadValues) {
+    const std::string knot = "render " + (test::sourceDir() / "configs/meshes/knot.ply").string() + " --out /tmp/x.png ";
+    expectOneLineError(run(knot + "--camera-position 1,2"), "--camera-position '1,2': expected 3 numbers");
+    expectOneLineError(run(knot + "--camera-look-at 1,2,x"), "--camera-look-at '1,2,x': expected 3 numbers");
+    expectOneLineError(run(knot + "--camera-up 0,0,0"), "up is parallel");
+    expectOneLineError(run(knot + "--camera-window 0,0,0,1,0,0,2,0,0"), "the window has no area");
+    expectOneLineError(run(knot + "--background 1,1,1,1"), "--background '1,1,1,1': expected 3 numbers");
+    expectOneLineError(run(knot + "--frame 2 --frames 3"), "excludes");
+    expectOneLineError(run(knot + "--region 0,0,8,8 --frames 3"), "--region renders one frame");
+    expectOneLineError(run(knot + "--gi --no-gi"), "excludes");
+    expectOneLineError(run(knot + "--shadows maybe"), "shadows");
+    expectOneLineError(run(knot + "--frame 2 --clients 1"), "--frame and --clients cannot be combined");
 }
 
 TEST(Cli, MalformedSceneNamesFileAndLine) {

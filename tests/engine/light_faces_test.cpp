@@ -5,8 +5,6 @@
 #include "shading_scenes.h"
 #include "test_util.h"
 
-#include "scene_impl.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -91,17 +89,16 @@ struct FaceScene {
     }
 };
 
-LightFace faceOf(const SceneDesc& d, uint32_t light = 0) { return Scene(d).impl().lightFaces[light]; }
+LightFace faceOf(const SceneDesc& d, uint32_t light = 0) { return Scene(d).lightFace(light); }
 
 TEST(LightFaces, AnEmitterOnAnAreaLightIsItsVisibleFace) {
     FaceScene f;
     {
         const Scene scene(f.desc);
-        EXPECT_EQ(scene.impl().lightFaces[0], LightFace::Covered);
-        EXPECT_EQ(scene.impl().lightFaces[1], LightFace::None);  // a point light has no face
-        EXPECT_EQ(scene.impl().instances[1].areaLight, 0);
-        EXPECT_EQ(scene.impl().instances[0].areaLight, -1);  // the floor does not emit
-        EXPECT_TRUE(scene.impl().anyLightFace);
+        EXPECT_EQ(scene.lightFace(0), LightFace::Covered);
+        EXPECT_EQ(scene.lightFace(1), LightFace::None);  // a point light has no face
+        EXPECT_EQ(scene.areaLightOf(1), 0);
+        EXPECT_EQ(scene.areaLightOf(0), -1);  // the floor does not emit
     }
     SceneDesc d = f.desc;
     // Half the light: part of it, so light samples count in full.
@@ -141,19 +138,19 @@ TEST(LightFaces, AnEmitterOnAnAreaLightIsItsVisibleFace) {
 TEST(LightFaces, UpdatesFindTheFacesAgain) {
     FaceScene f;
     Scene scene(f.desc);
-    ASSERT_EQ(scene.impl().lightFaces[0], LightFace::Covered);
+    ASSERT_EQ(scene.lightFace(0), LightFace::Covered);
     Light moved = f.desc.lights[0];
     moved.position.y = 2.0f;
     scene.setLight(0, moved);
-    EXPECT_EQ(scene.impl().lightFaces[0], LightFace::None);
-    EXPECT_EQ(scene.impl().instances[1].areaLight, -1);
-    EXPECT_FALSE(scene.impl().anyLightFace);
+    EXPECT_EQ(scene.lightFace(0), LightFace::None);
+    EXPECT_EQ(scene.areaLightOf(1), -1);
+    for (uint32_t l = 0; l < scene.desc().lights.size(); ++l) EXPECT_EQ(scene.lightFace(l), LightFace::None);
     scene.setInstanceTransform(1, downQuad(0, 2.0, -1, 0.6, 0.6));  // the panel follows
-    EXPECT_EQ(scene.impl().lightFaces[0], LightFace::Covered);
+    EXPECT_EQ(scene.lightFace(0), LightFace::Covered);
     Material dark = f.desc.materials[1];
     dark.emission = {0, 0, 0};
     scene.setMaterial(1, dark);
-    EXPECT_EQ(scene.impl().lightFaces[0], LightFace::None);
+    EXPECT_EQ(scene.lightFace(0), LightFace::None);
 }
 
 // -- Counting the lamp once ------------------------------------------------------------------------
@@ -197,7 +194,7 @@ TEST(GlobalIllumination, EmittingFurnaceWithAnAreaLightOnItsCeilingStaysUniform)
         const SceneDesc s = box(light);
         const Scene scene(s);
         if (light) {
-            EXPECT_EQ(scene.impl().lightFaces[0], LightFace::Covered);
+            EXPECT_EQ(scene.lightFace(0), LightFace::Covered);
         }
         const int frames = 40;
         const size_t n = size_t(s.settings.width) * s.settings.height * 3;
@@ -301,8 +298,8 @@ TEST(GlobalIllumination, EmitterOnAnAreaLightCountsTheLightOnce) {
     {
         const SceneDesc s = room(LightAndFace, true);
         const Scene scene(s);
-        EXPECT_EQ(scene.impl().lightFaces[0], LightFace::Covered);
-        EXPECT_EQ(Scene(room(HalfFace, true)).impl().lightFaces[0], LightFace::Partial);
+        EXPECT_EQ(scene.lightFace(0), LightFace::Covered);
+        EXPECT_EQ(Scene(room(HalfFace, true)).lightFace(0), LightFace::Partial);
         const Camera cam(s.cameras.front(), s.settings.width, s.settings.height);
         for (int y = 0; y < s.settings.height; ++y)
             for (int x = 0; x < s.settings.width; ++x) {

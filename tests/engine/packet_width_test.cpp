@@ -1,5 +1,5 @@
 // Packet widths (issue 15): every width the packet kernel can run (4, 8 and 16, forced through
-// RenderSettings::packetWidth, so any CPU runs all three: Embree emulates what it lacks) gives
+// TraceOptions::packetWidth, so any CPU runs all three: Embree emulates what it lacks) gives
 // the single-ray kernel's bytes on the scenes that hung rtcOccluded16 on AVX-512 CPUs and on
 // the material zoo; and 16-wide shadow rays finish from every stack position (the Embree hang
 // came and went with the stack's address).
@@ -54,12 +54,12 @@ void expectEveryWidthMatchesSingle(const SceneDesc& d, int frames) {
         for (int width : {4, 8, 16}) {
             RenderSettings packet = d.settings;
             packet.kernel = KernelType::Packet;
-            packet.packetWidth = width;
-            EXPECT_EQ(differingBytes(renderFrame(scene, camera, packet, uint32_t(f)), reference), 0u)
+            TraceOptions trace;
+            trace.packetWidth = width;
+            EXPECT_EQ(differingBytes(renderFrame(scene, camera, packet, uint32_t(f), nullptr, trace), reference), 0u)
                 << "packets of " << width << ", frame " << f;
             // The single-ray kernel shapes its primary blocks like packets of the width too.
-            single.packetWidth = width;
-            EXPECT_EQ(differingBytes(renderFrame(scene, camera, single, uint32_t(f)), reference), 0u)
+            EXPECT_EQ(differingBytes(renderFrame(scene, camera, single, uint32_t(f), nullptr, trace), reference), 0u)
                 << "single-ray kernel in blocks of " << width << ", frame " << f;
         }
     }
@@ -91,9 +91,10 @@ TEST(PacketWidths, MaterialZooMatchesTheSingleRayKernel) {
 TEST(PacketWidths, AWidthOtherThan4_8Or16IsRefused) {
     const SceneDesc d = smallKnots();
     const Scene scene(d);
-    RenderSettings s = d.settings;
-    s.packetWidth = 12;
-    EXPECT_THROW(renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), s), std::runtime_error);
+    TraceOptions trace;
+    trace.packetWidth = 12;
+    EXPECT_THROW(renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings, 0, nullptr, trace),
+                 TileError);
 }
 
 // Debian's Embree 3.13.5 never returned from some rtcOccluded16 calls on AVX-512 CPUs (its
@@ -105,8 +106,9 @@ TEST(PacketWidths, SixteenWideShadowsFinishFromEveryStackOffset) {
     const SceneDesc d = smallKnots();
     const Scene scene(d);
     const Camera camera(d.cameras.front(), d.settings.width, d.settings.height);
-    RenderSettings s = d.settings;
-    s.packetWidth = 16;
+    const RenderSettings s = d.settings;
+    TraceOptions sixteen;
+    sixteen.packetWidth = 16;
     RenderSettings single = d.settings;
     single.kernel = KernelType::Single;
     const Image reference = renderFrame(scene, camera, single, 0);
@@ -122,8 +124,8 @@ TEST(PacketWidths, SixteenWideShadowsFinishFromEveryStackOffset) {
             pad[0] = 0;
             Image scratch = reference;
             for (const TileRect& r : makeTiles(d.settings.width, d.settings.height, d.settings.tileSize))
-                renderTile(scene, camera, r, 1, eye, {scratch.pixel(r.x0, r.y0), size_t(scratch.width) * 3});
-            const Image img = renderFrame(scene, camera, s, 0);
+                renderTile(scene, camera, r, 1, eye, {scratch.pixel(r.x0, r.y0), size_t(scratch.width) * 3}, sixteen);
+            const Image img = renderFrame(scene, camera, s, 0, nullptr, sixteen);
             std::_Exit(differingBytes(img, reference) == 0 ? 0 : 2);
         }
         int status = 0;

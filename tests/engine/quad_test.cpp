@@ -5,10 +5,10 @@
 #include "material.h"
 #include "scene_impl.h"
 #include "shading.h"
-#include "vec.h"
 
 #include <rtwall/engine.h>
 #include <rtwall/engine_embree.h>
+#include <rtwall/vec.h>
 
 #include <gtest/gtest.h>
 

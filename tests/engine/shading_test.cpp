@@ -1,7 +1,8 @@
 // Fresnel, refraction and sRGB quantisation against analytic values.
 #include "shading.h"
 #include "texture.h"
-#include "vec.h"
+
+#include <rtwall/vec.h>
 
 #include <gtest/gtest.h>
 
@@ -97,7 +98,9 @@ TEST(Noise, TurbulenceGradientLanesAreBitIdenticalToTheScalarLoop) {
         }
         return sum;
     };
-    int compared = 0;
+    // Points where the noise and its gradient are not zero: two implementations that both gave
+    // zeros (or returned early) would agree everywhere.
+    int nonTrivial = 0;
     for (int i = 0; i < 3000; ++i) {
         const float s = i % 3 == 0 ? 1.0f : (i % 3 == 1 ? 37.0f : 2000.0f);
         Float3 p{std::sin(1.37f * i) * s, std::cos(0.91f * i) * s, std::sin(0.13f * i + 1.0f) * s};
@@ -109,10 +112,10 @@ TEST(Noise, TurbulenceGradientLanesAreBitIdenticalToTheScalarLoop) {
             EXPECT_EQ(a.x, b.x) << i;
             EXPECT_EQ(a.y, b.y) << i;
             EXPECT_EQ(a.z, b.z) << i;
-            ++compared;
+            nonTrivial += ta != 0.0f && (a.x != 0.0f || a.y != 0.0f || a.z != 0.0f);
         }
     }
-    EXPECT_EQ(compared, 6000);
+    EXPECT_GT(nonTrivial, 5400) << "of 6000 points";
 }
 
 TEST(Noise, AnalyticGradientMatchesFiniteDifferences) {

@@ -8,9 +8,9 @@
 #include "material.h"
 #include "shading.h"
 #include "texture.h"
-#include "vec.h"
 
 #include <rtwall/image.h>
+#include <rtwall/vec.h>
 
 #include <gtest/gtest.h>
 

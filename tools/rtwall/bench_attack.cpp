@@ -2,7 +2,6 @@
 // than the tests run them. Figures, not assertions: messages sent by kind and what the master
 // counted, frames completed and how many were bit-identical to one machine, frame times.
 #include "commands.h"
-#include "local_clients.h"
 
 #include <adversary.h>
 #include <rtwall/cluster.h>

@@ -9,7 +9,7 @@
 // decode threads (rtw-decode), ZeroMQ I/O threads (ZMQbg/...) and the rest (the caller's frame
 // assembly). The simulation's host costs (rtwall simulate --client-us-per-tile ...) come from these.
 #include "commands.h"
-#include "local_clients.h"
+#include "bench_util.h"
 
 #include <rtwall/cluster.h>
 #include <rtwall/engine.h>
@@ -82,11 +82,6 @@ std::map<std::string, double> cpuByRole(const std::vector<std::map<long, ThreadC
             roles[role] += d;
         }
     return roles;
-}
-
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
 }  // namespace

@@ -4,7 +4,7 @@
 // displayed frame that shows it, through a master and local clients, asynchronous on and off.
 // Needs a display: on a machine without one, run it under xvfb-run (Mesa's llvmpipe).
 #include "commands.h"
-#include "local_clients.h"
+#include "bench_util.h"
 
 #include <rtwall/cluster.h>
 #include <rtwall/display.h>
@@ -24,11 +24,6 @@ namespace rtwall::cli {
 namespace {
 
 double seconds() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? 0.0 : v[v.size() / 2];
-}
 
 WallFrame noiseFrame(int w, int h, uint32_t seed) {
     WallFrame f;

@@ -6,7 +6,6 @@
 //  - the throughput cost of CURVE against no encryption (replaying clients, so the master and
 //    the link are what is measured).
 #include "commands.h"
-#include "local_clients.h"
 
 #include <rtwall/cluster.h>
 #include <rtwall/engine.h>

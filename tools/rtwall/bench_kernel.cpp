@@ -2,6 +2,8 @@
 // bare rtcIntersectK loop (K = the packet kernel's width) over the very same Embree scene. Rounds are interleaved (bare,
 // packet, single, bare, ...) so that machine noise hits all three alike; medians are reported.
 #include "commands.h"
+#include "bench_util.h"
+#include "tile_failure.h"
 
 #include <rtwall/engine.h>
 #include <rtwall/engine_embree.h>
@@ -18,12 +20,6 @@
 namespace rtwall::cli {
 
 namespace {
-
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    const size_t n = v.size();
-    return n == 0 ? 0.0 : (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]));
-}
 
 template <int K> struct BarePacket;
 template <> struct BarePacket<4> {
@@ -101,12 +97,6 @@ void bareFrameFor(int packetWidth, RTCScene scene, const Camera& camera, int wid
     else bareFrame<4>(scene, camera, width, height, tileSize, threads, ids);
 }
 
-template <class F> double seconds(F&& f) {
-    const auto t0 = std::chrono::steady_clock::now();
-    f();
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 }  // namespace
 
 void addBenchKernel(CLI::App& bench, Run& run) {
@@ -136,12 +126,13 @@ void addBenchKernel(CLI::App& bench, Run& run) {
             const Camera camera(desc.cameras.front(), o->width, o->height);
             const int lanes = o->packetWidth > 0 ? o->packetWidth : packetWidth();
 
+            TraceOptions trace;
+            trace.packetWidth = lanes;
             RenderSettings s = desc.settings;
             s.width = o->width;
             s.height = o->height;
             s.tileSize = o->tile;
             s.threads = threads;
-            s.packetWidth = lanes;
             s.shading = ShadingMode::EyeLight;  // primary rays only, as in the bare loop
             RenderSettings single = s;
             single.kernel = KernelType::Single;
@@ -151,15 +142,23 @@ void addBenchKernel(CLI::App& bench, Run& run) {
             std::vector<uint32_t> ids(size_t(o->width) * o->height);
             std::vector<double> bare, packet, one, shaded;
             TileStats fullStats;
+            // A tile that fails is reported with the command that renders it again.
+            auto frame = [&](const RenderSettings& settings, TileStats* stats = nullptr) {
+                try {
+                    renderFrame(scene, camera, settings, 0, stats, trace);
+                } catch (const TileError& e) {
+                    throw withReplay(e, {"builtin:knots", o->triangles, desc.origin, desc.cameras.front(), settings, trace, 0, {}});
+                }
+            };
             // Warm-up: page in the BVH and the scratch buffers.
             bareFrameFor(lanes, embreeScene(scene), camera, o->width, o->height, o->tile, threads, ids);
-            renderFrame(scene, camera, s);
-            renderFrame(scene, camera, single);
+            frame(s);
+            frame(single);
             for (int r = 0; r < o->rounds; ++r) {
-                bare.push_back(seconds([&] { bareFrameFor(lanes, embreeScene(scene), camera, o->width, o->height, o->tile, threads, ids); }));
-                packet.push_back(seconds([&] { renderFrame(scene, camera, s); }));
-                one.push_back(seconds([&] { renderFrame(scene, camera, single); }));
-                shaded.push_back(seconds([&] { renderFrame(scene, camera, full, 0, &fullStats); }));
+                bare.push_back(secondsOf([&] { bareFrameFor(lanes, embreeScene(scene), camera, o->width, o->height, o->tile, threads, ids); }));
+                packet.push_back(secondsOf([&] { frame(s); }));
+                one.push_back(secondsOf([&] { frame(single); }));
+                shaded.push_back(secondsOf([&] { frame(full, &fullStats); }));
             }
             const double rays = double(o->width) * o->height;
             const double mBare = rays / median(bare) * 1e-6, mPacket = rays / median(packet) * 1e-6,

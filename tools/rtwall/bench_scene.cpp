@@ -3,6 +3,7 @@
 // with primary rays and shadows, for the scene's [bvh] primitives and the other choice; with
 // --sweep, the same for every BVH quality and compact mode.
 #include "commands.h"
+#include "bench_util.h"
 #include "progress.h"
 
 #include <rtwall/engine.h>
@@ -23,17 +24,6 @@
 namespace rtwall::cli {
 
 namespace {
-
-double medianOf(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
-template <class F> double seconds(F&& f) {
-    const auto t0 = std::chrono::steady_clock::now();
-    f();
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // CPU seconds of the whole process (all threads): on a shared machine, wall time alone says
 // little about the work done.
@@ -98,7 +88,7 @@ void addBenchScene(CLI::App& bench, Run& run) {
                 ProgressBar bar("import", 1, "");
                 lo.progress = bar.fn();
                 const double cpu0 = cpuSeconds();
-                const double total = seconds([&] { (void)loadSceneFile(path, lo); });
+                const double total = secondsOf([&] { (void)loadSceneFile(path, lo); });
                 out.insert("parse_load_s", total);
                 out.insert("parse_load_cpu_s", cpuSeconds() - cpu0);
                 out.insert("parse_import_s", parse.importSeconds);
@@ -108,7 +98,7 @@ void addBenchScene(CLI::App& bench, Run& run) {
                 SceneLoadOptions lo;
                 lo.cache = true;
                 lo.stats = &fill;
-                const double total = seconds([&] { (void)loadSceneFile(path, lo); });
+                const double total = secondsOf([&] { (void)loadSceneFile(path, lo); });
                 out.insert("cache_fill_s", total);
                 out.insert("caches_written", int64_t(fill.cacheWritten));
             }
@@ -118,7 +108,7 @@ void addBenchScene(CLI::App& bench, Run& run) {
             lo.stats = &cached;
             SceneDesc desc;
             const double cpuLoad0 = cpuSeconds();
-            const double cacheLoad = seconds([&] { desc = loadSceneFile(path, lo); });
+            const double cacheLoad = secondsOf([&] { desc = loadSceneFile(path, lo); });
             out.insert("cache_load_cpu_s", cpuSeconds() - cpuLoad0);
             out.insert("cache_load_s", cacheLoad);
             out.insert("cache_read_s", cached.cacheSeconds);
@@ -165,14 +155,14 @@ void addBenchScene(CLI::App& bench, Run& run) {
                 std::unique_ptr<Scene> scene;
                 ProgressBar bar("bvh build", double(unique) * 1e-6, "Mtri");
                 const double cpu0 = cpuSeconds();
-                const double build = seconds([&] { scene = std::make_unique<Scene>(desc, bar.fn()); });
+                const double build = secondsOf([&] { scene = std::make_unique<Scene>(desc, bar.fn()); });
                 const double buildCpu = cpuSeconds() - cpu0;
                 const Camera c(camera, s.width, s.height);
                 std::vector<double> frames;
                 TileStats stats;
                 renderFrame(*scene, c, s, 0, &stats);  // warm-up
                 const double cpu1 = cpuSeconds();
-                for (int f = 0; f < o->frames; ++f) frames.push_back(seconds([&] { renderFrame(*scene, c, s, 0); }));
+                for (int f = 0; f < o->frames; ++f) frames.push_back(secondsOf([&] { renderFrame(*scene, c, s, 0); }));
                 const double frameCpu = (cpuSeconds() - cpu1) / o->frames;
                 const double geometry = double(scene->geometryBytes()), embree = double(scene->embreeBytes());
                 size_t mapped = 0;
@@ -214,7 +204,7 @@ void addBenchScene(CLI::App& bench, Run& run) {
                                 // Embree 3 builds spatial splits only for quality high on a scene
                                 // that is neither robust nor compact; otherwise high is medium.
                                 {"spatial_splits", desc.bvh.quality == BvhSettings::Quality::High && !desc.bvh.robust && !desc.bvh.compact},
-                                {"frame_s", medianOf(frames)},
+                                {"frame_s", median(frames)},
                                 {"frame_cpu_s", frameCpu},
                                 {"rays_per_frame", int64_t(stats.rays + stats.shadowRays)}};
                 if (i == 0) out.insert("default", row);
@@ -223,7 +213,7 @@ void addBenchScene(CLI::App& bench, Run& run) {
                 if (!o->json)
                     std::printf("bvh %-9s %-6s compact=%d: build %.2f s, %.1f B/unique tri (geometry+Embree), rss %.2f GB, frame %.3f s\n",
                                 primitivesName(desc.bvh.primitives), qualityName(desc.bvh.quality), int(desc.bvh.compact), build, (geometry + embree) / double(std::max<int64_t>(1, unique)),
-                                double(procStatus("VmRSS:")) * 1e-9, medianOf(frames));
+                                double(procStatus("VmRSS:")) * 1e-9, median(frames));
             }
             if (o->sweep) out.insert("sweep", rows);
             out.insert("peak_rss_bytes", procStatus("VmHWM:"));

@@ -4,8 +4,8 @@
 // application thread's time in Master::setCamera, the time of the whole Master::renderFrame
 // (synchronous: begin, the clients' catch-up, the tile, the frame's end), and the network
 // thread's time from the frame's begin to its last tile (FrameReport::seconds). Medians.
+#include "bench_util.h"
 #include "commands.h"
-#include "local_clients.h"
 
 #include <rtwall/cluster.h>
 #include <rtwall/engine.h>
@@ -27,6 +27,7 @@ using Clock = std::chrono::steady_clock;
 
 double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
+// A p90 alongside the median (bench_util.h's median is rtwall/tune.h's).
 double quantile(std::vector<double> v, double q) {
     if (v.empty()) return 0;
     std::sort(v.begin(), v.end());
@@ -108,20 +109,20 @@ void addBenchUpdates(CLI::App& bench, Run& run) {
                             {"async", o->async},
                             {"master_construct_s", constructSeconds},
                             {"clients_join_s", joinSeconds},
-                            {"set_camera_us_median", 1e6 * quantile(update, 0.5)},
+                            {"set_camera_us_median", 1e6 * median(update)},
                             {"set_camera_us_p90", 1e6 * quantile(update, 0.9)},
-                            {"render_frame_ms_median", 1e3 * quantile(frame, 0.5)},
+                            {"render_frame_ms_median", 1e3 * median(frame)},
                             {"render_frame_ms_p90", 1e3 * quantile(frame, 0.9)},
-                            {"frame_begin_to_end_ms_median", 1e3 * quantile(network, 0.5)},
-                            {"update_and_frame_ms_median", 1e3 * (quantile(update, 0.5) + quantile(frame, 0.5))}};
+                            {"frame_begin_to_end_ms_median", 1e3 * median(network)},
+                            {"update_and_frame_ms_median", 1e3 * (median(update) + median(frame))}};
             if (o->json) {
                 std::cout << toml::json_formatter{out} << "\n";
             } else {
                 std::printf("%d instances, %d client%s, %d frames (%s): setCamera %.1f us (p90 %.1f), renderFrame %.3f ms "
                             "(p90 %.3f), begin to last tile %.3f ms (medians)\n",
                             o->instances, o->clients, o->clients == 1 ? "" : "s", o->frames, o->async ? "async" : "sync",
-                            1e6 * quantile(update, 0.5), 1e6 * quantile(update, 0.9), 1e3 * quantile(frame, 0.5),
-                            1e3 * quantile(frame, 0.9), 1e3 * quantile(network, 0.5));
+                            1e6 * median(update), 1e6 * quantile(update, 0.9), 1e3 * median(frame),
+                            1e3 * quantile(frame, 0.9), 1e3 * median(network));
             }
             return 0;
         };

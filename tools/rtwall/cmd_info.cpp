@@ -42,14 +42,14 @@ toml::table meshInfo(const std::filesystem::path& path) {
                        {"resident_bytes", int64_t(mesh.residentBytes())}};
 }
 
-toml::table sceneInfo(const std::filesystem::path& path) {
-    const SceneDesc desc = loadSceneFile(path);
+toml::table sceneInfo(const std::string& scene) {
+    const SceneDesc desc = loadScene(scene);
     int64_t unique = 0, instanced = 0;
     for (const MeshDesc& m : desc.meshes) unique += int64_t(m.mesh->triangleCount());
     for (const InstanceDesc& in : desc.instances) instanced += int64_t(desc.meshes[in.mesh].mesh->triangleCount());
     toml::array cameras;
     for (const CameraDesc& c : desc.cameras) cameras.push_back(c.name);
-    return toml::table{{"file", path.string()},
+    return toml::table{{"file", scene},
                        {"meshes", int64_t(desc.meshes.size())},
                        {"instances", int64_t(desc.instances.size())},
                        {"materials", int64_t(desc.materials.size())},
@@ -70,12 +70,13 @@ void addInfo(CLI::App& app, Run& run) {
     };
     auto o = std::make_shared<Options>();
     CLI::App* cmd = app.add_subcommand("info", "Print what a mesh file or scene file holds");
-    cmd->add_option("file", o->file, "Mesh file (.obj .off .ply .stl .om .vtk .vtp .vtu) or scene file (.toml)")->required();
+    cmd->add_option("file", o->file, "Mesh file (.obj .off .ply .stl .om .vtk .vtp .vtu .wrl), scene file (.toml) or builtin:NAME")
+        ->required();
     cmd->add_flag("--json", o->json, "Print JSON instead of TOML-style text");
     cmd->callback([&run, o] {
         run = [o] {
-            const std::filesystem::path path(o->file);
-            const toml::table info = path.extension() == ".toml" ? sceneInfo(path) : meshInfo(path);
+            const toml::table info =
+                sceneSourceKind(o->file) == SceneSourceKind::MeshFile ? meshInfo(o->file) : sceneInfo(o->file);
             if (o->json) std::cout << toml::json_formatter{info} << "\n";
             else std::cout << info << "\n";
             return 0;

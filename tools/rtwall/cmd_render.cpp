@@ -1,31 +1,90 @@
 #include "commands.h"
-#include "local_clients.h"
 #include "progress.h"
+#include "tile_failure.h"
 
 #include <rtwall/cluster.h>
+#include <rtwall/wall.h>
 #include <rtwall/engine.h>
+#include <rtwall/vec.h>
 
+#include <array>
+#include <charconv>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <vector>
 
 namespace rtwall::cli {
 
 namespace {
 
 struct RenderOptions {
-    std::string scene, out, camera, kernel, region, codec = "lz4", view;
+    std::string scene, out, camera, kernel, region, codec = "lz4", view, shading, shadows;
+    std::string cameraPosition, cameraLookAt, cameraUp, cameraWindow, background, ambient, fault;
     int width = 0, height = 0, threads = -1, tile = 0, clients = 0, prefetch = 4;
-    int samples = 0, maxDepth = 0, frames = 1, packetWidth = 0;
-    double prune = -1;
-    bool gi = false;
+    int samples = 0, maxDepth = 0, frames = 1, packetWidth = 0, supersample = 0;
+    int64_t frame = -1, clientId = -1, triangles = 3'000'000;
+    double prune = -1, fov = 0;
+    bool gi = false, noGi = false;
 };
 
-bool isSceneFile(const std::filesystem::path& p) {
-    std::string ext = p.extension().string();
-    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return ext == ".toml";
+// "a,b,c,..." as exactly `count` numbers (each read as the nearest double).
+std::vector<double> parseNumbers(const std::string& text, size_t count, const std::string& option) {
+    std::vector<double> v;
+    const char* p = text.data();
+    const char* end = text.data() + text.size();
+    while (v.size() < count) {
+        double x = 0;
+        const auto r = std::from_chars(p, end, x);
+        if (r.ec != std::errc() || !std::isfinite(x)) break;
+        v.push_back(x);
+        p = r.ptr;
+        if (p == end || *p != ',') break;
+        ++p;
+    }
+    if (v.size() != count || p != end)
+        throw InputError(option + " '" + text + "': expected " + std::to_string(count) + " numbers separated by commas");
+    return v;
+}
+Float3 parseVector(const std::string& text, const std::string& option) {
+    const std::vector<double> v = parseNumbers(text, 3, option);
+    return {float(v[0]), float(v[1]), float(v[2])};
+}
+// A point in the scene file's world coordinates, made relative to the scene's origin in double
+// precision as loading a scene file does.
+Float3 parsePoint(const std::string& text, const std::string& option, const std::array<double, 3>& origin) {
+    const std::vector<double> v = parseNumbers(text, 3, option);
+    return {float(v[0] - origin[0]), float(v[1] - origin[1]), float(v[2] - origin[2])};
+}
+
+// The camera: a scene camera by name (or the first), with what the options give instead.
+CameraDesc chooseCamera(const SceneDesc& desc, const RenderOptions& o) {
+    const CameraDesc* named = o.camera.empty() ? &desc.cameras.front() : desc.findCamera(o.camera);
+    if (!named) {
+        std::string names;
+        for (const CameraDesc& c : desc.cameras) names += (names.empty() ? "" : ", ") + c.name;
+        throw InputError(o.scene + ": no camera named '" + o.camera + "' (cameras: " + names + ")");
+    }
+    CameraDesc c = *named;
+    if (!o.cameraPosition.empty()) c.position = parsePoint(o.cameraPosition, "--camera-position", desc.origin);
+    if (!o.cameraLookAt.empty()) c.lookAt = parsePoint(o.cameraLookAt, "--camera-look-at", desc.origin);
+    if (!o.cameraUp.empty()) c.up = parseVector(o.cameraUp, "--camera-up");
+    if (o.fov > 0) c.fovY = float(o.fov);
+    if (!o.cameraWindow.empty()) {
+        const std::vector<double> v = parseNumbers(o.cameraWindow, 9, "--camera-window");
+        const auto& org = desc.origin;
+        ProjectionWindow w;
+        w.lowerLeft = {float(v[0] - org[0]), float(v[1] - org[1]), float(v[2] - org[2])};
+        w.right = {float(v[3]), float(v[4]), float(v[5])};
+        w.up = {float(v[6]), float(v[7]), float(v[8])};
+        if (length(cross(w.right, w.up)) == 0.0f) throw InputError("--camera-window '" + o.cameraWindow + "': the window has no area");
+        c.window = w;
+    }
+    if (length(c.lookAt - c.position) == 0.0f) throw InputError("the camera looks at its own position");
+    if (length(cross(c.lookAt - c.position, c.up)) == 0.0f) throw InputError("the camera's up is parallel to its viewing direction");
+    return c;
 }
 
 TileRect parseRegion(const std::string& text, const RenderSettings& s) {
@@ -37,10 +96,13 @@ TileRect parseRegion(const std::string& text, const RenderSettings& s) {
     return r;
 }
 
-// The cluster path: a master on loopback and local client processes, one frame.
+// The cluster path: the wall's session (rtwall/wall.h) with local client processes, headless,
+// frames 1..N of a still view, averaged as one machine averages them (the same bytes).
 Image renderWithClients(SceneDesc desc, const CameraDesc& camera, const RenderOptions& o, FrameReport& report) {
     desc.cameras = {camera};
-    ClusterSettings cs;
+    RunConfig c;
+    c.scene = o.scene;
+    ClusterSettings& cs = c.cluster;
     cs.localClients = o.clients;
     cs.threadsPerClient = desc.settings.threads > 0 ? std::max(1, desc.settings.threads / o.clients) : 1;
     cs.prefetch = o.prefetch;
@@ -50,37 +112,33 @@ Image renderWithClients(SceneDesc desc, const CameraDesc& camera, const RenderOp
     // as the single-machine path below does; one frame comes as 8-bit tiles, the bytes
     // renderFrame gives (a linear tile would be rounded to half precision first).
     cs.wideAccumulation = o.frames > 1;
-    Master master(desc, cs);
-    LocalClients clients(o.clients, master.endpoint(), cs.threadsPerClient);
-    // A client that dies or freezes while starting must not hold the frame back: the others
-    // render it (the bytes are the same whoever renders).
-    const int joined = master.awaitClients(o.clients, 60'000, std::max(3000, 2 * cs.timeoutMs));
-    if (joined == 0) throw InputError("no local render client joined within 60 s");
-    if (joined < o.clients)
-        std::printf("only %d of %d local render clients joined; rendering with them\n", joined, o.clients);
-    // Progressive: frames 1..N of a still view, averaged (the same bytes as one machine). A
-    // stochastic scene's frames come as linear tiles; a deterministic scene's as 8-bit tiles,
-    // every frame the same image, which their 8-bit mean is exactly.
-    Accumulator acc;
-    std::vector<float> linear;
-    Image one;
-    for (int f = 0; f < o.frames; ++f) {
-        one = master.renderFrame(&report, &linear);
-        if (o.frames == 1) break;
-        if (report.linear) acc.addLinear(linear.data(), one.width, one.height);
-        else acc.add(one);
+    c.loaded = std::move(desc);
+    c.frames = o.frames;
+    c.framesGiven = true;
+    c.orbit = 0.0;
+    c.writeEvery = 0;
+    c.headless = true;
+    c.log = [](const std::string& line) {
+        if (line.starts_with("only ")) std::printf("%s\n", line.c_str());  // a client that did not join
+    };
+    WallSession session(c);
+    while (session.step()) {
     }
-    if (const MasterCounters c = master.counters(); c.dropped() + c.failedSends + c.lostHandOuts + c.clientsDropped > 0)
-        std::printf("master: %s\n", describeCounters(c).c_str());
-    return o.frames == 1 ? one : acc.resolve();
+    report = session.lastReport();
+    if (const MasterCounters m = session.summary().counters; m.dropped() + m.failedSends + m.lostHandOuts + m.clientsDropped > 0)
+        std::printf("master: %s\n", describeCounters(m).c_str());
+    // A stochastic scene's frames are averaged while the view stays (the progressive mean); a
+    // deterministic scene's are every one the same image.
+    return session.lastFrame().left;
 }
 
 // Scene files may name gigabytes of meshes: a progress bar on a terminal, and Ctrl-C stops.
-SceneDesc loadWithProgress(const std::filesystem::path& path) {
-    ProgressBar bar("loading", 1, "");
+SceneDesc loadWithProgress(const std::string& scene, int64_t builtinTriangles) {
+    std::optional<ProgressBar> bar;
     SceneLoadOptions lo;
-    lo.progress = bar.fn();
-    return loadSceneFile(path, lo);
+    lo.builtinTriangles = builtinTriangles;
+    if (sceneSourceKind(scene) == SceneSourceKind::SceneFile) lo.progress = bar.emplace("loading", 1, "").fn();
+    return loadScene(scene, lo);
 }
 
 }  // namespace
@@ -89,11 +147,20 @@ void addRender(CLI::App& app, Run& run) {
     auto o = std::make_shared<RenderOptions>();
     CLI::App* cmd = app.add_subcommand("render", "Render one frame of a scene file (.toml) or a mesh file to PNG");
     cmd->add_option("scene", o->scene,
-                    "Scene file (.toml), mesh file (.obj .off .ply .stl .om), or builtin:knots")->required();
+                    "Scene file (.toml), mesh file (.obj .off .ply .stl .om .vtk .vtp .vtu .wrl), or builtin:knots")->required();
     cmd->add_option("--out,-o", o->out, "Output PNG file")->required();
+    cmd->add_option("--triangles", o->triangles, "Triangles of a builtin scene")
+        ->check(CLI::Range(int64_t(1000), int64_t(200'000'000)));
     cmd->add_option("--width", o->width, "Image width in pixels (overrides the scene)")->check(CLI::Range(1, 16384));
     cmd->add_option("--height", o->height, "Image height in pixels (overrides the scene)")->check(CLI::Range(1, 16384));
     cmd->add_option("--camera", o->camera, "Name of the scene camera to use (default: the first)");
+    cmd->add_option("--camera-position", o->cameraPosition, "Camera position x,y,z in the scene's world coordinates (overrides the camera's)");
+    cmd->add_option("--camera-look-at", o->cameraLookAt, "Point x,y,z the camera looks at (overrides the camera's)");
+    cmd->add_option("--camera-up", o->cameraUp, "Camera up direction x,y,z (overrides the camera's)");
+    cmd->add_option("--fov", o->fov, "Vertical field of view in degrees (overrides the camera's)")->check(CLI::Range(0.01, 179.0));
+    cmd->add_option("--camera-window", o->cameraWindow,
+                    "Off-axis projection: the image rectangle's lower-left corner (world coordinates), its right edge "
+                    "and its up edge, 9 numbers x,y,z,x,y,z,x,y,z");
     cmd->add_option("--threads", o->threads, "Render threads (0 = one per hardware thread)")->check(CLI::Range(0, 1024));
     cmd->add_option("--tile", o->tile, "Tile size in pixels (overrides the scene)")->check(CLI::Range(1, 1024));
     cmd->add_option("--kernel", o->kernel, "Ray kernel (overrides the scene)")->check(CLI::IsMember({"packet", "single"}));
@@ -107,51 +174,70 @@ void addRender(CLI::App& app, Run& run) {
         ->check(CLI::IsMember({"raw", "lz4", "zstd", "jpeg"}));
     cmd->add_option("--view", o->view, "False-colour view (overrides the scene)")
         ->check(CLI::IsMember({"shaded", "depth", "rays", "tile_time", "client"}));
-    cmd->add_flag("--gi", o->gi, "Global illumination: path tracing with next-event estimation");
+    cmd->add_option("--client-id", o->clientId, "The render client id the client view shows (default 0)")
+        ->check(CLI::Range(int64_t(0), int64_t(UINT32_MAX)));
+    cmd->add_option("--shading", o->shading, "full, or eyelight: primary rays only (overrides the scene)")
+        ->check(CLI::IsMember({"full", "eyelight"}));
+    cmd->add_option("--shadows", o->shadows, "Hard shadows from every light (overrides the scene)")->check(CLI::IsMember({"on", "off"}));
+    cmd->add_option("--background", o->background, "Radiance r,g,b of rays that hit nothing (overrides the scene)");
+    cmd->add_option("--ambient", o->ambient, "Constant ambient light r,g,b (overrides the scene)");
+    CLI::Option* gi = cmd->add_flag("--gi", o->gi, "Global illumination: path tracing with next-event estimation");
+    cmd->add_flag("--no-gi", o->noGi, "No global illumination (overrides the scene)")->excludes(gi);
     cmd->add_option("--samples", o->samples, "Random samples per pixel sample and frame")->check(CLI::Range(1, 4096));
+    cmd->add_option("--supersample", o->supersample, "n x n sub-pixel samples per pixel (overrides the scene)")->check(CLI::Range(1, 16));
     cmd->add_option("--prune", o->prune, "Ray-tree pruning threshold (0 = off)")->check(CLI::Range(0.0, 1.0));
     cmd->add_option("--max-depth", o->maxDepth, "Longest ray path")->check(CLI::Range(1, 64));
-    cmd->add_option("--frames", o->frames,
-                    "Average this many frames in linear light, each with its own seeds (progressive refinement)")
+    CLI::Option* frames = cmd->add_option("--frames", o->frames,
+                    "Average frames 1..N in linear light, each with its own seeds (progressive refinement)")
         ->check(CLI::Range(1, 100000));
+    cmd->add_option("--frame", o->frame, "Render frame N alone, with its own seeds (default: frame 1)")
+        ->check(CLI::Range(int64_t(0), int64_t(UINT32_MAX)))->excludes(frames);
     cmd->add_option("--region", o->region, "Render only pixels x0,y0,x1,y1 (half-open; the rest stays black), to replay one tile");
+    // Tests only, not in --help: the tile of frame F holding pixel (X, Y) throws, to test how a
+    // failed tile is reported and replayed.
+    cmd->add_option("--inject-tile-fault", o->fault, "F,X,Y")->group("");
 
     cmd->callback([&run, o] {
         run = [o] {
-            const std::filesystem::path path(o->scene);
             installInterruptHandler();
-            SceneDesc desc = o->scene.starts_with("builtin:") ? builtinScene(o->scene.substr(8), 3'000'000)
-                             : isSceneFile(path)                 ? loadWithProgress(path)
-                                                                 : sceneFromMeshFile(path);
+            SceneDesc desc = loadWithProgress(o->scene, o->triangles);
             RenderSettings& s = desc.settings;
             if (o->width) s.width = o->width;
             if (o->height) s.height = o->height;
             if (o->threads >= 0) s.threads = o->threads;
             if (o->tile) s.tileSize = o->tile;
             if (!o->kernel.empty()) s.kernel = o->kernel == "single" ? KernelType::Single : KernelType::Packet;
-            s.packetWidth = o->packetWidth;
             if (!o->view.empty()) s.view = viewModeFromName(o->view);
+            if (!o->shading.empty()) s.shading = o->shading == "eyelight" ? ShadingMode::EyeLight : ShadingMode::Full;
+            if (!o->shadows.empty()) s.shadows = o->shadows == "on";
+            if (!o->background.empty()) s.background = parseVector(o->background, "--background");
+            if (!o->ambient.empty()) s.ambient = parseVector(o->ambient, "--ambient");
             if (o->gi) s.gi = true;
+            if (o->noGi) s.gi = false;
             if (o->samples) s.samples = o->samples;
+            if (o->supersample) s.supersample = o->supersample;
             if (o->prune >= 0) s.pruneThreshold = float(o->prune);
             if (o->maxDepth) s.maxDepth = o->maxDepth;
-            const CameraDesc* cam = o->camera.empty() ? &desc.cameras.front() : desc.findCamera(o->camera);
-            if (!cam) {
-                std::string names;
-                for (const CameraDesc& c : desc.cameras) names += (names.empty() ? "" : ", ") + c.name;
-                throw InputError(o->scene + ": no camera named '" + o->camera + "' (cameras: " + names + ")");
+            TraceOptions trace;
+            trace.packetWidth = o->packetWidth;
+            if (o->clientId >= 0) trace.clientId = uint32_t(o->clientId);
+            if (!o->fault.empty()) {
+                const std::vector<double> f = parseNumbers(o->fault, 3, "--inject-tile-fault");
+                trace.fault = InjectedTileFault{uint32_t(f[0]), int(f[1]), int(f[2])};
             }
+            const CameraDesc cam = chooseCamera(desc, *o);
             const char* kernel = s.kernel == KernelType::Packet ? "packet" : "single";
             const auto t0 = std::chrono::steady_clock::now();
             if (o->clients > 0) {
                 if (!o->region.empty()) throw InputError("--region and --clients cannot be combined");
+                if (o->frame >= 0) throw InputError("--frame and --clients cannot be combined (the cluster numbers its frames)");
                 FrameReport report;
-                const Image img = renderWithClients(desc, *cam, *o, report);
+                const Image img = renderWithClients(desc, cam, *o, report);
                 writePng(img, o->out);
                 const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 std::printf("wrote %s (%dx%d, camera '%s', %s kernel, %d clients, codec %s): frame %.3f s, "
                             "%.3f s with start-up, %.2f MB of tiles\n",
-                            o->out.c_str(), s.width, s.height, cam->name.c_str(), kernel, o->clients, o->codec.c_str(),
+                            o->out.c_str(), s.width, s.height, cam.name.c_str(), kernel, o->clients, o->codec.c_str(),
                             report.seconds, total, double(report.bytes) * 1e-6);
                 return 0;
             }
@@ -161,36 +247,43 @@ void addRender(CLI::App& app, Run& run) {
             Scene scene(desc, bar->fn());
             bar.reset();
             const auto t1 = std::chrono::steady_clock::now();
-            const Camera camera(*cam, s.width, s.height);
+            const Camera camera(cam, s.width, s.height);
+            // The cluster numbers its frames from 1; so do we, so both give the same bytes.
+            const uint32_t firstFrame = o->frame >= 0 ? uint32_t(o->frame) : 1;
             TileStats stats;
             Image img;
-            if (o->region.empty()) {
-                // The cluster numbers its frames from 1; so do we, so both give the same bytes.
-                // Frames are averaged in linear light, before the 8-bit quantisation clips each
-                // at 1.0 (a GI sample far above 1 would lose its excess in every frame), at the
-                // half precision the cluster sends them in (Accumulator::addLinear). A
-                // deterministic scene renders the same image every frame: its 8-bit mean is it.
-                const bool linear = o->frames > 1 && rendersStochastically(desc);
-                Accumulator acc;
-                for (int f = 0; f < o->frames; ++f) {
-                    TileStats fs;
-                    if (linear) {
-                        const std::vector<float> frame = renderFrameLinear(scene, camera, s, uint32_t(f + 1), &fs);
-                        acc.addLinear(frame.data(), s.width, s.height);
-                    } else {
-                        img = renderFrame(scene, camera, s, uint32_t(f + 1), &fs);
-                        if (o->frames > 1) acc.add(img);
+            try {
+                if (!o->region.empty() && o->frames > 1) throw InputError("--region renders one frame: give it --frame, not --frames");
+                if (o->region.empty()) {
+                    // Frames are averaged in linear light, before the 8-bit quantisation clips
+                    // each at 1.0 (a GI sample far above 1 would lose its excess in every frame),
+                    // at the half precision the cluster sends them in (Accumulator::addLinear). A
+                    // deterministic scene renders the same image every frame: its 8-bit mean is it.
+                    const bool linear = o->frames > 1 && rendersStochastically(desc);
+                    Accumulator acc;
+                    for (int f = 0; f < o->frames; ++f) {
+                        TileStats fs;
+                        const uint32_t frame = firstFrame + uint32_t(f);
+                        if (linear) {
+                            const std::vector<float> rgb = renderFrameLinear(scene, camera, s, frame, &fs, trace);
+                            acc.addLinear(rgb.data(), s.width, s.height);
+                        } else {
+                            img = renderFrame(scene, camera, s, frame, &fs, trace);
+                            if (o->frames > 1) acc.add(img);
+                        }
+                        stats.rays += fs.rays;
+                        stats.shadowRays += fs.shadowRays;
                     }
-                    stats.rays += fs.rays;
-                    stats.shadowRays += fs.shadowRays;
+                    if (o->frames > 1) img = acc.resolve();
+                } else {
+                    const TileRect r = parseRegion(o->region, s);
+                    img.width = s.width;
+                    img.height = s.height;
+                    img.rgb.assign(size_t(s.width) * s.height * 3, 0);
+                    stats = renderTile(scene, camera, r, firstFrame, s, {img.pixel(r.x0, r.y0), size_t(s.width) * 3}, trace);
                 }
-                if (o->frames > 1) img = acc.resolve();
-            } else {
-                const TileRect r = parseRegion(o->region, s);
-                img.width = s.width;
-                img.height = s.height;
-                img.rgb.assign(size_t(s.width) * s.height * 3, 0);
-                stats = renderTile(scene, camera, r, 0, s, {img.pixel(r.x0, r.y0), size_t(s.width) * 3});
+            } catch (const TileError& e) {
+                throw withReplay(e, {o->scene, o->triangles, desc.origin, cam, s, trace, 0, {}});
             }
             const auto t2 = std::chrono::steady_clock::now();
             writePng(img, o->out);
@@ -199,7 +292,7 @@ void addRender(CLI::App& app, Run& run) {
             const double pixels = double(s.width) * s.height * std::max(1, o->frames);
             std::printf("wrote %s (%dx%d, camera '%s', %s kernel): BVH build %.3f s, render %.3f s, %.2f Mrays/s "
                         "(%.1f rays + %.1f shadow rays per pixel and frame)\n",
-                        o->out.c_str(), s.width, s.height, cam->name.c_str(), kernel, build, render,
+                        o->out.c_str(), s.width, s.height, cam.name.c_str(), kernel, build, render,
                         double(stats.rays + stats.shadowRays) / render * 1e-6, double(stats.rays) / pixels,
                         double(stats.shadowRays) / pixels);
             return 0;

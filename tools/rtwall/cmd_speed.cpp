@@ -6,14 +6,19 @@
 //   rtwall simulate --profile P     the real TileScheduler against simulated clients and links
 // The libraries do the work (rtwall::tune, rtwall::cluster); this file parses and prints.
 #include "commands.h"
+#include "tile_failure.h"
 
 #include <rtwall/cluster.h>
 #include <rtwall/engine.h>
 #include <rtwall/tune.h>
+#include <rtwall/wall.h>
 
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
+#include <optional>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -24,27 +29,10 @@ namespace rtwall::cli {
 
 namespace {
 
-SceneDesc loadScene(const std::string& scene, int64_t triangles) {
-    const std::filesystem::path path(scene);
-    if (scene.starts_with("builtin:")) return builtinScene(scene.substr(8), triangles);
-    std::string ext = path.extension().string();
-    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return ext == ".toml" ? loadSceneFile(path) : sceneFromMeshFile(path);
-}
-
 const CameraDesc& pickCamera(const SceneDesc& desc, const std::string& scene, const std::string& name) {
     if (name.empty()) return desc.cameras.front();
     if (const CameraDesc* c = desc.findCamera(name)) return *c;
     throw InputError(scene + ": no camera named '" + name + "'");
-}
-
-CameraDesc orbit(const CameraDesc& c, double degrees) {
-    const double a = degrees * std::numbers::pi / 180.0, ca = std::cos(a), sa = std::sin(a);
-    const double x = c.position.x - c.lookAt.x, z = c.position.z - c.lookAt.z;
-    CameraDesc o = c;
-    o.position.x = float(c.lookAt.x + ca * x + sa * z);
-    o.position.z = float(c.lookAt.z - sa * x + ca * z);
-    return o;
 }
 
 // "jpeg:75" -> JPEG at quality 75; "zstd:3" -> zstd level 3; "lz4", "raw".
@@ -97,18 +85,33 @@ toml::table errorTable(const ImageError& e) {
                        {"max_error", e.maxError}, {"mean_abs_error", e.meanAbs}, {"identical", e.identical()}};
 }
 
-// The shading controls of the sweep, as `rtwall run` applies a front's: a negative prune or
-// GI count and a zero step leave the scene's own.
-void applyShadingControls(SceneDesc& desc, double prune, int giSpp, double volumeStep) {
-    if (prune >= 0) desc.settings.pruneThreshold = float(prune);
-    if (giSpp >= 0) {
-        desc.settings.gi = giSpp > 0;
-        desc.settings.samples = std::max(1, giSpp);
+// The controls (rtwall/wall.h's table) as options of a command: a value given on the command line
+// is applied to the scene as `rtwall run` applies a front's point.
+struct ControlOptions {
+    std::map<std::string, std::optional<double>> given;
+
+    void add(CLI::App* cmd, std::initializer_list<std::string> only) {
+        for (const Control& c : controls())
+            if (*c.option && std::find(only.begin(), only.end(), c.name) != only.end())
+                cmd->add_option(c.option, given[c.name], std::string(c.help) + " (overrides the scene)")->check(CLI::Range(c.min, c.max));
     }
-    if (volumeStep > 0)
-        for (Material& m : desc.materials)
-            if (m.type == MaterialType::Volume) m.volumeStep = float(volumeStep);
-}
+    std::optional<double> value(const std::string& name) const {
+        auto it = given.find(name);
+        return it == given.end() ? std::nullopt : it->second;
+    }
+    // `desc.settings` at the wall's resolution on entry; the scale control makes it a fraction of it.
+    void apply(SceneDesc& desc) const {
+        OperatingPoint p;
+        p.name = "the command line";
+        for (const auto& [name, v] : given)
+            if (v) p.controls.emplace_back(name, *v);
+        const Knobs k = knobsOf(p, desc.settings, {});
+        desc.settings = k.settings;
+        if (k.volumeStep > 0)
+            for (Material& m : desc.materials)
+                if (m.type == MaterialType::Volume) m.volumeStep = k.volumeStep;
+    }
+};
 
 double sum(const std::vector<double>& v) {
     double s = 0;
@@ -167,9 +170,9 @@ void addCompare(CLI::App& app, Run& run) {
 void addReference(CLI::App& app, Run& run) {
     struct Options {
         std::string scene, out, camera;
-        int width = 0, height = 0, supersample = 8, threads = 0, giSpp = -1, frames = 1;
+        int width = 0, height = 0, threads = 0, frames = 1;
         uint32_t firstFrame = 1u << 20;  // independent of the frames the sweep renders (1, 2, ...)
-        double prune = -1, volumeStep = 0;
+        ControlOptions controls;
         int64_t triangles = 3'000'000;
         bool json = false;
         std::string progressOut;
@@ -182,14 +185,7 @@ void addReference(CLI::App& app, Run& run) {
     cmd->add_option("--width", o->width, "Image width (overrides the scene)")->check(CLI::Range(1, 16384));
     cmd->add_option("--height", o->height, "Image height (overrides the scene)")->check(CLI::Range(1, 16384));
     cmd->add_option("--camera", o->camera, "Scene camera (default: the first)");
-    cmd->add_option("--supersample", o->supersample, "n x n samples per pixel")->check(CLI::Range(1, 32));
-    cmd->add_option("--threads", o->threads, "Render threads (0 = all)")->check(CLI::Range(0, 1024));
-    cmd->add_option("--prune", o->prune, "Ray-tree pruning threshold (0 = never prune; overrides the scene)")
-        ->check(CLI::Range(0.0, 1.0));
-    cmd->add_option("--gi-spp", o->giSpp, "GI samples per pixel sample (0 = GI off; overrides the scene)")
-        ->check(CLI::Range(0, 4096));
-    cmd->add_option("--volume-step", o->volumeStep, "Ray-march step of every volume material, in voxels")
-        ->check(CLI::Range(0.01, 100.0));
+    o->controls.add(cmd, {"supersample", "prune", "gi_spp", "volume_step"});  // supersample: 8 x 8 unless given
     cmd->add_option("--triangles", o->triangles, "Triangles of a builtin scene")->check(CLI::Range(int64_t(1000), int64_t(100'000'000)));
     cmd->add_option("--frames", o->frames,
                     "Average this many frames in linear light (path tracing jitters samples per frame; an even count "
@@ -201,26 +197,37 @@ void addReference(CLI::App& app, Run& run) {
     cmd->add_flag("--json", o->json, "Print JSON");
     cmd->callback([&run, o] {
         run = [o] {
-            SceneDesc desc = loadScene(o->scene, o->triangles);
+            SceneLoadOptions load;
+            load.builtinTriangles = o->triangles;
+            SceneDesc desc = loadScene(o->scene, load);
             RenderSettings& s = desc.settings;
             if (o->width) s.width = o->width;
             if (o->height) s.height = o->height;
-            applyShadingControls(desc, o->prune, o->giSpp, o->volumeStep);
-            s.supersample = o->supersample;
+            o->controls.apply(desc);
+            s.supersample = int(o->controls.value("supersample").value_or(8));
             s.threads = o->threads;
             const CameraDesc cam = pickCamera(desc, o->scene, o->camera);
             const Scene scene(desc);
             const Camera camera(cam, s.width, s.height);
+            // A tile that fails is reported with the command that renders it again.
+            auto replayable = [&](auto&& render) {
+                try {
+                    return render();
+                } catch (const TileError& e) {
+                    throw withReplay(e, {o->scene, o->triangles, desc.origin, cam, s, {}, 0, {}});
+                }
+            };
             if (o->frames == 1 && o->progressOut.empty() && o->firstFrame == 1u << 20) {
-                writePng(renderFrame(scene, camera, s), o->out);
+                writePng(replayable([&] { return renderFrame(scene, camera, s); }), o->out);
                 if (o->json) std::cout << toml::json_formatter{toml::table{{"out", o->out}, {"frames", 1}}} << "\n";
                 else std::printf("wrote %s (%dx%d, %dx%d samples per pixel)\n", o->out.c_str(), s.width, s.height,
-                                 o->supersample, o->supersample);
+                                 s.supersample, s.supersample);
                 return 0;
             }
             Accumulator all, half[2];
             for (int f = 0; f < o->frames; ++f) {
-                const std::vector<float> linear = renderFrameLinear(scene, camera, s, o->firstFrame + uint32_t(f));
+                const std::vector<float> linear =
+                    replayable([&] { return renderFrameLinear(scene, camera, s, o->firstFrame + uint32_t(f)); });
                 all.addLinear(linear.data(), s.width, s.height);
                 half[2 * f < o->frames ? 0 : 1].addLinear(linear.data(), s.width, s.height);
                 if (!o->progressOut.empty() && (all.frames() & (all.frames() - 1)) == 0)
@@ -240,7 +247,7 @@ void addReference(CLI::App& app, Run& run) {
                 std::cout << toml::json_formatter{out} << "\n";
             } else {
                 std::printf("wrote %s (%dx%d, %dx%d samples per pixel x %d frames)\n", o->out.c_str(), s.width, s.height,
-                            o->supersample, o->supersample, o->frames);
+                            s.supersample, s.supersample, o->frames);
                 if (auto e = out["own_psnr_db_estimate"].value<double>())
                     std::printf("its own error, from its two halves: about %.1f dB PSNR\n", *e);
             }
@@ -253,8 +260,9 @@ void addBenchTiles(CLI::App& bench, Run& run) {
     struct Options {
         std::string scene, camera, codecs = "raw,lz4,zstd,jpeg:50,jpeg:75,jpeg:90,jpeg:95", reference, profileOut, saveImage,
             shading;
-        int width = 0, height = 0, tile = 0, supersample = 0, frames = 1, giSpp = -1;
-        double scale = 1.0, orbitDegrees = 1.0, prune = -1, volumeStep = 0;
+        int width = 0, height = 0, frames = 1;
+        double orbitDegrees = 1.0;
+        ControlOptions controls;
         int64_t triangles = 3'000'000;
         bool json = false;
     };
@@ -264,17 +272,8 @@ void addBenchTiles(CLI::App& bench, Run& run) {
     cmd->add_option("scene", o->scene, "Scene file (.toml), mesh file or builtin:NAME")->required();
     cmd->add_option("--width", o->width, "Wall image width (overrides the scene)")->check(CLI::Range(16, 16384));
     cmd->add_option("--height", o->height, "Wall image height (overrides the scene)")->check(CLI::Range(16, 16384));
-    cmd->add_option("--scale", o->scale, "Render at this fraction of the wall's resolution, upscaled bilinearly for the error")
-        ->check(CLI::Range(0.05, 1.0));
-    cmd->add_option("--tile", o->tile, "Tile size (overrides the scene)")->check(CLI::Range(4, 1024));
-    cmd->add_option("--supersample", o->supersample, "n x n samples per pixel (overrides the scene)")->check(CLI::Range(1, 32));
+    o->controls.add(cmd, {"scale", "tile", "supersample", "prune", "gi_spp", "volume_step"});  // scale: upscaled for the error
     cmd->add_option("--shading", o->shading, "full or eyelight (overrides the scene)")->check(CLI::IsMember({"full", "eyelight"}));
-    cmd->add_option("--prune", o->prune, "Ray-tree pruning threshold (0 = never prune; overrides the scene)")
-        ->check(CLI::Range(0.0, 1.0));
-    cmd->add_option("--gi-spp", o->giSpp, "GI samples per pixel sample (0 = GI off; overrides the scene)")
-        ->check(CLI::Range(0, 4096));
-    cmd->add_option("--volume-step", o->volumeStep, "Ray-march step of every volume material, in voxels")
-        ->check(CLI::Range(0.01, 100.0));
     cmd->add_option("--camera", o->camera, "Scene camera (default: the first)");
     cmd->add_option("--frames", o->frames, "Frames to time, the camera orbiting --orbit degrees per frame")->check(CLI::Range(1, 1000));
     cmd->add_option("--orbit", o->orbitDegrees, "Degrees per frame around the camera's look-at point")->check(CLI::Range(-360.0, 360.0));
@@ -286,17 +285,15 @@ void addBenchTiles(CLI::App& bench, Run& run) {
     cmd->add_flag("--json", o->json, "Print JSON");
     cmd->callback([&run, o] {
         run = [o] {
-            SceneDesc desc = loadScene(o->scene, o->triangles);
+            SceneLoadOptions load;
+            load.builtinTriangles = o->triangles;
+            SceneDesc desc = loadScene(o->scene, load);
             RenderSettings& s = desc.settings;
             if (o->width) s.width = o->width;
             if (o->height) s.height = o->height;
             const int wallW = s.width, wallH = s.height;
-            s.width = std::max(1, int(std::lround(wallW * o->scale)));
-            s.height = std::max(1, int(std::lround(wallH * o->scale)));
-            if (o->tile) s.tileSize = o->tile;
-            if (o->supersample) s.supersample = o->supersample;
+            o->controls.apply(desc);
             if (!o->shading.empty()) s.shading = o->shading == "eyelight" ? ShadingMode::EyeLight : ShadingMode::Full;
-            applyShadingControls(desc, o->prune, o->giSpp, o->volumeStep);
             s.threads = 1;
             std::vector<CodecSettings> codecs;
             for (const std::string& c : splitList(o->codecs)) codecs.push_back(parseCodec(c));
@@ -311,11 +308,18 @@ void addBenchTiles(CLI::App& bench, Run& run) {
             }
             const CameraDesc start = pickCamera(desc, o->scene, o->camera);
             std::vector<CameraDesc> cameras;
-            for (int f = 0; f < o->frames; ++f) cameras.push_back(orbit(start, o->orbitDegrees * f));
+            for (int f = 0; f < o->frames; ++f) cameras.push_back(orbitCamera(start, o->orbitDegrees * f));
             const Scene scene(desc);
             Image lossless;
             std::vector<Image> decoded;
-            TileProfile profile = profileTiles(scene, cameras, s, codecs, &lossless, &decoded);
+            TileProfile profile;
+            try {
+                profile = profileTiles(scene, cameras, s, codecs, &lossless, &decoded);
+            } catch (const TileError& e) {
+                // Frame f + 1 is cameras[f] (frame 1's eye-light warm-up pass is reported as frame 1).
+                const size_t f = std::min<size_t>(std::max<uint32_t>(e.frame(), 1) - 1, cameras.size() - 1);
+                throw withReplay(e, {o->scene, o->triangles, desc.origin, cameras[f], s, {}, 0, {}});
+            }
             profile.scene = o->scene;
             if (!o->profileOut.empty()) writeTileProfile(profile, o->profileOut);
             if (!o->saveImage.empty()) writePng(lossless, o->saveImage);
@@ -352,7 +356,7 @@ void addBenchTiles(CLI::App& bench, Run& run) {
                                 {"wall_height", wallH},
                                 {"width", s.width},
                                 {"height", s.height},
-                                {"scale", o->scale},
+                                {"scale", o->controls.value("scale").value_or(1.0)},
                                 {"tile", s.tileSize},
                                 {"supersample", s.supersample},
                                 {"tiles", int64_t(profile.tileCount())},

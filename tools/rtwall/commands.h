@@ -14,6 +14,7 @@ void addRender(CLI::App& app, Run& run);
 void addInfo(CLI::App& app, Run& run);
 void addClient(CLI::App& app, Run& run);
 void addRun(CLI::App& app, Run& run);
+void addControls(CLI::App& app, Run& run);  // cmd_run.cpp
 void addKeys(CLI::App& app, Run& run);
 void addBenchKernel(CLI::App& bench, Run& run);
 void addBenchCluster(CLI::App& bench, Run& run);

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
     rtwall::cli::addInfo(app, run);
     rtwall::cli::addClient(app, run);
     rtwall::cli::addRun(app, run);
+    rtwall::cli::addControls(app, run);
     rtwall::cli::addKeys(app, run);
     rtwall::cli::addGen(app, run);
     rtwall::cli::addCompare(app, run);

@@ -209,6 +209,7 @@ struct ClientSettings {
     int extraTileDelayMs = 0;           // fault injection for tests: emulate a slower PC
     int extraSceneBuildMs = 0;          // fault injection for tests: a PC slow to build the scene
     int dropEveryNthResult = 0;         // fault injection for tests: lose every Nth tile result on its way out
+    std::optional<InjectedTileFault> tileFault;  // fault injection for tests: a tile that throws
     // A render thread that does not return: the first tile of frame stallFrame or later that this
     // client renders sleeps stallMs on its thread (once; cut short when the client stops).
     int stallMs = 0;                    // fault injection for tests
@@ -219,6 +220,24 @@ struct ClientSettings {
     std::filesystem::path keyFile;      // this client's key pair: CURVE on (needs serverKeyFile)
     std::filesystem::path serverKeyFile;  // the master's public key: the client checks it
     std::shared_ptr<ClientCounters> counters;  // optional: updated while it runs
+};
+
+// Render-client processes on this PC: `EXECUTABLE client --connect ENDPOINT ...` children (the
+// same executable by default, so client and master speak the same protocol version), stopped
+// (SIGTERM and SIGCONT, then SIGKILL after 2 s) when the object goes away.
+class LocalClients {
+public:
+    // With a netns prefix, client i runs in network namespace <prefix><i> (tools/netem.sh).
+    LocalClients(int count, const std::string& endpoint, int threadsEach, bool replay = false,
+                 const std::string& netnsPrefix = {}, const std::vector<std::string>& extraArgs = {},
+                 const std::filesystem::path& executable = "/proc/self/exe");
+    ~LocalClients();
+    LocalClients(const LocalClients&) = delete;
+    LocalClients& operator=(const LocalClients&) = delete;
+    const std::vector<int>& pids() const { return pids_; }
+
+private:
+    std::vector<int> pids_;
 };
 
 // Writes a new CURVE key pair to STEM.key (secret, mode 0600) and STEM.pub (public).

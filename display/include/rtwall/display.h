@@ -100,13 +100,18 @@ std::vector<std::string> checkWall(const std::filesystem::path& file);
 // Mapping a wall image to the screens (the CPU reference of present.frag)
 
 // A finished frame as the renderer delivers it.
+// Its images are the wall's size, or smaller: a frame rendered at a fraction of the wall's
+// resolution is shown upscaled (bilinear, pixel centres aligned, edges clamped).
 struct WallFrame {
     uint32_t number = 0;
     Image left;                         // the mono image, or the left eye
-    Image right;                        // the right eye (stereo walls only)
-    std::vector<uint32_t> tileOwners;   // client id per tile (row-major), for the false-colour view
-    int tileSize = 0;
+    Image right;                        // the right eye (stereo walls only; the left's size)
+    std::vector<uint32_t> tileOwners;   // client id per tile of the frame (row-major), for the false-colour view
+    int tileSize = 0;                   // in the frame's pixels
 };
+// Throws std::invalid_argument, naming `who` and the sizes, for a frame larger than the wall, an
+// empty one, or eyes of different sizes.
+void checkFrameSize(const WallConfig& wall, const WallFrame& frame, const char* who);
 
 struct PresentOptions {
     bool falseColour = false;  // tint every tile with the colour of the client that rendered it
@@ -249,12 +254,10 @@ public:
     void setMode(Mode m) { mode_ = m; }
     // Bookmarks 1..9: Ctrl+digit stores, digit recalls.
     bool hasBookmark(int slot) const;
-    // Recording (key R): one pose per update while on. Written as a camera path (configs/README.md).
+    // Recording (key R): one pose per update while on; the wall writes them as a camera path
+    // (rtwall/wall.h, writeCameraPath).
     bool recording() const { return recording_; }
     const std::vector<ViewPose>& recorded() const { return path_; }
-    // Poses are in the scene's (rebased) coordinates; the file gets world coordinates, pose +
-    // `origin` in double precision, so that it replays after the scene's origin changes.
-    static std::string cameraPathToml(const std::vector<ViewPose>& poses, const std::array<double, 3>& origin = {0, 0, 0});
 
 private:
     ViewPose pose_;

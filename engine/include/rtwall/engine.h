@@ -18,6 +18,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -128,6 +129,10 @@ struct CameraDesc {
     bool operator==(const CameraDesc&) const = default;
 };
 
+// The camera turned `degrees` about the vertical axis through its look-at point (a demo's and a
+// benchmark's orbit): position moves, look-at, up and field of view stay.
+CameraDesc orbitCamera(const CameraDesc& camera, double degrees);
+
 struct MeshDesc {
     std::string name;
     std::string source;  // file path or "shape:<kind>", for messages and hashing
@@ -151,10 +156,6 @@ struct RenderSettings {
     int height = 600;
     int tileSize = 32;                    // square tiles, in pixels
     KernelType kernel = KernelType::Packet;
-    // Rays per Embree packet (the packet kernel, and the primary-ray blocks of both kernels): 0 =
-    // this CPU's widest (packetWidth()), or 4, 8 or 16 forced. Every width gives the same bytes.
-    // Not on the wire: each render client traces with its own.
-    int packetWidth = 0;
     ShadingMode shading = ShadingMode::Full;  // eyelight: primary rays only, for fast previews
     int maxDepth = 8;                     // primary ray = depth 1; reflection/refraction add one each
     int supersample = 1;                  // n x n regular sub-pixel grid
@@ -166,8 +167,25 @@ struct RenderSettings {
     bool gi = false;                      // path tracing: indirect light by cosine-sampled bounces
     int samples = 1;                      // random samples per pixel sample and frame (GI, glossy, area lights)
     ViewMode view = ViewMode::Shaded;
-    uint32_t clientId = 0;                // not on the wire: each render client sets the id the master gave it
     bool operator==(const RenderSettings&) const = default;
+};
+
+// Tests only: the tile of `frame` that holds pixel (x, y) throws instead of rendering, as a bug
+// or a failed allocation would, so that failure reports and their replays can be tested.
+struct InjectedTileFault {
+    uint32_t frame = 0;
+    int x = 0, y = 0;
+};
+
+// How this process traces, as opposed to what the image shows (RenderSettings): these never
+// travel to a render client (each has its own) and never change a shaded pixel's bytes; only
+// the client false-colour view shows clientId.
+struct TraceOptions {
+    // Rays per Embree packet (the packet kernel, and the primary-ray blocks of both kernels): 0 =
+    // this CPU's widest (packetWidth()), or 4, 8 or 16 forced. Every width gives the same bytes.
+    int packetWidth = 0;
+    uint32_t clientId = 0;                     // the id the master gave this render client: the client view's colour
+    std::optional<InjectedTileFault> fault;    // tests only
 };
 
 // How each mesh's BVH is built ([bvh] in scene files): memory against build and render speed.
@@ -220,11 +238,16 @@ struct SceneLoadStats {
     size_t cacheHits = 0, cacheWritten = 0, filesImported = 0;
 };
 struct SceneLoadOptions {
-    ProgressFn progress;            // fraction of mesh bytes loaded; returning false cancels (Cancelled)
-    std::optional<bool> cache;      // overrides the scene file's [load] cache
+    ProgressFn progress;            // scene files: fraction of mesh bytes loaded; returning false cancels (Cancelled)
+    std::optional<bool> cache;      // scene files: overrides the scene file's [load] cache
     SceneLoadStats* stats = nullptr;
+    int64_t builtinTriangles = 3'000'000;  // builtin:NAME: about this many triangles
 };
 SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOptions& options);
+
+// Writes a regular grid of scalars (`values`: nx * ny * nz, x fastest, at least 2 per axis) as
+// ASCII VTK image data (.vti), which volume materials read; for generators and tests.
+void writeVolumeVti(const std::filesystem::path& file, int nx, int ny, int nz, const std::vector<float>& values);
 
 // A scene made of one mesh file, with a camera that frames its bounds and a default light.
 SceneDesc sceneFromMeshFile(const std::filesystem::path& file);
@@ -232,6 +255,22 @@ SceneDesc sceneFromMeshFile(const std::filesystem::path& file);
 // Scenes built in code, shared by tests, benchmarks and examples. "knots": twelve distinct
 // torus knots on a floor with about `triangles` triangles in all (the kernel benchmark).
 SceneDesc builtinScene(const std::string& name, int64_t triangles);
+
+// What a scene name given to rtwall names: "builtin:NAME" a scene built in code, a name ending
+// in .toml (any case) a scene file, anything else a mesh file (OBJ, PLY, VTK, ... any case).
+enum class SceneSourceKind { Builtin, SceneFile, MeshFile };
+SceneSourceKind sceneSourceKind(const std::string& nameOrPath);
+
+// The one way every command loads a scene by name: builtinScene, loadSceneFile or
+// sceneFromMeshFile, as sceneSourceKind says.
+SceneDesc loadScene(const std::string& nameOrPath, const SceneLoadOptions& options = {});
+
+// How an area light is seen by rays (engine/src/light_faces.cpp, configs/README.md [[light]]):
+// not at all (next-event estimation alone finds it), through emitters that cover its whole
+// parallelogram (Covered: light samples and hits on them are weighted by multiple importance
+// sampling), or through emitters that cover part of it (Partial: light samples count in full,
+// and so do hits on the emitters where no light sample could have found them).
+enum class LightFace : uint8_t { None, Partial, Covered };
 
 // A loaded scene ready to render: Embree device, one BVH per mesh, instances on top.
 class Scene {
@@ -271,6 +310,12 @@ public:
     void setLight(uint32_t light, const Light& value);
     void commit();
 
+    // What the scene recognised as the visible faces of its area lights, as of the last change:
+    // per light (None for point and directional lights), and the area light an instance is the
+    // visible face of (-1: none). Both throw std::out_of_range for an index that does not exist.
+    LightFace lightFace(uint32_t light) const;
+    int32_t areaLightOf(uint32_t instance) const;
+
     struct Impl;
     const Impl& impl() const { return *impl_; }
 
@@ -300,6 +345,23 @@ struct TileRect {
     int height() const { return y1 - y0; }
 };
 
+// A tile that could not be rendered. renderTile and renderTileLinear throw it for anything that
+// goes wrong inside a tile (renderFrame and renderFrameLinear rethrow the first); what() is
+// "frame F, tile x0,y0,x1,y1: reason". The caller knows where the scene and the camera came
+// from and can add the command that renders just this tile (replayCommand).
+class TileError : public std::runtime_error {
+public:
+    TileError(uint32_t frame, const TileRect& rect, const std::string& reason);
+    uint32_t frame() const { return frame_; }
+    const TileRect& rect() const { return rect_; }
+    const std::string& reason() const { return reason_; }
+
+private:
+    uint32_t frame_;
+    TileRect rect_;
+    std::string reason_;
+};
+
 // Where renderTile writes: pixel (rect.x0 + i, rect.y0 + j) goes to data + j*stride + 3*i (sRGB8).
 struct TileView {
     uint8_t* data = nullptr;
@@ -316,12 +378,32 @@ struct TileStats {
 // jitter) are a hash of the pixel's image coordinates, the frame and the sample, so a pixel's
 // bytes never depend on which tile or client rendered it.
 TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
-                     const RenderSettings& settings, TileView out);
+                     const RenderSettings& settings, TileView out, const TraceOptions& trace = {});
 
 // The same, in linear RGB floats (3 per pixel, `stride` floats per row), before quantisation:
 // for tests of the estimators. False-colour views are not applied.
 TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
-                           const RenderSettings& settings, float* out, size_t stride);
+                           const RenderSettings& settings, float* out, size_t stride, const TraceOptions& trace = {});
+
+// Everything that decides one tile's pixels, as `rtwall render` can be told it.
+struct TileReplay {
+    std::string scene;                      // as loadScene() was given it: builtin:NAME, a scene file or a mesh file
+    int64_t builtinTriangles = 3'000'000;   // a builtin scene's SceneLoadOptions::builtinTriangles
+    std::array<double, 3> origin{0, 0, 0};  // the loaded SceneDesc::origin: the camera goes in the file's coordinates
+    CameraDesc camera;
+    RenderSettings settings;
+    TraceOptions trace;                     // the injected fault is not replayed
+    uint32_t frame = 0;
+    TileRect rect;
+};
+
+// The `rtwall render` command line that renders exactly these pixels of that tile again, alone:
+// every setting that can change a pixel is spelled out (the scene file's [render] table may have
+// been overridden), the camera by position, look-at point, up, field of view and projection
+// window in the scene file's world coordinates, the frame's own random numbers (--frame), the
+// kernel and the packet width. What it cannot carry: changes made to the scene after it was
+// loaded (materials, lights, instance transforms moved on a running wall).
+std::string replayCommand(const TileReplay& tile);
 
 // Progressive refinement of a still view: the mean of the frames added since the last reset,
 // in linear light (each sRGB8 frame is converted back exactly and summed in double). The
@@ -352,6 +434,9 @@ void floatFromHalf(const uint16_t* in, size_t count, float* out);
 
 // The 8-bit sRGB quantisation renderTile applies, for `count` linear values.
 void linearToSrgb8(const float* linear, size_t count, uint8_t* out);
+// Its inverse for `count` 8-bit values: the linear value each code stands for (what
+// Accumulator::add sums), exactly.
+void srgb8ToLinear(const uint8_t* srgb, size_t count, float* out);
 
 // True when a frame's pixels depend on the frame number, i.e. when averaging frames refines
 // the image: path tracing, area lights, rough metal or a volume (per-frame random sampling) in
@@ -364,11 +449,11 @@ std::vector<TileRect> makeTiles(int width, int height, int tileSize);
 
 // Renders a whole frame on settings.threads threads (tiles handed out on demand).
 Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings& settings, uint32_t frame = 0,
-                  TileStats* stats = nullptr);
+                  TileStats* stats = nullptr, const TraceOptions& trace = {});
 // The same frame in linear RGB floats (3 per pixel, rows of settings.width pixels), as
 // renderTileLinear writes them: what Accumulator::addLinear averages.
 std::vector<float> renderFrameLinear(const Scene& scene, const Camera& camera, const RenderSettings& settings,
-                                     uint32_t frame = 0, TileStats* stats = nullptr);
+                                     uint32_t frame = 0, TileStats* stats = nullptr, const TraceOptions& trace = {});
 
 // Picking: the instance that the primary ray through image position (px, py) (pixels from the
 // top-left corner) hits first, where, and how far along the ray (in units of the ray
@@ -381,7 +466,7 @@ struct PickResult {
 std::optional<PickResult> pick(const Scene& scene, const Camera& camera, float px, float py);
 
 // Number of rays per Embree packet the packet kernel uses on this CPU (4, 8 or 16) where
-// RenderSettings::packetWidth is 0: 16 with AVX-512, 8 with AVX, else 4.
+// TraceOptions::packetWidth is 0: 16 with AVX-512, 8 with AVX, else 4.
 int packetWidth();
 
 }  // namespace rtwall

@@ -160,4 +160,13 @@ Image resizeBilinear(const Image& src, int width, int height) {
     return out;
 }
 
+double median(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    const size_t n = v.size(), mid = n / 2;
+    std::nth_element(v.begin(), v.begin() + mid, v.end());
+    if (n % 2) return v[mid];
+    const double upper = v[mid];
+    return 0.5 * (*std::max_element(v.begin(), v.begin() + mid) + upper);
+}
+
 }  // namespace rtwall

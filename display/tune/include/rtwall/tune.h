@@ -67,6 +67,10 @@ Image differenceImage(const Image& test, const Image& reference, int scaleLevels
 // values, rounded to nearest: what a display would do to upscale a lower-resolution frame.
 Image resizeBilinear(const Image& src, int width, int height);
 
+// The median of some measurements (the mean of the middle two for an even count; 0 for none):
+// benchmarks and frame rates quote medians, which the noise of a shared machine moves least.
+double median(std::vector<double> values);
+
 // ---- Operating point ------------------------------------------------------------------------
 
 // One measured setting: the values of its controls, its frame time and its error.

@@ -1,6 +1,6 @@
-// Small float vector helpers for the engine's internals. Deliberately plain scalar code: the
-// packet kernel gains its speed in Embree's traversal, and scalar shading keeps the packet and
-// single-ray paths bit-identical.
+// Small float vector helpers on the public Float3, for the engine, the tools and the tests.
+// Deliberately plain scalar code: the packet kernel gains its speed in Embree's traversal, and
+// scalar shading keeps the packet and single-ray paths bit-identical.
 #pragma once
 
 #include <rtwall/mesh.h>

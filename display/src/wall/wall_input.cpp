@@ -1,4 +1,6 @@
-#include "wall_view.h"
+#include "wall_input.h"
+
+#include <rtwall/wall.h>
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>  // key codes
@@ -7,7 +9,7 @@
 #include <cstdio>
 #include <fstream>
 
-namespace rtwall::cli {
+namespace rtwall::wall {
 
 namespace {
 ViewPose poseOf(const CameraDesc& c) { return {c.position, c.lookAt, c.up, c.fovY}; }
@@ -22,29 +24,28 @@ CameraDesc cameraOf(const CameraDesc& base, const ViewPose& p) {
 float length(Float3 a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
 }  // namespace
 
-WallView::WallView(const WallConfig& wall, const SceneDesc& scene, const CameraDesc& start, const Options& options)
-    : wall_(wall), scene_(scene), base_(start), options_(options) {
-    if (options.forceHeadless) {
-        whyHeadless_ = "--headless";
-    } else {
-        gl_ = GlPresenter::open(wall_, {}, &whyHeadless_);
-    }
+WallInput::WallInput(const WallConfig& wall, const CameraDesc& start, const Options& options,
+                     std::function<void(const std::string&)> log)
+    : wall_(wall), base_(start), options_(options), log_(std::move(log)) {
+    if (options.forceHeadless) whyHeadless_ = "--headless";
+    else gl_ = GlPresenter::open(wall_, {}, &whyHeadless_);
     if (!gl_ && options.perScreenImages) headless_ = std::make_unique<HeadlessPresenter>(wall_, options.outDir);
     const Float3 d{start.position.x - start.lookAt.x, start.position.y - start.lookAt.y, start.position.z - start.lookAt.z};
     nav_ = std::make_unique<Navigator>(poseOf(start), std::max(0.1f, length(d)));
     if (gl_)
-        std::printf("wall '%s': %zu window%s (%s); keys: H status, T tile owners, Tab fly/orbit, 1-9 bookmarks "
-                    "(Ctrl+digit stores), R record, Ctrl+drag moves an object, Esc quits\n",
-                    wall_.name.c_str(), wall_.screens.size(), wall_.screens.size() == 1 ? "" : "s", gl_->renderer().c_str());
+        log_("wall '" + wall_.name + "': " + std::to_string(wall_.screens.size()) + " window" +
+             (wall_.screens.size() == 1 ? "" : "s") + " (" + gl_->renderer() +
+             "); keys: H status, T tile owners, Tab fly/orbit, 1-9 bookmarks (Ctrl+digit stores), R record, Ctrl+drag "
+             "moves an object, Esc quits");
     else
-        std::printf("wall '%s': headless (%s)\n", wall_.name.c_str(), whyHeadless_.c_str());
+        log_("wall '" + wall_.name + "': headless (" + whyHeadless_ + ")");
 }
 
-WallView::~WallView() = default;
+WallInput::~WallInput() = default;
 
-CameraDesc WallView::camera() const { return cameraOf(base_, nav_->pose()); }
+CameraDesc WallInput::camera() const { return cameraOf(base_, nav_->pose()); }
 
-CameraDesc WallView::eyeCamera(int eye) const {
+CameraDesc WallInput::eyeCamera(int eye) const {
     CameraDesc c = camera();
     if (wall_.stereo.mode == StereoMode::None) return c;
     // Off-axis: each eye sees the wall's physical rectangle as a projection window. The wall frame
@@ -58,11 +59,23 @@ CameraDesc WallView::eyeCamera(int eye) const {
     return c;
 }
 
-void WallView::setCamera(const CameraDesc& c) { nav_->setPose(poseOf(c)); }
+void WallInput::setCamera(const CameraDesc& c) { nav_->setPose(poseOf(c)); }
 
-bool WallView::handleInput(Master& master, double dt) {
-    if (!gl_) return true;
-    const InputState in = gl_->poll();
+std::optional<PickResult> WallInput::pick(LiveScene& scene, double wallX, double wallY) {
+    return scene.pick(camera(), wall_.width, wall_.height, wallX, wallY);
+}
+
+bool WallInput::handle(LiveScene& scene, double dt) {
+    std::vector<InputState> inputs;
+    inputs.swap(injected_);
+    if (gl_) inputs.push_back(gl_->poll());
+    for (const InputState& in : inputs)
+        if (!apply(scene, in, dt)) return false;
+    return true;
+}
+
+// One poll's input. A new key binding goes here.
+bool WallInput::apply(LiveScene& scene, const InputState& in, double dt) {
     if (in.closeRequested || in.keyDown[GLFW_KEY_ESCAPE]) return false;
     for (int key : in.keysPressed) {
         if (key == GLFW_KEY_H) {
@@ -73,47 +86,46 @@ bool WallView::handleInput(Master& master, double dt) {
         if (key == GLFW_KEY_T) present_.falseColour = !present_.falseColour;
     }
     const bool wasRecording = nav_->recording();
-    bool moved = options_.interactive && nav_->update(in, dt);
+    const bool moved = options_.interactive && nav_->update(in, dt);
     if (wasRecording && !nav_->recording()) {
+        std::vector<CameraKey> keys;
+        for (const ViewPose& p : nav_->recorded()) keys.push_back({int(keys.size()), cameraOf(base_, p)});
         const auto file = options_.outDir / ("camera_path_" + std::to_string(++recordings_) + ".toml");
         std::filesystem::create_directories(options_.outDir);
-        std::ofstream(file) << Navigator::cameraPathToml(nav_->recorded(), scene_.origin);
-        std::printf("recorded %zu cameras to %s (replay: rtwall run --camera-path %s)\n", nav_->recorded().size(),
-                    file.c_str(), file.c_str());
+        std::ofstream(file) << writeCameraPath(keys, scene.desc().origin);
+        log_("recorded " + std::to_string(keys.size()) + " cameras to " + file.string() + " (replay: rtwall run --camera-path " +
+             file.string() + ")");
     }
-    if (moved) master.setCamera(camera());
+    if (moved) scene.setCamera(camera());
 
     // Ctrl+click picks the object under the cursor; dragging moves it parallel to the screen.
     const bool ctrl = in.clickMods & GLFW_MOD_CONTROL;
     if (options_.interactive && in.leftPressed && ctrl) {
-        if (!pickScene_) pickScene_ = std::make_unique<Scene>(scene_);
-        const Camera cam(camera(), wall_.width, wall_.height);
-        grabbed_ = pick(*pickScene_, cam, float(in.wallX), float(in.wallY));
+        grabbed_ = pick(scene, in.wallX, in.wallY);
         if (grabbed_) {
-            grabbedStart_ = scene_.instances[grabbed_->instance].transform;
-            std::printf("picked instance %u at distance %.2f\n", grabbed_->instance, double(grabbed_->t * length(cam.direction(float(in.wallX), float(in.wallY)))));
+            grabbedStart_ = scene.desc().instances[grabbed_->instance].transform;
+            const Camera cam(camera(), wall_.width, wall_.height);
+            char line[128];
+            std::snprintf(line, sizeof line, "picked instance %u at distance %.2f", grabbed_->instance,
+                          double(grabbed_->t * length(cam.direction(float(in.wallX), float(in.wallY)))));
+            log_(line);
         }
     }
     if (grabbed_ && in.leftDown && ctrl) {
         const Camera cam(camera(), wall_.width, wall_.height);
         const Float3 o = cam.origin(), d = cam.direction(float(in.wallX), float(in.wallY));
         const Float3 p{o.x + d.x * grabbed_->t, o.y + d.y * grabbed_->t, o.z + d.z * grabbed_->t};
-        const Transform t = Transform::translate(double(p.x) - grabbed_->point.x, double(p.y) - grabbed_->point.y,
-                                                 double(p.z) - grabbed_->point.z) *
-                            grabbedStart_;
-        master.setInstanceTransform(grabbed_->instance, t);  // a differential update to every client
-        pickScene_->setInstanceTransform(grabbed_->instance, t);
-        pickScene_->commit();
-        scene_.instances[grabbed_->instance].transform = t;
+        scene.setInstanceTransform(grabbed_->instance, Transform::translate(double(p.x) - grabbed_->point.x,
+                                                                            double(p.y) - grabbed_->point.y,
+                                                                            double(p.z) - grabbed_->point.z) *
+                                                           grabbedStart_);
     } else if (grabbed_ && !in.leftDown) {
         grabbed_.reset();
     }
     return true;
 }
 
-void WallView::show(WallFrame& frame, const FrameReport& report, double frameSeconds) {
-    frame.tileOwners = report.tileOwners;
-    frame.tileSize = scene_.settings.tileSize;
+void WallInput::show(const WallFrame& frame, const FrameReport& report, double frameSeconds) {
     if (gl_) {
         gl_->present(frame, present_);
         statusClock_ += frameSeconds;
@@ -126,22 +138,21 @@ void WallView::show(WallFrame& frame, const FrameReport& report, double frameSec
             std::string status = line, overlay = line;
             for (const ClientReport& c : report.clients) {
                 std::snprintf(line, sizeof line, " | client %u: %llu tiles (%.2f MB/s) %.0f%% busy", c.id, (unsigned long long)c.tiles,
-                              report.seconds > 0 ? double(c.bytes) / report.seconds * 1e-6 : 0.0,
-                              100.0 * c.busyFraction);
+                              report.seconds > 0 ? double(c.bytes) / report.seconds * 1e-6 : 0.0, 100.0 * c.busyFraction);
                 status += line;
                 overlay += "\n" + std::string(line + 3);
             }
-            // What the master dropped, refused or lost so far (issue 16: an operator must see it).
+            // What the master dropped, refused or lost so far (an operator must see it).
             const std::string counters = "master: " + describeCounters(report.counters);
             status += " | " + counters;
             overlay += "\n" + counters;
             gl_->setStatus(status);
             statusImage_ = textImage(overlay, 2);  // shown from the next frame on
-            std::printf("%s\n", status.c_str());
+            log_(status);
         }
     } else if (headless_) {
         headless_->present(frame, present_);
     }
 }
 
-}  // namespace rtwall::cli
+}  // namespace rtwall::wall

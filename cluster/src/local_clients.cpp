@@ -1,6 +1,5 @@
-#include "local_clients.h"
-
-#include <rtwall/mesh.h>
+// Render-client processes on this PC (LocalClients in rtwall/cluster.h).
+#include <rtwall/cluster.h>
 
 #include <spawn.h>
 #include <sys/wait.h>
@@ -15,10 +14,11 @@
 
 extern char** environ;
 
-namespace rtwall::cli {
+namespace rtwall {
 
 LocalClients::LocalClients(int count, const std::string& endpoint, int threadsEach, bool replay,
-                           const std::string& netnsPrefix, const std::vector<std::string>& extraArgs) {
+                           const std::string& netnsPrefix, const std::vector<std::string>& extraArgs,
+                           const std::filesystem::path& executable) {
     const std::string threads = std::to_string(threadsEach);
     for (int i = 0; i < count; ++i) {
         // The same executable, so client and master always speak the same protocol version.
@@ -26,12 +26,12 @@ LocalClients::LocalClients(int count, const std::string& endpoint, int threadsEa
         std::vector<std::string> args = {"client", "--connect", endpoint, "--threads", threads, "--exit-after-idle", "5000"};
         if (replay) args.push_back("--replay");
         args.insert(args.end(), extraArgs.begin(), extraArgs.end());
-        std::string program = "/proc/self/exe";
+        std::string program = executable.string();
         if (!netnsPrefix.empty()) {
             // `ip netns exec NS EXE ...`: the same executable, resolved, inside the namespace.
             std::error_code ec;
             args.insert(args.begin(), {"netns", "exec", netnsPrefix + std::to_string(i + 1),
-                                       std::filesystem::read_symlink("/proc/self/exe", ec).string()});
+                                       std::filesystem::canonical(executable, ec).string()});
             program = "/usr/sbin/ip";
         }
         std::vector<char*> argv{const_cast<char*>("rtwall")};
@@ -66,4 +66,4 @@ LocalClients::~LocalClients() {
     }
 }
 
-}  // namespace rtwall::cli
+}  // namespace rtwall

@@ -1,0 +1,181 @@
+// rtwall wall: the display master as a library, the one public header.
+//
+// A WallSession is what runs on the wall's PC. It loads the scene, starts the master and the
+// local render clients, shows the frames on the wall (GLFW windows, or the headless presenter
+// where there is no display), and owns the one scene state the clients hold: navigation,
+// picking, `--watch` edits and the operating-point controls all change the scene through it,
+// and it sends the differential updates. step() advances one frame. `rtwall run` is argument
+// parsing and a loop over step().
+//
+// Where a change goes:
+// - a key binding or other input: WallInput::handle (display/src/wall/wall_input.cpp);
+// - a control of the operating point and the speed/accuracy sweep: the table in controls.cpp;
+// - a camera-path field: camera_path.cpp (read, write and interpolation, one file);
+// - a per-frame step: WallSession::step (session.cpp); the run config: run_config.cpp.
+//
+// The GL presenter stays inside the display library; this library joins it to the engine and
+// the cluster, which know nothing of each other's windows.
+#pragma once
+
+#include <rtwall/cluster.h>
+#include <rtwall/display.h>
+#include <rtwall/engine.h>
+#include <rtwall/tune.h>
+
+#include <array>
+#include <atomic>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace rtwall {
+
+// ---- Run configs (configs/README.md, "Run configs") ---------------------------------------------
+
+struct RunConfig {
+    std::string scene = "builtin:knots";  // scene file (.toml), mesh file or builtin:NAME
+    std::optional<SceneDesc> loaded;      // a scene loaded in code: used instead of loading `scene`
+    std::string camera;                   // a camera of the scene by name (empty: its first)
+    ClusterSettings cluster;
+    int frames = 60;                      // 0: until stopped (in a window: until it is closed)
+    bool framesGiven = false;             // a count was asked for: a window closes after it too
+    int writeEvery = 30;                  // every Nth frame as PNG (0: never)
+    std::filesystem::path out = "out/frames";
+    double orbit = 1.0;                   // degrees per frame around the look-at point (no window)
+    std::filesystem::path cameraPath;     // keyframes to follow (replaces the orbit)
+    int width = 0, height = 0;            // override the scene's image size (0: the scene's)
+    std::filesystem::path wall;           // a wall config; empty: one window of the image's size
+    // Given on the command line only.
+    bool headless = false;                // never open windows
+    bool watch = false;                   // reload the scene file when it changes on disk
+    double targetFps = 0;                 // > 0: hold this frame rate with the operating point
+    std::filesystem::path front;          // the measured front for targetFps (empty: calibrate)
+    std::filesystem::path trace;          // with targetFps: one CSV line per frame
+    // Local render clients: `rtwall client` processes of this executable, or (tests) threads of
+    // this process running runClient.
+    std::filesystem::path clientExecutable = "/proc/self/exe";
+    bool clientThreads = false;
+    // Where the session's progress lines go (stdout by default).
+    std::function<void(const std::string&)> log;
+};
+
+// Reads a run config; every problem is an InputError naming the file, line and key.
+RunConfig readRunConfig(const std::filesystem::path& file);
+// The embedded default of `rtwall run` without a config: the built-in knot field, 800x600, two
+// local clients, 60 frames orbiting, every 30th written.
+RunConfig defaultRunConfig();
+
+// ---- Controls: what the operating point and the speed/accuracy sweep change ----------------------
+
+// The settings a control acts on.
+struct Knobs {
+    RenderSettings settings;
+    CodecSettings codec;
+    float volumeStep = 0;  // > 0: every volume material's ray-march step, in voxels
+};
+
+struct Control {
+    const char* name;    // its key in a front's [point.controls]
+    const char* option;  // its flag on `rtwall bench tiles` and `rtwall reference`
+    const char* help;
+    double min, max;     // the values it accepts
+    std::vector<double> sweep;  // what tools/speed_accuracy.py sweeps unless a scene says otherwise
+    const char* label;   // a value's name in charts: "{}" stands for the value
+    void (*apply)(Knobs& knobs, const RenderSettings& base, double value);
+};
+// Every control, in one table (controls.cpp). tools/speed_accuracy.py reads it from
+// `rtwall controls --json`.
+const std::vector<Control>& controls();
+// The control of that name, or an InputError naming the operating point and the known names.
+const Control& control(const std::string& name, const std::string& point);
+std::string controlsJson();
+
+// The settings of an operating point over the base ones (throws InputError for an unknown
+// control or a value outside its range).
+Knobs knobsOf(const OperatingPoint& point, const RenderSettings& base, const CodecSettings& baseCodec);
+// A front written by tools/speed_accuracy.py: [[point]] name, frame_s, error, [point.controls].
+std::vector<OperatingPoint> readFront(const std::filesystem::path& file);
+
+// ---- Camera paths (configs/README.md, "Camera paths") --------------------------------------------
+
+// A keyframe: the camera at a frame number; between keys cameras are interpolated linearly,
+// after the last the last is held.
+struct CameraKey {
+    int frame = 0;
+    CameraDesc camera;
+};
+// Positions in the file are world coordinates (double); the keys come relative to the scene's
+// rebased `origin`, so a path survives a change of origin, and written paths are the same.
+std::vector<CameraKey> readCameraPath(const std::filesystem::path& file, const std::array<double, 3>& origin);
+std::string writeCameraPath(const std::vector<CameraKey>& keys, const std::array<double, 3>& origin);
+CameraDesc cameraAt(const std::vector<CameraKey>& keys, int frame);
+
+// ---- The session ----------------------------------------------------------------------------------
+
+struct RunSummary {
+    size_t frames = 0;
+    double medianFps = 0;
+    double megabytesPerFrame = 0;
+    int accumulatedFrames = 0;  // frames of a stochastic scene averaged while the view was still
+    int linearFrames = 0;       // of which as linear tiles
+    // With a target frame rate:
+    size_t framesOnTarget = 0;
+    uint64_t operatingPointChanges = 0;
+    std::string operatingPoint;
+    MasterCounters counters;
+};
+// The lines `rtwall run` prints at the end.
+std::string describeSummary(const RunSummary& summary, double targetFps);
+
+class WallSession {
+public:
+    // Loads the scene and the wall, starts the master and the local clients, waits for them and,
+    // with a target frame rate, takes or measures the front. Throws InputError for any problem
+    // of the configs. `stop` (optional) ends the run between frames and interrupts a frame that
+    // cannot finish (Master::setStopFlag): a signal handler may set it.
+    explicit WallSession(RunConfig config, const std::atomic<bool>* stop = nullptr);
+    ~WallSession();
+    WallSession(const WallSession&) = delete;
+    WallSession& operator=(const WallSession&) = delete;
+
+    // One frame: input, edits, the scripted camera, the render, accumulation, the wall, the
+    // controller, files and the progress line. False once the run is over (its frames done, the
+    // wall closed, or stopped), before anything is rendered.
+    bool step();
+
+    // The one scene state: what every client holds, and what picking casts rays into.
+    const SceneDesc& scene() const;
+    CameraDesc camera() const;  // the viewer's camera (each eye of a stereo wall is derived from it)
+    void setCamera(const CameraDesc& camera);
+    void setInstanceTransform(uint32_t instance, const Transform& transform);
+    void setMaterial(uint32_t material, const Material& value);
+    void setLight(uint32_t light, const Light& value);
+    void setRenderSettings(const RenderSettings& settings);
+    void setCodec(const CodecSettings& codec);
+    // A reloaded scene file: what changed goes out as differential updates; `refused` lists
+    // what updates cannot express (and what the camera path or controller owns).
+    SceneEdit applyEdit(const SceneDesc& edited);
+    // The instance under wall pixel (x, y) for the viewer's camera.
+    std::optional<PickResult> pick(double wallX, double wallY);
+    void showTileOwners(bool on);  // the false-colour view of who rendered each tile (key T)
+    // Input as if from the wall's windows, applied at the next step() (keys, mouse, picking:
+    // display.h's InputState): scripted control and tests; it works headless too.
+    void inject(const InputState& input);
+
+    // What the last step showed and measured.
+    const WallFrame& lastFrame() const;
+    const FrameReport& lastReport() const;
+    RunSummary summary() const;
+    std::string endpoint() const;
+    bool windowed() const;
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rtwall

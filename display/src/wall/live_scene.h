@@ -1,0 +1,70 @@
+// The one scene state of a running wall: what every client holds. Every change goes through
+// here: the master sends it as a differential update (and checks it first: a bad index or an
+// unreadable texture throws before anything changed), the description follows, and so does
+// the local copy that picking casts rays into (built on the first pick, then kept in step).
+#pragma once
+
+#include <rtwall/cluster.h>
+#include <rtwall/engine.h>
+
+#include <memory>
+#include <optional>
+
+namespace rtwall::wall {
+
+class LiveScene {
+public:
+    LiveScene(SceneDesc desc, Master& master) : desc_(std::move(desc)), master_(master) {}
+
+    const SceneDesc& desc() const { return desc_; }
+    // The viewer's camera (the scene's first): each eye of a stereo wall is derived from it and
+    // sent with sendEyeCamera, which leaves it as it is.
+    const CameraDesc& camera() const { return desc_.cameras.front(); }
+
+    void setCamera(const CameraDesc& camera) {
+        master_.setCamera(camera);
+        desc_.cameras.front() = camera;
+    }
+    void sendEyeCamera(const CameraDesc& eye) { master_.setCamera(eye); }
+    void setInstanceTransform(uint32_t instance, const Transform& transform) {
+        master_.setInstanceTransform(instance, transform);
+        desc_.instances[instance].transform = transform;
+        if (pickScene_) {
+            pickScene_->setInstanceTransform(instance, transform);
+            pickScene_->commit();
+        }
+    }
+    void setMaterial(uint32_t material, const Material& value) {
+        master_.setMaterial(material, value);
+        desc_.materials[material] = value;
+        if (pickScene_) {  // alpha masks decide what a pick hits
+            pickScene_->setMaterial(material, value);
+            pickScene_->commit();
+        }
+    }
+    void setLight(uint32_t light, const Light& value) {
+        master_.setLight(light, value);
+        desc_.lights[light] = value;
+        if (pickScene_) {
+            pickScene_->setLight(light, value);
+            pickScene_->commit();
+        }
+    }
+    void setRenderSettings(const RenderSettings& settings) {
+        master_.setRenderSettings(settings);
+        desc_.settings = settings;
+    }
+
+    // The instance the ray through image position (x, y) of a width x height image hits first.
+    std::optional<PickResult> pick(const CameraDesc& camera, int width, int height, double x, double y) {
+        if (!pickScene_) pickScene_ = std::make_unique<Scene>(desc_);
+        return rtwall::pick(*pickScene_, Camera(camera, width, height), float(x), float(y));
+    }
+
+private:
+    SceneDesc desc_;
+    Master& master_;
+    std::unique_ptr<Scene> pickScene_;
+};
+
+}  // namespace rtwall::wall

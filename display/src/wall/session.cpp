@@ -1,0 +1,464 @@
+// WallSession: the display master's frame loop (what `rtwall run` runs).
+#include "live_scene.h"
+#include "scene_watcher.h"
+#include "wall_input.h"
+
+#include <rtwall/wall.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <thread>
+#include <tuple>
+
+namespace rtwall {
+
+using wall::LiveScene;
+using wall::SceneWatcher;
+using wall::WallInput;
+
+namespace {
+
+// What the run config and the wall decide over the scene file (also for a reloaded one).
+void fitToRun(SceneDesc& d, const RunConfig& c, const WallConfig& wall) {
+    if (c.width) d.settings.width = c.width;
+    if (c.height) d.settings.height = c.height;
+    if (!c.wall.empty()) {
+        d.settings.width = wall.width;
+        d.settings.height = wall.height;
+    }
+    if (!c.camera.empty()) {
+        const CameraDesc* cam = d.findCamera(c.camera);
+        if (!cam) throw InputError(c.scene + ": no camera named '" + c.camera + "'");
+        d.cameras = {*cam};
+    }
+}
+
+std::string codecPointName(const CodecSettings& c, int tile) {
+    std::string n = tileCodecName(c.codec);
+    if (c.codec == TileCodec::Jpeg) n += " q" + std::to_string(c.jpegQuality);
+    return n + ", tile " + std::to_string(tile);
+}
+
+std::string format(const char* fmt, auto... args) {
+    char buf[512];
+    std::snprintf(buf, sizeof buf, fmt, args...);
+    return buf;
+}
+
+}  // namespace
+
+struct WallSession::Impl {
+    RunConfig config;
+    const std::atomic<bool>* stop = nullptr;
+    std::function<void(const std::string&)> log;
+    WallConfig wallConfig;
+    bool stereo = false;
+    CameraDesc start;
+    std::vector<CameraKey> path;
+    RenderSettings baseSettings;  // the wall's resolution and the scene's settings before any operating point
+    CodecSettings baseCodec;
+
+    std::unique_ptr<Master> master;
+    std::unique_ptr<LocalClients> processes;
+    std::vector<std::thread> clientThreads;
+    std::unique_ptr<LiveScene> live;
+    std::unique_ptr<WallInput> input;
+    std::unique_ptr<SceneWatcher> watcher;
+    std::unique_ptr<OperatingPointController> controller;
+    std::ofstream trace;
+
+    // Per frame.
+    int frame = 0;  // frames stepped
+    std::vector<double> frameTimes;
+    std::chrono::steady_clock::time_point last;
+    uint64_t bytes = 0;
+    uint32_t accumulatedSeq = UINT32_MAX;  // the state the progressive mean is of
+    Accumulator progressive;
+    std::vector<float> linear;  // the frame in linear RGB when it came as linear tiles
+    int accumulatedFrames = 0, linearFrames = 0;
+    size_t framesOnTarget = 0;
+    WallFrame shown;
+    FrameReport report;
+
+    ~Impl() {
+        // The master goes first: its goodbye ends the client threads, which are joined after it.
+        watcher.reset();
+        input.reset();
+        live.reset();
+        master.reset();
+        for (std::thread& t : clientThreads) t.join();
+        processes.reset();
+    }
+
+    bool stopped() const { return stop && stop->load(); }
+
+    void startClients() {
+        const ClusterSettings& cs = config.cluster;
+        const int count = cs.localClients, threads = std::max(1, cs.threadsPerClient);
+        if (count == 0) return;
+        if (!config.clientThreads) {
+            processes = std::make_unique<LocalClients>(count, master->endpoint(), threads, false, std::string{},
+                                                       master->localClientArgs(), config.clientExecutable);
+            return;
+        }
+        ClientSettings c;
+        c.connect = master->endpoint();
+        c.threads = threads;
+        c.exitAfterIdleMs = 5000;
+        const std::vector<std::string> args = master->localClientArgs();  // --key K --server-key P, with keys
+        for (size_t i = 0; i + 1 < args.size(); i += 2) {
+            if (args[i] == "--key") c.keyFile = args[i + 1];
+            if (args[i] == "--server-key") c.serverKeyFile = args[i + 1];
+        }
+        for (int i = 0; i < count; ++i) clientThreads.emplace_back([c] { runClient(c); });
+    }
+
+    void waitForClients() {
+        const ClusterSettings& cs = config.cluster;
+        // Remote clients may take a while to be started; local ones are here in seconds, and one
+        // that died or froze on the way must not keep the wall dark: go on with the others.
+        const int needed = std::max(1, cs.localClients);
+        const int waitMs = cs.localClients > 0 ? 60'000 : 600'000;
+        if (cs.localClients == 0) log("waiting for clients: rtwall client --connect " + master->endpoint());
+        const int joined = master->awaitClients(needed, waitMs, cs.localClients > 0 ? std::max(3000, 2 * cs.timeoutMs) : waitMs);
+        if (joined == 0)
+            throw InputError("no render client joined " + master->endpoint() + " in time" +
+                             (cs.keyFile.empty() ? "" : " (" + describeCounters(master->counters()) +
+                                                            "; each client needs --key with its public key in client_keys)"));
+        if (joined < needed)
+            log(format("only %d of %d %srender clients joined; rendering with them (the others join when they can)", joined,
+                       needed, cs.localClients > 0 ? "local " : ""));
+    }
+
+    // An operating point's settings, applied through the one scene state.
+    void apply(const OperatingPoint& p) {
+        const Knobs k = knobsOf(p, baseSettings, baseCodec);
+        live->setRenderSettings(k.settings);
+        master->setCodec(k.codec);
+        if (k.volumeStep > 0)
+            for (size_t m = 0; m < live->desc().materials.size(); ++m)
+                if (live->desc().materials[m].type == MaterialType::Volume && live->desc().materials[m].volumeStep != k.volumeStep) {
+                    Material mat = live->desc().materials[m];
+                    mat.volumeStep = k.volumeStep;
+                    live->setMaterial(uint32_t(m), mat);
+                }
+    }
+
+    // Calibration: each codec and tile size, and two resolutions, for three frames of the first
+    // view; error = 1 - SSIM against the lossless frame (at the wall's resolution).
+    std::vector<OperatingPoint> calibrate() {
+        log("calibrating the operating points (codec x tile size, and resolution, 3 frames each)");
+        const Image lossless = master->renderFrame();
+        std::vector<std::tuple<int, int, double>> grid;  // JPEG quality (0: LZ4), tile, scale
+        for (int q : {0, 95, 90, 75, 50})
+            for (int tile : {32, 64, 128}) grid.emplace_back(q, tile, 1.0);
+        for (double scale : {0.75, 0.5}) grid.emplace_back(0, 64, scale);
+        std::vector<OperatingPoint> points;
+        for (const auto& [q, tile, scale] : grid) {
+            OperatingPoint p;
+            CodecSettings cs = baseCodec;
+            cs.codec = q == 0 ? TileCodec::Lz4 : TileCodec::Jpeg;
+            if (q) cs.jpegQuality = q;
+            p.name = codecPointName(cs, tile);
+            p.controls = {{"tile", tile}, {"codec", double(int(cs.codec))}, {"scale", scale}};
+            if (scale != 1.0) p.name += ", scale " + std::to_string(scale).substr(0, 4);
+            if (q) p.controls.emplace_back("jpeg_quality", q);
+            apply(p);
+            std::vector<double> times;
+            Image img;
+            for (int i = 0; i < 3; ++i) {
+                FrameReport r;
+                img = master->renderFrame(&r);
+                if (i > 0) times.push_back(r.seconds);
+            }
+            p.frameSeconds = std::max(1e-6, *std::min_element(times.begin(), times.end()));
+            p.error = std::max(0.0, 1.0 - ssimLuminance(resizeBilinear(img, lossless.width, lossless.height), lossless));
+            log(format("  %-20s %7.1f ms  1-SSIM %.5f", p.name.c_str(), p.frameSeconds * 1e3, p.error));
+            points.push_back(p);
+        }
+        return points;
+    }
+
+    void startController(const std::vector<OperatingPoint>& givenFront) {
+        if (config.targetFps <= 0) return;
+        const std::vector<OperatingPoint> points = givenFront.empty() ? calibrate() : givenFront;
+        ControllerOptions co;
+        co.targetFps = config.targetFps;
+        controller = std::make_unique<OperatingPointController>(points, co);
+        apply(controller->current());
+        log(format("target %.1f fps: starting at '%s' (front of %zu points)", config.targetFps,
+                   controller->current().name.c_str(), controller->front().size()));
+        if (!config.trace.empty()) {
+            trace.open(config.trace);
+            if (!trace) throw InputError("--trace: cannot write " + config.trace.string());
+            trace << "frame,seconds,clients,point_index,point\n";
+        }
+    }
+
+    SceneEdit applyEdit(const SceneDesc& edited) {
+        SceneEdit e = diffScenes(live->desc(), edited);
+        if (e.settings && controller) {
+            e.refused.push_back("[render] changed, but --target-fps sets the render settings");
+            e.settings.reset();
+        }
+        if (e.camera && (!path.empty() || config.orbit != 0.0)) {
+            e.refused.push_back("the camera changed, but a camera path or orbit moves it");
+            e.camera.reset();
+        }
+        std::vector<std::pair<uint32_t, Material>> materials;
+        for (const auto& [i, m] : e.materials) {
+            try {
+                live->setMaterial(i, m);
+                materials.emplace_back(i, m);
+            } catch (const InputError& err) {
+                e.refused.push_back("material '" + m.name + "': " + err.what());
+            }
+        }
+        e.materials = std::move(materials);
+        for (const auto& [i, l] : e.lights) live->setLight(i, l);
+        for (const auto& [i, t] : e.transforms) live->setInstanceTransform(i, t);
+        if (e.settings) live->setRenderSettings(*e.settings);
+        if (e.camera) {
+            live->setCamera(*e.camera);
+            input->setCamera(*e.camera);
+        }
+        const std::string file = config.scene;
+        for (const std::string& r : e.refused) log(file + ": " + r + " (not applied)");
+        log(format("%s changed: %zu materials, %zu lights, %zu instance transforms, render settings %s, camera %s", file.c_str(),
+                   e.materials.size(), e.lights.size(), e.transforms.size(), e.settings ? "changed" : "same",
+                   e.camera ? "moved" : "same"));
+        return e;
+    }
+
+    // Renders the frame (both eyes on a stereo wall) into `shown` and `report`.
+    void render() {
+        shown = WallFrame{};
+        if (stereo) {
+            live->sendEyeCamera(input->eyeCamera(0));
+            shown.left = master->renderFrame();
+            live->sendEyeCamera(input->eyeCamera(1));
+            shown.right = master->renderFrame(&report);
+        } else {
+            shown.left = master->renderFrame(&report, &linear);
+        }
+        shown.number = report.frame;
+        // The tile grid of the frame as rendered (the `tile` control and [render] edits change it).
+        shown.tileOwners = report.tileOwners;
+        shown.tileSize = live->desc().settings.tileSize;
+        if (!stereo && report.stochastic) {
+            // A still view refines: each frame has its own sampling seeds; any change to the scene
+            // state (camera, objects, materials, codec) restarts the accumulation. Linear frames
+            // are summed without the 8-bit quantisation.
+            if (report.stateSeq != accumulatedSeq) progressive.reset();
+            accumulatedSeq = report.stateSeq;
+            if (report.linear) progressive.addLinear(linear.data(), shown.left.width, shown.left.height);
+            else progressive.add(shown.left);
+            ++accumulatedFrames;
+            linearFrames += report.linear;
+            shown.left = progressive.resolve();
+        } else {
+            // Deterministic: every frame of a state is the same image; averaging would only cost time.
+            accumulatedSeq = UINT32_MAX;
+        }
+    }
+
+    void observe() {
+        if (!controller) return;
+        if (trace.is_open())
+            trace << frame << ',' << report.seconds << ',' << master->connectedClients() << ',' << controller->currentIndex()
+                  << ",\"" << controller->current().name << "\"" << std::endl;
+        framesOnTarget += report.seconds <= 1.0 / config.targetFps;
+        if (controller->observe(report.seconds)) {
+            apply(controller->current());
+            log(format("frame %d: %.1f ms (budget %.1f ms): operating point -> '%s'", frame, report.seconds * 1e3,
+                       controller->budgetSeconds() * 1e3, controller->current().name.c_str()));
+        }
+    }
+
+    void writeFiles() {
+        if (config.writeEvery > 0 && frame % config.writeEvery == 0) {
+            const std::filesystem::path file = config.out / format("frame_%06u.png", report.frame);
+            // A frame rendered at a lower resolution (operating point) is written as the wall shows it.
+            writePng(resizeBilinear(shown.left, baseSettings.width, baseSettings.height), file);
+            log("wrote " + file.string());
+        }
+        if (frame % 10 == 0 || frame == config.frames) {
+            const size_t n = std::min<size_t>(10, frameTimes.size());
+            const double recent = median(std::vector<double>(frameTimes.end() - long(n), frameTimes.end()));
+            const RenderSettings& s = live->desc().settings;
+            log(format("frame %d: %.1f fps (median of the last %zu), %.2f MB of tiles, %llu stolen, %llu of %zu tiles kept their client",
+                       frame, 1.0 / recent, n, double(report.bytes) * 1e-6, (unsigned long long)report.tilesStolen,
+                       (unsigned long long)report.affinityHits, makeTiles(s.width, s.height, s.tileSize).size()));
+        }
+    }
+};
+
+WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl_(std::make_unique<Impl>()) {
+    Impl& s = *impl_;
+    s.config = std::move(config);
+    s.stop = stop;
+    s.log = s.config.log ? s.config.log : [](const std::string& line) {
+        std::printf("%s\n", line.c_str());
+        std::fflush(stdout);
+    };
+    RunConfig& c = s.config;
+    if (c.watch && (c.loaded || sceneSourceKind(c.scene) != SceneSourceKind::SceneFile))
+        throw InputError("--watch needs a scene file (.toml); " + c.scene + " is not one");
+    SceneDesc desc = c.loaded ? std::move(*c.loaded) : loadScene(c.scene);
+    c.loaded.reset();
+    if (c.width) desc.settings.width = c.width;
+    if (c.height) desc.settings.height = c.height;
+    // The wall decides the image size; its config and shaders are checked before anything starts.
+    s.wallConfig = singleScreenWall(desc.settings.width, desc.settings.height);
+    if (!c.wall.empty()) {
+        const std::vector<std::string> problems = checkWall(c.wall);
+        if (!problems.empty()) throw InputError(problems.front());
+        s.wallConfig = loadWallConfig(c.wall);
+    }
+    s.stereo = s.wallConfig.stereo.mode != StereoMode::None;
+    if (s.stereo && c.cluster.async) {
+        // Two renders per frame, one per eye: asynchronous mode would give each eye the other's camera.
+        s.log("stereo wall: asynchronous rendering off, each frame renders the left then the right eye");
+        c.cluster.async = false;
+    }
+    fitToRun(desc, c, s.wallConfig);
+    s.start = desc.cameras.front();
+    s.baseSettings = desc.settings;
+    s.baseCodec = c.cluster.codec;
+    if (!c.cameraPath.empty()) s.path = readCameraPath(c.cameraPath, desc.origin);
+    // A given front is checked before anything starts: a mistake in it is one line, at once.
+    std::vector<OperatingPoint> givenFront;
+    if (!c.front.empty()) {
+        if (c.targetFps <= 0) throw InputError("--front needs --target-fps");
+        givenFront = readFront(c.front);
+        for (const OperatingPoint& p : givenFront) knobsOf(p, desc.settings, c.cluster.codec);  // unknown controls fail now
+    }
+    if (!c.trace.empty() && c.targetFps <= 0) throw InputError("--trace needs --target-fps");
+
+    s.master = std::make_unique<Master>(desc, c.cluster);
+    s.master->setStopFlag(stop);
+    s.log(format("rtwall master at %s, %dx%d, %d local clients, codec %s%s", s.master->endpoint().c_str(), desc.settings.width,
+                 desc.settings.height, c.cluster.localClients, tileCodecName(c.cluster.codec.codec),
+                 c.cluster.async ? ", asynchronous" : ""));
+    s.startClients();
+    s.waitForClients();
+    s.live = std::make_unique<LiveScene>(std::move(desc), *s.master);
+
+    WallInput::Options io;
+    io.forceHeadless = c.headless;
+    io.perScreenImages = !c.wall.empty();
+    io.outDir = c.out;
+    io.interactive = s.path.empty();
+    io.codec = tileCodecName(c.cluster.codec.codec);
+    s.input = std::make_unique<WallInput>(s.wallConfig, s.start, io, s.log);
+    // In a window the wall runs until it is closed, unless a frame count was asked for.
+    if (s.input->windowed() && !c.framesGiven) c.frames = 0;
+    s.startController(givenFront);
+    if (c.watch) {
+        const std::filesystem::path file = c.scene;
+        const RunConfig fitConfig = c;
+        const WallConfig wall = s.wallConfig;
+        s.watcher = std::make_unique<SceneWatcher>(
+            file,
+            [file, fitConfig, wall] {
+                SceneDesc d = loadSceneFile(file);
+                fitToRun(d, fitConfig, wall);
+                return d;
+            },
+            s.log);
+        s.log("watching " + file.string() +
+              ": edits to materials, lights, instance transforms, render settings and the camera are sent as they are saved");
+    }
+    s.last = std::chrono::steady_clock::now();
+}
+
+WallSession::~WallSession() = default;
+
+bool WallSession::step() {
+    Impl& s = *impl_;
+    if (s.stopped() || (s.config.frames > 0 && s.frame >= s.config.frames)) return false;
+    const double dt = s.frameTimes.empty() ? 0.0 : s.frameTimes.back();
+    if (!s.input->handle(*s.live, dt)) return false;
+    ++s.frame;
+    if (s.watcher)
+        if (std::optional<SceneDesc> edited = s.watcher->poll()) s.applyEdit(*edited);
+    // A scripted camera: a path, or the orbit (without a window, where nobody navigates).
+    std::optional<CameraDesc> scripted;
+    if (!s.path.empty()) scripted = cameraAt(s.path, s.frame);
+    else if (s.config.orbit != 0.0 && !s.input->windowed()) scripted = orbitCamera(s.start, s.config.orbit * s.frame);
+    if (scripted) {
+        // A stereo wall sends each eye's camera before its render: this one merges away.
+        s.input->setCamera(*scripted);
+        s.live->setCamera(*scripted);
+    }
+    s.render();
+    const auto now = std::chrono::steady_clock::now();
+    s.frameTimes.push_back(std::chrono::duration<double>(now - s.last).count());
+    s.last = now;
+    s.input->show(s.shown, s.report, s.frameTimes.back());
+    s.bytes += s.report.bytes;
+    s.observe();
+    s.writeFiles();
+    return true;
+}
+
+const SceneDesc& WallSession::scene() const { return impl_->live->desc(); }
+CameraDesc WallSession::camera() const { return impl_->input->camera(); }
+void WallSession::setCamera(const CameraDesc& camera) {
+    impl_->input->setCamera(camera);
+    impl_->live->setCamera(camera);
+}
+void WallSession::setInstanceTransform(uint32_t instance, const Transform& transform) {
+    impl_->live->setInstanceTransform(instance, transform);
+}
+void WallSession::setMaterial(uint32_t material, const Material& value) { impl_->live->setMaterial(material, value); }
+void WallSession::setLight(uint32_t light, const Light& value) { impl_->live->setLight(light, value); }
+void WallSession::setRenderSettings(const RenderSettings& settings) { impl_->live->setRenderSettings(settings); }
+void WallSession::setCodec(const CodecSettings& codec) { impl_->master->setCodec(codec); }
+SceneEdit WallSession::applyEdit(const SceneDesc& edited) { return impl_->applyEdit(edited); }
+std::optional<PickResult> WallSession::pick(double wallX, double wallY) { return impl_->input->pick(*impl_->live, wallX, wallY); }
+void WallSession::showTileOwners(bool on) { impl_->input->showTileOwners(on); }
+void WallSession::inject(const InputState& input) { impl_->input->inject(input); }
+const WallFrame& WallSession::lastFrame() const { return impl_->shown; }
+const FrameReport& WallSession::lastReport() const { return impl_->report; }
+std::string WallSession::endpoint() const { return impl_->master->endpoint(); }
+bool WallSession::windowed() const { return impl_->input->windowed(); }
+
+RunSummary WallSession::summary() const {
+    const Impl& s = *impl_;
+    RunSummary r;
+    r.frames = s.frameTimes.size();
+    r.medianFps = r.frames ? 1.0 / median(s.frameTimes) : 0.0;
+    r.megabytesPerFrame = r.frames ? double(s.bytes) * 1e-6 / double(r.frames) : 0.0;
+    r.accumulatedFrames = s.accumulatedFrames;
+    r.linearFrames = s.linearFrames;
+    r.framesOnTarget = s.framesOnTarget;
+    if (s.controller) {
+        r.operatingPointChanges = s.controller->changes();
+        r.operatingPoint = s.controller->current().name;
+    }
+    r.counters = s.master->counters();
+    return r;
+}
+
+std::string describeSummary(const RunSummary& r, double targetFps) {
+    std::string out;
+    if (r.frames > 0) {
+        out += format("%zu frames, median %.1f fps, %.2f MB of tiles per frame\n", r.frames, r.medianFps, r.megabytesPerFrame);
+        if (r.accumulatedFrames > 0)
+            out += format("progressive refinement: %d of %zu frames accumulated (stochastic scene), %d of them as linear tiles\n",
+                          r.accumulatedFrames, r.frames, r.linearFrames);
+        else
+            out += "no accumulation: the scene is deterministic (every frame of a view is the same image)\n";
+        if (targetFps > 0)
+            out += format("target %.1f fps: %zu of %zu frames within budget (master frame time), %llu operating-point "
+                          "changes, ending at '%s'\n",
+                          targetFps, r.framesOnTarget, r.frames, (unsigned long long)r.operatingPointChanges,
+                          r.operatingPoint.c_str());
+    }
+    return out + "master: " + describeCounters(r.counters);
+}
+
+}  // namespace rtwall

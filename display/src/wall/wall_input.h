@@ -1,0 +1,73 @@
+// The wall as the people in front of it meet it: the presenters (GLFW windows, or per-screen
+// PNGs where there is no display), keys and mouse, navigation, bookmarks, camera-path recording,
+// picking and dragging objects, and the status overlay. Every change of the scene goes through
+// the LiveScene. A new key binding goes into handle().
+#pragma once
+
+#include "live_scene.h"
+
+#include <rtwall/display.h>
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace rtwall::wall {
+
+class WallInput {
+public:
+    struct Options {
+        bool forceHeadless = false;
+        bool perScreenImages = false;  // headless: write what each screen would show (the wall's write_every)
+        std::filesystem::path outDir = "out/frames";
+        bool interactive = true;       // navigation and picking drive the camera (off while a path replays)
+        std::string codec;             // for the status line
+    };
+    WallInput(const WallConfig& wall, const CameraDesc& start, const Options& options,
+              std::function<void(const std::string&)> log);
+    ~WallInput();
+
+    bool windowed() const { return gl_ != nullptr; }
+    // Polls the windows' input (and takes what inject() queued) and applies it to the scene:
+    // camera, moved objects, the overlay and the views. False once the user closed the wall (Esc
+    // or a window's close button).
+    bool handle(LiveScene& scene, double dt);
+    // Input as if from the windows, for the next handle(): scripted control and tests (it works
+    // headless too).
+    void inject(const InputState& input) { injected_.push_back(input); }
+    bool showingStatus() const { return showStatus_; }
+    bool showingTileOwners() const { return present_.falseColour; }
+    // The viewer's camera, from the navigation pose, and each eye's (stereo walls: an off-axis
+    // window from the wall's corners; 0 left, 1 right).
+    CameraDesc camera() const;
+    CameraDesc eyeCamera(int eye) const;
+    void setCamera(const CameraDesc& c);  // a camera path, orbit or scene edit moved it
+    void showTileOwners(bool on) { present_.falseColour = on; }
+    std::optional<PickResult> pick(LiveScene& scene, double wallX, double wallY);
+    // Shows a frame the wall's size (or smaller: a frame rendered at a fraction of the
+    // resolution is shown upscaled).
+    void show(const WallFrame& frame, const FrameReport& report, double frameSeconds);
+
+private:
+    WallConfig wall_;
+    CameraDesc base_;
+    Options options_;
+    std::function<void(const std::string&)> log_;
+    std::unique_ptr<GlPresenter> gl_;
+    std::unique_ptr<HeadlessPresenter> headless_;
+    std::string whyHeadless_;
+    std::unique_ptr<Navigator> nav_;
+    PresentOptions present_;
+    bool showStatus_ = false;
+    Image statusImage_;  // the overlay (H): frame rate, bytes, codec, per-client figures, counters
+    double statusClock_ = 0;
+    int recordings_ = 0;
+    std::vector<InputState> injected_;
+    bool apply(LiveScene& scene, const InputState& in, double dt);
+    std::optional<PickResult> grabbed_;
+    Transform grabbedStart_;
+};
+
+}  // namespace rtwall::wall

@@ -1,0 +1,265 @@
+// WallSession on loopback with client threads: the one scene state (the bugs of the old frame
+// loop, issue 17, each reproduced), the tile-owner view, frames at a fraction of the wall.
+#include "display_test_util.h"
+
+#include <rtwall/wall.h>
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>  // key codes, as the wall's windows report them
+
+#include <fstream>
+
+namespace rtwall {
+namespace {
+
+// Two boxes on a floor, lit, a camera looking at them; 96x64 pixels in tiles of 32.
+std::string sceneText(double boxX, const char* boxColour = "[0.8, 0.2, 0.2]") {
+    char text[2048];
+    std::snprintf(text, sizeof text, R"([image]
+width = 96
+height = 64
+tile = 32
+[render]
+ambient = [0.1, 0.1, 0.1]
+[[mesh]]
+name = "box"
+shape = "box"
+[[mesh]]
+name = "floor"
+shape = "quad"
+[[material]]
+name = "red"
+type = "lambert"
+color = %s
+[[material]]
+name = "grey"
+type = "lambert"
+color = [0.6, 0.6, 0.6]
+[[instance]]
+mesh = "box"
+material = "red"
+translate = [%g, 0.5, 0]
+[[instance]]
+mesh = "floor"
+material = "grey"
+scale = 8
+[[light]]
+position = [2, 6, 4]
+intensity = 60
+[[camera]]
+position = [0, 2, 7]
+look_at = [0, 0.5, 0]
+fov = 40
+)",
+                  boxColour, boxX);
+    return text;
+}
+
+RunConfig sessionConfig(const std::filesystem::path& dir, const std::filesystem::path& scene) {
+    RunConfig c;
+    c.scene = scene.string();
+    c.cluster.localClients = 2;
+    c.cluster.async = false;  // each frame shows the state at the time of the call
+    c.clientThreads = true;
+    c.headless = true;
+    c.frames = 0;
+    c.orbit = 0.0;
+    c.writeEvery = 0;
+    c.out = dir;
+    c.log = [](const std::string&) {};
+    return c;
+}
+
+// The session's state, rendered on this machine: what the cluster must have shown.
+Image renderState(const SceneDesc& d) {
+    const Scene scene(d);
+    return renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings);
+}
+
+size_t differingBytes(const Image& a, const Image& b) {
+    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
+    size_t n = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
+    return n;
+}
+
+// Where the box's centre is seen: its pixel, found by projecting with the session's camera.
+std::pair<double, double> pixelOf(const WallSession& s, Float3 p) {
+    // Search the image for the pixel whose ray passes closest to p (96 x 64: cheap, and exact enough).
+    const SceneDesc& d = s.scene();
+    const Camera cam(s.camera(), d.settings.width, d.settings.height);
+    double best = 1e30, bx = 0, by = 0;
+    for (int y = 0; y < d.settings.height; ++y)
+        for (int x = 0; x < d.settings.width; ++x) {
+            const Float3 o = cam.origin(), dir = cam.direction(x + 0.5f, y + 0.5f);
+            const Float3 v{p.x - o.x, p.y - o.y, p.z - o.z};
+            const double dd = double(dir.x) * dir.x + double(dir.y) * dir.y + double(dir.z) * dir.z;
+            const double t = (double(v.x) * dir.x + double(v.y) * dir.y + double(v.z) * dir.z) / dd;
+            const double ex = v.x - t * dir.x, ey = v.y - t * dir.y, ez = v.z - t * dir.z;
+            const double dist = ex * ex + ey * ey + ez * ez;
+            if (dist < best) best = dist, bx = x + 0.5, by = y + 0.5;
+        }
+    return {bx, by};
+}
+
+// Issue 17: a --watch edit updated only the loop's copy and the master, so picks went on using
+// the transforms the scene was started with.
+TEST(WallSession, PickingSeesWhatAnEditMoved) {
+    const auto dir = test::displayScratchDir();
+    const auto file = test::writeText(dir / "scene.toml", sceneText(0.0));
+    WallSession s(sessionConfig(dir, file));
+    ASSERT_TRUE(s.step());
+    const auto [x0, y0] = pixelOf(s, {0, 0.5f, 0});
+    ASSERT_TRUE(s.pick(x0, y0));
+    EXPECT_EQ(s.pick(x0, y0)->instance, 0u) << "the box, where the file put it";
+    const SceneEdit e = s.applyEdit(loadSceneFile(test::writeText(dir / "scene.toml", sceneText(2.0))));
+    EXPECT_EQ(e.transforms.size(), 1u);
+    ASSERT_TRUE(s.step());
+    const auto p = s.pick(x0, y0);
+    EXPECT_TRUE(!p || p->instance != 0u) << "the box is not where it was any more";
+    const auto [x1, y1] = pixelOf(s, {2, 0.5f, 0});
+    ASSERT_TRUE(s.pick(x1, y1));
+    EXPECT_EQ(s.pick(x1, y1)->instance, 0u) << "the box where the edit moved it";
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+}
+
+// Issue 17: a Ctrl+drag updated only the master and the view's copy, so the loop's state no
+// longer matched the clients', and a later --watch edit was diffed against the wrong state.
+TEST(WallSession, TheStateItHoldsIsWhatTheClientsRender) {
+    const auto dir = test::displayScratchDir();
+    const auto file = test::writeText(dir / "scene.toml", sceneText(0.0));
+    WallSession s(sessionConfig(dir, file));
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    // A drag (WallInput moves objects through the same call).
+    s.setInstanceTransform(0, Transform::translate(-1.5, 0.5, 0.5));
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.scene().instances[0].transform.m[3], -1.5);
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u) << "after the drag";
+    // The file changes only a colour: the reload puts the box back where the file has it.
+    const SceneEdit e = s.applyEdit(loadSceneFile(test::writeText(dir / "scene.toml", sceneText(0.0, "[0.2, 0.8, 0.2]"))));
+    EXPECT_EQ(e.materials.size(), 1u);
+    ASSERT_EQ(e.transforms.size(), 1u) << "the dragged box differs from the file";
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.scene().instances[0].transform.m[3], 0.0);
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u) << "after the reload";
+    EXPECT_EQ(s.summary().counters.dropped(), 0u);
+}
+
+// Issue 17: the tile-owner view (key T) drew the tile grid the run started with, whatever the
+// tile control or a [render] edit set since.
+TEST(WallSession, TheTileOwnerViewFollowsTheTileSize) {
+    const auto dir = test::displayScratchDir();
+    WallSession s(sessionConfig(dir, test::writeText(dir / "scene.toml", sceneText(0.0))));
+    s.showTileOwners(true);
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.lastFrame().tileSize, 32);
+    EXPECT_EQ(s.lastFrame().tileOwners.size(), 3u * 2u);
+    RenderSettings smaller = s.scene().settings;
+    smaller.tileSize = 16;
+    s.setRenderSettings(smaller);
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.lastFrame().tileSize, 16);
+    EXPECT_EQ(s.lastFrame().tileOwners.size(), 6u * 4u);
+    for (uint32_t owner : s.lastFrame().tileOwners) EXPECT_NE(owner, UINT32_MAX) << "every tile has its client";
+}
+
+// Issue 17: the scale control renders a smaller frame, which the presenters refused (they threw
+// for a frame that is not the wall's size), so an operating point with a scale below 1 ended the
+// run. The wall shows it upscaled; the screens get their full size.
+TEST(WallSession, AFrameAtAFractionOfTheWallIsShownUpscaled) {
+    const auto dir = test::displayScratchDir();
+    const auto wall = test::writeText(dir / "wall.toml", R"([wall]
+name = "pair"
+[grid]
+columns = 2
+rows = 1
+screen_width = 48
+screen_height = 64
+[headless]
+write_every = 1
+)");
+    const auto front = test::writeText(dir / "front.toml", R"([[point]]
+name = "half"
+frame_s = 0.001
+error = 0.5
+[point.controls]
+scale = 0.5
+tile = 16
+)");
+    RunConfig c = sessionConfig(dir, test::writeText(dir / "scene.toml", sceneText(0.0)));
+    c.wall = wall;
+    c.targetFps = 10;
+    c.front = front;
+    c.writeEvery = 1;
+    WallSession s(c);
+    s.showTileOwners(true);
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.lastFrame().left.width, 48) << "rendered at half the wall's resolution";
+    EXPECT_EQ(s.lastFrame().tileSize, 16);
+    const uint32_t n = s.lastReport().frame;
+    char name[64];
+    std::snprintf(name, sizeof name, "frame_%06u", n);
+    EXPECT_EQ(readPng(dir / (std::string(name) + ".png")).width, 96) << "the file is the wall's size";
+    for (const char* screen : {"_c0r0.png", "_c1r0.png"}) {
+        const Image img = readPng(dir / (std::string(name) + screen));
+        EXPECT_EQ(img.width, 48) << screen;
+        EXPECT_EQ(img.height, 64) << screen;
+    }
+}
+
+InputState keyPress(int key, int mods = 0) {
+    InputState in;
+    in.keysPressed = {key};
+    in.modsPressed = {mods};
+    return in;
+}
+
+// The wall's keys and mouse, as its windows would report them (injected: the same code path,
+// headless): Ctrl+drag moves an object through the one state, a drag orbits the camera, R records
+// a camera path that replays, Esc ends the run.
+TEST(WallSession, KeysAndMouseChangeTheSceneThroughItsOneState) {
+    const auto dir = test::displayScratchDir();
+    WallSession s(sessionConfig(dir, test::writeText(dir / "scene.toml", sceneText(0.0))));
+    ASSERT_TRUE(s.step());
+    // Ctrl+click on the box, then drag it 20 pixels to the right.
+    const auto [x, y] = pixelOf(s, {0, 0.5f, 0});
+    InputState press;
+    press.leftPressed = press.leftDown = true;
+    press.clickMods = GLFW_MOD_CONTROL;
+    press.wallX = x;
+    press.wallY = y;
+    InputState drag = press;
+    drag.leftPressed = false;
+    drag.wallX = x + 20;
+    s.inject(press);
+    s.inject(drag);
+    ASSERT_TRUE(s.step());
+    EXPECT_GT(s.scene().instances[0].transform.m[3], 0.1) << "the box moved right";
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u) << "and the clients render it there";
+    // Release, then R, an orbiting drag, R: a recorded camera path.
+    InputState release;
+    s.inject(release);
+    s.inject(keyPress(GLFW_KEY_R));
+    InputState orbit;
+    orbit.leftDown = true;
+    orbit.mouseDx = 40;
+    s.inject(orbit);
+    s.inject(orbit);
+    s.inject(keyPress(GLFW_KEY_R));
+    const CameraDesc before = s.camera();
+    ASSERT_TRUE(s.step());
+    EXPECT_NE(s.camera().position.x, before.position.x) << "the drag orbited the camera";
+    EXPECT_EQ(s.scene().cameras.front().position.x, s.camera().position.x) << "the state holds the camera the wall shows";
+    const std::vector<CameraKey> path = readCameraPath(dir / "camera_path_1.toml", s.scene().origin);
+    ASSERT_GE(path.size(), 2u);
+    EXPECT_EQ(path.back().camera.position.x, s.camera().position.x);
+    // Esc ends the run before another frame.
+    InputState esc;
+    esc.keyDown[GLFW_KEY_ESCAPE] = true;
+    s.inject(esc);
+    EXPECT_FALSE(s.step());
+}
+
+}  // namespace
+}  // namespace rtwall

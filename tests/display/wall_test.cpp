@@ -1,0 +1,153 @@
+// The wall library's plain parts: camera paths (one format, read and written in one file), the
+// control table and run configs.
+#include "display_test_util.h"
+
+#include <rtwall/wall.h>
+
+#include <cmath>
+#include <set>
+
+namespace rtwall {
+namespace {
+
+CameraKey key(int frame, Float3 position, float fov = 45.0f) {
+    CameraKey k;
+    k.frame = frame;
+    k.camera.position = position;
+    k.camera.lookAt = {0, 0, 0};
+    k.camera.fovY = fov;
+    return k;
+}
+
+// Recorded paths are written in world coordinates: the scene's rebasing origin is added back in
+// double precision, so a float pose at 1e6 comes out exact, and reading the file with the same
+// origin gives the very floats back.
+TEST(CameraPath, WrittenInWorldCoordinatesAndReadBackExactly) {
+    const std::array<double, 3> origin{1e6, -2e5, 3e5 + 0.5};
+    CameraKey a = key(0, {0.25f, 1.0f, -2.0f}, 40.0f), b = key(7, {1.0f / 3.0f, -0.1f, 5e-3f}, 61.5f);
+    b.camera.up = {0.0f, 0.8f, 0.6f};
+    const std::string text = writeCameraPath({a, b}, origin);
+    EXPECT_NE(text.find("position = [1000000.25, -199999, 299998.5]"), std::string::npos) << text;
+    EXPECT_NE(text.find("look_at = [1000000, -200000, 300000.5]"), std::string::npos) << text;
+    const auto file = test::writeText(test::displayScratchDir() / "path.toml", text);
+    const std::vector<CameraKey> back = readCameraPath(file, origin);
+    ASSERT_EQ(back.size(), 2u);
+    for (size_t i = 0; i < 2; ++i) {
+        const CameraKey& w = i ? b : a;
+        EXPECT_EQ(back[i].frame, w.frame);
+        EXPECT_EQ(back[i].camera.position.x, w.camera.position.x) << i;
+        EXPECT_EQ(back[i].camera.position.y, w.camera.position.y) << i;
+        EXPECT_EQ(back[i].camera.position.z, w.camera.position.z) << i;
+        EXPECT_EQ(back[i].camera.up.y, w.camera.up.y) << i;
+        EXPECT_EQ(back[i].camera.fovY, w.camera.fovY) << i;
+    }
+    // Without an origin the numbers are the scene's own.
+    EXPECT_NE(writeCameraPath({a}, {0, 0, 0}).find("position = [0.25, 1, -2]"), std::string::npos);
+}
+
+TEST(CameraPath, InterpolatesBetweenKeysAndHoldsAfterTheLast) {
+    const std::vector<CameraKey> keys{key(10, {0, 0, 4}, 40), key(20, {10, 0, 4}, 60)};
+    EXPECT_EQ(cameraAt(keys, 0).position.x, 0.0f);
+    EXPECT_EQ(cameraAt(keys, 15).position.x, 5.0f);
+    EXPECT_EQ(cameraAt(keys, 15).fovY, 50.0f);
+    EXPECT_EQ(cameraAt(keys, 99).position.x, 10.0f);
+}
+
+TEST(CameraPath, BadFilesAreOneLineErrors) {
+    const auto dir = test::displayScratchDir();
+    auto error = [&](const std::string& text) {
+        const auto file = test::writeText(dir / "bad.toml", text);
+        try {
+            readCameraPath(file, {0, 0, 0});
+        } catch (const InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_NE(error("").find("at least one [[key]]"), std::string::npos);
+    EXPECT_NE(error("[[key]]\nframe = 3\nposition = [0,0,1]\nlook_at = [0,0,0]\n[[key]]\nframe = 3\nposition = [0,0,1]\n"
+                    "look_at = [0,0,0]\n")
+                  .find("bad.toml:6"),
+              std::string::npos);
+    EXPECT_NE(error("[[key]]\nframe = 1\nposition = [0,0,1]\nlook_at = [0,0,0]\nfield_of_view = 30\n").find("field_of_view"),
+              std::string::npos);
+}
+
+TEST(Controls, EveryControlHasOneNameAndAppliesWithinItsRange) {
+    std::set<std::string> names;
+    RenderSettings base;
+    base.width = 1600;
+    base.height = 1200;
+    for (const Control& c : controls()) {
+        EXPECT_TRUE(names.insert(c.name).second) << "two controls named " << c.name;
+        OperatingPoint p;
+        p.name = "test";
+        bool changed = false;  // at one end of its range at least, a control changes a setting
+        for (double v : {c.min, c.max}) {
+            p.controls = {{c.name, v}};
+            const Knobs k = knobsOf(p, base, {});
+            changed |= k.settings.tileSize != base.tileSize || k.settings.width != base.width ||
+                       k.settings.supersample != base.supersample || k.settings.pruneThreshold != base.pruneThreshold ||
+                       k.settings.gi != base.gi || k.codec.codec != CodecSettings{}.codec ||
+                       k.codec.jpegQuality != CodecSettings{}.jpegQuality || k.volumeStep != 0;
+        }
+        EXPECT_TRUE(changed) << c.name << " changes nothing";
+        for (double v : c.sweep) EXPECT_TRUE(v >= c.min && v <= c.max) << c.name << " sweeps " << v;
+        p.controls = {{c.name, c.max * 2 + 1}};
+        EXPECT_THROW(knobsOf(p, base, {}), InputError) << c.name << " out of range";
+    }
+    OperatingPoint unknown;
+    unknown.name = "p1";
+    unknown.controls = {{"tile_size", 32}};
+    try {
+        knobsOf(unknown, base, {});
+        ADD_FAILURE() << "an unknown control was applied";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("'tile_size'"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("gi_spp"), std::string::npos) << "names the known controls: " << e.what();
+    }
+    // What the sweep and the operating point mean by scale: a fraction of the wall's pixels.
+    OperatingPoint half;
+    half.controls = {{"scale", 0.5}};
+    EXPECT_EQ(knobsOf(half, base, {}).settings.width, 800);
+}
+
+TEST(Controls, TheJsonTheSweepReadsHasEveryControl) {
+    const std::string json = controlsJson();
+    for (const Control& c : controls()) {
+        EXPECT_NE(json.find("\"name\" : \"" + std::string(c.name) + "\""), std::string::npos) << c.name;
+        if (*c.option) {
+            EXPECT_NE(json.find("\"option\" : \"" + std::string(c.option) + "\""), std::string::npos) << c.name;
+        }
+    }
+}
+
+TEST(RunConfig, TheEmbeddedDefaultIsTheKnotDemo) {
+    const RunConfig c = defaultRunConfig();
+    EXPECT_EQ(c.scene, "builtin:knots");
+    EXPECT_EQ(c.width, 800);
+    EXPECT_EQ(c.cluster.localClients, 2);
+    EXPECT_EQ(c.frames, 60);
+    EXPECT_EQ(c.writeEvery, 30);
+}
+
+TEST(RunConfig, PathsAreRelativeToTheFileAndTyposAreErrorsWithTheirLine) {
+    const auto dir = test::displayScratchDir();
+    const auto file = test::writeText(dir / "run.toml", "scene = \"scene.toml\"\nwall = \"w.toml\"\n[run]\ncamera_path = \"p.toml\"\n");
+    const RunConfig c = readRunConfig(file);
+    EXPECT_EQ(c.scene, (dir / "scene.toml").string());
+    EXPECT_EQ(c.wall, dir / "w.toml");
+    EXPECT_EQ(c.cameraPath, dir / "p.toml");
+    EXPECT_EQ(c.orbit, 0.0) << "a camera path replaces the orbit";
+    const auto typo = test::writeText(dir / "typo.toml", "scene = \"x.toml\"\n[cluster]\nclient = 3\n");
+    try {
+        readRunConfig(typo);
+        ADD_FAILURE() << "a typo was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("typo.toml:3"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("'client'"), std::string::npos) << e.what();
+    }
+}
+
+}  // namespace
+}  // namespace rtwall
