@@ -199,6 +199,7 @@ private:
             if (std::string why = failure(); !why.empty()) {
                 // The tiles rendered before the failure go first: they are not lost with it.
                 forwardResults(std::numeric_limits<int>::max());
+                if (std::optional<TileFailed> tile = failedTile()) send(*tile);  // which tile, for its replay
                 send(Goodbye{why});
                 std::fprintf(stderr, "rtwall client: %s\n", why.c_str());
                 return 1;
@@ -737,6 +738,10 @@ private:
         std::lock_guard lock(workMutex_);
         return failure_;
     }
+    std::optional<TileFailed> failedTile() {
+        std::lock_guard lock(workMutex_);
+        return failedTile_;
+    }
 
     // ---- render threads -------------------------------------------------------------------
 
@@ -809,10 +814,14 @@ private:
                 // frame, the tile's number and pixels, and what went wrong.
                 const TileRect& r = e.rect();
                 std::lock_guard lock(workMutex_);
-                if (failure_.empty())
+                if (failure_.empty()) {
                     failure_ = "frame " + std::to_string(e.frame()) + ", tile " + std::to_string(w.tile) + " (pixels " +
                                std::to_string(r.x0) + "," + std::to_string(r.y0) + "," + std::to_string(r.x1) + "," +
                                std::to_string(r.y1) + "): " + e.reason();
+                    // The width this thread traced with (0 asks for this CPU's widest).
+                    const int width = settings_.packetWidth != 0 ? settings_.packetWidth : packetWidth();
+                    failedTile_ = TileFailed{e.frame(), w.tile, r, width, e.reason().substr(0, kMaxStringBytes)};
+                }
                 return;
             } catch (const std::exception& e) {
                 std::lock_guard lock(workMutex_);
@@ -860,6 +869,7 @@ private:
     std::atomic<bool> stallInjected_{false};
     std::atomic<bool> stopRequested_{false};
     std::string failure_;  // guarded by workMutex_
+    std::optional<TileFailed> failedTile_;  // the tile behind failure_, when the engine said which (workMutex_)
 
     std::optional<SceneSnapshot> snapshot_;
     std::future<std::unique_ptr<Scene>> building_;  // the scene for a snapshot, being built

@@ -271,6 +271,17 @@ struct Master::Impl {
     SceneSnapshot frameState;
     std::optional<EncodedSnapshot> frameStateMessage;  // frameState encoded and hashed, once per frame that needs it
     MergedUpdate sentSince;       // the updates sent since frameState, merged, for joiners
+    // The camera and settings of the last frames begun: a client's failed tile is reported a
+    // little after its frame may have ended.
+    struct FrameRecord {
+        uint32_t frame;
+        CameraDesc camera;
+        RenderSettings settings;
+    };
+    static constexpr size_t kRecentFrames = 8;
+    std::deque<FrameRecord> recentFrames;
+    std::mutex failuresMutex;
+    std::deque<TileFailure> tileFailures;  // for takeTileFailures (failuresMutex)
     TilePixels framePixels = TilePixels::Srgb8;  // how the current frame's tiles travel
     bool frameStochastic = false;
     std::vector<float> linear;    // the current frame in linear RGB (LinearHalf frames)
@@ -520,6 +531,9 @@ struct Master::Impl {
             frameState.updateSeq = stateSeq;
             frameStateMessage.reset();
         }
+        // What a client's failed tile of this frame is replayed with (onTileFailed).
+        recentFrames.push_back({frame, frameState.camera, frameState.settings});
+        if (recentFrames.size() > kRecentFrames) recentFrames.pop_front();
         frameActive = true;
         frameStart = nowSeconds();
         frameBytes = 0;
@@ -760,6 +774,28 @@ struct Master::Impl {
         serveAll();
     }
 
+    // A client's tile threw (it says goodbye next): kept, with the camera and settings of its
+    // frame, for the application to say how to replay it. A report that does not match a tile
+    // of a recent frame is dropped: it could not be replayed.
+    void onTileFailed(ClientState& c, const TileFailed& f) {
+        auto rec = std::find_if(recentFrames.begin(), recentFrames.end(), [&](const FrameRecord& r) { return r.frame == f.frame; });
+        if (rec == recentFrames.end()) {
+            unexpected("a failed tile of frame " + std::to_string(f.frame) + ", which is not a recent frame");
+            return;
+        }
+        const std::vector<TileRect> tiles = makeTiles(rec->settings.width, rec->settings.height, rec->settings.tileSize);
+        const TileRect& r = f.rect;
+        if (f.tile >= tiles.size() || tiles[f.tile].x0 != r.x0 || tiles[f.tile].y0 != r.y0 || tiles[f.tile].x1 != r.x1 ||
+            tiles[f.tile].y1 != r.y1) {
+            unexpected("a failed tile " + std::to_string(f.tile) + " whose pixels are not that tile's in frame " +
+                       std::to_string(f.frame));
+            return;
+        }
+        std::lock_guard lock(failuresMutex);
+        tileFailures.push_back({c.id, f.frame, f.tile, r, f.reason, rec->camera, rec->settings, f.packetWidth});
+        if (tileFailures.size() > 64) tileFailures.pop_front();
+    }
+
     void onResyncRequest(ClientState& c, const uint8_t* data, size_t size) {
         decodePayload<ResyncRequest>(data, size);
         if (c.stateInFlight) {
@@ -826,6 +862,7 @@ struct Master::Impl {
             case MsgType::TileResult: onTileResult(c, h, payload, payloadSize); break;
             case MsgType::Heartbeat: onHeartbeat(c, decodePayload<Heartbeat>(payload, payloadSize)); break;
             case MsgType::TileStalled: onTileStalled(c, decodePayload<TileStalled>(payload, payloadSize)); break;
+            case MsgType::TileFailed: onTileFailed(c, decodePayload<TileFailed>(payload, payloadSize)); break;
             case MsgType::ResyncRequest: onResyncRequest(c, payload, payloadSize); break;
             case MsgType::Goodbye: {
                 const Goodbye bye = decodePayload<Goodbye>(payload, payloadSize);
@@ -1173,6 +1210,14 @@ int Master::awaitClients(int wanted, int timeoutMs, int settleMs) {
 void Master::setStopFlag(const std::atomic<bool>* flag) { impl_->stopFlag = flag; }
 
 std::vector<std::string> Master::localClientArgs() const { return impl_->localArgs; }
+
+std::vector<TileFailure> Master::takeTileFailures() {
+    std::lock_guard lock(impl_->failuresMutex);
+    std::vector<TileFailure> out(std::make_move_iterator(impl_->tileFailures.begin()),
+                                 std::make_move_iterator(impl_->tileFailures.end()));
+    impl_->tileFailures.clear();
+    return out;
+}
 
 namespace {
 

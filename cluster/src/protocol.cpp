@@ -681,6 +681,28 @@ void read(Reader& r, TileStalled& m) {
     m.elapsedMs = r.u32();
 }
 
+RTWALL_WIRE_FIELDS(TileFailed, 5);
+RTWALL_WIRE_FIELDS(TileRect, 4);  // written with TileFailed
+void write(Writer& w, const TileFailed& m) {
+    w.u32(m.frame);
+    w.u32(m.tile);
+    for (int v : {m.rect.x0, m.rect.y0, m.rect.x1, m.rect.y1}) w.i32(v);
+    w.i32(m.packetWidth);
+    w.string(m.reason);
+}
+void read(Reader& r, TileFailed& m) {
+    m.frame = r.u32();
+    m.tile = r.u32();
+    m.rect.x0 = readInt(r, 0, kMaxImageSide - 1, "failed tile x0");
+    m.rect.y0 = readInt(r, 0, kMaxImageSide - 1, "failed tile y0");
+    m.rect.x1 = readInt(r, m.rect.x0 + 1, kMaxImageSide, "failed tile x1");
+    m.rect.y1 = readInt(r, m.rect.y0 + 1, kMaxImageSide, "failed tile y1");
+    m.packetWidth = readInt(r, 4, 16, "packet width");
+    if (m.packetWidth != 4 && m.packetWidth != 8 && m.packetWidth != 16)
+        fail("packet width " + std::to_string(m.packetWidth) + " is not 4, 8 or 16");
+    m.reason = r.string(kMaxStringBytes);
+}
+
 RTWALL_WIRE_FIELDS(Goodbye, 1);
 void write(Writer& w, const Goodbye& m) { w.string(m.reason); }
 void read(Reader& r, Goodbye& m) { m.reason = r.string(kMaxStringBytes); }
@@ -798,6 +820,7 @@ MsgType messageTypeOf(const ResyncRequest&) { return MsgType::ResyncRequest; }
 MsgType messageTypeOf(const AssetRequest&) { return MsgType::AssetRequest; }
 MsgType messageTypeOf(const AssetData&) { return MsgType::AssetData; }
 MsgType messageTypeOf(const TileStalled&) { return MsgType::TileStalled; }
+MsgType messageTypeOf(const TileFailed&) { return MsgType::TileFailed; }
 
 #define RTWALL_INSTANTIATE_MESSAGE(Msg)                                                    \
     template std::vector<uint8_t> encodeMessage<Msg>(Header header, const Msg& msg); \
@@ -819,6 +842,7 @@ RTWALL_INSTANTIATE_MESSAGE(ResyncRequest)
 RTWALL_INSTANTIATE_MESSAGE(AssetRequest)
 RTWALL_INSTANTIATE_MESSAGE(AssetData)
 RTWALL_INSTANTIATE_MESSAGE(TileStalled)
+RTWALL_INSTANTIATE_MESSAGE(TileFailed)
 #undef RTWALL_INSTANTIATE_MESSAGE
 
 // -- Meshes --------------------------------------------------------------------------------------

@@ -1,4 +1,4 @@
-// The rtwall wire protocol, version 7 (2 added the master's peer timeout to Welcome; 3 added
+// The rtwall wire protocol, version 8 (2 added the master's peer timeout to Welcome; 3 added
 // materials, area lights and shading settings; 4 added vertex colours to meshes, the scene's
 // origin and [bvh] settings to the snapshot, spherical and cylindrical texture mappings, texture
 // and volume files by content hash (AssetRequest, AssetData, SceneSnapshot::assets) and linear
@@ -7,7 +7,7 @@
 // Material::twoSided and Light::twoSided, which side emits; 7 added the client's work report to
 // Heartbeat (the frame, the tiles of its assignments that arrived, and whether it holds any tile:
 // the master releases hand-outs an idle client no longer holds) and TileStalled (a render thread
-// stuck on a tile)).
+// stuck on a tile); 8 added TileFailed (a tile whose rendering threw, before the client leaves)).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one writer and one
@@ -33,7 +33,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 7;
+inline constexpr uint16_t kProtocolVersion = 8;
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -64,8 +64,9 @@ enum class MsgType : uint16_t {
     AssetRequest = 15,  // client -> master: a texture or volume file by content hash
     AssetData = 16,     // master -> client
     TileStalled = 17,   // client -> master: a render thread has been on this tile far too long
+    TileFailed = 18,    // client -> master: rendering this tile threw; the client leaves after it
 };
-inline constexpr uint16_t kMaxMsgType = 17;
+inline constexpr uint16_t kMaxMsgType = 18;
 
 struct Header {
     uint16_t version = kProtocolVersion;
@@ -233,6 +234,16 @@ struct TileStalled {
     uint32_t elapsedMs = 0;
 };
 
+// A tile the engine could not render (TileError), sent just before the client's Goodbye: what
+// the master needs, with the frame's state, to say how to replay exactly that tile.
+struct TileFailed {
+    uint32_t frame = 0;
+    uint32_t tile = 0;
+    TileRect rect;            // the tile's pixels, as the client's tiling has them
+    int32_t packetWidth = 0;  // rays per Embree packet the client traced with (4, 8 or 16)
+    std::string reason;
+};
+
 struct Goodbye {
     std::string reason;
 };
@@ -274,6 +285,7 @@ MsgType messageTypeOf(const ResyncRequest&);
 MsgType messageTypeOf(const AssetRequest&);
 MsgType messageTypeOf(const AssetData&);
 MsgType messageTypeOf(const TileStalled&);
+MsgType messageTypeOf(const TileFailed&);
 
 // Canonical mesh bytes (vertex count, positions, triangle count, indices, normals flag and
 // normals, colours flag and RGB bytes, all little-endian), their hash (XXH3 128-bit) and the way back. decodeMesh

@@ -194,6 +194,16 @@ void expectSame(const Heartbeat& a, const Heartbeat& b) {
     EXPECT_EQ(a.tilesSeen, b.tilesSeen);
     EXPECT_EQ(a.idle, b.idle);
 }
+void expectSame(const TileFailed& a, const TileFailed& b) {
+    EXPECT_EQ(a.frame, b.frame);
+    EXPECT_EQ(a.tile, b.tile);
+    EXPECT_EQ(a.rect.x0, b.rect.x0);
+    EXPECT_EQ(a.rect.y0, b.rect.y0);
+    EXPECT_EQ(a.rect.x1, b.rect.x1);
+    EXPECT_EQ(a.rect.y1, b.rect.y1);
+    EXPECT_EQ(a.packetWidth, b.packetWidth);
+    EXPECT_EQ(a.reason, b.reason);
+}
 void expectSame(const TileStalled& a, const TileStalled& b) {
     EXPECT_EQ(a.frame, b.frame);
     EXPECT_EQ(a.tile, b.tile);
@@ -374,6 +384,7 @@ template <class F> void forEachSample(F&& f) {
     f(AssetRequest{{0x0102030405060708ull, 0x1112131415161718ull}});
     f(AssetData{{7, 8}, {1, 2, 3, 4, 5}});
     f(TileStalled{78, 12, 61000});
+    f(TileFailed{79, 13, {32, 64, 48, 80}, 8, "injected fault at pixel 40,70"});
 }
 
 template <class Msg> std::vector<uint8_t> payloadOf(const Msg& msg) {
@@ -471,7 +482,7 @@ TEST(Protocol, GoldenBytes) {
     // The exact layout of a header and a small payload; a change here breaks every deployed peer
     // (version 2: the shading fields of materials, lights and settings; 4: FrameBegin's tile format;
     // 5: the snapshot's BVH primitives; 6: two-sided emission of materials and area lights; 7: the
-    // client's work report in Heartbeat, TileStalled).
+    // client's work report in Heartbeat, TileStalled; 8: TileFailed).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -479,7 +490,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x07, 0x00,                                      // version (7: Heartbeat's work report, TileStalled)
+        0x08, 0x00,                                      // version (8: TileFailed)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame

@@ -1,5 +1,6 @@
 // WallSession on loopback with client threads: the one scene state (the bugs of the old frame
 // loop, issue 17, each reproduced), the tile-owner view, frames at a fraction of the wall.
+#include "cli_util.h"
 #include "display_test_util.h"
 
 #include <rtwall/wall.h>
@@ -259,6 +260,75 @@ TEST(WallSession, KeysAndMouseChangeTheSceneThroughItsOneState) {
     esc.keyDown[GLFW_KEY_ESCAPE] = true;
     s.inject(esc);
     EXPECT_FALSE(s.step());
+}
+
+// Issue 17: a tile a render client fails is one line of the session's log with the command that
+// renders just that tile again (the frame's camera, here not the scene file's, its settings and
+// the client's packet width); run, the command gives the pixels the frame should have had there.
+TEST(WallSession, AFailedTileIsOneLineWithTheCommandThatReplaysIt) {
+    const auto dir = test::displayScratchDir();
+    const std::filesystem::path scene = test::writeText(dir / "scene.toml", sceneText(0.0));
+    RunConfig c = sessionConfig(dir, scene);
+    c.cluster.localClients = 1;
+    c.cluster.timeoutMs = 500;  // the frame fails soon once its only client has left
+    c.clientFault = InjectedTileFault{2, 40, 20};  // frame 2, in the tile of pixels 32,0 to 64,32
+    std::vector<std::string> lines;
+    c.log = [&](const std::string& line) { lines.push_back(line); };
+    WallSession s(c);
+    ASSERT_TRUE(s.step());
+    ASSERT_EQ(s.lastReport().frame, 1u);
+    CameraDesc moved = s.camera();
+    moved.position = {1.5f, 2.5f, 6.0f};
+    s.setCamera(moved);
+    lines.clear();
+    try {
+        s.step();
+    } catch (const std::exception&) {
+        // The frame may fail: its only client left.
+    }
+    std::vector<std::string> failed;
+    for (const std::string& line : lines)
+        if (line.find("failed frame") != std::string::npos) failed.push_back(line);
+    ASSERT_EQ(failed.size(), 1u) << "one line for the one failed tile";
+    const std::string& line = failed.front();
+    const std::string head = "client 1 failed frame 2, tile 32,0,64,32: injected fault at pixel 40,20 (replay: ";
+    ASSERT_TRUE(line.starts_with(head) && line.ends_with(")")) << line;
+    const std::string command = line.substr(head.size(), line.size() - head.size() - 1);
+
+    const SceneDesc loaded = loadScene(scene.string());
+    TileReplay expected;
+    expected.scene = scene.string();
+    expected.origin = loaded.origin;
+    expected.camera = moved;
+    expected.settings = loaded.settings;
+    expected.trace.packetWidth = packetWidth();  // the client's: this CPU's widest
+    expected.trace.clientId = 1;
+    expected.frame = 2;
+    expected.rect = {32, 0, 64, 32};
+    EXPECT_EQ(command, replayCommand(expected));
+
+    // Run, it renders that tile alone: the pixels of frame 2 there, nothing elsewhere.
+    const std::string tail = " --out tile.png";
+    ASSERT_TRUE(command.starts_with("rtwall render ") && command.ends_with(tail)) << command;
+    const std::filesystem::path out = dir / "replayed.png";
+    const test::CliResult r =
+        test::runCli(RTWALL_EXE, command.substr(7, command.size() - 7 - tail.size()) + " --out " + out.string());
+    ASSERT_EQ(r.status, 0) << command << "\n" << r.output;
+    const Image replayed = readPng(out);
+    const Image frame2 = renderFrame(Scene(loaded), Camera(moved, loaded.settings.width, loaded.settings.height),
+                                     loaded.settings, 2);
+    ASSERT_EQ(replayed.width, frame2.width);
+    ASSERT_EQ(replayed.height, frame2.height);
+    size_t differing = 0, lit = 0;
+    for (int y = 0; y < frame2.height; ++y)
+        for (int x = 0; x < frame2.width; ++x)
+            for (int k = 0; k < 3; ++k) {
+                const bool inTile = x >= 32 && x < 64 && y < 32;
+                if (inTile) differing += replayed.pixel(x, y)[k] != frame2.pixel(x, y)[k];
+                else lit += replayed.pixel(x, y)[k] != 0;
+            }
+    EXPECT_EQ(differing, 0u) << "the replayed tile differs from frame 2's";
+    EXPECT_EQ(lit, 0u) << "the replay renders that tile alone";
 }
 
 }  // namespace

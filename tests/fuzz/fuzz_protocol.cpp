@@ -69,10 +69,10 @@ template <class... Msgs> struct Table {
     static constexpr PayloadCheck payload[] = {checkPayload<Msgs>...};
     static constexpr MessageCheck message[] = {checkMessage<Msgs>...};
 };
-// In MsgType order, 1..17.
+// In MsgType order, 1..18.
 using Messages = Table<Hello, Welcome, SceneSnapshot, MeshRequest, MeshData, Update, FrameBegin, TileRequest,
                        TileAssign, TileResult, Heartbeat, Goodbye, Ready, ResyncRequest, AssetRequest, AssetData,
-                       TileStalled>;
+                       TileStalled, TileFailed>;
 static_assert(std::size(Messages::payload) == kMaxMsgType);
 
 void checkMesh(const uint8_t* data, size_t size) {

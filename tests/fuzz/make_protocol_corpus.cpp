@@ -105,6 +105,7 @@ int main(int argc, char** argv) {
     seedMessage("heartbeat", Heartbeat{});
     seedMessage("heartbeat-idle", Heartbeat{3, 12, true});
     seedMessage("tile-stalled", TileStalled{3, 17, 61000});
+    seedMessage("tile-failed", TileFailed{3, 17, {32, 0, 64, 32}, 16, "injected fault at pixel 40,20"});
     seedMessage("goodbye", Goodbye{"done"});
     seedMessage("ready", Ready{2, {3, 4}});
     seedMessage("resync-request", ResyncRequest{1});

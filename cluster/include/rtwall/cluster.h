@@ -127,6 +127,21 @@ struct SceneEdit {
 SceneEdit diffScenes(const SceneDesc& before, const SceneDesc& after);
 
 // The display master: owns the scene state, hands out tiles, assembles frames.
+// A tile a render client could not render (its engine threw a TileError; the client left after
+// saying so), with what decides the tile's pixels as the master knows it: the state of the frame
+// (its camera and render settings) and the client's packet width. Everything a replay needs
+// (replayCommand) but where the scene came from, which the application knows.
+struct TileFailure {
+    uint32_t client = 0;      // its id (the client view's colour)
+    uint32_t frame = 0;
+    uint32_t tile = 0;        // index in the frame's tiling (makeTiles)
+    TileRect rect;
+    std::string reason;       // the engine's (TileError::reason)
+    CameraDesc camera;        // the frame's
+    RenderSettings settings;  // the frame's
+    int packetWidth = 0;      // the client's rays per Embree packet
+};
+
 class Master {
 public:
     Master(const SceneDesc& scene, const ClusterSettings& settings);
@@ -152,6 +167,9 @@ public:
     // temporary directory, removed with the master; its public key is allowed) and the master's
     // public key. Empty without keys.
     std::vector<std::string> localClientArgs() const;
+
+    // Tiles that clients failed since the last call, oldest first (the 64 newest are kept).
+    std::vector<TileFailure> takeTileFailures();
 
     // Differential scene updates: only what changes is sent to the clients. They take effect
     // in the next frame that begins after the call. Each costs the same whatever the scene's

@@ -58,6 +58,7 @@ struct RunConfig {
     // this process running runClient.
     std::filesystem::path clientExecutable = "/proc/self/exe";
     bool clientThreads = false;
+    std::optional<InjectedTileFault> clientFault;  // tests: client threads fail this tile (ClientSettings::tileFault)
     // Where the session's progress lines go (stdout by default).
     std::function<void(const std::string&)> log;
 };
@@ -142,7 +143,8 @@ public:
     WallSession& operator=(const WallSession&) = delete;
 
     // One frame: input, edits, the scripted camera, the render, accumulation, the wall, the
-    // controller, files and the progress line. False once the run is over (its frames done, the
+    // controller, files and the progress line. A tile a client failed is one line in the log with
+    // the `rtwall render` command that replays it (also when the frame then fails). False once the run is over (its frames done, the
     // wall closed, or stopped), before anything is rendered.
     bool step();
 

@@ -60,6 +60,9 @@ struct WallSession::Impl {
     RenderSettings baseSettings;  // the wall's resolution and the scene's settings before any operating point
     CodecSettings baseCodec;
 
+    // The scene as loadScene was given it, for replay commands; none for a scene given in code.
+    std::optional<std::string> replaySource;
+
     std::unique_ptr<Master> master;
     std::unique_ptr<LocalClients> processes;
     std::vector<std::thread> clientThreads;
@@ -107,6 +110,7 @@ struct WallSession::Impl {
         c.connect = master->endpoint();
         c.threads = threads;
         c.exitAfterIdleMs = 5000;
+        c.tileFault = config.clientFault;
         const std::vector<std::string> args = master->localClientArgs();  // --key K --server-key P, with keys
         for (size_t i = 0; i + 1 < args.size(); i += 2) {
             if (args[i] == "--key") c.keyFile = args[i + 1];
@@ -232,6 +236,32 @@ struct WallSession::Impl {
         return e;
     }
 
+    // One line per tile a client failed: which, why, and the command that renders just that tile
+    // again with the frame's camera and settings and the client's packet width. (Changes made to
+    // the scene after it was loaded, other than the camera and settings, are not in it.)
+    void reportTileFailures() {
+        for (const TileFailure& f : master->takeTileFailures()) {
+            std::string line = format("client %u failed frame %u, tile %d,%d,%d,%d: ", f.client, f.frame, f.rect.x0, f.rect.y0,
+                                      f.rect.x1, f.rect.y1) + f.reason;
+            if (replaySource) {
+                TileReplay t;
+                t.scene = *replaySource;
+                t.builtinTriangles = SceneLoadOptions{}.builtinTriangles;  // how the session loads it
+                t.origin = live->desc().origin;
+                t.camera = f.camera;
+                t.settings = f.settings;
+                t.trace.packetWidth = f.packetWidth;
+                t.trace.clientId = f.client;
+                t.frame = f.frame;
+                t.rect = f.rect;
+                line += " (replay: " + replayCommand(t) + ")";
+            } else {
+                line += " (no replay command: the scene was given in code)";
+            }
+            log(line);
+        }
+    }
+
     // Renders the frame (both eyes on a stereo wall) into `shown` and `report`.
     void render() {
         shown = WallFrame{};
@@ -306,6 +336,7 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     RunConfig& c = s.config;
     if (c.watch && (c.loaded || sceneSourceKind(c.scene) != SceneSourceKind::SceneFile))
         throw InputError("--watch needs a scene file (.toml); " + c.scene + " is not one");
+    if (!c.loaded) s.replaySource = c.scene;
     SceneDesc desc = c.loaded ? std::move(*c.loaded) : loadScene(c.scene);
     c.loaded.reset();
     if (c.width) desc.settings.width = c.width;
@@ -393,7 +424,13 @@ bool WallSession::step() {
         s.input->setCamera(*scripted);
         s.live->setCamera(*scripted);
     }
-    s.render();
+    try {
+        s.render();
+    } catch (...) {
+        s.reportTileFailures();  // the failure may be why the frame could not finish
+        throw;
+    }
+    s.reportTileFailures();
     const auto now = std::chrono::steady_clock::now();
     s.frameTimes.push_back(std::chrono::duration<double>(now - s.last).count());
     s.last = now;
