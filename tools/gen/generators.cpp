@@ -10,6 +10,12 @@ const std::map<std::string, Generator>& generators() {
          {"field of instanced sunflowers in groups of groups, plus large trees (--instances plants, --triangles per plant, "
           "--trees, --tree-triangles)",
           genSunflowers}},
+        {"office",
+         {"the office demo: shadows, mirror, glass, textures, alpha-masked leaves, a volume",
+          [](const GenOptions& g) { writeShadingDemo("office", g.out); }}},
+        {"headlight",
+         {"the headlight demo: parabolic reflector, bulb, structured lens glass, deep paths",
+          [](const GenOptions& g) { writeShadingDemo("headlight", g.out); }}},
     };
     return all;
 }

@@ -37,6 +37,9 @@ const std::map<std::string, Generator>& generators();
 
 void genPowerplant(const GenOptions& o);
 void genSunflowers(const GenOptions& o);
+// The shading demos (shading_demos.cpp): writes `name` ("office" or "headlight") into `dir`;
+// returns the scene file.
+std::filesystem::path writeShadingDemo(const std::string& name, const std::filesystem::path& dir);
 
 // ---- building blocks shared by the generators ------------------------------------------------
 

@@ -1,8 +1,7 @@
 // rtwall gen NAME --out DIR: the scene generators (tools/gen/).
 #include "commands.h"
 
-#include "../gen/generators.h"
-#include "gen_shading.h"
+#include <generators.h>
 
 #include <rtwall/mesh.h>
 
@@ -16,15 +15,8 @@ void addGen(CLI::App& app, Run& run) {
     auto o = std::make_shared<gen::GenOptions>();
     auto name = std::make_shared<std::string>();
     CLI::App* cmd = app.add_subcommand("gen", "Generate a test or benchmark scene: mesh files plus scene.toml");
-    // The CAD generators (tools/gen/) and the shading demos (gen_shading.cpp), one list.
-    static const std::map<std::string, gen::Generator> all = [] {
-        std::map<std::string, gen::Generator> m = gen::generators();
-        m["office"] = {"the office demo: shadows, mirror, glass, textures, alpha-masked leaves, a volume",
-                       [](const gen::GenOptions& g) { writeShadingDemo("office", g.out); }};
-        m["headlight"] = {"the headlight demo: parabolic reflector, bulb, structured lens glass, deep paths",
-                          [](const gen::GenOptions& g) { writeShadingDemo("headlight", g.out); }};
-        return m;
-    }();
+    // The CAD generators and the shading demos (tools/gen/), one list.
+    const std::map<std::string, gen::Generator>& all = gen::generators();
     std::string list;
     std::vector<std::string> names;
     for (const auto& [n, g] : all) {
@@ -46,7 +38,7 @@ void addGen(CLI::App& app, Run& run) {
         run = [o, name] {
             const auto t0 = std::chrono::steady_clock::now();
             try {
-                all.at(*name).run(*o);
+                gen::generators().at(*name).run(*o);
             } catch (const std::filesystem::filesystem_error& e) {
                 throw InputError(std::string("gen: ") + e.what());
             } catch (const std::runtime_error& e) {

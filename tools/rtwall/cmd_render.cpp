@@ -1,15 +1,16 @@
+// rtwall render: one frame (or the mean of frames 1..N) of a scene to PNG, on this PC or through
+// a master and local client processes (the wall's session, rtwall/wall.h). Option values are
+// read in render_args.cpp.
 #include "commands.h"
-#include "progress.h"
-#include "tile_failure.h"
+#include "render_args.h"
+
+#include <progress.h>
+#include <tile_failure.h>
 
 #include <rtwall/cluster.h>
-#include <rtwall/wall.h>
 #include <rtwall/engine.h>
-#include <rtwall/vec.h>
+#include <rtwall/wall.h>
 
-#include <array>
-#include <charconv>
-#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -20,81 +21,7 @@ namespace rtwall::cli {
 
 namespace {
 
-struct RenderOptions {
-    std::string scene, out, camera, kernel, region, codec = "lz4", view, shading, shadows;
-    std::string cameraPosition, cameraLookAt, cameraUp, cameraWindow, background, ambient, fault;
-    int width = 0, height = 0, threads = -1, tile = 0, clients = 0, prefetch = 4;
-    int samples = 0, maxDepth = 0, frames = 1, packetWidth = 0, supersample = 0;
-    int64_t frame = -1, clientId = -1, triangles = 3'000'000;
-    double prune = -1, fov = 0;
-    bool gi = false, noGi = false;
-};
-
-// "a,b,c,..." as exactly `count` numbers (each read as the nearest double).
-std::vector<double> parseNumbers(const std::string& text, size_t count, const std::string& option) {
-    std::vector<double> v;
-    const char* p = text.data();
-    const char* end = text.data() + text.size();
-    while (v.size() < count) {
-        double x = 0;
-        const auto r = std::from_chars(p, end, x);
-        if (r.ec != std::errc() || !std::isfinite(x)) break;
-        v.push_back(x);
-        p = r.ptr;
-        if (p == end || *p != ',') break;
-        ++p;
-    }
-    if (v.size() != count || p != end)
-        throw InputError(option + " '" + text + "': expected " + std::to_string(count) + " numbers separated by commas");
-    return v;
-}
-Float3 parseVector(const std::string& text, const std::string& option) {
-    const std::vector<double> v = parseNumbers(text, 3, option);
-    return {float(v[0]), float(v[1]), float(v[2])};
-}
-// A point in the scene file's world coordinates, made relative to the scene's origin in double
-// precision as loading a scene file does.
-Float3 parsePoint(const std::string& text, const std::string& option, const std::array<double, 3>& origin) {
-    const std::vector<double> v = parseNumbers(text, 3, option);
-    return {float(v[0] - origin[0]), float(v[1] - origin[1]), float(v[2] - origin[2])};
-}
-
-// The camera: a scene camera by name (or the first), with what the options give instead.
-CameraDesc chooseCamera(const SceneDesc& desc, const RenderOptions& o) {
-    const CameraDesc* named = o.camera.empty() ? &desc.cameras.front() : desc.findCamera(o.camera);
-    if (!named) {
-        std::string names;
-        for (const CameraDesc& c : desc.cameras) names += (names.empty() ? "" : ", ") + c.name;
-        throw InputError(o.scene + ": no camera named '" + o.camera + "' (cameras: " + names + ")");
-    }
-    CameraDesc c = *named;
-    if (!o.cameraPosition.empty()) c.position = parsePoint(o.cameraPosition, "--camera-position", desc.origin);
-    if (!o.cameraLookAt.empty()) c.lookAt = parsePoint(o.cameraLookAt, "--camera-look-at", desc.origin);
-    if (!o.cameraUp.empty()) c.up = parseVector(o.cameraUp, "--camera-up");
-    if (o.fov > 0) c.fovY = float(o.fov);
-    if (!o.cameraWindow.empty()) {
-        const std::vector<double> v = parseNumbers(o.cameraWindow, 9, "--camera-window");
-        const auto& org = desc.origin;
-        ProjectionWindow w;
-        w.lowerLeft = {float(v[0] - org[0]), float(v[1] - org[1]), float(v[2] - org[2])};
-        w.right = {float(v[3]), float(v[4]), float(v[5])};
-        w.up = {float(v[6]), float(v[7]), float(v[8])};
-        if (length(cross(w.right, w.up)) == 0.0f) throw InputError("--camera-window '" + o.cameraWindow + "': the window has no area");
-        c.window = w;
-    }
-    if (length(c.lookAt - c.position) == 0.0f) throw InputError("the camera looks at its own position");
-    if (length(cross(c.lookAt - c.position, c.up)) == 0.0f) throw InputError("the camera's up is parallel to its viewing direction");
-    return c;
-}
-
-TileRect parseRegion(const std::string& text, const RenderSettings& s) {
-    TileRect r;
-    if (std::sscanf(text.c_str(), "%d,%d,%d,%d", &r.x0, &r.y0, &r.x1, &r.y1) != 4 || r.x0 < 0 || r.y0 < 0 ||
-        r.x1 > s.width || r.y1 > s.height || r.x0 >= r.x1 || r.y0 >= r.y1)
-        throw InputError("--region '" + text + "': expected x0,y0,x1,y1 inside the " + std::to_string(s.width) + "x" +
-                         std::to_string(s.height) + " image");
-    return r;
-}
+using bench::withReplay;
 
 // The cluster path: the wall's session (rtwall/wall.h) with local client processes, headless,
 // frames 1..N of a still view, averaged as one machine averages them (the same bytes).
@@ -134,11 +61,98 @@ Image renderWithClients(SceneDesc desc, const CameraDesc& camera, const RenderOp
 
 // Scene files may name gigabytes of meshes: a progress bar on a terminal, and Ctrl-C stops.
 SceneDesc loadWithProgress(const std::string& scene, int64_t builtinTriangles) {
-    std::optional<ProgressBar> bar;
+    std::optional<bench::ProgressBar> bar;
     SceneLoadOptions lo;
     lo.builtinTriangles = builtinTriangles;
     if (sceneSourceKind(scene) == SceneSourceKind::SceneFile) lo.progress = bar.emplace("loading", 1, "").fn();
     return loadScene(scene, lo);
+}
+
+// Frames firstFrame.. on this PC: one, the mean of o.frames, or the pixels of --region alone.
+Image renderHere(const Scene& scene, const Camera& camera, const SceneDesc& desc, const CameraDesc& cam,
+                 const RenderOptions& o, const TraceOptions& trace, TileStats& stats) {
+    const RenderSettings& s = desc.settings;
+    // The cluster numbers its frames from 1; so do we, so both give the same bytes.
+    const uint32_t firstFrame = o.frame >= 0 ? uint32_t(o.frame) : 1;
+    Image img;
+    try {
+        if (!o.region.empty() && o.frames > 1) throw InputError("--region renders one frame: give it --frame, not --frames");
+        if (o.region.empty()) {
+            // Frames are averaged in linear light, before the 8-bit quantisation clips
+            // each at 1.0 (a GI sample far above 1 would lose its excess in every frame),
+            // at the half precision the cluster sends them in (Accumulator::addLinear). A
+            // deterministic scene renders the same image every frame: its 8-bit mean is it.
+            const bool linear = o.frames > 1 && rendersStochastically(desc);
+            Accumulator acc;
+            for (int f = 0; f < o.frames; ++f) {
+                TileStats fs;
+                const uint32_t frame = firstFrame + uint32_t(f);
+                if (linear) {
+                    const std::vector<float> rgb = renderFrameLinear(scene, camera, s, frame, &fs, trace);
+                    acc.addLinear(rgb.data(), s.width, s.height);
+                } else {
+                    img = renderFrame(scene, camera, s, frame, &fs, trace);
+                    if (o.frames > 1) acc.add(img);
+                }
+                stats.rays += fs.rays;
+                stats.shadowRays += fs.shadowRays;
+            }
+            if (o.frames > 1) img = acc.resolve();
+        } else {
+            const TileRect r = parseRegion(o.region, s);
+            img.width = s.width;
+            img.height = s.height;
+            img.rgb.assign(size_t(s.width) * s.height * 3, 0);
+            stats = renderTile(scene, camera, r, firstFrame, s, {img.pixel(r.x0, r.y0), size_t(s.width) * 3}, trace);
+        }
+    } catch (const TileError& e) {
+        throw withReplay(e, {o.scene, o.triangles, desc.origin, cam, s, trace, 0, {}});
+    }
+    return img;
+}
+
+int runRender(const RenderOptions& o) {
+    bench::installInterruptHandler();
+    SceneDesc desc = loadWithProgress(o.scene, o.triangles);
+    RenderSettings& s = desc.settings;
+    applyOverrides(s, o);
+    const TraceOptions trace = traceOptionsOf(o);
+    const CameraDesc cam = chooseCamera(desc, o);
+    const char* kernel = s.kernel == KernelType::Packet ? "packet" : "single";
+    const auto t0 = std::chrono::steady_clock::now();
+    if (o.clients > 0) {
+        if (!o.region.empty()) throw InputError("--region and --clients cannot be combined");
+        if (o.frame >= 0) throw InputError("--frame and --clients cannot be combined (the cluster numbers its frames)");
+        FrameReport report;
+        const Image img = renderWithClients(desc, cam, o, report);
+        writePng(img, o.out);
+        const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::printf("wrote %s (%dx%d, camera '%s', %s kernel, %d clients, codec %s): frame %.3f s, "
+                    "%.3f s with start-up, %.2f MB of tiles\n",
+                    o.out.c_str(), s.width, s.height, cam.name.c_str(), kernel, o.clients, o.codec.c_str(),
+                    report.seconds, total, double(report.bytes) * 1e-6);
+        return 0;
+    }
+    int64_t triangles = 0;
+    for (const MeshDesc& m : desc.meshes) triangles += int64_t(m.mesh->triangleCount());
+    std::optional<bench::ProgressBar> bar(std::in_place, "bvh build", double(triangles) * 1e-6, "Mtri");
+    Scene scene(desc, bar->fn());
+    bar.reset();
+    const auto t1 = std::chrono::steady_clock::now();
+    const Camera camera(cam, s.width, s.height);
+    TileStats stats;
+    const Image img = renderHere(scene, camera, desc, cam, o, trace, stats);
+    const auto t2 = std::chrono::steady_clock::now();
+    writePng(img, o.out);
+    const double build = std::chrono::duration<double>(t1 - t0).count();
+    const double render = std::chrono::duration<double>(t2 - t1).count();
+    const double pixels = double(s.width) * s.height * std::max(1, o.frames);
+    std::printf("wrote %s (%dx%d, camera '%s', %s kernel): BVH build %.3f s, render %.3f s, %.2f Mrays/s "
+                "(%.1f rays + %.1f shadow rays per pixel and frame)\n",
+                o.out.c_str(), s.width, s.height, cam.name.c_str(), kernel, build, render,
+                double(stats.rays + stats.shadowRays) / render * 1e-6, double(stats.rays) / pixels,
+                double(stats.shadowRays) / pixels);
+    return 0;
 }
 
 }  // namespace
@@ -197,107 +211,7 @@ void addRender(CLI::App& app, Run& run) {
     // failed tile is reported and replayed.
     cmd->add_option("--inject-tile-fault", o->fault, "F,X,Y")->group("");
 
-    cmd->callback([&run, o] {
-        run = [o] {
-            installInterruptHandler();
-            SceneDesc desc = loadWithProgress(o->scene, o->triangles);
-            RenderSettings& s = desc.settings;
-            if (o->width) s.width = o->width;
-            if (o->height) s.height = o->height;
-            if (o->threads >= 0) s.threads = o->threads;
-            if (o->tile) s.tileSize = o->tile;
-            if (!o->kernel.empty()) s.kernel = o->kernel == "single" ? KernelType::Single : KernelType::Packet;
-            if (!o->view.empty()) s.view = viewModeFromName(o->view);
-            if (!o->shading.empty()) s.shading = o->shading == "eyelight" ? ShadingMode::EyeLight : ShadingMode::Full;
-            if (!o->shadows.empty()) s.shadows = o->shadows == "on";
-            if (!o->background.empty()) s.background = parseVector(o->background, "--background");
-            if (!o->ambient.empty()) s.ambient = parseVector(o->ambient, "--ambient");
-            if (o->gi) s.gi = true;
-            if (o->noGi) s.gi = false;
-            if (o->samples) s.samples = o->samples;
-            if (o->supersample) s.supersample = o->supersample;
-            if (o->prune >= 0) s.pruneThreshold = float(o->prune);
-            if (o->maxDepth) s.maxDepth = o->maxDepth;
-            TraceOptions trace;
-            trace.packetWidth = o->packetWidth;
-            if (o->clientId >= 0) trace.clientId = uint32_t(o->clientId);
-            if (!o->fault.empty()) {
-                const std::vector<double> f = parseNumbers(o->fault, 3, "--inject-tile-fault");
-                trace.fault = InjectedTileFault{uint32_t(f[0]), int(f[1]), int(f[2])};
-            }
-            const CameraDesc cam = chooseCamera(desc, *o);
-            const char* kernel = s.kernel == KernelType::Packet ? "packet" : "single";
-            const auto t0 = std::chrono::steady_clock::now();
-            if (o->clients > 0) {
-                if (!o->region.empty()) throw InputError("--region and --clients cannot be combined");
-                if (o->frame >= 0) throw InputError("--frame and --clients cannot be combined (the cluster numbers its frames)");
-                FrameReport report;
-                const Image img = renderWithClients(desc, cam, *o, report);
-                writePng(img, o->out);
-                const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-                std::printf("wrote %s (%dx%d, camera '%s', %s kernel, %d clients, codec %s): frame %.3f s, "
-                            "%.3f s with start-up, %.2f MB of tiles\n",
-                            o->out.c_str(), s.width, s.height, cam.name.c_str(), kernel, o->clients, o->codec.c_str(),
-                            report.seconds, total, double(report.bytes) * 1e-6);
-                return 0;
-            }
-            int64_t triangles = 0;
-            for (const MeshDesc& m : desc.meshes) triangles += int64_t(m.mesh->triangleCount());
-            std::optional<ProgressBar> bar(std::in_place, "bvh build", double(triangles) * 1e-6, "Mtri");
-            Scene scene(desc, bar->fn());
-            bar.reset();
-            const auto t1 = std::chrono::steady_clock::now();
-            const Camera camera(cam, s.width, s.height);
-            // The cluster numbers its frames from 1; so do we, so both give the same bytes.
-            const uint32_t firstFrame = o->frame >= 0 ? uint32_t(o->frame) : 1;
-            TileStats stats;
-            Image img;
-            try {
-                if (!o->region.empty() && o->frames > 1) throw InputError("--region renders one frame: give it --frame, not --frames");
-                if (o->region.empty()) {
-                    // Frames are averaged in linear light, before the 8-bit quantisation clips
-                    // each at 1.0 (a GI sample far above 1 would lose its excess in every frame),
-                    // at the half precision the cluster sends them in (Accumulator::addLinear). A
-                    // deterministic scene renders the same image every frame: its 8-bit mean is it.
-                    const bool linear = o->frames > 1 && rendersStochastically(desc);
-                    Accumulator acc;
-                    for (int f = 0; f < o->frames; ++f) {
-                        TileStats fs;
-                        const uint32_t frame = firstFrame + uint32_t(f);
-                        if (linear) {
-                            const std::vector<float> rgb = renderFrameLinear(scene, camera, s, frame, &fs, trace);
-                            acc.addLinear(rgb.data(), s.width, s.height);
-                        } else {
-                            img = renderFrame(scene, camera, s, frame, &fs, trace);
-                            if (o->frames > 1) acc.add(img);
-                        }
-                        stats.rays += fs.rays;
-                        stats.shadowRays += fs.shadowRays;
-                    }
-                    if (o->frames > 1) img = acc.resolve();
-                } else {
-                    const TileRect r = parseRegion(o->region, s);
-                    img.width = s.width;
-                    img.height = s.height;
-                    img.rgb.assign(size_t(s.width) * s.height * 3, 0);
-                    stats = renderTile(scene, camera, r, firstFrame, s, {img.pixel(r.x0, r.y0), size_t(s.width) * 3}, trace);
-                }
-            } catch (const TileError& e) {
-                throw withReplay(e, {o->scene, o->triangles, desc.origin, cam, s, trace, 0, {}});
-            }
-            const auto t2 = std::chrono::steady_clock::now();
-            writePng(img, o->out);
-            const double build = std::chrono::duration<double>(t1 - t0).count();
-            const double render = std::chrono::duration<double>(t2 - t1).count();
-            const double pixels = double(s.width) * s.height * std::max(1, o->frames);
-            std::printf("wrote %s (%dx%d, camera '%s', %s kernel): BVH build %.3f s, render %.3f s, %.2f Mrays/s "
-                        "(%.1f rays + %.1f shadow rays per pixel and frame)\n",
-                        o->out.c_str(), s.width, s.height, cam.name.c_str(), kernel, build, render,
-                        double(stats.rays + stats.shadowRays) / render * 1e-6, double(stats.rays) / pixels,
-                        double(stats.shadowRays) / pixels);
-            return 0;
-        };
-    });
+    cmd->callback([&run, o] { run = [o] { return runRender(*o); }; });
 }
 
 }  // namespace rtwall::cli

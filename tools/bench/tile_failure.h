@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace rtwall::cli {
+namespace rtwall::bench {
 
 // `replay` holds the scene, camera and settings that were rendered; the frame and the tile
 // come from the error.
@@ -17,4 +17,4 @@ inline std::runtime_error withReplay(const TileError& e, TileReplay replay) {
     return std::runtime_error(std::string(e.what()) + " (replay: " + replayCommand(replay) + ")");
 }
 
-}  // namespace rtwall::cli
+}  // namespace rtwall::bench

@@ -9,7 +9,7 @@
 #include <chrono>
 #include <string>
 
-namespace rtwall::cli {
+namespace rtwall::bench {
 
 // Installs a SIGINT handler that sets a flag (once per process). The first Ctrl-C asks the
 // running step to stop at its next progress report; a second one ends the process at once.
@@ -34,4 +34,4 @@ private:
     bool tty_, drawn_ = false;
 };
 
-}  // namespace rtwall::cli
+}  // namespace rtwall::bench

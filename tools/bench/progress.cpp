@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <unistd.h>
 
-namespace rtwall::cli {
+namespace rtwall::bench {
 
 namespace {
 
@@ -65,4 +65,4 @@ bool ProgressBar::update(double fraction) {
     return true;
 }
 
-}  // namespace rtwall::cli
+}  // namespace rtwall::bench

@@ -1,7 +1,6 @@
-// rtwall gen office|headlight: the shading demo scenes. Each writes a scene file and the
+// rtwall gen office|headlight: the shading demo scenes (also written by `rtwall bench shading`). Each writes a scene file and the
 // meshes, textures and volume it needs into one directory; render it by naming the scene.
-#include "commands.h"
-#include "gen_shading.h"
+#include "generators.h"
 
 #include <rtwall/image.h>
 #include <rtwall/mesh.h>
@@ -14,7 +13,7 @@
 #include <numbers>
 #include <string>
 
-namespace rtwall::cli {
+namespace rtwall::gen {
 
 namespace {
 
@@ -124,7 +123,7 @@ void writeSmoke(const fs::path& file, int n) {
         }
 }
 
-void writeText(const fs::path& file, const std::string& text) { openOut(file) << text; }
+void writeSceneText(const fs::path& file, const std::string& text) { openOut(file) << text; }
 
 const char* kOffice = R"(# rtwall gen office: shadows, a mirror, glass, procedural and image textures, a bump map,
 # alpha-masked leaves and a smoke volume on the desk.
@@ -553,7 +552,7 @@ std::filesystem::path writeShadingDemo(const std::string& name, const std::files
         writePoster(d / "poster.png");
         writeLeafMask(d / "leaf_mask.png");
         writeSmoke(d / "smoke.vtk", 32);
-        writeText(d / "office.toml", kOffice);
+        writeSceneText(d / "office.toml", kOffice);
         return d / "office.toml";
     }
     if (name != "headlight") throw InputError("unknown demo scene '" + name + "' (office, headlight)");
@@ -569,8 +568,8 @@ std::filesystem::path writeShadingDemo(const std::string& name, const std::files
             scene += buf;
         }
     scene += kHeadlightTail;
-    writeText(d / "headlight.toml", scene);
+    writeSceneText(d / "headlight.toml", scene);
     return d / "headlight.toml";
 }
 
-}  // namespace rtwall::cli
+}  // namespace rtwall::gen

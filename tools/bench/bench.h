@@ -1,0 +1,95 @@
+// The benchmarks behind `rtwall bench ...`: one options struct and one function per benchmark.
+// Each function runs the benchmark, writes its human-readable lines to `text` as it goes (none
+// when `text` is null; `--json` makes it null) and returns its figures: the JSON that `--json`
+// prints. Adding a benchmark: its options and function here, its work in a file of its own
+// (tools/bench/NAME.cpp, listed in tools/CMakeLists.txt), and its command-line options in
+// tools/rtwall/bench_NAME.cpp. Timing targets live here, never in tests.
+#pragma once
+
+#include <toml++/toml.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace rtwall::bench {
+
+// What every benchmark's options have.
+struct Common {
+    std::FILE* text = stdout;  // human-readable lines as the benchmark goes; nullptr: none
+};
+
+// Primary-ray throughput: packet and single-ray kernels against a bare rtcIntersectK loop.
+struct KernelOptions : Common {
+    int width = 1600, height = 1200, threads = 0, rounds = 7, tile = 32, packetWidth = 0;
+    int64_t triangles = 3'000'000;
+};
+toml::table kernel(const KernelOptions& o);
+
+// The master and local clients over loopback, each setting varied around a base.
+struct ClusterOptions : Common {
+    int width = 1600, height = 1200, tile = 32, frames = 10, maxClients = 4;
+    int64_t triangles = 200'000;
+    bool render = false, insecure = false;
+    std::string bind = "tcp://127.0.0.1:0", netns, link = "loopback", codec = "lz4";
+    std::vector<int> clientCounts;
+};
+toml::table cluster(const ClusterOptions& o);
+
+// The cost of a killed or frozen client, and of CURVE encryption.
+struct FaultsOptions : Common {
+    int clients = 3, frames = 5, timeoutMs = 400;
+    std::string bind = "tcp://127.0.0.1:0", netns, link = "loopback";
+};
+toml::table faults(const FaultsOptions& o);
+
+// The master under attack, with and without CURVE.
+struct AttackOptions : Common {
+    int clients = 2, rate = 5000;
+    double seconds = 10;
+    uint64_t seed = 1;
+};
+toml::table attack(const AttackOptions& o);
+
+// Rendering while client processes are frozen, killed, restarted and cut off at random. The
+// run went well when every frame completed bit-identical: see chaosPassed().
+struct ChaosOptions : Common {
+    int clients = 4, intervalMs = 300, maxMs = 1500, timeoutMs = 400, framesAfter = 10;
+    double seconds = 30;
+    uint64_t seed = 1;
+    bool linkCuts = false;
+};
+toml::table chaos(const ChaosOptions& o);
+bool chaosPassed(const toml::table& result);
+
+// GL presenter frames/s and camera-to-display latency (needs a display).
+struct DisplayOptions : Common {
+    int frames = 60, trials = 8, width = 800, height = 600, clients = 2;
+    int64_t triangles = 200'000;
+};
+toml::table display(const DisplayOptions& o);
+
+// Import, cache, BVH build, memory and frame time of a scene file.
+struct SceneOptions : Common {
+    std::string scene, camera;
+    int width = 1600, height = 1200, threads = 0, frames = 3;
+    bool sweep = false, skipParse = false, otherPrimitives = true;
+    std::string robust = "scene";  // "scene", "on" or "off"
+};
+toml::table scene(const SceneOptions& o);
+
+// Shading demos: frame time and error as pruning, GI samples and the volume step vary.
+struct ShadingOptions : Common {
+    int width = 1600, height = 1200, rounds = 3, referenceFrames = 64, threads = 0;
+    std::string dir = "out/bench-shading";
+    std::vector<std::string> scenes{"office", "headlight", "sunflowers"};
+    int64_t sunflowerPlants = 2000;  // the field is generated at this size (rtwall gen sunflowers --instances)
+    int sunflowerTrees = 1;
+    std::vector<float> thresholds{0.0005f, 0.002f, 0.01f, 0.05f};
+    std::vector<int> giSamples{1, 2, 4, 8, 16};
+    std::vector<float> volumeSteps{0.25f, 0.5f, 1.0f, 2.0f, 4.0f};
+};
+toml::table shading(const ShadingOptions& o);
+
+}  // namespace rtwall::bench
