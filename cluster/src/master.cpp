@@ -1357,6 +1357,22 @@ uint64_t Master::refusedConnections() const { return impl_->zap ? impl_->zap->de
 
 namespace rtwall {
 
+MasterCounters operator-(MasterCounters a, const MasterCounters& b) {
+    a.malformed -= b.malformed;
+    a.unknownPeer -= b.unknownPeer;
+    a.stale -= b.stale;
+    a.replayed -= b.replayed;
+    a.unexpected -= b.unexpected;
+    a.undecodableTiles -= b.undecodableTiles;
+    a.refused -= b.refused;
+    a.failedHandshakes -= b.failedHandshakes;
+    a.failedSends -= b.failedSends;
+    a.lostHandOuts -= b.lostHandOuts;
+    a.stalledTiles -= b.stalledTiles;
+    a.clientsDropped -= b.clientsDropped;
+    return a;
+}
+
 std::string describeCounters(const MasterCounters& c) {
     std::string out;
     auto part = [](std::string& s, uint64_t n, const char* what) {

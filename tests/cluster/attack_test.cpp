@@ -35,21 +35,6 @@ SceneDesc smallScene() {
     return desc;
 }
 
-MasterCounters minus(MasterCounters a, const MasterCounters& b) {
-    a.malformed -= b.malformed;
-    a.unknownPeer -= b.unknownPeer;
-    a.stale -= b.stale;
-    a.replayed -= b.replayed;
-    a.unexpected -= b.unexpected;
-    a.undecodableTiles -= b.undecodableTiles;
-    a.refused -= b.refused;
-    a.failedHandshakes -= b.failedHandshakes;
-    a.failedSends -= b.failedSends;
-    a.lostHandOuts -= b.lostHandOuts;
-    a.stalledTiles -= b.stalledTiles;
-    a.clientsDropped -= b.clientsDropped;
-    return a;
-}
 
 class MasterUnderAttack : public ::testing::TestWithParam<bool> {};
 
@@ -116,13 +101,13 @@ TEST_P(MasterUnderAttack, FramesStayBitIdenticalAndEveryMessageIsCounted) {
     const testing::AttackReport sent = attack.get();
     // The master reads what is still queued: wait (bounded) until every kind has caught up.
     auto caughtUp = [&] {
-        const MasterCounters d = minus(master.counters(), before);
+        const MasterCounters d = master.counters() - before;
         return d.malformed >= sent.malformed && d.unknownPeer >= sent.unknownPeer && d.refused >= sent.refused &&
                d.stale >= sent.stale && d.replayed + d.unexpected >= sent.replayedOrUnexpected &&
                d.stalledTiles >= sent.stallReports;
     };
     for (int i = 0; i < 500 && !caughtUp(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    const MasterCounters d = minus(master.counters(), before);
+    const MasterCounters d = master.counters() - before;
     std::printf("attack (CURVE %s): %llu app-level messages (%llu malformed, %llu from no client, %llu refused, %llu in a "
                 "session), %llu raw connections, %llu oversized, %llu CURVE strangers; master: %s; %d frames, %d "
                 "bit-identical, worst %.0f ms\n",

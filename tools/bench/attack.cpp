@@ -49,21 +49,6 @@ toml::table countersTable(const MasterCounters& c) {
                        {"clients_dropped", int64_t(c.clientsDropped)}};
 }
 
-MasterCounters minus(MasterCounters a, const MasterCounters& b) {
-    a.malformed -= b.malformed;
-    a.unknownPeer -= b.unknownPeer;
-    a.stale -= b.stale;
-    a.replayed -= b.replayed;
-    a.unexpected -= b.unexpected;
-    a.undecodableTiles -= b.undecodableTiles;
-    a.refused -= b.refused;
-    a.failedHandshakes -= b.failedHandshakes;
-    a.failedSends -= b.failedSends;
-    a.lostHandOuts -= b.lostHandOuts;
-    a.stalledTiles -= b.stalledTiles;
-    a.clientsDropped -= b.clientsDropped;
-    return a;
-}
 
 struct FrameStats {
     int frames = 0, identical = 0;
@@ -120,12 +105,12 @@ toml::table attackRun(const SceneDesc& desc, const Image& expected, bool curve, 
     const testing::AttackReport sent = attack.get();
     // Let the master read what is still queued.
     auto counted = [&] {
-        const MasterCounters d = minus(master.counters(), before);
+        const MasterCounters d = master.counters() - before;
         return d.dropped() + d.refused + d.stalledTiles;
     };
     for (int i = 0; i < 100 && counted() < sent.appMessages(); ++i)
         std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    const MasterCounters delta = minus(master.counters(), before);
+    const MasterCounters delta = master.counters() - before;
     return toml::table{
         {"curve", curve},
         {"clients", clients},

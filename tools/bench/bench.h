@@ -92,4 +92,11 @@ struct ShadingOptions : Common {
 };
 toml::table shading(const ShadingOptions& o);
 
+// The master's cost of a camera update per frame, with N instances of one box.
+struct UpdatesOptions : Common {
+    int instances = 100'000, frames = 200, clients = 1;
+    bool async = false;
+};
+toml::table updates(const UpdatesOptions& o);
+
 }  // namespace rtwall::bench

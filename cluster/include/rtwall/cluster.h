@@ -78,6 +78,8 @@ struct MasterCounters {
     uint64_t clientsDropped = 0;    // clients that left or were dropped (goodbye, timeout, gone, queue full too long)
     uint64_t dropped() const { return malformed + unknownPeer + stale + replayed + unexpected + undecodableTiles; }
 };
+// What was counted between two readings (later - earlier), member by member.
+MasterCounters operator-(MasterCounters later, const MasterCounters& earlier);
 // One line for an operator: "dropped 12 messages (3 malformed, 9 from unknown peers), ..." or
 // "nothing dropped, refused or lost".
 std::string describeCounters(const MasterCounters& c);

@@ -1,0 +1,110 @@
+// rtwall bench updates: what a camera move costs the master with many instances (issue 17).
+// A scene of N instances of one box, a tiny image (one 32x32 tile, eyelight) so that the cost of
+// the update, not rendering, decides the frame time, and local render clients. Per frame: the
+// application thread's time in Master::setCamera, the time of the whole Master::renderFrame
+// (synchronous: begin, the clients' catch-up, the tile, the frame's end), and the network
+// thread's time from the frame's begin to its last tile (FrameReport::seconds). Medians.
+#include "bench.h"
+#include "bench_util.h"
+
+#include <rtwall/cluster.h>
+#include <rtwall/engine.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+namespace rtwall::bench {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+// A p90 alongside the median (bench_util.h's median is rtwall/tune.h's).
+double quantile(std::vector<double> v, double q) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    return v[std::min(v.size() - 1, size_t(q * double(v.size())))];
+}
+
+// N boxes on a square grid in the xz-plane, all of one mesh and one material.
+SceneDesc manyInstances(int count) {
+    SceneDesc d;
+    d.meshes.push_back({"box", "shape:box", std::make_shared<const TriangleMesh>(makeBox())});
+    Material m;
+    m.name = "grey";
+    d.materials.push_back(m);
+    const int side = std::max(1, int(std::ceil(std::sqrt(double(count)))));
+    d.instances.reserve(size_t(count));
+    for (int i = 0; i < count; ++i) {
+        const double x = 3.0 * (i % side - side / 2), z = 3.0 * (i / side - side / 2);
+        d.instances.push_back({0, 0, Transform::translate(x, 0, z) * Transform::scale(0.5, 0.5, 0.5)});
+    }
+    d.lights.push_back(Light{});
+    CameraDesc c;
+    c.position = {0, float(3 * side), float(3 * side)};
+    d.cameras.push_back(c);
+    d.settings.width = 32;
+    d.settings.height = 32;
+    d.settings.tileSize = 32;
+    d.settings.shading = ShadingMode::EyeLight;
+    return d;
+}
+
+}  // namespace
+
+toml::table updates(const UpdatesOptions& o) {
+    const SceneDesc desc = manyInstances(o.instances);
+    ClusterSettings cs;
+    cs.async = o.async;
+    const auto t0 = Clock::now();
+    Master master(desc, cs);
+    const double constructSeconds = seconds(Clock::now() - t0);
+    LocalClients procs(o.clients, master.endpoint(), 1, false, {}, master.localClientArgs());
+    const auto t1 = Clock::now();
+    if (!master.waitForClients(o.clients, 300'000)) throw InputError("the local clients did not join");
+    const double joinSeconds = seconds(Clock::now() - t1);
+    for (int i = 0; i < 3; ++i) master.renderFrame();  // warm-up
+
+    std::vector<double> update, frame, network;
+    CameraDesc camera = desc.cameras.front();
+    const float radius = camera.position.z;
+    for (int f = 0; f < o.frames; ++f) {
+        const float angle = 0.01f * float(f + 1);
+        camera.position = {radius * std::sin(angle), camera.position.y, radius * std::cos(angle)};
+        const auto a = Clock::now();
+        master.setCamera(camera);
+        const auto b = Clock::now();
+        FrameReport report;
+        master.renderFrame(&report);
+        const auto c = Clock::now();
+        update.push_back(seconds(b - a));
+        frame.push_back(seconds(c - b));
+        network.push_back(report.seconds);
+    }
+    toml::table out{{"benchmark", "updates"},
+                    {"instances", o.instances},
+                    {"clients", o.clients},
+                    {"frames", o.frames},
+                    {"async", o.async},
+                    {"master_construct_s", constructSeconds},
+                    {"clients_join_s", joinSeconds},
+                    {"set_camera_us_median", 1e6 * median(update)},
+                    {"set_camera_us_p90", 1e6 * quantile(update, 0.9)},
+                    {"render_frame_ms_median", 1e3 * median(frame)},
+                    {"render_frame_ms_p90", 1e3 * quantile(frame, 0.9)},
+                    {"frame_begin_to_end_ms_median", 1e3 * median(network)},
+                    {"update_and_frame_ms_median", 1e3 * (median(update) + median(frame))}};
+    if (o.text)
+        std::fprintf(o.text, "%d instances, %d client%s, %d frames (%s): setCamera %.1f us (p90 %.1f), renderFrame %.3f ms "
+                    "(p90 %.3f), begin to last tile %.3f ms (medians)\n",
+                    o.instances, o.clients, o.clients == 1 ? "" : "s", o.frames, o.async ? "async" : "sync",
+                    1e6 * median(update), 1e6 * quantile(update, 0.9), 1e3 * median(frame),
+                    1e3 * quantile(frame, 0.9), 1e3 * median(network));
+    return out;
+}
+
+}  // namespace rtwall::bench
