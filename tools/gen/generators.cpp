@@ -10,6 +10,10 @@ const std::map<std::string, Generator>& generators() {
          {"field of instanced sunflowers in groups of groups, plus large trees (--instances plants, --triangles per plant, "
           "--trees, --tree-triangles)",
           genSunflowers}},
+        {"step",
+         {"STEP assembly through OpenCASCADE: 3 coloured, named parts in a 7-part module on a grid, assembly.step "
+          "(--instances part instances, 7000)",
+          genStep}},
     };
     return all;
 }

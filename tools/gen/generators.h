@@ -37,6 +37,7 @@ const std::map<std::string, Generator>& generators();
 
 void genPowerplant(const GenOptions& o);
 void genSunflowers(const GenOptions& o);
+void genStep(const GenOptions& o);  // step_assembly.cpp: OpenCASCADE, the generator's only OCCT unit
 
 // ---- building blocks shared by the generators ------------------------------------------------
 
