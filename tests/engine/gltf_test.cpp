@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -18,11 +20,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The generated files, written into the test's own scratch directory (ctest runs the tests of
-// this program in parallel processes; gtest runs them in one, hence written once).
+// The generated files, written once per process into a directory of its own (ctest runs the
+// tests of this program in parallel processes).
 const fs::path& generated() {
     static const fs::path dir = [] {
-        const fs::path d = test::scratchDir() / "generated";
+        const fs::path d = fs::path(RTWALL_BINARY_DIR) / "test-scratch" / ("gltf-generated-" + std::to_string(::getpid()));
+        fs::remove_all(d);
         const std::string cmd = "python3 " + (test::sourceDir() / "tools" / "gltf_testgen.py").string() + " --malformed --out " + d.string();
         EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
         return d;

@@ -10,8 +10,11 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -22,11 +25,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Three modules of seven part instances: 21 instances of 3 parts, written once per test into
-// the test's own scratch directory (ctest runs the tests of this program in parallel processes).
+// Three modules of seven part instances: 21 instances of 3 parts, written once per process into
+// a directory of its own (ctest runs the tests of this program in parallel processes).
 const fs::path& stepFile() {
     static const fs::path file = [] {
-        const fs::path d = test::scratchDir() / "generated";
+        const fs::path d = fs::path(RTWALL_BINARY_DIR) / "test-scratch" / ("step-generated-" + std::to_string(::getpid()));
+        fs::remove_all(d);
         gen::GenOptions o;
         o.out = d;
         o.instances = 21;
@@ -115,8 +119,8 @@ TEST(Step, DeflectionControlsTheTessellation) {
 // same assembly; the key is the file's content (a rewrite with the same bytes still hits) and the
 // deflections; a changed file or a corrupt cache is rebuilt, never trusted.
 TEST(Step, CacheIsKeyedByContentAndDeflections) {
-    const fs::path file = stepFile().parent_path().parent_path() / "a.step";
-    const fs::path dir = file.parent_path();
+    const fs::path dir = test::scratchDir();
+    const fs::path file = dir / "a.step";
     fs::copy_file(stepFile(), file);
     AssemblyOptions o;
     o.cache = true;
@@ -180,8 +184,31 @@ TEST(Step, CacheIsKeyedByContentAndDeflections) {
     EXPECT_EQ(rebuilt.instances.size(), 21u);
 }
 
+// The same assembly written as IGES (IGESCAFControl_Writer) and read through the IGES reader.
+// OCCT's IGES writer flattens the assembly into one named compound, so what comes back is one
+// part holding all 21 placed parts' surfaces: at least 3 x (plate + 4 bolts + 2 brackets).
+TEST(Step, IgesAssemblyReads) {
+    const auto dir = test::scratchDir();
+    gen::GenOptions o;
+    o.out = dir;
+    o.instances = 21;
+    gen::genIges(o);
+    const Assembly a = loadAssembly(dir / "assembly.igs");
+    EXPECT_EQ(a.format, "iges");
+    ASSERT_FALSE(a.instances.empty());
+    size_t triangles = 0;
+    for (const AssemblyInstance& in : a.instances) triangles += a.meshes[in.mesh]->triangleCount();
+    const Assembly step = loadAssembly(stepFile());
+    size_t stepTriangles = 0;
+    for (const AssemblyInstance& in : step.instances) stepTriangles += step.meshes[in.mesh]->triangleCount();
+    EXPECT_GE(triangles, stepTriangles * 9 / 10);
+    EXPECT_LE(triangles, stepTriangles * 11 / 10);
+    EXPECT_EQ(a.parts.at(0).name, "plant");
+    EXPECT_NE(test::inputErrorOf([&] { loadAssembly(test::writeFile(dir / "bad.igs", "not IGES\n")); }).find("bad.igs: "), std::string::npos);
+}
+
 TEST(Step, MalformedFilesAreOneLineErrors) {
-    const auto dir = test::scratchDir();  // (this test generates no STEP file)
+    const auto dir = test::scratchDir();
     const auto garbage = test::writeFile(dir / "garbage.step", "this is not ISO 10303-21 at all\n");
     const auto empty = test::writeFile(dir / "empty.stp", "");
     const auto noShapes = test::writeFile(dir / "no_shapes.step",

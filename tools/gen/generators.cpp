@@ -14,6 +14,7 @@ const std::map<std::string, Generator>& generators() {
          {"STEP assembly through OpenCASCADE: 3 coloured, named parts in a 7-part module on a grid, assembly.step "
           "(--instances part instances, 7000)",
           genStep}},
+        {"iges", {"the same assembly as IGES through OpenCASCADE: assembly.igs (--instances)", genIges}},
     };
     return all;
 }

@@ -38,6 +38,7 @@ const std::map<std::string, Generator>& generators();
 void genPowerplant(const GenOptions& o);
 void genSunflowers(const GenOptions& o);
 void genStep(const GenOptions& o);  // step_assembly.cpp: OpenCASCADE, the generator's only OCCT unit
+void genIges(const GenOptions& o);  // step_assembly.cpp: the same assembly as IGES
 
 // ---- building blocks shared by the generators ------------------------------------------------
 

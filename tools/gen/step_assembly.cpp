@@ -1,5 +1,6 @@
-// `rtwall gen step`: a STEP assembly with repeated parts, written through OpenCASCADE's XDE
-// (STEPCAFControl_Writer), so the importer reads a file that its own code did not write.
+// `rtwall gen step` / `rtwall gen iges`: a STEP (IGES) assembly with repeated parts, written
+// through OpenCASCADE's XDE (STEPCAFControl_Writer, IGESCAFControl_Writer), so the importer
+// reads a file that its own code did not write.
 //
 // Three parts (a plate, a bolt, a bracket), each with a colour and a name, make one "module"
 // sub-assembly (a plate, four bolts, two brackets: seven part instances); the root "plant"
@@ -11,6 +12,7 @@
 #include <BRepPrimAPI_MakeBox.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
 #include <IFSelect_ReturnStatus.hxx>
+#include <IGESCAFControl_Writer.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
@@ -46,13 +48,15 @@ TopLoc_Location at(double x, double y, double z, double turnDegrees = 0) {
 
 }  // namespace
 
-void genStep(const GenOptions& o) {
+namespace {
+
+void writeAssembly(const GenOptions& o, bool iges) {
     // Part instances wanted; 7 per module, so modules = ceil(instances / 7).
     const int64_t wanted = o.instances > 0 ? o.instances : 7000;
     const int64_t modules = (wanted + 6) / 7;
     const auto side = int64_t(std::ceil(std::sqrt(double(modules))));
     std::filesystem::create_directories(o.out);
-    const std::filesystem::path file = o.out / "assembly.step";
+    const std::filesystem::path file = o.out / (iges ? "assembly.igs" : "assembly.step");
 
     Message::DefaultMessenger()->RemovePrinters(STANDARD_TYPE(Message_Printer));  // OCCT prints to stdout otherwise
     Handle(TDocStd_Document) doc;
@@ -89,18 +93,33 @@ void genStep(const GenOptions& o) {
                   "module " + std::to_string(m + 1));
     shapes->UpdateAssemblies();
 
+    const std::string what = iges ? "gen iges: " : "gen step: ";
     try {
-        STEPCAFControl_Writer writer;
-        writer.SetColorMode(true);
-        writer.SetNameMode(true);
-        if (!writer.Transfer(doc, STEPControl_AsIs)) throw std::runtime_error("gen step: OpenCASCADE could not transfer the assembly");
-        if (writer.Write(file.c_str()) != IFSelect_RetDone) throw std::runtime_error("gen step: cannot write " + file.string());
+        bool ok = false;
+        if (iges) {
+            IGESCAFControl_Writer writer;
+            writer.SetColorMode(true);
+            writer.SetNameMode(true);
+            ok = writer.Transfer(doc) && writer.Write(file.c_str());
+        } else {
+            STEPCAFControl_Writer writer;
+            writer.SetColorMode(true);
+            writer.SetNameMode(true);
+            if (!writer.Transfer(doc, STEPControl_AsIs)) throw std::runtime_error(what + "OpenCASCADE could not transfer the assembly");
+            ok = writer.Write(file.c_str()) == IFSelect_RetDone;
+        }
+        if (!ok) throw std::runtime_error(what + "cannot write " + file.string());
     } catch (const Standard_Failure& e) {
-        throw std::runtime_error(std::string("gen step: OpenCASCADE: ") + e.GetMessageString());
+        throw std::runtime_error(what + "OpenCASCADE: " + e.GetMessageString());
     }
     XCAFApp_Application::GetApplication()->Close(doc);
     std::printf("wrote %s: %lld modules, %lld part instances of 3 parts\n", file.c_str(), (long long)modules,
                 (long long)(7 * modules));
 }
+
+}  // namespace
+
+void genStep(const GenOptions& o) { writeAssembly(o, false); }
+void genIges(const GenOptions& o) { writeAssembly(o, true); }
 
 }  // namespace rtwall::gen
