@@ -18,6 +18,8 @@
 #include <IGESCAFControl_Reader.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
+#include <Message_ProgressIndicator.hxx>
+#include <Message_ProgressScope.hxx>
 #include <Poly_Triangulation.hxx>
 #include <Quantity_Color.hxx>
 #include <STEPCAFControl_Reader.hxx>
@@ -40,6 +42,7 @@
 #include <gp_Trsf.hxx>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -57,6 +60,9 @@ using Matrix = std::array<double, 12>;
 // More instances than this is an input error (as for glTF and scene files).
 constexpr uint64_t kMaxInstances = uint64_t(1) << 24;
 constexpr uint32_t kNoMesh = UINT32_MAX;  // a part without triangles
+// The share of a load's progress that reading and transferring the file takes (tessellating the
+// distinct parts, the rest).
+constexpr double kTransferShare = 0.9;
 
 [[noreturn]] void fail(const fs::path& file, const std::string& what) { throw InputError(file.string() + ": " + what); }
 
@@ -213,7 +219,9 @@ private:
             fail(file_, "part '" + labelName(part) + "' (" + key + "): " + e.what());
         }
         ++partsDone_;
-        if (options_.progress && !options_.progress(double(partsDone_) / double(std::max<size_t>(partsTotal_, 1)))) throw Cancelled();
+        if (options_.progress &&
+            !options_.progress(kTransferShare + (1.0 - kTransferShare) * double(partsDone_) / double(std::max<size_t>(partsTotal_, 1))))
+            throw Cancelled();
         const std::string name = labelName(part);
         if (mesh.triangleCount() == 0) {
             // Wires, points, or faces OCCT could not mesh: nothing to render, no instances.
@@ -288,6 +296,26 @@ private:
     size_t partsTotal_ = 0, partsDone_ = 0;
 };
 
+// OCCT's transfer of the file into the document, the slow part of a large assembly, reports
+// through a progress indicator: its position is the first `share` of the load's progress, and a
+// progress function that returns false makes it a user break, which OCCT's transfer honours.
+class TransferProgress : public Message_ProgressIndicator {
+public:
+    TransferProgress(const ProgressFn& fn, double share) : fn_(fn), share_(share) {}
+    bool cancelled() const { return cancelled_; }
+
+protected:
+    void Show(const Message_ProgressScope&, const Standard_Boolean) override {
+        if (fn_ && !cancelled_ && !fn_(share_ * GetPosition())) cancelled_ = true;
+    }
+    Standard_Boolean UserBreak() override { return cancelled_; }
+
+private:
+    const ProgressFn& fn_;
+    double share_;
+    std::atomic<bool> cancelled_{false};
+};
+
 // OCCT's readers print to its default messenger (stdout); rtwall's output is its own.
 void silenceOcct() {
     static std::once_flag once;
@@ -318,19 +346,21 @@ Assembly importCad(const fs::path& file, const AssemblyOptions& options) {
         } document;
         Handle(TDocStd_Document)& doc = document.doc;
         bool ok = false;
+        const Handle(TransferProgress) progress = new TransferProgress(options.progress, kTransferShare);
         if (iges) {
             IGESCAFControl_Reader reader;
             reader.SetColorMode(true);
             reader.SetNameMode(true);
             if (reader.ReadFile(file.c_str()) != IFSelect_RetDone) fail(file, "not a readable IGES file");
-            ok = reader.Transfer(doc);
+            ok = reader.Transfer(doc, progress->Start());
         } else {
             STEPCAFControl_Reader reader;
             reader.SetColorMode(true);
             reader.SetNameMode(true);
             if (reader.ReadFile(file.c_str()) != IFSelect_RetDone) fail(file, "not a readable STEP file");
-            ok = reader.Transfer(doc);
+            ok = reader.Transfer(doc, progress->Start());
         }
+        if (progress->cancelled()) throw Cancelled();
         if (!ok) fail(file, "OpenCASCADE could not transfer the file's shapes");
         XdeReader(file, options, doc, out).read();
     } catch (const Standard_Failure& e) {

@@ -19,6 +19,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <vector>
 
 namespace rtwall {
 namespace {
@@ -205,6 +206,27 @@ TEST(Step, IgesAssemblyReads) {
     EXPECT_LE(triangles, stepTriangles * 11 / 10);
     EXPECT_EQ(a.parts.at(0).name, "plant");
     EXPECT_NE(test::inputErrorOf([&] { loadAssembly(test::writeFile(dir / "bad.igs", "not IGES\n")); }).find("bad.igs: "), std::string::npos);
+}
+
+// Progress reaches 1 through the transfer and the tessellation, and a progress function that
+// says stop makes the load throw Cancelled (what Ctrl-C does), in either phase.
+TEST(Step, ProgressAndCancel) {
+    std::vector<double> seen;
+    AssemblyOptions o;
+    o.progress = [&](double f) {
+        seen.push_back(f);
+        return true;
+    };
+    loadAssembly(stepFile(), o);
+    ASSERT_GE(seen.size(), 4u);
+    EXPECT_TRUE(std::is_sorted(seen.begin(), seen.end()));
+    EXPECT_DOUBLE_EQ(seen.back(), 1.0);
+    EXPECT_GT(std::count_if(seen.begin(), seen.end(), [](double f) { return f > 0.0 && f < 0.9; }), 0) << "the transfer reports";
+    for (double stopAt : {0.0, 0.95}) {
+        AssemblyOptions c;
+        c.progress = [&](double f) { return f < stopAt; };
+        EXPECT_THROW(loadAssembly(stepFile(), c), Cancelled) << stopAt;
+    }
 }
 
 TEST(Step, MalformedFilesAreOneLineErrors) {
