@@ -37,6 +37,8 @@ PACKAGES=(
   iptables libnetfilter-queue-dev  # NFQUEUE: netjitter's delay, jitter and reordering in those namespaces
   python3
   python3-matplotlib   # charts of tools/speed_accuracy.py (speed against accuracy)
+  libtinygltf-dev      # tinygltf 2.7: glTF 2.0 (.gltf/.glb) parser, the Debian shared library (no implementation TU of ours)
+  libocct-data-exchange-dev libocct-ocaf-dev libocct-modeling-algorithms-dev  # OpenCASCADE 7.6: STEP/IGES assemblies (XDE), tessellation
 )
 
 say() { printf '[bootstrap] %s\n' "$*"; }

@@ -272,17 +272,22 @@ void read(Reader& r, CameraDesc& c) {
     }
 }
 
-RTWALL_WIRE_FIELDS(InstanceDesc, 3);
+RTWALL_WIRE_FIELDS(InstanceDesc, 4);
 void write(Writer& w, const InstanceDesc& in) {
     w.u32(in.mesh);
     w.u32(in.material);
     write(w, in.transform);
+    w.i32(in.part);
 }
 
 void read(Reader& r, InstanceDesc& in) {
     in.mesh = r.u32();
     in.material = r.u32();
     read(r, in.transform);
+    // The part's index only: the names stay with the master (SceneDesc::parts does not travel),
+    // so a client can say which part a failed tile shows to the master, which can name it.
+    in.part = r.i32();
+    if (in.part < -1) fail("instance part " + std::to_string(in.part) + " is out of range");
 }
 
 RTWALL_WIRE_FIELDS(RenderSettings, 15);  // what is each process's own is TraceOptions, not sent

@@ -40,8 +40,9 @@ std::string countChange(const char* what, size_t before, size_t after) {
 SceneEdit diffScenes(const SceneDesc& before, const SceneDesc& after) {
     // Every member of SceneDesc is either an update below or a restart; the snapshot's mapping
     // (scene_state.cpp) asserts the same count. sourceFile and files (bytes by path) are the
-    // scene file's own business: a material naming another file is a material edit.
-    static_assert(fieldCount<SceneDesc>() == 10, "SceneDesc has a member diffScenes does not compare");
+    // scene file's own business: a material naming another file is a material edit. parts (an
+    // assembly's names) are the master's alone: the clients render without them.
+    static_assert(fieldCount<SceneDesc>() == 11, "SceneDesc has a member diffScenes does not compare");
     SceneEdit e;
     if (before.meshes.size() != after.meshes.size()) {
         e.refused.push_back(countChange("meshes", before.meshes.size(), after.meshes.size()));

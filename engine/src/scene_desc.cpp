@@ -59,6 +59,16 @@ const CameraDesc* SceneDesc::findCamera(const std::string& name) const {
     return nullptr;
 }
 
+std::string SceneDesc::partPath(int32_t part) const {
+    std::string path;
+    // Bounded by the part count, so a bad parent link cannot loop.
+    for (size_t steps = 0; part >= 0 && size_t(part) < parts.size() && steps <= parts.size(); ++steps) {
+        path = path.empty() ? parts[size_t(part)].name : parts[size_t(part)].name + "/" + path;
+        part = parts[size_t(part)].parent;
+    }
+    return path;
+}
+
 Bounds3 SceneDesc::worldBounds() const {
     Bounds3 world;
     for (const InstanceDesc& in : instances) {

@@ -572,7 +572,112 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
     return scene;
 }
 
-SceneDesc sceneFromMeshFile(const std::filesystem::path& file) {
+// glTF's metallic-roughness model onto rtwall's kinds (the table in README.md): transmission
+// of one half or more is glass of the given ior, tinted by the base colour; metallic of one half
+// or more is metal of the base colour and roughness; everything else is Phong with the base
+// colour as albedo and glTF's dielectric reflectance 0.04 as specular, in a lobe as sharp as the
+// metal's for that roughness (exponent 2/r^2 - 2, at least 1). Emission adds to any kind. The
+// base colour texture modulates the colour through the mesh's UVs.
+Material materialFromAssembly(const AssemblyMaterial& a) {
+    Material m;
+    m.name = a.name;
+    m.color = {a.baseColor[0], a.baseColor[1], a.baseColor[2]};
+    if (a.transmission >= 0.5f) {
+        m.type = MaterialType::Glass;
+        m.ior = a.ior;
+    } else if (a.metallic >= 0.5f) {
+        m.type = MaterialType::Metal;
+        m.roughness = a.roughness;
+    } else {
+        m.type = MaterialType::Phong;
+        m.specular = {0.04f, 0.04f, 0.04f};
+        const float r = std::max(a.roughness, 0.01f);
+        m.shininess = std::max(1.0f, 2.0f / (r * r) - 2.0f);
+    }
+    m.emission = {a.emissive[0], a.emissive[1], a.emissive[2]};
+    if (!a.baseColorTexture.empty()) {
+        m.texture.kind = TextureKind::Image;
+        m.texture.file = a.baseColorTexture;
+        m.texture.mapping = TextureMapping::Auto;  // the mesh's UVs where it has them
+    }
+    return m;
+}
+
+namespace {
+
+// A head light from above the camera's right shoulder, plus a soft ambient term so nothing is pitch black.
+void addHeadLight(SceneDesc& scene) {
+    const CameraDesc& c = scene.cameras.front();
+    Light key;
+    key.type = LightType::Directional;
+    key.direction = normalize((c.lookAt - c.position) + Float3{-0.3f, -0.5f, 0.0f} * length(c.lookAt - c.position));
+    key.intensity = 2.5f;
+    scene.lights.push_back(key);
+    scene.settings.ambient = {0.15f, 0.15f, 0.15f};
+}
+
+}  // namespace
+
+SceneDesc sceneFromAssembly(const Assembly& a, const std::filesystem::path& file) {
+    SceneDesc scene;
+    scene.sourceFile = file;
+    for (size_t i = 0; i < a.meshes.size(); ++i) {
+        MeshDesc md;
+        md.name = a.meshNames[i];
+        md.source = file.string() + "#" + a.meshNames[i];
+        md.mesh = a.meshes[i];
+        scene.meshes.push_back(std::move(md));
+    }
+    for (const AssemblyMaterial& m : a.materials) scene.materials.push_back(materialFromAssembly(m));
+    if (scene.materials.empty()) scene.materials.push_back(Material{});
+    scene.instances.reserve(a.instances.size());
+    for (const AssemblyInstance& ai : a.instances) {
+        InstanceDesc in;
+        in.mesh = ai.mesh;
+        in.material = ai.material;
+        in.transform.m = ai.transform;
+        in.part = ai.part;
+        scene.instances.push_back(in);
+    }
+    for (const AssemblyPart& p : a.parts) scene.parts.push_back({p.name, p.parent});
+    scene.files = a.files;
+    // Far-from-origin assemblies are rebased as scene files are.
+    scene.origin = rebaseOrigin(scene);
+    for (InstanceDesc& in : scene.instances) {
+        in.transform.m[3] -= scene.origin[0];
+        in.transform.m[7] -= scene.origin[1];
+        in.transform.m[11] -= scene.origin[2];
+    }
+    scene.cameras.push_back(framingCamera(scene.worldBounds()));
+    addHeadLight(scene);
+    return scene;
+}
+
+SceneDesc sceneFromMeshFile(const std::filesystem::path& file) { return sceneFromMeshFile(file, SceneLoadOptions{}); }
+
+SceneDesc sceneFromMeshFile(const std::filesystem::path& file, const SceneLoadOptions& options) {
+    if (isAssemblyFile(file)) {
+        AssemblyOptions ao;
+        ao.linearDeflection = options.linearDeflection;
+        ao.angularDeflection = options.angularDeflection;
+        ao.cache = options.cache.value_or(false);
+        ao.progress = options.progress;
+        const auto t0 = std::chrono::steady_clock::now();
+        const Assembly a = loadAssembly(file, ao);
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (options.stats) {
+            SceneLoadStats& st = *options.stats;
+            if (a.cache == "hit") {
+                st.cacheSeconds += seconds;
+                ++st.cacheHits;
+            } else {
+                st.importSeconds += seconds;
+                ++st.filesImported;
+                st.cacheWritten += a.cache == "written" || a.cache.starts_with("rebuilt");
+            }
+        }
+        return sceneFromAssembly(a, file);
+    }
     SceneDesc scene;
     scene.sourceFile = file;
     MeshDesc md;
@@ -591,14 +696,7 @@ SceneDesc sceneFromMeshFile(const std::filesystem::path& file) {
     scene.materials.push_back(m);
     scene.instances.push_back(InstanceDesc{});
     scene.cameras.push_back(framingCamera(scene.worldBounds()));
-    // A head light from above the camera's right shoulder, plus a soft ambient term so nothing is pitch black.
-    const CameraDesc& c = scene.cameras.front();
-    Light key;
-    key.type = LightType::Directional;
-    key.direction = normalize((c.lookAt - c.position) + Float3{-0.3f, -0.5f, 0.0f} * length(c.lookAt - c.position));
-    key.intensity = 2.5f;
-    scene.lights.push_back(key);
-    scene.settings.ambient = {0.15f, 0.15f, 0.15f};
+    addHeadLight(scene);
     return scene;
 }
 

@@ -19,7 +19,7 @@ SceneDesc loadScene(const std::string& nameOrPath, const SceneLoadOptions& optio
     case SceneSourceKind::SceneFile: return loadSceneFile(nameOrPath, options);
     case SceneSourceKind::MeshFile: break;
     }
-    return sceneFromMeshFile(nameOrPath);
+    return sceneFromMeshFile(nameOrPath, options);
 }
 
 }  // namespace rtwall

@@ -4,6 +4,9 @@
 #include "rtwall/mesh.h"
 
 #include <array>
+#include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace rtwall::detail {
@@ -46,5 +49,24 @@ TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t so
 
 // Reads any supported mesh file, without a cache (import.cpp).
 TriangleMesh importMesh(const std::filesystem::path& file, ImportReport* report);
+
+
+// Assembly importers (import_gltf.cpp, import_cad.cpp); loadAssembly (assembly.cpp) picks one.
+Assembly importGltf(const std::filesystem::path& file);
+Assembly importCad(const std::filesystem::path& file, const AssemblyOptions& options);  // STEP, IGES
+
+// Assembly caches (cache.cpp): what a cache must have been made from.
+struct AssemblyKey {
+    uint64_t hash = 0, size = 0;  // XXH3-64 and size of the source file's content
+    double linearDeflection = 0, angularDeflection = 0;
+};
+std::filesystem::path assemblyCachePath(const std::filesystem::path& source, const std::filesystem::path& cacheDir);
+uint64_t hashFileContent(const std::filesystem::path& file, uint64_t& size);
+void writeAssemblyCache(const Assembly& assembly, const AssemblyKey& key, const std::filesystem::path& cacheFile);
+// Validated in full (checksum, counts, indices, every mesh as decodeMeshCache does); with
+// `keepAlive` the meshes view `data`.
+Assembly decodeAssemblyCache(const unsigned char* data, size_t size, const AssemblyKey& key, const std::string& name,
+                             std::shared_ptr<const void> keepAlive);
+std::optional<Assembly> readAssemblyCache(const std::filesystem::path& cacheFile, const AssemblyKey& key, std::string* whyNot);
 
 }  // namespace rtwall::detail

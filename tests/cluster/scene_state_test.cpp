@@ -232,7 +232,8 @@ SceneDesc sampleScene() {
     d.meshes.push_back({"box", "meshes/box.ply", std::make_shared<const TriangleMesh>(makeBox())});
     d.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
     d.materials = {sampleMaterial(0), sampleMaterial(1)};
-    d.instances = {InstanceDesc{1, 1, sampleTransform(0)}, InstanceDesc{1, 1, sampleTransform(1)}};
+    d.instances = {InstanceDesc{1, 1, sampleTransform(0), 1}, InstanceDesc{1, 1, sampleTransform(1), 0}};
+    d.parts = {PartDesc{"module", -1}, PartDesc{"module/bolt", 0}};
     d.lights = {sampleLight(0), sampleLight(1)};
     d.cameras = {sampleCamera(0), sampleCamera(1)};
     d.settings = sampleSettings();
@@ -271,10 +272,10 @@ TEST(SceneState, MemberCountsAreExact) {
     EXPECT_EQ(fieldCount<Light>(), 8u);
     EXPECT_EQ(fieldCount<CameraDesc>(), 6u);  // std::optional<ProjectionWindow> counts as one
     EXPECT_EQ(fieldCount<ProjectionWindow>(), 3u);
-    EXPECT_EQ(fieldCount<InstanceDesc>(), 3u);
+    EXPECT_EQ(fieldCount<InstanceDesc>(), 4u);
     EXPECT_EQ(fieldCount<Transform>(), 1u);  // the std::array, not its 12 doubles
     EXPECT_EQ(fieldCount<BvhSettings>(), 4u);
-    EXPECT_EQ(fieldCount<SceneDesc>(), 10u);
+    EXPECT_EQ(fieldCount<SceneDesc>(), 11u);
     EXPECT_EQ(fieldCount<SceneSnapshot>(), 10u);
     EXPECT_EQ(std::tuple_size_v<decltype(tieFields(std::declval<RenderSettings&>()))>, fieldCount<RenderSettings>());
 }
@@ -287,7 +288,8 @@ TEST(SceneState, TheSamplesSetEveryMember) {
 }
 
 // SceneDesc -> snapshot -> bytes -> snapshot -> SceneDesc: every member comes back, but for what
-// does not travel: the scene file's path and cameras other than the current one. (What is each
+// does not travel: the scene file's path, cameras other than the current one and an assembly's
+// part names (the instances' part indices do travel). (What is each
 // process's own, the packet width and a client's id, is TraceOptions, never on the wire.)
 TEST(SceneState, EveryMemberTravelsAndComesBack) {
     const SceneDesc d = sampleScene();
@@ -307,6 +309,7 @@ TEST(SceneState, EveryMemberTravelsAndComesBack) {
     ASSERT_TRUE(back);
     SceneDesc expected = d;
     expected.sourceFile.clear();
+    expected.parts.clear();
     expected.cameras = {current};
     expectEqualMembers(*back, expected, "SceneDesc");
 }
@@ -346,7 +349,7 @@ TEST(SceneState, EveryMemberChangesTheWireBytes) {
     expectEveryMemberOnTheWire(sampleMaterial(0), "Material");
     expectEveryMemberOnTheWire(sampleLight(0), "Light");
     expectEveryMemberOnTheWire(sampleCamera(0), "CameraDesc");
-    expectEveryMemberOnTheWire(InstanceDesc{1, 2, sampleTransform(0)}, "InstanceDesc");
+    expectEveryMemberOnTheWire(InstanceDesc{1, 2, sampleTransform(0), 3}, "InstanceDesc");
     expectEveryMemberOnTheWire(sampleSettings(), "RenderSettings");
     EXPECT_TRUE(sameOnWire(sampleMaterial(1), sampleMaterial(1)));
 }

@@ -8,7 +8,11 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>  // key codes, as the wall's windows report them
 
+#include <cstdlib>
 #include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
 
 namespace rtwall {
 namespace {
@@ -329,6 +333,33 @@ TEST(WallSession, AFailedTileIsOneLineWithTheCommandThatReplaysIt) {
             }
     EXPECT_EQ(differing, 0u) << "the replayed tile differs from frame 2's";
     EXPECT_EQ(lit, 0u) << "the replay renders that tile alone";
+}
+
+// Issue 20: picking an object of an assembly names its part (the glTF node path), so that a
+// reviewer on the wall can say which part is meant.
+TEST(WallSession, PickingAnAssemblyNamesThePart) {
+    const auto dir = test::displayScratchDir();
+    const std::string cmd = "python3 " + (std::filesystem::path(RTWALL_SOURCE_DIR) / "tools" / "gltf_testgen.py").string() +
+                            " --out " + dir.string();
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    RunConfig c = sessionConfig(dir, dir / "binary.glb");
+    auto lines = std::make_shared<std::vector<std::string>>();
+    c.log = [lines](const std::string& line) { lines->push_back(line); };
+    WallSession s(c);
+    ASSERT_TRUE(s.step());
+    ASSERT_FALSE(s.scene().parts.empty());
+    // box_a's top face centre, (-2, 1, 0) in the file.
+    const auto [x, y] = pixelOf(s, {-2.0f, 1.0f, 0.0f});
+    InputState press;
+    press.leftPressed = press.leftDown = true;
+    press.clickMods = GLFW_MOD_CONTROL;
+    press.wallX = x;
+    press.wallY = y;
+    s.inject(press);
+    ASSERT_TRUE(s.step());
+    bool named = false;
+    for (const std::string& l : *lines) named = named || (l.find("picked instance") != std::string::npos && l.find("part 'root/box_a'") != std::string::npos);
+    EXPECT_TRUE(named) << (lines->empty() ? std::string("no log lines") : lines->back());
 }
 
 }  // namespace

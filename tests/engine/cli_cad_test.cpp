@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 
 namespace rtwall {
 namespace {
@@ -124,6 +125,57 @@ TEST(CliCad, BadGroupNamesFileAndLine) {
     const auto file = test::writeFile(test::scratchDir() / "g.toml",
                                       "[[mesh]]\nname = \"b\"\nshape = \"box\"\n[[instance]]\ngroup = \"missing\"\n");
     expectOneLineError(run("render " + file.string() + " --out x.png"), 1, file.string() + ":5:");
+}
+
+// glTF assemblies (issue 20): rtwall info lists the part tree, a render works, and a broken
+// file is one line naming it and a non-zero exit, from info and from render.
+TEST(CliCad, GltfInfoListsThePartTreeAndBadFilesGiveOneLine) {
+    const auto dir = test::scratchDir();
+    const std::string cmd = "python3 " + (test::sourceDir() / "tools" / "gltf_testgen.py").string() + " --malformed --out " + dir.string();
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    const Result text = run("info " + (dir / "embedded.gltf").string());
+    ASSERT_EQ(text.status, 0) << text.output;
+    EXPECT_NE(text.output.find("\nroot\n"), std::string::npos) << text.output;
+    EXPECT_NE(text.output.find("\n  group\n    box_c  [box]\n"), std::string::npos) << text.output;
+    EXPECT_NE(text.output.find("\n  pipes  [pipe/0, pipe/1]\n"), std::string::npos) << text.output;
+    EXPECT_NE(text.output.find("instances = 11"), std::string::npos) << text.output;
+    const Result json = run("info --json " + (dir / "binary.glb").string());
+    ASSERT_EQ(json.status, 0) << json.output;
+    EXPECT_NE(json.output.find("\"path\" : \"root/group/box_c\""), std::string::npos) << json.output;
+    EXPECT_NE(json.output.find("\"format\" : \"glb\""), std::string::npos) << json.output;
+    const Result r = run("render " + (dir / "external.gltf").string() + " --out " + (dir / "f.png").string() +
+                         " --width 48 --height 32 --threads 2");
+    EXPECT_EQ(r.status, 0) << r.output;
+
+    expectOneLineError(run("info " + (dir / "truncated.glb").string()), 1, "truncated.glb: ");
+    expectOneLineError(run("info " + (dir / "missing_buffer.gltf").string()), 1, "missing.bin");
+    expectOneLineError(run("render " + (dir / "bad_json.gltf").string() + " --out x.png"), 1, "bad_json.gltf: ");
+    expectOneLineError(run("render " + (dir / "huge_count.gltf").string() + " --out x.png"), 1, "2147483648 elements");
+}
+
+// STEP (issue 20): rtwall gen step writes an assembly through OpenCASCADE; rtwall info lists its
+// tree with part names, and writes and then uses the assembly cache; a bad file is one line.
+TEST(CliCad, StepGenInfoCacheAndBadFile) {
+    const auto dir = test::scratchDir();
+    const Result g = run("gen step --out " + dir.string() + " --instances 14");
+    ASSERT_EQ(g.status, 0) << g.output;
+    const std::string step = (dir / "assembly.step").string();
+    const Result text = run("info " + step);
+    ASSERT_EQ(text.status, 0) << text.output;
+    EXPECT_NE(text.output.find("\nplant\n  module 1\n    plate  [plate]\n    bolt 1  [bolt]\n"), std::string::npos) << text.output;
+    EXPECT_NE(text.output.find("instances = 14"), std::string::npos) << text.output;
+    const Result first = run("info --json --cache " + step);
+    ASSERT_EQ(first.status, 0) << first.output;
+    EXPECT_NE(first.output.find("\"cache\" : \"written\""), std::string::npos) << first.output;
+    const Result second = run("info --json --cache " + step);
+    EXPECT_NE(second.output.find("\"cache\" : \"hit\""), std::string::npos) << second.output;
+    EXPECT_NE(second.output.find("\"path\" : \"plant/module 2/bracket 2\""), std::string::npos) << second.output;
+    const Result r = run("render " + step + " --cache --out " + (dir / "f.png").string() + " --width 48 --height 32 --threads 2");
+    EXPECT_EQ(r.status, 0) << r.output;
+
+    const auto bad = test::writeFile(dir / "bad.step", "ISO-10303-21;\nHEADER;\nthis is not a header\n");
+    expectOneLineError(run("info " + bad.string()), 1, bad.string() + ": ");
+    expectOneLineError(run("render " + bad.string() + " --out x.png"), 1, bad.string() + ": ");
 }
 
 }  // namespace

@@ -16,6 +16,11 @@ const std::map<std::string, Generator>& generators() {
         {"headlight",
          {"the headlight demo: parabolic reflector, bulb, structured lens glass, deep paths",
           [](const GenOptions& g) { writeShadingDemo("headlight", g.out); }}},
+        {"step",
+         {"STEP assembly through OpenCASCADE: 3 coloured, named parts in a 7-part module on a grid, assembly.step "
+          "(--instances part instances, 7000)",
+          genStep}},
+        {"iges", {"the same assembly as IGES through OpenCASCADE: assembly.igs (--instances)", genIges}},
     };
     return all;
 }

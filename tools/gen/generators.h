@@ -40,6 +40,8 @@ void genSunflowers(const GenOptions& o);
 // The shading demos (shading_demos.cpp): writes `name` ("office" or "headlight") into `dir`;
 // returns the scene file.
 std::filesystem::path writeShadingDemo(const std::string& name, const std::filesystem::path& dir);
+void genStep(const GenOptions& o);  // step_assembly.cpp: OpenCASCADE, the generator's only OCCT unit
+void genIges(const GenOptions& o);  // step_assembly.cpp: the same assembly as IGES
 
 // ---- building blocks shared by the generators ------------------------------------------------
 

@@ -27,7 +27,7 @@ void addGen(CLI::App& app, Run& run) {
     cmd->add_option("--out,-o", o->out, "Output directory (created)")->required();
     cmd->add_option("--triangles", o->triangles, "Size: powerplant: unique triangles (12.5M); sunflowers: per plant (36,000)")
         ->check(CLI::Range(int64_t(100), int64_t(2'000'000'000)));
-    cmd->add_option("--instances", o->instances, "sunflowers: plants (28,000)")->check(CLI::Range(int64_t(1), int64_t(10'000'000)));
+    cmd->add_option("--instances", o->instances, "sunflowers: plants (28,000); step: part instances (7,000)")->check(CLI::Range(int64_t(1), int64_t(10'000'000)));
     cmd->add_option("--copies", o->copies, "powerplant: plants side by side (1)")->check(CLI::Range(1, 64));
     cmd->add_option("--trees", o->trees, "sunflowers: large trees (4)")->check(CLI::Range(0, 64));
     cmd->add_option("--tree-triangles", o->treeTriangles, "sunflowers: triangles per tree (2.5M)")

@@ -4,8 +4,11 @@
 
 #include <toml++/toml.h>
 
+#include <chrono>
 #include <iostream>
 #include <memory>
+#include <string>
+#include <vector>
 
 namespace rtwall::cli {
 
@@ -61,20 +64,95 @@ toml::table sceneInfo(const std::string& scene) {
                        {"origin", toml::array{desc.origin[0], desc.origin[1], desc.origin[2]}}};
 }
 
+// An assembly (glTF, STEP, IGES): the counts, and the part tree, one entry per node with its
+// path, its parent and the instances it places.
+toml::table assemblyInfo(const std::filesystem::path& path, const AssemblyOptions& options, std::string* tree) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const Assembly a = loadAssembly(path, options);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    int64_t unique = 0, instanced = 0;
+    for (const auto& m : a.meshes) unique += int64_t(m->triangleCount());
+    std::vector<std::vector<uint32_t>> placed(a.parts.size());
+    for (const AssemblyInstance& in : a.instances) {
+        instanced += int64_t(a.meshes[in.mesh]->triangleCount());
+        placed[in.part].push_back(in.mesh);
+    }
+    std::vector<std::string> paths(a.parts.size());
+    std::vector<int> depth(a.parts.size(), 0);
+    toml::array parts;
+    for (size_t i = 0; i < a.parts.size(); ++i) {
+        const AssemblyPart& p = a.parts[i];
+        paths[i] = p.parent >= 0 ? paths[size_t(p.parent)] + "/" + p.name : p.name;
+        depth[i] = p.parent >= 0 ? depth[size_t(p.parent)] + 1 : 0;
+        toml::array meshes;
+        for (uint32_t m : placed[i]) meshes.push_back(a.meshNames[m]);
+        parts.push_back(toml::table{{"name", p.name}, {"path", paths[i]}, {"parent", int64_t(p.parent)}, {"meshes", meshes}});
+        if (tree) {
+            *tree += std::string(2 * size_t(depth[i]), ' ') + p.name;
+            if (!placed[i].empty()) {
+                *tree += "  [";
+                for (size_t k = 0; k < placed[i].size(); ++k) *tree += (k ? ", " : "") + a.meshNames[placed[i][k]];
+                *tree += "]";
+            }
+            *tree += "\n";
+        }
+    }
+    toml::array materials;
+    for (const AssemblyMaterial& m : a.materials) materials.push_back(m.name);
+    size_t bytes = 0, mapped = 0;
+    for (const auto& m : a.meshes) {
+        bytes += m->residentBytes();
+        mapped += m->mappedBytes();
+    }
+    return toml::table{{"file", path.string()},
+                       {"format", a.format},
+                       {"load_seconds", seconds},
+                       {"cache", a.cache.empty() ? std::string("off") : a.cache},
+                       {"mesh_bytes", int64_t(bytes)},  // unique meshes' buffers, mapped cache pages included
+                       {"mesh_bytes_mapped", int64_t(mapped)},
+                       {"meshes", int64_t(a.meshes.size())},
+                       {"instances", int64_t(a.instances.size())},
+                       {"materials", materials},
+                       {"triangles", unique},
+                       {"instanced_triangles", instanced},
+                       {"parts", parts}};
+}
+
 }  // namespace
 
 void addInfo(CLI::App& app, Run& run) {
     struct Options {
         std::string file;
-        bool json = false;
+        bool json = false, cache = false;
+        double deflection = 0.1, angularDeflection = 0.5;
     };
     auto o = std::make_shared<Options>();
     CLI::App* cmd = app.add_subcommand("info", "Print what a mesh file or scene file holds");
-    cmd->add_option("file", o->file, "Mesh file (.obj .off .ply .stl .om .vtk .vtp .vtu .wrl), scene file (.toml) or builtin:NAME")
+    cmd->add_option("file", o->file, "Mesh file (.obj .off .ply .stl .om .vtk .vtp .vtu .wrl), assembly (.gltf .glb .step .stp .iges .igs), scene file (.toml) or builtin:NAME")
         ->required();
     cmd->add_flag("--json", o->json, "Print JSON instead of TOML-style text");
+    cmd->add_option("--deflection", o->deflection, "STEP/IGES: tessellation tolerance in file units (0.1)")->check(CLI::Range(1e-6, 1e6));
+    cmd->add_option("--angular-deflection", o->angularDeflection, "STEP/IGES: angular tolerance, radians (0.5)")
+        ->check(CLI::Range(1e-3, 3.14));
+    cmd->add_flag("--cache", o->cache, "STEP/IGES: use FILE.rtwasm when it matches, else write it");
     cmd->callback([&run, o] {
         run = [o] {
+            if (isAssemblyFile(o->file)) {
+                // The text form lists the tree indented, one part a line, instead of the parts table.
+                std::string tree;
+                AssemblyOptions ao;
+                ao.linearDeflection = o->deflection;
+                ao.angularDeflection = o->angularDeflection;
+                ao.cache = o->cache;
+                toml::table info = assemblyInfo(o->file, ao, o->json ? nullptr : &tree);
+                if (o->json) {
+                    std::cout << toml::json_formatter{info} << "\n";
+                } else {
+                    info.erase("parts");
+                    std::cout << info << "\n\n# assembly tree (part  [meshes it places])\n" << tree;
+                }
+                return 0;
+            }
             const toml::table info =
                 sceneSourceKind(o->file) == SceneSourceKind::MeshFile ? meshInfo(o->file) : sceneInfo(o->file);
             if (o->json) std::cout << toml::json_formatter{info} << "\n";

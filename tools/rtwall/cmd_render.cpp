@@ -60,11 +60,15 @@ Image renderWithClients(SceneDesc desc, const CameraDesc& camera, const RenderOp
 }
 
 // Scene files may name gigabytes of meshes: a progress bar on a terminal, and Ctrl-C stops.
-SceneDesc loadWithProgress(const std::string& scene, int64_t builtinTriangles) {
+SceneDesc loadWithProgress(const std::string& scene, const RenderOptions& o) {
     std::optional<bench::ProgressBar> bar;
     SceneLoadOptions lo;
-    lo.builtinTriangles = builtinTriangles;
+    lo.builtinTriangles = o.triangles;
+    lo.linearDeflection = o.deflection;
+    lo.angularDeflection = o.angularDeflection;
+    if (o.cache) lo.cache = true;
     if (sceneSourceKind(scene) == SceneSourceKind::SceneFile) lo.progress = bar.emplace("loading", 1, "").fn();
+    else if (isAssemblyFile(scene)) lo.progress = bar.emplace("tessellating", 1, "").fn();
     return loadScene(scene, lo);
 }
 
@@ -113,7 +117,7 @@ Image renderHere(const Scene& scene, const Camera& camera, const SceneDesc& desc
 
 int runRender(const RenderOptions& o) {
     bench::installInterruptHandler();
-    SceneDesc desc = loadWithProgress(o.scene, o.triangles);
+    SceneDesc desc = loadWithProgress(o.scene, o);
     RenderSettings& s = desc.settings;
     applyOverrides(s, o);
     const TraceOptions trace = traceOptionsOf(o);
@@ -161,10 +165,15 @@ void addRender(CLI::App& app, Run& run) {
     auto o = std::make_shared<RenderOptions>();
     CLI::App* cmd = app.add_subcommand("render", "Render one frame of a scene file (.toml) or a mesh file to PNG");
     cmd->add_option("scene", o->scene,
-                    "Scene file (.toml), mesh file (.obj .off .ply .stl .om .vtk .vtp .vtu .wrl), or builtin:knots")->required();
+                    "Scene file (.toml), mesh file (.obj .off .ply .stl .om .vtk .vtp .vtu .wrl), assembly (.gltf .glb .step .stp .iges .igs), or builtin:knots")->required();
     cmd->add_option("--out,-o", o->out, "Output PNG file")->required();
     cmd->add_option("--triangles", o->triangles, "Triangles of a builtin scene")
         ->check(CLI::Range(int64_t(1000), int64_t(200'000'000)));
+    cmd->add_option("--deflection", o->deflection, "STEP/IGES: tessellation tolerance, the largest surface-to-triangle distance in file units (0.1)")
+        ->check(CLI::Range(1e-6, 1e6));
+    cmd->add_option("--angular-deflection", o->angularDeflection, "STEP/IGES: largest angle between neighbouring triangles, radians (0.5)")
+        ->check(CLI::Range(1e-3, 3.14));
+    cmd->add_flag("--cache", o->cache, "STEP/IGES: use FILE.rtwasm when it matches the file and deflections, else write it");
     cmd->add_option("--width", o->width, "Image width in pixels (overrides the scene)")->check(CLI::Range(1, 16384));
     cmd->add_option("--height", o->height, "Image height in pixels (overrides the scene)")->check(CLI::Range(1, 16384));
     cmd->add_option("--camera", o->camera, "Name of the scene camera to use (default: the first)");

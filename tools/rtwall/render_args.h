@@ -15,7 +15,8 @@ struct RenderOptions {
     int samples = 0, maxDepth = 0, frames = 1, packetWidth = 0, supersample = 0;
     int64_t frame = -1, clientId = -1, triangles = 3'000'000;
     double prune = -1, fov = 0;
-    bool gi = false, noGi = false;
+    double deflection = 0.1, angularDeflection = 0.5;  // STEP/IGES tessellation
+    bool gi = false, noGi = false, cache = false;
 };
 
 

@@ -108,7 +108,9 @@ bool WallInput::apply(LiveScene& scene, const InputState& in, double dt) {
             char line[128];
             std::snprintf(line, sizeof line, "picked instance %u at distance %.2f", grabbed_->instance,
                           double(grabbed_->t * length(cam.direction(float(in.wallX), float(in.wallY)))));
-            log_(line);
+            // Assemblies name the part, so a reviewer can say which one is meant.
+            const std::string part = scene.desc().partPath(scene.desc().instances[grabbed_->instance].part);
+            log_(part.empty() ? std::string(line) : std::string(line) + ", part '" + part + "'");
         }
     }
     if (grabbed_ && in.leftDown && ctrl) {

@@ -143,7 +143,17 @@ struct InstanceDesc {
     uint32_t mesh = 0;      // index into SceneDesc::meshes
     uint32_t material = 0;  // index into SceneDesc::materials
     Transform transform;
+    int32_t part = -1;      // index into SceneDesc::parts (assembly files), -1: none; kept by
+                            // the master only, render clients need no names
     bool operator==(const InstanceDesc&) const = default;
+};
+
+// A node of an imported assembly's tree (glTF node, STEP assembly or part): what `rtwall info`
+// lists and what picking names.
+struct PartDesc {
+    std::string name;
+    int32_t parent = -1;  // index into SceneDesc::parts; -1 for a root
+    bool operator==(const PartDesc&) const = default;
 };
 
 enum class KernelType { Packet, Single };
@@ -213,6 +223,7 @@ struct SceneDesc {
     std::vector<MeshDesc> meshes;
     std::vector<Material> materials;
     std::vector<InstanceDesc> instances;
+    std::vector<PartDesc> parts;  // assembly files: the node tree, parents first; empty otherwise
     std::vector<Light> lights;
     std::vector<CameraDesc> cameras;
     RenderSettings settings;
@@ -221,6 +232,8 @@ struct SceneDesc {
     std::map<std::string, std::shared_ptr<const std::vector<uint8_t>>> files;
 
     const CameraDesc* findCamera(const std::string& name) const;  // nullptr if absent
+    // The part's names from its root down, joined by '/' ("engine/piston 2"); empty for -1.
+    std::string partPath(int32_t part) const;
     Bounds3 worldBounds() const;
 };
 
@@ -242,6 +255,10 @@ struct SceneLoadOptions {
     std::optional<bool> cache;      // scene files: overrides the scene file's [load] cache
     SceneLoadStats* stats = nullptr;
     int64_t builtinTriangles = 3'000'000;  // builtin:NAME: about this many triangles
+    // STEP/IGES files: the tessellation (AssemblyOptions); `cache` (off when unset) uses and writes
+    // their assembly cache, `progress` counts parts tessellated.
+    double linearDeflection = 0.1;   // file units (millimetres for most CAD files)
+    double angularDeflection = 0.5;  // radians
 };
 SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOptions& options);
 
@@ -249,8 +266,14 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
 // ASCII VTK image data (.vti), which volume materials read; for generators and tests.
 void writeVolumeVti(const std::filesystem::path& file, int nx, int ny, int nz, const std::vector<float>& values);
 
-// A scene made of one mesh file, with a camera that frames its bounds and a default light.
+// A scene made of one mesh file, with a camera that frames its bounds and a default light. An
+// assembly file (isAssemblyFile: glTF, STEP, IGES) becomes its meshes, each stored once, placed by
+// its instances, with its materials and its part tree.
 SceneDesc sceneFromMeshFile(const std::filesystem::path& file);
+SceneDesc sceneFromMeshFile(const std::filesystem::path& file, const SceneLoadOptions& options);
+SceneDesc sceneFromAssembly(const Assembly& assembly, const std::filesystem::path& file);
+// How an assembly's metallic-roughness material becomes an rtwall material (README.md, "Formats").
+Material materialFromAssembly(const AssemblyMaterial& material);
 
 // Scenes built in code, shared by tests, benchmarks and examples. "knots": twelve distinct
 // torus knots on a floor with about `triangles` triangles in all (the kernel benchmark).

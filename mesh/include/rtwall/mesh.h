@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -257,6 +258,77 @@ std::optional<TriangleMesh> readMeshCache(const std::filesystem::path& cacheFile
 // The mesh returned owns copies of the arrays.
 TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t sourceSize, int64_t sourceMtime,
                              const std::string& name, ImportReport* report = nullptr);
+
+// Assemblies: files that place meshes by a node tree rather than hold one mesh. glTF 2.0
+// (.gltf, .glb) and STEP (.step, .stp) / IGES (.iges, .igs) are read as assemblies: every mesh
+// is stored once and placed by as many instances as the file uses it (the engine's scene loader
+// turns them into instances that share one BVH).
+
+// A material as the file describes it, in glTF's metallic-roughness terms (STEP colours fill
+// baseColor; the rest keeps its defaults). The engine maps it onto its own material kinds.
+struct AssemblyMaterial {
+    std::string name;
+    std::array<float, 4> baseColor{1, 1, 1, 1};  // linear RGBA
+    float metallic = 0.0f;                        // 0 dielectric .. 1 metal
+    float roughness = 0.5f;                       // 0 smooth .. 1 rough
+    std::array<float, 3> emissive{0, 0, 0};       // linear RGB radiance
+    float transmission = 0.0f;                    // KHR_materials_transmission: 0 opaque .. 1 clear
+    float ior = 1.5f;                             // KHR_materials_ior
+    std::string baseColorTexture;                 // key into Assembly::files (a PNG or JPEG); empty: none
+};
+
+// A node of the assembly tree: a glTF node, a STEP assembly, part or part occurrence.
+struct AssemblyPart {
+    std::string name;     // the file's name for it, or "<kind> <index>" where it has none
+    int32_t parent = -1;  // index into Assembly::parts; -1 for a root
+};
+
+struct AssemblyInstance {
+    uint32_t mesh = 0;      // index into Assembly::meshes
+    uint32_t material = 0;  // index into Assembly::materials
+    uint32_t part = 0;      // the node it belongs to (index into Assembly::parts)
+    std::array<double, 12> transform{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};  // row-major 3x4, mesh to world,
+                                                                           // the mesh's origin() included
+};
+
+struct Assembly {
+    std::string format;  // "gltf", "glb", "step", "iges"
+    std::vector<std::shared_ptr<const TriangleMesh>> meshes;  // each stored once
+    std::vector<std::string> meshNames;                       // one per mesh
+    std::vector<AssemblyMaterial> materials;
+    std::vector<AssemblyPart> parts;  // parents come before their children
+    std::vector<AssemblyInstance> instances;
+    // Texture images by the key a material names ("<file>#image<N>"): the bytes as the file holds them.
+    std::map<std::string, std::shared_ptr<const std::vector<uint8_t>>> files;
+    std::vector<std::string> warnings;  // one line each, naming the file
+    std::string cache;                  // with AssemblyOptions::cache: "hit", "written", "rebuilt: <why>"
+                                        // or "not written: <why>"; empty without
+};
+
+struct AssemblyOptions {
+    // STEP/IGES tessellation (BRepMesh_IncrementalMesh): the largest distance between a surface and
+    // its triangles, in the file's units, and the largest angle between neighbouring triangles.
+    double linearDeflection = 0.1;
+    double angularDeflection = 0.5;  // radians
+    // STEP/IGES: use the file's cache when it is current, else write one. The cache (FILE.rtwasm,
+    // or in cacheDir) holds the tessellated parts as mesh caches, mapped in place on a hit, and
+    // the assembly around them; it is keyed by the file's content (XXH3-64, size) and the two
+    // deflections, checksummed and validated in full before use, replaced by rename.
+    bool cache = false;
+    std::filesystem::path cacheDir;  // empty: beside the file
+    ProgressFn progress;             // STEP/IGES: fraction of parts tessellated; false cancels (Cancelled)
+};
+
+// True for the extensions read as assemblies (any case).
+bool isAssemblyFile(const std::filesystem::path& file);
+// Reads an assembly. Throws InputError (one line naming the file and what is wrong) on any
+// malformed input: bad JSON or GLB framing, an accessor or buffer view outside its buffer, an
+// index out of range, a missing external buffer or image, a node tree with a cycle; never
+// allocates much more than the file and the buffers it names hold.
+Assembly loadAssembly(const std::filesystem::path& file, const AssemblyOptions& options = {});
+// glTF from memory (the fuzz target): JSON or GLB by content; external files are not read
+// (a URI other than a data: URI is an InputError naming `name`).
+Assembly decodeGltf(const unsigned char* data, size_t size, const std::string& name);
 
 // Procedural shapes for scenes, tests and benchmarks, wound counter-clockwise seen from
 // outside. Sizes out of range throw std::invalid_argument.

@@ -1,0 +1,220 @@
+// glTF 2.0 assemblies (issue 20): files written by an independent writer (tools/gltf_testgen.py,
+// Python's standard library) read into unique meshes placed by instances, materials mapped onto
+// rtwall's, the three encodings (data URIs, GLB, external files) alike to the rendered byte, and
+// every malformed file one InputError line naming the file and the fault.
+#include "test_util.h"
+
+#include <rtwall/engine.h>
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+namespace rtwall {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The generated files, written once per process into a directory of its own (ctest runs the
+// tests of this program in parallel processes).
+const fs::path& generated() {
+    static const fs::path dir = [] {
+        const fs::path d = fs::path(RTWALL_BINARY_DIR) / "test-scratch" / ("gltf-generated-" + std::to_string(::getpid()));
+        fs::remove_all(d);
+        const std::string cmd = "python3 " + (test::sourceDir() / "tools" / "gltf_testgen.py").string() + " --malformed --out " + d.string();
+        EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+        return d;
+    }();
+    return dir;
+}
+
+size_t partNamed(const Assembly& a, const std::string& name) {
+    for (size_t i = 0; i < a.parts.size(); ++i)
+        if (a.parts[i].name == name) return i;
+    ADD_FAILURE() << "no part " << name;
+    return 0;
+}
+
+std::vector<const AssemblyInstance*> instancesOf(const Assembly& a, const std::string& part) {
+    const size_t p = partNamed(a, part);
+    std::vector<const AssemblyInstance*> out;
+    for (const AssemblyInstance& in : a.instances)
+        if (in.part == p) out.push_back(&in);
+    return out;
+}
+
+// The world position of the mesh's vertex v under the instance.
+std::array<double, 3> worldVertex(const Assembly& a, const AssemblyInstance& in, size_t v) {
+    const Float3 p = a.meshes[in.mesh]->position(v);
+    const auto& m = in.transform;
+    return {m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+            m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]};
+}
+
+// The centre of the instance's box (its vertices' mean).
+std::array<double, 3> centre(const Assembly& a, const AssemblyInstance& in) {
+    std::array<double, 3> c{0, 0, 0};
+    const size_t n = a.meshes[in.mesh]->vertexCount();
+    for (size_t v = 0; v < n; ++v) {
+        const auto w = worldVertex(a, in, v);
+        for (int k = 0; k < 3; ++k) c[k] += w[k] / double(n);
+    }
+    return c;
+}
+
+void expectNear3(const std::array<double, 3>& got, std::array<double, 3> want) {
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[k], want[k], 1e-6) << "component " << k;
+}
+
+TEST(Gltf, StructureMeshesStoredOnceAndInstanced) {
+    const Assembly a = loadAssembly(generated() / "embedded.gltf");
+    EXPECT_EQ(a.format, "gltf");
+    // One mesh per primitive: box, colour quad, pane, and the pipe's two primitives.
+    ASSERT_EQ(a.meshes.size(), 5u);
+    ASSERT_EQ(a.meshNames.size(), 5u);
+    EXPECT_EQ(a.parts.size(), 9u);
+    ASSERT_EQ(a.instances.size(), 11u);
+    // The box: three nodes and four EXT_mesh_gpu_instancing instances, all of one mesh.
+    const uint32_t box = instancesOf(a, "box_a").at(0)->mesh;
+    EXPECT_EQ(a.meshNames[box], "box");
+    EXPECT_EQ(std::count_if(a.instances.begin(), a.instances.end(), [&](const AssemblyInstance& i) { return i.mesh == box; }), 7);
+    EXPECT_EQ(a.meshes[box]->triangleCount(), 12u);
+    EXPECT_TRUE(a.meshes[box]->hasNormals());
+    EXPECT_TRUE(a.meshes[box]->hasUVs());
+
+    // Transforms: translation; translation and rotation; a scaled parent over a matrix.
+    expectNear3(centre(a, *instancesOf(a, "box_a").at(0)), {-2.0, 0.5, 0.0});
+    expectNear3(centre(a, *instancesOf(a, "box_b").at(0)), {2.0, 0.5, 0.0});
+    const AssemblyInstance& c = *instancesOf(a, "box_c").at(0);
+    expectNear3(centre(a, c), {0.0, 0.5, -2.0});  // group: scale 0.5, then (0, 0, -2); box_c: (0, 1, 0)
+    EXPECT_NEAR(c.transform[0], 0.5, 1e-12);
+    EXPECT_EQ(a.parts[instancesOf(a, "box_c").at(0)->part].parent, int32_t(partNamed(a, "group")));
+    EXPECT_EQ(a.parts[partNamed(a, "group")].parent, int32_t(partNamed(a, "root")));
+    // box_b is turned 45 degrees about y: its corner (0.5, *, 0.5) lies on the x axis.
+    const AssemblyInstance& b = *instancesOf(a, "box_b").at(0);
+    EXPECT_NEAR(b.transform[0], std::sqrt(0.5), 1e-12);
+    EXPECT_NEAR(b.transform[2], std::sqrt(0.5), 1e-12);
+    const auto bolts = instancesOf(a, "bolts");
+    ASSERT_EQ(bolts.size(), 4u);
+    expectNear3(centre(a, *bolts[2]), {1.5, 0.1, -1.5});
+    EXPECT_NEAR(bolts[2]->transform[5], 0.2, 1e-7);
+
+    // The pipe: a triangle strip of 6 vertices (4 triangles) and a triangle, of two materials.
+    const auto pipe = instancesOf(a, "pipes");
+    ASSERT_EQ(pipe.size(), 2u);
+    EXPECT_EQ(a.meshes[pipe[0]->mesh]->triangleCount(), 4u);
+    EXPECT_EQ(a.meshes[pipe[1]->mesh]->triangleCount(), 1u);
+    EXPECT_EQ(a.materials[pipe[0]->material].name, "steel");
+    EXPECT_EQ(a.materials[pipe[1]->material].name, "default");
+    // The strip's triangles all face +z (every other one is wound the other way in the strip).
+    const TriangleMesh& strip = *a.meshes[pipe[0]->mesh];
+    for (size_t t = 0; t < strip.triangleCount(); ++t) {
+        const Float3 p0 = strip.position(strip.indices()[3 * t]), p1 = strip.position(strip.indices()[3 * t + 1]),
+                     p2 = strip.position(strip.indices()[3 * t + 2]);
+        const float nz = (p1.x - p0.x) * (p2.y - p0.y) - (p1.y - p0.y) * (p2.x - p0.x);
+        EXPECT_LT(nz, 0.0f) << "triangle " << t;  // (0,0),(0,.3),(1,0): clockwise seen from +z, as the strip starts
+    }
+}
+
+TEST(Gltf, VertexColoursTextureAndMaterials) {
+    const Assembly a = loadAssembly(generated() / "embedded.gltf");
+    const TriangleMesh& quad = *a.meshes[instancesOf(a, "floor_colours").at(0)->mesh];
+    ASSERT_TRUE(quad.hasColors());
+    // Linear 1.0 / 0.0 encode to sRGB 255 / 0: red, green, blue, white.
+    const uint8_t want[12] = {255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255};
+    for (int i = 0; i < 12; ++i) EXPECT_EQ(quad.colors()[i], want[i]) << i;
+
+    const AssemblyMaterial& glass = a.materials[instancesOf(a, "window").at(0)->material];
+    EXPECT_EQ(glass.name, "glass");
+    EXPECT_FLOAT_EQ(glass.transmission, 1.0f);
+    EXPECT_FLOAT_EQ(glass.ior, 1.45f);
+    const AssemblyMaterial& textured = a.materials[instancesOf(a, "box_a").at(0)->material];
+    ASSERT_FALSE(textured.baseColorTexture.empty());
+    const auto& png = *a.files.at(textured.baseColorTexture);
+    ASSERT_GT(png.size(), 8u);
+    EXPECT_EQ(png[1], 'P');  // the encoded PNG, decoded by the engine
+
+    // The mapping onto rtwall's materials (README.md).
+    const SceneDesc d = sceneFromMeshFile(generated() / "embedded.gltf");
+    auto material = [&](const std::string& name) {
+        for (const Material& m : d.materials)
+            if (m.name == name) return m;
+        ADD_FAILURE() << name;
+        return Material{};
+    };
+    EXPECT_EQ(material("glass").type, MaterialType::Glass);
+    EXPECT_FLOAT_EQ(material("glass").ior, 1.45f);
+    EXPECT_EQ(material("steel").type, MaterialType::Metal);
+    EXPECT_FLOAT_EQ(material("steel").roughness, 0.2f);
+    EXPECT_EQ(material("painted").type, MaterialType::Phong);
+    EXPECT_EQ(material("textured").texture.kind, TextureKind::Image);
+    EXPECT_TRUE(d.files.count(material("textured").texture.file));
+    EXPECT_EQ(d.instances.size(), 11u);
+    EXPECT_EQ(d.meshes.size(), 5u);
+    EXPECT_EQ(d.partPath(d.instances[instancesOf(a, "box_c").at(0) - a.instances.data()].part), "root/group/box_c");
+}
+
+Image render(const SceneDesc& d) {
+    SceneDesc s = d;
+    s.settings.width = 160;
+    s.settings.height = 120;
+    s.settings.threads = 2;
+    const Scene scene(s);
+    return renderFrame(scene, Camera(s.cameras.front(), s.settings.width, s.settings.height), s.settings);
+}
+
+// Data URIs, GLB and external files hold the same assembly: the same image to the byte, and one
+// that shows the checker texture's red.
+TEST(Gltf, ThreeEncodingsRenderAlike) {
+    const Image embedded = render(sceneFromMeshFile(generated() / "embedded.gltf"));
+    if (std::getenv("RTWALL_DUMP")) writePng(embedded, "/tmp/gltf_embedded.png");
+    const Image binary = render(sceneFromMeshFile(generated() / "binary.glb"));
+    const Image external = render(sceneFromMeshFile(generated() / "external.gltf"));
+    EXPECT_EQ(loadAssembly(generated() / "binary.glb").format, "glb");
+    EXPECT_TRUE(embedded.rgb == binary.rgb);
+    EXPECT_TRUE(embedded.rgb == external.rgb);
+    size_t red = 0;
+    for (size_t i = 0; i + 2 < embedded.rgb.size(); i += 3)
+        red += embedded.rgb[i] > 2 * embedded.rgb[i + 1] + 30 && embedded.rgb[i] > 2 * embedded.rgb[i + 2] + 30;
+    EXPECT_GT(red, 20u);
+}
+
+TEST(Gltf, MalformedFilesAreOneLineErrors) {
+    const struct {
+        const char* file;
+        const char* fault;
+    } cases[] = {
+        {"truncated.glb", "truncated.glb: "},
+        {"bad_json.gltf", "bad_json.gltf: "},
+        {"accessor_overflow.gltf", "mesh 0 primitive 0 POSITION: accessor 0: 1000000 elements from byte 0 do not fit buffer view 0"},
+        {"view_outside_buffer.gltf", "buffer view 0 (bytes 0 + "},
+        {"bad_accessor_index.gltf", "mesh 0 primitive 0 POSITION: accessor 99 does not exist"},
+        {"index_out_of_range.gltf", "mesh 1 primitive 0 index 0 = 200 is out of range (4 vertices)"},
+        {"missing_buffer.gltf", "missing.bin"},
+        {"huge_count.gltf", "2147483648 elements"},
+        {"node_cycle.gltf", "node 3 is reached twice"},
+        // Found by fuzz_import_gltf: tinygltf 2.7 read an image's buffer view past its buffer.
+        {"image_view_outside_buffer.glb", "image 0: buffer view 12 lies outside its buffer"},
+    };
+    for (const auto& c : cases) {
+        const fs::path f = generated() / c.file;
+        const std::string e = test::inputErrorOf([&] { loadAssembly(f); });
+        EXPECT_NE(e.find(f.string() + ": "), std::string::npos) << e;
+        EXPECT_NE(e.find(c.fault), std::string::npos) << c.file << ": " << e;
+        EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+    }
+    // From memory (the fuzz target's entry): an external URI is refused, not read.
+    const std::string json = R"({"asset":{"version":"2.0"},"buffers":[{"uri":"/etc/passwd","byteLength":4}]})";
+    const std::string e = test::inputErrorOf(
+        [&] { decodeGltf(reinterpret_cast<const unsigned char*>(json.data()), json.size(), "memory.gltf"); });
+    EXPECT_NE(e.find("memory.gltf: "), std::string::npos) << e;
+    EXPECT_NE(e.find("not read here"), std::string::npos) << e;
+}
+
+}  // namespace
+}  // namespace rtwall

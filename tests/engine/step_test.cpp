@@ -1,0 +1,247 @@
+// STEP assemblies (issue 20): a file written through OpenCASCADE's XDE writer by `rtwall gen step`
+// (tools/gen/step_assembly.cpp), read back through the XDE reader: each distinct part tessellated
+// once, placed by as many instances as the assembly uses it, with names, colours and transforms;
+// the tessellation deflections control the triangle count; bad files are one-line errors.
+#include "test_util.h"
+
+#include "generators.h"
+
+#include <rtwall/engine.h>
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+namespace rtwall {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Three modules of seven part instances: 21 instances of 3 parts, written once per process into
+// a directory of its own (ctest runs the tests of this program in parallel processes).
+const fs::path& stepFile() {
+    static const fs::path file = [] {
+        const fs::path d = fs::path(RTWALL_BINARY_DIR) / "test-scratch" / ("step-generated-" + std::to_string(::getpid()));
+        fs::remove_all(d);
+        gen::GenOptions o;
+        o.out = d;
+        o.instances = 21;
+        gen::genStep(o);
+        return d / "assembly.step";
+    }();
+    return file;
+}
+
+std::array<double, 3> centre(const Assembly& a, const AssemblyInstance& in) {
+    const Bounds3 b = a.meshes[in.mesh]->bounds();
+    const double p[3] = {0.5 * (b.lo.x + b.hi.x), 0.5 * (b.lo.y + b.hi.y), 0.5 * (b.lo.z + b.hi.z)};
+    const auto& m = in.transform;
+    return {m[0] * p[0] + m[1] * p[1] + m[2] * p[2] + m[3], m[4] * p[0] + m[5] * p[1] + m[6] * p[2] + m[7],
+            m[8] * p[0] + m[9] * p[1] + m[10] * p[2] + m[11]};
+}
+
+TEST(Step, UniquePartsTessellatedOnceAndInstanced) {
+    const Assembly a = loadAssembly(stepFile());
+    EXPECT_EQ(a.format, "step");
+    ASSERT_EQ(a.meshes.size(), 3u) << "plate, bolt, bracket: each tessellated once";
+    std::vector<std::string> names = a.meshNames;
+    std::sort(names.begin(), names.end());
+    EXPECT_EQ(names, (std::vector<std::string>{"bolt", "bracket", "plate"}));
+    ASSERT_EQ(a.instances.size(), 21u);
+    for (const auto& m : a.meshes) {
+        EXPECT_GT(m->triangleCount(), 10u);
+        EXPECT_TRUE(m->hasNormals());
+    }
+    size_t bolts = 0;
+    for (const AssemblyInstance& in : a.instances) bolts += a.meshNames[in.mesh] == "bolt";
+    EXPECT_EQ(bolts, 12u);
+
+    // The tree: plant > module N > its seven components.
+    ASSERT_FALSE(a.parts.empty());
+    EXPECT_EQ(a.parts[0].name, "plant");
+    EXPECT_EQ(a.parts[0].parent, -1);
+    size_t modules = 0;
+    for (const AssemblyPart& p : a.parts) modules += p.name.rfind("module ", 0) == 0 && p.parent == 0;
+    EXPECT_EQ(modules, 3u);
+
+    // Colours: the bolts' (0.8, 0.65, 0.2), through the file's colour entities.
+    for (const AssemblyInstance& in : a.instances) {
+        if (a.meshNames[in.mesh] != "bolt") continue;
+        const auto& c = a.materials[in.material].baseColor;
+        EXPECT_NEAR(c[0], 0.8, 0.01);
+        EXPECT_NEAR(c[1], 0.65, 0.01);
+        EXPECT_NEAR(c[2], 0.2, 0.01);
+    }
+
+    // Transforms: module m lies at (100 (m mod 2), 100 (m div 2)) in the file's z-up frame, turned
+    // m x 90 degrees; rtwall turns z-up into y-up: (x, y, z) -> (x, z, -y). The plate is centred
+    // on its module, 3 mm up.
+    std::vector<std::array<double, 3>> plates;
+    for (const AssemblyInstance& in : a.instances)
+        if (a.meshNames[in.mesh] == "plate") plates.push_back(centre(a, in));
+    ASSERT_EQ(plates.size(), 3u);
+    const std::array<double, 3> want[3] = {{0, 3, 0}, {100, 3, 0}, {0, 3, -100}};
+    for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(plates[size_t(i)][size_t(k)], want[i][size_t(k)], 1e-3) << i << " " << k;
+    const SceneDesc d = sceneFromMeshFile(stepFile());
+    EXPECT_EQ(d.instances.size(), 21u);
+    EXPECT_EQ(d.meshes.size(), 3u);
+    const std::string path = d.partPath(d.instances.back().part);
+    EXPECT_EQ(path.rfind("plant/module ", 0), 0u) << path;
+}
+
+TEST(Step, DeflectionControlsTheTessellation) {
+    AssemblyOptions coarse, fine;
+    coarse.linearDeflection = 1.0;
+    fine.linearDeflection = 0.01;
+    fine.angularDeflection = 0.1;
+    const Assembly c = loadAssembly(stepFile(), coarse), f = loadAssembly(stepFile(), fine);
+    auto boltTriangles = [](const Assembly& a) {
+        for (size_t i = 0; i < a.meshes.size(); ++i)
+            if (a.meshNames[i] == "bolt") return a.meshes[i]->triangleCount();
+        return size_t(0);
+    };
+    EXPECT_GT(boltTriangles(f), 4 * boltTriangles(c));
+    AssemblyOptions bad;
+    bad.linearDeflection = 0;
+    EXPECT_NE(test::inputErrorOf([&] { loadAssembly(stepFile(), bad); }).find("deflections must be positive"), std::string::npos);
+}
+
+// The assembly cache: a second load maps the tessellated parts from FILE.rtwasm and gives the
+// same assembly; the key is the file's content (a rewrite with the same bytes still hits) and the
+// deflections; a changed file or a corrupt cache is rebuilt, never trusted.
+TEST(Step, CacheIsKeyedByContentAndDeflections) {
+    const fs::path dir = test::scratchDir();
+    const fs::path file = dir / "a.step";
+    fs::copy_file(stepFile(), file);
+    AssemblyOptions o;
+    o.cache = true;
+    const Assembly first = loadAssembly(file, o);
+    EXPECT_EQ(first.cache, "written");
+    ASSERT_TRUE(fs::exists(dir / "a.step.rtwasm"));
+    const Assembly hit = loadAssembly(file, o);
+    EXPECT_EQ(hit.cache, "hit");
+    ASSERT_EQ(hit.meshes.size(), first.meshes.size());
+    EXPECT_EQ(hit.meshNames, first.meshNames);
+    ASSERT_EQ(hit.instances.size(), first.instances.size());
+    for (size_t i = 0; i < hit.instances.size(); ++i) {
+        EXPECT_EQ(hit.instances[i].mesh, first.instances[i].mesh);
+        EXPECT_EQ(hit.instances[i].material, first.instances[i].material);
+        EXPECT_EQ(hit.instances[i].part, first.instances[i].part);
+        EXPECT_EQ(hit.instances[i].transform, first.instances[i].transform);
+    }
+    ASSERT_EQ(hit.parts.size(), first.parts.size());
+    for (size_t i = 0; i < hit.parts.size(); ++i) {
+        EXPECT_EQ(hit.parts[i].name, first.parts[i].name);
+        EXPECT_EQ(hit.parts[i].parent, first.parts[i].parent);
+    }
+    ASSERT_EQ(hit.materials.size(), first.materials.size());
+    for (size_t i = 0; i < hit.materials.size(); ++i) EXPECT_EQ(hit.materials[i].baseColor, first.materials[i].baseColor);
+    for (size_t m = 0; m < hit.meshes.size(); ++m) {
+        EXPECT_TRUE(hit.meshes[m]->isMapped()) << "rendered where the cache file lies";
+        ASSERT_EQ(hit.meshes[m]->vertexCount(), first.meshes[m]->vertexCount());
+        ASSERT_EQ(hit.meshes[m]->triangleCount(), first.meshes[m]->triangleCount());
+        EXPECT_EQ(0, std::memcmp(hit.meshes[m]->positions(), first.meshes[m]->positions(), 12 * first.meshes[m]->vertexCount()));
+        EXPECT_EQ(0, std::memcmp(hit.meshes[m]->indices(), first.meshes[m]->indices(), 12 * first.meshes[m]->triangleCount()));
+        EXPECT_EQ(hit.meshes[m]->origin(), first.meshes[m]->origin());
+    }
+
+    // The same bytes written again (a new modification time): still a hit.
+    {
+        std::ifstream in(file, std::ios::binary);
+        const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        in.close();
+        test::writeFile(file, bytes);
+        EXPECT_EQ(loadAssembly(file, o).cache, "hit");
+        // Other deflections: rebuilt.
+        AssemblyOptions finer = o;
+        finer.linearDeflection = 0.05;
+        EXPECT_NE(loadAssembly(file, finer).cache.find("rebuilt: "), std::string::npos);
+        EXPECT_NE(loadAssembly(file, o).cache.find("deflections"), std::string::npos);
+        // Another content (a comment line added at the end): rebuilt as stale.
+        test::writeFile(file, bytes + "/* edited */\n");
+        const Assembly edited = loadAssembly(file, o);
+        EXPECT_NE(edited.cache.find("stale"), std::string::npos) << edited.cache;
+        EXPECT_EQ(edited.instances.size(), 21u);
+    }
+    // A flipped byte in a cached mesh: the checksum catches it and the cache is rebuilt.
+    EXPECT_EQ(loadAssembly(file, o).cache, "hit");
+    {
+        std::fstream f(dir / "a.step.rtwasm", std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(-64, std::ios::end);
+        f.put('\x5a');
+    }
+    const Assembly rebuilt = loadAssembly(file, o);
+    EXPECT_NE(rebuilt.cache.find("checksum"), std::string::npos) << rebuilt.cache;
+    EXPECT_EQ(rebuilt.instances.size(), 21u);
+}
+
+// The same assembly written as IGES (IGESCAFControl_Writer) and read through the IGES reader.
+// OCCT's IGES writer flattens the assembly into one named compound, so what comes back is one
+// part holding all 21 placed parts' surfaces: at least 3 x (plate + 4 bolts + 2 brackets).
+TEST(Step, IgesAssemblyReads) {
+    const auto dir = test::scratchDir();
+    gen::GenOptions o;
+    o.out = dir;
+    o.instances = 21;
+    gen::genIges(o);
+    const Assembly a = loadAssembly(dir / "assembly.igs");
+    EXPECT_EQ(a.format, "iges");
+    ASSERT_FALSE(a.instances.empty());
+    size_t triangles = 0;
+    for (const AssemblyInstance& in : a.instances) triangles += a.meshes[in.mesh]->triangleCount();
+    const Assembly step = loadAssembly(stepFile());
+    size_t stepTriangles = 0;
+    for (const AssemblyInstance& in : step.instances) stepTriangles += step.meshes[in.mesh]->triangleCount();
+    EXPECT_GE(triangles, stepTriangles * 9 / 10);
+    EXPECT_LE(triangles, stepTriangles * 11 / 10);
+    EXPECT_EQ(a.parts.at(0).name, "plant");
+    EXPECT_NE(test::inputErrorOf([&] { loadAssembly(test::writeFile(dir / "bad.igs", "not IGES\n")); }).find("bad.igs: "), std::string::npos);
+}
+
+// Progress reaches 1 through the transfer and the tessellation, and a progress function that
+// says stop makes the load throw Cancelled (what Ctrl-C does), in either phase.
+TEST(Step, ProgressAndCancel) {
+    std::vector<double> seen;
+    AssemblyOptions o;
+    o.progress = [&](double f) {
+        seen.push_back(f);
+        return true;
+    };
+    loadAssembly(stepFile(), o);
+    ASSERT_GE(seen.size(), 4u);
+    EXPECT_TRUE(std::is_sorted(seen.begin(), seen.end()));
+    EXPECT_DOUBLE_EQ(seen.back(), 1.0);
+    EXPECT_GT(std::count_if(seen.begin(), seen.end(), [](double f) { return f > 0.0 && f < 0.9; }), 0) << "the transfer reports";
+    for (double stopAt : {0.0, 0.95}) {
+        AssemblyOptions c;
+        c.progress = [&](double f) { return f < stopAt; };
+        EXPECT_THROW(loadAssembly(stepFile(), c), Cancelled) << stopAt;
+    }
+}
+
+TEST(Step, MalformedFilesAreOneLineErrors) {
+    const auto dir = test::scratchDir();
+    const auto garbage = test::writeFile(dir / "garbage.step", "this is not ISO 10303-21 at all\n");
+    const auto empty = test::writeFile(dir / "empty.stp", "");
+    const auto noShapes = test::writeFile(dir / "no_shapes.step",
+                                          "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(('x'),'2;1');\nFILE_NAME('x','',(''),(''),'','','');\n"
+                                          "FILE_SCHEMA(('AUTOMOTIVE_DESIGN'));\nENDSEC;\nDATA;\nENDSEC;\nEND-ISO-10303-21;\n");
+    for (const fs::path& f : {garbage, empty, noShapes, dir / "missing.step"}) {
+        const std::string e = test::inputErrorOf([&] { loadAssembly(f); });
+        EXPECT_EQ(e.rfind(f.string() + ": ", 0), 0u) << e;
+        EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+    }
+}
+
+}  // namespace
+}  // namespace rtwall

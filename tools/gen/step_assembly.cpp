@@ -1,0 +1,125 @@
+// `rtwall gen step` / `rtwall gen iges`: a STEP (IGES) assembly with repeated parts, written
+// through OpenCASCADE's XDE (STEPCAFControl_Writer, IGESCAFControl_Writer), so the importer
+// reads a file that its own code did not write.
+//
+// Three parts (a plate, a bolt, a bracket), each with a colour and a name, make one "module"
+// sub-assembly (a plate, four bolts, two brackets: seven part instances); the root "plant"
+// places the module on a square grid, so the file holds each part's geometry once and
+// 7 x modules part instances. Sizes in millimetres, z up (as CAD files are).
+#include "generators.h"
+
+#include <BRepBuilderAPI_Transform.hxx>
+#include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCylinder.hxx>
+#include <IFSelect_ReturnStatus.hxx>
+#include <IGESCAFControl_Writer.hxx>
+#include <Interface_Static.hxx>
+#include <Message.hxx>
+#include <Message_Messenger.hxx>
+#include <Quantity_Color.hxx>
+#include <STEPCAFControl_Writer.hxx>
+#include <STEPControl_StepModelType.hxx>
+#include <Standard_Failure.hxx>
+#include <TCollection_ExtendedString.hxx>
+#include <TDataStd_Name.hxx>
+#include <TDocStd_Document.hxx>
+#include <TopLoc_Location.hxx>
+#include <XCAFApp_Application.hxx>
+#include <XCAFDoc_ColorTool.hxx>
+#include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_ShapeTool.hxx>
+#include <gp_Ax2.hxx>
+#include <gp_Trsf.hxx>
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+namespace rtwall::gen {
+namespace {
+
+TopLoc_Location at(double x, double y, double z, double turnDegrees = 0) {
+    gp_Trsf r, t;
+    r.SetRotation(gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), turnDegrees * M_PI / 180.0);
+    t.SetTranslation(gp_Vec(x, y, z));
+    return TopLoc_Location(t * r);
+}
+
+}  // namespace
+
+namespace {
+
+void writeAssembly(const GenOptions& o, bool iges) {
+    // Part instances wanted; 7 per module, so modules = ceil(instances / 7).
+    const int64_t wanted = o.instances > 0 ? o.instances : 7000;
+    const int64_t modules = (wanted + 6) / 7;
+    const auto side = int64_t(std::ceil(std::sqrt(double(modules))));
+    std::filesystem::create_directories(o.out);
+    const std::filesystem::path file = o.out / (iges ? "assembly.igs" : "assembly.step");
+
+    Message::DefaultMessenger()->RemovePrinters(STANDARD_TYPE(Message_Printer));  // OCCT prints to stdout otherwise
+    Handle(TDocStd_Document) doc;
+    XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc);
+    const Handle(XCAFDoc_ShapeTool) shapes = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
+    const Handle(XCAFDoc_ColorTool) colours = XCAFDoc_DocumentTool::ColorTool(doc->Main());
+    auto part = [&](const TopoDS_Shape& s, const char* name, double r, double g, double b) {
+        const TDF_Label l = shapes->AddShape(s, false);
+        TDataStd_Name::Set(l, TCollection_ExtendedString(name));
+        colours->SetColor(l, Quantity_Color(r, g, b, Quantity_TOC_RGB), XCAFDoc_ColorSurf);
+        return l;
+    };
+    const TDF_Label plate = part(BRepPrimAPI_MakeBox(gp_Pnt(-40, -40, 0), 80, 80, 6).Shape(), "plate", 0.55, 0.57, 0.6);
+    const TDF_Label bolt = part(BRepPrimAPI_MakeCylinder(4, 20).Shape(), "bolt", 0.8, 0.65, 0.2);
+    const TDF_Label bracket = part(BRepPrimAPI_MakeBox(gp_Pnt(-5, -15, 0), 10, 30, 40).Shape(), "bracket", 0.15, 0.35, 0.75);
+
+    const TDF_Label module = shapes->NewShape();
+    TDataStd_Name::Set(module, "module");
+    auto component = [&](const TDF_Label& into, const TDF_Label& what, const TopLoc_Location& loc, const std::string& name) {
+        const TDF_Label c = shapes->AddComponent(into, what, loc);
+        TDataStd_Name::Set(c, TCollection_ExtendedString(name.c_str()));
+    };
+    component(module, plate, at(0, 0, 0), "plate");
+    int k = 0;
+    for (double x : {-30.0, 30.0})
+        for (double y : {-30.0, 30.0}) component(module, bolt, at(x, y, 6), "bolt " + std::to_string(++k));
+    component(module, bracket, at(-20, 0, 6), "bracket 1");
+    component(module, bracket, at(20, 0, 6, 180), "bracket 2");
+
+    const TDF_Label plant = shapes->NewShape();
+    TDataStd_Name::Set(plant, "plant");
+    for (int64_t m = 0; m < modules; ++m)
+        component(plant, module, at(100.0 * double(m % side), 100.0 * double(m / side), 0, double(m % 4) * 90.0),
+                  "module " + std::to_string(m + 1));
+    shapes->UpdateAssemblies();
+
+    const std::string what = iges ? "gen iges: " : "gen step: ";
+    try {
+        bool ok = false;
+        if (iges) {
+            IGESCAFControl_Writer writer;
+            writer.SetColorMode(true);
+            writer.SetNameMode(true);
+            ok = writer.Transfer(doc) && writer.Write(file.c_str());
+        } else {
+            STEPCAFControl_Writer writer;
+            writer.SetColorMode(true);
+            writer.SetNameMode(true);
+            if (!writer.Transfer(doc, STEPControl_AsIs)) throw std::runtime_error(what + "OpenCASCADE could not transfer the assembly");
+            ok = writer.Write(file.c_str()) == IFSelect_RetDone;
+        }
+        if (!ok) throw std::runtime_error(what + "cannot write " + file.string());
+    } catch (const Standard_Failure& e) {
+        throw std::runtime_error(what + "OpenCASCADE: " + e.GetMessageString());
+    }
+    XCAFApp_Application::GetApplication()->Close(doc);
+    std::printf("wrote %s: %lld modules, %lld part instances of 3 parts\n", file.c_str(), (long long)modules,
+                (long long)(7 * modules));
+}
+
+}  // namespace
+
+void genStep(const GenOptions& o) { writeAssembly(o, false); }
+void genIges(const GenOptions& o) { writeAssembly(o, true); }
+
+}  // namespace rtwall::gen

@@ -1,0 +1,293 @@
+#!/usr/bin/env python3
+"""Writes small glTF 2.0 assemblies for rtwall's importer tests, with the standard library only.
+
+It is a second, independent glTF writer (rtwall reads glTF through tinygltf), so the tests read
+files that rtwall's own code did not make. One assembly, written three ways that must import
+alike:
+  embedded.gltf   buffers and the texture as data: URIs
+  binary.glb      one GLB file: the buffer in the BIN chunk, the texture in a buffer view
+  external.gltf   external.bin and checker.png beside it
+The assembly: a textured box mesh placed by three nodes (one under a scaled parent, one by a
+matrix) and four times more by EXT_mesh_gpu_instancing; a quad with vertex colours (normalised
+unsigned bytes); a glass pane (KHR_materials_transmission and KHR_materials_ior), without an
+index accessor; a mesh of two primitives, a metal triangle strip and a triangle without a
+material. Unique meshes: 5 (one per primitive); instances: 11; nodes: 9.
+
+With --malformed it also writes broken files, each with one thing wrong (the names say what).
+
+  python3 tools/gltf_testgen.py --out DIR [--malformed]
+  python3 tools/gltf_testgen.py --out DIR --grid N   # a large file for timing: an N x N x N grid of boxes
+"""
+import argparse
+import base64
+import json
+import math
+import os
+import struct
+import zlib
+
+
+def png_rgb(width, height, rgb):
+    """An 8-bit RGB PNG (filter 0 on every row)."""
+    raw = b"".join(b"\x00" + rgb[y * width * 3:(y + 1) * width * 3] for y in range(height))
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) +
+            chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+def checker_png():
+    n = 8
+    rgb = bytearray()
+    for y in range(n):
+        for x in range(n):
+            rgb += bytes((230, 30, 30)) if (x + y) % 2 else bytes((240, 240, 240))
+    return png_rgb(n, n, bytes(rgb))
+
+
+FLOAT, UBYTE, USHORT = 5126, 5121, 5123
+
+
+class Builder:
+    def __init__(self):
+        self.blob = bytearray()
+        self.views = []
+        self.accessors = []
+
+    def view(self, data, target=None):
+        while len(self.blob) % 4:
+            self.blob.append(0)
+        v = {"buffer": 0, "byteOffset": len(self.blob), "byteLength": len(data)}
+        if target:
+            v["target"] = target
+        self.blob += data
+        self.views.append(v)
+        return len(self.views) - 1
+
+    def accessor(self, fmt_type, values, components, component_type=FLOAT, normalized=False, target=None):
+        code = {FLOAT: "f", UBYTE: "B", USHORT: "H"}[component_type]
+        flat = [c for v in values for c in (v if isinstance(v, (list, tuple)) else (v,))]
+        data = struct.pack("<%d%s" % (len(flat), code), *flat)
+        a = {"bufferView": self.view(data, target), "componentType": component_type, "count": len(values),
+             "type": fmt_type}
+        if normalized:
+            a["normalized"] = True
+        if fmt_type == "VEC3" and component_type == FLOAT:
+            a["min"] = [min(v[i] for v in values) for i in range(3)]
+            a["max"] = [max(v[i] for v in values) for i in range(3)]
+        self.accessors.append(a)
+        return len(self.accessors) - 1
+
+
+def box_geometry():
+    """24 vertices (4 per face, outward normals, UVs) and 36 indices, counter-clockwise from outside."""
+    pos, nrm, uv, idx = [], [], [], []
+    for axis in range(3):
+        for sign in (1.0, -1.0):
+            n = [0.0, 0.0, 0.0]
+            n[axis] = sign
+            u_axis, v_axis = (axis + 1) % 3, (axis + 2) % 3
+            base = len(pos)
+            for (a, b) in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+                p = [0.0, 0.0, 0.0]
+                p[axis] = sign * 0.5
+                p[u_axis] = a * 0.5
+                p[v_axis] = b * 0.5 * sign
+                pos.append(p)
+                nrm.append(list(n))
+                uv.append([(a + 1) / 2, (b + 1) / 2])
+            idx += [base, base + 1, base + 2, base, base + 2, base + 3]
+    return pos, nrm, uv, idx
+
+
+def quat_y(degrees):
+    h = math.radians(degrees) / 2
+    return [0.0, math.sin(h), 0.0, math.cos(h)]
+
+
+def assembly(image_mode):
+    """The glTF JSON and its binary buffer. image_mode: 'uri' (filled in by the caller) or 'view'."""
+    b = Builder()
+    pos, nrm, uv, idx = box_geometry()
+    box = {"attributes": {"POSITION": b.accessor("VEC3", pos, 3, target=34962),
+                          "NORMAL": b.accessor("VEC3", nrm, 3, target=34962),
+                          "TEXCOORD_0": b.accessor("VEC2", uv, 2, target=34962)},
+           "indices": b.accessor("SCALAR", idx, 1, USHORT, target=34963), "material": 0}
+    quad_pos = [[-0.5, 0.0, 0.5], [0.5, 0.0, 0.5], [0.5, 0.0, -0.5], [-0.5, 0.0, -0.5]]
+    quad_col = [[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255], [255, 255, 255, 255]]
+    colours = {"attributes": {"POSITION": b.accessor("VEC3", quad_pos, 3),
+                              "COLOR_0": b.accessor("VEC4", quad_col, 4, UBYTE, normalized=True)},
+               "indices": b.accessor("SCALAR", [0, 1, 2, 0, 2, 3], 1, UBYTE), "material": 1}
+    pane_pos = [[-0.6, -0.4, 0.0], [0.6, -0.4, 0.0], [0.6, 0.4, 0.0], [-0.6, -0.4, 0.0], [0.6, 0.4, 0.0], [-0.6, 0.4, 0.0]]
+    pane = {"attributes": {"POSITION": b.accessor("VEC3", pane_pos, 3)}, "material": 2}
+    strip_pos = [[0.0, 0.0, 0.0], [0.0, 0.3, 0.0], [1.0, 0.0, 0.0], [1.0, 0.3, 0.0], [2.0, 0.0, 0.0], [2.0, 0.3, 0.0]]
+    strip = {"attributes": {"POSITION": b.accessor("VEC3", strip_pos, 3)}, "mode": 5, "material": 3}
+    plain = {"attributes": {"POSITION": b.accessor("VEC3", [[0, 0.5, 0], [0.5, 0.5, 0], [0, 1.0, 0]], 3)}}
+    bolts_t = b.accessor("VEC3", [[-1.5, 0.1, 1.5], [1.5, 0.1, 1.5], [1.5, 0.1, -1.5], [-1.5, 0.1, -1.5]], 3)
+    bolts_s = b.accessor("VEC3", [[0.2, 0.2, 0.2]] * 4, 3)
+
+    doc = {
+        "asset": {"version": "2.0", "generator": "rtwall tools/gltf_testgen.py"},
+        "extensionsUsed": ["KHR_materials_transmission", "KHR_materials_ior", "EXT_mesh_gpu_instancing"],
+        "scene": 0,
+        "scenes": [{"name": "review", "nodes": [0]}],
+        "nodes": [
+            {"name": "root", "children": [1, 2, 3, 4, 5, 6, 8]},
+            {"name": "box_a", "mesh": 0, "translation": [-2.0, 0.5, 0.0]},
+            {"name": "box_b", "mesh": 0, "translation": [2.0, 0.5, 0.0], "rotation": quat_y(45)},
+            {"name": "group", "scale": [0.5, 0.5, 0.5], "translation": [0.0, 0.0, -2.0], "children": [7]},
+            {"name": "floor_colours", "mesh": 1, "scale": [4.0, 1.0, 4.0]},
+            {"name": "window", "mesh": 2, "translation": [0.0, 1.0, 1.5]},
+            {"name": "bolts", "mesh": 0,
+             "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": bolts_t, "SCALE": bolts_s}}}},
+            {"name": "box_c", "mesh": 0, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 1, 0, 1]},
+            {"name": "pipes", "mesh": 3, "translation": [-1.0, 2.0, -1.0]},
+        ],
+        "meshes": [{"name": "box", "primitives": [box]}, {"name": "colour_quad", "primitives": [colours]},
+                   {"name": "pane", "primitives": [pane]}, {"name": "pipe", "primitives": [strip, plain]}],
+        "materials": [
+            {"name": "textured", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0,
+                                                          "roughnessFactor": 0.5}},
+            {"name": "painted", "pbrMetallicRoughness": {"metallicFactor": 0.0, "roughnessFactor": 1.0}},
+            {"name": "glass", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 1.0, 0.95, 1.0], "metallicFactor": 0.0,
+                                                       "roughnessFactor": 0.0},
+             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_ior": {"ior": 1.45}}},
+            {"name": "steel", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.85, 1.0], "metallicFactor": 1.0,
+                                                       "roughnessFactor": 0.2}},
+        ],
+        "textures": [{"source": 0}],
+        "images": [{}],
+    }
+    if image_mode == "view":
+        doc["images"][0] = {"bufferView": b.view(checker_png()), "mimeType": "image/png"}
+    doc["bufferViews"] = b.views
+    doc["accessors"] = b.accessors
+    doc["buffers"] = [{"byteLength": len(b.blob)}]
+    return doc, bytes(b.blob)
+
+
+def data_uri(mime, data):
+    return "data:%s;base64,%s" % (mime, base64.b64encode(data).decode("ascii"))
+
+
+def glb(doc, blob):
+    text = json.dumps(doc, separators=(",", ":")).encode("utf-8")
+    text += b" " * (-len(text) % 4)
+    blob = blob + b"\x00" * (-len(blob) % 4)
+    body = struct.pack("<II", len(text), 0x4E4F534A) + text + struct.pack("<II", len(blob), 0x004E4942) + blob
+    return struct.pack("<III", 0x46546C67, 2, 12 + len(body)) + body
+
+
+def write(path, data):
+    with open(path, "wb") as f:
+        f.write(data if isinstance(data, bytes) else data.encode("utf-8"))
+
+
+def write_assemblies(out):
+    doc, blob = assembly("uri")
+    doc["buffers"][0]["uri"] = data_uri("application/octet-stream", blob)
+    doc["images"][0] = {"uri": data_uri("image/png", checker_png())}
+    write(os.path.join(out, "embedded.gltf"), json.dumps(doc, indent=1))
+
+    doc, blob = assembly("view")
+    write(os.path.join(out, "binary.glb"), glb(doc, blob))
+
+    doc, blob = assembly("uri")
+    doc["buffers"][0]["uri"] = "external.bin"
+    doc["images"][0] = {"uri": "checker.png"}
+    write(os.path.join(out, "external.gltf"), json.dumps(doc, indent=1))
+    write(os.path.join(out, "external.bin"), blob)
+    write(os.path.join(out, "checker.png"), checker_png())
+
+
+def write_malformed(out):
+    """Broken files, each wrong in one way; the importer must name the file and the fault."""
+    def embedded():
+        doc, blob = assembly("uri")
+        doc["buffers"][0]["uri"] = data_uri("application/octet-stream", blob)
+        doc["images"][0] = {"uri": data_uri("image/png", checker_png())}
+        return doc, blob
+
+    def put(name, doc):
+        write(os.path.join(out, name), json.dumps(doc))
+
+    doc, blob = assembly("view")
+    whole = glb(doc, blob)
+    write(os.path.join(out, "truncated.glb"), whole[:len(whole) // 2])
+    write(os.path.join(out, "bad_json.gltf"), '{"asset": {"version": "2.0"}, "nodes": [')
+
+    doc, _ = embedded()
+    doc["accessors"][0]["count"] = 1000000  # the box's positions: far more than its buffer view holds
+    put("accessor_overflow.gltf", doc)
+
+    doc, blob = embedded()
+    doc["bufferViews"][0]["byteLength"] = len(blob) + 64  # the view runs past the end of its buffer
+    put("view_outside_buffer.gltf", doc)
+
+    doc, _ = embedded()
+    doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 99  # no such accessor
+    put("bad_accessor_index.gltf", doc)
+
+    doc, blob = assembly("uri")
+    # Index 0 of the colour quad (an unsigned byte) patched to 200, with 4 vertices.
+    view = doc["bufferViews"][doc["accessors"][doc["meshes"][1]["primitives"][0]["indices"]]["bufferView"]]
+    patched = bytearray(blob)
+    patched[view["byteOffset"]] = 200
+    doc["buffers"][0]["uri"] = data_uri("application/octet-stream", bytes(patched))
+    doc["images"][0] = {"uri": data_uri("image/png", checker_png())}
+    put("index_out_of_range.gltf", doc)
+
+    doc, _ = assembly("uri")
+    doc["buffers"][0]["uri"] = "missing.bin"
+    doc["images"][0] = {"uri": data_uri("image/png", checker_png())}
+    put("missing_buffer.gltf", doc)
+
+    doc, _ = embedded()
+    doc["accessors"][1]["count"] = 2 ** 31  # a huge count that must be refused, not allocated
+    put("huge_count.gltf", doc)
+
+    doc, _ = embedded()
+    doc["nodes"][7]["children"] = [3]  # box_c (under group) names group as its child: a cycle
+    put("node_cycle.gltf", doc)
+
+    doc, blob = assembly("view")
+    # The texture's buffer view runs past the BIN chunk (tinygltf 2.7 itself reads it unchecked).
+    doc["bufferViews"][doc["images"][0]["bufferView"]]["byteOffset"] = len(blob) + 100000
+    write(os.path.join(out, "image_view_outside_buffer.glb"), glb(doc, blob))
+
+
+def write_grid(out, n):
+    """An n^3 grid of one box mesh (one node each), for import timing."""
+    b = Builder()
+    pos, nrm, uv, idx = box_geometry()
+    prim = {"attributes": {"POSITION": b.accessor("VEC3", pos, 3), "NORMAL": b.accessor("VEC3", nrm, 3)},
+            "indices": b.accessor("SCALAR", idx, 1, USHORT)}
+    nodes = [{"name": "grid", "children": list(range(1, n ** 3 + 1))}]
+    for i in range(n ** 3):
+        x, y, z = i % n, (i // n) % n, i // (n * n)
+        nodes.append({"name": "box %d" % i, "mesh": 0, "translation": [1.5 * x, 1.5 * y, 1.5 * z]})
+    doc = {"asset": {"version": "2.0", "generator": "rtwall tools/gltf_testgen.py"}, "scene": 0,
+           "scenes": [{"nodes": [0]}], "nodes": nodes, "meshes": [{"name": "box", "primitives": [prim]}],
+           "bufferViews": b.views, "accessors": b.accessors, "buffers": [{"byteLength": len(b.blob)}]}
+    write(os.path.join(out, "grid%d.glb" % n), glb(doc, bytes(b.blob)))
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--out", required=True, help="directory to write into (created)")
+    p.add_argument("--malformed", action="store_true", help="also write the broken files")
+    p.add_argument("--grid", type=int, default=0, help="write gridN.glb: N^3 instances of one box")
+    args = p.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    if args.grid:
+        write_grid(args.out, args.grid)
+        return
+    write_assemblies(args.out)
+    if args.malformed:
+        write_malformed(args.out)
+
+
+if __name__ == "__main__":
+    main()
