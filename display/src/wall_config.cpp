@@ -115,6 +115,57 @@ bool blended(const ScreenConfig& s, const PixelRect& in) {
            (s.blend[3] > 0 && in.y >= v.y + v.height - s.blend[3]);
 }
 
+// "dtrack://A.B.C.D:PORT": the IPv4 address to listen on and the UDP port.
+bool parseSource(const std::string& s, std::string& address, int& port) {
+    const std::string scheme = "dtrack://";
+    if (s.rfind(scheme, 0) != 0) return false;
+    const std::string rest = s.substr(scheme.size());
+    const size_t colon = rest.rfind(':');
+    if (colon == std::string::npos) return false;
+    const std::string a = rest.substr(0, colon), p = rest.substr(colon + 1);
+    int parts = 0;
+    size_t i = 0;
+    while (i <= a.size()) {
+        const size_t dot = std::min(a.find('.', i), a.size());
+        const std::string n = a.substr(i, dot - i);
+        if (n.empty() || n.size() > 3 || !std::all_of(n.begin(), n.end(), ::isdigit) || std::stoi(n) > 255) return false;
+        ++parts;
+        i = dot + 1;
+    }
+    if (parts != 4 || p.empty() || p.size() > 5 || !std::all_of(p.begin(), p.end(), ::isdigit)) return false;
+    const int v = std::stoi(p);
+    if (v < 1 || v > 65535) return false;
+    address = a;
+    port = v;
+    return true;
+}
+
+void readTracking(Reader& r, TrackingConfig& t) {
+    t.enabled = true;
+    t.source = r.string("source", t.source);
+    if (!parseSource(t.source, t.address, t.port))
+        r.fail(r.find("source"), "key 'source': expected dtrack://ADDRESS:PORT with an IPv4 address to listen on and a UDP port "
+                                 "(dtrack://0.0.0.0:5000), got '" + t.source + "'");
+    t.headBody = r.integer("head_body", t.headBody, 0, 1'000'000);
+    t.flystick = r.integer("flystick", t.flystick, -1, 255);
+    t.roomScale = r.number("room_scale", t.roomScale, 1e-9, 1e6);
+    if (t.roomScale <= 0) r.fail(r.find("room_scale"), "key 'room_scale': must be positive");
+    t.roomRotate = r.vec3d("room_rotate", t.roomRotate);
+    for (double a : t.roomRotate)
+        if (std::fabs(a) > 360) r.fail(r.find("room_rotate"), "key 'room_rotate': angles are degrees in [-360, 360]");
+    t.roomTranslate = r.vec3d("room_translate", t.roomTranslate);
+    t.timeoutMs = r.integer("timeout_ms", t.timeoutMs, 1, 60'000);
+    t.predictionMs = r.number("prediction_ms", t.predictionMs, 0.0, 500.0);
+    t.filter = r.choice("filter", "none", {"none", "one_euro"}) == "one_euro" ? TrackingFilter::OneEuro : TrackingFilter::None;
+    for (const char* k : {"min_cutoff", "beta", "derivative_cutoff"})
+        if (t.filter == TrackingFilter::None && r.has(k))
+            r.fail(r.find(k), std::string("key '") + k + "': a one-euro filter setting, but filter is \"none\" (set filter = \"one_euro\")");
+    t.minCutoff = r.number("min_cutoff", t.minCutoff, 1e-3, 1000.0);
+    t.beta = r.number("beta", t.beta, 0.0, 1e6);
+    t.derivativeCutoff = r.number("derivative_cutoff", t.derivativeCutoff, 1e-3, 1000.0);
+    r.finish();
+}
+
 WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
     using namespace toml_reader;
     WallConfig w;
@@ -131,8 +182,10 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
     w.vsync = wr.boolean("vsync", w.vsync);
     wr.finish();
 
+    bool hasCorners = false;
     if (const toml::table* t = subTable(top, "stereo")) {
         Reader r(file, *t, "[stereo]: ");
+        hasCorners = r.has("lower_left") && r.has("lower_right") && r.has("upper_left");
         StereoConfig& st = w.stereo;
         st.mode = stereoFromName(r.choice("mode", "none", {"none", "passive", "side_by_side", "quad_buffer"}));
         st.eyeSeparation = r.number("eye_separation", st.eyeSeparation, 0.0, 1.0);
@@ -148,6 +201,14 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
         if (std::fabs(dot(across, up)) > 1e-3 * la * lu)
             r.fail(r.find("upper_left"), "lower_left->lower_right and lower_left->upper_left must be at right angles");
         r.finish();
+    }
+    if (const toml::table* t = subTable(top, "tracking")) {
+        Reader r(file, *t, "[tracking]: ");
+        readTracking(r, w.tracking);
+        // The frusta follow from where the head is relative to the physical screens.
+        if (!hasCorners)
+            top.fail(t, "[tracking]: a tracked wall needs its physical corners: lower_left, lower_right and upper_left in [stereo] "
+                        "(with mode = \"none\" for a mono wall)");
     }
     const Eye defaultEye = w.stereo.mode == StereoMode::SideBySide || w.stereo.mode == StereoMode::QuadBuffer ? Eye::Both
                                                                                                              : Eye::Mono;
@@ -324,7 +385,7 @@ bool StereoConfig::operator==(const StereoConfig& o) const {
 
 bool WallConfig::operator==(const WallConfig& o) const {
     return name == o.name && width == o.width && height == o.height && vsync == o.vsync && screens == o.screens &&
-           stereo == o.stereo && writeEvery == o.writeEvery && video == o.video;
+           stereo == o.stereo && tracking == o.tracking && writeEvery == o.writeEvery && video == o.video;
 }
 
 WallConfig loadWallConfig(const std::filesystem::path& file) { return parse(toml_reader::parseFile(file), file); }
@@ -364,11 +425,22 @@ std::string writeWallConfig(const WallConfig& w) {
     };
     os << "[wall]\nname = " << quoted(w.name) << "\nwidth = " << w.width << "\nheight = " << w.height
        << "\nvsync = " << (w.vsync ? "true" : "false") << "\n\n";
-    if (w.stereo.mode != StereoMode::None) {
+    if (w.stereo.mode != StereoMode::None || w.tracking.enabled) {
         const StereoConfig& s = w.stereo;
         os << "[stereo]\nmode = \"" << stereoName(s.mode) << "\"\neye_separation = " << num(s.eyeSeparation)
            << "\nviewer = " << f3(s.viewer) << "\nlower_left = " << f3(s.lowerLeft) << "\nlower_right = " << f3(s.lowerRight)
            << "\nupper_left = " << f3(s.upperLeft) << "\n\n";
+    }
+    if (w.tracking.enabled) {
+        const TrackingConfig& t = w.tracking;
+        auto d3 = [&](const std::array<double, 3>& v) { return "[" + num(v[0]) + ", " + num(v[1]) + ", " + num(v[2]) + "]"; };
+        os << "[tracking]\nsource = " << quoted(t.source) << "\nhead_body = " << t.headBody << "\nflystick = " << t.flystick
+           << "\nroom_scale = " << num(t.roomScale) << "\nroom_rotate = " << d3(t.roomRotate) << "\nroom_translate = "
+           << d3(t.roomTranslate) << "\ntimeout_ms = " << t.timeoutMs << "\nprediction_ms = " << num(t.predictionMs) << "\n";
+        if (t.filter == TrackingFilter::OneEuro)
+            os << "filter = \"one_euro\"\nmin_cutoff = " << num(t.minCutoff) << "\nbeta = " << num(t.beta)
+               << "\nderivative_cutoff = " << num(t.derivativeCutoff) << "\n";
+        os << "\n";
     }
     os << "[headless]\nwrite_every = " << w.writeEvery << "\nvideo = " << quoted(w.video) << "\n";
     for (const ScreenConfig& s : w.screens) {

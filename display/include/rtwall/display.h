@@ -59,6 +59,29 @@ struct StereoConfig {
     bool operator==(const StereoConfig& o) const;
 };
 
+// [tracking]: the viewer's head from a tracking system (rtwall/tracking.h reads it). The room
+// transform takes the tracker's coordinates to wall coordinates (metres): scale first, then the
+// rotation about x, then y, then z (degrees), then the translation.
+enum class TrackingFilter { None, OneEuro };
+struct TrackingConfig {
+    bool enabled = false;                 // a [tracking] table is present
+    std::string source = "dtrack://0.0.0.0:5000";  // where the tracker's UDP datagrams arrive
+    std::string address = "0.0.0.0";      // from source: the local address to listen on
+    int port = 5000;                      // from source
+    int headBody = 0;                     // the 6d body on the viewer's head (DTrack's id)
+    int flystick = -1;                    // the 6df2 flystick's id (-1: none)
+    double roomScale = 0.001;             // tracker units to metres (DTrack: millimetres)
+    std::array<double, 3> roomRotate{0, 0, 0};     // degrees about x, then y, then z
+    std::array<double, 3> roomTranslate{0, 0, 0};  // metres, applied last
+    int timeoutMs = 250;                  // no packet for this long: the last pose is held (and said)
+    double predictionMs = 0;              // constant-velocity prediction this far ahead (0: off)
+    TrackingFilter filter = TrackingFilter::None;
+    double minCutoff = 1.0;               // one-euro filter: cutoff (Hz) of a still head
+    double beta = 20.0;                   //   cutoff added per m/s of head speed
+    double derivativeCutoff = 1.0;        //   cutoff (Hz) of the speed estimate
+    bool operator==(const TrackingConfig&) const = default;
+};
+
 struct WallConfig {
     std::filesystem::path file;       // where it was read from (messages, relative shader paths)
     std::string name = "wall";
@@ -66,6 +89,7 @@ struct WallConfig {
     bool vsync = true;
     std::vector<ScreenConfig> screens;
     StereoConfig stereo;
+    TrackingConfig tracking;
     int writeEvery = 1;               // headless: every Nth frame as per-screen PNGs (0: never)
     std::string video;                // headless: also encode the wall to this file through ffmpeg
     bool operator==(const WallConfig& o) const;  // ignores `file` and screen lines
