@@ -3,10 +3,19 @@
 // ART DTrack's ASCII output over UDP is read natively: DTrackParser turns one datagram into a
 // DTrackFrame (plain code, no sockets; strict: a malformed packet is dropped with one line
 // saying what is wrong). Poses are in the tracker's room coordinates, millimetres.
+// HeadTracker (plain code, fed frames and times) takes the head body into wall coordinates
+// through the config's room transform, smooths it (one-euro filter, optional), predicts it to
+// display time and holds it after a timeout. TrackerReceiver is the only part with a socket: a
+// thread receiving the datagrams into a HeadTracker that the frame loop reads without waiting.
 #pragma once
 
+#include <rtwall/display.h>
+
 #include <array>
+#include <chrono>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -88,5 +97,111 @@ private:
 // to 6 decimals), for the tracker simulator and the tests; parsing it back gives the frame to
 // that precision.
 std::string writeDTrackPacket(const DTrackFrame& frame);
+
+// ---------------------------------------------------------------------------------------------
+// The head in wall coordinates
+
+// Tracker room coordinates to wall coordinates (metres): wall = rotation * (scale * room) + translate.
+struct RoomTransform {
+    std::array<double, 9> rotation{1, 0, 0, 0, 1, 0, 0, 0, 1};  // row-major
+    double scale = 0.001;
+    std::array<double, 3> translate{};
+    std::array<double, 3> point(const std::array<double, 3>& room) const;
+    std::array<double, 3> direction(const std::array<double, 3>& room) const;  // rotation only
+};
+RoomTransform roomTransform(const TrackingConfig& config);
+
+// Where the viewer's head is and how it is turned, in wall coordinates (metres). The eyes lie on
+// the head's x axis (`right`, from the left eye to the right one).
+struct HeadPose {
+    Float3 position{0, 0, 2};
+    Float3 right{1, 0, 0};
+    Float3 up{0, 1, 0};
+    bool operator==(const HeadPose&) const = default;
+};
+// The pose of a DTrack body (millimetres, room axes) in wall coordinates.
+HeadPose headPoseOf(const DTrackBody& body, const RoomTransform& room);
+
+// One-euro filter (Casiez, Roussel and Vogel, CHI 2012) of one value: a low-pass filter whose
+// cutoff rises with the speed, so a still head does not jitter and a moving one does not lag.
+class OneEuroFilter {
+public:
+    OneEuroFilter(double minCutoff, double beta, double derivativeCutoff);
+    double operator()(double value, double time);  // time in seconds, increasing
+    void reset() { primed_ = false; }
+
+private:
+    double minCutoff_, beta_, derivativeCutoff_;
+    bool primed_ = false;
+    double value_ = 0, derivative_ = 0, time_ = 0;
+};
+
+// What the frame loop knows of the head.
+struct TrackerState {
+    bool seen = false;       // a pose of the head body has arrived
+    bool stale = false;      // none for timeout_ms: `head` is the last one, held (not predicted)
+    double age = 0;          // seconds since the last pose
+    HeadPose head;           // wall coordinates, filtered and predicted to the display time
+    Float3 velocity{};       // metres per second, the prediction's estimate
+    uint64_t packets = 0;    // datagrams read
+    uint64_t dropped = 0;    // malformed ones
+    std::string lastError;   // why the last one was dropped
+};
+// One line for the status overlay: "tracker: head at (x, y, z) m, 12 ms old" or "tracker: no
+// head for 1.3 s, holding the last pose".
+std::string describeTracker(const TrackerState& state);
+
+// The head body's poses over time: room transform, filter, prediction, timeout. Plain code:
+// times are seconds on any monotonic clock, given by the caller.
+class HeadTracker {
+public:
+    explicit HeadTracker(const TrackingConfig& config);
+    // A frame that arrived at `time`. False when it does not hold the head body (or not seen).
+    bool add(const DTrackFrame& frame, double time);
+    // The head for an image shown at `time` + the prediction (prediction_ms): the last pose moved
+    // at the estimated velocity; held as it was when no pose came for timeout_ms.
+    TrackerState at(double time) const;
+    void setPredictionSeconds(double seconds) { prediction_ = seconds; }
+    void countDropped(const std::string& why);
+    static constexpr double kVelocityWindow = 0.05;  // seconds of poses the velocity is fitted to
+
+private:
+    TrackingConfig config_;
+    RoomTransform room_;
+    double prediction_ = 0;
+    std::array<OneEuroFilter, 3> filters_;
+    struct Sample {
+        double time;
+        std::array<double, 3> position;
+    };
+    std::vector<Sample> recent_;  // within kVelocityWindow of the last, oldest first
+    HeadPose last_;
+    bool seen_ = false;
+    double lastTime_ = 0;
+    uint64_t packets_ = 0, dropped_ = 0;
+    std::string lastError_;
+    std::array<double, 3> velocity() const;
+};
+
+// Receives DTrack datagrams on the config's UDP address and port on a thread of its own and
+// keeps the latest head in a HeadTracker; state() never waits for the network. Throws
+// InputError naming the source when the port cannot be opened. Port 0 (tests) picks a free one.
+class TrackerReceiver {
+public:
+    explicit TrackerReceiver(const TrackingConfig& config, std::function<void(const std::string&)> log = {});
+    ~TrackerReceiver();
+    TrackerReceiver(const TrackerReceiver&) = delete;
+    TrackerReceiver& operator=(const TrackerReceiver&) = delete;
+    int port() const;  // the bound port
+    // The head for an image shown now (plus the prediction).
+    TrackerState state() const;
+    TrackerState state(std::chrono::steady_clock::time_point now) const;
+    static double seconds(std::chrono::steady_clock::time_point t);  // the clock HeadTracker is fed with
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace rtwall
