@@ -115,6 +115,17 @@ bool blended(const ScreenConfig& s, const PixelRect& in) {
            (s.blend[3] > 0 && in.y >= v.y + v.height - s.blend[3]);
 }
 
+// Three corners that span a rectangle; fails at `node` otherwise.
+void checkRectangle(Reader& r, const toml::node* node, Float3 ll, Float3 lr, Float3 ul, const std::string& what) {
+    auto sub = [](Float3 a, Float3 b) { return Float3{a.x - b.x, a.y - b.y, a.z - b.z}; };
+    auto dot = [](Float3 a, Float3 b) { return double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z; };
+    const Float3 across = sub(lr, ll), up = sub(ul, ll);
+    const double la = std::sqrt(dot(across, across)), lu = std::sqrt(dot(up, up));
+    if (la < 1e-6 || lu < 1e-6) r.fail(node, what + " corners must span a rectangle");
+    if (std::fabs(dot(across, up)) > 1e-3 * la * lu)
+        r.fail(node, "lower_left->lower_right and lower_left->upper_left must be at right angles");
+}
+
 // "dtrack://A.B.C.D:PORT": the IPv4 address to listen on and the UDP port.
 bool parseSource(const std::string& s, std::string& address, int& port) {
     const std::string scheme = "dtrack://";
@@ -134,7 +145,7 @@ bool parseSource(const std::string& s, std::string& address, int& port) {
     }
     if (parts != 4 || p.empty() || p.size() > 5 || !std::all_of(p.begin(), p.end(), ::isdigit)) return false;
     const int v = std::stoi(p);
-    if (v < 1 || v > 65535) return false;
+    if (v > 65535) return false;  // 0: a free port, said at start (tests)
     address = a;
     port = v;
     return true;
@@ -182,10 +193,10 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
     w.vsync = wr.boolean("vsync", w.vsync);
     wr.finish();
 
-    bool hasCorners = false;
+    bool stereoCorners = false;
     if (const toml::table* t = subTable(top, "stereo")) {
         Reader r(file, *t, "[stereo]: ");
-        hasCorners = r.has("lower_left") && r.has("lower_right") && r.has("upper_left");
+        stereoCorners = r.has("lower_left") && r.has("lower_right") && r.has("upper_left");
         StereoConfig& st = w.stereo;
         st.mode = stereoFromName(r.choice("mode", "none", {"none", "passive", "side_by_side", "quad_buffer"}));
         st.eyeSeparation = r.number("eye_separation", st.eyeSeparation, 0.0, 1.0);
@@ -193,20 +204,14 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
         st.lowerLeft = r.vec3("lower_left", st.lowerLeft);
         st.lowerRight = r.vec3("lower_right", st.lowerRight);
         st.upperLeft = r.vec3("upper_left", st.upperLeft);
-        auto sub = [](Float3 a, Float3 b) { return Float3{a.x - b.x, a.y - b.y, a.z - b.z}; };
-        auto dot = [](Float3 a, Float3 b) { return double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z; };
-        const Float3 across = sub(st.lowerRight, st.lowerLeft), up = sub(st.upperLeft, st.lowerLeft);
-        const double la = std::sqrt(dot(across, across)), lu = std::sqrt(dot(up, up));
-        if (la < 1e-6 || lu < 1e-6) r.fail(r.find("upper_left"), "the wall's corners must span a rectangle");
-        if (std::fabs(dot(across, up)) > 1e-3 * la * lu)
-            r.fail(r.find("upper_left"), "lower_left->lower_right and lower_left->upper_left must be at right angles");
+        checkRectangle(r, r.find("upper_left"), st.lowerLeft, st.lowerRight, st.upperLeft, "the wall's");
         r.finish();
     }
     if (const toml::table* t = subTable(top, "tracking")) {
         Reader r(file, *t, "[tracking]: ");
         readTracking(r, w.tracking);
         // The frusta follow from where the head is relative to the physical screens.
-        if (!hasCorners)
+        if (!stereoCorners)
             top.fail(t, "[tracking]: a tracked wall needs its physical corners: lower_left, lower_right and upper_left in [stereo] "
                         "(with mode = \"none\" for a mono wall)");
     }
@@ -310,6 +315,17 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
                 if (!std::filesystem::exists(s.fragmentShader))
                     r.fail(r.find("shader"), "key 'shader': no such file " + s.fragmentShader.string());
             }
+            const int corners = r.has("lower_left") + r.has("lower_right") + r.has("upper_left");
+            if (corners > 0 && corners < 3)
+                r.fail(r.find(r.has("lower_left") ? "lower_left" : r.has("lower_right") ? "lower_right" : "upper_left"),
+                       "give all three physical corners (lower_left, lower_right, upper_left; metres) or none");
+            if (corners == 3) {
+                s.hasCorners = true;
+                s.lowerLeft = r.vec3("lower_left", {});
+                s.lowerRight = r.vec3("lower_right", {});
+                s.upperLeft = r.vec3("upper_left", {});
+                checkRectangle(r, r.find("upper_left"), s.lowerLeft, s.lowerRight, s.upperLeft, "the screen's");
+            }
             for (size_t i = 0; i < w.screens.size(); ++i)
                 if (w.screens[i].name == s.name) r.fail(r.find("name"), "key 'name': '" + s.name + "' is used by another screen");
             w.screens.push_back(s);
@@ -340,6 +356,8 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
         };
         left |= s.eye == Eye::Left;
         right |= s.eye == Eye::Right;
+        if (s.hasCorners != w.screens.front().hasCorners)
+            failAt("give the physical corners (lower_left, lower_right, upper_left) on every screen or on none");
         switch (w.stereo.mode) {
         case StereoMode::None:
             if (s.eye != Eye::Mono) failAt("key 'eye': '" + std::string(eyeName(s.eye)) + "' needs a [stereo] mode");
@@ -370,11 +388,16 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
 
 }  // namespace
 
+namespace {
+bool eq3(Float3 a, Float3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+}  // namespace
+
 bool ScreenConfig::operator==(const ScreenConfig& o) const {
     return name == o.name && viewport == o.viewport && outputWidth == o.outputWidth && outputHeight == o.outputHeight &&
            blend == o.blend && blendGamma == o.blendGamma && gamma == o.gamma && brightness == o.brightness &&
            eye == o.eye && monitor == o.monitor && window == o.window && fullscreen == o.fullscreen &&
-           fragmentShader == o.fragmentShader;
+           fragmentShader == o.fragmentShader && hasCorners == o.hasCorners &&
+           (!hasCorners || (eq3(lowerLeft, o.lowerLeft) && eq3(lowerRight, o.lowerRight) && eq3(upperLeft, o.upperLeft)));
 }
 
 bool StereoConfig::operator==(const StereoConfig& o) const {
@@ -452,6 +475,8 @@ std::string writeWallConfig(const WallConfig& w) {
            << eyeName(s.eye) << "\"\nmonitor = " << s.monitor << "\nwindow = [" << s.window[0] << ", " << s.window[1]
            << "]\nfullscreen = " << (s.fullscreen ? "true" : "false") << "\n";
         if (!s.fragmentShader.empty()) os << "shader = " << quoted(s.fragmentShader.string()) << "\n";
+        if (s.hasCorners)
+            os << "lower_left = " << f3(s.lowerLeft) << "\nlower_right = " << f3(s.lowerRight) << "\nupper_left = " << f3(s.upperLeft) << "\n";
     }
     return os.str();
 }

@@ -68,5 +68,28 @@ TEST(TrackerReceiver, APortInUseIsAnInputErrorNamingTheSource) {
     }
 }
 
+TEST(TrackerReceiver, TheSimulatorDrivesTheHeadOnLoopback) {
+    TrackingConfig c;
+    c.address = "127.0.0.1";
+    c.port = 0;
+    c.timeoutMs = 60'000;
+    TrackerReceiver r(c);
+    HeadPath path;
+    path.keys = {{0.0, {0, 0, 2000}, {0, 0, 0}}, {0.2, {400, 0, 2000}, {0, 0, 0}}};  // 2 m/s along x
+    const uint64_t sent = playHeadPath(path, r.port(), 100, 0.3);
+    EXPECT_GE(sent, 30u);
+    ASSERT_TRUE(waitFor(r, [sent](const TrackerState& s) { return s.packets == sent; })) << r.state().packets << " of " << sent;
+    const TrackerState s = r.state();
+    EXPECT_EQ(s.dropped, 0u);
+    EXPECT_TRUE(s.seen);
+    // The path loops; its last frames are past the end of the path and at its start again.
+    EXPECT_GE(s.head.position.x, 0.0f);
+    EXPECT_LE(s.head.position.x, 0.4f);
+    EXPECT_EQ(s.head.position.z, 2.0f);
+    // The simulator refuses what it cannot do.
+    EXPECT_THROW(playHeadPath(path, 0, 100, 0.1), InputError);
+    EXPECT_THROW(playHeadPath(path, r.port(), 0, 0.1), InputError);
+}
+
 }  // namespace
 }  // namespace rtwall

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <random>
 
@@ -183,6 +185,118 @@ TEST(Tracking, TimeoutHoldsTheLastPoseAndSaysSo) {
     EXPECT_FALSE(back.stale);
     EXPECT_FLOAT_EQ(back.head.position.x, 5.0f);
     EXPECT_EQ(back.packets, 13u);
+}
+
+// The bytes DTrack sends for a head at `wall` (metres, wall coordinates), looking straight at the
+// wall, through the inverse of the shipped walls' room transform (z up, y towards the screen).
+std::string packetForHeadAt(const TrackingConfig& t, double x, double y, double z) {
+    DTrackFrame f;
+    f.frame = 1;
+    DTrackBody b;
+    b.quality = 1;
+    b.id = t.headBody;
+    b.position = {std::round((x - t.roomTranslate[0]) * 1e3), std::round(-(z - t.roomTranslate[2]) * 1e3),
+                  std::round((y - t.roomTranslate[1]) * 1e3)};
+    f.bodies.push_back(b);
+    return writeDTrackPacket(f);
+}
+
+TEST(Tracking, AHeadTrackedAtTheViewerGivesTheStaticViewsBitForBit) {
+    // Through the whole chain: datagram, parser, room transform, head, eyes, views. Bit for bit,
+    // so the tracked render is the static render (tests/display/wall_session_test.cpp renders it).
+    for (const char* name : {"configs/wall/tracked-stereo-2x2.toml", "configs/wall/cave-3.toml"}) {
+        SCOPED_TRACE(name);
+        const WallConfig wall = loadWallConfig(std::filesystem::path(RTWALL_SOURCE_DIR) / name);
+        TrackingConfig t = wall.tracking;
+        t.filter = TrackingFilter::None;
+        HeadTracker tracker(t);
+        DTrackParser parser;
+        const Float3 v = wall.stereo.viewer;
+        const auto frame = parser.parse(packetForHeadAt(t, v.x, v.y, v.z));
+        ASSERT_TRUE(frame) << parser.error();
+        ASSERT_TRUE(tracker.add(*frame, 1.0));
+        const HeadPose tracked = tracker.at(1.0).head, fixed = staticHead(wall.stereo);
+        for (auto [a, b] : {std::pair{tracked.position, fixed.position}, std::pair{tracked.right, fixed.right}}) {
+            EXPECT_EQ(a.x, b.x);
+            EXPECT_EQ(a.y, b.y);
+            EXPECT_EQ(a.z, b.z);
+        }
+        for (int eye : {0, 1}) {
+            const std::vector<WallView> a = wallViews(wall, tracked, eye), b = wallViews(wall, fixed, eye);
+            ASSERT_EQ(a.size(), b.size());
+            for (size_t i = 0; i < a.size(); ++i) {
+                EXPECT_EQ(a[i].screens, b[i].screens);
+                EXPECT_EQ(a[i].window.eye.x, b[i].window.eye.x);
+                EXPECT_EQ(a[i].window.eye.y, b[i].window.eye.y);
+                EXPECT_EQ(a[i].window.eye.z, b[i].window.eye.z);
+                EXPECT_EQ(a[i].window.lowerLeft.x, b[i].window.lowerLeft.x);
+            }
+        }
+    }
+}
+
+TEST(HeadPath, TheShippedStrollIsInterpolatedAndHeld) {
+    const HeadPath path = readHeadPath(std::filesystem::path(RTWALL_SOURCE_DIR) / "configs/wall/paths/stroll.toml");
+    EXPECT_EQ(path.body, 0);
+    ASSERT_EQ(path.keys.size(), 101u);
+    EXPECT_DOUBLE_EQ(path.duration(), 10.0);
+    // Halfway between two keys: halfway between their positions and angles.
+    const HeadKey& a = path.keys[10];
+    const HeadKey& b = path.keys[11];
+    const DTrackFrame f = headPathFrame(path, 1.05, 7);
+    EXPECT_EQ(f.frame, 7u);
+    EXPECT_DOUBLE_EQ(*f.timestamp, 1.05);
+    ASSERT_EQ(f.bodies.size(), 1u);
+    EXPECT_NEAR(f.bodies[0].position[0], 0.5 * (a.position[0] + b.position[0]), 1e-9);
+    EXPECT_NEAR(f.bodies[0].position[2], 0.5 * (a.position[2] + b.position[2]), 1e-9);
+    // The rotation is the angles' (about z last): its first column is the body's x axis.
+    const double yaw = 0.5 * (a.rotate[2] + b.rotate[2]) * std::numbers::pi / 180, roll = 0.5 * (a.rotate[1] + b.rotate[1]) * std::numbers::pi / 180;
+    EXPECT_NEAR(f.bodies[0].rotation[0], std::cos(yaw) * std::cos(roll), 1e-9);
+    EXPECT_NEAR(f.bodies[0].rotation[3], std::sin(yaw) * std::cos(roll), 1e-9);
+    EXPECT_NEAR(f.bodies[0].rotation[6], -std::sin(roll), 1e-9);
+    // Held after the end; written and parsed back as a DTrack datagram.
+    EXPECT_EQ(headPathFrame(path, 99, 1).bodies[0].position, path.keys.back().position);
+    DTrackParser parser;
+    EXPECT_TRUE(parser.parse(writeDTrackPacket(f))) << parser.error();
+    // Its top speed is the 0.5 m/s the prediction target is stated for.
+    double top = 0;
+    for (size_t i = 1; i < path.keys.size(); ++i) {
+        double d = 0;
+        for (int j = 0; j < 2; ++j) d += std::pow(path.keys[i].position[size_t(j)] - path.keys[i - 1].position[size_t(j)], 2);
+        top = std::max(top, std::sqrt(d) / 1e3 / 0.1);
+    }
+    EXPECT_GT(top, 0.45);
+    EXPECT_LT(top, 0.6);
+}
+
+TEST(HeadPath, EveryMistakeNamesLineAndKey) {
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() / "rtwall_head_paths";
+    std::filesystem::create_directories(dir);
+    struct Case {
+        std::string text, expected;
+    };
+    const std::vector<Case> cases = {
+        {"body = 0\n", "p.toml:1: a head path needs at least one [[key]]"},
+        {"[[key]]\nposition = [0, 0, 0]\n", "p.toml:1: [[key]] #1: missing required key 'time'"},
+        {"[[key]]\ntime = 0\n", "p.toml:1: [[key]] #1: missing required key 'position'"},
+        {"[[key]]\ntime = 1\nposition = [0, 0, 0]\n[[key]]\ntime = 1\nposition = [0, 0, 0]\n",
+         "p.toml:5: [[key]] #2: key 'time': must be later than the key before"},
+        {"[[key]]\ntime = 0\nposition = [0, 0]\n", "p.toml:3: [[key]] #1: key 'position': expected an array of 3 numbers"},
+        {"[[key]]\ntime = 0\nposition = [0, 0, 0]\nrotate = [0, 0, 720]\n", "p.toml:4: [[key]] #1: key 'rotate': angles are degrees"},
+        {"[[key]]\ntime = 0\nposition = [0, 0, 0]\nspeed = 1\n", "p.toml:4: [[key]] #1: unknown key 'speed'"},
+        {"bodies = 1\n[[key]]\ntime = 0\nposition = [0, 0, 0]\n", "p.toml:1: unknown key 'bodies'"},
+    };
+    for (const Case& c : cases) {
+        const std::filesystem::path file = dir / "p.toml";
+        std::ofstream(file) << c.text;
+        try {
+            readHeadPath(file);
+            ADD_FAILURE() << "no error for " << c.text;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(c.expected), std::string::npos) << e.what() << "\nwanted: " << c.expected;
+        }
+    }
+    std::filesystem::remove_all(dir);
 }
 
 }  // namespace

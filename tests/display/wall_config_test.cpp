@@ -161,6 +161,14 @@ TEST(WallConfig, EveryKindOfMistakeNamesLineAndKey) {
         {grid + tracked + "beta = 3\n", "wall.toml:12: [tracking]: key 'beta': a one-euro filter setting, but filter is \"none\""},
         {grid + tracked + "filter = \"one_euro\"\nmin_cutoff = 0\n", "wall.toml:13: [tracking]: key 'min_cutoff': 0 is out of range"},
         {grid + tracked + "head = 1\n", "wall.toml:12: [tracking]: unknown key 'head'"},
+        {"[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\nlower_left = [0, 0, 0]\n",
+         "wall.toml:6: [[screen]] #1: give all three physical corners (lower_left, lower_right, upper_left; metres) or none"},
+        {"[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\nlower_left = [0, 0, 0]\n"
+         "lower_right = [1, 0, 0]\nupper_left = [1, 1, 0]\n",
+         "wall.toml:8: [[screen]] #1: lower_left->lower_right and lower_left->upper_left must be at right angles"},
+        {"[wall]\nwidth = 100\nheight = 100\n[[screen]]\nname = \"a\"\nviewport = [0, 0, 50, 100]\nlower_left = [0, 0, 0]\n"
+         "lower_right = [1, 0, 0]\nupper_left = [0, 1, 0]\n[[screen]]\nname = \"b\"\nviewport = [50, 0, 50, 100]\n",
+         "screen 'b': give the physical corners (lower_left, lower_right, upper_left) on every screen or on none"},
         {"[wall]\nwidth = 200\nheight = 600\n[grid]\ncolumns = 2\nrows = 1\nscreen_width = 800\nscreen_height = 600\n",
          "wall.toml:2: [wall]: key 'width': 200 differs from the grid's 1600"},
     };

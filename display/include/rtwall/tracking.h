@@ -12,7 +12,9 @@
 #include <rtwall/display.h>
 
 #include <array>
+#include <atomic>
 #include <chrono>
+#include <filesystem>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -111,14 +113,6 @@ struct RoomTransform {
 };
 RoomTransform roomTransform(const TrackingConfig& config);
 
-// Where the viewer's head is and how it is turned, in wall coordinates (metres). The eyes lie on
-// the head's x axis (`right`, from the left eye to the right one).
-struct HeadPose {
-    Float3 position{0, 0, 2};
-    Float3 right{1, 0, 0};
-    Float3 up{0, 1, 0};
-    bool operator==(const HeadPose&) const = default;
-};
 // The pose of a DTrack body (millimetres, room axes) in wall coordinates.
 HeadPose headPoseOf(const DTrackBody& body, const RoomTransform& room);
 
@@ -203,5 +197,43 @@ public:
 private:
     std::unique_ptr<Impl> impl_;
 };
+
+// ---------------------------------------------------------------------------------------------
+// Head paths and the tracker simulator
+
+// A head path (configs/README.md, "Head paths"): keyframes of the head body in the tracker's
+// room (millimetres, degrees), linearly interpolated and held after the last; scripted by hand
+// or converted from a recording (a key per recorded frame).
+struct HeadKey {
+    double time = 0;                 // seconds from the start, increasing
+    std::array<double, 3> position{};  // millimetres, tracker room coordinates
+    std::array<double, 3> rotate{};    // degrees: the body turned about the room's x, then y, then z
+};
+struct HeadPath {
+    int body = 0;                    // the 6d body id it is sent as
+    std::vector<HeadKey> keys;
+    double duration() const { return keys.empty() ? 0.0 : keys.back().time; }
+};
+// Throws InputError "<file>:<line>: <context>key '<key>': <what>" for any mistake.
+HeadPath readHeadPath(const std::filesystem::path& file);
+// The DTrack frame of the path at `time` (seconds; held after the end): fr = frame, ts = time.
+DTrackFrame headPathFrame(const HeadPath& path, double time, uint64_t frame);
+
+// Sends DTrack datagrams to a port on 127.0.0.1, and nowhere else (the simulator and the tests).
+class DTrackSender {
+public:
+    explicit DTrackSender(int port);
+    ~DTrackSender();
+    void send(const DTrackFrame& frame);
+    void send(std::string_view datagram);
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+// Plays a path to 127.0.0.1:port at `rate` frames a second for `seconds` (looping the path when
+// it is shorter), on the calling thread; returns early when `stop` is set. Returns frames sent.
+uint64_t playHeadPath(const HeadPath& path, int port, double rate, double seconds, const std::atomic<bool>* stop = nullptr);
 
 }  // namespace rtwall
