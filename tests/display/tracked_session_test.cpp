@@ -5,6 +5,7 @@
 
 #include <rtwall/wall.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <thread>
@@ -194,6 +195,36 @@ TEST(TrackedSession, CaveTrackedHeadGivesTheStaticRender) {
     const auto dir = test::displayScratchDir();
     checkTrackedEqualsStatic(dir, caveWall, "[0.0, 1.7, 0.0]", {0.0f, 1.7f, 0.0f});
     checkTrackedEqualsStatic(dir, caveWall, "[0.4, 1.55, 0.6]", {0.4f, 1.55f, 0.6f});
+}
+
+// No head for timeout_ms: the last pose is held (not flown off at its last velocity), the log and
+// the overlay line say so, and the wall keeps going; the head's return is said too.
+TEST(TrackedSession, ALostHeadIsHeldAndSaid) {
+    const auto dir = test::displayScratchDir();
+    std::string wall = flatWall("[0.0, 0.2, 2.5]", true);
+    wall.replace(wall.find("timeout_ms = 60000"), 18, "timeout_ms = 100\nprediction_ms = 50");
+    RunConfig c = config(dir, wall, "tracked.toml");
+    std::vector<std::string> lines;
+    c.log = [&](const std::string& line) { lines.push_back(line); };
+    WallSession s(c);
+    const TrackingConfig t = loadWallConfig(dir / "tracked.toml").tracking;
+    sendHead(s, t, {0.0f, 0.2f, 2.5f}, 0, 1);
+    sendHead(s, t, {0.1f, 0.2f, 2.5f}, 0, 2);  // moving: the prediction has a velocity
+    ASSERT_TRUE(s.step());
+    std::this_thread::sleep_for(std::chrono::milliseconds(250));
+    ASSERT_TRUE(s.step());
+    ASSERT_TRUE(s.tracker()->stale);
+    EXPECT_EQ(s.lastHead().position.x, 0.1f) << "held where it was last seen";
+    const auto said = [&](const std::string& what) {
+        return std::any_of(lines.begin(), lines.end(), [&](const std::string& l) { return l.find(what) != std::string::npos; });
+    };
+    EXPECT_TRUE(said("tracker: no head for")) << "the log says the pose is held";
+    EXPECT_TRUE(said("holding the last pose"));
+    EXPECT_NE(describeTracker(*s.tracker()).find("holding the last pose"), std::string::npos);
+    sendHead(s, t, {-0.2f, 0.2f, 2.5f}, 0, 3);
+    ASSERT_TRUE(s.step());
+    EXPECT_FALSE(s.tracker()->stale);
+    EXPECT_TRUE(said("tracker: the head is back"));
 }
 
 // Each CAVE wall is seen through its own frustum: a wall's pixels in the composed image are those
