@@ -28,6 +28,7 @@ PACKAGES=(
   libxxhash-dev        # content hashes of meshes and scene states
   libvtk9-dev          # VTK: volume data sets (.vti, legacy .vtk), used only by rtwall_volume_io
   clang libclang-rt-14-dev  # libFuzzer with ASan/UBSan for the fuzz targets
+  libasio-dev          # standalone Asio (header-only): the tracker's UDP receiver (DTrack)
   libglfw3-dev libgl-dev  # GLFW and OpenGL 3.3: the wall's windows and input
   glslang-dev          # glslang: every wall shader is compiled at `rtwall check` and in the tests
   glslang-tools        # glslangValidator: glslang-dev's CMake targets reference it, but it only Suggests it

@@ -115,6 +115,68 @@ bool blended(const ScreenConfig& s, const PixelRect& in) {
            (s.blend[3] > 0 && in.y >= v.y + v.height - s.blend[3]);
 }
 
+// Three corners that span a rectangle; fails at `node` otherwise.
+void checkRectangle(Reader& r, const toml::node* node, Float3 ll, Float3 lr, Float3 ul, const std::string& what) {
+    auto sub = [](Float3 a, Float3 b) { return Float3{a.x - b.x, a.y - b.y, a.z - b.z}; };
+    auto dot = [](Float3 a, Float3 b) { return double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z; };
+    const Float3 across = sub(lr, ll), up = sub(ul, ll);
+    const double la = std::sqrt(dot(across, across)), lu = std::sqrt(dot(up, up));
+    if (la < 1e-6 || lu < 1e-6) r.fail(node, what + " corners must span a rectangle");
+    if (std::fabs(dot(across, up)) > 1e-3 * la * lu)
+        r.fail(node, "lower_left->lower_right and lower_left->upper_left must be at right angles");
+}
+
+// "dtrack://A.B.C.D:PORT": the IPv4 address to listen on and the UDP port.
+bool parseSource(const std::string& s, std::string& address, int& port) {
+    const std::string scheme = "dtrack://";
+    if (s.rfind(scheme, 0) != 0) return false;
+    const std::string rest = s.substr(scheme.size());
+    const size_t colon = rest.rfind(':');
+    if (colon == std::string::npos) return false;
+    const std::string a = rest.substr(0, colon), p = rest.substr(colon + 1);
+    int parts = 0;
+    size_t i = 0;
+    while (i <= a.size()) {
+        const size_t dot = std::min(a.find('.', i), a.size());
+        const std::string n = a.substr(i, dot - i);
+        if (n.empty() || n.size() > 3 || !std::all_of(n.begin(), n.end(), ::isdigit) || std::stoi(n) > 255) return false;
+        ++parts;
+        i = dot + 1;
+    }
+    if (parts != 4 || p.empty() || p.size() > 5 || !std::all_of(p.begin(), p.end(), ::isdigit)) return false;
+    const int v = std::stoi(p);
+    if (v > 65535) return false;  // 0: a free port, said at start (tests)
+    address = a;
+    port = v;
+    return true;
+}
+
+void readTracking(Reader& r, TrackingConfig& t) {
+    t.enabled = true;
+    t.source = r.string("source", t.source);
+    if (!parseSource(t.source, t.address, t.port))
+        r.fail(r.find("source"), "key 'source': expected dtrack://ADDRESS:PORT with an IPv4 address to listen on and a UDP port "
+                                 "(dtrack://0.0.0.0:5000), got '" + t.source + "'");
+    t.headBody = r.integer("head_body", t.headBody, 0, 1'000'000);
+    t.flystick = r.integer("flystick", t.flystick, -1, 255);
+    t.roomScale = r.number("room_scale", t.roomScale, 1e-9, 1e6);
+    if (t.roomScale <= 0) r.fail(r.find("room_scale"), "key 'room_scale': must be positive");
+    t.roomRotate = r.vec3d("room_rotate", t.roomRotate);
+    for (double a : t.roomRotate)
+        if (std::fabs(a) > 360) r.fail(r.find("room_rotate"), "key 'room_rotate': angles are degrees in [-360, 360]");
+    t.roomTranslate = r.vec3d("room_translate", t.roomTranslate);
+    t.timeoutMs = r.integer("timeout_ms", t.timeoutMs, 1, 60'000);
+    t.predictionMs = r.number("prediction_ms", t.predictionMs, 0.0, 500.0);
+    t.filter = r.choice("filter", "none", {"none", "one_euro"}) == "one_euro" ? TrackingFilter::OneEuro : TrackingFilter::None;
+    for (const char* k : {"min_cutoff", "beta", "derivative_cutoff"})
+        if (t.filter == TrackingFilter::None && r.has(k))
+            r.fail(r.find(k), std::string("key '") + k + "': a one-euro filter setting, but filter is \"none\" (set filter = \"one_euro\")");
+    t.minCutoff = r.number("min_cutoff", t.minCutoff, 1e-3, 1000.0);
+    t.beta = r.number("beta", t.beta, 0.0, 1e6);
+    t.derivativeCutoff = r.number("derivative_cutoff", t.derivativeCutoff, 1e-3, 1000.0);
+    r.finish();
+}
+
 WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
     using namespace toml_reader;
     WallConfig w;
@@ -131,8 +193,10 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
     w.vsync = wr.boolean("vsync", w.vsync);
     wr.finish();
 
+    bool stereoCorners = false;
     if (const toml::table* t = subTable(top, "stereo")) {
         Reader r(file, *t, "[stereo]: ");
+        stereoCorners = r.has("lower_left") && r.has("lower_right") && r.has("upper_left");
         StereoConfig& st = w.stereo;
         st.mode = stereoFromName(r.choice("mode", "none", {"none", "passive", "side_by_side", "quad_buffer"}));
         st.eyeSeparation = r.number("eye_separation", st.eyeSeparation, 0.0, 1.0);
@@ -140,14 +204,16 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
         st.lowerLeft = r.vec3("lower_left", st.lowerLeft);
         st.lowerRight = r.vec3("lower_right", st.lowerRight);
         st.upperLeft = r.vec3("upper_left", st.upperLeft);
-        auto sub = [](Float3 a, Float3 b) { return Float3{a.x - b.x, a.y - b.y, a.z - b.z}; };
-        auto dot = [](Float3 a, Float3 b) { return double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z; };
-        const Float3 across = sub(st.lowerRight, st.lowerLeft), up = sub(st.upperLeft, st.lowerLeft);
-        const double la = std::sqrt(dot(across, across)), lu = std::sqrt(dot(up, up));
-        if (la < 1e-6 || lu < 1e-6) r.fail(r.find("upper_left"), "the wall's corners must span a rectangle");
-        if (std::fabs(dot(across, up)) > 1e-3 * la * lu)
-            r.fail(r.find("upper_left"), "lower_left->lower_right and lower_left->upper_left must be at right angles");
+        checkRectangle(r, r.find("upper_left"), st.lowerLeft, st.lowerRight, st.upperLeft, "the wall's");
         r.finish();
+    }
+    if (const toml::table* t = subTable(top, "tracking")) {
+        Reader r(file, *t, "[tracking]: ");
+        readTracking(r, w.tracking);
+        // The frusta follow from where the head is relative to the physical screens.
+        if (!stereoCorners)
+            top.fail(t, "[tracking]: a tracked wall needs its physical corners: lower_left, lower_right and upper_left in [stereo] "
+                        "(with mode = \"none\" for a mono wall)");
     }
     const Eye defaultEye = w.stereo.mode == StereoMode::SideBySide || w.stereo.mode == StereoMode::QuadBuffer ? Eye::Both
                                                                                                              : Eye::Mono;
@@ -249,6 +315,17 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
                 if (!std::filesystem::exists(s.fragmentShader))
                     r.fail(r.find("shader"), "key 'shader': no such file " + s.fragmentShader.string());
             }
+            const int corners = r.has("lower_left") + r.has("lower_right") + r.has("upper_left");
+            if (corners > 0 && corners < 3)
+                r.fail(r.find(r.has("lower_left") ? "lower_left" : r.has("lower_right") ? "lower_right" : "upper_left"),
+                       "give all three physical corners (lower_left, lower_right, upper_left; metres) or none");
+            if (corners == 3) {
+                s.hasCorners = true;
+                s.lowerLeft = r.vec3("lower_left", {});
+                s.lowerRight = r.vec3("lower_right", {});
+                s.upperLeft = r.vec3("upper_left", {});
+                checkRectangle(r, r.find("upper_left"), s.lowerLeft, s.lowerRight, s.upperLeft, "the screen's");
+            }
             for (size_t i = 0; i < w.screens.size(); ++i)
                 if (w.screens[i].name == s.name) r.fail(r.find("name"), "key 'name': '" + s.name + "' is used by another screen");
             w.screens.push_back(s);
@@ -279,6 +356,8 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
         };
         left |= s.eye == Eye::Left;
         right |= s.eye == Eye::Right;
+        if (s.hasCorners != w.screens.front().hasCorners)
+            failAt("give the physical corners (lower_left, lower_right, upper_left) on every screen or on none");
         switch (w.stereo.mode) {
         case StereoMode::None:
             if (s.eye != Eye::Mono) failAt("key 'eye': '" + std::string(eyeName(s.eye)) + "' needs a [stereo] mode");
@@ -309,11 +388,16 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
 
 }  // namespace
 
+namespace {
+bool eq3(Float3 a, Float3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+}  // namespace
+
 bool ScreenConfig::operator==(const ScreenConfig& o) const {
     return name == o.name && viewport == o.viewport && outputWidth == o.outputWidth && outputHeight == o.outputHeight &&
            blend == o.blend && blendGamma == o.blendGamma && gamma == o.gamma && brightness == o.brightness &&
            eye == o.eye && monitor == o.monitor && window == o.window && fullscreen == o.fullscreen &&
-           fragmentShader == o.fragmentShader;
+           fragmentShader == o.fragmentShader && hasCorners == o.hasCorners &&
+           (!hasCorners || (eq3(lowerLeft, o.lowerLeft) && eq3(lowerRight, o.lowerRight) && eq3(upperLeft, o.upperLeft)));
 }
 
 bool StereoConfig::operator==(const StereoConfig& o) const {
@@ -324,7 +408,7 @@ bool StereoConfig::operator==(const StereoConfig& o) const {
 
 bool WallConfig::operator==(const WallConfig& o) const {
     return name == o.name && width == o.width && height == o.height && vsync == o.vsync && screens == o.screens &&
-           stereo == o.stereo && writeEvery == o.writeEvery && video == o.video;
+           stereo == o.stereo && tracking == o.tracking && writeEvery == o.writeEvery && video == o.video;
 }
 
 WallConfig loadWallConfig(const std::filesystem::path& file) { return parse(toml_reader::parseFile(file), file); }
@@ -364,11 +448,22 @@ std::string writeWallConfig(const WallConfig& w) {
     };
     os << "[wall]\nname = " << quoted(w.name) << "\nwidth = " << w.width << "\nheight = " << w.height
        << "\nvsync = " << (w.vsync ? "true" : "false") << "\n\n";
-    if (w.stereo.mode != StereoMode::None) {
+    if (w.stereo.mode != StereoMode::None || w.tracking.enabled) {
         const StereoConfig& s = w.stereo;
         os << "[stereo]\nmode = \"" << stereoName(s.mode) << "\"\neye_separation = " << num(s.eyeSeparation)
            << "\nviewer = " << f3(s.viewer) << "\nlower_left = " << f3(s.lowerLeft) << "\nlower_right = " << f3(s.lowerRight)
            << "\nupper_left = " << f3(s.upperLeft) << "\n\n";
+    }
+    if (w.tracking.enabled) {
+        const TrackingConfig& t = w.tracking;
+        auto d3 = [&](const std::array<double, 3>& v) { return "[" + num(v[0]) + ", " + num(v[1]) + ", " + num(v[2]) + "]"; };
+        os << "[tracking]\nsource = " << quoted(t.source) << "\nhead_body = " << t.headBody << "\nflystick = " << t.flystick
+           << "\nroom_scale = " << num(t.roomScale) << "\nroom_rotate = " << d3(t.roomRotate) << "\nroom_translate = "
+           << d3(t.roomTranslate) << "\ntimeout_ms = " << t.timeoutMs << "\nprediction_ms = " << num(t.predictionMs) << "\n";
+        if (t.filter == TrackingFilter::OneEuro)
+            os << "filter = \"one_euro\"\nmin_cutoff = " << num(t.minCutoff) << "\nbeta = " << num(t.beta)
+               << "\nderivative_cutoff = " << num(t.derivativeCutoff) << "\n";
+        os << "\n";
     }
     os << "[headless]\nwrite_every = " << w.writeEvery << "\nvideo = " << quoted(w.video) << "\n";
     for (const ScreenConfig& s : w.screens) {
@@ -380,6 +475,8 @@ std::string writeWallConfig(const WallConfig& w) {
            << eyeName(s.eye) << "\"\nmonitor = " << s.monitor << "\nwindow = [" << s.window[0] << ", " << s.window[1]
            << "]\nfullscreen = " << (s.fullscreen ? "true" : "false") << "\n";
         if (!s.fragmentShader.empty()) os << "shader = " << quoted(s.fragmentShader.string()) << "\n";
+        if (s.hasCorners)
+            os << "lower_left = " << f3(s.lowerLeft) << "\nlower_right = " << f3(s.lowerRight) << "\nupper_left = " << f3(s.upperLeft) << "\n";
     }
     return os.str();
 }

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <string>
 
 namespace rtwall {
 namespace {
@@ -81,6 +83,93 @@ TEST(OffAxis, OffCentreViewerGivesHandComputedAsymmetricFrustum) {
     expectNear(g.lowerLeft, {2.5f, -1.8f, -2.6f}, 1e-5f, "lower left in the world");
     expectNear(g.right, {0, 0, 3.2f}, 1e-6f, "right edge along camera right");
     expectNear(g.up, {0, 2.4f, 0}, 1e-6f, "up edge along camera up");
+}
+
+TEST(OffAxis, TheStaticHeadIsTheConfigsViewerAndAxisAlignedWallsGiveExactAxes) {
+    const StereoConfig s = wall32x24();
+    const HeadPose h = staticHead(s);
+    EXPECT_EQ(h.position.z, 2.5f);
+    // 3.2 / 3.2: exactly 1, so a tracked head looking straight at the wall agrees to the bit.
+    EXPECT_EQ(h.right.x, 1.0f);
+    EXPECT_EQ(h.right.y, 0.0f);
+    EXPECT_EQ(h.up.y, 1.0f);
+    for (int eye : {0, 1, -1}) {
+        const EyeWindow a = wallEyeWindow(s, eye), b = wallEyeWindow(s, h, eye);
+        EXPECT_EQ(a.eye.x, b.eye.x);
+        EXPECT_EQ(a.eye.y, b.eye.y);
+    }
+}
+
+TEST(OffAxis, ATiltedHeadMovesTheEyes) {
+    const StereoConfig s = wall32x24();
+    HeadPose level = staticHead(s);
+    HeadPose tilted = level;
+    const float c = std::cos(0.5236f), sn = std::sin(0.5236f);  // rolled 30 degrees to the left
+    tilted.right = {c, sn, 0};
+    const Float3 l = eyePosition(tilted, 0.065, 0), r = eyePosition(tilted, 0.065, 1);
+    expectNear(l, {-0.0325f * c, -0.0325f * sn, 2.5f}, 1e-7f, "left eye lower");
+    expectNear(r, {0.0325f * c, 0.0325f * sn, 2.5f}, 1e-7f, "right eye higher");
+    EXPECT_NE(r.y, eyePosition(level, 0.065, 1).y);
+    // Turned 90 degrees (looking along the wall): the eyes lie one behind the other.
+    HeadPose turned = level;
+    turned.right = {0, 0, 1};
+    expectNear(eyePosition(turned, 0.065, 1), {0, 0, 2.5325f}, 1e-6f, "right eye nearer the viewer's back");
+    // The centre of the head for mono walls.
+    expectNear(eyePosition(tilted, 0.065, -1), {0, 0, 2.5f}, 0, "mono");
+    // The windows follow: same wall, the tilted eye.
+    expectNear(wallEyeWindow(s, tilted, 1).eye, r, 0, "window eye");
+}
+
+// Where a window puts wall pixel (x, y) (image y down) of a W x H image.
+Float3 pixelPoint(const EyeWindow& w, double x, double y, int W, int H) {
+    const float u = float(x / W), v = float(1.0 - y / H);
+    return {w.lowerLeft.x + w.right.x * u + w.up.x * v, w.lowerLeft.y + w.right.y * u + w.up.y * v,
+            w.lowerLeft.z + w.right.z * u + w.up.z * v};
+}
+
+TEST(OffAxis, EveryCaveWallGetsItsOwnViewLandingOnItsCorners) {
+    const WallConfig cave = loadWallConfig(std::filesystem::path(RTWALL_SOURCE_DIR) / "configs/wall/cave-3.toml");
+    ASSERT_EQ(cave.screens.size(), 6u);
+    EXPECT_TRUE(wallHasViews(cave));
+    HeadPose head = staticHead(cave.stereo);
+    head.position = {0.3f, 1.6f, 0.4f};
+    for (int eye : {0, 1}) {
+        const std::vector<WallView> views = wallViews(cave, head, eye);
+        ASSERT_EQ(views.size(), 3u) << "three walls, three planes";
+        for (const WallView& v : views) {
+            ASSERT_EQ(v.screens.size(), 1u);
+            const ScreenConfig& s = cave.screens[v.screens[0]];
+            EXPECT_EQ(s.eye, eye == 0 ? Eye::Left : Eye::Right);
+            expectNear(v.window.eye, eyePosition(head, 0.065, eye), 0, "the eye");
+            // The screen's viewport corners land on its physical corners.
+            const PixelRect& p = s.viewport;
+            expectNear(pixelPoint(v.window, p.x, p.y + p.height, cave.width, cave.height), s.lowerLeft, 1e-5f, "lower left");
+            expectNear(pixelPoint(v.window, p.x + p.width, p.y + p.height, cave.width, cave.height), s.lowerRight, 1e-5f, "lower right");
+            expectNear(pixelPoint(v.window, p.x, p.y, cave.width, cave.height), s.upperLeft, 1e-5f, "upper left");
+        }
+    }
+    // A flat wall given per screen by corners that line up is one view: the whole rectangle.
+    std::string flat = "[wall]\nwidth = 200\nheight = 100\n[stereo]\nlower_left = [-2, -1, 0]\nlower_right = [2, -1, 0]\n"
+                       "upper_left = [-2, 1, 0]\n";
+    for (int i = 0; i < 2; ++i) {
+        const float x0 = -2.0f + 2.0f * float(i);
+        flat += "[[screen]]\nname = \"s" + std::to_string(i) + "\"\nviewport = [" + std::to_string(100 * i) + ", 0, 100, 100]\n" +
+                "lower_left = [" + std::to_string(x0) + ", -1, 0]\nlower_right = [" + std::to_string(x0 + 2) + ", -1, 0]\n" +
+                "upper_left = [" + std::to_string(x0) + ", 1, 0]\n";
+    }
+    const WallConfig w = parseWallConfig(flat, "flat.toml");
+    const std::vector<WallView> one = wallViews(w, staticHead(w.stereo), -1);
+    ASSERT_EQ(one.size(), 1u);
+    EXPECT_EQ(one[0].screens.size(), 2u);
+    expectNear(one[0].window.lowerLeft, {-2, -1, 0}, 1e-6f, "lower left");
+    expectNear(one[0].window.right, {4, 0, 0}, 1e-6f, "right");
+    expectNear(one[0].window.up, {0, 2, 0}, 1e-6f, "up");
+    // Without screen corners: [stereo]'s rectangle, one view, every screen of the eye.
+    const WallConfig passive = loadWallConfig(std::filesystem::path(RTWALL_SOURCE_DIR) / "configs/wall/stereo-passive.toml");
+    const std::vector<WallView> pv = wallViews(passive, staticHead(passive.stereo), 1);
+    ASSERT_EQ(pv.size(), 1u);
+    EXPECT_EQ(pv[0].screens, std::vector<size_t>{1});
+    EXPECT_FALSE(wallHasViews(loadWallConfig(std::filesystem::path(RTWALL_SOURCE_DIR) / "configs/wall/projectors-2x2.toml")));
 }
 
 }  // namespace

@@ -103,6 +103,8 @@ TEST(WallConfig, EveryKindOfMistakeNamesLineAndKey) {
         std::string text, expected;
     };
     const std::string grid = "[wall]\n[grid]\ncolumns = 2\nrows = 2\nscreen_width = 800\nscreen_height = 600\n";
+    const std::string tracked =
+        "[stereo]\nlower_left = [-1, -1, 0]\nlower_right = [1, -1, 0]\nupper_left = [-1, 1, 0]\n[tracking]\n";  // [tracking] is line 11
     const std::vector<Case> cases = {
         {grid + "bezel = [500, 400, 0, 0]\n", "wall.toml:7: [grid]: the bezel (900 pixels left and right) is wider than the screen (800)"},
         {grid + "bezel = [0, 0, 300, 300]\n", "wall.toml:7: [grid]: the bezel (600 pixels top and bottom) is taller than the screen (600)"},
@@ -142,6 +144,31 @@ TEST(WallConfig, EveryKindOfMistakeNamesLineAndKey) {
         {grid + "[headless]\nvideo = \"-y.mp4\"\n",
          "wall.toml:8: [headless]: key 'video': a plain file name of letters, digits, '.', '-' and '_' (it goes to ffmpeg)"},
         {grid + "[headless]\nwrite_every = true\n", "wall.toml:8: [headless]: key 'write_every': expected an integer, got a boolean"},
+        {grid + "[tracking]\n", "wall.toml:7: [tracking]: a tracked wall needs its physical corners"},
+        {grid + tracked + "source = \"udp://0.0.0.0:5000\"\n",
+         "wall.toml:12: [tracking]: key 'source': expected dtrack://ADDRESS:PORT with an IPv4 address to listen on and a UDP port"},
+        {grid + tracked + "source = \"dtrack://0.0.0.0:70000\"\n", "[tracking]: key 'source': expected dtrack://"},
+        {grid + tracked + "source = \"dtrack://300.0.0.1:5000\"\n", "[tracking]: key 'source': expected dtrack://"},
+        {grid + tracked + "source = \"dtrack://localhost:5000\"\n", "[tracking]: key 'source': expected dtrack://"},
+        {grid + tracked + "head_body = -1\n", "wall.toml:12: [tracking]: key 'head_body': -1 is out of range"},
+        {grid + tracked + "flystick = \"0\"\n", "wall.toml:12: [tracking]: key 'flystick': expected an integer, got a string"},
+        {grid + tracked + "room_scale = 0\n", "wall.toml:12: [tracking]: key 'room_scale': 0 is out of range"},
+        {grid + tracked + "room_rotate = [0, 400, 0]\n", "wall.toml:12: [tracking]: key 'room_rotate': angles are degrees in [-360, 360]"},
+        {grid + tracked + "room_translate = [0, 0]\n", "wall.toml:12: [tracking]: key 'room_translate': expected an array of 3 numbers"},
+        {grid + tracked + "timeout_ms = 0\n", "wall.toml:12: [tracking]: key 'timeout_ms': 0 is out of range"},
+        {grid + tracked + "prediction_ms = -5\n", "wall.toml:12: [tracking]: key 'prediction_ms': -5 is out of range"},
+        {grid + tracked + "filter = \"kalman\"\n", "wall.toml:12: [tracking]: key 'filter': 'kalman' is not one of none, one_euro"},
+        {grid + tracked + "beta = 3\n", "wall.toml:12: [tracking]: key 'beta': a one-euro filter setting, but filter is \"none\""},
+        {grid + tracked + "filter = \"one_euro\"\nmin_cutoff = 0\n", "wall.toml:13: [tracking]: key 'min_cutoff': 0 is out of range"},
+        {grid + tracked + "head = 1\n", "wall.toml:12: [tracking]: unknown key 'head'"},
+        {"[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\nlower_left = [0, 0, 0]\n",
+         "wall.toml:6: [[screen]] #1: give all three physical corners (lower_left, lower_right, upper_left; metres) or none"},
+        {"[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\nlower_left = [0, 0, 0]\n"
+         "lower_right = [1, 0, 0]\nupper_left = [1, 1, 0]\n",
+         "wall.toml:8: [[screen]] #1: lower_left->lower_right and lower_left->upper_left must be at right angles"},
+        {"[wall]\nwidth = 100\nheight = 100\n[[screen]]\nname = \"a\"\nviewport = [0, 0, 50, 100]\nlower_left = [0, 0, 0]\n"
+         "lower_right = [1, 0, 0]\nupper_left = [0, 1, 0]\n[[screen]]\nname = \"b\"\nviewport = [50, 0, 50, 100]\n",
+         "screen 'b': give the physical corners (lower_left, lower_right, upper_left) on every screen or on none"},
         {"[wall]\nwidth = 200\nheight = 600\n[grid]\ncolumns = 2\nrows = 1\nscreen_width = 800\nscreen_height = 600\n",
          "wall.toml:2: [wall]: key 'width': 200 differs from the grid's 1600"},
     };
@@ -151,6 +178,47 @@ TEST(WallConfig, EveryKindOfMistakeNamesLineAndKey) {
         EXPECT_NE(e.find(c.expected), std::string::npos) << "got: " << e << "\nexpected: " << c.expected;
         EXPECT_EQ(e.find('\n'), std::string::npos) << "one line";
     }
+}
+
+TEST(WallConfig, TheTrackedStereoWallListensForDTrack) {
+    const WallConfig w = loadWallConfig(test::sourceDir() / "configs/wall/tracked-stereo-2x2.toml");
+    const TrackingConfig& t = w.tracking;
+    EXPECT_TRUE(t.enabled);
+    EXPECT_EQ(t.address, "0.0.0.0");
+    EXPECT_EQ(t.port, 5000);
+    EXPECT_EQ(t.headBody, 0);
+    EXPECT_EQ(t.flystick, 0);
+    EXPECT_DOUBLE_EQ(t.roomScale, 0.001);
+    EXPECT_EQ(t.roomRotate, (std::array<double, 3>{-90, 0, 0}));
+    EXPECT_EQ(t.roomTranslate, (std::array<double, 3>{0, -1.5, 2.5}));
+    EXPECT_EQ(t.filter, TrackingFilter::OneEuro);
+    EXPECT_EQ(w.stereo.mode, StereoMode::Passive);
+    EXPECT_EQ(w.screens.size(), 8u);
+    // Without [tracking] nothing listens.
+    EXPECT_FALSE(loadWallConfig(test::sourceDir() / "configs/wall/stereo-passive.toml").tracking.enabled);
+    // A mono wall is tracked with its corners in [stereo] mode "none", and written back with them.
+    const std::string mono = "[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\n[stereo]\nmode = \"none\"\n"
+                             "lower_left = [-1, -1, 0]\nlower_right = [1, -1, 0]\nupper_left = [-1, 1, 0]\n[tracking]\n"
+                             "source = \"dtrack://127.0.0.1:5123\"\nprediction_ms = 20\n";
+    const WallConfig m = parseWallConfig(mono, "mono.toml");
+    EXPECT_EQ(m.tracking.address, "127.0.0.1");
+    EXPECT_EQ(m.tracking.port, 5123);
+    EXPECT_DOUBLE_EQ(m.tracking.predictionMs, 20);
+    EXPECT_EQ(parseWallConfig(writeWallConfig(m), "again.toml"), m);
+}
+
+TEST(WallConfig, RtwallCheckReportsATrackingMistake) {
+    const std::filesystem::path file = std::filesystem::temp_directory_path() / "rtwall_bad_tracking.toml";
+    std::ofstream(file) << "[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\n[stereo]\n"
+                           "lower_left = [-1, -1, 0]\nlower_right = [1, -1, 0]\nupper_left = [-1, 1, 0]\n[tracking]\ntimeout_ms = 1.5\n";
+    try {
+        checkWall(file);
+        ADD_FAILURE() << "no error";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("rtwall_bad_tracking.toml:11: [tracking]: key 'timeout_ms': expected an integer"), std::string::npos)
+            << e.what();
+    }
+    std::filesystem::remove(file);
 }
 
 TEST(WallConfig, MissingFileIsAnInputError) {

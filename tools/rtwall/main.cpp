@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
     rtwall::cli::addCompare(app, run);
     rtwall::cli::addReference(app, run);
     rtwall::cli::addSimulate(app, run);
+    rtwall::cli::addTrackerSim(app, run);
     CLI::App* bench = app.add_subcommand("bench", "Benchmarks that print their figures (JSON with --json)");
     bench->require_subcommand(1);
     rtwall::cli::addBenchKernel(*bench, run);

@@ -47,6 +47,10 @@ struct ScreenConfig {
     std::array<int, 2> window{0, 0};  // window position (windowed)
     bool fullscreen = false;
     std::filesystem::path fragmentShader;  // replaces the shipped present.frag when set
+    // Where the screen is in the room (wall coordinates, metres), for walls whose screens are not
+    // one rectangle (a CAVE, an angled wall). Without them the whole wall image is [stereo]'s rectangle.
+    bool hasCorners = false;
+    Float3 lowerLeft{}, lowerRight{}, upperLeft{};
     int line = 0;                     // where the screen was defined (messages only)
     bool operator==(const ScreenConfig& o) const;  // ignores `line`
 };
@@ -59,6 +63,29 @@ struct StereoConfig {
     bool operator==(const StereoConfig& o) const;
 };
 
+// [tracking]: the viewer's head from a tracking system (rtwall/tracking.h reads it). The room
+// transform takes the tracker's coordinates to wall coordinates (metres): scale first, then the
+// rotation about x, then y, then z (degrees), then the translation.
+enum class TrackingFilter { None, OneEuro };
+struct TrackingConfig {
+    bool enabled = false;                 // a [tracking] table is present
+    std::string source = "dtrack://0.0.0.0:5000";  // where the tracker's UDP datagrams arrive
+    std::string address = "0.0.0.0";      // from source: the local address to listen on
+    int port = 5000;                      // from source
+    int headBody = 0;                     // the 6d body on the viewer's head (DTrack's id)
+    int flystick = -1;                    // the 6df2 flystick's id (-1: none)
+    double roomScale = 0.001;             // tracker units to metres (DTrack: millimetres)
+    std::array<double, 3> roomRotate{0, 0, 0};     // degrees about x, then y, then z
+    std::array<double, 3> roomTranslate{0, 0, 0};  // metres, applied last
+    int timeoutMs = 250;                  // no packet for this long: the last pose is held (and said)
+    double predictionMs = 0;              // constant-velocity prediction this far ahead (0: off)
+    TrackingFilter filter = TrackingFilter::None;
+    double minCutoff = 1.0;               // one-euro filter: cutoff (Hz) of a still head
+    double beta = 20.0;                   //   cutoff added per m/s of head speed
+    double derivativeCutoff = 1.0;        //   cutoff (Hz) of the speed estimate
+    bool operator==(const TrackingConfig&) const = default;
+};
+
 struct WallConfig {
     std::filesystem::path file;       // where it was read from (messages, relative shader paths)
     std::string name = "wall";
@@ -66,6 +93,7 @@ struct WallConfig {
     bool vsync = true;
     std::vector<ScreenConfig> screens;
     StereoConfig stereo;
+    TrackingConfig tracking;
     int writeEvery = 1;               // headless: every Nth frame as per-screen PNGs (0: never)
     std::string video;                // headless: also encode the wall to this file through ffmpeg
     bool operator==(const WallConfig& o) const;  // ignores `file` and screen lines
@@ -230,10 +258,36 @@ struct EyeWindow {
     Float3 eye;                   // the eye's position
     Float3 lowerLeft, right, up;  // the wall: lower-left corner, edge to lower-right, edge to upper-left
 };
-// In wall coordinates (metres). eye: 0 left, 1 right, anything else the head itself (mono). The
-// eyes sit half the separation either side of `viewer` along the wall's right edge direction
-// (lowerRight - lowerLeft, normalised): the viewer faces the wall with level eyes.
+// Where the viewer's head is and how it is turned, in wall coordinates (metres): tracked
+// (rtwall/tracking.h), or the static viewer of the config. The eyes lie on the head's x axis
+// (`right`, from the left eye to the right one).
+struct HeadPose {
+    Float3 position{0, 0, 2};
+    Float3 right{1, 0, 0};
+    Float3 up{0, 1, 0};
+};
+// The head a static config assumes: at `viewer`, level, facing the wall: its x axis along the
+// wall's lower edge (lowerRight - lowerLeft, normalised), its y axis along the left edge.
+HeadPose staticHead(const StereoConfig& stereo);
+// eye 0: the left eye, half the separation along -right from the head; 1: the right eye; any
+// other: the head's centre (mono walls).
+Float3 eyePosition(const HeadPose& head, double eyeSeparation, int eye);
+// In wall coordinates (metres): [stereo]'s rectangle seen from an eye of the static head...
 EyeWindow wallEyeWindow(const StereoConfig& stereo, int eye);
+// ... or of any head (tracked).
+EyeWindow wallEyeWindow(const StereoConfig& stereo, const HeadPose& head, int eye);
+// What one render of the whole wall image shows to one eye: a projection window spanning the
+// image, and the screens it is right for. A wall is one view (one plane: [stereo]'s rectangle,
+// or screen corners that line up); a CAVE is one view per plane of screens, each window
+// extended from a screen's physical corners over the whole image so that the screen's viewport
+// lands on the screen. Screens of the other eye are left out.
+struct WallView {
+    EyeWindow window;
+    std::vector<size_t> screens;  // indices into WallConfig::screens
+};
+std::vector<WallView> wallViews(const WallConfig& wall, const HeadPose& head, int eye);
+// Whether the wall needs off-axis views even without stereo (tracked, or screens with corners).
+bool wallHasViews(const WallConfig& wall);
 // Maps a wall-coordinate EyeWindow into the world through the navigation pose: the wall frame's
 // x, y, z axes become the camera's right, up and back (= -forward) axes, 1 metre becomes 1 world
 // unit, and the viewer's physical head position `viewer` becomes the camera position. So the

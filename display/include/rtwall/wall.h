@@ -20,6 +20,7 @@
 #include <rtwall/cluster.h>
 #include <rtwall/display.h>
 #include <rtwall/engine.h>
+#include <rtwall/tracking.h>
 #include <rtwall/tune.h>
 
 #include <array>
@@ -166,6 +167,12 @@ public:
     // Input as if from the wall's windows, applied at the next step() (keys, mouse, picking:
     // display.h's InputState): scripted control and tests; it works headless too.
     void inject(const InputState& input);
+
+    // The tracked head (a wall with [tracking]): what the last step used, and the UDP port the
+    // tracker's datagrams go to (0 without tracking).
+    std::optional<TrackerState> tracker() const;
+    int trackerPort() const;
+    const HeadPose& lastHead() const;  // the head the last step's frusta were made for
 
     // What the last step showed and measured.
     const WallFrame& lastFrame() const;

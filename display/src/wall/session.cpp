@@ -41,6 +41,20 @@ std::string codecPointName(const CodecSettings& c, int tile) {
     return n + ", tile " + std::to_string(tile);
 }
 
+// The pixels of `screens` from a render of the whole image: a view of a CAVE shows only its own
+// walls. Frames smaller than the wall (an operating point) are scaled alike.
+void copyScreens(Image& to, const Image& from, const WallConfig& wall, const std::vector<size_t>& screens) {
+    for (size_t i : screens) {
+        const PixelRect& v = wall.screens[i].viewport;
+        const int x0 = int(int64_t(v.x) * from.width / wall.width), x1 = int((int64_t(v.x + v.width) * from.width + wall.width - 1) / wall.width);
+        const int y0 = int(int64_t(v.y) * from.height / wall.height), y1 = int((int64_t(v.y + v.height) * from.height + wall.height - 1) / wall.height);
+        for (int y = y0; y < std::min(y1, from.height); ++y) {
+            const size_t row = (size_t(y) * size_t(from.width) + size_t(x0)) * 3;
+            std::copy(from.rgb.begin() + long(row), from.rgb.begin() + long(row + size_t(std::min(x1, from.width) - x0) * 3), to.rgb.begin() + long(row));
+        }
+    }
+}
+
 std::string format(const char* fmt, auto... args) {
     char buf[512];
     std::snprintf(buf, sizeof buf, fmt, args...);
@@ -55,6 +69,11 @@ struct WallSession::Impl {
     std::function<void(const std::string&)> log;
     WallConfig wallConfig;
     bool stereo = false;
+    bool views = false;  // off-axis views (stereo, tracked, or screens given by corners)
+    std::unique_ptr<TrackerReceiver> tracker;
+    TrackerState trackerState;
+    HeadPose head;
+    bool trackerStale = false;
     CameraDesc start;
     std::vector<CameraKey> path;
     RenderSettings baseSettings;  // the wall's resolution and the scene's settings before any operating point
@@ -262,14 +281,46 @@ struct WallSession::Impl {
         }
     }
 
+    // The head this frame's frusta are made for: the tracked one (predicted to display time, or
+    // held after the timeout), else the config's viewer.
+    void updateHead() {
+        head = staticHead(wallConfig.stereo);
+        if (!tracker) return;
+        trackerState = tracker->state();
+        if (trackerState.seen) head = trackerState.head;
+        if (trackerState.seen && trackerState.stale != trackerStale)
+            log(trackerState.stale ? describeTracker(trackerState) : "tracker: the head is back");
+        trackerStale = trackerState.seen && trackerState.stale;
+        input->setTrackerLine(describeTracker(trackerState));
+    }
+
     // Renders the frame (both eyes on a stereo wall) into `shown` and `report`.
     void render() {
         shown = WallFrame{};
-        if (stereo) {
-            live->sendEyeCamera(input->eyeCamera(0));
-            shown.left = master->renderFrame();
-            live->sendEyeCamera(input->eyeCamera(1));
-            shown.right = master->renderFrame(&report);
+        if (views) {
+            // Each eye, each plane of screens: one render of the wall image with that view's
+            // off-axis camera; a CAVE's screens each keep their own view's pixels.
+            const std::vector<int> eyes = stereo ? std::vector<int>{0, 1} : std::vector<int>{-1};
+            for (int eye : eyes) {
+                const std::vector<WallView> vs = wallViews(wallConfig, head, eye);
+                Image image;
+                for (size_t i = 0; i < vs.size(); ++i) {
+                    live->sendEyeCamera(input->viewCamera(vs[i].window));
+                    const bool lastRender = eye == eyes.back() && i + 1 == vs.size();
+                    Image part = master->renderFrame(lastRender ? &report : nullptr);
+                    if (vs.size() == 1) {
+                        image = std::move(part);
+                    } else {
+                        if (i == 0) {
+                            image.width = part.width;
+                            image.height = part.height;
+                            image.rgb.assign(part.rgb.size(), 0);
+                        }
+                        copyScreens(image, part, wallConfig, vs[i].screens);
+                    }
+                }
+                (eye == 1 ? shown.right : shown.left) = std::move(image);
+            }
         } else {
             shown.left = master->renderFrame(&report, &linear);
         }
@@ -277,7 +328,7 @@ struct WallSession::Impl {
         // The tile grid of the frame as rendered (the `tile` control and [render] edits change it).
         shown.tileOwners = report.tileOwners;
         shown.tileSize = live->desc().settings.tileSize;
-        if (!stereo && report.stochastic) {
+        if (!views && report.stochastic) {
             // A still view refines: each frame has its own sampling seeds; any change to the scene
             // state (camera, objects, materials, codec) restarts the accumulation. Linear frames
             // are summed without the 8-bit quantisation.
@@ -349,9 +400,11 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
         s.wallConfig = loadWallConfig(c.wall);
     }
     s.stereo = s.wallConfig.stereo.mode != StereoMode::None;
-    if (s.stereo && c.cluster.async) {
-        // Two renders per frame, one per eye: asynchronous mode would give each eye the other's camera.
-        s.log("stereo wall: asynchronous rendering off, each frame renders the left then the right eye");
+    s.views = wallHasViews(s.wallConfig);
+    if (s.views && c.cluster.async) {
+        // A render per eye (and per plane of screens): asynchronous mode would give each the other's camera.
+        s.log(s.stereo ? "stereo wall: asynchronous rendering off, each frame renders the left then the right eye"
+                       : "off-axis wall: asynchronous rendering off, each frame renders each view with its own camera");
         c.cluster.async = false;
     }
     fitToRun(desc, c, s.wallConfig);
@@ -376,6 +429,12 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     s.startClients();
     s.waitForClients();
     s.live = std::make_unique<LiveScene>(std::move(desc), *s.master);
+    if (s.wallConfig.tracking.enabled) {
+        const TrackingConfig& t = s.wallConfig.tracking;
+        s.tracker = std::make_unique<TrackerReceiver>(t, s.log);
+        s.log(format("tracker: listening for ART DTrack on udp %s:%d (head body %d%s)", t.address.c_str(), s.tracker->port(), t.headBody,
+                     t.predictionMs > 0 ? format(", predicted %.0f ms ahead", t.predictionMs).c_str() : ""));
+    }
 
     WallInput::Options io;
     io.forceHeadless = c.headless;
@@ -424,6 +483,7 @@ bool WallSession::step() {
         s.input->setCamera(*scripted);
         s.live->setCamera(*scripted);
     }
+    if (s.views) s.updateHead();
     try {
         s.render();
     } catch (...) {
@@ -459,6 +519,12 @@ std::optional<PickResult> WallSession::pick(double wallX, double wallY) { return
 void WallSession::showTileOwners(bool on) { impl_->input->showTileOwners(on); }
 void WallSession::inject(const InputState& input) { impl_->input->inject(input); }
 const WallFrame& WallSession::lastFrame() const { return impl_->shown; }
+std::optional<TrackerState> WallSession::tracker() const {
+    if (!impl_->tracker) return std::nullopt;
+    return impl_->tracker->state();
+}
+int WallSession::trackerPort() const { return impl_->tracker ? impl_->tracker->port() : 0; }
+const HeadPose& WallSession::lastHead() const { return impl_->head; }
 const FrameReport& WallSession::lastReport() const { return impl_->report; }
 std::string WallSession::endpoint() const { return impl_->master->endpoint(); }
 bool WallSession::windowed() const { return impl_->input->windowed(); }

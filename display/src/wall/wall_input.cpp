@@ -45,13 +45,13 @@ WallInput::~WallInput() = default;
 
 CameraDesc WallInput::camera() const { return cameraOf(base_, nav_->pose()); }
 
-CameraDesc WallInput::eyeCamera(int eye) const {
+CameraDesc WallInput::viewCamera(const EyeWindow& window) const {
     CameraDesc c = camera();
-    if (wall_.stereo.mode == StereoMode::None) return c;
-    // Off-axis: each eye sees the wall's physical rectangle as a projection window. The wall frame
+    // Off-axis: the eye sees the wall's physical rectangle as a projection window. The wall frame
     // is carried into the world by the navigation pose (wall x, y, z = camera right, up, back; the
-    // viewer's head = the camera position; 1 metre = 1 world unit): see eyeWindowInWorld.
-    const EyeWindow w = eyeWindowInWorld(wallEyeWindow(wall_.stereo, eye), wall_.stereo.viewer, nav_->pose());
+    // config's viewer = the camera position, so a tracked head moves within a room that stays
+    // put in the scene; 1 metre = 1 world unit): see eyeWindowInWorld.
+    const EyeWindow w = eyeWindowInWorld(window, wall_.stereo.viewer, nav_->pose());
     const Float3 f{c.lookAt.x - c.position.x, c.lookAt.y - c.position.y, c.lookAt.z - c.position.z};
     c.position = w.eye;
     c.lookAt = {w.eye.x + f.x, w.eye.y + f.y, w.eye.z + f.z};  // unused by the window; kept sensible
@@ -148,6 +148,10 @@ void WallInput::show(const WallFrame& frame, const FrameReport& report, double f
             const std::string counters = "master: " + describeCounters(report.counters);
             status += " | " + counters;
             overlay += "\n" + counters;
+            if (!trackerLine_.empty()) {
+                status += " | " + trackerLine_;
+                overlay += "\n" + trackerLine_;
+            }
             gl_->setStatus(status);
             statusImage_ = textImage(overlay, 2);  // shown from the next frame on
             log_(status);

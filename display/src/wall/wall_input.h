@@ -39,10 +39,12 @@ public:
     void inject(const InputState& input) { injected_.push_back(input); }
     bool showingStatus() const { return showStatus_; }
     bool showingTileOwners() const { return present_.falseColour; }
-    // The viewer's camera, from the navigation pose, and each eye's (stereo walls: an off-axis
-    // window from the wall's corners; 0 left, 1 right).
+    // The viewer's camera, from the navigation pose, and the camera of one off-axis view of the
+    // wall (wallViews: an eye's window in wall coordinates, carried into the world by the pose).
     CameraDesc camera() const;
-    CameraDesc eyeCamera(int eye) const;
+    CameraDesc viewCamera(const EyeWindow& window) const;
+    // A line for the status overlay and the title (the tracker's state); empty: none.
+    void setTrackerLine(const std::string& line) { trackerLine_ = line; }
     void setCamera(const CameraDesc& c);  // a camera path, orbit or scene edit moved it
     void showTileOwners(bool on) { present_.falseColour = on; }
     std::optional<PickResult> pick(LiveScene& scene, double wallX, double wallY);
@@ -65,6 +67,7 @@ private:
     double statusClock_ = 0;
     int recordings_ = 0;
     std::vector<InputState> injected_;
+    std::string trackerLine_;
     bool apply(LiveScene& scene, const InputState& in, double dt);
     std::optional<PickResult> grabbed_;
     Transform grabbedStart_;

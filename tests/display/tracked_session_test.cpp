@@ -1,0 +1,257 @@
+// A tracked wall end to end in one process (loopback, client threads): DTrack datagrams for a
+// head at the config's viewer give the very bytes of the static render with that viewer, on a
+// flat 2x2 stereo wall and on a three-wall CAVE; a tilted or moved head changes the eye images.
+#include "display_test_util.h"
+
+#include <rtwall/wall.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+namespace rtwall {
+namespace {
+
+const char* kScene = R"([image]
+width = 64
+height = 64
+tile = 16
+[render]
+ambient = [0.1, 0.1, 0.1]
+[[mesh]]
+name = "box"
+shape = "box"
+[[mesh]]
+name = "floor"
+shape = "quad"
+[[material]]
+name = "red"
+type = "lambert"
+color = [0.8, 0.2, 0.2]
+[[material]]
+name = "grey"
+type = "lambert"
+color = [0.6, 0.6, 0.6]
+[[instance]]
+mesh = "box"
+material = "red"
+scale = 0.4
+translate = [0.3, 0.4, -1.5]
+[[instance]]
+mesh = "floor"
+material = "grey"
+scale = 8
+[[instance]]
+mesh = "box"
+material = "grey"
+scale = 0.3
+translate = [-1.2, 1.0, 0.8]
+[[light]]
+position = [2, 6, 4]
+intensity = 60
+[[camera]]
+position = [0, 1.7, 0]
+look_at = [0, 1.7, -1]
+fov = 60
+)";
+
+// The shipped walls' geometry at a few pixels per screen. `viewer` is [stereo]'s.
+std::string flatWall(const char* viewer, bool tracked) {
+    std::string t = R"([wall]
+vsync = false
+[grid]
+columns = 2
+rows = 2
+screen_width = 24
+screen_height = 16
+[stereo]
+mode = "passive"
+eye_separation = 0.065
+viewer = )" + std::string(viewer) + R"(
+lower_left = [-1.6, -1.2, 0.0]
+lower_right = [1.6, -1.2, 0.0]
+upper_left = [-1.6, 1.2, 0.0]
+[headless]
+write_every = 0
+)";
+    if (tracked)
+        t += "[tracking]\nsource = \"dtrack://127.0.0.1:0\"\nroom_rotate = [-90, 0, 0]\nroom_translate = [0, -1.5, 2.5]\ntimeout_ms = 60000\n";
+    return t;
+}
+
+std::string caveWall(const char* viewer, bool tracked) {
+    std::string t = R"([wall]
+width = 96
+height = 24
+vsync = false
+[stereo]
+mode = "passive"
+viewer = )" + std::string(viewer) + R"(
+lower_left = [-1.5, 0.0, -1.5]
+lower_right = [1.5, 0.0, -1.5]
+upper_left = [-1.5, 2.25, -1.5]
+[headless]
+write_every = 0
+)";
+    const char* walls[3][4] = {{"left", "[-1.5, 0, 1.5]", "[-1.5, 0, -1.5]", "[-1.5, 2.25, 1.5]"},
+                               {"front", "[-1.5, 0, -1.5]", "[1.5, 0, -1.5]", "[-1.5, 2.25, -1.5]"},
+                               {"right", "[1.5, 0, -1.5]", "[1.5, 0, 1.5]", "[1.5, 2.25, -1.5]"}};
+    for (const char* eye : {"left", "right"})
+        for (int i = 0; i < 3; ++i)
+            t += "[[screen]]\nname = \"" + std::string(walls[i][0]) + "-" + eye + "\"\nviewport = [" + std::to_string(32 * i) +
+                 ", 0, 32, 24]\neye = \"" + eye + "\"\nlower_left = " + walls[i][1] + "\nlower_right = " + walls[i][2] +
+                 "\nupper_left = " + walls[i][3] + "\n";
+    if (tracked)
+        t += "[tracking]\nsource = \"dtrack://127.0.0.1:0\"\nroom_rotate = [-90, 0, 0]\ntimeout_ms = 60000\n";
+    return t;
+}
+
+RunConfig config(const std::filesystem::path& dir, const std::string& wallText, const char* name) {
+    RunConfig c;
+    c.scene = test::writeText(dir / "scene.toml", kScene).string();
+    c.wall = test::writeText(dir / name, wallText);
+    c.cluster.localClients = 2;
+    c.cluster.async = false;
+    c.clientThreads = true;
+    c.headless = true;
+    c.frames = 0;
+    c.orbit = 0.0;
+    c.writeEvery = 0;
+    c.out = dir;
+    c.log = [](const std::string&) {};
+    return c;
+}
+
+// A head at wall position (x, y, z) as the shipped rooms' DTrack sends it (z up, y towards the
+// front screen), rolled `roll` degrees about the viewing direction.
+void sendHead(WallSession& s, const TrackingConfig& t, Float3 p, double roll, uint64_t frame) {
+    DTrackFrame f;
+    f.frame = frame;
+    DTrackBody b;
+    b.quality = 1;
+    b.position = {std::round((p.x - t.roomTranslate[0]) * 1e3), std::round(-(p.z - t.roomTranslate[2]) * 1e3),
+                  std::round((p.y - t.roomTranslate[1]) * 1e3)};
+    const double r = roll * 3.14159265358979 / 180, c = std::cos(r), sn = std::sin(r);
+    // About the room's y axis (the viewing direction): x tips up towards z (room up).
+    b.rotation = {c, 0, -sn, 0, 1, 0, sn, 0, c};
+    f.bodies.push_back(b);
+    DTrackSender(s.trackerPort()).send(f);
+    for (int i = 0; i < 400; ++i) {  // 2 s at most
+        const std::optional<TrackerState> st = s.tracker();
+        if (st && st->packets >= frame) return;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    ADD_FAILURE() << "the session's tracker did not get datagram " << frame;
+}
+
+bool sameBytes(const WallFrame& a, const WallFrame& b) {
+    return a.left.width == b.left.width && a.left.rgb == b.left.rgb && a.right.rgb == b.right.rgb && !a.left.rgb.empty() &&
+           !a.right.rgb.empty();
+}
+
+void checkTrackedEqualsStatic(const std::filesystem::path& dir, std::string (*wall)(const char*, bool), const char* viewer, Float3 at) {
+    WallSession fixed(config(dir, wall(viewer, false), "static.toml"));
+    ASSERT_TRUE(fixed.step());
+    const WallFrame want = fixed.lastFrame();
+    EXPECT_FALSE(fixed.tracker().has_value());
+
+    WallSession tracked(config(dir, wall(viewer, true), "tracked.toml"));
+    const TrackingConfig t = loadWallConfig(dir / "tracked.toml").tracking;
+    ASSERT_GT(tracked.trackerPort(), 0);
+    // Before the first datagram: the config's viewer.
+    ASSERT_TRUE(tracked.step());
+    EXPECT_TRUE(sameBytes(tracked.lastFrame(), want));
+    // The head at the viewer: the same bytes, through datagram, parser and room transform.
+    sendHead(tracked, t, at, 0, 1);
+    ASSERT_TRUE(tracked.step());
+    EXPECT_EQ(tracked.lastHead().position.y, at.y);
+    EXPECT_TRUE(tracked.tracker()->seen);
+    EXPECT_TRUE(sameBytes(tracked.lastFrame(), want)) << "the tracked head at the viewer must render what the static viewer does";
+    // Tilted: the eyes move (one up, one down), so the eye images change.
+    sendHead(tracked, t, at, 30, 2);
+    ASSERT_TRUE(tracked.step());
+    EXPECT_NEAR(tracked.lastHead().right.y, 0.5, 1e-6);
+    EXPECT_NE(tracked.lastFrame().left.rgb, want.left.rgb);
+    EXPECT_NE(tracked.lastFrame().right.rgb, want.right.rgb);
+    // Moved 0.4 m to the right: the images follow the head.
+    sendHead(tracked, t, {at.x + 0.4f, at.y, at.z}, 0, 3);
+    ASSERT_TRUE(tracked.step());
+    EXPECT_NEAR(tracked.lastHead().position.x, at.x + 0.4f, 1e-6);
+    EXPECT_NE(tracked.lastFrame().left.rgb, want.left.rgb);
+    // Back at the viewer: the static bytes again.
+    sendHead(tracked, t, at, 0, 4);
+    ASSERT_TRUE(tracked.step());
+    EXPECT_TRUE(sameBytes(tracked.lastFrame(), want));
+}
+
+TEST(TrackedSession, FlatStereoWallTrackedHeadGivesTheStaticRender) {
+    const auto dir = test::displayScratchDir();
+    checkTrackedEqualsStatic(dir, flatWall, "[0.0, 0.2, 2.5]", {0.0f, 0.2f, 2.5f});
+    checkTrackedEqualsStatic(dir, flatWall, "[-0.7, 0.35, 1.8]", {-0.7f, 0.35f, 1.8f});
+}
+
+TEST(TrackedSession, CaveTrackedHeadGivesTheStaticRender) {
+    const auto dir = test::displayScratchDir();
+    checkTrackedEqualsStatic(dir, caveWall, "[0.0, 1.7, 0.0]", {0.0f, 1.7f, 0.0f});
+    checkTrackedEqualsStatic(dir, caveWall, "[0.4, 1.55, 0.6]", {0.4f, 1.55f, 0.6f});
+}
+
+// No head for timeout_ms: the last pose is held (not flown off at its last velocity), the log and
+// the overlay line say so, and the wall keeps going; the head's return is said too.
+TEST(TrackedSession, ALostHeadIsHeldAndSaid) {
+    const auto dir = test::displayScratchDir();
+    std::string wall = flatWall("[0.0, 0.2, 2.5]", true);
+    wall.replace(wall.find("timeout_ms = 60000"), 18, "timeout_ms = 100\nprediction_ms = 50");
+    RunConfig c = config(dir, wall, "tracked.toml");
+    std::vector<std::string> lines;
+    c.log = [&](const std::string& line) { lines.push_back(line); };
+    WallSession s(c);
+    const TrackingConfig t = loadWallConfig(dir / "tracked.toml").tracking;
+    sendHead(s, t, {0.0f, 0.2f, 2.5f}, 0, 1);
+    sendHead(s, t, {0.1f, 0.2f, 2.5f}, 0, 2);  // moving: the prediction has a velocity
+    ASSERT_TRUE(s.step());
+    std::this_thread::sleep_for(std::chrono::milliseconds(250));
+    ASSERT_TRUE(s.step());
+    ASSERT_TRUE(s.tracker()->stale);
+    EXPECT_EQ(s.lastHead().position.x, 0.1f) << "held where it was last seen";
+    const auto said = [&](const std::string& what) {
+        return std::any_of(lines.begin(), lines.end(), [&](const std::string& l) { return l.find(what) != std::string::npos; });
+    };
+    EXPECT_TRUE(said("tracker: no head for")) << "the log says the pose is held";
+    EXPECT_TRUE(said("holding the last pose"));
+    EXPECT_NE(describeTracker(*s.tracker()).find("holding the last pose"), std::string::npos);
+    sendHead(s, t, {-0.2f, 0.2f, 2.5f}, 0, 3);
+    ASSERT_TRUE(s.step());
+    EXPECT_FALSE(s.tracker()->stale);
+    EXPECT_TRUE(said("tracker: the head is back"));
+}
+
+// Each CAVE wall is seen through its own frustum: a wall's pixels in the composed image are those
+// of a render with that wall's view alone (and the walls differ from one flat projection).
+TEST(TrackedSession, CaveWallsAreRenderedEachWithItsOwnView) {
+    const auto dir = test::displayScratchDir();
+    WallSession cave(config(dir, caveWall("[0.0, 1.7, 0.0]", false), "cave.toml"));
+    ASSERT_TRUE(cave.step());
+    const WallFrame& f = cave.lastFrame();
+    const WallConfig wall = loadWallConfig(dir / "cave.toml");
+    const std::vector<WallView> views = wallViews(wall, staticHead(wall.stereo), 0);
+    ASSERT_EQ(views.size(), 3u);
+    // The same scene on one machine, one render per view; each wall's columns must match.
+    const SceneDesc d = cave.scene();
+    const Scene scene(d);
+    for (const WallView& v : views) {
+        CameraDesc cam = cave.camera();
+        const EyeWindow w = eyeWindowInWorld(v.window, wall.stereo.viewer, {cam.position, cam.lookAt, cam.up, cam.fovY});
+        cam.position = w.eye;
+        cam.window = ProjectionWindow{w.lowerLeft, w.right, w.up};
+        const Image ref = renderFrame(scene, Camera(cam, d.settings.width, d.settings.height), d.settings);
+        const PixelRect& vp = wall.screens[v.screens[0]].viewport;
+        for (int y = 0; y < vp.height; ++y)
+            for (int x = vp.x; x < vp.x + vp.width; ++x)
+                for (int k = 0; k < 3; ++k) ASSERT_EQ(f.left.pixel(x, y)[k], ref.pixel(x, y)[k]) << x << "," << y;
+    }
+}
+
+}  // namespace
+}  // namespace rtwall
