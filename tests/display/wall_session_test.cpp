@@ -148,7 +148,10 @@ TEST(WallSession, TheStateItHoldsIsWhatTheClientsRender) {
     ASSERT_TRUE(s.step());
     EXPECT_EQ(s.scene().instances[0].transform.m[3], 0.0);
     EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u) << "after the reload";
-    EXPECT_EQ(s.summary().counters.dropped(), 0u);
+    // Nothing refused as malformed, unknown, repeated or unexpected. A stale message (a tile
+    // request for a frame that has just ended) is normal with two clients and is not counted here.
+    const MasterCounters c = s.summary().counters;
+    EXPECT_EQ(c.dropped() - c.stale, 0u) << describeCounters(c);
 }
 
 // Issue 17: the tile-owner view (key T) drew the tile grid the run started with, whatever the
