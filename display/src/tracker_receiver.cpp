@@ -12,7 +12,6 @@ namespace rtwall {
 
 struct TrackerReceiver::Impl {
     TrackingConfig config;
-    std::function<void(const std::string&)> log;
     asio::io_context io;
     asio::ip::udp::socket socket{io};
     asio::ip::udp::endpoint sender;
@@ -22,6 +21,8 @@ struct TrackerReceiver::Impl {
     HeadTracker tracker;
     int port = 0;
     uint64_t reported = 0;  // drops already logged (the first of each run of them)
+    std::vector<std::string> messages;  // for the owner's thread (takeMessages), under `mutex`
+    uint64_t lostMessages = 0;
     std::thread thread;
 
     explicit Impl(const TrackingConfig& c) : config(c), tracker(c) {}
@@ -37,25 +38,25 @@ struct TrackerReceiver::Impl {
     void take(std::string_view datagram) {
         const double now = seconds(std::chrono::steady_clock::now());
         std::optional<DTrackFrame> frame = parser.parse(datagram);
-        std::string message;
-        {
-            std::lock_guard<std::mutex> lock(mutex);
-            if (frame) {
-                tracker.add(*frame, now);
-            } else {
-                tracker.countDropped(parser.error());
-                // One line per 100 bad datagrams at most: a misconfigured sender must not flood the log.
-                if (reported++ % 100 == 0) message = parser.error() + " (from " + sender.address().to_string() + ")";
-            }
+        std::lock_guard<std::mutex> lock(mutex);
+        if (frame) {
+            tracker.add(*frame, now);
+        } else {
+            tracker.countDropped(parser.error());
+            // One line per 100 bad datagrams at most: a misconfigured sender must not flood the log.
+            if (reported++ % 100 == 0) say(parser.error() + " (from " + sender.address().to_string() + ")");
         }
-        if (!message.empty() && log) log(message);
+    }
+
+    // Under `mutex`.
+    void say(std::string line) {
+        if (messages.size() < 16) messages.push_back(std::move(line));
+        else ++lostMessages;
     }
 };
 
-TrackerReceiver::TrackerReceiver(const TrackingConfig& config, std::function<void(const std::string&)> log)
-    : impl_(std::make_unique<Impl>(config)) {
+TrackerReceiver::TrackerReceiver(const TrackingConfig& config) : impl_(std::make_unique<Impl>(config)) {
     Impl& s = *impl_;
-    s.log = std::move(log);
     asio::error_code ec;
     const asio::ip::address address = asio::ip::make_address(config.address, ec);
     if (!ec) {
@@ -71,7 +72,8 @@ TrackerReceiver::TrackerReceiver(const TrackingConfig& config, std::function<voi
         try {
             s.io.run();
         } catch (const std::exception& e) {
-            if (s.log) s.log(std::string("tracker receiver stopped: ") + e.what());
+            std::lock_guard<std::mutex> lock(s.mutex);
+            s.say(std::string("tracker receiver stopped: ") + e.what());
         }
     });
 }
@@ -82,6 +84,16 @@ TrackerReceiver::~TrackerReceiver() {
 }
 
 int TrackerReceiver::port() const { return impl_->port; }
+
+std::vector<std::string> TrackerReceiver::takeMessages() {
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    std::vector<std::string> out = std::move(impl_->messages);
+    impl_->messages.clear();
+    if (impl_->lostMessages > 0)
+        out.push_back("tracker: " + std::to_string(impl_->lostMessages) + " more lines about dropped datagrams not shown");
+    impl_->lostMessages = 0;
+    return out;
+}
 
 double TrackerReceiver::seconds(std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double>(t.time_since_epoch()).count();

@@ -32,8 +32,7 @@ TEST(TrackerReceiver, HeadFromDatagramsOnLoopback) {
     c.address = "127.0.0.1";
     c.port = 0;
     c.timeoutMs = 60'000;
-    std::vector<std::string> log;
-    TrackerReceiver r(c, [&](const std::string& line) { log.push_back(line); });
+    TrackerReceiver r(c);
     ASSERT_GT(r.port(), 0);
     EXPECT_FALSE(r.state().seen);
     send(r.port(), "fr 1\r\nts 10.0\r\n6d 1 [0 1.000][250.000 100.000 2500.000][1 0 0 0 1 0 0 0 1]\r\n");
@@ -49,8 +48,11 @@ TEST(TrackerReceiver, HeadFromDatagramsOnLoopback) {
     EXPECT_EQ(s.head.position.x, 0.25f);  // the bad one changed nothing
     send(r.port(), "fr 3\r\n6d 1 [0 1.000][-500.000 100.000 2500.000][1 0 0 0 1 0 0 0 1]\r\n");
     ASSERT_TRUE(waitFor(r, [](const TrackerState& t) { return t.head.position.x == -0.5f; }));
-    ASSERT_FALSE(log.empty());
+    // The bad datagram's line waits for the owner's thread (the session logs it in its step).
+    const std::vector<std::string> log = r.takeMessages();
+    ASSERT_EQ(log.size(), 1u);
     EXPECT_NE(log[0].find("(from 127.0.0.1)"), std::string::npos) << log[0];
+    EXPECT_TRUE(r.takeMessages().empty()) << "taken once";
 }
 
 TEST(TrackerReceiver, APortInUseIsAnInputErrorNamingTheSource) {

@@ -182,7 +182,7 @@ private:
 // InputError naming the source when the port cannot be opened. Port 0 (tests) picks a free one.
 class TrackerReceiver {
 public:
-    explicit TrackerReceiver(const TrackingConfig& config, std::function<void(const std::string&)> log = {});
+    explicit TrackerReceiver(const TrackingConfig& config);
     ~TrackerReceiver();
     TrackerReceiver(const TrackerReceiver&) = delete;
     TrackerReceiver& operator=(const TrackerReceiver&) = delete;
@@ -191,6 +191,10 @@ public:
     TrackerState state() const;
     TrackerState state(std::chrono::steady_clock::time_point now) const;
     static double seconds(std::chrono::steady_clock::time_point t);  // the clock HeadTracker is fed with
+    // What the receive thread has to say since the last call (a dropped datagram's reason, one
+    // line per 100 at most; the thread stopping), for the owner's thread to log: the owner's
+    // log need not be thread-safe. At most 16 lines wait; more are counted in one last line.
+    std::vector<std::string> takeMessages();
 
     struct Impl;
 

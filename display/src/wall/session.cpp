@@ -286,6 +286,7 @@ struct WallSession::Impl {
     void updateHead() {
         head = staticHead(wallConfig.stereo);
         if (!tracker) return;
+        for (const std::string& line : tracker->takeMessages()) log(line);  // said here, on the session's thread
         trackerState = tracker->state();
         if (trackerState.seen) head = trackerState.head;
         if (trackerState.seen && trackerState.stale != trackerStale)
@@ -431,7 +432,7 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     s.live = std::make_unique<LiveScene>(std::move(desc), *s.master);
     if (s.wallConfig.tracking.enabled) {
         const TrackingConfig& t = s.wallConfig.tracking;
-        s.tracker = std::make_unique<TrackerReceiver>(t, s.log);
+        s.tracker = std::make_unique<TrackerReceiver>(t);
         s.log(format("tracker: listening for ART DTrack on udp %s:%d (head body %d%s)", t.address.c_str(), s.tracker->port(), t.headBody,
                      t.predictionMs > 0 ? format(", predicted %.0f ms ahead", t.predictionMs).c_str() : ""));
     }
