@@ -101,8 +101,7 @@ case "${1:-}" in
     say "fuzzing every decoder briefly (clang, libFuzzer, ASan+UBSan)"
     cmake -S . -B "$BUILD_DIR-fuzz" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
       -DRTWALL_FUZZ=ON -DRTWALL_BUILD_BENCHMARKS=OFF >/dev/null
-    cmake --build "$BUILD_DIR-fuzz" -j "$JOBS" --target fuzz_protocol fuzz_import_vtk fuzz_import_vtp fuzz_import_vtu fuzz_import_wrl \
-      fuzz_import_openmesh fuzz_mesh_cache
+    cmake --build "$BUILD_DIR-fuzz" -j "$JOBS" --target fuzz_targets  # every fuzz_* target (tests/fuzz)
     ctest --test-dir "$BUILD_DIR-fuzz" -L fuzz --output-on-failure --timeout 600
     say "running the test suite"
     ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS" --timeout 900
