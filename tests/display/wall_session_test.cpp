@@ -8,6 +8,10 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>  // key codes, as the wall's windows report them
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <memory>
@@ -363,6 +367,260 @@ TEST(WallSession, PickingAnAssemblyNamesThePart) {
     bool named = false;
     for (const std::string& l : *lines) named = named || (l.find("picked instance") != std::string::npos && l.find("part 'root/box_a'") != std::string::npos);
     EXPECT_TRUE(named) << (lines->empty() ? std::string("no log lines") : lines->back());
+}
+
+// ---- Measuring (issue 20) ------------------------------------------------------------------------
+
+// A part with a slot of known width: two boxes ([-1, 1]^3) whose inner faces lie kSlot apart along x
+// (x = -kSlot/2 and +kSlot/2 around `at`), seen from between them; no floor, so the top of the
+// image between them is background.
+constexpr double kSlot = 2.5;
+std::string slotSceneText(const std::array<double, 3>& at) {
+    char text[2048];
+    std::snprintf(text, sizeof text, R"([image]
+width = 192
+height = 128
+tile = 32
+[render]
+ambient = [0.1, 0.1, 0.1]
+[[mesh]]
+name = "box"
+shape = "box"
+[[material]]
+name = "red"
+type = "lambert"
+color = [0.8, 0.2, 0.2]
+[[instance]]
+mesh = "box"
+material = "red"
+translate = [%.17g, %.17g, %.17g]
+[[instance]]
+mesh = "box"
+material = "red"
+translate = [%.17g, %.17g, %.17g]
+[[light]]
+position = [%.17g, %.17g, %.17g]
+intensity = 30
+[[camera]]
+position = [%.17g, %.17g, %.17g]
+look_at = [%.17g, %.17g, %.17g]
+fov = 70
+)",
+                  at[0] - kSlot / 2 - 1, at[1], at[2], at[0] + kSlot / 2 + 1, at[1], at[2], at[0], at[1] + 4, at[2] + 4,
+                  at[0], at[1], at[2] + 2.5, at[0], at[1], at[2]);
+    return text;
+}
+
+// The wall position whose ray passes through p (file coordinates): direction(px, py) is
+// corner + px du + py dv, so p - eye = t corner + (t px) du + (t py) dv is solved for t, px, py.
+// Aiming through the point itself (not the nearest pixel centre) keeps the pixel footprint out
+// of the measured distance: what is left is single-precision rounding.
+std::pair<double, double> wallPositionOf(const WallSession& s, const std::array<double, 3>& p) {
+    const SceneDesc& d = s.scene();
+    const Camera cam(s.camera(), d.settings.width, d.settings.height);
+    // du and dv from the image's far edges: a difference over one pixel would keep only a few
+    // significant digits of the float directions.
+    const float w1 = float(d.settings.width), h1 = float(d.settings.height);
+    const Float3 o = cam.origin(), c = cam.direction(0, 0), x1 = cam.direction(w1, 0), y1 = cam.direction(0, h1);
+    const std::array<double, 3> u{(double(x1.x) - c.x) / w1, (double(x1.y) - c.y) / w1, (double(x1.z) - c.z) / w1};
+    const std::array<double, 3> v{(double(y1.x) - c.x) / h1, (double(y1.y) - c.y) / h1, (double(y1.z) - c.z) / h1};
+    const std::array<double, 3> w{double(c.x), double(c.y), double(c.z)};
+    const std::array<double, 3> r{p[0] - d.origin[0] - o.x, p[1] - d.origin[1] - o.y, p[2] - d.origin[2] - o.z};
+    auto det = [](const std::array<double, 3>& a, const std::array<double, 3>& b, const std::array<double, 3>& e) {
+        return a[0] * (b[1] * e[2] - b[2] * e[1]) - a[1] * (b[0] * e[2] - b[2] * e[0]) + a[2] * (b[0] * e[1] - b[1] * e[0]);
+    };
+    const double dd = det(w, u, v), t = det(r, u, v) / dd;
+    return {det(w, r, v) / dd / t, det(w, u, r) / dd / t};
+}
+
+InputState ctrlClick(std::pair<double, double> at) {
+    InputState in;
+    in.leftPressed = in.leftDown = true;
+    in.clickMods = GLFW_MOD_CONTROL;
+    in.wallX = at.first;
+    in.wallY = at.second;
+    return in;
+}
+// Esc as GLFW reports a press: pressed since the last poll, and down.
+InputState escapePress() {
+    InputState in = keyPress(GLFW_KEY_ESCAPE);
+    in.keyDown[GLFW_KEY_ESCAPE] = true;
+    return in;
+}
+
+// Both points lie on faces the camera sees at ~2.6 units and at least ~60 degrees from the
+// normal (cos >= 0.47); the hit t and the ray are single precision (a few ulps of 2^-24 of the
+// distance), so each point is off by < 16 * 6e-8 * 2.6 / 0.47 ~ 5e-6, the distance by twice that.
+// The origin of the far scene is added in double (1e6 * 2^-53 ~ 1e-10): the same budget.
+constexpr double kMeasureTolerance = 1e-5;
+
+struct MeasuredSlot {
+    Measurement m;
+    std::vector<std::string> lines;
+};
+MeasuredSlot measureSlot(const std::array<double, 3>& at) {
+    const auto dir = test::displayScratchDir();
+    const auto file = test::writeText(dir / "slot.toml", slotSceneText(at));
+    RunConfig c = sessionConfig(dir, file);
+    auto lines = std::make_shared<std::vector<std::string>>();
+    c.log = [lines](const std::string& line) { lines->push_back(line); };
+    WallSession s(c);
+    EXPECT_TRUE(s.step());
+    // Points on the two inner faces, at the same height and depth: kSlot apart.
+    const std::array<double, 3> a{at[0] - kSlot / 2, at[1] + 0.1, at[2] + 0.2}, b{at[0] + kSlot / 2, at[1] + 0.1, at[2] + 0.2};
+    s.inject(keyPress(GLFW_KEY_M));
+    s.inject(ctrlClick(wallPositionOf(s, a)));
+    s.inject(ctrlClick(wallPositionOf(s, b)));
+    EXPECT_TRUE(s.step());
+    EXPECT_TRUE(s.measuring());
+    MeasuredSlot r;
+    if (s.measurement()) r.m = *s.measurement();
+    r.lines = *lines;
+    for (int i = 0; i < 3; ++i) {
+        EXPECT_NEAR(r.m.a[i], a[i], kMeasureTolerance / 2) << "A[" << i << "]";
+        if (r.m.b) {
+            EXPECT_NEAR((*r.m.b)[i], b[i], kMeasureTolerance / 2) << "B[" << i << "]";
+        }
+    }
+    return r;
+}
+
+// The line the log got for a finished measurement, read back.
+std::optional<Measurement> parseMeasureLine(const std::vector<std::string>& lines) {
+    for (const std::string& l : lines) {
+        Measurement m;
+        std::array<double, 3> b{};
+        if (std::sscanf(l.c_str(), "measure: A (%lf, %lf, %lf) to B (%lf, %lf, %lf): %lf scene units", &m.a[0], &m.a[1], &m.a[2],
+                        &b[0], &b[1], &b[2], &m.distance) == 7) {
+            m.b = b;
+            return m;
+        }
+    }
+    return std::nullopt;
+}
+
+TEST(WallSession, MeasuringASlotGivesItsWidth) {
+    const MeasuredSlot r = measureSlot({0, 0, 0});
+    ASSERT_TRUE(r.m.b) << (r.lines.empty() ? "no log lines" : r.lines.back());
+    EXPECT_NEAR(r.m.distance, kSlot, kMeasureTolerance);
+    const auto printed = parseMeasureLine(r.lines);
+    ASSERT_TRUE(printed) << r.lines.back();
+    EXPECT_NEAR(printed->distance, kSlot, kMeasureTolerance);
+}
+
+// A CAD model 1e6 units from the file's origin is rebased on load; the measurement is in the
+// file's coordinates and as precise as at the origin (in float, 1e6 is 0.0625 from its neighbour).
+TEST(WallSession, MeasuringFarFromTheOriginIsAsPrecise) {
+    const std::array<double, 3> at{1000000.375, 250.5, -1000000.25};
+    const MeasuredSlot r = measureSlot(at);
+    ASSERT_TRUE(r.m.b) << (r.lines.empty() ? "no log lines" : r.lines.back());
+    EXPECT_NEAR(r.m.distance, kSlot, kMeasureTolerance);
+    const auto printed = parseMeasureLine(r.lines);
+    ASSERT_TRUE(printed) << r.lines.back();
+    EXPECT_NEAR(printed->distance, kSlot, kMeasureTolerance);
+    EXPECT_NEAR(printed->a[0], at[0] - kSlot / 2, 1e-5) << "the file's coordinates, printed";
+    EXPECT_NEAR(printed->a[2], at[2] + 0.2, 1e-5);
+    EXPECT_NEAR((*printed->b)[0], at[0] + kSlot / 2, 1e-5);
+}
+
+TEST(WallSession, MeasureModeKeys) {
+    const auto dir = test::displayScratchDir();
+    const auto file = test::writeText(dir / "slot.toml", slotSceneText({0, 0, 0}));
+    RunConfig c = sessionConfig(dir, file);
+    auto lines = std::make_shared<std::vector<std::string>>();
+    c.log = [lines](const std::string& line) { lines->push_back(line); };
+    WallSession s(c);
+    ASSERT_TRUE(s.step());
+    const auto a = wallPositionOf(s, {-kSlot / 2, 0.1, 0.2}), b = wallPositionOf(s, {kSlot / 2, 0.1, 0.2});
+    const Transform before = s.scene().instances[0].transform;
+
+    // Off: Ctrl+click picks (and a drag would move), nothing is measured.
+    s.inject(ctrlClick(a));
+    ASSERT_TRUE(s.step());
+    EXPECT_FALSE(s.measuring());
+    EXPECT_FALSE(s.measurement());
+
+    s.inject(keyPress(GLFW_KEY_M));
+    ASSERT_TRUE(s.step());
+    EXPECT_TRUE(s.measuring());
+    EXPECT_FALSE(s.measurement()) << "a new mode starts without points";
+    s.inject(ctrlClick(a));
+    ASSERT_TRUE(s.step());
+    ASSERT_TRUE(s.measurement());
+    EXPECT_FALSE(s.measurement()->b);
+    // A drag with Ctrl held after the click moves nothing while measuring.
+    InputState drag = ctrlClick(b);
+    drag.leftPressed = false;
+    s.inject(drag);
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.scene().instances[0].transform.m, before.m) << "measuring moved the part";
+    s.inject(ctrlClick(b));
+    ASSERT_TRUE(s.step());
+    ASSERT_TRUE(s.measurement() && s.measurement()->b);
+    EXPECT_NEAR(s.measurement()->distance, kSlot, kMeasureTolerance);
+
+    // A third pick starts a new measurement at that point.
+    s.inject(ctrlClick(b));
+    ASSERT_TRUE(s.step());
+    ASSERT_TRUE(s.measurement());
+    EXPECT_FALSE(s.measurement()->b);
+    EXPECT_NEAR(s.measurement()->a[0], kSlot / 2, kMeasureTolerance);
+    // ... and the next ends it: across the slot and along the faces, all three axes count.
+    s.inject(ctrlClick(wallPositionOf(s, {-kSlot / 2, -0.3, -0.4})));
+    ASSERT_TRUE(s.step());
+    ASSERT_TRUE(s.measurement() && s.measurement()->b);
+    EXPECT_NEAR(s.measurement()->distance, std::sqrt(kSlot * kSlot + 0.4 * 0.4 + 0.6 * 0.6), kMeasureTolerance);
+
+    // M leaves the mode and forgets the points.
+    s.inject(keyPress(GLFW_KEY_M));
+    ASSERT_TRUE(s.step());
+    EXPECT_FALSE(s.measuring());
+    EXPECT_FALSE(s.measurement());
+
+    // Esc leaves it too, and does not close the wall, also while it is held on.
+    s.inject(keyPress(GLFW_KEY_M));
+    s.inject(ctrlClick(a));
+    ASSERT_TRUE(s.step());
+    ASSERT_TRUE(s.measurement());
+    s.inject(escapePress());
+    ASSERT_TRUE(s.step()) << "the Esc that leaves measure mode closed the wall";
+    EXPECT_FALSE(s.measuring());
+    EXPECT_FALSE(s.measurement());
+    InputState held;
+    held.keyDown[GLFW_KEY_ESCAPE] = true;
+    s.inject(held);
+    ASSERT_TRUE(s.step()) << "holding that Esc closed the wall";
+    s.inject(InputState{});  // released
+    ASSERT_TRUE(s.step());
+    s.inject(escapePress());
+    EXPECT_FALSE(s.step()) << "out of measure mode, Esc closes the wall as before";
+
+    bool on = false, off = false;
+    for (const std::string& l : *lines) on = on || l.rfind("measure: on", 0) == 0, off = off || l == "measure: off";
+    EXPECT_TRUE(on && off);
+}
+
+TEST(WallSession, MeasuringTheBackgroundSetsNoPoint) {
+    const auto dir = test::displayScratchDir();
+    const auto file = test::writeText(dir / "slot.toml", slotSceneText({0, 0, 0}));
+    RunConfig c = sessionConfig(dir, file);
+    auto lines = std::make_shared<std::vector<std::string>>();
+    c.log = [lines](const std::string& line) { lines->push_back(line); };
+    WallSession s(c);
+    ASSERT_TRUE(s.step());
+    ASSERT_FALSE(s.pick(96, 1)) << "the top centre must be background";
+    EXPECT_FALSE(s.measurePick(wallPositionOf(s, {-kSlot / 2, 0.1, 0.2}).first, 60)) << "not measuring";
+    s.setMeasuring(true);
+    s.inject(ctrlClick({96, 1}));
+    ASSERT_TRUE(s.step());
+    EXPECT_FALSE(s.measurement()) << "a miss set point A";
+    auto said = [&](const std::string& line) { return std::find(lines->begin(), lines->end(), line) != lines->end(); };
+    EXPECT_TRUE(said("measure: nothing under the cursor, point A not set"));
+    EXPECT_TRUE(s.measurePick(wallPositionOf(s, {-kSlot / 2, 0.1, 0.2}).first, wallPositionOf(s, {-kSlot / 2, 0.1, 0.2}).second));
+    EXPECT_FALSE(s.measurePick(96, 1));
+    ASSERT_TRUE(s.measurement());
+    EXPECT_FALSE(s.measurement()->b) << "a miss set point B";
+    EXPECT_TRUE(said("measure: nothing under the cursor, point B not set"));
 }
 
 }  // namespace

@@ -132,6 +132,15 @@ struct RunSummary {
 // The lines `rtwall run` prints at the end.
 std::string describeSummary(const RunSummary& summary, double targetFps);
 
+// Measuring on the wall (key M, README "Measuring"): two picked surface points in the scene
+// FILE's coordinates (a rebased scene's `origin` added back, in double precision) and their
+// distance in scene units (scenes declare no unit).
+struct Measurement {
+    std::array<double, 3> a{};               // the first point
+    std::optional<std::array<double, 3>> b;  // the second, once picked
+    double distance = 0;                     // |b - a| once b is set
+};
+
 class WallSession {
 public:
     // Loads the scene and the wall, starts the master and the local clients, waits for them and,
@@ -163,6 +172,15 @@ public:
     SceneEdit applyEdit(const SceneDesc& edited);
     // The instance under wall pixel (x, y) for the viewer's camera.
     std::optional<PickResult> pick(double wallX, double wallY);
+    // Measure mode (key M toggles it, Esc leaves it): while it is on, a pick sets point A, the
+    // next point B (the distance goes to the log and the status line), the next a new A. The
+    // wall's Ctrl+click and a wand's button (issue 18) come here alike. measurePick is false
+    // (and sets nothing, and the log says so) where the ray hits nothing or the mode is off.
+    void setMeasuring(bool on);
+    bool measuring() const;
+    bool measurePick(double wallX, double wallY);
+    // The measurement under way: nothing before A is picked (and after the mode is left).
+    std::optional<Measurement> measurement() const;
     void showTileOwners(bool on);  // the false-colour view of who rendered each tile (key T)
     // Input as if from the wall's windows, applied at the next step() (keys, mouse, picking:
     // display.h's InputState): scripted control and tests; it works headless too.

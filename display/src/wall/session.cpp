@@ -517,6 +517,10 @@ void WallSession::setRenderSettings(const RenderSettings& settings) { impl_->liv
 void WallSession::setCodec(const CodecSettings& codec) { impl_->master->setCodec(codec); }
 SceneEdit WallSession::applyEdit(const SceneDesc& edited) { return impl_->applyEdit(edited); }
 std::optional<PickResult> WallSession::pick(double wallX, double wallY) { return impl_->input->pick(*impl_->live, wallX, wallY); }
+void WallSession::setMeasuring(bool on) { impl_->input->setMeasuring(on); }
+bool WallSession::measuring() const { return impl_->input->measuring(); }
+bool WallSession::measurePick(double wallX, double wallY) { return impl_->input->measurePick(*impl_->live, wallX, wallY); }
+std::optional<Measurement> WallSession::measurement() const { return impl_->input->measurement(); }
 void WallSession::showTileOwners(bool on) { impl_->input->showTileOwners(on); }
 void WallSession::inject(const InputState& input) { impl_->input->inject(input); }
 const WallFrame& WallSession::lastFrame() const { return impl_->shown; }

@@ -36,7 +36,7 @@ WallInput::WallInput(const WallConfig& wall, const CameraDesc& start, const Opti
         log_("wall '" + wall_.name + "': " + std::to_string(wall_.screens.size()) + " window" +
              (wall_.screens.size() == 1 ? "" : "s") + " (" + gl_->renderer() +
              "); keys: H status, T tile owners, Tab fly/orbit, 1-9 bookmarks (Ctrl+digit stores), R record, Ctrl+drag "
-             "moves an object, Esc quits");
+             "moves an object, M measure, Esc quits");
     else
         log_("wall '" + wall_.name + "': headless (" + whyHeadless_ + ")");
 }
@@ -65,6 +65,66 @@ std::optional<PickResult> WallInput::pick(LiveScene& scene, double wallX, double
     return scene.pick(camera(), wall_.width, wall_.height, wallX, wallY);
 }
 
+namespace {
+std::string pointText(const std::array<double, 3>& p) {
+    char text[128];
+    std::snprintf(text, sizeof text, "(%.6f, %.6f, %.6f)", p[0], p[1], p[2]);
+    return text;
+}
+}  // namespace
+
+void WallInput::setMeasuring(bool on) {
+    if (on == measuring_) return;
+    measuring_ = on;
+    measurement_.reset();
+    grabbed_.reset();
+    log_(on ? "measure: on (Ctrl+click point A, then B; M or Esc leaves)" : "measure: off");
+    present_.overlay = (showStatus_ || measuring_) ? &statusImage_ : nullptr;
+    statusImage_ = {};
+    refreshStatus();
+}
+
+bool WallInput::measurePick(LiveScene& scene, double wallX, double wallY) {
+    if (!measuring_) return false;
+    const bool newMeasurement = !measurement_ || measurement_->b;
+    const std::optional<PickResult> hit = pick(scene, wallX, wallY);
+    if (!hit) {
+        log_(std::string("measure: nothing under the cursor, point ") + (newMeasurement ? "A" : "B") + " not set");
+        return false;
+    }
+    // The hit point again from the ray, in double, with the rebased scene's origin added back:
+    // the float t Embree found (a few ulps, ~1e-7 of the distance from the eye) is then the only
+    // single-precision error, however far from the file's origin the model lies (README,
+    // "Measuring").
+    const Camera cam(camera(), wall_.width, wall_.height);
+    const Float3 o = cam.origin(), d = cam.direction(float(wallX), float(wallY));
+    const std::array<double, 3>& origin = scene.desc().origin;
+    const double t = hit->t;
+    const std::array<double, 3> p{origin[0] + (double(o.x) + t * double(d.x)), origin[1] + (double(o.y) + t * double(d.y)),
+                                  origin[2] + (double(o.z) + t * double(d.z))};
+    if (newMeasurement) {
+        measurement_ = Measurement{p, std::nullopt, 0.0};
+        log_("measure: A " + pointText(p) + ", Ctrl+click B");
+    } else {
+        // From the file's coordinates: adding an origin of 1e6 rounds by ~1e-10, far below
+        // the hit's own error.
+        const double dx = p[0] - measurement_->a[0], dy = p[1] - measurement_->a[1], dz = p[2] - measurement_->a[2];
+        measurement_->b = p;
+        measurement_->distance = std::sqrt(dx * dx + dy * dy + dz * dz);
+        log_(measureLine());
+    }
+    refreshStatus();
+    return true;
+}
+
+std::string WallInput::measureLine() const {
+    if (!measurement_) return "measure: Ctrl+click point A";
+    if (!measurement_->b) return "measure: A " + pointText(measurement_->a) + ", Ctrl+click B";
+    char distance[64];
+    std::snprintf(distance, sizeof distance, ": %.6f scene units", measurement_->distance);
+    return "measure: A " + pointText(measurement_->a) + " to B " + pointText(*measurement_->b) + distance;
+}
+
 bool WallInput::handle(LiveScene& scene, double dt) {
     std::vector<InputState> inputs;
     inputs.swap(injected_);
@@ -76,12 +136,21 @@ bool WallInput::handle(LiveScene& scene, double dt) {
 
 // One poll's input. A new key binding goes here.
 bool WallInput::apply(LiveScene& scene, const InputState& in, double dt) {
-    if (in.closeRequested || in.keyDown[GLFW_KEY_ESCAPE]) return false;
+    // Esc leaves measure mode first; the wall closes on the next press, not while that one is held.
+    for (int key : in.keysPressed)
+        if (key == GLFW_KEY_ESCAPE && measuring_) {
+            setMeasuring(false);
+            escapeHeld_ = true;
+        }
+    if (escapeHeld_ && !in.keyDown[GLFW_KEY_ESCAPE]) escapeHeld_ = false;
+    if (in.closeRequested || (in.keyDown[GLFW_KEY_ESCAPE] && !escapeHeld_)) return false;
     for (int key : in.keysPressed) {
+        if (key == GLFW_KEY_M) setMeasuring(!measuring_);
         if (key == GLFW_KEY_H) {
             showStatus_ = !showStatus_;
             statusImage_ = {};
-            present_.overlay = showStatus_ ? &statusImage_ : nullptr;
+            present_.overlay = (showStatus_ || measuring_) ? &statusImage_ : nullptr;
+            refreshStatus();
         }
         if (key == GLFW_KEY_T) present_.falseColour = !present_.falseColour;
     }
@@ -99,7 +168,13 @@ bool WallInput::apply(LiveScene& scene, const InputState& in, double dt) {
     if (moved) scene.setCamera(camera());
 
     // Ctrl+click picks the object under the cursor; dragging moves it parallel to the screen.
+    // While measuring the same click sets a point and moves nothing (a plain drag navigates, so
+    // a plain click would spend a point on every turn of the view).
     const bool ctrl = in.clickMods & GLFW_MOD_CONTROL;
+    if (measuring_) {
+        if (in.leftPressed && ctrl) measurePick(scene, in.wallX, in.wallY);
+        return true;
+    }
     if (options_.interactive && in.leftPressed && ctrl) {
         grabbed_ = pick(scene, in.wallX, in.wallY);
         if (grabbed_) {
@@ -131,7 +206,12 @@ void WallInput::show(const WallFrame& frame, const FrameReport& report, double f
     if (gl_) {
         gl_->present(frame, present_);
         statusClock_ += frameSeconds;
-        if (showStatus_ && statusClock_ >= 0.5) {
+        if (measuring_ && !showStatus_ && statusClock_ >= 0.5) {
+            // Measure mode alone: its line is the overlay and the title, and the log has had it.
+            statusClock_ = 0;
+            gl_->setStatus(measureLine());
+            statusImage_ = textImage(measureLine(), 2);
+        } else if (showStatus_ && statusClock_ >= 0.5) {
             statusClock_ = 0;
             char line[256];
             std::snprintf(line, sizeof line, "rtwall %.1f fps | %.2f MB/frame %s | late swaps %llu",
@@ -151,6 +231,10 @@ void WallInput::show(const WallFrame& frame, const FrameReport& report, double f
             if (!trackerLine_.empty()) {
                 status += " | " + trackerLine_;
                 overlay += "\n" + trackerLine_;
+            }
+            if (measuring_) {
+                status += " | " + measureLine();
+                overlay += "\n" + measureLine();
             }
             gl_->setStatus(status);
             statusImage_ = textImage(overlay, 2);  // shown from the next frame on

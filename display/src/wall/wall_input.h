@@ -7,6 +7,7 @@
 #include "live_scene.h"
 
 #include <rtwall/display.h>
+#include <rtwall/wall.h>
 
 #include <filesystem>
 #include <memory>
@@ -48,6 +49,11 @@ public:
     void setCamera(const CameraDesc& c);  // a camera path, orbit or scene edit moved it
     void showTileOwners(bool on) { present_.falseColour = on; }
     std::optional<PickResult> pick(LiveScene& scene, double wallX, double wallY);
+    // Measure mode (WallSession::setMeasuring and measurePick say what it does).
+    void setMeasuring(bool on);
+    bool measuring() const { return measuring_; }
+    bool measurePick(LiveScene& scene, double wallX, double wallY);
+    const std::optional<Measurement>& measurement() const { return measurement_; }
     // Shows a frame the wall's size (or smaller: a frame rendered at a fraction of the
     // resolution is shown upscaled).
     void show(const WallFrame& frame, const FrameReport& report, double frameSeconds);
@@ -71,6 +77,11 @@ private:
     bool apply(LiveScene& scene, const InputState& in, double dt);
     std::optional<PickResult> grabbed_;
     Transform grabbedStart_;
+    bool measuring_ = false;
+    bool escapeHeld_ = false;  // the Esc that left measure mode: held on, it does not close the wall
+    std::optional<Measurement> measurement_;
+    std::string measureLine() const;  // for the status line and overlay while measuring
+    void refreshStatus() { statusClock_ = 1e9; }  // the overlay shows a change at the next frame
 };
 
 }  // namespace rtwall::wall
