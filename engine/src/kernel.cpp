@@ -66,14 +66,15 @@ template <> struct Packet<16> {
 };
 
 template <class RayK>
-inline void setRay(RayK& r, int k, const Float3& org, const Float3& dir, float tfar, uint32_t mask = kMaskAll) {
+inline void setRay(RayK& r, int k, const Float3& org, const Float3& dir, float tnear, float tfar,
+                   uint32_t mask = kMaskAll) {
     r.org_x[k] = org.x;
     r.org_y[k] = org.y;
     r.org_z[k] = org.z;
     r.dir_x[k] = dir.x;
     r.dir_y[k] = dir.y;
     r.dir_z[k] = dir.z;
-    r.tnear[k] = 0.0f;
+    r.tnear[k] = tnear;
     r.tfar[k] = tfar;
     r.time[k] = 0.0f;
     r.mask[k] = mask;
@@ -94,6 +95,49 @@ template <class RayHitK> inline Hit hitOf(const RayHitK& rh, int k) {
     return h;
 }
 
+// Section planes: each ray's interval clipped to the kept region, the same for every kernel
+// (they all trace the tasks this wrote). Nothing to do, and nothing done, without planes.
+void clipRays(const SectionState& c, RayTask* rays, size_t n) {
+    if (c.count == 0) return;
+    for (size_t i = 0; i < n; ++i) {
+        RayTask& r = rays[i];
+        int enter = -1;
+        if (!clipToSections(c, r.org, r.dir, r.tnear, r.tfar, enter)) r.tnear = INFINITY;
+        r.enter = enter;
+    }
+}
+
+void clipRays(const SectionState& c, ShadowTask* rays, size_t n) {
+    if (c.count == 0) return;
+    for (size_t i = 0; i < n; ++i) {
+        ShadowTask& r = rays[i];
+        int enter = -1;
+        if (!clipToSections(c, r.org, r.dir, r.tnear, r.tfar, enter)) r.tnear = INFINITY;
+    }
+}
+
+// A ray that entered the kept region through a plane and then first met the back of a surface
+// was inside a closed part where it crossed the plane: it sees the plane's cap there instead.
+inline bool seesCap(const Scene::Impl& s, int enter, uint32_t inst, const Float3& ng, const Float3& dir) {
+    if (enter < 0 || !s.sections.caps[enter] || inst == kNoHit) return false;
+    return !(dot(transformNormal(s.instances[inst].normalMatrix, ng), dir) < 0.0f);
+}
+
+void capHits(const Scene::Impl& s, const RayTask* rays, Hit* hits, size_t n) {
+    if (s.sections.count == 0) return;
+    for (size_t i = 0; i < n; ++i) {
+        const RayTask& r = rays[i];
+        Hit& h = hits[i];
+        if (!seesCap(s, r.enter, h.inst, h.ng, r.dir)) continue;
+        h.t = r.tnear;
+        h.u = h.v = 0.0f;
+        h.ng = -s.sections.n[r.enter];
+        h.inst = kCapHit;
+        h.prim = uint32_t(r.enter);
+        h.geom = 0;
+    }
+}
+
 void initContext(RTCIntersectContext& ctx, bool coherent) {
     rtcInitIntersectContext(&ctx);
     ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
@@ -109,9 +153,9 @@ void traceClosestPacket(RTCScene scene, const RayTask* rays, Hit* hits, size_t n
     for (size_t base = 0; base < n; base += K) {
         const int count = int(std::min<size_t>(K, n - base));
         for (int k = 0; k < K; ++k) {
-            valid[k] = k < count ? -1 : 0;
             const RayTask& t = rays[base + (k < count ? k : 0)];
-            setRay(rh.ray, k, t.org, t.dir, t.tfar, mask);
+            valid[k] = k < count && t.tnear <= t.tfar ? -1 : 0;  // an empty interval misses
+            setRay(rh.ray, k, t.org, t.dir, t.tnear, t.tfar, mask);
             rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
             rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
@@ -126,13 +170,17 @@ void traceClosestSingle(RTCScene scene, const RayTask* rays, Hit* hits, size_t n
     alignas(16) RTCRayHit rh;
     for (size_t i = 0; i < n; ++i) {
         const RayTask& t = rays[i];
+        if (!(t.tnear <= t.tfar)) {  // an empty interval misses, as in the packet kernel
+            hits[i] = Hit{t.tfar, 0.0f, 0.0f, {0, 0, 0}, kNoHit, RTC_INVALID_GEOMETRY_ID, RTC_INVALID_GEOMETRY_ID};
+            continue;
+        }
         rh.ray.org_x = t.org.x;
         rh.ray.org_y = t.org.y;
         rh.ray.org_z = t.org.z;
         rh.ray.dir_x = t.dir.x;
         rh.ray.dir_y = t.dir.y;
         rh.ray.dir_z = t.dir.z;
-        rh.ray.tnear = 0.0f;
+        rh.ray.tnear = t.tnear;
         rh.ray.tfar = t.tfar;
         rh.ray.time = 0.0f;
         rh.ray.mask = mask;
@@ -162,9 +210,9 @@ void traceShadowPacket(RTCScene scene, const ShadowTask* rays, uint8_t* occluded
     for (size_t base = 0; base < n; base += K) {
         const int count = int(std::min<size_t>(K, n - base));
         for (int k = 0; k < K; ++k) {
-            valid[k] = k < count ? -1 : 0;
             const ShadowTask& t = rays[base + (k < count ? k : 0)];
-            setRay(r, k, t.org, t.dir, t.tfar, mask);
+            valid[k] = k < count && t.tnear <= t.tfar ? -1 : 0;  // an empty interval is not occluded
+            setRay(r, k, t.org, t.dir, t.tnear, t.tfar, mask);
         }
         P::occluded(valid, scene, &ctx, &r);
         for (int k = 0; k < count; ++k) occluded[base + k] = r.tfar[k] == -INFINITY;
@@ -177,13 +225,17 @@ void traceShadowSingle(RTCScene scene, const ShadowTask* rays, uint8_t* occluded
     alignas(16) RTCRay r;
     for (size_t i = 0; i < n; ++i) {
         const ShadowTask& t = rays[i];
+        if (!(t.tnear <= t.tfar)) {
+            occluded[i] = 0;
+            continue;
+        }
         r.org_x = t.org.x;
         r.org_y = t.org.y;
         r.org_z = t.org.z;
         r.dir_x = t.dir.x;
         r.dir_y = t.dir.y;
         r.dir_z = t.dir.z;
-        r.tnear = 0.0f;
+        r.tnear = t.tnear;
         r.tfar = t.tfar;
         r.time = 0.0f;
         r.mask = mask;
@@ -229,6 +281,11 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
     initContext(ctx, true);
     alignas(64) typename P::RayHit rh;
     alignas(64) int valid[K];
+    alignas(64) int traced[K];  // section planes: the lanes with something left to trace
+    int enter[K];
+    const SectionState& sections = s.sections;
+    const bool clipping = sections.count > 0;
+    const int* traceValid = clipping ? traced : valid;
     uint32_t pixel[K], seed[K] = {}, rouletteSeed[K] = {};
     float ox[K], oy[K];
     for (int k = 0; k < K; ++k) {
@@ -274,14 +331,25 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
                             rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
                             rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
                         }
+                        if (clipping)
+                            for (int k = 0; k < K; ++k) {
+                                float t0 = 0.0f, t1 = INFINITY;
+                                enter[k] = -1;
+                                const Float3 d{rh.ray.dir_x[k], rh.ray.dir_y[k], rh.ray.dir_z[k]};
+                                const bool kept = clipToSections(sections, org, d, t0, t1, enter[k]);
+                                traced[k] = valid[k] && kept ? -1 : 0;
+                                rh.ray.tnear[k] = kept ? t0 : 0.0f;
+                                rh.ray.tfar[k] = kept ? t1 : INFINITY;
+                            }
                         if constexpr (kUsePackets) {
-                            P::intersect(valid, s.top, &ctx, &rh);
+                            P::intersect(traceValid, s.top, &ctx, &rh);
                         } else {
                             for (int k = 0; k < K; ++k) {
-                                if (!valid[k]) continue;
+                                if (!traceValid[k]) continue;
                                 RTCRayHit one;
-                                one.ray = {rh.ray.org_x[k], rh.ray.org_y[k], rh.ray.org_z[k], 0.0f, rh.ray.dir_x[k],
-                                           rh.ray.dir_y[k], rh.ray.dir_z[k], 0.0f, INFINITY, kMaskAll, 0, 0};
+                                one.ray = {rh.ray.org_x[k], rh.ray.org_y[k], rh.ray.org_z[k], rh.ray.tnear[k],
+                                           rh.ray.dir_x[k], rh.ray.dir_y[k], rh.ray.dir_z[k], 0.0f, rh.ray.tfar[k],
+                                           kMaskAll, 0, 0};
                                 one.hit.geomID = RTC_INVALID_GEOMETRY_ID;
                                 one.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
                                 rtcIntersect1(s.top, &ctx, &one);
@@ -296,6 +364,21 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
                                 rh.hit.instID[0][k] = one.hit.instID[0];
                             }
                         }
+                        if (clipping)
+                            for (int k = 0; k < K; ++k) {
+                                if (!traced[k] || rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+                                const Float3 ng{rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]};
+                                const Float3 d{rh.ray.dir_x[k], rh.ray.dir_y[k], rh.ray.dir_z[k]};
+                                if (!seesCap(s, enter[k], rh.hit.instID[0][k], ng, d)) continue;
+                                const Float3 n = -sections.n[enter[k]];
+                                rh.ray.tfar[k] = rh.ray.tnear[k];
+                                rh.hit.Ng_x[k] = n.x;
+                                rh.hit.Ng_y[k] = n.y;
+                                rh.hit.Ng_z[k] = n.z;
+                                rh.hit.instID[0][k] = kCapHit;
+                                rh.hit.primID[k] = uint32_t(enter[k]);
+                                rh.hit.geomID[k] = 0;
+                            }
                         if (eyeLight) {
                             shadeEyeLightPacket<K>(shading, rh, valid, pixel, sampleWeight, sc.accum.data());
                             continue;
@@ -349,6 +432,7 @@ void traceShadows(const Tracer& tracer, const ShadingContext& shading, Scratch& 
     const Scene::Impl& s = shading.scene;
     sc.occluded.resize(sc.shadows.size());
     const uint32_t firstMask = s.anyShadowTransparent ? kMaskOpaque : kMaskAll;
+    clipRays(s.sections, sc.shadows.data(), sc.shadows.size());
     tracer.shadow(s.top, sc.shadows.data(), sc.occluded.data(), sc.shadows.size(), firstMask, s.coherentOcclusion);
     stats.shadowRays += sc.shadows.size();
     if (trackRays)
@@ -368,7 +452,9 @@ void traceShadows(const Tracer& tracer, const ShadingContext& shading, Scratch& 
             sc.walkRays[i] = RayTask{t.org, t.dir, t.tfar, t.contribution, t.pixel, 0, 0, 0};
         }
         sc.hits.resize(sc.walk.size());
+        clipRays(s.sections, sc.walkRays.data(), sc.walkRays.size());
         tracer.closest(s.top, sc.walkRays.data(), sc.hits.data(), sc.walk.size(), false, kMaskShadowTransparent);
+        capHits(s, sc.walkRays.data(), sc.hits.data(), sc.walk.size());
         stats.shadowRays += sc.walk.size();
         sc.walkNext.clear();
         for (size_t i = 0; i < sc.walk.size(); ++i) {
@@ -378,6 +464,7 @@ void traceShadows(const Tracer& tracer, const ShadingContext& shading, Scratch& 
                 sc.accum[t.pixel] += t.contribution;
                 continue;
             }
+            if (hit.inst == kCapHit) continue;  // caps are opaque
             const ShadowPass pass = shadowPassAt(shading, t, hit);
             t.contribution = t.contribution * pass.transmittance;
             if (!(maxComponent(t.contribution) > 0.0f)) continue;
@@ -570,7 +657,9 @@ TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileR
         sc.rays.swap(sc.next);
         sc.next.clear();
         sc.hits.resize(sc.rays.size());
+        clipRays(s.sections, sc.rays.data(), sc.rays.size());
         tracer.closest(s.top, sc.rays.data(), sc.hits.data(), sc.rays.size(), false, kMaskAll);
+        capHits(s, sc.rays.data(), sc.hits.data(), sc.rays.size());
         stats.rays += sc.rays.size();
         if (trackDepth)
             for (const RayTask& r : sc.rays)

@@ -238,6 +238,46 @@ void updateShadowTransparency(Scene::Impl& s) {
 
 Scene::Impl::~Impl() = default;
 
+namespace {
+
+void checkSection(uint32_t index, const SectionPlane& plane) {
+    const Float3& p = plane.point;
+    const Float3& n = plane.normal;
+    const Color& c = plane.capColor;
+    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(n.x) && std::isfinite(n.y) &&
+          std::isfinite(n.z) && std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z)))
+        throw std::invalid_argument("section " + std::to_string(index) + " is not finite");
+    if (!(n.x * n.x + n.y * n.y + n.z * n.z > 0.0f))
+        throw std::invalid_argument("section " + std::to_string(index) + " has a zero normal");
+}
+
+// desc.sections as the kernel reads them, and a cap material per enabled plane. O(kMaxSections):
+// nothing else in the scene depends on the planes.
+void updateSections(Scene::Impl& s) {
+    SectionState st;
+    std::vector<std::unique_ptr<MaterialModel>> caps;
+    for (uint32_t i = 0; i < uint32_t(kMaxSections); ++i) {
+        const SectionPlane& plane = s.desc.sections[i];
+        checkSection(i, plane);
+        if (!plane.enabled) continue;
+        const Float3 n = normalize(plane.normal);
+        st.n[st.count] = n;
+        st.d[st.count] = dot(n, plane.point);
+        st.caps[st.count] = plane.caps;
+        st.capColor[st.count] = plane.capColor;
+        Material cap;
+        cap.name = "section cap " + std::to_string(i);
+        cap.type = MaterialType::Lambert;
+        cap.color = plane.capColor;
+        caps.push_back(makeMaterialModel(cap));
+        ++st.count;
+    }
+    s.sections = st;
+    s.capModels = std::move(caps);
+}
+
+}  // namespace
+
 Scene::Scene(const SceneDesc& desc) : Scene(desc, ProgressFn{}) {}
 
 Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::make_unique<Impl>()) {
@@ -261,6 +301,7 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
             s.models.push_back(makeMaterialModel(m));
             anyAlpha |= s.models.back()->alphaMasked();
         }
+        updateSections(s);
         std::vector<Bounds3> meshBounds(s.desc.meshes.size());
         for (size_t i = 0; i < s.desc.meshes.size(); ++i) meshBounds[i] = s.desc.meshes[i].mesh->bounds();
         s.meshScenes.reserve(s.desc.meshes.size());
@@ -418,6 +459,16 @@ void Scene::setLight(uint32_t light, const Light& value) {
     s.desc.lights[light] = value;
     s.randomContent = samplesRandomly(s.desc);
     findLightFaces(s);
+}
+
+void Scene::setSection(uint32_t index, const SectionPlane& plane) {
+    Impl& s = *impl_;
+    if (index >= uint32_t(kMaxSections))
+        throw std::out_of_range("section " + std::to_string(index) + " does not exist (at most " +
+                                std::to_string(kMaxSections) + ")");
+    checkSection(index, plane);  // before anything changes
+    s.desc.sections[index] = plane;
+    updateSections(s);
 }
 
 void Scene::commit() {

@@ -534,6 +534,24 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
         lightPositions.push_back(position);
     });
 
+    // Section planes: slot i is the i-th [[section]], in the file's coordinates until the rebase.
+    std::vector<std::array<double, 3>> sectionPoints;
+    forEachTable(top, file, "section", [&](Reader& r, const toml::table&) {
+        if (sectionPoints.size() == size_t(kMaxSections))
+            r.fail(nullptr, "more than " + std::to_string(kMaxSections) + " [[section]] planes (the renderer clips by at most " +
+                                std::to_string(kMaxSections) + ")");
+        SectionPlane p;
+        const std::array<double, 3> point = r.vec3d("point", {}, true);
+        p.normal = r.vec3("normal", {}, true);
+        if (dot(p.normal, p.normal) == 0.0f) r.fail(r.find("normal"), "key 'normal' must not be zero");
+        p.capColor = r.vec3("cap_color", p.capColor);
+        checkUnit(r, "cap_color", p.capColor);
+        p.caps = r.boolean("caps", p.caps);
+        p.enabled = r.boolean("enabled", true);
+        scene.sections[sectionPoints.size()] = p;
+        sectionPoints.push_back(point);
+    });
+
     std::vector<std::array<double, 3>> cameraPositions, cameraTargets;
     forEachTable(top, file, "camera", [&](Reader& r, const toml::table&) {
         CameraDesc c;
@@ -563,6 +581,7 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
     }
     for (size_t i = 0; i < scene.lights.size(); ++i)
         if (scene.lights[i].type != LightType::Directional) scene.lights[i].position = rel(lightPositions[i]);
+    for (size_t i = 0; i < sectionPoints.size(); ++i) scene.sections[i].point = rel(sectionPoints[i]);
     for (size_t i = 0; i < scene.cameras.size(); ++i) {
         scene.cameras[i].position = rel(cameraPositions[i]);
         scene.cameras[i].lookAt = rel(cameraTargets[i]);

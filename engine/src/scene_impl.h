@@ -102,6 +102,45 @@ bool coherentOcclusionIsSafe(RTCDevice device);
 // change.
 void findLightFaces(Scene::Impl& s);
 
+// The enabled section planes as the kernel reads them (SceneDesc::sections compacted): a point x
+// is kept when dot(n, x) >= d for every plane. The ray interval is clipped to the kept region
+// (convex, so one interval) before Embree sees the ray: every ray kind and both kernels clip the
+// same way, instancing cannot get in the way, and no BVH changes when a plane moves.
+struct SectionState {
+    int count = 0;
+    Float3 n[kMaxSections] = {};  // unit normals, towards the kept side
+    float d[kMaxSections] = {};
+    bool caps[kMaxSections] = {};
+    Color capColor[kMaxSections] = {};
+};
+
+// The ray interval [t0, t1] clipped to the kept region; false when nothing of it is left. `enter`
+// becomes the plane through which the ray enters the kept region at t0 > its old value (the
+// plane a cap would lie on), or stays -1 when it starts inside.
+inline bool clipToSections(const SectionState& c, const Float3& org, const Float3& dir, float& t0, float& t1,
+                           int& enter) {
+    for (int i = 0; i < c.count; ++i) {
+        const Float3& n = c.n[i];
+        const float dist = n.x * org.x + n.y * org.y + n.z * org.z - c.d[i];
+        const float dn = n.x * dir.x + n.y * dir.y + n.z * dir.z;
+        if (dn > 0.0f) {
+            if (dist < 0.0f) {
+                const float t = -dist / dn;
+                if (t > t0) {
+                    t0 = t;
+                    enter = i;
+                }
+            }
+        } else if (dn < 0.0f) {
+            const float t = dist / -dn;  // negative when the origin is cut away: empty
+            if (t < t1) t1 = t;
+        } else if (dist < 0.0f) {
+            return false;  // parallel to the plane on its cut-away side
+        }
+    }
+    return t0 <= t1;
+}
+
 struct Scene::Impl {
     SceneDesc desc;  // meshes are shared pointers: no second copy of any geometry
     std::string lastError;  // written by Embree's error callback
@@ -125,6 +164,9 @@ struct Scene::Impl {
     bool coherentOcclusion = true;
     std::vector<LightFace> lightFaces;     // per desc.lights entry (findLightFaces)
     bool anyLightFace = false;             // some entry of lightFaces is not None
+    SectionState sections;                 // the enabled planes of desc.sections
+    std::vector<std::unique_ptr<MaterialModel>> capModels;  // per sections entry: Lambert of its cap colour
+    InstanceData capInstance;              // what a cap's surface point names as its instance (no mesh)
 
     ~Impl();
 };

@@ -81,10 +81,21 @@ void shadeHit(const ShadingContext& ctx, const RayTask& ray, const Hit& hit, Col
         pixel += ray.weight * ctx.settings.background;
         return;
     }
+    ShadeContext c(ctx, pixel, shadows, next);
+    if (hit.inst == kCapHit) {
+        // A section plane's cap: a flat opaque surface facing the cut-away side (the ray came
+        // from there), lit and shadowed like any other.
+        SurfacePoint sp;
+        sp.p = ray.org + ray.dir * hit.t;
+        sp.t = hit.t;
+        sp.ng = sp.ns = hit.ng;
+        sp.instance = &ctx.scene.capInstance;
+        ctx.scene.capModels[hit.prim]->shade(c, ray, sp);
+        return;
+    }
     const InstanceData& inst = ctx.scene.instances[hit.inst];
     const MaterialModel& model = *ctx.scene.models[inst.material];
     const SurfacePoint sp = surfaceAt(inst, model, ray.org, ray.dir, hit);
-    ShadeContext c(ctx, pixel, shadows, next);
     model.shade(c, ray, sp);
 }
 

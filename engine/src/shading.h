@@ -12,6 +12,8 @@
 namespace rtwall {
 
 inline constexpr uint32_t kNoHit = 0xFFFFFFFFu;
+// Hit::inst of a section plane's cap; Hit::prim is then the plane's index in Impl::sections.
+inline constexpr uint32_t kCapHit = 0xFFFFFFFEu;
 
 // Embree ray masks: shadow rays first test only opaque instances with the fast occlusion
 // query, then walk the shadow-transparent ones (glass, volumes) hit by hit.
@@ -36,6 +38,10 @@ struct RayTask {
     // (a ray that went on through a volume keeps its direction and its density).
     float bsdfPdf = 0.0f;
     float travelled = 0.0f;
+    // Section planes (clipRays in kernel.cpp): where the traced interval starts (tnear > tfar:
+    // nothing of the ray is kept), and the plane it enters the kept region through (-1: none).
+    float tnear = 0.0f;
+    int32_t enter = -1;
 };
 
 struct Hit {
@@ -51,6 +57,7 @@ struct ShadowTask {
     float tfar;
     Color contribution;  // added to the pixel if the light is visible, times what passes
     uint32_t pixel;
+    float tnear = 0.0f;  // section planes, as RayTask::tnear
 };
 
 struct ShadingContext {
@@ -76,6 +83,16 @@ inline void shadeEyeLightPacket(const ShadingContext& ctx, const RayHitK& rh, co
                                 float weight, Color* accum) {
     alignas(64) float nx[K], ny[K], nz[K], cr[K], cg[K], cb[K], cosine[K];
     for (int k = 0; k < K; ++k) {
+        if (valid[k] && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID && rh.hit.instID[0][k] == kCapHit) {
+            nx[k] = rh.hit.Ng_x[k];
+            ny[k] = rh.hit.Ng_y[k];
+            nz[k] = rh.hit.Ng_z[k];
+            const Color& cap = ctx.scene.sections.capColor[rh.hit.primID[k]];
+            cr[k] = cap.x;
+            cg[k] = cap.y;
+            cb[k] = cap.z;
+            continue;
+        }
         if (!valid[k] || rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
             // A miss (or an unused lane) takes the background at cosine 1.
             nx[k] = rh.ray.dir_x[k];

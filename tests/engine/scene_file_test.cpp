@@ -65,6 +65,40 @@ TEST(SceneFile, EveryShippedConfigLoads) {
     EXPECT_GT(count, 0);
 }
 
+// [[section]]: slot i is the i-th table; points are rebased with everything else, in double.
+TEST(SceneFile, LoadsSectionPlanesInTheRebasedCoordinates) {
+    const auto file = writeFile(scratchDir() / "s.toml", R"(
+[[mesh]]
+name = "ball"
+shape = "sphere"
+[[instance]]
+mesh = "ball"
+translate = [1000000.5, 0, -200000.25]
+[[section]]
+point = [1000000.75, 2, -200000.25]
+normal = [0, 0, 2]
+cap_color = [0.2, 0.4, 0.6]
+[[section]]
+point = [0, 0, 0]
+normal = [1, 0, 0]
+enabled = false
+caps = false
+)");
+    const SceneDesc s = loadSceneFile(file);
+    ASSERT_NE(s.origin[0], 0.0) << "the scene is far from the origin: rebased";
+    const SectionPlane& a = s.sections[0];
+    EXPECT_TRUE(a.enabled);
+    EXPECT_TRUE(a.caps);
+    EXPECT_FLOAT_EQ(float(s.origin[0] + double(a.point.x)), 1000000.75f);
+    EXPECT_DOUBLE_EQ(double(a.point.x), 1000000.75 - s.origin[0]) << "subtracted in double, exact";
+    EXPECT_DOUBLE_EQ(double(a.point.z), -200000.25 - s.origin[2]);
+    EXPECT_EQ(a.normal, (Float3{0, 0, 2}));
+    EXPECT_EQ(a.capColor, (Color{0.2f, 0.4f, 0.6f}));
+    EXPECT_FALSE(s.sections[1].enabled);
+    EXPECT_FALSE(s.sections[1].caps);
+    for (int i = 2; i < kMaxSections; ++i) EXPECT_EQ(s.sections[i], SectionPlane{});
+}
+
 TEST(SceneFile, SameMeshFileIsLoadedOnce) {
     const auto dir = scratchDir();
     std::filesystem::copy_file(test::sourceDir() / "configs/meshes/knot.ply", dir / "knot.ply");
@@ -123,6 +157,22 @@ INSTANTIATE_TEST_SUITE_P(
         BadScene{"DuplicateName", "[[mesh]]\nname = \"m\"\nshape = \"box\"\n[[mesh]]\nname = \"m\"\nshape = \"box\"\n",
                  "5", "used twice"},
         BadScene{"TableWhereArrayExpected", "[mesh]\nname = \"m\"\n", "1", "[[mesh]]"},
+        // Section planes (issue 20).
+        BadScene{"SectionUnknownKey", "[[section]]\npoint = [0,0,0]\nnormal = [1,0,0]\ncap_colour = [1,0,0]\n", "4",
+                 "unknown key 'cap_colour'"},
+        BadScene{"SectionWithoutNormal", "[[section]]\npoint = [0,0,0]\n", "1", "missing required key 'normal'"},
+        BadScene{"SectionZeroNormal", "[[section]]\npoint = [0,0,0]\nnormal = [0,0,0]\n", "3",
+                 "key 'normal' must not be zero"},
+        BadScene{"SectionCapColorAboveOne", "[[section]]\npoint = [0,0,0]\nnormal = [0,1,0]\ncap_color = [0,3,0]\n", "4",
+                 "key 'cap_color': components must lie in [0, 1]"},
+        BadScene{"SectionEnabledNotABoolean", "[[section]]\npoint = [0,0,0]\nnormal = [0,1,0]\nenabled = 1\n", "4",
+                 "key 'enabled': expected true or false"},
+        BadScene{"SevenSections",
+                 "[[section]]\npoint = [0,0,0]\nnormal = [1,0,0]\n[[section]]\npoint = [0,0,0]\nnormal = [1,0,0]\n"
+                 "[[section]]\npoint = [0,0,0]\nnormal = [1,0,0]\n[[section]]\npoint = [0,0,0]\nnormal = [1,0,0]\n"
+                 "[[section]]\npoint = [0,0,0]\nnormal = [1,0,0]\n[[section]]\npoint = [0,0,0]\nnormal = [1,0,0]\n"
+                 "[[section]]\npoint = [0,0,0]\nnormal = [1,0,0]\n",
+                 "19", "more than 6 [[section]] planes"},
         BadScene{"ColorAboveOne", "[[material]]\nname = \"m\"\ncolor = [2, 0, 0]\n", "3", "[0, 1]"},
         BadScene{"DegenerateCamera", "[[camera]]\nposition = [0,0,0]\nlook_at = [0,0,0]\n", "3", "own position"},
         BadScene{"HugeShape", "[[mesh]]\nname = \"k\"\nshape = \"torus_knot\"\nsegments = 1000000\nsides = 4000\n", "4",

@@ -212,6 +212,22 @@ struct BvhSettings {
     bool operator==(const BvhSettings&) const = default;
 };
 
+// A section plane ([[section]] in scene files, issue 20): geometry on the side its normal points
+// away from is cut off for every ray (camera, shadow, reflection, refraction, GI), and where the
+// plane cuts through a closed part the cut shows a cap: an opaque Lambert surface of `capColor`
+// facing the cut-away side. Coordinates are the scene's (relative to SceneDesc::origin, like
+// lights). Up to kMaxSections; a point is kept when it lies on the kept side of every enabled one.
+struct SectionPlane {
+    bool enabled = false;
+    Float3 point{0, 0, 0};            // a point on the plane
+    Float3 normal{1, 0, 0};           // towards the kept side; non-zero (the engine normalises it)
+    Color capColor{0.8f, 0.1f, 0.1f}; // linear RGB of the cap
+    bool caps = true;                 // false: the cut stays open (insides are seen)
+    bool operator==(const SectionPlane&) const = default;
+};
+inline constexpr int kMaxSections = 6;
+using SectionPlanes = std::array<SectionPlane, kMaxSections>;
+
 struct SceneDesc {
     std::filesystem::path sourceFile;  // empty when built in code
     // Where this description's coordinate origin lies in the scene file's world, in double
@@ -227,6 +243,7 @@ struct SceneDesc {
     std::vector<Light> lights;
     std::vector<CameraDesc> cameras;
     RenderSettings settings;
+    SectionPlanes sections;  // slot i is plane i; disabled slots cut nothing
     // Contents of texture image and volume files by the path a material names: a path found
     // here is decoded from these bytes, not opened (a render client gets them from the master).
     std::map<std::string, std::shared_ptr<const std::vector<uint8_t>>> files;
@@ -331,6 +348,10 @@ public:
     // render client gets them from the master by hash.
     void addFile(const std::string& path, std::shared_ptr<const std::vector<uint8_t>> bytes);
     void setLight(uint32_t light, const Light& value);
+    // O(1): no BVH or instance is touched, the kernel clips rays against the planes. Throws
+    // std::out_of_range for a slot >= kMaxSections, std::invalid_argument for a plane that is not
+    // finite or has a zero normal.
+    void setSection(uint32_t index, const SectionPlane& plane);
     void commit();
 
     // What the scene recognised as the visible faces of its area lights, as of the last change:
