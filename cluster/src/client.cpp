@@ -559,6 +559,7 @@ private:
     }
     void apply(const LightChange& c) { scene_->setLight(c.light, c.value); }
     void apply(const SettingsChange& c) { setRenderSettings(c.settings); }
+    void apply(const SectionChange& c) { scene_->setSection(c.section, c.value); }
 
     void onFrameBegin(const FrameBegin& fb) {
         // Frames only move forward. An older FrameBegin, or the one being rendered again, is a

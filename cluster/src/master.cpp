@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <condition_variable>
@@ -31,6 +32,7 @@
 #include <optional>
 #include <random>
 #include <set>
+#include <stdexcept>
 #include <thread>
 #include <utility>
 
@@ -1277,6 +1279,18 @@ void Master::setMaterial(uint32_t material, const Material& value) {
 }
 void Master::setLight(uint32_t light, const Light& value) { pushUpdate(*impl_, LightChange{light, value}); }
 void Master::setRenderSettings(const RenderSettings& settings) { pushUpdate(*impl_, SettingsChange{settings}); }
+void Master::setSection(uint32_t section, const SectionPlane& plane) {
+    // What the clients' decoders would refuse is refused here, before anything changed.
+    const Float3 &p = plane.point, &n = plane.normal, &c = plane.capColor;
+    for (float v : {p.x, p.y, p.z, n.x, n.y, n.z})
+        if (!std::isfinite(v)) throw std::invalid_argument("section " + std::to_string(section) + " is not finite");
+    if (!(n.x * n.x + n.y * n.y + n.z * n.z > 0.0f))
+        throw std::invalid_argument("section " + std::to_string(section) + " has a zero normal");
+    for (float v : {c.x, c.y, c.z})
+        if (!(v >= 0.0f && v <= 1.0f))
+            throw std::invalid_argument("section " + std::to_string(section) + ": cap colour outside [0, 1]");
+    pushUpdate(*impl_, SectionChange{section, plane});
+}
 
 void Master::setCodec(const CodecSettings& codec) {
     Impl& s = *impl_;

@@ -237,6 +237,27 @@ void read(Reader& r, Light& l) {
     l.twoSided = r.boolean();
 }
 
+RTWALL_WIRE_FIELDS(SectionPlane, 5);
+void write(Writer& w, const SectionPlane& p) {
+    w.boolean(p.enabled);
+    write(w, p.point);
+    write(w, p.normal);
+    write(w, p.capColor);
+    w.boolean(p.caps);
+}
+
+void read(Reader& r, SectionPlane& p) {
+    p.enabled = r.boolean();
+    p.point = readFloat3(r);
+    p.normal = readFloat3(r);
+    for (const Float3& v : {p.point, p.normal})
+        if (!(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z))) fail("section plane is not finite");
+    if (!(p.normal.x * p.normal.x + p.normal.y * p.normal.y + p.normal.z * p.normal.z > 0.0f))
+        fail("section plane normal is zero");
+    p.capColor = readUnitColor(r, "section cap colour");
+    p.caps = r.boolean();
+}
+
 RTWALL_WIRE_FIELDS(CameraDesc, 6);
 RTWALL_WIRE_FIELDS(ProjectionWindow, 3);  // written with the camera
 void write(Writer& w, const CameraDesc& c) {
@@ -428,6 +449,17 @@ RTWALL_WIRE_FIELDS(SettingsChange, 1);
 void write(Writer& w, const SettingsChange& c) { write(w, c.settings); }
 void read(Reader& r, SettingsChange& c) { read(r, c.settings); }
 
+RTWALL_WIRE_FIELDS(SectionChange, 2);
+void write(Writer& w, const SectionChange& c) {
+    w.u32(c.section);
+    write(w, c.value);
+}
+void read(Reader& r, SectionChange& c) {
+    c.section = r.u32();
+    if (c.section >= uint32_t(kMaxSections)) fail("section " + std::to_string(c.section) + " does not exist");
+    read(r, c.value);
+}
+
 // A change is its variant index (u8) and then the alternative.
 void write(Writer& w, const Change& c) {
     w.u8(uint8_t(c.index()));
@@ -442,13 +474,14 @@ template <size_t I> void readAlternative(Reader& r, Change& c) {
 
 void read(Reader& r, Change& c) {
     const uint8_t kind = r.u8();
-    static_assert(std::variant_size_v<Change> == 5, "a new change kind needs a case here");
+    static_assert(std::variant_size_v<Change> == 6, "a new change kind needs a case here");
     switch (kind) {
         case 0: readAlternative<0>(r, c); break;
         case 1: readAlternative<1>(r, c); break;
         case 2: readAlternative<2>(r, c); break;
         case 3: readAlternative<3>(r, c); break;
         case 4: readAlternative<4>(r, c); break;
+        case 5: readAlternative<5>(r, c); break;
         default: fail("unknown change kind " + std::to_string(kind));
     }
 }
@@ -459,7 +492,8 @@ size_t minChangeSize() {
     MaterialChange material;
     material.value.name.clear();
     return 1 + std::min({minEncodedSize(camera), minEncodedSize(TransformChange{}), minEncodedSize(material),
-                         minEncodedSize(LightChange{}), minEncodedSize(SettingsChange{})});
+                         minEncodedSize(LightChange{}), minEncodedSize(SettingsChange{}),
+                         minEncodedSize(SectionChange{})});
 }
 
 // -- Messages ------------------------------------------------------------------------------------
@@ -499,7 +533,7 @@ void read(Reader& r, Welcome& m) {
              " ms exceeds the limit");
 }
 
-RTWALL_WIRE_FIELDS(SceneSnapshot, 10);
+RTWALL_WIRE_FIELDS(SceneSnapshot, 11);
 RTWALL_WIRE_FIELDS(BvhSettings, 4);  // written with the snapshot
 // Everything that affects the image, i.e. the snapshot without its sequence number; stateHash
 // hashes exactly these bytes.
@@ -516,6 +550,7 @@ void writeState(Writer& w, const SceneSnapshot& m) {
     w.u8(uint8_t(m.bvh.primitives));
     for (double o : m.origin) w.f64(o);
     writeVector(w, m.assets);
+    for (const SectionPlane& p : m.sections) write(w, p);  // version 9
 }
 
 void write(Writer& w, const SceneSnapshot& m) {
@@ -546,6 +581,7 @@ void read(Reader& r, SceneSnapshot& m) {
     for (double& o : m.origin) o = r.f64();  // f64 rejects NaN and infinity
     static const size_t assetBytes = minEncodedSize(AssetRef{});
     readVector(r, m.assets, assetBytes, kMaxSceneObjects);
+    for (SectionPlane& p : m.sections) read(r, p);
     // The engine indexes meshes and materials with these without further checks.
     for (size_t i = 0; i < m.instances.size(); ++i) {
         const InstanceDesc& in = m.instances[i];
@@ -951,6 +987,7 @@ template std::vector<uint8_t> encodeValue(const Light&);
 template std::vector<uint8_t> encodeValue(const CameraDesc&);
 template std::vector<uint8_t> encodeValue(const InstanceDesc&);
 template std::vector<uint8_t> encodeValue(const RenderSettings&);
+template std::vector<uint8_t> encodeValue(const SectionPlane&);
 
 Hash128 stateHash(const SceneSnapshot& snapshot) {
     const std::vector<uint8_t> bytes = measureAndWrite([&](Writer& w) { writeState(w, snapshot); });

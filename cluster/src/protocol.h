@@ -7,7 +7,8 @@
 // Material::twoSided and Light::twoSided, which side emits; 7 added the client's work report to
 // Heartbeat (the frame, the tiles of its assignments that arrived, and whether it holds any tile:
 // the master releases hand-outs an idle client no longer holds) and TileStalled (a render thread
-// stuck on a tile); 8 added TileFailed (a tile whose rendering threw, before the client leaves)).
+// stuck on a tile); 8 added TileFailed (a tile whose rendering threw, before the client leaves);
+// 9 added section planes: SceneSnapshot::sections and SectionChange).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one writer and one
@@ -33,7 +34,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 8;
+inline constexpr uint16_t kProtocolVersion = 9;
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -128,6 +129,7 @@ struct SceneSnapshot {
     BvhSettings bvh;
     std::array<double, 3> origin{0, 0, 0};
     std::vector<AssetRef> assets;  // every texture image and volume file the materials name
+    SectionPlanes sections;        // version 9
     bool operator==(const SceneSnapshot&) const = default;
 };
 
@@ -177,7 +179,13 @@ struct SettingsChange {
     RenderSettings settings;
     bool operator==(const SettingsChange&) const = default;
 };
-using Change = std::variant<CameraChange, TransformChange, MaterialChange, LightChange, SettingsChange>;
+// Version 9: one section plane slot (moved, turned, enabled or disabled).
+struct SectionChange {
+    uint32_t section = 0;  // slot, below kMaxSections
+    SectionPlane value;
+    bool operator==(const SectionChange&) const = default;
+};
+using Change = std::variant<CameraChange, TransformChange, MaterialChange, LightChange, SettingsChange, SectionChange>;
 
 // The changes that take the state from baseSeq to seq. The master merges the updates made
 // between two network-thread wake-ups into one (keeping the last change to each object), so a

@@ -12,10 +12,10 @@ namespace {
 // member added to either fails the build here until it is mapped (or said not to travel).
 // SceneDesc::sourceFile, other cameras and parts (an assembly's part names: picking and `rtwall
 // info` on the master) do not travel.
-static_assert(fieldCount<SceneDesc>() == 11,
+static_assert(fieldCount<SceneDesc>() == 12,
               "SceneDesc has a member snapshotOf/sceneOf do not map: map it (or say why it does not travel), "
               "and decide in diffScenes whether an edit of it is an update or needs a restart");
-static_assert(fieldCount<SceneSnapshot>() == 10, "SceneSnapshot has a member snapshotOf/sceneOf do not map");
+static_assert(fieldCount<SceneSnapshot>() == 11, "SceneSnapshot has a member snapshotOf/sceneOf do not map");
 
 // The scene state as plain data, wherever it is held: what changes write.
 struct StateFields {
@@ -24,6 +24,7 @@ struct StateFields {
     std::vector<Light>& lights;
     CameraDesc& camera;
     RenderSettings& settings;
+    SectionPlanes& sections;
     std::vector<AssetRef>* assets;  // a snapshot's files; a SceneDesc holds file bytes, which its owner adds
 };
 
@@ -50,6 +51,12 @@ void apply(const StateFields& s, const Change& change) {
         }
         void operator()(const LightChange& c) const { element(s.lights, c.light, "light") = c.value; }
         void operator()(const SettingsChange& c) const { s.settings = c.settings; }
+        void operator()(const SectionChange& c) const {
+            if (c.section >= s.sections.size())
+                throw DecodeError("section " + std::to_string(c.section) + " does not exist (at most " +
+                                  std::to_string(s.sections.size()) + ")");
+            s.sections[c.section] = c.value;
+        }
     };
     std::visit(Visitor{s}, change);
 }
@@ -77,6 +84,7 @@ SceneSnapshot snapshotOf(const SceneDesc& scene, const CameraDesc& camera, std::
     s.bvh = scene.bvh;
     s.origin = scene.origin;
     s.assets = std::move(assets);
+    s.sections = scene.sections;
     return s;
 }
 
@@ -101,15 +109,17 @@ std::optional<SceneDesc> sceneOf(const SceneSnapshot& snapshot,
     d.settings = snapshot.settings;
     d.bvh = snapshot.bvh;
     d.origin = snapshot.origin;
+    d.sections = snapshot.sections;
     return d;
 }
 
 void applyChange(SceneDesc& scene, CameraDesc& camera, const Change& change) {
-    apply({scene.materials, scene.instances, scene.lights, camera, scene.settings, nullptr}, change);
+    apply({scene.materials, scene.instances, scene.lights, camera, scene.settings, scene.sections, nullptr}, change);
 }
 
 void applyChange(SceneSnapshot& snapshot, const Change& change) {
-    apply({snapshot.materials, snapshot.instances, snapshot.lights, snapshot.camera, snapshot.settings, &snapshot.assets},
+    apply({snapshot.materials, snapshot.instances, snapshot.lights, snapshot.camera, snapshot.settings,
+           snapshot.sections, &snapshot.assets},
           change);
 }
 
@@ -120,6 +130,7 @@ uint64_t objectOf(const Change& change) {
         uint32_t operator()(const MaterialChange& c) const { return c.material; }
         uint32_t operator()(const LightChange& c) const { return c.light; }
         uint32_t operator()(const SettingsChange&) const { return 0; }  // one set of settings
+        uint32_t operator()(const SectionChange& c) const { return c.section; }
     };
     return uint64_t(change.index()) << 32 | std::visit(Visitor{}, change);
 }

@@ -65,7 +65,8 @@ private:
 };
 
 // Two values as the clients get them: they differ for the renderer exactly when their wire
-// bytes differ (encodeValue). For Material, Light, CameraDesc, InstanceDesc and RenderSettings.
+// bytes differ (encodeValue). For Material, Light, CameraDesc, InstanceDesc, RenderSettings and
+// SectionPlane.
 template <class T> bool sameOnWire(const T& a, const T& b) { return encodeValue(a) == encodeValue(b); }
 
 }  // namespace rtwall::cluster

@@ -86,7 +86,8 @@ constexpr bool kWalked = std::is_same_v<T, SceneDesc> || std::is_same_v<T, Scene
                          std::is_same_v<T, TextureDesc> || std::is_same_v<T, TransferPoint> || std::is_same_v<T, Light> ||
                          std::is_same_v<T, CameraDesc> || std::is_same_v<T, ProjectionWindow> ||
                          std::is_same_v<T, InstanceDesc> || std::is_same_v<T, Transform> ||
-                         std::is_same_v<T, RenderSettings> || std::is_same_v<T, BvhSettings> || std::is_same_v<T, Float3>;
+                         std::is_same_v<T, RenderSettings> || std::is_same_v<T, BvhSettings> || std::is_same_v<T, Float3> ||
+                         std::is_same_v<T, SectionPlane>;
 
 std::string memberPath(const std::string& path, size_t i) { return path + "." + std::to_string(i); }
 
@@ -192,6 +193,16 @@ CameraDesc sampleCamera(int k) {
     return c;
 }
 
+SectionPlane sampleSection(int k) {
+    SectionPlane p;
+    p.enabled = true;
+    p.point = f3(0.5f, -1.25f, 2.0f + float(k));
+    p.normal = f3(0.25f, 1.0f, -0.5f);
+    p.capColor = f3(0.125f, 0.25f, 0.5f);
+    p.caps = false;
+    return p;
+}
+
 Transform sampleTransform(int k) {
     Transform t;
     for (size_t i = 0; i < t.m.size(); ++i) t.m[i] = 0.1 * double(i + 2) + 1e-9 * k + 0.5;
@@ -237,6 +248,7 @@ SceneDesc sampleScene() {
     d.lights = {sampleLight(0), sampleLight(1)};
     d.cameras = {sampleCamera(0), sampleCamera(1)};
     d.settings = sampleSettings();
+    for (int i = 0; i < kMaxSections; ++i) d.sections[i] = sampleSection(i);
     for (const Material& m : d.materials)
         for (const std::string& path : {m.texture.file, m.alpha.file, m.volumeFile}) d.files[path] = bytesOf("bytes of " + path);
     return d;
@@ -275,8 +287,9 @@ TEST(SceneState, MemberCountsAreExact) {
     EXPECT_EQ(fieldCount<InstanceDesc>(), 4u);
     EXPECT_EQ(fieldCount<Transform>(), 1u);  // the std::array, not its 12 doubles
     EXPECT_EQ(fieldCount<BvhSettings>(), 4u);
-    EXPECT_EQ(fieldCount<SceneDesc>(), 11u);
-    EXPECT_EQ(fieldCount<SceneSnapshot>(), 10u);
+    EXPECT_EQ(fieldCount<SectionPlane>(), 5u);
+    EXPECT_EQ(fieldCount<SceneDesc>(), 12u);
+    EXPECT_EQ(fieldCount<SceneSnapshot>(), 11u);
     EXPECT_EQ(std::tuple_size_v<decltype(tieFields(std::declval<RenderSettings&>()))>, fieldCount<RenderSettings>());
 }
 
@@ -320,8 +333,9 @@ TEST(SceneState, EveryChangeTravelsAndComesBack) {
     u.baseSeq = 4;
     u.changes = {CameraChange{sampleCamera(3)}, TransformChange{1, sampleTransform(4)},
                  MaterialChange{1, sampleMaterial(5), {refOf("tex/new.png", bytesOf("new"))}}, LightChange{1, sampleLight(6)},
-                 SettingsChange{sampleSettings()}};
+                 SettingsChange{sampleSettings()}, SectionChange{5, sampleSection(3)}};
     expectAllSet(std::get<CameraChange>(u.changes[0]).camera, CameraDesc{}, "CameraChange");
+    expectAllSet(std::get<SectionChange>(u.changes[5]).value, SectionPlane{}, "SectionChange");
     expectAllSet(std::get<MaterialChange>(u.changes[2]).value, Material{}, "MaterialChange");
     expectAllSet(std::get<LightChange>(u.changes[3]).value, Light{}, "LightChange");
     expectAllSet(std::get<SettingsChange>(u.changes[4]).settings, RenderSettings{}, "SettingsChange");
@@ -351,6 +365,7 @@ TEST(SceneState, EveryMemberChangesTheWireBytes) {
     expectEveryMemberOnTheWire(sampleCamera(0), "CameraDesc");
     expectEveryMemberOnTheWire(InstanceDesc{1, 2, sampleTransform(0), 3}, "InstanceDesc");
     expectEveryMemberOnTheWire(sampleSettings(), "RenderSettings");
+    expectEveryMemberOnTheWire(sampleSection(0), "SectionPlane");
     EXPECT_TRUE(sameOnWire(sampleMaterial(1), sampleMaterial(1)));
 }
 
@@ -368,7 +383,7 @@ TEST(SceneState, AChangeDoesTheSameToADescriptionAndToASnapshot) {
         CameraChange{sampleCamera(5)}, TransformChange{1, sampleTransform(9)},
         // A file the state holds already and one it does not: only the new one joins the snapshot.
         MaterialChange{0, m, {fresh, sent.assets.front()}}, LightChange{1, sampleLight(4)},
-        SettingsChange{RenderSettings{}}, TransformChange{0, sampleTransform(11)}};
+        SettingsChange{RenderSettings{}}, TransformChange{0, sampleTransform(11)}, SectionChange{3, sampleSection(2)}};
     for (const Change& c : changes) {
         applyChange(d, camera, c);
         applyChange(snap, c);
@@ -379,12 +394,13 @@ TEST(SceneState, AChangeDoesTheSameToADescriptionAndToASnapshot) {
     EXPECT_TRUE(camera == sampleCamera(5));
     EXPECT_TRUE(d.materials[0] == m);
     EXPECT_TRUE(d.instances[0].transform == sampleTransform(11));
+    EXPECT_TRUE(d.sections[3] == sampleSection(2));
 
     // An object that does not exist: an error, and nothing changed.
     const SceneDesc before = d;
     const SceneSnapshot snapBefore = snap;
     for (const Change& bad : std::vector<Change>{TransformChange{2, {}}, MaterialChange{2, {}, {fresh}}, LightChange{2, {}},
-                                                 LightChange{0xFFFFFFFFu, {}}}) {
+                                                 LightChange{0xFFFFFFFFu, {}}, SectionChange{uint32_t(kMaxSections), {}}}) {
         EXPECT_THROW(applyChange(d, camera, bad), DecodeError);
         EXPECT_THROW(applyChange(snap, bad), DecodeError);
     }

@@ -109,6 +109,50 @@ TEST(ClusterShading, LampFacesAndTwoSidedEmissionBitIdenticalToOneMachine) {
     EXPECT_EQ(differingBytes(img, singleMachine(changed, r.frame)), 0u) << "after the updates";
 }
 
+// Section planes (issue 20, protocol version 9): a scene that starts with one plane (in the
+// snapshot) renders over three clients as on one machine; then a plane moved, one added and one
+// turned off as differential updates.
+TEST(ClusterShading, SectionPlanesAndTheirUpdatesBitIdenticalToOneMachine) {
+    const auto dir = test::scratchDir();
+    SceneDesc desc = test::materialZoo(dir, 64, 48);
+    desc.settings.tileSize = 8;
+    desc.sections[1].enabled = true;
+    desc.sections[1].point = {0.3f, 0, 0};
+    desc.sections[1].normal = {-1, 0, 0.2f};
+    ClusterSettings cs;
+    cs.async = false;
+    cs.prefetch = 2;
+    cs.wideAccumulation = false;  // 8-bit tiles, compared with one machine's 8-bit frames
+    LocalCluster cluster(desc, cs, 3);
+    Master& master = *cluster.master;
+    ASSERT_TRUE(master.waitForClients(3, 30000));
+    FrameReport r;
+    Image img = master.renderFrame(&r);
+    EXPECT_EQ(differingBytes(img, singleMachine(desc, r.frame)), 0u) << "the snapshot's plane";
+    const Image before = img;
+
+    SceneDesc changed = desc;
+    changed.sections[1].point = {-0.5f, 0, 0};
+    changed.sections[4].enabled = true;
+    changed.sections[4].point = {0, 0, -0.2f};
+    changed.sections[4].normal = {0, 0, -1};
+    changed.sections[4].capColor = {0.1f, 0.2f, 0.9f};
+    master.setSection(1, changed.sections[1]);
+    master.setSection(4, changed.sections[4]);
+    img = master.renderFrame(&r);
+    EXPECT_EQ(differingBytes(img, singleMachine(changed, r.frame)), 0u) << "a plane moved and one added";
+    EXPECT_GT(differingBytes(img, before), 0u) << "the updates changed the picture";
+
+    changed.sections[1].enabled = false;
+    master.setSection(1, changed.sections[1]);
+    EXPECT_THROW(master.setSection(kMaxSections, changed.sections[1]), std::exception);
+    SectionPlane flat = changed.sections[1];
+    flat.normal = {0, 0, 0};
+    EXPECT_THROW(master.setSection(2, flat), std::invalid_argument);
+    img = master.renderFrame(&r);
+    EXPECT_EQ(differingBytes(img, singleMachine(changed, r.frame)), 0u) << "a plane turned off";
+}
+
 // Texture coordinates travel with the mesh (protocol version 5): a UV-textured OBJ (an image by
 // uv, an alpha mask by uv and a uv bump, with a seam split on import) over two clients gives one
 // machine's bytes.

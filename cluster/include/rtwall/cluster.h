@@ -121,9 +121,11 @@ struct SceneEdit {
     std::vector<std::pair<uint32_t, Transform>> transforms;
     std::optional<RenderSettings> settings;
     std::optional<CameraDesc> camera;  // the first camera, when it changed
+    std::vector<std::pair<uint32_t, SectionPlane>> sections;  // slots whose plane changed
     std::vector<std::string> refused;
     bool empty() const {
-        return materials.empty() && lights.empty() && transforms.empty() && !settings && !camera && refused.empty();
+        return materials.empty() && lights.empty() && transforms.empty() && !settings && !camera && sections.empty() &&
+               refused.empty();
     }
 };
 SceneEdit diffScenes(const SceneDesc& before, const SceneDesc& after);
@@ -181,6 +183,9 @@ public:
     void setMaterial(uint32_t material, const Material& value);
     void setLight(uint32_t light, const Light& value);
     void setRenderSettings(const RenderSettings& settings);
+    // Section plane slot `section`: throws for a slot >= kMaxSections and (std::invalid_argument)
+    // for a plane that is not finite, has a zero normal or a cap colour outside [0, 1].
+    void setSection(uint32_t section, const SectionPlane& plane);
     // Changes the tile codec of every client from their next tile on (a Welcome within the
     // session carries it); results in flight keep their own codec, which each result names.
     // It counts as a state change (FrameReport::stateSeq moves on): with a lossy codec the
