@@ -625,3 +625,112 @@ TEST(WallSession, MeasuringTheBackgroundSetsNoPoint) {
 
 }  // namespace
 }  // namespace rtwall
+
+// ---- Section planes (issue 20) --------------------------------------------------------------------
+
+namespace rtwall {
+namespace {
+
+double dot3(const Float3& a, const Float3& b) { return double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z; }
+Float3 unit3(const Float3& v) {
+    const float l = std::sqrt(float(dot3(v, v)));
+    return {v.x / l, v.y / l, v.z / l};
+}
+
+// The section keys and WallSession::setSection change the one state: the clients render each
+// step exactly as one machine renders that state (differential updates), and the planes do what
+// the keys say.
+TEST(WallSession, SectionKeysAndSetSectionCutTheScene) {
+    const auto dir = test::displayScratchDir();
+    RunConfig c = sessionConfig(dir, test::writeText(dir / "scene.toml", sceneText(0.0)));
+    auto lines = std::make_shared<std::vector<std::string>>();
+    c.log = [lines](const std::string& line) { lines->push_back(line); };
+    WallSession s(c);
+    ASSERT_TRUE(s.step());
+    const Image uncut = s.lastFrame().left;
+    EXPECT_EQ(s.activeSection(), -1);
+
+    // C: a plane through the point looked at, facing along the view: the box's front is cut away.
+    s.inject(keyPress(GLFW_KEY_C));
+    ASSERT_TRUE(s.step());
+    ASSERT_EQ(s.activeSection(), 0);
+    const SectionPlane added = s.scene().sections[0];
+    EXPECT_TRUE(added.enabled);
+    const CameraDesc cam = s.camera();
+    EXPECT_EQ(added.point, cam.lookAt);
+    const Float3 view = unit3({cam.lookAt.x - cam.position.x, cam.lookAt.y - cam.position.y, cam.lookAt.z - cam.position.z});
+    EXPECT_NEAR(dot3(unit3(added.normal), view), 1.0, 1e-6);
+    EXPECT_GT(differingBytes(s.lastFrame().left, uncut), 0u) << "the cut shows";
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u) << "and the clients render the state";
+    ASSERT_FALSE(lines->empty());
+    EXPECT_NE(lines->back().find("section 0: on"), std::string::npos) << lines->back();
+
+    // PageUp moves it along its normal by 1/100 of the scene's size (the floor's diagonal: 8 x 8
+    // units and the box's 2 units of height), Shift+PageDown ten times that back.
+    s.inject(keyPress(GLFW_KEY_PAGE_UP));
+    ASSERT_TRUE(s.step());
+    const SectionPlane moved = s.scene().sections[0];
+    const Float3 step{moved.point.x - added.point.x, moved.point.y - added.point.y, moved.point.z - added.point.z};
+    EXPECT_NEAR(dot3(step, unit3(added.normal)), std::sqrt(16.0 * 16.0 + 16.0 * 16.0 + 2.0 * 2.0) / 100.0, 1e-4);
+    s.inject(keyPress(GLFW_KEY_PAGE_DOWN, GLFW_MOD_SHIFT));
+    ASSERT_TRUE(s.step());
+    const Float3 back{s.scene().sections[0].point.x - moved.point.x, s.scene().sections[0].point.y - moved.point.y,
+                      s.scene().sections[0].point.z - moved.point.z};
+    EXPECT_NEAR(dot3(back, unit3(added.normal)), -10.0 * std::sqrt(16.0 * 16.0 + 16.0 * 16.0 + 2.0 * 2.0) / 100.0, 1e-3);
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+
+    // Left turns the normal 5 degrees about the view's up axis; F flips it; X turns it off.
+    const Float3 n0 = unit3(s.scene().sections[0].normal);
+    s.inject(keyPress(GLFW_KEY_LEFT));
+    ASSERT_TRUE(s.step());
+    const Float3 n1 = unit3(s.scene().sections[0].normal);
+    const Float3 up = unit3(s.camera().up);
+    EXPECT_NEAR(dot3(n0, up), dot3(n1, up), 1e-6) << "turned about the up axis";
+    auto flat = [&](const Float3& n) {
+        const double u = dot3(n, up);
+        return Float3{float(n.x - u * up.x), float(n.y - u * up.y), float(n.z - u * up.z)};
+    };
+    EXPECT_NEAR(std::acos(std::min(1.0, dot3(unit3(flat(n0)), unit3(flat(n1))))) * 180.0 / 3.14159265358979, 5.0, 0.01);
+    s.inject(keyPress(GLFW_KEY_F));
+    ASSERT_TRUE(s.step());
+    EXPECT_NEAR(dot3(unit3(s.scene().sections[0].normal), n1), -1.0, 1e-6);
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    s.inject(keyPress(GLFW_KEY_X));
+    ASSERT_TRUE(s.step());
+    EXPECT_FALSE(s.scene().sections[0].enabled);
+    EXPECT_EQ(differingBytes(s.lastFrame().left, uncut), 0u) << "a plane turned off cuts nothing";
+
+    // The API a wand calls: any slot, in the scene's coordinates; it becomes the active plane.
+    SectionPlane p;
+    p.enabled = true;
+    p.point = {0, 0.5f, 0};
+    p.normal = {1, 0, 0};
+    p.capColor = {0.1f, 0.2f, 0.9f};
+    s.setSection(3, p);
+    EXPECT_EQ(s.activeSection(), 3);
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.scene().sections[3], p);
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_THROW(s.setSection(uint32_t(kMaxSections), p), std::out_of_range);
+    SectionPlane zero = p;
+    zero.normal = {0, 0, 0};
+    EXPECT_THROW(s.setSection(1, zero), std::invalid_argument);
+    EXPECT_EQ(s.scene().sections[1], SectionPlane{}) << "a refused plane changes nothing";
+
+    // Shift+C selects the next plane in use (slot 0 is off but in use), then none; Del removes one.
+    s.inject(keyPress(GLFW_KEY_C, GLFW_MOD_SHIFT));
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.activeSection(), -1) << "after slot 3, the last in use: none";
+    s.inject(keyPress(GLFW_KEY_C, GLFW_MOD_SHIFT));
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.activeSection(), 0);
+    s.inject(keyPress(GLFW_KEY_DELETE));
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.activeSection(), -1);
+    EXPECT_EQ(s.scene().sections[0], SectionPlane{});
+    EXPECT_TRUE(s.scene().sections[3].enabled) << "the other plane stays";
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+}
+
+}  // namespace
+}  // namespace rtwall

@@ -166,6 +166,13 @@ public:
     void setMaterial(uint32_t material, const Material& value);
     void setLight(uint32_t light, const Light& value);
     void setRenderSettings(const RenderSettings& settings);
+    // Section plane slot `index` (< kMaxSections), in the scene's coordinates (relative to
+    // scene().origin, as lights are): a differential update to every client, O(1), no BVH is
+    // rebuilt. It becomes the active plane (the one the section keys move; -1: none). The wall's
+    // keys (README, "Section planes") and a wand come here alike. Throws for a bad slot or a
+    // plane that is not finite or has a zero normal, before anything changed.
+    void setSection(uint32_t index, const SectionPlane& plane);
+    int activeSection() const;
     void setCodec(const CodecSettings& codec);
     // A reloaded scene file: what changed goes out as differential updates; `refused` lists
     // what updates cannot express (and what the camera path or controller owns).

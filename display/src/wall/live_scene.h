@@ -50,6 +50,11 @@ public:
             pickScene_->commit();
         }
     }
+    void setSection(uint32_t section, const SectionPlane& plane) {
+        master_.setSection(section, plane);  // throws for a bad slot or plane before anything changed
+        desc_.sections[section] = plane;
+        if (pickScene_) pickScene_->setSection(section, plane);  // what is cut away cannot be picked
+    }
     void setRenderSettings(const RenderSettings& settings) {
         master_.setRenderSettings(settings);
         desc_.settings = settings;

@@ -241,6 +241,7 @@ struct WallSession::Impl {
         }
         e.materials = std::move(materials);
         for (const auto& [i, l] : e.lights) live->setLight(i, l);
+        for (const auto& [i, p] : e.sections) live->setSection(i, p);
         for (const auto& [i, t] : e.transforms) live->setInstanceTransform(i, t);
         if (e.settings) live->setRenderSettings(*e.settings);
         if (e.camera) {
@@ -249,9 +250,10 @@ struct WallSession::Impl {
         }
         const std::string file = config.scene;
         for (const std::string& r : e.refused) log(file + ": " + r + " (not applied)");
-        log(format("%s changed: %zu materials, %zu lights, %zu instance transforms, render settings %s, camera %s", file.c_str(),
-                   e.materials.size(), e.lights.size(), e.transforms.size(), e.settings ? "changed" : "same",
-                   e.camera ? "moved" : "same"));
+        log(format("%s changed: %zu materials, %zu lights, %zu instance transforms, %zu section planes, render settings %s, "
+                   "camera %s",
+                   file.c_str(), e.materials.size(), e.lights.size(), e.transforms.size(), e.sections.size(),
+                   e.settings ? "changed" : "same", e.camera ? "moved" : "same"));
         return e;
     }
 
@@ -514,6 +516,8 @@ void WallSession::setInstanceTransform(uint32_t instance, const Transform& trans
 void WallSession::setMaterial(uint32_t material, const Material& value) { impl_->live->setMaterial(material, value); }
 void WallSession::setLight(uint32_t light, const Light& value) { impl_->live->setLight(light, value); }
 void WallSession::setRenderSettings(const RenderSettings& settings) { impl_->live->setRenderSettings(settings); }
+void WallSession::setSection(uint32_t index, const SectionPlane& plane) { impl_->input->setSection(*impl_->live, index, plane); }
+int WallSession::activeSection() const { return impl_->input->activeSection(); }
 void WallSession::setCodec(const CodecSettings& codec) { impl_->master->setCodec(codec); }
 SceneEdit WallSession::applyEdit(const SceneDesc& edited) { return impl_->applyEdit(edited); }
 std::optional<PickResult> WallSession::pick(double wallX, double wallY) { return impl_->input->pick(*impl_->live, wallX, wallY); }

@@ -36,7 +36,8 @@ WallInput::WallInput(const WallConfig& wall, const CameraDesc& start, const Opti
         log_("wall '" + wall_.name + "': " + std::to_string(wall_.screens.size()) + " window" +
              (wall_.screens.size() == 1 ? "" : "s") + " (" + gl_->renderer() +
              "); keys: H status, T tile owners, Tab fly/orbit, 1-9 bookmarks (Ctrl+digit stores), R record, Ctrl+drag "
-             "moves an object, M measure, Esc quits");
+             "moves an object, M measure, C section plane (Shift+C next, X on/off, F flip, PgUp/PgDn move, arrows "
+             "turn, Del remove), Esc quits");
     else
         log_("wall '" + wall_.name + "': headless (" + whyHeadless_ + ")");
 }
@@ -79,7 +80,7 @@ void WallInput::setMeasuring(bool on) {
     measurement_.reset();
     grabbed_.reset();
     log_(on ? "measure: on (Ctrl+click point A, then B; M or Esc leaves)" : "measure: off");
-    present_.overlay = (showStatus_ || measuring_) ? &statusImage_ : nullptr;
+    updateOverlay();
     statusImage_ = {};
     refreshStatus();
 }
@@ -131,7 +132,131 @@ bool WallInput::handle(LiveScene& scene, double dt) {
     if (gl_) inputs.push_back(gl_->poll());
     for (const InputState& in : inputs)
         if (!apply(scene, in, dt)) return false;
+    std::string text = measuring_ ? measureLine() : std::string();
+    if (activeSection_ >= 0) text += (text.empty() ? "" : " | ") + sectionLine(scene.desc());
+    overlayText_ = std::move(text);
     return true;
+}
+
+namespace {
+
+// A slot in use: enabled, or set to anything but the default (a disabled plane from the file).
+bool sectionUsed(const SectionPlane& p) { return p.enabled || !(p == SectionPlane{}); }
+
+// v turned by `degrees` about the unit axis a (Rodrigues), in double.
+Float3 rotated(const Float3& v, const Float3& a, double degrees) {
+    const double r = degrees * 3.14159265358979323846 / 180.0, c = std::cos(r), s = std::sin(r);
+    const double ax = a.x, ay = a.y, az = a.z, vx = v.x, vy = v.y, vz = v.z;
+    const double d = ax * vx + ay * vy + az * vz;
+    const double cx = ay * vz - az * vy, cy = az * vx - ax * vz, cz = ax * vy - ay * vx;
+    return {float(vx * c + cx * s + ax * d * (1 - c)), float(vy * c + cy * s + ay * d * (1 - c)),
+            float(vz * c + cz * s + az * d * (1 - c))};
+}
+
+Float3 cross3(const Float3& a, const Float3& b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+
+Float3 unit(const Float3& v) {
+    const float l = length(v);
+    return l > 0.0f ? Float3{v.x / l, v.y / l, v.z / l} : Float3{0, 0, 0};
+}
+
+}  // namespace
+
+void WallInput::setSection(LiveScene& scene, uint32_t index, const SectionPlane& plane) {
+    if (index >= uint32_t(kMaxSections))
+        throw std::out_of_range("section " + std::to_string(index) + " does not exist (at most " +
+                                std::to_string(kMaxSections) + ")");
+    scene.setSection(index, plane);
+    activeSection_ = int(index);
+    updateOverlay();
+    refreshStatus();
+}
+
+// The section keys: C adds a plane through the point the view looks at, facing along the view
+// (what lies before that point is cut away); Shift+C selects the next plane in use (and after
+// the last, none); the others act on the selected plane.
+void WallInput::sectionKey(LiveScene& scene, int key, int mods) {
+    const SceneDesc& desc = scene.desc();
+    const bool shift = mods & GLFW_MOD_SHIFT;
+    if (key == GLFW_KEY_C && shift) {
+        int next = -1;
+        for (int i = activeSection_ + 1; i < kMaxSections && next < 0; ++i)
+            if (sectionUsed(desc.sections[i])) next = i;
+        activeSection_ = next;
+        log_(next < 0 ? "section: none selected" : sectionLine(desc));
+        updateOverlay();
+        refreshStatus();
+        return;
+    }
+    if (key == GLFW_KEY_C) {
+        int slot = -1;
+        for (int i = 0; i < kMaxSections && slot < 0; ++i)
+            if (!sectionUsed(desc.sections[i])) slot = i;
+        if (slot < 0) {
+            log_("section: all " + std::to_string(kMaxSections) + " planes are in use (Del removes the selected one)");
+            return;
+        }
+        const CameraDesc c = camera();
+        SectionPlane p;
+        p.enabled = true;
+        p.point = c.lookAt;
+        p.normal = unit({c.lookAt.x - c.position.x, c.lookAt.y - c.position.y, c.lookAt.z - c.position.z});
+        if (!(length(p.normal) > 0.0f)) p.normal = {0, 0, -1};
+        setSection(scene, uint32_t(slot), p);
+        log_(sectionLine(desc));
+        return;
+    }
+    if (activeSection_ < 0) return;
+    const bool known = key == GLFW_KEY_X || key == GLFW_KEY_F || key == GLFW_KEY_PAGE_UP || key == GLFW_KEY_PAGE_DOWN ||
+                       key == GLFW_KEY_LEFT || key == GLFW_KEY_RIGHT || key == GLFW_KEY_UP || key == GLFW_KEY_DOWN ||
+                       key == GLFW_KEY_DELETE;
+    if (!known) return;
+    SectionPlane p = desc.sections[activeSection_];
+    const Float3 n = unit(p.normal);
+    if (key == GLFW_KEY_X) p.enabled = !p.enabled;
+    if (key == GLFW_KEY_F) p.normal = {-p.normal.x, -p.normal.y, -p.normal.z};
+    if (key == GLFW_KEY_PAGE_UP || key == GLFW_KEY_PAGE_DOWN) {
+        if (sectionStep_ == 0) {
+            const Bounds3 b = desc.worldBounds();
+            const double size = b.empty() ? 0.0 : length({b.hi.x - b.lo.x, b.hi.y - b.lo.y, b.hi.z - b.lo.z});
+            sectionStep_ = size > 0 ? size / 100.0 : 0.01;
+        }
+        const double step = (key == GLFW_KEY_PAGE_UP ? 1.0 : -1.0) * sectionStep_ * (shift ? 10.0 : 1.0);
+        p.point = {float(p.point.x + step * n.x), float(p.point.y + step * n.y), float(p.point.z + step * n.z)};
+    }
+    const double degrees = shift ? 1.0 : 5.0;
+    if (key == GLFW_KEY_LEFT || key == GLFW_KEY_RIGHT)  // about the view's up axis
+        p.normal = rotated(n, unit(camera().up), key == GLFW_KEY_LEFT ? degrees : -degrees);
+    if (key == GLFW_KEY_UP || key == GLFW_KEY_DOWN) {  // about the horizontal axis in the plane
+        Float3 axis = unit(cross3(n, camera().up));
+        if (!(length(axis) > 0.0f)) axis = {1, 0, 0};
+        p.normal = rotated(n, axis, key == GLFW_KEY_UP ? degrees : -degrees);
+    }
+    const int slot = activeSection_;
+    if (key == GLFW_KEY_DELETE) {
+        scene.setSection(uint32_t(slot), SectionPlane{});
+        log_("section " + std::to_string(slot) + ": removed");
+        activeSection_ = -1;
+        updateOverlay();
+        refreshStatus();
+        return;
+    }
+    setSection(scene, uint32_t(slot), p);
+    log_(sectionLine(desc));
+}
+
+std::string WallInput::sectionLine(const SceneDesc& scene) const {
+    if (activeSection_ < 0) return "";
+    const SectionPlane& p = scene.sections[activeSection_];
+    const std::array<double, 3>& o = scene.origin;
+    const Float3 n = unit(p.normal);
+    char line[256];
+    std::snprintf(line, sizeof line, "section %d: %s, point (%.4f, %.4f, %.4f), normal (%.3f, %.3f, %.3f)", activeSection_,
+                  p.enabled ? "on" : "off", o[0] + double(p.point.x), o[1] + double(p.point.y), o[2] + double(p.point.z),
+                  double(n.x), double(n.y), double(n.z));
+    return line;
 }
 
 // One poll's input. A new key binding goes here.
@@ -149,11 +274,13 @@ bool WallInput::apply(LiveScene& scene, const InputState& in, double dt) {
         if (key == GLFW_KEY_H) {
             showStatus_ = !showStatus_;
             statusImage_ = {};
-            present_.overlay = (showStatus_ || measuring_) ? &statusImage_ : nullptr;
+            updateOverlay();
             refreshStatus();
         }
         if (key == GLFW_KEY_T) present_.falseColour = !present_.falseColour;
     }
+    for (size_t i = 0; i < in.keysPressed.size(); ++i)
+        sectionKey(scene, in.keysPressed[i], i < in.modsPressed.size() ? in.modsPressed[i] : 0);
     const bool wasRecording = nav_->recording();
     const bool moved = options_.interactive && nav_->update(in, dt);
     if (wasRecording && !nav_->recording()) {
@@ -206,11 +333,12 @@ void WallInput::show(const WallFrame& frame, const FrameReport& report, double f
     if (gl_) {
         gl_->present(frame, present_);
         statusClock_ += frameSeconds;
-        if (measuring_ && !showStatus_ && statusClock_ >= 0.5) {
-            // Measure mode alone: its line is the overlay and the title, and the log has had it.
+        if ((measuring_ || activeSection_ >= 0) && !showStatus_ && statusClock_ >= 0.5) {
+            // Measure mode or an active section plane alone: its line is the overlay and the
+            // title, and the log has had it.
             statusClock_ = 0;
-            gl_->setStatus(measureLine());
-            statusImage_ = textImage(measureLine(), 2);
+            gl_->setStatus(overlayText_);
+            statusImage_ = textImage(overlayText_, 2);
         } else if (showStatus_ && statusClock_ >= 0.5) {
             statusClock_ = 0;
             char line[256];
@@ -232,9 +360,9 @@ void WallInput::show(const WallFrame& frame, const FrameReport& report, double f
                 status += " | " + trackerLine_;
                 overlay += "\n" + trackerLine_;
             }
-            if (measuring_) {
-                status += " | " + measureLine();
-                overlay += "\n" + measureLine();
+            if (!overlayText_.empty()) {
+                status += " | " + overlayText_;
+                overlay += "\n" + overlayText_;
             }
             gl_->setStatus(status);
             statusImage_ = textImage(overlay, 2);  // shown from the next frame on

@@ -54,6 +54,10 @@ public:
     bool measuring() const { return measuring_; }
     bool measurePick(LiveScene& scene, double wallX, double wallY);
     const std::optional<Measurement>& measurement() const { return measurement_; }
+    // Section planes (WallSession::setSection): sets slot `index` and makes it the active plane,
+    // the one the section keys (README, "Section planes") move; -1: none.
+    void setSection(LiveScene& scene, uint32_t index, const SectionPlane& plane);
+    int activeSection() const { return activeSection_; }
     // Shows a frame the wall's size (or smaller: a frame rendered at a fraction of the
     // resolution is shown upscaled).
     void show(const WallFrame& frame, const FrameReport& report, double frameSeconds);
@@ -81,6 +85,12 @@ private:
     bool escapeHeld_ = false;  // the Esc that left measure mode: held on, it does not close the wall
     std::optional<Measurement> measurement_;
     std::string measureLine() const;  // for the status line and overlay while measuring
+    int activeSection_ = -1;
+    double sectionStep_ = 0;  // how far PageUp/PageDown move a plane: 1/100 of the scene's size
+    void sectionKey(LiveScene& scene, int key, int mods);
+    std::string sectionLine(const SceneDesc& scene) const;  // the active plane, for the overlay
+    std::string overlayText_;  // measuring and the active plane: the overlay's line, kept by handle()
+    void updateOverlay() { present_.overlay = (showStatus_ || measuring_ || activeSection_ >= 0) ? &statusImage_ : nullptr; }
     void refreshStatus() { statusClock_ = 1e9; }  // the overlay shows a change at the next frame
 };
 
