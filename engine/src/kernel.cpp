@@ -286,6 +286,8 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
     const SectionState& sections = s.sections;
     const bool clipping = sections.count > 0;
     const int* traceValid = clipping ? traced : valid;
+    float originDist[kMaxSections];  // every primary ray of the tile starts at the camera
+    sectionDistances(sections, org, originDist);
     uint32_t pixel[K], seed[K] = {}, rouletteSeed[K] = {};
     float ox[K], oy[K];
     for (int k = 0; k < K; ++k) {
@@ -336,7 +338,7 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
                                 float t0 = 0.0f, t1 = INFINITY;
                                 enter[k] = -1;
                                 const Float3 d{rh.ray.dir_x[k], rh.ray.dir_y[k], rh.ray.dir_z[k]};
-                                const bool kept = clipToSections(sections, org, d, t0, t1, enter[k]);
+                                const bool kept = clipToSections(sections, originDist, d, t0, t1, enter[k]);
                                 traced[k] = valid[k] && kept ? -1 : 0;
                                 rh.ray.tnear[k] = kept ? t0 : 0.0f;
                                 rh.ray.tfar[k] = kept ? t1 : INFINITY;

@@ -114,31 +114,47 @@ struct SectionState {
     Color capColor[kMaxSections] = {};
 };
 
-// The ray interval [t0, t1] clipped to the kept region; false when nothing of it is left. `enter`
-// becomes the plane through which the ray enters the kept region at t0 > its old value (the
-// plane a cap would lie on), or stays -1 when it starts inside.
-inline bool clipToSections(const SectionState& c, const Float3& org, const Float3& dir, float& t0, float& t1,
+// Each plane's signed distance of a ray origin (positive on the kept side): what every ray from
+// that origin shares (a tile's primary rays compute it once).
+inline void sectionDistances(const SectionState& c, const Float3& org, float* dist) {
+    for (int i = 0; i < c.count; ++i) {
+        const Float3& n = c.n[i];
+        dist[i] = n.x * org.x + n.y * org.y + n.z * org.z - c.d[i];
+    }
+}
+
+// The ray interval [t0, t1] clipped to the kept region, given sectionDistances of its origin;
+// false when nothing of it is left. `enter` becomes the plane through which the ray enters the
+// kept region at t0 > its old value (the plane a cap would lie on), or stays -1 when it starts
+// inside.
+inline bool clipToSections(const SectionState& c, const float* dist, const Float3& dir, float& t0, float& t1,
                            int& enter) {
     for (int i = 0; i < c.count; ++i) {
         const Float3& n = c.n[i];
-        const float dist = n.x * org.x + n.y * org.y + n.z * org.z - c.d[i];
         const float dn = n.x * dir.x + n.y * dir.y + n.z * dir.z;
         if (dn > 0.0f) {
-            if (dist < 0.0f) {
-                const float t = -dist / dn;
+            if (dist[i] < 0.0f) {
+                const float t = -dist[i] / dn;
                 if (t > t0) {
                     t0 = t;
                     enter = i;
                 }
             }
         } else if (dn < 0.0f) {
-            const float t = dist / -dn;  // negative when the origin is cut away: empty
+            const float t = dist[i] / -dn;  // negative when the origin is cut away: empty
             if (t < t1) t1 = t;
-        } else if (dist < 0.0f) {
+        } else if (dist[i] < 0.0f) {
             return false;  // parallel to the plane on its cut-away side
         }
     }
     return t0 <= t1;
+}
+
+inline bool clipToSections(const SectionState& c, const Float3& org, const Float3& dir, float& t0, float& t1,
+                           int& enter) {
+    float dist[kMaxSections];
+    sectionDistances(c, org, dist);
+    return clipToSections(c, dist, dir, t0, t1, enter);
 }
 
 struct Scene::Impl {

@@ -24,6 +24,10 @@ struct Common {
 struct KernelOptions : Common {
     int width = 1600, height = 1200, threads = 0, rounds = 7, tile = 32, packetWidth = 0;
     int64_t triangles = 3'000'000;
+    // Section planes (issue 20): this many, each keeping the whole scene (their clipping's own
+    // cost), or with `cut` the first through the scene's centre (half of it cut away, capped).
+    int sections = 0;
+    bool cut = false;
 };
 toml::table kernel(const KernelOptions& o);
 

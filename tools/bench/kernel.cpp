@@ -101,6 +101,21 @@ void bareFrameFor(int packetWidth, RTCScene scene, const Camera& camera, int wid
 
 toml::table kernel(const KernelOptions& o) {
     SceneDesc desc = builtinScene("knots", o.triangles);
+    if (o.sections > 0) {
+        const Bounds3 b = desc.worldBounds();
+        const Float3 centre{0.5f * (b.lo.x + b.hi.x), 0.5f * (b.lo.y + b.hi.y), 0.5f * (b.lo.z + b.hi.z)};
+        const Float3 normals[kMaxSections] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}};
+        for (int i = 0; i < std::min(o.sections, kMaxSections); ++i) {
+            SectionPlane& p = desc.sections[size_t(i)];
+            p.enabled = true;
+            p.normal = normals[i];
+            // Outside the bounds on the side the normal points away from: it keeps everything.
+            const Float3 n = normals[i];
+            p.point = {n.x > 0 ? b.lo.x - 1 : n.x < 0 ? b.hi.x + 1 : centre.x, n.y > 0 ? b.lo.y - 1 : n.y < 0 ? b.hi.y + 1 : centre.y,
+                       n.z > 0 ? b.lo.z - 1 : n.z < 0 ? b.hi.z + 1 : centre.z};
+            if (i == 0 && o.cut) p.point = centre;
+        }
+    }
     int64_t tris = 0;
     for (const MeshDesc& m : desc.meshes) tris += int64_t(m.mesh->triangleCount());
     Scene scene(desc);
@@ -158,6 +173,8 @@ toml::table kernel(const KernelOptions& o) {
                     {"cpu_packet_width", packetWidth()},
                     {"coherent_occlusion", coherentOcclusion(scene)},
                     {"triangles", tris},
+                    {"sections", o.sections},
+                    {"sections_cut", o.cut},
                     {"rounds", o.rounds},
                     {"bare_mrays_per_s", mBare},
                     {"packet_mrays_per_s", mPacket},
@@ -168,9 +185,9 @@ toml::table kernel(const KernelOptions& o) {
                     {"full_shading_mrays_per_s", double(fullStats.rays + fullStats.shadowRays) / median(shaded) * 1e-6},
                     {"frame_seconds", toml::table{{"bare", arr(bare)}, {"packet", arr(packet)}, {"single", arr(one)}, {"full_shading", arr(shaded)}}}};
     if (o.text)
-        std::fprintf(o.text, "%dx%d, %lld triangles, %d threads, packets of %d (%s occlusion): bare %.2f, packet %.2f, "
-                    "single %.2f Mrays/s (packet/bare %.3f, packet/single %.3f); full shading %.3f s/frame\n",
-                    o.width, o.height, (long long)tris, threads, lanes,
+        std::fprintf(o.text, "%dx%d, %lld triangles, %d threads, %d section planes%s, packets of %d (%s occlusion): bare %.2f, "
+                    "packet %.2f, single %.2f Mrays/s (packet/bare %.3f, packet/single %.3f); full shading %.3f s/frame\n",
+                    o.width, o.height, (long long)tris, threads, o.sections, o.cut ? " (one cutting)" : "", lanes,
                     coherentOcclusion(scene) ? "coherent" : "incoherent", mBare, mPacket, mSingle,
                     mPacket / mBare, mPacket / mSingle, median(shaded));
     return out;

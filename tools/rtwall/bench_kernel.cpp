@@ -17,6 +17,9 @@ void addBenchKernel(CLI::App& bench, Run& run) {
     cmd->add_option("--tile", o.tile, "Tile size")->check(CLI::Range(2, 1024));
     cmd->add_option("--packet-width", o.packetWidth, "Rays per packet, kernel and bare loop (0 = this CPU's widest)")
         ->check(CLI::IsMember({0, 4, 8, 16}));
+    cmd->add_option("--sections", o.sections, "Section planes that keep the whole scene (their clipping's cost)")
+        ->check(CLI::Range(0, 6));  // kMaxSections
+    cmd->add_flag("--cut", o.cut, "With --sections: the first plane cuts the scene in half (with a cap)");
     callBenchmark(cmd, run, a, bench::kernel);
 }
 
