@@ -73,6 +73,31 @@ TEST(SceneDiff, TwoSidedEmissionIsAnEdit) {
     EXPECT_TRUE(edit.lights[0].second.twoSided);
 }
 
+// [[section]] tables (issue 20): a plane added, moved or turned off in the file is an update of
+// its slot, and only of the slots that changed.
+TEST(SceneDiff, SectionPlanesAreUpdatesOfTheirSlots) {
+    SceneDesc d = test::materialZoo(test::scratchDir(), 32, 24);
+    d.sections[0].enabled = true;
+    d.sections[0].normal = {0, 0, -1};
+    d.sections[2].enabled = true;
+    SceneDesc e = d;
+    e.sections[0].point.z = 0.5f;          // moved
+    e.sections[2].enabled = false;         // turned off
+    e.sections[5].enabled = true;          // added
+    e.sections[5].capColor = {0, 0, 1};
+    const SceneEdit edit = diffScenes(d, e);
+    EXPECT_TRUE(edit.refused.empty());
+    EXPECT_FALSE(edit.empty());
+    ASSERT_EQ(edit.sections.size(), 3u);
+    EXPECT_EQ(edit.sections[0].first, 0u);
+    EXPECT_EQ(edit.sections[0].second, e.sections[0]);
+    EXPECT_EQ(edit.sections[1].first, 2u);
+    EXPECT_FALSE(edit.sections[1].second.enabled);
+    EXPECT_EQ(edit.sections[2].first, 5u);
+    EXPECT_EQ(edit.sections[2].second, e.sections[5]);
+    EXPECT_TRUE(diffScenes(e, e).empty());
+}
+
 TEST(SceneDiff, WhatUpdatesCannotExpressIsRefusedInOneLineEach) {
     const SceneDesc d = test::materialZoo(test::scratchDir(), 32, 24);
     auto refused = [&](auto change) {
