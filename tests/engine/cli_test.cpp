@@ -58,6 +58,21 @@ TEST(Cli, InfoJsonOnAMesh) {
     EXPECT_NE(r.output.find("\"bounds\""), std::string::npos) << r.output;
 }
 
+// Issue 20: rtwall info lists a scene's section planes (slot, point in the file's coordinates,
+// normal, cap colour); rtwall render takes them from the scene file.
+TEST(Cli, InfoListsSectionPlanes) {
+    const Result r = run("info --json " + (test::sourceDir() / "configs/section.toml").string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    size_t slots = 0;
+    for (size_t at = r.output.find("\"slot\""); at != std::string::npos; at = r.output.find("\"slot\"", at + 1)) ++slots;
+    EXPECT_EQ(slots, 2u) << r.output;
+    EXPECT_NE(r.output.find("\"cap_color\""), std::string::npos) << r.output;
+    const auto out = test::scratchDir() / "section.png";
+    const Result render = run("render " + (test::sourceDir() / "configs/section.toml").string() +
+                              " --width 80 --height 60 --out " + out.string());
+    EXPECT_EQ(render.status, 0) << render.output;
+}
+
 // Issue 15: how the polygons became triangles, in rtwall info (text and JSON); a PLY header line
 // that is no keyword is one warning line on stderr.
 TEST(Cli, InfoCountsHowPolygonsWereTriangulated) {

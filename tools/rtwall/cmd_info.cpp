@@ -52,7 +52,21 @@ toml::table sceneInfo(const std::string& scene) {
     for (const InstanceDesc& in : desc.instances) instanced += int64_t(desc.meshes[in.mesh].mesh->triangleCount());
     toml::array cameras;
     for (const CameraDesc& c : desc.cameras) cameras.push_back(c.name);
+    // Section planes in use (slot order), their points in the file's coordinates.
+    toml::array sections;
+    for (size_t i = 0; i < desc.sections.size(); ++i) {
+        const SectionPlane& p = desc.sections[i];
+        if (!p.enabled && p == SectionPlane{}) continue;
+        sections.push_back(toml::table{
+            {"slot", int64_t(i)},
+            {"enabled", p.enabled},
+            {"point", toml::array{desc.origin[0] + p.point.x, desc.origin[1] + p.point.y, desc.origin[2] + p.point.z}},
+            {"normal", toml::array{p.normal.x, p.normal.y, p.normal.z}},
+            {"cap_color", toml::array{p.capColor.x, p.capColor.y, p.capColor.z}},
+            {"caps", p.caps}});
+    }
     return toml::table{{"file", scene},
+                       {"sections", sections},
                        {"meshes", int64_t(desc.meshes.size())},
                        {"instances", int64_t(desc.instances.size())},
                        {"materials", int64_t(desc.materials.size())},
