@@ -59,7 +59,8 @@ struct Cost {
     double frameBytes = 0;   // allocated by the whole process per setCamera + renderFrame
 };
 
-Cost cameraUpdateCost(int instances) {
+// `update(master, f)` is the f-th update of the run.
+template <class Update> Cost updateCost(int instances, Update&& update) {
     const SceneDesc desc = boxes(instances);
     ClusterSettings cs;
     cs.async = false;
@@ -69,12 +70,10 @@ Cost cameraUpdateCost(int instances) {
     for (int i = 0; i < 3; ++i) master.renderFrame();
     constexpr int kFrames = 20;
     Cost cost;
-    CameraDesc camera = desc.cameras.front();
     for (int f = 0; f < kFrames; ++f) {
-        camera.position.x += 0.25f;
         const uint64_t process0 = allocatedBytes.load();
         const uint64_t thread0 = threadAllocatedBytes;
-        master.setCamera(camera);
+        update(master, f);
         cost.updateBytes += double(threadAllocatedBytes - thread0);
         master.renderFrame();
         cost.frameBytes += double(allocatedBytes.load() - process0);
@@ -82,6 +81,14 @@ Cost cameraUpdateCost(int instances) {
     cost.updateBytes /= kFrames;
     cost.frameBytes /= kFrames;
     return cost;
+}
+
+Cost cameraUpdateCost(int instances) {
+    CameraDesc camera = boxes(1).cameras.front();
+    return updateCost(instances, [&](Master& master, int) {
+        camera.position.x += 0.25f;
+        master.setCamera(camera);
+    });
 }
 
 TEST(Issue17, ACameraUpdateCostsTheSameWhateverTheInstanceCount) {
@@ -93,6 +100,28 @@ TEST(Issue17, ACameraUpdateCostsTheSameWhateverTheInstanceCount) {
     // (heartbeats, ZeroMQ's own allocations), which is far below one copy of the instances.
     EXPECT_LT(many.updateBytes, few.updateBytes + 1024) << "setCamera serialises or copies the scene state";
     EXPECT_LT(many.frameBytes, few.frameBytes + 256 * 1024) << "a frame copies the scene state";
+}
+
+// Issue 20: moving a section plane costs the master and the clients the same whatever the
+// scene's size: the master sends one change, a client sets six floats and a cap material; no BVH
+// (a top level of 20,000 instances is megabytes) is rebuilt, nothing of the scene is copied.
+Cost sectionUpdateCost(int instances) {
+    SectionPlane plane;
+    plane.enabled = true;
+    plane.normal = {1, 0, 0};
+    return updateCost(instances, [&](Master& master, int f) {
+        plane.point.x = 3.0f * float(f);  // sweeps across the boxes
+        master.setSection(0, plane);
+    });
+}
+
+TEST(Issue20, ASectionPlaneUpdateCostsTheSameWhateverTheInstanceCount) {
+    const Cost few = sectionUpdateCost(10);
+    const Cost many = sectionUpdateCost(20'000);
+    std::printf("bytes allocated per section update: %.0f with 10 instances, %.0f with 20,000; per update and frame: "
+                "%.0f and %.0f\n", few.updateBytes, many.updateBytes, few.frameBytes, many.frameBytes);
+    EXPECT_LT(many.updateBytes, few.updateBytes + 1024) << "setSection serialises or copies the scene state";
+    EXPECT_LT(many.frameBytes, few.frameBytes + 256 * 1024) << "a plane update copies the scene or rebuilds a BVH";
 }
 
 }  // namespace
