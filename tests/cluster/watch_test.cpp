@@ -129,7 +129,7 @@ std::vector<uint8_t> fileBytes(const std::filesystem::path& p) {
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-std::string sceneText(const std::string& colour) {
+std::string sceneText(const std::string& colour, const std::string& extra = "") {
     return "[image]\nwidth = 48\nheight = 32\n"
            "[[mesh]]\nname = \"box\"\nfile = \"" + (test::dataDir() / "meshes/box_quads.obj").string() + "\"\n"
            "[[mesh]]\nname = \"floor\"\nshape = \"quad\"\n"
@@ -138,13 +138,16 @@ std::string sceneText(const std::string& colour) {
            "[[instance]]\nmesh = \"box\"\nmaterial = \"paint\"\n"
            "[[instance]]\nmesh = \"floor\"\nmaterial = \"ground\"\nscale = [8, 1, 8]\ntranslate = [0, -1, 0]\n"
            "[[light]]\ntype = \"point\"\nposition = [3, 6, 4]\nintensity = 40\n"
-           "[[camera]]\nname = \"main\"\nposition = [3, 2.5, 4]\nlook_at = [0, 0, 0]\n";
+           "[[camera]]\nname = \"main\"\nposition = [3, 2.5, 4]\nlook_at = [0, 0, 0]\n" + extra;
 }
+
+// Issue 20: the edit also adds a section plane that cuts the box open towards the camera (a cap).
+const char* kSection = "[[section]]\npoint = [0, 0, 0.3]\nnormal = [-1, 0, -1]\ncap_color = [0.9, 0.9, 0.1]\n";
 
 TEST(RunWatch, AnEditedSceneFileReachesTheWallAsUpdates) {
     const auto dir = test::scratchDir();
     test::writeFile(dir / "scene.toml", sceneText("[0.8, 0.2, 0.1]"));
-    test::writeFile(dir / "edited.toml", sceneText("[0.1, 0.3, 0.9]"));
+    test::writeFile(dir / "edited.toml", sceneText("[0.1, 0.3, 0.9]", kSection));
     test::writeFile(dir / "broken.toml", sceneText("[0.1, 0.3") );
     test::writeFile(dir / "run.toml", "scene = \"scene.toml\"\n[cluster]\nclients = 1\n"
                                       "[run]\nframes = 100000\nwrite_every = 1\nout = \"" + (dir / "frames").string() +
@@ -177,7 +180,8 @@ ls "$D/frames" | sort | tail -1 > "$D/last"
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_EQ(r.output.find("NO "), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("exit 0"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("changed: 1 materials, 0 lights, 0 instance transforms, render settings same, camera same"),
+    EXPECT_NE(r.output.find("changed: 1 materials, 0 lights, 0 instance transforms, render settings same, camera same, 1 "
+                            "section planes"),
               std::string::npos)
         << r.output;
 
@@ -192,6 +196,9 @@ ls "$D/frames" | sort | tail -1 > "$D/last"
     EXPECT_EQ(fileBytes(dir / "before.png"), fileBytes(dir / "original.png"));
     EXPECT_EQ(fileBytes(dir / "frames" / last), fileBytes(dir / "edited.png")) << last;
     EXPECT_NE(fileBytes(dir / "original.png"), fileBytes(dir / "edited.png"));
+    test::writeFile(dir / "uncut.toml", sceneText("[0.1, 0.3, 0.9]"));
+    ASSERT_EQ(test::runCli(exe, "render " + (dir / "uncut.toml").string() + " --out " + (dir / "uncut.png").string()).status, 0);
+    EXPECT_NE(fileBytes(dir / "uncut.png"), fileBytes(dir / "edited.png")) << "the plane cuts something";
 }
 
 }  // namespace

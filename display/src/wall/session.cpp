@@ -250,10 +250,10 @@ struct WallSession::Impl {
         }
         const std::string file = config.scene;
         for (const std::string& r : e.refused) log(file + ": " + r + " (not applied)");
-        log(format("%s changed: %zu materials, %zu lights, %zu instance transforms, %zu section planes, render settings %s, "
-                   "camera %s",
-                   file.c_str(), e.materials.size(), e.lights.size(), e.transforms.size(), e.sections.size(),
-                   e.settings ? "changed" : "same", e.camera ? "moved" : "same"));
+        log(format("%s changed: %zu materials, %zu lights, %zu instance transforms, render settings %s, camera %s, %zu "
+                   "section planes",
+                   file.c_str(), e.materials.size(), e.lights.size(), e.transforms.size(), e.settings ? "changed" : "same",
+                   e.camera ? "moved" : "same", e.sections.size()));
         return e;
     }
 
@@ -462,7 +462,8 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
             },
             s.log);
         s.log("watching " + file.string() +
-              ": edits to materials, lights, instance transforms, render settings and the camera are sent as they are saved");
+              ": edits to materials, lights, instance transforms, render settings, the camera and section planes "
+              "are sent as they are saved");
     }
     s.last = std::chrono::steady_clock::now();
 }
