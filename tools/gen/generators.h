@@ -42,6 +42,7 @@ void genSunflowers(const GenOptions& o);
 std::filesystem::path writeShadingDemo(const std::string& name, const std::filesystem::path& dir);
 void genStep(const GenOptions& o);  // step_assembly.cpp: OpenCASCADE, the generator's only OCCT unit
 void genIges(const GenOptions& o);  // step_assembly.cpp: the same assembly as IGES
+void genStepCurved(const GenOptions& o);  // step_assembly.cpp: curved parts (fillets, spheres, tori)
 
 // ---- building blocks shared by the generators ------------------------------------------------
 
