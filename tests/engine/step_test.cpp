@@ -315,6 +315,34 @@ TEST(Step, DamagedFilesAreOneLineErrors) {
     }
 }
 
+// OCCT 7.6 dereferences a null handle when a LINE's VECTOR entity is missing (the fuzzer's first
+// crash, within seconds: StepGeom_Vector::Orientation under StepToGeom::MakeLine). In this process
+// that is a segmentation fault; the child process makes it one line naming the file.
+TEST(Step, CrashInsideOpenCascadeIsContained) {
+    const auto dir = test::scratchDir();
+    gen::GenOptions o;
+    o.out = dir;
+    o.instances = 11;
+    gen::genStepCurved(o);
+    std::ifstream in(dir / "assembly.step", std::ios::binary);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    // The first LINE('',#point,#vector): drop the entity #vector.
+    const size_t line = text.find("= LINE('',#");
+    ASSERT_NE(line, std::string::npos);
+    const size_t comma = text.find(",#", line + 11), close = text.find(')', comma);
+    const std::string vector = "\n" + text.substr(comma + 1, close - comma - 1) + " = VECTOR(";
+    const size_t at = text.find(vector);
+    ASSERT_NE(at, std::string::npos) << vector;
+    text.erase(at, text.find(';', at) + 1 - at);
+    const fs::path bad = test::writeFile(dir / "missing_vector.step", text);
+    const std::string e = test::inputErrorOf([&] { loadAssembly(bad); });
+    EXPECT_EQ(e.rfind(bad.string() + ": ", 0), 0u) << e;
+    EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+    EXPECT_NE(e.find("crashed"), std::string::npos) << e;
+    // The importer is still usable afterwards.
+    EXPECT_EQ(loadAssembly(stepFile()).instances.size(), 21u);
+}
+
 TEST(Step, MalformedFilesAreOneLineErrors) {
     const auto dir = test::scratchDir();
     const auto garbage = test::writeFile(dir / "garbage.step", "this is not ISO 10303-21 at all\n");

@@ -169,7 +169,7 @@ void writeAssembly(const GenOptions& o, bool iges, PartSet set) {
         throw std::runtime_error(what + "OpenCASCADE: " + e.GetMessageString());
     }
     XCAFApp_Application::GetApplication()->Close(doc);
-    std::printf("wrote %s: %lld modules, %lld part instances of %d parts\n", file.c_str(), (long long)modules,
+    std::fprintf(stderr, "wrote %s: %lld modules, %lld part instances of %d parts\n", file.c_str(), (long long)modules,
                 (long long)(perModule * modules), curved ? 4 : 3);
 }
 
