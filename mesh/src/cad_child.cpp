@@ -97,6 +97,9 @@ uint64_t memoryBudget(uint64_t fileSize) {
 // The child: import, encode, write the bytes into `memfd`; messages on `out`. Never returns.
 [[noreturn]] void runChild(const fs::path& file, const AssemblyOptions& options, const AssemblyKey& key, int memfd, int out,
                            uint64_t fileSize) {
+    // A crash here is the parent's to report: no handler inherited from the parent (a crash
+    // reporter, libFuzzer's, which would record the input as its own finding) runs in the child.
+    for (int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) std::signal(sig, SIG_DFL);
 #ifndef RTWALL_CAD_ASAN
     // AddressSanitizer reserves terabytes of shadow address space; the limit is left to it there.
     if (const uint64_t now = addressSpaceNow(); now > 0) {

@@ -25,6 +25,7 @@ struct GenOptions {
     int64_t treeTriangles = 0;       // sunflowers: triangles per tree (0: default)
     uint64_t seed = 1;
     bool cache = true;               // write [load] cache = true into the scene
+    bool rows = false;               // step, step-curved, iges: modules grouped into one sub-assembly per row
 };
 
 struct Generator {

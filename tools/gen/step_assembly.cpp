@@ -7,6 +7,10 @@
 // places the module on a square grid, so the file holds each part's geometry once and
 // 7 x modules part instances. Sizes in millimetres, z up (as CAD files are).
 //
+// With --rows, the plant holds one sub-assembly per grid row, and the rows the modules (as large
+// CAD assemblies nest): OCCT's STEP reader takes time quadratic in the components of one
+// assembly (docs/assemblies.md), so this is how a file of 100,000s of part instances is read.
+//
 // `rtwall gen step-curved` writes the same layout with curved parts, where the tessellation
 // deflections decide what the model looks like (the tessellation benchmark's model): a plate with
 // every edge filleted (cylindrical and spherical blends), pins with a filleted head (a torus),
@@ -144,9 +148,22 @@ void writeAssembly(const GenOptions& o, bool iges, PartSet set) {
 
     const TDF_Label plant = shapes->NewShape();
     TDataStd_Name::Set(plant, "plant");
-    for (int64_t m = 0; m < modules; ++m)
-        component(plant, module, at(100.0 * double(m % side), 100.0 * double(m / side), 0, double(m % 4) * 90.0),
-                  "module " + std::to_string(m + 1));
+    TDF_Label row;
+    for (int64_t m = 0; m < modules; ++m) {
+        const double x = 100.0 * double(m % side), y = 100.0 * double(m / side), turn = double(m % 4) * 90.0;
+        if (!o.rows) {
+            component(plant, module, at(x, y, 0, turn), "module " + std::to_string(m + 1));
+            continue;
+        }
+        // plant > row N (a product of its own, placed at its y) > module M.
+        if (m % side == 0) {
+            row = shapes->NewShape();
+            const std::string name = "row " + std::to_string(m / side + 1);
+            TDataStd_Name::Set(row, TCollection_ExtendedString(name.c_str()));
+        }
+        component(row, module, at(x, 0, 0, turn), "module " + std::to_string(m + 1));
+        if (m % side == side - 1 || m == modules - 1) component(plant, row, at(0, y, 0), "row " + std::to_string(m / side + 1));
+    }
     shapes->UpdateAssemblies();
 
     const std::string what = iges ? "gen iges: " : "gen step: ";
