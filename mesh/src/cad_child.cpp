@@ -1,10 +1,9 @@
 // STEP and IGES imports in a child process.
 //
-// OpenCASCADE is not written for hostile input: on malformed files its STEP and IGES readers and
-// BRepMesh dereference null handles, recurse without bound, loop, or allocate what a count in the
-// file says (docs/assemblies.md, "Malformed files", lists what the fuzzer found). None of that
-// may take rtwall down, and OCCT's own signal handling (OSD::SetSignal) cannot be trusted to
-// unwind a corrupted heap. So the import runs in a forked child under an address-space limit,
+// OpenCASCADE is not written for hostile input: fuzz_step found eight distinct null dereferences
+// in OCCT 7.6's STEP translator within minutes (docs/assemblies.md, "Malformed STEP and IGES
+// files"), plain segmentation faults that no handler can unwind safely, and nothing in OCCT
+// bounds the memory or the time one import takes. None of that may take rtwall down. So the import runs in a forked child under an address-space limit and a stall limit,
 // and answers through a pipe, one line per message:
 //   P <fraction>   progress (the parent's progress function sees it; false there kills the child)
 //   W <line>       a warning of the assembly
@@ -13,8 +12,8 @@
 // and validates in full like any cache (so the child's result is trusted no more than a file).
 // The tessellated meshes stay where the child wrote them (views of the memfd's pages): the
 // geometry exists once in the parent, and the child's copy goes with it. A crash is reported as a
-// malformed file; no message for longer than the stall limit is reported as a hang and the child
-// is killed. The cost is a fork and one encode/decode of the result (docs/assemblies.md).
+// malformed file; no message within the stall limit (CPU time of the child) is reported as a
+// hang and the child is killed. The cost is a fork and one encode/decode of the result (docs/assemblies.md).
 #include "mesh_internal.h"
 
 #include <fcntl.h>
@@ -33,6 +32,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 #include <new>
 #include <string>
 
@@ -143,6 +143,23 @@ uint64_t memoryBudget(uint64_t fileSize) {
     ::_exit(code);
 }
 
+// CPU seconds (user and system) that process `pid` has used, from /proc/PID/stat; -1 if unknown.
+double cpuSecondsOf(pid_t pid) {
+    std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+    std::string stat;
+    std::getline(in, stat);
+    const size_t close = stat.rfind(')');  // the command name may hold spaces and parentheses
+    if (close == std::string::npos) return -1;
+    std::istringstream fields(stat.substr(close + 2));
+    std::string field;
+    unsigned long long utime = 0, stime = 0;
+    for (int i = 3; i <= 15 && fields >> field; ++i) {
+        if (i == 14) utime = std::strtoull(field.c_str(), nullptr, 10);
+        if (i == 15) stime = std::strtoull(field.c_str(), nullptr, 10);
+    }
+    return double(utime + stime) / double(::sysconf(_SC_CLK_TCK));
+}
+
 struct Fd {
     int fd = -1;
     ~Fd() {
@@ -190,29 +207,39 @@ CadImport importCad(const fs::path& file, const AssemblyOptions& options, const 
     ::close(pipeFds[1]);
     if (pid < 0) fail(file, std::string("cannot start the importer: ") + std::strerror(errno));
 
-    // Messages until the pipe closes (the child exited), a stall, or a cancel.
-    auto kill = [pid] {
+    // Messages until the child exits (not only until the pipe closes: a process forked meanwhile
+    // by another thread may hold the pipe's write end), a stall, or a cancel.
+    auto killChild = [pid] {
         ::kill(pid, SIGKILL);
         int status = 0;
         while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
         }
     };
-    // Parsing (before the first progress report) runs at some MB/s; each later step reports.
-    const auto stallLimit = std::chrono::seconds(120 + fileSize / (1 << 20));
+    // A hang is a child that reports nothing while it burns CPU: parsing (before the first
+    // progress report) runs at some MB/s, each later step reports. Counted in the child's CPU
+    // seconds, so that a loaded machine does not make a slow import a hang; a child blocked
+    // without using CPU is caught by ten times that in wall time.
+    const double stallCpu = 120.0 + double(fileSize) / double(1 << 20);
+    const auto stallWall = std::chrono::seconds(int64_t(10 * stallCpu));
     auto lastMessage = std::chrono::steady_clock::now();
+    double cpuAtLastMessage = 0;
     std::string pending, error;
     char buf[4096];
-    for (bool open = true; open;) {
-        pollfd pfd{in.fd, POLLIN, 0};
-        const int ready = ::poll(&pfd, 1, 100);
-        if (ready > 0) {
+    int status = 0;
+    for (bool exited = false, open = true; !exited;) {
+        // After the child has exited, what it wrote is in the pipe: drain it without waiting.
+        if (::waitpid(pid, &status, WNOHANG) == pid) exited = true;
+        for (pollfd pfd{in.fd, POLLIN, 0}; open && ::poll(&pfd, 1, exited ? 0 : 100) > 0; pfd.revents = 0) {
             const ssize_t n = ::read(in.fd, buf, sizeof buf);
             if (n < 0 && errno == EINTR) continue;
-            if (n <= 0) open = false;
-            else {
-                pending.append(buf, size_t(n));
-                lastMessage = std::chrono::steady_clock::now();
+            if (n <= 0) {
+                open = false;
+                break;
             }
+            pending.append(buf, size_t(n));
+            lastMessage = std::chrono::steady_clock::now();
+            cpuAtLastMessage = cpuSecondsOf(pid);
+            if (!exited) break;
         }
         for (size_t nl; (nl = pending.find('\n')) != std::string::npos;) {
             const std::string line = pending.substr(0, nl);
@@ -221,7 +248,7 @@ CadImport importCad(const fs::path& file, const AssemblyOptions& options, const 
             const std::string text = line.substr(2);
             if (line[0] == 'P') {
                 if (options.progress && !options.progress(std::strtod(text.c_str(), nullptr))) {
-                    kill();
+                    if (!exited) killChild();
                     throw Cancelled();
                 }
             } else if (line[0] == 'W') {
@@ -230,15 +257,17 @@ CadImport importCad(const fs::path& file, const AssemblyOptions& options, const 
                 error = text;
             }
         }
-        if (open && std::chrono::steady_clock::now() - lastMessage > stallLimit) {
-            kill();
-            fail(file, "OpenCASCADE did not finish reading the file (no progress for " +
-                           std::to_string(std::chrono::duration_cast<std::chrono::seconds>(stallLimit).count()) +
-                           " s); the file is malformed or too large");
+        if (!exited && (cpuSecondsOf(pid) - cpuAtLastMessage > stallCpu || std::chrono::steady_clock::now() - lastMessage > stallWall)) {
+            killChild();
+            fail(file, "OpenCASCADE did not finish reading the file (no progress in " + std::to_string(int(stallCpu)) +
+                           " s of CPU time); the file is malformed or too large");
         }
-    }
-    int status = 0;
-    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+        if (!open && !exited) {
+            // The pipe closed: the child is exiting; wait for it.
+            while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+            }
+            exited = true;
+        }
     }
     if (WIFSIGNALED(status))
         fail(file, "OpenCASCADE crashed reading the file (signal " + std::to_string(WTERMSIG(status)) + ": " +
