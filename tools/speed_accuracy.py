@@ -15,6 +15,9 @@ Steps (each writes raw JSON under --work/raw/, charts under docs/speed-accuracy/
   5. validate   simulated against measured frames/s for what this PC can run (rtwall bench cluster)
   6. docs       the charts and docs/speed-accuracy.md, plus a front per scene for
                 `rtwall run --target-fps N --front docs/speed-accuracy/front-SCENE.toml`
+  7. tessellation  STEP tessellation tolerance against triangles, memory, import time and image
+                error (rtwall bench tessellation); `--only tessellation` runs this step alone and
+                rewrites only its section of the page
 
 A control is one entry of rtwall's control table (`rtwall controls --json`): its option and label.
 Pruning threshold, GI samples per pixel and volume step go there once the renderer has them.
@@ -898,8 +901,126 @@ def shading_failures(points_by_scene):
     return md
 
 
+# ---- 7. STEP tessellation --------------------------------------------------------------------
+
+TESSELLATION_ARGS = ["--linear", "3,1,0.3,0.1,0.03,0.01", "--angular", "1,0.5,0.25,0.1", "--reference-linear", "0.002",
+                     "--reference-angular", "0.05", "--width", "800", "--height", "600", "--supersample", "2",
+                     "--runs", "3"]
+TESSELLATION_BEGIN, TESSELLATION_END = "<!-- tessellation: begin -->", "<!-- tessellation: end -->"
+
+
+def tessellation(r):
+    t0 = time.time()
+    res = r.run("bench", "tessellation", "--json", "--dir", r.work / "tessellation", *TESSELLATION_ARGS)
+    res["elapsed_s"] = time.time() - t0
+    (r.raw / "tessellation.json").write_text(json.dumps(res, indent=1))
+    log(f"tessellation: done ({res['elapsed_s'] / 60:.1f} min)")
+    return res
+
+
+def tessellation_chart(docs, tess):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    rows = tess["rows"]
+    angulars = sorted({row["angular_deflection"] for row in rows}, reverse=True)
+    panels = [("unique triangles", lambda row: row["unique_triangles"], True),
+              ("memory, MB (mesh buffers + Embree BVH)", lambda row: (row["geometry_bytes"] + row["embree_bytes"]) / 1e6, True),
+              (f"cold import, s (median of {tess['runs']})", lambda row: row["import_s"], True),
+              ("RMSE against the reference, 8-bit levels", lambda row: row["rmse"], True),
+              ("mean FLIP against the reference", lambda row: row["flip"], True)]
+    fig, axes = plt.subplots(2, 3, figsize=(15, 8.5))
+    cmap = plt.get_cmap("viridis")
+    for ax, (label, value, logy) in zip(axes.flat, panels):
+        for i, a in enumerate(angulars):
+            sel = sorted((row for row in rows if row["angular_deflection"] == a), key=lambda row: row["linear_deflection"])
+            ax.plot([row["linear_deflection"] for row in sel], [max(value(row), 1e-4) for row in sel], "o-", ms=4,
+                    color=cmap(i / max(1, len(angulars) - 1)), label=f"angular {a:g} rad")
+        ax.set_xscale("log")
+        ax.invert_xaxis()  # finer to the right
+        if logy:
+            ax.set_yscale("log")
+        ax.set_xlabel("linear deflection, mm (finer to the right)")
+        ax.set_ylabel(label)
+        ax.grid(True, which="both", alpha=0.3)
+    axes.flat[0].legend(fontsize=8)
+    ax = axes.flat[5]
+    for i, a in enumerate(angulars):
+        sel = [row for row in rows if row["angular_deflection"] == a]
+        ax.scatter([row["unique_triangles"] for row in sel], [min(row["psnr_db"], 80) for row in sel], s=22,
+                   color=cmap(i / max(1, len(angulars) - 1)), label=f"angular {a:g} rad")
+    ax.axhline(40, color="grey", ls=":", lw=1)
+    ax.set_xscale("log")
+    ax.set_xlabel("unique triangles")
+    ax.set_ylabel("PSNR against the reference, dB")
+    ax.grid(True, which="both", alpha=0.3)
+    ref = tess["reference"]
+    fig.suptitle(f"STEP tessellation: {tess['instances']} part instances of {tess['meshes']} curved parts; reference "
+                 f"linear {ref['linear_deflection']:g} mm, angular {ref['angular_deflection']:g} rad "
+                 f"({ref['unique_triangles']:,} unique triangles)")
+    path = docs / "speed-accuracy-tessellation.png"
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+    return path
+
+
+def tessellation_section(path, fig, tess):
+    rel = os.path.relpath(fig, path.parent)
+    ref, rows = tess["reference"], tess["rows"]
+    ok = [row for row in rows if row["psnr_db"] >= 40]
+    cheapest = min(ok, key=lambda row: row["unique_triangles"]) if ok else None
+    default = next((row for row in rows if row["linear_deflection"] == 0.1 and row["angular_deflection"] == 0.5), None)
+    md = [TESSELLATION_BEGIN, "## STEP tessellation: tolerance against triangles, memory, import time and error", "",
+          f"`rtwall bench tessellation --json {' '.join(TESSELLATION_ARGS)}` (run by `tools/speed_accuracy.py "
+          f"--only tessellation` in {tess.get('elapsed_s', 0) / 60:.1f} min): `rtwall gen step-curved` writes a STEP "
+          f"assembly through OpenCASCADE of {tess['instances']} part instances of {tess['meshes']} curved parts (a plate "
+          "with every edge filleted, pins with a rounded head, ball knobs, torus rings; millimetres), imported at every "
+          "pair of linear deflection (the largest distance between surface and triangles) and angular deflection (the "
+          "largest angle between neighbouring triangles; BRepMesh meets both). Import time is a cold import "
+          "(OpenCASCADE's transfer and BRepMesh, no assembly cache; the median of "
+          f"{tess['runs']}); memory is the mesh buffers (positions, normals, indices) plus Embree's BVHs. Error: the "
+          f"same camera and {tess['supersample']}x{tess['supersample']} samples per pixel at {tess['width']}x{tess['height']} "
+          f"against the reference tessellation (linear {ref['linear_deflection']:g} mm, angular "
+          f"{ref['angular_deflection']:g} rad: {ref['unique_triangles']:,} unique triangles, "
+          f"{(ref['geometry_bytes'] + ref['embree_bytes']) / 1e6:.1f} MB, import {ref['import_s']:.2f} s), so the only "
+          "difference is the geometry: faceted silhouettes and the flat facets' shading (normals come from the "
+          "surface, so shading inside a face is smooth already at coarse settings).", "",
+          f"![tessellation]({rel})", ""]
+    if cheapest:
+        md += [f"**The fewest triangles at 40 dB or better: linear {cheapest['linear_deflection']:g} mm, angular "
+               f"{cheapest['angular_deflection']:g} rad** ({cheapest['unique_triangles']:,} unique triangles, "
+               f"{cheapest['psnr_db']:.1f} dB, {cheapest['unique_triangles'] / ref['unique_triangles']:.1%} of the "
+               "reference's triangles)." + (f" The default (0.1 mm, 0.5 rad): {default['unique_triangles']:,} triangles, "
+                                            f"{default['psnr_db']:.1f} dB, FLIP {default['flip']:.4f}." if default else ""), ""]
+    md += [fmt_table(["linear mm", "angular rad", "unique triangles", "instanced triangles", "mesh MB", "BVH MB",
+                      "bytes / unique triangle", "import s", "RMSE", "PSNR dB", "FLIP"],
+                     [[f"{row['linear_deflection']:g}", f"{row['angular_deflection']:g}", f"{row['unique_triangles']:,}",
+                       f"{row['instanced_triangles']:,}", f"{row['geometry_bytes'] / 1e6:.2f}",
+                       f"{row['embree_bytes'] / 1e6:.2f}",
+                       f"{(row['geometry_bytes'] + row['embree_bytes']) / max(1, row['unique_triangles']):.0f}",
+                       f"{row['import_s']:.3f}", f"{row['rmse']:.3f}", psnr(row["psnr_db"]), f"{row['flip']:.4f}"]
+                      for row in sorted(rows, key=lambda row: (-row["linear_deflection"], -row["angular_deflection"]))]),
+           "", TESSELLATION_END, ""]
+    return md
+
+
+def update_tessellation_section(path, section):
+    """Replaces the page's tessellation section (or puts it before the automatic operating point)."""
+    text = path.read_text()
+    block = "\n".join(section)
+    if TESSELLATION_BEGIN in text and TESSELLATION_END in text:
+        head, rest = text.split(TESSELLATION_BEGIN, 1)
+        tail = rest.split(TESSELLATION_END, 1)[1].lstrip("\n")
+        text = head + block + tail
+    else:
+        at = text.index("## Automatic operating point")
+        text = text[:at] + block + text[at:]
+    path.write_text(text)
+
+
 def write_docs(path, figs, points_by_scene, scaling_by_scene, text_rows, affinity, prefetch, validation, elapsed, args,
-               trace=None, refs=None, accs=None):
+               trace=None, refs=None, accs=None, tess=None):
     refs, accs = refs or {}, accs or {}
     rel = lambda p: os.path.relpath(p, path.parent)
     md = ["# Speed against accuracy", "",
@@ -987,6 +1108,8 @@ def write_docs(path, figs, points_by_scene, scaling_by_scene, text_rows, affinit
                    "two independent halves of its frames where it path traces, else bounded by comparing it with the "
                    "same render at a quarter of its samples; PSNRs against it are trustworthy well below that figure.",
                    ""] + md[6:]
+    if tess:
+        md += tessellation_section(path, figs["tessellation"], tess)
     md += ["## Automatic operating point", "",
            "`rtwall run CONFIG --target-fps N --front docs/speed-accuracy/front-SCENE.toml` starts at the most "
            "accurate front point whose frame time fits 1/N, then feeds every measured frame time to an "
@@ -1178,14 +1301,22 @@ def main():
     ap.add_argument("--prior-s", type=float, default=0,
                     help="with --reuse after a run that stopped after its sweep: the seconds that run took (the "
                          "page then reports their sum as the regeneration time)")
+    ap.add_argument("--only", choices=["tessellation"],
+                    help="run this step alone and rewrite only its section of the page (and its chart)")
     args = ap.parse_args()
     args.start_load = os.getloadavg()[0]  # how busy the PC was: the page says so
     t0 = time.time()
     r = Runner(args.build, args.work, args.quick)
-    load_controls(r)
     docs = Path(args.docs)
     figdir = docs / "speed-accuracy"
     figdir.mkdir(parents=True, exist_ok=True)
+    if args.only == "tessellation":
+        tess = tessellation(r)
+        page = docs / "speed-accuracy.md"
+        update_tessellation_section(page, tessellation_section(page, tessellation_chart(figdir, tess), tess))
+        log(f"wrote the tessellation section of {page} in {(time.time() - t0) / 60:.1f} min")
+        return
+    load_controls(r)
 
     points_by_scene, scaling_by_scene = {}, {}
     if args.reuse:
@@ -1219,6 +1350,9 @@ def main():
     if not args.reuse:
         text_rows, affinity, prefetch, validation, diff_dir = measure_rest(r, args, t0)
     figs = charts(figdir, points_by_scene, scaling_by_scene, affinity, prefetch, validation)
+    tess_file = r.raw / "tessellation.json"
+    tess = json.loads(tess_file.read_text()) if args.reuse and tess_file.exists() else tessellation(r)
+    figs["tessellation"] = tessellation_chart(figdir, tess)
     trace_file = r.raw / "controller-trace.json"
     if args.skip_validation:
         trace = json.loads(trace_file.read_text()) if args.reuse and trace_file.exists() else None
@@ -1246,7 +1380,7 @@ def main():
                          if (r.raw / f"{kind}-{sc.name}.json").exists()}
     accs = {k: v for k, v in load("accumulate").items() if v}
     write_docs(docs / "speed-accuracy.md", figs, points_by_scene, scaling_by_scene, text_rows, affinity, prefetch,
-               validation, elapsed, args, trace, refs=load("reference"), accs=accs)
+               validation, elapsed, args, trace, refs=load("reference"), accs=accs, tess=tess)
     log(f"wrote {docs / 'speed-accuracy.md'} and {len(figs)} figures in {(time.time() - t0) / 60:.1f} min")
 
 

@@ -31,7 +31,7 @@ Assembly loadAssembly(const std::filesystem::path& file, const AssemblyOptions& 
     if (ext == ".gltf" || ext == ".glb") {
         a = detail::importGltf(file);
     } else if (!options.cache) {
-        a = detail::importCad(file, options);
+        a = detail::importCad(file, options, {}, nullptr).assembly;
     } else {
         // Tessellation is the slow part: the cache is keyed by the file's content and the deflections.
         detail::AssemblyKey key;
@@ -44,15 +44,18 @@ Assembly loadAssembly(const std::filesystem::path& file, const AssemblyOptions& 
             cached->cache = "hit";
             return std::move(*cached);
         }
-        a = detail::importCad(file, options);
+        std::string dirError;
         try {
             if (!options.cacheDir.empty()) std::filesystem::create_directories(options.cacheDir);
-            detail::writeAssemblyCache(a, key, cacheFile);
-            a.cache = why == "no cache" ? "written" : "rebuilt: " + why;
         } catch (const std::exception& e) {
-            // A read-only folder must not stop the model from loading.
-            a.cache = std::string("not written: ") + e.what();
+            dirError = e.what();
         }
+        detail::CadImport imported = detail::importCad(file, options, key, dirError.empty() ? &cacheFile : nullptr);
+        a = std::move(imported.assembly);
+        // A read-only folder must not stop the model from loading.
+        if (!dirError.empty()) a.cache = "not written: " + dirError;
+        else if (!imported.cacheError.empty()) a.cache = "not written: " + imported.cacheError;
+        else a.cache = why == "no cache" ? "written" : "rebuilt: " + why;
     }
     for (const std::string& w : a.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     return a;

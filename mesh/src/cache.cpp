@@ -543,7 +543,7 @@ uint64_t hashFileContent(const fs::path& file, uint64_t& size) {
     return map.data() ? XXH3_64bits(map.data(), map.size()) : XXH3_64bits(nullptr, 0);
 }
 
-void writeAssemblyCache(const Assembly& a, const AssemblyKey& key, const fs::path& cacheFile) {
+std::vector<unsigned char> encodeAssemblyCache(const Assembly& a, const AssemblyKey& key) {
     Out d;
     d.str(a.format);
     d.put(uint64_t(a.meshNames.size()));
@@ -593,11 +593,19 @@ void writeAssemblyCache(const Assembly& a, const AssemblyKey& key, const fs::pat
     std::memcpy(file.data() + kAssemblyHeader, d.bytes.data(), d.bytes.size());
     for (size_t i = 0; i < meshes.size(); ++i) std::memcpy(file.data() + offsets[i], meshes[i].data(), meshes[i].size());
     putLE(file.data() + kAssemblyChecksumAt, checksumAt(file.data(), file.size(), kAssemblyChecksumAt));
+    return file;
+}
 
+void writeAssemblyCache(const Assembly& a, const AssemblyKey& key, const fs::path& cacheFile) {
+    const std::vector<unsigned char> bytes = encodeAssemblyCache(a, key);
+    writeAssemblyCacheBytes(bytes.data(), bytes.size(), cacheFile);
+}
+
+void writeAssemblyCacheBytes(const unsigned char* data, size_t size, const fs::path& cacheFile) {
     const fs::path tmp = cacheFile.string() + ".tmp." + std::to_string(::getpid());
     {
         std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        out.write(reinterpret_cast<const char*>(file.data()), std::streamsize(file.size()));
+        out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
         out.flush();
         if (!out) {
             out.close();

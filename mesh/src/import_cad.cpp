@@ -281,6 +281,9 @@ private:
             in.part = part;
             const auto& o = out_.meshes[in.mesh]->origin();
             in.transform = multiply(world, Matrix{1, 0, 0, o[0], 0, 1, 0, o[1], 0, 0, 1, o[2]});
+            // A location out of double range (1.E+400 in a placement) must not reach Embree.
+            for (double v : in.transform)
+                if (!std::isfinite(v)) fail(file_, "the placement of '" + name + "' is not finite");
             out_.instances.push_back(in);
         }
     }
@@ -324,7 +327,12 @@ void silenceOcct() {
 
 }  // namespace
 
-Assembly importCad(const fs::path& file, const AssemblyOptions& options) {
+std::mutex& occtMutex() {
+    static std::mutex occt;
+    return occt;
+}
+
+Assembly importCadHere(const fs::path& file, const AssemblyOptions& options, bool lock) {
     if (!(options.linearDeflection > 0) || !(options.angularDeflection > 0))
         fail(file, "tessellation deflections must be positive");
     std::error_code ec;
@@ -336,8 +344,8 @@ Assembly importCad(const fs::path& file, const AssemblyOptions& options) {
     Assembly out;
     out.format = iges ? "iges" : "step";
     // OCCT's application object and its static tables are shared: one import at a time.
-    static std::mutex occt;
-    const std::lock_guard<std::mutex> lock(occt);
+    std::unique_lock<std::mutex> guard(occtMutex(), std::defer_lock);
+    if (lock) guard.lock();
     try {
         struct Document {
             Handle(TDocStd_Document) doc;

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -53,7 +54,11 @@ TriangleMesh importMesh(const std::filesystem::path& file, ImportReport* report)
 
 // Assembly importers (import_gltf.cpp, import_cad.cpp); loadAssembly (assembly.cpp) picks one.
 Assembly importGltf(const std::filesystem::path& file);
-Assembly importCad(const std::filesystem::path& file, const AssemblyOptions& options);  // STEP, IGES
+// STEP and IGES (import_cad.cpp), in this process. OCCT's document application and static tables
+// are shared, so imports take occtMutex() (`lock` false: the caller holds it, or is the child
+// process forked while holding it).
+std::mutex& occtMutex();
+Assembly importCadHere(const std::filesystem::path& file, const AssemblyOptions& options, bool lock = true);
 
 // Assembly caches (cache.cpp): what a cache must have been made from.
 struct AssemblyKey {
@@ -63,10 +68,25 @@ struct AssemblyKey {
 std::filesystem::path assemblyCachePath(const std::filesystem::path& source, const std::filesystem::path& cacheDir);
 uint64_t hashFileContent(const std::filesystem::path& file, uint64_t& size);
 void writeAssemblyCache(const Assembly& assembly, const AssemblyKey& key, const std::filesystem::path& cacheFile);
+// The bytes writeAssemblyCache writes; also how a STEP/IGES import returns its assembly from the
+// child process it runs in.
+std::vector<unsigned char> encodeAssemblyCache(const Assembly& assembly, const AssemblyKey& key);
+// Writes encoded bytes as the cache file, atomically (a temporary file, then rename).
+void writeAssemblyCacheBytes(const unsigned char* data, size_t size, const std::filesystem::path& cacheFile);
 // Validated in full (checksum, counts, indices, every mesh as decodeMeshCache does); with
 // `keepAlive` the meshes view `data`.
 Assembly decodeAssemblyCache(const unsigned char* data, size_t size, const AssemblyKey& key, const std::string& name,
                              std::shared_ptr<const void> keepAlive);
 std::optional<Assembly> readAssemblyCache(const std::filesystem::path& cacheFile, const AssemblyKey& key, std::string* whyNot);
+
+// STEP and IGES as loadAssembly reads them (cad_child.cpp): importCadHere in a child process with
+// a memory and a time limit, the result handed back as assembly-cache bytes for `key` (mapped,
+// validated, and with `cacheFile` also written there). RTWALL_CAD_IN_PROCESS=1 imports here.
+struct CadImport {
+    Assembly assembly;
+    std::string cacheError;  // with a cacheFile: why it was not written; empty when it was
+};
+CadImport importCad(const std::filesystem::path& file, const AssemblyOptions& options, const AssemblyKey& key,
+                    const std::filesystem::path* cacheFile);
 
 }  // namespace rtwall::detail

@@ -103,4 +103,16 @@ struct UpdatesOptions : Common {
 };
 toml::table updates(const UpdatesOptions& o);
 
+// STEP tessellation: triangles, memory, import time and image error against a much finer
+// tessellation, for every pair of linear and angular deflection (`rtwall gen step-curved`).
+struct TessellationOptions : Common {
+    std::string dir = "out/bench-tessellation";  // where the STEP assembly is written
+    int64_t instances = 11;                      // part instances (one module: the parts fill the view)
+    int width = 800, height = 600, supersample = 2, threads = 0, runs = 3;
+    std::vector<double> linear{3.0, 1.0, 0.3, 0.1, 0.03, 0.01};  // file units (mm)
+    std::vector<double> angular{1.0, 0.5, 0.25, 0.1};       // radians
+    double referenceLinear = 0.002, referenceAngular = 0.05;
+};
+toml::table tessellation(const TessellationOptions& o);
+
 }  // namespace rtwall::bench

@@ -20,6 +20,10 @@ const std::map<std::string, Generator>& generators() {
          {"STEP assembly through OpenCASCADE: 3 coloured, named parts in a 7-part module on a grid, assembly.step "
           "(--instances part instances, 7000)",
           genStep}},
+        {"step-curved",
+         {"STEP assembly of curved parts (filleted plate, pins with a rounded head, ball knobs, rings: 11-part "
+          "module), where the tessellation deflections show: assembly.step (--instances, 11000)",
+          genStepCurved}},
         {"iges", {"the same assembly as IGES through OpenCASCADE: assembly.igs (--instances)", genIges}},
     };
     return all;

@@ -25,6 +25,7 @@ struct GenOptions {
     int64_t treeTriangles = 0;       // sunflowers: triangles per tree (0: default)
     uint64_t seed = 1;
     bool cache = true;               // write [load] cache = true into the scene
+    bool rows = false;               // step, step-curved, iges: modules grouped into one sub-assembly per row
 };
 
 struct Generator {
@@ -42,6 +43,7 @@ void genSunflowers(const GenOptions& o);
 std::filesystem::path writeShadingDemo(const std::string& name, const std::filesystem::path& dir);
 void genStep(const GenOptions& o);  // step_assembly.cpp: OpenCASCADE, the generator's only OCCT unit
 void genIges(const GenOptions& o);  // step_assembly.cpp: the same assembly as IGES
+void genStepCurved(const GenOptions& o);  // step_assembly.cpp: curved parts (fillets, spheres, tori)
 
 // ---- building blocks shared by the generators ------------------------------------------------
 

@@ -33,6 +33,7 @@ void addSimulate(CLI::App& app, Run& run);
 void addBenchTiles(CLI::App& bench, Run& run);
 void addBenchCodecs(CLI::App& bench, Run& run);
 void addBenchShading(CLI::App& bench, Run& run);
+void addBenchTessellation(CLI::App& bench, Run& run);  // bench_tessellation.cpp (issue 20)
 void addTrackerSim(CLI::App& app, Run& run);  // cmd_tracker_sim.cpp (issue 18)
 
 }  // namespace rtwall::cli

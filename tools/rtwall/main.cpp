@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
     rtwall::cli::addBenchTiles(*bench, run);
     rtwall::cli::addBenchCodecs(*bench, run);
     rtwall::cli::addBenchShading(*bench, run);
+    rtwall::cli::addBenchTessellation(*bench, run);
 
     try {
         app.parse(argc, argv);
