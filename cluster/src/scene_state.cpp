@@ -50,6 +50,9 @@ void apply(const StateFields& s, const Change& change) {
         }
         void operator()(const LightChange& c) const { element(s.lights, c.light, "light") = c.value; }
         void operator()(const SettingsChange& c) const { s.settings = c.settings; }
+        void operator()(const VisibilityChange& c) const {
+            element(s.instances, c.instance, "instance").visibility = c.visibility;
+        }
     };
     std::visit(Visitor{s}, change);
 }
@@ -120,6 +123,7 @@ uint64_t objectOf(const Change& change) {
         uint32_t operator()(const MaterialChange& c) const { return c.material; }
         uint32_t operator()(const LightChange& c) const { return c.light; }
         uint32_t operator()(const SettingsChange&) const { return 0; }  // one set of settings
+        uint32_t operator()(const VisibilityChange& c) const { return c.instance; }
     };
     return uint64_t(change.index()) << 32 | std::visit(Visitor{}, change);
 }

@@ -74,6 +74,7 @@ void expectSame(const InstanceDesc& a, const InstanceDesc& b) {
     EXPECT_EQ(a.mesh, b.mesh);
     EXPECT_EQ(a.material, b.material);
     expectSame(a.transform, b.transform);
+    EXPECT_EQ(a.visibility, b.visibility);
 }
 void expectSame(const RenderSettings& a, const RenderSettings& b) {
     EXPECT_EQ(a.width, b.width);
@@ -159,6 +160,10 @@ void expectSame(const LightChange& a, const LightChange& b) {
     expectSame(a.value, b.value);
 }
 void expectSame(const SettingsChange& a, const SettingsChange& b) { expectSame(a.settings, b.settings); }
+void expectSame(const VisibilityChange& a, const VisibilityChange& b) {
+    EXPECT_EQ(a.instance, b.instance);
+    EXPECT_EQ(a.visibility, b.visibility);
+}
 void expectSame(const Change& a, const Change& b) {
     ASSERT_EQ(a.index(), b.index());
     std::visit([&](const auto& alt) { expectSame(alt, std::get<std::decay_t<decltype(alt)>>(b)); }, a);
@@ -311,7 +316,7 @@ SceneSnapshot sampleSnapshot() {
     s.meshes.push_back(MeshRef{"floor", "shape:quad", {1, 2}, 200});
     s.materials = {sampleMaterial(0), sampleMaterial(1)};
     s.instances.push_back(InstanceDesc{1, 0, sampleTransform(0)});
-    s.instances.push_back(InstanceDesc{0, 1, sampleTransform(1)});
+    s.instances.push_back(InstanceDesc{0, 1, sampleTransform(1), -1, Visibility::Hidden});
     s.lights = {sampleLight(0), sampleLight(1)};
     s.camera = sampleCamera();
     s.settings = sampleSettings();
@@ -341,6 +346,7 @@ Update sampleUpdate() {
     u.changes.push_back(LightChange{2, sampleLight(1)});
     u.changes.push_back(SettingsChange{sampleSettings()});
     u.changes.push_back(CameraChange{sampleOffAxisCamera()});
+    u.changes.push_back(VisibilityChange{4, Visibility::Highlighted});
     return u;
 }
 

@@ -232,7 +232,8 @@ SceneDesc sampleScene() {
     d.meshes.push_back({"box", "meshes/box.ply", std::make_shared<const TriangleMesh>(makeBox())});
     d.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
     d.materials = {sampleMaterial(0), sampleMaterial(1)};
-    d.instances = {InstanceDesc{1, 1, sampleTransform(0), 1}, InstanceDesc{1, 1, sampleTransform(1), 0}};
+    d.instances = {InstanceDesc{1, 1, sampleTransform(0), 1, Visibility::Highlighted},
+                   InstanceDesc{1, 1, sampleTransform(1), 0, Visibility::Hidden}};
     d.parts = {PartDesc{"module", -1}, PartDesc{"module/bolt", 0}};
     d.lights = {sampleLight(0), sampleLight(1)};
     d.cameras = {sampleCamera(0), sampleCamera(1)};
@@ -272,7 +273,7 @@ TEST(SceneState, MemberCountsAreExact) {
     EXPECT_EQ(fieldCount<Light>(), 8u);
     EXPECT_EQ(fieldCount<CameraDesc>(), 6u);  // std::optional<ProjectionWindow> counts as one
     EXPECT_EQ(fieldCount<ProjectionWindow>(), 3u);
-    EXPECT_EQ(fieldCount<InstanceDesc>(), 4u);
+    EXPECT_EQ(fieldCount<InstanceDesc>(), 5u);
     EXPECT_EQ(fieldCount<Transform>(), 1u);  // the std::array, not its 12 doubles
     EXPECT_EQ(fieldCount<BvhSettings>(), 4u);
     EXPECT_EQ(fieldCount<SceneDesc>(), 11u);
@@ -320,7 +321,7 @@ TEST(SceneState, EveryChangeTravelsAndComesBack) {
     u.baseSeq = 4;
     u.changes = {CameraChange{sampleCamera(3)}, TransformChange{1, sampleTransform(4)},
                  MaterialChange{1, sampleMaterial(5), {refOf("tex/new.png", bytesOf("new"))}}, LightChange{1, sampleLight(6)},
-                 SettingsChange{sampleSettings()}};
+                 SettingsChange{sampleSettings()}, VisibilityChange{1, Visibility::Hidden}};
     expectAllSet(std::get<CameraChange>(u.changes[0]).camera, CameraDesc{}, "CameraChange");
     expectAllSet(std::get<MaterialChange>(u.changes[2]).value, Material{}, "MaterialChange");
     expectAllSet(std::get<LightChange>(u.changes[3]).value, Light{}, "LightChange");

@@ -54,6 +54,9 @@ public:
     bool measuring() const { return measuring_; }
     bool measurePick(LiveScene& scene, double wallX, double wallY);
     const std::optional<Measurement>& measurement() const { return measurement_; }
+    // Parts by name (WallSession::setPartView): applied to the scene, logged, on the overlay.
+    void setPartView(LiveScene& scene, const PartView& view);
+    void showAllParts(LiveScene& scene);
     // Shows a frame the wall's size (or smaller: a frame rendered at a fraction of the
     // resolution is shown upscaled).
     void show(const WallFrame& frame, const FrameReport& report, double frameSeconds);
@@ -81,6 +84,10 @@ private:
     bool escapeHeld_ = false;  // the Esc that left measure mode: held on, it does not close the wall
     std::optional<Measurement> measurement_;
     std::string measureLine() const;  // for the status line and overlay while measuring
+    std::string selected_;            // the part (path, or mesh name) the last Ctrl+click picked
+    std::string partsLine_;           // what is hidden, isolated, highlighted; empty: nothing
+    void partKey(LiveScene& scene, int key);
+    bool banner() const { return measuring_ || !partsLine_.empty(); }
     void refreshStatus() { statusClock_ = 1e9; }  // the overlay shows a change at the next frame
 };
 
