@@ -350,7 +350,7 @@ TEST(SceneState, EveryMemberChangesTheWireBytes) {
     expectEveryMemberOnTheWire(sampleMaterial(0), "Material");
     expectEveryMemberOnTheWire(sampleLight(0), "Light");
     expectEveryMemberOnTheWire(sampleCamera(0), "CameraDesc");
-    expectEveryMemberOnTheWire(InstanceDesc{1, 2, sampleTransform(0), 3}, "InstanceDesc");
+    expectEveryMemberOnTheWire(InstanceDesc{1, 2, sampleTransform(0), 3, Visibility::Hidden}, "InstanceDesc");
     expectEveryMemberOnTheWire(sampleSettings(), "RenderSettings");
     EXPECT_TRUE(sameOnWire(sampleMaterial(1), sampleMaterial(1)));
 }

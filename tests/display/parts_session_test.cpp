@@ -3,7 +3,6 @@
 // Every frame the cluster shows is the session's state rendered on one machine, byte for byte.
 #include "display_test_util.h"
 #include "parts_scene.h"
-#include "test_util.h"
 
 #include <rtwall/wall.h>
 
