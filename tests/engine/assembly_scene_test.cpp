@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <set>
 
 namespace rtwall {
@@ -85,6 +86,37 @@ mesh = "floor"
     }
     EXPECT_EQ(s.instances[42].part, -1);
     EXPECT_EQ(instancesMatching(s, "bolt*").size(), 2u * 12u);  // four bolts per module, 3 modules, 2 placements
+}
+
+// glTF too: its node tree as instances, its textures carried as the scene's files (so that
+// render clients get them from the master), its materials mapped as a whole file's are.
+TEST(AssemblyScene, GltfAssemblyWithTexturesInASceneFile) {
+    const auto dir = test::scratchDir();
+    const std::string cmd = "python3 " + (test::sourceDir() / "tools" / "gltf_testgen.py").string() + " --out " + dir.string();
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    const SceneDesc s = loadSceneFile(test::writeFile(dir / "s.toml", R"(
+[[mesh]]
+name = "g"
+file = "external.gltf"
+[[instance]]
+mesh = "g"
+scale = 2
+)"));
+    const SceneDesc alone = sceneFromMeshFile(dir / "external.gltf");
+    ASSERT_EQ(s.instances.size(), alone.instances.size());
+    EXPECT_EQ(s.meshes.size(), alone.meshes.size());
+    EXPECT_EQ(s.parts.size(), alone.parts.size());
+    EXPECT_EQ(s.files.size(), alone.files.size());
+    EXPECT_FALSE(s.files.empty()) << "the base-colour texture travels with the scene";
+    for (size_t i = 0; i < s.instances.size(); ++i) {
+        EXPECT_EQ(s.materials[s.instances[i].material], alone.materials[alone.instances[i].material]);
+        EXPECT_EQ(s.partPath(s.instances[i].part), alone.partPath(alone.instances[i].part));
+        EXPECT_NEAR(s.instances[i].transform.m[0], 2 * alone.instances[i].transform.m[0], 1e-9);
+    }
+    const std::string e = test::inputErrorOf([&] {
+        loadSceneFile(test::writeFile(dir / "b.toml", "[[mesh]]\nname = \"g\"\nfile = \"external.gltf\"\nangular_deflection = 0.2\n"));
+    });
+    EXPECT_NE(e.find("b.toml:4"), std::string::npos) << e;
 }
 
 TEST(AssemblyScene, TessellationIsASceneSetting) {
