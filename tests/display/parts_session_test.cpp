@@ -145,5 +145,26 @@ TEST(PartsSession, RunConfigPartsApplyFromTheStart) {
     EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
 }
 
+// A --watch edit of the scene file's [parts] arrives as visibility changes (applyEdit is what the
+// watcher calls); the wall's own view stays on top of it.
+TEST(PartsSession, AnEditedPartsTableIsAnUpdate) {
+    const auto dir = test::displayScratchDir();
+    auto lines = std::make_shared<std::vector<std::string>>();
+    WallSession s(partsConfig(dir, lines));
+    ASSERT_TRUE(s.step());
+    s.setPartView(PartView{{}, {}, {"left"}});
+    SceneDesc edited = test::partsScene();
+    applyPartView(edited, PartView{{"floor"}, {}, {}});
+    const SceneEdit e = s.applyEdit(edited);
+    EXPECT_TRUE(e.refused.empty());
+    EXPECT_TRUE(e.transforms.empty());
+    ASSERT_EQ(e.visibility.size(), 2u) << "the floor, and the left box the wall highlights";
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.scene().instances[0].visibility, Visibility::Hidden);
+    EXPECT_EQ(s.scene().instances[1].visibility, Visibility::Highlighted);
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_TRUE(logged(*lines, "camera same, 2 instance visibilities"));
+}
+
 }  // namespace
 }  // namespace rtwall

@@ -251,9 +251,9 @@ struct WallSession::Impl {
         }
         const std::string file = config.scene;
         for (const std::string& r : e.refused) log(file + ": " + r + " (not applied)");
-        log(format("%s changed: %zu materials, %zu lights, %zu instance transforms, %zu instance visibilities, render settings %s, camera %s",
-                   file.c_str(), e.materials.size(), e.lights.size(), e.transforms.size(), e.visibility.size(), e.settings ? "changed" : "same",
-                   e.camera ? "moved" : "same"));
+        log(format("%s changed: %zu materials, %zu lights, %zu instance transforms, render settings %s, camera %s, %zu instance visibilities",
+                   file.c_str(), e.materials.size(), e.lights.size(), e.transforms.size(), e.settings ? "changed" : "same",
+                   e.camera ? "moved" : "same", e.visibility.size()));
         return e;
     }
 
