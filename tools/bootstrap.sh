@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # One entry point for a fresh Debian 12 machine:
 #   tools/bootstrap.sh demo [NAME [gen options]]   install what is missing, build, run the master with
-#             local clients (NAME: office, headlight, sunflowers or powerplant, generated first)
+#             local clients (NAME: office, headlight, sunflowers, powerplant or step-assembly,
+#             generated first; step-assembly: a STEP assembly in configs/demos/step_assembly.toml)
 #   tools/bootstrap.sh test   install what is missing, build, run the whole test suite
 #   tools/bootstrap.sh deps   only install what is missing
 #   tools/bootstrap.sh build  install and build
@@ -84,10 +85,18 @@ case "${1:-}" in
       # the cluster path like the default.
       name=$2; shift 2
       dir=$(pwd)/out/$name
-      say "generating the '$name' scene into $dir (rtwall gen $name $*)"
-      "$BUILD_DIR/tools/rtwall" gen "$name" --out "$dir" "$@"
-      scene=$dir/scene.toml
-      [ -f "$scene" ] || scene=$dir/$name.toml
+      gen=$name
+      scene=
+      # Demos with a scene file shipped in configs/demos/: the generator writes what it references.
+      case $name in
+        step-assembly) gen=step; scene=$(pwd)/configs/demos/step_assembly.toml; set -- --instances 700 "$@" ;;
+      esac
+      say "generating the '$name' scene into $dir (rtwall gen $gen $*)"
+      "$BUILD_DIR/tools/rtwall" gen "$gen" --out "$dir" "$@"
+      if [ -z "$scene" ]; then
+        scene=$dir/scene.toml
+        [ -f "$scene" ] || scene=$dir/$name.toml
+      fi
       printf 'scene = "%s"\n[image]\nwidth = 800\nheight = 600\n[cluster]\nclients = 2\n[run]\nframes = 10\nwrite_every = 5\nout = "%s/frames"\n' \
         "$scene" "$dir" > "$dir/run.toml"
       say "running the master with two local render clients on $scene (rtwall run $dir/run.toml)"

@@ -553,6 +553,7 @@ private:
     // (a new kind fails to compile in catchUp's std::visit until it has one).
     void apply(const CameraChange& c) { camera_ = c.camera; }
     void apply(const TransformChange& c) { scene_->setInstanceTransform(c.instance, c.transform); }
+    void apply(const VisibilityChange& c) { scene_->setInstanceVisibility(c.instance, c.visibility); }
     void apply(const MaterialChange& c) {
         for (const AssetRef& ref : c.files) scene_->addFile(ref.path, assets_.at(ref.hash));
         scene_->setMaterial(c.material, c.value);

@@ -1254,6 +1254,7 @@ void pushUpdate(Master::Impl& s, Change change, std::vector<Asset> files = {}) {
 
 void Master::setCamera(const CameraDesc& camera) { pushUpdate(*impl_, CameraChange{camera}); }
 void Master::setInstanceTransform(uint32_t instance, const Transform& t) { pushUpdate(*impl_, TransformChange{instance, t}); }
+void Master::setInstanceVisibility(uint32_t instance, Visibility v) { pushUpdate(*impl_, VisibilityChange{instance, v}); }
 void Master::setMaterial(uint32_t material, const Material& value) {
     // The change names its files by hash. One the scene did not load is read now (an unreadable
     // file throws here, before anything changed) and travels like the snapshot's: each client

@@ -293,12 +293,13 @@ void read(Reader& r, CameraDesc& c) {
     }
 }
 
-RTWALL_WIRE_FIELDS(InstanceDesc, 4);
+RTWALL_WIRE_FIELDS(InstanceDesc, 5);
 void write(Writer& w, const InstanceDesc& in) {
     w.u32(in.mesh);
     w.u32(in.material);
     write(w, in.transform);
     w.i32(in.part);
+    writeEnum(w, in.visibility);
 }
 
 void read(Reader& r, InstanceDesc& in) {
@@ -309,6 +310,7 @@ void read(Reader& r, InstanceDesc& in) {
     // so a client can say which part a failed tile shows to the master, which can name it.
     in.part = r.i32();
     if (in.part < -1) fail("instance part " + std::to_string(in.part) + " is out of range");
+    in.visibility = readEnum(r, Visibility::Highlighted, "instance visibility");
 }
 
 RTWALL_WIRE_FIELDS(RenderSettings, 15);  // what is each process's own is TraceOptions, not sent
@@ -460,6 +462,16 @@ void read(Reader& r, SectionChange& c) {
     read(r, c.value);
 }
 
+RTWALL_WIRE_FIELDS(VisibilityChange, 2);
+void write(Writer& w, const VisibilityChange& c) {
+    w.u32(c.instance);
+    writeEnum(w, c.visibility);
+}
+void read(Reader& r, VisibilityChange& c) {
+    c.instance = r.u32();
+    c.visibility = readEnum(r, Visibility::Highlighted, "instance visibility");
+}
+
 // A change is its variant index (u8) and then the alternative.
 void write(Writer& w, const Change& c) {
     w.u8(uint8_t(c.index()));
@@ -474,7 +486,7 @@ template <size_t I> void readAlternative(Reader& r, Change& c) {
 
 void read(Reader& r, Change& c) {
     const uint8_t kind = r.u8();
-    static_assert(std::variant_size_v<Change> == 6, "a new change kind needs a case here");
+    static_assert(std::variant_size_v<Change> == 7, "a new change kind needs a case here");
     switch (kind) {
         case 0: readAlternative<0>(r, c); break;
         case 1: readAlternative<1>(r, c); break;
@@ -482,6 +494,7 @@ void read(Reader& r, Change& c) {
         case 3: readAlternative<3>(r, c); break;
         case 4: readAlternative<4>(r, c); break;
         case 5: readAlternative<5>(r, c); break;
+        case 6: readAlternative<6>(r, c); break;
         default: fail("unknown change kind " + std::to_string(kind));
     }
 }
@@ -493,7 +506,7 @@ size_t minChangeSize() {
     material.value.name.clear();
     return 1 + std::min({minEncodedSize(camera), minEncodedSize(TransformChange{}), minEncodedSize(material),
                          minEncodedSize(LightChange{}), minEncodedSize(SettingsChange{}),
-                         minEncodedSize(SectionChange{})});
+                         minEncodedSize(SectionChange{}), minEncodedSize(VisibilityChange{})});
 }
 
 // -- Messages ------------------------------------------------------------------------------------

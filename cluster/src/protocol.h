@@ -34,7 +34,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 9;
+inline constexpr uint16_t kProtocolVersion = 9;  // 9: section planes, instance visibility
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -185,7 +185,14 @@ struct SectionChange {
     SectionPlane value;
     bool operator==(const SectionChange&) const = default;
 };
-using Change = std::variant<CameraChange, TransformChange, MaterialChange, LightChange, SettingsChange, SectionChange>;
+// Version 9: hide, show or highlight an instance (parts by name, on the master).
+struct VisibilityChange {
+    uint32_t instance = 0;
+    Visibility visibility = Visibility::Shown;
+    bool operator==(const VisibilityChange&) const = default;
+};
+using Change = std::variant<CameraChange, TransformChange, MaterialChange, LightChange, SettingsChange, SectionChange,
+                            VisibilityChange>;
 
 // The changes that take the state from baseSeq to seq. The master merges the updates made
 // between two network-thread wake-ups into one (keeping the last change to each object), so a

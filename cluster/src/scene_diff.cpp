@@ -78,8 +78,10 @@ SceneEdit diffScenes(const SceneDesc& before, const SceneDesc& after) {
             if (a.mesh != b.mesh || a.material != b.material)
                 e.refused.push_back("instance " + std::to_string(i) +
                                     " has another mesh or material: that needs a restart");
-            else if (!sameOnWire(a, b))  // the same mesh and material: the transform
-                e.transforms.emplace_back(i, b.transform);
+            else {
+                if (!(a.transform == b.transform)) e.transforms.emplace_back(i, b.transform);
+                if (a.visibility != b.visibility) e.visibility.emplace_back(i, b.visibility);
+            }
         }
     }
     if (!sameOnWire(before.settings, after.settings)) e.settings = after.settings;

@@ -57,6 +57,9 @@ void apply(const StateFields& s, const Change& change) {
                                   std::to_string(s.sections.size()) + ")");
             s.sections[c.section] = c.value;
         }
+        void operator()(const VisibilityChange& c) const {
+            element(s.instances, c.instance, "instance").visibility = c.visibility;
+        }
     };
     std::visit(Visitor{s}, change);
 }
@@ -131,6 +134,7 @@ uint64_t objectOf(const Change& change) {
         uint32_t operator()(const LightChange& c) const { return c.light; }
         uint32_t operator()(const SettingsChange&) const { return 0; }  // one set of settings
         uint32_t operator()(const SectionChange& c) const { return c.section; }
+        uint32_t operator()(const VisibilityChange& c) const { return c.instance; }
     };
     return uint64_t(change.index()) << 32 | std::visit(Visitor{}, change);
 }

@@ -180,7 +180,7 @@ void findLightFaces(Scene::Impl& s) {
     for (size_t i = 0; i < s.instances.size(); ++i) {
         InstanceData& data = s.instances[i];
         const Material& m = d.materials[data.material];
-        if (!emits(m)) continue;
+        if (!emits(m) || data.hidden) continue;
         for (size_t li = 0; li < d.lights.size(); ++li) {
             const Light& light = d.lights[li];
             if (light.type != LightType::Area || !(length(cross(light.edge1, light.edge2)) > 0.0f)) continue;

@@ -378,6 +378,9 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
             rtcSetGeometryInstancedScene(g, s.meshScenes[in.mesh]);
             rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, data.objectToWorld);
             rtcSetGeometryMask(g, instanceMask(s, data));
+            data.hidden = in.visibility == Visibility::Hidden;
+            data.highlighted = in.visibility == Visibility::Highlighted;
+            if (data.hidden) rtcDisableGeometry(g);
             rtcCommitGeometry(g);
             rtcAttachGeometryByID(s.top, g, unsigned(i));
             rtcReleaseGeometry(g);
@@ -423,6 +426,25 @@ void Scene::setInstanceTransform(uint32_t instance, const Transform& transform) 
     rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, data.objectToWorld);
     rtcCommitGeometry(g);
     findLightFaces(s);  // a lamp panel moved onto or off an area light
+    s.dirty = true;
+}
+
+void Scene::setInstanceVisibility(uint32_t instance, Visibility visibility) {
+    Impl& s = *impl_;
+    if (instance >= s.instances.size()) throw std::out_of_range("instance " + std::to_string(instance) + " does not exist");
+    InstanceData& data = s.instances[instance];
+    const bool hidden = visibility == Visibility::Hidden;
+    s.desc.instances[instance].visibility = visibility;
+    data.highlighted = visibility == Visibility::Highlighted;
+    if (hidden == data.hidden) return;
+    data.hidden = hidden;
+    RTCGeometry g = rtcGetGeometry(s.top, instance);
+    if (hidden) rtcDisableGeometry(g);
+    else rtcEnableGeometry(g);
+    // A hidden lamp panel is no face of its area light; only an emitter can change that, and the
+    // search goes over every instance, so a part that does not glow skips it.
+    const Material& m = s.desc.materials[data.material];
+    if (m.type == MaterialType::Emissive || maxComponent(m.emission) > 0.0f) findLightFaces(s);
     s.dirty = true;
 }
 

@@ -8,6 +8,8 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -15,6 +17,7 @@
 #include <numbers>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 namespace rtwall {
 
@@ -144,6 +147,38 @@ LoadSettings readLoad(Reader& top, const std::filesystem::path& file) {
     return l;
 }
 
+// [import]: the STEP/IGES tessellation every [[mesh]] of such a file gets unless it says otherwise.
+struct ImportSettings {
+    double linearDeflection = 0.1;
+    double angularDeflection = 0.5;
+};
+
+void readDeflections(Reader& r, ImportSettings& s) {
+    s.linearDeflection = r.number("linear_deflection", s.linearDeflection, 1e-6, 1e6);
+    s.angularDeflection = r.number("angular_deflection", s.angularDeflection, 1e-3, 3.14159);
+}
+
+// STEP and IGES: the files a [[mesh]] may give deflections for.
+bool isCadFile(const std::filesystem::path& file) {
+    std::string ext = file.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext == ".step" || ext == ".stp" || ext == ".iges" || ext == ".igs";
+}
+
+void noDeflections(Reader& r) {
+    for (const char* k : {"linear_deflection", "angular_deflection"})
+        if (r.has(k)) r.fail(r.find(k), std::string("key '") + k + "': only STEP and IGES files are tessellated");
+}
+
+ImportSettings readImport(Reader& top, const std::filesystem::path& file, ImportSettings s) {
+    const toml::table* t = subTable(top, "import");
+    if (!t) return s;
+    Reader r(file, *t, "[import]: ");
+    readDeflections(r, s);
+    r.finish();
+    return s;
+}
+
 std::shared_ptr<const TriangleMesh> makeShape(Reader& r, const std::string& shape) {
     if (shape == "sphere") {
         const int rings = r.integer("rings", 32, 2, 4096), segments = r.integer("segments", 64, 3, 8192);
@@ -250,6 +285,7 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
     meshOptions.cacheDir = load.cacheDir;
     SceneLoadStats localStats;
     SceneLoadStats& stats = options.stats ? *options.stats : localStats;
+    const ImportSettings import = readImport(top, file, {options.linearDeflection, options.angularDeflection});
 
     // Progress is counted in bytes of mesh files, which the first pass sums.
     double bytesTotal = 0, bytesDone = 0;
@@ -266,10 +302,76 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
 
     std::map<std::string, uint32_t> meshIndex, materialIndex;
     std::map<std::filesystem::path, std::shared_ptr<const TriangleMesh>> loadedFiles;  // one copy per file
+    // Assembly files (glTF, STEP, IGES) named by [[mesh]]: their meshes, materials and parts join
+    // the scene once per file and tolerance; each [[instance]] of the entry places all of its
+    // instances, its own transform applied on top.
+    struct PlacedAssembly {
+        uint32_t firstMesh = 0, firstMaterial = 0;
+        int32_t firstPart = 0;
+        std::vector<AssemblyInstance> instances;
+    };
+    std::vector<PlacedAssembly> assemblies;
+    std::map<std::string, uint32_t> assemblyIndex;  // [[mesh]] name -> assemblies
+    std::map<std::tuple<std::filesystem::path, double, double>, uint32_t> loadedAssemblies;
+    auto loadAssemblyEntry = [&](Reader& r, const std::string& name, const std::filesystem::path& path,
+                                 const std::filesystem::path& key) {
+        ImportSettings tess = import;
+        if (isCadFile(path)) readDeflections(r, tess);
+        const auto slot = loadedAssemblies.find({key, tess.linearDeflection, tess.angularDeflection});
+        if (slot != loadedAssemblies.end()) {
+            assemblyIndex[name] = slot->second;
+            return;
+        }
+        AssemblyOptions ao;
+        ao.linearDeflection = tess.linearDeflection;
+        ao.angularDeflection = tess.angularDeflection;
+        ao.cache = meshOptions.cache;
+        ao.cacheDir = meshOptions.cacheDir;
+        std::error_code ec;
+        const double size = double(std::filesystem::file_size(path, ec));
+        if (options.progress && !ec)
+            ao.progress = [&, size](double f) { return options.progress(bytesTotal > 0 ? (bytesDone + f * size) / bytesTotal : 1.0); };
+        Assembly a;
+        try {
+            const auto t0 = std::chrono::steady_clock::now();
+            a = loadAssembly(path, ao);
+            const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            if (a.cache == "hit") {
+                stats.cacheSeconds += dt;
+                ++stats.cacheHits;
+            } else {
+                stats.importSeconds += dt;
+                ++stats.filesImported;
+                stats.cacheWritten += a.cache == "written" || a.cache.starts_with("rebuilt");
+            }
+        } catch (const InputError& e) {
+            r.fail(r.find("file"), std::string("mesh '") + name + "': " + e.what());
+        }
+        if (options.progress) {
+            if (!ec) bytesDone += size;
+            if (!options.progress(bytesTotal > 0 ? bytesDone / bytesTotal : 1.0)) throw Cancelled();
+        }
+        PlacedAssembly pa;
+        pa.firstMesh = uint32_t(scene.meshes.size());
+        for (size_t i = 0; i < a.meshes.size(); ++i)
+            scene.meshes.push_back({name + "/" + a.meshNames[i], path.string() + "#" + a.meshNames[i], a.meshes[i]});
+        pa.firstMaterial = uint32_t(scene.materials.size());
+        for (const AssemblyMaterial& m : a.materials) scene.materials.push_back(materialFromAssembly(m));
+        if (a.materials.empty()) scene.materials.push_back(Material{});  // what sceneFromAssembly gives it too
+        pa.firstPart = int32_t(scene.parts.size());
+        for (const AssemblyPart& p : a.parts) scene.parts.push_back({p.name, p.parent < 0 ? -1 : p.parent + pa.firstPart});
+        for (auto& [k, bytes] : a.files) scene.files[k] = bytes;
+        pa.instances = std::move(a.instances);
+        const uint32_t index = uint32_t(assemblies.size());
+        assemblies.push_back(std::move(pa));
+        loadedAssemblies[{key, tess.linearDeflection, tess.angularDeflection}] = index;
+        assemblyIndex[name] = index;
+    };
     forEachTable(top, file, "mesh", [&](Reader& r, const toml::table&) {
         MeshDesc md;
         md.name = r.string("name", "", true);
-        if (meshIndex.count(md.name)) r.fail(r.find("name"), "mesh name '" + md.name + "' is used twice");
+        if (meshIndex.count(md.name) || assemblyIndex.count(md.name))
+            r.fail(r.find("name"), "mesh name '" + md.name + "' is used twice");
         const bool hasFile = r.has("file"), hasShape = r.has("shape");
         if (hasFile == hasShape) r.fail(nullptr, "give exactly one of 'file' and 'shape'");
         if (hasFile) {
@@ -277,6 +379,8 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
             md.source = path.string();
             std::error_code ec;
             const auto key = std::filesystem::weakly_canonical(path, ec);
+            if (!isCadFile(path)) noDeflections(r);
+            if (isAssemblyFile(path)) return loadAssemblyEntry(r, md.name, path, ec ? path : key);
             auto& slot = loadedFiles[ec ? path : key];
             if (!slot) {
                 try {
@@ -303,6 +407,7 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
             }
             md.mesh = slot;
         } else {
+            noDeflections(r);
             const std::string shape = r.choice("shape", "", {"sphere", "box", "quad", "torus_knot"});
             md.source = "shape:" + shape;
             try {
@@ -392,7 +497,8 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
     constexpr uint32_t kNoMaterial = ~0u;
     struct Child {
         bool isGroup = false;
-        uint32_t target = 0;              // mesh or group index
+        bool isAssembly = false;          // target indexes `assemblies`
+        uint32_t target = 0;              // mesh, group or assembly index
         uint32_t material = kNoMaterial;  // inherited from the parent when not given
         Transform transform;
     };
@@ -411,8 +517,15 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
         if (hasMesh) {
             const std::string mesh = r.string("mesh", "", true);
             auto mi = meshIndex.find(mesh);
-            if (mi == meshIndex.end()) r.fail(r.find("mesh"), "key 'mesh': no [[mesh]] is named '" + mesh + "'");
-            c.target = mi->second;
+            auto ai = assemblyIndex.find(mesh);
+            if (ai != assemblyIndex.end()) {
+                c.isAssembly = true;
+                c.target = ai->second;
+            } else if (mi == meshIndex.end()) {
+                r.fail(r.find("mesh"), "key 'mesh': no [[mesh]] is named '" + mesh + "'");
+            } else {
+                c.target = mi->second;
+            }
         } else {
             const std::string group = r.string("group", "", true);
             auto gi = groupIndex.find(group);
@@ -422,6 +535,8 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
             c.target = gi->second;
         }
         const std::string material = r.string("material", "");
+        if (!material.empty() && c.isAssembly)
+            r.fail(r.find("material"), "key 'material': an assembly file keeps its own materials");
         if (!material.empty()) {
             auto it = materialIndex.find(material);
             if (it == materialIndex.end())
@@ -431,7 +546,9 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
         c.transform = readTransform(r);
         return c;
     };
-    auto expandedOf = [&](const Child& c) -> uint64_t { return c.isGroup ? groups[c.target].expanded : 1; };
+    auto expandedOf = [&](const Child& c) -> uint64_t {
+        return c.isGroup ? groups[c.target].expanded : c.isAssembly ? assemblies[c.target].instances.size() : 1;
+    };
 
     forEachTable(top, file, "group", [&](Reader& r, const toml::table&) {
         const std::string name = r.string("name", "", true);
@@ -483,6 +600,21 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
     };
     // Mesh origins (far-from-origin files are stored recentred) go into the transform here.
     auto emit = [&](const Child& leaf, const Transform& parent, uint32_t inherited) {
+        if (leaf.isAssembly) {  // its own materials (a group's inherited one does not apply) and parts
+            const PlacedAssembly& pa = assemblies[leaf.target];
+            const Transform placement = parent * leaf.transform;
+            for (const AssemblyInstance& ai : pa.instances) {
+                InstanceDesc in;
+                in.mesh = pa.firstMesh + ai.mesh;
+                in.material = pa.firstMaterial + ai.material;
+                Transform t;
+                t.m = ai.transform;  // the mesh's origin() is in it already
+                in.transform = placement * t;
+                in.part = pa.firstPart + int32_t(ai.part);
+                scene.instances.push_back(in);
+            }
+            return;
+        }
         InstanceDesc in;
         in.mesh = leaf.target;
         in.material = materialOrDefault(leaf.material != kNoMaterial ? leaf.material : inherited);
@@ -567,6 +699,32 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
         cameraPositions.push_back(p);
         cameraTargets.push_back(at);
     });
+    // [parts]: hide, isolate and highlight by name, once every instance is known.
+    if (const toml::table* t = subTable(top, "parts")) {
+        Reader r(file, *t, "[parts]: ");
+        PartView view;
+        auto patterns = [&](const char* key, std::vector<std::string>& out) {
+            const toml::node* n = r.find(key);
+            if (!n) return;
+            const toml::array* a = n->as_array();
+            if (!a) r.fail(n, std::string("key '") + key + "': expected an array of strings");
+            for (const toml::node& e : *a) {
+                const auto v = e.value<std::string>();
+                if (!v || !e.is_string() || v->empty()) r.fail(&e, std::string("key '") + key + "': expected non-empty strings");
+                out.push_back(*v);
+                try {
+                    if (instancesMatching(scene, *v).empty()) throw InputError("no part or mesh matches it");
+                } catch (const InputError& err) {
+                    r.fail(&e, std::string("key '") + key + "': '" + *v + "': " + err.what());
+                }
+            }
+        };
+        patterns("hide", view.hide);
+        patterns("isolate", view.isolate);
+        patterns("highlight", view.highlight);
+        r.finish();
+        applyPartView(scene, view);
+    }
     top.finish();
 
     // Rebase: everything the renderer sees in single precision becomes relative to one origin

@@ -84,6 +84,8 @@ struct InstanceData {
     float worldToObject[12] = {};  // for materials that work in object space (volumes)
     Bounds3 meshBounds;            // object-space bounds of the mesh (the box a volume fills)
     int32_t areaLight = -1;        // the area light this emitter is the visible face of (light_faces.cpp), or -1
+    bool hidden = false;           // Visibility::Hidden: disabled in the top level, never hit
+    bool highlighted = false;      // Visibility::Highlighted: shadeHit tints it (kHighlightTint, kHighlightGlow)
 };
 
 // True when the scene samples something at random whatever the settings: an area light, a rough

@@ -95,7 +95,11 @@ void shadeHit(const ShadingContext& ctx, const RayTask& ray, const Hit& hit, Col
     }
     const InstanceData& inst = ctx.scene.instances[hit.inst];
     const MaterialModel& model = *ctx.scene.models[inst.material];
-    const SurfacePoint sp = surfaceAt(inst, model, ray.org, ray.dir, hit);
+    SurfacePoint sp = surfaceAt(inst, model, ray.org, ray.dir, hit);
+    if (inst.highlighted) {  // seen directly or in a reflection alike
+        sp.tint = sp.tint * kHighlightTint;
+        pixel += ray.weight * kHighlightGlow;
+    }
     model.shade(c, ray, sp);
 }
 

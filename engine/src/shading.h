@@ -119,6 +119,11 @@ inline void shadeEyeLightPacket(const ShadingContext& ctx, const RayHitK& rh, co
             cg[k] *= tint.y;
             cb[k] *= tint.z;
         }
+        if (inst.highlighted) {
+            cr[k] *= kHighlightTint.x;
+            cg[k] *= kHighlightTint.y;
+            cb[k] *= kHighlightTint.z;
+        }
     }
     for (int k = 0; k < K; ++k) {
         const float nn = nx[k] * nx[k] + ny[k] * ny[k] + nz[k] * nz[k];
@@ -132,6 +137,11 @@ inline void shadeEyeLightPacket(const ShadingContext& ctx, const RayHitK& rh, co
         p.x += weight * cr[k] * c;
         p.y += weight * cg[k] * c;
         p.z += weight * cb[k] * c;
+        if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID && ctx.scene.instances[rh.hit.instID[0][k]].highlighted) {
+            p.x += weight * kHighlightGlow.x;
+            p.y += weight * kHighlightGlow.y;
+            p.z += weight * kHighlightGlow.z;
+        }
     }
 }
 

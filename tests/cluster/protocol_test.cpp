@@ -74,6 +74,7 @@ void expectSame(const InstanceDesc& a, const InstanceDesc& b) {
     EXPECT_EQ(a.mesh, b.mesh);
     EXPECT_EQ(a.material, b.material);
     expectSame(a.transform, b.transform);
+    EXPECT_EQ(a.visibility, b.visibility);
 }
 void expectSame(const RenderSettings& a, const RenderSettings& b) {
     EXPECT_EQ(a.width, b.width);
@@ -159,6 +160,10 @@ void expectSame(const LightChange& a, const LightChange& b) {
     expectSame(a.value, b.value);
 }
 void expectSame(const SettingsChange& a, const SettingsChange& b) { expectSame(a.settings, b.settings); }
+void expectSame(const VisibilityChange& a, const VisibilityChange& b) {
+    EXPECT_EQ(a.instance, b.instance);
+    EXPECT_EQ(a.visibility, b.visibility);
+}
 void expectSame(const Change& a, const Change& b) {
     ASSERT_EQ(a.index(), b.index());
     std::visit([&](const auto& alt) { expectSame(alt, std::get<std::decay_t<decltype(alt)>>(b)); }, a);
@@ -311,7 +316,7 @@ SceneSnapshot sampleSnapshot() {
     s.meshes.push_back(MeshRef{"floor", "shape:quad", {1, 2}, 200});
     s.materials = {sampleMaterial(0), sampleMaterial(1)};
     s.instances.push_back(InstanceDesc{1, 0, sampleTransform(0)});
-    s.instances.push_back(InstanceDesc{0, 1, sampleTransform(1)});
+    s.instances.push_back(InstanceDesc{0, 1, sampleTransform(1), -1, Visibility::Hidden});
     s.lights = {sampleLight(0), sampleLight(1)};
     s.camera = sampleCamera();
     s.settings = sampleSettings();
@@ -341,6 +346,7 @@ Update sampleUpdate() {
     u.changes.push_back(LightChange{2, sampleLight(1)});
     u.changes.push_back(SettingsChange{sampleSettings()});
     u.changes.push_back(CameraChange{sampleOffAxisCamera()});
+    u.changes.push_back(VisibilityChange{4, Visibility::Highlighted});
     return u;
 }
 
@@ -482,7 +488,7 @@ TEST(Protocol, GoldenBytes) {
     // The exact layout of a header and a small payload; a change here breaks every deployed peer
     // (version 2: the shading fields of materials, lights and settings; 4: FrameBegin's tile format;
     // 5: the snapshot's BVH primitives; 6: two-sided emission of materials and area lights; 7: the
-    // client's work report in Heartbeat, TileStalled; 8: TileFailed; 9: section planes).
+    // client's work report in Heartbeat, TileStalled; 8: TileFailed; 9: section planes, instance visibility).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -490,7 +496,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x09, 0x00,                                      // version (9: section planes)
+        0x09, 0x00,                                      // version (9: section planes, instance visibility)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame

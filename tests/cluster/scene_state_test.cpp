@@ -243,7 +243,8 @@ SceneDesc sampleScene() {
     d.meshes.push_back({"box", "meshes/box.ply", std::make_shared<const TriangleMesh>(makeBox())});
     d.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
     d.materials = {sampleMaterial(0), sampleMaterial(1)};
-    d.instances = {InstanceDesc{1, 1, sampleTransform(0), 1}, InstanceDesc{1, 1, sampleTransform(1), 0}};
+    d.instances = {InstanceDesc{1, 1, sampleTransform(0), 1, Visibility::Highlighted},
+                   InstanceDesc{1, 1, sampleTransform(1), 0, Visibility::Hidden}};
     d.parts = {PartDesc{"module", -1}, PartDesc{"module/bolt", 0}};
     d.lights = {sampleLight(0), sampleLight(1)};
     d.cameras = {sampleCamera(0), sampleCamera(1)};
@@ -284,7 +285,7 @@ TEST(SceneState, MemberCountsAreExact) {
     EXPECT_EQ(fieldCount<Light>(), 8u);
     EXPECT_EQ(fieldCount<CameraDesc>(), 6u);  // std::optional<ProjectionWindow> counts as one
     EXPECT_EQ(fieldCount<ProjectionWindow>(), 3u);
-    EXPECT_EQ(fieldCount<InstanceDesc>(), 4u);
+    EXPECT_EQ(fieldCount<InstanceDesc>(), 5u);
     EXPECT_EQ(fieldCount<Transform>(), 1u);  // the std::array, not its 12 doubles
     EXPECT_EQ(fieldCount<BvhSettings>(), 4u);
     EXPECT_EQ(fieldCount<SectionPlane>(), 5u);
@@ -333,7 +334,8 @@ TEST(SceneState, EveryChangeTravelsAndComesBack) {
     u.baseSeq = 4;
     u.changes = {CameraChange{sampleCamera(3)}, TransformChange{1, sampleTransform(4)},
                  MaterialChange{1, sampleMaterial(5), {refOf("tex/new.png", bytesOf("new"))}}, LightChange{1, sampleLight(6)},
-                 SettingsChange{sampleSettings()}, SectionChange{5, sampleSection(3)}};
+                 SettingsChange{sampleSettings()}, SectionChange{5, sampleSection(3)},
+                 VisibilityChange{1, Visibility::Hidden}};
     expectAllSet(std::get<CameraChange>(u.changes[0]).camera, CameraDesc{}, "CameraChange");
     expectAllSet(std::get<SectionChange>(u.changes[5]).value, SectionPlane{}, "SectionChange");
     expectAllSet(std::get<MaterialChange>(u.changes[2]).value, Material{}, "MaterialChange");
@@ -363,7 +365,7 @@ TEST(SceneState, EveryMemberChangesTheWireBytes) {
     expectEveryMemberOnTheWire(sampleMaterial(0), "Material");
     expectEveryMemberOnTheWire(sampleLight(0), "Light");
     expectEveryMemberOnTheWire(sampleCamera(0), "CameraDesc");
-    expectEveryMemberOnTheWire(InstanceDesc{1, 2, sampleTransform(0), 3}, "InstanceDesc");
+    expectEveryMemberOnTheWire(InstanceDesc{1, 2, sampleTransform(0), 3, Visibility::Hidden}, "InstanceDesc");
     expectEveryMemberOnTheWire(sampleSettings(), "RenderSettings");
     expectEveryMemberOnTheWire(sampleSection(0), "SectionPlane");
     EXPECT_TRUE(sameOnWire(sampleMaterial(1), sampleMaterial(1)));

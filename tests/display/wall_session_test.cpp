@@ -679,7 +679,7 @@ TEST(WallSession, SectionKeysAndSetSectionCutTheScene) {
     EXPECT_NEAR(dot3(back, unit3(added.normal)), -10.0 * std::sqrt(16.0 * 16.0 + 16.0 * 16.0 + 2.0 * 2.0) / 100.0, 1e-3);
     EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
 
-    // Left turns the normal 5 degrees about the view's up axis; F flips it; X turns it off.
+    // Left turns the normal 5 degrees about the view's up axis; F flips it; V turns it off.
     const Float3 n0 = unit3(s.scene().sections[0].normal);
     s.inject(keyPress(GLFW_KEY_LEFT));
     ASSERT_TRUE(s.step());
@@ -695,7 +695,7 @@ TEST(WallSession, SectionKeysAndSetSectionCutTheScene) {
     ASSERT_TRUE(s.step());
     EXPECT_NEAR(dot3(unit3(s.scene().sections[0].normal), n1), -1.0, 1e-6);
     EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
-    s.inject(keyPress(GLFW_KEY_X));
+    s.inject(keyPress(GLFW_KEY_V));
     ASSERT_TRUE(s.step());
     EXPECT_FALSE(s.scene().sections[0].enabled);
     EXPECT_EQ(differingBytes(s.lastFrame().left, uncut), 0u) << "a plane turned off cuts nothing";

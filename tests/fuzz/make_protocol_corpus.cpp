@@ -91,7 +91,8 @@ int main(int argc, char** argv) {
     update.seq = 3;
     update.changes = {CameraChange{CameraDesc{}}, TransformChange{0, translation(0, 1, 0)},
                       MaterialChange{1, Material{}, {AssetRef{"wood.png", Hash128{1, 2}, 777}}}, LightChange{0, Light{}},
-                      SettingsChange{RenderSettings{}}, SectionChange{2, SectionPlane{}}};
+                      SettingsChange{RenderSettings{}}, SectionChange{2, SectionPlane{}},
+                      VisibilityChange{0, Visibility::Hidden}};
     seedMessage("update", update);
     CameraDesc offAxis;  // a stereo eye: the projection window travels with the camera
     offAxis.window = ProjectionWindow{{-1.6f, -1.2f, 0.0f}, {3.2f, 0.0f, 0.0f}, {0.0f, 2.4f, 0.0f}};

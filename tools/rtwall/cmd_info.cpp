@@ -52,6 +52,11 @@ toml::table sceneInfo(const std::string& scene) {
     for (const InstanceDesc& in : desc.instances) instanced += int64_t(desc.meshes[in.mesh].mesh->triangleCount());
     toml::array cameras;
     for (const CameraDesc& c : desc.cameras) cameras.push_back(c.name);
+    int64_t hidden = 0, highlighted = 0;  // [parts]
+    for (const InstanceDesc& in : desc.instances) {
+        hidden += in.visibility == Visibility::Hidden;
+        highlighted += in.visibility == Visibility::Highlighted;
+    }
     // Section planes in use (slot order), their points in the file's coordinates.
     toml::array sections;
     for (size_t i = 0; i < desc.sections.size(); ++i) {
@@ -67,6 +72,9 @@ toml::table sceneInfo(const std::string& scene) {
     }
     return toml::table{{"file", scene},
                        {"sections", sections},
+                       {"parts", int64_t(desc.parts.size())},
+                       {"instances_hidden", hidden},
+                       {"instances_highlighted", highlighted},
                        {"meshes", int64_t(desc.meshes.size())},
                        {"instances", int64_t(desc.instances.size())},
                        {"materials", int64_t(desc.materials.size())},

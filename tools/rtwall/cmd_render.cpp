@@ -118,6 +118,7 @@ Image renderHere(const Scene& scene, const Camera& camera, const SceneDesc& desc
 int runRender(const RenderOptions& o) {
     bench::installInterruptHandler();
     SceneDesc desc = loadWithProgress(o.scene, o);
+    applyPartView(desc, o.parts);  // on top of the scene file's [parts]
     RenderSettings& s = desc.settings;
     applyOverrides(s, o);
     const TraceOptions trace = traceOptionsOf(o);
@@ -174,6 +175,9 @@ void addRender(CLI::App& app, Run& run) {
     cmd->add_option("--angular-deflection", o->angularDeflection, "STEP/IGES: largest angle between neighbouring triangles, radians (0.5)")
         ->check(CLI::Range(1e-3, 3.14));
     cmd->add_flag("--cache", o->cache, "STEP/IGES: use FILE.rtwasm when it matches the file and deflections, else write it");
+    cmd->add_option("--hide", o->parts.hide, "Hide the parts (or meshes) this pattern names: a name, or a path a/b/c when it has a '/'; '*' is any text (repeatable)");
+    cmd->add_option("--isolate", o->parts.isolate, "Show only the parts (or meshes) these patterns name (repeatable)");
+    cmd->add_option("--highlight", o->parts.highlight, "Highlight the parts (or meshes) this pattern names: tinted and glowing (repeatable)");
     cmd->add_option("--width", o->width, "Image width in pixels (overrides the scene)")->check(CLI::Range(1, 16384));
     cmd->add_option("--height", o->height, "Image height in pixels (overrides the scene)")->check(CLI::Range(1, 16384));
     cmd->add_option("--camera", o->camera, "Name of the scene camera to use (default: the first)");

@@ -22,6 +22,7 @@ void addRun(CLI::App& app, Run& run) {
         std::string out, bind, cameraPath, wall, front, trace;
         bool insecure = false, headless = false, watch = false;
         double targetFps = 0;
+        PartView parts;
     };
     auto o = std::make_shared<Options>();
     CLI::App* cmd = app.add_subcommand("run", "Run the display master with local render clients (default: a built-in demo)");
@@ -45,6 +46,9 @@ void addRun(CLI::App& app, Run& run) {
                     "Measured front for --target-fps (.toml from tools/speed_accuracy.py); default: calibrate codecs and tile "
                     "sizes on the first frames");
     cmd->add_option("--trace", o->trace, "With --target-fps: write one CSV line per frame (frame, seconds, clients, operating point)");
+    cmd->add_option("--hide", o->parts.hide, "Hide the parts (or meshes) this pattern names: a name, or a path a/b/c when it has a '/'; '*' is any text (repeatable)");
+    cmd->add_option("--isolate", o->parts.isolate, "Show only the parts (or meshes) these patterns name (repeatable)");
+    cmd->add_option("--highlight", o->parts.highlight, "Highlight the parts (or meshes) this pattern names (repeatable)");
     cmd->callback([&run, o] {
         run = [o] {
             RunConfig c = o->config.empty() ? defaultRunConfig() : readRunConfig(o->config);
@@ -64,6 +68,7 @@ void addRun(CLI::App& app, Run& run) {
             c.targetFps = o->targetFps;
             c.front = o->front;
             c.trace = o->trace;
+            c.parts = o->parts;
             // Ctrl-C and SIGTERM end the run between frames, and interrupt a frame that cannot
             // finish (Cancelled: "interrupted", exit status 130).
             std::signal(SIGINT, [](int) { gStop = true; });

@@ -17,6 +17,7 @@ struct RenderOptions {
     double prune = -1, fov = 0;
     double deflection = 0.1, angularDeflection = 0.5;  // STEP/IGES tessellation
     bool gi = false, noGi = false, cache = false;
+    PartView parts;  // --hide, --isolate, --highlight
 };
 
 

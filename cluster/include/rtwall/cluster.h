@@ -119,12 +119,14 @@ struct SceneEdit {
     std::vector<std::pair<uint32_t, Material>> materials;
     std::vector<std::pair<uint32_t, Light>> lights;
     std::vector<std::pair<uint32_t, Transform>> transforms;
+    std::vector<std::pair<uint32_t, Visibility>> visibility;  // [parts] edits
     std::optional<RenderSettings> settings;
     std::optional<CameraDesc> camera;  // the first camera, when it changed
     std::vector<std::pair<uint32_t, SectionPlane>> sections;  // slots whose plane changed
     std::vector<std::string> refused;
     bool empty() const {
-        return materials.empty() && lights.empty() && transforms.empty() && !settings && !camera && sections.empty() &&
+        return materials.empty() && lights.empty() && transforms.empty() && visibility.empty() && !settings && !camera &&
+               sections.empty() &&
                refused.empty();
     }
 };
@@ -180,6 +182,7 @@ public:
     // size: nothing is copied, serialised or hashed whole (a state is hashed when it is sent).
     void setCamera(const CameraDesc& camera);
     void setInstanceTransform(uint32_t instance, const Transform& transform);
+    void setInstanceVisibility(uint32_t instance, Visibility visibility);  // hide, show, highlight
     void setMaterial(uint32_t material, const Material& value);
     void setLight(uint32_t light, const Light& value);
     void setRenderSettings(const RenderSettings& settings);

@@ -55,6 +55,7 @@ struct RunConfig {
     double targetFps = 0;                 // > 0: hold this frame rate with the operating point
     std::filesystem::path front;          // the measured front for targetFps (empty: calibrate)
     std::filesystem::path trace;          // with targetFps: one CSV line per frame
+    PartView parts;                       // --hide, --isolate, --highlight: on top of the scene file's [parts]
     // Local render clients: `rtwall client` processes of this executable, or (tests) threads of
     // this process running runClient.
     std::filesystem::path clientExecutable = "/proc/self/exe";
@@ -189,6 +190,14 @@ public:
     // The measurement under way: nothing before A is picked (and after the mode is left).
     std::optional<Measurement> measurement() const;
     void showTileOwners(bool on);  // the false-colour view of who rendered each tile (key T)
+    // Parts by name (README "Parts"; keys X hide, I isolate, G highlight, U show all, on the part
+    // a Ctrl+click picked): `view` on top of what the scene was loaded with (its [parts] and
+    // RunConfig::parts). Only the instances whose visibility changes travel. Throws InputError
+    // for a pattern that matches nothing, before anything changed. showAllParts also shows what
+    // the scene file hid.
+    void setPartView(const PartView& view);
+    const PartView& partView() const;
+    void showAllParts();
     // Input as if from the wall's windows, applied at the next step() (keys, mouse, picking:
     // display.h's InputState): scripted control and tests; it works headless too.
     void inject(const InputState& input);

@@ -9,12 +9,15 @@
 
 #include <memory>
 #include <optional>
+#include <vector>
 
 namespace rtwall::wall {
 
 class LiveScene {
 public:
-    LiveScene(SceneDesc desc, Master& master) : desc_(std::move(desc)), master_(master) {}
+    LiveScene(SceneDesc desc, Master& master) : desc_(std::move(desc)), master_(master) {
+        for (const InstanceDesc& in : desc_.instances) loaded_.push_back(in.visibility);
+    }
 
     const SceneDesc& desc() const { return desc_; }
     // The viewer's camera (the scene's first): each eye of a stereo wall is derived from it and
@@ -55,6 +58,38 @@ public:
         desc_.sections[section] = plane;
         if (pickScene_) pickScene_->setSection(section, plane);  // what is cut away cannot be picked
     }
+    // Hide, isolate and highlight parts by name (README "Parts"): `view` on top of what the scene
+    // was loaded with (its [parts], `--hide` ...), unless `keepLoaded` is false (show all). Only
+    // the instances whose visibility changes are sent. Throws InputError for a pattern that
+    // matches nothing, before anything changed.
+    void setPartView(const PartView& view, bool keepLoaded = true) {
+        std::vector<Visibility> v = visibilityOf(desc_, view);
+        if (keepLoaded)
+            for (size_t i = 0; i < v.size(); ++i) v[i] = combineVisibility(loaded_[i], v[i]);
+        else
+            loaded_.assign(v.size(), Visibility::Shown);
+        for (size_t i = 0; i < v.size(); ++i) {
+            if (desc_.instances[i].visibility == v[i]) continue;
+            master_.setInstanceVisibility(uint32_t(i), v[i]);
+            desc_.instances[i].visibility = v[i];
+            if (pickScene_) pickScene_->setInstanceVisibility(uint32_t(i), v[i]);  // a hidden part is not picked
+        }
+        if (pickScene_) pickScene_->commit();
+        view_ = view;
+    }
+    const PartView& partView() const { return view_; }
+    // A --watch edit of the scene file's [parts]: what the file now loads the instances with
+    // (the wall's own view stays on top of it).
+    void setLoadedVisibility(const std::vector<std::pair<uint32_t, Visibility>>& edits) {
+        for (const auto& [i, v] : edits) loaded_.at(i) = v;
+        setPartView(view_);
+    }
+    size_t hiddenCount() const {
+        size_t n = 0;
+        for (const InstanceDesc& in : desc_.instances) n += in.visibility == Visibility::Hidden;
+        return n;
+    }
+
     void setRenderSettings(const RenderSettings& settings) {
         master_.setRenderSettings(settings);
         desc_.settings = settings;
@@ -69,6 +104,8 @@ public:
 private:
     SceneDesc desc_;
     Master& master_;
+    std::vector<Visibility> loaded_;  // per instance: as the scene was loaded (or last edited)
+    PartView view_;                   // the wall's own hide/isolate/highlight on top
     std::unique_ptr<Scene> pickScene_;
 };
 

@@ -28,6 +28,7 @@ void fitToRun(SceneDesc& d, const RunConfig& c, const WallConfig& wall) {
         d.settings.width = wall.width;
         d.settings.height = wall.height;
     }
+    if (!c.parts.empty()) applyPartView(d, c.parts);
     if (!c.camera.empty()) {
         const CameraDesc* cam = d.findCamera(c.camera);
         if (!cam) throw InputError(c.scene + ": no camera named '" + c.camera + "'");
@@ -243,6 +244,7 @@ struct WallSession::Impl {
         for (const auto& [i, l] : e.lights) live->setLight(i, l);
         for (const auto& [i, p] : e.sections) live->setSection(i, p);
         for (const auto& [i, t] : e.transforms) live->setInstanceTransform(i, t);
+        if (!e.visibility.empty()) live->setLoadedVisibility(e.visibility);
         if (e.settings) live->setRenderSettings(*e.settings);
         if (e.camera) {
             live->setCamera(*e.camera);
@@ -251,9 +253,9 @@ struct WallSession::Impl {
         const std::string file = config.scene;
         for (const std::string& r : e.refused) log(file + ": " + r + " (not applied)");
         log(format("%s changed: %zu materials, %zu lights, %zu instance transforms, render settings %s, camera %s, %zu "
-                   "section planes",
+                   "section planes, %zu instance visibilities",
                    file.c_str(), e.materials.size(), e.lights.size(), e.transforms.size(), e.settings ? "changed" : "same",
-                   e.camera ? "moved" : "same", e.sections.size()));
+                   e.camera ? "moved" : "same", e.sections.size(), e.visibility.size()));
         return e;
     }
 
@@ -446,6 +448,7 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     io.interactive = s.path.empty();
     io.codec = tileCodecName(c.cluster.codec.codec);
     s.input = std::make_unique<WallInput>(s.wallConfig, s.start, io, s.log);
+    s.input->setPartView(*s.live, {});  // says what the scene file and the command line hid, if anything
     // In a window the wall runs until it is closed, unless a frame count was asked for.
     if (s.input->windowed() && !c.framesGiven) c.frames = 0;
     s.startController(givenFront);
@@ -527,6 +530,9 @@ bool WallSession::measuring() const { return impl_->input->measuring(); }
 bool WallSession::measurePick(double wallX, double wallY) { return impl_->input->measurePick(*impl_->live, wallX, wallY); }
 std::optional<Measurement> WallSession::measurement() const { return impl_->input->measurement(); }
 void WallSession::showTileOwners(bool on) { impl_->input->showTileOwners(on); }
+void WallSession::setPartView(const PartView& view) { impl_->input->setPartView(*impl_->live, view); }
+const PartView& WallSession::partView() const { return impl_->live->partView(); }
+void WallSession::showAllParts() { impl_->input->showAllParts(*impl_->live); }
 void WallSession::inject(const InputState& input) { impl_->input->inject(input); }
 const WallFrame& WallSession::lastFrame() const { return impl_->shown; }
 std::optional<TrackerState> WallSession::tracker() const {

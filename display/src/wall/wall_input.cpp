@@ -5,6 +5,7 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>  // key codes
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -36,8 +37,8 @@ WallInput::WallInput(const WallConfig& wall, const CameraDesc& start, const Opti
         log_("wall '" + wall_.name + "': " + std::to_string(wall_.screens.size()) + " window" +
              (wall_.screens.size() == 1 ? "" : "s") + " (" + gl_->renderer() +
              "); keys: H status, T tile owners, Tab fly/orbit, 1-9 bookmarks (Ctrl+digit stores), R record, Ctrl+drag "
-             "moves an object, M measure, C section plane (Shift+C next, X on/off, F flip, PgUp/PgDn move, arrows "
-             "turn, Del remove), Esc quits");
+             "moves an object (and picks its part: X hides, I isolates, G highlights it, U shows all), M measure, C section "
+             "plane (Shift+C next, V on/off, F flip, PgUp/PgDn move, arrows turn, Del remove), Esc quits");
     else
         log_("wall '" + wall_.name + "': headless (" + whyHeadless_ + ")");
 }
@@ -126,6 +127,66 @@ std::string WallInput::measureLine() const {
     return "measure: A " + pointText(measurement_->a) + " to B " + pointText(*measurement_->b) + distance;
 }
 
+namespace {
+std::string quotedList(const std::vector<std::string>& v) {
+    std::string s;
+    for (const std::string& p : v) s += (s.empty() ? "'" : ", '") + p + "'";
+    return s;
+}
+}  // namespace
+
+void WallInput::setPartView(LiveScene& scene, const PartView& view) {
+    scene.setPartView(view);
+    const PartView& v = scene.partView();
+    size_t highlighted = 0;
+    for (const InstanceDesc& in : scene.desc().instances) highlighted += in.visibility == Visibility::Highlighted;
+    const size_t hidden = scene.hiddenCount();
+    std::string line;
+    if (!v.isolate.empty()) line += "isolated " + quotedList(v.isolate) + "; ";
+    if (!v.hide.empty()) line += "hidden " + quotedList(v.hide) + "; ";
+    if (!v.highlight.empty()) line += "highlighted " + quotedList(v.highlight) + "; ";
+    if (hidden > 0 || highlighted > 0 || !line.empty())
+        line = "parts: " + line + std::to_string(hidden) + " of " + std::to_string(scene.desc().instances.size()) +
+               " instances hidden, " + std::to_string(highlighted) + " highlighted (U shows all)";
+    if (line != partsLine_ && !line.empty()) log_(line);
+    partsLine_ = line;
+    updateOverlay();
+    refreshStatus();
+}
+
+void WallInput::showAllParts(LiveScene& scene) {
+    scene.setPartView({}, false);
+    if (!partsLine_.empty()) log_("parts: all shown");
+    partsLine_.clear();
+    updateOverlay();
+    statusImage_ = {};
+    refreshStatus();
+}
+
+// X hides the picked part, I isolates it (again: shows all again), G highlights it (again:
+// not), U shows everything.
+void WallInput::partKey(LiveScene& scene, int key) {
+    if (key == GLFW_KEY_U) return showAllParts(scene);
+    if (selected_.empty()) {
+        log_("parts: Ctrl+click a part first");
+        return;
+    }
+    PartView v = scene.partView();
+    if (key == GLFW_KEY_X) {
+        v.hide.push_back(selected_);
+        v.highlight.erase(std::remove(v.highlight.begin(), v.highlight.end(), selected_), v.highlight.end());
+        selected_.clear();  // it is gone: the next X needs a new pick
+    } else if (key == GLFW_KEY_I) {
+        v.isolate = v.isolate == std::vector<std::string>{selected_} ? std::vector<std::string>{}
+                                                                    : std::vector<std::string>{selected_};
+    } else {
+        auto it = std::find(v.highlight.begin(), v.highlight.end(), selected_);
+        if (it != v.highlight.end()) v.highlight.erase(it);
+        else v.highlight.push_back(selected_);
+    }
+    setPartView(scene, v);
+}
+
 bool WallInput::handle(LiveScene& scene, double dt) {
     std::vector<InputState> inputs;
     inputs.swap(injected_);
@@ -209,13 +270,13 @@ void WallInput::sectionKey(LiveScene& scene, int key, int mods) {
         return;
     }
     if (activeSection_ < 0) return;
-    const bool known = key == GLFW_KEY_X || key == GLFW_KEY_F || key == GLFW_KEY_PAGE_UP || key == GLFW_KEY_PAGE_DOWN ||
+    const bool known = key == GLFW_KEY_V || key == GLFW_KEY_F || key == GLFW_KEY_PAGE_UP || key == GLFW_KEY_PAGE_DOWN ||
                        key == GLFW_KEY_LEFT || key == GLFW_KEY_RIGHT || key == GLFW_KEY_UP || key == GLFW_KEY_DOWN ||
                        key == GLFW_KEY_DELETE;
     if (!known) return;
     SectionPlane p = desc.sections[activeSection_];
     const Float3 n = unit(p.normal);
-    if (key == GLFW_KEY_X) p.enabled = !p.enabled;
+    if (key == GLFW_KEY_V) p.enabled = !p.enabled;
     if (key == GLFW_KEY_F) p.normal = {-p.normal.x, -p.normal.y, -p.normal.z};
     if (key == GLFW_KEY_PAGE_UP || key == GLFW_KEY_PAGE_DOWN) {
         if (sectionStep_ == 0) {
@@ -278,6 +339,7 @@ bool WallInput::apply(LiveScene& scene, const InputState& in, double dt) {
             refreshStatus();
         }
         if (key == GLFW_KEY_T) present_.falseColour = !present_.falseColour;
+        if (key == GLFW_KEY_X || key == GLFW_KEY_I || key == GLFW_KEY_G || key == GLFW_KEY_U) partKey(scene, key);
     }
     for (size_t i = 0; i < in.keysPressed.size(); ++i)
         sectionKey(scene, in.keysPressed[i], i < in.modsPressed.size() ? in.modsPressed[i] : 0);
@@ -311,8 +373,12 @@ bool WallInput::apply(LiveScene& scene, const InputState& in, double dt) {
             std::snprintf(line, sizeof line, "picked instance %u at distance %.2f", grabbed_->instance,
                           double(grabbed_->t * length(cam.direction(float(in.wallX), float(in.wallY)))));
             // Assemblies name the part, so a reviewer can say which one is meant.
-            const std::string part = scene.desc().partPath(scene.desc().instances[grabbed_->instance].part);
-            log_(part.empty() ? std::string(line) : std::string(line) + ", part '" + part + "'");
+            const InstanceDesc& in = scene.desc().instances[grabbed_->instance];
+            const std::string part = scene.desc().partPath(in.part);
+            // X, I and G act on it: the part, or the mesh of an instance that has none.
+            selected_ = part.empty() ? scene.desc().meshes[in.mesh].name : part;
+            log_(part.empty() ? std::string(line) + ", mesh '" + selected_ + "' (X hide, I isolate, G highlight)"
+                              : std::string(line) + ", part '" + part + "' (X hide, I isolate, G highlight)");
         }
     }
     if (grabbed_ && in.leftDown && ctrl) {
@@ -333,12 +399,14 @@ void WallInput::show(const WallFrame& frame, const FrameReport& report, double f
     if (gl_) {
         gl_->present(frame, present_);
         statusClock_ += frameSeconds;
-        if ((measuring_ || activeSection_ >= 0) && !showStatus_ && statusClock_ >= 0.5) {
-            // Measure mode or an active section plane alone: its line is the overlay and the
-            // title, and the log has had it.
+        if ((measuring_ || activeSection_ >= 0 || !partsLine_.empty()) && !showStatus_ && statusClock_ >= 0.5) {
+            // Measure mode, an active section plane or parts hidden alone: their lines are the
+            // overlay and the title, and the log has had them.
             statusClock_ = 0;
-            gl_->setStatus(overlayText_);
-            statusImage_ = textImage(overlayText_, 2);
+            std::string text = overlayText_;
+            if (!partsLine_.empty()) text += (text.empty() ? "" : "\n") + partsLine_;
+            gl_->setStatus(text);
+            statusImage_ = textImage(text, 2);
         } else if (showStatus_ && statusClock_ >= 0.5) {
             statusClock_ = 0;
             char line[256];
@@ -363,6 +431,10 @@ void WallInput::show(const WallFrame& frame, const FrameReport& report, double f
             if (!overlayText_.empty()) {
                 status += " | " + overlayText_;
                 overlay += "\n" + overlayText_;
+            }
+            if (!partsLine_.empty()) {
+                status += " | " + partsLine_;
+                overlay += "\n" + partsLine_;
             }
             gl_->setStatus(status);
             statusImage_ = textImage(overlay, 2);  // shown from the next frame on

@@ -58,6 +58,9 @@ public:
     // the one the section keys (README, "Section planes") move; -1: none.
     void setSection(LiveScene& scene, uint32_t index, const SectionPlane& plane);
     int activeSection() const { return activeSection_; }
+    // Parts by name (WallSession::setPartView): applied to the scene, logged, on the overlay.
+    void setPartView(LiveScene& scene, const PartView& view);
+    void showAllParts(LiveScene& scene);
     // Shows a frame the wall's size (or smaller: a frame rendered at a fraction of the
     // resolution is shown upscaled).
     void show(const WallFrame& frame, const FrameReport& report, double frameSeconds);
@@ -90,7 +93,12 @@ private:
     void sectionKey(LiveScene& scene, int key, int mods);
     std::string sectionLine(const SceneDesc& scene) const;  // the active plane, for the overlay
     std::string overlayText_;  // measuring and the active plane: the overlay's line, kept by handle()
-    void updateOverlay() { present_.overlay = (showStatus_ || measuring_ || activeSection_ >= 0) ? &statusImage_ : nullptr; }
+    void updateOverlay() {
+        present_.overlay = (showStatus_ || measuring_ || activeSection_ >= 0 || !partsLine_.empty()) ? &statusImage_ : nullptr;
+    }
+    std::string selected_;            // the part (path, or mesh name) the last Ctrl+click picked
+    std::string partsLine_;           // what is hidden, isolated, highlighted; empty: nothing
+    void partKey(LiveScene& scene, int key);
     void refreshStatus() { statusClock_ = 1e9; }  // the overlay shows a change at the next frame
 };
 

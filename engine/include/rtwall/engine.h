@@ -139,12 +139,21 @@ struct MeshDesc {
     std::shared_ptr<const TriangleMesh> mesh;
 };
 
+// How an instance is shown (design reviews: hide, isolate and highlight parts, README "Parts").
+// Hidden: not in the scene at all (no pixels, no shadow, no reflection, not picked).
+// Highlighted: its surface colour is multiplied by kHighlightTint and it glows with
+// kHighlightGlow, so it stands out lit or in shadow, whatever its material.
+enum class Visibility : uint8_t { Shown = 0, Hidden = 1, Highlighted = 2 };
+inline constexpr Float3 kHighlightTint{1.0f, 0.55f, 0.12f};
+inline constexpr Float3 kHighlightGlow{0.30f, 0.14f, 0.02f};
+
 struct InstanceDesc {
     uint32_t mesh = 0;      // index into SceneDesc::meshes
     uint32_t material = 0;  // index into SceneDesc::materials
     Transform transform;
     int32_t part = -1;      // index into SceneDesc::parts (assembly files), -1: none; kept by
                             // the master only, render clients need no names
+    Visibility visibility = Visibility::Shown;
     bool operator==(const InstanceDesc&) const = default;
 };
 
@@ -254,6 +263,31 @@ struct SceneDesc {
     Bounds3 worldBounds() const;
 };
 
+// Parts by name (hide, isolate, highlight). A pattern is matched against a part's path
+// (SceneDesc::partPath, "engine/piston 2") when it contains a '/', else against its name; '*'
+// stands for any run of characters (also '/'), everything else is literal. An instance is
+// matched when its part or any ancestor of it is; an instance without a part (a scene file's own
+// [[instance]]) is matched by its mesh's name.
+bool globMatch(const std::string& pattern, const std::string& text);
+std::vector<uint32_t> instancesMatching(const SceneDesc& scene, const std::string& pattern);
+
+// What is hidden, isolated and highlighted, as patterns (scene file [parts], `--hide`, the wall's
+// keys). Each instance's visibility: with any isolate pattern, the instances no isolate pattern
+// matches are hidden; those a hide pattern matches are hidden; of the rest, those a highlight
+// pattern matches are highlighted.
+struct PartView {
+    std::vector<std::string> hide, isolate, highlight;
+    bool empty() const { return hide.empty() && isolate.empty() && highlight.empty(); }
+    bool operator==(const PartView&) const = default;
+};
+// One visibility per instance. Throws InputError naming the first pattern that matches nothing.
+std::vector<Visibility> visibilityOf(const SceneDesc& scene, const PartView& view);
+// Hidden where either is, else highlighted where either is.
+Visibility combineVisibility(Visibility a, Visibility b);
+// Each instance's visibility combined with what `view` gives it (throws as visibilityOf, before
+// changing anything): a scene file's [parts], then `--hide` etc. on top.
+void applyPartView(SceneDesc& scene, const PartView& view);
+
 // "shaded", "depth", "rays", "tile_time", "client"; anything else is an InputError.
 ViewMode viewModeFromName(const std::string& name);
 
@@ -343,6 +377,9 @@ public:
     // Differential updates: they change what the next commit() publishes, without rebuilding
     // any mesh's BVH (a transform only refits the top level). Not safe while tiles render.
     void setInstanceTransform(uint32_t instance, const Transform& transform);  // throws std::out_of_range
+    // Hides, shows or highlights an instance: a hidden one leaves the top level (the next commit
+    // rebuilds it over the instances, never a mesh's BVH). Throws std::out_of_range.
+    void setInstanceVisibility(uint32_t instance, Visibility visibility);
     void setMaterial(uint32_t material, const Material& value);
     // The contents of a file that materials set from now on may name (as SceneDesc::files): a
     // render client gets them from the master by hash.

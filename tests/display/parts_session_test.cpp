@@ -1,0 +1,170 @@
+// Hide, isolate and highlight on the wall (issue 20): Ctrl+click picks a part, X hides it, I
+// isolates it, G highlights it, U shows all; --hide etc. (RunConfig::parts) apply from the start.
+// Every frame the cluster shows is the session's state rendered on one machine, byte for byte.
+#include "display_test_util.h"
+#include "parts_scene.h"
+
+#include <rtwall/wall.h>
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+#include <gtest/gtest.h>
+
+#include <memory>
+
+namespace rtwall {
+namespace {
+
+RunConfig partsConfig(const std::filesystem::path& dir, std::shared_ptr<std::vector<std::string>> lines) {
+    RunConfig c;
+    c.scene = "parts";
+    c.loaded = test::partsScene();
+    c.cluster.localClients = 2;
+    c.cluster.async = false;
+    c.clientThreads = true;
+    c.headless = true;
+    c.frames = 0;
+    c.orbit = 0.0;
+    c.writeEvery = 0;
+    c.out = dir;
+    c.log = [lines](const std::string& line) { lines->push_back(line); };
+    return c;
+}
+
+Image renderState(const SceneDesc& d) {
+    const Scene scene(d);
+    return renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings);
+}
+
+size_t differingBytes(const Image& a, const Image& b) {
+    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
+    size_t n = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
+    return n;
+}
+
+// A wall pixel whose ray hits `instance` first.
+std::pair<double, double> pixelOnInstance(WallSession& s, uint32_t instance) {
+    const RenderSettings& st = s.scene().settings;
+    for (int y = 0; y < st.height; ++y)
+        for (int x = 0; x < st.width; ++x)
+            if (const auto hit = s.pick(x + 0.5, y + 0.5); hit && hit->instance == instance) return {x + 0.5, y + 0.5};
+    ADD_FAILURE() << "instance " << instance << " is not in view";
+    return {0, 0};
+}
+
+void ctrlClick(WallSession& s, std::pair<double, double> at) {
+    InputState press;
+    press.leftPressed = press.leftDown = true;
+    press.clickMods = GLFW_MOD_CONTROL;
+    press.wallX = at.first;
+    press.wallY = at.second;
+    s.inject(press);
+    s.inject(InputState{});  // released
+}
+
+void key(WallSession& s, int k) {
+    InputState in;
+    in.keysPressed = {k};
+    in.modsPressed = {0};
+    s.inject(in);
+}
+
+bool logged(const std::vector<std::string>& lines, const std::string& text) {
+    for (const std::string& l : lines)
+        if (l.find(text) != std::string::npos) return true;
+    return false;
+}
+
+TEST(PartsSession, PickThenHideIsolateHighlightAndShowAll) {
+    const auto dir = test::displayScratchDir();
+    auto lines = std::make_shared<std::vector<std::string>>();
+    WallSession s(partsConfig(dir, lines));
+    ASSERT_TRUE(s.step());
+    const Image start = s.lastFrame().left;
+    ASSERT_EQ(differingBytes(start, renderState(s.scene())), 0u);
+
+    key(s, GLFW_KEY_X);  // nothing picked yet: nothing happens
+    ASSERT_TRUE(s.step());
+    EXPECT_TRUE(logged(*lines, "parts: Ctrl+click a part first"));
+
+    ctrlClick(s, pixelOnInstance(s, 1));
+    ASSERT_TRUE(s.step());
+    EXPECT_TRUE(logged(*lines, "part 'asm/left'"));
+    key(s, GLFW_KEY_X);
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.scene().instances[1].visibility, Visibility::Hidden);
+    EXPECT_EQ(s.partView().hide, std::vector<std::string>{"asm/left"});
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_GT(differingBytes(s.lastFrame().left, start), 0u);
+    EXPECT_TRUE(logged(*lines, "parts: hidden 'asm/left'; 1 of 4 instances hidden"));
+
+    ctrlClick(s, pixelOnInstance(s, 2));
+    key(s, GLFW_KEY_I);  // the right box's node: the box and its knob, nothing else
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.scene().instances[0].visibility, Visibility::Hidden);
+    EXPECT_EQ(s.scene().instances[2].visibility, Visibility::Shown);
+    EXPECT_EQ(s.scene().instances[3].visibility, Visibility::Shown);
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_TRUE(logged(*lines, "isolated 'asm/right'"));
+
+    key(s, GLFW_KEY_G);
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.scene().instances[2].visibility, Visibility::Highlighted);
+    EXPECT_EQ(s.scene().instances[3].visibility, Visibility::Highlighted);
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+
+    key(s, GLFW_KEY_U);
+    ASSERT_TRUE(s.step());
+    for (const InstanceDesc& in : s.scene().instances) EXPECT_EQ(in.visibility, Visibility::Shown);
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+}
+
+TEST(PartsSession, RunConfigPartsApplyFromTheStart) {
+    const auto dir = test::displayScratchDir();
+    auto lines = std::make_shared<std::vector<std::string>>();
+    RunConfig c = partsConfig(dir, lines);
+    c.parts.hide = {"knob"};
+    c.parts.highlight = {"left"};
+    WallSession s(c);
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.scene().instances[3].visibility, Visibility::Hidden);
+    EXPECT_EQ(s.scene().instances[1].visibility, Visibility::Highlighted);
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_TRUE(logged(*lines, "1 of 4 instances hidden, 1 highlighted"));
+    // A wall view on top keeps them; U shows all.
+    s.setPartView(PartView{{"floor"}, {}, {}});
+    EXPECT_EQ(s.scene().instances[3].visibility, Visibility::Hidden);
+    EXPECT_EQ(s.scene().instances[0].visibility, Visibility::Hidden);
+    EXPECT_THROW(s.setPartView(PartView{{"nothing"}, {}, {}}), InputError);
+    EXPECT_EQ(s.scene().instances[0].visibility, Visibility::Hidden) << "a bad pattern changes nothing";
+    s.showAllParts();
+    ASSERT_TRUE(s.step());
+    for (const InstanceDesc& in : s.scene().instances) EXPECT_EQ(in.visibility, Visibility::Shown);
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+}
+
+// A --watch edit of the scene file's [parts] arrives as visibility changes (applyEdit is what the
+// watcher calls); the wall's own view stays on top of it.
+TEST(PartsSession, AnEditedPartsTableIsAnUpdate) {
+    const auto dir = test::displayScratchDir();
+    auto lines = std::make_shared<std::vector<std::string>>();
+    WallSession s(partsConfig(dir, lines));
+    ASSERT_TRUE(s.step());
+    s.setPartView(PartView{{}, {}, {"left"}});
+    SceneDesc edited = test::partsScene();
+    applyPartView(edited, PartView{{"floor"}, {}, {}});
+    const SceneEdit e = s.applyEdit(edited);
+    EXPECT_TRUE(e.refused.empty());
+    EXPECT_TRUE(e.transforms.empty());
+    ASSERT_EQ(e.visibility.size(), 2u) << "the floor, and the left box the wall highlights";
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.scene().instances[0].visibility, Visibility::Hidden);
+    EXPECT_EQ(s.scene().instances[1].visibility, Visibility::Highlighted);
+    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_TRUE(logged(*lines, "camera same, 2 instance visibilities"));
+}
+
+}  // namespace
+}  // namespace rtwall

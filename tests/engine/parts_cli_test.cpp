@@ -1,0 +1,63 @@
+// `rtwall render --hide/--isolate/--highlight` (issue 20), through the executable: on top of the
+// scene file's [parts], a hidden mesh is gone from the PNG as if the scene never had it, on one
+// machine and through local client processes alike; a pattern that matches nothing is one line.
+#include "cli_util.h"
+#include "test_util.h"
+
+#include <rtwall/engine.h>
+
+#include <gtest/gtest.h>
+
+namespace rtwall {
+namespace {
+
+const std::string kScene = R"([image]
+width = 64
+height = 48
+tile = 16
+[[mesh]]
+name = "floor"
+shape = "quad"
+[[mesh]]
+name = "box"
+shape = "box"
+[[instance]]
+mesh = "floor"
+scale = 4
+[[instance]]
+mesh = "box"
+scale = 0.5
+translate = [0, 0.5, 0]
+[[light]]
+type = "directional"
+direction = [0.5, -1, -0.3]
+[[camera]]
+position = [0, 3, 5]
+look_at = [0, 0, 0]
+)";
+
+TEST(PartsCli, HideOnTheCommandLineIsTheSceneWithoutIt) {
+    const auto dir = test::scratchDir();
+    test::writeFile(dir / "s.toml", kScene + "[parts]\nhighlight = [\"floor\"]\n");
+    std::string without = kScene;
+    without.erase(without.find("[[instance]]\nmesh = \"box\""), std::string("[[instance]]\nmesh = \"box\"\nscale = 0.5\ntranslate = [0, 0.5, 0]\n").size());
+    test::writeFile(dir / "w.toml", without + "[parts]\nhighlight = [\"floor\"]\n");
+    const std::string exe = RTWALL_EXE;
+    for (const std::string& extra : {std::string(), std::string(" --clients 2")}) {
+        SCOPED_TRACE(extra);
+        auto a = test::runCli(exe, "render " + (dir / "s.toml").string() + " --out " + (dir / "a.png").string() + " --hide box" + extra);
+        ASSERT_EQ(a.status, 0) << a.output;
+        auto b = test::runCli(exe, "render " + (dir / "w.toml").string() + " --out " + (dir / "b.png").string() + extra);
+        ASSERT_EQ(b.status, 0) << b.output;
+        auto c = test::runCli(exe, "render " + (dir / "s.toml").string() + " --out " + (dir / "c.png").string() + extra);
+        ASSERT_EQ(c.status, 0) << c.output;
+        EXPECT_EQ(readPng(dir / "a.png").rgb, readPng(dir / "b.png").rgb);
+        EXPECT_NE(readPng(dir / "a.png").rgb, readPng(dir / "c.png").rgb) << "the box shows without --hide";
+    }
+    auto bad = test::runCli(exe, "render " + (dir / "s.toml").string() + " --out " + (dir / "x.png").string() + " --isolate 'no*'");
+    EXPECT_EQ(bad.status, 1) << bad.output;
+    EXPECT_NE(bad.output.find("isolate 'no*': no part or mesh matches it"), std::string::npos) << bad.output;
+}
+
+}  // namespace
+}  // namespace rtwall
