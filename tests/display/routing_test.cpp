@@ -81,6 +81,18 @@ TEST(DisplayNodes, EveryMistakeIsOneLineWithFileLineAndKey) {
     EXPECT_EQ(wallError(kGrid2x2 + "[[node]]\nname = \"\"\n"),
               "wall.toml:8: [[node]] #1: key 'name': '' is not a node name (1 to 32 letters, digits, '-' or '_')");
     EXPECT_EQ(wallError(kGrid2x2 + "node = \"x\"\n"), "wall.toml:7: [grid]: unknown key 'node'");
+    // Node sets are 64-bit masks: 64 nodes are fine, a 65th is refused when the config is read.
+    auto oneNodePerScreen = [](int columns, int rows) {
+        std::string text = "[wall]\n[grid]\ncolumns = " + std::to_string(columns) + "\nrows = " + std::to_string(rows) +
+                           "\nscreen_width = 8\nscreen_height = 8\n";
+        for (int y = 0; y < rows; ++y)
+            for (int x = 0; x < columns; ++x)
+                text += "[[node]]\nname = \"n" + std::to_string(y * columns + x) + "\"\ncolumns = [" + std::to_string(x) + ", " +
+                        std::to_string(x) + "]\nrows = [" + std::to_string(y) + ", " + std::to_string(y) + "]\n";
+        return text;
+    };
+    EXPECT_EQ(parseWallConfig(oneNodePerScreen(8, 8), "w.toml").nodes().size(), 64u);
+    EXPECT_EQ(wallError(oneNodePerScreen(13, 5)), "wall.toml:1: the screens name 65 display nodes, at most 64 are supported");
 }
 
 // A frame of random pixels (both eyes for stereo walls).
