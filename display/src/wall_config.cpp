@@ -8,6 +8,7 @@
 #include <cmath>
 #include <iomanip>
 #include <sstream>
+#include <stdexcept>
 
 namespace rtwall {
 
@@ -177,6 +178,48 @@ void readTracking(Reader& r, TrackingConfig& t) {
     r.finish();
 }
 
+// [[node]] tables: which display node drives which columns and rows of a [grid] (inclusive
+// ranges; both eyes' screens of a passive-stereo grid). Every grid screen on exactly one node.
+void readNodeRegions(toml_reader::Reader& top, const std::filesystem::path& file, WallConfig& w, int cols, int rows) {
+    if (!top.has("node")) return;
+    if (cols == 0) top.fail(top.find("node"), "[[node]] regions are for a [grid]; with [[screen]] give node = \"NAME\" on each screen");
+    std::vector<int> owner(size_t(cols) * rows, -1);  // region index per cell
+    std::vector<std::string> names;
+    toml_reader::forEachTable(top, file, "node", [&](toml_reader::Reader& r, const toml::table&) {
+        const std::string name = r.string("name", "", true);
+        if (!validNodeName(name)) r.fail(r.find("name"), "key 'name': '" + name + "' is not a node name (1 to 32 letters, digits, '-' or '_')");
+        if (std::find(names.begin(), names.end(), name) != names.end())
+            r.fail(r.find("name"), "key 'name': node '" + name + "' has a region already (one [[node]] per node)");
+        const std::array<int, 2> c = intArray<2>(r, "columns", {0, cols - 1}, 0, 63);
+        const std::array<int, 2> rr = intArray<2>(r, "rows", {0, rows - 1}, 0, 63);
+        if (c[0] > c[1] || c[1] >= cols)
+            r.fail(r.find("columns"), "key 'columns': [" + std::to_string(c[0]) + ", " + std::to_string(c[1]) +
+                                          "] is not a first and last column of the grid's 0.." + std::to_string(cols - 1));
+        if (rr[0] > rr[1] || rr[1] >= rows)
+            r.fail(r.find("rows"), "key 'rows': [" + std::to_string(rr[0]) + ", " + std::to_string(rr[1]) +
+                                       "] is not a first and last row of the grid's 0.." + std::to_string(rows - 1));
+        for (int y = rr[0]; y <= rr[1]; ++y)
+            for (int x = c[0]; x <= c[1]; ++x) {
+                int& o = owner[size_t(y) * cols + x];
+                if (o >= 0)
+                    r.fail(r.find("columns") ? r.find("columns") : r.find("rows"),
+                           "screen c" + std::to_string(x) + "r" + std::to_string(y) + " is in the region of node '" + names[size_t(o)] + "' too");
+                o = int(names.size());
+            }
+        names.push_back(name);
+    });
+    for (int y = 0; y < rows; ++y)
+        for (int x = 0; x < cols; ++x)
+            if (owner[size_t(y) * cols + x] < 0)
+                top.fail(top.find("node"), "[[node]]: screen c" + std::to_string(x) + "r" + std::to_string(y) +
+                                               " is in no node's region (every screen needs a node)");
+    // Grid screens are made row-major per eye.
+    for (size_t i = 0; i < w.screens.size(); ++i) {
+        const size_t cell = i % (size_t(cols) * rows);
+        w.screens[i].node = names[size_t(owner[cell])];
+    }
+}
+
 WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
     using namespace toml_reader;
     WallConfig w;
@@ -223,10 +266,13 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
     if (!hasGrid && !hasScreens) top.fail(nullptr, "a wall needs a [grid] or a list of [[screen]]");
 
     std::vector<const toml::node*> viewportNodes;  // per screen, for messages about the layout
+    int gridColumns = 0, gridRows = 0;
     if (hasGrid) {
         const toml::table* t = subTable(top, "grid");
         Reader r(file, *t, "[grid]: ");
         const int cols = r.integer("columns", 1, 1, 64), rows = r.integer("rows", 1, 1, 64);
+        gridColumns = cols;
+        gridRows = rows;
         const int sw = r.integer("screen_width", 0, 1, 16384), sh = r.integer("screen_height", 0, 1, 16384);
         if (!r.has("screen_width")) r.fail(nullptr, "missing required key 'screen_width'");
         if (!r.has("screen_height")) r.fail(nullptr, "missing required key 'screen_height'");
@@ -326,12 +372,19 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
                 s.upperLeft = r.vec3("upper_left", {});
                 checkRectangle(r, r.find("upper_left"), s.lowerLeft, s.lowerRight, s.upperLeft, "the screen's");
             }
+            if (r.has("node")) {
+                s.node = r.string("node", "");
+                if (!validNodeName(s.node))
+                    r.fail(r.find("node"), "key 'node': '" + s.node + "' is not a node name (1 to 32 letters, digits, '-' or '_')");
+            }
             for (size_t i = 0; i < w.screens.size(); ++i)
                 if (w.screens[i].name == s.name) r.fail(r.find("name"), "key 'name': '" + s.name + "' is used by another screen");
             w.screens.push_back(s);
             viewportNodes.push_back(vpNode);
         });
     }
+
+    readNodeRegions(top, file, w, gridColumns, gridRows);
 
     if (const toml::table* t = subTable(top, "headless")) {
         Reader r(file, *t, "[headless]: ");
@@ -358,6 +411,11 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
         right |= s.eye == Eye::Right;
         if (s.hasCorners != w.screens.front().hasCorners)
             failAt("give the physical corners (lower_left, lower_right, upper_left) on every screen or on none");
+        if (s.node.empty() != w.screens.front().node.empty())
+            failAt(s.node.empty() ? "key 'node': missing; screen '" + w.screens.front().name + "' is on node '" +
+                                        w.screens.front().node + "', so every screen needs a node"
+                                  : "key 'node': screen '" + w.screens.front().name +
+                                        "' has no node, so none may have one (give node = \"...\" on every screen or on none)");
         switch (w.stereo.mode) {
         case StereoMode::None:
             if (s.eye != Eye::Mono) failAt("key 'eye': '" + std::string(eyeName(s.eye)) + "' needs a [stereo] mode");
@@ -383,6 +441,9 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
     }
     if (w.stereo.mode == StereoMode::Passive && (!left || !right))
         throw InputError(toml_reader::where(file, root.source()) + ": [stereo]: passive stereo needs screens for both eyes");
+    if (w.nodes().size() > kMaxDisplayNodes)
+        throw InputError(toml_reader::where(file, root.source()) + ": the screens name " + std::to_string(w.nodes().size()) +
+                         " display nodes, at most " + std::to_string(kMaxDisplayNodes) + " are supported");
     return w;
 }
 
@@ -396,7 +457,7 @@ bool ScreenConfig::operator==(const ScreenConfig& o) const {
     return name == o.name && viewport == o.viewport && outputWidth == o.outputWidth && outputHeight == o.outputHeight &&
            blend == o.blend && blendGamma == o.blendGamma && gamma == o.gamma && brightness == o.brightness &&
            eye == o.eye && monitor == o.monitor && window == o.window && fullscreen == o.fullscreen &&
-           fragmentShader == o.fragmentShader && hasCorners == o.hasCorners &&
+           fragmentShader == o.fragmentShader && hasCorners == o.hasCorners && node == o.node &&
            (!hasCorners || (eq3(lowerLeft, o.lowerLeft) && eq3(lowerRight, o.lowerRight) && eq3(upperLeft, o.upperLeft)));
 }
 
@@ -475,10 +536,38 @@ std::string writeWallConfig(const WallConfig& w) {
            << eyeName(s.eye) << "\"\nmonitor = " << s.monitor << "\nwindow = [" << s.window[0] << ", " << s.window[1]
            << "]\nfullscreen = " << (s.fullscreen ? "true" : "false") << "\n";
         if (!s.fragmentShader.empty()) os << "shader = " << quoted(s.fragmentShader.string()) << "\n";
+        if (!s.node.empty()) os << "node = " << quoted(s.node) << "\n";
         if (s.hasCorners)
             os << "lower_left = " << f3(s.lowerLeft) << "\nlower_right = " << f3(s.lowerRight) << "\nupper_left = " << f3(s.upperLeft) << "\n";
     }
     return os.str();
+}
+
+std::vector<std::string> WallConfig::nodes() const {
+    std::vector<std::string> out;
+    for (const ScreenConfig& s : screens)
+        if (!s.node.empty() && std::find(out.begin(), out.end(), s.node) == out.end()) out.push_back(s.node);
+    return out;
+}
+
+bool validNodeName(const std::string& name) {
+    if (name.empty() || name.size() > 32) return false;
+    return std::all_of(name.begin(), name.end(),
+                       [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_'; });
+}
+
+WallConfig nodeWall(const WallConfig& wall, const std::string& node) {
+    WallConfig w = wall;
+    w.screens.clear();
+    for (const ScreenConfig& s : wall.screens)
+        if (s.node == node) w.screens.push_back(s);
+    if (w.screens.empty()) {
+        std::string known;
+        for (const std::string& n : wall.nodes()) known += (known.empty() ? "" : ", ") + n;
+        throw std::invalid_argument("the wall '" + wall.name + "' has no display node '" + node + "' (its nodes: " +
+                                    (known.empty() ? std::string("none") : known) + ")");
+    }
+    return w;
 }
 
 WallConfig singleScreenWall(int width, int height) {

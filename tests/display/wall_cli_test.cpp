@@ -26,6 +26,20 @@ TEST(WallCli, CheckAcceptsEveryShippedWall) {
     }
 }
 
+TEST(WallCli, CheckNamesTheScreensOfEachDisplayNode) {
+    Result r = run("check " + (test::sourceDir() / "configs/wall/two-nodes-2x2.toml").string());
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("4 screens, shaders compile; display nodes: left: c0r0 c0r1; right: c1r0 c1r1\n"), std::string::npos)
+        << r.output;
+    const auto dir = test::displayScratchDir();
+    const auto bad = test::writeText(dir / "nodes.toml", "[wall]\nwidth = 100\nheight = 50\n[[screen]]\nviewport = [0, 0, 50, 50]\n"
+                                                         "node = \"a\"\n[[screen]]\nviewport = [50, 0, 50, 50]\n");
+    r = run("check " + bad.string());
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.output, "rtwall: error: " + bad.string() +
+                            ":8: screen 'screen2': key 'node': missing; screen 'screen1' is on node 'a', so every screen needs a node\n");
+}
+
 TEST(WallCli, CheckReportsABadConfigAndABadShaderOnOneLine) {
     const auto dir = test::displayScratchDir();
     const auto bad = test::writeText(dir / "bad.toml", "[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\ngama = 2\n");

@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <string>
 
 namespace rtwall::cli {
 
@@ -19,8 +20,15 @@ void addCheck(CLI::App& app, Run& run) {
             for (const std::string& p : problems) std::fprintf(stderr, "rtwall: error: %s\n", p.c_str());
             if (!problems.empty()) return 1;
             const WallConfig wall = loadWallConfig(*config);
-            std::printf("%s: ok: '%s', %dx%d wall pixels, %zu screen%s, shaders compile\n", config->c_str(), wall.name.c_str(),
-                        wall.width, wall.height, wall.screens.size(), wall.screens.size() == 1 ? "" : "s");
+            // With display nodes, which node drives which screens: what an installer wires up.
+            std::string nodes;
+            for (const std::string& n : wall.nodes()) {
+                nodes += (nodes.empty() ? "; display nodes: " : "; ") + n + ":";
+                for (const ScreenConfig& s : wall.screens)
+                    if (s.node == n) nodes += " " + s.name;
+            }
+            std::printf("%s: ok: '%s', %dx%d wall pixels, %zu screen%s, shaders compile%s\n", config->c_str(), wall.name.c_str(),
+                        wall.width, wall.height, wall.screens.size(), wall.screens.size() == 1 ? "" : "s", nodes.c_str());
             return 0;
         };
     });

@@ -51,6 +51,9 @@ struct ScreenConfig {
     // one rectangle (a CAVE, an angled wall). Without them the whole wall image is [stereo]'s rectangle.
     bool hasCorners = false;
     Float3 lowerLeft{}, lowerRight{}, upperLeft{};
+    // The display node (wall PC) that drives this screen; empty: the master drives it. Either
+    // every screen of a wall names a node or none does.
+    std::string node;
     int line = 0;                     // where the screen was defined (messages only)
     bool operator==(const ScreenConfig& o) const;  // ignores `line`
 };
@@ -97,7 +100,14 @@ struct WallConfig {
     int writeEvery = 1;               // headless: every Nth frame as per-screen PNGs (0: never)
     std::string video;                // headless: also encode the wall to this file through ffmpeg
     bool operator==(const WallConfig& o) const;  // ignores `file` and screen lines
+    // The display nodes its screens name, in the order of their first screen; empty when the
+    // master drives every screen itself.
+    std::vector<std::string> nodes() const;
 };
+
+constexpr size_t kMaxDisplayNodes = 64;  // node sets are 64-bit masks on the tile path
+// Letters, digits, '-' and '_', 1 to 32 of them (a node name travels in messages and file names).
+bool validNodeName(const std::string& name);
 
 // Reads and validates a wall config (format: configs/README.md, "Wall configs"). Every problem
 // is an InputError of one line "<file>:<line>: <context>key '<key>': <what>".
@@ -107,6 +117,39 @@ WallConfig parseWallConfig(const std::string& text, const std::filesystem::path&
 std::string writeWallConfig(const WallConfig& wall);
 // One window showing the whole image: the default wall of `rtwall run`.
 WallConfig singleScreenWall(int width, int height);
+// The screens of one display node, in the wall's order, as a wall config of their own: the same
+// wall image and stereo, only those screens (what `rtwall display --node NAME` presents).
+// Throws std::invalid_argument for a node the wall does not name.
+WallConfig nodeWall(const WallConfig& wall, const std::string& node);
+
+// ---------------------------------------------------------------------------------------------
+// Tile-to-node routing
+
+// Which display nodes need a tile of a frame: those with a screen that shows one of its pixels.
+// Screens sample the wall image at their viewport's pixels (bezel pixels are rendered, shown by
+// none); a frame smaller than the wall is upscaled bilinearly, so a screen needs the frame pixels
+// its viewport's samples read with a weight above zero. A tile under a bezel or a blending
+// overlap may go to two nodes, or four at a corner, one wholly under a bezel to none. Passive
+// stereo screens need their eye's image, side-by-side and quad-buffered ones both.
+// Plain arithmetic, no sockets: the render client asks it where to send each tile.
+class TileRouting {
+public:
+    // Nodes are wall.nodes(), or one node (the master, named "") for a wall without any.
+    TileRouting(const WallConfig& wall, int frameWidth, int frameHeight);
+    const std::vector<std::string>& nodes() const { return nodes_; }
+    // Bit i: nodes()[i] needs the tile [x0, x1) x [y0, y1) of eye `eye` (0 left/mono, 1 right).
+    uint64_t route(int x0, int y0, int x1, int y1, int eye) const;
+    // The masks of every tile of the frame cut into tileSize squares, row-major (the engine's
+    // makeTiles order, edge tiles cut at the frame's border): the table a frame's tiles travel by.
+    std::vector<uint64_t> routeTiles(int tileSize, int eye) const;
+    // The frame pixels node i's screens read, per eye (empty rects where it shows no such eye).
+    const std::vector<std::array<PixelRect, 2>>& needs(size_t node) const { return needs_.at(node); }
+
+private:
+    std::vector<std::string> nodes_;
+    int frameWidth_ = 0, frameHeight_ = 0;
+    std::vector<std::vector<std::array<PixelRect, 2>>> needs_;  // [node][screen of the node][eye]
+};
 
 // ---------------------------------------------------------------------------------------------
 // Shaders
