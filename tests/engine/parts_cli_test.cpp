@@ -4,6 +4,8 @@
 #include "cli_util.h"
 #include "test_util.h"
 
+#include "generators.h"
+
 #include <rtwall/engine.h>
 
 #include <gtest/gtest.h>
@@ -57,6 +59,25 @@ TEST(PartsCli, HideOnTheCommandLineIsTheSceneWithoutIt) {
     auto bad = test::runCli(exe, "render " + (dir / "s.toml").string() + " --out " + (dir / "x.png").string() + " --isolate 'no*'");
     EXPECT_EQ(bad.status, 1) << bad.output;
     EXPECT_NE(bad.output.find("isolate 'no*': no part or mesh matches it"), std::string::npos) << bad.output;
+}
+
+// `rtwall info` of a scene file lists the part tree of its assemblies, with what [parts] hides
+// and highlights: the names a reviewer gives --hide.
+TEST(PartsCli, InfoListsTheScenesPartTree) {
+    const auto dir = test::scratchDir();
+    gen::GenOptions o;
+    o.out = dir;
+    o.instances = 14;
+    gen::genStep(o);
+    test::writeFile(dir / "s.toml", "[[mesh]]\nname = \"plant\"\nfile = \"assembly.step\"\n[[instance]]\nmesh = \"plant\"\n"
+                                    "[parts]\nhide = [\"plant/module 2/bolt 1\"]\nhighlight = [\"bracket*\"]\n");
+    const auto r = test::runCli(RTWALL_EXE, "info " + (dir / "s.toml").string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("instances_hidden = 1\n"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("instances_highlighted = 4\n"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("plant\n  module 1\n    plate  [1 instance]\n    bolt 1  [1 instance]\n"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("  module 2\n    plate  [1 instance]\n    bolt 1  [1 instance, 1 hidden]\n"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("    bracket 2  [1 instance, 1 highlighted]\n"), std::string::npos) << r.output;
 }
 
 }  // namespace

@@ -45,8 +45,33 @@ toml::table meshInfo(const std::filesystem::path& path) {
                        {"resident_bytes", int64_t(mesh.residentBytes())}};
 }
 
-toml::table sceneInfo(const std::string& scene) {
+// A scene (file or builtin): the counts; for a scene file that brings in assemblies, their part
+// tree in `tree`, each part with the instances it places and how many of them [parts] hides or
+// highlights (the names `--hide` and the wall's keys go by).
+toml::table sceneInfo(const std::string& scene, std::string* tree) {
     const SceneDesc desc = loadScene(scene);
+    if (tree && !desc.parts.empty()) {
+        std::vector<size_t> placed(desc.parts.size()), hiddenIn(desc.parts.size()), highlightedIn(desc.parts.size());
+        for (const InstanceDesc& in : desc.instances)
+            if (in.part >= 0 && size_t(in.part) < desc.parts.size()) {
+                ++placed[size_t(in.part)];
+                hiddenIn[size_t(in.part)] += in.visibility == Visibility::Hidden;
+                highlightedIn[size_t(in.part)] += in.visibility == Visibility::Highlighted;
+            }
+        std::vector<int> depth(desc.parts.size(), 0);
+        for (size_t i = 0; i < desc.parts.size(); ++i) {
+            const PartDesc& p = desc.parts[i];
+            depth[i] = p.parent >= 0 && size_t(p.parent) < i ? depth[size_t(p.parent)] + 1 : 0;
+            *tree += std::string(2 * size_t(depth[i]), ' ') + p.name;
+            if (placed[i] > 0) {
+                *tree += "  [" + std::to_string(placed[i]) + (placed[i] == 1 ? " instance" : " instances");
+                if (hiddenIn[i]) *tree += ", " + std::to_string(hiddenIn[i]) + " hidden";
+                if (highlightedIn[i]) *tree += ", " + std::to_string(highlightedIn[i]) + " highlighted";
+                *tree += "]";
+            }
+            *tree += "\n";
+        }
+    }
     int64_t unique = 0, instanced = 0;
     for (const MeshDesc& m : desc.meshes) unique += int64_t(m.mesh->triangleCount());
     for (const InstanceDesc& in : desc.instances) instanced += int64_t(desc.meshes[in.mesh].mesh->triangleCount());
@@ -175,10 +200,12 @@ void addInfo(CLI::App& app, Run& run) {
                 }
                 return 0;
             }
-            const toml::table info =
-                sceneSourceKind(o->file) == SceneSourceKind::MeshFile ? meshInfo(o->file) : sceneInfo(o->file);
+            std::string tree;
+            const toml::table info = sceneSourceKind(o->file) == SceneSourceKind::MeshFile
+                                         ? meshInfo(o->file)
+                                         : sceneInfo(o->file, o->json ? nullptr : &tree);
             if (o->json) std::cout << toml::json_formatter{info} << "\n";
-            else std::cout << info << "\n";
+            else std::cout << info << "\n" << (tree.empty() ? "" : "\n# part tree of its assemblies (part  [instances])\n" + tree);
             return 0;
         };
     });
