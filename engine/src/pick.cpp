@@ -4,7 +4,10 @@
 namespace rtwall {
 
 std::optional<PickResult> pick(const Scene& scene, const Camera& camera, float px, float py) {
-    const Float3 o = camera.origin(), d = camera.direction(px, py);
+    return pickRay(scene, camera.origin(), camera.direction(px, py));
+}
+
+std::optional<PickResult> pickRay(const Scene& scene, const Float3& o, const Float3& d) {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh{};

@@ -61,6 +61,11 @@ public:
         return rtwall::pick(*pickScene_, Camera(camera, width, height), float(x), float(y));
     }
 
+    std::optional<PickResult> pickRay(const Float3& origin, const Float3& direction) {
+        if (!pickScene_) pickScene_ = std::make_unique<Scene>(desc_);
+        return rtwall::pickRay(*pickScene_, origin, direction);
+    }
+
 private:
     SceneDesc desc_;
     Master& master_;
