@@ -4,10 +4,7 @@
 namespace rtwall {
 
 std::optional<PickResult> pick(const Scene& scene, const Camera& camera, float px, float py) {
-    return pickRay(scene, camera.origin(), camera.direction(px, py));
-}
-
-std::optional<PickResult> pickRay(const Scene& scene, const Float3& o, const Float3& d) {
+    const Float3 o = camera.origin(), d = camera.direction(px, py);
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh{};

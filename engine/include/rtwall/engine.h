@@ -487,8 +487,6 @@ struct PickResult {
     Float3 point;           // world space
 };
 std::optional<PickResult> pick(const Scene& scene, const Camera& camera, float px, float py);
-// The same for any ray (a tracked wand's): t in units of `direction`.
-std::optional<PickResult> pickRay(const Scene& scene, const Float3& origin, const Float3& direction);
 
 // Number of rays per Embree packet the packet kernel uses on this CPU (4, 8 or 16) where
 // TraceOptions::packetWidth is 0: 16 with AVX-512, 8 with AVX, else 4.
