@@ -375,6 +375,19 @@ TEST(WandSession, JoystickFliesTheCameraAlongTheWandAndHomeReturns) {
     ASSERT_TRUE(s.step());
     EXPECT_EQ(s.camera().position, start.position);
     EXPECT_EQ(s.camera().lookAt, start.lookAt);
+    // The mode button: orbit about the scene's centre, whose distance the joystick's x keeps.
+    sendWand(s, t, {0, -0.5f, 1.5f}, 90, {false, true}, {0, 0}, 4);
+    ASSERT_TRUE(s.step());
+    const Bounds3 b = s.scene().worldBounds();
+    const Float3 centre{(b.lo.x + b.hi.x) / 2, (b.lo.y + b.hi.y) / 2, (b.lo.z + b.hi.z) / 2};
+    auto distance = [&](Float3 p) { return std::hypot(p.x - centre.x, p.y - centre.y, p.z - centre.z); };
+    sendWand(s, t, {0, -0.5f, 1.5f}, 90, {false, false}, {1, 0}, 5);
+    for (int i = 0; i < 3; ++i) ASSERT_TRUE(s.step());
+    // (The camera stands on the centre's vertical, so its position stays; where it looks turns.)
+    EXPECT_NE(s.camera().lookAt, start.lookAt) << "turned";
+    EXPECT_NEAR(distance(s.camera().lookAt), distance(start.lookAt), 1e-4);
+    EXPECT_NEAR(distance(s.camera().position), distance(start.position), 1e-4);
+    EXPECT_NEAR(s.camera().position.y, start.position.y, 1e-5) << "about the vertical";
 }
 
 TEST(WandSession, TheRayIsDrawnInBothEyesAndOnlyWithAWand) {

@@ -32,6 +32,8 @@ WallInput::WallInput(const WallConfig& wall, const CameraDesc& start, const Opti
     if (!gl_ && options.perScreenImages) headless_ = std::make_unique<HeadlessPresenter>(wall_, options.outDir);
     const Float3 d{start.position.x - start.lookAt.x, start.position.y - start.lookAt.y, start.position.z - start.lookAt.z};
     nav_ = std::make_unique<Navigator>(poseOf(start), std::max(0.1f, length(d)));
+    // A flystick flies by default, as in every VR wall; its mode button (or Tab) orbits.
+    if (wall_.tracking.enabled && wall_.tracking.flystick >= 0) nav_->setMode(Navigator::Mode::Fly);
     if (gl_)
         log_("wall '" + wall_.name + "': " + std::to_string(wall_.screens.size()) + " window" +
              (wall_.screens.size() == 1 ? "" : "s") + " (" + gl_->renderer() +
