@@ -13,7 +13,7 @@ namespace rtwall {
 
 namespace {
 
-constexpr int32_t kSenderDescription = -1, kTypeDescription = -2, kUdpDescription = -3, kLogDescription = -4,
+constexpr int32_t kSenderDescription = -1, kTypeDescription = -2, kUdpDescription = -3,  // -4: a log description (skipped)
                   kDisconnect = -5;
 constexpr size_t kMaxNames = 4096;  // senders or types one server may name
 
