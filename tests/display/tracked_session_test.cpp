@@ -345,6 +345,34 @@ TEST(WandSession, PickAndDragMovesTheInstanceByExactlyTheWandsMotion) {
     EXPECT_TRUE(said("wand: released instance 0"));
 }
 
+// In measure mode the trigger sets the points where the wand's ray hits, and moves nothing.
+TEST(WandSession, TheTriggerMeasuresInMeasureMode) {
+    const auto dir = test::displayScratchDir();
+    WallSession s(config(dir, wandWall(), "wand.toml"));
+    const TrackingConfig t = loadWallConfig(dir / "wand.toml").tracking;
+    const Transform start = s.scene().instances[0].transform;
+    s.setMeasuring(true);
+    // Level with the red box's centre (world (0.3, 0.4, -1.5)), a metre in front: A on its face.
+    sendWand(s, t, {0.3f, 0.4f - 1.7f + 0.2f, -0.5f + 2.5f}, 0, {true}, {0, 0}, 1);
+    ASSERT_TRUE(s.step());
+    ASSERT_TRUE(s.measurement());
+    EXPECT_NEAR(s.measurement()->a[0], 0.3, 1e-5);
+    EXPECT_NEAR(s.measurement()->a[1], 0.4, 1e-5);
+    const double face = s.measurement()->a[2];
+    EXPECT_GT(face, -1.5);
+    EXPECT_LT(face, -0.5);
+    // Released, moved 0.1 m up and pressed again: B, 0.1 from A on the same face.
+    sendWand(s, t, {0.3f, 0.5f - 1.7f + 0.2f, -0.5f + 2.5f}, 0, {false}, {0, 0}, 2);
+    ASSERT_TRUE(s.step());
+    sendWand(s, t, {0.3f, 0.5f - 1.7f + 0.2f, -0.5f + 2.5f}, 0, {true}, {0, 0}, 3);
+    ASSERT_TRUE(s.step());
+    ASSERT_TRUE(s.measurement()->b);
+    EXPECT_NEAR(s.measurement()->distance, 0.1, 1e-4);
+    EXPECT_NEAR((*s.measurement()->b)[2], face, 1e-5);
+    EXPECT_EQ(s.scene().instances[0].transform, start) << "measuring moves nothing";
+    EXPECT_FALSE(s.wand()->dragging);
+}
+
 TEST(WandSession, JoystickFliesTheCameraAlongTheWandAndHomeReturns) {
     const auto dir = test::displayScratchDir();
     // Each step moves by the speed times the previous frame's time, the first frame's counted
