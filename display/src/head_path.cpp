@@ -103,7 +103,11 @@ uint64_t playHeadPath(const HeadPath& path, int port, double rate, double second
         const double t = double(sent) / rate;
         if (t > seconds || (stop && stop->load())) break;
         std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(t)));
-        sender.send(headPathFrame(path, length > 0 ? std::fmod(t, length + 1.0 / rate) : 0.0, sent + 1));
+        DTrackFrame f = headPathFrame(path, length > 0 ? std::fmod(t, length + 1.0 / rate) : 0.0, sent + 1);
+        // Stamped as DTrack stamps its frames: the time of day (UTC) of the measurement, on this
+        // PC's clock, so the wall sees a tracker whose clock agrees with its own.
+        f.timestamp = std::fmod(std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count(), 86400.0);
+        sender.send(f);
     }
     return sent;
 }

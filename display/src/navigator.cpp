@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
+#include <numbers>
 #include <sstream>
 
 namespace rtwall {
@@ -121,6 +122,39 @@ bool Navigator::update(const InputState& in, double dt) {
     pose_.lookAt = f(at);
     if (recording_) path_.push_back(pose_);
     return changed;
+}
+
+bool Navigator::updateWand(const Wand& w, double dt) {
+    if ((w.x == 0 && w.y == 0) || !(dt > 0)) return false;
+    const V up = normalize(v(pose_.up));
+    V pos = v(pose_.position), at = v(pose_.lookAt);
+    // Joystick right turns right: clockwise seen from above, a negative angle about up.
+    const double turn = -w.x * w.turnDegrees * std::numbers::pi / 180.0 * dt;
+    if (mode_ == Mode::Fly) {
+        const V step = normalize(v(w.direction)) * (w.y * w.speed * dt);
+        pos = pos + step;
+        at = at + step;
+        at = pos + rotate(at - pos, up, turn);
+    } else {
+        const V c = v(w.centre);
+        pos = c + rotate(pos - c, up, turn);
+        at = c + rotate(at - c, up, turn);
+        // Towards the centre (y > 0) or away; the view direction stays.
+        const V toCentre = c - pos;
+        const double dist = std::sqrt(dot(toCentre, toCentre));
+        if (dist > 0) {
+            const double step = std::min(w.y * w.speed * dt, dist - 1e-3 * double(speed_));
+            if (step > 0 || w.y < 0) {
+                const V move = toCentre * (std::min(step, dist) / dist);
+                pos = pos + move;
+                at = at + move;
+            }
+        }
+    }
+    pose_.position = f(pos);
+    pose_.lookAt = f(at);
+    if (recording_) path_.push_back(pose_);
+    return true;
 }
 
 

@@ -1,6 +1,7 @@
 // Off-axis stereo frusta from the wall's physical corners and the viewer's head.
 #include <rtwall/display.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace rtwall {
@@ -102,17 +103,102 @@ std::vector<WallView> wallViews(const WallConfig& wall, const HeadPose& head, in
     return views;
 }
 
-EyeWindow eyeWindowInWorld(const EyeWindow& wall, const Float3& viewer, const ViewPose& pose) {
+WallToWorld wallToWorld(const Float3& viewer, const ViewPose& pose) {
     // The camera's orthonormal frame, as the engine's Camera builds it.
     const Float3 forward = unit(sub(pose.lookAt, pose.position), {0, 0, -1});
     Float3 right = unit(cross(forward, pose.up), {0, 0, 0});
     if (len(right) == 0)
         right = unit(cross(forward, std::fabs(forward.y) < 0.9f ? Float3{0, 1, 0} : Float3{1, 0, 0}), {1, 0, 0});
     const Float3 up = cross(right, forward);
-    const Float3 back = mul(forward, -1.0f);
-    auto dir = [&](Float3 v) { return add(add(mul(right, v.x), mul(up, v.y)), mul(back, v.z)); };
-    auto point = [&](Float3 p) { return add(pose.position, dir(sub(p, viewer))); };
-    return {point(wall.eye), point(wall.lowerLeft), dir(wall.right), dir(wall.up)};
+    return {pose.position, viewer, right, up, mul(forward, -1.0f)};
+}
+
+Float3 WallToWorld::direction(const Float3& v) const { return add(add(mul(x, v.x), mul(y, v.y)), mul(z, v.z)); }
+Float3 WallToWorld::point(const Float3& p) const { return add(origin, direction(sub(p, viewer))); }
+
+EyeWindow eyeWindowInWorld(const EyeWindow& wall, const Float3& viewer, const ViewPose& pose) {
+    const WallToWorld m = wallToWorld(viewer, pose);
+    return {m.point(wall.eye), m.point(wall.lowerLeft), m.direction(wall.right), m.direction(wall.up)};
+}
+
+namespace {
+// One pixel-wide line from (x0, y0) to (x1, y1) (image pixels), 2 pixels thick, only inside `clip`.
+void drawLine(Image& image, double x0, double y0, double x1, double y1, const PixelRect& clip, std::array<uint8_t, 3> colour) {
+    // Cut to the clip rectangle first (Liang-Barsky): a point almost level with the eye projects
+    // far off the screens.
+    double t0 = 0, t1 = 1;
+    const double ddx = x1 - x0, ddy = y1 - y0;
+    const double p[4] = {-ddx, ddx, -ddy, ddy};
+    const double q[4] = {x0 - (clip.x - 1), (clip.x + clip.width) - x0, y0 - (clip.y - 1), (clip.y + clip.height) - y0};
+    for (int k = 0; k < 4; ++k) {
+        if (p[k] == 0) {
+            if (q[k] < 0) return;
+            continue;
+        }
+        const double r = q[k] / p[k];
+        if (p[k] < 0) t0 = std::max(t0, r);
+        else t1 = std::min(t1, r);
+    }
+    if (!(t0 <= t1)) return;
+    x1 = x0 + ddx * t1, y1 = y0 + ddy * t1;
+    x0 = x0 + ddx * t0, y0 = y0 + ddy * t0;
+    const double steps = std::ceil(std::max(std::fabs(x1 - x0), std::fabs(y1 - y0)));
+    if (!(steps < 1e6)) return;  // not finite
+    for (int i = 0; i <= int(steps); ++i) {
+        const double t = steps > 0 ? i / steps : 0.0;
+        const int px = int(std::floor(x0 + (x1 - x0) * t)), py = int(std::floor(y0 + (y1 - y0) * t));
+        for (int dy = 0; dy < 2; ++dy)
+            for (int dx = 0; dx < 2; ++dx) {
+                const int x = px + dx, y = py + dy;
+                if (x < clip.x || y < clip.y || x >= clip.x + clip.width || y >= clip.y + clip.height) continue;
+                uint8_t* pixel = &image.rgb[(size_t(y) * size_t(image.width) + size_t(x)) * 3];
+                pixel[0] = colour[0], pixel[1] = colour[1], pixel[2] = colour[2];
+            }
+    }
+}
+}  // namespace
+
+void drawWandRay(const WallConfig& wall, const HeadPose& head, int eye, const Float3& from, const Float3& to, Image& image,
+                 std::array<uint8_t, 3> colour) {
+    if (image.width <= 0 || image.height <= 0 || wall.width <= 0 || wall.height <= 0) return;
+    const double sx = double(image.width) / wall.width, sy = double(image.height) / wall.height;
+    for (const WallView& v : wallViews(wall, head, eye)) {
+        const EyeWindow& w = v.window;
+        const Float3 n = cross(w.right, w.up);  // towards the viewer's side of the screens
+        const double nn = double(len(n));
+        if (!(nn > 0)) continue;
+        // Signed distance of a point in front of the eye (towards the screens), along the normal.
+        auto depth = [&](Float3 p) { return -double(n.x * (p.x - w.eye.x) + n.y * (p.y - w.eye.y) + n.z * (p.z - w.eye.z)) / nn; };
+        Float3 a = from, b = to;
+        double da = depth(a), db = depth(b);
+        const double nearPlane = 1e-3;  // metres: the part of the ray behind the eye is not seen
+        if (da < nearPlane && db < nearPlane) continue;
+        if (da < nearPlane) a = add(a, mul(sub(b, a), float((nearPlane - da) / (db - da)))), da = nearPlane;
+        if (db < nearPlane) b = add(a, mul(sub(b, a), float((nearPlane - da) / (db - da)))), db = nearPlane;
+        const double screenDepth = depth(w.lowerLeft);
+        // Onto the plane from the eye, then into the view's image coordinates (y down).
+        auto project = [&](Float3 p, double d, double& px, double& py) {
+            const double s = screenDepth / d;
+            const double q[3] = {w.eye.x + (p.x - w.eye.x) * s - w.lowerLeft.x, w.eye.y + (p.y - w.eye.y) * s - w.lowerLeft.y,
+                                 w.eye.z + (p.z - w.eye.z) * s - w.lowerLeft.z};
+            const double rr = double(w.right.x) * w.right.x + double(w.right.y) * w.right.y + double(w.right.z) * w.right.z;
+            const double uu = double(w.up.x) * w.up.x + double(w.up.y) * w.up.y + double(w.up.z) * w.up.z;
+            const double u = (q[0] * w.right.x + q[1] * w.right.y + q[2] * w.right.z) / rr;
+            const double vv = (q[0] * w.up.x + q[1] * w.up.y + q[2] * w.up.z) / uu;
+            px = u * wall.width * sx;
+            py = (1.0 - vv) * wall.height * sy;
+        };
+        double x0, y0, x1, y1;
+        project(a, da, x0, y0);
+        project(b, db, x1, y1);
+        for (size_t i : v.screens) {
+            const PixelRect& r = wall.screens[i].viewport;
+            const int cx0 = int(std::floor(r.x * sx)), cy0 = int(std::floor(r.y * sy));
+            const PixelRect clip{cx0, cy0, int(std::ceil((r.x + r.width) * sx)) - cx0, int(std::ceil((r.y + r.height) * sy)) - cy0};
+            drawLine(image, x0, y0, x1, y1, {clip.x, clip.y, std::min(clip.width, image.width - clip.x), std::min(clip.height, image.height - clip.y)},
+                     colour);
+        }
+    }
 }
 
 }  // namespace rtwall

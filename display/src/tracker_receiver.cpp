@@ -5,6 +5,7 @@
 #include <asio.hpp>
 
 #include <array>
+#include <cmath>
 #include <mutex>
 #include <thread>
 
@@ -35,16 +36,118 @@ struct TrackerReceiver::Impl {
         });
     }
 
+    // Seconds since 00:00 UTC now: what the tracker's timestamps count.
+    static double utcOfDay() {
+        return std::fmod(std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count(), 86400.0);
+    }
+
     void take(std::string_view datagram) {
-        const double now = seconds(std::chrono::steady_clock::now());
+        const double now = seconds(std::chrono::steady_clock::now()), utc = utcOfDay();
         std::optional<DTrackFrame> frame = parser.parse(datagram);
         std::lock_guard<std::mutex> lock(mutex);
         if (frame) {
-            tracker.add(*frame, now);
+            tracker.add(*frame, now, utc);
         } else {
             tracker.countDropped(parser.error());
             // One line per 100 bad datagrams at most: a misconfigured sender must not flood the log.
             if (reported++ % 100 == 0) say(parser.error() + " (from " + sender.address().to_string() + ")");
+        }
+    }
+
+    // VRPN: a TCP session to the server (reconnected a second after it breaks), and the UDP
+    // port it is offered for the reports.
+    asio::ip::tcp::resolver resolver{io};
+    asio::ip::tcp::socket tcp{io};
+    asio::steady_timer retry{io};
+    std::optional<VrpnParser> vrpn;
+    std::array<char, 65536> tcpBuffer{};
+    std::string outgoing;
+    std::string lastConnectError;  // said once, not at every retry
+
+    void connectVrpn() {
+        resolver.async_resolve(config.address, std::to_string(config.port), [this](const asio::error_code& ec, asio::ip::tcp::resolver::results_type r) {
+            if (ec == asio::error::operation_aborted) return;
+            if (ec) return retryVrpn("cannot resolve '" + config.address + "': " + ec.message());
+            asio::async_connect(tcp, r, [this](const asio::error_code& e, const asio::ip::tcp::endpoint&) {
+                if (e == asio::error::operation_aborted) return;
+                if (e) return retryVrpn("cannot connect: " + e.message());
+                startVrpn();
+            });
+        });
+    }
+
+    void retryVrpn(const std::string& why) {
+        asio::error_code ignored;
+        tcp.close(ignored);
+        socket.close(ignored);
+        vrpn.reset();
+        const std::string line = "tracker: VRPN " + config.server + ": " + why + " (trying again every second)";
+        if (line != lastConnectError) {
+            std::lock_guard<std::mutex> lock(mutex);
+            say(line);
+        }
+        lastConnectError = line;
+        retry.expires_after(std::chrono::seconds(1));
+        retry.async_wait([this](const asio::error_code& ec) {
+            if (!ec) connectVrpn();
+        });
+    }
+
+    void startVrpn() {
+        asio::error_code ec;
+        tcp.set_option(asio::ip::tcp::no_delay(true), ec);
+        vrpn.emplace(config);
+        lastConnectError.clear();
+        {
+            std::lock_guard<std::mutex> lock(mutex);
+            say("tracker: connected to VRPN " + config.server);
+        }
+        // Our cookie, then a UDP port offered for the reports (VRPN sends its trackers' reports
+        // by UDP where it can), on the address the server reached us at.
+        outgoing = vrpnCookie();
+        const asio::ip::address local = tcp.local_endpoint(ec).address();
+        if (!ec) socket.open(local.is_v4() ? asio::ip::udp::v4() : asio::ip::udp::v6(), ec);
+        if (!ec) socket.bind(asio::ip::udp::endpoint(local, 0), ec);
+        if (!ec) {
+            const std::string host = local.to_string();
+            outgoing += vrpnMessage(socket.local_endpoint().port(), -3, 0, std::string_view(host.c_str(), host.size() + 1));
+            receiveVrpnUdp();
+        }
+        asio::async_write(tcp, asio::buffer(outgoing), [this](const asio::error_code& e, size_t) {
+            if (e && e != asio::error::operation_aborted) retryVrpn("cannot write: " + e.message());
+        });
+        readVrpn();
+    }
+
+    void readVrpn() {
+        tcp.async_read_some(asio::buffer(tcpBuffer), [this](const asio::error_code& ec, size_t bytes) {
+            if (ec == asio::error::operation_aborted || !vrpn) return;
+            if (ec) return retryVrpn(ec == asio::error::eof ? "the server closed the connection" : "connection lost: " + ec.message());
+            takeVrpn(std::string_view(tcpBuffer.data(), bytes), false);
+            if (vrpn->failed()) return retryVrpn(vrpn->error().substr(std::string("vrpn session: ").size()));
+            readVrpn();
+        });
+    }
+
+    void receiveVrpnUdp() {
+        socket.async_receive_from(asio::buffer(buffer), sender, [this](const asio::error_code& ec, size_t bytes) {
+            if (ec == asio::error::operation_aborted || !vrpn) return;
+            if (!ec) takeVrpn(std::string_view(buffer.data(), bytes), true);
+            receiveVrpnUdp();
+        });
+    }
+
+    void takeVrpn(std::string_view bytes, bool datagram) {
+        const double now = seconds(std::chrono::steady_clock::now()), utc = utcOfDay();
+        std::vector<DTrackFrame> frames;
+        const uint64_t droppedBefore = vrpn->dropped();
+        if (datagram) vrpn->datagram(bytes, frames);
+        else vrpn->feed(bytes, frames);
+        std::lock_guard<std::mutex> lock(mutex);
+        for (const DTrackFrame& f : frames) tracker.add(f, now, utc);
+        for (uint64_t i = droppedBefore; i < vrpn->dropped(); ++i) {
+            tracker.countDropped(vrpn->error());
+            if (reported++ % 100 == 0) say(vrpn->error());
         }
     }
 
@@ -57,6 +160,19 @@ struct TrackerReceiver::Impl {
 
 TrackerReceiver::TrackerReceiver(const TrackingConfig& config) : impl_(std::make_unique<Impl>(config)) {
     Impl& s = *impl_;
+    if (config.kind == TrackingSource::Vrpn) {
+        s.port = config.port;
+        s.connectVrpn();
+        s.thread = std::thread([&s] {
+            try {
+                s.io.run();
+            } catch (const std::exception& e) {
+                std::lock_guard<std::mutex> lock(s.mutex);
+                s.say(std::string("tracker receiver stopped: ") + e.what());
+            }
+        });
+        return;
+    }
     asio::error_code ec;
     const asio::ip::address address = asio::ip::make_address(config.address, ec);
     if (!ec) {

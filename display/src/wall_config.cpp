@@ -152,12 +152,48 @@ bool parseSource(const std::string& s, std::string& address, int& port) {
     return true;
 }
 
+// "DEVICE@HOST[:PORT]" (VRPN's own form; the port defaults to VRPN's 3883). HOST is a name or an
+// IPv4 address: letters, digits, '.', '-'.
+bool parseVrpnServer(const std::string& s, std::string& device, std::string& host, int& port) {
+    const size_t at = s.find('@');
+    if (at == std::string::npos || at == 0 || at > 99) return false;  // VRPN's names are at most 99 characters
+    device = s.substr(0, at);
+    std::string rest = s.substr(at + 1);
+    port = 3883;
+    const size_t colon = rest.rfind(':');
+    if (colon != std::string::npos) {
+        const std::string p = rest.substr(colon + 1);
+        if (p.empty() || p.size() > 5 || !std::all_of(p.begin(), p.end(), ::isdigit) || std::stoi(p) > 65535) return false;
+        port = std::stoi(p);
+        rest = rest.substr(0, colon);
+    }
+    if (rest.empty() || !std::all_of(rest.begin(), rest.end(), [](char c) { return std::isalnum((unsigned char)c) || c == '.' || c == '-'; }))
+        return false;
+    host = rest;
+    return std::all_of(device.begin(), device.end(), [](char c) { return std::isprint((unsigned char)c) && c != ' '; });
+}
+
 void readTracking(Reader& r, TrackingConfig& t) {
     t.enabled = true;
     t.source = r.string("source", t.source);
-    if (!parseSource(t.source, t.address, t.port))
+    if (t.source == "vrpn") {
+        t.kind = TrackingSource::Vrpn;
+        t.server = r.string("server", "", true);
+        if (!parseVrpnServer(t.server, t.device, t.address, t.port))
+            r.fail(r.find("server"), "key 'server': expected DEVICE@HOST or DEVICE@HOST:PORT (Tracker0@localhost), got '" + t.server + "'");
+        t.buttonDevice = r.string("buttons", t.device);
+        t.analogDevice = r.string("analog", t.device);
+        for (const char* k : {"buttons", "analog"})
+            if (r.has(k) && (r.string(k, "").empty() || r.string(k, "").size() > 99))
+                r.fail(r.find(k), std::string("key '") + k + "': a VRPN device name of 1 to 99 characters");
+        t.roomScale = 1.0;  // VRPN reports metres
+    } else if (!parseSource(t.source, t.address, t.port)) {
         r.fail(r.find("source"), "key 'source': expected dtrack://ADDRESS:PORT with an IPv4 address to listen on and a UDP port "
-                                 "(dtrack://0.0.0.0:5000), got '" + t.source + "'");
+                                 "(dtrack://0.0.0.0:5000), or \"vrpn\" with a server, got '" + t.source + "'");
+    }
+    for (const char* k : {"server", "buttons", "analog"})
+        if (t.kind != TrackingSource::Vrpn && r.has(k))
+            r.fail(r.find(k), std::string("key '") + k + "': a VRPN setting, but source is not \"vrpn\"");
     t.headBody = r.integer("head_body", t.headBody, 0, 1'000'000);
     t.flystick = r.integer("flystick", t.flystick, -1, 255);
     t.roomScale = r.number("room_scale", t.roomScale, 1e-9, 1e6);
@@ -175,6 +211,19 @@ void readTracking(Reader& r, TrackingConfig& t) {
     t.minCutoff = r.number("min_cutoff", t.minCutoff, 1e-3, 1000.0);
     t.beta = r.number("beta", t.beta, 0.0, 1e6);
     t.derivativeCutoff = r.number("derivative_cutoff", t.derivativeCutoff, 1e-3, 1000.0);
+    t.buttonPick = r.integer("button_pick", t.buttonPick, -1, 255);
+    t.buttonMode = r.integer("button_mode", t.buttonMode, -1, 255);
+    t.buttonHome = r.integer("button_home", t.buttonHome, -1, 255);
+    t.joystickX = r.integer("joystick_x", t.joystickX, -1, 255);
+    t.joystickY = r.integer("joystick_y", t.joystickY, -1, 255);
+    t.flySpeed = r.number("fly_speed", t.flySpeed, 0.0, 1e6);
+    t.turnSpeed = r.number("turn_speed", t.turnSpeed, 0.0, 3600.0);
+    t.deadZone = r.number("dead_zone", t.deadZone, 0.0, 0.99);
+    t.wandDirection = r.vec3d("wand_direction", t.wandDirection);
+    const auto& d = t.wandDirection;
+    if (!(d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > 1e-12) || !std::isfinite(d[0] + d[1] + d[2]))
+        r.fail(r.find("wand_direction"), "key 'wand_direction': must be a direction (not zero)");
+    t.wandRay = r.boolean("wand_ray", t.wandRay);
     r.finish();
 }
 
@@ -518,13 +567,19 @@ std::string writeWallConfig(const WallConfig& w) {
     if (w.tracking.enabled) {
         const TrackingConfig& t = w.tracking;
         auto d3 = [&](const std::array<double, 3>& v) { return "[" + num(v[0]) + ", " + num(v[1]) + ", " + num(v[2]) + "]"; };
-        os << "[tracking]\nsource = " << quoted(t.source) << "\nhead_body = " << t.headBody << "\nflystick = " << t.flystick
+        os << "[tracking]\nsource = " << quoted(t.source);
+        if (t.kind == TrackingSource::Vrpn)
+            os << "\nserver = " << quoted(t.server) << "\nbuttons = " << quoted(t.buttonDevice) << "\nanalog = " << quoted(t.analogDevice);
+        os << "\nhead_body = " << t.headBody << "\nflystick = " << t.flystick
            << "\nroom_scale = " << num(t.roomScale) << "\nroom_rotate = " << d3(t.roomRotate) << "\nroom_translate = "
            << d3(t.roomTranslate) << "\ntimeout_ms = " << t.timeoutMs << "\nprediction_ms = " << num(t.predictionMs) << "\n";
         if (t.filter == TrackingFilter::OneEuro)
             os << "filter = \"one_euro\"\nmin_cutoff = " << num(t.minCutoff) << "\nbeta = " << num(t.beta)
                << "\nderivative_cutoff = " << num(t.derivativeCutoff) << "\n";
-        os << "\n";
+        os << "button_pick = " << t.buttonPick << "\nbutton_mode = " << t.buttonMode << "\nbutton_home = " << t.buttonHome
+           << "\njoystick_x = " << t.joystickX << "\njoystick_y = " << t.joystickY << "\nfly_speed = " << num(t.flySpeed)
+           << "\nturn_speed = " << num(t.turnSpeed) << "\ndead_zone = " << num(t.deadZone) << "\nwand_direction = "
+           << d3(t.wandDirection) << "\nwand_ray = " << (t.wandRay ? "true" : "false") << "\n\n";
     }
     os << "[headless]\nwrite_every = " << w.writeEvery << "\nvideo = " << quoted(w.video) << "\n";
     for (const ScreenConfig& s : w.screens) {

@@ -253,5 +253,196 @@ TEST(TrackedSession, CaveWallsAreRenderedEachWithItsOwnView) {
     }
 }
 
+// ---- The flystick (issue 18): scripted DTrack datagrams of flystick 0 in the shipped room.
+
+// The flystick at wall position p (metres), pointing at the screen turned `yaw` degrees to the
+// left about the vertical, with its buttons and joystick.
+void sendWand(WallSession& s, const TrackingConfig& t, Float3 p, double yaw, std::vector<bool> buttons,
+              std::vector<double> joystick, uint64_t frame) {
+    DTrackFrame f;
+    f.frame = frame;
+    DTrackFlystick w;
+    w.pose.id = 0;
+    w.pose.quality = 1;
+    w.pose.position = {std::round((p.x - t.roomTranslate[0]) * 1e3), std::round(-(p.z - t.roomTranslate[2]) * 1e3),
+                       std::round((p.y - t.roomTranslate[1]) * 1e3)};
+    // About the room's z (up): Rz(yaw) times "pointing at the screen" (its -z along the room's y).
+    const double r = yaw * 3.14159265358979 / 180, c = std::cos(r), sn = std::sin(r);
+    const std::array<double, 9> rz{c, -sn, 0, sn, c, 0, 0, 0, 1}, at{1, 0, 0, 0, 0, -1, 0, 1, 0};
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            w.pose.rotation[size_t(3 * i + j)] = rz[size_t(3 * i)] * at[size_t(j)] + rz[size_t(3 * i + 1)] * at[size_t(3 + j)] +
+                                                 rz[size_t(3 * i + 2)] * at[size_t(6 + j)];
+    w.buttons = std::move(buttons);
+    w.controllers = std::move(joystick);
+    f.definedFlysticks = 1;
+    f.flysticks.push_back(w);
+    DTrackSender(s.trackerPort()).send(f);
+    for (int i = 0; i < 400; ++i) {
+        const std::optional<TrackerState> st = s.tracker();
+        if (st && st->packets >= frame) return;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    ADD_FAILURE() << "the session's tracker did not get datagram " << frame;
+}
+
+std::string wandWall() { return flatWall("[0.0, 0.2, 2.5]", true) + "flystick = 0\n"; }
+
+// Where a wall point is in the world for the scene's camera (at (0, 1.7, 0) looking down -z, so
+// the wall's axes are the world's) and the config's viewer (0, 0.2, 2.5).
+Float3 worldOf(Float3 wall) { return {wall.x, wall.y - 0.2f + 1.7f, wall.z - 2.5f}; }
+
+void expectTransform(const Transform& got, const Transform& want, const char* what) {
+    for (size_t i = 0; i < 12; ++i) EXPECT_NEAR(got.m[i], want.m[i], 2e-5) << what << ", element " << i;
+}
+
+TEST(WandSession, PickAndDragMovesTheInstanceByExactlyTheWandsMotion) {
+    const auto dir = test::displayScratchDir();
+    RunConfig c = config(dir, wandWall(), "wand.toml");
+    std::vector<std::string> lines;
+    c.log = [&](const std::string& line) { lines.push_back(line); };
+    WallSession s(c);
+    const TrackingConfig t = loadWallConfig(dir / "wand.toml").tracking;
+    ASSERT_EQ(t.flystick, 0);
+    const Transform start = s.scene().instances[0].transform;  // the red box, centre (0.3, 0.4, -1.5) in the world
+    // The wand level with the box's centre, a metre in front of it, pointing at it; trigger down.
+    const Float3 p0{0.3f, 0.4f - 1.7f + 0.2f, -0.5f + 2.5f};
+    sendWand(s, t, p0, 0, {true}, {0, 0}, 1);
+    ASSERT_TRUE(s.step());
+    ASSERT_TRUE(s.wand());
+    ASSERT_TRUE(s.wand()->dragging);
+    EXPECT_EQ(*s.wand()->dragging, 0u) << "the red box, not the floor behind it";
+    EXPECT_NEAR(s.wand()->origin.x, 0.3f, 1e-6);
+    EXPECT_NEAR(s.wand()->origin.y, 0.4f, 1e-6);
+    EXPECT_NEAR(s.wand()->direction.z, -1.0f, 1e-6);
+    expectTransform(s.scene().instances[0].transform, start, "picked, not yet moved");
+    // Moved 0.1 m right and 0.05 m up, still held: the box moves by exactly that.
+    const Float3 p1{p0.x + 0.1f, p0.y + 0.05f, p0.z};
+    sendWand(s, t, p1, 0, {true}, {0, 0}, 2);
+    ASSERT_TRUE(s.step());
+    expectTransform(s.scene().instances[0].transform, Transform::translate(0.1, 0.05, 0) * start, "moved with the wand");
+    // Turned 30 degrees to the left about the vertical: the box turns with it, about the wand.
+    sendWand(s, t, p1, 30, {true}, {0, 0}, 3);
+    ASSERT_TRUE(s.step());
+    const Float3 w0 = worldOf(p0), w1 = worldOf(p1);
+    const Transform motion = Transform::translate(w1.x, w1.y, w1.z) * Transform::rotateDegrees(0, 1, 0, 30) *
+                             Transform::translate(-w0.x, -w0.y, -w0.z);
+    expectTransform(s.scene().instances[0].transform, motion * start, "turned with the wand");
+    EXPECT_EQ(s.scene().instances[1].transform, Transform::scale(8, 8, 8)) << "the floor stays";
+    // Released: moving the wand no longer moves the box.
+    sendWand(s, t, p0, 0, {false}, {0, 0}, 4);
+    ASSERT_TRUE(s.step());
+    EXPECT_FALSE(s.wand()->dragging);
+    const Transform released = s.scene().instances[0].transform;
+    expectTransform(released, motion * start, "released where it was");
+    sendWand(s, t, {p0.x - 0.3f, p0.y, p0.z}, 0, {false}, {0, 0}, 5);
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.scene().instances[0].transform, released);
+    const auto said = [&](const std::string& what) {
+        return std::any_of(lines.begin(), lines.end(), [&](const std::string& l) { return l.find(what) != std::string::npos; });
+    };
+    EXPECT_TRUE(said("wand: picked instance 0"));
+    EXPECT_TRUE(said("wand: released instance 0"));
+}
+
+// In measure mode the trigger sets the points where the wand's ray hits, and moves nothing.
+TEST(WandSession, TheTriggerMeasuresInMeasureMode) {
+    const auto dir = test::displayScratchDir();
+    WallSession s(config(dir, wandWall(), "wand.toml"));
+    const TrackingConfig t = loadWallConfig(dir / "wand.toml").tracking;
+    const Transform start = s.scene().instances[0].transform;
+    s.setMeasuring(true);
+    // Level with the red box's centre (world (0.3, 0.4, -1.5)), a metre in front: A on its face.
+    sendWand(s, t, {0.3f, 0.4f - 1.7f + 0.2f, -0.5f + 2.5f}, 0, {true}, {0, 0}, 1);
+    ASSERT_TRUE(s.step());
+    ASSERT_TRUE(s.measurement());
+    EXPECT_NEAR(s.measurement()->a[0], 0.3, 1e-5);
+    EXPECT_NEAR(s.measurement()->a[1], 0.4, 1e-5);
+    const double face = s.measurement()->a[2];
+    EXPECT_GT(face, -1.5);
+    EXPECT_LT(face, -0.5);
+    // Released, moved 0.1 m up and pressed again: B, 0.1 from A on the same face.
+    sendWand(s, t, {0.3f, 0.5f - 1.7f + 0.2f, -0.5f + 2.5f}, 0, {false}, {0, 0}, 2);
+    ASSERT_TRUE(s.step());
+    sendWand(s, t, {0.3f, 0.5f - 1.7f + 0.2f, -0.5f + 2.5f}, 0, {true}, {0, 0}, 3);
+    ASSERT_TRUE(s.step());
+    ASSERT_TRUE(s.measurement()->b);
+    EXPECT_NEAR(s.measurement()->distance, 0.1, 1e-4);
+    EXPECT_NEAR((*s.measurement()->b)[2], face, 1e-5);
+    EXPECT_EQ(s.scene().instances[0].transform, start) << "measuring moves nothing";
+    EXPECT_FALSE(s.wand()->dragging);
+}
+
+TEST(WandSession, JoystickFliesTheCameraAlongTheWandAndHomeReturns) {
+    const auto dir = test::displayScratchDir();
+    // Each step moves by the speed times the previous frame's time, the first frame's counted
+    // from the session's start: all of it lies after t0.
+    const auto t0 = std::chrono::steady_clock::now();
+    WallSession s(config(dir, wandWall(), "wand.toml"));
+    const TrackingConfig t = loadWallConfig(dir / "wand.toml").tracking;
+    const CameraDesc start = s.camera();
+    // Pointing 90 degrees to the left (world -x), joystick full forward.
+    sendWand(s, t, {0, -0.5f, 1.5f}, 90, {}, {0, 1}, 1);
+    for (int i = 0; i < 4; ++i) ASSERT_TRUE(s.step());
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const CameraDesc moved = s.camera();
+    const float dx = moved.position.x - start.position.x;
+    EXPECT_LT(dx, 0.0f) << "flew to the left, where the wand points";
+    EXPECT_LE(-dx, t.flySpeed * elapsed + 1e-4) << "at fly_speed m/s at most";
+    EXPECT_NEAR(moved.position.y, start.position.y, 1e-5);
+    EXPECT_NEAR(moved.position.z, start.position.z, 1e-4);
+    EXPECT_NEAR(moved.lookAt.x - moved.position.x, start.lookAt.x - start.position.x, 1e-4) << "flying does not turn";
+    // The joystick at rest inside the dead zone: nothing moves.
+    sendWand(s, t, {0, -0.5f, 1.5f}, 90, {}, {0.05, -0.05}, 2);
+    ASSERT_TRUE(s.step());
+    const CameraDesc still = s.camera();
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.camera().position, still.position);
+    // Home (button 2) goes back to the start camera.
+    sendWand(s, t, {0, -0.5f, 1.5f}, 90, {false, false, true}, {0, 0}, 3);
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.camera().position, start.position);
+    EXPECT_EQ(s.camera().lookAt, start.lookAt);
+    // The mode button: orbit about the scene's centre, whose distance the joystick's x keeps.
+    sendWand(s, t, {0, -0.5f, 1.5f}, 90, {false, true}, {0, 0}, 4);
+    ASSERT_TRUE(s.step());
+    const Bounds3 b = s.scene().worldBounds();
+    const Float3 centre{(b.lo.x + b.hi.x) / 2, (b.lo.y + b.hi.y) / 2, (b.lo.z + b.hi.z) / 2};
+    auto distance = [&](Float3 p) { return std::hypot(p.x - centre.x, p.y - centre.y, p.z - centre.z); };
+    sendWand(s, t, {0, -0.5f, 1.5f}, 90, {false, false}, {1, 0}, 5);
+    for (int i = 0; i < 3; ++i) ASSERT_TRUE(s.step());
+    // (The camera stands on the centre's vertical, so its position stays; where it looks turns.)
+    EXPECT_NE(s.camera().lookAt, start.lookAt) << "turned";
+    EXPECT_NEAR(distance(s.camera().lookAt), distance(start.lookAt), 1e-4);
+    EXPECT_NEAR(distance(s.camera().position), distance(start.position), 1e-4);
+    EXPECT_NEAR(s.camera().position.y, start.position.y, 1e-5) << "about the vertical";
+}
+
+TEST(WandSession, TheRayIsDrawnInBothEyesAndOnlyWithAWand) {
+    const auto dir = test::displayScratchDir();
+    WallSession s(config(dir, wandWall(), "wand.toml"));
+    const TrackingConfig t = loadWallConfig(dir / "wand.toml").tracking;
+    auto rayPixels = [](const Image& img) {
+        int n = 0;
+        for (size_t i = 0; i + 2 < img.rgb.size(); i += 3) n += img.rgb[i] == 255 && img.rgb[i + 1] == 230 && img.rgb[i + 2] == 40;
+        return n;
+    };
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(rayPixels(s.lastFrame().left), 0);
+    // Pointing at the screen from below its centre, turned a little: a ray across the wall.
+    sendWand(s, t, {0.2f, -0.6f, 1.8f}, 20, {}, {0, 0}, 1);
+    ASSERT_TRUE(s.step());
+    EXPECT_GT(rayPixels(s.lastFrame().left), 0);
+    EXPECT_GT(rayPixels(s.lastFrame().right), 0);
+    EXPECT_NE(s.lastFrame().left.rgb, s.lastFrame().right.rgb);
+    // wand_ray = false: the wand works, nothing is drawn.
+    std::string off = wandWall() + "wand_ray = false\n";
+    WallSession quiet(config(dir, off, "quiet.toml"));
+    sendWand(quiet, t, {0.2f, -0.6f, 1.8f}, 20, {}, {0, 0}, 1);
+    ASSERT_TRUE(quiet.step());
+    EXPECT_TRUE(quiet.wand());
+    EXPECT_EQ(rayPixels(quiet.lastFrame().left), 0);
+}
+
 }  // namespace
 }  // namespace rtwall

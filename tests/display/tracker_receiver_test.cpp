@@ -6,6 +6,7 @@
 
 #include <asio.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <thread>
 
@@ -53,6 +54,82 @@ TEST(TrackerReceiver, HeadFromDatagramsOnLoopback) {
     ASSERT_EQ(log.size(), 1u);
     EXPECT_NE(log[0].find("(from 127.0.0.1)"), std::string::npos) << log[0];
     EXPECT_TRUE(r.takeMessages().empty()) << "taken once";
+}
+
+// VRPN over loopback: a server of this test's own (the bytes VRPN 07 sends) on 127.0.0.1. The
+// receiver sends its cookie and offers a UDP port; the server's TCP reports and its UDP report
+// reach the head; a closed connection is said and tried again.
+TEST(TrackerReceiver, VrpnServerOnLoopbackOverTcpAndUdp) {
+    asio::io_context io;
+    asio::ip::tcp::acceptor acceptor(io, asio::ip::tcp::endpoint(asio::ip::make_address("127.0.0.1"), 0));
+    const int port = acceptor.local_endpoint().port();
+    TrackingConfig c;
+    c.enabled = true;
+    c.kind = TrackingSource::Vrpn;
+    c.server = "Tracker0@127.0.0.1:" + std::to_string(port);
+    c.device = c.buttonDevice = c.analogDevice = "Tracker0";
+    c.address = "127.0.0.1";
+    c.port = port;
+    c.roomScale = 1;
+    c.flystick = 1;
+    c.timeoutMs = 60'000;
+    TrackerReceiver r(c);
+    EXPECT_EQ(r.port(), port);
+
+    asio::ip::tcp::socket peer(io);
+    acceptor.accept(peer);
+    // The client's cookie, then its UDP offer: port in the sender field, the address with a NUL.
+    std::string cookie(24, '\0');
+    asio::read(peer, asio::buffer(cookie));
+    EXPECT_EQ(cookie.substr(0, 14), "vrpn: ver. 07.");
+    EXPECT_EQ(cookie[18], '0');
+    std::string header(24, '\0');
+    asio::read(peer, asio::buffer(header));
+    auto u32 = [&](size_t at) {
+        return uint32_t(uint8_t(header[at])) << 24 | uint32_t(uint8_t(header[at + 1])) << 16 | uint32_t(uint8_t(header[at + 2])) << 8 |
+               uint32_t(uint8_t(header[at + 3]));
+    };
+    EXPECT_EQ(int32_t(u32(16)), -3) << "a UDP description";
+    const uint32_t udpPort = u32(12), payload = u32(0) - 24;
+    std::string address((payload + 7) / 8 * 8, '\0');
+    asio::read(peer, asio::buffer(address));
+    EXPECT_EQ(std::string(address.c_str()), "127.0.0.1");
+    ASSERT_GT(udpPort, 0u);
+
+    std::string session = vrpnCookie() + vrpnName(0, -1, "Tracker0") + vrpnName(0, -2, "vrpn_Tracker Pos_Quat") +
+                          vrpnName(1, -2, "vrpn_Button Change");
+    session += vrpnMessage(0, 0, 100.0, vrpnPosQuat(0, {0.5, 1.25, 2.0}, {0, 0, 0, 1}));
+    session += vrpnMessage(0, 1, 100.0, vrpnButtonChange(0, 1));
+    asio::write(peer, asio::buffer(session));
+    ASSERT_TRUE(waitFor(r, [](const TrackerState& s) { return s.seen && s.wand.button(0); }));
+    EXPECT_EQ(r.state().head.position.y, 1.25f);
+    // A report by UDP, as a VRPN server sends its trackers' reports once offered a port.
+    asio::ip::udp::socket udp(io, asio::ip::udp::v4());
+    udp.send_to(asio::buffer(vrpnMessage(0, 0, 100.5, vrpnPosQuat(0, {-0.75, 1.25, 2.0}, {0, 0, 0, 1}))),
+                asio::ip::udp::endpoint(asio::ip::make_address("127.0.0.1"), asio::ip::port_type(udpPort)));
+    ASSERT_TRUE(waitFor(r, [](const TrackerState& s) { return s.head.position.x == -0.75f; }));
+    // A malformed report: dropped, said once.
+    asio::write(peer, asio::buffer(vrpnMessage(0, 1, 101.0, vrpnButtonChange(0, 5))));
+    ASSERT_TRUE(waitFor(r, [](const TrackerState& s) { return s.dropped == 1; }));
+    EXPECT_NE(r.state().lastError.find("button 0 to state 5"), std::string::npos) << r.state().lastError;
+    // The server goes away: said, and the receiver comes back to the next server on the port.
+    peer.close();
+    acceptor.non_blocking(true);  // bounded: the receiver tries again after a second
+    asio::ip::tcp::socket again(io);
+    std::vector<std::string> said;
+    bool reconnected = false;
+    for (int i = 0; i < 600 && !reconnected; ++i) {  // 3 s at most
+        for (std::string& l : r.takeMessages()) said.push_back(std::move(l));
+        asio::error_code ec;
+        acceptor.accept(again, ec);
+        reconnected = !ec;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    EXPECT_TRUE(reconnected) << "the receiver connects again";
+    for (std::string& l : r.takeMessages()) said.push_back(std::move(l));
+    EXPECT_TRUE(std::any_of(said.begin(), said.end(), [](const std::string& l) { return l.find("tracker: connected to VRPN Tracker0@127.0.0.1") != std::string::npos; }));
+    EXPECT_TRUE(std::any_of(said.begin(), said.end(), [](const std::string& l) { return l.find("tracker: VRPN Tracker0@127.0.0.1:" ) != std::string::npos && l.find("the server closed the connection") != std::string::npos; }));
+    EXPECT_TRUE(std::any_of(said.begin(), said.end(), [](const std::string& l) { return l.find("vrpn message: vrpn_Button Change from 'Tracker0': button 0 to state 5") != std::string::npos; }));
 }
 
 TEST(TrackerReceiver, APortInUseIsAnInputErrorNamingTheSource) {

@@ -70,11 +70,20 @@ struct StereoConfig {
 // transform takes the tracker's coordinates to wall coordinates (metres): scale first, then the
 // rotation about x, then y, then z (degrees), then the translation.
 enum class TrackingFilter { None, OneEuro };
+enum class TrackingSource { DTrack, Vrpn };
 struct TrackingConfig {
     bool enabled = false;                 // a [tracking] table is present
-    std::string source = "dtrack://0.0.0.0:5000";  // where the tracker's UDP datagrams arrive
-    std::string address = "0.0.0.0";      // from source: the local address to listen on
-    int port = 5000;                      // from source
+    std::string source = "dtrack://0.0.0.0:5000";  // where the tracker's UDP datagrams arrive, or "vrpn"
+    TrackingSource kind = TrackingSource::DTrack;  // from source
+    std::string address = "0.0.0.0";      // from source: the local address to listen on (DTrack);
+                                          // from server: the VRPN server's host
+    int port = 5000;                      // from source (DTrack), or server (VRPN: 3883 unless given)
+    // VRPN (source = "vrpn"): server = "DEVICE@HOST[:PORT]". The head is sensor head_body of the
+    // device's tracker, the wand sensor `flystick`; its buttons and joystick are the device's
+    // vrpn_Button and vrpn_Analog (or those of the devices named by `buttons` and `analog`).
+    std::string server;                   // as written
+    std::string device;                   // from server
+    std::string buttonDevice, analogDevice;  // default: device
     int headBody = 0;                     // the 6d body on the viewer's head (DTrack's id)
     int flystick = -1;                    // the 6df2 flystick's id (-1: none)
     double roomScale = 0.001;             // tracker units to metres (DTrack: millimetres)
@@ -86,6 +95,16 @@ struct TrackingConfig {
     double minCutoff = 1.0;               // one-euro filter: cutoff (Hz) of a still head
     double beta = 20.0;                   //   cutoff added per m/s of head speed
     double derivativeCutoff = 1.0;        //   cutoff (Hz) of the speed estimate
+    // The flystick (wand): its controls, and how it navigates (README, "Flystick").
+    int buttonPick = 0;                   // held: pick the object the wand points at and drag it
+    int buttonMode = 1;                   // pressed: fly <-> orbit
+    int buttonHome = 2;                   // pressed: back to the start camera
+    int joystickX = 0, joystickY = 1;     // controller indices of the joystick's axes
+    double flySpeed = 1.0;                // m/s at full deflection (1 m of the room is 1 scene unit)
+    double turnSpeed = 45.0;              // degrees per second at full deflection
+    double deadZone = 0.1;                // joystick deflections below this count as none
+    std::array<double, 3> wandDirection{0, 0, -1};  // where the wand points, in its body's axes
+    bool wandRay = true;                  // draw the wand's ray on the wall
     bool operator==(const TrackingConfig&) const = default;
 };
 
@@ -336,6 +355,23 @@ bool wallHasViews(const WallConfig& wall);
 // unit, and the viewer's physical head position `viewer` becomes the camera position. So the
 // pose steers the whole physical room through the scene; pose.fovY is unused.
 EyeWindow eyeWindowInWorld(const EyeWindow& wall, const Float3& viewer, const ViewPose& pose);
+// That map on its own (rigid, 1 metre = 1 unit): where a tracked wand in the room is in the world.
+struct WallToWorld {
+    Float3 origin;   // the camera position: where `viewer` lands
+    Float3 viewer;
+    Float3 x, y, z;  // the wall's axes in the world: the camera's right, up and back
+    Float3 point(const Float3& wall) const;
+    Float3 direction(const Float3& wall) const;
+};
+WallToWorld wallToWorld(const Float3& viewer, const ViewPose& pose);
+
+// The wand's ray on the wall, drawn into one eye's image of the whole wall (a frame smaller than
+// the wall is drawn at its scale): the segment from `from` to `to` (wall coordinates, metres) as
+// that eye sees it, i.e. projected from the eye onto each view's plane of screens and clipped to
+// the screens of that view; the part behind the eye is cut off. Per eye, so it has the right
+// parallax in stereo; it is drawn over the scene (not hidden by it: it ends where it hits).
+void drawWandRay(const WallConfig& wall, const HeadPose& head, int eye, const Float3& from, const Float3& to, Image& image,
+                 std::array<uint8_t, 3> colour = {255, 230, 40});
 
 // Fly (WASD + mouse look) and orbit (drag around the look-at point, scroll to zoom), camera
 // bookmarks and camera-path recording. Plain state: fed InputState, tested without a window.
@@ -349,6 +385,18 @@ public:
     void setPose(const ViewPose& p) { pose_ = p; }
     Mode mode() const { return mode_; }
     void setMode(Mode m) { mode_ = m; }
+    // The flystick's joystick over dt seconds (README, "Flystick"). Fly: y moves along the wand's
+    // pointing direction, x turns about the up axis through the camera. Orbit: x turns the camera
+    // about the vertical axis through `centre`, y moves it towards the centre (never past it).
+    // True when the pose changed.
+    struct Wand {
+        double x = 0, y = 0;          // joystick deflection in [-1, 1], dead zone already applied
+        Float3 direction{0, 0, -1};   // where the wand points, world (unit)
+        Float3 centre{0, 0, 0};       // orbit: the scene's centre
+        double speed = 1.0;           // world units per second at full deflection
+        double turnDegrees = 45.0;    // per second at full deflection
+    };
+    bool updateWand(const Wand& wand, double dt);
     // Bookmarks 1..9: Ctrl+digit stores, digit recalls.
     bool hasBookmark(int slot) const;
     // Recording (key R): one pose per update while on; the wall writes them as a camera path

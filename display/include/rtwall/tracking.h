@@ -101,6 +101,76 @@ private:
 std::string writeDTrackPacket(const DTrackFrame& frame);
 
 // ---------------------------------------------------------------------------------------------
+// VRPN: the client side of what a tracker needs (README, "VRPN"), written from VRPN 07's
+// protocol description (Format_Of_Protocol.txt) and sources. A session over TCP: both sides
+// send a 24-byte cookie "vrpn: ver. 07.xx  L" (L: the remote log mode, '0'..'3'; NUL padded),
+// then messages, each a header of six 32-bit big-endian integers (length = 24 + payload length,
+// seconds, microseconds, sender, type, a sequence number) and the payload padded to 8 bytes.
+// Negative types are the connection's own: -1 names a sender (payload: int32 length of the name
+// with its NUL, the name, NUL), -2 a type (the same), -3 offers a UDP port (sender: the port,
+// payload: the address, NUL). Reports name their sender and type by those ids:
+//   "vrpn_Tracker Pos_Quat": int32 sensor, int32 (padding), float64 position[3], quaternion[4] (x y z w)
+//   "vrpn_Button Change":    int32 button, int32 state (0 up, 1 down)
+//   "vrpn_Button States":    int32 count, int32 state each
+//   "vrpn_Analog Channel":   float64 count, float64 value each
+// (all big-endian). Other types (velocities, pings, ...) are skipped. The same messages, without
+// the cookie, come in UDP datagrams when the client offers a UDP port.
+
+// Turns a VRPN byte stream into tracker frames as DTrack would send them: a pose of the head
+// sensor (`head_body`) is a 6d body of that id; a pose of the wand sensor (`flystick`), and every
+// change of the buttons and analog channels, a flystick of that id with the device's buttons and
+// channels as its buttons and controllers. Times are the messages' own (seconds of the day, UTC,
+// as DTrack's `ts`). Plain code, no sockets.
+class VrpnParser {
+public:
+    explicit VrpnParser(const TrackingConfig& config);
+    // Bytes of the TCP stream as they come (any split). A broken stream (a bad cookie, a message
+    // length that cannot be, a name that cannot be) ends the session: failed() turns true and
+    // error() says why in one line; nothing more is parsed. A malformed report is dropped, with
+    // its reason in error() (dropped() counts them). Each call's frames are appended to `out`.
+    void feed(std::string_view bytes, std::vector<DTrackFrame>& out);
+    // A UDP datagram of whole messages (no cookie); a malformed one is dropped whole.
+    void datagram(std::string_view bytes, std::vector<DTrackFrame>& out);
+    bool connected() const { return cookie_; }  // the server's cookie was read
+    bool failed() const { return failed_; }
+    const std::string& error() const { return error_; }
+    uint64_t dropped() const { return dropped_; }
+    uint64_t messages() const { return messages_; }
+    std::optional<int> udpPortOffered() const { return udpOffer_; }  // the server's -3, if any
+
+    static constexpr size_t kCookieSize = 24;
+    static constexpr size_t kHeaderSize = 24;
+    static constexpr size_t kMaxPayload = 65536;  // far above any tracker report; more cannot be a VRPN message we read
+    static constexpr int kMaxChannels = 256;      // buttons or analog channels of one device (VRPN: 256 and 128)
+
+private:
+    TrackingConfig config_;
+    std::string buffer_;  // stream bytes not yet parsed
+    bool cookie_ = false, failed_ = false;
+    std::string error_;
+    uint64_t dropped_ = 0, messages_ = 0;
+    std::optional<int> udpOffer_;
+    std::vector<std::string> senders_, types_;  // by the server's ids
+    std::vector<bool> buttons_;
+    std::vector<double> channels_;
+    std::optional<DTrackBody> wand_;            // the wand's last pose
+    // One message; false (and error_) when the stream cannot go on.
+    bool message(std::string_view header, std::string_view payload, std::vector<DTrackFrame>& out);
+    void drop(const std::string& why);
+    bool fail(const std::string& why);
+    DTrackFrame wandFrame(double time) const;
+};
+
+// The bytes a VRPN peer sends (the tests' recorded sessions, the fuzz corpus, a test server).
+std::string vrpnCookie(char logMode = '0');
+std::string vrpnMessage(int32_t sender, int32_t type, double unixSeconds, std::string_view payload);
+std::string vrpnName(int32_t id, int32_t kind, std::string_view name);  // kind -1: a sender, -2: a type
+std::string vrpnPosQuat(int32_t sensor, const std::array<double, 3>& position, const std::array<double, 4>& xyzw);
+std::string vrpnButtonChange(int32_t button, int32_t state);
+std::string vrpnButtonStates(const std::vector<bool>& states);
+std::string vrpnAnalog(const std::vector<double>& channels);
+
+// ---------------------------------------------------------------------------------------------
 // The head in wall coordinates
 
 // Tracker room coordinates to wall coordinates (metres): wall = rotation * (scale * room) + translate.
@@ -130,6 +200,43 @@ private:
     double value_ = 0, derivative_ = 0, time_ = 0;
 };
 
+// One-euro filter of an orientation: the same adaptive cutoff, driven by the angular speed, and
+// the smoothing step a slerp from the filtered quaternion towards the new one (q and -q are the
+// same turn: the new one is taken on the filtered one's side).
+class OneEuroRotationFilter {
+public:
+    OneEuroRotationFilter(double minCutoff, double beta, double derivativeCutoff);
+    // A quaternion (w, x, y, z), unit; returns the filtered one (unit).
+    std::array<double, 4> operator()(const std::array<double, 4>& q, double time);
+    void reset() { primed_ = false; }
+
+private:
+    double minCutoff_, beta_, derivativeCutoff_;
+    bool primed_ = false;
+    std::array<double, 4> value_{1, 0, 0, 0};
+    double speed_ = 0, time_ = 0;  // filtered angular speed, radians per second
+};
+// A rotation matrix (row-major, orthonormal) as a unit quaternion (w, x, y, z) and back.
+std::array<double, 4> quaternionOf(const std::array<double, 9>& rotation);
+std::array<double, 9> rotationOf(const std::array<double, 4>& quaternion);
+// Spherical interpolation from a to b (unit quaternions, the shorter way round).
+std::array<double, 4> slerp(const std::array<double, 4>& a, const std::array<double, 4>& b, double t);
+
+// The flystick (wand) in wall coordinates, as the last frame gave it (filtered, not predicted:
+// a pointer that runs ahead of the hand is worse than one 10 ms late).
+struct WandState {
+    bool seen = false;                  // a pose has arrived
+    bool stale = false;                 // none for timeout_ms (buttons and joystick count as released)
+    bool visible = false;               // the last frame saw it (a flystick not seen keeps its last pose)
+    Float3 position{};                  // wall coordinates, metres
+    std::array<double, 9> rotation{1, 0, 0, 0, 1, 0, 0, 0, 1};  // body to wall, row-major
+    Float3 direction{0, 0, -1};         // where it points (wand_direction turned into the wall), unit
+    std::vector<bool> buttons;
+    std::vector<double> controllers;    // joystick axes, [-1, 1]
+    bool button(int i) const { return !stale && i >= 0 && size_t(i) < buttons.size() && buttons[size_t(i)]; }
+    double controller(int i) const { return !stale && i >= 0 && size_t(i) < controllers.size() ? controllers[size_t(i)] : 0.0; }
+};
+
 // What the frame loop knows of the head.
 struct TrackerState {
     bool seen = false;       // a pose of the head body has arrived
@@ -140,6 +247,11 @@ struct TrackerState {
     uint64_t packets = 0;    // datagrams read
     uint64_t dropped = 0;    // malformed ones
     std::string lastError;   // why the last one was dropped
+    // From the tracker's own timestamps (DTrack `ts`, VRPN's message times), where the wall's
+    // clock and the tracker's agree (NTP or PTP: a transit time in [0, 1) s): the last frame's
+    // time from measurement to arrival. The age and the prediction count from the measurement.
+    std::optional<double> latency;
+    WandState wand;          // the flystick of [tracking] `flystick` (seen = false without one)
 };
 // One line for the status overlay: "tracker: head at (x, y, z) m, 12 ms old" or "tracker: no
 // head for 1.3 s, holding the last pose".
@@ -150,8 +262,13 @@ std::string describeTracker(const TrackerState& state);
 class HeadTracker {
 public:
     explicit HeadTracker(const TrackingConfig& config);
-    // A frame that arrived at `time`. False when it does not hold the head body (or not seen).
-    bool add(const DTrackFrame& frame, double time);
+    // A frame that arrived at `time` (the monotonic clock; `arrivalUtc`: the same moment in
+    // seconds since 00:00 UTC, for the frame's own timestamp). Poses are filtered and their
+    // velocity is fitted at the times they were measured: from the timestamp where the frame has
+    // one (mapped onto the monotonic clock by the fastest transit seen, so network jitter does
+    // not shake the velocity; by the measured transit where the clocks agree), else on arrival.
+    // False when it does not hold the head body (or not seen); the wand is taken either way.
+    bool add(const DTrackFrame& frame, double time, std::optional<double> arrivalUtc = std::nullopt);
     // The head for an image shown at `time` + the prediction (prediction_ms): the last pose moved
     // at the estimated velocity; held as it was when no pose came for timeout_ms.
     TrackerState at(double time) const;
@@ -164,6 +281,16 @@ private:
     RoomTransform room_;
     double prediction_ = 0;
     std::array<OneEuroFilter, 3> filters_;
+    OneEuroRotationFilter headRotation_, wandRotation_;
+    std::array<OneEuroFilter, 3> wandFilters_;
+    WandState wand_;
+    double wandTime_ = 0;
+    // Tracker timestamps onto the monotonic clock: offset = min(arrival - timestamp) since the
+    // tracker's clock last went back (a restart, midnight UTC).
+    std::optional<double> clockOffset_;
+    double lastStamp_ = 0;
+    std::optional<double> latency_;
+    double sampleTime(const DTrackFrame& frame, double time, std::optional<double> arrivalUtc);
     struct Sample {
         double time;
         std::array<double, 3> position;
@@ -186,7 +313,7 @@ public:
     ~TrackerReceiver();
     TrackerReceiver(const TrackerReceiver&) = delete;
     TrackerReceiver& operator=(const TrackerReceiver&) = delete;
-    int port() const;  // the bound port
+    int port() const;  // the bound UDP port (DTrack), or the VRPN server's port
     // The head for an image shown now (plus the prediction).
     TrackerState state() const;
     TrackerState state(std::chrono::steady_clock::time_point now) const;
@@ -238,6 +365,7 @@ private:
 
 // Plays a path to 127.0.0.1:port at `rate` frames a second for `seconds` (looping the path when
 // it is shorter), on the calling thread; returns early when `stop` is set. Returns frames sent.
+// Each frame's `ts` is the time of day (UTC) it is sent at, as a DTrack with a synchronised clock.
 uint64_t playHeadPath(const HeadPath& path, int port, double rate, double seconds, const std::atomic<bool>* stop = nullptr);
 
 }  // namespace rtwall

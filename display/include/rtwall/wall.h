@@ -142,6 +142,20 @@ struct Measurement {
     double distance = 0;                     // |b - a| once b is set
 };
 
+// The tracked wand (flystick) as the session's tools see it (README, "Flystick"): the last
+// step's pose in the room and in the world, its buttons and joystick, and what it holds.
+struct WandPose {
+    Float3 wallPosition, wallDirection;   // wall coordinates (metres); the direction is unit
+    std::array<double, 9> wallRotation{1, 0, 0, 0, 1, 0, 0, 0, 1};  // body to wall, row-major
+    Float3 origin, direction;             // world (scene) coordinates, the navigation applied
+    std::array<double, 9> rotation{1, 0, 0, 0, 1, 0, 0, 0, 1};      // body to world, row-major
+    std::vector<bool> buttons;
+    std::vector<double> controllers;
+    float length = 0;                     // of the ray drawn: to what it points at, else kWandRayLength
+    std::optional<uint32_t> dragging;     // the instance it holds
+};
+constexpr float kWandRayLength = 10.0f;  // scene units (metres of the room), when the ray hits nothing
+
 class WallSession {
 public:
     // Loads the scene and the wall, starts the master and the local clients, waits for them and,
@@ -207,6 +221,10 @@ public:
     std::optional<TrackerState> tracker() const;
     int trackerPort() const;
     const HeadPose& lastHead() const;  // the head the last step's frusta were made for
+    // The wand as the last step left it: nothing without a flystick, before its first pose, and
+    // after timeout_ms without one. The pose for the session's tools (picking, dragging,
+    // measuring; a section plane).
+    std::optional<WandPose> wand() const;
 
     // What the last step showed and measured.
     const WallFrame& lastFrame() const;

@@ -7,6 +7,7 @@
 #include <rtwall/cluster.h>
 #include <rtwall/engine.h>
 
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -99,6 +100,24 @@ public:
     std::optional<PickResult> pick(const CameraDesc& camera, int width, int height, double x, double y) {
         if (!pickScene_) pickScene_ = std::make_unique<Scene>(desc_);
         return rtwall::pick(*pickScene_, Camera(camera, width, height), float(x), float(y));
+    }
+
+    // The instance a ray (a tracked wand's) hits first; t in units of `direction`. The engine's
+    // pick takes a camera: this is one whose single pixel's ray is this one (an off-axis window
+    // of no size at origin + direction).
+    std::optional<PickResult> pickRay(const Float3& origin, const Float3& direction) {
+        CameraDesc c;
+        c.position = origin;
+        const Float3 at{origin.x + direction.x, origin.y + direction.y, origin.z + direction.z};
+        c.window = ProjectionWindow{at, {0, 0, 0}, {0, 0, 0}};
+        std::optional<PickResult> r = pick(c, 1, 1, 0.0, 0.0);
+        if (r) {
+            // The camera's ray is at - origin, the direction up to rounding.
+            const Float3 d{at.x - origin.x, at.y - origin.y, at.z - origin.z};
+            auto len = [](Float3 v) { return std::sqrt(double(v.x) * v.x + double(v.y) * v.y + double(v.z) * v.z); };
+            r->t = float(r->t * len(d) / len(direction));
+        }
+        return r;
     }
 
 private:

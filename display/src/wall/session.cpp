@@ -437,7 +437,10 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     if (s.wallConfig.tracking.enabled) {
         const TrackingConfig& t = s.wallConfig.tracking;
         s.tracker = std::make_unique<TrackerReceiver>(t);
-        s.log(format("tracker: listening for ART DTrack on udp %s:%d (head body %d%s)", t.address.c_str(), s.tracker->port(), t.headBody,
+        const std::string from = t.kind == TrackingSource::Vrpn ? "VRPN " + t.server + " (tcp " + t.address + ":" + std::to_string(t.port) + ")"
+                                                                : format("ART DTrack on udp %s:%d", t.address.c_str(), s.tracker->port());
+        s.log(format("tracker: listening for %s (head body %d%s%s)", from.c_str(), t.headBody,
+                     t.flystick >= 0 ? format(", flystick %d", t.flystick).c_str() : "",
                      t.predictionMs > 0 ? format(", predicted %.0f ms ahead", t.predictionMs).c_str() : ""));
     }
 
@@ -491,6 +494,7 @@ bool WallSession::step() {
         s.live->setCamera(*scripted);
     }
     if (s.views) s.updateHead();
+    if (s.tracker) s.input->handleWand(*s.live, s.trackerState, dt);  // the flystick navigates, picks and drags
     try {
         s.render();
     } catch (...) {
@@ -498,6 +502,7 @@ bool WallSession::step() {
         throw;
     }
     s.reportTileFailures();
+    if (s.tracker) s.input->drawWand(s.shown, s.head);
     const auto now = std::chrono::steady_clock::now();
     s.frameTimes.push_back(std::chrono::duration<double>(now - s.last).count());
     s.last = now;
@@ -541,6 +546,7 @@ std::optional<TrackerState> WallSession::tracker() const {
 }
 int WallSession::trackerPort() const { return impl_->tracker ? impl_->tracker->port() : 0; }
 const HeadPose& WallSession::lastHead() const { return impl_->head; }
+std::optional<WandPose> WallSession::wand() const { return impl_->input->wand(); }
 const FrameReport& WallSession::lastReport() const { return impl_->report; }
 std::string WallSession::endpoint() const { return impl_->master->endpoint(); }
 bool WallSession::windowed() const { return impl_->input->windowed(); }

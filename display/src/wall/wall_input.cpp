@@ -33,6 +33,8 @@ WallInput::WallInput(const WallConfig& wall, const CameraDesc& start, const Opti
     if (!gl_ && options.perScreenImages) headless_ = std::make_unique<HeadlessPresenter>(wall_, options.outDir);
     const Float3 d{start.position.x - start.lookAt.x, start.position.y - start.lookAt.y, start.position.z - start.lookAt.z};
     nav_ = std::make_unique<Navigator>(poseOf(start), std::max(0.1f, length(d)));
+    // A flystick flies by default, as in every VR wall; its mode button (or Tab) orbits.
+    if (wall_.tracking.enabled && wall_.tracking.flystick >= 0) nav_->setMode(Navigator::Mode::Fly);
     if (gl_)
         log_("wall '" + wall_.name + "': " + std::to_string(wall_.screens.size()) + " window" +
              (wall_.screens.size() == 1 ? "" : "s") + " (" + gl_->renderer() +
@@ -88,8 +90,13 @@ void WallInput::setMeasuring(bool on) {
 
 bool WallInput::measurePick(LiveScene& scene, double wallX, double wallY) {
     if (!measuring_) return false;
+    const Camera cam(camera(), wall_.width, wall_.height);
+    return measureHit(scene, pick(scene, wallX, wallY), cam.origin(), cam.direction(float(wallX), float(wallY)));
+}
+
+// A hit of the ray o + t d (a click's or the wand's) as the next point of the measurement.
+bool WallInput::measureHit(LiveScene& scene, const std::optional<PickResult>& hit, Float3 o, Float3 d) {
     const bool newMeasurement = !measurement_ || measurement_->b;
-    const std::optional<PickResult> hit = pick(scene, wallX, wallY);
     if (!hit) {
         log_(std::string("measure: nothing under the cursor, point ") + (newMeasurement ? "A" : "B") + " not set");
         return false;
@@ -98,8 +105,6 @@ bool WallInput::measurePick(LiveScene& scene, double wallX, double wallY) {
     // the float t Embree found (a few ulps, ~1e-7 of the distance from the eye) is then the only
     // single-precision error, however far from the file's origin the model lies (README,
     // "Measuring").
-    const Camera cam(camera(), wall_.width, wall_.height);
-    const Float3 o = cam.origin(), d = cam.direction(float(wallX), float(wallY));
     const std::array<double, 3>& origin = scene.desc().origin;
     const double t = hit->t;
     const std::array<double, 3> p{origin[0] + (double(o.x) + t * double(d.x)), origin[1] + (double(o.y) + t * double(d.y)),
@@ -393,6 +398,131 @@ bool WallInput::apply(LiveScene& scene, const InputState& in, double dt) {
         grabbed_.reset();
     }
     return true;
+}
+
+namespace {
+using Mat3 = std::array<double, 9>;
+Mat3 multiply(const Mat3& a, const Mat3& b) {
+    Mat3 m{};
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) m[size_t(3 * r + c)] = a[size_t(3 * r)] * b[size_t(c)] + a[size_t(3 * r + 1)] * b[size_t(3 + c)] + a[size_t(3 * r + 2)] * b[size_t(6 + c)];
+    return m;
+}
+// A joystick axis past the dead zone, rescaled so that full deflection stays 1.
+double deflection(double value, double deadZone) {
+    const double a = std::fabs(value);
+    if (!(a > deadZone)) return 0.0;
+    return std::copysign(std::min(1.0, (a - deadZone) / (1.0 - deadZone)), value);
+}
+}  // namespace
+
+void WallInput::handleWand(LiveScene& scene, const TrackerState& tracker, double dt) {
+    const TrackingConfig& t = wall_.tracking;
+    const WandState& w = tracker.wand;
+    if (!w.seen || w.stale) {
+        if (wandGrab_) log_("wand: lost, instance " + std::to_string(wandGrab_->instance) + " released");
+        wand_.reset();
+        wandGrab_.reset();
+        wandButtons_.clear();
+        return;
+    }
+    auto pressed = [&](int b) { return w.button(b) && !(b >= 0 && size_t(b) < wandButtons_.size() && wandButtons_[size_t(b)]); };
+    if (options_.interactive && pressed(t.buttonMode)) {
+        nav_->setMode(nav_->mode() == Navigator::Mode::Fly ? Navigator::Mode::Orbit : Navigator::Mode::Fly);
+        orbitCentre_.reset();
+        log_(nav_->mode() == Navigator::Mode::Fly ? "wand: fly" : "wand: orbit about the scene's centre");
+    }
+    if (options_.interactive && pressed(t.buttonHome)) {
+        setCamera(base_);
+        scene.setCamera(camera());
+        log_("wand: back to the start camera");
+    }
+    // The joystick moves the room through the scene, then the wand is placed in the moved room.
+    WallToWorld map = wallToWorld(wall_.stereo.viewer, nav_->pose());
+    if (options_.interactive) {
+        Navigator::Wand nw;
+        nw.x = deflection(w.controller(t.joystickX), t.deadZone);
+        nw.y = deflection(w.controller(t.joystickY), t.deadZone);
+        nw.direction = map.direction(w.direction);
+        nw.speed = t.flySpeed;  // 1 m of the room is 1 scene unit (eyeWindowInWorld)
+        nw.turnDegrees = t.turnSpeed;
+        if (nav_->mode() == Navigator::Mode::Orbit && (nw.x != 0 || nw.y != 0) && !orbitCentre_) {
+            const Bounds3 b = scene.desc().worldBounds();
+            orbitCentre_ = b.empty() ? nav_->pose().lookAt
+                                     : Float3{(b.lo.x + b.hi.x) * 0.5f, (b.lo.y + b.hi.y) * 0.5f, (b.lo.z + b.hi.z) * 0.5f};
+        }
+        if (orbitCentre_) nw.centre = *orbitCentre_;
+        if (nav_->updateWand(nw, dt)) {
+            scene.setCamera(camera());
+            map = wallToWorld(wall_.stereo.viewer, nav_->pose());
+        }
+    }
+    WandPose p;
+    p.wallPosition = w.position;
+    p.wallDirection = w.direction;
+    p.wallRotation = w.rotation;
+    p.origin = map.point(w.position);
+    p.direction = map.direction(w.direction);
+    // The wall's axes in the world are the columns of the room's turn.
+    const Mat3 axes{map.x.x, map.y.x, map.z.x, map.x.y, map.y.y, map.z.y, map.x.z, map.y.z, map.z.z};
+    p.rotation = multiply(axes, w.rotation);
+    p.buttons = w.buttons;
+    p.controllers = w.controllers;
+    p.length = kWandRayLength;
+
+    const bool pick = options_.interactive && w.visible && pressed(t.buttonPick);
+    if (pick && measuring_) {
+        measureHit(scene, scene.pickRay(p.origin, p.direction), p.origin, p.direction);
+    } else if (pick) {
+        wandGrab_ = scene.pickRay(p.origin, p.direction);
+        if (wandGrab_) {
+            wandGrabStart_ = p;
+            wandGrabTransform_ = scene.desc().instances[wandGrab_->instance].transform;
+            char line[128];
+            std::snprintf(line, sizeof line, "wand: picked instance %u at distance %.2f", wandGrab_->instance, double(wandGrab_->t));
+            const std::string part = scene.desc().partPath(scene.desc().instances[wandGrab_->instance].part);
+            log_(part.empty() ? std::string(line) : std::string(line) + ", part '" + part + "'");
+        }
+    }
+    if (wandGrab_ && !w.button(t.buttonPick)) {
+        log_("wand: released instance " + std::to_string(wandGrab_->instance));
+        wandGrab_.reset();
+    }
+    if (wandGrab_ && w.visible) {
+        // Rigidly with the wand: the object is moved by the wand's motion since the pick,
+        // motion = now * start^-1 (world), applied after the object's transform at the pick.
+        const WandPose& s = wandGrabStart_;
+        const Mat3& r1 = p.rotation;
+        const Mat3& r0 = s.rotation;
+        const Mat3 r0t{r0[0], r0[3], r0[6], r0[1], r0[4], r0[7], r0[2], r0[5], r0[8]};
+        const Mat3 r = multiply(r1, r0t);
+        const std::array<double, 3> p0{s.origin.x, s.origin.y, s.origin.z}, p1{p.origin.x, p.origin.y, p.origin.z};
+        Transform motion;
+        for (int i = 0; i < 3; ++i) {
+            const size_t row = size_t(3 * i);
+            for (int j = 0; j < 3; ++j) motion.m[size_t(4 * i + j)] = r[row + size_t(j)];
+            motion.m[size_t(4 * i + 3)] = p1[size_t(i)] - (r[row] * p0[0] + r[row + 1] * p0[1] + r[row + 2] * p0[2]);
+        }
+        scene.setInstanceTransform(wandGrab_->instance, motion * wandGrabTransform_);
+        p.dragging = wandGrab_->instance;
+        p.length = wandGrab_->t;
+    } else if (w.visible) {
+        if (const std::optional<PickResult> hit = scene.pickRay(p.origin, p.direction)) p.length = hit->t;
+    }
+    wandButtons_ = w.buttons;
+    wand_ = p;
+}
+
+void WallInput::drawWand(WallFrame& frame, const HeadPose& head) const {
+    if (!wand_ || !wall_.tracking.wandRay) return;
+    const Float3 a = wand_->wallPosition, d = wand_->wallDirection;
+    const Float3 b{a.x + d.x * wand_->length, a.y + d.y * wand_->length, a.z + d.z * wand_->length};
+    if (wall_.stereo.mode == StereoMode::None) {
+        drawWandRay(wall_, head, -1, a, b, frame.left);
+    } else {
+        drawWandRay(wall_, head, 0, a, b, frame.left);
+        drawWandRay(wall_, head, 1, a, b, frame.right);
+    }
 }
 
 void WallInput::show(const WallFrame& frame, const FrameReport& report, double frameSeconds) {

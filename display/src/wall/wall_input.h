@@ -61,6 +61,12 @@ public:
     // Parts by name (WallSession::setPartView): applied to the scene, logged, on the overlay.
     void setPartView(LiveScene& scene, const PartView& view);
     void showAllParts(LiveScene& scene);
+    // The tracked flystick (a wall with [tracking] and a `flystick`): navigation by its joystick,
+    // its buttons (mode, home, pick and drag or measure), and the ray's length; once per step,
+    // after handle(). Then drawWand draws its ray into the frame's eye images for `head`.
+    void handleWand(LiveScene& scene, const TrackerState& tracker, double dt);
+    void drawWand(WallFrame& frame, const HeadPose& head) const;
+    const std::optional<WandPose>& wand() const { return wand_; }
     // Shows a frame the wall's size (or smaller: a frame rendered at a fraction of the
     // resolution is shown upscaled).
     void show(const WallFrame& frame, const FrameReport& report, double frameSeconds);
@@ -84,6 +90,13 @@ private:
     bool apply(LiveScene& scene, const InputState& in, double dt);
     std::optional<PickResult> grabbed_;
     Transform grabbedStart_;
+    std::optional<WandPose> wand_;
+    std::vector<bool> wandButtons_;  // the last step's, for presses
+    std::optional<PickResult> wandGrab_;
+    WandPose wandGrabStart_;
+    Transform wandGrabTransform_;
+    std::optional<Float3> orbitCentre_;  // the scene's centre, taken when the wand starts orbiting
+    bool measureHit(LiveScene& scene, const std::optional<PickResult>& hit, Float3 origin, Float3 direction);
     bool measuring_ = false;
     bool escapeHeld_ = false;  // the Esc that left measure mode: held on, it does not close the wall
     std::optional<Measurement> measurement_;
