@@ -229,6 +229,40 @@ TEST(Step, ProgressAndCancel) {
     }
 }
 
+// gen step --rows nests the same modules in row sub-assemblies: plant > row N > module M > part;
+// the parts land where the flat file puts them.
+TEST(Step, RowsNestTheSameModules) {
+    const auto dir = test::scratchDir();
+    gen::GenOptions o;
+    o.out = dir;
+    o.instances = 21;
+    o.rows = true;
+    gen::genStep(o);
+    const Assembly rows = loadAssembly(dir / "assembly.step"), flat = loadAssembly(stepFile());
+    ASSERT_EQ(rows.instances.size(), 21u);
+    EXPECT_EQ(rows.parts.at(0).name, "plant");
+    std::vector<std::string> rowNames;
+    for (const AssemblyPart& p : rows.parts)
+        if (p.parent == 0) rowNames.push_back(p.name);
+    EXPECT_EQ(rowNames, (std::vector<std::string>{"row 1", "row 2"}));  // 3 modules, 2 a row
+    for (const AssemblyInstance& in : rows.instances) {
+        const int32_t module = rows.parts[in.part].parent;
+        ASSERT_GE(module, 0);
+        EXPECT_EQ(rows.parts[size_t(module)].name.rfind("module ", 0), 0u);
+        EXPECT_EQ(rows.parts[size_t(rows.parts[size_t(module)].parent)].name.rfind("row ", 0), 0u);
+    }
+    auto centres = [](const Assembly& a) {
+        std::vector<std::array<long, 3>> c;
+        for (const AssemblyInstance& in : a.instances) {
+            const auto p = centre(a, in);
+            c.push_back({std::lround(p[0] * 1000), std::lround(p[1] * 1000), std::lround(p[2] * 1000)});
+        }
+        std::sort(c.begin(), c.end());
+        return c;
+    };
+    EXPECT_EQ(centres(rows), centres(flat));
+}
+
 // The import runs in a child process (mesh/src/cad_child.cpp) and hands the assembly back as
 // cache bytes in a memfd: the parent's meshes are views of those pages (the geometry exists once),
 // and the result is the same as an import in this process, warnings included.
