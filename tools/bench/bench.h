@@ -99,6 +99,7 @@ toml::table shading(const ShadingOptions& o);
 // The master's cost of a camera update per frame, with N instances of one box.
 struct UpdatesOptions : Common {
     int instances = 100'000, frames = 200, clients = 1;
+    int transforms = 0;  // instances moved per frame as well (Master::setInstanceTransform)
     bool async = false;
 };
 toml::table updates(const UpdatesOptions& o);
