@@ -345,6 +345,52 @@ TEST(WandSession, PickAndDragMovesTheInstanceByExactlyTheWandsMotion) {
     EXPECT_TRUE(said("wand: released instance 0"));
 }
 
+// With a section plane selected, the trigger holds the plane instead of an object: its point
+// moves and its normal turns with the wand, exactly as a dragged object would (issue 20: planes
+// movable by the wand); let go, it stays.
+TEST(WandSession, TheTriggerMovesTheSelectedSectionPlane) {
+    const auto dir = test::displayScratchDir();
+    WallSession s(config(dir, wandWall(), "wand.toml"));
+    const TrackingConfig t = loadWallConfig(dir / "wand.toml").tracking;
+    const Transform box = s.scene().instances[0].transform;
+    SectionPlane plane;
+    plane.enabled = true;
+    plane.point = {0.3f, 0.4f, -1.0f};
+    plane.normal = {0, 0, -1};
+    s.setSection(2, plane);
+    ASSERT_EQ(s.activeSection(), 2);
+    const Float3 p0{0.3f, 0.4f - 1.7f + 0.2f, -0.5f + 2.5f};
+    sendWand(s, t, p0, 0, {true}, {0, 0}, 1);
+    ASSERT_TRUE(s.step());
+    EXPECT_FALSE(s.wand()->dragging) << "the plane is held, not the box";
+    EXPECT_EQ(s.scene().sections[2], plane) << "taken, not yet moved";
+    const Float3 p1{p0.x + 0.1f, p0.y + 0.05f, p0.z - 0.2f};
+    sendWand(s, t, p1, 30, {true}, {0, 0}, 2);
+    ASSERT_TRUE(s.step());
+    // motion = T(w1) R_y(30) T(-w0) applied to the point, R_y(30) to the normal.
+    const Float3 w0 = worldOf(p0), w1 = worldOf(p1);
+    const Transform motion = Transform::translate(w1.x, w1.y, w1.z) * Transform::rotateDegrees(0, 1, 0, 30) *
+                             Transform::translate(-w0.x, -w0.y, -w0.z);
+    const Float3 q = plane.point;
+    const SectionPlane& moved = s.scene().sections[2];
+    EXPECT_NEAR(moved.point.x, motion.m[0] * q.x + motion.m[1] * q.y + motion.m[2] * q.z + motion.m[3], 2e-5);
+    EXPECT_NEAR(moved.point.y, motion.m[4] * q.x + motion.m[5] * q.y + motion.m[6] * q.z + motion.m[7], 2e-5);
+    EXPECT_NEAR(moved.point.z, motion.m[8] * q.x + motion.m[9] * q.y + motion.m[10] * q.z + motion.m[11], 2e-5);
+    const double a = 30 * 3.14159265358979 / 180;
+    EXPECT_NEAR(moved.normal.x, -std::sin(a), 2e-5);
+    EXPECT_NEAR(moved.normal.y, 0, 2e-5);
+    EXPECT_NEAR(moved.normal.z, -std::cos(a), 2e-5);
+    EXPECT_TRUE(moved.enabled);
+    EXPECT_EQ(s.scene().instances[0].transform, box) << "the box stays";
+    // Released and moved on: the plane stays where it was let go.
+    const SectionPlane released = moved;
+    sendWand(s, t, p1, 30, {false}, {0, 0}, 3);
+    ASSERT_TRUE(s.step());
+    sendWand(s, t, p0, 0, {false}, {0, 0}, 4);
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.scene().sections[2], released);
+}
+
 // In measure mode the trigger sets the points where the wand's ray hits, and moves nothing.
 TEST(WandSession, TheTriggerMeasuresInMeasureMode) {
     const auto dir = test::displayScratchDir();
