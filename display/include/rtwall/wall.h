@@ -60,6 +60,10 @@ struct RunConfig {
     std::filesystem::path clientExecutable = "/proc/self/exe";
     bool clientThreads = false;
     std::optional<InjectedTileFault> clientFault;  // tests: client threads fail this tile (ClientSettings::tileFault)
+    // A wall with views (stereo, tracked, a CAVE): every view's tiles in one scheduler pass, with
+    // async as configured. Off: each view is a frame of its own, async off (the way before;
+    // tests and `rtwall bench latency` compare the two).
+    bool viewsInOnePass = true;
     // Where the session's progress lines go (stdout by default).
     std::function<void(const std::string&)> log;
 };
@@ -191,6 +195,13 @@ public:
     std::optional<TrackerState> tracker() const;
     int trackerPort() const;
     const HeadPose& lastHead() const;  // the head the last step's frusta were made for
+    // The tracker datagrams counted (TrackerState::packets) when the head pose of the last
+    // shown frame was taken: with async on, the frame shown was specified a step earlier.
+    uint64_t shownTrackerPackets() const;
+    const HeadPose& shownHead() const;  // and that head (lastHead() with async off)
+    // View accumulations restarted so far (a stochastic scene on a wall with views: a view
+    // restarts when the state or its own camera changed).
+    size_t viewRestarts() const;
 
     // What the last step showed and measured.
     const WallFrame& lastFrame() const;
