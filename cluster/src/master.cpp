@@ -213,7 +213,7 @@ struct Command {
     CodecSettings codec{};      // kCodec
     TilePixels pixels = TilePixels::Srgb8;  // kBeginFrame: how its tiles travel
     bool stochastic = false;    // kBeginFrame: its state renders stochastically
-    std::vector<FrameView> views;  // kBeginFrame: a multi-view frame's views (setViews)
+    std::vector<FrameView> views{};  // kBeginFrame: a multi-view frame's views (setViews)
     uint64_t viewsTag = 0;
 };
 
@@ -515,12 +515,12 @@ struct Master::Impl {
     }
 
     void beginFrame(uint32_t frame, uint32_t stateSeq, const RenderSettings& rs, TilePixels pixels, bool stochastic,
-                    std::vector<FrameView>&& views, uint64_t viewsTag) {
+                    std::vector<FrameView>&& beginViews, uint64_t beginViewsTag) {
         currentFrame = frame;
         framePixels = pixels;
         frameStochastic = stochastic;
-        frameViews = std::move(views);
-        frameViewsTag = viewsTag;
+        frameViews = std::move(beginViews);
+        frameViewsTag = beginViewsTag;
         // Every tile writes its part; no clearing. (Swapped with the completed frame's buffer,
         // so a still view allocates nothing.)
         if (pixels == TilePixels::LinearHalf) {
@@ -802,14 +802,14 @@ struct Master::Impl {
             return;
         }
         std::vector<TileRect> tiles;
-        CameraDesc camera = rec->camera;
+        CameraDesc replayCamera = rec->camera;
         if (rec->views.empty()) {
             tiles = makeTiles(rec->settings.width, rec->settings.height, rec->settings.tileSize);
         } else {
             // A multi-view frame's tile is replayed with its view's camera.
             const std::vector<ViewTile> vt = viewTiles(rec->views, rec->settings.width, rec->settings.height, rec->settings.tileSize);
             for (const ViewTile& t : vt) tiles.push_back(t.rect);
-            if (f.tile < vt.size()) camera = rec->views[vt[f.tile].view].camera;
+            if (f.tile < vt.size()) replayCamera = rec->views[vt[f.tile].view].camera;
         }
         const TileRect& r = f.rect;
         if (f.tile >= tiles.size() || tiles[f.tile].x0 != r.x0 || tiles[f.tile].y0 != r.y0 || tiles[f.tile].x1 != r.x1 ||
@@ -819,7 +819,7 @@ struct Master::Impl {
             return;
         }
         std::lock_guard lock(failuresMutex);
-        tileFailures.push_back({c.id, f.frame, f.tile, r, f.reason, camera, rec->settings, f.packetWidth});
+        tileFailures.push_back({c.id, f.frame, f.tile, r, f.reason, replayCamera, rec->settings, f.packetWidth});
         if (tileFailures.size() > 64) tileFailures.pop_front();
     }
 

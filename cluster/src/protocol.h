@@ -200,7 +200,7 @@ struct FrameBegin {
     // Version 9: a multi-view frame (Master::setViews): its tiles are viewTiles(views) at the
     // state's resolution and tile size, each rendered with its view's camera instead of the
     // state's. Per frame, not state: an eye's camera moves with the head at no sequence number.
-    std::vector<FrameView> views;
+    std::vector<FrameView> views{};
 };
 
 struct TileRequest {

@@ -7,7 +7,8 @@
 // "presented": the headless presenter has taken the frame). Per shown frame: the distance
 // between the head it was made for (predicted or not) and the true head on the circle at the
 // moment it was presented. Mono and stereo, asynchronous rendering off and on, prediction off
-// and on (on: prediction_ms = the median latency measured with it off), at a few image sizes
+// and on (on: prediction_ms = the median time from a frame's head pose to its presentation,
+// measured with it off; the tracker adds the pose's age itself), at a few image sizes
 // (frame rates). Medians and p95, and the share of datagrams and frames over the targets.
 #include "bench.h"
 #include "bench_util.h"
@@ -74,6 +75,7 @@ struct Measured {
     std::vector<double> latency;  // seconds, per datagram shown
     std::vector<double> error;    // metres, per frame shown
     std::vector<double> frame;    // seconds between presentations
+    std::vector<double> specToPresent;  // seconds from a frame's head pose (its step's start) to its presentation
     uint64_t sent = 0, shownPackets = 0;
 };
 
@@ -146,20 +148,23 @@ Measured measure(const LatencyOptions& o, const Case& c, const std::filesystem::
     Measured m;
     HeadSender sender(session.trackerPort(), circle, o.rate, start);
     uint64_t lastShown = 0;
-    Clock::time_point lastPresented = Clock::now();
-    int frames = 0;
+    Clock::time_point lastPresented = Clock::now(), lastStart = lastPresented;
     for (int f = 0; f < o.warmupFrames + o.frames; ++f) {
+        const Clock::time_point stepStart = Clock::now();
         session.step();
         const Clock::time_point presented = Clock::now();
         const uint64_t shown = session.shownTrackerPackets();
         const std::vector<Clock::time_point> times = sender.times();
+        // With async the frame shown was specified (its head pose taken) at the previous step's start.
+        const Clock::time_point specified = c.async ? lastStart : stepStart;
+        lastStart = stepStart;
         if (f < o.warmupFrames) {  // the head comes up to speed, the async pipeline fills
             lastShown = shown;
             lastPresented = presented;
             continue;
         }
-        ++frames;
         m.frame.push_back(std::chrono::duration<double>(presented - lastPresented).count());
+        m.specToPresent.push_back(std::chrono::duration<double>(presented - specified).count());
         lastPresented = presented;
         for (uint64_t k = lastShown + 1; k <= shown && k <= times.size(); ++k)
             m.latency.push_back(std::chrono::duration<double>(presented - times[k - 1]).count());
@@ -213,10 +218,11 @@ toml::table latency(const LatencyOptions& o) {
         for (bool stereo : {false, true})
             for (bool async : {false, true}) {
                 Case c{stereo, async, 0.0, width, width * 3 / 4};
-                // Prediction on: as far ahead as this configuration's measured median latency.
+                // Prediction on: as far ahead as this configuration's frames take from their head
+                // pose to their presentation (measured without prediction).
                 const Measured plain = measure(o, c, dir);
                 Case p = c;
-                p.predictionMs = std::round(1e3 * median(plain.latency) * 10) / 10;
+                p.predictionMs = std::max(0.1, std::round(1e3 * median(plain.specToPresent) * 10) / 10);
                 const Measured predicted = measure(o, p, dir);
                 for (const auto& [cc, mm] : {std::pair<const Case&, const Measured&>{c, plain}, {p, predicted}}) {
                     toml::table r = row(cc, mm, o.targetSlackMs, o.targetErrorMm);
