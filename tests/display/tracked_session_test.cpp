@@ -282,7 +282,9 @@ void checkOnePassEqualsSeparate(const std::filesystem::path& dir, std::string (*
             ASSERT_TRUE(one.step());
             if (async) {
                 // (The very first frame has nothing in flight before it: it shows its own head.)
-                if (i > 0) EXPECT_EQ(one.shownTrackerPackets(), packet - 1) << "async shows the frame specified a step earlier";
+                if (i > 0) {
+                    EXPECT_EQ(one.shownTrackerPackets(), packet - 1) << "async shows the frame specified a step earlier";
+                }
                 ASSERT_TRUE(one.step());
             }
             EXPECT_EQ(one.shownTrackerPackets(), packet);
