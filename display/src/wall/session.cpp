@@ -382,11 +382,11 @@ struct WallSession::Impl {
     // A still view of a stochastic scene refines, view by view: a view restarts when the state
     // changed (any scene change, the navigation camera, the codec) or its own camera did (the
     // head moved its eye, or its plane's frustum); the others keep accumulating.
-    void accumulateViews(std::vector<Image>& images, const std::vector<FrameView>& views) {
+    void accumulateViews(std::vector<Image>& images, const std::vector<FrameView>& rendered) {
         if (viewAccumulation.size() != images.size()) viewAccumulation = std::vector<ViewAccumulation>(images.size());
         for (size_t v = 0; v < images.size(); ++v) {
             ViewAccumulation& a = viewAccumulation[v];
-            const CameraDesc& camera = views[v].camera;
+            const CameraDesc& camera = rendered[v].camera;
             if (a.stateSeq != report.stateSeq || !a.camera || !(*a.camera == camera)) {
                 a.sum.reset();
                 a.stateSeq = report.stateSeq;
