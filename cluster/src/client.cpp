@@ -70,8 +70,6 @@ public:
 private:
     static constexpr const char* kResultsAddress = "inproc://rtwall-client-results";
 
-    // A tile to render with everything the render thread needs from the network thread's state,
-    // captured when the assignment arrives: render threads never read what that thread writes.
     // A multi-view frame's views and tiling (FrameBegin::views), shared by its work items and
     // never changed once made: a render thread reads it without a lock.
     struct FrameLayout {
@@ -79,6 +77,8 @@ private:
         std::vector<ViewTile> tiles;
     };
 
+    // A tile to render with everything the render thread needs from the network thread's state,
+    // captured when the assignment arrives: render threads never read what that thread writes.
     struct Work {
         uint32_t frame = 0;
         uint32_t tile = 0;
