@@ -576,6 +576,12 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     s.input = std::make_unique<WallInput>(s.wallConfig, s.start, io, s.log);
     // In a window the wall runs until it is closed, unless a frame count was asked for.
     if (s.input->windowed() && !c.framesGiven) c.frames = 0;
+    if (s.views && c.viewsInOnePass) {
+        // The views from the start: a calibration's frames then cost what the wall's frames do.
+        s.head = staticHead(s.wallConfig.stereo);
+        s.viewSpecs.push_back({0, 0, s.head, s.frameViews()});
+        s.master->setViews(s.viewSpecs.back().views, 0);
+    }
     s.startController(givenFront);
     if (c.watch) {
         const std::filesystem::path file = c.scene;
