@@ -502,7 +502,9 @@ struct WallSession::Impl {
             const RenderSettings& s = live->desc().settings;
             log(format("frame %d: %.1f fps (median of the last %zu), %.2f MB of tiles, %llu stolen, %llu of %zu tiles kept their client",
                        frame, 1.0 / recent, n, double(report.bytes) * 1e-6, (unsigned long long)report.tilesStolen,
-                       (unsigned long long)report.affinityHits, makeTiles(s.width, s.height, s.tileSize).size()));
+                       (unsigned long long)report.affinityHits,
+                       // A multi-view frame's tiles are those of all its views.
+                       report.views > 0 ? report.tileOwners.size() : makeTiles(s.width, s.height, s.tileSize).size()));
         }
     }
 };
