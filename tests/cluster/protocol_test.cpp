@@ -499,7 +499,7 @@ TEST(Protocol, GoldenBytes) {
     // The exact layout of a header and a small payload; a change here breaks every deployed peer
     // (version 2: the shading fields of materials, lights and settings; 4: FrameBegin's tile format;
     // 5: the snapshot's BVH primitives; 6: two-sided emission of materials and area lights; 7: the
-    // client's work report in Heartbeat, TileStalled; 8: TileFailed; 9: FrameBegin's views).
+    // client's work report in Heartbeat, TileStalled; 8: TileFailed; 9: section planes; 10: FrameBegin's views).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -507,7 +507,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x09, 0x00,                                      // version (9: FrameBegin's views)
+        0x0A, 0x00,                                      // version (10: FrameBegin's views)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
