@@ -490,5 +490,91 @@ TEST(WandSession, TheRayIsDrawnInBothEyesAndOnlyWithAWand) {
     EXPECT_EQ(rayPixels(quiet.lastFrame().left), 0);
 }
 
+// One scheduler pass for every view (issue 18): the eye images of the one-pass frame equal
+// those of one frame per view (the way before), bit for bit, for a moving tracked head, on the
+// flat 2x2 stereo wall and the three-wall CAVE, with asynchronous rendering off and on (on: the
+// frame shown was specified a step earlier, so the head's image comes one step later).
+void checkOnePassEqualsSeparate(const std::filesystem::path& dir, std::string (*wall)(const char*, bool), const char* viewer,
+                                Float3 at, size_t views) {
+    RunConfig sc = config(dir, wall(viewer, true), "separate.toml");
+    sc.viewsInOnePass = false;
+    WallSession separate(sc);
+    const TrackingConfig t = loadWallConfig(dir / "separate.toml").tracking;
+    const std::vector<std::pair<Float3, double>> heads{{at, 0.0}, {{at.x + 0.3f, at.y - 0.1f, at.z + 0.2f}, 20.0}, {at, -35.0}};
+    std::vector<WallFrame> want;
+    uint64_t packet = 0;
+    for (const auto& [p, roll] : heads) {
+        sendHead(separate, t, p, roll, ++packet);
+        ASSERT_TRUE(separate.step());
+        want.push_back(separate.lastFrame());
+    }
+    for (bool async : {false, true}) {
+        SCOPED_TRACE(async ? "async" : "sync");
+        RunConfig oc = config(dir, wall(viewer, true), "onepass.toml");
+        oc.cluster.async = async;
+        WallSession one(oc);
+        packet = 0;
+        for (size_t i = 0; i < heads.size(); ++i) {
+            sendHead(one, t, heads[i].first, heads[i].second, ++packet);
+            ASSERT_TRUE(one.step());
+            if (async) {
+                // (The very first frame has nothing in flight before it: it shows its own head.)
+                if (i > 0) {
+                    EXPECT_EQ(one.shownTrackerPackets(), packet - 1) << "async shows the frame specified a step earlier";
+                }
+                ASSERT_TRUE(one.step());
+            }
+            EXPECT_EQ(one.shownTrackerPackets(), packet);
+            EXPECT_EQ(one.lastReport().views, views) << "every view in one frame";
+            EXPECT_TRUE(sameBytes(one.lastFrame(), want[i])) << "head " << i;
+        }
+        EXPECT_NE(want[0].left.rgb, want[1].left.rgb) << "the heads must give different images, or the test proves nothing";
+    }
+}
+
+TEST(TrackedSession, OnePassStereoEqualsOneFramePerEye) {
+    checkOnePassEqualsSeparate(test::displayScratchDir(), flatWall, "[0.0, 0.2, 2.5]", {0.0f, 0.2f, 2.5f}, 2);
+}
+
+TEST(TrackedSession, OnePassCaveEqualsOneFramePerPlane) {
+    checkOnePassEqualsSeparate(test::displayScratchDir(), caveWall, "[0.0, 1.7, 0.0]", {0.0f, 1.7f, 0.0f}, 6);
+}
+
+// A stochastic scene (GI) on a tracked wall accumulates view by view: still views refine, a head
+// move restarts exactly the views whose camera it changed. On a mono wall the one view is at the
+// head's centre, so turning the head in place keeps accumulating and moving it restarts; on a
+// stereo wall turning the head moves both eyes, so both restart.
+TEST(TrackedSession, HeadMovesRestartOnlyTheViewsTheyChange) {
+    const auto dir = test::displayScratchDir();
+    std::string scene = kScene;
+    scene.replace(scene.find("[render]\n"), 9, "[render]\ngi = true\n");
+    for (bool stereo : {false, true}) {
+        SCOPED_TRACE(stereo ? "stereo" : "mono");
+        std::string wallText = flatWall("[0.0, 0.2, 2.5]", true);
+        if (!stereo) wallText.replace(wallText.find("mode = \"passive\""), 16, "mode = \"none\"");
+        RunConfig c = config(dir, wallText, "gi.toml");
+        c.scene = test::writeText(dir / "gi-scene.toml", scene).string();
+        WallSession s(c);
+        const TrackingConfig t = loadWallConfig(dir / "gi.toml").tracking;
+        const size_t views = stereo ? 2 : 1;
+        sendHead(s, t, {0.0f, 0.2f, 2.5f}, 0, 1);
+        ASSERT_TRUE(s.step());
+        ASSERT_TRUE(s.lastReport().stochastic);
+        const size_t first = s.viewRestarts();
+        EXPECT_EQ(first, views);
+        const WallFrame one = s.lastFrame();
+        for (int i = 0; i < 3; ++i) ASSERT_TRUE(s.step());
+        EXPECT_EQ(s.viewRestarts(), first) << "a still head keeps accumulating";
+        EXPECT_NE(s.lastFrame().left.rgb, one.left.rgb) << "four frames averaged differ from the first alone";
+        sendHead(s, t, {0.0f, 0.2f, 2.5f}, 25, 2);  // turned in place
+        ASSERT_TRUE(s.step());
+        EXPECT_EQ(s.viewRestarts(), stereo ? first + 2 : first) << "a turn moves the eyes, not the head's centre";
+        const size_t turned = s.viewRestarts();
+        sendHead(s, t, {0.2f, 0.2f, 2.5f}, 25, 3);  // moved
+        ASSERT_TRUE(s.step());
+        EXPECT_EQ(s.viewRestarts(), turned + views);
+    }
+}
+
 }  // namespace
 }  // namespace rtwall

@@ -116,4 +116,17 @@ struct TessellationOptions : Common {
 };
 toml::table tessellation(const TessellationOptions& o);
 
+// Motion-to-photon latency of a tracked wall (issue 18): DTrack datagram to the first presented
+// frame made with it, and the head error at presentation, mono/stereo x async off/on x
+// prediction off/on, at each image width (height = 3/4 of it), loopback client threads.
+struct LatencyOptions : Common {
+    std::string scene = "builtin:knots";
+    std::vector<int> widths{320, 640, 960};
+    int clients = 2, frames = 120, warmupFrames = 10;
+    double rate = 120;            // tracker datagrams a second
+    double targetSlackMs = 10;    // latency target: one frame time plus this (async off)
+    double targetErrorMm = 5;     // prediction target at 0.5 m/s
+};
+toml::table latency(const LatencyOptions& o);
+
 }  // namespace rtwall::bench
