@@ -10,23 +10,47 @@ constexpr uint8_t kWriting = 1;
 constexpr uint8_t kDone = 2;
 }  // namespace
 
-void FrameAssembler::beginFrame(uint32_t frame, int width, int height, int tileSize) {
+void FrameAssembler::resize(size_t views, int width, int height) {
     width = std::max(0, width);
     height = std::max(0, height);
+    images_.resize(std::max<size_t>(1, views));
     // Same size: the previous frame's pixels stay, so a tile that never arrives shows last
     // frame's content on the wall instead of a black hole.
-    if (width != image_.width || height != image_.height) {
-        image_.width = width;
-        image_.height = height;
-        image_.rgb.assign(size_t(width) * size_t(height) * 3, 0);
-    }
-    const size_t previous = tiles_.size();
-    tiles_ = makeTiles(width, height, tileSize);
+    for (Image& image : images_)
+        if (width != image.width || height != image.height) {
+            image.width = width;
+            image.height = height;
+            image.rgb.assign(size_t(width) * size_t(height) * 3, 0);
+        }
+}
+
+void FrameAssembler::resetStates(size_t previous) {
     if (!state_ || previous != tiles_.size())
         state_ = std::make_unique<std::atomic<uint8_t>[]>(tiles_.size());  // value-initialised: all missing
     else
         for (size_t t = 0; t < tiles_.size(); ++t) state_[t].store(kMissing, std::memory_order_relaxed);
     done_.store(0);
+}
+
+void FrameAssembler::beginFrame(uint32_t frame, int width, int height, int tileSize) {
+    resize(1, width, height);
+    const size_t previous = tiles_.size();
+    tiles_ = makeTiles(std::max(0, width), std::max(0, height), tileSize);
+    view_.clear();
+    resetStates(previous);
+    frame_ = frame;
+}
+
+void FrameAssembler::beginFrame(uint32_t frame, int width, int height, const std::vector<ViewTile>& tiles, uint32_t views) {
+    resize(views, width, height);
+    const size_t previous = tiles_.size();
+    tiles_.resize(tiles.size());
+    view_.resize(tiles.size());
+    for (size_t t = 0; t < tiles.size(); ++t) {
+        tiles_[t] = tiles[t].rect;
+        view_[t] = std::min(tiles[t].view, uint32_t(images_.size() - 1));
+    }
+    resetStates(previous);
     frame_ = frame;
 }
 
@@ -40,8 +64,9 @@ FrameAssembler::Claim FrameAssembler::claim(uint32_t frame, uint32_t tile, TileR
     if (!state_[tile].compare_exchange_strong(expected, kWriting, std::memory_order_acq_rel))
         return Claim::Duplicate;
     rect = tiles_[tile];
-    view.data = image_.pixel(rect.x0, rect.y0);
-    view.stride = size_t(image_.width) * 3;
+    Image& image = images_[viewOf(tile)];
+    view.data = image.pixel(rect.x0, rect.y0);
+    view.stride = size_t(image.width) * 3;
     return Claim::Granted;
 }
 

@@ -70,6 +70,13 @@ public:
 private:
     static constexpr const char* kResultsAddress = "inproc://rtwall-client-results";
 
+    // A multi-view frame's views and tiling (FrameBegin::views), shared by its work items and
+    // never changed once made: a render thread reads it without a lock.
+    struct FrameLayout {
+        std::vector<CameraDesc> cameras;  // per view
+        std::vector<ViewTile> tiles;
+    };
+
     // A tile to render with everything the render thread needs from the network thread's state,
     // captured when the assignment arrives: render threads never read what that thread writes.
     struct Work {
@@ -78,6 +85,7 @@ private:
         uint32_t stateSeq = 0;  // for the result's header
         CodecSettings codec;
         TilePixels pixels = TilePixels::Srgb8;
+        std::shared_ptr<const FrameLayout> layout;  // a multi-view frame's; none: tiles_ and the state's camera
     };
 
     // What a render thread is rendering, for the network thread's stall watch. Written per tile
@@ -589,6 +597,14 @@ private:
         blockedSince_ = 0;
         blockedLogged_ = false;
         framePixels_ = fb.pixels;
+        frameLayout_.reset();
+        if (!fb.views.empty()) {
+            // At the state's resolution and tile size, which catchUp just brought to the frame's.
+            auto layout = std::make_shared<FrameLayout>();
+            for (const FrameView& v : fb.views) layout->cameras.push_back(v.camera);
+            layout->tiles = viewTiles(fb.views, renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
+            frameLayout_ = std::move(layout);
+        }
         frame_.store(fb.frame);
         lastFrameBegun_ = fb.frame;
         send(TileRequest{fb.frame, prefetch_}, fb.frame);
@@ -611,7 +627,7 @@ private:
             std::lock_guard lock(workMutex_);
             for (uint32_t t : a.tiles) {
                 if (work_.size() >= kMaxQueuedTiles) break;
-                work_.push_back({a.frame, t, stateSeq_, codec_, framePixels_});
+                work_.push_back({a.frame, t, stateSeq_, codec_, framePixels_, frameLayout_});
                 ++queued;
             }
             held_ += int64_t(queued);
@@ -767,17 +783,20 @@ private:
             const bool wide = w.pixels == TilePixels::LinearHalf;
             try {
                 std::shared_lock lock(sceneMutex_);
-                if (w.frame != frame_.load() || !scene_ || w.tile >= tiles_.size()) {  // stale or bogus
+                const size_t tileCount = w.layout ? w.layout->tiles.size() : tiles_.size();
+                if (w.frame != frame_.load() || !scene_ || w.tile >= tileCount) {  // stale or bogus
                     --held_;
                     continue;
                 }
                 if (settings_.replay && !wide && replaySend(out, w)) continue;
-                const TileRect r = tiles_[w.tile];
+                // A view's tile renders as it would in a frame of that view's camera alone.
+                const TileRect r = w.layout ? w.layout->tiles[w.tile].rect : tiles_[w.tile];
+                const CameraDesc& cameraDesc = w.layout ? w.layout->cameras[w.layout->tiles[w.tile].view] : camera_;
                 const auto t0 = std::chrono::steady_clock::now();
                 // For the stall watch (watchStalls): this thread is on this tile since now.
                 slot.job.store(uint64_t(w.frame) << 32 | w.tile);
                 slot.startNs.store(steadyNs());
-                const Camera camera(camera_, renderSettings_.width, renderSettings_.height);
+                const Camera camera(cameraDesc, renderSettings_.width, renderSettings_.height);
                 if (wide) {
                     // Part of an accumulation: linear, before the 8-bit quantisation.
                     linear.resize(size_t(r.width()) * r.height() * 3);
@@ -880,6 +899,7 @@ private:
     std::map<Hash128, std::shared_ptr<const TriangleMesh>> meshes_;
     std::map<Hash128, std::shared_ptr<const std::vector<uint8_t>>> assets_;  // texture and volume files
     std::map<Hash128, AssetRef> updateFiles_;  // files named by updates' material changes
+    std::shared_ptr<const FrameLayout> frameLayout_;  // the current frame's, when it has views (network thread)
     std::optional<FrameBegin> deferredFrame_;  // a frame waiting for one of them
     std::optional<FrameBegin> blockedFrame_;   // a frame whose updates wait for the render threads to leave the scene
     double blockedSince_ = 0;

@@ -215,6 +215,8 @@ struct Command {
     CodecSettings codec{};      // kCodec
     TilePixels pixels = TilePixels::Srgb8;  // kBeginFrame: how its tiles travel
     bool stochastic = false;    // kBeginFrame: its state renders stochastically
+    std::vector<FrameView> views{};  // kBeginFrame: a multi-view frame's views (setViews)
+    uint64_t viewsTag = 0;
 };
 
 }  // namespace
@@ -231,6 +233,8 @@ struct Master::Impl {
     std::map<Hash128, std::shared_ptr<const std::vector<uint8_t>>> assetBytes;
     mutable std::mutex stateMutex;
     uint32_t seq = 0;      // state sequence number
+    std::vector<FrameView> views;  // setViews: what the next frame begun renders
+    uint64_t viewsTag = 0;
     // rendersStochastically(scene), recomputed (O(instances)) only after a change that can alter
     // it: a material, light or settings change (it reads which materials instances use, never
     // their transforms).
@@ -253,9 +257,9 @@ struct Master::Impl {
     std::deque<Command> commands;
     std::mutex wakeMutex;         // zmq sockets are not thread-safe: one writer at a time
     uint32_t completedFrame = 0;
-    Image completedImage;
+    std::vector<Image> completedImages;  // one per view
     FrameReport completedReport;
-    std::vector<float> completedLinear;  // the completed frame's linear pixels, when it had linear tiles
+    std::vector<std::vector<float>> completedLinear;  // the completed frame's linear pixels per view, when it had linear tiles
     int readyClients = 0;
     std::atomic<const std::atomic<bool>*> stopFlag{nullptr};
 
@@ -279,6 +283,7 @@ struct Master::Impl {
         uint32_t frame;
         CameraDesc camera;
         RenderSettings settings;
+        std::vector<FrameView> views;
     };
     static constexpr size_t kRecentFrames = 8;
     std::deque<FrameRecord> recentFrames;
@@ -286,7 +291,9 @@ struct Master::Impl {
     std::deque<TileFailure> tileFailures;  // for takeTileFailures (failuresMutex)
     TilePixels framePixels = TilePixels::Srgb8;  // how the current frame's tiles travel
     bool frameStochastic = false;
-    std::vector<float> linear;    // the current frame in linear RGB (LinearHalf frames)
+    std::vector<std::vector<float>> linear;  // the current frame in linear RGB (LinearHalf frames), per view
+    std::vector<FrameView> frameViews;  // the current frame's views (none: the state's camera)
+    uint64_t frameViewsTag = 0;
     bool frameActive = false;
     double frameStart = 0;
     uint64_t frameBytes = 0;
@@ -487,7 +494,7 @@ struct Master::Impl {
     }
 
     void sendFrameBegin(ClientState& c) {
-        if (send(c, FrameBegin{currentFrame, frameSeq, framePixels}, currentFrame) == SendResult::Sent)
+        if (send(c, FrameBegin{currentFrame, frameSeq, framePixels, frameViews}, currentFrame) == SendResult::Sent)
             c.frameBegun = currentFrame;
     }
 
@@ -509,13 +516,19 @@ struct Master::Impl {
         }
     }
 
-    void beginFrame(uint32_t frame, uint32_t stateSeq, const RenderSettings& rs, TilePixels pixels, bool stochastic) {
+    void beginFrame(uint32_t frame, uint32_t stateSeq, const RenderSettings& rs, TilePixels pixels, bool stochastic,
+                    std::vector<FrameView>&& beginViews, uint64_t beginViewsTag) {
         currentFrame = frame;
         framePixels = pixels;
         frameStochastic = stochastic;
+        frameViews = std::move(beginViews);
+        frameViewsTag = beginViewsTag;
         // Every tile writes its part; no clearing. (Swapped with the completed frame's buffer,
         // so a still view allocates nothing.)
-        if (pixels == TilePixels::LinearHalf) linear.resize(size_t(rs.width) * size_t(rs.height) * 3);
+        if (pixels == TilePixels::LinearHalf) {
+            linear.resize(std::max<size_t>(1, frameViews.size()));
+            for (std::vector<float>& l : linear) l.resize(size_t(rs.width) * size_t(rs.height) * 3);
+        }
         frameSeq = stateSeq;
         // The frame's state: the last one and every update up to stateSeq, which were all sent
         // before this frame began (runCommands flushes first) and no later one was (commands
@@ -534,13 +547,15 @@ struct Master::Impl {
             frameStateMessage.reset();
         }
         // What a client's failed tile of this frame is replayed with (onTileFailed).
-        recentFrames.push_back({frame, frameState.camera, frameState.settings});
+        recentFrames.push_back({frame, frameState.camera, frameState.settings, frameViews});
         if (recentFrames.size() > kRecentFrames) recentFrames.pop_front();
         frameActive = true;
         frameStart = nowSeconds();
         frameBytes = 0;
         frameDecoded = false;
-        assembler.beginFrame(frame, rs.width, rs.height, rs.tileSize);
+        if (frameViews.empty()) assembler.beginFrame(frame, rs.width, rs.height, rs.tileSize);
+        else assembler.beginFrame(frame, rs.width, rs.height, viewTiles(frameViews, rs.width, rs.height, rs.tileSize),
+                                  uint32_t(frameViews.size()));
         scheduler.beginFrame(frame, uint32_t(assembler.tiles().size()));
         for (auto& [peer, c] : clients) {
             c.credits = 0;
@@ -570,6 +585,8 @@ struct Master::Impl {
         r.tileOwners.assign(scheduler.owners().begin(), scheduler.owners().end());
         r.stochastic = frameStochastic;
         r.linear = framePixels == TilePixels::LinearHalf;
+        r.views = frameViews.size();
+        r.viewsTag = frameViewsTag;
         r.counters = countersNow();
         const std::vector<double>& lat = scheduler.latencies();
         double sum = 0;
@@ -588,7 +605,7 @@ struct Master::Impl {
         }
         {
             std::lock_guard lock(m);
-            completedImage = std::exchange(assembler.image(), Image{});  // the assembler starts the next frame afresh
+            completedImages = std::exchange(assembler.images(), std::vector<Image>(1));  // the assembler starts the next frame afresh
             if (framePixels == TilePixels::LinearHalf) completedLinear.swap(linear);
             else completedLinear.clear();
             completedReport = std::move(r);
@@ -728,8 +745,9 @@ struct Master::Impl {
             if (assembler.claim(r.frame, r.tile, rect, view) == FrameAssembler::Claim::Granted) {
                 frameBytes += r.pixels.size();
                 c.frameBytes += r.pixels.size();
+                const uint32_t v = assembler.viewOf(r.tile);
                 decoder->push({std::move(r.pixels), r.codec, r.tile, rect, view, r.format,
-                               r.format == TilePixels::LinearHalf ? linear.data() : nullptr, assembler.image().width});
+                               r.format == TilePixels::LinearHalf ? linear[v].data() : nullptr, assembler.image(v).width});
             }
         }
         serve(c);
@@ -785,7 +803,16 @@ struct Master::Impl {
             unexpected("a failed tile of frame " + std::to_string(f.frame) + ", which is not a recent frame");
             return;
         }
-        const std::vector<TileRect> tiles = makeTiles(rec->settings.width, rec->settings.height, rec->settings.tileSize);
+        std::vector<TileRect> tiles;
+        CameraDesc replayCamera = rec->camera;
+        if (rec->views.empty()) {
+            tiles = makeTiles(rec->settings.width, rec->settings.height, rec->settings.tileSize);
+        } else {
+            // A multi-view frame's tile is replayed with its view's camera.
+            const std::vector<ViewTile> vt = viewTiles(rec->views, rec->settings.width, rec->settings.height, rec->settings.tileSize);
+            for (const ViewTile& t : vt) tiles.push_back(t.rect);
+            if (f.tile < vt.size()) replayCamera = rec->views[vt[f.tile].view].camera;
+        }
         const TileRect& r = f.rect;
         if (f.tile >= tiles.size() || tiles[f.tile].x0 != r.x0 || tiles[f.tile].y0 != r.y0 || tiles[f.tile].x1 != r.x1 ||
             tiles[f.tile].y1 != r.y1) {
@@ -794,7 +821,7 @@ struct Master::Impl {
             return;
         }
         std::lock_guard lock(failuresMutex);
-        tileFailures.push_back({c.id, f.frame, f.tile, r, f.reason, rec->camera, rec->settings, f.packetWidth});
+        tileFailures.push_back({c.id, f.frame, f.tile, r, f.reason, replayCamera, rec->settings, f.packetWidth});
         if (tileFailures.size() > 64) tileFailures.pop_front();
     }
 
@@ -940,7 +967,7 @@ struct Master::Impl {
             // Never merge across a frame: a frame's state must be a point in the sequence.
             flushUpdates();
             if (cmd.kind == Command::kBeginFrame)
-                beginFrame(cmd.frame, cmd.update.seq, cmd.settings, cmd.pixels, cmd.stochastic);
+                beginFrame(cmd.frame, cmd.update.seq, cmd.settings, cmd.pixels, cmd.stochastic, std::move(cmd.views), cmd.viewsTag);
             if (cmd.kind == Command::kCodec) {
                 settings.codec = cmd.codec;  // for clients that join later
                 for (auto& [peer, c] : clients)
@@ -1306,7 +1333,26 @@ void Master::setCodec(const CodecSettings& codec) {
     s.wake();
 }
 
+void Master::setViews(std::vector<FrameView> views, uint64_t tag) {
+    if (views.size() > kMaxViews) throw InputError("a frame has at most " + std::to_string(kMaxViews) + " views");
+    Impl& s = *impl_;
+    std::lock_guard lock(s.stateMutex);
+    s.views = std::move(views);
+    s.viewsTag = tag;
+}
+
 Image Master::renderFrame(FrameReport* report, std::vector<float>* linear) {
+    std::vector<std::vector<float>> views;
+    if (linear) views.emplace_back().swap(*linear);  // the caller's buffer goes round for a later frame
+    std::vector<Image> images = renderViews(report, linear ? &views : nullptr);
+    if (linear) {
+        linear->clear();
+        if (!views.empty()) linear->swap(views.front());
+    }
+    return std::move(images.front());
+}
+
+std::vector<Image> Master::renderViews(FrameReport* report, std::vector<std::vector<float>>* linear) {
     Impl& s = *impl_;
     auto begin = [&] {
         const uint32_t frame = ++s.lastBegun;
@@ -1321,6 +1367,8 @@ Image Master::renderFrame(FrameReport* report, std::vector<float>* linear) {
                 s.stochasticStale = false;
             }
             cmd.stochastic = s.stateStochastic;
+            cmd.views = s.views;
+            cmd.viewsTag = s.viewsTag;
             if (cmd.stochastic && s.settings.wideAccumulation) cmd.pixels = TilePixels::LinearHalf;
             queueLocked(s, std::move(cmd));
         }
@@ -1347,16 +1395,16 @@ Image Master::renderFrame(FrameReport* report, std::vector<float>* linear) {
         s.inFlight = false;
         if (report) *report = s.completedReport;
         if (linear) {
-            linear->clear();
-            linear->swap(s.completedLinear);  // the caller's buffer comes back for a later frame
+            for (std::vector<float>& l : *linear) l.clear();
+            linear->swap(s.completedLinear);  // the caller's buffers come back for a later frame
         }
-        return std::move(s.completedImage);
+        return std::move(s.completedImages);
     };
     if (!s.settings.async) return wait(begin());
     // Asynchronous: finish the frame in flight, start the next at once (it carries every update
     // made so far), and return the finished one while the clients already render its successor.
     const uint32_t waitFor = s.inFlight ? s.lastBegun : begin();
-    Image img = wait(waitFor);
+    std::vector<Image> img = wait(waitFor);
     begin();
     return img;
 }

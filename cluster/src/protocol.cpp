@@ -21,6 +21,7 @@ constexpr int kMaxTileSize = 1024;
 constexpr int kMaxDepth = 64;
 constexpr int kMaxSupersample = 16;
 constexpr int kMaxThreads = 1024;
+constexpr int kMaxViewReference = 1 << 20;  // a view region's reference image (the wall's pixels)
 
 [[noreturn]] void fail(const std::string& what) { throw DecodeError(what); }
 
@@ -391,6 +392,12 @@ void read(Reader& r, NodeEndpoint& m);
 
 // The smallest encoding of a value (empty strings), measured with the writer itself so that
 // the element-count checks below cannot drift from the format.
+// Written and read with the messages (FrameBegin), declared here for writeVector and readVector.
+void write(Writer& w, const ViewRegion& g);
+void read(Reader& r, ViewRegion& g);
+void write(Writer& w, const FrameView& v);
+void read(Reader& r, FrameView& v);
+
 template <class T> size_t minEncodedSize(const T& emptyValue) {
     Writer w;
     write(w, emptyValue);
@@ -655,16 +662,59 @@ void read(Reader& r, Update& m) {
     m.baseSeq = r.u32();
 }
 
-RTWALL_WIRE_FIELDS(FrameBegin, 3);
+RTWALL_WIRE_FIELDS(ViewRegion, 4);
+void write(Writer& w, const ViewRegion& g) {
+    w.i32(g.x);
+    w.i32(g.y);
+    w.i32(g.width);
+    w.i32(g.height);
+}
+void read(Reader& r, ViewRegion& g) {
+    // The bounds of the view's reference image are checked with the view.
+    g.x = readInt(r, 0, kMaxViewReference, "view region x");
+    g.y = readInt(r, 0, kMaxViewReference, "view region y");
+    g.width = readInt(r, 0, kMaxViewReference, "view region width");
+    g.height = readInt(r, 0, kMaxViewReference, "view region height");
+}
+
+RTWALL_WIRE_FIELDS(FrameView, 4);
+void write(Writer& w, const FrameView& v) {
+    write(w, v.camera);
+    writeVector(w, v.regions);
+    w.i32(v.refWidth);
+    w.i32(v.refHeight);
+}
+void read(Reader& r, FrameView& v) {
+    read(r, v.camera);
+    readVector(r, v.regions, 16, kMaxRegionsPerView);
+    const bool regions = !v.regions.empty();
+    // Without regions the view is the whole image and the reference size means nothing.
+    v.refWidth = readInt(r, regions ? 1 : 0, kMaxViewReference, "view reference width");
+    v.refHeight = readInt(r, regions ? 1 : 0, kMaxViewReference, "view reference height");
+    for (const ViewRegion& g : v.regions)
+        if (int64_t(g.x) + g.width > v.refWidth || int64_t(g.y) + g.height > v.refHeight)
+            fail("view region " + std::to_string(g.x) + "," + std::to_string(g.y) + "," + std::to_string(g.width) + "," +
+                 std::to_string(g.height) + " is outside its " + std::to_string(v.refWidth) + "x" +
+                 std::to_string(v.refHeight) + " reference image");
+}
+
+RTWALL_WIRE_FIELDS(FrameBegin, 4);
 void write(Writer& w, const FrameBegin& m) {
     w.u32(m.frame);
     w.u32(m.updateSeq);
     writeEnum(w, m.pixels);
+    writeVector(w, m.views);
 }
 void read(Reader& r, FrameBegin& m) {
     m.frame = r.u32();
     m.updateSeq = r.u32();
     m.pixels = readEnum(r, TilePixels::LinearHalf, "tile pixel format");
+    static const size_t viewBytes = [] {
+        FrameView v;
+        v.camera.name.clear();
+        return minEncodedSize(v);
+    }();
+    readVector(r, m.views, viewBytes, kMaxViews);
 }
 
 RTWALL_WIRE_FIELDS(TileRequest, 2);

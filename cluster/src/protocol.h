@@ -1,4 +1,4 @@
-// The rtwall wire protocol, version 8 (2 added the master's peer timeout to Welcome; 3 added
+// The rtwall wire protocol, version 11 (2 added the master's peer timeout to Welcome; 3 added
 // materials, area lights and shading settings; 4 added vertex colours to meshes, the scene's
 // origin and [bvh] settings to the snapshot, spherical and cylindrical texture mappings, texture
 // and volume files by content hash (AssetRequest, AssetData, SceneSnapshot::assets) and linear
@@ -8,10 +8,13 @@
 // Heartbeat (the frame, the tiles of its assignments that arrived, and whether it holds any tile:
 // the master releases hand-outs an idle client no longer holds) and TileStalled (a render thread
 // stuck on a tile); 8 added TileFailed (a tile whose rendering threw, before the client leaves);
-// 9 added section planes: SceneSnapshot::sections and SectionChange; 10 is the views of a
-// multi-view frame (branch stereo); 11 added display nodes (issue 19): the node <-> master
-// messages NodeHello to NodeSwapped, and for clients NodeList, TileRoutes and TileDone: tiles go
-// straight from the clients to the nodes that show them, the master gets a small ack).
+// 9 added section planes and instance visibility (SceneSnapshot::sections, SectionChange,
+// InstanceDesc::visibility, VisibilityChange); 10 added the views of a multi-view frame to FrameBegin
+// (each view's camera and image regions: both eyes of a stereo wall, a CAVE's planes, in one
+// scheduler pass; no views: the state's camera, 4 bytes more); 11 added display nodes (issue 19):
+// the node <-> master messages NodeHello to NodeSwapped, and for clients NodeList, TileRoutes and
+// TileDone: tiles go straight from the clients to the nodes that show them, the master gets a
+// small ack).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one writer and one
@@ -48,6 +51,8 @@ inline constexpr uint32_t kMaxSceneObjects = 1 << 24;  // meshes, instances, mat
 inline constexpr uint64_t kMaxMeshBytes = uint64_t(1) << 31;
 inline constexpr uint64_t kMaxAssetBytes = uint64_t(1) << 30;  // one texture image or volume file
 inline constexpr uint32_t kMaxFilesPerMaterial = 3;  // texture, alpha mask, volume
+inline constexpr uint32_t kMaxViews = 64;             // images of one multi-view frame
+inline constexpr uint32_t kMaxRegionsPerView = 1024;  // screens a view shows
 inline constexpr uint32_t kMaxTimeoutMs = 3'600'000;  // heartbeat and timeout: an hour at most
 inline constexpr uint32_t kMaxNodes = 64;                 // display nodes: node sets are 64-bit masks
 inline constexpr uint32_t kMaxTilesPerFrame = 1 << 22;    // a 16384-pixel-square frame of 8-pixel tiles
@@ -225,6 +230,10 @@ struct FrameBegin {
     uint32_t frame = 0;
     uint32_t updateSeq = 0;  // the frame renders the state at exactly this sequence number
     TilePixels pixels = TilePixels::Srgb8;  // how its tiles are sent
+    // Version 10: a multi-view frame (Master::setViews): its tiles are viewTiles(views) at the
+    // state's resolution and tile size, each rendered with its view's camera instead of the
+    // state's. Per frame, not state: an eye's camera moves with the head at no sequence number.
+    std::vector<FrameView> views{};
 };
 
 struct TileRequest {

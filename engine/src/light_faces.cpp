@@ -169,6 +169,13 @@ bool emits(const Material& m) { return m.type != MaterialType::Volume && maxComp
 
 }  // namespace
 
+bool mayBeLightFace(const Scene::Impl& s, const InstanceData& data) {
+    if (!emits(s.desc.materials[data.material])) return false;
+    for (const Light& light : s.desc.lights)
+        if (light.type == LightType::Area) return true;
+    return false;
+}
+
 void findLightFaces(Scene::Impl& s) {
     const SceneDesc& d = s.desc;
     s.lightFaces.assign(d.lights.size(), LightFace::None);

@@ -425,7 +425,7 @@ void Scene::setInstanceTransform(uint32_t instance, const Transform& transform) 
     RTCGeometry g = rtcGetGeometry(s.top, instance);
     rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, data.objectToWorld);
     rtcCommitGeometry(g);
-    findLightFaces(s);  // a lamp panel moved onto or off an area light
+    if (mayBeLightFace(s, data)) findLightFaces(s);  // a lamp panel moved onto or off an area light
     s.dirty = true;
 }
 
@@ -441,10 +441,7 @@ void Scene::setInstanceVisibility(uint32_t instance, Visibility visibility) {
     RTCGeometry g = rtcGetGeometry(s.top, instance);
     if (hidden) rtcDisableGeometry(g);
     else rtcEnableGeometry(g);
-    // A hidden lamp panel is no face of its area light; only an emitter can change that, and the
-    // search goes over every instance, so a part that does not glow skips it.
-    const Material& m = s.desc.materials[data.material];
-    if (m.type == MaterialType::Emissive || maxComponent(m.emission) > 0.0f) findLightFaces(s);
+    if (mayBeLightFace(s, data)) findLightFaces(s);  // a hidden lamp panel is no face of its area light
     s.dirty = true;
 }
 

@@ -103,6 +103,10 @@ bool coherentOcclusionIsSafe(RTCDevice device);
 // InstanceData::areaLight and Impl::lightFaces; run whenever instances, materials or lights
 // change.
 void findLightFaces(Scene::Impl& s);
+// Whether moving, hiding or showing this instance can change what findLightFaces finds: only an
+// emitter can be an area light's face, and only where the scene has an area light. The search
+// goes over every instance, so an update of anything else skips it (bulk updates stay linear).
+bool mayBeLightFace(const Scene::Impl& s, const InstanceData& data);
 
 // The enabled section planes as the kernel reads them (SceneDesc::sections compacted): a point x
 // is kept when dot(n, x) >= d for every plane. The ray interval is clipped to the kept region

@@ -228,5 +228,74 @@ TEST(Assembler, ConcurrentClaimsGrantEachTileExactlyOnce) {
     }
 }
 
+// A multi-view frame (issue 18): each tile goes into its own view's image, at its place, and
+// the frame completes when every view's tiles are in; the images are separate buffers.
+TEST(Assembler, MultiViewFrameWritesEachTileIntoItsView) {
+    std::vector<FrameView> views(2);
+    views[1].regions = {{20, 0, 12, 8}};  // the right half of a 40x16 reference at 32x16: x 16..32
+    views[1].refWidth = 40;
+    views[1].refHeight = 16;
+    const std::vector<ViewTile> tiles = viewTiles(views, 32, 16, 8);
+    ASSERT_EQ(tiles.size(), 8u + 2u);  // view 0: all 4x2; view 1: the two tiles of x 16..32, row 0
+    FrameAssembler a;
+    a.beginFrame(5, 32, 16, tiles, 2);
+    ASSERT_EQ(a.images().size(), 2u);
+    for (uint32_t t = 0; t < tiles.size(); ++t) {
+        EXPECT_EQ(a.viewOf(t), tiles[t].view);
+        ASSERT_TRUE(writeTile(a, 5, t, colourOf(t)));
+        EXPECT_EQ(a.complete(), t + 1 == tiles.size());
+    }
+    EXPECT_EQ(writeTile(a, 5, 8, colourOf(0)), false);  // each tile once
+    EXPECT_EQ(at(a.image(0), 16, 0), colourOf(2));
+    EXPECT_EQ(at(a.image(1), 16, 0), colourOf(8));
+    EXPECT_EQ(at(a.image(1), 31, 7), colourOf(9));
+    EXPECT_EQ(at(a.image(1), 0, 0), (std::array<uint8_t, 3>{0, 0, 0}));  // outside its region: never written
+    // A later mono frame is one image again.
+    a.beginFrame(6, 32, 16, 8);
+    EXPECT_EQ(a.images().size(), 1u);
+    EXPECT_EQ(a.tiles().size(), 8u);
+    EXPECT_EQ(a.viewOf(7), 0u);
+}
+
+// The tiling of a multi-view frame: view by view, only the tiles that meet a view's regions,
+// with the regions scaled as the wall scales a smaller frame (rounded outwards).
+TEST(FrameViews, TilesMeetScaledRegions) {
+    EXPECT_EQ(viewTiles({}, 64, 64, 16).size(), 0u);
+    std::vector<FrameView> views(3);
+    EXPECT_EQ(viewTiles(views, 64, 32, 16).size(), 3 * 8u);  // no regions: the whole image each
+    views[0].regions = {{0, 0, 1000, 500}};
+    views[0].refWidth = 3000;
+    views[0].refHeight = 500;
+    views[1].regions = {{1000, 0, 1000, 500}};
+    views[1].refWidth = 3000;
+    views[1].refHeight = 500;
+    views[2].regions = {{2000, 0, 1000, 250}};
+    views[2].refWidth = 3000;
+    views[2].refHeight = 500;
+    // 96x32, tiles of 16: plane 0 covers x 0..32, plane 1 x 32..64, plane 2 x 64..96, y 0..16.
+    const std::vector<ViewTile> t = viewTiles(views, 96, 32, 16);
+    ASSERT_EQ(t.size(), 4u + 4u + 2u);
+    EXPECT_EQ(t[0].view, 0u);
+    EXPECT_EQ(t[4].view, 1u);
+    EXPECT_EQ(t[4].rect.x0, 32);
+    EXPECT_EQ(t[8].view, 2u);
+    EXPECT_EQ(t[8].rect.x0, 64);
+    EXPECT_EQ(t[9].rect.x1, 96);
+    // A region edge inside a tile takes that tile; scaled, x0 rounds down and x1 up.
+    const TileRect r = scaledRegion({1000, 0, 1000, 500}, 3000, 500, 100, 10);
+    EXPECT_EQ(r.x0, 33);
+    EXPECT_EQ(r.x1, 67);
+    EXPECT_EQ(viewTiles({views[1]}, 100, 10, 16).size(), 3u);  // x 33..67 meets the tiles at 32, 48 and 64
+    // A region outside the image, or an empty one, takes no tile; a bad reference size neither.
+    FrameView none;
+    none.regions = {{0, 0, 0, 0}};
+    none.refWidth = 10;
+    none.refHeight = 10;
+    EXPECT_EQ(viewTiles({none}, 64, 64, 16).size(), 0u);
+    none.refWidth = 0;
+    none.regions = {{0, 0, 5, 5}};
+    EXPECT_EQ(viewTiles({none}, 64, 64, 16).size(), 0u);
+}
+
 }  // namespace
 }  // namespace rtwall::cluster

@@ -416,7 +416,23 @@ Header sampleHeader() {
     return h;
 }
 
-// Calls f with every sample message, each a different type.
+// A stereo CAVE's frame: two views, one of the whole image, one with two regions and a window.
+FrameBegin sampleViewsFrameBegin() {
+    FrameBegin fb{1235, 100, TilePixels::Srgb8, {}};
+    FrameView left;
+    left.camera.position = {0.1f, 1.7f, 0.2f};
+    left.camera.fovY = 45.0f;
+    FrameView right;
+    right.camera.position = {0.3f, 1.6f, 0.0f};
+    right.camera.window = ProjectionWindow{{-1.5f, 0.0f, -1.5f}, {3.0f, 0.0f, 0.0f}, {0.0f, 2.25f, 0.0f}};
+    right.regions = {{0, 0, 1024, 768}, {2048, 0, 1024, 768}};
+    right.refWidth = 3072;
+    right.refHeight = 768;
+    fb.views = {left, right};
+    return fb;
+}
+
+// Calls f with every sample message (FrameBegin twice: mono and with views).
 template <class F> void forEachSample(F&& f) {
     f(sampleHello());
     f(sampleWelcome());
@@ -425,6 +441,7 @@ template <class F> void forEachSample(F&& f) {
     f(sampleMeshData());
     f(sampleUpdate());
     f(FrameBegin{1234, 99, TilePixels::LinearHalf});
+    f(sampleViewsFrameBegin());
     f(TileRequest{55, 8});
     f(TileAssign{56, {0, 7, 1u << 20, 0xFFFFFFFFu}});
     f(sampleTileResult());
@@ -543,7 +560,7 @@ TEST(Protocol, GoldenBytes) {
     // (version 2: the shading fields of materials, lights and settings; 4: FrameBegin's tile format;
     // 5: the snapshot's BVH primitives; 6: two-sided emission of materials and area lights; 7: the
     // client's work report in Heartbeat, TileStalled; 8: TileFailed; 9: section planes, instance visibility;
-    // 10: the views of a frame; 11: display nodes).
+    // 10: FrameBegin's views; 11: display nodes).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -556,10 +573,11 @@ TEST(Protocol, GoldenBytes) {
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
         0x0D, 0x0E, 0x0F, 0x10,                          // scene version
-        0x09, 0x00, 0x00, 0x00,                          // payload length
+        0x0D, 0x00, 0x00, 0x00,                          // payload length
         0x00, 0x00, 0x00, 0x00,                          // reserved
         0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88,  // payload: frame, update sequence
         0x00,                                            // tile pixels: 8-bit sRGB
+        0x00, 0x00, 0x00, 0x00,                          // no views: the state's camera
     };
     EXPECT_EQ(bytes, expected);
 }
@@ -1200,7 +1218,7 @@ TEST(Protocol, AssetsAndLinearTilesRejectValuesOutOfRange) {
     s.assets[0].path.clear();
     EXPECT_THROW(decode<SceneSnapshot>(payloadOf(s)), DecodeError);
     std::vector<uint8_t> p = payloadOf(FrameBegin{1, 2, TilePixels::LinearHalf});
-    p.back() = 2;
+    p[8] = 2;
     EXPECT_THROW(decode<FrameBegin>(p), DecodeError);
     p = payloadOf(sampleTileResult());
     p.back() = 7;
@@ -1209,6 +1227,41 @@ TEST(Protocol, AssetsAndLinearTilesRejectValuesOutOfRange) {
     p = payloadOf(AssetData{{1, 2}, {}});
     putU32(p, 16, 0xFFFFFFF0u);
     EXPECT_THROW(decode<AssetData>(p), DecodeError);
+}
+
+}  // namespace
+}  // namespace rtwall::cluster
+
+namespace rtwall::cluster {
+namespace {
+
+TEST(Protocol, FrameViewsRoundTripAndRejectBadRegions) {
+    const FrameBegin fb = sampleViewsFrameBegin();
+    const FrameBegin back = decode<FrameBegin>(payloadOf(fb));
+    EXPECT_EQ(back.views, fb.views);
+    ASSERT_EQ(back.views.size(), 2u);
+    EXPECT_TRUE(back.views[1].camera.window.has_value());
+    // A region beyond its reference image, a negative size, a view without a reference size,
+    // more views than the limit, a view count larger than the bytes: each one clear error.
+    FrameBegin bad = fb;
+    bad.views[1].regions[1].width = 1025;  // 2048 + 1025 > 3072
+    EXPECT_THROW(decode<FrameBegin>(payloadOf(bad)), DecodeError);
+    bad = fb;
+    bad.views[1].regions[0].height = -1;
+    EXPECT_THROW(decode<FrameBegin>(payloadOf(bad)), DecodeError);
+    bad = fb;
+    bad.views[1].refWidth = 0;
+    EXPECT_THROW(decode<FrameBegin>(payloadOf(bad)), DecodeError);
+    bad = fb;
+    bad.views.assign(kMaxViews + 1, fb.views[0]);
+    EXPECT_THROW(decode<FrameBegin>(payloadOf(bad)), DecodeError);
+    std::vector<uint8_t> p = payloadOf(fb);
+    putU32(p, 9, 1000);  // the view count
+    EXPECT_THROW(decode<FrameBegin>(p), DecodeError);
+    // Truncated anywhere: never read past the end.
+    p = payloadOf(fb);
+    for (size_t n = 0; n < p.size(); ++n)
+        EXPECT_THROW(decode<FrameBegin>(std::vector<uint8_t>(p.begin(), p.begin() + long(n))), DecodeError) << n;
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 // and late clients, stale results) driven by hand with an explicit clock.
 #include "scheduler.h"
 
+#include <rtwall/cluster.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -281,6 +283,40 @@ TEST(SchedulerAffinity, FirstAskerGetsItsOwnTilesNotTheSharedOrder) {
     for (uint32_t t = 0; t < 3; ++t) EXPECT_EQ(s.complete(1, 1, t, 1.1), Result::Accepted);
     EXPECT_EQ(s.complete(2, 1, 3, 1.1), Result::Accepted);
     EXPECT_EQ(s.stats().affinityHits, 4u);
+}
+
+// Both eyes in one pass (issue 18): the frame's tile list is the left eye's tiles, then the
+// right eye's (viewTiles), so affinity by tile number keeps each client on the same tiles of the
+// same eye: client 1 rendered the left eye's first half and the right eye's second half, and
+// gets exactly those again, whoever asks first.
+TEST(SchedulerAffinity, EachEyesTilesGoBackToTheirOwnerInOnePass) {
+    std::vector<FrameView> views(2);
+    const uint32_t perEye = uint32_t(makeTiles(64, 32, 16).size()), count = uint32_t(viewTiles(views, 64, 32, 16).size());
+    ASSERT_EQ(count, 2 * perEye);
+    TileScheduler s;
+    s.addClient(1);
+    s.addClient(2);
+    // Frame 0: 1 takes left 0..3 and right 4..7, 2 the rest (its own queue order after frame 0).
+    s.beginFrame(0, count);
+    std::vector<uint32_t> one = s.request(1, 4, 0.0);
+    EXPECT_EQ(one, range(0, 4));
+    std::vector<uint32_t> two = s.request(2, perEye, 0.0);  // left 4..7 and right 0..3
+    EXPECT_EQ(two, range(4, 12));
+    std::vector<uint32_t> rest = s.request(1, 4, 0.0);  // right 4..7
+    EXPECT_EQ(rest, range(12, 16));
+    for (uint32_t t : one) s.complete(1, 0, t, 0.1);
+    for (uint32_t t : rest) s.complete(1, 0, t, 0.1);
+    for (uint32_t t : two) s.complete(2, 0, t, 0.1);
+    // Frame 1: 2 asks first and gets its own tiles of both eyes, not the front of the list.
+    s.beginFrame(1, count);
+    EXPECT_EQ(s.request(2, perEye, 1.0), range(4, 12));
+    std::vector<uint32_t> again = s.request(1, perEye, 1.0);
+    std::vector<uint32_t> expected = range(0, 4);
+    for (uint32_t t : range(12, 16)) expected.push_back(t);
+    EXPECT_EQ(again, expected);
+    for (uint32_t t = 0; t < count; ++t) s.complete(t < 4 || t >= 12 ? 1 : 2, 1, t, 1.1);
+    EXPECT_EQ(s.stats().affinityHits, count);
+    EXPECT_EQ(s.stats().stolen, 0u);
 }
 
 TEST(SchedulerAffinity, ChangedTileCountStartsFromTheSharedQueue) {

@@ -76,10 +76,11 @@ std::string runText(const std::filesystem::path& dir, const std::string& wall, i
            "\nwrite_every = 1\norbit = 0.0\nout = \"" + (dir / ("frames-" + wall)).string() + "\"\n";
 }
 
-// A stereo frame is two master frames (left, right); files are named by the master's number.
+// A stereo frame is one master frame (both eyes in one scheduler pass); files are named by the
+// master's number.
 std::string fileOf(int shown) {
     char name[32];
-    std::snprintf(name, sizeof name, "frame_%06d.png", 2 * shown);
+    std::snprintf(name, sizeof name, "frame_%06d.png", shown);
     return name;
 }
 

@@ -88,7 +88,7 @@ TEST(WallCli, TheStereoWallWritesDifferentEyes) {
     const Result r = run("run --wall " + (test::sourceDir() / "configs/wall/stereo-passive.toml").string() +
                          " --headless --frames 1 --write-every 1 --out " + dir.string());
     ASSERT_EQ(r.status, 0) << r.output;
-    // A stereo frame is two rendered frames (left, then right) and is named after the second.
+    // Both eyes are one rendered frame (one scheduler pass); each eye has its own file.
     std::filesystem::path leftFile, rightFile;
     for (const auto& e : std::filesystem::directory_iterator(dir)) {
         const std::string n = e.path().filename().string();

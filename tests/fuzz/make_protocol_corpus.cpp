@@ -102,6 +102,10 @@ int main(int argc, char** argv) {
     eye.changes = {CameraChange{offAxis}};
     seedMessage("update-off-axis", eye);
     seedMessage("frame-begin", FrameBegin{3, 2});
+    // Both eyes in one frame; the right eye a CAVE plane with two screens' regions.
+    FrameView left{offAxis, {}, 0, 0}, right{offAxis, {{0, 0, 1024, 768}, {2048, 0, 1024, 768}}, 3072, 768};
+    right.camera.position.x += 0.065f;
+    seedMessage("frame-begin-views", FrameBegin{4, 2, TilePixels::Srgb8, {left, right}});
     seedMessage("tile-request", TileRequest{3, 4});
     seedMessage("tile-assign", TileAssign{3, {0, 1, 2, 17}});
     seedMessage("tile-result", TileResult{3, 17, TileCodec::Lz4, 1500, {1, 2, 3, 4, 5}});

@@ -99,6 +99,7 @@ toml::table shading(const ShadingOptions& o);
 // The master's cost of a camera update per frame, with N instances of one box.
 struct UpdatesOptions : Common {
     int instances = 100'000, frames = 200, clients = 1;
+    int transforms = 0;  // instances moved per frame as well (Master::setInstanceTransform)
     bool async = false;
 };
 toml::table updates(const UpdatesOptions& o);
@@ -114,5 +115,18 @@ struct TessellationOptions : Common {
     double referenceLinear = 0.002, referenceAngular = 0.05;
 };
 toml::table tessellation(const TessellationOptions& o);
+
+// Motion-to-photon latency of a tracked wall (issue 18): DTrack datagram to the first presented
+// frame made with it, and the head error at presentation, mono/stereo x async off/on x
+// prediction off/on, at each image width (height = 3/4 of it), loopback client threads.
+struct LatencyOptions : Common {
+    std::string scene = "builtin:knots";
+    std::vector<int> widths{320, 640, 960};
+    int clients = 2, frames = 120, warmupFrames = 10;
+    double rate = 120;            // tracker datagrams a second
+    double targetSlackMs = 10;    // latency target: one frame time plus this (async off)
+    double targetErrorMm = 5;     // prediction target at 0.5 m/s
+};
+toml::table latency(const LatencyOptions& o);
 
 }  // namespace rtwall::bench

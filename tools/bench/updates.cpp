@@ -1,4 +1,7 @@
-// rtwall bench updates: what a camera move costs the master with many instances (issue 17).
+// rtwall bench updates: what a camera move costs the master with many instances (issue 17), and
+// with --transforms K, K instance transforms per frame as well (a dragged object: each client
+// applies them to its Scene before the frame, so a per-update cost that grows with the instance
+// count shows in the frame time).
 // A scene of N instances of one box, a tiny image (one 32x32 tile, eyelight) so that the cost of
 // the update, not rendering, decides the frame time, and local render clients. Per frame: the
 // application thread's time in Master::setCamera, the time of the whole Master::renderFrame
@@ -69,7 +72,7 @@ toml::table updates(const UpdatesOptions& o) {
     const double joinSeconds = seconds(Clock::now() - t1);
     for (int i = 0; i < 3; ++i) master.renderFrame();  // warm-up
 
-    std::vector<double> update, frame, network;
+    std::vector<double> update, frame, network, transforms;
     CameraDesc camera = desc.cameras.front();
     const float radius = camera.position.z;
     for (int f = 0; f < o.frames; ++f) {
@@ -77,11 +80,17 @@ toml::table updates(const UpdatesOptions& o) {
         camera.position = {radius * std::sin(angle), camera.position.y, radius * std::cos(angle)};
         const auto a = Clock::now();
         master.setCamera(camera);
+        const auto m = Clock::now();
+        for (int k = 0; k < o.transforms; ++k) {
+            const auto i = uint32_t((size_t(f) * size_t(o.transforms) + size_t(k)) % desc.instances.size());
+            master.setInstanceTransform(i, Transform::translate(0, 0.001 * (f + 1), 0) * desc.instances[i].transform);
+        }
         const auto b = Clock::now();
+        transforms.push_back(seconds(b - m));
         FrameReport report;
         master.renderFrame(&report);
         const auto c = Clock::now();
-        update.push_back(seconds(b - a));
+        update.push_back(seconds(m - a));
         frame.push_back(seconds(c - b));
         network.push_back(report.seconds);
     }
@@ -90,6 +99,8 @@ toml::table updates(const UpdatesOptions& o) {
                     {"clients", o.clients},
                     {"frames", o.frames},
                     {"async", o.async},
+                    {"transforms_per_frame", o.transforms},
+                    {"set_transforms_us_median", 1e6 * median(transforms)},
                     {"master_construct_s", constructSeconds},
                     {"clients_join_s", joinSeconds},
                     {"set_camera_us_median", 1e6 * median(update)},
@@ -97,12 +108,12 @@ toml::table updates(const UpdatesOptions& o) {
                     {"render_frame_ms_median", 1e3 * median(frame)},
                     {"render_frame_ms_p90", 1e3 * quantile(frame, 0.9)},
                     {"frame_begin_to_end_ms_median", 1e3 * median(network)},
-                    {"update_and_frame_ms_median", 1e3 * (median(update) + median(frame))}};
+                    {"update_and_frame_ms_median", 1e3 * (median(update) + median(transforms) + median(frame))}};
     if (o.text)
-        std::fprintf(o.text, "%d instances, %d client%s, %d frames (%s): setCamera %.1f us (p90 %.1f), renderFrame %.3f ms "
-                    "(p90 %.3f), begin to last tile %.3f ms (medians)\n",
+        std::fprintf(o.text, "%d instances, %d client%s, %d frames (%s): setCamera %.1f us (p90 %.1f), %d transforms %.1f us, "
+                    "renderFrame %.3f ms (p90 %.3f), begin to last tile %.3f ms (medians)\n",
                     o.instances, o.clients, o.clients == 1 ? "" : "s", o.frames, o.async ? "async" : "sync",
-                    1e6 * median(update), 1e6 * quantile(update, 0.9), 1e3 * median(frame),
+                    1e6 * median(update), 1e6 * quantile(update, 0.9), o.transforms, 1e6 * median(transforms), 1e3 * median(frame),
                     1e3 * quantile(frame, 0.9), 1e3 * median(network));
     return out;
 }

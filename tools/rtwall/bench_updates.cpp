@@ -12,6 +12,10 @@ void addBenchUpdates(CLI::App& bench, Run& run) {
     cmd->add_option("--instances", o.instances, "Instances of one box in the scene")->check(CLI::Range(1, 10'000'000));
     cmd->add_option("--frames", o.frames, "Measured frames, each after one camera update")->check(CLI::Range(1, 100000));
     cmd->add_option("--clients", o.clients, "Local client processes (one render thread each)")->check(CLI::Range(1, 16));
+    cmd->add_option("--transforms", o.transforms,
+                    "Instance transforms moved per frame besides the camera (as a dragged object or a "
+                    "flystick's pick does)")
+        ->check(CLI::Range(0, 100000));
     cmd->add_flag("--async", o.async, "Asynchronous frames (as rtwall run): the frame time overlaps the next one's begin");
     callBenchmark(cmd, run, a, bench::updates);
 }

@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
     rtwall::cli::addBenchAttack(*bench, run);
     rtwall::cli::addBenchChaos(*bench, run);
     rtwall::cli::addBenchUpdates(*bench, run);
+    rtwall::cli::addBenchLatency(*bench, run);
     rtwall::cli::addCheck(app, run);
     rtwall::cli::addBenchDisplay(*bench, run);
     rtwall::cli::addBenchScene(*bench, run);

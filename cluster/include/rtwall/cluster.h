@@ -84,6 +84,44 @@ MasterCounters operator-(MasterCounters later, const MasterCounters& earlier);
 // "nothing dropped, refused or lost".
 std::string describeCounters(const MasterCounters& c);
 
+// ---- Frames of several views ---------------------------------------------------------------------
+// Both eyes of a stereo wall, and each plane of screens of a non-coplanar wall (a CAVE), render
+// in one frame: one scheduler pass over the tiles of every view, each view with its own
+// off-axis camera, assembled into one image per view (Master::setViews, renderViews).
+
+// A rectangle of the wall image (x, y, width, height in pixels of a reference image).
+struct ViewRegion {
+    int x = 0, y = 0, width = 0, height = 0;
+    bool operator==(const ViewRegion&) const = default;
+};
+
+// One image of a multi-view frame: its camera and the parts of the image it shows (a CAVE plane
+// shows only its screens), in pixels of a refWidth x refHeight image (the wall's), scaled to
+// the frame's resolution as the wall scales a smaller frame (scaledRegion). No regions: the
+// whole image.
+struct FrameView {
+    CameraDesc camera;
+    std::vector<ViewRegion> regions;
+    int refWidth = 0, refHeight = 0;
+    bool operator==(const FrameView&) const = default;
+};
+
+// A tile of a multi-view frame: the view it belongs to and its pixels in that view's image.
+struct ViewTile {
+    uint32_t view = 0;
+    TileRect rect;
+};
+
+// A region's pixels in a width x height frame: x0 rounded down, x1 up (a frame smaller than
+// the wall still covers every pixel of the region), clipped to the frame.
+TileRect scaledRegion(const ViewRegion& region, int refWidth, int refHeight, int width, int height);
+
+// The tiling of a multi-view frame, which master and clients compute alike (a tile's number in
+// the protocol indexes it): view by view, the tiles of makeTiles(width, height, tileSize) that
+// meet one of the view's regions (all of them without regions), in makeTiles order. A client
+// that renders a tile of view v renders it as it would in a frame of v's camera alone.
+std::vector<ViewTile> viewTiles(const std::vector<FrameView>& views, int width, int height, int tileSize);
+
 struct ClientReport {
     uint32_t id = 0;
     uint64_t tiles = 0;         // results accepted this frame
@@ -104,9 +142,11 @@ struct FrameReport {
     uint64_t affinityHits = 0;      // tiles rendered by last frame's client
     double meanTileLatency = 0;     // seconds from assignment to result
     std::vector<ClientReport> clients;
-    std::vector<uint32_t> tileOwners;  // client id that rendered each tile (makeTiles order); UINT32_MAX: none
+    std::vector<uint32_t> tileOwners;  // client id that rendered each tile (makeTiles order; of a multi-view frame: viewTiles order); UINT32_MAX: none
     bool stochastic = false;        // the frame's state renders stochastically: frames of one state refine by averaging
     bool linear = false;            // its tiles came as linear half floats (renderFrame can give them)
+    size_t views = 0;               // images of a multi-view frame (0: one, the state's camera)
+    uint64_t viewsTag = 0;          // the tag of the setViews the frame was rendered with
     MasterCounters counters;        // the master's counters when the frame completed
 };
 
@@ -200,6 +240,19 @@ public:
     // as linear tiles (report->linear), `linear` receives it in linear RGB (3 floats a pixel,
     // each exactly a half float), for Accumulator::addLinear; otherwise it is emptied.
     Image renderFrame(FrameReport* report = nullptr, std::vector<float>* linear = nullptr);
+
+    // Frames of several views in one scheduler pass (both eyes, a CAVE's planes): each frame
+    // begun after the call renders viewTiles(views) and renderViews gives one image per view, in
+    // this order. Like an update, it takes effect in the next frame that begins: with async on,
+    // renderViews returns the frame begun before (its report's viewsTag says which views it
+    // shows: the caller's tag, e.g. the tracker packet behind its head pose) and begins one with
+    // these. Views are not scene state: a new eye camera moves no sequence number. Empty views:
+    // frames of the state's camera, one image (renderFrame), as before any call.
+    void setViews(std::vector<FrameView> views, uint64_t tag = 0);
+    // A frame as renderFrame, one image per view of the frame (one without views); a view's
+    // pixels outside its regions' tiles are unspecified. With linear tiles `linear` receives
+    // each view's linear RGB.
+    std::vector<Image> renderViews(FrameReport* report = nullptr, std::vector<std::vector<float>>* linear = nullptr);
 
     MasterCounters counters() const;
     uint64_t droppedMessages() const;  // counters().dropped()

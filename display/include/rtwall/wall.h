@@ -61,6 +61,10 @@ struct RunConfig {
     std::filesystem::path clientExecutable = "/proc/self/exe";
     bool clientThreads = false;
     std::optional<InjectedTileFault> clientFault;  // tests: client threads fail this tile (ClientSettings::tileFault)
+    // A wall with views (stereo, tracked, a CAVE): every view's tiles in one scheduler pass, with
+    // async as configured. Off: each view is a frame of its own, async off (the way before;
+    // tests and `rtwall bench latency` compare the two).
+    bool viewsInOnePass = true;
     // Where the session's progress lines go (stdout by default).
     std::function<void(const std::string&)> log;
 };
@@ -225,6 +229,13 @@ public:
     // after timeout_ms without one. The pose for the session's tools (picking, dragging,
     // measuring; a section plane).
     std::optional<WandPose> wand() const;
+    // The tracker datagrams counted (TrackerState::packets) when the head pose of the last
+    // shown frame was taken: with async on, the frame shown was specified a step earlier.
+    uint64_t shownTrackerPackets() const;
+    const HeadPose& shownHead() const;  // and that head (lastHead() with async off)
+    // View accumulations restarted so far (a stochastic scene on a wall with views: a view
+    // restarts when the state or its own camera changed).
+    size_t viewRestarts() const;
 
     // What the last step showed and measured.
     const WallFrame& lastFrame() const;

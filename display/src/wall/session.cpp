@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <deque>
 #include <fstream>
 #include <thread>
 #include <tuple>
@@ -43,17 +44,22 @@ std::string codecPointName(const CodecSettings& c, int tile) {
 }
 
 // The pixels of `screens` from a render of the whole image: a view of a CAVE shows only its own
-// walls. Frames smaller than the wall (an operating point) are scaled alike.
+// walls. Frames smaller than the wall (an operating point) are scaled alike (scaledRegion, the
+// rule by which a multi-view frame picks each view's tiles).
 void copyScreens(Image& to, const Image& from, const WallConfig& wall, const std::vector<size_t>& screens) {
     for (size_t i : screens) {
         const PixelRect& v = wall.screens[i].viewport;
-        const int x0 = int(int64_t(v.x) * from.width / wall.width), x1 = int((int64_t(v.x + v.width) * from.width + wall.width - 1) / wall.width);
-        const int y0 = int(int64_t(v.y) * from.height / wall.height), y1 = int((int64_t(v.y + v.height) * from.height + wall.height - 1) / wall.height);
-        for (int y = y0; y < std::min(y1, from.height); ++y) {
-            const size_t row = (size_t(y) * size_t(from.width) + size_t(x0)) * 3;
-            std::copy(from.rgb.begin() + long(row), from.rgb.begin() + long(row + size_t(std::min(x1, from.width) - x0) * 3), to.rgb.begin() + long(row));
+        const TileRect r = scaledRegion({v.x, v.y, v.width, v.height}, wall.width, wall.height, from.width, from.height);
+        for (int y = r.y0; y < r.y1; ++y) {
+            const size_t row = (size_t(y) * size_t(from.width) + size_t(r.x0)) * 3;
+            std::copy(from.rgb.begin() + long(row), from.rgb.begin() + long(row + size_t(r.width()) * 3), to.rgb.begin() + long(row));
         }
     }
+}
+
+bool samePose(const HeadPose& a, const HeadPose& b) {
+    auto same = [](const Float3& p, const Float3& q) { return p.x == q.x && p.y == q.y && p.z == q.z; };
+    return same(a.position, b.position) && same(a.right, b.right) && same(a.up, b.up);
 }
 
 std::string format(const char* fmt, auto... args) {
@@ -104,6 +110,31 @@ struct WallSession::Impl {
     size_t framesOnTarget = 0;
     WallFrame shown;
     FrameReport report;
+    // Multi-view frames (views): what each setViews asked for, by tag, until its frame is back
+    // (async returns the frame begun a step earlier); each view's eye and screens; and per view
+    // the accumulation of a still view of a stochastic scene.
+    struct ViewSpec {
+        uint64_t tag = 0;
+        uint64_t trackerPackets = 0;  // the tracker datagrams counted when its head pose was taken
+        HeadPose head;
+        std::vector<FrameView> views;
+    };
+    std::deque<ViewSpec> viewSpecs;
+    uint64_t nextViewTag = 1;
+    std::vector<int> viewEye;                  // -1 (mono), 0 left, 1 right
+    std::vector<std::vector<size_t>> viewScreens;  // a view's screens (empty: it is the whole image)
+    std::vector<std::vector<float>> viewLinear;
+    struct ViewAccumulation {
+        Accumulator sum;
+        uint32_t stateSeq = UINT32_MAX;
+        std::optional<CameraDesc> camera;
+    };
+    std::vector<ViewAccumulation> viewAccumulation;
+    uint64_t shownTrackerPackets = 0;  // of the head pose the last shown frame was made for
+    HeadPose shownHead;
+    size_t viewRestarts = 0;           // view accumulations restarted (a view's camera or the state changed)
+    CameraDesc lastNavigation;
+    bool moved = false;                // this frame's view moved (navigation, scripted camera, head): the controller favours speed
 
     ~Impl() {
         // The master goes first: its goodbye ends the client threads, which are joined after it.
@@ -299,12 +330,103 @@ struct WallSession::Impl {
         input->setTrackerLine(describeTracker(trackerState));
     }
 
+    // Each view of the wall (both eyes, each plane of a CAVE's screens) with its off-axis
+    // camera: its eye, its screens, and its part of the wall image.
+    std::vector<FrameView> frameViews() {
+        std::vector<FrameView> out;
+        viewEye.clear();
+        viewScreens.clear();
+        const std::vector<int> eyes = stereo ? std::vector<int>{0, 1} : std::vector<int>{-1};
+        for (int eye : eyes) {
+            const std::vector<WallView> vs = wallViews(wallConfig, head, eye);
+            for (const WallView& v : vs) {
+                FrameView f;
+                f.camera = input->viewCamera(v.window);
+                if (vs.size() > 1) {
+                    // One plane of several: only its screens' tiles are rendered.
+                    for (size_t i : v.screens) {
+                        const PixelRect& r = wallConfig.screens[i].viewport;
+                        f.regions.push_back({r.x, r.y, r.width, r.height});
+                    }
+                    f.refWidth = wallConfig.width;
+                    f.refHeight = wallConfig.height;
+                    viewScreens.push_back(v.screens);
+                } else {
+                    viewScreens.emplace_back();
+                }
+                viewEye.push_back(eye);
+                out.push_back(std::move(f));
+            }
+        }
+        return out;
+    }
+
+    // Each eye's image from its views' images: a whole-image view is the eye's image, planes
+    // give their screens' pixels.
+    void composeEyes(std::vector<Image>& images) {
+        for (int eye : stereo ? std::vector<int>{0, 1} : std::vector<int>{-1}) {
+            Image image;
+            for (size_t v = 0; v < images.size() && v < viewEye.size(); ++v) {
+                if (viewEye[v] != eye) continue;
+                if (viewScreens[v].empty()) {
+                    image = std::move(images[v]);
+                    continue;
+                }
+                if (image.rgb.empty()) {
+                    image.width = images[v].width;
+                    image.height = images[v].height;
+                    image.rgb.assign(images[v].rgb.size(), 0);
+                }
+                copyScreens(image, images[v], wallConfig, viewScreens[v]);
+            }
+            (eye == 1 ? shown.right : shown.left) = std::move(image);
+        }
+    }
+
+    // A still view of a stochastic scene refines, view by view: a view restarts when the state
+    // changed (any scene change, the navigation camera, the codec) or its own camera did (the
+    // head moved its eye, or its plane's frustum); the others keep accumulating.
+    void accumulateViews(std::vector<Image>& images, const std::vector<FrameView>& rendered) {
+        if (viewAccumulation.size() != images.size()) viewAccumulation = std::vector<ViewAccumulation>(images.size());
+        for (size_t v = 0; v < images.size(); ++v) {
+            ViewAccumulation& a = viewAccumulation[v];
+            const CameraDesc& camera = rendered[v].camera;
+            if (a.stateSeq != report.stateSeq || !a.camera || !(*a.camera == camera)) {
+                a.sum.reset();
+                a.stateSeq = report.stateSeq;
+                a.camera = camera;
+                ++viewRestarts;
+            }
+            if (report.linear && v < viewLinear.size()) a.sum.addLinear(viewLinear[v].data(), images[v].width, images[v].height);
+            else a.sum.add(images[v]);
+            images[v] = a.sum.resolve();
+        }
+        ++accumulatedFrames;
+        linearFrames += report.linear;
+    }
+
     // Renders the frame (both eyes on a stereo wall) into `shown` and `report`.
     void render() {
         shown = WallFrame{};
-        if (views) {
+        if (views && config.viewsInOnePass) {
+            // Every view's tiles in one scheduler pass. The views go with a tag: with async the
+            // frame that comes back was begun with the views of the step before.
+            ViewSpec spec{nextViewTag++, trackerState.packets, head, frameViews()};
+            master->setViews(spec.views, spec.tag);
+            viewSpecs.push_back(std::move(spec));
+            std::vector<Image> images = master->renderViews(&report, &viewLinear);
+            while (viewSpecs.size() > 1 && viewSpecs.front().tag != report.viewsTag) viewSpecs.pop_front();
+            const ViewSpec& rendered = viewSpecs.front();
+            shownTrackerPackets = rendered.trackerPackets;
+            shownHead = rendered.head;
+            if (images.size() != rendered.views.size())
+                throw std::runtime_error("internal error: a multi-view frame came back with " + std::to_string(images.size()) +
+                                         " images for " + std::to_string(rendered.views.size()) + " views");
+            if (report.stochastic) accumulateViews(images, rendered.views);
+            composeEyes(images);
+        } else if (views) {
             // Each eye, each plane of screens: one render of the wall image with that view's
-            // off-axis camera; a CAVE's screens each keep their own view's pixels.
+            // off-axis camera (the way before one-pass frames: tests compare the two).
             const std::vector<int> eyes = stereo ? std::vector<int>{0, 1} : std::vector<int>{-1};
             for (int eye : eyes) {
                 const std::vector<WallView> vs = wallViews(wallConfig, head, eye);
@@ -326,12 +448,20 @@ struct WallSession::Impl {
                 }
                 (eye == 1 ? shown.right : shown.left) = std::move(image);
             }
+            shownTrackerPackets = trackerState.packets;
+            shownHead = head;
         } else {
             shown.left = master->renderFrame(&report, &linear);
         }
         shown.number = report.frame;
-        // The tile grid of the frame as rendered (the `tile` control and [render] edits change it).
+        // The tile grid of the frame as rendered (the `tile` control and [render] edits change it);
+        // a multi-view frame shows the owners of its first view's tiles where that is the whole image.
         shown.tileOwners = report.tileOwners;
+        if (report.views > 0) {
+            const RenderSettings& rs = live->desc().settings;
+            shown.tileOwners.resize(std::min(shown.tileOwners.size(), makeTiles(rs.width, rs.height, rs.tileSize).size()));
+            if (!viewScreens.empty() && !viewScreens.front().empty()) shown.tileOwners.clear();
+        }
         shown.tileSize = live->desc().settings.tileSize;
         if (!views && report.stochastic) {
             // A still view refines: each frame has its own sampling seeds; any change to the scene
@@ -356,7 +486,7 @@ struct WallSession::Impl {
             trace << frame << ',' << report.seconds << ',' << master->connectedClients() << ',' << controller->currentIndex()
                   << ",\"" << controller->current().name << "\"" << std::endl;
         framesOnTarget += report.seconds <= 1.0 / config.targetFps;
-        if (controller->observe(report.seconds)) {
+        if (controller->observe(report.seconds, moved)) {
             apply(controller->current());
             log(format("frame %d: %.1f ms (budget %.1f ms): operating point -> '%s'", frame, report.seconds * 1e3,
                        controller->budgetSeconds() * 1e3, controller->current().name.c_str()));
@@ -376,7 +506,9 @@ struct WallSession::Impl {
             const RenderSettings& s = live->desc().settings;
             log(format("frame %d: %.1f fps (median of the last %zu), %.2f MB of tiles, %llu stolen, %llu of %zu tiles kept their client",
                        frame, 1.0 / recent, n, double(report.bytes) * 1e-6, (unsigned long long)report.tilesStolen,
-                       (unsigned long long)report.affinityHits, makeTiles(s.width, s.height, s.tileSize).size()));
+                       (unsigned long long)report.affinityHits,
+                       // A multi-view frame's tiles are those of all its views.
+                       report.views > 0 ? report.tileOwners.size() : makeTiles(s.width, s.height, s.tileSize).size()));
         }
     }
 };
@@ -406,7 +538,7 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     }
     s.stereo = s.wallConfig.stereo.mode != StereoMode::None;
     s.views = wallHasViews(s.wallConfig);
-    if (s.views && c.cluster.async) {
+    if (s.views && c.cluster.async && !c.viewsInOnePass) {
         // A render per eye (and per plane of screens): asynchronous mode would give each the other's camera.
         s.log(s.stereo ? "stereo wall: asynchronous rendering off, each frame renders the left then the right eye"
                        : "off-axis wall: asynchronous rendering off, each frame renders each view with its own camera");
@@ -454,6 +586,12 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     s.input->setPartView(*s.live, {});  // says what the scene file and the command line hid, if anything
     // In a window the wall runs until it is closed, unless a frame count was asked for.
     if (s.input->windowed() && !c.framesGiven) c.frames = 0;
+    if (s.views && c.viewsInOnePass) {
+        // The views from the start: a calibration's frames then cost what the wall's frames do.
+        s.head = staticHead(s.wallConfig.stereo);
+        s.viewSpecs.push_back({0, 0, s.head, s.frameViews()});
+        s.master->setViews(s.viewSpecs.back().views, 0);
+    }
     s.startController(givenFront);
     if (c.watch) {
         const std::filesystem::path file = c.scene;
@@ -493,8 +631,13 @@ bool WallSession::step() {
         s.input->setCamera(*scripted);
         s.live->setCamera(*scripted);
     }
+    const CameraDesc navigation = s.input->camera();
+    const HeadPose headBefore = s.head;
     if (s.views) s.updateHead();
     if (s.tracker) s.input->handleWand(*s.live, s.trackerState, dt);  // the flystick navigates, picks and drags
+    // Motion, for the controller: the viewer's camera or the tracked head moved since the last frame.
+    s.moved = s.frame > 1 && (!(navigation == s.lastNavigation) || !samePose(headBefore, s.head));
+    s.lastNavigation = navigation;
     try {
         s.render();
     } catch (...) {
@@ -547,6 +690,9 @@ std::optional<TrackerState> WallSession::tracker() const {
 int WallSession::trackerPort() const { return impl_->tracker ? impl_->tracker->port() : 0; }
 const HeadPose& WallSession::lastHead() const { return impl_->head; }
 std::optional<WandPose> WallSession::wand() const { return impl_->input->wand(); }
+uint64_t WallSession::shownTrackerPackets() const { return impl_->shownTrackerPackets; }
+const HeadPose& WallSession::shownHead() const { return impl_->shownHead; }
+size_t WallSession::viewRestarts() const { return impl_->viewRestarts; }
 const FrameReport& WallSession::lastReport() const { return impl_->report; }
 std::string WallSession::endpoint() const { return impl_->master->endpoint(); }
 bool WallSession::windowed() const { return impl_->input->windowed(); }

@@ -378,10 +378,10 @@ bool WallInput::apply(LiveScene& scene, const InputState& in, double dt) {
             std::snprintf(line, sizeof line, "picked instance %u at distance %.2f", grabbed_->instance,
                           double(grabbed_->t * length(cam.direction(float(in.wallX), float(in.wallY)))));
             // Assemblies name the part, so a reviewer can say which one is meant.
-            const InstanceDesc& in = scene.desc().instances[grabbed_->instance];
-            const std::string part = scene.desc().partPath(in.part);
+            const InstanceDesc& picked = scene.desc().instances[grabbed_->instance];
+            const std::string part = scene.desc().partPath(picked.part);
             // X, I and G act on it: the part, or the mesh of an instance that has none.
-            selected_ = part.empty() ? scene.desc().meshes[in.mesh].name : part;
+            selected_ = part.empty() ? scene.desc().meshes[picked.mesh].name : part;
             log_(part.empty() ? std::string(line) + ", mesh '" + selected_ + "' (X hide, I isolate, G highlight)"
                               : std::string(line) + ", part '" + part + "' (X hide, I isolate, G highlight)");
         }
@@ -423,6 +423,7 @@ void WallInput::handleWand(LiveScene& scene, const TrackerState& tracker, double
         if (wandGrab_) log_("wand: lost, instance " + std::to_string(wandGrab_->instance) + " released");
         wand_.reset();
         wandGrab_.reset();
+        wandPlaneStart_.reset();
         wandButtons_.clear();
         return;
     }
@@ -473,6 +474,12 @@ void WallInput::handleWand(LiveScene& scene, const TrackerState& tracker, double
     const bool pick = options_.interactive && w.visible && pressed(t.buttonPick);
     if (pick && measuring_) {
         measureHit(scene, scene.pickRay(p.origin, p.direction), p.origin, p.direction);
+    } else if (pick && activeSection_ >= 0) {
+        // A selected section plane: the trigger holds the plane, not an object (Shift+C until
+        // none is selected gives the trigger back to objects).
+        wandPlaneStart_ = scene.desc().sections[size_t(activeSection_)];
+        wandGrabStart_ = p;
+        log_("wand: holds section " + std::to_string(activeSection_));
     } else if (pick) {
         wandGrab_ = scene.pickRay(p.origin, p.direction);
         if (wandGrab_) {
@@ -484,13 +491,17 @@ void WallInput::handleWand(LiveScene& scene, const TrackerState& tracker, double
             log_(part.empty() ? std::string(line) : std::string(line) + ", part '" + part + "'");
         }
     }
+    if (wandPlaneStart_ && (!w.button(t.buttonPick) || activeSection_ < 0)) {
+        log_(activeSection_ < 0 ? "wand: section released" : "wand: released " + sectionLine(scene.desc()));
+        wandPlaneStart_.reset();
+    }
     if (wandGrab_ && !w.button(t.buttonPick)) {
         log_("wand: released instance " + std::to_string(wandGrab_->instance));
         wandGrab_.reset();
     }
-    if (wandGrab_ && w.visible) {
-        // Rigidly with the wand: the object is moved by the wand's motion since the pick,
-        // motion = now * start^-1 (world), applied after the object's transform at the pick.
+    if ((wandGrab_ || wandPlaneStart_) && w.visible) {
+        // Rigidly with the wand: the object (or plane) is moved by the wand's motion since the
+        // pick, motion = now * start^-1 (world), applied after its transform at the pick.
         const WandPose& s = wandGrabStart_;
         const Mat3& r1 = p.rotation;
         const Mat3& r0 = s.rotation;
@@ -503,9 +514,23 @@ void WallInput::handleWand(LiveScene& scene, const TrackerState& tracker, double
             for (int j = 0; j < 3; ++j) motion.m[size_t(4 * i + j)] = r[row + size_t(j)];
             motion.m[size_t(4 * i + 3)] = p1[size_t(i)] - (r[row] * p0[0] + r[row + 1] * p0[1] + r[row + 2] * p0[2]);
         }
-        scene.setInstanceTransform(wandGrab_->instance, motion * wandGrabTransform_);
-        p.dragging = wandGrab_->instance;
-        p.length = wandGrab_->t;
+        if (wandPlaneStart_) {
+            // The plane's point moves with the wand and its normal turns with it; the plane
+            // stays where it was put when the trigger is let go.
+            SectionPlane plane = *wandPlaneStart_;
+            const Float3 q = plane.point, n = plane.normal;
+            plane.point = {float(motion.m[0] * q.x + motion.m[1] * q.y + motion.m[2] * q.z + motion.m[3]),
+                           float(motion.m[4] * q.x + motion.m[5] * q.y + motion.m[6] * q.z + motion.m[7]),
+                           float(motion.m[8] * q.x + motion.m[9] * q.y + motion.m[10] * q.z + motion.m[11])};
+            plane.normal = {float(r[0] * n.x + r[1] * n.y + r[2] * n.z), float(r[3] * n.x + r[4] * n.y + r[5] * n.z),
+                            float(r[6] * n.x + r[7] * n.y + r[8] * n.z)};
+            setSection(scene, uint32_t(activeSection_), plane);
+            if (const std::optional<PickResult> hit = scene.pickRay(p.origin, p.direction)) p.length = hit->t;
+        } else {
+            scene.setInstanceTransform(wandGrab_->instance, motion * wandGrabTransform_);
+            p.dragging = wandGrab_->instance;
+            p.length = wandGrab_->t;
+        }
     } else if (w.visible) {
         if (const std::optional<PickResult> hit = scene.pickRay(p.origin, p.direction)) p.length = hit->t;
     }

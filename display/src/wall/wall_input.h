@@ -95,6 +95,7 @@ private:
     std::optional<PickResult> wandGrab_;
     WandPose wandGrabStart_;
     Transform wandGrabTransform_;
+    std::optional<SectionPlane> wandPlaneStart_;  // the selected section plane as the trigger took it
     std::optional<Float3> orbitCentre_;  // the scene's centre, taken when the wand starts orbiting
     bool measureHit(LiveScene& scene, const std::optional<PickResult>& hit, Float3 origin, Float3 direction);
     bool measuring_ = false;

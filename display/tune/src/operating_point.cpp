@@ -58,7 +58,7 @@ size_t OperatingPointController::bestFitting(double budget) const {
     return best;
 }
 
-bool OperatingPointController::observe(double measured) {
+bool OperatingPointController::observe(double measured, bool moving) {
     if (!(measured > 0) || !std::isfinite(measured)) return false;  // no information
     const double sample = measured / front_[current_].frameSeconds;
     ratio_ = ratio_ * (1 - options_.smoothing) + sample * options_.smoothing;
@@ -66,14 +66,16 @@ bool OperatingPointController::observe(double measured) {
     const double budget = budgetSeconds();
     overBudget_ = measured > budget * (1 + options_.tolerance) ? overBudget_ + 1 : 0;
     const size_t up = bestFitting(budget * (1 - options_.headroom));
-    underBudget_ = up > current_ ? underBudget_ + 1 : 0;
+    // Motion never counts towards a step up: refinement waits for a still view.
+    underBudget_ = up > current_ && !moving ? underBudget_ + 1 : 0;
 
-    if (hold_ > 0) {
+    const bool downNow = moving && overBudget_ >= 1 && current_ > 0;
+    if (hold_ > 0 && !downNow) {
         --hold_;
         return false;
     }
     size_t next = current_;
-    if (overBudget_ >= options_.downFrames && current_ > 0) {
+    if ((overBudget_ >= options_.downFrames || downNow) && current_ > 0) {
         // Down to the most accurate point that fits the budget by the current ratio, but at
         // least one step, since the current one demonstrably does not.
         next = std::min(current_ - 1, bestFitting(budget));

@@ -111,5 +111,38 @@ TEST(OperatingPointController, RejectsBadFronts) {
     EXPECT_THROW(OperatingPointController({{"ok", {}, 0.01, 1.0}}, {.targetFps = 0}), InputError);
 }
 
+// Motion (issue 18: navigation or a tracked head) favours a fast first frame: one frame over
+// budget steps down at once, even in the hold after a change, and no step up happens while the
+// view moves; still again, the controller climbs back as before.
+TEST(OperatingPointController, MotionStepsDownAtOnceAndNeverUp) {
+    ControllerOptions o{.targetFps = 30, .smoothing = 1.0};
+    {
+        // Still: one slow frame is not enough (downFrames = 2).
+        OperatingPointController c(front(), o);
+        EXPECT_FALSE(c.observe(0.045));
+        EXPECT_EQ(c.current().name, "p2");
+        // Moving: the same single frame steps down.
+        OperatingPointController m(front(), o);
+        EXPECT_TRUE(m.observe(0.045, true));
+        EXPECT_EQ(m.current().name, "p1");
+        // In the hold after that change a still view waits; a moving one steps down again at once.
+        EXPECT_TRUE(m.observe(0.040, true));
+        EXPECT_EQ(m.current().name, "p0");
+    }
+    {
+        // Frames far under budget: a still view climbs after upFrames, a moving one never does.
+        OperatingPointController moving(front(), {.targetFps = 30});
+        for (int i = 0; i < 100; ++i) EXPECT_FALSE(moving.observe(moving.current().frameSeconds * 0.5, true));
+        EXPECT_EQ(moving.current().name, "p2");
+        int frames = 0;
+        while (moving.current().name == "p2" && frames < 100) {
+            moving.observe(moving.current().frameSeconds * 0.5, false);
+            ++frames;
+        }
+        EXPECT_NE(moving.current().name, "p2");
+        EXPECT_LE(frames, ControllerOptions{}.upFrames + 2);
+    }
+}
+
 }  // namespace
 }  // namespace rtwall

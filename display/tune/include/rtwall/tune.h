@@ -124,7 +124,12 @@ public:
 
     // Feeds the measured time of one frame rendered at current(). Returns true when current()
     // changed (the caller applies the new settings before the next frame).
-    bool observe(double measuredFrameSeconds);
+    // `moving`: the view moved for this frame (navigation, a scripted camera, a tracked head).
+    // A moving viewer sees each frame once and notices lag more than error, so motion favours
+    // speed: while moving the controller never steps up to a more accurate point, and one frame
+    // over budget x (1 + tolerance) steps down at once (not downFrames in a row), also during
+    // the hold after a change. A still view goes back to the hysteresis above.
+    bool observe(double measuredFrameSeconds, bool moving = false);
 
     void setTargetFps(double fps);  // keeps the point; the next observations decide
     uint64_t changes() const { return changes_; }

@@ -1,0 +1,265 @@
+// rtwall bench latency: motion-to-photon latency of a tracked wall (issue 18). A WallSession
+// (master and loopback client threads, headless presenter) on a tracked wall whose DTrack
+// datagrams come from a sender thread in this process on 127.0.0.1: a head going round a
+// horizontal circle at a constant 0.5 m/s, at the tracker's rate. Per datagram: the time from
+// its sending (loopback: its arrival, to within microseconds) to the end of the first step()
+// whose shown frame was made with a head pose that includes it (WallSession::shownTrackerPackets;
+// "presented": the headless presenter has taken the frame). That includes waiting for the frame
+// in progress when it arrived (up to a frame); per frame, the time from the arrival of the newest
+// datagram it was made with to its presentation is the issue's target (one frame time + 10 ms
+// with async off: that frame's render and transfer, nothing queued before it). Per shown frame: the distance
+// between the head it was made for (predicted or not) and the true head on the circle at the
+// moment it was presented. Mono and stereo, asynchronous rendering off and on, prediction off
+// and on (on: prediction_ms = the median time from a frame's head pose to its presentation,
+// measured with it off; the tracker adds the pose's age itself), at a few image sizes
+// (frame rates). Medians and p95, and the share of datagrams and frames over the targets.
+#include "bench.h"
+#include "bench_util.h"
+
+#include <rtwall/tracking.h>
+#include <rtwall/wall.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <thread>
+#include <unistd.h>
+
+namespace rtwall::bench {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr double kPi = 3.14159265358979323846;
+
+double quantile(std::vector<double> v, double q) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    return v[std::min(v.size() - 1, size_t(q * double(v.size())))];
+}
+
+// The true head: a horizontal circle of `radius` m about the viewer's position, at `speed` m/s.
+struct Circle {
+    Float3 centre{0.0f, 0.2f, 2.5f};  // wall coordinates: the shipped 2x2 wall's viewer
+    double radius = 0.3, speed = 0.5;
+    std::array<double, 3> at(double t) const {
+        const double a = speed / radius * t;
+        return {centre.x + radius * std::cos(a), centre.y, centre.z + radius * std::sin(a)};
+    }
+};
+
+// A wall of width x height pixels, 3.2 m x 2.4 m, tracked on 127.0.0.1 (a free port). The room
+// transform is the identity in metres (DTrack millimetres): what is sent is wall coordinates.
+std::string wallText(int width, int height, bool stereo, double predictionMs) {
+    char buf[1024];
+    std::snprintf(buf, sizeof buf,
+                  "[wall]\nname = \"latency\"\nvsync = false\n[grid]\ncolumns = %d\nrows = %d\nscreen_width = %d\nscreen_height = %d\n"
+                  "[stereo]\nmode = \"%s\"\neye_separation = 0.065\nviewer = [0.0, 0.2, 2.5]\n"
+                  "lower_left = [-1.6, -1.2, 0.0]\nlower_right = [1.6, -1.2, 0.0]\nupper_left = [-1.6, 1.2, 0.0]\n"
+                  "[tracking]\nsource = \"dtrack://127.0.0.1:0\"\nroom_scale = 0.001\ntimeout_ms = 1000\nprediction_ms = %.3f\n"
+                  "filter = \"none\"\n[headless]\nwrite_every = 0\n",
+                  stereo ? 2 : 1, stereo ? 2 : 1, stereo ? width / 2 : width, stereo ? height / 2 : height,
+                  stereo ? "passive" : "none", predictionMs);
+    return buf;
+}
+
+struct Case {
+    bool stereo = false, async = false;
+    double predictionMs = 0;
+    int width = 0, height = 0;
+};
+
+struct Measured {
+    std::vector<double> latency;  // seconds, per datagram shown: arrival to the first frame made with it
+    std::vector<double> newest;   // seconds, per frame: arrival of the newest datagram it was made with to its presentation
+    std::vector<double> error;    // metres, per frame shown
+    std::vector<double> frame;    // seconds between presentations
+    std::vector<double> specToPresent;  // seconds from a frame's head pose (its step's start) to its presentation
+    uint64_t sent = 0, shownPackets = 0;
+};
+
+// Sends the circle's datagrams at `rate` Hz until stopped; the send time of datagram k (1-based,
+// the receiver's packet count after it) is times[k - 1].
+class HeadSender {
+public:
+    HeadSender(int port, Circle circle, double rate, Clock::time_point start)
+        : sender_(port), circle_(circle), rate_(rate), start_(start), thread_([this] { run(); }) {}
+    ~HeadSender() {
+        stop_ = true;
+        thread_.join();
+    }
+    std::vector<Clock::time_point> times() const {
+        std::lock_guard lock(m_);
+        return times_;
+    }
+
+private:
+    void run() {
+        for (uint64_t k = 1; !stop_; ++k) {
+            const Clock::time_point due = start_ + std::chrono::nanoseconds(int64_t(double(k - 1) / rate_ * 1e9));
+            std::this_thread::sleep_until(due);
+            const double t = std::chrono::duration<double>(Clock::now() - start_).count();
+            const std::array<double, 3> p = circle_.at(t);
+            DTrackFrame f;
+            f.frame = k;
+            DTrackBody b;
+            b.quality = 1;
+            b.position = {p[0] * 1e3, p[1] * 1e3, p[2] * 1e3};
+            f.bodies.push_back(b);
+            {
+                std::lock_guard lock(m_);
+                times_.push_back(Clock::now());
+            }
+            sender_.send(f);
+        }
+    }
+    DTrackSender sender_;
+    Circle circle_;
+    double rate_;
+    Clock::time_point start_;
+    std::atomic<bool> stop_{false};
+    mutable std::mutex m_;
+    std::vector<Clock::time_point> times_;
+    std::thread thread_;
+};
+
+Measured measure(const LatencyOptions& o, const Case& c, const std::filesystem::path& dir) {
+    const std::filesystem::path wall = dir / "wall.toml";
+    std::ofstream(wall) << wallText(c.width, c.height, c.stereo, c.predictionMs);
+    RunConfig rc;
+    rc.scene = o.scene;
+    rc.wall = wall;
+    rc.cluster.localClients = o.clients;
+    rc.cluster.threadsPerClient = 1;
+    rc.cluster.async = c.async;
+    rc.clientThreads = true;
+    rc.headless = true;
+    rc.frames = 0;
+    rc.orbit = 0;
+    rc.writeEvery = 0;
+    rc.out = dir;
+    rc.log = [](const std::string&) {};
+    WallSession session(rc);
+    for (int i = 0; i < 3; ++i) session.step();  // warm-up: scene built, affinity settled
+
+    const Circle circle;
+    const Clock::time_point start = Clock::now();
+    Measured m;
+    HeadSender sender(session.trackerPort(), circle, o.rate, start);
+    uint64_t lastShown = 0;
+    Clock::time_point lastPresented = Clock::now(), lastStart = lastPresented;
+    for (int f = 0; f < o.warmupFrames + o.frames; ++f) {
+        const Clock::time_point stepStart = Clock::now();
+        session.step();
+        const Clock::time_point presented = Clock::now();
+        const uint64_t shown = session.shownTrackerPackets();
+        const std::vector<Clock::time_point> times = sender.times();
+        // With async the frame shown was specified (its head pose taken) at the previous step's start.
+        const Clock::time_point specified = c.async ? lastStart : stepStart;
+        lastStart = stepStart;
+        if (f < o.warmupFrames) {  // the head comes up to speed, the async pipeline fills
+            lastShown = shown;
+            lastPresented = presented;
+            continue;
+        }
+        m.frame.push_back(std::chrono::duration<double>(presented - lastPresented).count());
+        m.specToPresent.push_back(std::chrono::duration<double>(presented - specified).count());
+        lastPresented = presented;
+        for (uint64_t k = lastShown + 1; k <= shown && k <= times.size(); ++k)
+            m.latency.push_back(std::chrono::duration<double>(presented - times[k - 1]).count());
+        if (shown > lastShown) m.shownPackets += shown - lastShown;
+        if (shown >= 1 && shown <= times.size()) m.newest.push_back(std::chrono::duration<double>(presented - times[shown - 1]).count());
+        lastShown = std::max(lastShown, shown);
+        const std::array<double, 3> truth = circle.at(std::chrono::duration<double>(presented - start).count());
+        const Float3& h = session.shownHead().position;
+        m.error.push_back(std::hypot(h.x - truth[0], h.y - truth[1], h.z - truth[2]));
+    }
+    m.sent = sender.times().size();
+    return m;
+}
+
+toml::table row(const Case& c, const Measured& m, double targetSlackMs, double targetErrorMm) {
+    const double frameS = median(m.frame);
+    const double bound = frameS + targetSlackMs * 1e-3;
+    size_t late = 0, lateFrames = 0, off = 0;
+    for (double l : m.latency) late += l > bound;
+    for (double l : m.newest) lateFrames += l > bound;
+    for (double e : m.error) off += e > targetErrorMm * 1e-3;
+    return toml::table{{"stereo", c.stereo},
+                       {"async", c.async},
+                       {"prediction_ms", c.predictionMs},
+                       {"width", c.width},
+                       {"height", c.height},
+                       {"frames", int64_t(m.frame.size())},
+                       {"fps", frameS > 0 ? 1.0 / frameS : 0.0},
+                       {"frame_ms_median", 1e3 * frameS},
+                       {"frame_ms_p95", 1e3 * quantile(m.frame, 0.95)},
+                       {"datagrams_sent", int64_t(m.sent)},
+                       {"datagrams_shown", int64_t(m.latency.size())},
+                       {"latency_ms_median", 1e3 * median(m.latency)},
+                       {"latency_ms_p95", 1e3 * quantile(m.latency, 0.95)},
+                       {"latency_target_ms", 1e3 * bound},
+                       {"latency_over_target", m.latency.empty() ? 0.0 : double(late) / double(m.latency.size())},
+                       {"frame_latency_ms_median", 1e3 * median(m.newest)},
+                       {"frame_latency_ms_p95", 1e3 * quantile(m.newest, 0.95)},
+                       {"frame_latency_over_target", m.newest.empty() ? 0.0 : double(lateFrames) / double(m.newest.size())},
+                       {"pose_to_present_ms_median", 1e3 * median(m.specToPresent)},
+                       {"error_mm_median", 1e3 * median(m.error)},
+                       {"error_mm_p95", 1e3 * quantile(m.error, 0.95)},
+                       {"error_over_target", m.error.empty() ? 0.0 : double(off) / double(m.error.size())}};
+}
+
+}  // namespace
+
+toml::table latency(const LatencyOptions& o) {
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("rtwall-bench-latency-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    toml::array rows;
+    if (o.text)
+        std::fprintf(o.text, "head on a circle at 0.5 m/s, DTrack at %.0f Hz on loopback, %d client threads, scene %s; targets: "
+                             "latency <= frame time + %.0f ms (async off), error <= %.0f mm (prediction on)\n",
+                     o.rate, o.clients, o.scene.c_str(), o.targetSlackMs, o.targetErrorMm);
+    for (int width : o.widths)
+        for (bool stereo : {false, true})
+            for (bool async : {false, true}) {
+                Case c{stereo, async, 0.0, width, width * 3 / 4};
+                // Prediction on: as far ahead as this configuration's frames take from their head
+                // pose to their presentation (measured without prediction).
+                const Measured plain = measure(o, c, dir);
+                Case p = c;
+                p.predictionMs = std::max(0.1, std::round(1e3 * median(plain.specToPresent) * 10) / 10);
+                const Measured predicted = measure(o, p, dir);
+                for (const auto& [cc, mm] : {std::pair<const Case&, const Measured&>{c, plain}, {p, predicted}}) {
+                    toml::table r = row(cc, mm, o.targetSlackMs, o.targetErrorMm);
+                    if (o.text)
+                        std::fprintf(o.text, "%-6s %-5s %4dx%-4d pred %5.1f ms: %5.1f fps, every datagram %5.1f ms (p95 %5.1f), "
+                                             "newest per frame %5.1f ms (p95 %5.1f, %4.1f%% over %5.1f ms), head error %5.1f mm "
+                                             "(p95 %5.1f, %4.1f%% over %.0f mm)\n",
+                                     cc.stereo ? "stereo" : "mono", cc.async ? "async" : "sync", cc.width, cc.height, cc.predictionMs,
+                                     r["fps"].value_or(0.0), r["latency_ms_median"].value_or(0.0), r["latency_ms_p95"].value_or(0.0),
+                                     r["frame_latency_ms_median"].value_or(0.0), r["frame_latency_ms_p95"].value_or(0.0),
+                                     100 * r["frame_latency_over_target"].value_or(0.0), r["latency_target_ms"].value_or(0.0),
+                                     r["error_mm_median"].value_or(0.0), r["error_mm_p95"].value_or(0.0),
+                                     100 * r["error_over_target"].value_or(0.0), o.targetErrorMm);
+                    rows.push_back(std::move(r));
+                }
+            }
+    std::error_code ec;
+    std::filesystem::remove_all(dir, ec);
+    return toml::table{{"benchmark", "latency"},
+                       {"scene", o.scene},
+                       {"clients", o.clients},
+                       {"tracker_hz", o.rate},
+                       {"head_speed_m_s", 0.5},
+                       {"frames", o.frames},
+                       {"target_slack_ms", o.targetSlackMs},
+                       {"target_error_mm", o.targetErrorMm},
+                       {"rows", std::move(rows)}};
+}
+
+}  // namespace rtwall::bench
