@@ -691,9 +691,17 @@ struct Master::Impl {
         tilesDone = 0;
         auto key = std::make_tuple(rs.width, rs.height, rs.tileSize, frameViews);
         if (routesFrame == UINT32_MAX || key != routesKey) {
-            std::vector<uint64_t> masks = settings.displayNodes.routes
-                                              ? settings.displayNodes.routes(rs.width, rs.height, rs.tileSize, frameViews)
-                                              : std::vector<uint64_t>(scheduler.tileCount(), ~uint64_t(0));
+            // Without a routing (or when it cannot route this frame) every node gets every tile:
+            // more traffic, the same screens.
+            std::vector<uint64_t> masks(scheduler.tileCount(), ~uint64_t(0));
+            if (settings.displayNodes.routes) {
+                try {
+                    masks = settings.displayNodes.routes(rs.width, rs.height, rs.tileSize, frameViews);
+                } catch (const std::exception& e) {
+                    std::fprintf(stderr, "rtwall master: cannot route the tiles of frame %u to the display nodes (%s): every "
+                                         "node gets every tile\n", currentFrame, e.what());
+                }
+            }
             if (masks.size() != scheduler.tileCount()) {
                 // An invariant of the wall library's routing, not an input.
                 std::fprintf(stderr, "rtwall master: internal error: %zu tile masks for a frame of %u tiles\n", masks.size(),

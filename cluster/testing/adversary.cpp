@@ -247,7 +247,7 @@ private:
                 break;
             }
             std::vector<uint8_t> m = sample();
-            if (MsgType(m[6]) == MsgType::Hello) {
+            if (MsgType(m[6]) == MsgType::Hello || MsgType(m[6]) == MsgType::NodeHello) {
                 m[4] = uint8_t(kProtocolVersion + 1 + rng_() % 50);  // another protocol version: refused
                 if (put(s, m)) tally(&AttackReport::refused);
                 break;

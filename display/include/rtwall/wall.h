@@ -34,6 +34,14 @@
 
 namespace rtwall {
 
+// ---- Display nodes (issue 19) ------------------------------------------------------------------
+
+// The master's settings for a wall whose screens name display nodes: the nodes in the wall's
+// order, the config text each is sent, and the tile masks from TileRouting. A frame of views
+// routes each view's tiles by its eye (viewEyes[v]: -1 mono, 0 left, 1 right); a view without an
+// entry goes to every node that shows either eye of its pixels.
+DisplayNodeSettings displayNodeSettings(const WallConfig& wall, std::string wallText, std::vector<int> viewEyes = {});
+
 // ---- Run configs (configs/README.md, "Run configs") ---------------------------------------------
 
 struct RunConfig {
