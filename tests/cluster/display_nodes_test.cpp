@@ -6,6 +6,7 @@
 // node is left out (and named) and rejoins. Every loop is bounded; every wait has a timeout.
 #include "test_util.h"
 
+#include "codec.h"
 #include "net.h"
 #include "protocol.h"
 
@@ -17,9 +18,11 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstring>
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <map>
 #include <optional>
 #include <thread>
 
@@ -138,8 +141,35 @@ private:
 
 class FakeNode : public Peer {
 public:
-    FakeNode(zmq::context_t& ctx, const std::string& endpoint, const std::string& name) : Peer(ctx, endpoint) {
-        put(encodeMessage(Header{}, NodeHello{kProtocolVersion, name, "tcp://127.0.0.1:9", ""}));
+    // With `takeTiles`, the node binds a ROUTER on loopback for the clients' tiles and keeps what
+    // arrives (TileResults by frame and tile).
+    FakeNode(zmq::context_t& ctx, const std::string& endpoint, const std::string& name, bool takeTiles = false)
+        : Peer(ctx, endpoint) {
+        std::string tileEndpoint = "tcp://127.0.0.1:9";
+        if (takeTiles) {
+            tiles_.emplace(ctx, zmq::socket_type::router);
+            tiles_->set(zmq::sockopt::linger, 0);
+            tiles_->bind("tcp://127.0.0.1:0");
+            tileEndpoint = tiles_->get(zmq::sockopt::last_endpoint);
+        }
+        put(encodeMessage(Header{}, NodeHello{kProtocolVersion, name, tileEndpoint, ""}));
+    }
+    std::map<std::pair<uint32_t, uint32_t>, TileResult> received;  // by (frame, tile)
+    uint64_t repeats = 0;
+
+    void pumpTiles() {
+        if (!tiles_) return;
+        for (int i = 0; i < 256; ++i) {
+            zmq::message_t identity, msg;
+            if (!tiles_->recv(identity, zmq::recv_flags::dontwait)) break;
+            if (!tiles_->recv(msg, zmq::recv_flags::dontwait)) break;
+            const auto* p = static_cast<const uint8_t*>(msg.data());
+            const Header h = decodeHeader(p, msg.size());
+            if (h.type != MsgType::TileResult) continue;
+            TileResult r = decodePayload<TileResult>(p + kHeaderSize, msg.size() - kHeaderSize);
+            std::lock_guard lock(m);
+            if (!received.emplace(std::make_pair(r.frame, r.tile), r).second) ++repeats;
+        }
     }
     struct Swap {
         uint32_t frame;
@@ -193,6 +223,7 @@ private:
         }
     }
     std::vector<std::pair<uint32_t, double>> delayed_;
+    std::optional<zmq::socket_t> tiles_;
 };
 
 // The scripted peers on one thread, pumped until the object goes.
@@ -205,7 +236,10 @@ public:
                     std::lock_guard lock(mutex_);
                     for (Peer* p : peers_) {
                         p->pump();
-                        if (auto* node = dynamic_cast<FakeNode*>(p)) node->flushDelayed();
+                        if (auto* node = dynamic_cast<FakeNode*>(p)) {
+                            node->flushDelayed();
+                            node->pumpTiles();
+                        }
                     }
                 }
                 std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -363,6 +397,86 @@ TEST(DisplayNodes, AStalledNodeIsLeftOutAndNamedThenRejoins) {
         EXPECT_EQ(again.routes[0].masks, halves(64, 48, 16, {}));
     }
     w.peers.remove(&again);
+}
+
+// Real render clients (runClient threads): each tile goes to exactly the nodes of its mask, with
+// the pixels one machine renders, and the master gets only acks.
+TEST(DisplayNodes, RenderClientsSendEachTileToItsNodesBitIdentical) {
+    const SceneDesc scene = smallScene();
+    // Declared in this order so that the master goes first (its goodbye ends the clients), then
+    // the client threads are joined, also when an assertion returns early.
+    struct Joined {
+        std::vector<std::thread> threads;
+        ~Joined() {
+            for (auto& t : threads) t.join();
+        }
+    } clients;
+    zmq::context_t ctx{1};
+    auto owned = std::make_unique<Master>(scene, nodeSettings());
+    Master& master = *owned;
+    FakeNode left(ctx, master.endpoint(), "left", true), right(ctx, master.endpoint(), "right", true);
+    Peers peers({&left, &right});
+    ASSERT_TRUE(waitFor(left, [&] { return left.index.has_value(); }));
+    ASSERT_TRUE(waitFor(right, [&] { return right.index.has_value(); }));
+    for (int i = 0; i < 2; ++i) {
+        ClientSettings cs;
+        cs.connect = master.endpoint();
+        cs.threads = 1;
+        cs.exitAfterIdleMs = 3000;  // never outlive the test by much
+        clients.threads.emplace_back([cs] { runClient(cs); });
+    }
+    ASSERT_TRUE(master.waitForClients(2, 10000));
+
+    // A frame whose tiles never reach the nodes (or whose acks never come) would not end: it
+    // is given 20 s, then cancelled (Master::setStopFlag) and the test fails.
+    std::atomic<bool> stop{false}, done{false};
+    master.setStopFlag(&stop);
+    std::thread watchdog([&] {
+        for (int i = 0; i < 2000 && !done; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        stop = !done;
+    });
+    FrameReport report;
+    bool finished = false;
+    try {
+        master.renderFrame(&report);
+        finished = true;
+    } catch (const Cancelled&) {
+    }
+    done = true;
+    watchdog.join();
+    ASSERT_TRUE(finished) << "the frame did not end within 20 s";
+    EXPECT_EQ(report.counters.unexpected, 0u) << describeCounters(report.counters);
+    const std::vector<uint64_t> masks = halves(64, 48, 16, {});
+    const std::vector<TileRect> rects = makeTiles(64, 48, 16);
+    const Scene reference(scene);
+    const Image one = renderFrame(reference, Camera(scene.cameras.front(), 64, 48), scene.settings);
+    for (FakeNode* node : {&left, &right}) {
+        const uint64_t bit = node == &left ? 1 : 2;
+        size_t routed = 0;
+        for (uint64_t mask : masks) routed += (mask & bit) ? 1 : 0;
+        ASSERT_TRUE(waitFor(*node, [&] {
+            size_t n = 0;
+            for (const auto& [key, r] : node->received) n += key.first == report.frame ? 1 : 0;
+            return n >= routed;
+        })) << "node " << bit;
+        std::lock_guard lock(node->m);
+        EXPECT_EQ(node->repeats, 0u);
+        for (const auto& [key, r] : node->received) {
+            if (key.first != report.frame) continue;
+            ASSERT_LT(r.tile, masks.size());
+            EXPECT_TRUE(masks[r.tile] & bit) << "tile " << r.tile << " went to a node that does not show it";
+            const TileRect& t = rects[r.tile];
+            std::vector<uint8_t> pixels(size_t(t.width()) * t.height() * 3);
+            decodeTile(r.codec, r.pixels.data(), r.pixels.size(), t.width(), t.height(), pixels.data(), size_t(t.width()) * 3);
+            for (int y = 0; y < t.height(); ++y)
+                ASSERT_EQ(0, std::memcmp(pixels.data() + size_t(y) * t.width() * 3,
+                                         one.rgb.data() + (size_t(t.y0 + y) * 64 + size_t(t.x0)) * 3, size_t(t.width()) * 3))
+                    << "tile " << r.tile << " row " << y;
+        }
+    }
+    // The nodes held the frame and were told to swap it.
+    ASSERT_TRUE(waitFor(left, [&] { return !left.swaps.empty() && left.swaps.back().frame == report.frame; }));
+    ASSERT_TRUE(waitFor(right, [&] { return !right.swaps.empty() && right.swaps.back().frame == report.frame; }));
 }
 
 TEST(DisplayNodes, ANodeTheWallDoesNotNameIsRefused) {
