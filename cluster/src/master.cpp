@@ -769,8 +769,14 @@ struct Master::Impl {
 
     void releaseSwap(std::optional<uint32_t> frame) {
         if (!frame) return;
+        // Every node of the wall that does not take part: stalled, gone, or never came.
         NodeSwap swap{*frame, {}};
-        for (NodeId out : barrier.leftOut()) swap.leftOut.push_back(settings.displayNodes.names.at(out));
+        const std::vector<NodeId> joined = barrier.nodes(), stalled = barrier.leftOut();
+        const std::vector<std::string>& names = settings.displayNodes.names;
+        for (NodeId i = 0; i < names.size(); ++i)
+            if (std::find(joined.begin(), joined.end(), i) == joined.end() ||
+                std::find(stalled.begin(), stalled.end(), i) != stalled.end())
+                swap.leftOut.push_back(names[i]);
         for (auto& [peer, n] : nodes)
             if (!n.deathReason) sendNode(n, swap, *frame);
     }

@@ -324,8 +324,8 @@ struct NodeHave {
     uint32_t frame = 0;
 };
 
-// Present `frame`; `leftOut` names the nodes the barrier no longer waits for (their screens are
-// dark; the overlay says so).
+// Present `frame`; `leftOut` names the wall's nodes that do not take part in it (stalled, gone
+// or never joined): their screens are dark, and the overlay says which.
 struct NodeSwap {
     uint32_t frame = 0;
     std::vector<std::string> leftOut;

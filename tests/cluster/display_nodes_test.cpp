@@ -479,6 +479,123 @@ TEST(DisplayNodes, RenderClientsSendEachTileToItsNodesBitIdentical) {
     ASSERT_TRUE(waitFor(right, [&] { return !right.swaps.empty() && right.swaps.back().frame == report.frame; }));
 }
 
+// runDisplayNode on a thread: what it was given to present.
+struct NodeThread {
+    struct Shown {
+        uint32_t frame;
+        std::optional<Image> image;
+        std::vector<std::string> leftOut;
+    };
+    NodeThread(const std::string& endpoint, const std::string& name) {
+        run.connect = endpoint;
+        run.name = name;
+        run.exitAfterIdleMs = 5000;
+        run.stop = &stop;
+        run.onWall = [this](const std::string& text) {
+            std::lock_guard lock(m);
+            wall = text;
+        };
+        run.present = [this](uint32_t frame, const Image* image, const std::vector<std::string>& leftOut) {
+            std::lock_guard lock(m);
+            shown.push_back({frame, image ? std::optional<Image>(*image) : std::nullopt, leftOut});
+        };
+        thread = std::thread([this] { status = runDisplayNode(run); });
+    }
+    ~NodeThread() {
+        stop = true;
+        thread.join();
+    }
+    std::mutex m;
+    std::string wall;
+    std::vector<Shown> shown;
+    std::atomic<bool> stop{false};
+    int status = -1;
+    DisplayNodeRun run;
+    std::thread thread;
+};
+
+// Two display-node processes' network side (runDisplayNode) with real render clients: each
+// node presents the frame with exactly its tiles, bit-identical to one machine; killed, the other
+// goes on and names it; restarted, it takes part again.
+TEST(DisplayNodes, NodesPresentTheirTilesAndSurviveAKilledNode) {
+    const SceneDesc scene = smallScene();
+    struct Joined {
+        std::vector<std::thread> threads;
+        ~Joined() {
+            for (auto& t : threads) t.join();
+        }
+    } clients;
+    ClusterSettings cs = nodeSettings();
+    cs.timeoutMs = 1000;
+    auto owned = std::make_unique<Master>(scene, cs);
+    Master& master = *owned;
+    auto left = std::make_unique<NodeThread>(master.endpoint(), "left");
+    auto right = std::make_unique<NodeThread>(master.endpoint(), "right");
+    for (int i = 0; i < 2; ++i) {
+        ClientSettings c;
+        c.connect = master.endpoint();
+        c.threads = 1;
+        c.exitAfterIdleMs = 3000;
+        clients.threads.emplace_back([c] { runClient(c); });
+    }
+    ASSERT_TRUE(master.waitForClients(2, 10000));
+    ASSERT_TRUE(waitFor(*left, [&] { return !left->wall.empty(); }));
+    ASSERT_TRUE(waitFor(*right, [&] { return !right->wall.empty(); }));
+    EXPECT_EQ(left->wall, cs.displayNodes.wallText);
+
+    FrameReport report;
+    master.renderFrame(&report);
+    const Scene reference(scene);
+    const Image one = renderFrame(reference, Camera(scene.cameras.front(), 64, 48), scene.settings);
+    const std::vector<uint64_t> masks = halves(64, 48, 16, {});
+    const std::vector<TileRect> rects = makeTiles(64, 48, 16);
+    for (NodeThread* node : {left.get(), right.get()}) {
+        const uint64_t bit = node == left.get() ? 1 : 2;
+        ASSERT_TRUE(waitFor(*node, [&] { return !node->shown.empty() && node->shown.back().frame == report.frame; }));
+        std::lock_guard lock(node->m);
+        const NodeThread::Shown& s = node->shown.back();
+        ASSERT_TRUE(s.image.has_value()) << "node " << bit << " did not hold the frame it was told to swap";
+        EXPECT_TRUE(s.leftOut.empty());
+        ASSERT_EQ(s.image->width, 64);
+        for (size_t t = 0; t < rects.size(); ++t) {
+            if (!(masks[t] & bit)) continue;
+            const TileRect& r = rects[t];
+            for (int y = r.y0; y < r.y1; ++y)
+                ASSERT_EQ(0, std::memcmp(s.image->rgb.data() + (size_t(y) * 64 + size_t(r.x0)) * 3,
+                                         one.rgb.data() + (size_t(y) * 64 + size_t(r.x0)) * 3, size_t(r.width()) * 3))
+                    << "node " << bit << " tile " << t << " row " << y;
+        }
+    }
+
+    // The right node dies: frames go on, and the left node's swaps name it.
+    right.reset();
+    for (int i = 0; i < 3; ++i) master.renderFrame(&report);
+    ASSERT_TRUE(waitFor(*left, [&] {
+        return !left->shown.empty() && left->shown.back().frame == report.frame;
+    }));
+    {
+        std::lock_guard lock(left->m);
+        bool named = false;
+        for (const auto& s : left->shown) named = named || s.leftOut == std::vector<std::string>{"right"};
+        EXPECT_TRUE(named) << "no swap named the dead node";
+        EXPECT_TRUE(left->shown.back().image.has_value());
+    }
+    // Restarted, it joins again and presents the next frames with the rest.
+    right = std::make_unique<NodeThread>(master.endpoint(), "right");
+    ASSERT_TRUE(waitFor(*right, [&] { return !right->wall.empty(); }));
+    bool together = false;
+    for (int i = 0; i < 20 && !together; ++i) {
+        master.renderFrame(&report);
+        together = waitFor(*right, [&] {
+            return !right->shown.empty() && right->shown.back().frame == report.frame && right->shown.back().image &&
+                   right->shown.back().leftOut.empty();
+        });
+    }
+    EXPECT_TRUE(together) << "the restarted node never presented a frame with the others";
+    right.reset();
+    left.reset();
+}
+
 TEST(DisplayNodes, ANodeTheWallDoesNotNameIsRefused) {
     Wall w;
     FakeNode stranger(w.ctx, w.master.endpoint(), "attic");

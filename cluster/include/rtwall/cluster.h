@@ -348,6 +348,32 @@ private:
 // Writes a new CURVE key pair to STEM.key (secret, mode 0600) and STEM.pub (public).
 void writeNewKeyPair(const std::filesystem::path& stem);
 
+// ---- Display nodes (issue 19) -------------------------------------------------------------------
+
+// A display node: one PC of a wall whose screens are spread over several. It joins the master
+// (NodeHello), takes the tiles its screens show straight from the render clients on a ROUTER of
+// its own, says when it holds a frame and presents it when the master's swap barrier releases
+// it. What it presents, and how, is the caller's (the wall library: rtwall display).
+struct DisplayNodeRun {
+    std::string connect;                  // the master, tcp://HOST:PORT
+    std::string name;                     // this node's name in the wall config
+    std::string bind = "tcp://127.0.0.1:0";  // where the clients send tiles (port 0: a free one); told to the master
+    int exitAfterIdleMs = 0;              // > 0: exit when no master answers for this long
+    int frames = 0;                       // > 0: exit after presenting this many frames (tests, benchmarks)
+    const std::atomic<bool>* stop = nullptr;  // set: say goodbye and return 0
+    // The master's wall config text, on every (re)join, before any frame: the caller sets up its
+    // screens. An exception ends the node with its message.
+    std::function<void(const std::string& wallText)> onWall;
+    // Frame `frame` is released: `image` is the whole frame with this node's tiles in it (null
+    // when this node does not hold that frame: it was left out); `leftOut` names the nodes the
+    // wall did not wait for.
+    std::function<void(uint32_t frame, const Image* image, const std::vector<std::string>& leftOut)> present;
+};
+
+// Runs a display node until the master says goodbye, `frames` are presented, the stop flag is
+// set or no master answers for exitAfterIdleMs. Returns the process exit status.
+int runDisplayNode(const DisplayNodeRun& run);
+
 // Runs a render client until the master says goodbye (or exitAfterIdleMs passes).
 // Returns the process exit status.
 int runClient(const ClientSettings& settings);
