@@ -147,7 +147,7 @@ private:
                 const bool held = begun_ && assembly_.frame() == s.frame && assembly_.complete();
                 if (run_.present) run_.present(s.frame, held ? &assembly_.image() : nullptr, s.leftOut);
                 send(NodeSwapped{s.frame}, s.frame);
-                if (run_.frames > 0 && ++presented_ >= run_.frames) {
+                if (held && run_.frames > 0 && ++presented_ >= run_.frames) {
                     send(Goodbye{"display node '" + run_.name + "' presented its frames"});
                     return 0;
                 }

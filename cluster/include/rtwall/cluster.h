@@ -359,7 +359,7 @@ struct DisplayNodeRun {
     std::string name;                     // this node's name in the wall config
     std::string bind = "tcp://127.0.0.1:0";  // where the clients send tiles (port 0: a free one); told to the master
     int exitAfterIdleMs = 0;              // > 0: exit when no master answers for this long
-    int frames = 0;                       // > 0: exit after presenting this many frames (tests, benchmarks)
+    int frames = 0;                       // > 0: exit after presenting this many frames it held (tests, benchmarks)
     const std::atomic<bool>* stop = nullptr;  // set: say goodbye and return 0
     // The master's wall config text, on every (re)join, before any frame: the caller sets up its
     // screens. An exception ends the node with its message.
