@@ -137,7 +137,8 @@ inline void shadeEyeLightPacket(const ShadingContext& ctx, const RayHitK& rh, co
         p.x += weight * cr[k] * c;
         p.y += weight * cg[k] * c;
         p.z += weight * cb[k] * c;
-        if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID && ctx.scene.instances[rh.hit.instID[0][k]].highlighted) {
+        if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID && rh.hit.instID[0][k] != kCapHit &&  // a cap is no instance
+            ctx.scene.instances[rh.hit.instID[0][k]].highlighted) {
             p.x += weight * kHighlightGlow.x;
             p.y += weight * kHighlightGlow.y;
             p.z += weight * kHighlightGlow.z;

@@ -163,7 +163,7 @@ TEST(PartsSession, AnEditedPartsTableIsAnUpdate) {
     EXPECT_EQ(s.scene().instances[0].visibility, Visibility::Hidden);
     EXPECT_EQ(s.scene().instances[1].visibility, Visibility::Highlighted);
     EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
-    EXPECT_TRUE(logged(*lines, "camera same, 2 instance visibilities"));
+    EXPECT_TRUE(logged(*lines, "camera same, 0 section planes, 2 instance visibilities"));
 }
 
 }  // namespace
