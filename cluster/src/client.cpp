@@ -140,6 +140,8 @@ private:
         forgetPendingFiles();
         ++buildGeneration_;
         lastFrameBegun_ = 0;
+        nodeLinks_.clear();  // the master sends its node list again
+        tileRoutes_.clear();
         Hello hello;
         hello.threads = uint32_t(threads_);
         char host[256] = {};
@@ -246,12 +248,85 @@ private:
             const int n = settings_.dropEveryNthResult;
             if (n > 0 && ++resultsOut_ % uint64_t(n) == 0) {
                 // Injected loss.
+            } else if (!tileRoutes_.empty()) {
+                sendToNodes(msg);
             } else if (!dealer_.send(msg, zmq::send_flags::dontwait)) {
                 ++lostResults_;
             }
             --held_;
             lastSent_ = nowSeconds();
         }
+    }
+
+
+    // ---- display nodes (issue 19) ----------------------------------------------------------
+
+    // One DEALER per node of the master's list (CURVE with the node's server key when this
+    // client has keys); kept while the node's endpoint and key stay the same. ZMQ_IMMEDIATE: a
+    // tile for a node that is not connected is dropped, never queued for a dead peer.
+    void onNodeList(const NodeList& list) {
+        std::map<uint32_t, NodeLink> next;
+        for (const NodeEndpoint& e : list.nodes) {
+            auto old = nodeLinks_.find(e.node);
+            if (old != nodeLinks_.end() && old->second.endpoint == e.endpoint && old->second.serverKey == e.serverKey) {
+                next.emplace(e.node, std::move(old->second));
+                continue;
+            }
+            NodeLink link{e.endpoint, e.serverKey, zmq::socket_t(ctx_, zmq::socket_type::dealer)};
+            link.socket.set(zmq::sockopt::linger, 0);
+            link.socket.set(zmq::sockopt::immediate, 1);
+            link.socket.set(zmq::sockopt::sndhwm, 1000);
+            link.socket.set(zmq::sockopt::reconnect_ivl, 100);
+            if (!settings_.keyFile.empty() && !e.serverKey.empty()) {
+                link.socket.set(zmq::sockopt::curve_serverkey, e.serverKey);
+                link.socket.set(zmq::sockopt::curve_publickey, keys_.publicKey);
+                link.socket.set(zmq::sockopt::curve_secretkey, keys_.secretKey);
+            }
+            try {
+                link.socket.connect(e.endpoint);
+            } catch (const zmq::error_t& err) {
+                std::fprintf(stderr, "rtwall client %u: cannot connect to display node '%s' at %s: %s\n", id_, e.name.c_str(),
+                             e.endpoint.c_str(), err.what());
+                continue;
+            }
+            next.emplace(e.node, std::move(link));
+        }
+        nodeLinks_ = std::move(next);  // links of nodes no longer listed close here
+    }
+
+    // The masks for frames from routes.frame on; the previous set stays for the results of
+    // earlier frames still on their way (async frames overlap by one).
+    void onTileRoutes(TileRoutes routes) {
+        const uint32_t from = routes.frame;
+        tileRoutes_[from] = std::move(routes.masks);
+        while (tileRoutes_.size() > 2) tileRoutes_.erase(tileRoutes_.begin());
+    }
+
+    // A finished tile (an encoded TileResult) goes to every node of its mask, then a TileDone
+    // to the master. Nothing blocks: a node whose queue is full or that is not connected misses
+    // the tile (and is left out of that frame's swap).
+    void sendToNodes(const zmq::message_t& msg) {
+        const auto* bytes = static_cast<const uint8_t*>(msg.data());
+        // TileResult's payload starts with frame (u32), tile (u32), codec (u8), render
+        // microseconds (u32) and the pixels' length (u32): written by this client itself.
+        constexpr size_t kFixed = kHeaderSize + 17;
+        if (msg.size() < kFixed) return;
+        auto u32At = [&](size_t at) {
+            uint32_t v = 0;
+            for (int i = 0; i < 4; ++i) v |= uint32_t(bytes[at + size_t(i)]) << (8 * i);
+            return v;
+        };
+        const uint32_t frame = u32At(kHeaderSize), tile = u32At(kHeaderSize + 4);
+        auto routes = tileRoutes_.upper_bound(frame);
+        if (routes == tileRoutes_.begin()) return;  // no masks for a frame this old
+        const std::vector<uint64_t>& masks = std::prev(routes)->second;
+        if (tile >= masks.size()) return;
+        for (auto& [node, link] : nodeLinks_) {
+            if (!(masks[tile] >> node & 1)) continue;
+            zmq::message_t copy(msg.data(), msg.size());
+            if (!link.socket.send(copy, zmq::send_flags::dontwait)) ++lostResults_;
+        }
+        send(TileDone{frame, tile, u32At(kHeaderSize + 9), u32At(kHeaderSize + 13)}, frame);
     }
 
     // Returns an exit status when the client should stop.
@@ -276,6 +351,8 @@ private:
                     ++buildGeneration_;
                     ready_ = false;
                     lastFrameBegun_ = 0;
+                    nodeLinks_.clear();
+                    tileRoutes_.clear();
                 }
                 session_ = h.session;
                 id_ = w.clientId;
@@ -309,6 +386,8 @@ private:
             case MsgType::FrameBegin: onFrameBegin(decodePayload<FrameBegin>(p, n)); break;
             case MsgType::TileAssign: onAssign(decodePayload<TileAssign>(p, n)); break;
             case MsgType::Heartbeat: decodePayload<Heartbeat>(p, n); break;
+            case MsgType::NodeList: onNodeList(decodePayload<NodeList>(p, n)); break;
+            case MsgType::TileRoutes: onTileRoutes(decodePayload<TileRoutes>(p, n)); break;
             case MsgType::Goodbye: {
                 const Goodbye bye = decodePayload<Goodbye>(p, n);
                 std::fprintf(stderr, "rtwall client %u: the master says goodbye: %s\n", id_, bye.reason.c_str());
@@ -882,6 +961,12 @@ private:
     uint32_t assignFrame_ = 0;  // the newest frame it was assigned tiles for
     uint32_t assignSeen_ = 0;   // tiles of that frame's assignments that arrived
     zmq::socket_t monitor_;     // handshake events of dealer_
+    struct NodeLink {
+        std::string endpoint, serverKey;
+        zmq::socket_t socket;
+    };
+    std::map<uint32_t, NodeLink> nodeLinks_;  // display nodes by index (bit in the tile masks)
+    std::map<uint32_t, std::vector<uint64_t>> tileRoutes_;  // tile masks by their first frame; empty: no nodes
     uint64_t monitorSeq_ = 0;
     std::string handshakeTrouble_;  // the last failed handshake, said when giving up
     uint64_t handshakeFailures_ = 0;

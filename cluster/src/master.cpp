@@ -11,6 +11,7 @@
 #include "scene_state.h"
 #include "scheduler.h"
 #include "security.h"
+#include "swap_barrier.h"
 
 #include <rtwall/cluster.h>
 
@@ -19,6 +20,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -34,6 +36,7 @@
 #include <set>
 #include <stdexcept>
 #include <thread>
+#include <tuple>
 #include <utility>
 
 namespace rtwall {
@@ -66,6 +69,18 @@ struct ClientState {
     double busySeconds = 0;   // render time reported this frame
     uint64_t frameBytes = 0;  // encoded bytes of its results accepted this frame
     const char* deathReason = nullptr;  // set when it must go; reaped outside any iteration
+    uint32_t routesFrame = UINT32_MAX;  // with display nodes: the TileRoutes it holds (their first frame)
+};
+
+// A display node on the master's ROUTER (issue 19): control only, its tiles come from the clients.
+struct NodeState {
+    uint32_t index = 0;  // its bit in the tile masks: its place in DisplayNodeSettings::names
+    std::string name, endpoint, publicKey;
+    std::string peer;
+    double lastSeen = 0, lastSent = 0;
+    uint32_t routesFrame = UINT32_MAX;  // the TileRoutes it holds
+    uint32_t frameSent = 0;             // the last frame whose NodeFrame it was sent
+    const char* deathReason = nullptr;
 };
 
 std::string hex(uint32_t v) {
@@ -300,6 +315,16 @@ struct Master::Impl {
     std::atomic<bool> frameDecoded{false};
     std::mutex failedMutex;
     std::vector<uint32_t> failedTiles;  // accepted results of the current frame that did not decode
+    // Display nodes (settings.displayNodes.names non-empty): by peer identity. The frame's tile
+    // masks are recomputed when the tiling changes (size, tile size, views) and sent to every
+    // client and node once, as TileRoutes, before the first frame that uses them.
+    std::map<std::string, NodeState> nodes;
+    SwapBarrier barrier;
+    std::vector<uint64_t> routes;
+    uint32_t routesFrame = UINT32_MAX;  // the first frame `routes` apply to
+    std::tuple<int, int, int, std::vector<FrameView>> routesKey;
+    size_t tilesDone = 0;  // with nodes: tiles of the current frame acknowledged (TileDone)
+    bool withNodes() const { return !settings.displayNodes.names.empty(); }
     std::atomic<uint64_t> resyncCount{0};
     std::atomic<uint64_t> injectedLosses{0};
 
@@ -315,7 +340,8 @@ struct Master::Impl {
     std::thread net;
 
     Impl(const SceneDesc& s, const ClusterSettings& cs)
-        : settings(cs), scene(s), scheduler(SchedulerOptions{cs.affinity, cs.stragglerFactor, 0.05, 1}) {}
+        : settings(cs), scene(s), scheduler(SchedulerOptions{cs.affinity, cs.stragglerFactor, 0.05, 1}),
+          barrier(cs.displayNodes.stallSeconds) {}
 
     ~Impl() {
         if (!localKeyDir.empty()) {
@@ -494,6 +520,10 @@ struct Master::Impl {
     }
 
     void sendFrameBegin(ClientState& c) {
+        if (withNodes() && c.routesFrame != routesFrame) {
+            if (send(c, TileRoutes{routesFrame, routes}, currentFrame) != SendResult::Sent) return;
+            c.routesFrame = routesFrame;
+        }
         if (send(c, FrameBegin{currentFrame, frameSeq, framePixels, frameViews}, currentFrame) == SendResult::Sent)
             c.frameBegun = currentFrame;
     }
@@ -557,6 +587,7 @@ struct Master::Impl {
         else assembler.beginFrame(frame, rs.width, rs.height, viewTiles(frameViews, rs.width, rs.height, rs.tileSize),
                                   uint32_t(frameViews.size()));
         scheduler.beginFrame(frame, uint32_t(assembler.tiles().size()));
+        if (withNodes()) beginNodeFrame(rs);
         for (auto& [peer, c] : clients) {
             c.credits = 0;
             c.window = 0;
@@ -568,7 +599,8 @@ struct Master::Impl {
     }
 
     void finishFrameIfDone() {
-        if (!frameActive || !frameDecoded.load()) return;
+        if (!frameActive) return;
+        if (withNodes() ? tilesDone < scheduler.tileCount() : !frameDecoded.load()) return;
         frameActive = false;
         const double seconds = nowSeconds() - frameStart;
         FrameReport r;
@@ -588,6 +620,14 @@ struct Master::Impl {
         r.views = frameViews.size();
         r.viewsTag = frameViewsTag;
         r.counters = countersNow();
+        if (withNodes()) {
+            const SwapBarrierStats& b = barrier.stats();
+            r.displayNodes = nodes.size();
+            r.swapsReleased = b.released;
+            r.nodesLeftOut = b.leftOut;
+            r.lastSwapSkew = b.lastSkew;
+            r.maxSwapSkew = b.maxSkew;
+        }
         const std::vector<double>& lat = scheduler.latencies();
         double sum = 0;
         for (double l : lat) sum += l;
@@ -605,13 +645,221 @@ struct Master::Impl {
         }
         {
             std::lock_guard lock(m);
-            completedImages = std::exchange(assembler.images(), std::vector<Image>(1));  // the assembler starts the next frame afresh
+            // With nodes the pixels are on the nodes: empty images, one per view.
+            if (withNodes()) completedImages.assign(std::max<size_t>(1, frameViews.size()), Image{});
+            else completedImages = std::exchange(assembler.images(), std::vector<Image>(1));  // the assembler starts the next frame afresh
             if (framePixels == TilePixels::LinearHalf) completedLinear.swap(linear);
             else completedLinear.clear();
             completedReport = std::move(r);
             completedFrame = currentFrame;
         }
         cv.notify_all();
+    }
+
+
+    // -- Display nodes ---------------------------------------------------------------------------
+
+    template <class Msg> bool sendNode(NodeState& n, const Msg& msg, uint32_t frame = 0) {
+        const SendResult r = sendToPeerResult(router, n.peer, encodeMessage(header(messageTypeOf(msg), frame), msg));
+        if (r == SendResult::Sent) {
+            n.lastSent = nowSeconds();
+            return true;
+        }
+        add(&MasterCounters::failedSends, 1);
+        // A node that cannot take control messages cannot keep up with the wall: it goes, and
+        // rejoins with a new hello (its screens are dark meanwhile).
+        if (!n.deathReason) n.deathReason = r == SendResult::Full ? "its queue is full" : "its connection is gone";
+        return false;
+    }
+
+    NodeList nodeList() const {
+        NodeList list;
+        for (const auto& [peer, n] : nodes)
+            if (!n.deathReason) list.nodes.push_back({n.index, n.name, n.endpoint, n.publicKey});
+        std::sort(list.nodes.begin(), list.nodes.end(), [](const NodeEndpoint& a, const NodeEndpoint& b) { return a.node < b.node; });
+        return list;
+    }
+
+    void sendNodeListToClients() {
+        const NodeList list = nodeList();
+        for (auto& [peer, c] : clients)
+            if (!c.deathReason) send(c, list);
+    }
+
+    // The frame's tile masks (recomputed only when the tiling changes) and its NodeFrame.
+    void beginNodeFrame(const RenderSettings& rs) {
+        tilesDone = 0;
+        auto key = std::make_tuple(rs.width, rs.height, rs.tileSize, frameViews);
+        if (routesFrame == UINT32_MAX || key != routesKey) {
+            // Without a routing (or when it cannot route this frame) every node gets every tile:
+            // more traffic, the same screens.
+            std::vector<uint64_t> masks(scheduler.tileCount(), ~uint64_t(0));
+            if (settings.displayNodes.routes) {
+                try {
+                    masks = settings.displayNodes.routes(rs.width, rs.height, rs.tileSize, frameViews);
+                } catch (const std::exception& e) {
+                    std::fprintf(stderr, "rtwall master: cannot route the tiles of frame %u to the display nodes (%s): every "
+                                         "node gets every tile\n", currentFrame, e.what());
+                }
+            }
+            if (masks.size() != scheduler.tileCount()) {
+                // An invariant of the wall library's routing, not an input.
+                std::fprintf(stderr, "rtwall master: internal error: %zu tile masks for a frame of %u tiles\n", masks.size(),
+                             scheduler.tileCount());
+                std::abort();
+            }
+            routes = std::move(masks);
+            routesKey = std::move(key);
+            routesFrame = currentFrame;
+        }
+        for (auto& [peer, n] : nodes) sendNodeFrame(n, rs);
+    }
+
+    void sendNodeFrame(NodeState& n, const RenderSettings& rs) {
+        if (n.deathReason) return;
+        if (n.routesFrame != routesFrame) {
+            if (!sendNode(n, TileRoutes{routesFrame, routes}, currentFrame)) return;
+            n.routesFrame = routesFrame;
+        }
+        if (sendNode(n, NodeFrame{currentFrame, rs.width, rs.height, rs.tileSize, framePixels}, currentFrame))
+            n.frameSent = currentFrame;
+    }
+
+    void onNodeHello(const std::string& peer, const Header& h, const uint8_t* data, size_t size) {
+        const NodeHello hello = decodePayload<NodeHello>(data, size);
+        auto refuse = [&](const std::string& why) {
+            if (!sendToPeer(router, peer, encodeMessage(header(MsgType::Goodbye), Goodbye{why}))) add(&MasterCounters::failedSends, 1);
+            count(&MasterCounters::refused, "refused a display node", why);
+        };
+        if (h.version != kProtocolVersion || hello.protocolVersion != kProtocolVersion) {
+            const unsigned theirs = h.version != kProtocolVersion ? h.version : hello.protocolVersion;
+            refuse("protocol version " + std::to_string(theirs) + " is not the master's " + std::to_string(kProtocolVersion));
+            return;
+        }
+        const std::vector<std::string>& names = settings.displayNodes.names;
+        const auto at = std::find(names.begin(), names.end(), hello.name);
+        if (at == names.end()) {
+            refuse(names.empty() ? "this wall has no display nodes (node '" + hello.name + "')"
+                                 : "the wall has no display node '" + hello.name + "'");
+            return;
+        }
+        // A node of that name on another connection (a restarted node) is replaced.
+        for (auto& [otherPeer, other] : nodes)
+            if (other.name == hello.name && !other.deathReason) other.deathReason = "another node of its name said hello";
+        reapNodes();
+        NodeState n;
+        n.index = uint32_t(at - names.begin());
+        n.name = hello.name;
+        n.endpoint = hello.endpoint;
+        n.publicKey = hello.publicKey;
+        n.peer = peer;
+        n.lastSeen = nowSeconds();
+        NodeState& ref = nodes[peer] = n;
+        if (!sendNode(ref, NodeWelcome{ref.index, uint32_t(settings.heartbeatMs), uint32_t(settings.timeoutMs),
+                                       settings.displayNodes.wallText})) {
+            reapNodes();
+            return;
+        }
+        std::fprintf(stderr, "rtwall master: display node '%s' (%u) joins, tiles to %s\n", ref.name.c_str(), ref.index,
+                     ref.endpoint.c_str());
+        barrier.join(ref.index);
+        sendNodeListToClients();
+        if (frameActive) sendNodeFrame(ref, frameState.settings);
+    }
+
+    void releaseSwap(std::optional<uint32_t> frame) {
+        if (!frame) return;
+        // Every node of the wall that does not take part: stalled, gone, or never came.
+        NodeSwap swap{*frame, {}};
+        const std::vector<NodeId> joined = barrier.nodes(), stalled = barrier.leftOut();
+        const std::vector<std::string>& names = settings.displayNodes.names;
+        for (NodeId i = 0; i < names.size(); ++i)
+            if (std::find(joined.begin(), joined.end(), i) == joined.end() ||
+                std::find(stalled.begin(), stalled.end(), i) != stalled.end())
+                swap.leftOut.push_back(names[i]);
+        for (auto& [peer, n] : nodes)
+            if (!n.deathReason) sendNode(n, swap, *frame);
+    }
+
+    void handleNode(NodeState& n, const Header& h, const uint8_t* payload, size_t payloadSize) {
+        n.lastSeen = nowSeconds();
+        switch (h.type) {
+        case MsgType::NodeHave: {
+            const NodeHave have = decodePayload<NodeHave>(payload, payloadSize);
+            if (have.frame > currentFrame || have.frame <= barrier.lastReleased()) {
+                stale("display node '" + n.name + "' holds frame " + std::to_string(have.frame) + ", which is not waiting for a swap");
+                return;
+            }
+            releaseSwap(barrier.have(n.index, have.frame, nowSeconds()));
+            break;
+        }
+        case MsgType::NodeSwapped: barrier.swapped(n.index, decodePayload<NodeSwapped>(payload, payloadSize).frame, nowSeconds()); break;
+        case MsgType::Heartbeat: decodePayload<Heartbeat>(payload, payloadSize); break;
+        case MsgType::Goodbye: {
+            const Goodbye bye = decodePayload<Goodbye>(payload, payloadSize);
+            std::fprintf(stderr, "rtwall master: display node '%s' says goodbye: %s\n", n.name.c_str(), bye.reason.c_str());
+            if (!n.deathReason) n.deathReason = "it said goodbye";
+            break;
+        }
+        default: unexpected("a message of type " + std::to_string(int(h.type)) + " from display node '" + n.name + "'"); break;
+        }
+    }
+
+    void reapNodes() {
+        bool any = false;
+        for (auto it = nodes.begin(); it != nodes.end();) {
+            if (!it->second.deathReason) {
+                ++it;
+                continue;
+            }
+            std::fprintf(stderr, "rtwall master: display node '%s' leaves: %s\n", it->second.name.c_str(), it->second.deathReason);
+            // Leaving the barrier may complete a frame the others all hold.
+            barrier.leave(it->second.index);
+            it = nodes.erase(it);
+            any = true;
+        }
+        if (any) {
+            sendNodeListToClients();
+            releaseSwap(barrier.poll(nowSeconds()));
+        }
+    }
+
+    void nodeHousekeeping() {
+        const double now = nowSeconds();
+        const double timeout = settings.timeoutMs * 1e-3, beat = settings.heartbeatMs * 1e-3;
+        for (auto& [peer, n] : nodes) {
+            if (n.deathReason) continue;
+            if (now - n.lastSeen > timeout) n.deathReason = "heartbeat timeout";
+            else if (now - n.lastSent > beat) sendNode(n, Heartbeat{});
+        }
+        reapNodes();
+        releaseSwap(barrier.poll(now));
+    }
+
+    // A client sent a tile to its nodes: the scheduler completes it as it would a TileResult.
+    void onTileDone(ClientState& c, const Header& h, const TileDone& d) {
+        c.busySeconds += d.renderMicros * 1e-6;
+        if (!withNodes()) {
+            unexpected("a tile ack, but this wall has no display nodes");
+            return;
+        }
+        if (!frameActive || h.frame != currentFrame || d.frame != currentFrame) {
+            stale("a tile ack for frame " + std::to_string(d.frame) + ", which is not being rendered");
+            return;
+        }
+        const auto result = scheduler.complete(c.id, d.frame, d.tile, nowSeconds());
+        if (result == TileScheduler::Result::Unexpected) {
+            unexpected("a tile ack for tile " + std::to_string(d.tile) + ", which it was not given");
+            return;
+        }
+        c.credits = std::min<uint32_t>(c.credits + 1, kMaxCredits);
+        if (result == TileScheduler::Result::Accepted) {
+            ++tilesDone;
+            const uint64_t sent = uint64_t(d.bytes) * uint64_t(std::popcount(routes[d.tile]));
+            frameBytes += sent;
+            c.frameBytes += sent;
+        }
+        serve(c);
     }
 
     void onHello(const std::string& peer, const Header& h, const uint8_t* data, size_t size) {
@@ -638,6 +886,7 @@ struct Master::Impl {
         auto& ref = clients[peer] = c;
         const SendResult r = send(ref, welcomeFor(ref));
         if (r == SendResult::Gone) return;
+        if (r == SendResult::Sent && withNodes()) send(ref, nodeList());
         if (r == SendResult::Full) {
             // Both again, in this order: a state before its Welcome would be thrown away.
             ref.needsWelcome = ref.needsState = true;
@@ -721,6 +970,11 @@ struct Master::Impl {
 
     void onTileResult(ClientState& c, const Header& h, const uint8_t* data, size_t size) {
         TileResult r = decodePayload<TileResult>(data, size);
+        if (withNodes()) {
+            // The master never takes pixels of a wall with display nodes: the frame ends on acks.
+            unexpected("a tile's pixels, but this wall's tiles go to its display nodes");
+            return;
+        }
         c.busySeconds += r.renderMicros * 1e-6;
         if (!frameActive || h.frame != currentFrame || r.frame != currentFrame) {
             stale("a result for frame " + std::to_string(r.frame) + ", which is not being rendered");
@@ -865,6 +1119,18 @@ struct Master::Impl {
                 onHello(peer, h, payload, payloadSize);
                 return;
             }
+            if (h.type == MsgType::NodeHello) {
+                onNodeHello(peer, h, payload, payloadSize);
+                return;
+            }
+            if (auto node = nodes.find(peer); node != nodes.end()) {
+                if (h.session != session || h.version != kProtocolVersion) {
+                    count(&MasterCounters::unknownPeer, "dropped a message", "another session or protocol version");
+                    return;
+                }
+                handleNode(node->second, h, payload, payloadSize);
+                return;
+            }
             if (known == clients.end() || h.session != session || h.version != kProtocolVersion) {
                 // Not (or no longer) one of ours.
                 count(&MasterCounters::unknownPeer, "dropped a message",
@@ -889,6 +1155,7 @@ struct Master::Impl {
                 break;
             }
             case MsgType::TileResult: onTileResult(c, h, payload, payloadSize); break;
+            case MsgType::TileDone: onTileDone(c, h, decodePayload<TileDone>(payload, payloadSize)); break;
             case MsgType::Heartbeat: onHeartbeat(c, decodePayload<Heartbeat>(payload, payloadSize)); break;
             case MsgType::TileStalled: onTileStalled(c, decodePayload<TileStalled>(payload, payloadSize)); break;
             case MsgType::TileFailed: onTileFailed(c, decodePayload<TileFailed>(payload, payloadSize)); break;
@@ -1073,6 +1340,7 @@ struct Master::Impl {
                 checkTimeouts();
                 reap();
                 retryPending();
+                if (withNodes()) nodeHousekeeping();
                 serveAll();  // re-queued tiles of departed clients, stragglers
             }
         }

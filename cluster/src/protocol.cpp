@@ -386,6 +386,9 @@ void read(Reader& r, AssetRef& m) {
 // lookup at their definition must find (these overloads are invisible to ADL).
 void write(Writer& w, const Change& c);
 void read(Reader& r, Change& c);
+// The same for the node list's entries (display nodes, further down).
+void write(Writer& w, const NodeEndpoint& m);
+void read(Reader& r, NodeEndpoint& m);
 
 // The smallest encoding of a value (empty strings), measured with the writer itself so that
 // the element-count checks below cannot drift from the format.
@@ -825,6 +828,173 @@ RTWALL_WIRE_FIELDS(ResyncRequest, 1);
 void write(Writer& w, const ResyncRequest& m) { w.u32(m.lastSeq); }
 void read(Reader& r, ResyncRequest& m) { m.lastSeq = r.u32(); }
 
+// -- Display nodes (version 11) ------------------------------------------------------------------
+
+constexpr size_t kMaxEndpointBytes = 256;
+constexpr size_t kZ85KeyChars = 40;
+
+std::string readNodeName(Reader& r, const char* what) {
+    std::string name = r.string(32);
+    if (!isNodeName(name)) fail(std::string(what) + " '" + name + "' is not a node name (1 to 32 letters, digits, '-' or '_')");
+    return name;
+}
+
+std::string readEndpoint(Reader& r) {
+    std::string e = r.string(kMaxEndpointBytes);
+    if (e.empty()) fail("empty node endpoint");
+    for (char c : e)
+        if (c <= ' ' || c > '~') fail("node endpoint has a control, space or non-ASCII character");
+    return e;
+}
+
+std::string readKey(Reader& r, const char* what) {
+    std::string key = r.string(kZ85KeyChars);
+    if (!key.empty() && key.size() != kZ85KeyChars)
+        fail(std::string(what) + " has " + std::to_string(key.size()) + " characters, not 40 (Z85) or 0");
+    for (char c : key)
+        if (c <= ' ' || c > '~' || c == '"' || c == '\'' || c == ',' || c == ';' || c == '\\' || c == '_' || c == '`' ||
+            c == '|' || c == '~')
+            fail(std::string(what) + " is not Z85");
+    return key;
+}
+
+uint32_t readNodeIndex(Reader& r) {
+    const uint32_t node = r.u32();
+    if (node >= kMaxNodes) fail("node index " + std::to_string(node) + " is not below " + std::to_string(kMaxNodes));
+    return node;
+}
+
+RTWALL_WIRE_FIELDS(NodeHello, 4);
+void write(Writer& w, const NodeHello& m) {
+    w.u16(m.protocolVersion);
+    w.string(m.name);
+    w.string(m.endpoint);
+    w.string(m.publicKey);
+}
+void read(Reader& r, NodeHello& m) {
+    m.protocolVersion = r.u16();
+    m.name = readNodeName(r, "node name");
+    m.endpoint = readEndpoint(r);
+    m.publicKey = readKey(r, "node public key");
+}
+
+RTWALL_WIRE_FIELDS(NodeWelcome, 4);
+void write(Writer& w, const NodeWelcome& m) {
+    w.u32(m.node);
+    w.u32(m.heartbeatMs);
+    w.u32(m.timeoutMs);
+    w.string(m.wall);
+}
+void read(Reader& r, NodeWelcome& m) {
+    m.node = readNodeIndex(r);
+    m.heartbeatMs = r.u32();
+    m.timeoutMs = r.u32();
+    if (m.heartbeatMs < 1 || m.heartbeatMs > kMaxTimeoutMs || m.timeoutMs < m.heartbeatMs || m.timeoutMs > kMaxTimeoutMs)
+        fail("node heartbeat " + std::to_string(m.heartbeatMs) + " ms and timeout " + std::to_string(m.timeoutMs) +
+             " ms are out of range");
+    m.wall = r.string(kMaxWallConfigBytes);
+    if (m.wall.empty()) fail("node welcome without a wall config");
+}
+
+RTWALL_WIRE_FIELDS(NodeFrame, 5);
+void write(Writer& w, const NodeFrame& m) {
+    w.u32(m.frame);
+    w.i32(m.width);
+    w.i32(m.height);
+    w.i32(m.tileSize);
+    writeEnum(w, m.pixels);
+}
+void read(Reader& r, NodeFrame& m) {
+    m.frame = r.u32();
+    m.width = readInt(r, 1, kMaxImageSide, "node frame width");
+    m.height = readInt(r, 1, kMaxImageSide, "node frame height");
+    m.tileSize = readInt(r, 1, kMaxTileSize, "node frame tile size");
+    const uint64_t tiles = uint64_t((m.width + m.tileSize - 1) / m.tileSize) * uint64_t((m.height + m.tileSize - 1) / m.tileSize);
+    if (tiles > kMaxTilesPerFrame) fail("node frame of " + std::to_string(tiles) + " tiles exceeds the limit");
+    m.pixels = readEnum(r, TilePixels::LinearHalf, "tile pixel format");
+}
+
+RTWALL_WIRE_FIELDS(NodeHave, 1);
+void write(Writer& w, const NodeHave& m) { w.u32(m.frame); }
+void read(Reader& r, NodeHave& m) { m.frame = r.u32(); }
+
+RTWALL_WIRE_FIELDS(NodeSwap, 2);
+void write(Writer& w, const NodeSwap& m) {
+    w.u32(m.frame);
+    if (m.leftOut.size() > kMaxNodes) throw std::length_error("protocol: more left-out nodes than nodes");
+    w.u32(uint32_t(m.leftOut.size()));
+    for (const std::string& n : m.leftOut) w.string(n);
+}
+void read(Reader& r, NodeSwap& m) {
+    m.frame = r.u32();
+    const uint32_t n = r.u32();
+    r.expectElements(n, sizeof(uint32_t) + 1, kMaxNodes);
+    m.leftOut.resize(n);
+    for (std::string& name : m.leftOut) name = readNodeName(r, "left-out node");
+}
+
+RTWALL_WIRE_FIELDS(NodeSwapped, 1);
+void write(Writer& w, const NodeSwapped& m) { w.u32(m.frame); }
+void read(Reader& r, NodeSwapped& m) { m.frame = r.u32(); }
+
+RTWALL_WIRE_FIELDS(NodeEndpoint, 4);
+void write(Writer& w, const NodeEndpoint& m) {
+    w.u32(m.node);
+    w.string(m.name);
+    w.string(m.endpoint);
+    w.string(m.serverKey);
+}
+void read(Reader& r, NodeEndpoint& m) {
+    m.node = readNodeIndex(r);
+    m.name = readNodeName(r, "node name");
+    m.endpoint = readEndpoint(r);
+    m.serverKey = readKey(r, "node server key");
+}
+
+RTWALL_WIRE_FIELDS(NodeList, 1);
+void write(Writer& w, const NodeList& m) {
+    if (m.nodes.size() > kMaxNodes) throw std::length_error("protocol: more than 64 nodes in a node list");
+    writeVector(w, m.nodes);
+}
+void read(Reader& r, NodeList& m) {
+    static const size_t endpointBytes = minEncodedSize(NodeEndpoint{});
+    readVector(r, m.nodes, endpointBytes, kMaxNodes);
+    uint64_t seen = 0;
+    for (const NodeEndpoint& e : m.nodes) {
+        if (seen & (uint64_t(1) << e.node)) fail("node " + std::to_string(e.node) + " is twice in the node list");
+        seen |= uint64_t(1) << e.node;
+    }
+}
+
+RTWALL_WIRE_FIELDS(TileRoutes, 2);
+void write(Writer& w, const TileRoutes& m) {
+    w.u32(m.frame);
+    if (m.masks.size() > kMaxTilesPerFrame) throw std::length_error("protocol: too many tiles for tile routes");
+    w.u32(uint32_t(m.masks.size()));
+    for (uint64_t mask : m.masks) w.u64(mask);
+}
+void read(Reader& r, TileRoutes& m) {
+    m.frame = r.u32();
+    const uint32_t n = r.u32();
+    r.expectElements(n, sizeof(uint64_t), kMaxTilesPerFrame);
+    m.masks.resize(n);
+    for (uint64_t& mask : m.masks) mask = r.u64();
+}
+
+RTWALL_WIRE_FIELDS(TileDone, 4);
+void write(Writer& w, const TileDone& m) {
+    w.u32(m.frame);
+    w.u32(m.tile);
+    w.u32(m.renderMicros);
+    w.u32(m.bytes);
+}
+void read(Reader& r, TileDone& m) {
+    m.frame = r.u32();
+    m.tile = r.u32();
+    m.renderMicros = r.u32();
+    m.bytes = r.u32();
+}
+
 RTWALL_WIRE_FIELDS(Header, 6);
 void writeHeader(Writer& w, const Header& h) {
     w.u32(kMagic);
@@ -925,6 +1095,23 @@ MsgType messageTypeOf(const AssetRequest&) { return MsgType::AssetRequest; }
 MsgType messageTypeOf(const AssetData&) { return MsgType::AssetData; }
 MsgType messageTypeOf(const TileStalled&) { return MsgType::TileStalled; }
 MsgType messageTypeOf(const TileFailed&) { return MsgType::TileFailed; }
+MsgType messageTypeOf(const NodeHello&) { return MsgType::NodeHello; }
+MsgType messageTypeOf(const NodeWelcome&) { return MsgType::NodeWelcome; }
+MsgType messageTypeOf(const NodeFrame&) { return MsgType::NodeFrame; }
+MsgType messageTypeOf(const NodeHave&) { return MsgType::NodeHave; }
+MsgType messageTypeOf(const NodeSwap&) { return MsgType::NodeSwap; }
+MsgType messageTypeOf(const NodeSwapped&) { return MsgType::NodeSwapped; }
+MsgType messageTypeOf(const NodeList&) { return MsgType::NodeList; }
+MsgType messageTypeOf(const TileRoutes&) { return MsgType::TileRoutes; }
+MsgType messageTypeOf(const TileDone&) { return MsgType::TileDone; }
+
+bool isNodeName(const std::string& name) {
+    if (name.empty() || name.size() > 32) return false;
+    for (char c : name)
+        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' || c == '_'))
+            return false;
+    return true;
+}
 
 #define RTWALL_INSTANTIATE_MESSAGE(Msg)                                                    \
     template std::vector<uint8_t> encodeMessage<Msg>(Header header, const Msg& msg); \
@@ -947,6 +1134,15 @@ RTWALL_INSTANTIATE_MESSAGE(AssetRequest)
 RTWALL_INSTANTIATE_MESSAGE(AssetData)
 RTWALL_INSTANTIATE_MESSAGE(TileStalled)
 RTWALL_INSTANTIATE_MESSAGE(TileFailed)
+RTWALL_INSTANTIATE_MESSAGE(NodeHello)
+RTWALL_INSTANTIATE_MESSAGE(NodeWelcome)
+RTWALL_INSTANTIATE_MESSAGE(NodeFrame)
+RTWALL_INSTANTIATE_MESSAGE(NodeHave)
+RTWALL_INSTANTIATE_MESSAGE(NodeSwap)
+RTWALL_INSTANTIATE_MESSAGE(NodeSwapped)
+RTWALL_INSTANTIATE_MESSAGE(NodeList)
+RTWALL_INSTANTIATE_MESSAGE(TileRoutes)
+RTWALL_INSTANTIATE_MESSAGE(TileDone)
 #undef RTWALL_INSTANTIATE_MESSAGE
 
 // -- Meshes --------------------------------------------------------------------------------------

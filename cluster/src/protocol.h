@@ -1,4 +1,4 @@
-// The rtwall wire protocol, version 10 (2 added the master's peer timeout to Welcome; 3 added
+// The rtwall wire protocol, version 11 (2 added the master's peer timeout to Welcome; 3 added
 // materials, area lights and shading settings; 4 added vertex colours to meshes, the scene's
 // origin and [bvh] settings to the snapshot, spherical and cylindrical texture mappings, texture
 // and volume files by content hash (AssetRequest, AssetData, SceneSnapshot::assets) and linear
@@ -11,7 +11,10 @@
 // 9 added section planes and instance visibility (SceneSnapshot::sections, SectionChange,
 // InstanceDesc::visibility, VisibilityChange); 10 added the views of a multi-view frame to FrameBegin
 // (each view's camera and image regions: both eyes of a stereo wall, a CAVE's planes, in one
-// scheduler pass; no views: the state's camera, 4 bytes more)).
+// scheduler pass; no views: the state's camera, 4 bytes more); 11 added display nodes (issue 19):
+// the node <-> master messages NodeHello to NodeSwapped, and for clients NodeList, TileRoutes and
+// TileDone: tiles go straight from the clients to the nodes that show them, the master gets a
+// small ack).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one writer and one
@@ -37,7 +40,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 10;
+inline constexpr uint16_t kProtocolVersion = 11;  // 11: display nodes
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -51,6 +54,9 @@ inline constexpr uint32_t kMaxFilesPerMaterial = 3;  // texture, alpha mask, vol
 inline constexpr uint32_t kMaxViews = 64;             // images of one multi-view frame
 inline constexpr uint32_t kMaxRegionsPerView = 1024;  // screens a view shows
 inline constexpr uint32_t kMaxTimeoutMs = 3'600'000;  // heartbeat and timeout: an hour at most
+inline constexpr uint32_t kMaxNodes = 64;                 // display nodes: node sets are 64-bit masks
+inline constexpr uint32_t kMaxTilesPerFrame = 1 << 22;    // a 16384-pixel-square frame of 8-pixel tiles
+inline constexpr size_t kMaxWallConfigBytes = 1 << 20;    // the wall config text a node is sent
 
 enum class MsgType : uint16_t {
     Hello = 1,          // client -> master
@@ -71,8 +77,19 @@ enum class MsgType : uint16_t {
     AssetData = 16,     // master -> client
     TileStalled = 17,   // client -> master: a render thread has been on this tile far too long
     TileFailed = 18,    // client -> master: rendering this tile threw; the client leaves after it
+    // Version 11: display nodes. A node talks to the master's ROUTER like a client does, but
+    // opens with NodeHello; the clients send tiles to the nodes' own ROUTERs.
+    NodeHello = 19,     // node -> master
+    NodeWelcome = 20,   // master -> node
+    NodeFrame = 21,     // master -> node: a frame's size and pixel format, before its tiles come
+    NodeHave = 22,      // node -> master: it holds every tile of the frame routed to it
+    NodeSwap = 23,      // master -> node: present the frame (the barrier released it)
+    NodeSwapped = 24,   // node -> master: presented it (for the swap skew)
+    NodeList = 25,      // master -> client: where the nodes take tiles
+    TileRoutes = 26,    // master -> client and node: each tile's node mask, from a frame on
+    TileDone = 27,      // client -> master: a tile went to its nodes (instead of TileResult)
 };
-inline constexpr uint16_t kMaxMsgType = 18;
+inline constexpr uint16_t kMaxMsgType = 27;
 
 struct Header {
     uint16_t version = kProtocolVersion;
@@ -272,6 +289,85 @@ struct Goodbye {
     std::string reason;
 };
 
+// -- Display nodes (version 11) ----------------------------------------------------------------
+
+// Node names follow the wall config's rule (1 to 32 letters, digits, '-' or '_'); an endpoint is
+// what the clients connect to (tcp://HOST:PORT), at most 256 bytes; a CURVE key is Z85 (40
+// characters) or empty (no CURVE).
+struct NodeHello {
+    uint16_t protocolVersion = kProtocolVersion;
+    std::string name;
+    std::string endpoint;   // the node's ROUTER for tiles
+    std::string publicKey;  // its CURVE server key, Z85, or empty
+};
+
+// The node's place in the wall: bit `node` of the tile masks, and the whole wall config (the
+// node presents nodeWall(wall, name)).
+struct NodeWelcome {
+    uint32_t node = 0;  // below kMaxNodes
+    uint32_t heartbeatMs = 250;
+    uint32_t timeoutMs = 3000;
+    std::string wall;  // the wall config's TOML text, at most kMaxWallConfigBytes
+};
+
+// Frame `frame` is width x height in tiles of tileSize (makeTiles order), its tiles sent as
+// `pixels`; sent before any of its tiles can reach the node.
+struct NodeFrame {
+    uint32_t frame = 0;
+    int32_t width = 0;
+    int32_t height = 0;
+    int32_t tileSize = 0;
+    TilePixels pixels = TilePixels::Srgb8;
+};
+
+struct NodeHave {
+    uint32_t frame = 0;
+};
+
+// Present `frame`; `leftOut` names the wall's nodes that do not take part in it (stalled, gone
+// or never joined): their screens are dark, and the overlay says which.
+struct NodeSwap {
+    uint32_t frame = 0;
+    std::vector<std::string> leftOut;
+};
+
+struct NodeSwapped {
+    uint32_t frame = 0;
+};
+
+struct NodeEndpoint {
+    uint32_t node = 0;  // its bit in the tile masks, below kMaxNodes
+    std::string name;
+    std::string endpoint;
+    std::string serverKey;  // Z85, or empty
+    bool operator==(const NodeEndpoint&) const = default;
+};
+
+// Every connected node (sent whenever one joins or leaves): a client keeps one connection per
+// node and sends a tile to every node of its mask that the list has.
+struct NodeList {
+    std::vector<NodeEndpoint> nodes;
+};
+
+// masks[t]: the nodes that show tile t (bit i: node i), for frames from `frame` on until the next
+// TileRoutes. Sent once per frame size or tiling, before that frame's FrameBegin or NodeFrame.
+struct TileRoutes {
+    uint32_t frame = 0;
+    std::vector<uint64_t> masks;  // at most kMaxTilesPerFrame
+};
+
+// The client sent tile `tile` of `frame` to its nodes (`bytes` encoded bytes to each): the master
+// completes it in the scheduler as it would a TileResult.
+struct TileDone {
+    uint32_t frame = 0;
+    uint32_t tile = 0;
+    uint32_t renderMicros = 0;
+    uint32_t bytes = 0;
+};
+
+// Whether a name is a node name by the wall config's rule (validNodeName in display.h), for the wire.
+bool isNodeName(const std::string& name);
+
 struct Ready {
     uint32_t updateSeq = 0;
     Hash128 stateHash{};
@@ -310,6 +406,15 @@ MsgType messageTypeOf(const AssetRequest&);
 MsgType messageTypeOf(const AssetData&);
 MsgType messageTypeOf(const TileStalled&);
 MsgType messageTypeOf(const TileFailed&);
+MsgType messageTypeOf(const NodeHello&);
+MsgType messageTypeOf(const NodeWelcome&);
+MsgType messageTypeOf(const NodeFrame&);
+MsgType messageTypeOf(const NodeHave&);
+MsgType messageTypeOf(const NodeSwap&);
+MsgType messageTypeOf(const NodeSwapped&);
+MsgType messageTypeOf(const NodeList&);
+MsgType messageTypeOf(const TileRoutes&);
+MsgType messageTypeOf(const TileDone&);
 
 // Canonical mesh bytes (vertex count, positions, triangle count, indices, normals flag and
 // normals, colours flag and RGB bytes, all little-endian), their hash (XXH3 128-bit) and the way back. decodeMesh

@@ -70,6 +70,18 @@ std::vector<std::vector<uint8_t>> everyType(uint64_t session, uint32_t frame) {
     out.push_back(encodeMessage(h, AssetRequest{{6, 7}}));
     out.push_back(encodeMessage(h, AssetData{{6, 7}, {1, 2, 3}}));
     out.push_back(encodeMessage(h, TileStalled{frame, 1, 5000}));
+    out.push_back(encodeMessage(h, TileFailed{frame, 1, {0, 0, 8, 8}, 8, "attacker"}));
+    // Display nodes (version 11). A node name no wall uses, and an endpoint on loopback: a master
+    // that took this hello would still never send anyone anywhere else.
+    out.push_back(encodeMessage(h, NodeHello{kProtocolVersion, "attacker", "tcp://127.0.0.1:9", ""}));
+    out.push_back(encodeMessage(h, NodeWelcome{0, 250, 3000, "[wall]\n"}));
+    out.push_back(encodeMessage(h, NodeFrame{frame, 64, 48, 16, TilePixels::Srgb8}));
+    out.push_back(encodeMessage(h, NodeHave{frame}));
+    out.push_back(encodeMessage(h, NodeSwap{frame, {"attacker"}}));
+    out.push_back(encodeMessage(h, NodeSwapped{frame}));
+    out.push_back(encodeMessage(h, NodeList{{{0, "attacker", "tcp://127.0.0.1:9", ""}}}));
+    out.push_back(encodeMessage(h, TileRoutes{frame, {1, 1, 1}}));
+    out.push_back(encodeMessage(h, TileDone{frame, 1, 100, 12}));
     return out;
 }
 
@@ -235,7 +247,7 @@ private:
                 break;
             }
             std::vector<uint8_t> m = sample();
-            if (MsgType(m[6]) == MsgType::Hello) {
+            if (MsgType(m[6]) == MsgType::Hello || MsgType(m[6]) == MsgType::NodeHello) {
                 m[4] = uint8_t(kProtocolVersion + 1 + rng_() % 50);  // another protocol version: refused
                 if (put(s, m)) tally(&AttackReport::refused);
                 break;
@@ -343,8 +355,10 @@ private:
         case 6: m = inSession(Ready{uint32_t(rng_() % 5), {rng_(), rng_()}}); break;
         default: {
             // A message only the master sends.
-            static constexpr MsgType kMasterOnly[] = {MsgType::Welcome, MsgType::FrameBegin, MsgType::TileAssign,
-                                                      MsgType::MeshData, MsgType::AssetData};
+            static constexpr MsgType kMasterOnly[] = {MsgType::Welcome,    MsgType::FrameBegin, MsgType::TileAssign,
+                                                      MsgType::MeshData,   MsgType::AssetData,  MsgType::NodeWelcome,
+                                                      MsgType::NodeFrame,  MsgType::NodeSwap,   MsgType::NodeList,
+                                                      MsgType::TileRoutes};
             const MsgType t = kMasterOnly[rng_() % std::size(kMasterOnly)];
             for (const auto& sample : everyType(session_, frame_))
                 if (MsgType(sample[6]) == t) m = sample;

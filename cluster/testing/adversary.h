@@ -35,7 +35,7 @@ struct AttackOptions {
 struct AttackReport {
     uint64_t malformed = 0;    // raw bytes, multi-frame messages of every type, truncated, bad header
     uint64_t unknownPeer = 0;  // well-formed messages of every type from a peer that is not a client
-    uint64_t refused = 0;      // Hellos of another protocol version
+    uint64_t refused = 0;      // Hellos and NodeHellos of another protocol version
     // Inside a session (join), never accepted: requests and results for a frame that is not
     // rendered (stale); repeated or unknown mesh and file requests, a Ready for a state it was
     // not sent, types only the master sends (repeated or unexpected: which of the two for a

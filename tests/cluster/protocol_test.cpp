@@ -215,6 +215,42 @@ void expectSame(const TileStalled& a, const TileStalled& b) {
     EXPECT_EQ(a.elapsedMs, b.elapsedMs);
 }
 void expectSame(const Goodbye& a, const Goodbye& b) { EXPECT_EQ(a.reason, b.reason); }
+void expectSame(const NodeHello& a, const NodeHello& b) {
+    EXPECT_EQ(a.protocolVersion, b.protocolVersion);
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_EQ(a.endpoint, b.endpoint);
+    EXPECT_EQ(a.publicKey, b.publicKey);
+}
+void expectSame(const NodeWelcome& a, const NodeWelcome& b) {
+    EXPECT_EQ(a.node, b.node);
+    EXPECT_EQ(a.heartbeatMs, b.heartbeatMs);
+    EXPECT_EQ(a.timeoutMs, b.timeoutMs);
+    EXPECT_EQ(a.wall, b.wall);
+}
+void expectSame(const NodeFrame& a, const NodeFrame& b) {
+    EXPECT_EQ(a.frame, b.frame);
+    EXPECT_EQ(a.width, b.width);
+    EXPECT_EQ(a.height, b.height);
+    EXPECT_EQ(a.tileSize, b.tileSize);
+    EXPECT_EQ(a.pixels, b.pixels);
+}
+void expectSame(const NodeHave& a, const NodeHave& b) { EXPECT_EQ(a.frame, b.frame); }
+void expectSame(const NodeSwap& a, const NodeSwap& b) {
+    EXPECT_EQ(a.frame, b.frame);
+    EXPECT_EQ(a.leftOut, b.leftOut);
+}
+void expectSame(const NodeSwapped& a, const NodeSwapped& b) { EXPECT_EQ(a.frame, b.frame); }
+void expectSame(const NodeList& a, const NodeList& b) { EXPECT_EQ(a.nodes, b.nodes); }
+void expectSame(const TileRoutes& a, const TileRoutes& b) {
+    EXPECT_EQ(a.frame, b.frame);
+    EXPECT_EQ(a.masks, b.masks);
+}
+void expectSame(const TileDone& a, const TileDone& b) {
+    EXPECT_EQ(a.frame, b.frame);
+    EXPECT_EQ(a.tile, b.tile);
+    EXPECT_EQ(a.renderMicros, b.renderMicros);
+    EXPECT_EQ(a.bytes, b.bytes);
+}
 void expectSame(const Ready& a, const Ready& b) {
     EXPECT_EQ(a.updateSeq, b.updateSeq);
     EXPECT_EQ(a.stateHash, b.stateHash);
@@ -361,6 +397,15 @@ TileResult sampleTileResult() {
     return t;
 }
 
+// A Z85 CURVE key (40 characters of the Z85 alphabet).
+const std::string kSampleKey = "rq:rM>}U?@Lns47E1%kR.o@n%FcmmsL/@{H8]yf7";
+
+NodeHello sampleNodeHello() { return NodeHello{uint16_t(kProtocolVersion + 1), "left-PC_2", "tcp://10.0.0.7:5600", kSampleKey}; }
+NodeWelcome sampleNodeWelcome() { return NodeWelcome{63, 100, 2500, "[wall]\nscreens = 2\n"}; }
+NodeList sampleNodeList() {
+    return NodeList{{{0, "left", "tcp://127.0.0.1:5601", ""}, {63, "right", "tcp://127.0.0.1:5602", kSampleKey}}};
+}
+
 Header sampleHeader() {
     Header h;
     h.type = MsgType::Goodbye;  // encodeMessage sets the type from the message
@@ -408,6 +453,15 @@ template <class F> void forEachSample(F&& f) {
     f(AssetData{{7, 8}, {1, 2, 3, 4, 5}});
     f(TileStalled{78, 12, 61000});
     f(TileFailed{79, 13, {32, 64, 48, 80}, 8, "injected fault at pixel 40,70"});
+    f(sampleNodeHello());
+    f(sampleNodeWelcome());
+    f(NodeFrame{80, 3840, 2160, 64, TilePixels::LinearHalf});
+    f(NodeHave{81});
+    f(NodeSwap{82, {"right", "node-3"}});
+    f(NodeSwapped{83});
+    f(sampleNodeList());
+    f(TileRoutes{84, {1, 3, 0, 0x8000000000000002ull}});
+    f(TileDone{85, 14, 2500, 12288});
 }
 
 template <class Msg> std::vector<uint8_t> payloadOf(const Msg& msg) {
@@ -506,7 +560,7 @@ TEST(Protocol, GoldenBytes) {
     // (version 2: the shading fields of materials, lights and settings; 4: FrameBegin's tile format;
     // 5: the snapshot's BVH primitives; 6: two-sided emission of materials and area lights; 7: the
     // client's work report in Heartbeat, TileStalled; 8: TileFailed; 9: section planes, instance visibility;
-    // 10: FrameBegin's views).
+    // 10: FrameBegin's views; 11: display nodes).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -514,7 +568,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x0A, 0x00,                                      // version (10: FrameBegin's views)
+        0x0B, 0x00,                                      // version (11: display nodes)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -814,6 +868,84 @@ TEST(Protocol, OtherMessagesRejectValuesOutOfRange) {
     MeshData m = sampleMeshData();
     m.hash[1] ^= 1;
     EXPECT_THROW(decode<MeshData>(payloadOf(m)), DecodeError);
+}
+
+TEST(Protocol, NodeMessagesRejectValuesOutOfRange) {
+    auto helloWith = [](auto mutate) {
+        NodeHello h = sampleNodeHello();
+        mutate(h);
+        return payloadOf(h);
+    };
+    EXPECT_NO_THROW(decode<NodeHello>(helloWith([](NodeHello& h) { h.publicKey.clear(); })));
+    EXPECT_NO_THROW(decode<NodeHello>(helloWith([](NodeHello& h) { h.name = std::string(32, 'n'); })));
+    EXPECT_THROW(decode<NodeHello>(helloWith([](NodeHello& h) { h.name.clear(); })), DecodeError);
+    EXPECT_THROW(decode<NodeHello>(helloWith([](NodeHello& h) { h.name = std::string(33, 'n'); })), DecodeError);
+    EXPECT_THROW(decode<NodeHello>(helloWith([](NodeHello& h) { h.name = "left pc"; })), DecodeError);
+    EXPECT_THROW(decode<NodeHello>(helloWith([](NodeHello& h) { h.name = "../etc"; })), DecodeError);
+    EXPECT_THROW(decode<NodeHello>(helloWith([](NodeHello& h) { h.endpoint.clear(); })), DecodeError);
+    EXPECT_THROW(decode<NodeHello>(helloWith([](NodeHello& h) { h.endpoint = "tcp://a b:1"; })), DecodeError);
+    EXPECT_THROW(decode<NodeHello>(helloWith([](NodeHello& h) { h.endpoint = "tcp://" + std::string(251, 'a'); })),
+                 DecodeError);
+    EXPECT_THROW(decode<NodeHello>(helloWith([](NodeHello& h) { h.publicKey.pop_back(); })), DecodeError);
+    EXPECT_THROW(decode<NodeHello>(helloWith([](NodeHello& h) { h.publicKey[5] = '_'; })), DecodeError);
+
+    NodeWelcome w = sampleNodeWelcome();
+    w.node = kMaxNodes;
+    EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+    w = sampleNodeWelcome();
+    w.timeoutMs = w.heartbeatMs - 1;
+    EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+    w = sampleNodeWelcome();
+    w.heartbeatMs = 0;
+    EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+    w = sampleNodeWelcome();
+    w.wall.clear();
+    EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+    w.wall = std::string(kMaxWallConfigBytes, '#');
+    EXPECT_NO_THROW(decode<NodeWelcome>(payloadOf(w)));
+    w.wall.push_back('#');
+    EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+
+    EXPECT_THROW(decode<NodeFrame>(payloadOf(NodeFrame{1, 0, 10, 8})), DecodeError);
+    EXPECT_THROW(decode<NodeFrame>(payloadOf(NodeFrame{1, 10, 16385, 8})), DecodeError);
+    EXPECT_THROW(decode<NodeFrame>(payloadOf(NodeFrame{1, 10, 10, 1025})), DecodeError);
+    EXPECT_NO_THROW(decode<NodeFrame>(payloadOf(NodeFrame{1, 16384, 16384, 8})));  // exactly the tile limit
+    EXPECT_THROW(decode<NodeFrame>(payloadOf(NodeFrame{1, 16384, 16384, 4})), DecodeError);
+    std::vector<uint8_t> p = payloadOf(NodeFrame{1, 10, 10, 8});
+    p.back() = 2;  // the pixel format
+    EXPECT_THROW(decode<NodeFrame>(p), DecodeError);
+
+    EXPECT_THROW(decode<NodeSwap>(payloadOf(NodeSwap{1, {"ok", "not ok"}})), DecodeError);
+    NodeList twice = sampleNodeList();
+    twice.nodes[1].node = twice.nodes[0].node;
+    EXPECT_THROW(decode<NodeList>(payloadOf(twice)), DecodeError);
+    NodeList high = sampleNodeList();
+    high.nodes[1].node = kMaxNodes;
+    EXPECT_THROW(decode<NodeList>(payloadOf(high)), DecodeError);
+    EXPECT_TRUE(isNodeName("a-Z_09"));
+    EXPECT_FALSE(isNodeName("caf\xc3\xa9"));
+}
+
+TEST(Protocol, NodeMessageCountsThrowBeforeAllocating) {
+    for (uint32_t count : {0x80000000u, 0xFFFFFFFFu, kMaxTilesPerFrame + 1}) {
+        std::vector<uint8_t> p = payloadOf(TileRoutes{9, {}});
+        putU32(p, 4, count);
+        EXPECT_THROW(decode<TileRoutes>(p), DecodeError) << count;
+    }
+    for (uint32_t count : {kMaxNodes + 1, 0xFFFFFFFFu}) {
+        std::vector<uint8_t> p = payloadOf(NodeList{});
+        putU32(p, 0, count);
+        EXPECT_THROW(decode<NodeList>(p), DecodeError) << count;
+        p = payloadOf(NodeSwap{3, {}});
+        putU32(p, 4, count);
+        EXPECT_THROW(decode<NodeSwap>(p), DecodeError) << count;
+    }
+}
+
+TEST(Protocol, TileDoneGoldenBytes) {
+    // The ack that replaces a tile's pixels on the master's link: 16 bytes of payload.
+    const std::vector<uint8_t> expected{0x01, 0, 0, 0, 0x02, 0, 0, 0, 0x03, 0, 0, 0, 0x04, 0x01, 0, 0};
+    EXPECT_EQ(payloadOf(TileDone{1, 2, 3, 0x104}), expected);
 }
 
 // -- Meshes --------------------------------------------------------------------------------------

@@ -151,3 +151,51 @@ TEST(RunConfig, PathsAreRelativeToTheFileAndTyposAreErrorsWithTheirLine) {
 
 }  // namespace
 }  // namespace rtwall
+
+namespace rtwall {
+namespace {
+
+// The master's display-node settings from a wall config (issue 19): the nodes in the wall's
+// order, and tile masks that are TileRouting's, per view by its eye.
+TEST(DisplayNodeSettings, RoutesTilesByTheWallsScreens) {
+    const WallConfig wall = parseWallConfig(R"([wall]
+[grid]
+columns = 2
+rows = 2
+screen_width = 320
+screen_height = 240
+bezel = [4, 4, 4, 4]
+[[node]]
+name = "left"
+columns = [0, 0]
+[[node]]
+name = "right"
+columns = [1, 1]
+)",
+                                            "two-nodes.toml");
+    const DisplayNodeSettings d = displayNodeSettings(wall, "the text", {0, 1});
+    EXPECT_EQ(d.names, (std::vector<std::string>{"left", "right"}));
+    EXPECT_EQ(d.wallText, "the text");
+    ASSERT_TRUE(d.routes);
+    const TileRouting routing(wall, wall.width, wall.height);
+    const std::vector<uint64_t> mono = d.routes(wall.width, wall.height, 48, {});
+    EXPECT_EQ(mono, routing.routeTiles(48, 0));
+    // Both nodes get some tiles, and the tiles at x = 288..335, under the middle bezel, go to both.
+    EXPECT_NE(std::count(mono.begin(), mono.end(), 1u), 0);
+    EXPECT_NE(std::count(mono.begin(), mono.end(), 2u), 0);
+    EXPECT_NE(std::count(mono.begin(), mono.end(), 3u), 0);
+
+    // Two views of the whole image: each view's tiles routed by its eye; a mono wall's screens
+    // show no right eye, so the second view's tiles go nowhere.
+    FrameView whole;
+    const std::vector<uint64_t> views = d.routes(wall.width, wall.height, 48, {whole, whole});
+    ASSERT_EQ(views.size(), 2 * mono.size());
+    EXPECT_EQ(std::vector<uint64_t>(views.begin(), views.begin() + ptrdiff_t(mono.size())), mono);
+    EXPECT_EQ(std::count(views.begin() + ptrdiff_t(mono.size()), views.end(), 0u), ptrdiff_t(mono.size()));
+    // A view of unknown eye goes wherever either eye is shown.
+    const std::vector<uint64_t> unknown = displayNodeSettings(wall, "", {}).routes(wall.width, wall.height, 48, {whole});
+    EXPECT_EQ(unknown, mono);
+}
+
+}  // namespace
+}  // namespace rtwall

@@ -118,6 +118,18 @@ int main(int argc, char** argv) {
     seedMessage("resync-request", ResyncRequest{1});
     seedMessage("asset-request", AssetRequest{{5, 6}});
     seedMessage("asset-data", AssetData{{5, 6}, {0x89, 'P', 'N', 'G', 1, 2, 3}});
+    // Display nodes (version 11).
+    seedMessage("node-hello", NodeHello{kProtocolVersion, "left", "tcp://127.0.0.1:5601", ""});
+    seedMessage("node-hello-curve", NodeHello{kProtocolVersion, "right_2", "tcp://127.0.0.1:5602",
+                                              "rq:rM>}U?@Lns47E1%kR.o@n%FcmmsL/@{H8]yf7"});
+    seedMessage("node-welcome", NodeWelcome{1, 250, 3000, "[wall]\nrows = 1\ncolumns = 2\n"});
+    seedMessage("node-frame", NodeFrame{3, 128, 64, 32, TilePixels::Srgb8});
+    seedMessage("node-have", NodeHave{3});
+    seedMessage("node-swap", NodeSwap{3, {"right_2"}});
+    seedMessage("node-swapped", NodeSwapped{3});
+    seedMessage("node-list", NodeList{{{0, "left", "tcp://127.0.0.1:5601", ""}, {1, "right_2", "tcp://127.0.0.1:5602", ""}}});
+    seedMessage("tile-routes", TileRoutes{3, {1, 3, 2, 0, 1, 3, 2, 2}});
+    seedMessage("tile-done", TileDone{3, 17, 1500, 3072});
 
     writeSeed("mesh-box", 18, encodeMesh(makeBox()));
     writeSeed("mesh-sphere-normals", 18, encodeMesh(makeSphere(3, 5)));

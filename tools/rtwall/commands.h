@@ -13,6 +13,7 @@ using Run = std::function<int()>;
 void addRender(CLI::App& app, Run& run);
 void addInfo(CLI::App& app, Run& run);
 void addClient(CLI::App& app, Run& run);
+void addDisplay(CLI::App& app, Run& run);  // cmd_display.cpp (issue 19)
 void addRun(CLI::App& app, Run& run);
 void addControls(CLI::App& app, Run& run);  // cmd_run.cpp
 void addKeys(CLI::App& app, Run& run);

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
     rtwall::cli::addRender(app, run);
     rtwall::cli::addInfo(app, run);
     rtwall::cli::addClient(app, run);
+    rtwall::cli::addDisplay(app, run);
     rtwall::cli::addRun(app, run);
     rtwall::cli::addControls(app, run);
     rtwall::cli::addKeys(app, run);

@@ -33,6 +33,22 @@ struct CodecSettings {
     bool operator==(const CodecSettings&) const = default;
 };
 
+struct FrameView;
+
+// A wall on several display PCs (issue 19): render clients send each tile straight to the
+// display nodes whose screens show it; the master carries only control and a small ack per
+// tile, and releases frame N to every node at once (a swap barrier). No names: the master is the
+// only display, as before.
+struct DisplayNodeSettings {
+    std::vector<std::string> names;  // the wall's nodes (WallConfig::nodes()); bit i of a tile mask is names[i]
+    std::string wallText;            // the wall config each node is sent (it presents its own screens)
+    // The node mask of every tile of a width x height frame in tiles of tileSize (makeTiles
+    // order; with views, viewTiles order). The wall library builds it from TileRouting: the
+    // cluster knows nothing of screens.
+    std::function<std::vector<uint64_t>(int width, int height, int tileSize, const std::vector<FrameView>& views)> routes;
+    double stallSeconds = 0.5;  // a node this late for a frame the others hold is left out of it (SwapBarrier)
+};
+
 struct ClusterSettings {
     std::string bind = "tcp://127.0.0.1:0";  // master endpoint; port 0 picks a free port
     int localClients = 2;                     // client processes `rtwall run` spawns on this PC
@@ -57,6 +73,7 @@ struct ClusterSettings {
     std::filesystem::path keyFile;                  // the master's key pair (rtwall keys)
     std::vector<std::filesystem::path> clientKeys;  // public key files of the clients allowed in
     bool insecure = false;
+    DisplayNodeSettings displayNodes;
 };
 
 // What the master dropped, refused or could not send, by kind, since it started
@@ -148,6 +165,13 @@ struct FrameReport {
     size_t views = 0;               // images of a multi-view frame (0: one, the state's camera)
     uint64_t viewsTag = 0;          // the tag of the setViews the frame was rendered with
     MasterCounters counters;        // the master's counters when the frame completed
+    // With display nodes: the frame's pixels went to the nodes (renderViews' images are empty),
+    // `bytes` counts what the clients sent to them, and the swap barrier's figures so far.
+    size_t displayNodes = 0;        // nodes connected when the frame completed
+    uint64_t swapsReleased = 0;     // frames the barrier released to the nodes
+    uint64_t nodesLeftOut = 0;      // times a node was left out of a frame for stalling
+    double lastSwapSkew = 0;        // seconds between the first and last node's swap of the newest swapped frame
+    double maxSwapSkew = 0;
 };
 
 // The differential updates that turn scene `before` into `after` (a scene file edited while the
@@ -323,6 +347,32 @@ private:
 
 // Writes a new CURVE key pair to STEM.key (secret, mode 0600) and STEM.pub (public).
 void writeNewKeyPair(const std::filesystem::path& stem);
+
+// ---- Display nodes (issue 19) -------------------------------------------------------------------
+
+// A display node: one PC of a wall whose screens are spread over several. It joins the master
+// (NodeHello), takes the tiles its screens show straight from the render clients on a ROUTER of
+// its own, says when it holds a frame and presents it when the master's swap barrier releases
+// it. What it presents, and how, is the caller's (the wall library: rtwall display).
+struct DisplayNodeRun {
+    std::string connect;                  // the master, tcp://HOST:PORT
+    std::string name;                     // this node's name in the wall config
+    std::string bind = "tcp://127.0.0.1:0";  // where the clients send tiles (port 0: a free one); told to the master
+    int exitAfterIdleMs = 0;              // > 0: exit when no master answers for this long
+    int frames = 0;                       // > 0: exit after presenting this many frames it held (tests, benchmarks)
+    const std::atomic<bool>* stop = nullptr;  // set: say goodbye and return 0
+    // The master's wall config text, on every (re)join, before any frame: the caller sets up its
+    // screens. An exception ends the node with its message.
+    std::function<void(const std::string& wallText)> onWall;
+    // Frame `frame` is released: `image` is the whole frame with this node's tiles in it (null
+    // when this node does not hold that frame: it was left out); `leftOut` names the nodes the
+    // wall did not wait for.
+    std::function<void(uint32_t frame, const Image* image, const std::vector<std::string>& leftOut)> present;
+};
+
+// Runs a display node until the master says goodbye, `frames` are presented, the stop flag is
+// set or no master answers for exitAfterIdleMs. Returns the process exit status.
+int runDisplayNode(const DisplayNodeRun& run);
 
 // Runs a render client until the master says goodbye (or exitAfterIdleMs passes).
 // Returns the process exit status.

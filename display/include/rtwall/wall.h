@@ -34,6 +34,29 @@
 
 namespace rtwall {
 
+// ---- Display nodes (issue 19) ------------------------------------------------------------------
+
+// The master's settings for a wall whose screens name display nodes: the nodes in the wall's
+// order, the config text each is sent, and the tile masks from TileRouting. A frame of views
+// routes each view's tiles by its eye (viewEyes[v]: -1 mono, 0 left, 1 right); a view without an
+// entry goes to every node that shows either eye of its pixels.
+DisplayNodeSettings displayNodeSettings(const WallConfig& wall, std::string wallText, std::vector<int> viewEyes = {});
+
+// `rtwall display`: one display node of a wall (runDisplayNode), presenting its screens of the
+// wall config the master sends (nodeWall) in GLFW windows, or as images in `out` when headless
+// or where no window can be opened. A frame the wall released without this node shows nothing
+// new; nodes left out of a frame are named in an overlay on the first screen.
+struct DisplayNodeOptions {
+    std::string connect;                      // the master, tcp://HOST:PORT
+    std::string name;                         // the node's name in the wall config
+    std::string bind = "tcp://127.0.0.1:0";   // where the render clients send its tiles
+    bool headless = false;
+    std::filesystem::path out = "out/node";   // headless screens go here (a folder per node name is not made)
+    int frames = 0;                           // > 0: exit after presenting this many frames
+    int exitAfterIdleMs = 0;                  // > 0: exit when no master answers for this long
+};
+int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop = nullptr);
+
 // ---- Run configs (configs/README.md, "Run configs") ---------------------------------------------
 
 struct RunConfig {

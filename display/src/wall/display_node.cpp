@@ -1,0 +1,56 @@
+// `rtwall display`: a display node of a wall on several PCs (issue 19). The cluster's
+// runDisplayNode does the network and the tiles; this presents the node's own screens.
+#include <rtwall/wall.h>
+
+#include <cstdio>
+#include <memory>
+
+namespace rtwall {
+
+int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop) {
+    std::unique_ptr<GlPresenter> gl;
+    std::unique_ptr<HeadlessPresenter> headless;
+    WallConfig wall;
+    DisplayNodeRun run;
+    run.connect = options.connect;
+    run.name = options.name;
+    run.bind = options.bind;
+    run.frames = options.frames;
+    run.exitAfterIdleMs = options.exitAfterIdleMs;
+    run.stop = stop;
+    run.onWall = [&](const std::string& text) {
+        // The same wall on every (re)join: the presenter is made once.
+        if (gl || headless) return;
+        wall = nodeWall(parseWallConfig(text, "the master's wall config"), options.name);
+        std::string whyNot;
+        if (!options.headless) gl = GlPresenter::open(wall, {}, &whyNot);
+        if (!gl) {
+            if (!options.headless) std::fprintf(stderr, "rtwall display: no window (%s): writing the screens to %s\n",
+                                                whyNot.c_str(), options.out.string().c_str());
+            headless = std::make_unique<HeadlessPresenter>(wall, options.out);
+        }
+    };
+    run.present = [&](uint32_t frame, const Image* image, const std::vector<std::string>& leftOut) {
+        if (!image) return;  // released without this node: nothing new to show
+        WallFrame f;
+        f.number = frame;
+        f.left = *image;
+        Image overlay;
+        PresentOptions po;
+        if (!leftOut.empty()) {
+            std::string text = "display nodes left out:";
+            for (const std::string& n : leftOut) text += " " + n;
+            overlay = textImage(text);
+            po.overlay = &overlay;
+        }
+        if (gl) {
+            gl->present(f, po);
+            gl->poll();
+        } else if (headless) {
+            headless->present(f, po);
+        }
+    };
+    return runDisplayNode(run);
+}
+
+}  // namespace rtwall

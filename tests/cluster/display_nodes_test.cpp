@@ -1,0 +1,624 @@
+// The master's side of a wall on several display nodes (issue 19), on loopback: a real Master,
+// a scripted render client that acknowledges its tiles with TileDone (as a client does once it
+// has sent them to the nodes) and scripted display nodes that report NodeHave and NodeSwapped.
+// What is checked is the control: node list and tile masks reach the client, the frame ends on
+// the last ack, the swap barrier releases a frame only when every node holds it, a stalled
+// node is left out (and named) and rejoins. Every loop is bounded; every wait has a timeout.
+#include "test_util.h"
+
+#include "codec.h"
+#include "net.h"
+#include "protocol.h"
+
+#include <rtwall/cluster.h>
+
+#include <zmq.hpp>
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstring>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <map>
+#include <optional>
+#include <thread>
+
+namespace rtwall {
+namespace {
+
+using namespace cluster;
+using Clock = std::chrono::steady_clock;
+
+SceneDesc smallScene() {
+    SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
+    desc.settings.width = 64;
+    desc.settings.height = 48;
+    desc.settings.tileSize = 16;
+    desc.settings.supersample = 1;
+    return desc;
+}
+
+// Node 0 ("left") shows x < 32, node 1 ("right") x >= 32: tiles are 16 wide, so none straddles.
+std::vector<uint64_t> halves(int width, int height, int tileSize, const std::vector<FrameView>&) {
+    std::vector<uint64_t> masks;
+    for (const TileRect& t : makeTiles(width, height, tileSize)) masks.push_back(t.x0 < width / 2 ? 1u : 2u);
+    return masks;
+}
+
+ClusterSettings nodeSettings() {
+    ClusterSettings cs;
+    cs.async = false;
+    cs.heartbeatMs = 50;
+    cs.timeoutMs = 1500;
+    cs.displayNodes.names = {"left", "right"};
+    cs.displayNodes.wallText = "[wall]\n# two nodes\n";
+    cs.displayNodes.routes = halves;
+    cs.displayNodes.stallSeconds = 0.3;
+    return cs;
+}
+
+double secondsNow() { return std::chrono::duration<double>(Clock::now().time_since_epoch()).count(); }
+
+// One scripted peer on a DEALER: what it received, and how it answers.
+class Peer {
+public:
+    Peer(zmq::context_t& ctx, const std::string& endpoint) : socket_(ctx, zmq::socket_type::dealer) {
+        socket_.set(zmq::sockopt::linger, 0);
+        socket_.connect(endpoint);
+    }
+    virtual ~Peer() = default;
+    void put(const std::vector<uint8_t>& bytes) { socket_.send(zmq::buffer(bytes), zmq::send_flags::dontwait); }
+    template <class Msg> void putInSession(const Msg& m, uint32_t frame = 0) {
+        Header h;
+        h.session = session_;
+        h.frame = frame;
+        put(encodeMessage(h, m));
+    }
+    void pump() {
+        for (int i = 0; i < 256; ++i) {
+            zmq::message_t msg;
+            if (!socket_.recv(msg, zmq::recv_flags::dontwait)) break;
+            const auto* p = static_cast<const uint8_t*>(msg.data());
+            const Header h = decodeHeader(p, msg.size());
+            if (h.type == MsgType::Welcome || h.type == MsgType::NodeWelcome) session_ = h.session;
+            on(h, p + kHeaderSize, msg.size() - kHeaderSize);
+        }
+        if (alive && Clock::now() - lastBeat_ > std::chrono::milliseconds(40)) {
+            lastBeat_ = Clock::now();
+            if (session_) putInSession(Heartbeat{});
+        }
+    }
+    std::atomic<bool> alive{true};  // false: silent (a stalled or dead peer)
+
+protected:
+    virtual void on(const Header& h, const uint8_t* p, size_t n) = 0;
+    zmq::socket_t socket_;
+    uint64_t session_ = 0;
+    Clock::time_point lastBeat_{};
+};
+
+class FakeClient : public Peer {
+public:
+    FakeClient(zmq::context_t& ctx, const std::string& endpoint) : Peer(ctx, endpoint) {
+        put(encodeMessage(Header{}, Hello{kProtocolVersion, 1, "fake-client"}));
+    }
+    std::mutex m;
+    std::vector<NodeList> lists;
+    std::vector<TileRoutes> routes;
+    uint32_t acks = 0;
+
+private:
+    void on(const Header& h, const uint8_t* p, size_t n) override {
+        std::lock_guard lock(m);
+        switch (h.type) {
+        case MsgType::SceneSnapshot: {
+            const SceneSnapshot snap = decodePayload<SceneSnapshot>(p, n);
+            putInSession(Ready{snap.updateSeq, stateHash(snap)});
+            break;
+        }
+        case MsgType::NodeList: lists.push_back(decodePayload<NodeList>(p, n)); break;
+        case MsgType::TileRoutes: routes.push_back(decodePayload<TileRoutes>(p, n)); break;
+        case MsgType::FrameBegin: {
+            const FrameBegin fb = decodePayload<FrameBegin>(p, n);
+            putInSession(TileRequest{fb.frame, 64}, fb.frame);
+            break;
+        }
+        case MsgType::TileAssign: {
+            const TileAssign a = decodePayload<TileAssign>(p, n);
+            for (uint32_t t : a.tiles) {
+                putInSession(TileDone{a.frame, t, 100, 1000}, a.frame);
+                ++acks;
+            }
+            break;
+        }
+        default: break;
+        }
+    }
+};
+
+class FakeNode : public Peer {
+public:
+    // With `takeTiles`, the node binds a ROUTER on loopback for the clients' tiles and keeps what
+    // arrives (TileResults by frame and tile).
+    FakeNode(zmq::context_t& ctx, const std::string& endpoint, const std::string& name, bool takeTiles = false)
+        : Peer(ctx, endpoint) {
+        std::string tileEndpoint = "tcp://127.0.0.1:9";
+        if (takeTiles) {
+            tiles_.emplace(ctx, zmq::socket_type::router);
+            tiles_->set(zmq::sockopt::linger, 0);
+            tiles_->bind("tcp://127.0.0.1:0");
+            tileEndpoint = tiles_->get(zmq::sockopt::last_endpoint);
+        }
+        put(encodeMessage(Header{}, NodeHello{kProtocolVersion, name, tileEndpoint, ""}));
+    }
+    std::map<std::pair<uint32_t, uint32_t>, TileResult> received;  // by (frame, tile)
+    uint64_t repeats = 0;
+
+    void pumpTiles() {
+        if (!tiles_) return;
+        for (int i = 0; i < 256; ++i) {
+            zmq::message_t identity, msg;
+            if (!tiles_->recv(identity, zmq::recv_flags::dontwait)) break;
+            if (!tiles_->recv(msg, zmq::recv_flags::dontwait)) break;
+            const auto* p = static_cast<const uint8_t*>(msg.data());
+            const Header h = decodeHeader(p, msg.size());
+            if (h.type != MsgType::TileResult) continue;
+            TileResult r = decodePayload<TileResult>(p + kHeaderSize, msg.size() - kHeaderSize);
+            std::lock_guard lock(m);
+            if (!received.emplace(std::make_pair(r.frame, r.tile), r).second) ++repeats;
+        }
+    }
+    struct Swap {
+        uint32_t frame;
+        std::vector<std::string> leftOut;
+        double at;
+    };
+    std::mutex m;
+    std::optional<uint32_t> index;
+    std::optional<std::string> goodbye;
+    std::vector<TileRoutes> routes;
+    std::vector<NodeFrame> frames;
+    std::vector<Swap> swaps;
+    std::vector<double> haveSentAt;  // per NodeHave sent
+    double haveDelay = 0;            // seconds between NodeFrame and NodeHave (a slow node)
+
+    void flushDelayed() {
+        std::lock_guard lock(m);
+        for (auto it = delayed_.begin(); it != delayed_.end();) {
+            if (secondsNow() < it->second) {
+                ++it;
+                continue;
+            }
+            if (alive) {
+                haveSentAt.push_back(secondsNow());
+                putInSession(NodeHave{it->first}, it->first);
+            }
+            it = delayed_.erase(it);
+        }
+    }
+
+private:
+    void on(const Header& h, const uint8_t* p, size_t n) override {
+        std::lock_guard lock(m);
+        switch (h.type) {
+        case MsgType::NodeWelcome: index = decodePayload<NodeWelcome>(p, n).node; break;
+        case MsgType::Goodbye: goodbye = decodePayload<Goodbye>(p, n).reason; break;
+        case MsgType::TileRoutes: routes.push_back(decodePayload<TileRoutes>(p, n)); break;
+        case MsgType::NodeFrame: {
+            const NodeFrame f = decodePayload<NodeFrame>(p, n);
+            frames.push_back(f);
+            delayed_.emplace_back(f.frame, secondsNow() + haveDelay);
+            break;
+        }
+        case MsgType::NodeSwap: {
+            const NodeSwap s = decodePayload<NodeSwap>(p, n);
+            swaps.push_back({s.frame, s.leftOut, secondsNow()});
+            if (alive) putInSession(NodeSwapped{s.frame}, s.frame);
+            break;
+        }
+        default: break;
+        }
+    }
+    std::vector<std::pair<uint32_t, double>> delayed_;
+    std::optional<zmq::socket_t> tiles_;
+};
+
+// The scripted peers on one thread, pumped until the object goes.
+class Peers {
+public:
+    explicit Peers(std::vector<Peer*> peers) : peers_(std::move(peers)) {
+        thread_ = std::thread([this] {
+            while (!stop_) {
+                {
+                    std::lock_guard lock(mutex_);
+                    for (Peer* p : peers_) {
+                        p->pump();
+                        if (auto* node = dynamic_cast<FakeNode*>(p)) {
+                            node->flushDelayed();
+                            node->pumpTiles();
+                        }
+                    }
+                }
+                std::this_thread::sleep_for(std::chrono::milliseconds(1));
+            }
+        });
+    }
+    void add(Peer* p) {
+        std::lock_guard lock(mutex_);
+        peers_.push_back(p);
+    }
+    void remove(Peer* p) {
+        std::lock_guard lock(mutex_);
+        std::erase(peers_, p);
+    }
+    ~Peers() {
+        stop_ = true;
+        thread_.join();
+    }
+
+private:
+    std::mutex mutex_;
+    std::vector<Peer*> peers_;
+    std::atomic<bool> stop_{false};
+    std::thread thread_;
+};
+
+// Waits (at most 5 s) until pred() holds under the peer's lock.
+template <class P, class F> bool waitFor(P& peer, F pred) {
+    const auto end = Clock::now() + std::chrono::seconds(5);
+    while (Clock::now() < end) {
+        {
+            std::lock_guard lock(peer.m);
+            if (pred()) return true;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return false;
+}
+
+struct Wall {
+    SceneDesc scene = smallScene();
+    Master master{scene, nodeSettings()};
+    zmq::context_t ctx{1};
+    FakeNode left{ctx, master.endpoint(), "left"};
+    FakeNode right{ctx, master.endpoint(), "right"};
+    FakeClient client{ctx, master.endpoint()};
+    Peers peers{{&left, &right, &client}};
+};
+
+TEST(DisplayNodes, ClientsGetNodesAndMasksAndTheFrameEndsOnTheLastAck) {
+    Wall w;
+    ASSERT_TRUE(waitFor(w.left, [&] { return w.left.index.has_value(); }));
+    ASSERT_TRUE(waitFor(w.right, [&] { return w.right.index.has_value(); }));
+    EXPECT_EQ(*w.left.index, 0u);
+    EXPECT_EQ(*w.right.index, 1u);
+    ASSERT_TRUE(w.master.waitForClients(1, 5000));
+
+    FrameReport report;
+    const Image image = w.master.renderFrame(&report);
+    EXPECT_TRUE(image.rgb.empty());  // the pixels are the nodes'
+    EXPECT_EQ(report.displayNodes, 2u);
+    // 12 tiles, each acknowledged with 1000 bytes sent to its one node.
+    EXPECT_EQ(report.bytes, 12u * 1000u);
+    EXPECT_EQ(report.counters.unexpected, 0u);
+
+    const std::vector<uint64_t> expected = halves(64, 48, 16, {});
+    {
+        std::lock_guard lock(w.client.m);
+        EXPECT_EQ(w.client.acks, 12u);
+        ASSERT_EQ(w.client.routes.size(), 1u);
+        EXPECT_EQ(w.client.routes[0].masks, expected);
+        ASSERT_FALSE(w.client.lists.empty());
+        const NodeList& last = w.client.lists.back();
+        ASSERT_EQ(last.nodes.size(), 2u);
+        EXPECT_EQ(last.nodes[0].name, "left");
+        EXPECT_EQ(last.nodes[0].endpoint, "tcp://127.0.0.1:9");
+        EXPECT_EQ(last.nodes[1].name, "right");
+    }
+    // A second frame of the same size: the masks are not sent again.
+    w.master.renderFrame(&report);
+    {
+        std::lock_guard lock(w.client.m);
+        EXPECT_EQ(w.client.routes.size(), 1u);
+        EXPECT_EQ(w.client.acks, 24u);
+    }
+    for (FakeNode* node : {&w.left, &w.right}) {
+        ASSERT_TRUE(waitFor(*node, [&] { return node->swaps.size() >= 2; }));
+        std::lock_guard lock(node->m);
+        EXPECT_EQ(node->routes.size(), 1u);
+        ASSERT_EQ(node->frames.size(), 2u);
+        EXPECT_EQ(node->frames[0].width, 64);
+        EXPECT_EQ(node->frames[0].tileSize, 16);
+        EXPECT_EQ(node->swaps[0].frame, node->frames[0].frame);
+        EXPECT_EQ(node->swaps[1].frame, node->frames[1].frame);
+        EXPECT_TRUE(node->swaps[0].leftOut.empty());
+    }
+}
+
+TEST(DisplayNodes, NoNodeSwapsBeforeTheSlowestHoldsTheFrame) {
+    Wall w;
+    {
+        std::lock_guard lock(w.right.m);
+        w.right.haveDelay = 0.15;  // well under the stall time (0.3 s): it is waited for
+    }
+    ASSERT_TRUE(waitFor(w.right, [&] { return w.right.index.has_value(); }));
+    ASSERT_TRUE(waitFor(w.left, [&] { return w.left.index.has_value(); }));
+    ASSERT_TRUE(w.master.waitForClients(1, 5000));
+    for (int i = 0; i < 3; ++i) w.master.renderFrame();
+    ASSERT_TRUE(waitFor(w.left, [&] { return w.left.swaps.size() >= 3; }));
+    ASSERT_TRUE(waitFor(w.right, [&] { return w.right.swaps.size() >= 3; }));
+    std::scoped_lock lock(w.left.m, w.right.m);
+    ASSERT_GE(w.right.haveSentAt.size(), 3u);
+    for (size_t i = 0; i < 3; ++i) {
+        // The swap of frame i reached the fast node only after the slow one said it held it.
+        EXPECT_GE(w.left.swaps[i].at, w.right.haveSentAt[i]) << "frame " << w.left.swaps[i].frame;
+        EXPECT_TRUE(w.left.swaps[i].leftOut.empty());
+    }
+}
+
+TEST(DisplayNodes, AStalledNodeIsLeftOutAndNamedThenRejoins) {
+    Wall w;
+    ASSERT_TRUE(waitFor(w.left, [&] { return w.left.index.has_value(); }));
+    ASSERT_TRUE(waitFor(w.right, [&] { return w.right.index.has_value(); }));
+    ASSERT_TRUE(w.master.waitForClients(1, 5000));
+    w.master.renderFrame();
+    ASSERT_TRUE(waitFor(w.left, [&] { return w.left.swaps.size() >= 1; }));
+
+    w.right.alive = false;  // stalls: no NodeHave, no heartbeat
+    FrameReport report;
+    for (int i = 0; i < 2; ++i) w.master.renderFrame(&report);  // the frames end on the client's acks regardless
+    // Once the stall time has passed, the newest frame goes to the left node alone (an older one
+    // that waited is superseded), with the right node named.
+    ASSERT_TRUE(waitFor(w.left, [&] { return w.left.swaps.back().frame == report.frame; }));
+    {
+        std::lock_guard lock(w.left.m);
+        EXPECT_EQ(w.left.swaps.back().leftOut, std::vector<std::string>{"right"});
+    }
+    // After the timeout it is gone from the clients' node list.
+    ASSERT_TRUE(waitFor(w.client, [&] { return !w.client.lists.empty() && w.client.lists.back().nodes.size() == 1; }));
+
+    // It comes back on a new connection (a restarted node) and takes part again.
+    w.peers.remove(&w.right);
+    FakeNode again(w.ctx, w.master.endpoint(), "right");
+    w.peers.add(&again);
+    ASSERT_TRUE(waitFor(again, [&] { return again.index.has_value(); }));
+    EXPECT_EQ(*again.index, 1u);
+    ASSERT_TRUE(waitFor(w.client, [&] { return w.client.lists.back().nodes.size() == 2; }));
+    w.master.renderFrame();
+    ASSERT_TRUE(waitFor(again, [&] { return !again.swaps.empty(); }));
+    {
+        std::lock_guard lock(again.m);
+        EXPECT_TRUE(again.swaps.back().leftOut.empty());
+        // It was sent the masks before its first frame.
+        ASSERT_EQ(again.routes.size(), 1u);
+        EXPECT_EQ(again.routes[0].masks, halves(64, 48, 16, {}));
+    }
+    w.peers.remove(&again);
+}
+
+// Real render clients (runClient threads): each tile goes to exactly the nodes of its mask, with
+// the pixels one machine renders, and the master gets only acks.
+TEST(DisplayNodes, RenderClientsSendEachTileToItsNodesBitIdentical) {
+    const SceneDesc scene = smallScene();
+    // Declared in this order so that the master goes first (its goodbye ends the clients), then
+    // the client threads are joined, also when an assertion returns early.
+    struct Joined {
+        std::vector<std::thread> threads;
+        ~Joined() {
+            for (auto& t : threads) t.join();
+        }
+    } clients;
+    zmq::context_t ctx{1};
+    auto owned = std::make_unique<Master>(scene, nodeSettings());
+    Master& master = *owned;
+    FakeNode left(ctx, master.endpoint(), "left", true), right(ctx, master.endpoint(), "right", true);
+    Peers peers({&left, &right});
+    ASSERT_TRUE(waitFor(left, [&] { return left.index.has_value(); }));
+    ASSERT_TRUE(waitFor(right, [&] { return right.index.has_value(); }));
+    for (int i = 0; i < 2; ++i) {
+        ClientSettings cs;
+        cs.connect = master.endpoint();
+        cs.threads = 1;
+        cs.exitAfterIdleMs = 3000;  // never outlive the test by much
+        clients.threads.emplace_back([cs] { runClient(cs); });
+    }
+    ASSERT_TRUE(master.waitForClients(2, 10000));
+
+    // A frame whose tiles never reach the nodes (or whose acks never come) would not end: it
+    // is given 20 s, then cancelled (Master::setStopFlag) and the test fails.
+    std::atomic<bool> stop{false}, done{false};
+    master.setStopFlag(&stop);
+    std::thread watchdog([&] {
+        for (int i = 0; i < 2000 && !done; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        stop = !done;
+    });
+    FrameReport report;
+    bool finished = false;
+    try {
+        master.renderFrame(&report);
+        finished = true;
+    } catch (const Cancelled&) {
+    }
+    done = true;
+    watchdog.join();
+    ASSERT_TRUE(finished) << "the frame did not end within 20 s";
+    EXPECT_EQ(report.counters.unexpected, 0u) << describeCounters(report.counters);
+    const std::vector<uint64_t> masks = halves(64, 48, 16, {});
+    const std::vector<TileRect> rects = makeTiles(64, 48, 16);
+    const Scene reference(scene);
+    const Image one = renderFrame(reference, Camera(scene.cameras.front(), 64, 48), scene.settings);
+    for (FakeNode* node : {&left, &right}) {
+        const uint64_t bit = node == &left ? 1 : 2;
+        size_t routed = 0;
+        for (uint64_t mask : masks) routed += (mask & bit) ? 1 : 0;
+        ASSERT_TRUE(waitFor(*node, [&] {
+            size_t n = 0;
+            for (const auto& [key, r] : node->received) n += key.first == report.frame ? 1 : 0;
+            return n >= routed;
+        })) << "node " << bit;
+        std::lock_guard lock(node->m);
+        EXPECT_EQ(node->repeats, 0u);
+        for (const auto& [key, r] : node->received) {
+            if (key.first != report.frame) continue;
+            ASSERT_LT(r.tile, masks.size());
+            EXPECT_TRUE(masks[r.tile] & bit) << "tile " << r.tile << " went to a node that does not show it";
+            const TileRect& t = rects[r.tile];
+            std::vector<uint8_t> pixels(size_t(t.width()) * t.height() * 3);
+            decodeTile(r.codec, r.pixels.data(), r.pixels.size(), t.width(), t.height(), pixels.data(), size_t(t.width()) * 3);
+            for (int y = 0; y < t.height(); ++y)
+                ASSERT_EQ(0, std::memcmp(pixels.data() + size_t(y) * t.width() * 3,
+                                         one.rgb.data() + (size_t(t.y0 + y) * 64 + size_t(t.x0)) * 3, size_t(t.width()) * 3))
+                    << "tile " << r.tile << " row " << y;
+        }
+    }
+    // The nodes held the frame and were told to swap it.
+    ASSERT_TRUE(waitFor(left, [&] { return !left.swaps.empty() && left.swaps.back().frame == report.frame; }));
+    ASSERT_TRUE(waitFor(right, [&] { return !right.swaps.empty() && right.swaps.back().frame == report.frame; }));
+}
+
+// runDisplayNode on a thread: what it was given to present.
+struct NodeThread {
+    struct Shown {
+        uint32_t frame;
+        std::optional<Image> image;
+        std::vector<std::string> leftOut;
+    };
+    NodeThread(const std::string& endpoint, const std::string& name) {
+        run.connect = endpoint;
+        run.name = name;
+        run.exitAfterIdleMs = 5000;
+        run.stop = &stop;
+        run.onWall = [this](const std::string& text) {
+            std::lock_guard lock(m);
+            wall = text;
+        };
+        run.present = [this](uint32_t frame, const Image* image, const std::vector<std::string>& leftOut) {
+            std::lock_guard lock(m);
+            shown.push_back({frame, image ? std::optional<Image>(*image) : std::nullopt, leftOut});
+        };
+        thread = std::thread([this] { status = runDisplayNode(run); });
+    }
+    ~NodeThread() {
+        stop = true;
+        thread.join();
+    }
+    std::mutex m;
+    std::string wall;
+    std::vector<Shown> shown;
+    std::atomic<bool> stop{false};
+    int status = -1;
+    DisplayNodeRun run;
+    std::thread thread;
+};
+
+// Two display-node processes' network side (runDisplayNode) with real render clients: each
+// node presents the frame with exactly its tiles, bit-identical to one machine; killed, the other
+// goes on and names it; restarted, it takes part again.
+TEST(DisplayNodes, NodesPresentTheirTilesAndSurviveAKilledNode) {
+    const SceneDesc scene = smallScene();
+    struct Joined {
+        std::vector<std::thread> threads;
+        ~Joined() {
+            for (auto& t : threads) t.join();
+        }
+    } clients;
+    ClusterSettings cs = nodeSettings();
+    cs.timeoutMs = 1000;
+    auto owned = std::make_unique<Master>(scene, cs);
+    Master& master = *owned;
+    auto left = std::make_unique<NodeThread>(master.endpoint(), "left");
+    auto right = std::make_unique<NodeThread>(master.endpoint(), "right");
+    for (int i = 0; i < 2; ++i) {
+        ClientSettings c;
+        c.connect = master.endpoint();
+        c.threads = 1;
+        c.exitAfterIdleMs = 3000;
+        clients.threads.emplace_back([c] { runClient(c); });
+    }
+    ASSERT_TRUE(master.waitForClients(2, 10000));
+    ASSERT_TRUE(waitFor(*left, [&] { return !left->wall.empty(); }));
+    ASSERT_TRUE(waitFor(*right, [&] { return !right->wall.empty(); }));
+    EXPECT_EQ(left->wall, cs.displayNodes.wallText);
+
+    FrameReport report;
+    master.renderFrame(&report);
+    const Scene reference(scene);
+    const Image one = renderFrame(reference, Camera(scene.cameras.front(), 64, 48), scene.settings);
+    const std::vector<uint64_t> masks = halves(64, 48, 16, {});
+    const std::vector<TileRect> rects = makeTiles(64, 48, 16);
+    for (NodeThread* node : {left.get(), right.get()}) {
+        const uint64_t bit = node == left.get() ? 1 : 2;
+        ASSERT_TRUE(waitFor(*node, [&] { return !node->shown.empty() && node->shown.back().frame == report.frame; }));
+        std::lock_guard lock(node->m);
+        const NodeThread::Shown& s = node->shown.back();
+        ASSERT_TRUE(s.image.has_value()) << "node " << bit << " did not hold the frame it was told to swap";
+        EXPECT_TRUE(s.leftOut.empty());
+        ASSERT_EQ(s.image->width, 64);
+        for (size_t t = 0; t < rects.size(); ++t) {
+            if (!(masks[t] & bit)) continue;
+            const TileRect& r = rects[t];
+            for (int y = r.y0; y < r.y1; ++y)
+                ASSERT_EQ(0, std::memcmp(s.image->rgb.data() + (size_t(y) * 64 + size_t(r.x0)) * 3,
+                                         one.rgb.data() + (size_t(y) * 64 + size_t(r.x0)) * 3, size_t(r.width()) * 3))
+                    << "node " << bit << " tile " << t << " row " << y;
+        }
+    }
+
+    // The right node dies: frames go on, and the left node's swaps name it.
+    right.reset();
+    for (int i = 0; i < 3; ++i) master.renderFrame(&report);
+    ASSERT_TRUE(waitFor(*left, [&] {
+        return !left->shown.empty() && left->shown.back().frame == report.frame;
+    }));
+    {
+        std::lock_guard lock(left->m);
+        bool named = false;
+        for (const auto& s : left->shown) named = named || s.leftOut == std::vector<std::string>{"right"};
+        EXPECT_TRUE(named) << "no swap named the dead node";
+        EXPECT_TRUE(left->shown.back().image.has_value());
+    }
+    // Restarted, it joins again and presents the next frames with the rest.
+    right = std::make_unique<NodeThread>(master.endpoint(), "right");
+    ASSERT_TRUE(waitFor(*right, [&] { return !right->wall.empty(); }));
+    bool together = false;
+    for (int i = 0; i < 20 && !together; ++i) {
+        master.renderFrame(&report);
+        together = waitFor(*right, [&] {
+            return !right->shown.empty() && right->shown.back().frame == report.frame && right->shown.back().image &&
+                   right->shown.back().leftOut.empty();
+        });
+    }
+    EXPECT_TRUE(together) << "the restarted node never presented a frame with the others";
+    right.reset();
+    left.reset();
+}
+
+TEST(DisplayNodes, ANodeTheWallDoesNotNameIsRefused) {
+    Wall w;
+    FakeNode stranger(w.ctx, w.master.endpoint(), "attic");
+    w.peers.add(&stranger);
+    ASSERT_TRUE(waitFor(stranger, [&] { return stranger.goodbye.has_value(); }));
+    EXPECT_NE(stranger.goodbye->find("no display node 'attic'"), std::string::npos) << *stranger.goodbye;
+    EXPECT_FALSE(stranger.index.has_value());
+    EXPECT_GE(w.master.counters().refused, 1u);
+    w.peers.remove(&stranger);
+}
+
+TEST(DisplayNodes, AWallWithoutNodesRefusesANode) {
+    SceneDesc scene = smallScene();
+    ClusterSettings cs;
+    cs.async = false;
+    Master master(scene, cs);
+    zmq::context_t ctx{1};
+    FakeNode node(ctx, master.endpoint(), "left");
+    Peers peers({&node});
+    ASSERT_TRUE(waitFor(node, [&] { return node.goodbye.has_value(); }));
+    EXPECT_NE(node.goodbye->find("has no display nodes"), std::string::npos) << *node.goodbye;
+    peers.remove(&node);
+}
+
+}  // namespace
+}  // namespace rtwall

@@ -1,0 +1,100 @@
+// `rtwall display` processes (issue 19): two display nodes of configs/wall/two-nodes-2x2.toml,
+// each writing its two screens headless, against a master in this process and render-client
+// threads. Each node's screens are byte-identical to the single-PC wall's screens of the same
+// frame. Loopback only; every wait is bounded.
+#include "display_test_util.h"
+
+#include "../cluster/child_process.h"
+
+#include <rtwall/cluster.h>
+#include <rtwall/wall.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <thread>
+
+namespace rtwall {
+namespace {
+
+std::string fileBytes(const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+TEST(DisplayNodeProcesses, EachShowsItsHalfOfTheWallBitIdentical) {
+    const std::filesystem::path configFile = test::sourceDir() / "configs/wall/two-nodes-2x2.toml";
+    const std::string text = fileBytes(configFile);
+    const WallConfig wall = loadWallConfig(configFile);
+    SceneDesc scene = loadSceneFile(test::sourceDir() / "configs/demo.toml");
+    scene.settings.width = wall.width;
+    scene.settings.height = wall.height;
+    scene.settings.supersample = 1;
+    const std::filesystem::path dir = test::displayScratchDir();
+
+    struct Joined {
+        std::vector<std::thread> threads;
+        ~Joined() {
+            for (auto& t : threads) t.join();
+        }
+    } clients;
+    ClusterSettings cs;
+    cs.async = false;
+    cs.displayNodes = displayNodeSettings(wall, text);
+    auto master = std::make_unique<Master>(scene, cs);
+    std::vector<std::unique_ptr<test::ChildProcess>> nodes;
+    for (const std::string name : {"left", "right"})
+        nodes.push_back(std::make_unique<test::ChildProcess>(std::vector<std::string>{
+            RTWALL_EXE, "display", "--connect", master->endpoint(), "--node", name, "--headless", "--out",
+            (dir / name).string(), "--frames", "1", "--exit-after-idle", "20000"}));
+    for (int i = 0; i < 2; ++i) {
+        ClientSettings c;
+        c.connect = master->endpoint();
+        c.threads = 1;
+        c.exitAfterIdleMs = 5000;
+        clients.threads.emplace_back([c] { runClient(c); });
+    }
+    ASSERT_TRUE(master->waitForClients(2, 20000));
+    // Frames until both nodes have presented one they held (a node that joined during a frame
+    // may miss it); bounded.
+    for (int i = 0; i < 30; ++i) {
+        master->renderFrame();
+        if (nodes[0]->wait(0) && nodes[1]->wait(0)) break;
+    }
+    for (auto& n : nodes) {
+        const std::optional<int> status = n->wait(10000);
+        ASSERT_TRUE(status.has_value()) << n->output();
+        EXPECT_EQ(*status, 0) << n->output();
+    }
+
+    // The same frame on one PC: the whole wall's screens from the single-machine image.
+    const Scene reference(scene);
+    WallFrame one;
+    one.left = renderFrame(reference, Camera(scene.cameras.front(), wall.width, wall.height), scene.settings);
+    const std::map<std::string, std::vector<std::string>> screensOf{{"left", {"c0r0", "c0r1"}}, {"right", {"c1r0", "c1r1"}}};
+    for (const auto& [name, screens] : screensOf) {
+        std::vector<std::filesystem::path> written;
+        for (const auto& e : std::filesystem::directory_iterator(dir / name)) written.push_back(e.path());
+        ASSERT_EQ(written.size(), 2u) << name;
+        std::sort(written.begin(), written.end());
+        // frame_NNNNNN_<screen>.png: the reference is presented with the node's frame number.
+        const std::string stem = written[0].filename().string().substr(0, 13);
+        one.number = uint32_t(std::stoul(stem.substr(6, 6)));
+        HeadlessPresenter whole(wall, dir / ("one-" + name));
+        whole.present(one);
+        for (const std::string& screen : screens) {
+            const std::filesystem::path mine = dir / name / (stem + screen + ".png");
+            ASSERT_TRUE(std::filesystem::exists(mine)) << mine;
+            EXPECT_EQ(fileBytes(mine), fileBytes(dir / ("one-" + name) / (stem + screen + ".png"))) << name << " " << screen;
+        }
+    }
+    master.reset();
+}
+
+}  // namespace
+}  // namespace rtwall
