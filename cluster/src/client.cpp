@@ -779,8 +779,12 @@ private:
                 else if (id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL)
                     why = "the handshake failed (ZMTP protocol error " + std::to_string(value) + ")";
                 else
-                    why = settings_.keyFile.empty() ? "the master broke off the handshake"
-                                                    : "the master broke off the CURVE handshake: is --server-key its public key?";
+                    // The master closes the connection as soon as it sees the other mechanism, and
+                    // its greeting may be lost with the reset: keyless, this is the likely cause.
+                    why = settings_.keyFile.empty()
+                              ? "the master broke off the handshake: do the master and this client disagree on security "
+                                "(a master with CURVE keys needs --key and --server-key here)?"
+                              : "the master broke off the CURVE handshake: is --server-key its public key?";
             }
             if (why != handshakeTrouble_)
                 std::fprintf(stderr, "rtwall client: %s: %s\n", settings_.connect.c_str(), why.c_str());
