@@ -7,6 +7,11 @@
 #   tools/netem.sh up N [MASTER_RATE] [CLIENT_RATE]   e.g. up 4 1gbit 100mbit (default 1gbit 1gbit)
 #   tools/netem.sh bench N [MASTER_RATE] [CLIENT_RATE] [-- rtwall bench cluster arguments]
 #   tools/netem.sh faults N [MASTER_RATE] [CLIENT_RATE] [-- rtwall bench faults arguments]
+#   tools/netem.sh nodes K M [RATE] [-- rtwall bench cluster arguments]
+#                                                     a master, K display nodes rtw-n1..rtw-nK
+#                                                     (10.199.0.101, ...) and M clients, every link
+#                                                     at RATE (default 1gbit); runs
+#                                                     `rtwall bench cluster --display-nodes K`
 #   tools/netem.sh down
 #   LOSS=1 tools/netem.sh bench 2 ...                 each client's link loses 1% of packets each way
 #   DELAY=5 JITTER=5 tools/netem.sh bench 2 ...       each packet on a client's link is held 5 +- 5 ms
@@ -65,11 +70,15 @@ up() {
     shape "$ns" eth0 "$rate"        # and what it sends
   }
   attach rtw-m 10.199.0.1 "$mrate"
+  for i in $(seq 1 "${NODES:-0}"); do
+    attach "rtw-n$i" "10.199.0.$((100 + i))" "$mrate"
+  done
   for i in $(seq 1 "$n"); do
     attach "rtw-c$i" "10.199.0.$((10 + i))" "$crate"
     if [ "$LOSS" != 0 ]; then lose "rtw-c$i" "$LOSS"; fi
     if [ "$DELAY" != 0 ] || [ "$JITTER" != 0 ]; then jitter "rtw-c$i"; fi
   done
+  if [ "${NODES:-0}" != 0 ]; then echo "netem: ${NODES} display nodes 10.199.0.101.. at $mrate" >&2; fi
   echo "netem: master 10.199.0.1 at $mrate, $n clients at $crate, loss $LOSS% each way," \
        "delay $DELAY +- $JITTER ms each way on client links" >&2
 }
@@ -80,7 +89,7 @@ down() {
     kill "$(cat "$f")" 2>/dev/null || true
     rm -f "$f"
   done
-  for ns in $(ip netns list | awk '{print $1}' | grep -E '^rtw-(m|sw|c[0-9]+)$' || true); do ip netns del "$ns"; done
+  for ns in $(ip netns list | awk '{print $1}' | grep -E '^rtw-(m|sw|c[0-9]+|n[0-9]+)$' || true); do ip netns del "$ns"; done
 }
 
 case "${1:-}" in
@@ -108,5 +117,22 @@ case "${1:-}" in
         --link "$link" "$@"
     fi
     ;;
-  *) echo "usage: tools/netem.sh up N [MASTER_RATE] [CLIENT_RATE] | bench|faults N [RATES] [-- ARGS] | down" >&2; exit 2 ;;
+  nodes)
+    # Display nodes (issue 19): every machine's link, master's, nodes' and clients', at one rate.
+    shift
+    k=$1 m=$2
+    shift 2
+    rate=1gbit
+    if [ $# -gt 0 ] && [ "$1" != "--" ]; then rate=$1; shift; fi
+    [ "${1:-}" = "--" ] && shift
+    NODES=$k up "$m" "$rate" "$rate"
+    trap down EXIT
+    addresses=$(seq -s, 101 $((100 + k)) | sed 's/\([0-9]*\)/10.199.0.\1/g')
+    mbit=$(awk -v r="$rate" 'BEGIN { v = r + 0; if (r ~ /gbit$/) v *= 1000; else if (r ~ /kbit$/) v /= 1000; print v }')
+    # --insecure: these namespaces are the script's own and reach nothing else.
+    ip netns exec rtw-m "$RTWALL" bench cluster --bind tcp://10.199.0.1:7700 --client-netns rtw-c --insecure \
+      --max-clients "$m" --display-nodes "$k" --node-netns rtw-n --node-addresses "$addresses" \
+      --node-link-mbit "$mbit" --link "master, $k nodes and $m clients at $rate each" "$@"
+    ;;
+  *) echo "usage: tools/netem.sh up N [MASTER_RATE] [CLIENT_RATE] | bench|faults N [RATES] [-- ARGS] | nodes K M [RATE] [-- ARGS] | down" >&2; exit 2 ;;
 esac

@@ -13,6 +13,7 @@
 #include <zmq.hpp>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <map>
@@ -43,7 +44,14 @@ public:
         double idleSince = nowSeconds();
         for (;;) {
             zmq::pollitem_t items[] = {{master_.handle(), 0, ZMQ_POLLIN, 0}, {tiles_.handle(), 0, ZMQ_POLLIN, 0}};
-            zmq::poll(items, 2, std::chrono::milliseconds(10));
+            try {
+                zmq::poll(items, 2, std::chrono::milliseconds(10));
+            } catch (const zmq::error_t& e) {
+                // A signal (SIGTERM from `rtwall display`'s handler) interrupted the wait: the
+                // stop flag is looked at below, as after any wait.
+                if (e.num() != EINTR) throw;
+                items[0].revents = items[1].revents = 0;
+            }
             if (items[0].revents & ZMQ_POLLIN) {
                 for (int i = 0; i < 256; ++i) {
                     zmq::message_t msg;

@@ -276,6 +276,7 @@ struct Master::Impl {
     FrameReport completedReport;
     std::vector<std::vector<float>> completedLinear;  // the completed frame's linear pixels per view, when it had linear tiles
     int readyClients = 0;
+    uint32_t swapReleased = 0;    // with display nodes: the newest frame the swap barrier released
     std::atomic<const std::atomic<bool>*> stopFlag{nullptr};
 
     // Network-thread state.
@@ -769,6 +770,11 @@ struct Master::Impl {
 
     void releaseSwap(std::optional<uint32_t> frame) {
         if (!frame) return;
+        {
+            std::lock_guard lock(m);
+            swapReleased = std::max(swapReleased, *frame);
+        }
+        cv.notify_all();
         // Every node of the wall that does not take part: stalled, gone, or never came.
         NodeSwap swap{*frame, {}};
         const std::vector<NodeId> joined = barrier.nodes(), stalled = barrier.leftOut();
@@ -1477,6 +1483,19 @@ bool Master::waitForClients(int count, int timeoutMs) {
     std::unique_lock lock(s.m);
     const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
     while (s.readyClients < count) {
+        throwIfStopped(s);
+        const auto now = std::chrono::steady_clock::now();
+        if (now >= end) return false;
+        s.cv.wait_for(lock, std::min<std::chrono::steady_clock::duration>(end - now, std::chrono::milliseconds(100)));
+    }
+    return true;
+}
+
+bool Master::waitForSwap(uint32_t frame, int timeoutMs) {
+    Impl& s = *impl_;
+    std::unique_lock lock(s.m);
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
+    while (s.swapReleased < frame) {
         throwIfStopped(s);
         const auto now = std::chrono::steady_clock::now();
         if (now >= end) return false;

@@ -38,8 +38,19 @@ struct ClusterOptions : Common {
     bool render = false, insecure = false;
     std::string bind = "tcp://127.0.0.1:0", netns, link = "loopback", codec = "lz4";
     std::vector<int> clientCounts;
+    // --display-nodes: walls split over these numbers of display-node processes instead
+    // (cluster_nodes.cpp), each with every codec of nodeCodecs, maxClients clients.
+    std::vector<int> displayNodes;
+    std::vector<std::string> nodeCodecs = {"raw", "lz4"};
+    std::vector<std::string> nodeAddresses;  // node i binds its tile socket here (default 127.0.0.1)
+    std::string nodeNetns;                   // node i runs in network namespace <nodeNetns><i> (tools/netem.sh)
+    double nodeLinkMbit = 0;                 // each node's link, for the link-bound frame rate (0: not known)
+    int nodePrefetch = 8;
 };
 toml::table cluster(const ClusterOptions& o);
+// The wall config of `bench cluster --display-nodes`: a grid of screens whose columns go to the
+// nodes n1..nK in equal runs. InputError for a count the wall cannot be split into.
+std::string nodeBenchWall(int width, int height, int nodes);
 
 // The cost of a killed or frozen client, and of CURVE encryption.
 struct FaultsOptions : Common {

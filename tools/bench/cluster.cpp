@@ -189,7 +189,12 @@ toml::table measure(const SceneDesc& desc, const Image& reference, const Point& 
 
 }  // namespace
 
+toml::table clusterNodes(const SceneDesc& desc, const Image& reference, const ClusterOptions& o);  // cluster_nodes.cpp
+
 toml::table cluster(const ClusterOptions& o) {
+    // Display-node walls: every count checked before anything runs.
+    for (int k : o.displayNodes) nodeBenchWall(o.width, o.height, k);
+    for (const std::string& c : o.nodeCodecs) tileCodecFromName(c);
     SceneDesc desc = builtinScene("knots", o.triangles);
     desc.settings.width = o.width;
     desc.settings.height = o.height;
@@ -200,6 +205,7 @@ toml::table cluster(const ClusterOptions& o) {
         const Scene scene(desc);
         return renderFrame(scene, Camera(desc.cameras.front(), o.width, o.height), desc.settings);
     }();
+    if (!o.displayNodes.empty()) return clusterNodes(desc, reference, o);
     toml::array results;
     for (const Point& p : pointsOf(o)) results.push_back(measure(desc, reference, p, o));
     return toml::table{{"benchmark", "cluster"}, {"width", o.width}, {"height", o.height}, {"tile", o.tile},

@@ -25,6 +25,19 @@ void addBenchCluster(CLI::App& bench, Run& run) {
         ->delimiter(',')
         ->check(CLI::Range(1, 256));
     cmd->add_option("--codec", o.codec, "Codec of the --client-counts runs")->check(CLI::IsMember({"raw", "lz4", "zstd", "jpeg"}));
+    cmd->add_option("--display-nodes", o.displayNodes,
+                    "Walls split over these numbers of display-node processes, e.g. 1,2,4 (issue 19; frames paced by the swap)")
+        ->delimiter(',')
+        ->check(CLI::Range(1, 64));
+    cmd->add_option("--node-codecs", o.nodeCodecs, "Codecs of the --display-nodes runs (default raw,lz4)")
+        ->delimiter(',')
+        ->check(CLI::IsMember({"raw", "lz4", "zstd", "jpeg"}));
+    cmd->add_option("--node-addresses", o.nodeAddresses, "Address node i binds its tile socket to (default 127.0.0.1 for all)")
+        ->delimiter(',');
+    cmd->add_option("--node-netns", o.nodeNetns, "Start display node i in network namespace <prefix><i> (tools/netem.sh)");
+    cmd->add_option("--node-link-mbit", o.nodeLinkMbit, "Each node's link in Mbit/s: reports the link-bound frame rate")
+        ->check(CLI::Range(0.0, 1e7));
+    cmd->add_option("--node-prefetch", o.nodePrefetch, "Prefetch of the --display-nodes runs")->check(CLI::Range(1, 64));
     callBenchmark(cmd, run, a, bench::cluster);
 }
 
