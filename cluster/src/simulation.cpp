@@ -28,12 +28,21 @@
 //   rtwall bench cluster per thread): a client's network work per result delays its send; the
 //   master's receive per result (one I/O thread, FIFO) comes before its network thread; the
 //   master's per-frame work follows the last decode. On shared cores all are CPU jobs there.
-// Not modelled: heartbeats, timeouts and dead clients, scene updates, TCP congestion control.
+// - Display nodes (SimConfig::displayNodes > 0; issue 19): a finished tile goes once per node of
+//   its mask over the client's link (Client::sendToNodes), each copy through the node's own link
+//   to its decode threads (runDisplayNode), then a TileDone ack to the master (header bytes over
+//   both links; Impl::onTileDone completes it in the scheduler, nothing is decoded). The frame
+//   is swapped a round trip after the last ack is in and the slowest node has decoded its tiles
+//   (SwapBarrier); the next frame begins at the swap, as `rtwall bench cluster --display-nodes`
+//   paces them. A node's decodes are timed when the copy is sent (its arrival is known then).
+// Not modelled: heartbeats, timeouts and dead clients, scene updates, TCP congestion control,
+// nodes left out of a frame.
 #include "scheduler.h"
 
 #include <rtwall/cluster.h>
 
 #include <algorithm>
+#include <bit>
 #include <deque>
 #include <queue>
 #include <random>
@@ -87,6 +96,16 @@ struct SimClient {
     double busy = 0;                    // render time started in the measured window
 };
 
+// A display node: its link and decode threads, and the current frame's tiles it waits for.
+struct SimNode {
+    double linkFree = 0, linkBusy = 0;
+    std::vector<double> decoders;  // when each decode thread is free
+    std::vector<uint32_t> held;    // per tile: the last frame whose copy arrived (duplicates decode nothing)
+    uint32_t pending = 0;          // tiles of the current frame not yet sent to it
+    double doneAt = 0;             // when its last tile of the current frame is decoded
+    uint64_t frameBytes = 0, measuredBytes = 0;
+};
+
 class Simulation {
 public:
     Simulation(const TileProfile& p, const SimConfig& c)
@@ -113,6 +132,24 @@ public:
                          c.masterSecondsPerFrame})
             if (!(x >= 0)) throw InputError("simulation: host costs must be zero or positive");
         decoders_.assign(size_t(c.decodeThreads), 0.0);
+        if (c.displayNodes < 0 || size_t(c.displayNodes) > 64) throw InputError("simulation: 0 to 64 display nodes");
+        if (c.displayNodes > 0) {
+            if (c.nodeDecodeThreads < 1 || !(c.nodeBitsPerSecond >= 0))
+                throw InputError("simulation: node decode threads must be positive and node links zero or positive");
+            masks_ = c.tileNodes.empty() ? columnNodeMasks(p.width, p.height, p.tileSize, c.displayNodes) : c.tileNodes;
+            if (masks_.size() != p.tileCount())
+                throw InputError("simulation: " + std::to_string(masks_.size()) + " tile node masks for " +
+                                 std::to_string(p.tileCount()) + " tiles");
+            const uint64_t valid = c.displayNodes == 64 ? ~0ull : (1ull << c.displayNodes) - 1;
+            for (uint64_t m : masks_)
+                if (m & ~valid) throw InputError("simulation: a tile's node mask names a node beyond the " +
+                                                 std::to_string(c.displayNodes) + " display nodes");
+            nodes_.resize(size_t(c.displayNodes));
+            for (SimNode& n : nodes_) {
+                n.decoders.assign(size_t(c.nodeDecodeThreads), 0.0);
+                n.held.assign(p.tileCount(), 0);
+            }
+        }
     }
 
     SimReport run() {
@@ -145,6 +182,11 @@ public:
         r.reissuedPerFrame = double(reissued_) / config_.frames;
         r.duplicatesPerFrame = double(duplicates_) / config_.frames;
         r.affinityHitFraction = double(affinityHits_) / (double(config_.frames) * double(profile_.tileCount()));
+        for (const SimNode& n : nodes_) {
+            r.nodeBytesPerFrame.push_back(double(n.measuredBytes) / config_.frames);
+            if (config_.nodeBitsPerSecond > 0 && window > 0) r.maxNodeLinkLoad = std::max(r.maxNodeLinkLoad, n.linkBusy / window);
+        }
+        r.meanBarrierWait = barrierWait_ / config_.frames;
         return r;
     }
 
@@ -184,6 +226,9 @@ private:
     int decodesRunning_ = 0;
     std::deque<Event> ioQueue_;  // results waiting for the master's I/O thread
     bool ioRunning_ = false;
+    std::vector<SimNode> nodes_;    // display nodes (none: the master takes the pixels)
+    std::vector<uint64_t> masks_;   // per tile, the nodes it goes to
+    double barrierWait_ = 0;        // measured frames: slowest node done - first node done
 
     double resultBytes(uint32_t tile) const {
         return double(profile_.codecs[config_.codec].bytes[tile]) + config_.messageOverheadBytes;
@@ -210,6 +255,10 @@ private:
     }
 
     void sendResult(uint32_t id, uint32_t frame, uint32_t tile) {
+        if (!nodes_.empty()) {
+            sendToNodes(id, frame, tile);
+            return;
+        }
         Event r = makeEvent(up(clients_[id], resultBytes(tile)), Ev::ResultAtMaster, id, frame);
         r.tiles = {tile};
         push(std::move(r));
@@ -332,6 +381,57 @@ private:
         return c.lastUp;
     }
 
+    // Client -> each node of the tile's mask (a copy each over the client's link, then the
+    // node's), decoded there; then the ack to the master over the client's and master's links.
+    void sendToNodes(uint32_t id, uint32_t frame, uint32_t tile) {
+        SimClient& c = clients_[id];
+        const double bytes = resultBytes(tile), bits = bytes * 8.0, lat = config_.clientLink.latencySeconds;
+        const double decode = profile_.codecs[config_.codec].decodeSeconds[tile] / config_.decodeSpeed;
+        for (size_t i = 0; i < nodes_.size(); ++i) {
+            if (!(masks_[tile] >> i & 1)) continue;
+            SimNode& n = nodes_[i];
+            const double txStart = std::max(now_, c.linkFree);
+            const double txTime = config_.clientLink.bitsPerSecond > 0 ? bits / config_.clientLink.bitsPerSecond : 0.0;
+            c.linkFree = txStart + txTime;
+            if (measuring_) c.linkBusy += txTime;
+            double arrive = c.linkFree + lat;
+            if (config_.nodeBitsPerSecond > 0) {
+                const double nTime = bits / config_.nodeBitsPerSecond;
+                const double nStart = std::max(txStart + lat, n.linkFree);
+                arrive = std::max(nStart + nTime, arrive);
+                n.linkFree = arrive;
+                if (measuring_) n.linkBusy += nTime;
+            }
+            arrive += spike(config_.clientLink);
+            if (frame != frame_ || n.held[tile] == frame) continue;  // a late or repeated copy: the node drops it
+            n.held[tile] = frame;
+            auto free = std::min_element(n.decoders.begin(), n.decoders.end());
+            *free = std::max(arrive, *free) + decode;
+            n.doneAt = std::max(n.doneAt, *free);
+            n.frameBytes += uint64_t(bytes);
+            --n.pending;
+        }
+        Event r = makeEvent(up(c, config_.messageOverheadBytes), Ev::ResultAtMaster, id, frame);
+        r.tiles = {tile};
+        push(std::move(r));
+    }
+
+    // All acks are in: the swap, once the slowest node holds the frame (NodeHave up, NodeSwap down).
+    void swapWhenNodesHold() {
+        double first = now_, last = now_;
+        bool any = false;
+        for (const SimNode& n : nodes_) {
+            if (n.pending != 0) continue;  // cannot happen: every tile's copies leave before its ack
+            first = any ? std::min(first, n.doneAt) : n.doneAt;
+            last = any ? std::max(last, n.doneAt) : n.doneAt;
+            any = true;
+        }
+        if (measuring_) barrierWait_ += last - first;
+        const double lat = config_.clientLink.latencySeconds;
+        const double swap = std::max(now_, last + lat) + lat;
+        push(makeEvent(swap + config_.masterSecondsPerFrame, Ev::FrameDone, 0, frame_));
+    }
+
     void beginFrame(uint32_t frame, double t) {
         frame_ = frame;
         frameActive_ = true;
@@ -344,6 +444,12 @@ private:
             measureStart_ = t;
         }
         scheduler_.beginFrame(frame, uint32_t(profile_.tileCount()));
+        for (size_t i = 0; i < nodes_.size(); ++i) {
+            nodes_[i].pending = 0;
+            for (uint64_t m : masks_) nodes_[i].pending += uint32_t(m >> i & 1);
+            nodes_[i].doneAt = t;
+            nodes_[i].frameBytes = 0;
+        }
         for (uint32_t i = 0; i < clients_.size(); ++i) {
             clients_[i].credits = 0;
             Event e = makeEvent(down(clients_[i]), Ev::FrameBeginAtClient, i, frame);
@@ -479,7 +585,14 @@ private:
         const uint32_t tile = e.tiles.front();
         const auto result = scheduler_.complete(e.client, e.frame, tile, now_);
         c.credits += 1;
-        if (result == TileScheduler::Result::Accepted) {
+        if (result == TileScheduler::Result::Accepted && !nodes_.empty()) {
+            // As the master counts it: the tile's bytes once per node it went to.
+            frameBytes_ += uint64_t(resultBytes(tile)) * uint64_t(std::popcount(masks_[tile]));
+            if (scheduler_.frameComplete() && !frameDoneScheduled_) {
+                frameDoneScheduled_ = true;
+                swapWhenNodesHold();
+            }
+        } else if (result == TileScheduler::Result::Accepted) {
             const auto& codec = profile_.codecs[config_.codec];
             frameBytes_ += codec.bytes[tile] + config_.messageOverheadBytes;
             if (shared()) {
@@ -508,6 +621,7 @@ private:
             const SchedulerStats& st = scheduler_.stats();
             frameSeconds_.push_back(now_ - frameStart_);
             measuredBytes_ += frameBytes_;
+            for (SimNode& n : nodes_) n.measuredBytes += n.frameBytes;
             stolen_ += st.stolen;
             reissued_ += st.reissued;
             duplicates_ += st.duplicates;
@@ -519,6 +633,20 @@ private:
 };
 
 }  // namespace
+
+std::vector<uint64_t> columnNodeMasks(int width, int height, int tileSize, int nodes) {
+    if (nodes < 1 || nodes > 64) throw InputError("column node masks: 1 to 64 nodes");
+    std::vector<uint64_t> masks;
+    for (const TileRect& t : makeTiles(width, height, tileSize)) {
+        // Node i's columns are [i * width / nodes, (i + 1) * width / nodes): the first and last
+        // nodes whose run holds one of the tile's pixels, and every one between.
+        const int first = int(int64_t(t.x0) * nodes / width), last = int(int64_t(t.x1 - 1) * nodes / width);
+        uint64_t m = 0;
+        for (int i = first; i <= last && i < nodes; ++i) m |= 1ull << i;
+        masks.push_back(m);
+    }
+    return masks;
+}
 
 SimReport simulateCluster(const TileProfile& profile, const SimConfig& config) {
     return Simulation(profile, config).run();

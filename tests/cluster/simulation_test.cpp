@@ -224,6 +224,144 @@ TEST(ClusterSimulation, RejectsBadConfigurations) {
     EXPECT_THROW(simulateCluster(p, cfg), InputError);
 }
 
+// ---- Display nodes (issue 19) ----------------------------------------------------------------
+
+TEST(ClusterSimulationNodes, OneNodeWithoutLatencyEqualsTheMasterModel) {
+    // Unlimited node and master links, no latency, no header bytes: a tile reaches the one node
+    // when it would have reached the master, is decoded by as many threads at the same cost, and
+    // the ack completes it in the scheduler at the same moment.
+    const TileProfile p = uniformProfile(16, 1.0 / 64, 1024, 1.0 / 256);
+    SimConfig master = trivial();
+    master.clients = 2;
+    master.prefetch = 4;
+    master.clientLink.latencySeconds = 0;
+    master.clientLink.bitsPerSecond = 1024.0 * 1024;
+    SimConfig node = master;
+    node.displayNodes = 1;
+    node.nodeDecodeThreads = master.decodeThreads;
+    const SimReport a = simulateCluster(p, master), b = simulateCluster(p, node);
+    EXPECT_EQ(a.frameSeconds, b.frameSeconds);
+    EXPECT_EQ(a.bytesPerFrame, b.bytesPerFrame);
+    ASSERT_EQ(b.nodeBytesPerFrame.size(), 1u);
+    EXPECT_EQ(b.nodeBytesPerFrame[0], b.bytesPerFrame);
+    EXPECT_TRUE(a.nodeBytesPerFrame.empty());
+    // With latency L, the barrier adds its round trip (NodeHave up, NodeSwap down): 2L a frame.
+    const double L = 1.0 / 1024;
+    master.clientLink.latencySeconds = node.clientLink.latencySeconds = L;
+    const SimReport c = simulateCluster(p, master), d = simulateCluster(p, node);
+    ASSERT_EQ(c.frameSeconds.size(), d.frameSeconds.size());
+    for (size_t i = 0; i < c.frameSeconds.size(); ++i) EXPECT_DOUBLE_EQ(d.frameSeconds[i], c.frameSeconds[i] + 2 * L);
+}
+
+TEST(ClusterSimulationNodes, OneLinkBoundNodeRunsAsTheLinkBoundMaster) {
+    // 64 tiles of 2^12 bytes over a 2^20 bit/s link: 2 s a frame, through the master's uplink or
+    // the one node's (its ack travels ahead of the pixels, which does not change the link's time).
+    const TileProfile p = uniformProfile(64, 0.0, 4096);
+    SimConfig master = trivial();
+    master.clients = 4;
+    master.prefetch = 4;
+    master.masterBitsPerSecond = 1024.0 * 1024;
+    SimConfig node = master;
+    node.masterBitsPerSecond = 0;
+    node.displayNodes = 1;
+    node.nodeBitsPerSecond = 1024.0 * 1024;
+    const SimReport a = simulateCluster(p, master), b = simulateCluster(p, node);
+    EXPECT_NEAR(b.fps, a.fps, 0.01 * a.fps);
+    EXPECT_LE(b.fps, 0.5);
+    EXPECT_GT(b.maxNodeLinkLoad, 0.98);
+}
+
+TEST(ClusterSimulationNodes, FramesPerSecondGrowWithNodesUpToTheirLinks) {
+    // A frame of 16 x 4 tiles split into columns: each node's link carries its share, so
+    // frames/s double with the nodes, never above what their links carry together.
+    TileProfile p = uniformProfile(64, 0.0, 4096);
+    p.width = 1024;
+    p.height = 256;
+    SimConfig cfg = trivial();
+    cfg.clients = 8;
+    cfg.prefetch = 4;
+    cfg.clientLink.bitsPerSecond = 16.0 * 1024 * 1024;
+    cfg.nodeBitsPerSecond = 1024.0 * 1024;
+    double last = 0;
+    for (int nodes : {1, 2, 4}) {
+        cfg.displayNodes = nodes;
+        const SimReport r = simulateCluster(p, cfg);
+        const double linkBound = nodes * cfg.nodeBitsPerSecond / (8.0 * 64 * 4096);
+        EXPECT_LE(r.fps, linkBound * 1.0001) << nodes << " nodes";
+        EXPECT_GT(r.fps, 0.95 * linkBound) << nodes << " nodes";
+        EXPECT_GT(r.fps, 1.9 * last) << nodes << " nodes";
+        ASSERT_EQ(r.nodeBytesPerFrame.size(), size_t(nodes));
+        for (double b : r.nodeBytesPerFrame) EXPECT_EQ(b, 64.0 * 4096 / nodes);
+        last = r.fps;
+    }
+}
+
+TEST(ClusterSimulationNodes, ATileOnTwoNodesCountsTwiceAndLoadsBothLinks) {
+    // Four tiles, two of them under the bezel between the two nodes (mask 3).
+    SimConfig cfg = trivial();
+    cfg.prefetch = 4;
+    cfg.displayNodes = 2;
+    cfg.nodeBitsPerSecond = 1024.0 * 1024;
+    cfg.tileNodes = {1, 3, 2, 3};
+    const TileProfile p = uniformProfile(4, 0.0, 1024);
+    const SimReport r = simulateCluster(p, cfg);
+    EXPECT_EQ(r.bytesPerFrame, 6 * 1024.0);
+    EXPECT_EQ(r.nodeBytesPerFrame, (std::vector<double>{3 * 1024.0, 3 * 1024.0}));
+    cfg.tileNodes = {1, 1, 2, 2};
+    const SimReport plain = simulateCluster(p, cfg);
+    EXPECT_EQ(plain.bytesPerFrame, 4 * 1024.0);
+    EXPECT_LT(r.fps, plain.fps);  // each node's link carries 3 tiles instead of 2
+    // The client's link carries each copy: one client link at the nodes' rate is the limit.
+    cfg.tileNodes = {1, 3, 2, 3};
+    cfg.nodeBitsPerSecond = 0;
+    cfg.clientLink.bitsPerSecond = 1024.0 * 1024;
+    EXPECT_GT(simulateCluster(p, cfg).maxClientLinkLoad, 0.0);
+    EXPECT_LE(simulateCluster(p, cfg).fps, 1024.0 * 1024 / (8 * 6 * 1024.0));
+}
+
+TEST(ClusterSimulationNodes, TheSwapWaitsForTheSlowestNode) {
+    // Two tiles, one per node, free to render and send; node 1's decodes 4 times as long. The
+    // frame is swapped when node 1 holds it; the barrier wait is the difference.
+    TileProfile p = uniformProfile(2, 0.0, 1024);
+    p.codecs[0].decodeSeconds = {1.0 / 256, 1.0 / 64};
+    SimConfig cfg = trivial();
+    cfg.prefetch = 2;
+    cfg.clientLink.latencySeconds = 0;
+    cfg.displayNodes = 2;
+    cfg.tileNodes = {1, 2};
+    const SimReport r = simulateCluster(p, cfg);
+    for (double s : r.frameSeconds) EXPECT_EQ(s, 1.0 / 64);
+    EXPECT_EQ(r.meanBarrierWait, 1.0 / 64 - 1.0 / 256);
+}
+
+TEST(ClusterSimulationNodes, ColumnMasksSplitTheWidthAndFanOutAtCutTiles) {
+    // 3840 pixels in 64-pixel tiles: 960-pixel runs hold whole tiles, no tile goes to two nodes.
+    const std::vector<uint64_t> four = columnNodeMasks(3840, 128, 64, 4);
+    ASSERT_EQ(four.size(), 120u);
+    for (size_t t = 0; t < four.size(); ++t) EXPECT_EQ(four[t], 1ull << ((t % 60) / 15)) << t;
+    // 100 pixels in 32-pixel tiles on two nodes: the boundary at 50 cuts the tile [32, 64).
+    EXPECT_EQ(columnNodeMasks(100, 32, 32, 2), (std::vector<uint64_t>{1, 3, 2, 2}));
+    EXPECT_EQ(columnNodeMasks(100, 32, 32, 1), (std::vector<uint64_t>{1, 1, 1, 1}));
+    EXPECT_THROW(columnNodeMasks(100, 32, 32, 0), InputError);
+    EXPECT_THROW(columnNodeMasks(100, 32, 32, 65), InputError);
+}
+
+TEST(ClusterSimulationNodes, RejectsBadNodeConfigurations) {
+    const TileProfile p = uniformProfile(4, 0.01, 10);
+    SimConfig cfg = trivial();
+    cfg.displayNodes = 65;
+    EXPECT_THROW(simulateCluster(p, cfg), InputError);
+    cfg = trivial();
+    cfg.displayNodes = 2;
+    cfg.tileNodes = {1, 2, 3};  // 3 masks for 4 tiles
+    EXPECT_THROW(simulateCluster(p, cfg), InputError);
+    cfg.tileNodes = {1, 2, 4, 1};  // node 2 of 2
+    EXPECT_THROW(simulateCluster(p, cfg), InputError);
+    cfg.tileNodes.clear();
+    cfg.nodeDecodeThreads = 0;
+    EXPECT_THROW(simulateCluster(p, cfg), InputError);
+}
+
 TEST(TileProfile, WritesAndReadsBack) {
     TileProfile p = uniformProfile(3, 0.25, 77, 0.5);
     p.scene = "test";

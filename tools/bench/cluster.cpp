@@ -193,7 +193,12 @@ toml::table clusterNodes(const SceneDesc& desc, const Image& reference, const Cl
 
 toml::table cluster(const ClusterOptions& o) {
     // Display-node walls: every count checked before anything runs.
-    for (int k : o.displayNodes) nodeBenchWall(o.width, o.height, k);
+    for (int k : o.displayNodes) {
+        nodeBenchWall(o.width, o.height, k);
+        if (!o.nodeAddresses.empty() && o.nodeAddresses.size() < size_t(k))
+            throw InputError("--node-addresses: " + std::to_string(o.nodeAddresses.size()) + " given for " + std::to_string(k) +
+                             " display nodes");
+    }
     for (const std::string& c : o.nodeCodecs) tileCodecFromName(c);
     SceneDesc desc = builtinScene("knots", o.triangles);
     desc.settings.width = o.width;

@@ -58,6 +58,9 @@ SimConfig configOf(const SimulateOptions& o, const TileProfile& profile) {
     cfg.masterSecondsPerResult = o.masterUsPerResult * 1e-6;
     cfg.masterSecondsPerByte = o.masterNsPerByte * 1e-9;
     cfg.masterSecondsPerFrame = o.masterMsPerFrame * 1e-3;
+    cfg.displayNodes = o.displayNodes;
+    cfg.nodeBitsPerSecond = parseRate(o.nodeLink);
+    cfg.nodeDecodeThreads = o.nodeDecodeThreads;
     return cfg;
 }
 
@@ -78,10 +81,18 @@ toml::table simulate(const SimulateOptions& o) {
         const SimReport r = simulateCluster(profile, cfg);
         // The link-bound ceiling: results of one frame over the master's link, or over
         // all client links together, whichever is slower.
+        // With display nodes the master's link carries only acks: the busiest node's link
+        // instead, and the client links carry every copy of a tile shown by two nodes.
         double ceiling = 0;
-        if (cfg.masterBitsPerSecond > 0) ceiling = cfg.masterBitsPerSecond / (8 * bytes);
+        const double sent = cfg.displayNodes > 0 ? r.bytesPerFrame : bytes;
+        if (cfg.displayNodes > 0) {
+            const double busiest = *std::max_element(r.nodeBytesPerFrame.begin(), r.nodeBytesPerFrame.end());
+            if (cfg.nodeBitsPerSecond > 0 && busiest > 0) ceiling = cfg.nodeBitsPerSecond / (8 * busiest);
+        } else if (cfg.masterBitsPerSecond > 0) {
+            ceiling = cfg.masterBitsPerSecond / (8 * bytes);
+        }
         if (cfg.clientLink.bitsPerSecond > 0) {
-            const double c = clients * cfg.clientLink.bitsPerSecond / (8 * bytes);
+            const double c = clients * cfg.clientLink.bitsPerSecond / (8 * sent);
             ceiling = ceiling > 0 ? std::min(ceiling, c) : c;
         }
         toml::table row{{"clients", clients},
@@ -96,7 +107,20 @@ toml::table simulate(const SimulateOptions& o) {
                         {"stolen_per_frame", r.stolenPerFrame},
                         {"reissued_per_frame", r.reissuedPerFrame},
                         {"affinity_hit_fraction", r.affinityHitFraction}};
-        if (o.text)
+        if (cfg.displayNodes > 0) {
+            toml::array nodeBytes;
+            for (double b : r.nodeBytesPerFrame) nodeBytes.push_back(b);
+            row.insert("display_nodes", cfg.displayNodes);
+            row.insert("node_bytes_per_frame", nodeBytes);
+            row.insert("max_node_link_load", r.maxNodeLinkLoad);
+            row.insert("mean_barrier_wait_ms", r.meanBarrierWait * 1e3);
+            row.insert("mpixel_per_s", double(profile.width) * profile.height * r.fps * 1e-6);
+        }
+        if (o.text && cfg.displayNodes > 0)
+            std::fprintf(o.text, "%4d clients, %d display nodes: %8.2f fps (link ceiling %8.2f), busiest node link %5.1f%%, "
+                         "barrier wait %.2f ms\n",
+                         clients, cfg.displayNodes, r.fps, ceiling, 100 * r.maxNodeLinkLoad, r.meanBarrierWait * 1e3);
+        else if (o.text)
             std::fprintf(o.text, "%4d clients: %8.2f fps (link ceiling %8.2f), master link %5.1f%%, clients busy %5.1f%%, "
                          "%.1f stolen/frame\n",
                          clients, r.fps, ceiling, 100 * r.masterLinkLoad, 100 * r.meanUtilisation, r.stolenPerFrame);
@@ -108,6 +132,7 @@ toml::table simulate(const SimulateOptions& o) {
                        {"master_link_bps", cfg.masterBitsPerSecond},
                        {"latency_ms", o.latencyMs},   {"prefetch", o.prefetch},
                        {"threads", o.threads},        {"affinity", !o.noAffinity},
+                       {"display_nodes", o.displayNodes}, {"node_link_bps", cfg.nodeBitsPerSecond},
                        {"results", rows}};
 }
 

@@ -76,6 +76,8 @@ struct SimulateOptions : Common {
     double latencyMs = 0.1, hostLoad = 0, spikeProb = 0, spikeMs = 0, masterUs = 28, clientSpeed = 1, decodeSpeed = 1, straggler = 4;
     bool noAffinity = false;
     uint64_t seed = 1;
+    int displayNodes = 0, nodeDecodeThreads = 1;  // > 0: a wall split into that many column runs (columnNodeMasks)
+    std::string nodeLink = "1gbit";                // each display node's link
 };
 toml::table simulate(const SimulateOptions& o);
 

@@ -131,6 +131,12 @@ void addSimulate(CLI::App& app, Run& run) {
         ->check(CLI::Range(0.0, 1e6));
     cmd->add_option("--frames", o.frames, "Simulated frames per client count (after one warm-up frame)")->check(CLI::Range(1, 100000));
     cmd->add_option("--seed", o.seed, "Seed for latency spikes and steal victims");
+    cmd->add_option("--display-nodes", o.displayNodes,
+                    "A wall on this many display nodes, each driving an equal run of columns (0: the master takes the pixels)")
+        ->check(CLI::Range(0, 64));
+    cmd->add_option("--node-link", o.nodeLink, "With --display-nodes: each node's link");
+    cmd->add_option("--node-decode-threads", o.nodeDecodeThreads, "With --display-nodes: decode threads per node")
+        ->check(CLI::Range(1, 1024));
     callBenchmark(cmd, run, a, bench::simulate);
 }
 

@@ -460,6 +460,17 @@ struct SimConfig {
     double clientSecondsPerResult = 0, clientSecondsPerByte = 0;
     double masterSecondsPerResult = 0, masterSecondsPerByte = 0;
     double masterSecondsPerFrame = 0;
+    // Display nodes (issue 19). 0: the master takes every result, as above. K > 0: a client
+    // sends each result over its own link once per node of the tile's mask, each copy through
+    // that node's link (FIFO, pipelined as the master's link) to the node's decode threads, and
+    // then a header-sized ack to the master, which decodes nothing. A frame is swapped when the
+    // last ack is in and the slowest node has decoded its last tile (the barrier), a round trip
+    // later (NodeHave up, NodeSwap down); the next frame begins then (the benchmark's pacing).
+    // Nodes are machines of their own (not on hostCores).
+    int displayNodes = 0;
+    std::vector<uint64_t> tileNodes;  // per tile, its node mask; empty: columnNodeMasks of the profile's frame
+    double nodeBitsPerSecond = 0;     // each node's link (0 = unlimited)
+    int nodeDecodeThreads = 1;
     int frames = 10;                 // measured frames
     int warmupFrames = 1;            // frames run first and not reported (affinity needs one)
     uint64_t seed = 1;               // latency spikes and the scheduler's steal victims
@@ -476,7 +487,18 @@ struct SimReport {
     double meanUtilisation = 0;
     double stolenPerFrame = 0, reissuedPerFrame = 0, duplicatesPerFrame = 0;
     double affinityHitFraction = 0;    // of the measured frames' tiles
+    // With display nodes: result bytes each node receives per frame (bytesPerFrame is their
+    // sum: a tile shown by two nodes counts twice), the busiest node link's load, and the mean
+    // time per frame between the first and the slowest node holding all its tiles.
+    std::vector<double> nodeBytesPerFrame;
+    double maxNodeLinkLoad = 0;
+    double meanBarrierWait = 0;
 };
+
+// The node masks of a wall whose nodes drive equal runs of columns, node 0 leftmost: a tile goes
+// to every node whose columns [i * width / nodes, (i + 1) * width / nodes) it overlaps (two at a
+// boundary that cuts it). makeTiles order.
+std::vector<uint64_t> columnNodeMasks(int width, int height, int tileSize, int nodes);
 
 // Event-driven, deterministic simulation of the master's TileScheduler (the same class, same
 // calls as the master: request on a client's credits, complete on each result, housekeeping
