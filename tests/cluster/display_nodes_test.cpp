@@ -359,6 +359,32 @@ TEST(DisplayNodes, NoNodeSwapsBeforeTheSlowestHoldsTheFrame) {
     }
 }
 
+// Master::waitForSwap (what paces `rtwall bench cluster --display-nodes`): it returns when the
+// barrier has released the frame, which is after the slow node said it holds it, and gives up
+// on a frame that was never rendered.
+TEST(DisplayNodes, WaitForSwapReturnsOnlyOnceTheSlowestNodeHoldsTheFrame) {
+    Wall w;
+    {
+        std::lock_guard lock(w.right.m);
+        w.right.haveDelay = 0.1;
+    }
+    ASSERT_TRUE(waitFor(w.right, [&] { return w.right.index.has_value(); }));
+    ASSERT_TRUE(waitFor(w.left, [&] { return w.left.index.has_value(); }));
+    ASSERT_TRUE(w.master.waitForClients(1, 5000));
+    for (int i = 0; i < 2; ++i) {
+        FrameReport report;
+        w.master.renderFrame(&report);
+        ASSERT_TRUE(w.master.waitForSwap(report.frame, 5000)) << "frame " << report.frame;
+        const double released = secondsNow();
+        std::lock_guard lock(w.right.m);
+        ASSERT_EQ(w.right.haveSentAt.size(), size_t(i + 1));
+        EXPECT_LE(w.right.haveSentAt.back(), released);
+    }
+    const auto t0 = Clock::now();
+    EXPECT_FALSE(w.master.waitForSwap(100, 200));  // never begun
+    EXPECT_GE(Clock::now() - t0, std::chrono::milliseconds(200));
+}
+
 TEST(DisplayNodes, AStalledNodeIsLeftOutAndNamedThenRejoins) {
     Wall w;
     ASSERT_TRUE(waitFor(w.left, [&] { return w.left.index.has_value(); }));
