@@ -4,8 +4,8 @@
 // whose columns go to the K nodes in equal runs (a 3840x2160 wall: 4 x 2 screens of 960x1080,
 // a node per column, two or all four). Clients replay (each tile rendered once, then its bytes
 // resent), nodes run headless and write nothing ([headless] write_every = 0), so a node's work
-// is receiving, decoding, the barrier and one copy of its frame; the figures are the links' and
-// the nodes', not the renderer's.
+// is receiving, decoding and the barrier; the figures are the links' and the nodes', not the
+// renderer's.
 //
 // Frames are paced by the swap: frame N+1 begins only when the barrier has released N (async
 // off, Master::waitForSwap). A node assembles one frame at a time, and a client acknowledges a
@@ -26,7 +26,6 @@
 
 #include <algorithm>
 #include <bit>
-#include <cerrno>
 #include <chrono>
 #include <csignal>
 #include <cstring>
