@@ -1,8 +1,10 @@
 // A display node's network side (issue 19): a DEALER to the master for control (NodeHello,
 // NodeFrame, NodeHave, NodeSwap, NodeSwapped) and a ROUTER on which the render clients deliver
-// the tiles its screens show. Tiles are decoded on this thread straight into a NodeAssembly;
-// a tile that comes before its frame's NodeFrame (it travels on another connection) waits in a
-// bounded queue. What is presented, and how, is the caller's callback.
+// the tiles its screens show. Tiles are decoded on this thread straight into a NodeAssembly (one
+// image per view); a tile that comes before its frame's NodeFrame (it travels on another
+// connection) waits in a bounded queue. A frame it holds becomes what it shows (NodeImages:
+// accumulated and composed into the eyes as on the single-PC wall) before it says so; the swap
+// presents that. What is presented, and how, is the caller's callback.
 #include "codec.h"
 #include "net.h"
 #include "node_assembly.h"
@@ -92,6 +94,7 @@ private:
         master_.set(zmq::sockopt::linger, 0);
         master_.connect(run_.connect);
         session_ = 0;
+        shown_ = NodeImages{};  // another session's frames: no running mean goes on across a rejoin
         routes_.clear();
         early_.clear();
         begun_ = false;
@@ -144,8 +147,11 @@ private:
             case MsgType::NodeFrame: onFrame(decodePayload<NodeFrame>(p, n)); break;
             case MsgType::NodeSwap: {
                 const NodeSwap s = decodePayload<NodeSwap>(p, n);
-                const bool held = begun_ && assembly_.frame() == s.frame && assembly_.complete();
-                if (run_.present) run_.present(s.frame, held ? &assembly_.image() : nullptr, s.leftOut);
+                const bool held = shown_.frame() == s.frame;
+                if (run_.present) {
+                    if (held) run_.present(s.frame, &shown_.left(), shown_.right().rgb.empty() ? nullptr : &shown_.right(), s.leftOut);
+                    else run_.present(s.frame, nullptr, nullptr, s.leftOut);
+                }
                 send(NodeSwapped{s.frame}, s.frame);
                 if (held && run_.frames > 0 && ++presented_ >= run_.frames) {
                     send(Goodbye{"display node '" + run_.name + "' presented its frames"});
@@ -168,13 +174,20 @@ private:
             return;
         }
         try {
-            assembly_.beginFrame(f.frame, f.width, f.height, f.tileSize, std::prev(r)->second, index_);
+            // The clients' tiling of the frame (viewTiles), which the masks index.
+            std::vector<ViewTile> tiles;
+            if (f.views.empty())
+                for (const TileRect& t : makeTiles(f.width, f.height, f.tileSize)) tiles.push_back({0, t});
+            else
+                tiles = viewTiles(f.views, f.width, f.height, f.tileSize);
+            assembly_.beginFrame(f.frame, f.width, f.height, tiles, uint32_t(f.views.size()), std::prev(r)->second, index_,
+                                 f.pixels == TilePixels::LinearHalf);
         } catch (const std::invalid_argument& e) {
             std::fprintf(stderr, "rtwall display: frame %u is skipped: %s\n", f.frame, e.what());
             return;
         }
         begun_ = true;
-        pixels_ = f.pixels;
+        frame_ = f;
         haveSent_ = false;
         // The tiles that came first.
         std::vector<zmq::message_t> early;
@@ -201,15 +214,15 @@ private:
         TileView view;
         if (assembly_.claim(r.frame, r.tile, rect, view) != NodeAssembly::Claim::Granted) return;
         try {
-            if (r.format != pixels_) throw DecodeError("a tile in another pixel format than its frame's");
+            if (r.format != frame_.pixels) throw DecodeError("a tile in another pixel format than its frame's");
             if (r.format == TilePixels::LinearHalf) {
-                // An accumulated frame's tile: shown as this frame's 8-bit pixels (the node does
-                // not accumulate across frames).
-                linear_.resize(size_t(rect.width()) * rect.height() * 3);
-                decodeWideTile(r.codec, r.pixels.data(), r.pixels.size(), rect.width(), rect.height(), linear_.data(),
-                               size_t(rect.width()) * 3, scratch_);
+                // An accumulated frame's tile: into the view's linear image (what is summed) and
+                // quantised into its 8-bit one, as the master does.
+                float* linear = assembly_.linearAt(assembly_.viewOf(r.tile), rect.x0, rect.y0);
+                const size_t stride = size_t(frame_.width) * 3;
+                decodeWideTile(r.codec, r.pixels.data(), r.pixels.size(), rect.width(), rect.height(), linear, stride, scratch_);
                 for (int y = 0; y < rect.height(); ++y)
-                    linearToSrgb8(linear_.data() + size_t(y) * rect.width() * 3, size_t(rect.width()) * 3, view.data + y * view.stride);
+                    linearToSrgb8(linear + size_t(y) * stride, size_t(rect.width()) * 3, view.data + y * view.stride);
             } else {
                 decodeTile(r.codec, r.pixels.data(), r.pixels.size(), rect.width(), rect.height(), view.data, view.stride);
             }
@@ -225,6 +238,7 @@ private:
     void reportIfComplete() {
         if (!begun_ || haveSent_ || !assembly_.complete()) return;
         haveSent_ = true;
+        shown_.show(frame_, assembly_);
         send(NodeHave{assembly_.frame()}, assembly_.frame());
     }
 
@@ -241,9 +255,9 @@ private:
     NodeAssembly assembly_;
     bool begun_ = false;     // assembly_ holds a frame begun in this session
     bool haveSent_ = false;  // its NodeHave went
-    TilePixels pixels_ = TilePixels::Srgb8;
+    NodeFrame frame_;        // what assembly_ holds
+    NodeImages shown_;       // what the node shows of the last frame it held
     std::vector<zmq::message_t> early_;
-    std::vector<float> linear_;
     std::vector<uint8_t> scratch_;
     int presented_ = 0;
 };

@@ -721,8 +721,10 @@ struct Master::Impl {
             if (!sendNode(n, TileRoutes{routesFrame, routes}, currentFrame)) return;
             n.routesFrame = routesFrame;
         }
-        if (sendNode(n, NodeFrame{currentFrame, rs.width, rs.height, rs.tileSize, framePixels}, currentFrame))
-            n.frameSent = currentFrame;
+        NodeFrame f{currentFrame, rs.width, rs.height, rs.tileSize, framePixels, frameViews, {}, frameStochastic, frameSeq};
+        const std::vector<int>& eyes = settings.displayNodes.viewEyes;
+        for (size_t v = 0; v < frameViews.size(); ++v) f.eyes.push_back(int8_t(v < eyes.size() && eyes[v] >= 0 && eyes[v] <= 1 ? eyes[v] : -1));
+        if (sendNode(n, f, currentFrame)) n.frameSent = currentFrame;
     }
 
     void onNodeHello(const std::string& peer, const Header& h, const uint8_t* data, size_t size) {

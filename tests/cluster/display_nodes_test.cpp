@@ -483,7 +483,8 @@ TEST(DisplayNodes, RenderClientsSendEachTileToItsNodesBitIdentical) {
 struct NodeThread {
     struct Shown {
         uint32_t frame;
-        std::optional<Image> image;
+        std::optional<Image> image;  // the mono image or the left eye's
+        std::optional<Image> right;
         std::vector<std::string> leftOut;
     };
     NodeThread(const std::string& endpoint, const std::string& name) {
@@ -495,9 +496,10 @@ struct NodeThread {
             std::lock_guard lock(m);
             wall = text;
         };
-        run.present = [this](uint32_t frame, const Image* image, const std::vector<std::string>& leftOut) {
+        run.present = [this](uint32_t frame, const Image* left, const Image* right, const std::vector<std::string>& leftOut) {
             std::lock_guard lock(m);
-            shown.push_back({frame, image ? std::optional<Image>(*image) : std::nullopt, leftOut});
+            shown.push_back({frame, left ? std::optional<Image>(*left) : std::nullopt,
+                             right ? std::optional<Image>(*right) : std::nullopt, leftOut});
         };
         thread = std::thread([this] { status = runDisplayNode(run); });
     }
@@ -595,6 +597,206 @@ TEST(DisplayNodes, NodesPresentTheirTilesAndSurviveAKilledNode) {
     right.reset();
     left.reset();
 }
+
+// Views and accumulation on display nodes (protocol 12) ---------------------------------------
+
+CameraDesc eyeCamera(const SceneDesc& d, float dx) {
+    CameraDesc c = d.cameras.front();
+    c.position.x += dx;
+    c.lookAt.x += dx;
+    return c;
+}
+
+// Each view's tiles split like halves(): view by view, the left half to node 0, the right to 1.
+std::vector<uint64_t> viewHalves(int width, int height, int tileSize, const std::vector<FrameView>& views) {
+    if (views.empty()) return halves(width, height, tileSize, views);
+    std::vector<uint64_t> masks;
+    for (const ViewTile& t : viewTiles(views, width, height, tileSize)) masks.push_back(t.rect.x0 < width / 2 ? 1u : 2u);
+    return masks;
+}
+
+// Whether `image` equals `expected` on the half of the 64-pixel-wide frame node `bit` shows.
+::testing::AssertionResult sameOnNode(const Image& image, const Image& expected, uint64_t bit) {
+    if (image.width != expected.width || image.height != expected.height)
+        return ::testing::AssertionFailure() << "size " << image.width << "x" << image.height << ", expected "
+                                             << expected.width << "x" << expected.height;
+    const int x0 = bit == 1 ? 0 : image.width / 2, x1 = bit == 1 ? image.width / 2 : image.width;
+    for (int y = 0; y < image.height; ++y)
+        if (std::memcmp(image.pixel(x0, y), expected.pixel(x0, y), size_t(x1 - x0) * 3) != 0)
+            return ::testing::AssertionFailure() << "row " << y << " differs";
+    return ::testing::AssertionSuccess();
+}
+
+// A master with render-client threads and two runDisplayNode threads, both joined.
+struct NodeWall {
+    struct Joined {
+        std::vector<std::thread> threads;
+        ~Joined() {
+            for (auto& t : threads) t.join();
+        }
+    } clients;  // joined after the master is gone (its goodbye ends them)
+    std::unique_ptr<Master> master;
+    std::unique_ptr<NodeThread> left, right;
+
+    NodeWall(const SceneDesc& scene, ClusterSettings cs) {
+        master = std::make_unique<Master>(scene, cs);
+        left = std::make_unique<NodeThread>(master->endpoint(), "left");
+        right = std::make_unique<NodeThread>(master->endpoint(), "right");
+        for (int i = 0; i < 2; ++i) {
+            ClientSettings c;
+            c.connect = master->endpoint();
+            c.threads = 1;
+            c.exitAfterIdleMs = 5000;
+            clients.threads.emplace_back([c] { runClient(c); });
+        }
+    }
+    bool ready() {
+        return master->waitForClients(2, 20000) && waitFor(*left, [&] { return !left->wall.empty(); }) &&
+               waitFor(*right, [&] { return !right->wall.empty(); });
+    }
+    // What `node` presented of `frame` (waits for it, at most 5 s).
+    std::optional<NodeThread::Shown> shownOf(NodeThread& node, uint32_t frame) {
+        std::optional<NodeThread::Shown> out;
+        waitFor(node, [&] {
+            for (const auto& s : node.shown)
+                if (s.frame == frame) out = s;
+            return out.has_value();
+        });
+        return out;
+    }
+    ~NodeWall() {
+        left.reset();
+        right.reset();
+        master.reset();
+    }
+};
+
+// A stereo frame (both eyes in one pass) on two nodes: each node presents a left and a right
+// image whose pixels on its half are one machine's render of that eye, bit for bit.
+TEST(DisplayNodes, StereoFramesShowBothEyesBitIdentical) {
+    const SceneDesc scene = smallScene();
+    ClusterSettings cs = nodeSettings();
+    cs.displayNodes.routes = viewHalves;
+    cs.displayNodes.viewEyes = {0, 1};
+    NodeWall w(scene, cs);
+    ASSERT_TRUE(w.ready());
+    const std::vector<FrameView> views{{eyeCamera(scene, -0.2f), {}, 0, 0}, {eyeCamera(scene, 0.2f), {}, 0, 0}};
+    w.master->setViews(views);
+    FrameReport report;
+    w.master->renderViews(&report);
+    ASSERT_EQ(report.views, 2u);
+    const Scene reference(scene);
+    const Image leftEye = renderFrame(reference, Camera(views[0].camera, 64, 48), scene.settings);
+    const Image rightEye = renderFrame(reference, Camera(views[1].camera, 64, 48), scene.settings);
+    ASSERT_NE(leftEye.rgb, rightEye.rgb);
+    for (NodeThread* node : {w.left.get(), w.right.get()}) {
+        const uint64_t bit = node == w.left.get() ? 1 : 2;
+        const auto shown = w.shownOf(*node, report.frame);
+        ASSERT_TRUE(shown.has_value()) << "node " << bit;
+        ASSERT_TRUE(shown->image.has_value()) << "node " << bit;
+        ASSERT_TRUE(shown->right.has_value()) << "node " << bit << " presented no right eye";
+        EXPECT_TRUE(sameOnNode(*shown->image, leftEye, bit)) << "node " << bit << ", left eye";
+        EXPECT_TRUE(sameOnNode(*shown->right, rightEye, bit)) << "node " << bit << ", right eye";
+    }
+}
+
+// A CAVE-like frame: two planes of one (mono) eye, each view with its region of the image: the
+// node's one image takes each plane's pixels from its view.
+TEST(DisplayNodes, PlanesAreComposedIntoTheEyeImageBitIdentical) {
+    const SceneDesc scene = smallScene();
+    ClusterSettings cs = nodeSettings();
+    cs.displayNodes.routes = viewHalves;
+    cs.displayNodes.viewEyes = {-1, -1};
+    NodeWall w(scene, cs);
+    ASSERT_TRUE(w.ready());
+    // Plane 0 shows x < 32 (node left), plane 1 the rest; a 64x48 reference image.
+    const std::vector<FrameView> views{{eyeCamera(scene, -0.3f), {{0, 0, 32, 48}}, 64, 48},
+                                       {eyeCamera(scene, 0.3f), {{32, 0, 32, 48}}, 64, 48}};
+    w.master->setViews(views);
+    FrameReport report;
+    w.master->renderViews(&report);
+    const Scene reference(scene);
+    const Image plane0 = renderFrame(reference, Camera(views[0].camera, 64, 48), scene.settings);
+    const Image plane1 = renderFrame(reference, Camera(views[1].camera, 64, 48), scene.settings);
+    const auto left = w.shownOf(*w.left, report.frame), right = w.shownOf(*w.right, report.frame);
+    ASSERT_TRUE(left && left->image && right && right->image);
+    EXPECT_FALSE(left->right.has_value());  // mono: one image
+    EXPECT_TRUE(sameOnNode(*left->image, plane0, 1));
+    EXPECT_TRUE(sameOnNode(*right->image, plane1, 2));
+}
+
+// A still view of a stochastic (GI) scene: after K frames each node shows one machine's running
+// mean of those K frame numbers (linear half-float tiles, Accumulator::addLinear), bit for bit;
+// a scene change restarts it. Mono, and stereo with one running mean per view.
+class NodeAccumulation : public ::testing::TestWithParam<bool> {};
+
+TEST_P(NodeAccumulation, AStillViewAccumulatesAsOnOneMachine) {
+    const bool stereo = GetParam();
+    SceneDesc scene = smallScene();
+    scene.settings.gi = true;
+    ASSERT_TRUE(rendersStochastically(scene));
+    ClusterSettings cs = nodeSettings();
+    cs.displayNodes.routes = viewHalves;
+    if (stereo) cs.displayNodes.viewEyes = {0, 1};
+    NodeWall w(scene, cs);
+    ASSERT_TRUE(w.ready());
+    std::vector<FrameView> views;
+    if (stereo) views = {{eyeCamera(scene, -0.2f), {}, 0, 0}, {eyeCamera(scene, 0.2f), {}, 0, 0}};
+    w.master->setViews(views);
+    const std::vector<CameraDesc> cameras = stereo ? std::vector<CameraDesc>{views[0].camera, views[1].camera}
+                                                   : std::vector<CameraDesc>{scene.cameras.front()};
+    const Scene reference(scene);
+    std::vector<Accumulator> sums(cameras.size());
+    auto check = [&](const char* when) {
+        FrameReport report;
+        w.master->renderViews(&report);
+        ASSERT_TRUE(report.stochastic);
+        ASSERT_TRUE(report.linear);
+        std::vector<Image> expected;
+        for (size_t v = 0; v < cameras.size(); ++v) {
+            const std::vector<float> one = renderFrameLinear(reference, Camera(cameras[v], 64, 48), scene.settings, report.frame);
+            sums[v].addLinear(one.data(), 64, 48);
+            expected.push_back(sums[v].resolve());
+        }
+        for (NodeThread* node : {w.left.get(), w.right.get()}) {
+            const uint64_t bit = node == w.left.get() ? 1 : 2;
+            const auto shown = w.shownOf(*node, report.frame);
+            ASSERT_TRUE(shown && shown->image) << when << ": node " << bit << " did not present frame " << report.frame;
+            EXPECT_TRUE(sameOnNode(*shown->image, expected[0], bit)) << when << ": node " << bit << ", frame " << report.frame;
+            if (stereo) {
+                ASSERT_TRUE(shown->right.has_value());
+                EXPECT_TRUE(sameOnNode(*shown->right, expected[1], bit)) << when << ": node " << bit << ", right eye";
+            }
+        }
+    };
+    for (int k = 0; k < 3; ++k) check("still view");
+    ASSERT_EQ(sums[0].frames(), 3);
+    // A scene change (the light) restarts every running mean, on one machine and on the nodes.
+    Light light = scene.lights.front();
+    light.intensity *= 0.5f;
+    w.master->setLight(0, light);
+    scene.lights.front() = light;
+    const Scene changed(scene);
+    for (Accumulator& a : sums) a.reset();
+    {
+        FrameReport report;
+        w.master->renderViews(&report);
+        for (size_t v = 0; v < cameras.size(); ++v) {
+            const std::vector<float> one = renderFrameLinear(changed, Camera(cameras[v], 64, 48), scene.settings, report.frame);
+            sums[v].addLinear(one.data(), 64, 48);
+        }
+        const Image expected = sums[0].resolve();
+        for (NodeThread* node : {w.left.get(), w.right.get()}) {
+            const uint64_t bit = node == w.left.get() ? 1 : 2;
+            const auto shown = w.shownOf(*node, report.frame);
+            ASSERT_TRUE(shown && shown->image);
+            EXPECT_TRUE(sameOnNode(*shown->image, expected, bit)) << "after the change: node " << bit;
+        }
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(MonoAndStereo, NodeAccumulation, ::testing::Bool(),
+                         [](const auto& info) { return info.param ? "Stereo" : "Mono"; });
 
 TEST(DisplayNodes, ANodeTheWallDoesNotNameIsRefused) {
     Wall w;

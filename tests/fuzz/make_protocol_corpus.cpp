@@ -124,6 +124,16 @@ int main(int argc, char** argv) {
                                               "rq:rM>}U?@Lns47E1%kR.o@n%FcmmsL/@{H8]yf7"});
     seedMessage("node-welcome", NodeWelcome{1, 250, 3000, "[wall]\nrows = 1\ncolumns = 2\n"});
     seedMessage("node-frame", NodeFrame{3, 128, 64, 32, TilePixels::Srgb8});
+    // Version 12: a stereo frame's views with their eyes, accumulated as linear tiles.
+    {
+        FrameView left, right;
+        left.camera.position = {-0.0325f, 0.0f, 2.0f};
+        right.camera.position = {0.0325f, 0.0f, 2.0f};
+        right.regions = {{0, 0, 64, 64}};
+        right.refWidth = 128;
+        right.refHeight = 64;
+        seedMessage("node-frame-stereo", NodeFrame{4, 128, 64, 32, TilePixels::LinearHalf, {left, right}, {0, 1}, true, 9});
+    }
     seedMessage("node-have", NodeHave{3});
     seedMessage("node-swap", NodeSwap{3, {"right_2"}});
     seedMessage("node-swapped", NodeSwapped{3});

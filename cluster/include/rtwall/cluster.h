@@ -46,6 +46,10 @@ struct DisplayNodeSettings {
     // order; with views, viewTiles order). The wall library builds it from TileRouting: the
     // cluster knows nothing of screens.
     std::function<std::vector<uint64_t>(int width, int height, int tileSize, const std::vector<FrameView>& views)> routes;
+    // The eye of each view of a multi-view frame (-1 mono, 0 left, 1 right), in setViews' order:
+    // a node composes its eyes' images from the views as the single-PC wall does. A view beyond
+    // the list is taken as mono (the node's left image).
+    std::vector<int> viewEyes;
     double stallSeconds = 0.5;  // a node this late for a frame the others hold is left out of it (SwapBarrier)
 };
 
@@ -364,10 +368,12 @@ struct DisplayNodeRun {
     // The master's wall config text, on every (re)join, before any frame: the caller sets up its
     // screens. An exception ends the node with its message.
     std::function<void(const std::string& wallText)> onWall;
-    // Frame `frame` is released: `image` is the whole frame with this node's tiles in it (null
-    // when this node does not hold that frame: it was left out); `leftOut` names the nodes the
-    // wall did not wait for.
-    std::function<void(uint32_t frame, const Image* image, const std::vector<std::string>& leftOut)> present;
+    // Frame `frame` is released: `left` is the whole wall image (the mono one, or the left eye's)
+    // with this node's tiles in it, `right` the right eye's of a stereo frame (else null), each
+    // accumulated over the frames of a still view of a stochastic scene as the single-PC wall
+    // does; both null when this node does not hold that frame (it was left out). `leftOut` names
+    // the nodes the wall did not wait for.
+    std::function<void(uint32_t frame, const Image* left, const Image* right, const std::vector<std::string>& leftOut)> present;
 };
 
 // Runs a display node until the master says goodbye, `frames` are presented, the stop flag is

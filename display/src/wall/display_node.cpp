@@ -30,11 +30,12 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
             headless = std::make_unique<HeadlessPresenter>(wall, options.out);
         }
     };
-    run.present = [&](uint32_t frame, const Image* image, const std::vector<std::string>& leftOut) {
-        if (!image) return;  // released without this node: nothing new to show
+    run.present = [&](uint32_t frame, const Image* left, const Image* right, const std::vector<std::string>& leftOut) {
+        if (!left) return;  // released without this node: nothing new to show
         WallFrame f;
         f.number = frame;
-        f.left = *image;
+        f.left = *left;
+        if (right) f.right = *right;
         Image overlay;
         PresentOptions po;
         if (!leftOut.empty()) {
