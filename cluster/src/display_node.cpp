@@ -9,14 +9,17 @@
 #include "net.h"
 #include "node_assembly.h"
 #include "protocol.h"
+#include "security.h"
 
 #include <rtwall/cluster.h>
 
 #include <zmq.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <optional>
 #include <thread>
@@ -33,19 +36,41 @@ constexpr size_t kMaxEarlyTiles = 4096;
 
 class DisplayNode {
 public:
-    explicit DisplayNode(const DisplayNodeRun& run) : run_(run) {}
+    explicit DisplayNode(const DisplayNodeRun& run) : run_(run) {
+        if (!run.keyFile.empty()) {
+            // As `rtwall client`: the same options, the same checks.
+            if (run.serverKeyFile.empty()) throw InputError("--key needs --server-key (the master's public key)");
+            checkZmqVersion();
+            keys_ = readKeyPair(run.keyFile);
+            serverKey_ = readPublicKey(run.serverKeyFile);
+            tileKeys_ = makeKeyPair();
+        }
+    }
 
     int operator()() {
         tiles_.set(zmq::sockopt::linger, 0);
         tiles_.set(zmq::sockopt::maxmsgsize, int64_t(kHeaderSize + 64 + maxEncodedTileBytes(2 * 1024, 1024)));
         tiles_.set(zmq::sockopt::rcvhwm, 100000);
+        if (keyed()) {
+            // A CURVE server for the clients' tiles, with a key pair of this run (the clients
+            // learn its public key from the master); until the master's welcome names the client
+            // keys, nobody gets in.
+            zap_ = std::make_unique<ZapHandler>(ctx_, std::vector<std::string>{}, "rtwall display",
+                                                "the client keys the master gave this node");
+            tiles_.set(zmq::sockopt::zap_domain, "rtwall-node");
+            tiles_.set(zmq::sockopt::curve_server, 1);
+            tiles_.set(zmq::sockopt::curve_secretkey, tileKeys_.secretKey);
+        }
         tiles_.bind(run_.bind);
-        endpoint_ = tiles_.get(zmq::sockopt::last_endpoint);
+        endpoint_ = advertisedNodeEndpoint(tiles_.get(zmq::sockopt::last_endpoint), run_.advertise);
         connect();
         double idleSince = nowSeconds();
         for (;;) {
-            zmq::pollitem_t items[] = {{master_.handle(), 0, ZMQ_POLLIN, 0}, {tiles_.handle(), 0, ZMQ_POLLIN, 0}};
-            zmq::poll(items, 2, std::chrono::milliseconds(10));
+            zmq::pollitem_t items[] = {{master_.handle(), 0, ZMQ_POLLIN, 0}, {tiles_.handle(), 0, ZMQ_POLLIN, 0},
+                                       {monitor_.handle(), 0, ZMQ_POLLIN, 0}};
+            zmq::poll(items, monitor_ ? 3 : 2, std::chrono::milliseconds(10));
+            if (monitor_ && (items[2].revents & ZMQ_POLLIN)) readMonitor();
+            if (zap_ && run_.counters) run_.counters->refusedClients = zap_->denied();
             if (items[0].revents & ZMQ_POLLIN) {
                 for (int i = 0; i < 256; ++i) {
                     zmq::message_t msg;
@@ -88,17 +113,35 @@ private:
         return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
     }
 
+    bool keyed() const { return !run_.keyFile.empty(); }
+
     void connect() {
         master_ = zmq::socket_t(ctx_, zmq::socket_type::dealer);
-        configureSocket(master_, int64_t(kHeaderSize + 64 + kMaxWallConfigBytes + (1 << 26)), 250, 3000);
+        // A welcome holds the wall config and the client keys.
+        configureSocket(master_, int64_t(kHeaderSize + 64 + kMaxWallConfigBytes + kMaxClientKeys * 48 + (1 << 26)), 250, 3000);
         master_.set(zmq::sockopt::linger, 0);
+        if (keyed()) {
+            master_.set(zmq::sockopt::curve_serverkey, serverKey_);
+            master_.set(zmq::sockopt::curve_publickey, keys_.publicKey);
+            master_.set(zmq::sockopt::curve_secretkey, keys_.secretKey);
+        }
+        // The handshake's outcome (a refused key, no CURVE on one side) is said in one line.
+        monitor_ = zmq::socket_t();
+        const std::string monitorAddress = "inproc://rtwall-node-monitor-" + std::to_string(++monitorSeq_);
+        if (zmq_socket_monitor(master_.handle(), monitorAddress.c_str(),
+                               ZMQ_EVENT_HANDSHAKE_FAILED_AUTH | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
+                                   ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_SUCCEEDED) == 0) {
+            monitor_ = zmq::socket_t(ctx_, zmq::socket_type::pair);
+            monitor_.set(zmq::sockopt::linger, 0);
+            monitor_.connect(monitorAddress);
+        }
         master_.connect(run_.connect);
         session_ = 0;
         shown_ = NodeImages{};  // another session's frames: no running mean goes on across a rejoin
         routes_.clear();
         early_.clear();
         begun_ = false;
-        sendNow(master_, encodeMessage(Header{}, NodeHello{kProtocolVersion, run_.name, endpoint_, ""}));
+        sendNow(master_, encodeMessage(Header{}, NodeHello{kProtocolVersion, run_.name, endpoint_, tileKeys_.publicKey}));
         lastHeard_ = lastSent_ = nowSeconds();
     }
 
@@ -131,6 +174,7 @@ private:
                 index_ = w.node;
                 heartbeatMs_ = int(std::max(10u, w.heartbeatMs));
                 timeoutMs_ = int(std::max(w.timeoutMs, 2 * w.heartbeatMs));
+                if (zap_) zap_->setAllowed(w.clientKeys);
                 if (run_.onWall) run_.onWall(w.wall);
                 std::fprintf(stderr, "rtwall display: node '%s' (%u) joined %s, tiles to %s\n", run_.name.c_str(), index_,
                              run_.connect.c_str(), endpoint_.c_str());
@@ -162,6 +206,7 @@ private:
             default: break;  // heartbeats, and types a node never gets
             }
         } catch (const DecodeError& e) {
+            if (run_.counters) ++run_.counters->droppedMessages;
             std::fprintf(stderr, "rtwall display: dropped a malformed message from the master: %s\n", e.what());
         }
         return std::nullopt;
@@ -204,6 +249,7 @@ private:
             if (h.type != MsgType::TileResult || h.version != kProtocolVersion || session_ == 0 || h.session != session_) return;
             r = decodePayload<TileResult>(bytes + kHeaderSize, msg.size() - kHeaderSize);
         } catch (const DecodeError&) {
+            if (run_.counters) ++run_.counters->droppedMessages;
             return;
         }
         if (!begun_ || r.frame > assembly_.frame()) {
@@ -242,9 +288,51 @@ private:
         send(NodeHave{assembly_.frame()}, assembly_.frame());
     }
 
+    // Handshake events of the connection to the master: a refusal is said, not just "no master".
+    void readMonitor() {
+        for (int i = 0; i < 16; ++i) {
+            zmq::message_t event, address;
+            if (!monitor_.recv(event, zmq::recv_flags::dontwait)) return;
+            if (!event.more() || !monitor_.recv(address, zmq::recv_flags::dontwait) || event.size() < 6) continue;
+            discardRestOf(monitor_, address);
+            uint16_t id;
+            uint32_t value;
+            std::memcpy(&id, event.data(), 2);
+            std::memcpy(&value, static_cast<const uint8_t*>(event.data()) + 2, 4);
+            if (id == ZMQ_EVENT_HANDSHAKE_SUCCEEDED) {
+                handshakeTrouble_.clear();
+                continue;
+            }
+            std::string why;
+            if (id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) {
+                if (run_.counters) ++run_.counters->refusedHandshakes;
+                why = "the master refused this node's key (status " + std::to_string(value) + "): is " + keys_.publicKey +
+                      " in the master's client_keys?";
+            } else {
+                if (run_.counters) ++run_.counters->failedHandshakes;
+                if (id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL && value == ZMQ_PROTOCOL_ERROR_ZMTP_MECHANISM_MISMATCH)
+                    why = "the master and this node disagree on security: one uses CURVE keys, the other not";
+                else if (id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL)
+                    why = "the handshake failed (ZMTP protocol error " + std::to_string(value) + ")";
+                else
+                    why = keyed() ? "the master broke off the CURVE handshake: is --server-key its public key?"
+                                  : "the master broke off the handshake: do the master and this node disagree on security "
+                                    "(a master with CURVE keys needs --key and --server-key here)?";
+            }
+            if (why != handshakeTrouble_) std::fprintf(stderr, "rtwall display: %s: %s\n", run_.connect.c_str(), why.c_str());
+            handshakeTrouble_ = why;
+        }
+    }
+
     const DisplayNodeRun& run_;
+    KeyPair keys_, tileKeys_;  // with CURVE: this node's pair towards the master, and its tile socket's
+    std::string serverKey_;    // the master's public key
     zmq::context_t ctx_{1};
     zmq::socket_t master_;
+    zmq::socket_t monitor_;  // handshake events of master_
+    uint64_t monitorSeq_ = 0;
+    std::string handshakeTrouble_;  // said once until it changes
+    std::unique_ptr<ZapHandler> zap_;  // with CURVE: the tile socket's key check (goes after the socket)
     zmq::socket_t tiles_{ctx_, zmq::socket_type::router};
     std::string endpoint_;
     uint64_t session_ = 0;
@@ -263,6 +351,37 @@ private:
 };
 
 }  // namespace
+
+std::string advertisedNodeEndpoint(const std::string& bound, const std::string& advertise) {
+    const size_t colon = bound.rfind(':');
+    if (!bound.starts_with("tcp://") || colon == std::string::npos || colon < 6)
+        throw InputError("display node: cannot tell the clients where '" + bound + "' is (expected tcp://HOST:PORT)");
+    const std::string host = bound.substr(6, colon - 6), port = bound.substr(colon + 1);
+    if (advertise.empty()) {
+        if (host == "0.0.0.0" || host == "*" || host == "[::]" || host == "::" || host == "[*]")
+            throw InputError("display node: --bind " + bound + " listens on every address: say which one the render "
+                             "clients reach this node at (--advertise HOST)");
+        return bound;
+    }
+    bool ok = !advertise.empty() && advertise.size() <= 240;
+    if (ok && advertise.front() == '[') {
+        // A bracketed IPv6 address.
+        ok = advertise.size() > 2 && advertise.back() == ']';
+        for (size_t i = 1; ok && i + 1 < advertise.size(); ++i) {
+            const char c = advertise[i];
+            ok = std::isxdigit(static_cast<unsigned char>(c)) || c == ':' || c == '.';
+        }
+    } else {
+        for (char c : advertise) ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-');
+        ok = ok && advertise.front() != '-' && advertise.front() != '.';
+    }
+    if (!ok)
+        throw InputError("display node: --advertise '" + advertise +
+                         "' is not a host name, an IPv4 address or a bracketed IPv6 address ([::1])");
+    if (advertise == "0.0.0.0" || advertise == "[::]")
+        throw InputError("display node: --advertise " + advertise + " is not an address the clients can reach");
+    return "tcp://" + advertise + ":" + port;
+}
 
 int runDisplayNode(const DisplayNodeRun& run) {
     if (run.name.empty()) throw InputError("display node: no name (--node NAME)");

@@ -259,6 +259,7 @@ struct Master::Impl {
 
     zmq::context_t ctx{1};
     std::unique_ptr<ZapHandler> zap;  // before the router: it must answer the first handshake
+    std::vector<std::string> allowedKeys;  // with CURVE: the client keys (Z85) let in, which display nodes take too
     zmq::socket_t router{ctx, zmq::socket_type::router};
     zmq::socket_t monitor{ctx, zmq::socket_type::pair};  // the router's failed handshakes
     zmq::socket_t wakeSend{ctx, zmq::socket_type::pair};
@@ -745,6 +746,12 @@ struct Master::Impl {
                                  : "the wall has no display node '" + hello.name + "'");
             return;
         }
+        // Behind CURVE the tiles must be too: a node reached over an authenticated link whose
+        // tile socket has no key would take pixels in the clear.
+        if (zap && hello.publicKey.empty()) {
+            refuse("display node '" + hello.name + "' has no tile key, and this master uses CURVE keys");
+            return;
+        }
         // A node of that name on another connection (a restarted node) is replaced.
         for (auto& [otherPeer, other] : nodes)
             if (other.name == hello.name && !other.deathReason) other.deathReason = "another node of its name said hello";
@@ -758,7 +765,7 @@ struct Master::Impl {
         n.lastSeen = nowSeconds();
         NodeState& ref = nodes[peer] = n;
         if (!sendNode(ref, NodeWelcome{ref.index, uint32_t(settings.heartbeatMs), uint32_t(settings.timeoutMs),
-                                       settings.displayNodes.wallText})) {
+                                       settings.displayNodes.wallText, allowedKeys})) {
             reapNodes();
             return;
         }
@@ -1389,6 +1396,7 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
             s.localArgs = {"--key", (s.localKeyDir / "local.key").string(), "--server-key",
                            (s.localKeyDir / "master.pub").string()};
         }
+        s.allowedKeys = allowed;
         s.zap = std::make_unique<ZapHandler>(s.ctx, allowed);
         s.router.set(zmq::sockopt::zap_domain, "rtwall");
         s.router.set(zmq::sockopt::curve_server, 1);

@@ -878,12 +878,15 @@ void read(Reader& r, NodeHello& m) {
     m.publicKey = readKey(r, "node public key");
 }
 
-RTWALL_WIRE_FIELDS(NodeWelcome, 4);
+RTWALL_WIRE_FIELDS(NodeWelcome, 5);
 void write(Writer& w, const NodeWelcome& m) {
     w.u32(m.node);
     w.u32(m.heartbeatMs);
     w.u32(m.timeoutMs);
     w.string(m.wall);
+    if (m.clientKeys.size() > kMaxClientKeys) throw std::length_error("protocol: too many client keys for a node");
+    w.u32(uint32_t(m.clientKeys.size()));
+    for (const std::string& k : m.clientKeys) w.string(k);
 }
 void read(Reader& r, NodeWelcome& m) {
     m.node = readNodeIndex(r);
@@ -894,6 +897,13 @@ void read(Reader& r, NodeWelcome& m) {
              " ms are out of range");
     m.wall = r.string(kMaxWallConfigBytes);
     if (m.wall.empty()) fail("node welcome without a wall config");
+    const uint32_t keys = r.u32();
+    r.expectElements(keys, sizeof(uint32_t) + kZ85KeyChars, kMaxClientKeys);
+    m.clientKeys.resize(keys);
+    for (std::string& k : m.clientKeys) {
+        k = readKey(r, "client key");
+        if (k.empty()) fail("empty client key");
+    }
 }
 
 RTWALL_WIRE_FIELDS(NodeFrame, 9);

@@ -14,7 +14,8 @@
 // scheduler pass; no views: the state's camera, 4 bytes more); 11 added display nodes (issue 19):
 // the node <-> master messages NodeHello to NodeSwapped, and for clients NodeList, TileRoutes and
 // TileDone: tiles go straight from the clients to the nodes that show them, the master gets a
-// small ack); 12 added to NodeFrame the frame's views with each view's eye (a node assembles
+// small ack); 12 added CURVE to the node links (NodeWelcome::clientKeys: the client keys a node's
+// tile socket lets in) and to NodeFrame the frame's views with each view's eye (a node assembles
 // one image per view and composes the eyes, as the single-PC wall does) and what a node needs to
 // accumulate a stochastic frame as the single-PC wall does (whether it is stochastic, and its
 // state's sequence number).
@@ -60,6 +61,7 @@ inline constexpr uint32_t kMaxTimeoutMs = 3'600'000;  // heartbeat and timeout: 
 inline constexpr uint32_t kMaxNodes = 64;                 // display nodes: node sets are 64-bit masks
 inline constexpr uint32_t kMaxTilesPerFrame = 1 << 22;    // a 16384-pixel-square frame of 8-pixel tiles
 inline constexpr size_t kMaxWallConfigBytes = 1 << 20;    // the wall config text a node is sent
+inline constexpr uint32_t kMaxClientKeys = 4096;          // client public keys a node is given
 
 enum class MsgType : uint16_t {
     Hello = 1,          // client -> master
@@ -311,6 +313,9 @@ struct NodeWelcome {
     uint32_t heartbeatMs = 250;
     uint32_t timeoutMs = 3000;
     std::string wall;  // the wall config's TOML text, at most kMaxWallConfigBytes
+    // Version 12: with CURVE, the public keys (Z85) of the render clients the master lets in: the
+    // node's tile socket takes only these (its ZAP handler). Empty without keys.
+    std::vector<std::string> clientKeys{};
 };
 
 // Frame `frame` is width x height in tiles of tileSize (makeTiles order; with views, viewTiles

@@ -9,6 +9,7 @@
 #include "codec.h"
 #include "net.h"
 #include "protocol.h"
+#include "security.h"
 
 #include <rtwall/cluster.h>
 
@@ -65,8 +66,15 @@ double secondsNow() { return std::chrono::duration<double>(Clock::now().time_sin
 // One scripted peer on a DEALER: what it received, and how it answers.
 class Peer {
 public:
-    Peer(zmq::context_t& ctx, const std::string& endpoint) : socket_(ctx, zmq::socket_type::dealer) {
+    // With `keys`, a CURVE client of the master whose public key is `serverKey`.
+    Peer(zmq::context_t& ctx, const std::string& endpoint, const KeyPair* keys = nullptr, const std::string& serverKey = {})
+        : socket_(ctx, zmq::socket_type::dealer) {
         socket_.set(zmq::sockopt::linger, 0);
+        if (keys) {
+            socket_.set(zmq::sockopt::curve_serverkey, serverKey);
+            socket_.set(zmq::sockopt::curve_publickey, keys->publicKey);
+            socket_.set(zmq::sockopt::curve_secretkey, keys->secretKey);
+        }
         socket_.connect(endpoint);
     }
     virtual ~Peer() = default;
@@ -102,7 +110,8 @@ protected:
 
 class FakeClient : public Peer {
 public:
-    FakeClient(zmq::context_t& ctx, const std::string& endpoint) : Peer(ctx, endpoint) {
+    FakeClient(zmq::context_t& ctx, const std::string& endpoint, const KeyPair* keys = nullptr, const std::string& serverKey = {})
+        : Peer(ctx, endpoint, keys, serverKey) {
         put(encodeMessage(Header{}, Hello{kProtocolVersion, 1, "fake-client"}));
     }
     std::mutex m;
@@ -487,11 +496,13 @@ struct NodeThread {
         std::optional<Image> right;
         std::vector<std::string> leftOut;
     };
-    NodeThread(const std::string& endpoint, const std::string& name) {
+    NodeThread(const std::string& endpoint, const std::string& name, const std::function<void(DisplayNodeRun&)>& configure = {}) {
         run.connect = endpoint;
         run.name = name;
         run.exitAfterIdleMs = 5000;
         run.stop = &stop;
+        run.counters = counters;
+        if (configure) configure(run);
         run.onWall = [this](const std::string& text) {
             std::lock_guard lock(m);
             wall = text;
@@ -501,7 +512,10 @@ struct NodeThread {
             shown.push_back({frame, left ? std::optional<Image>(*left) : std::nullopt,
                              right ? std::optional<Image>(*right) : std::nullopt, leftOut});
         };
-        thread = std::thread([this] { status = runDisplayNode(run); });
+        thread = std::thread([this] {
+            status = runDisplayNode(run);
+            finished = true;
+        });
     }
     ~NodeThread() {
         stop = true;
@@ -510,8 +524,9 @@ struct NodeThread {
     std::mutex m;
     std::string wall;
     std::vector<Shown> shown;
-    std::atomic<bool> stop{false};
-    int status = -1;
+    std::atomic<bool> stop{false}, finished{false};
+    std::atomic<int> status{-1};
+    std::shared_ptr<DisplayNodeCounters> counters = std::make_shared<DisplayNodeCounters>();
     DisplayNodeRun run;
     std::thread thread;
 };
@@ -796,7 +811,211 @@ TEST_P(NodeAccumulation, AStillViewAccumulatesAsOnOneMachine) {
 }
 
 INSTANTIATE_TEST_SUITE_P(MonoAndStereo, NodeAccumulation, ::testing::Bool(),
-                         [](const auto& info) { return info.param ? "Stereo" : "Mono"; });
+                         [](const auto& p) { return p.param ? "Stereo" : "Mono"; });
+
+// CURVE on the node links ----------------------------------------------------------------------
+
+// Waits (at most 10 s) for `pred`.
+template <class F> bool eventually(F pred) {
+    const auto end = Clock::now() + std::chrono::seconds(10);
+    while (Clock::now() < end) {
+        if (pred()) return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return pred();
+}
+
+// Every link keyed with exactly the arguments a master gives the processes it starts on its PC
+// (localClientArgs: --key, --server-key): nodes join, clients send them tiles over CURVE, the
+// screens are bit-identical; a stranger's key is refused by a node's tile socket, said on both
+// sides, and the wall goes on.
+TEST(DisplayNodes, CurveKeysOnEveryNodeLinkFramesBitIdenticalAndStrangersRefused) {
+    const SceneDesc scene = smallScene();
+    const auto dir = test::scratchDir();
+    writeNewKeyPair(dir / "master");
+    ClusterSettings cs = nodeSettings();
+    cs.keyFile = dir / "master.key";
+    cs.localClients = 2;  // the master makes a key pair for its PC's processes
+    struct Joined {
+        std::vector<std::thread> threads;
+        ~Joined() {
+            for (auto& t : threads) t.join();
+        }
+    } clients;
+    auto owned = std::make_unique<Master>(scene, cs);
+    Master& master = *owned;
+    const std::vector<std::string> args = master.localClientArgs();
+    ASSERT_EQ(args.size(), 4u);
+    ASSERT_EQ(args[0], "--key");
+    ASSERT_EQ(args[2], "--server-key");
+    auto keyed = [&](DisplayNodeRun& r) {
+        r.keyFile = args[1];
+        r.serverKeyFile = args[3];
+    };
+    auto left = std::make_unique<NodeThread>(master.endpoint(), "left", keyed);
+    auto right = std::make_unique<NodeThread>(master.endpoint(), "right", keyed);
+    for (int i = 0; i < 2; ++i) {
+        ClientSettings c;
+        c.connect = master.endpoint();
+        c.threads = 1;
+        c.exitAfterIdleMs = 5000;
+        c.keyFile = args[1];
+        c.serverKeyFile = args[3];
+        clients.threads.emplace_back([c] { runClient(c); });
+    }
+    ASSERT_TRUE(master.waitForClients(2, 20000));
+    ASSERT_TRUE(waitFor(*left, [&] { return !left->wall.empty(); }));
+    ASSERT_TRUE(waitFor(*right, [&] { return !right->wall.empty(); }));
+
+    const Scene reference(scene);
+    const Image one = renderFrame(reference, Camera(scene.cameras.front(), 64, 48), scene.settings);
+    auto presentsFrame = [&](const char* when) {
+        FrameReport report;
+        master.renderFrame(&report);
+        for (NodeThread* node : {left.get(), right.get()}) {
+            const uint64_t bit = node == left.get() ? 1 : 2;
+            ASSERT_TRUE(waitFor(*node, [&] { return !node->shown.empty() && node->shown.back().frame == report.frame; }))
+                << when << ": node " << bit;
+            std::lock_guard lock(node->m);
+            ASSERT_TRUE(node->shown.back().image.has_value()) << when << ": node " << bit;
+            EXPECT_TRUE(sameOnNode(*node->shown.back().image, one, bit)) << when << ": node " << bit;
+        }
+    };
+    presentsFrame("with keys");
+
+    // The master vouches for each node's tile key: a keyed client of the master reads them.
+    const KeyPair local = readKeyPair(args[1]);
+    const std::string masterKey = readPublicKey(args[3]);
+    zmq::context_t ctx{1};
+    FakeClient reader(ctx, master.endpoint(), &local, masterKey);
+    Peers peers({&reader});
+    ASSERT_TRUE(waitFor(reader, [&] { return !reader.lists.empty() && reader.lists.back().nodes.size() == 2; }));
+    NodeList list;
+    {
+        std::lock_guard lock(reader.m);
+        list = reader.lists.back();
+    }
+    EXPECT_EQ(list.nodes[0].serverKey.size(), 40u);
+    EXPECT_EQ(list.nodes[1].serverKey.size(), 40u);
+    EXPECT_NE(list.nodes[0].serverKey, list.nodes[1].serverKey);  // each node has its own pair
+    EXPECT_NE(list.nodes[0].serverKey, local.publicKey);
+
+    // A stranger with the node's server key but a key of its own: refused by the node's ZAP.
+    const KeyPair strangerKeys = makeKeyPair();
+    zmq::socket_t stranger(ctx, zmq::socket_type::dealer);
+    stranger.set(zmq::sockopt::linger, 0);
+    stranger.set(zmq::sockopt::curve_serverkey, list.nodes[0].serverKey);
+    stranger.set(zmq::sockopt::curve_publickey, strangerKeys.publicKey);
+    stranger.set(zmq::sockopt::curve_secretkey, strangerKeys.secretKey);
+    ASSERT_EQ(zmq_socket_monitor(stranger.handle(), "inproc://stranger-monitor", ZMQ_EVENT_HANDSHAKE_FAILED_AUTH), 0);
+    zmq::socket_t monitor(ctx, zmq::socket_type::pair);
+    monitor.set(zmq::sockopt::linger, 0);
+    monitor.connect("inproc://stranger-monitor");
+    stranger.connect(list.nodes[0].endpoint);
+    Header h;
+    h.session = 1;
+    const std::vector<uint8_t> forged = encodeMessage(h, TileResult{0, 0, TileCodec::Raw, 1, std::vector<uint8_t>(16 * 16 * 3, 255)});
+    stranger.send(zmq::buffer(forged), zmq::send_flags::dontwait);
+    monitor.set(zmq::sockopt::rcvtimeo, 10000);
+    zmq::message_t event;
+    ASSERT_TRUE(monitor.recv(event)) << "the stranger was not told it was refused";
+    uint16_t id = 0;
+    std::memcpy(&id, event.data(), 2);
+    EXPECT_EQ(id, ZMQ_EVENT_HANDSHAKE_FAILED_AUTH);
+    EXPECT_TRUE(eventually([&] { return left->counters->refusedClients.load() >= 1; })) << "the node did not count the refusal";
+    EXPECT_EQ(right->counters->refusedClients.load(), 0u);
+    presentsFrame("after the stranger");
+    EXPECT_EQ(master.counters().refused, 0u);  // the master saw nothing of it
+    peers.remove(&reader);
+    right.reset();
+    left.reset();
+}
+
+// A node without keys at a keyed master does not get in, and says why; so does one whose key
+// the master does not know. Neither hangs: each gives up after its idle time.
+TEST(DisplayNodes, NodesWithoutKeysOrWithUnknownKeysAreRefusedByAKeyedMaster) {
+    const SceneDesc scene = smallScene();
+    const auto dir = test::scratchDir();
+    writeNewKeyPair(dir / "master");
+    writeNewKeyPair(dir / "stranger");
+    ClusterSettings cs = nodeSettings();
+    cs.keyFile = dir / "master.key";
+    cs.localClients = 2;
+    Master master(scene, cs);
+    NodeThread keyless(master.endpoint(), "left", [](DisplayNodeRun& r) { r.exitAfterIdleMs = 1500; });
+    NodeThread unknown(master.endpoint(), "right", [&](DisplayNodeRun& r) {
+        r.exitAfterIdleMs = 1500;
+        r.keyFile = dir / "stranger.key";
+        r.serverKeyFile = dir / "master.pub";
+    });
+    ASSERT_TRUE(eventually([&] { return keyless.finished.load() && unknown.finished.load(); }));
+    EXPECT_EQ(keyless.status.load(), 1);
+    EXPECT_EQ(unknown.status.load(), 1);
+    EXPECT_GE(keyless.counters->failedHandshakes.load(), 1u);
+    EXPECT_GE(unknown.counters->refusedHandshakes.load(), 1u);
+    EXPECT_TRUE(keyless.wall.empty());
+    EXPECT_TRUE(unknown.wall.empty());
+    EXPECT_GE(master.refusedConnections(), 1u);
+    EXPECT_GE(master.counters().failedHandshakes, 1u);
+}
+
+TEST(DisplayNodes, AKeyWithoutTheMastersKeyIsAnInputError) {
+    const auto dir = test::scratchDir();
+    writeNewKeyPair(dir / "node");
+    DisplayNodeRun r;
+    r.connect = "tcp://127.0.0.1:9";
+    r.name = "left";
+    r.keyFile = dir / "node.key";
+    try {
+        runDisplayNode(r);
+        FAIL() << "no error";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("--key needs --server-key"), std::string::npos) << e.what();
+    }
+}
+
+// Where the clients are told to send a node's tiles.
+TEST(DisplayNodes, TheAdvertisedEndpointIsTheBoundOneOrTheGivenHost) {
+    EXPECT_EQ(advertisedNodeEndpoint("tcp://127.0.0.1:5601", ""), "tcp://127.0.0.1:5601");
+    EXPECT_EQ(advertisedNodeEndpoint("tcp://10.0.0.7:5601", ""), "tcp://10.0.0.7:5601");
+    EXPECT_EQ(advertisedNodeEndpoint("tcp://0.0.0.0:5601", "wall-pc-2"), "tcp://wall-pc-2:5601");
+    EXPECT_EQ(advertisedNodeEndpoint("tcp://0.0.0.0:5601", "10.1.2.3"), "tcp://10.1.2.3:5601");
+    EXPECT_EQ(advertisedNodeEndpoint("tcp://[::]:5601", "[fd00::7]"), "tcp://[fd00::7]:5601");
+    for (const char* wildcard : {"tcp://0.0.0.0:5601", "tcp://[::]:5601", "tcp://*:5601"}) {
+        try {
+            advertisedNodeEndpoint(wildcard, "");
+            ADD_FAILURE() << wildcard << ": no error";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("--advertise"), std::string::npos) << e.what();
+        }
+    }
+    for (const char* bad : {"wall pc", "host:1", "-x", "[fd00::7", "[zz::1]", "0.0.0.0", "a/b", "caf\xc3\xa9"})
+        EXPECT_THROW(advertisedNodeEndpoint("tcp://0.0.0.0:5601", bad), InputError) << bad;
+    EXPECT_THROW(advertisedNodeEndpoint("tcp://0.0.0.0:5601", std::string(241, 'a')), InputError);
+    EXPECT_THROW(advertisedNodeEndpoint("ipc:///tmp/x", ""), InputError);
+}
+
+// A node advertising a host name for its (loopback) bind: the clients reach it there. (A wildcard
+// bind is not used here: tests listen on loopback only.)
+TEST(DisplayNodes, ANodeIsReachedAtItsAdvertisedHost) {
+    SceneDesc scene = smallScene();
+    NodeWall w(scene, nodeSettings());
+    ASSERT_TRUE(w.ready());
+    w.left.reset();
+    w.left = std::make_unique<NodeThread>(w.master->endpoint(), "left", [](DisplayNodeRun& r) {
+        r.bind = "tcp://127.0.0.1:0";
+        r.advertise = "localhost";
+    });
+    ASSERT_TRUE(waitFor(*w.left, [&] { return !w.left->wall.empty(); }));
+    FrameReport report;
+    bool together = false;
+    for (int i = 0; i < 10 && !together; ++i) {
+        w.master->renderFrame(&report);
+        const auto shown = w.shownOf(*w.left, report.frame);
+        together = shown && shown->image && shown->leftOut.empty();
+    }
+    EXPECT_TRUE(together) << "the node advertised as localhost never presented a frame";
+}
 
 TEST(DisplayNodes, ANodeTheWallDoesNotNameIsRefused) {
     Wall w;

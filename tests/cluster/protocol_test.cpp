@@ -226,6 +226,7 @@ void expectSame(const NodeWelcome& a, const NodeWelcome& b) {
     EXPECT_EQ(a.heartbeatMs, b.heartbeatMs);
     EXPECT_EQ(a.timeoutMs, b.timeoutMs);
     EXPECT_EQ(a.wall, b.wall);
+    EXPECT_EQ(a.clientKeys, b.clientKeys);
 }
 void expectSame(const NodeFrame& a, const NodeFrame& b) {
     EXPECT_EQ(a.frame, b.frame);
@@ -405,7 +406,9 @@ TileResult sampleTileResult() {
 const std::string kSampleKey = "rq:rM>}U?@Lns47E1%kR.o@n%FcmmsL/@{H8]yf7";
 
 NodeHello sampleNodeHello() { return NodeHello{uint16_t(kProtocolVersion + 1), "left-PC_2", "tcp://10.0.0.7:5600", kSampleKey}; }
-NodeWelcome sampleNodeWelcome() { return NodeWelcome{63, 100, 2500, "[wall]\nscreens = 2\n"}; }
+NodeWelcome sampleNodeWelcome() {
+    return NodeWelcome{63, 100, 2500, "[wall]\nscreens = 2\n", {kSampleKey, "Yne@$w-vo<fVvi]a<NY6T1ed:M$fCG*[IaLV{hID"}};
+}
 NodeList sampleNodeList() {
     return NodeList{{{0, "left", "tcp://127.0.0.1:5601", ""}, {63, "right", "tcp://127.0.0.1:5602", kSampleKey}}};
 }
@@ -917,6 +920,27 @@ TEST(Protocol, NodeMessagesRejectValuesOutOfRange) {
     EXPECT_NO_THROW(decode<NodeWelcome>(payloadOf(w)));
     w.wall.push_back('#');
     EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+    // Version 12: the client keys a node's tile socket lets in, each a Z85 key.
+    w = sampleNodeWelcome();
+    w.clientKeys.clear();
+    EXPECT_NO_THROW(decode<NodeWelcome>(payloadOf(w)));
+    w.clientKeys = {""};
+    EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+    w.clientKeys = {kSampleKey.substr(1)};
+    EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+    w.clientKeys = {kSampleKey + "x"};
+    EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+    w.clientKeys = {kSampleKey};
+    w.clientKeys[0][3] = '~';
+    EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+    {
+        std::vector<uint8_t> p = payloadOf(sampleNodeWelcome());
+        const size_t countAt = p.size() - 2 * (4 + 40) - 4;  // the key count before the two keys
+        for (uint32_t count : {3u, kMaxClientKeys + 1, 0xFFFFFFFFu}) {
+            putU32(p, countAt, count);
+            EXPECT_THROW(decode<NodeWelcome>(p), DecodeError) << count;
+        }
+    }
 
     EXPECT_THROW(decode<NodeFrame>(payloadOf(NodeFrame{1, 0, 10, 8})), DecodeError);
     EXPECT_THROW(decode<NodeFrame>(payloadOf(NodeFrame{1, 10, 16385, 8})), DecodeError);

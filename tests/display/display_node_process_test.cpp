@@ -96,5 +96,84 @@ TEST(DisplayNodeProcesses, EachShowsItsHalfOfTheWallBitIdentical) {
     master.reset();
 }
 
+// A passive-stereo 2x2 wall on two nodes (protocol 12): both eyes render in one frame (two
+// views), and each node writes the left- and right-eye screens of its column, byte-identical
+// to the single-PC wall's screens of the same eye images.
+TEST(DisplayNodeProcesses, StereoWallShowsBothEyesOfEachNodesScreensBitIdentical) {
+    const std::string text = fileBytes(test::sourceDir() / "configs/wall/two-nodes-2x2.toml") +
+                             "\n[stereo]\nmode = \"passive\"\neye_separation = 0.065\n";
+    const WallConfig wall = parseWallConfig(text, "stereo two-node wall");
+    ASSERT_EQ(wall.screens.size(), 8u);
+    SceneDesc scene = loadSceneFile(test::sourceDir() / "configs/demo.toml");
+    scene.settings.width = wall.width;
+    scene.settings.height = wall.height;
+    scene.settings.supersample = 1;
+    const std::filesystem::path dir = test::displayScratchDir();
+
+    struct Joined {
+        std::vector<std::thread> threads;
+        ~Joined() {
+            for (auto& t : threads) t.join();
+        }
+    } clients;
+    ClusterSettings cs;
+    cs.async = false;
+    cs.displayNodes = displayNodeSettings(wall, text, {0, 1});
+    auto master = std::make_unique<Master>(scene, cs);
+    // Two eyes a little apart: any two cameras do, the point is that each eye's screens show its own.
+    std::vector<FrameView> views(2);
+    for (int e = 0; e < 2; ++e) {
+        views[size_t(e)].camera = scene.cameras.front();
+        views[size_t(e)].camera.position.x += e == 0 ? -0.3f : 0.3f;
+    }
+    master->setViews(views);
+    std::vector<std::unique_ptr<test::ChildProcess>> nodes;
+    for (const std::string name : {"left", "right"})
+        nodes.push_back(std::make_unique<test::ChildProcess>(std::vector<std::string>{
+            RTWALL_EXE, "display", "--connect", master->endpoint(), "--node", name, "--headless", "--out",
+            (dir / name).string(), "--frames", "1", "--exit-after-idle", "20000"}));
+    for (int i = 0; i < 2; ++i) {
+        ClientSettings c;
+        c.connect = master->endpoint();
+        c.threads = 1;
+        c.exitAfterIdleMs = 5000;
+        clients.threads.emplace_back([c] { runClient(c); });
+    }
+    ASSERT_TRUE(master->waitForClients(2, 20000));
+    for (int i = 0; i < 30; ++i) {
+        master->renderViews();
+        if (nodes[0]->wait(0) && nodes[1]->wait(0)) break;
+    }
+    for (auto& n : nodes) {
+        const std::optional<int> status = n->wait(10000);
+        ASSERT_TRUE(status.has_value()) << n->output();
+        EXPECT_EQ(*status, 0) << n->output();
+    }
+
+    const Scene reference(scene);
+    WallFrame one;
+    one.left = renderFrame(reference, Camera(views[0].camera, wall.width, wall.height), scene.settings);
+    one.right = renderFrame(reference, Camera(views[1].camera, wall.width, wall.height), scene.settings);
+    ASSERT_NE(one.left.rgb, one.right.rgb);
+    const std::map<std::string, std::vector<std::string>> screensOf{
+        {"left", {"c0r0L", "c0r0R", "c0r1L", "c0r1R"}}, {"right", {"c1r0L", "c1r0R", "c1r1L", "c1r1R"}}};
+    for (const auto& [name, screens] : screensOf) {
+        std::vector<std::filesystem::path> written;
+        for (const auto& e : std::filesystem::directory_iterator(dir / name)) written.push_back(e.path());
+        ASSERT_EQ(written.size(), 4u) << name;
+        std::sort(written.begin(), written.end());
+        const std::string stem = written[0].filename().string().substr(0, 13);
+        one.number = uint32_t(std::stoul(stem.substr(6, 6)));
+        HeadlessPresenter whole(wall, dir / ("one-" + name));
+        whole.present(one);
+        for (const std::string& screen : screens) {
+            const std::filesystem::path mine = dir / name / (stem + screen + ".png");
+            ASSERT_TRUE(std::filesystem::exists(mine)) << mine;
+            EXPECT_EQ(fileBytes(mine), fileBytes(dir / ("one-" + name) / (stem + screen + ".png"))) << name << " " << screen;
+        }
+    }
+    master.reset();
+}
+
 }  // namespace
 }  // namespace rtwall

@@ -362,6 +362,16 @@ struct DisplayNodeRun {
     std::string connect;                  // the master, tcp://HOST:PORT
     std::string name;                     // this node's name in the wall config
     std::string bind = "tcp://127.0.0.1:0";  // where the clients send tiles (port 0: a free one); told to the master
+    // The host the render clients reach the node at (the master tells them tcp://ADVERTISE:PORT,
+    // PORT the bound one). Empty: the bound address, which must then not be a wildcard.
+    std::string advertise;
+    // CURVE, as for a render client (ClientSettings): the node joins the master with this key pair
+    // (its public key in the master's client_keys) and checks the master's public key; its tile
+    // socket is then a CURVE server with a key pair made for the run (its public key reaches the
+    // clients through the master) and lets in only the client keys the master gives it.
+    std::filesystem::path keyFile;
+    std::filesystem::path serverKeyFile;
+    std::shared_ptr<struct DisplayNodeCounters> counters;  // optional: updated while it runs
     int exitAfterIdleMs = 0;              // > 0: exit when no master answers for this long
     int frames = 0;                       // > 0: exit after presenting this many frames it held (tests, benchmarks)
     const std::atomic<bool>* stop = nullptr;  // set: say goodbye and return 0
@@ -375,6 +385,19 @@ struct DisplayNodeRun {
     // the nodes the wall did not wait for.
     std::function<void(uint32_t frame, const Image* left, const Image* right, const std::vector<std::string>& leftOut)> present;
 };
+
+struct DisplayNodeCounters {
+    std::atomic<uint64_t> refusedClients{0};     // tile connections whose key the master did not give (ZAP)
+    std::atomic<uint64_t> refusedHandshakes{0};  // the master refused this node's key
+    std::atomic<uint64_t> failedHandshakes{0};   // other broken handshakes with the master (no CURVE on one side, wrong server key)
+    std::atomic<uint64_t> droppedMessages{0};    // malformed or unexpected messages from the master or on the tile socket
+};
+
+// The endpoint a node bound at `bound` (tcp://HOST:PORT, as ZMQ_LAST_ENDPOINT gives it) tells
+// the clients: tcp://ADVERTISE:PORT, or `bound` itself without `advertise`. Throws InputError
+// for a wildcard bind (0.0.0.0, *, [::]) without `advertise`, and for an advertised host that
+// is not a host name, an IPv4 address or a bracketed IPv6 address.
+std::string advertisedNodeEndpoint(const std::string& bound, const std::string& advertise);
 
 // Runs a display node until the master says goodbye, `frames` are presented, the stop flag is
 // set or no master answers for exitAfterIdleMs. Returns the process exit status.

@@ -15,6 +15,9 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
     run.connect = options.connect;
     run.name = options.name;
     run.bind = options.bind;
+    run.advertise = options.advertise;
+    run.keyFile = options.keyFile;
+    run.serverKeyFile = options.serverKeyFile;
     run.frames = options.frames;
     run.exitAfterIdleMs = options.exitAfterIdleMs;
     run.stop = stop;
