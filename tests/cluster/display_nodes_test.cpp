@@ -1017,6 +1017,116 @@ TEST(DisplayNodes, ANodeIsReachedAtItsAdvertisedHost) {
     EXPECT_TRUE(together) << "the node advertised as localhost never presented a frame";
 }
 
+// A hostile master (a ROUTER of the test's) sends a display node NodeFrames and welcomes whose
+// new fields (protocol 12) are out of range: the node drops and counts each, never crashes or
+// hangs, and still assembles, accumulates and presents a good frame after them.
+TEST(DisplayNodes, ANodeDropsMalformedViewsEyesAndKeysFromAHostileMaster) {
+    zmq::context_t ctx{1};
+    zmq::socket_t master(ctx, zmq::socket_type::router);
+    master.set(zmq::sockopt::linger, 0);
+    master.bind("tcp://127.0.0.1:0");
+    NodeThread node(master.get(zmq::sockopt::last_endpoint), "left");
+    master.set(zmq::sockopt::rcvtimeo, 5000);
+    zmq::message_t identity, hello;
+    ASSERT_TRUE(master.recv(identity));
+    ASSERT_TRUE(master.recv(hello));
+    const Header hh = decodeHeader(static_cast<const uint8_t*>(hello.data()), hello.size());
+    ASSERT_EQ(hh.type, MsgType::NodeHello);
+    const NodeHello nh = decodePayload<NodeHello>(static_cast<const uint8_t*>(hello.data()) + kHeaderSize, hello.size() - kHeaderSize);
+    EXPECT_TRUE(nh.publicKey.empty());  // no keys, no tile key
+    const std::string peer = identity.to_string();
+    auto put = [&](const auto& msg, uint32_t frame = 0) {
+        Header h;
+        h.session = 77;
+        h.frame = frame;
+        const std::vector<uint8_t> bytes = encodeMessage(h, msg);
+        master.send(zmq::buffer(peer), zmq::send_flags::sndmore);
+        master.send(zmq::buffer(bytes));
+    };
+    // A welcome with a client key that is not Z85: dropped (the node stays out of the session).
+    NodeWelcome badWelcome{0, 50, 5000, "[wall]\n", {std::string(40, '~')}};
+    put(badWelcome);
+    ASSERT_TRUE(eventually([&] { return node.counters->droppedMessages.load() >= 1; }));
+    EXPECT_TRUE(node.wall.empty());
+    put(NodeWelcome{0, 50, 5000, "[wall]\n", {}});
+    ASSERT_TRUE(waitFor(node, [&] { return !node.wall.empty(); }));
+
+    SceneDesc scene = smallScene();
+    scene.settings.gi = true;
+    const std::vector<FrameView> views{{eyeCamera(scene, -0.2f), {}, 0, 0}, {eyeCamera(scene, 0.2f), {}, 0, 0}};
+    const std::vector<uint64_t> masks = viewHalves(64, 48, 16, views);
+    put(TileRoutes{1, masks}, 1);
+    const NodeFrame good{1, 64, 48, 16, TilePixels::Srgb8, views, {0, 1}, true, 5};
+    std::vector<NodeFrame> bad;
+    NodeFrame f = good;
+    f.eyes = {0};  // an eye short
+    bad.push_back(f);
+    f = good;
+    f.eyes = {0, 2};  // no such eye
+    bad.push_back(f);
+    f = good;
+    f.pixels = TilePixels::LinearHalf;
+    f.stochastic = false;  // linear tiles of a frame that does not accumulate
+    bad.push_back(f);
+    f = good;
+    f.views = std::vector<FrameView>(kMaxViews + 1, views[0]);  // more views than a frame has
+    f.eyes.clear();  // (the writer refuses more eyes than that; the reader stops at the views)
+    bad.push_back(f);
+    f = good;
+    f.views[1].regions = {{60, 0, 10, 10}};  // a region outside its reference image
+    f.views[1].refWidth = 64;
+    f.views[1].refHeight = 48;
+    bad.push_back(f);
+    const uint64_t before = node.counters->droppedMessages.load();
+    for (const NodeFrame& b : bad) put(b, 1);
+    ASSERT_TRUE(eventually([&] { return node.counters->droppedMessages.load() >= before + bad.size(); }));
+    EXPECT_EQ(node.counters->droppedMessages.load(), before + bad.size());
+    // Views whose tiling does not match the masks: the frame is skipped, not assembled.
+    f = good;
+    f.views.push_back(views[0]);
+    f.eyes.push_back(-1);
+    put(f, 1);
+    put(NodeSwap{1, {}}, 1);
+    ASSERT_TRUE(waitFor(node, [&] { return !node.shown.empty(); }));
+    {
+        std::lock_guard lock(node.m);
+        EXPECT_FALSE(node.shown.back().image.has_value());  // it did not hold the frame
+    }
+    EXPECT_FALSE(node.finished.load());
+
+    // Then a good stereo frame: its tiles (from a test client on the node's tile socket) are
+    // assembled into both eyes.
+    put(good, 1);
+    zmq::socket_t client(ctx, zmq::socket_type::dealer);
+    client.set(zmq::sockopt::linger, 0);
+    client.connect(nh.endpoint);
+    const std::vector<ViewTile> tiles = viewTiles(views, 64, 48, 16);
+    for (uint32_t t = 0; t < tiles.size(); ++t) {
+        if (!(masks[t] & 1)) continue;
+        const std::vector<uint8_t> pixels(size_t(tiles[t].rect.width()) * tiles[t].rect.height() * 3, uint8_t(10 + tiles[t].view * 100));
+        Header h;
+        h.session = 77;
+        h.frame = 1;
+        client.send(zmq::buffer(encodeMessage(h, TileResult{1, t, TileCodec::Raw, 1, pixels})), zmq::send_flags::dontwait);
+    }
+    master.set(zmq::sockopt::rcvtimeo, 100);
+    bool have = false;
+    for (int i = 0; i < 100 && !have; ++i) {
+        zmq::message_t from, msg;
+        if (!master.recv(from) || !master.recv(msg)) continue;
+        const Header h = decodeHeader(static_cast<const uint8_t*>(msg.data()), msg.size());
+        have = h.type == MsgType::NodeHave;
+    }
+    ASSERT_TRUE(have) << "the node never held the good frame";
+    put(NodeSwap{1, {}}, 1);
+    ASSERT_TRUE(waitFor(node, [&] { return node.shown.size() >= 2; }));
+    std::lock_guard lock(node.m);
+    const NodeThread::Shown& shown = node.shown.back();
+    ASSERT_TRUE(shown.image && shown.right);
+    EXPECT_EQ(shown.image->pixel(0, 0)[0], 10);
+    EXPECT_EQ(shown.right->pixel(0, 0)[0], 110);
+}
+
 TEST(DisplayNodes, ANodeTheWallDoesNotNameIsRefused) {
     Wall w;
     FakeNode stranger(w.ctx, w.master.endpoint(), "attic");

@@ -175,5 +175,88 @@ TEST(DisplayNodeProcesses, StereoWallShowsBothEyesOfEachNodesScreensBitIdentical
     master.reset();
 }
 
+// CURVE on the node links, as `rtwall run` will start local nodes: with exactly the arguments
+// the master gives its PC's processes (localClientArgs: --key, --server-key), two node processes
+// join a keyed master and show their screens bit-identical; a node without keys is refused and
+// says why in one line, and gives up after its idle time.
+TEST(DisplayNodeProcesses, KeyedNodesWithTheLocalArgumentsWorkAndAKeylessOneIsRefused) {
+    const std::filesystem::path configFile = test::sourceDir() / "configs/wall/two-nodes-2x2.toml";
+    const std::string text = fileBytes(configFile);
+    const WallConfig wall = loadWallConfig(configFile);
+    SceneDesc scene = loadSceneFile(test::sourceDir() / "configs/demo.toml");
+    scene.settings.width = wall.width;
+    scene.settings.height = wall.height;
+    scene.settings.supersample = 1;
+    const std::filesystem::path dir = test::displayScratchDir();
+    writeNewKeyPair(dir / "master");
+
+    struct Joined {
+        std::vector<std::thread> threads;
+        ~Joined() {
+            for (auto& t : threads) t.join();
+        }
+    } clients;
+    ClusterSettings cs;
+    cs.async = false;
+    cs.keyFile = dir / "master.key";
+    cs.localClients = 2;
+    cs.displayNodes = displayNodeSettings(wall, text);
+    auto master = std::make_unique<Master>(scene, cs);
+    const std::vector<std::string> keyArgs = master->localClientArgs();
+    ASSERT_EQ(keyArgs.size(), 4u);
+    std::vector<std::unique_ptr<test::ChildProcess>> nodes;
+    for (const std::string name : {"left", "right"}) {
+        std::vector<std::string> argv{RTWALL_EXE, "display", "--connect", master->endpoint(), "--node", name, "--headless",
+                                      "--out", (dir / name).string(), "--frames", "1", "--exit-after-idle", "20000"};
+        argv.insert(argv.end(), keyArgs.begin(), keyArgs.end());
+        nodes.push_back(std::make_unique<test::ChildProcess>(argv));
+    }
+    test::ChildProcess keyless({RTWALL_EXE, "display", "--connect", master->endpoint(), "--node", "left", "--headless", "--out",
+                                (dir / "keyless").string(), "--exit-after-idle", "2000"});
+    for (int i = 0; i < 2; ++i) {
+        ClientSettings c;
+        c.connect = master->endpoint();
+        c.threads = 1;
+        c.exitAfterIdleMs = 5000;
+        c.keyFile = keyArgs[1];
+        c.serverKeyFile = keyArgs[3];
+        clients.threads.emplace_back([c] { runClient(c); });
+    }
+    ASSERT_TRUE(master->waitForClients(2, 20000));
+    for (int i = 0; i < 30; ++i) {
+        master->renderFrame();
+        if (nodes[0]->wait(0) && nodes[1]->wait(0)) break;
+    }
+    for (auto& n : nodes) {
+        const std::optional<int> status = n->wait(10000);
+        ASSERT_TRUE(status.has_value()) << n->output();
+        EXPECT_EQ(*status, 0) << n->output();
+    }
+    const std::optional<int> refused = keyless.wait(20000);
+    ASSERT_TRUE(refused.has_value()) << keyless.output();
+    EXPECT_EQ(*refused, 1) << keyless.output();
+    EXPECT_NE(keyless.output().find("disagree on security"), std::string::npos) << keyless.output();
+    EXPECT_FALSE(std::filesystem::exists(dir / "keyless")) << "a refused node presented something";
+
+    const Scene reference(scene);
+    WallFrame one;
+    one.left = renderFrame(reference, Camera(scene.cameras.front(), wall.width, wall.height), scene.settings);
+    const std::map<std::string, std::vector<std::string>> screensOf{{"left", {"c0r0", "c0r1"}}, {"right", {"c1r0", "c1r1"}}};
+    for (const auto& [name, screens] : screensOf) {
+        std::vector<std::filesystem::path> written;
+        for (const auto& e : std::filesystem::directory_iterator(dir / name)) written.push_back(e.path());
+        ASSERT_EQ(written.size(), 2u) << name;
+        std::sort(written.begin(), written.end());
+        const std::string stem = written[0].filename().string().substr(0, 13);
+        one.number = uint32_t(std::stoul(stem.substr(6, 6)));
+        HeadlessPresenter whole(wall, dir / ("one-" + name));
+        whole.present(one);
+        for (const std::string& screen : screens)
+            EXPECT_EQ(fileBytes(dir / name / (stem + screen + ".png")), fileBytes(dir / ("one-" + name) / (stem + screen + ".png")))
+                << name << " " << screen;
+    }
+    master.reset();
+}
+
 }  // namespace
 }  // namespace rtwall
