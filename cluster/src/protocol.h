@@ -303,7 +303,7 @@ struct NodeHello {
     uint16_t protocolVersion = kProtocolVersion;
     std::string name;
     std::string endpoint;   // the node's ROUTER for tiles
-    std::string publicKey;  // its CURVE server key, Z85, or empty
+    std::string publicKey;  // its tile socket's CURVE server key (a pair made for the run), Z85; empty without keys
 };
 
 // The node's place in the wall: bit `node` of the tile masks, and the whole wall config (the
