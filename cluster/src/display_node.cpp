@@ -98,8 +98,9 @@ public:
             if (session_ && now - lastSent_ > heartbeatMs_ * 1e-3) send(Heartbeat{});
             if (now - lastHeard_ > timeoutMs_ * 1e-3) {
                 if (run_.exitAfterIdleMs > 0 && now - idleSince > run_.exitAfterIdleMs * 1e-3) {
-                    std::fprintf(stderr, "rtwall display: no master at %s for %d ms, giving up\n", run_.connect.c_str(),
-                                 run_.exitAfterIdleMs);
+                    std::fprintf(stderr, "rtwall display: no master at %s for %d ms, giving up%s\n", run_.connect.c_str(),
+                                 run_.exitAfterIdleMs,
+                                 handshakeTrouble_.empty() ? "" : (" (" + handshakeTrouble_ + ")").c_str());
                     return 1;
                 }
                 // The master went silent: join again (a restarted master, or one that dropped us).
