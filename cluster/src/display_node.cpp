@@ -176,6 +176,9 @@ private:
                 heartbeatMs_ = int(std::max(10u, w.heartbeatMs));
                 timeoutMs_ = int(std::max(w.timeoutMs, 2 * w.heartbeatMs));
                 if (zap_) zap_->setAllowed(w.clientKeys);
+                // At once: the master tells the clients where this node is only once it answered
+                // (its tile socket now lets their keys in).
+                send(Heartbeat{});
                 if (run_.onWall) run_.onWall(w.wall);
                 std::fprintf(stderr, "rtwall display: node '%s' (%u) joined %s, tiles to %s\n", run_.name.c_str(), index_,
                              run_.connect.c_str(), endpoint_.c_str());

@@ -80,6 +80,9 @@ struct NodeState {
     double lastSeen = 0, lastSent = 0;
     uint32_t routesFrame = UINT32_MAX;  // the TileRoutes it holds
     uint32_t frameSent = 0;             // the last frame whose NodeFrame it was sent
+    // It answered its welcome: it holds the client keys (its tile socket lets them in), so the
+    // clients may now be told where it is; before, a client's handshake could be refused.
+    bool answered = false;
     const char* deathReason = nullptr;
 };
 
@@ -676,7 +679,7 @@ struct Master::Impl {
     NodeList nodeList() const {
         NodeList list;
         for (const auto& [peer, n] : nodes)
-            if (!n.deathReason) list.nodes.push_back({n.index, n.name, n.endpoint, n.publicKey});
+            if (!n.deathReason && n.answered) list.nodes.push_back({n.index, n.name, n.endpoint, n.publicKey});
         std::sort(list.nodes.begin(), list.nodes.end(), [](const NodeEndpoint& a, const NodeEndpoint& b) { return a.node < b.node; });
         return list;
     }
@@ -772,7 +775,6 @@ struct Master::Impl {
         std::fprintf(stderr, "rtwall master: display node '%s' (%u) joins, tiles to %s\n", ref.name.c_str(), ref.index,
                      ref.endpoint.c_str());
         barrier.join(ref.index);
-        sendNodeListToClients();
         if (frameActive) sendNodeFrame(ref, frameState.settings);
     }
 
@@ -792,6 +794,11 @@ struct Master::Impl {
 
     void handleNode(NodeState& n, const Header& h, const uint8_t* payload, size_t payloadSize) {
         n.lastSeen = nowSeconds();
+        if (!n.answered) {
+            // Its first message after the welcome (it sends a heartbeat at once): the clients learn of it now.
+            n.answered = true;
+            sendNodeListToClients();
+        }
         switch (h.type) {
         case MsgType::NodeHave: {
             const NodeHave have = decodePayload<NodeHave>(payload, payloadSize);

@@ -148,6 +148,24 @@ private:
     }
 };
 
+// A client of the master that only reads the node lists it is sent: it never proves the state,
+// so it is never given tiles (a FakeClient would acknowledge tiles that no node receives).
+class ListReader : public Peer {
+public:
+    ListReader(zmq::context_t& ctx, const std::string& endpoint, const KeyPair* keys = nullptr, const std::string& serverKey = {})
+        : Peer(ctx, endpoint, keys, serverKey) {
+        put(encodeMessage(Header{}, Hello{kProtocolVersion, 1, "list-reader"}));
+    }
+    std::mutex m;
+    std::vector<NodeList> lists;
+
+private:
+    void on(const Header& h, const uint8_t* p, size_t n) override {
+        std::lock_guard lock(m);
+        if (h.type == MsgType::NodeList) lists.push_back(decodePayload<NodeList>(p, n));
+    }
+};
+
 class FakeNode : public Peer {
 public:
     // With `takeTiles`, the node binds a ROUTER on loopback for the clients' tiles and keeps what
@@ -213,7 +231,10 @@ private:
     void on(const Header& h, const uint8_t* p, size_t n) override {
         std::lock_guard lock(m);
         switch (h.type) {
-        case MsgType::NodeWelcome: index = decodePayload<NodeWelcome>(p, n).node; break;
+        case MsgType::NodeWelcome:
+            index = decodePayload<NodeWelcome>(p, n).node;
+            if (alive) putInSession(Heartbeat{});  // it answers at once, as runDisplayNode does: the clients learn of it then
+            break;
         case MsgType::Goodbye: goodbye = decodePayload<Goodbye>(p, n).reason; break;
         case MsgType::TileRoutes: routes.push_back(decodePayload<TileRoutes>(p, n)); break;
         case MsgType::NodeFrame: {
@@ -887,7 +908,7 @@ TEST(DisplayNodes, CurveKeysOnEveryNodeLinkFramesBitIdenticalAndStrangersRefused
     const KeyPair local = readKeyPair(args[1]);
     const std::string masterKey = readPublicKey(args[3]);
     zmq::context_t ctx{1};
-    FakeClient reader(ctx, master.endpoint(), &local, masterKey);
+    ListReader reader(ctx, master.endpoint(), &local, masterKey);
     Peers peers({&reader});
     ASSERT_TRUE(waitFor(reader, [&] { return !reader.lists.empty() && reader.lists.back().nodes.size() == 2; }));
     NodeList list;
