@@ -61,6 +61,7 @@ public:
             tiles_.set(zmq::sockopt::curve_server, 1);
             tiles_.set(zmq::sockopt::curve_secretkey, tileKeys_.secretKey);
         }
+        advertisedNodeEndpoint(run_.bind, run_.advertise);  // a wildcard without --advertise stops before listening
         tiles_.bind(run_.bind);
         endpoint_ = advertisedNodeEndpoint(tiles_.get(zmq::sockopt::last_endpoint), run_.advertise);
         connect();

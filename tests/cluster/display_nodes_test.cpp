@@ -170,8 +170,9 @@ class FakeNode : public Peer {
 public:
     // With `takeTiles`, the node binds a ROUTER on loopback for the clients' tiles and keeps what
     // arrives (TileResults by frame and tile).
-    FakeNode(zmq::context_t& ctx, const std::string& endpoint, const std::string& name, bool takeTiles = false)
-        : Peer(ctx, endpoint) {
+    FakeNode(zmq::context_t& ctx, const std::string& endpoint, const std::string& name, bool takeTiles = false,
+             const KeyPair* keys = nullptr, const std::string& serverKey = {})
+        : Peer(ctx, endpoint, keys, serverKey) {
         std::string tileEndpoint = "tcp://127.0.0.1:9";
         if (takeTiles) {
             tiles_.emplace(ctx, zmq::socket_type::router);
@@ -978,6 +979,29 @@ TEST(DisplayNodes, NodesWithoutKeysOrWithUnknownKeysAreRefusedByAKeyedMaster) {
     EXPECT_TRUE(unknown.wall.empty());
     EXPECT_GE(master.refusedConnections(), 1u);
     EXPECT_GE(master.counters().failedHandshakes, 1u);
+}
+
+// A node that gets through a keyed master's CURVE (its key is allowed) but offers no tile key
+// would take pixels in the clear: the master refuses it, saying why.
+TEST(DisplayNodes, AKeyedMasterRefusesANodeWithoutATileKey) {
+    const auto dir = test::scratchDir();
+    writeNewKeyPair(dir / "master");
+    ClusterSettings cs = nodeSettings();
+    cs.keyFile = dir / "master.key";
+    cs.localClients = 2;
+    const SceneDesc scene = smallScene();
+    Master master(scene, cs);
+    const std::vector<std::string> args = master.localClientArgs();
+    ASSERT_EQ(args.size(), 4u);
+    const KeyPair local = readKeyPair(args[1]);
+    zmq::context_t ctx{1};
+    FakeNode node(ctx, master.endpoint(), "left", false, &local, readPublicKey(args[3]));  // its NodeHello has no key
+    Peers peers({&node});
+    ASSERT_TRUE(waitFor(node, [&] { return node.goodbye.has_value(); }));
+    EXPECT_NE(node.goodbye->find("has no tile key"), std::string::npos) << *node.goodbye;
+    EXPECT_FALSE(node.index.has_value());
+    EXPECT_GE(master.counters().refused, 1u);
+    peers.remove(&node);
 }
 
 TEST(DisplayNodes, AKeyWithoutTheMastersKeyIsAnInputError) {
