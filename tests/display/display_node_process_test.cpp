@@ -51,7 +51,7 @@ TEST(DisplayNodeProcesses, EachShowsItsHalfOfTheWallBitIdentical) {
     for (const std::string name : {"left", "right"})
         nodes.push_back(std::make_unique<test::ChildProcess>(std::vector<std::string>{
             RTWALL_EXE, "display", "--connect", master->endpoint(), "--node", name, "--headless", "--out",
-            (dir / name).string(), "--frames", "1", "--exit-after-idle", "20000"}));
+            (dir / name).string(), "--frames", "3", "--exit-after-idle", "20000"}));
     for (int i = 0; i < 2; ++i) {
         ClientSettings c;
         c.connect = master->endpoint();
@@ -60,8 +60,9 @@ TEST(DisplayNodeProcesses, EachShowsItsHalfOfTheWallBitIdentical) {
         clients.threads.emplace_back([c] { runClient(c); });
     }
     ASSERT_TRUE(master->waitForClients(2, 20000));
-    // Frames until both nodes have presented one they held (a node that joined during a frame
-    // may miss it); bounded.
+    // Both nodes in before the first frame (a frame released without one names it on the other);
+    // then frames until both have presented three they held (the last one is compared), bounded.
+    for (auto& n : nodes) ASSERT_TRUE(n->waitFor("joined", 20000)) << n->output();
     for (int i = 0; i < 30; ++i) {
         master->renderFrame();
         if (nodes[0]->wait(0) && nodes[1]->wait(0)) break;
@@ -80,10 +81,11 @@ TEST(DisplayNodeProcesses, EachShowsItsHalfOfTheWallBitIdentical) {
     for (const auto& [name, screens] : screensOf) {
         std::vector<std::filesystem::path> written;
         for (const auto& e : std::filesystem::directory_iterator(dir / name)) written.push_back(e.path());
-        ASSERT_EQ(written.size(), 2u) << name;
+        ASSERT_EQ(written.size(), 3 * 2u) << name;
         std::sort(written.begin(), written.end());
         // frame_NNNNNN_<screen>.png: the reference is presented with the node's frame number.
-        const std::string stem = written[0].filename().string().substr(0, 13);
+        // Its newest frame (frame_NNNNNN_): the first ones may name a node that was not in yet.
+        const std::string stem = written.back().filename().string().substr(0, 13);
         one.number = uint32_t(std::stoul(stem.substr(6, 6)));
         HeadlessPresenter whole(wall, dir / ("one-" + name));
         whole.present(one);
@@ -131,7 +133,7 @@ TEST(DisplayNodeProcesses, StereoWallShowsBothEyesOfEachNodesScreensBitIdentical
     for (const std::string name : {"left", "right"})
         nodes.push_back(std::make_unique<test::ChildProcess>(std::vector<std::string>{
             RTWALL_EXE, "display", "--connect", master->endpoint(), "--node", name, "--headless", "--out",
-            (dir / name).string(), "--frames", "1", "--exit-after-idle", "20000"}));
+            (dir / name).string(), "--frames", "3", "--exit-after-idle", "20000"}));
     for (int i = 0; i < 2; ++i) {
         ClientSettings c;
         c.connect = master->endpoint();
@@ -140,6 +142,8 @@ TEST(DisplayNodeProcesses, StereoWallShowsBothEyesOfEachNodesScreensBitIdentical
         clients.threads.emplace_back([c] { runClient(c); });
     }
     ASSERT_TRUE(master->waitForClients(2, 20000));
+    // Both nodes in before the first frame (a frame released without one names it on the other).
+    for (auto& n : nodes) ASSERT_TRUE(n->waitFor("joined", 20000)) << n->output();
     for (int i = 0; i < 30; ++i) {
         master->renderViews();
         if (nodes[0]->wait(0) && nodes[1]->wait(0)) break;
@@ -160,9 +164,10 @@ TEST(DisplayNodeProcesses, StereoWallShowsBothEyesOfEachNodesScreensBitIdentical
     for (const auto& [name, screens] : screensOf) {
         std::vector<std::filesystem::path> written;
         for (const auto& e : std::filesystem::directory_iterator(dir / name)) written.push_back(e.path());
-        ASSERT_EQ(written.size(), 4u) << name;
+        ASSERT_EQ(written.size(), 3 * 4u) << name;
         std::sort(written.begin(), written.end());
-        const std::string stem = written[0].filename().string().substr(0, 13);
+        // Its newest frame (frame_NNNNNN_): the first ones may name a node that was not in yet.
+        const std::string stem = written.back().filename().string().substr(0, 13);
         one.number = uint32_t(std::stoul(stem.substr(6, 6)));
         HeadlessPresenter whole(wall, dir / ("one-" + name));
         whole.present(one);
@@ -207,7 +212,7 @@ TEST(DisplayNodeProcesses, KeyedNodesWithTheLocalArgumentsWorkAndAKeylessOneIsRe
     std::vector<std::unique_ptr<test::ChildProcess>> nodes;
     for (const std::string name : {"left", "right"}) {
         std::vector<std::string> argv{RTWALL_EXE, "display", "--connect", master->endpoint(), "--node", name, "--headless",
-                                      "--out", (dir / name).string(), "--frames", "1", "--exit-after-idle", "20000"};
+                                      "--out", (dir / name).string(), "--frames", "3", "--exit-after-idle", "20000"};
         argv.insert(argv.end(), keyArgs.begin(), keyArgs.end());
         nodes.push_back(std::make_unique<test::ChildProcess>(argv));
     }
@@ -223,6 +228,8 @@ TEST(DisplayNodeProcesses, KeyedNodesWithTheLocalArgumentsWorkAndAKeylessOneIsRe
         clients.threads.emplace_back([c] { runClient(c); });
     }
     ASSERT_TRUE(master->waitForClients(2, 20000));
+    // Both nodes in before the first frame (a frame released without one names it on the other).
+    for (auto& n : nodes) ASSERT_TRUE(n->waitFor("joined", 20000)) << n->output();
     for (int i = 0; i < 30; ++i) {
         master->renderFrame();
         if (nodes[0]->wait(0) && nodes[1]->wait(0)) break;
@@ -245,9 +252,10 @@ TEST(DisplayNodeProcesses, KeyedNodesWithTheLocalArgumentsWorkAndAKeylessOneIsRe
     for (const auto& [name, screens] : screensOf) {
         std::vector<std::filesystem::path> written;
         for (const auto& e : std::filesystem::directory_iterator(dir / name)) written.push_back(e.path());
-        ASSERT_EQ(written.size(), 2u) << name;
+        ASSERT_EQ(written.size(), 3 * 2u) << name;
         std::sort(written.begin(), written.end());
-        const std::string stem = written[0].filename().string().substr(0, 13);
+        // Its newest frame (frame_NNNNNN_): the first ones may name a node that was not in yet.
+        const std::string stem = written.back().filename().string().substr(0, 13);
         one.number = uint32_t(std::stoul(stem.substr(6, 6)));
         HeadlessPresenter whole(wall, dir / ("one-" + name));
         whole.present(one);
