@@ -196,6 +196,7 @@ private:
             }
             if (items[1].revents & ZMQ_POLLIN) forwardResults(256);
             if (monitor_ && (items[2].revents & ZMQ_POLLIN)) readMonitor();
+            readNodeMonitors();
             finishBuild();
             watchStalls();
             if (blockedFrame_) {
@@ -272,7 +273,13 @@ private:
                 next.emplace(e.node, std::move(old->second));
                 continue;
             }
-            NodeLink link{e.endpoint, e.serverKey, zmq::socket_t(ctx_, zmq::socket_type::dealer)};
+            if (!settings_.keyFile.empty() && e.serverKey.empty()) {
+                // Behind CURVE, pixels never go in the clear.
+                std::fprintf(stderr, "rtwall client %u: display node '%s' at %s has no CURVE key: its tiles are not sent\n", id_,
+                             e.name.c_str(), e.endpoint.c_str());
+                continue;
+            }
+            NodeLink link{e.endpoint, e.serverKey, zmq::socket_t(ctx_, zmq::socket_type::dealer), e.name, {}, false};
             link.socket.set(zmq::sockopt::linger, 0);
             link.socket.set(zmq::sockopt::immediate, 1);
             link.socket.set(zmq::sockopt::sndhwm, 1000);
@@ -281,6 +288,15 @@ private:
                 link.socket.set(zmq::sockopt::curve_serverkey, e.serverKey);
                 link.socket.set(zmq::sockopt::curve_publickey, keys_.publicKey);
                 link.socket.set(zmq::sockopt::curve_secretkey, keys_.secretKey);
+                // A node that refuses this client's key is said once (readNodeMonitors).
+                const std::string monitorAddress = "inproc://rtwall-client-node-monitor-" + std::to_string(++monitorSeq_);
+                if (zmq_socket_monitor(link.socket.handle(), monitorAddress.c_str(),
+                                       ZMQ_EVENT_HANDSHAKE_FAILED_AUTH | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
+                                           ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL) == 0) {
+                    link.monitor = zmq::socket_t(ctx_, zmq::socket_type::pair);
+                    link.monitor.set(zmq::sockopt::linger, 0);
+                    link.monitor.connect(monitorAddress);
+                }
             }
             try {
                 link.socket.connect(e.endpoint);
@@ -292,6 +308,34 @@ private:
             next.emplace(e.node, std::move(link));
         }
         nodeLinks_ = std::move(next);  // links of nodes no longer listed close here
+    }
+
+    // Handshake failures of the links to the nodes, each said once per link.
+    void readNodeMonitors() {
+        for (auto& [node, link] : nodeLinks_) {
+            if (!link.monitor) continue;
+            for (int i = 0; i < 8; ++i) {
+                zmq::message_t event, address;
+                if (!link.monitor.recv(event, zmq::recv_flags::dontwait)) break;
+                if (!event.more() || !link.monitor.recv(address, zmq::recv_flags::dontwait) || event.size() < 6) continue;
+                discardRestOf(link.monitor, address);
+                uint16_t id;
+                uint32_t value;
+                std::memcpy(&id, event.data(), 2);
+                std::memcpy(&value, static_cast<const uint8_t*>(event.data()) + 2, 4);
+                if (settings_.counters) ++(id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH ? settings_.counters->refusedHandshakes
+                                                                                 : settings_.counters->failedHandshakes);
+                if (link.said) continue;
+                link.said = true;
+                if (id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH)
+                    std::fprintf(stderr, "rtwall client %u: display node '%s' at %s refused this client's key %s (status %u): "
+                                         "it takes the keys the master gives it\n",
+                                 id_, link.name.c_str(), link.endpoint.c_str(), keys_.publicKey.c_str(), value);
+                else
+                    std::fprintf(stderr, "rtwall client %u: the CURVE handshake with display node '%s' at %s failed (event %u, "
+                                         "value %u)\n", id_, link.name.c_str(), link.endpoint.c_str(), unsigned(id), value);
+            }
+        }
     }
 
     // The masks for frames from routes.frame on; the previous set stays for the results of
@@ -968,6 +1012,9 @@ private:
     struct NodeLink {
         std::string endpoint, serverKey;
         zmq::socket_t socket;
+        std::string name;
+        zmq::socket_t monitor;  // handshake events of socket (with CURVE)
+        bool said = false;      // its handshake trouble was said
     };
     std::map<uint32_t, NodeLink> nodeLinks_;  // display nodes by index (bit in the tile masks)
     std::map<uint32_t, std::vector<uint64_t>> tileRoutes_;  // tile masks by their first frame; empty: no nodes

@@ -1,21 +1,26 @@
 // A display node's network side (issue 19): a DEALER to the master for control (NodeHello,
 // NodeFrame, NodeHave, NodeSwap, NodeSwapped) and a ROUTER on which the render clients deliver
-// the tiles its screens show. Tiles are decoded on this thread straight into a NodeAssembly;
-// a tile that comes before its frame's NodeFrame (it travels on another connection) waits in a
-// bounded queue. What is presented, and how, is the caller's callback.
+// the tiles its screens show. Tiles are decoded on this thread straight into a NodeAssembly (one
+// image per view); a tile that comes before its frame's NodeFrame (it travels on another
+// connection) waits in a bounded queue. A frame it holds becomes what it shows (NodeImages:
+// accumulated and composed into the eyes as on the single-PC wall) before it says so; the swap
+// presents that. What is presented, and how, is the caller's callback.
 #include "codec.h"
 #include "net.h"
 #include "node_assembly.h"
 #include "protocol.h"
+#include "security.h"
 
 #include <rtwall/cluster.h>
 
 #include <zmq.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <optional>
 #include <thread>
@@ -32,26 +37,49 @@ constexpr size_t kMaxEarlyTiles = 4096;
 
 class DisplayNode {
 public:
-    explicit DisplayNode(const DisplayNodeRun& run) : run_(run) {}
+    explicit DisplayNode(const DisplayNodeRun& run) : run_(run) {
+        if (!run.keyFile.empty()) {
+            // As `rtwall client`: the same options, the same checks.
+            if (run.serverKeyFile.empty()) throw InputError("--key needs --server-key (the master's public key)");
+            checkZmqVersion();
+            keys_ = readKeyPair(run.keyFile);
+            serverKey_ = readPublicKey(run.serverKeyFile);
+            tileKeys_ = makeKeyPair();
+        }
+    }
 
     int operator()() {
         tiles_.set(zmq::sockopt::linger, 0);
         tiles_.set(zmq::sockopt::maxmsgsize, int64_t(kHeaderSize + 64 + maxEncodedTileBytes(2 * 1024, 1024)));
         tiles_.set(zmq::sockopt::rcvhwm, 100000);
+        if (keyed()) {
+            // A CURVE server for the clients' tiles, with a key pair of this run (the clients
+            // learn its public key from the master); until the master's welcome names the client
+            // keys, nobody gets in.
+            zap_ = std::make_unique<ZapHandler>(ctx_, std::vector<std::string>{}, "rtwall display",
+                                                "the client keys the master gave this node");
+            tiles_.set(zmq::sockopt::zap_domain, "rtwall-node");
+            tiles_.set(zmq::sockopt::curve_server, 1);
+            tiles_.set(zmq::sockopt::curve_secretkey, tileKeys_.secretKey);
+        }
+        advertisedNodeEndpoint(run_.bind, run_.advertise);  // a wildcard without --advertise stops before listening
         tiles_.bind(run_.bind);
-        endpoint_ = tiles_.get(zmq::sockopt::last_endpoint);
+        endpoint_ = advertisedNodeEndpoint(tiles_.get(zmq::sockopt::last_endpoint), run_.advertise);
         connect();
         double idleSince = nowSeconds();
         for (;;) {
-            zmq::pollitem_t items[] = {{master_.handle(), 0, ZMQ_POLLIN, 0}, {tiles_.handle(), 0, ZMQ_POLLIN, 0}};
+            zmq::pollitem_t items[] = {{master_.handle(), 0, ZMQ_POLLIN, 0}, {tiles_.handle(), 0, ZMQ_POLLIN, 0},
+                                       {monitor_.handle(), 0, ZMQ_POLLIN, 0}};
             try {
-                zmq::poll(items, 2, std::chrono::milliseconds(10));
+                zmq::poll(items, monitor_ ? 3 : 2, std::chrono::milliseconds(10));
             } catch (const zmq::error_t& e) {
                 // A signal (SIGTERM from `rtwall display`'s handler) interrupted the wait: the
                 // stop flag is looked at below, as after any wait.
                 if (e.num() != EINTR) throw;
-                items[0].revents = items[1].revents = 0;
+                items[0].revents = items[1].revents = items[2].revents = 0;
             }
+            if (monitor_ && (items[2].revents & ZMQ_POLLIN)) readMonitor();
+            if (zap_ && run_.counters) run_.counters->refusedClients = zap_->denied();
             if (items[0].revents & ZMQ_POLLIN) {
                 for (int i = 0; i < 256; ++i) {
                     zmq::message_t msg;
@@ -79,8 +107,9 @@ public:
             if (session_ && now - lastSent_ > heartbeatMs_ * 1e-3) send(Heartbeat{});
             if (now - lastHeard_ > timeoutMs_ * 1e-3) {
                 if (run_.exitAfterIdleMs > 0 && now - idleSince > run_.exitAfterIdleMs * 1e-3) {
-                    std::fprintf(stderr, "rtwall display: no master at %s for %d ms, giving up\n", run_.connect.c_str(),
-                                 run_.exitAfterIdleMs);
+                    std::fprintf(stderr, "rtwall display: no master at %s for %d ms, giving up%s\n", run_.connect.c_str(),
+                                 run_.exitAfterIdleMs,
+                                 handshakeTrouble_.empty() ? "" : (" (" + handshakeTrouble_ + ")").c_str());
                     return 1;
                 }
                 // The master went silent: join again (a restarted master, or one that dropped us).
@@ -94,16 +123,35 @@ private:
         return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
     }
 
+    bool keyed() const { return !run_.keyFile.empty(); }
+
     void connect() {
         master_ = zmq::socket_t(ctx_, zmq::socket_type::dealer);
-        configureSocket(master_, int64_t(kHeaderSize + 64 + kMaxWallConfigBytes + (1 << 26)), 250, 3000);
+        // A welcome holds the wall config and the client keys.
+        configureSocket(master_, int64_t(kHeaderSize + 64 + kMaxWallConfigBytes + kMaxClientKeys * 48 + (1 << 26)), 250, 3000);
         master_.set(zmq::sockopt::linger, 0);
+        if (keyed()) {
+            master_.set(zmq::sockopt::curve_serverkey, serverKey_);
+            master_.set(zmq::sockopt::curve_publickey, keys_.publicKey);
+            master_.set(zmq::sockopt::curve_secretkey, keys_.secretKey);
+        }
+        // The handshake's outcome (a refused key, no CURVE on one side) is said in one line.
+        monitor_ = zmq::socket_t();
+        const std::string monitorAddress = "inproc://rtwall-node-monitor-" + std::to_string(++monitorSeq_);
+        if (zmq_socket_monitor(master_.handle(), monitorAddress.c_str(),
+                               ZMQ_EVENT_HANDSHAKE_FAILED_AUTH | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
+                                   ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_SUCCEEDED) == 0) {
+            monitor_ = zmq::socket_t(ctx_, zmq::socket_type::pair);
+            monitor_.set(zmq::sockopt::linger, 0);
+            monitor_.connect(monitorAddress);
+        }
         master_.connect(run_.connect);
         session_ = 0;
+        shown_ = NodeImages{};  // another session's frames: no running mean goes on across a rejoin
         routes_.clear();
         early_.clear();
         begun_ = false;
-        sendNow(master_, encodeMessage(Header{}, NodeHello{kProtocolVersion, run_.name, endpoint_, ""}));
+        sendNow(master_, encodeMessage(Header{}, NodeHello{kProtocolVersion, run_.name, endpoint_, tileKeys_.publicKey}));
         lastHeard_ = lastSent_ = nowSeconds();
     }
 
@@ -136,6 +184,10 @@ private:
                 index_ = w.node;
                 heartbeatMs_ = int(std::max(10u, w.heartbeatMs));
                 timeoutMs_ = int(std::max(w.timeoutMs, 2 * w.heartbeatMs));
+                if (zap_) zap_->setAllowed(w.clientKeys);
+                // At once: the master tells the clients where this node is only once it answered
+                // (its tile socket now lets their keys in).
+                send(Heartbeat{});
                 if (run_.onWall) run_.onWall(w.wall);
                 std::fprintf(stderr, "rtwall display: node '%s' (%u) joined %s, tiles to %s\n", run_.name.c_str(), index_,
                              run_.connect.c_str(), endpoint_.c_str());
@@ -152,8 +204,11 @@ private:
             case MsgType::NodeFrame: onFrame(decodePayload<NodeFrame>(p, n)); break;
             case MsgType::NodeSwap: {
                 const NodeSwap s = decodePayload<NodeSwap>(p, n);
-                const bool held = begun_ && assembly_.frame() == s.frame && assembly_.complete();
-                if (run_.present) run_.present(s.frame, held ? &assembly_.image() : nullptr, s.leftOut);
+                const bool held = shown_.frame() == s.frame;
+                if (run_.present) {
+                    if (held) run_.present(s.frame, &shown_.left(), shown_.right().rgb.empty() ? nullptr : &shown_.right(), s.leftOut);
+                    else run_.present(s.frame, nullptr, nullptr, s.leftOut);
+                }
                 send(NodeSwapped{s.frame}, s.frame);
                 if (held && run_.frames > 0 && ++presented_ >= run_.frames) {
                     send(Goodbye{"display node '" + run_.name + "' presented its frames"});
@@ -164,6 +219,7 @@ private:
             default: break;  // heartbeats, and types a node never gets
             }
         } catch (const DecodeError& e) {
+            if (run_.counters) ++run_.counters->droppedMessages;
             std::fprintf(stderr, "rtwall display: dropped a malformed message from the master: %s\n", e.what());
         }
         return std::nullopt;
@@ -176,13 +232,20 @@ private:
             return;
         }
         try {
-            assembly_.beginFrame(f.frame, f.width, f.height, f.tileSize, std::prev(r)->second, index_);
+            // The clients' tiling of the frame (viewTiles), which the masks index.
+            std::vector<ViewTile> tiles;
+            if (f.views.empty())
+                for (const TileRect& t : makeTiles(f.width, f.height, f.tileSize)) tiles.push_back({0, t});
+            else
+                tiles = viewTiles(f.views, f.width, f.height, f.tileSize);
+            assembly_.beginFrame(f.frame, f.width, f.height, tiles, uint32_t(f.views.size()), std::prev(r)->second, index_,
+                                 f.pixels == TilePixels::LinearHalf);
         } catch (const std::invalid_argument& e) {
             std::fprintf(stderr, "rtwall display: frame %u is skipped: %s\n", f.frame, e.what());
             return;
         }
         begun_ = true;
-        pixels_ = f.pixels;
+        frame_ = f;
         haveSent_ = false;
         // The tiles that came first.
         std::vector<zmq::message_t> early;
@@ -199,6 +262,7 @@ private:
             if (h.type != MsgType::TileResult || h.version != kProtocolVersion || session_ == 0 || h.session != session_) return;
             r = decodePayload<TileResult>(bytes + kHeaderSize, msg.size() - kHeaderSize);
         } catch (const DecodeError&) {
+            if (run_.counters) ++run_.counters->droppedMessages;
             return;
         }
         if (!begun_ || r.frame > assembly_.frame()) {
@@ -209,15 +273,15 @@ private:
         TileView view;
         if (assembly_.claim(r.frame, r.tile, rect, view) != NodeAssembly::Claim::Granted) return;
         try {
-            if (r.format != pixels_) throw DecodeError("a tile in another pixel format than its frame's");
+            if (r.format != frame_.pixels) throw DecodeError("a tile in another pixel format than its frame's");
             if (r.format == TilePixels::LinearHalf) {
-                // An accumulated frame's tile: shown as this frame's 8-bit pixels (the node does
-                // not accumulate across frames).
-                linear_.resize(size_t(rect.width()) * rect.height() * 3);
-                decodeWideTile(r.codec, r.pixels.data(), r.pixels.size(), rect.width(), rect.height(), linear_.data(),
-                               size_t(rect.width()) * 3, scratch_);
+                // An accumulated frame's tile: into the view's linear image (what is summed) and
+                // quantised into its 8-bit one, as the master does.
+                float* linear = assembly_.linearAt(assembly_.viewOf(r.tile), rect.x0, rect.y0);
+                const size_t stride = size_t(frame_.width) * 3;
+                decodeWideTile(r.codec, r.pixels.data(), r.pixels.size(), rect.width(), rect.height(), linear, stride, scratch_);
                 for (int y = 0; y < rect.height(); ++y)
-                    linearToSrgb8(linear_.data() + size_t(y) * rect.width() * 3, size_t(rect.width()) * 3, view.data + y * view.stride);
+                    linearToSrgb8(linear + size_t(y) * stride, size_t(rect.width()) * 3, view.data + y * view.stride);
             } else {
                 decodeTile(r.codec, r.pixels.data(), r.pixels.size(), rect.width(), rect.height(), view.data, view.stride);
             }
@@ -233,12 +297,55 @@ private:
     void reportIfComplete() {
         if (!begun_ || haveSent_ || !assembly_.complete()) return;
         haveSent_ = true;
+        shown_.show(frame_, assembly_);
         send(NodeHave{assembly_.frame()}, assembly_.frame());
     }
 
+    // Handshake events of the connection to the master: a refusal is said, not just "no master".
+    void readMonitor() {
+        for (int i = 0; i < 16; ++i) {
+            zmq::message_t event, address;
+            if (!monitor_.recv(event, zmq::recv_flags::dontwait)) return;
+            if (!event.more() || !monitor_.recv(address, zmq::recv_flags::dontwait) || event.size() < 6) continue;
+            discardRestOf(monitor_, address);
+            uint16_t id;
+            uint32_t value;
+            std::memcpy(&id, event.data(), 2);
+            std::memcpy(&value, static_cast<const uint8_t*>(event.data()) + 2, 4);
+            if (id == ZMQ_EVENT_HANDSHAKE_SUCCEEDED) {
+                handshakeTrouble_.clear();
+                continue;
+            }
+            std::string why;
+            if (id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) {
+                if (run_.counters) ++run_.counters->refusedHandshakes;
+                why = "the master refused this node's key (status " + std::to_string(value) + "): is " + keys_.publicKey +
+                      " in the master's client_keys?";
+            } else {
+                if (run_.counters) ++run_.counters->failedHandshakes;
+                if (id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL && value == ZMQ_PROTOCOL_ERROR_ZMTP_MECHANISM_MISMATCH)
+                    why = "the master and this node disagree on security: one uses CURVE keys, the other not";
+                else if (id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL)
+                    why = "the handshake failed (ZMTP protocol error " + std::to_string(value) + ")";
+                else
+                    why = keyed() ? "the master broke off the CURVE handshake: is --server-key its public key?"
+                                  : "the master broke off the handshake: do the master and this node disagree on security "
+                                    "(a master with CURVE keys needs --key and --server-key here)?";
+            }
+            if (why != handshakeTrouble_) std::fprintf(stderr, "rtwall display: %s: %s\n", run_.connect.c_str(), why.c_str());
+            handshakeTrouble_ = why;
+        }
+    }
+
     const DisplayNodeRun& run_;
+    KeyPair keys_, tileKeys_;  // with CURVE: this node's pair towards the master, and its tile socket's
+    std::string serverKey_;    // the master's public key
     zmq::context_t ctx_{1};
     zmq::socket_t master_;
+    zmq::socket_t monitor_;  // handshake events of master_
+    uint64_t monitorSeq_ = 0;
+    std::string handshakeTrouble_;  // said once until it changes
+    std::unique_ptr<ZapHandler> zap_;  // with CURVE: the tile socket's key check (goes after the socket)
     zmq::socket_t tiles_{ctx_, zmq::socket_type::router};
     std::string endpoint_;
     uint64_t session_ = 0;
@@ -249,14 +356,45 @@ private:
     NodeAssembly assembly_;
     bool begun_ = false;     // assembly_ holds a frame begun in this session
     bool haveSent_ = false;  // its NodeHave went
-    TilePixels pixels_ = TilePixels::Srgb8;
+    NodeFrame frame_;        // what assembly_ holds
+    NodeImages shown_;       // what the node shows of the last frame it held
     std::vector<zmq::message_t> early_;
-    std::vector<float> linear_;
     std::vector<uint8_t> scratch_;
     int presented_ = 0;
 };
 
 }  // namespace
+
+std::string advertisedNodeEndpoint(const std::string& bound, const std::string& advertise) {
+    const size_t colon = bound.rfind(':');
+    if (!bound.starts_with("tcp://") || colon == std::string::npos || colon < 6)
+        throw InputError("display node: cannot tell the clients where '" + bound + "' is (expected tcp://HOST:PORT)");
+    const std::string host = bound.substr(6, colon - 6), port = bound.substr(colon + 1);
+    if (advertise.empty()) {
+        if (host == "0.0.0.0" || host == "*" || host == "[::]" || host == "::" || host == "[*]")
+            throw InputError("display node: --bind " + bound + " listens on every address: say which one the render "
+                             "clients reach this node at (--advertise HOST)");
+        return bound;
+    }
+    bool ok = !advertise.empty() && advertise.size() <= 240;
+    if (ok && advertise.front() == '[') {
+        // A bracketed IPv6 address.
+        ok = advertise.size() > 2 && advertise.back() == ']';
+        for (size_t i = 1; ok && i + 1 < advertise.size(); ++i) {
+            const char c = advertise[i];
+            ok = std::isxdigit(static_cast<unsigned char>(c)) || c == ':' || c == '.';
+        }
+    } else {
+        for (char c : advertise) ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-');
+        ok = ok && advertise.front() != '-' && advertise.front() != '.';
+    }
+    if (!ok)
+        throw InputError("display node: --advertise '" + advertise +
+                         "' is not a host name, an IPv4 address or a bracketed IPv6 address ([::1])");
+    if (advertise == "0.0.0.0" || advertise == "[::]")
+        throw InputError("display node: --advertise " + advertise + " is not an address the clients can reach");
+    return "tcp://" + advertise + ":" + port;
+}
 
 int runDisplayNode(const DisplayNodeRun& run) {
     if (run.name.empty()) throw InputError("display node: no name (--node NAME)");

@@ -80,6 +80,9 @@ struct NodeState {
     double lastSeen = 0, lastSent = 0;
     uint32_t routesFrame = UINT32_MAX;  // the TileRoutes it holds
     uint32_t frameSent = 0;             // the last frame whose NodeFrame it was sent
+    // It answered its welcome: it holds the client keys (its tile socket lets them in), so the
+    // clients may now be told where it is; before, a client's handshake could be refused.
+    bool answered = false;
     const char* deathReason = nullptr;
 };
 
@@ -259,6 +262,7 @@ struct Master::Impl {
 
     zmq::context_t ctx{1};
     std::unique_ptr<ZapHandler> zap;  // before the router: it must answer the first handshake
+    std::vector<std::string> allowedKeys;  // with CURVE: the client keys (Z85) let in, which display nodes take too
     zmq::socket_t router{ctx, zmq::socket_type::router};
     zmq::socket_t monitor{ctx, zmq::socket_type::pair};  // the router's failed handshakes
     zmq::socket_t wakeSend{ctx, zmq::socket_type::pair};
@@ -676,7 +680,7 @@ struct Master::Impl {
     NodeList nodeList() const {
         NodeList list;
         for (const auto& [peer, n] : nodes)
-            if (!n.deathReason) list.nodes.push_back({n.index, n.name, n.endpoint, n.publicKey});
+            if (!n.deathReason && n.answered) list.nodes.push_back({n.index, n.name, n.endpoint, n.publicKey});
         std::sort(list.nodes.begin(), list.nodes.end(), [](const NodeEndpoint& a, const NodeEndpoint& b) { return a.node < b.node; });
         return list;
     }
@@ -722,8 +726,10 @@ struct Master::Impl {
             if (!sendNode(n, TileRoutes{routesFrame, routes}, currentFrame)) return;
             n.routesFrame = routesFrame;
         }
-        if (sendNode(n, NodeFrame{currentFrame, rs.width, rs.height, rs.tileSize, framePixels}, currentFrame))
-            n.frameSent = currentFrame;
+        NodeFrame f{currentFrame, rs.width, rs.height, rs.tileSize, framePixels, frameViews, {}, frameStochastic, frameSeq};
+        const std::vector<int>& eyes = settings.displayNodes.viewEyes;
+        for (size_t v = 0; v < frameViews.size(); ++v) f.eyes.push_back(int8_t(v < eyes.size() && eyes[v] >= 0 && eyes[v] <= 1 ? eyes[v] : -1));
+        if (sendNode(n, f, currentFrame)) n.frameSent = currentFrame;
     }
 
     void onNodeHello(const std::string& peer, const Header& h, const uint8_t* data, size_t size) {
@@ -744,6 +750,12 @@ struct Master::Impl {
                                  : "the wall has no display node '" + hello.name + "'");
             return;
         }
+        // Behind CURVE the tiles must be too: a node reached over an authenticated link whose
+        // tile socket has no key would take pixels in the clear.
+        if (zap && hello.publicKey.empty()) {
+            refuse("display node '" + hello.name + "' has no tile key, and this master uses CURVE keys");
+            return;
+        }
         // A node of that name on another connection (a restarted node) is replaced.
         for (auto& [otherPeer, other] : nodes)
             if (other.name == hello.name && !other.deathReason) other.deathReason = "another node of its name said hello";
@@ -757,14 +769,13 @@ struct Master::Impl {
         n.lastSeen = nowSeconds();
         NodeState& ref = nodes[peer] = n;
         if (!sendNode(ref, NodeWelcome{ref.index, uint32_t(settings.heartbeatMs), uint32_t(settings.timeoutMs),
-                                       settings.displayNodes.wallText})) {
+                                       settings.displayNodes.wallText, allowedKeys})) {
             reapNodes();
             return;
         }
         std::fprintf(stderr, "rtwall master: display node '%s' (%u) joins, tiles to %s\n", ref.name.c_str(), ref.index,
                      ref.endpoint.c_str());
         barrier.join(ref.index);
-        sendNodeListToClients();
         if (frameActive) sendNodeFrame(ref, frameState.settings);
     }
 
@@ -789,6 +800,11 @@ struct Master::Impl {
 
     void handleNode(NodeState& n, const Header& h, const uint8_t* payload, size_t payloadSize) {
         n.lastSeen = nowSeconds();
+        if (!n.answered) {
+            // Its first message after the welcome (it sends a heartbeat at once): the clients learn of it now.
+            n.answered = true;
+            sendNodeListToClients();
+        }
         switch (h.type) {
         case MsgType::NodeHave: {
             const NodeHave have = decodePayload<NodeHave>(payload, payloadSize);
@@ -1393,6 +1409,7 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
             s.localArgs = {"--key", (s.localKeyDir / "local.key").string(), "--server-key",
                            (s.localKeyDir / "master.pub").string()};
         }
+        s.allowedKeys = allowed;
         s.zap = std::make_unique<ZapHandler>(s.ctx, allowed);
         s.router.set(zmq::sockopt::zap_domain, "rtwall");
         s.router.set(zmq::sockopt::curve_server, 1);

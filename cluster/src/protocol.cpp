@@ -878,12 +878,15 @@ void read(Reader& r, NodeHello& m) {
     m.publicKey = readKey(r, "node public key");
 }
 
-RTWALL_WIRE_FIELDS(NodeWelcome, 4);
+RTWALL_WIRE_FIELDS(NodeWelcome, 5);
 void write(Writer& w, const NodeWelcome& m) {
     w.u32(m.node);
     w.u32(m.heartbeatMs);
     w.u32(m.timeoutMs);
     w.string(m.wall);
+    if (m.clientKeys.size() > kMaxClientKeys) throw std::length_error("protocol: too many client keys for a node");
+    w.u32(uint32_t(m.clientKeys.size()));
+    for (const std::string& k : m.clientKeys) w.string(k);
 }
 void read(Reader& r, NodeWelcome& m) {
     m.node = readNodeIndex(r);
@@ -894,15 +897,28 @@ void read(Reader& r, NodeWelcome& m) {
              " ms are out of range");
     m.wall = r.string(kMaxWallConfigBytes);
     if (m.wall.empty()) fail("node welcome without a wall config");
+    const uint32_t keys = r.u32();
+    r.expectElements(keys, sizeof(uint32_t) + kZ85KeyChars, kMaxClientKeys);
+    m.clientKeys.resize(keys);
+    for (std::string& k : m.clientKeys) {
+        k = readKey(r, "client key");
+        if (k.empty()) fail("empty client key");
+    }
 }
 
-RTWALL_WIRE_FIELDS(NodeFrame, 5);
+RTWALL_WIRE_FIELDS(NodeFrame, 9);
 void write(Writer& w, const NodeFrame& m) {
     w.u32(m.frame);
     w.i32(m.width);
     w.i32(m.height);
     w.i32(m.tileSize);
     writeEnum(w, m.pixels);
+    writeVector(w, m.views);
+    if (m.eyes.size() > kMaxViews) throw std::length_error("protocol: more view eyes than views");
+    w.u32(uint32_t(m.eyes.size()));
+    for (int8_t eye : m.eyes) w.u8(uint8_t(eye));
+    w.boolean(m.stochastic);
+    w.u32(m.stateSeq);
 }
 void read(Reader& r, NodeFrame& m) {
     m.frame = r.u32();
@@ -912,6 +928,29 @@ void read(Reader& r, NodeFrame& m) {
     const uint64_t tiles = uint64_t((m.width + m.tileSize - 1) / m.tileSize) * uint64_t((m.height + m.tileSize - 1) / m.tileSize);
     if (tiles > kMaxTilesPerFrame) fail("node frame of " + std::to_string(tiles) + " tiles exceeds the limit");
     m.pixels = readEnum(r, TilePixels::LinearHalf, "tile pixel format");
+    static const size_t viewBytes = [] {
+        FrameView v;
+        v.camera.name.clear();
+        return minEncodedSize(v);
+    }();
+    readVector(r, m.views, viewBytes, kMaxViews);
+    // Every view may hold every tile: the node's tiling is bounded as one frame's.
+    if (tiles * std::max<uint64_t>(1, m.views.size()) > kMaxTilesPerFrame)
+        fail("node frame of " + std::to_string(m.views.size()) + " views of " + std::to_string(tiles) +
+             " tiles exceeds the limit");
+    const uint32_t eyes = r.u32();
+    if (eyes != m.views.size())
+        fail("node frame with " + std::to_string(eyes) + " view eyes for " + std::to_string(m.views.size()) + " views");
+    r.expectElements(eyes, 1, kMaxViews);
+    m.eyes.resize(eyes);
+    for (int8_t& eye : m.eyes) {
+        const uint8_t e = r.u8();
+        if (e != 0 && e != 1 && e != 0xff) fail("view eye " + std::to_string(int(int8_t(e))) + " is not -1, 0 or 1");
+        eye = int8_t(e);
+    }
+    m.stochastic = r.boolean();
+    m.stateSeq = r.u32();
+    if (m.pixels == TilePixels::LinearHalf && !m.stochastic) fail("linear tiles for a frame that is not accumulated");
 }
 
 RTWALL_WIRE_FIELDS(NodeHave, 1);

@@ -14,7 +14,11 @@
 // scheduler pass; no views: the state's camera, 4 bytes more); 11 added display nodes (issue 19):
 // the node <-> master messages NodeHello to NodeSwapped, and for clients NodeList, TileRoutes and
 // TileDone: tiles go straight from the clients to the nodes that show them, the master gets a
-// small ack).
+// small ack); 12 added CURVE to the node links (NodeWelcome::clientKeys: the client keys a node's
+// tile socket lets in) and to NodeFrame the frame's views with each view's eye (a node assembles
+// one image per view and composes the eyes, as the single-PC wall does) and what a node needs to
+// accumulate a stochastic frame as the single-PC wall does (whether it is stochastic, and its
+// state's sequence number).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one writer and one
@@ -40,7 +44,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 11;  // 11: display nodes
+inline constexpr uint16_t kProtocolVersion = 12;  // 12: views and accumulation on display nodes
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -57,6 +61,7 @@ inline constexpr uint32_t kMaxTimeoutMs = 3'600'000;  // heartbeat and timeout: 
 inline constexpr uint32_t kMaxNodes = 64;                 // display nodes: node sets are 64-bit masks
 inline constexpr uint32_t kMaxTilesPerFrame = 1 << 22;    // a 16384-pixel-square frame of 8-pixel tiles
 inline constexpr size_t kMaxWallConfigBytes = 1 << 20;    // the wall config text a node is sent
+inline constexpr uint32_t kMaxClientKeys = 4096;          // client public keys a node is given
 
 enum class MsgType : uint16_t {
     Hello = 1,          // client -> master
@@ -298,7 +303,7 @@ struct NodeHello {
     uint16_t protocolVersion = kProtocolVersion;
     std::string name;
     std::string endpoint;   // the node's ROUTER for tiles
-    std::string publicKey;  // its CURVE server key, Z85, or empty
+    std::string publicKey;  // its tile socket's CURVE server key (a pair made for the run), Z85; empty without keys
 };
 
 // The node's place in the wall: bit `node` of the tile masks, and the whole wall config (the
@@ -308,16 +313,28 @@ struct NodeWelcome {
     uint32_t heartbeatMs = 250;
     uint32_t timeoutMs = 3000;
     std::string wall;  // the wall config's TOML text, at most kMaxWallConfigBytes
+    // Version 12: with CURVE, the public keys (Z85) of the render clients the master lets in: the
+    // node's tile socket takes only these (its ZAP handler). Empty without keys.
+    std::vector<std::string> clientKeys{};
 };
 
-// Frame `frame` is width x height in tiles of tileSize (makeTiles order), its tiles sent as
-// `pixels`; sent before any of its tiles can reach the node.
+// Frame `frame` is width x height in tiles of tileSize (makeTiles order; with views, viewTiles
+// order), its tiles sent as `pixels`; sent before any of its tiles can reach the node.
 struct NodeFrame {
     uint32_t frame = 0;
     int32_t width = 0;
     int32_t height = 0;
     int32_t tileSize = 0;
     TilePixels pixels = TilePixels::Srgb8;
+    // Version 12. A multi-view frame's views (as in its FrameBegin: the node computes the same
+    // viewTiles) and each view's eye: -1 the mono image, 0 the left eye's, 1 the right eye's.
+    // A view with regions gives its eye those pixels, one without is the eye's whole image.
+    std::vector<FrameView> views{};
+    std::vector<int8_t> eyes{};  // one per view
+    // A stochastic frame refines: the node sums the frames of one state (per view: of one state
+    // and one camera) exactly as the single-PC wall does; LinearHalf tiles only come with it.
+    bool stochastic = false;
+    uint32_t stateSeq = 0;  // the scene state it renders (any change restarts the sums)
 };
 
 struct NodeHave {

@@ -83,12 +83,20 @@ void checkZmqVersion() {
     if (!zmq_has("curve")) throw InputError("this libzmq was built without CURVE; refusing to start");
 }
 
-ZapHandler::ZapHandler(zmq::context_t& ctx, const std::vector<std::string>& allowedPublicKeysZ85)
-    : socket_(ctx, zmq::socket_type::rep) {
-    for (const std::string& k : allowedPublicKeysZ85) allowed_.insert(z85ToBinary(k));
+ZapHandler::ZapHandler(zmq::context_t& ctx, const std::vector<std::string>& allowedPublicKeysZ85, std::string who,
+                       std::string whose)
+    : socket_(ctx, zmq::socket_type::rep), who_(std::move(who)), whose_(std::move(whose)) {
+    setAllowed(allowedPublicKeysZ85);
     socket_.set(zmq::sockopt::linger, 0);
     socket_.bind("inproc://zeromq.zap.01");
     thread_ = std::thread([this] { run(); });
+}
+
+void ZapHandler::setAllowed(const std::vector<std::string>& allowedPublicKeysZ85) {
+    std::set<std::string> allowed;
+    for (const std::string& k : allowedPublicKeysZ85) allowed.insert(z85ToBinary(k));
+    std::lock_guard lock(mutex_);
+    allowed_ = std::move(allowed);
 }
 
 ZapHandler::~ZapHandler() {
@@ -113,15 +121,20 @@ void ZapHandler::run() {
         if (frames.size() < 6) continue;
         const std::string address = frames[3].to_string(), mechanism = frames[5].to_string();
         const std::string key = frames.size() > 6 ? frames[6].to_string() : std::string();
-        const bool ok = mechanism == "CURVE" && key.size() == 32 && allowed_.count(key);
+        bool ok = false;
+        {
+            std::lock_guard lock(mutex_);
+            ok = mechanism == "CURVE" && key.size() == 32 && allowed_.count(key);
+        }
         if (!ok) {
             // The first few are logged; a flood of strangers is counted (MasterCounters::refused).
             const uint64_t n = ++denied_;
             char z85[41] = "-";
             if (key.size() == 32) zmq_z85_encode(z85, reinterpret_cast<const uint8_t*>(key.data()), 32);
             if (n <= 5)
-                std::fprintf(stderr, "rtwall master: refused a client from %s (mechanism %s, key %s): not in the config's client keys%s\n",
-                             address.c_str(), mechanism.c_str(), z85, n == 5 ? " (more refusals are counted, not logged)" : "");
+                std::fprintf(stderr, "%s: refused a client from %s (mechanism %s, key %s): not in %s%s\n", who_.c_str(),
+                             address.c_str(), mechanism.c_str(), z85, whose_.c_str(),
+                             n == 5 ? " (more refusals are counted, not logged)" : "");
         }
         const std::string status = ok ? "200" : "400", text = ok ? "OK" : "unknown client key";
         // Non-blocking like every other send: if libzmq's side of the ZAP exchange is gone or
@@ -131,7 +144,7 @@ void ZapHandler::run() {
                              socket_.send(zmq::buffer(status), more) && socket_.send(zmq::buffer(text), more) &&
                              socket_.send(zmq::str_buffer(""), more) &&
                              socket_.send(zmq::str_buffer(""), zmq::send_flags::dontwait);
-        if (!replied) std::fprintf(stderr, "rtwall master: could not answer a ZAP request from %s\n", address.c_str());
+        if (!replied) std::fprintf(stderr, "%s: could not answer a ZAP request from %s\n", who_.c_str(), address.c_str());
     }
 }
 

@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <filesystem>
+#include <mutex>
 #include <set>
 #include <string>
 #include <thread>
@@ -33,14 +34,20 @@ void checkZmqVersion();
 // is in the allowed set pass; everyone else is refused and logged with address and key.
 class ZapHandler {
 public:
-    ZapHandler(zmq::context_t& ctx, const std::vector<std::string>& allowedPublicKeysZ85);
+    // `who` names the refusing side in its log lines ("rtwall master").
+    ZapHandler(zmq::context_t& ctx, const std::vector<std::string>& allowedPublicKeysZ85, std::string who = "rtwall master",
+               std::string whose = "the config's client keys");
     ~ZapHandler();
     uint64_t denied() const { return denied_.load(); }
+    // Replaces the allowed keys (a display node learns them from the master).
+    void setAllowed(const std::vector<std::string>& allowedPublicKeysZ85);
 
 private:
     void run();
     zmq::socket_t socket_;
+    std::mutex mutex_;
     std::set<std::string> allowed_;  // 32-byte binary keys
+    std::string who_, whose_;
     std::atomic<bool> stop_{false};
     std::atomic<uint64_t> denied_{0};
     std::thread thread_;

@@ -9,6 +9,7 @@
 #include "codec.h"
 #include "net.h"
 #include "protocol.h"
+#include "security.h"
 
 #include <rtwall/cluster.h>
 
@@ -65,8 +66,15 @@ double secondsNow() { return std::chrono::duration<double>(Clock::now().time_sin
 // One scripted peer on a DEALER: what it received, and how it answers.
 class Peer {
 public:
-    Peer(zmq::context_t& ctx, const std::string& endpoint) : socket_(ctx, zmq::socket_type::dealer) {
+    // With `keys`, a CURVE client of the master whose public key is `serverKey`.
+    Peer(zmq::context_t& ctx, const std::string& endpoint, const KeyPair* keys = nullptr, const std::string& serverKey = {})
+        : socket_(ctx, zmq::socket_type::dealer) {
         socket_.set(zmq::sockopt::linger, 0);
+        if (keys) {
+            socket_.set(zmq::sockopt::curve_serverkey, serverKey);
+            socket_.set(zmq::sockopt::curve_publickey, keys->publicKey);
+            socket_.set(zmq::sockopt::curve_secretkey, keys->secretKey);
+        }
         socket_.connect(endpoint);
     }
     virtual ~Peer() = default;
@@ -102,7 +110,8 @@ protected:
 
 class FakeClient : public Peer {
 public:
-    FakeClient(zmq::context_t& ctx, const std::string& endpoint) : Peer(ctx, endpoint) {
+    FakeClient(zmq::context_t& ctx, const std::string& endpoint, const KeyPair* keys = nullptr, const std::string& serverKey = {})
+        : Peer(ctx, endpoint, keys, serverKey) {
         put(encodeMessage(Header{}, Hello{kProtocolVersion, 1, "fake-client"}));
     }
     std::mutex m;
@@ -139,12 +148,31 @@ private:
     }
 };
 
+// A client of the master that only reads the node lists it is sent: it never proves the state,
+// so it is never given tiles (a FakeClient would acknowledge tiles that no node receives).
+class ListReader : public Peer {
+public:
+    ListReader(zmq::context_t& ctx, const std::string& endpoint, const KeyPair* keys = nullptr, const std::string& serverKey = {})
+        : Peer(ctx, endpoint, keys, serverKey) {
+        put(encodeMessage(Header{}, Hello{kProtocolVersion, 1, "list-reader"}));
+    }
+    std::mutex m;
+    std::vector<NodeList> lists;
+
+private:
+    void on(const Header& h, const uint8_t* p, size_t n) override {
+        std::lock_guard lock(m);
+        if (h.type == MsgType::NodeList) lists.push_back(decodePayload<NodeList>(p, n));
+    }
+};
+
 class FakeNode : public Peer {
 public:
     // With `takeTiles`, the node binds a ROUTER on loopback for the clients' tiles and keeps what
     // arrives (TileResults by frame and tile).
-    FakeNode(zmq::context_t& ctx, const std::string& endpoint, const std::string& name, bool takeTiles = false)
-        : Peer(ctx, endpoint) {
+    FakeNode(zmq::context_t& ctx, const std::string& endpoint, const std::string& name, bool takeTiles = false,
+             const KeyPair* keys = nullptr, const std::string& serverKey = {})
+        : Peer(ctx, endpoint, keys, serverKey) {
         std::string tileEndpoint = "tcp://127.0.0.1:9";
         if (takeTiles) {
             tiles_.emplace(ctx, zmq::socket_type::router);
@@ -204,7 +232,10 @@ private:
     void on(const Header& h, const uint8_t* p, size_t n) override {
         std::lock_guard lock(m);
         switch (h.type) {
-        case MsgType::NodeWelcome: index = decodePayload<NodeWelcome>(p, n).node; break;
+        case MsgType::NodeWelcome:
+            index = decodePayload<NodeWelcome>(p, n).node;
+            if (alive) putInSession(Heartbeat{});  // it answers at once, as runDisplayNode does: the clients learn of it then
+            break;
         case MsgType::Goodbye: goodbye = decodePayload<Goodbye>(p, n).reason; break;
         case MsgType::TileRoutes: routes.push_back(decodePayload<TileRoutes>(p, n)); break;
         case MsgType::NodeFrame: {
@@ -509,23 +540,30 @@ TEST(DisplayNodes, RenderClientsSendEachTileToItsNodesBitIdentical) {
 struct NodeThread {
     struct Shown {
         uint32_t frame;
-        std::optional<Image> image;
+        std::optional<Image> image;  // the mono image or the left eye's
+        std::optional<Image> right;
         std::vector<std::string> leftOut;
     };
-    NodeThread(const std::string& endpoint, const std::string& name) {
+    NodeThread(const std::string& endpoint, const std::string& name, const std::function<void(DisplayNodeRun&)>& configure = {}) {
         run.connect = endpoint;
         run.name = name;
         run.exitAfterIdleMs = 5000;
         run.stop = &stop;
+        run.counters = counters;
+        if (configure) configure(run);
         run.onWall = [this](const std::string& text) {
             std::lock_guard lock(m);
             wall = text;
         };
-        run.present = [this](uint32_t frame, const Image* image, const std::vector<std::string>& leftOut) {
+        run.present = [this](uint32_t frame, const Image* left, const Image* right, const std::vector<std::string>& leftOut) {
             std::lock_guard lock(m);
-            shown.push_back({frame, image ? std::optional<Image>(*image) : std::nullopt, leftOut});
+            shown.push_back({frame, left ? std::optional<Image>(*left) : std::nullopt,
+                             right ? std::optional<Image>(*right) : std::nullopt, leftOut});
         };
-        thread = std::thread([this] { status = runDisplayNode(run); });
+        thread = std::thread([this] {
+            status = runDisplayNode(run);
+            finished = true;
+        });
     }
     ~NodeThread() {
         stop = true;
@@ -534,8 +572,9 @@ struct NodeThread {
     std::mutex m;
     std::string wall;
     std::vector<Shown> shown;
-    std::atomic<bool> stop{false};
-    int status = -1;
+    std::atomic<bool> stop{false}, finished{false};
+    std::atomic<int> status{-1};
+    std::shared_ptr<DisplayNodeCounters> counters = std::make_shared<DisplayNodeCounters>();
     DisplayNodeRun run;
     std::thread thread;
 };
@@ -620,6 +659,543 @@ TEST(DisplayNodes, NodesPresentTheirTilesAndSurviveAKilledNode) {
     EXPECT_TRUE(together) << "the restarted node never presented a frame with the others";
     right.reset();
     left.reset();
+}
+
+// Views and accumulation on display nodes (protocol 12) ---------------------------------------
+
+CameraDesc eyeCamera(const SceneDesc& d, float dx) {
+    CameraDesc c = d.cameras.front();
+    c.position.x += dx;
+    c.lookAt.x += dx;
+    return c;
+}
+
+// Each view's tiles split like halves(): view by view, the left half to node 0, the right to 1.
+std::vector<uint64_t> viewHalves(int width, int height, int tileSize, const std::vector<FrameView>& views) {
+    if (views.empty()) return halves(width, height, tileSize, views);
+    std::vector<uint64_t> masks;
+    for (const ViewTile& t : viewTiles(views, width, height, tileSize)) masks.push_back(t.rect.x0 < width / 2 ? 1u : 2u);
+    return masks;
+}
+
+// Whether `image` equals `expected` on the half of the 64-pixel-wide frame node `bit` shows.
+::testing::AssertionResult sameOnNode(const Image& image, const Image& expected, uint64_t bit) {
+    if (image.width != expected.width || image.height != expected.height)
+        return ::testing::AssertionFailure() << "size " << image.width << "x" << image.height << ", expected "
+                                             << expected.width << "x" << expected.height;
+    const int x0 = bit == 1 ? 0 : image.width / 2, x1 = bit == 1 ? image.width / 2 : image.width;
+    for (int y = 0; y < image.height; ++y)
+        if (std::memcmp(image.pixel(x0, y), expected.pixel(x0, y), size_t(x1 - x0) * 3) != 0)
+            return ::testing::AssertionFailure() << "row " << y << " differs";
+    return ::testing::AssertionSuccess();
+}
+
+// A master with render-client threads and two runDisplayNode threads, both joined.
+struct NodeWall {
+    struct Joined {
+        std::vector<std::thread> threads;
+        ~Joined() {
+            for (auto& t : threads) t.join();
+        }
+    } clients;  // joined after the master is gone (its goodbye ends them)
+    std::unique_ptr<Master> master;
+    std::unique_ptr<NodeThread> left, right;
+
+    NodeWall(const SceneDesc& scene, ClusterSettings cs) {
+        master = std::make_unique<Master>(scene, cs);
+        left = std::make_unique<NodeThread>(master->endpoint(), "left");
+        right = std::make_unique<NodeThread>(master->endpoint(), "right");
+        for (int i = 0; i < 2; ++i) {
+            ClientSettings c;
+            c.connect = master->endpoint();
+            c.threads = 1;
+            c.exitAfterIdleMs = 5000;
+            clients.threads.emplace_back([c] { runClient(c); });
+        }
+    }
+    bool ready() {
+        return master->waitForClients(2, 20000) && waitFor(*left, [&] { return !left->wall.empty(); }) &&
+               waitFor(*right, [&] { return !right->wall.empty(); });
+    }
+    // What `node` presented of `frame` (waits for it, at most 5 s).
+    std::optional<NodeThread::Shown> shownOf(NodeThread& node, uint32_t frame) {
+        std::optional<NodeThread::Shown> out;
+        waitFor(node, [&] {
+            for (const auto& s : node.shown)
+                if (s.frame == frame) out = s;
+            return out.has_value();
+        });
+        return out;
+    }
+    ~NodeWall() {
+        left.reset();
+        right.reset();
+        master.reset();
+    }
+};
+
+// A stereo frame (both eyes in one pass) on two nodes: each node presents a left and a right
+// image whose pixels on its half are one machine's render of that eye, bit for bit.
+TEST(DisplayNodes, StereoFramesShowBothEyesBitIdentical) {
+    const SceneDesc scene = smallScene();
+    ClusterSettings cs = nodeSettings();
+    cs.displayNodes.routes = viewHalves;
+    cs.displayNodes.viewEyes = {0, 1};
+    NodeWall w(scene, cs);
+    ASSERT_TRUE(w.ready());
+    const std::vector<FrameView> views{{eyeCamera(scene, -0.2f), {}, 0, 0}, {eyeCamera(scene, 0.2f), {}, 0, 0}};
+    w.master->setViews(views);
+    FrameReport report;
+    w.master->renderViews(&report);
+    ASSERT_EQ(report.views, 2u);
+    const Scene reference(scene);
+    const Image leftEye = renderFrame(reference, Camera(views[0].camera, 64, 48), scene.settings);
+    const Image rightEye = renderFrame(reference, Camera(views[1].camera, 64, 48), scene.settings);
+    ASSERT_NE(leftEye.rgb, rightEye.rgb);
+    for (NodeThread* node : {w.left.get(), w.right.get()}) {
+        const uint64_t bit = node == w.left.get() ? 1 : 2;
+        const auto shown = w.shownOf(*node, report.frame);
+        ASSERT_TRUE(shown.has_value()) << "node " << bit;
+        ASSERT_TRUE(shown->image.has_value()) << "node " << bit;
+        ASSERT_TRUE(shown->right.has_value()) << "node " << bit << " presented no right eye";
+        EXPECT_TRUE(sameOnNode(*shown->image, leftEye, bit)) << "node " << bit << ", left eye";
+        EXPECT_TRUE(sameOnNode(*shown->right, rightEye, bit)) << "node " << bit << ", right eye";
+    }
+}
+
+// A CAVE-like frame: two planes of one (mono) eye, each view with its region of the image: the
+// node's one image takes each plane's pixels from its view.
+TEST(DisplayNodes, PlanesAreComposedIntoTheEyeImageBitIdentical) {
+    const SceneDesc scene = smallScene();
+    ClusterSettings cs = nodeSettings();
+    cs.displayNodes.routes = viewHalves;
+    cs.displayNodes.viewEyes = {-1, -1};
+    NodeWall w(scene, cs);
+    ASSERT_TRUE(w.ready());
+    // Plane 0 shows x < 32 (node left), plane 1 the rest; a 64x48 reference image.
+    const std::vector<FrameView> views{{eyeCamera(scene, -0.3f), {{0, 0, 32, 48}}, 64, 48},
+                                       {eyeCamera(scene, 0.3f), {{32, 0, 32, 48}}, 64, 48}};
+    w.master->setViews(views);
+    FrameReport report;
+    w.master->renderViews(&report);
+    const Scene reference(scene);
+    const Image plane0 = renderFrame(reference, Camera(views[0].camera, 64, 48), scene.settings);
+    const Image plane1 = renderFrame(reference, Camera(views[1].camera, 64, 48), scene.settings);
+    const auto left = w.shownOf(*w.left, report.frame), right = w.shownOf(*w.right, report.frame);
+    ASSERT_TRUE(left && left->image && right && right->image);
+    EXPECT_FALSE(left->right.has_value());  // mono: one image
+    EXPECT_TRUE(sameOnNode(*left->image, plane0, 1));
+    EXPECT_TRUE(sameOnNode(*right->image, plane1, 2));
+}
+
+// A still view of a stochastic (GI) scene: after K frames each node shows one machine's running
+// mean of those K frame numbers (linear half-float tiles, Accumulator::addLinear), bit for bit;
+// a scene change restarts it. Mono, and stereo with one running mean per view.
+class NodeAccumulation : public ::testing::TestWithParam<bool> {};
+
+TEST_P(NodeAccumulation, AStillViewAccumulatesAsOnOneMachine) {
+    const bool stereo = GetParam();
+    SceneDesc scene = smallScene();
+    scene.settings.gi = true;
+    ASSERT_TRUE(rendersStochastically(scene));
+    ClusterSettings cs = nodeSettings();
+    cs.displayNodes.routes = viewHalves;
+    if (stereo) cs.displayNodes.viewEyes = {0, 1};
+    NodeWall w(scene, cs);
+    ASSERT_TRUE(w.ready());
+    std::vector<FrameView> views;
+    if (stereo) views = {{eyeCamera(scene, -0.2f), {}, 0, 0}, {eyeCamera(scene, 0.2f), {}, 0, 0}};
+    w.master->setViews(views);
+    const std::vector<CameraDesc> cameras = stereo ? std::vector<CameraDesc>{views[0].camera, views[1].camera}
+                                                   : std::vector<CameraDesc>{scene.cameras.front()};
+    const Scene reference(scene);
+    std::vector<Accumulator> sums(cameras.size());
+    auto check = [&](const char* when) {
+        FrameReport report;
+        w.master->renderViews(&report);
+        ASSERT_TRUE(report.stochastic);
+        ASSERT_TRUE(report.linear);
+        std::vector<Image> expected;
+        for (size_t v = 0; v < cameras.size(); ++v) {
+            const std::vector<float> one = renderFrameLinear(reference, Camera(cameras[v], 64, 48), scene.settings, report.frame);
+            sums[v].addLinear(one.data(), 64, 48);
+            expected.push_back(sums[v].resolve());
+        }
+        for (NodeThread* node : {w.left.get(), w.right.get()}) {
+            const uint64_t bit = node == w.left.get() ? 1 : 2;
+            const auto shown = w.shownOf(*node, report.frame);
+            ASSERT_TRUE(shown && shown->image) << when << ": node " << bit << " did not present frame " << report.frame;
+            EXPECT_TRUE(sameOnNode(*shown->image, expected[0], bit)) << when << ": node " << bit << ", frame " << report.frame;
+            if (stereo) {
+                ASSERT_TRUE(shown->right.has_value());
+                EXPECT_TRUE(sameOnNode(*shown->right, expected[1], bit)) << when << ": node " << bit << ", right eye";
+            }
+        }
+    };
+    for (int k = 0; k < 3; ++k) check("still view");
+    ASSERT_EQ(sums[0].frames(), 3);
+    // A scene change (the light) restarts every running mean, on one machine and on the nodes.
+    Light light = scene.lights.front();
+    light.intensity *= 0.5f;
+    w.master->setLight(0, light);
+    scene.lights.front() = light;
+    const Scene changed(scene);
+    for (Accumulator& a : sums) a.reset();
+    {
+        FrameReport report;
+        w.master->renderViews(&report);
+        for (size_t v = 0; v < cameras.size(); ++v) {
+            const std::vector<float> one = renderFrameLinear(changed, Camera(cameras[v], 64, 48), scene.settings, report.frame);
+            sums[v].addLinear(one.data(), 64, 48);
+        }
+        const Image expected = sums[0].resolve();
+        for (NodeThread* node : {w.left.get(), w.right.get()}) {
+            const uint64_t bit = node == w.left.get() ? 1 : 2;
+            const auto shown = w.shownOf(*node, report.frame);
+            ASSERT_TRUE(shown && shown->image);
+            EXPECT_TRUE(sameOnNode(*shown->image, expected, bit)) << "after the change: node " << bit;
+        }
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(MonoAndStereo, NodeAccumulation, ::testing::Bool(),
+                         [](const auto& p) { return p.param ? "Stereo" : "Mono"; });
+
+// CURVE on the node links ----------------------------------------------------------------------
+
+// Waits (at most 10 s) for `pred`.
+template <class F> bool eventually(F pred) {
+    const auto end = Clock::now() + std::chrono::seconds(10);
+    while (Clock::now() < end) {
+        if (pred()) return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return pred();
+}
+
+// Every link keyed with exactly the arguments a master gives the processes it starts on its PC
+// (localClientArgs: --key, --server-key): nodes join, clients send them tiles over CURVE, the
+// screens are bit-identical; a stranger's key is refused by a node's tile socket, said on both
+// sides, and the wall goes on.
+TEST(DisplayNodes, CurveKeysOnEveryNodeLinkFramesBitIdenticalAndStrangersRefused) {
+    const SceneDesc scene = smallScene();
+    const auto dir = test::scratchDir();
+    writeNewKeyPair(dir / "master");
+    ClusterSettings cs = nodeSettings();
+    cs.keyFile = dir / "master.key";
+    cs.localClients = 2;  // the master makes a key pair for its PC's processes
+    struct Joined {
+        std::vector<std::thread> threads;
+        ~Joined() {
+            for (auto& t : threads) t.join();
+        }
+    } clients;
+    auto owned = std::make_unique<Master>(scene, cs);
+    Master& master = *owned;
+    const std::vector<std::string> args = master.localClientArgs();
+    ASSERT_EQ(args.size(), 4u);
+    ASSERT_EQ(args[0], "--key");
+    ASSERT_EQ(args[2], "--server-key");
+    auto keyed = [&](DisplayNodeRun& r) {
+        r.keyFile = args[1];
+        r.serverKeyFile = args[3];
+    };
+    auto left = std::make_unique<NodeThread>(master.endpoint(), "left", keyed);
+    auto right = std::make_unique<NodeThread>(master.endpoint(), "right", keyed);
+    for (int i = 0; i < 2; ++i) {
+        ClientSettings c;
+        c.connect = master.endpoint();
+        c.threads = 1;
+        c.exitAfterIdleMs = 5000;
+        c.keyFile = args[1];
+        c.serverKeyFile = args[3];
+        clients.threads.emplace_back([c] { runClient(c); });
+    }
+    ASSERT_TRUE(master.waitForClients(2, 20000));
+    ASSERT_TRUE(waitFor(*left, [&] { return !left->wall.empty(); }));
+    ASSERT_TRUE(waitFor(*right, [&] { return !right->wall.empty(); }));
+
+    const Scene reference(scene);
+    const Image one = renderFrame(reference, Camera(scene.cameras.front(), 64, 48), scene.settings);
+    auto presentsFrame = [&](const char* when) {
+        FrameReport report;
+        master.renderFrame(&report);
+        for (NodeThread* node : {left.get(), right.get()}) {
+            const uint64_t bit = node == left.get() ? 1 : 2;
+            ASSERT_TRUE(waitFor(*node, [&] { return !node->shown.empty() && node->shown.back().frame == report.frame; }))
+                << when << ": node " << bit;
+            std::lock_guard lock(node->m);
+            ASSERT_TRUE(node->shown.back().image.has_value()) << when << ": node " << bit;
+            EXPECT_TRUE(sameOnNode(*node->shown.back().image, one, bit)) << when << ": node " << bit;
+        }
+    };
+    presentsFrame("with keys");
+
+    // The master vouches for each node's tile key: a keyed client of the master reads them.
+    const KeyPair local = readKeyPair(args[1]);
+    const std::string masterKey = readPublicKey(args[3]);
+    zmq::context_t ctx{1};
+    ListReader reader(ctx, master.endpoint(), &local, masterKey);
+    Peers peers({&reader});
+    ASSERT_TRUE(waitFor(reader, [&] { return !reader.lists.empty() && reader.lists.back().nodes.size() == 2; }));
+    NodeList list;
+    {
+        std::lock_guard lock(reader.m);
+        list = reader.lists.back();
+    }
+    EXPECT_EQ(list.nodes[0].serverKey.size(), 40u);
+    EXPECT_EQ(list.nodes[1].serverKey.size(), 40u);
+    EXPECT_NE(list.nodes[0].serverKey, list.nodes[1].serverKey);  // each node has its own pair
+    EXPECT_NE(list.nodes[0].serverKey, local.publicKey);
+
+    // A stranger with the node's server key but a key of its own: refused by the node's ZAP.
+    const KeyPair strangerKeys = makeKeyPair();
+    zmq::socket_t stranger(ctx, zmq::socket_type::dealer);
+    stranger.set(zmq::sockopt::linger, 0);
+    stranger.set(zmq::sockopt::curve_serverkey, list.nodes[0].serverKey);
+    stranger.set(zmq::sockopt::curve_publickey, strangerKeys.publicKey);
+    stranger.set(zmq::sockopt::curve_secretkey, strangerKeys.secretKey);
+    ASSERT_EQ(zmq_socket_monitor(stranger.handle(), "inproc://stranger-monitor", ZMQ_EVENT_HANDSHAKE_FAILED_AUTH), 0);
+    zmq::socket_t monitor(ctx, zmq::socket_type::pair);
+    monitor.set(zmq::sockopt::linger, 0);
+    monitor.connect("inproc://stranger-monitor");
+    stranger.connect(list.nodes[0].endpoint);
+    Header h;
+    h.session = 1;
+    const std::vector<uint8_t> forged = encodeMessage(h, TileResult{0, 0, TileCodec::Raw, 1, std::vector<uint8_t>(16 * 16 * 3, 255)});
+    stranger.send(zmq::buffer(forged), zmq::send_flags::dontwait);
+    monitor.set(zmq::sockopt::rcvtimeo, 10000);
+    zmq::message_t event;
+    ASSERT_TRUE(monitor.recv(event)) << "the stranger was not told it was refused";
+    uint16_t id = 0;
+    std::memcpy(&id, event.data(), 2);
+    EXPECT_EQ(id, ZMQ_EVENT_HANDSHAKE_FAILED_AUTH);
+    EXPECT_TRUE(eventually([&] { return left->counters->refusedClients.load() >= 1; })) << "the node did not count the refusal";
+    EXPECT_EQ(right->counters->refusedClients.load(), 0u);
+    presentsFrame("after the stranger");
+    EXPECT_EQ(master.counters().refused, 0u);  // the master saw nothing of it
+    peers.remove(&reader);
+    right.reset();
+    left.reset();
+}
+
+// A node without keys at a keyed master does not get in, and says why; so does one whose key
+// the master does not know. Neither hangs: each gives up after its idle time.
+TEST(DisplayNodes, NodesWithoutKeysOrWithUnknownKeysAreRefusedByAKeyedMaster) {
+    const SceneDesc scene = smallScene();
+    const auto dir = test::scratchDir();
+    writeNewKeyPair(dir / "master");
+    writeNewKeyPair(dir / "stranger");
+    ClusterSettings cs = nodeSettings();
+    cs.keyFile = dir / "master.key";
+    cs.localClients = 2;
+    Master master(scene, cs);
+    NodeThread keyless(master.endpoint(), "left", [](DisplayNodeRun& r) { r.exitAfterIdleMs = 1500; });
+    NodeThread unknown(master.endpoint(), "right", [&](DisplayNodeRun& r) {
+        r.exitAfterIdleMs = 1500;
+        r.keyFile = dir / "stranger.key";
+        r.serverKeyFile = dir / "master.pub";
+    });
+    ASSERT_TRUE(eventually([&] { return keyless.finished.load() && unknown.finished.load(); }));
+    EXPECT_EQ(keyless.status.load(), 1);
+    EXPECT_EQ(unknown.status.load(), 1);
+    EXPECT_GE(keyless.counters->failedHandshakes.load(), 1u);
+    EXPECT_GE(unknown.counters->refusedHandshakes.load(), 1u);
+    EXPECT_TRUE(keyless.wall.empty());
+    EXPECT_TRUE(unknown.wall.empty());
+    EXPECT_GE(master.refusedConnections(), 1u);
+    EXPECT_GE(master.counters().failedHandshakes, 1u);
+}
+
+// A node that gets through a keyed master's CURVE (its key is allowed) but offers no tile key
+// would take pixels in the clear: the master refuses it, saying why.
+TEST(DisplayNodes, AKeyedMasterRefusesANodeWithoutATileKey) {
+    const auto dir = test::scratchDir();
+    writeNewKeyPair(dir / "master");
+    ClusterSettings cs = nodeSettings();
+    cs.keyFile = dir / "master.key";
+    cs.localClients = 2;
+    const SceneDesc scene = smallScene();
+    Master master(scene, cs);
+    const std::vector<std::string> args = master.localClientArgs();
+    ASSERT_EQ(args.size(), 4u);
+    const KeyPair local = readKeyPair(args[1]);
+    zmq::context_t ctx{1};
+    FakeNode node(ctx, master.endpoint(), "left", false, &local, readPublicKey(args[3]));  // its NodeHello has no key
+    Peers peers({&node});
+    ASSERT_TRUE(waitFor(node, [&] { return node.goodbye.has_value(); }));
+    EXPECT_NE(node.goodbye->find("has no tile key"), std::string::npos) << *node.goodbye;
+    EXPECT_FALSE(node.index.has_value());
+    EXPECT_GE(master.counters().refused, 1u);
+    peers.remove(&node);
+}
+
+TEST(DisplayNodes, AKeyWithoutTheMastersKeyIsAnInputError) {
+    const auto dir = test::scratchDir();
+    writeNewKeyPair(dir / "node");
+    DisplayNodeRun r;
+    r.connect = "tcp://127.0.0.1:9";
+    r.name = "left";
+    r.keyFile = dir / "node.key";
+    try {
+        runDisplayNode(r);
+        FAIL() << "no error";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("--key needs --server-key"), std::string::npos) << e.what();
+    }
+}
+
+// Where the clients are told to send a node's tiles.
+TEST(DisplayNodes, TheAdvertisedEndpointIsTheBoundOneOrTheGivenHost) {
+    EXPECT_EQ(advertisedNodeEndpoint("tcp://127.0.0.1:5601", ""), "tcp://127.0.0.1:5601");
+    EXPECT_EQ(advertisedNodeEndpoint("tcp://10.0.0.7:5601", ""), "tcp://10.0.0.7:5601");
+    EXPECT_EQ(advertisedNodeEndpoint("tcp://0.0.0.0:5601", "wall-pc-2"), "tcp://wall-pc-2:5601");
+    EXPECT_EQ(advertisedNodeEndpoint("tcp://0.0.0.0:5601", "10.1.2.3"), "tcp://10.1.2.3:5601");
+    EXPECT_EQ(advertisedNodeEndpoint("tcp://[::]:5601", "[fd00::7]"), "tcp://[fd00::7]:5601");
+    for (const char* wildcard : {"tcp://0.0.0.0:5601", "tcp://[::]:5601", "tcp://*:5601"}) {
+        try {
+            advertisedNodeEndpoint(wildcard, "");
+            ADD_FAILURE() << wildcard << ": no error";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("--advertise"), std::string::npos) << e.what();
+        }
+    }
+    for (const char* bad : {"wall pc", "host:1", "-x", "[fd00::7", "[zz::1]", "0.0.0.0", "a/b", "caf\xc3\xa9"})
+        EXPECT_THROW(advertisedNodeEndpoint("tcp://0.0.0.0:5601", bad), InputError) << bad;
+    EXPECT_THROW(advertisedNodeEndpoint("tcp://0.0.0.0:5601", std::string(241, 'a')), InputError);
+    EXPECT_THROW(advertisedNodeEndpoint("ipc:///tmp/x", ""), InputError);
+}
+
+// A node advertising a host name for its (loopback) bind: the clients reach it there. (A wildcard
+// bind is not used here: tests listen on loopback only.)
+TEST(DisplayNodes, ANodeIsReachedAtItsAdvertisedHost) {
+    SceneDesc scene = smallScene();
+    NodeWall w(scene, nodeSettings());
+    ASSERT_TRUE(w.ready());
+    w.left.reset();
+    w.left = std::make_unique<NodeThread>(w.master->endpoint(), "left", [](DisplayNodeRun& r) {
+        r.bind = "tcp://127.0.0.1:0";
+        r.advertise = "localhost";
+    });
+    ASSERT_TRUE(waitFor(*w.left, [&] { return !w.left->wall.empty(); }));
+    FrameReport report;
+    bool together = false;
+    for (int i = 0; i < 10 && !together; ++i) {
+        w.master->renderFrame(&report);
+        const auto shown = w.shownOf(*w.left, report.frame);
+        together = shown && shown->image && shown->leftOut.empty();
+    }
+    EXPECT_TRUE(together) << "the node advertised as localhost never presented a frame";
+}
+
+// A hostile master (a ROUTER of the test's) sends a display node NodeFrames and welcomes whose
+// new fields (protocol 12) are out of range: the node drops and counts each, never crashes or
+// hangs, and still assembles, accumulates and presents a good frame after them.
+TEST(DisplayNodes, ANodeDropsMalformedViewsEyesAndKeysFromAHostileMaster) {
+    zmq::context_t ctx{1};
+    zmq::socket_t master(ctx, zmq::socket_type::router);
+    master.set(zmq::sockopt::linger, 0);
+    master.bind("tcp://127.0.0.1:0");
+    NodeThread node(master.get(zmq::sockopt::last_endpoint), "left");
+    master.set(zmq::sockopt::rcvtimeo, 5000);
+    zmq::message_t identity, hello;
+    ASSERT_TRUE(master.recv(identity));
+    ASSERT_TRUE(master.recv(hello));
+    const Header hh = decodeHeader(static_cast<const uint8_t*>(hello.data()), hello.size());
+    ASSERT_EQ(hh.type, MsgType::NodeHello);
+    const NodeHello nh = decodePayload<NodeHello>(static_cast<const uint8_t*>(hello.data()) + kHeaderSize, hello.size() - kHeaderSize);
+    EXPECT_TRUE(nh.publicKey.empty());  // no keys, no tile key
+    const std::string peer = identity.to_string();
+    auto put = [&](const auto& msg, uint32_t frame = 0) {
+        Header h;
+        h.session = 77;
+        h.frame = frame;
+        const std::vector<uint8_t> bytes = encodeMessage(h, msg);
+        master.send(zmq::buffer(peer), zmq::send_flags::sndmore);
+        master.send(zmq::buffer(bytes));
+    };
+    // A welcome with a client key that is not Z85: dropped (the node stays out of the session).
+    NodeWelcome badWelcome{0, 50, 5000, "[wall]\n", {std::string(40, '~')}};
+    put(badWelcome);
+    ASSERT_TRUE(eventually([&] { return node.counters->droppedMessages.load() >= 1; }));
+    EXPECT_TRUE(node.wall.empty());
+    put(NodeWelcome{0, 50, 5000, "[wall]\n", {}});
+    ASSERT_TRUE(waitFor(node, [&] { return !node.wall.empty(); }));
+
+    SceneDesc scene = smallScene();
+    scene.settings.gi = true;
+    const std::vector<FrameView> views{{eyeCamera(scene, -0.2f), {}, 0, 0}, {eyeCamera(scene, 0.2f), {}, 0, 0}};
+    const std::vector<uint64_t> masks = viewHalves(64, 48, 16, views);
+    put(TileRoutes{1, masks}, 1);
+    const NodeFrame good{1, 64, 48, 16, TilePixels::Srgb8, views, {0, 1}, true, 5};
+    std::vector<NodeFrame> bad;
+    NodeFrame f = good;
+    f.eyes = {0};  // an eye short
+    bad.push_back(f);
+    f = good;
+    f.eyes = {0, 2};  // no such eye
+    bad.push_back(f);
+    f = good;
+    f.pixels = TilePixels::LinearHalf;
+    f.stochastic = false;  // linear tiles of a frame that does not accumulate
+    bad.push_back(f);
+    f = good;
+    f.views = std::vector<FrameView>(kMaxViews + 1, views[0]);  // more views than a frame has
+    f.eyes.clear();  // (the writer refuses more eyes than that; the reader stops at the views)
+    bad.push_back(f);
+    f = good;
+    f.views[1].regions = {{60, 0, 10, 10}};  // a region outside its reference image
+    f.views[1].refWidth = 64;
+    f.views[1].refHeight = 48;
+    bad.push_back(f);
+    const uint64_t before = node.counters->droppedMessages.load();
+    for (const NodeFrame& b : bad) put(b, 1);
+    ASSERT_TRUE(eventually([&] { return node.counters->droppedMessages.load() >= before + bad.size(); }));
+    EXPECT_EQ(node.counters->droppedMessages.load(), before + bad.size());
+    // Views whose tiling does not match the masks: the frame is skipped, not assembled.
+    f = good;
+    f.views.push_back(views[0]);
+    f.eyes.push_back(-1);
+    put(f, 1);
+    put(NodeSwap{1, {}}, 1);
+    ASSERT_TRUE(waitFor(node, [&] { return !node.shown.empty(); }));
+    {
+        std::lock_guard lock(node.m);
+        EXPECT_FALSE(node.shown.back().image.has_value());  // it did not hold the frame
+    }
+    EXPECT_FALSE(node.finished.load());
+
+    // Then a good stereo frame: its tiles (from a test client on the node's tile socket) are
+    // assembled into both eyes.
+    put(good, 1);
+    zmq::socket_t client(ctx, zmq::socket_type::dealer);
+    client.set(zmq::sockopt::linger, 0);
+    client.connect(nh.endpoint);
+    const std::vector<ViewTile> tiles = viewTiles(views, 64, 48, 16);
+    for (uint32_t t = 0; t < tiles.size(); ++t) {
+        if (!(masks[t] & 1)) continue;
+        const std::vector<uint8_t> pixels(size_t(tiles[t].rect.width()) * tiles[t].rect.height() * 3, uint8_t(10 + tiles[t].view * 100));
+        Header h;
+        h.session = 77;
+        h.frame = 1;
+        client.send(zmq::buffer(encodeMessage(h, TileResult{1, t, TileCodec::Raw, 1, pixels})), zmq::send_flags::dontwait);
+    }
+    master.set(zmq::sockopt::rcvtimeo, 100);
+    bool have = false;
+    for (int i = 0; i < 100 && !have; ++i) {
+        zmq::message_t from, msg;
+        if (!master.recv(from) || !master.recv(msg)) continue;
+        const Header h = decodeHeader(static_cast<const uint8_t*>(msg.data()), msg.size());
+        have = h.type == MsgType::NodeHave;
+    }
+    ASSERT_TRUE(have) << "the node never held the good frame";
+    put(NodeSwap{1, {}}, 1);
+    ASSERT_TRUE(waitFor(node, [&] { return node.shown.size() >= 2; }));
+    std::lock_guard lock(node.m);
+    const NodeThread::Shown& shown = node.shown.back();
+    ASSERT_TRUE(shown.image && shown.right);
+    EXPECT_EQ(shown.image->pixel(0, 0)[0], 10);
+    EXPECT_EQ(shown.right->pixel(0, 0)[0], 110);
 }
 
 TEST(DisplayNodes, ANodeTheWallDoesNotNameIsRefused) {

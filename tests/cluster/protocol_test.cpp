@@ -226,6 +226,7 @@ void expectSame(const NodeWelcome& a, const NodeWelcome& b) {
     EXPECT_EQ(a.heartbeatMs, b.heartbeatMs);
     EXPECT_EQ(a.timeoutMs, b.timeoutMs);
     EXPECT_EQ(a.wall, b.wall);
+    EXPECT_EQ(a.clientKeys, b.clientKeys);
 }
 void expectSame(const NodeFrame& a, const NodeFrame& b) {
     EXPECT_EQ(a.frame, b.frame);
@@ -233,6 +234,10 @@ void expectSame(const NodeFrame& a, const NodeFrame& b) {
     EXPECT_EQ(a.height, b.height);
     EXPECT_EQ(a.tileSize, b.tileSize);
     EXPECT_EQ(a.pixels, b.pixels);
+    EXPECT_EQ(a.views, b.views);
+    EXPECT_EQ(a.eyes, b.eyes);
+    EXPECT_EQ(a.stochastic, b.stochastic);
+    EXPECT_EQ(a.stateSeq, b.stateSeq);
 }
 void expectSame(const NodeHave& a, const NodeHave& b) { EXPECT_EQ(a.frame, b.frame); }
 void expectSame(const NodeSwap& a, const NodeSwap& b) {
@@ -401,7 +406,9 @@ TileResult sampleTileResult() {
 const std::string kSampleKey = "rq:rM>}U?@Lns47E1%kR.o@n%FcmmsL/@{H8]yf7";
 
 NodeHello sampleNodeHello() { return NodeHello{uint16_t(kProtocolVersion + 1), "left-PC_2", "tcp://10.0.0.7:5600", kSampleKey}; }
-NodeWelcome sampleNodeWelcome() { return NodeWelcome{63, 100, 2500, "[wall]\nscreens = 2\n"}; }
+NodeWelcome sampleNodeWelcome() {
+    return NodeWelcome{63, 100, 2500, "[wall]\nscreens = 2\n", {kSampleKey, "Yne@$w-vo<fVvi]a<NY6T1ed:M$fCG*[IaLV{hID"}};
+}
 NodeList sampleNodeList() {
     return NodeList{{{0, "left", "tcp://127.0.0.1:5601", ""}, {63, "right", "tcp://127.0.0.1:5602", kSampleKey}}};
 }
@@ -432,7 +439,14 @@ FrameBegin sampleViewsFrameBegin() {
     return fb;
 }
 
-// Calls f with every sample message (FrameBegin twice: mono and with views).
+// The same stereo CAVE's frame as a display node is told it (version 12): views, their eyes, and
+// that it accumulates.
+NodeFrame sampleViewsNodeFrame() {
+    NodeFrame f{86, 3072, 768, 64, TilePixels::LinearHalf, sampleViewsFrameBegin().views, {0, 1}, true, 0xA1B2C3D4u};
+    return f;
+}
+
+// Calls f with every sample message (FrameBegin and NodeFrame twice: mono and with views).
 template <class F> void forEachSample(F&& f) {
     f(sampleHello());
     f(sampleWelcome());
@@ -455,7 +469,8 @@ template <class F> void forEachSample(F&& f) {
     f(TileFailed{79, 13, {32, 64, 48, 80}, 8, "injected fault at pixel 40,70"});
     f(sampleNodeHello());
     f(sampleNodeWelcome());
-    f(NodeFrame{80, 3840, 2160, 64, TilePixels::LinearHalf});
+    f(NodeFrame{80, 3840, 2160, 64, TilePixels::LinearHalf, {}, {}, true, 41});
+    f(sampleViewsNodeFrame());
     f(NodeHave{81});
     f(NodeSwap{82, {"right", "node-3"}});
     f(NodeSwapped{83});
@@ -560,7 +575,7 @@ TEST(Protocol, GoldenBytes) {
     // (version 2: the shading fields of materials, lights and settings; 4: FrameBegin's tile format;
     // 5: the snapshot's BVH primitives; 6: two-sided emission of materials and area lights; 7: the
     // client's work report in Heartbeat, TileStalled; 8: TileFailed; 9: section planes, instance visibility;
-    // 10: FrameBegin's views; 11: display nodes).
+    // 10: FrameBegin's views; 11: display nodes; 12: views and accumulation on display nodes).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -568,7 +583,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x0B, 0x00,                                      // version (11: display nodes)
+        0x0C, 0x00,                                      // version (12: views and accumulation on display nodes)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -905,6 +920,27 @@ TEST(Protocol, NodeMessagesRejectValuesOutOfRange) {
     EXPECT_NO_THROW(decode<NodeWelcome>(payloadOf(w)));
     w.wall.push_back('#');
     EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+    // Version 12: the client keys a node's tile socket lets in, each a Z85 key.
+    w = sampleNodeWelcome();
+    w.clientKeys.clear();
+    EXPECT_NO_THROW(decode<NodeWelcome>(payloadOf(w)));
+    w.clientKeys = {""};
+    EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+    w.clientKeys = {kSampleKey.substr(1)};
+    EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+    w.clientKeys = {kSampleKey + "x"};
+    EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+    w.clientKeys = {kSampleKey};
+    w.clientKeys[0][3] = '~';
+    EXPECT_THROW(decode<NodeWelcome>(payloadOf(w)), DecodeError);
+    {
+        std::vector<uint8_t> p = payloadOf(sampleNodeWelcome());
+        const size_t countAt = p.size() - 2 * (4 + 40) - 4;  // the key count before the two keys
+        for (uint32_t count : {3u, kMaxClientKeys + 1, 0xFFFFFFFFu}) {
+            putU32(p, countAt, count);
+            EXPECT_THROW(decode<NodeWelcome>(p), DecodeError) << count;
+        }
+    }
 
     EXPECT_THROW(decode<NodeFrame>(payloadOf(NodeFrame{1, 0, 10, 8})), DecodeError);
     EXPECT_THROW(decode<NodeFrame>(payloadOf(NodeFrame{1, 10, 16385, 8})), DecodeError);
@@ -912,8 +948,44 @@ TEST(Protocol, NodeMessagesRejectValuesOutOfRange) {
     EXPECT_NO_THROW(decode<NodeFrame>(payloadOf(NodeFrame{1, 16384, 16384, 8})));  // exactly the tile limit
     EXPECT_THROW(decode<NodeFrame>(payloadOf(NodeFrame{1, 16384, 16384, 4})), DecodeError);
     std::vector<uint8_t> p = payloadOf(NodeFrame{1, 10, 10, 8});
-    p.back() = 2;  // the pixel format
+    p[16] = 2;  // the pixel format
     EXPECT_THROW(decode<NodeFrame>(p), DecodeError);
+    // Version 12: the views, their eyes, the accumulation.
+    EXPECT_NO_THROW(decode<NodeFrame>(payloadOf(sampleViewsNodeFrame())));
+    NodeFrame f = sampleViewsNodeFrame();
+    f.eyes.pop_back();  // an eye short
+    EXPECT_THROW(decode<NodeFrame>(payloadOf(f)), DecodeError);
+    f = sampleViewsNodeFrame();
+    f.eyes.push_back(-1);  // one too many
+    EXPECT_THROW(decode<NodeFrame>(payloadOf(f)), DecodeError);
+    for (int8_t eye : {int8_t(2), int8_t(-2), int8_t(127)}) {
+        f = sampleViewsNodeFrame();
+        f.eyes[1] = eye;
+        EXPECT_THROW(decode<NodeFrame>(payloadOf(f)), DecodeError) << int(eye);
+    }
+    f = sampleViewsNodeFrame();
+    f.eyes = {-1, -1};
+    EXPECT_NO_THROW(decode<NodeFrame>(payloadOf(f)));
+    f = sampleViewsNodeFrame();
+    f.stochastic = false;  // linear tiles are only for frames that accumulate
+    EXPECT_THROW(decode<NodeFrame>(payloadOf(f)), DecodeError);
+    f.pixels = TilePixels::Srgb8;
+    EXPECT_NO_THROW(decode<NodeFrame>(payloadOf(f)));
+    p = payloadOf(NodeFrame{1, 10, 10, 8});
+    p[p.size() - 5] = 2;  // the stochastic flag is a boolean
+    EXPECT_THROW(decode<NodeFrame>(p), DecodeError);
+    // Two views of a frame at the tile limit are over it.
+    f = sampleViewsNodeFrame();
+    f.width = f.height = 16384;
+    f.tileSize = 8;
+    EXPECT_THROW(decode<NodeFrame>(payloadOf(f)), DecodeError);
+    f.views.resize(1);
+    f.eyes.resize(1);
+    EXPECT_NO_THROW(decode<NodeFrame>(payloadOf(f)));
+    // A view region outside its reference image, as in FrameBegin.
+    f = sampleViewsNodeFrame();
+    f.views[1].regions[1].x = 2049;
+    EXPECT_THROW(decode<NodeFrame>(payloadOf(f)), DecodeError);
 
     EXPECT_THROW(decode<NodeSwap>(payloadOf(NodeSwap{1, {"ok", "not ok"}})), DecodeError);
     NodeList twice = sampleNodeList();

@@ -40,6 +40,26 @@ TEST(WallCli, CheckNamesTheScreensOfEachDisplayNode) {
                             ":8: screen 'screen2': key 'node': missing; screen 'screen1' is on node 'a', so every screen needs a node\n");
 }
 
+// `rtwall display` stops in one line, before listening or connecting, when the clients could not
+// be told where it is, or when its keys are half given (as `rtwall client`).
+TEST(WallCli, DisplayNeedsAnAdvertisedHostForAWildcardBindAndTheMastersKeyWithItsOwn) {
+    Result r = run("display --connect tcp://127.0.0.1:9 --node left --headless --bind tcp://0.0.0.0:0");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.output, "rtwall: error: display node: --bind tcp://0.0.0.0:0 listens on every address: say which one the "
+                        "render clients reach this node at (--advertise HOST)\n");
+    r = run("display --connect tcp://127.0.0.1:9 --node left --headless --bind tcp://*:0");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.output.find("(--advertise HOST)"), std::string::npos) << r.output;
+    r = run("display --connect tcp://127.0.0.1:9 --node left --headless --advertise 'wall pc'");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.output.find("--advertise 'wall pc' is not a host name"), std::string::npos) << r.output;
+    const auto dir = test::displayScratchDir();
+    writeNewKeyPair(dir / "node");
+    r = run("display --connect tcp://127.0.0.1:9 --node left --headless --key " + (dir / "node.key").string());
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.output, "rtwall: error: --key needs --server-key (the master's public key)\n");
+}
+
 TEST(WallCli, CheckReportsABadConfigAndABadShaderOnOneLine) {
     const auto dir = test::displayScratchDir();
     const auto bad = test::writeText(dir / "bad.toml", "[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\ngama = 2\n");

@@ -118,12 +118,24 @@ int main(int argc, char** argv) {
     seedMessage("resync-request", ResyncRequest{1});
     seedMessage("asset-request", AssetRequest{{5, 6}});
     seedMessage("asset-data", AssetData{{5, 6}, {0x89, 'P', 'N', 'G', 1, 2, 3}});
-    // Display nodes (version 11).
+    // Display nodes (version 11; 12: the welcome's client keys, the frame's views and accumulation).
     seedMessage("node-hello", NodeHello{kProtocolVersion, "left", "tcp://127.0.0.1:5601", ""});
     seedMessage("node-hello-curve", NodeHello{kProtocolVersion, "right_2", "tcp://127.0.0.1:5602",
                                               "rq:rM>}U?@Lns47E1%kR.o@n%FcmmsL/@{H8]yf7"});
     seedMessage("node-welcome", NodeWelcome{1, 250, 3000, "[wall]\nrows = 1\ncolumns = 2\n"});
+    seedMessage("node-welcome-keys", NodeWelcome{1, 250, 3000, "[wall]\nrows = 1\ncolumns = 2\n",
+                                                 {"rq:rM>}U?@Lns47E1%kR.o@n%FcmmsL/@{H8]yf7"}});
     seedMessage("node-frame", NodeFrame{3, 128, 64, 32, TilePixels::Srgb8});
+    // Version 12: a stereo frame's views with their eyes, accumulated as linear tiles.
+    {
+        FrameView left, right;
+        left.camera.position = {-0.0325f, 0.0f, 2.0f};
+        right.camera.position = {0.0325f, 0.0f, 2.0f};
+        right.regions = {{0, 0, 64, 64}};
+        right.refWidth = 128;
+        right.refHeight = 64;
+        seedMessage("node-frame-stereo", NodeFrame{4, 128, 64, 32, TilePixels::LinearHalf, {left, right}, {0, 1}, true, 9});
+    }
     seedMessage("node-have", NodeHave{3});
     seedMessage("node-swap", NodeSwap{3, {"right_2"}});
     seedMessage("node-swapped", NodeSwapped{3});

@@ -18,6 +18,10 @@ void addDisplay(CLI::App& app, Run& run) {
     cmd->add_option("--connect", o->connect, "The master's endpoint, tcp://HOST:PORT")->required();
     cmd->add_option("--node", o->name, "This node's name in the wall config (node = \"...\" or [[node]] name)")->required();
     cmd->add_option("--bind", o->bind, "Where the render clients send this node's tiles (port 0: a free one)");
+    cmd->add_option("--advertise", o->advertise,
+                    "The host the render clients reach this node at (default: the --bind address; required when it is 0.0.0.0 or *)");
+    cmd->add_option("--key", o->keyFile, "This node's CURVE key pair (rtwall keys): encrypt and authenticate, as rtwall client --key");
+    cmd->add_option("--server-key", o->serverKeyFile, "The master's public key file; the node checks the master with it");
     cmd->add_flag("--headless", o->headless, "Write the screens as images instead of opening windows");
     cmd->add_option("--out", o->out, "Folder for the headless screens");
     cmd->add_option("--frames", o->frames, "Exit after presenting this many frames (0: until the master ends)")->check(CLI::Range(0, 1 << 30));

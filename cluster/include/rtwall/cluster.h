@@ -46,6 +46,10 @@ struct DisplayNodeSettings {
     // order; with views, viewTiles order). The wall library builds it from TileRouting: the
     // cluster knows nothing of screens.
     std::function<std::vector<uint64_t>(int width, int height, int tileSize, const std::vector<FrameView>& views)> routes;
+    // The eye of each view of a multi-view frame (-1 mono, 0 left, 1 right), in setViews' order:
+    // a node composes its eyes' images from the views as the single-PC wall does. A view beyond
+    // the list is taken as mono (the node's left image).
+    std::vector<int> viewEyes;
     double stallSeconds = 0.5;  // a node this late for a frame the others hold is left out of it (SwapBarrier)
 };
 
@@ -364,17 +368,42 @@ struct DisplayNodeRun {
     std::string connect;                  // the master, tcp://HOST:PORT
     std::string name;                     // this node's name in the wall config
     std::string bind = "tcp://127.0.0.1:0";  // where the clients send tiles (port 0: a free one); told to the master
+    // The host the render clients reach the node at (the master tells them tcp://ADVERTISE:PORT,
+    // PORT the bound one). Empty: the bound address, which must then not be a wildcard.
+    std::string advertise;
+    // CURVE, as for a render client (ClientSettings): the node joins the master with this key pair
+    // (its public key in the master's client_keys) and checks the master's public key; its tile
+    // socket is then a CURVE server with a key pair made for the run (its public key reaches the
+    // clients through the master) and lets in only the client keys the master gives it.
+    std::filesystem::path keyFile;
+    std::filesystem::path serverKeyFile;
+    std::shared_ptr<struct DisplayNodeCounters> counters;  // optional: updated while it runs
     int exitAfterIdleMs = 0;              // > 0: exit when no master answers for this long
     int frames = 0;                       // > 0: exit after presenting this many frames it held (tests, benchmarks)
     const std::atomic<bool>* stop = nullptr;  // set: say goodbye and return 0
     // The master's wall config text, on every (re)join, before any frame: the caller sets up its
     // screens. An exception ends the node with its message.
     std::function<void(const std::string& wallText)> onWall;
-    // Frame `frame` is released: `image` is the whole frame with this node's tiles in it (null
-    // when this node does not hold that frame: it was left out); `leftOut` names the nodes the
-    // wall did not wait for.
-    std::function<void(uint32_t frame, const Image* image, const std::vector<std::string>& leftOut)> present;
+    // Frame `frame` is released: `left` is the whole wall image (the mono one, or the left eye's)
+    // with this node's tiles in it, `right` the right eye's of a stereo frame (else null), each
+    // accumulated over the frames of a still view of a stochastic scene as the single-PC wall
+    // does; both null when this node does not hold that frame (it was left out). `leftOut` names
+    // the nodes the wall did not wait for.
+    std::function<void(uint32_t frame, const Image* left, const Image* right, const std::vector<std::string>& leftOut)> present;
 };
+
+struct DisplayNodeCounters {
+    std::atomic<uint64_t> refusedClients{0};     // tile connections whose key the master did not give (ZAP)
+    std::atomic<uint64_t> refusedHandshakes{0};  // the master refused this node's key
+    std::atomic<uint64_t> failedHandshakes{0};   // other broken handshakes with the master (no CURVE on one side, wrong server key)
+    std::atomic<uint64_t> droppedMessages{0};    // malformed or unexpected messages from the master or on the tile socket
+};
+
+// The endpoint a node bound at `bound` (tcp://HOST:PORT, as ZMQ_LAST_ENDPOINT gives it) tells
+// the clients: tcp://ADVERTISE:PORT, or `bound` itself without `advertise`. Throws InputError
+// for a wildcard bind (0.0.0.0, *, [::]) without `advertise`, and for an advertised host that
+// is not a host name, an IPv4 address or a bracketed IPv6 address.
+std::string advertisedNodeEndpoint(const std::string& bound, const std::string& advertise);
 
 // Runs a display node until the master says goodbye, `frames` are presented, the stop flag is
 // set or no master answers for exitAfterIdleMs. Returns the process exit status.

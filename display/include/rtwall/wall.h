@@ -50,6 +50,9 @@ struct DisplayNodeOptions {
     std::string connect;                      // the master, tcp://HOST:PORT
     std::string name;                         // the node's name in the wall config
     std::string bind = "tcp://127.0.0.1:0";   // where the render clients send its tiles
+    std::string advertise;                    // the host the clients reach it at (DisplayNodeRun::advertise)
+    std::filesystem::path keyFile;            // CURVE, as `rtwall client --key`
+    std::filesystem::path serverKeyFile;      // the master's public key
     bool headless = false;
     std::filesystem::path out = "out/node";   // headless screens go here (a folder per node name is not made)
     int frames = 0;                           // > 0: exit after presenting this many frames

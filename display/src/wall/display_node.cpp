@@ -15,6 +15,9 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
     run.connect = options.connect;
     run.name = options.name;
     run.bind = options.bind;
+    run.advertise = options.advertise;
+    run.keyFile = options.keyFile;
+    run.serverKeyFile = options.serverKeyFile;
     run.frames = options.frames;
     run.exitAfterIdleMs = options.exitAfterIdleMs;
     run.stop = stop;
@@ -30,15 +33,16 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
             headless = std::make_unique<HeadlessPresenter>(wall, options.out);
         }
     };
-    run.present = [&](uint32_t frame, const Image* image, const std::vector<std::string>& leftOut) {
-        if (!image) return;  // released without this node: nothing new to show
+    run.present = [&](uint32_t frame, const Image* left, const Image* right, const std::vector<std::string>& leftOut) {
+        if (!left) return;  // released without this node: nothing new to show
         // Headless with nothing to write ([headless] write_every = 0, no video; the benchmark's
         // nodes): the frame would only be copied into a WallFrame and dropped. That copy of the
         // whole wall-sized frame took milliseconds at 4K and spread the nodes' swaps.
         if (headless && wall.writeEvery <= 0 && wall.video.empty()) return;
         WallFrame f;
         f.number = frame;
-        f.left = *image;
+        f.left = *left;
+        if (right) f.right = *right;
         Image overlay;
         PresentOptions po;
         if (!leftOut.empty()) {

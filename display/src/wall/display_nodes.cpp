@@ -10,6 +10,7 @@ DisplayNodeSettings displayNodeSettings(const WallConfig& wall, std::string wall
     DisplayNodeSettings out;
     out.names = wall.nodes();
     out.wallText = std::move(wallText);
+    out.viewEyes = viewEyes;
     out.routes = [wall, viewEyes](int width, int height, int tileSize, const std::vector<FrameView>& views) {
         const TileRouting routing(wall, width, height);
         if (views.empty()) return routing.routeTiles(tileSize, 0);
