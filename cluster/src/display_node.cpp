@@ -13,6 +13,7 @@
 #include <zmq.hpp>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <map>
@@ -43,7 +44,14 @@ public:
         double idleSince = nowSeconds();
         for (;;) {
             zmq::pollitem_t items[] = {{master_.handle(), 0, ZMQ_POLLIN, 0}, {tiles_.handle(), 0, ZMQ_POLLIN, 0}};
-            zmq::poll(items, 2, std::chrono::milliseconds(10));
+            try {
+                zmq::poll(items, 2, std::chrono::milliseconds(10));
+            } catch (const zmq::error_t& e) {
+                // SIGTERM or Ctrl-C (rtwall display sets the stop flag in its handler): the
+                // stop is handled below, with a goodbye.
+                if (e.num() != EINTR) throw;
+                items[0].revents = items[1].revents = 0;
+            }
             if (items[0].revents & ZMQ_POLLIN) {
                 for (int i = 0; i < 256; ++i) {
                     zmq::message_t msg;
@@ -94,7 +102,7 @@ private:
         session_ = 0;
         routes_.clear();
         early_.clear();
-        begun_ = false;
+        slots_[0].begun = slots_[1].begun = false;
         sendNow(master_, encodeMessage(Header{}, NodeHello{kProtocolVersion, run_.name, endpoint_, ""}));
         lastHeard_ = lastSent_ = nowSeconds();
     }
@@ -144,8 +152,9 @@ private:
             case MsgType::NodeFrame: onFrame(decodePayload<NodeFrame>(p, n)); break;
             case MsgType::NodeSwap: {
                 const NodeSwap s = decodePayload<NodeSwap>(p, n);
-                const bool held = begun_ && assembly_.frame() == s.frame && assembly_.complete();
-                if (run_.present) run_.present(s.frame, held ? &assembly_.image() : nullptr, s.leftOut);
+                const Slot* slot = slotOf(s.frame);
+                const bool held = slot && slot->assembly.complete();
+                if (run_.present) run_.present(s.frame, held ? &slot->assembly.image() : nullptr, s.leftOut);
                 send(NodeSwapped{s.frame}, s.frame);
                 if (held && run_.frames > 0 && ++presented_ >= run_.frames) {
                     send(Goodbye{"display node '" + run_.name + "' presented its frames"});
@@ -167,15 +176,20 @@ private:
             std::fprintf(stderr, "rtwall display: frame %u came without its tile masks; it is skipped\n", f.frame);
             return;
         }
+        // The newest frame goes into the older slot: the frame before may still be waiting for
+        // its last tiles or its swap (the master begins frame N+1 on N's last ack, which can
+        // overtake N's last tile on its way here, and N's NodeSwap comes after N+1 began).
+        Slot& slot = slots_[current_ ^ 1];
         try {
-            assembly_.beginFrame(f.frame, f.width, f.height, f.tileSize, std::prev(r)->second, index_);
+            slot.assembly.beginFrame(f.frame, f.width, f.height, f.tileSize, std::prev(r)->second, index_);
         } catch (const std::invalid_argument& e) {
             std::fprintf(stderr, "rtwall display: frame %u is skipped: %s\n", f.frame, e.what());
             return;
         }
-        begun_ = true;
-        pixels_ = f.pixels;
-        haveSent_ = false;
+        current_ ^= 1;
+        slot.begun = true;
+        slot.pixels = f.pixels;
+        slot.haveSent = false;
         // The tiles that came first.
         std::vector<zmq::message_t> early;
         early.swap(early_);
@@ -193,15 +207,19 @@ private:
         } catch (const DecodeError&) {
             return;
         }
-        if (!begun_ || r.frame > assembly_.frame()) {
+        const Slot& newest = slots_[current_];
+        if (!newest.begun || r.frame > newest.assembly.frame()) {
             if (early_.size() < kMaxEarlyTiles) early_.push_back(std::move(msg));
             return;
         }
+        Slot* slot = slotOf(r.frame);
+        if (!slot) return;  // stale
+        NodeAssembly& assembly = slot->assembly;
         TileRect rect;
         TileView view;
-        if (assembly_.claim(r.frame, r.tile, rect, view) != NodeAssembly::Claim::Granted) return;
+        if (assembly.claim(r.frame, r.tile, rect, view) != NodeAssembly::Claim::Granted) return;
         try {
-            if (r.format != pixels_) throw DecodeError("a tile in another pixel format than its frame's");
+            if (r.format != slot->pixels) throw DecodeError("a tile in another pixel format than its frame's");
             if (r.format == TilePixels::LinearHalf) {
                 // An accumulated frame's tile: shown as this frame's 8-bit pixels (the node does
                 // not accumulate across frames).
@@ -213,19 +231,31 @@ private:
             } else {
                 decodeTile(r.codec, r.pixels.data(), r.pixels.size(), rect.width(), rect.height(), view.data, view.stride);
             }
-            assembly_.commit(r.tile);
+            assembly.commit(r.tile);
         } catch (const DecodeError& e) {
-            assembly_.release(r.tile);
+            assembly.release(r.tile);
             std::fprintf(stderr, "rtwall display: tile %u of frame %u did not decode: %s\n", r.tile, r.frame, e.what());
             return;
         }
         reportIfComplete();
     }
 
+    // The older frame first: the barrier releases frames in order.
     void reportIfComplete() {
-        if (!begun_ || haveSent_ || !assembly_.complete()) return;
-        haveSent_ = true;
-        send(NodeHave{assembly_.frame()}, assembly_.frame());
+        for (int i : {current_ ^ 1, current_}) {
+            Slot& slot = slots_[i];
+            if (!slot.begun || slot.haveSent || !slot.assembly.complete()) continue;
+            slot.haveSent = true;
+            send(NodeHave{slot.assembly.frame()}, slot.assembly.frame());
+        }
+    }
+
+    // The slot that holds `frame` (begun in this session), if any.
+    struct Slot;
+    Slot* slotOf(uint32_t frame) {
+        for (Slot& slot : slots_)
+            if (slot.begun && slot.assembly.frame() == frame) return &slot;
+        return nullptr;
     }
 
     const DisplayNodeRun& run_;
@@ -238,10 +268,15 @@ private:
     int heartbeatMs_ = 250, timeoutMs_ = 3000;
     double lastHeard_ = 0, lastSent_ = 0;
     std::map<uint32_t, std::vector<uint64_t>> routes_;  // tile masks by their first frame
-    NodeAssembly assembly_;
-    bool begun_ = false;     // assembly_ holds a frame begun in this session
-    bool haveSent_ = false;  // its NodeHave went
-    TilePixels pixels_ = TilePixels::Srgb8;
+    // The newest frame (slots_[current_]) and the one before it.
+    struct Slot {
+        NodeAssembly assembly;
+        bool begun = false;     // holds a frame begun in this session
+        bool haveSent = false;  // its NodeHave went
+        TilePixels pixels = TilePixels::Srgb8;
+    };
+    Slot slots_[2];
+    int current_ = 0;
     std::vector<zmq::message_t> early_;
     std::vector<float> linear_;
     std::vector<uint8_t> scratch_;

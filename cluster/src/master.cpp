@@ -276,6 +276,8 @@ struct Master::Impl {
     FrameReport completedReport;
     std::vector<std::vector<float>> completedLinear;  // the completed frame's linear pixels per view, when it had linear tiles
     int readyClients = 0;
+    std::vector<std::string> presentNodes;  // display nodes there now, in the wall's order (Master::displayNodesPresent)
+    uint32_t releasedFrame = 0;             // the newest frame the swap barrier released (Master::waitForSwap)
     std::atomic<const std::atomic<bool>*> stopFlag{nullptr};
 
     // Network-thread state.
@@ -763,6 +765,7 @@ struct Master::Impl {
         std::fprintf(stderr, "rtwall master: display node '%s' (%u) joins, tiles to %s\n", ref.name.c_str(), ref.index,
                      ref.endpoint.c_str());
         barrier.join(ref.index);
+        publishNodes();
         sendNodeListToClients();
         if (frameActive) sendNodeFrame(ref, frameState.settings);
     }
@@ -779,6 +782,11 @@ struct Master::Impl {
                 swap.leftOut.push_back(names[i]);
         for (auto& [peer, n] : nodes)
             if (!n.deathReason) sendNode(n, swap, *frame);
+        {
+            std::lock_guard lock(m);
+            releasedFrame = std::max(releasedFrame, *frame);
+        }
+        cv.notify_all();
     }
 
     void handleNode(NodeState& n, const Header& h, const uint8_t* payload, size_t payloadSize) {
@@ -819,9 +827,26 @@ struct Master::Impl {
             any = true;
         }
         if (any) {
+            publishNodes();
             sendNodeListToClients();
             releaseSwap(barrier.poll(nowSeconds()));
         }
+    }
+
+    // For the application's thread (displayNodesPresent, waitForDisplayNodes).
+    void publishNodes() {
+        std::vector<std::string> present;
+        for (const std::string& name : settings.displayNodes.names)
+            for (const auto& [peer, n] : nodes)
+                if (n.name == name && !n.deathReason) {
+                    present.push_back(name);
+                    break;
+                }
+        {
+            std::lock_guard lock(m);
+            presentNodes = std::move(present);
+        }
+        cv.notify_all();
     }
 
     void nodeHousekeeping() {
@@ -1502,6 +1527,36 @@ int Master::awaitClients(int wanted, int timeoutMs, int settleMs) {
         s.cv.wait_for(lock, std::chrono::milliseconds(100));
     }
     return s.readyClients;
+}
+
+std::vector<std::string> Master::displayNodesPresent() const {
+    std::lock_guard lock(impl_->m);
+    return impl_->presentNodes;
+}
+
+bool Master::waitForSwap(uint32_t frame, int timeoutMs) {
+    Impl& s = *impl_;
+    std::unique_lock lock(s.m);
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
+    while (s.releasedFrame < frame && !s.presentNodes.empty()) {
+        const auto now = std::chrono::steady_clock::now();
+        if (now >= end) return false;
+        s.cv.wait_for(lock, std::min<std::chrono::steady_clock::duration>(end - now, std::chrono::milliseconds(100)));
+    }
+    return s.releasedFrame >= frame;
+}
+
+bool Master::waitForDisplayNodes(int timeoutMs) {
+    Impl& s = *impl_;
+    std::unique_lock lock(s.m);
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
+    while (s.presentNodes.size() < s.settings.displayNodes.names.size()) {
+        throwIfStopped(s);
+        const auto now = std::chrono::steady_clock::now();
+        if (now >= end) return false;
+        s.cv.wait_for(lock, std::min<std::chrono::steady_clock::duration>(end - now, std::chrono::milliseconds(100)));
+    }
+    return true;
 }
 
 void Master::setStopFlag(const std::atomic<bool>* flag) { impl_->stopFlag = flag; }

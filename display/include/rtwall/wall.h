@@ -79,6 +79,11 @@ struct RunConfig {
     std::filesystem::path front;          // the measured front for targetFps (empty: calibrate)
     std::filesystem::path trace;          // with targetFps: one CSV line per frame
     PartView parts;                       // --hide, --isolate, --highlight: on top of the scene file's [parts]
+    // A wall whose screens name display nodes (issue 19): one `rtwall display` process per node
+    // on this PC, of clientExecutable (LocalDisplayNodes; the whole wall on one machine). Off
+    // ([cluster] local_display_nodes = false, --no-local-nodes): the nodes are started on their
+    // own PCs and the master waits for them.
+    bool localDisplayNodes = true;
     // Local render clients: `rtwall client` processes of this executable, or (tests) threads of
     // this process running runClient.
     std::filesystem::path clientExecutable = "/proc/self/exe";
