@@ -1474,6 +1474,8 @@ Master::~Master() {
     if (s.net.joinable()) s.net.join();
     for (auto& [peer, c] : s.clients)  // a client already gone needs no goodbye (nor a log line)
         sendToPeer(s.router, c.peer, encodeMessage(s.header(MsgType::Goodbye), Goodbye{"the master is shutting down"}));
+    for (auto& [peer, n] : s.nodes)  // display nodes end with the wall instead of waiting for a master that is gone
+        if (!n.deathReason) sendToPeer(s.router, n.peer, encodeMessage(s.header(MsgType::Goodbye), Goodbye{"the master is shutting down"}));
     s.decoder.reset();
     zmq_socket_monitor(s.router.handle(), nullptr, 0);
     s.monitor.close();

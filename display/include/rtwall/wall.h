@@ -54,6 +54,7 @@ struct DisplayNodeOptions {
     std::filesystem::path out = "out/node";   // headless screens go here (a folder per node name is not made)
     int frames = 0;                           // > 0: exit after presenting this many frames
     int exitAfterIdleMs = 0;                  // > 0: exit when no master answers for this long
+    std::filesystem::path capture;            // tests: in windows, each presented frame's screens as read back from GL (frame_NNNNNN_SCREEN.png)
 };
 int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop = nullptr);
 
