@@ -81,9 +81,10 @@ struct RunConfig {
     std::filesystem::path trace;          // with targetFps: one CSV line per frame
     PartView parts;                       // --hide, --isolate, --highlight: on top of the scene file's [parts]
     // A wall whose screens name display nodes (issue 19): one `rtwall display` process per node
-    // on this PC, of clientExecutable (LocalDisplayNodes; the whole wall on one machine). Off
-    // ([cluster] local_display_nodes = false, --no-local-nodes): the nodes are started on their
-    // own PCs and the master waits for them.
+    // on this PC, of clientExecutable (LocalDisplayNodes; the whole wall on one machine), or with
+    // clientThreads a headless runWallNode thread per node writing to out/NAME. Off ([cluster]
+    // local_display_nodes = false, --no-local-nodes): the nodes are started on their own PCs
+    // and the master waits for them.
     bool localDisplayNodes = true;
     // Local render clients: `rtwall client` processes of this executable, or (tests) threads of
     // this process running runClient.

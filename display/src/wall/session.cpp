@@ -96,6 +96,8 @@ struct WallSession::Impl {
     // pixels (a console window at most); local node processes when the config asks for them.
     bool onNodes = false;
     std::unique_ptr<LocalDisplayNodes> nodeProcesses;
+    std::vector<std::thread> nodeThreads;  // with clientThreads (tests): runWallNode, headless
+    std::atomic<bool> stopNodes{false};
     std::vector<std::string> nodesPresent;  // at the last step, for the log
     uint64_t nodesLeftOut = 0;              // FrameReport::nodesLeftOut at the last step
     bool ranToTheEnd = false;               // every frame asked for was stepped
@@ -155,6 +157,8 @@ struct WallSession::Impl {
             log(format("display nodes: frame %u was not swapped within 3 s of its last tile", report.frame));
         master.reset();
         for (std::thread& t : clientThreads) t.join();
+        stopNodes = true;  // the master's goodbye ends them; this, one that never joined
+        for (std::thread& t : nodeThreads) t.join();
         processes.reset();
         nodeProcesses.reset();
     }
@@ -225,7 +229,24 @@ struct WallSession::Impl {
     // them, bounded: a node that dies or does not come is said, and the wall runs without it.
     void startNodes() {
         const std::vector<std::string>& names = config.cluster.displayNodes.names;
-        if (config.localDisplayNodes) {
+        if (config.localDisplayNodes && config.clientThreads) {
+            for (const std::string& n : names) {
+                DisplayNodeOptions o;
+                o.connect = master->endpoint();
+                o.name = n;
+                o.headless = true;  // windows belong to the main thread
+                o.out = config.out / n;
+                o.exitAfterIdleMs = 5000;
+                nodeThreads.emplace_back([this, o] {
+                    try {
+                        runWallNode(o, &stopNodes);
+                    } catch (const std::exception& e) {
+                        std::fprintf(stderr, "display node '%s': %s\n", o.name.c_str(), e.what());
+                    }
+                });
+            }
+            log("display nodes: " + joined(names) + " as threads of this process, writing to " + (config.out / "NAME").string());
+        } else if (config.localDisplayNodes) {
             LocalDisplayNodes::Options o;
             o.headless = config.headless;
             o.outDir = config.out;
@@ -647,7 +668,11 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
                        : "off-axis wall: asynchronous rendering off, each frame renders each view with its own camera");
         c.cluster.async = false;
     }
-    if (!s.wallConfig.nodes().empty()) s.routeToNodes();
+    if (!s.wallConfig.nodes().empty()) {
+        if (c.targetFps > 0 && c.front.empty())
+            throw InputError("--target-fps on a wall of display nodes needs --front: the master holds no pixels to calibrate with");
+        s.routeToNodes();
+    }
     fitToRun(desc, c, s.wallConfig);
     s.start = desc.cameras.front();
     s.baseSettings = desc.settings;
