@@ -1545,7 +1545,7 @@ bool Master::waitForSwap(uint32_t frame, int timeoutMs) {
         if (now >= end) return false;
         s.cv.wait_for(lock, std::min<std::chrono::steady_clock::duration>(end - now, std::chrono::milliseconds(100)));
     }
-    return s.releasedFrame >= frame;
+    return s.releasedFrame >= frame || s.presentNodes.empty();
 }
 
 bool Master::waitForDisplayNodes(int timeoutMs) {

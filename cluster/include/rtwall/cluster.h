@@ -237,8 +237,9 @@ public:
     // after timeoutMs; Cancelled when the stop flag is set, as awaitClients).
     std::vector<std::string> displayNodesPresent() const;
     bool waitForDisplayNodes(int timeoutMs);
-    // Waits until the swap barrier released `frame` or a newer one to the nodes (true), no node
-    // is there, or timeoutMs passes: the end of a run waits for its last frame's swap.
+    // Waits until the swap barrier released `frame` or a newer one to the nodes, or no node is
+    // there (true: nothing to wait for), or timeoutMs passes (false): the end of a run waits
+    // for its last frame's swap.
     bool waitForSwap(uint32_t frame, int timeoutMs);
 
     // Arguments for `rtwall client` processes this master starts on its own PC
