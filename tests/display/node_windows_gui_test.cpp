@@ -80,5 +80,23 @@ TEST(NodeWindows, TwoWindowedNodesEachShowTheirHalfOfTheWall) {
     }
 }
 
+// The one command with a display: the local nodes open their windows (and write nothing), the
+// master its console window.
+TEST(NodeWindows, OneCommandOpensTheNodesWindowsAndTheMastersConsole) {
+    const std::filesystem::path dir = test::displayScratchDir();
+    test::ChildProcess run({RTWALL_EXE, "run", (test::sourceDir() / "configs/run/demo.toml").string(), "--wall",
+                            (test::sourceDir() / "configs/wall/two-nodes-2x2.toml").string(), "--frames", "3", "--out", dir.string()});
+    const std::optional<int> status = run.wait(240'000);
+    ASSERT_TRUE(status.has_value()) << run.output();
+    ASSERT_EQ(*status, 0) << run.output();
+    const std::string out = run.output();
+    EXPECT_NE(out.find("display nodes: all 2 joined (left, right)"), std::string::npos) << out;
+    EXPECT_NE(out.find("this PC shows a console window"), std::string::npos) << out;
+    EXPECT_NE(out.find("display nodes 2/2, "), std::string::npos) << out;
+    EXPECT_EQ(out.find("no window"), std::string::npos) << "a node fell back to files:\n" << out;
+    EXPECT_FALSE(std::filesystem::exists(dir / "left")) << out;
+    EXPECT_FALSE(std::filesystem::exists(dir / "right")) << out;
+}
+
 }  // namespace
 }  // namespace rtwall
