@@ -47,8 +47,8 @@ public:
             try {
                 zmq::poll(items, 2, std::chrono::milliseconds(10));
             } catch (const zmq::error_t& e) {
-                // SIGTERM or Ctrl-C (rtwall display sets the stop flag in its handler): the
-                // stop is handled below, with a goodbye.
+                // A signal (SIGTERM from `rtwall display`'s handler) interrupted the wait: the
+                // stop flag is looked at below, as after any wait.
                 if (e.num() != EINTR) throw;
                 items[0].revents = items[1].revents = 0;
             }

@@ -272,12 +272,12 @@ struct Master::Impl {
     std::deque<Command> commands;
     std::mutex wakeMutex;         // zmq sockets are not thread-safe: one writer at a time
     uint32_t completedFrame = 0;
+    std::vector<std::string> presentNodes;  // display nodes there now, in the wall's order (Master::displayNodesPresent)
     std::vector<Image> completedImages;  // one per view
     FrameReport completedReport;
     std::vector<std::vector<float>> completedLinear;  // the completed frame's linear pixels per view, when it had linear tiles
     int readyClients = 0;
-    std::vector<std::string> presentNodes;  // display nodes there now, in the wall's order (Master::displayNodesPresent)
-    uint32_t releasedFrame = 0;             // the newest frame the swap barrier released (Master::waitForSwap)
+    uint32_t swapReleased = 0;    // with display nodes: the newest frame the swap barrier released
     std::atomic<const std::atomic<bool>*> stopFlag{nullptr};
 
     // Network-thread state.
@@ -772,6 +772,11 @@ struct Master::Impl {
 
     void releaseSwap(std::optional<uint32_t> frame) {
         if (!frame) return;
+        {
+            std::lock_guard lock(m);
+            swapReleased = std::max(swapReleased, *frame);
+        }
+        cv.notify_all();
         // Every node of the wall that does not take part: stalled, gone, or never came.
         NodeSwap swap{*frame, {}};
         const std::vector<NodeId> joined = barrier.nodes(), stalled = barrier.leftOut();
@@ -782,11 +787,6 @@ struct Master::Impl {
                 swap.leftOut.push_back(names[i]);
         for (auto& [peer, n] : nodes)
             if (!n.deathReason) sendNode(n, swap, *frame);
-        {
-            std::lock_guard lock(m);
-            releasedFrame = std::max(releasedFrame, *frame);
-        }
-        cv.notify_all();
     }
 
     void handleNode(NodeState& n, const Header& h, const uint8_t* payload, size_t payloadSize) {
@@ -1512,6 +1512,19 @@ bool Master::waitForClients(int count, int timeoutMs) {
     return true;
 }
 
+bool Master::waitForSwap(uint32_t frame, int timeoutMs) {
+    Impl& s = *impl_;
+    std::unique_lock lock(s.m);
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
+    while (s.swapReleased < frame) {
+        throwIfStopped(s);
+        const auto now = std::chrono::steady_clock::now();
+        if (now >= end) return false;
+        s.cv.wait_for(lock, std::min<std::chrono::steady_clock::duration>(end - now, std::chrono::milliseconds(100)));
+    }
+    return true;
+}
+
 int Master::awaitClients(int wanted, int timeoutMs, int settleMs) {
     Impl& s = *impl_;
     std::unique_lock lock(s.m);
@@ -1534,18 +1547,6 @@ int Master::awaitClients(int wanted, int timeoutMs, int settleMs) {
 std::vector<std::string> Master::displayNodesPresent() const {
     std::lock_guard lock(impl_->m);
     return impl_->presentNodes;
-}
-
-bool Master::waitForSwap(uint32_t frame, int timeoutMs) {
-    Impl& s = *impl_;
-    std::unique_lock lock(s.m);
-    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
-    while (s.releasedFrame < frame && !s.presentNodes.empty()) {
-        const auto now = std::chrono::steady_clock::now();
-        if (now >= end) return false;
-        s.cv.wait_for(lock, std::min<std::chrono::steady_clock::duration>(end - now, std::chrono::milliseconds(100)));
-    }
-    return s.releasedFrame >= frame || s.presentNodes.empty();
 }
 
 bool Master::waitForDisplayNodes(int timeoutMs) {

@@ -237,10 +237,6 @@ public:
     // after timeoutMs; Cancelled when the stop flag is set, as awaitClients).
     std::vector<std::string> displayNodesPresent() const;
     bool waitForDisplayNodes(int timeoutMs);
-    // Waits until the swap barrier released `frame` or a newer one to the nodes, or no node is
-    // there (true: nothing to wait for), or timeoutMs passes (false): the end of a run waits
-    // for its last frame's swap.
-    bool waitForSwap(uint32_t frame, int timeoutMs);
 
     // Arguments for `rtwall client` processes this master starts on its own PC
     // (ClusterSettings::localClients): with keys, a key pair made for this session (in a private
@@ -287,6 +283,12 @@ public:
     // pixels outside its regions' tiles are unspecified. With linear tiles `linear` receives
     // each view's linear RGB.
     std::vector<Image> renderViews(FrameReport* report = nullptr, std::vector<std::vector<float>>* linear = nullptr);
+
+    // With display nodes: waits until the swap barrier has released frame `frame` or a later
+    // one to the nodes (true), or timeoutMs passed (false). A benchmark paces frames by it: a
+    // node holds one frame at a time, so the next frame must not begin while tiles of this one
+    // are still on their way to a node over a slower link.
+    bool waitForSwap(uint32_t frame, int timeoutMs);
 
     MasterCounters counters() const;
     uint64_t droppedMessages() const;  // counters().dropped()

@@ -152,8 +152,10 @@ struct WallSession::Impl {
         input.reset();
         live.reset();
         // The nodes show the last frame before the master says goodbye (bounded: a node that
-        // stalls is left out of it after the barrier's stall time anyway).
-        if (onNodes && ranToTheEnd && master && !master->waitForSwap(report.frame, 3000))
+        // stalls is left out of it after the barrier's stall time anyway). Not after a stop,
+        // when the wait would throw Cancelled here.
+        if (onNodes && ranToTheEnd && master && !stopped() && !master->displayNodesPresent().empty() &&
+            !master->waitForSwap(report.frame, 3000))
             log(format("display nodes: frame %u was not swapped within 3 s of its last tile", report.frame));
         master.reset();
         for (std::thread& t : clientThreads) t.join();
