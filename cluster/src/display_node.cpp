@@ -150,7 +150,8 @@ private:
         shown_ = NodeImages{};  // another session's frames: no running mean goes on across a rejoin
         routes_.clear();
         early_.clear();
-        begun_ = false;
+        slots_[0].begun = slots_[1].begun = false;
+        pendingSwap_.reset();
         sendNow(master_, encodeMessage(Header{}, NodeHello{kProtocolVersion, run_.name, endpoint_, tileKeys_.publicKey}));
         lastHeard_ = lastSent_ = nowSeconds();
     }
@@ -204,12 +205,20 @@ private:
             case MsgType::NodeFrame: onFrame(decodePayload<NodeFrame>(p, n)); break;
             case MsgType::NodeSwap: {
                 const NodeSwap s = decodePayload<NodeSwap>(p, n);
-                const bool held = shown_.frame() == s.frame;
+                // A frame shown and reported before this one was released without this node.
+                if (pendingSwap_ && *pendingSwap_ < s.frame) pendingSwap_.reset();
+                reportIfComplete();  // the released frame, if it was held back behind the one before
+                const bool held = pendingSwap_ == s.frame;
                 if (run_.present) {
                     if (held) run_.present(s.frame, &shown_.left(), shown_.right().rgb.empty() ? nullptr : &shown_.right(), s.leftOut);
                     else run_.present(s.frame, nullptr, nullptr, s.leftOut);
                 }
                 send(NodeSwapped{s.frame}, s.frame);
+                // Frames up to this one are done with: shown, or released without this node.
+                if (held) pendingSwap_.reset();
+                for (Slot& slot : slots_)
+                    if (slot.begun && slot.frame.frame <= s.frame) slot.begun = false;
+                reportIfComplete();
                 if (held && run_.frames > 0 && ++presented_ >= run_.frames) {
                     send(Goodbye{"display node '" + run_.name + "' presented its frames"});
                     return 0;
@@ -231,6 +240,10 @@ private:
             std::fprintf(stderr, "rtwall display: frame %u came without its tile masks; it is skipped\n", f.frame);
             return;
         }
+        // The newest frame goes into the older slot: the frame before may still be waiting for
+        // its last tiles or its swap (the master begins frame N+1 on N's last ack, which can
+        // overtake N's last tile on its way here, and N's NodeSwap comes after N+1 began).
+        Slot& slot = slots_[current_ ^ 1];
         try {
             // The clients' tiling of the frame (viewTiles), which the masks index.
             std::vector<ViewTile> tiles;
@@ -238,15 +251,16 @@ private:
                 for (const TileRect& t : makeTiles(f.width, f.height, f.tileSize)) tiles.push_back({0, t});
             else
                 tiles = viewTiles(f.views, f.width, f.height, f.tileSize);
-            assembly_.beginFrame(f.frame, f.width, f.height, tiles, uint32_t(f.views.size()), std::prev(r)->second, index_,
-                                 f.pixels == TilePixels::LinearHalf);
+            slot.assembly.beginFrame(f.frame, f.width, f.height, tiles, uint32_t(f.views.size()), std::prev(r)->second, index_,
+                                     f.pixels == TilePixels::LinearHalf);
         } catch (const std::invalid_argument& e) {
             std::fprintf(stderr, "rtwall display: frame %u is skipped: %s\n", f.frame, e.what());
             return;
         }
-        begun_ = true;
-        frame_ = f;
-        haveSent_ = false;
+        current_ ^= 1;
+        slot.begun = true;
+        slot.frame = f;
+        slot.haveSent = false;
         // The tiles that came first.
         std::vector<zmq::message_t> early;
         early.swap(early_);
@@ -265,40 +279,64 @@ private:
             if (run_.counters) ++run_.counters->droppedMessages;
             return;
         }
-        if (!begun_ || r.frame > assembly_.frame()) {
+        const Slot& newest = slots_[current_];
+        if (!newest.begun || r.frame > newest.frame.frame) {
             if (early_.size() < kMaxEarlyTiles) early_.push_back(std::move(msg));
             return;
         }
+        Slot* slot = slotOf(r.frame);
+        if (!slot) return;  // stale
+        NodeAssembly& assembly = slot->assembly;
         TileRect rect;
         TileView view;
-        if (assembly_.claim(r.frame, r.tile, rect, view) != NodeAssembly::Claim::Granted) return;
+        if (assembly.claim(r.frame, r.tile, rect, view) != NodeAssembly::Claim::Granted) return;
         try {
-            if (r.format != frame_.pixels) throw DecodeError("a tile in another pixel format than its frame's");
+            if (r.format != slot->frame.pixels) throw DecodeError("a tile in another pixel format than its frame's");
             if (r.format == TilePixels::LinearHalf) {
                 // An accumulated frame's tile: into the view's linear image (what is summed) and
                 // quantised into its 8-bit one, as the master does.
-                float* linear = assembly_.linearAt(assembly_.viewOf(r.tile), rect.x0, rect.y0);
-                const size_t stride = size_t(frame_.width) * 3;
+                float* linear = assembly.linearAt(assembly.viewOf(r.tile), rect.x0, rect.y0);
+                const size_t stride = size_t(slot->frame.width) * 3;
                 decodeWideTile(r.codec, r.pixels.data(), r.pixels.size(), rect.width(), rect.height(), linear, stride, scratch_);
                 for (int y = 0; y < rect.height(); ++y)
                     linearToSrgb8(linear + size_t(y) * stride, size_t(rect.width()) * 3, view.data + y * view.stride);
             } else {
                 decodeTile(r.codec, r.pixels.data(), r.pixels.size(), rect.width(), rect.height(), view.data, view.stride);
             }
-            assembly_.commit(r.tile);
+            assembly.commit(r.tile);
         } catch (const DecodeError& e) {
-            assembly_.release(r.tile);
+            assembly.release(r.tile);
             std::fprintf(stderr, "rtwall display: tile %u of frame %u did not decode: %s\n", r.tile, r.frame, e.what());
             return;
         }
         reportIfComplete();
     }
 
+    // Frames are shown in order, one at a time: the next complete frame is made into what the
+    // node shows (its running means go on) and reported only once the one before was swapped or
+    // released without this node. The barrier releases frames in order, so waiting costs nothing,
+    // and every frame held is presented.
     void reportIfComplete() {
-        if (!begun_ || haveSent_ || !assembly_.complete()) return;
-        haveSent_ = true;
-        shown_.show(frame_, assembly_);
-        send(NodeHave{assembly_.frame()}, assembly_.frame());
+        if (pendingSwap_) return;
+        Slot* older = &slots_[current_ ^ 1];
+        Slot* newer = &slots_[current_];
+        for (Slot* slot : {older, newer}) {
+            if (!slot->begun || slot->haveSent) continue;
+            if (!slot->assembly.complete()) return;  // the newer waits for the older
+            slot->haveSent = true;
+            shown_.show(slot->frame, slot->assembly);
+            pendingSwap_ = slot->frame.frame;
+            send(NodeHave{slot->frame.frame}, slot->frame.frame);
+            return;
+        }
+    }
+
+    // The slot that holds `frame` (begun in this session), if any.
+    struct Slot;
+    Slot* slotOf(uint32_t frame) {
+        for (Slot& slot : slots_)
+            if (slot.begun && slot.frame.frame == frame) return &slot;
+        return nullptr;
     }
 
     // Handshake events of the connection to the master: a refusal is said, not just "no master".
@@ -353,11 +391,17 @@ private:
     int heartbeatMs_ = 250, timeoutMs_ = 3000;
     double lastHeard_ = 0, lastSent_ = 0;
     std::map<uint32_t, std::vector<uint64_t>> routes_;  // tile masks by their first frame
-    NodeAssembly assembly_;
-    bool begun_ = false;     // assembly_ holds a frame begun in this session
-    bool haveSent_ = false;  // its NodeHave went
-    NodeFrame frame_;        // what assembly_ holds
-    NodeImages shown_;       // what the node shows of the last frame it held
+    // The newest frame (slots_[current_]) and the one before it.
+    struct Slot {
+        NodeAssembly assembly;
+        NodeFrame frame;        // what assembly holds
+        bool begun = false;     // holds a frame begun in this session and not yet swapped
+        bool haveSent = false;  // shown and reported (NodeHave)
+    };
+    Slot slots_[2];
+    int current_ = 0;
+    NodeImages shown_;                     // what the node shows of the last frame it held
+    std::optional<uint32_t> pendingSwap_;  // shown_'s frame, reported and not yet swapped
     std::vector<zmq::message_t> early_;
     std::vector<uint8_t> scratch_;
     int presented_ = 0;

@@ -276,6 +276,7 @@ struct Master::Impl {
     std::deque<Command> commands;
     std::mutex wakeMutex;         // zmq sockets are not thread-safe: one writer at a time
     uint32_t completedFrame = 0;
+    std::vector<std::string> presentNodes;  // display nodes there now, in the wall's order (Master::displayNodesPresent)
     std::vector<Image> completedImages;  // one per view
     FrameReport completedReport;
     std::vector<std::vector<float>> completedLinear;  // the completed frame's linear pixels per view, when it had linear tiles
@@ -776,6 +777,7 @@ struct Master::Impl {
         std::fprintf(stderr, "rtwall master: display node '%s' (%u) joins, tiles to %s\n", ref.name.c_str(), ref.index,
                      ref.endpoint.c_str());
         barrier.join(ref.index);
+        publishNodes();
         if (frameActive) sendNodeFrame(ref, frameState.settings);
     }
 
@@ -841,9 +843,26 @@ struct Master::Impl {
             any = true;
         }
         if (any) {
+            publishNodes();
             sendNodeListToClients();
             releaseSwap(barrier.poll(nowSeconds()));
         }
+    }
+
+    // For the application's thread (displayNodesPresent, waitForDisplayNodes).
+    void publishNodes() {
+        std::vector<std::string> present;
+        for (const std::string& name : settings.displayNodes.names)
+            for (const auto& [peer, n] : nodes)
+                if (n.name == name && !n.deathReason) {
+                    present.push_back(name);
+                    break;
+                }
+        {
+            std::lock_guard lock(m);
+            presentNodes = std::move(present);
+        }
+        cv.notify_all();
     }
 
     void nodeHousekeeping() {
@@ -1472,6 +1491,8 @@ Master::~Master() {
     if (s.net.joinable()) s.net.join();
     for (auto& [peer, c] : s.clients)  // a client already gone needs no goodbye (nor a log line)
         sendToPeer(s.router, c.peer, encodeMessage(s.header(MsgType::Goodbye), Goodbye{"the master is shutting down"}));
+    for (auto& [peer, n] : s.nodes)  // display nodes end with the wall instead of waiting for a master that is gone
+        if (!n.deathReason) sendToPeer(s.router, n.peer, encodeMessage(s.header(MsgType::Goodbye), Goodbye{"the master is shutting down"}));
     s.decoder.reset();
     zmq_socket_monitor(s.router.handle(), nullptr, 0);
     s.monitor.close();
@@ -1538,6 +1559,24 @@ int Master::awaitClients(int wanted, int timeoutMs, int settleMs) {
         s.cv.wait_for(lock, std::chrono::milliseconds(100));
     }
     return s.readyClients;
+}
+
+std::vector<std::string> Master::displayNodesPresent() const {
+    std::lock_guard lock(impl_->m);
+    return impl_->presentNodes;
+}
+
+bool Master::waitForDisplayNodes(int timeoutMs) {
+    Impl& s = *impl_;
+    std::unique_lock lock(s.m);
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
+    while (s.presentNodes.size() < s.settings.displayNodes.names.size()) {
+        throwIfStopped(s);
+        const auto now = std::chrono::steady_clock::now();
+        if (now >= end) return false;
+        s.cv.wait_for(lock, std::min<std::chrono::steady_clock::duration>(end - now, std::chrono::milliseconds(100)));
+    }
+    return true;
 }
 
 void Master::setStopFlag(const std::atomic<bool>* flag) { impl_->stopFlag = flag; }

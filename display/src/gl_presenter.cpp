@@ -9,9 +9,12 @@
 
 #include <rtwall/display.h>
 
+#include "swap_group.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -55,6 +58,7 @@ const char* uploadMethodName(UploadMethod m) { return m == UploadMethod::Pbo ? "
 
 struct GlPresenter::Impl {
     WallConfig wall;
+    std::string swapGroupLine;  // what joinSwapGroup said (empty: no swap_group asked for)
     Options options;
     std::vector<Screen> screens;
     GLuint wallTex[2] = {0, 0}, ownerTex = 0, pbo[2][2] = {{0, 0}, {0, 0}};
@@ -318,6 +322,13 @@ std::unique_ptr<GlPresenter> GlPresenter::open(const WallConfig& wall, const Opt
     }
     im.allocateWallTextures(wall.width, wall.height);
     if (glGetError() != GL_NO_ERROR) return no("OpenGL refuses a " + std::to_string(wall.width) + "x" + std::to_string(wall.height) + " texture");
+    if (wall.swapGroup > 0) {
+        std::vector<GLFWwindow*> windows;
+        for (const Screen& sc : impl->screens) windows.push_back(sc.window);
+        impl->swapGroupLine = detail::joinSwapGroup(windows, wall.swapGroup, wall.swapBarrier);
+        std::fprintf(stderr, "rtwall: %s\n", impl->swapGroupLine.c_str());
+        glfwMakeContextCurrent(impl->screens[0].window);
+    }
     return std::unique_ptr<GlPresenter>(new GlPresenter(std::move(impl)));
 }
 
@@ -422,6 +433,8 @@ InputState GlPresenter::poll() {
 void GlPresenter::setStatus(const std::string& text) { glfwSetWindowTitle(impl_->screens[0].window, text.c_str()); }
 
 const PresentStats& GlPresenter::stats() const { return impl_->stats; }
+
+const std::string& GlPresenter::swapGroup() const { return impl_->swapGroupLine; }
 
 std::string GlPresenter::renderer() const {
     glfwMakeContextCurrent(impl_->screens[0].window);

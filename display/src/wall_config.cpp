@@ -283,6 +283,9 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
     w.width = wr.integer("width", 0, 1, 65536);
     w.height = wr.integer("height", 0, 1, 65536);
     w.vsync = wr.boolean("vsync", w.vsync);
+    w.swapGroup = wr.integer("swap_group", 0, 0, 1 << 20);
+    w.swapBarrier = wr.integer("swap_barrier", 0, 0, 1 << 20);
+    if (w.swapBarrier > 0 && w.swapGroup == 0) wr.fail(wr.find("swap_barrier"), "key 'swap_barrier': needs swap_group (a barrier binds a swap group)");
     wr.finish();
 
     bool stereoCorners = false;
@@ -517,7 +520,8 @@ bool StereoConfig::operator==(const StereoConfig& o) const {
 }
 
 bool WallConfig::operator==(const WallConfig& o) const {
-    return name == o.name && width == o.width && height == o.height && vsync == o.vsync && screens == o.screens &&
+    return name == o.name && width == o.width && height == o.height && vsync == o.vsync && swapGroup == o.swapGroup &&
+           swapBarrier == o.swapBarrier && screens == o.screens &&
            stereo == o.stereo && tracking == o.tracking && writeEvery == o.writeEvery && video == o.video;
 }
 
@@ -557,7 +561,9 @@ std::string writeWallConfig(const WallConfig& w) {
         return s;
     };
     os << "[wall]\nname = " << quoted(w.name) << "\nwidth = " << w.width << "\nheight = " << w.height
-       << "\nvsync = " << (w.vsync ? "true" : "false") << "\n\n";
+       << "\nvsync = " << (w.vsync ? "true" : "false") << "\n";
+    if (w.swapGroup > 0) os << "swap_group = " << w.swapGroup << "\nswap_barrier = " << w.swapBarrier << "\n";
+    os << "\n";
     if (w.stereo.mode != StereoMode::None || w.tracking.enabled) {
         const StereoConfig& s = w.stereo;
         os << "[stereo]\nmode = \"" << stereoName(s.mode) << "\"\neye_separation = " << num(s.eyeSeparation)

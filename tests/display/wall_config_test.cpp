@@ -227,3 +227,33 @@ TEST(WallConfig, MissingFileIsAnInputError) {
 
 }  // namespace
 }  // namespace rtwall
+
+namespace rtwall {
+namespace {
+
+// GLX_NV_swap_group (issue 19): off by default, read strictly, a barrier only with a group, and
+// written back.
+TEST(WallConfig, SwapGroupAndBarrierAreReadStrictly) {
+    const std::string screen = "[[screen]]\nviewport = [0, 0, 100, 100]\n";
+    const WallConfig plain = parseWallConfig("[wall]\nwidth = 100\nheight = 100\n" + screen, "wall.toml");
+    EXPECT_EQ(plain.swapGroup, 0);
+    EXPECT_EQ(plain.swapBarrier, 0);
+    const WallConfig grouped =
+        parseWallConfig("[wall]\nwidth = 100\nheight = 100\nswap_group = 1\nswap_barrier = 2\n" + screen, "wall.toml");
+    EXPECT_EQ(grouped.swapGroup, 1);
+    EXPECT_EQ(grouped.swapBarrier, 2);
+    EXPECT_EQ(parseWallConfig(writeWallConfig(grouped), "written.toml"), grouped);
+    EXPECT_FALSE(parseWallConfig(writeWallConfig(grouped), "written.toml") == plain);
+    EXPECT_EQ(test::wallError("[wall]\nwidth = 100\nheight = 100\nswap_barrier = 1\n" + screen),
+              "wall.toml:4: [wall]: key 'swap_barrier': needs swap_group (a barrier binds a swap group)");
+    EXPECT_EQ(test::wallError("[wall]\nwidth = 100\nheight = 100\nswap_group = -1\n" + screen),
+              "wall.toml:4: [wall]: key 'swap_group': -1 is out of range [0, 1048576]");
+    EXPECT_NE(test::wallError("[wall]\nwidth = 100\nheight = 100\nswap_group = true\n" + screen)
+                  .find("wall.toml:4: [wall]: key 'swap_group': expected an integer"),
+              std::string::npos);
+    EXPECT_NE(test::wallError("[wall]\nwidth = 100\nheight = 100\nswap_groups = 1\n" + screen).find("wall.toml:4: [wall]: unknown key 'swap_groups'"),
+              std::string::npos);
+}
+
+}  // namespace
+}  // namespace rtwall

@@ -734,3 +734,68 @@ TEST(WallSession, SectionKeysAndSetSectionCutTheScene) {
 
 }  // namespace
 }  // namespace rtwall
+
+namespace rtwall {
+namespace {
+
+// Issue 19: a wall whose screens name display nodes. The session starts them (threads here,
+// processes in `rtwall run`), the master holds no pixels, and each node shows its screens of the
+// single-PC frame exactly, every frame.
+TEST(WallSession, AWallOnDisplayNodesShowsItsScreensOnTheNodes) {
+    const auto dir = test::displayScratchDir();
+    const auto scene = test::writeText(dir / "scene.toml", sceneText(0.0));
+    const auto wall = test::writeText(dir / "wall.toml", "[wall]\nname = \"pair\"\n[grid]\ncolumns = 2\nrows = 1\nscreen_width = 48\n"
+                                                         "screen_height = 64\n[[node]]\nname = \"a\"\ncolumns = [0, 0]\n[[node]]\n"
+                                                         "name = \"b\"\ncolumns = [1, 1]\n[headless]\nwrite_every = 1\n");
+    RunConfig c = sessionConfig(dir / "out", scene);
+    c.wall = wall;
+    c.frames = 3;
+    c.framesGiven = true;
+    std::vector<std::string> lines;
+    c.log = [&lines](const std::string& l) { lines.push_back(l); };
+    SceneDesc desc = loadSceneFile(scene);
+    {
+        WallSession s(c);
+        while (s.step()) {
+        }
+        EXPECT_TRUE(s.lastFrame().left.rgb.empty()) << "the master holds no pixels";
+        EXPECT_EQ(s.lastReport().displayNodes, 2u);
+        EXPECT_GE(s.lastReport().swapsReleased, 2u);
+        EXPECT_EQ(s.summary().frames, 3u);
+    }
+    std::string log;
+    for (const std::string& l : lines) log += l + "\n";
+    EXPECT_NE(log.find("display nodes: all 2 joined (a, b)"), std::string::npos) << log;
+
+    WallFrame one;
+    one.left = renderState(desc);
+    one.number = 1;
+    HeadlessPresenter(loadWallConfig(wall), dir / "one").present(one);
+    for (const auto& [node, screen] : std::vector<std::pair<std::string, std::string>>{{"a", "c0r0"}, {"b", "c1r0"}})
+        for (int frame = 1; frame <= 3; ++frame) {
+            char name[64];
+            std::snprintf(name, sizeof name, "frame_%06d_%s.png", frame, screen.c_str());
+            const std::filesystem::path shown = dir / "out" / node / name;
+            ASSERT_TRUE(std::filesystem::exists(shown)) << shown << "\n" << log;
+            EXPECT_EQ(differingBytes(readPng(shown), readPng(dir / "one" / ("frame_000001_" + screen + ".png"))), 0u) << shown;
+        }
+}
+
+TEST(WallSession, ATargetFrameRateOnDisplayNodesNeedsAFront) {
+    const auto dir = test::displayScratchDir();
+    const auto scene = test::writeText(dir / "scene.toml", sceneText(0.0));
+    const auto wall = test::writeText(dir / "wall.toml", "[wall]\n[grid]\ncolumns = 2\nrows = 1\nscreen_width = 48\nscreen_height = 64\n"
+                                                         "[[node]]\nname = \"a\"\ncolumns = [0, 0]\n[[node]]\nname = \"b\"\ncolumns = [1, 1]\n");
+    RunConfig c = sessionConfig(dir, scene);
+    c.wall = wall;
+    c.targetFps = 30;
+    try {
+        WallSession s(c);
+        ADD_FAILURE() << "a calibration without pixels was started";
+    } catch (const InputError& e) {
+        EXPECT_STREQ(e.what(), "--target-fps on a wall of display nodes needs --front: the master holds no pixels to calibrate with");
+    }
+}
+
+}  // namespace
+}  // namespace rtwall

@@ -199,3 +199,24 @@ columns = [1, 1]
 
 }  // namespace
 }  // namespace rtwall
+
+namespace rtwall {
+namespace {
+
+// Display nodes started on this PC (issue 19) unless the run config says they run on their own PCs.
+TEST(RunConfig, LocalDisplayNodesAreOnUnlessTurnedOff) {
+    EXPECT_TRUE(defaultRunConfig().localDisplayNodes);
+    const auto dir = test::displayScratchDir();
+    EXPECT_FALSE(readRunConfig(test::writeText(dir / "off.toml", "[cluster]\nlocal_display_nodes = false\n")).localDisplayNodes);
+    EXPECT_TRUE(readRunConfig(test::writeText(dir / "on.toml", "[cluster]\nlocal_display_nodes = true\n")).localDisplayNodes);
+    try {
+        readRunConfig(test::writeText(dir / "bad.toml", "[cluster]\nclients = 1\nlocal_display_nodes = 0\n"));
+        ADD_FAILURE() << "an integer was taken for a boolean";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("bad.toml:3: [cluster]: key 'local_display_nodes': expected true or false, got an integer"), std::string::npos)
+            << e.what();
+    }
+}
+
+}  // namespace
+}  // namespace rtwall

@@ -24,6 +24,7 @@ void addDisplay(CLI::App& app, Run& run) {
     cmd->add_option("--server-key", o->serverKeyFile, "The master's public key file; the node checks the master with it");
     cmd->add_flag("--headless", o->headless, "Write the screens as images instead of opening windows");
     cmd->add_option("--out", o->out, "Folder for the headless screens");
+    cmd->add_option("--capture", o->capture, "Tests: in windows, also write each presented frame's screens as read back from OpenGL to this folder");
     cmd->add_option("--frames", o->frames, "Exit after presenting this many frames (0: until the master ends)")->check(CLI::Range(0, 1 << 30));
     cmd->add_option("--exit-after-idle", o->exitAfterIdleMs, "Exit when no master answers for this many ms (0: wait for ever)")
         ->check(CLI::Range(0, 86'400'000));

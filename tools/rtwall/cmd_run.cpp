@@ -20,7 +20,7 @@ void addRun(CLI::App& app, Run& run) {
         std::string config;
         int frames = -1, clients = -1, writeEvery = -1;
         std::string out, bind, cameraPath, wall, front, trace;
-        bool insecure = false, headless = false, watch = false;
+        bool insecure = false, headless = false, watch = false, noLocalNodes = false;
         double targetFps = 0;
         PartView parts;
     };
@@ -37,6 +37,8 @@ void addRun(CLI::App& app, Run& run) {
     cmd->add_flag("--watch", o->watch,
                   "Reload the scene file when it changes on disk and send what changed (materials, lights, instance "
                   "transforms, render settings, the camera) as differential updates");
+    cmd->add_flag("--no-local-nodes", o->noLocalNodes,
+                  "A wall on display nodes: start none on this PC (each runs `rtwall display --connect ... --node NAME` on its own PC)");
     cmd->add_flag("--insecure", o->insecure, "Allow a non-loopback bind without CURVE keys (says so loudly)");
     cmd->add_option("--bind", o->bind, "Endpoint for clients, e.g. tcp://0.0.0.0:7700 (default: loopback, any port)");
     cmd->add_option("--target-fps", o->targetFps,
@@ -62,6 +64,7 @@ void addRun(CLI::App& app, Run& run) {
             if (!o->bind.empty()) c.cluster.bind = o->bind;
             if (!o->cameraPath.empty()) c.cameraPath = o->cameraPath;
             if (o->insecure) c.cluster.insecure = true;
+            if (o->noLocalNodes) c.localDisplayNodes = false;
             if (!o->wall.empty()) c.wall = o->wall;
             c.headless = o->headless;
             c.watch = o->watch;

@@ -236,6 +236,12 @@ public:
     // finish). The flag must outlive the master.
     void setStopFlag(const std::atomic<bool>* flag);
 
+    // Display nodes (ClusterSettings::displayNodes): the names of those there now (joined and
+    // not gone), in the wall's order; and a wait until every node of the wall is there (false
+    // after timeoutMs; Cancelled when the stop flag is set, as awaitClients).
+    std::vector<std::string> displayNodesPresent() const;
+    bool waitForDisplayNodes(int timeoutMs);
+
     // Arguments for `rtwall client` processes this master starts on its own PC
     // (ClusterSettings::localClients): with keys, a key pair made for this session (in a private
     // temporary directory, removed with the master; its public key is allowed) and the master's
@@ -353,6 +359,42 @@ public:
 
 private:
     std::vector<int> pids_;
+};
+
+// Display-node processes on this PC (a wall on several display nodes run on one machine):
+// `EXECUTABLE display --connect ENDPOINT --node NAME ...` children, one per name, stopped as
+// LocalClients are. Node NAME opens its windows, or writes its screens to outDir/NAME (headless, or
+// where it finds no display). A node that ends
+// while the wall runs is said by takeEnded(), never waited for.
+class LocalDisplayNodes {
+public:
+    struct Options {
+        bool headless = true;
+        std::filesystem::path outDir = "out/frames";  // each node's screens in outDir/NAME, headless or without a display
+        std::vector<std::string> extraArgs;          // e.g. Master::localClientArgs()
+        std::filesystem::path executable = "/proc/self/exe";
+    };
+    LocalDisplayNodes(const std::vector<std::string>& names, const std::string& endpoint, const Options& options);
+    ~LocalDisplayNodes();
+    LocalDisplayNodes(const LocalDisplayNodes&) = delete;
+    LocalDisplayNodes& operator=(const LocalDisplayNodes&) = delete;
+
+    // One line per node process that ended since the last call: its name, pid and how it ended
+    // (exit status or signal).
+    std::vector<std::string> takeEnded();
+    size_t running() const;
+    int pid(const std::string& name) const;  // 0: no such node or it ended
+
+private:
+    struct Child {
+        std::string name;
+        int pid = 0;
+        bool ended = false;
+        int status = 0;
+    };
+    std::vector<Child> children_;
+    std::vector<std::string> endedLines_;
+    void reap(bool block);
 };
 
 // Writes a new CURVE key pair to STEM.key (secret, mode 0600) and STEM.pub (public).

@@ -113,6 +113,10 @@ struct WallConfig {
     std::string name = "wall";
     int width = 0, height = 0;        // the wall image the renderer produces, bezel pixels included
     bool vsync = true;
+    // GLX_NV_swap_group / swap_barrier where the driver has them (off: 0): this PC's windows join
+    // swap group `swapGroup`, and with swapBarrier > 0 the group binds to that barrier (a
+    // genlocked wall's PCs swap together in hardware, on top of the master's network barrier).
+    int swapGroup = 0, swapBarrier = 0;
     std::vector<ScreenConfig> screens;
     StereoConfig stereo;
     TrackingConfig tracking;
@@ -295,6 +299,9 @@ public:
     void setStatus(const std::string& text);  // shown in the first window's title
     const PresentStats& stats() const;
     std::string renderer() const;  // GL_RENDERER
+    // WallConfig::swapGroup: the line that said whether the windows joined GLX_NV_swap_group (also
+    // on stderr when the presenter opened); empty when the wall asks for no group.
+    const std::string& swapGroup() const;
 
     struct Impl;
 

@@ -57,6 +57,7 @@ struct DisplayNodeOptions {
     std::filesystem::path out = "out/node";   // headless screens go here (a folder per node name is not made)
     int frames = 0;                           // > 0: exit after presenting this many frames
     int exitAfterIdleMs = 0;                  // > 0: exit when no master answers for this long
+    std::filesystem::path capture;            // tests: in windows, each presented frame's screens as read back from GL (frame_NNNNNN_SCREEN.png)
 };
 int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop = nullptr);
 
@@ -82,6 +83,12 @@ struct RunConfig {
     std::filesystem::path front;          // the measured front for targetFps (empty: calibrate)
     std::filesystem::path trace;          // with targetFps: one CSV line per frame
     PartView parts;                       // --hide, --isolate, --highlight: on top of the scene file's [parts]
+    // A wall whose screens name display nodes (issue 19): one `rtwall display` process per node
+    // on this PC, of clientExecutable (LocalDisplayNodes; the whole wall on one machine), or with
+    // clientThreads a headless runWallNode thread per node writing to out/NAME. Off ([cluster]
+    // local_display_nodes = false, --no-local-nodes): the nodes are started on their own PCs
+    // and the master waits for them.
+    bool localDisplayNodes = true;
     // Local render clients: `rtwall client` processes of this executable, or (tests) threads of
     // this process running runClient.
     std::filesystem::path clientExecutable = "/proc/self/exe";

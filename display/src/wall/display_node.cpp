@@ -3,7 +3,9 @@
 #include <rtwall/wall.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <memory>
+#include <vector>
 
 namespace rtwall {
 
@@ -52,7 +54,18 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
             po.overlay = &overlay;
         }
         if (gl) {
-            gl->present(f, po);
+            if (options.capture.empty()) {
+                gl->present(f, po);
+            } else {
+                std::vector<Image> shown;
+                gl->present(f, po, &shown);
+                std::filesystem::create_directories(options.capture);
+                for (size_t i = 0; i < shown.size(); ++i) {
+                    char name[96];
+                    std::snprintf(name, sizeof name, "frame_%06u_%s.png", frame, wall.screens[i].name.c_str());
+                    writePng(shown[i], options.capture / name);
+                }
+            }
             gl->poll();
         } else if (headless) {
             headless->present(f, po);

@@ -68,6 +68,7 @@ RunConfig readRunConfig(const std::filesystem::path& file, const toml::table& ro
     if (const toml::table* t = subTable(top, "cluster")) {
         Reader r(file, *t, "[cluster]: ");
         readCluster(r, dir, c.cluster);
+        c.localDisplayNodes = r.boolean("local_display_nodes", c.localDisplayNodes);
         r.finish();
     }
     if (const toml::table* t = subTable(top, "run")) {

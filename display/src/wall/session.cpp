@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <deque>
 #include <fstream>
+#include <sstream>
 #include <thread>
 #include <tuple>
 
@@ -91,6 +92,15 @@ struct WallSession::Impl {
 
     std::unique_ptr<Master> master;
     std::unique_ptr<LocalClients> processes;
+    // A wall on display nodes (issue 19): the screens are on the nodes, the master shows no
+    // pixels (a console window at most); local node processes when the config asks for them.
+    bool onNodes = false;
+    std::unique_ptr<LocalDisplayNodes> nodeProcesses;
+    std::vector<std::thread> nodeThreads;  // with clientThreads (tests): runWallNode, headless
+    std::atomic<bool> stopNodes{false};
+    std::vector<std::string> nodesPresent;  // at the last step, for the log
+    uint64_t nodesLeftOut = 0;              // FrameReport::nodesLeftOut at the last step
+    bool ranToTheEnd = false;               // every frame asked for was stepped
     std::vector<std::thread> clientThreads;
     std::unique_ptr<LiveScene> live;
     std::unique_ptr<WallInput> input;
@@ -141,9 +151,18 @@ struct WallSession::Impl {
         watcher.reset();
         input.reset();
         live.reset();
+        // The nodes show the last frame before the master says goodbye (bounded: a node that
+        // stalls is left out of it after the barrier's stall time anyway). Not after a stop,
+        // when the wait would throw Cancelled here.
+        if (onNodes && ranToTheEnd && master && !stopped() && !master->displayNodesPresent().empty() &&
+            !master->waitForSwap(report.frame, 3000))
+            log(format("display nodes: frame %u was not swapped within 3 s of its last tile", report.frame));
         master.reset();
         for (std::thread& t : clientThreads) t.join();
+        stopNodes = true;  // the master's goodbye ends them; this, one that never joined
+        for (std::thread& t : nodeThreads) t.join();
         processes.reset();
+        nodeProcesses.reset();
     }
 
     bool stopped() const { return stop && stop->load(); }
@@ -185,6 +204,107 @@ struct WallSession::Impl {
         if (joined < needed)
             log(format("only %d of %d %srender clients joined; rendering with them (the others join when they can)", joined,
                        needed, cs.localClients > 0 ? "local " : ""));
+    }
+
+    // The wall's screens name display nodes: the master routes every tile to the nodes that show
+    // it, each view by its eye.
+    void routeToNodes() {
+        onNodes = true;
+        std::ifstream in(config.wall, std::ios::binary);
+        std::stringstream text;
+        text << in.rdbuf();
+        if (!in) throw InputError(config.wall.string() + ": cannot read it");
+        std::vector<int> eyes;
+        if (views && config.viewsInOnePass)
+            for (int eye : stereo ? std::vector<int>{0, 1} : std::vector<int>{-1})
+                for (size_t i = 0; i < wallViews(wallConfig, staticHead(wallConfig.stereo), eye).size(); ++i) eyes.push_back(eye);
+        config.cluster.displayNodes = displayNodeSettings(wallConfig, text.str(), eyes);
+    }
+
+    std::string joined(const std::vector<std::string>& names) const {
+        std::string out;
+        for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
+        return out;
+    }
+
+    // Starts the local nodes (or says how to start them on their PCs) and waits for all of
+    // them, bounded: a node that dies or does not come is said, and the wall runs without it.
+    void startNodes() {
+        const std::vector<std::string>& names = config.cluster.displayNodes.names;
+        if (config.localDisplayNodes && config.clientThreads) {
+            for (const std::string& n : names) {
+                DisplayNodeOptions o;
+                o.connect = master->endpoint();
+                o.name = n;
+                o.headless = true;  // windows belong to the main thread
+                o.out = config.out / n;
+                o.exitAfterIdleMs = 5000;
+                nodeThreads.emplace_back([this, o] {
+                    try {
+                        runWallNode(o, &stopNodes);
+                    } catch (const std::exception& e) {
+                        std::fprintf(stderr, "display node '%s': %s\n", o.name.c_str(), e.what());
+                    }
+                });
+            }
+            log("display nodes: " + joined(names) + " as threads of this process, writing to " + (config.out / "NAME").string());
+        } else if (config.localDisplayNodes) {
+            LocalDisplayNodes::Options o;
+            o.headless = config.headless;
+            o.outDir = config.out;
+            o.extraArgs = master->localClientArgs();
+            o.executable = config.clientExecutable;
+            nodeProcesses = std::make_unique<LocalDisplayNodes>(names, master->endpoint(), o);
+            log("display nodes: started " + joined(names) + " on this PC" +
+                (config.headless ? " (headless: each writes its screens to " + (config.out / "NAME").string() + ")" : ""));
+        } else {
+            for (const std::string& n : names) log("waiting for display node '" + n + "': rtwall display --connect " + master->endpoint() + " --node " + n);
+        }
+        const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(nodeProcesses ? 30 : 120);
+        while (!master->waitForDisplayNodes(200)) {
+            reportNodeProcesses();
+            if ((nodeProcesses && nodeProcesses->running() == 0) || std::chrono::steady_clock::now() >= end) break;
+        }
+        nodesPresent = master->displayNodesPresent();
+        if (nodesPresent.size() < names.size()) {
+            std::vector<std::string> missing;
+            for (const std::string& n : names)
+                if (std::find(nodesPresent.begin(), nodesPresent.end(), n) == nodesPresent.end()) missing.push_back(n);
+            log(format("display nodes: %zu of %zu joined (not there: %s); the wall runs without their screens, they join when they can",
+                       nodesPresent.size(), names.size(), joined(missing).c_str()));
+        } else {
+            log("display nodes: all " + std::to_string(names.size()) + " joined (" + joined(names) + "); the master shows no pixels");
+        }
+    }
+
+    void reportNodeProcesses() {
+        if (nodeProcesses)
+            for (const std::string& line : nodeProcesses->takeEnded()) log(line);
+    }
+
+    // The nodes' state after a frame: said at once when it changes, and on the console.
+    std::string nodeStatus() {
+        reportNodeProcesses();
+        const std::vector<std::string>& names = config.cluster.displayNodes.names;
+        const std::vector<std::string> present = master->displayNodesPresent();
+        if (present != nodesPresent) {
+            log("display nodes there: " + (present.empty() ? std::string("none") : joined(present)) + format(" (%zu of %zu)", present.size(), names.size()));
+            nodesPresent = present;
+        }
+        if (report.nodesLeftOut > nodesLeftOut)
+            log(format("display nodes: %llu more left out of a frame for stalling (%llu in all)",
+                       (unsigned long long)(report.nodesLeftOut - nodesLeftOut), (unsigned long long)report.nodesLeftOut));
+        nodesLeftOut = report.nodesLeftOut;
+        std::string line = format("display nodes %zu/%zu, %llu swaps released, %llu left out, swap skew %.2f ms (max %.2f ms)",
+                                  present.size(), names.size(), (unsigned long long)report.swapsReleased,
+                                  (unsigned long long)report.nodesLeftOut, report.lastSwapSkew * 1e3, report.maxSwapSkew * 1e3);
+        if (present.size() < names.size()) {
+            std::vector<std::string> missing;
+            for (const std::string& n : names)
+                if (std::find(present.begin(), present.end(), n) == present.end()) missing.push_back(n);
+            line += " | not there: " + joined(missing);
+        }
+        return line;
     }
 
     // An operating point's settings, applied through the one scene state.
@@ -422,8 +542,10 @@ struct WallSession::Impl {
             if (images.size() != rendered.views.size())
                 throw std::runtime_error("internal error: a multi-view frame came back with " + std::to_string(images.size()) +
                                          " images for " + std::to_string(rendered.views.size()) + " views");
-            if (report.stochastic) accumulateViews(images, rendered.views);
-            composeEyes(images);
+            if (!onNodes) {  // on nodes the images are empty: the pixels are on the nodes
+                if (report.stochastic) accumulateViews(images, rendered.views);
+                composeEyes(images);
+            }
         } else if (views) {
             // Each eye, each plane of screens: one render of the wall image with that view's
             // off-axis camera (the way before one-pass frames: tests compare the two).
@@ -435,6 +557,7 @@ struct WallSession::Impl {
                     live->sendEyeCamera(input->viewCamera(vs[i].window));
                     const bool lastRender = eye == eyes.back() && i + 1 == vs.size();
                     Image part = master->renderFrame(lastRender ? &report : nullptr);
+                    if (onNodes) continue;
                     if (vs.size() == 1) {
                         image = std::move(part);
                     } else {
@@ -463,7 +586,7 @@ struct WallSession::Impl {
             if (!viewScreens.empty() && !viewScreens.front().empty()) shown.tileOwners.clear();
         }
         shown.tileSize = live->desc().settings.tileSize;
-        if (!views && report.stochastic) {
+        if (!views && report.stochastic && !onNodes) {
             // A still view refines: each frame has its own sampling seeds; any change to the scene
             // state (camera, objects, materials, codec) restarts the accumulation. Linear frames
             // are summed without the 8-bit quantisation.
@@ -493,8 +616,10 @@ struct WallSession::Impl {
         }
     }
 
+    std::string nodeLine;  // this frame's nodeStatus()
+
     void writeFiles() {
-        if (config.writeEvery > 0 && frame % config.writeEvery == 0) {
+        if (config.writeEvery > 0 && frame % config.writeEvery == 0 && !onNodes) {
             const std::filesystem::path file = config.out / format("frame_%06u.png", report.frame);
             // A frame rendered at a lower resolution (operating point) is written as the wall shows it.
             writePng(resizeBilinear(shown.left, baseSettings.width, baseSettings.height), file);
@@ -508,7 +633,8 @@ struct WallSession::Impl {
                        frame, 1.0 / recent, n, double(report.bytes) * 1e-6, (unsigned long long)report.tilesStolen,
                        (unsigned long long)report.affinityHits,
                        // A multi-view frame's tiles are those of all its views.
-                       report.views > 0 ? report.tileOwners.size() : makeTiles(s.width, s.height, s.tileSize).size()));
+                       report.views > 0 ? report.tileOwners.size() : makeTiles(s.width, s.height, s.tileSize).size()) +
+                (onNodes ? "; " + nodeLine : std::string()));
         }
     }
 };
@@ -544,6 +670,11 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
                        : "off-axis wall: asynchronous rendering off, each frame renders each view with its own camera");
         c.cluster.async = false;
     }
+    if (!s.wallConfig.nodes().empty()) {
+        if (c.targetFps > 0 && c.front.empty())
+            throw InputError("--target-fps on a wall of display nodes needs --front: the master holds no pixels to calibrate with");
+        s.routeToNodes();
+    }
     fitToRun(desc, c, s.wallConfig);
     s.start = desc.cameras.front();
     s.baseSettings = desc.settings;
@@ -563,6 +694,9 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     s.log(format("rtwall master at %s, %dx%d, %d local clients, codec %s%s", s.master->endpoint().c_str(), desc.settings.width,
                  desc.settings.height, c.cluster.localClients, tileCodecName(c.cluster.codec.codec),
                  c.cluster.async ? ", asynchronous" : ""));
+    // Nodes first: a client learns where they are when it joins and connects to them while it
+    // builds the scene (a tile sent to a node it is not yet connected to is dropped).
+    if (s.onNodes) s.startNodes();
     s.startClients();
     s.waitForClients();
     s.live = std::make_unique<LiveScene>(std::move(desc), *s.master);
@@ -582,6 +716,7 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     io.outDir = c.out;
     io.interactive = s.path.empty();
     io.codec = tileCodecName(c.cluster.codec.codec);
+    io.console = s.onNodes;
     s.input = std::make_unique<WallInput>(s.wallConfig, s.start, io, s.log);
     s.input->setPartView(*s.live, {});  // says what the scene file and the command line hid, if anything
     // In a window the wall runs until it is closed, unless a frame count was asked for.
@@ -649,10 +784,16 @@ bool WallSession::step() {
     const auto now = std::chrono::steady_clock::now();
     s.frameTimes.push_back(std::chrono::duration<double>(now - s.last).count());
     s.last = now;
-    s.input->show(s.shown, s.report, s.frameTimes.back());
+    if (s.onNodes) {
+        s.nodeLine = s.nodeStatus();
+        s.input->showConsole(s.nodeLine, s.report, s.frameTimes.back());
+    } else {
+        s.input->show(s.shown, s.report, s.frameTimes.back());
+    }
     s.bytes += s.report.bytes;
     s.observe();
     s.writeFiles();
+    s.ranToTheEnd = s.config.frames > 0 && s.frame >= s.config.frames;
     return true;
 }
 

@@ -28,14 +28,24 @@ float length(Float3 a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
 WallInput::WallInput(const WallConfig& wall, const CameraDesc& start, const Options& options,
                      std::function<void(const std::string&)> log)
     : wall_(wall), base_(start), options_(options), log_(std::move(log)) {
+    if (options.console) {
+        // The wall's aspect, 640 pixels wide at most: clicks map to the wall by one scale.
+        const int w = std::min(640, wall_.width), h = std::clamp(int(std::lround(double(w) * wall_.height / wall_.width)), 120, 960);
+        console_ = singleScreenWall(w, h);
+        console_.name = "rtwall master: " + wall_.name;
+        console_.vsync = false;  // the nodes swap in step; the console must not hold the master's loop
+    }
     if (options.forceHeadless) whyHeadless_ = "--headless";
-    else gl_ = GlPresenter::open(wall_, {}, &whyHeadless_);
-    if (!gl_ && options.perScreenImages) headless_ = std::make_unique<HeadlessPresenter>(wall_, options.outDir);
+    else gl_ = GlPresenter::open(options.console ? console_ : wall_, {}, &whyHeadless_);
+    if (!gl_ && options.perScreenImages && !options.console) headless_ = std::make_unique<HeadlessPresenter>(wall_, options.outDir);
     const Float3 d{start.position.x - start.lookAt.x, start.position.y - start.lookAt.y, start.position.z - start.lookAt.z};
     nav_ = std::make_unique<Navigator>(poseOf(start), std::max(0.1f, length(d)));
     // A flystick flies by default, as in every VR wall; its mode button (or Tab) orbits.
     if (wall_.tracking.enabled && wall_.tracking.flystick >= 0) nav_->setMode(Navigator::Mode::Fly);
-    if (gl_)
+    if (gl_ && options.console)
+        log_("wall '" + wall_.name + "': on its display nodes; this PC shows a console window (" + gl_->renderer() +
+             ") with their status; the wall's keys work there (H status, Tab fly/orbit, 1-9 bookmarks, Esc quits, ...)");
+    else if (gl_)
         log_("wall '" + wall_.name + "': " + std::to_string(wall_.screens.size()) + " window" +
              (wall_.screens.size() == 1 ? "" : "s") + " (" + gl_->renderer() +
              "); keys: H status, T tile owners, Tab fly/orbit, 1-9 bookmarks (Ctrl+digit stores), R record, Ctrl+drag "
@@ -195,7 +205,15 @@ void WallInput::partKey(LiveScene& scene, int key) {
 bool WallInput::handle(LiveScene& scene, double dt) {
     std::vector<InputState> inputs;
     inputs.swap(injected_);
-    if (gl_) inputs.push_back(gl_->poll());
+    if (gl_) {
+        InputState in = gl_->poll();
+        if (options_.console) {
+            // Console pixels to wall pixels: the console has the wall's aspect.
+            in.wallX *= double(wall_.width) / console_.width;
+            in.wallY *= double(wall_.height) / console_.height;
+        }
+        inputs.push_back(in);
+    }
     for (const InputState& in : inputs)
         if (!apply(scene, in, dt)) return false;
     std::string text = measuring_ ? measureLine() : std::string();
@@ -598,6 +616,32 @@ void WallInput::show(const WallFrame& frame, const FrameReport& report, double f
     } else if (headless_) {
         headless_->present(frame, present_);
     }
+}
+
+void WallInput::showConsole(const std::string& lines, const FrameReport& report, double frameSeconds) {
+    if (!gl_) return;
+    std::string text = lines;
+    if (showStatus_) {
+        char line[160];
+        std::snprintf(line, sizeof line, "\nrtwall %.1f fps | %.2f MB/frame to the nodes %s\nmaster: ", frameSeconds > 0 ? 1.0 / frameSeconds : 0.0,
+                      double(report.bytes) * 1e-6, options_.codec.c_str());
+        text += line + describeCounters(report.counters);
+    }
+    if (!overlayText_.empty()) text += "\n" + overlayText_;
+    if (!partsLine_.empty()) text += "\n" + partsLine_;
+    WallFrame frame;
+    frame.number = report.frame;
+    frame.left.width = console_.width;
+    frame.left.height = console_.height;
+    frame.left.rgb.assign(size_t(console_.width) * size_t(console_.height) * 3, 0);
+    const Image t = textImage(text, 1);
+    for (int y = 0; y < std::min(t.height, frame.left.height - 8); ++y)
+        for (int x = 0; x < std::min(t.width, frame.left.width - 8); ++x)
+            for (int c = 0; c < 3; ++c)
+                frame.left.rgb[(size_t(y + 8) * size_t(frame.left.width) + size_t(x + 8)) * 3 + size_t(c)] =
+                    t.rgb[(size_t(y) * size_t(t.width) + size_t(x)) * 3 + size_t(c)];
+    gl_->setStatus(lines.substr(0, lines.find('\n')));
+    gl_->present(frame);
 }
 
 }  // namespace rtwall::wall

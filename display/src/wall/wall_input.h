@@ -25,6 +25,10 @@ public:
         std::filesystem::path outDir = "out/frames";
         bool interactive = true;       // navigation and picking drive the camera (off while a path replays)
         std::string codec;             // for the status line
+        // The wall's screens are on display nodes (issue 19): the master's one window is a small
+        // console of the wall's aspect that shows the nodes' status and takes the keys and the
+        // mouse (a click there is a click at that point of the wall); headless, nothing is written.
+        bool console = false;
     };
     WallInput(const WallConfig& wall, const CameraDesc& start, const Options& options,
               std::function<void(const std::string&)> log);
@@ -70,6 +74,9 @@ public:
     // Shows a frame the wall's size (or smaller: a frame rendered at a fraction of the
     // resolution is shown upscaled).
     void show(const WallFrame& frame, const FrameReport& report, double frameSeconds);
+    // Options::console: the console window shows these lines (the nodes' status) and, when the
+    // status overlay is on (H), the figures show() would show.
+    void showConsole(const std::string& lines, const FrameReport& report, double frameSeconds);
 
 private:
     WallConfig wall_;
@@ -77,6 +84,7 @@ private:
     Options options_;
     std::function<void(const std::string&)> log_;
     std::unique_ptr<GlPresenter> gl_;
+    WallConfig console_;  // Options::console: the one window's layout
     std::unique_ptr<HeadlessPresenter> headless_;
     std::string whyHeadless_;
     std::unique_ptr<Navigator> nav_;

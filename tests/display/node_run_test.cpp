@@ -1,0 +1,129 @@
+// `rtwall run` of a wall on two display nodes in one command (issue 19): the session starts one
+// `rtwall display` process per node on this PC; each writes its screens, and they are the
+// single-PC wall's screens byte for byte. A node killed mid-run is said, and the run finishes
+// with the other. Loopback only; every wait is bounded.
+#include "display_test_util.h"
+
+#include "../cluster/child_process.h"
+
+#include <rtwall/display.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+
+namespace rtwall {
+namespace {
+
+std::string fileBytes(const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+std::vector<std::string> filesIn(const std::filesystem::path& dir) {
+    std::vector<std::string> out;
+    std::error_code ec;
+    for (const auto& e : std::filesystem::directory_iterator(dir, ec)) out.push_back(e.path().filename().string());
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+const std::map<std::string, std::set<std::string>> kScreensOf{{"left", {"c0r0", "c0r1"}}, {"right", {"c1r0", "c1r1"}}};
+
+std::filesystem::path nodesWall() { return test::sourceDir() / "configs/wall/two-nodes-2x2.toml"; }
+
+// The same wall without nodes: the master drives the four screens, as on one PC.
+std::filesystem::path onePcWall(const std::filesystem::path& dir) {
+    WallConfig w = loadWallConfig(nodesWall());
+    for (ScreenConfig& s : w.screens) s.node.clear();
+    const std::filesystem::path file = dir / "one-pc.toml";
+    test::writeText(file, writeWallConfig(w));
+    EXPECT_TRUE(loadWallConfig(file).nodes().empty());
+    return file;
+}
+
+std::vector<std::string> runArgs(const std::filesystem::path& wall, int frames, const std::filesystem::path& out) {
+    return {RTWALL_EXE, "run", (test::sourceDir() / "configs/run/demo.toml").string(), "--wall", wall.string(), "--headless",
+            "--frames", std::to_string(frames), "--out", out.string()};
+}
+
+TEST(NodeRun, OneCommandRunsTwoLocalNodesBitIdenticalToOnePc) {
+    const std::filesystem::path dir = test::displayScratchDir();
+    test::ChildProcess nodes(runArgs(nodesWall(), 4, dir / "nodes"));
+    const std::optional<int> status = nodes.wait(240'000);
+    ASSERT_TRUE(status.has_value()) << nodes.output();
+    ASSERT_EQ(*status, 0) << nodes.output();
+    EXPECT_NE(nodes.output().find("display nodes: all 2 joined (left, right)"), std::string::npos) << nodes.output();
+    EXPECT_NE(nodes.output().find("display nodes 2/2, "), std::string::npos) << nodes.output();
+    // The master wrote no screens of its own.
+    for (const std::string& f : filesIn(dir / "nodes")) EXPECT_TRUE(f == "left" || f == "right") << f;
+
+    test::ChildProcess onePc(runArgs(onePcWall(dir), 4, dir / "one"));
+    ASSERT_EQ(onePc.wait(240'000), std::optional<int>(0)) << onePc.output();
+
+    for (const auto& [node, screens] : kScreensOf) {
+        const std::vector<std::string> files = filesIn(dir / "nodes" / node);
+        // Every frame, each as two screens: none is lost to the next frame overtaking it (async),
+        // and the last frame's swap is waited for before the run ends.
+        for (int frame = 1; frame <= 4; ++frame)
+            for (const std::string& screen : screens) {
+                char name[64];
+                std::snprintf(name, sizeof name, "frame_%06d_%s.png", frame, screen.c_str());
+                EXPECT_NE(std::find(files.begin(), files.end(), name), files.end()) << node << " did not show " << name << "\n"
+                                                                                    << nodes.output();
+            }
+        for (const std::string& f : files) {
+            SCOPED_TRACE(node + "/" + f);
+            ASSERT_EQ(f.size(), std::string("frame_000001_c0r0.png").size());
+            EXPECT_TRUE(screens.count(f.substr(13, 4))) << "a screen of the other node";
+            ASSERT_TRUE(std::filesystem::exists(dir / "one" / f));
+            EXPECT_EQ(fileBytes(dir / "nodes" / node / f), fileBytes(dir / "one" / f));
+        }
+    }
+}
+
+// The node's process among the run's children, by its --node argument.
+pid_t nodeProcess(pid_t run, const std::string& name) {
+    for (pid_t kid : test::childrenOf(run)) {
+        std::ifstream in("/proc/" + std::to_string(kid) + "/cmdline", std::ios::binary);
+        std::stringstream s;
+        s << in.rdbuf();
+        if (s.str().find(std::string("--node\0", 7) + name + '\0') != std::string::npos) return kid;
+    }
+    return 0;
+}
+
+TEST(NodeRun, AKilledLocalNodeIsSaidAndTheRunFinishesWithTheOther) {
+    const std::filesystem::path dir = test::displayScratchDir();
+    test::ChildProcess run(runArgs(nodesWall(), 30, dir));
+    ASSERT_TRUE(run.waitFor("display nodes: all 2 joined", 120'000)) << run.output();
+    ASSERT_TRUE(run.waitFor("frame 10:", 120'000)) << run.output();
+    const pid_t right = nodeProcess(run.pid(), "right");
+    ASSERT_GT(right, 0) << "no local node process 'right'";
+    ASSERT_EQ(kill(right, SIGKILL), 0);
+    const std::optional<int> status = run.wait(240'000);
+    ASSERT_TRUE(status.has_value()) << run.output();
+    EXPECT_EQ(*status, 0) << run.output();
+    const std::string out = run.output();
+    EXPECT_TRUE(std::regex_search(out, std::regex("local display node 'right' \\(pid " + std::to_string(right) + "\\) killed by signal 9")))
+        << out;
+    EXPECT_NE(out.find("display nodes there: left (1 of 2)"), std::string::npos) << out;
+    EXPECT_NE(out.find("30 frames"), std::string::npos) << out;
+    // The left node went on to the end; the right one stopped where it was killed.
+    const std::vector<std::string> left = filesIn(dir / "left"), rightFiles = filesIn(dir / "right");
+    EXPECT_NE(std::find(left.begin(), left.end(), "frame_000030_c0r0.png"), left.end()) << out;
+    EXPECT_EQ(std::find(rightFiles.begin(), rightFiles.end(), "frame_000030_c1r0.png"), rightFiles.end()) << out;
+    EXPECT_FALSE(test::alive(right));
+}
+
+}  // namespace
+}  // namespace rtwall
