@@ -1415,9 +1415,10 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
         for (const auto& f : settings.clientKeys) allowed.push_back(readPublicKey(f));
         if (allowed.empty() && settings.localClients == 0)
             throw InputError(settings.keyFile.string() + ": a master key needs at least one client key");
-        if (settings.localClients > 0) {
-            // Local clients get a key pair of their own, made for this session: a private
-            // directory only this user can enter, removed with the master.
+        if (settings.localClients > 0 || !settings.displayNodes.names.empty()) {
+            // Local clients (and display nodes the session starts on this PC) get a key pair of
+            // their own, made for this session: a private directory only this user can enter,
+            // removed with the master.
             std::string dir = (std::filesystem::temp_directory_path() / "rtwall-keys-XXXXXX").string();
             if (!mkdtemp(dir.data())) throw InputError(dir + ": cannot make a private directory for the local clients' keys");
             s.localKeyDir = dir;

@@ -279,6 +279,13 @@ TEST(Issue16, LocalClientsOfAMasterWithKeysGetASessionKeyPair) {
     EXPECT_FALSE(std::filesystem::exists(keyDir)) << "removed with the master";
     cs.keyFile.clear();
     EXPECT_TRUE(Master(demoScene(32, 24), cs).localClientArgs().empty()) << "no keys, no key arguments";
+    // A wall on display nodes that the session starts on this PC: the nodes need the session's
+    // key pair even when every render client is remote.
+    cs.keyFile = dir / "master.key";
+    cs.localClients = 0;
+    EXPECT_TRUE(Master(demoScene(32, 24), cs).localClientArgs().empty()) << "no local process, no session key pair";
+    cs.displayNodes.names = {"left", "right"};
+    EXPECT_EQ(Master(demoScene(32, 24), cs).localClientArgs().size(), 4u) << "display nodes get the session key pair";
 }
 
 // Item 6: a refused handshake is said on both sides: the client says the master refused its key

@@ -289,9 +289,9 @@ public:
     std::vector<Image> renderViews(FrameReport* report = nullptr, std::vector<std::vector<float>>* linear = nullptr);
 
     // With display nodes: waits until the swap barrier has released frame `frame` or a later
-    // one to the nodes (true), or timeoutMs passed (false). A benchmark paces frames by it: a
-    // node holds one frame at a time, so the next frame must not begin while tiles of this one
-    // are still on their way to a node over a slower link.
+    // one to the nodes (true), or timeoutMs passed (false). A benchmark paces frames by it, so
+    // that one frame at a time is in flight to the nodes (a node keeps two: the newest and the
+    // one before).
     bool waitForSwap(uint32_t frame, int timeoutMs);
 
     MasterCounters counters() const;
