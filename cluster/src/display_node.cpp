@@ -205,8 +205,11 @@ private:
             case MsgType::NodeFrame: onFrame(decodePayload<NodeFrame>(p, n)); break;
             case MsgType::NodeSwap: {
                 const NodeSwap s = decodePayload<NodeSwap>(p, n);
-                // A frame shown and reported before this one was released without this node.
+                // Frames before this one were released without this node (it was late): let them
+                // go, shown or not, so that this one can be shown if it is held.
                 if (pendingSwap_ && *pendingSwap_ < s.frame) pendingSwap_.reset();
+                for (Slot& slot : slots_)
+                    if (slot.begun && slot.frame.frame < s.frame) slot.begun = false;
                 reportIfComplete();  // the released frame, if it was held back behind the one before
                 const bool held = pendingSwap_ == s.frame;
                 if (run_.present) {

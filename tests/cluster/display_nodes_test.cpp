@@ -1222,5 +1222,102 @@ TEST(DisplayNodes, AWallWithoutNodesRefusesANode) {
     peers.remove(&node);
 }
 
+// With async frames the master begins frame N+1 on N's last ack, so N+1's NodeFrame can reach a
+// node before N's last tile, and N's swap always comes after N+1 began. A scripted master: the
+// node keeps both frames, reports and presents them in order (N+1 only once N is swapped), and a
+// frame it was left out of (released before it held it) lets the next one through.
+TEST(DisplayNodes, FramesThatOverlapArePresentedInOrderAndALeftOutFrameLetsTheNextThrough) {
+    zmq::context_t ctx{1};
+    zmq::socket_t master(ctx, zmq::socket_type::router);
+    master.set(zmq::sockopt::linger, 0);
+    master.bind("tcp://127.0.0.1:0");
+    NodeThread node(master.get(zmq::sockopt::last_endpoint), "left");
+    master.set(zmq::sockopt::rcvtimeo, 5000);
+    zmq::message_t identity, hello;
+    ASSERT_TRUE(master.recv(identity));
+    ASSERT_TRUE(master.recv(hello));
+    const NodeHello nh = decodePayload<NodeHello>(static_cast<const uint8_t*>(hello.data()) + kHeaderSize, hello.size() - kHeaderSize);
+    const std::string peer = identity.to_string();
+    auto put = [&](const auto& msg, uint32_t frame = 0) {
+        Header h;
+        h.session = 31;
+        h.frame = frame;
+        const std::vector<uint8_t> bytes = encodeMessage(h, msg);
+        master.send(zmq::buffer(peer), zmq::send_flags::sndmore);
+        master.send(zmq::buffer(bytes));
+    };
+    put(NodeWelcome{0, 50, 5000, "[wall]\n", {}});
+    ASSERT_TRUE(waitFor(node, [&] { return !node.wall.empty(); }));
+    const int w = 32, hgt = 32, ts = 16;
+    const std::vector<TileRect> rects = makeTiles(w, hgt, ts);
+    put(TileRoutes{1, std::vector<uint64_t>(rects.size(), 1)}, 1);
+    zmq::socket_t client(ctx, zmq::socket_type::dealer);
+    client.set(zmq::sockopt::linger, 0);
+    client.connect(nh.endpoint);
+    auto tile = [&](uint32_t frame, uint32_t t) {
+        const std::vector<uint8_t> pixels(size_t(rects[t].width()) * rects[t].height() * 3, uint8_t(10 * frame));
+        Header h;
+        h.session = 31;
+        h.frame = frame;
+        client.send(zmq::buffer(encodeMessage(h, TileResult{frame, t, TileCodec::Raw, 1, pixels})), zmq::send_flags::dontwait);
+    };
+    // The NodeHave frames the node sends within `ms`.
+    auto haves = [&](int ms) {
+        std::vector<uint32_t> out;
+        master.set(zmq::sockopt::rcvtimeo, 20);
+        const auto end = Clock::now() + std::chrono::milliseconds(ms);
+        while (Clock::now() < end) {
+            zmq::message_t from, msg;
+            if (!master.recv(from)) continue;
+            if (!master.recv(msg)) continue;
+            const auto* b = static_cast<const uint8_t*>(msg.data());
+            if (decodeHeader(b, msg.size()).type == MsgType::NodeHave)
+                out.push_back(decodePayload<NodeHave>(b + kHeaderSize, msg.size() - kHeaderSize).frame);
+        }
+        return out;
+    };
+    auto frameMsg = [&](uint32_t n) { return NodeFrame{n, w, hgt, ts, TilePixels::Srgb8, {}, {}, false, 1}; };
+
+    // Frame 1 lacks its last tile when frame 2 begins; frame 2 comes whole.
+    put(frameMsg(1), 1);
+    for (uint32_t t = 0; t + 1 < rects.size(); ++t) tile(1, t);
+    put(frameMsg(2), 2);
+    for (uint32_t t = 0; t < rects.size(); ++t) tile(2, t);
+    EXPECT_TRUE(haves(300).empty()) << "frame 2 is not reported before frame 1";
+    tile(1, uint32_t(rects.size() - 1));
+    EXPECT_EQ(haves(300), std::vector<uint32_t>{1}) << "frame 1 held; frame 2 waits for its swap";
+    put(NodeSwap{1, {}}, 1);
+    EXPECT_EQ(haves(300), std::vector<uint32_t>{2}) << "frame 2 reported once frame 1 swapped";
+    put(NodeSwap{2, {}}, 2);
+    ASSERT_TRUE(waitFor(node, [&] { return node.shown.size() >= 2; }));
+    {
+        std::lock_guard lock(node.m);
+        ASSERT_EQ(node.shown.size(), 2u);
+        EXPECT_EQ(node.shown[0].frame, 1u);
+        ASSERT_TRUE(node.shown[0].image);
+        EXPECT_EQ(node.shown[0].image->pixel(0, 0)[0], 10);
+        EXPECT_EQ(node.shown[1].frame, 2u);
+        ASSERT_TRUE(node.shown[1].image);
+        EXPECT_EQ(node.shown[1].image->pixel(0, 0)[0], 20);
+    }
+
+    // Frame 3 never completes here; frame 4 does, and waits behind it until the master releases
+    // frame 3 without this node.
+    put(frameMsg(3), 3);
+    tile(3, 0);
+    put(frameMsg(4), 4);
+    for (uint32_t t = 0; t < rects.size(); ++t) tile(4, t);
+    EXPECT_TRUE(haves(300).empty());
+    put(NodeSwap{3, {"left"}}, 3);
+    EXPECT_EQ(haves(300), std::vector<uint32_t>{4}) << "frame 3 let go at its swap";
+    put(NodeSwap{4, {}}, 4);
+    ASSERT_TRUE(waitFor(node, [&] { return node.shown.size() >= 4; }));
+    std::lock_guard lock(node.m);
+    EXPECT_FALSE(node.shown[2].image) << "frame 3 was not held";
+    ASSERT_TRUE(node.shown[3].image);
+    EXPECT_EQ(node.shown[3].frame, 4u);
+    EXPECT_EQ(node.shown[3].image->pixel(0, 0)[0], 40);
+}
+
 }  // namespace
 }  // namespace rtwall
