@@ -213,11 +213,11 @@ bool VrpnParser::message(std::string_view header, std::string_view p, std::vecto
         return true;
     }
     if (micro >= 1'000'000) {
-        drop(*typeName + " from '" + *senderName + "': " + std::to_string(micro) + " microseconds");
+        drop(printable(*typeName) + " from '" + printable(*senderName) + "': " + std::to_string(micro) + " microseconds");
         return true;
     }
     const double time = double(seconds % 86400) + micro * 1e-6;  // seconds of the day, as DTrack's ts
-    const std::string where = *typeName + " from '" + *senderName + "': ";
+    const std::string where = printable(*typeName) + " from '" + printable(*senderName) + "': ";
     if (*typeName == "vrpn_Tracker Pos_Quat") {
         if (*senderName != config_.device) return true;
         if (p.size() != 64) {

@@ -183,6 +183,22 @@ TEST(Vrpn, MalformedMessagesAreDroppedWithOneLine) {
     }
 }
 
+// A sender's name may hold any byte but NUL: a newline in it stays out of the one-line reason
+// (found by fuzz_vrpn in CI: "vrpn_Button States from '\nracker5': ... microseconds").
+TEST(Vrpn, ANameWithControlCharactersStaysOnOneLine) {
+    std::string m = vrpnMessage(7, 0, 10, vrpnPosQuat(0, {1, 2, 3}, {0, 0, 0, 1}));
+    m[11] = char(0x40);  // 0x000f4240 microseconds: a whole second
+    m[10] = char(0x42);
+    m[9] = char(0x0f);
+    VrpnParser p(vrpnConfig());
+    std::vector<DTrackFrame> frames;
+    p.feed(recordedSession() + vrpnName(7, -1, "Tra\ncker\x01") + m, frames);
+    EXPECT_FALSE(p.failed()) << p.error();
+    EXPECT_EQ(p.dropped(), 1u);
+    EXPECT_NE(p.error().find("from 'Tra?cker?'"), std::string::npos) << p.error();
+    EXPECT_EQ(p.error().find('\n'), std::string::npos) << p.error();
+}
+
 // What breaks the stream: the session ends with one line and reads nothing more.
 TEST(Vrpn, ABrokenStreamEndsTheSessionWithOneLine) {
     const std::string session = recordedSession();
