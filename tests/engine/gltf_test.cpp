@@ -139,7 +139,7 @@ TEST(Gltf, VertexColoursTextureAndMaterials) {
     ASSERT_GT(png.size(), 8u);
     EXPECT_EQ(png[1], 'P');  // the encoded PNG, decoded by the engine
 
-    // The mapping onto rtwall's materials (README.md).
+    // The mapping onto rtwall's materials (docs/assemblies.md, "Materials").
     const SceneDesc d = sceneFromMeshFile(generated() / "embedded.gltf");
     auto material = [&](const std::string& name) {
         for (const Material& m : d.materials)

@@ -139,7 +139,7 @@ struct MeshDesc {
     std::shared_ptr<const TriangleMesh> mesh;
 };
 
-// How an instance is shown (design reviews: hide, isolate and highlight parts, README "Parts").
+// How an instance is shown (design reviews: hide, isolate and highlight parts, docs/design-review.md, "Parts").
 // Hidden: not in the scene at all (no pixels, no shadow, no reflection, not picked).
 // Highlighted: its surface colour is multiplied by kHighlightTint and it glows with
 // kHighlightGlow, so it stands out lit or in shadow, whatever its material.
@@ -323,7 +323,7 @@ void writeVolumeVti(const std::filesystem::path& file, int nx, int ny, int nz, c
 SceneDesc sceneFromMeshFile(const std::filesystem::path& file);
 SceneDesc sceneFromMeshFile(const std::filesystem::path& file, const SceneLoadOptions& options);
 SceneDesc sceneFromAssembly(const Assembly& assembly, const std::filesystem::path& file);
-// How an assembly's metallic-roughness material becomes an rtwall material (README.md, "Formats").
+// How an assembly's metallic-roughness material becomes an rtwall material (docs/assemblies.md, "Materials").
 Material materialFromAssembly(const AssemblyMaterial& material);
 
 // Scenes built in code, shared by tests, benchmarks and examples. "knots": twelve distinct
