@@ -1,5 +1,6 @@
 #include "wall_input.h"
 
+#include <rtwall/vec.h>
 #include <rtwall/wall.h>
 
 #define GLFW_INCLUDE_NONE
@@ -22,7 +23,6 @@ CameraDesc cameraOf(const CameraDesc& base, const ViewPose& p) {
     c.fovY = p.fovY;
     return c;
 }
-float length(Float3 a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
 }  // namespace
 
 WallInput::WallInput(const WallConfig& wall, const CameraDesc& start, const Options& options,
@@ -38,7 +38,7 @@ WallInput::WallInput(const WallConfig& wall, const CameraDesc& start, const Opti
     if (options.forceHeadless) whyHeadless_ = "--headless";
     else gl_ = GlPresenter::open(options.console ? console_ : wall_, {}, &whyHeadless_);
     if (!gl_ && options.perScreenImages && !options.console) headless_ = std::make_unique<HeadlessPresenter>(wall_, options.outDir);
-    const Float3 d{start.position.x - start.lookAt.x, start.position.y - start.lookAt.y, start.position.z - start.lookAt.z};
+    const Float3 d = start.position - start.lookAt;
     nav_ = std::make_unique<Navigator>(poseOf(start), std::max(0.1f, length(d)));
     // A flystick flies by default, as in every VR wall; its mode button (or Tab) orbits.
     if (wall_.tracking.enabled && wall_.tracking.flystick >= 0) nav_->setMode(Navigator::Mode::Fly);
@@ -66,9 +66,9 @@ CameraDesc WallInput::viewCamera(const EyeWindow& window) const {
     // config's viewer = the camera position, so a tracked head moves within a room that stays
     // put in the scene; 1 metre = 1 world unit): see eyeWindowInWorld.
     const EyeWindow w = eyeWindowInWorld(window, wall_.stereo.viewer, nav_->pose());
-    const Float3 f{c.lookAt.x - c.position.x, c.lookAt.y - c.position.y, c.lookAt.z - c.position.z};
+    const Float3 f = c.lookAt - c.position;
     c.position = w.eye;
-    c.lookAt = {w.eye.x + f.x, w.eye.y + f.y, w.eye.z + f.z};  // unused by the window; kept sensible
+    c.lookAt = w.eye + f;  // unused by the window; kept sensible
     c.window = ProjectionWindow{w.lowerLeft, w.right, w.up};
     return c;
 }
@@ -237,10 +237,6 @@ Float3 rotated(const Float3& v, const Float3& a, double degrees) {
             float(vz * c + cz * s + az * d * (1 - c))};
 }
 
-Float3 cross3(const Float3& a, const Float3& b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-
 Float3 unit(const Float3& v) {
     const float l = length(v);
     return l > 0.0f ? Float3{v.x / l, v.y / l, v.z / l} : Float3{0, 0, 0};
@@ -286,7 +282,7 @@ void WallInput::sectionKey(LiveScene& scene, int key, int mods) {
         SectionPlane p;
         p.enabled = true;
         p.point = c.lookAt;
-        p.normal = unit({c.lookAt.x - c.position.x, c.lookAt.y - c.position.y, c.lookAt.z - c.position.z});
+        p.normal = unit(c.lookAt - c.position);
         if (!(length(p.normal) > 0.0f)) p.normal = {0, 0, -1};
         setSection(scene, uint32_t(slot), p);
         log_(sectionLine(desc));
@@ -304,7 +300,7 @@ void WallInput::sectionKey(LiveScene& scene, int key, int mods) {
     if (key == GLFW_KEY_PAGE_UP || key == GLFW_KEY_PAGE_DOWN) {
         if (sectionStep_ == 0) {
             const Bounds3 b = desc.worldBounds();
-            const double size = b.empty() ? 0.0 : length({b.hi.x - b.lo.x, b.hi.y - b.lo.y, b.hi.z - b.lo.z});
+            const double size = b.empty() ? 0.0 : length(b.hi - b.lo);
             sectionStep_ = size > 0 ? size / 100.0 : 0.01;
         }
         const double step = (key == GLFW_KEY_PAGE_UP ? 1.0 : -1.0) * sectionStep_ * (shift ? 10.0 : 1.0);
@@ -314,7 +310,7 @@ void WallInput::sectionKey(LiveScene& scene, int key, int mods) {
     if (key == GLFW_KEY_LEFT || key == GLFW_KEY_RIGHT)  // about the view's up axis
         p.normal = rotated(n, unit(camera().up), key == GLFW_KEY_LEFT ? degrees : -degrees);
     if (key == GLFW_KEY_UP || key == GLFW_KEY_DOWN) {  // about the horizontal axis in the plane
-        Float3 axis = unit(cross3(n, camera().up));
+        Float3 axis = unit(cross(n, camera().up));
         if (!(length(axis) > 0.0f)) axis = {1, 0, 0};
         p.normal = rotated(n, axis, key == GLFW_KEY_UP ? degrees : -degrees);
     }
