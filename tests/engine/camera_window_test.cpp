@@ -11,10 +11,10 @@
 namespace rtwall {
 namespace {
 
+// Every component within `tol` (0: the same floats).
 void expectNear(Float3 a, Float3 b, float tol, const char* what) {
-    EXPECT_NEAR(a.x, b.x, tol) << what;
-    EXPECT_NEAR(a.y, b.y, tol) << what;
-    EXPECT_NEAR(a.z, b.z, tol) << what;
+    EXPECT_LE(maxAbsComponent(a - b), tol) << what << ": (" << a.x << ", " << a.y << ", " << a.z << ") against ("
+                                           << b.x << ", " << b.y << ", " << b.z << ")";
 }
 
 // The window a symmetric camera implies: the image rectangle at distance 1 along the view axis.
