@@ -111,42 +111,46 @@ void WallInput::handleWand(LiveScene& scene, const TrackerState& tracker, double
         wandGrab_.reset();
     }
     if ((wandGrab_ || wandPlaneStart_) && w.visible) {
-        // Rigidly with the wand: the object (or plane) is moved by the wand's motion since the
-        // pick, motion = now * start^-1 (world), applied after its transform at the pick.
-        const WandPose& s = wandGrabStart_;
-        const Mat3& r1 = p.rotation;
-        const Mat3& r0 = s.rotation;
-        const Mat3 r0t{r0[0], r0[3], r0[6], r0[1], r0[4], r0[7], r0[2], r0[5], r0[8]};
-        const Mat3 r = multiply(r1, r0t);
-        const std::array<double, 3> p0{s.origin.x, s.origin.y, s.origin.z}, p1{p.origin.x, p.origin.y, p.origin.z};
-        Transform motion;
-        for (int i = 0; i < 3; ++i) {
-            const size_t row = size_t(3 * i);
-            for (int j = 0; j < 3; ++j) motion.m[size_t(4 * i + j)] = r[row + size_t(j)];
-            motion.m[size_t(4 * i + 3)] = p1[size_t(i)] - (r[row] * p0[0] + r[row + 1] * p0[1] + r[row + 2] * p0[2]);
-        }
-        if (wandPlaneStart_) {
-            // The plane's point moves with the wand and its normal turns with it; the plane
-            // stays where it was put when the trigger is let go.
-            SectionPlane plane = *wandPlaneStart_;
-            const Float3 q = plane.point, n = plane.normal;
-            plane.point = {float(motion.m[0] * q.x + motion.m[1] * q.y + motion.m[2] * q.z + motion.m[3]),
-                           float(motion.m[4] * q.x + motion.m[5] * q.y + motion.m[6] * q.z + motion.m[7]),
-                           float(motion.m[8] * q.x + motion.m[9] * q.y + motion.m[10] * q.z + motion.m[11])};
-            plane.normal = {float(r[0] * n.x + r[1] * n.y + r[2] * n.z), float(r[3] * n.x + r[4] * n.y + r[5] * n.z),
-                            float(r[6] * n.x + r[7] * n.y + r[8] * n.z)};
-            setSection(scene, uint32_t(activeSection_), plane);
-            if (const std::optional<PickResult> hit = scene.pickRay(p.origin, p.direction)) p.length = hit->t;
-        } else {
-            scene.setInstanceTransform(wandGrab_->instance, motion * wandGrabTransform_);
-            p.dragging = wandGrab_->instance;
-            p.length = wandGrab_->t;
-        }
+        dragHeld(scene, p);
     } else if (w.visible) {
         if (const std::optional<PickResult> hit = scene.pickRay(p.origin, p.direction)) p.length = hit->t;
     }
     wandButtons_ = w.buttons;
     wand_ = p;
+}
+
+// Rigidly with the wand: the held object (or plane) is moved by the wand's motion since the
+// pick, motion = now * start^-1 (world), applied after its transform at the pick.
+void WallInput::dragHeld(LiveScene& scene, WandPose& p) {
+    const WandPose& s = wandGrabStart_;
+    const Mat3& r1 = p.rotation;
+    const Mat3& r0 = s.rotation;
+    const Mat3 r0t{r0[0], r0[3], r0[6], r0[1], r0[4], r0[7], r0[2], r0[5], r0[8]};
+    const Mat3 r = multiply(r1, r0t);
+    const std::array<double, 3> p0{s.origin.x, s.origin.y, s.origin.z}, p1{p.origin.x, p.origin.y, p.origin.z};
+    Transform motion;
+    for (int i = 0; i < 3; ++i) {
+        const size_t row = size_t(3 * i);
+        for (int j = 0; j < 3; ++j) motion.m[size_t(4 * i + j)] = r[row + size_t(j)];
+        motion.m[size_t(4 * i + 3)] = p1[size_t(i)] - (r[row] * p0[0] + r[row + 1] * p0[1] + r[row + 2] * p0[2]);
+    }
+    if (wandPlaneStart_) {
+        // The plane's point moves with the wand and its normal turns with it; the plane
+        // stays where it was put when the trigger is let go.
+        SectionPlane plane = *wandPlaneStart_;
+        const Float3 q = plane.point, n = plane.normal;
+        plane.point = {float(motion.m[0] * q.x + motion.m[1] * q.y + motion.m[2] * q.z + motion.m[3]),
+                       float(motion.m[4] * q.x + motion.m[5] * q.y + motion.m[6] * q.z + motion.m[7]),
+                       float(motion.m[8] * q.x + motion.m[9] * q.y + motion.m[10] * q.z + motion.m[11])};
+        plane.normal = {float(r[0] * n.x + r[1] * n.y + r[2] * n.z), float(r[3] * n.x + r[4] * n.y + r[5] * n.z),
+                        float(r[6] * n.x + r[7] * n.y + r[8] * n.z)};
+        setSection(scene, uint32_t(activeSection_), plane);
+        if (const std::optional<PickResult> hit = scene.pickRay(p.origin, p.direction)) p.length = hit->t;
+    } else {
+        scene.setInstanceTransform(wandGrab_->instance, motion * wandGrabTransform_);
+        p.dragging = wandGrab_->instance;
+        p.length = wandGrab_->t;
+    }
 }
 
 void WallInput::drawWand(WallFrame& frame, const HeadPose& head) const {
