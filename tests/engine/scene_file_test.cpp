@@ -1,7 +1,11 @@
 // Scene files: what loads, and how every kind of mistake is reported (file, line, key).
+#include "scene_file_keys.h"
 #include "test_util.h"
 
 #include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
 
 namespace rtwall {
 namespace {
@@ -9,6 +13,17 @@ namespace {
 using test::inputErrorOf;
 using test::scratchDir;
 using test::writeFile;
+
+// Mitsuba's rule, every key read: the loader reads only keys of its tables, and every key of the
+// tables is documented, with the tables' help, in configs/README.md.
+TEST(SceneFile, EveryKeyOfTheTablesIsDocumented) {
+    std::ifstream in(test::sourceDir() / "configs/README.md");
+    std::stringstream doc;
+    doc << in.rdbuf();
+    ASSERT_FALSE(doc.str().empty());
+    const std::vector<std::string> missing = toml_reader::undocumentedKeys(scene_keys::kAll, doc.str());
+    EXPECT_TRUE(missing.empty()) << ::testing::PrintToString(missing);
+}
 
 const char* kMinimal = R"([image]
 width = 64
