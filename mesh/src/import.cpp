@@ -528,12 +528,40 @@ protected:
 
 // OpenMesh reports through its global omerr/omlog streams. While a file is read they go to a
 // string instead of the terminal, so the user sees our one-line error and not the reader's.
+//
+// omerr's connect() allocates a target that disconnect() forgets without freeing, so connecting
+// a buffer per import (and reconnecting std::cerr after it) leaked two targets a file. Instead
+// one sink is connected once for the process: it writes to the import's buffer while a capture
+// is open and to std::cerr (where omerr went before) otherwise. Captures run under
+// openMeshMutex().
+class OpenMeshErrSink {
+public:
+    static OpenMeshErrSink& instance() {
+        static OpenMeshErrSink* sink = [] {
+            auto* s = new OpenMeshErrSink;  // lives as long as omerr, which keeps a reference
+            s->toCerr_ = omerr().disconnect(std::cerr);
+            omerr().connect(*s);
+            return s;
+        }();
+        return *sink;
+    }
+    void capture(std::ostringstream* text) { text_ = text; }
+    friend OpenMeshErrSink& operator<<(OpenMeshErrSink& s, const std::string& line) {
+        if (s.text_) *s.text_ << line;
+        else if (s.toCerr_) std::cerr << line;
+        return s;
+    }
+
+private:
+    std::ostringstream* text_ = nullptr;
+    bool toCerr_ = false;
+};
+
 class CaptureOpenMeshLog {
 public:
     CaptureOpenMeshLog() {
-        errHadCerr_ = omerr().disconnect(std::cerr);
+        OpenMeshErrSink::instance().capture(&text_);
         errEnabled_ = omerr().is_enabled();
-        omerr().connect(text_);
         omerr().enable();
         logEnabled_ = omlog().is_enabled();
         outEnabled_ = omout().is_enabled();
@@ -542,8 +570,7 @@ public:
     }
     ~CaptureOpenMeshLog() {
         omerr().flush();
-        omerr().disconnect(text_);
-        if (errHadCerr_) omerr().connect(std::cerr);
+        OpenMeshErrSink::instance().capture(nullptr);
         // Set both ways: a reader that switched it off and then threw leaves it off.
         if (errEnabled_)
             omerr().enable();
@@ -570,7 +597,7 @@ public:
 
 private:
     std::ostringstream text_;
-    bool errHadCerr_ = false, errEnabled_ = true, logEnabled_ = true, outEnabled_ = true;
+    bool errEnabled_ = true, logEnabled_ = true, outEnabled_ = true;
 };
 
 // The readers are process-wide singletons with per-file state, and the log streams are global.
