@@ -171,6 +171,63 @@ private:
     const double* d_ = nullptr;
 };
 
+// The points' normals, colours and texture coordinates, where the data set has them.
+void copyPointAttributes(vtkPolyData* pd, vtkIdType nPoints, const std::string& name, TriangleMesh& mesh) {
+    // Point normals are kept when there is one usable normal per point.
+    if (vtkDataArray* n = pd->GetPointData() ? pd->GetPointData()->GetNormals() : nullptr;
+        n && n->GetNumberOfComponents() == 3 && n->GetNumberOfTuples() == nPoints) {
+        std::vector<float> normals(3 * size_t(nPoints));
+        bool ok = true;
+        for (vtkIdType i = 0; i < nPoints && ok; ++i) {
+            double v[3];
+            n->GetTuple(i, v);
+            const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            ok = std::isfinite(len) && len > 0.0;
+            for (int k = 0; k < 3 && ok; ++k) normals[3 * size_t(i) + size_t(k)] = float(v[k] / len);
+        }
+        if (ok) mesh.setNormals(std::move(normals));
+    }
+
+    // Point colours: active point scalars with 3 or 4 components, either unsigned char (0..255)
+    // or floating point (0..1, as VTK's colour arrays hold them); alpha is dropped. One-component
+    // scalars are data to be mapped through a lookup table, not colours, and are not kept.
+    if (vtkDataArray* c = pd->GetPointData() ? pd->GetPointData()->GetScalars() : nullptr;
+        c && (c->GetNumberOfComponents() == 3 || c->GetNumberOfComponents() == 4) && c->GetNumberOfTuples() == nPoints) {
+        const int type = c->GetDataType();
+        const bool bytes = type == VTK_UNSIGNED_CHAR;
+        if (bytes || type == VTK_FLOAT || type == VTK_DOUBLE) {
+            std::vector<uint8_t> colors(3 * size_t(nPoints));
+            for (vtkIdType i = 0; i < nPoints; ++i)
+                for (int k = 0; k < 3; ++k) {
+                    const double v = c->GetComponent(i, k);
+                    const double unit = bytes ? v / 255.0 : v;
+                    colors[3 * size_t(i) + size_t(k)] = unit > 0.0 ? uint8_t(std::lround(std::min(unit, 1.0) * 255.0)) : 0;
+                }
+            mesh.setColors(std::move(colors));
+        }
+    }
+
+    // Point texture coordinates (TCoords, VRML TextureCoordinate): the first two components of
+    // 2- or 3-component coordinates. Like the points, a bad value rejects the file.
+    if (vtkDataArray* t = pd->GetPointData() ? pd->GetPointData()->GetTCoords() : nullptr) {
+        const int comps = t->GetNumberOfComponents();
+        if (comps != 2 && comps != 3)
+            fail(name, "point texture coordinates have " + std::to_string(comps) + " components; expected 2 or 3");
+        if (t->GetNumberOfTuples() != nPoints)
+            fail(name, "UV count mismatch: " + std::to_string(t->GetNumberOfTuples()) + " texture coordinates for " +
+                           std::to_string(nPoints) + " points");
+        std::vector<float> uv(2 * size_t(nPoints));
+        for (vtkIdType i = 0; i < nPoints; ++i)
+            for (int k = 0; k < 2; ++k) {
+                const double v = t->GetComponent(i, k);
+                if (!std::isfinite(v) || std::fabs(v) > double(std::numeric_limits<float>::max()))
+                    fail(name, "point " + std::to_string(i) + " has a NaN or infinite texture coordinate");
+                uv[2 * size_t(i) + size_t(k)] = float(v);
+            }
+        mesh.setUVs(std::move(uv));
+    }
+}
+
 TriangleMesh toTriangles(vtkPolyData* pd, const std::string& name, ImportReport& report) {
     vtkPoints* points = pd->GetPoints();
     const vtkIdType nPoints = points ? points->GetNumberOfPoints() : 0;
@@ -259,59 +316,7 @@ TriangleMesh toTriangles(vtkPolyData* pd, const std::string& name, ImportReport&
                                   (pd->GetLines() ? pd->GetLines()->GetNumberOfCells() : 0));
     if (mesh.triangleCount() == 0) fail(name, "contains no triangles (no polygons or triangle strips)");
 
-    // Point normals are kept when there is one usable normal per point.
-    if (vtkDataArray* n = pd->GetPointData() ? pd->GetPointData()->GetNormals() : nullptr;
-        n && n->GetNumberOfComponents() == 3 && n->GetNumberOfTuples() == nPoints) {
-        std::vector<float> normals(3 * size_t(nPoints));
-        bool ok = true;
-        for (vtkIdType i = 0; i < nPoints && ok; ++i) {
-            double v[3];
-            n->GetTuple(i, v);
-            const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-            ok = std::isfinite(len) && len > 0.0;
-            for (int k = 0; k < 3 && ok; ++k) normals[3 * size_t(i) + size_t(k)] = float(v[k] / len);
-        }
-        if (ok) mesh.setNormals(std::move(normals));
-    }
-
-    // Point colours: active point scalars with 3 or 4 components, either unsigned char (0..255)
-    // or floating point (0..1, as VTK's colour arrays hold them); alpha is dropped. One-component
-    // scalars are data to be mapped through a lookup table, not colours, and are not kept.
-    if (vtkDataArray* c = pd->GetPointData() ? pd->GetPointData()->GetScalars() : nullptr;
-        c && (c->GetNumberOfComponents() == 3 || c->GetNumberOfComponents() == 4) && c->GetNumberOfTuples() == nPoints) {
-        const int type = c->GetDataType();
-        const bool bytes = type == VTK_UNSIGNED_CHAR;
-        if (bytes || type == VTK_FLOAT || type == VTK_DOUBLE) {
-            std::vector<uint8_t> colors(3 * size_t(nPoints));
-            for (vtkIdType i = 0; i < nPoints; ++i)
-                for (int k = 0; k < 3; ++k) {
-                    const double v = c->GetComponent(i, k);
-                    const double unit = bytes ? v / 255.0 : v;
-                    colors[3 * size_t(i) + size_t(k)] = unit > 0.0 ? uint8_t(std::lround(std::min(unit, 1.0) * 255.0)) : 0;
-                }
-            mesh.setColors(std::move(colors));
-        }
-    }
-
-    // Point texture coordinates (TCoords, VRML TextureCoordinate): the first two components of
-    // 2- or 3-component coordinates. Like the points, a bad value rejects the file.
-    if (vtkDataArray* t = pd->GetPointData() ? pd->GetPointData()->GetTCoords() : nullptr) {
-        const int comps = t->GetNumberOfComponents();
-        if (comps != 2 && comps != 3)
-            fail(name, "point texture coordinates have " + std::to_string(comps) + " components; expected 2 or 3");
-        if (t->GetNumberOfTuples() != nPoints)
-            fail(name, "UV count mismatch: " + std::to_string(t->GetNumberOfTuples()) + " texture coordinates for " +
-                           std::to_string(nPoints) + " points");
-        std::vector<float> uv(2 * size_t(nPoints));
-        for (vtkIdType i = 0; i < nPoints; ++i)
-            for (int k = 0; k < 2; ++k) {
-                const double v = t->GetComponent(i, k);
-                if (!std::isfinite(v) || std::fabs(v) > double(std::numeric_limits<float>::max()))
-                    fail(name, "point " + std::to_string(i) + " has a NaN or infinite texture coordinate");
-                uv[2 * size_t(i) + size_t(k)] = float(v);
-            }
-        mesh.setUVs(std::move(uv));
-    }
+    copyPointAttributes(pd, nPoints, name, mesh);
     return mesh;
 }
 
