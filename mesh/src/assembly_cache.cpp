@@ -31,7 +31,6 @@ constexpr char kAssemblyMagic[8] = {'R', 'T', 'W', 'A', 'S', 'M', '0', '1'};
 constexpr uint32_t kAssemblyVersion = 1;
 constexpr size_t kAssemblyHeader = 64, kAssemblyChecksumAt = 48;
 
-
 class Out {
 public:
     std::vector<unsigned char> bytes;

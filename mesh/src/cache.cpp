@@ -85,7 +85,6 @@ bool stampOf(const fs::path& source, SourceStamp& out) {
 
 uint64_t checksum(const unsigned char* data, size_t size) { return checksumAt(data, size, kChecksumAt); }
 
-
 }  // namespace
 
 fs::path meshCachePath(const fs::path& source, const fs::path& cacheDir) {
