@@ -215,17 +215,14 @@ void readTracking(Reader& r, TrackingConfig& t) {
     for (const char* k : {"min_cutoff", "beta", "derivative_cutoff"})
         if (t.filter == TrackingFilter::None && r.has(k))
             r.fail(r.find(k), std::string("key '") + k + "': a one-euro filter setting, but filter is \"none\" (set filter = \"one_euro\")");
-    t.minCutoff = r.number("min_cutoff", t.minCutoff);
-    t.beta = r.number("beta", t.beta);
-    t.derivativeCutoff = r.number("derivative_cutoff", t.derivativeCutoff);
-    t.buttonPick = r.integer("button_pick", t.buttonPick);
-    t.buttonMode = r.integer("button_mode", t.buttonMode);
-    t.buttonHome = r.integer("button_home", t.buttonHome);
-    t.joystickX = r.integer("joystick_x", t.joystickX);
-    t.joystickY = r.integer("joystick_y", t.joystickY);
-    t.flySpeed = r.number("fly_speed", t.flySpeed);
-    t.turnSpeed = r.number("turn_speed", t.turnSpeed);
-    t.deadZone = r.number("dead_zone", t.deadZone);
+    toml_reader::readFields<TrackingConfig>(
+        r, t,
+        {{"min_cutoff", &TrackingConfig::minCutoff}, {"beta", &TrackingConfig::beta},
+         {"derivative_cutoff", &TrackingConfig::derivativeCutoff}, {"button_pick", &TrackingConfig::buttonPick},
+         {"button_mode", &TrackingConfig::buttonMode}, {"button_home", &TrackingConfig::buttonHome},
+         {"joystick_x", &TrackingConfig::joystickX}, {"joystick_y", &TrackingConfig::joystickY},
+         {"fly_speed", &TrackingConfig::flySpeed}, {"turn_speed", &TrackingConfig::turnSpeed},
+         {"dead_zone", &TrackingConfig::deadZone}});
     t.wandDirection = r.vec3d("wand_direction", t.wandDirection);
     const auto& d = t.wandDirection;
     if (!(d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > 1e-12) || !std::isfinite(d[0] + d[1] + d[2]))
@@ -314,11 +311,10 @@ void readStereo(Reader& top, WallParse& p) {
     p.stereoCorners = r->has("lower_left") && r->has("lower_right") && r->has("upper_left");
     StereoConfig& st = p.w.stereo;
     st.mode = stereoFromName(r->choice("mode", "none"));
-    st.eyeSeparation = r->number("eye_separation", st.eyeSeparation);
-    st.viewer = r->vec3("viewer", st.viewer);
-    st.lowerLeft = r->vec3("lower_left", st.lowerLeft);
-    st.lowerRight = r->vec3("lower_right", st.lowerRight);
-    st.upperLeft = r->vec3("upper_left", st.upperLeft);
+    toml_reader::readFields<StereoConfig>(*r, st,
+                                          {{"eye_separation", &StereoConfig::eyeSeparation}, {"viewer", &StereoConfig::viewer},
+                                           {"lower_left", &StereoConfig::lowerLeft}, {"lower_right", &StereoConfig::lowerRight},
+                                           {"upper_left", &StereoConfig::upperLeft}});
     checkRectangle(*r, r->find("upper_left"), st.lowerLeft, st.lowerRight, st.upperLeft, "the wall's");
     r->finish();
 }

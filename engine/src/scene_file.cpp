@@ -85,23 +85,20 @@ void checkNonNegative(Reader& r, const std::string& key, const Color& c) {
 
 void readSettings(Reader& top, const std::filesystem::path& file, RenderSettings& s) {
     if (auto r = sectionReader(top, file, scene_keys::kImage)) {
-        s.width = r->integer("width", s.width);
-        s.height = r->integer("height", s.height);
-        s.tileSize = r->integer("tile", s.tileSize);
+        toml_reader::readFields<RenderSettings>(
+            *r, s, {{"width", &RenderSettings::width}, {"height", &RenderSettings::height}, {"tile", &RenderSettings::tileSize}});
         r->finish();
     }
     if (auto r = sectionReader(top, file, scene_keys::kRender)) {
         s.kernel = r->choice("kernel", "packet") == "single" ? KernelType::Single : KernelType::Packet;
         s.shading = r->choice("shading", "full") == "eyelight" ? ShadingMode::EyeLight : ShadingMode::Full;
-        s.maxDepth = r->integer("max_depth", s.maxDepth);
-        s.supersample = r->integer("supersample", s.supersample);
-        s.shadows = r->boolean("shadows", s.shadows);
-        s.background = r->vec3("background", s.background);
-        s.ambient = r->vec3("ambient", s.ambient);
-        s.threads = r->integer("threads", s.threads);
-        s.pruneThreshold = float(r->number("prune_threshold", s.pruneThreshold));
-        s.gi = r->boolean("gi", s.gi);
-        s.samples = r->integer("samples", s.samples);
+        toml_reader::readFields<RenderSettings>(
+            *r, s,
+            {{"max_depth", &RenderSettings::maxDepth}, {"supersample", &RenderSettings::supersample},
+             {"shadows", &RenderSettings::shadows}, {"background", &RenderSettings::background},
+             {"ambient", &RenderSettings::ambient}, {"threads", &RenderSettings::threads},
+             {"prune_threshold", &RenderSettings::pruneThreshold}, {"gi", &RenderSettings::gi},
+             {"samples", &RenderSettings::samples}});
         s.view = viewModeFromName(r->choice("view", "shaded"));
         r->finish();
     }

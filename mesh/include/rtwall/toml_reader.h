@@ -19,6 +19,7 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <initializer_list>
 #include <optional>
 #include <set>
@@ -27,6 +28,8 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 namespace rtwall::toml_reader {
@@ -272,6 +275,32 @@ private:
     std::set<std::string> used_;
 };
 
+// A key read straight into a member of T: integer, number (double or float), boolean, [x, y, z]
+// or string, with the range its section's table gives.
+template <class T>
+struct Field {
+    const char* key;
+    std::variant<int T::*, double T::*, float T::*, bool T::*, Float3 T::*, std::string T::*> member;
+};
+
+// Reads the fields in their order, each defaulting to what the member holds.
+template <class T>
+void readFields(Reader& r, T& object, std::initializer_list<Field<T>> fields) {
+    for (const Field<T>& f : fields)
+        std::visit(
+            [&](auto member) {
+                auto& value = object.*member;
+                using V = std::remove_reference_t<decltype(value)>;
+                if constexpr (std::is_same_v<V, int>) value = r.integer(f.key, value);
+                else if constexpr (std::is_same_v<V, double>) value = r.number(f.key, value);
+                else if constexpr (std::is_same_v<V, float>) value = float(r.number(f.key, value));
+                else if constexpr (std::is_same_v<V, bool>) value = r.boolean(f.key, value);
+                else if constexpr (std::is_same_v<V, Float3>) value = r.vec3(f.key, value);
+                else value = r.string(f.key, value);
+            },
+            f.member);
+}
+
 // Visits [[name]] (an array of tables) or reports what is there instead. With a section, each
 // entry's Reader checks its keys against it.
 template <class F>
@@ -347,6 +376,15 @@ inline std::vector<std::string> undocumentedKeys(std::span<const Section* const>
         }
     }
     return out;
+}
+
+// The same for the documentation in `docFile`.
+inline std::vector<std::string> undocumentedKeys(std::span<const Section* const> sections, const std::filesystem::path& docFile) {
+    std::ifstream in(docFile);
+    std::stringstream doc;
+    doc << in.rdbuf();
+    if (!in || doc.str().empty()) return {docFile.string() + ": cannot read it"};
+    return undocumentedKeys(sections, doc.str());
 }
 
 // Parses a file, turning toml++'s parse errors into one-line InputErrors.
