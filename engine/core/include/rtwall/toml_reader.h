@@ -11,7 +11,8 @@
 // a test holds them against configs/README.md (undocumentedKeys below).
 #pragma once
 
-#include <rtwall/mesh.h>
+#include <rtwall/input_error.h>
+#include <rtwall/vec.h>
 
 #include <toml++/toml.h>
 
