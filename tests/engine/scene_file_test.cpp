@@ -1,4 +1,5 @@
 // Scene files: what loads, and how every kind of mistake is reported (file, line, key).
+#include "scene_file_keys.h"
 #include "test_util.h"
 
 #include <gtest/gtest.h>
@@ -9,6 +10,14 @@ namespace {
 using test::inputErrorOf;
 using test::scratchDir;
 using test::writeFile;
+
+// Mitsuba's rule, every key read: the loader reads only keys of its tables, and every key of the
+// tables is documented, with the tables' help, in configs/README.md.
+TEST(SceneFile, EveryKeyOfTheTablesIsDocumented) {
+    const std::vector<std::string> missing =
+        toml_reader::undocumentedKeys(scene_keys::kAll, test::sourceDir() / "configs/README.md");
+    EXPECT_TRUE(missing.empty()) << ::testing::PrintToString(missing);
+}
 
 const char* kMinimal = R"([image]
 width = 64

@@ -4,6 +4,7 @@
 #include "rtwall/mesh.h"
 
 #include <gtest/gtest.h>
+#include <malloc.h>
 
 #include <cstring>
 #include <filesystem>
@@ -126,6 +127,30 @@ TEST(MeshImport, OpenMeshPrintsNothing) {
     const std::string err = ::testing::internal::GetCapturedStderr();
     EXPECT_EQ(mesh.triangleCount(), 12u);
     EXPECT_EQ(err, "");
+}
+
+#if defined(__SANITIZE_ADDRESS__)
+#define RTWALL_SANITIZED_HEAP 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(memory_sanitizer)
+#define RTWALL_SANITIZED_HEAP 1
+#endif
+#endif
+
+// Issue 26: each import connected a buffer to OpenMesh's omerr and disconnected it afterwards,
+// and disconnect() does not free what connect() allocated, so every file read leaked. The heap
+// in use must not grow with the number of imports; and omerr still reaches std::cerr after them.
+TEST(MeshImport, RepeatedImportsKeepNoOpenMeshLogState) {
+#ifdef RTWALL_SANITIZED_HEAP
+    GTEST_SKIP() << "a sanitizer's allocator does not report through mallinfo2; its leak checker covers this";
+#endif
+    const fs::path file = kMeshes / "box_normals.obj";
+    for (int i = 0; i < 10; ++i) loadMesh(file);  // first-use allocations (reader singletons, the sink)
+    const size_t before = mallinfo2().uordblks;
+    for (int i = 0; i < 500; ++i) loadMesh(file);
+    const size_t after = mallinfo2().uordblks;
+    EXPECT_LT(double(after) - double(before), 4096.0) << "bytes in use grew by " << double(after) - double(before)
+                                                      << " over 500 imports";
 }
 
 TEST(MeshImport, DegenerateTrianglesAreKeptAndCounted) {
