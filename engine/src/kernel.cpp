@@ -11,6 +11,7 @@
 #include "scene_impl.h"
 #include "shading.h"
 
+#include <rtwall/engine_testing.h>
 #include <rtwall/vec.h>
 
 #include <algorithm>

@@ -6,6 +6,7 @@
 #include "cli_util.h"
 
 #include <rtwall/engine.h>
+#include <rtwall/engine_testing.h>
 #include <rtwall/vec.h>
 
 #include <gtest/gtest.h>
@@ -118,7 +119,7 @@ TEST(TileError, ATileThatThrowsSaysItsFrameItsPixelsAndWhy) {
     const Scene scene(d);
     const Camera camera(d.cameras.front(), 96, 64);
     TraceOptions trace;
-    trace.fault = InjectedTileFault{7, 40, 20};
+    trace.fault = injectFault({7, 40, 20});
     auto expectFault = [&](const std::function<void()>& render, const char* what) {
         try {
             render();
@@ -251,7 +252,7 @@ TEST(ReplayCommand, ReplaysCamerasAndSettingsThatAreNotTheSceneFiles) {
         RenderSettings s = base;
         TraceOptions trace;
         v.change(s, trace);
-        trace.fault = InjectedTileFault{9, 20, 30};
+        trace.fault = injectFault({9, 20, 30});
         const Camera camera(v.camera, s.width, s.height);
         std::string command;
         try {
@@ -345,7 +346,7 @@ TEST(ReplayCommand, SpellsOutEveryInputThatChangesAPixel) {
     EXPECT_NE(replayCommand(client), replayCommand(other));
     // The injected fault is not replayed: the replay is to render the tile.
     TileReplay faulty = base;
-    faulty.trace.fault = InjectedTileFault{0, 0, 0};
+    faulty.trace.fault = injectFault({0, 0, 0});
     EXPECT_EQ(replayCommand(faulty), baseCommand);
 }
 
