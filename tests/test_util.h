@@ -5,15 +5,36 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <stdexcept>
 #include <string>
 
 namespace rtwall::test {
 
 inline std::filesystem::path dataDir() { return RTWALL_TEST_DATA_DIR; }
 inline std::filesystem::path sourceDir() { return RTWALL_SOURCE_DIR; }
+
+// A fresh scratch directory `name-PID` under the build tree, for what a test program writes once
+// per process (ctest runs the tests of one program in parallel processes).
+inline std::filesystem::path processScratchDir(const std::string& name) {
+    const std::filesystem::path d =
+        std::filesystem::path(RTWALL_BINARY_DIR) / "test-scratch" / (name + "-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(d);
+    return d;
+}
+
+// The text of tests/data/scenes/NAME.toml: a small scene the tests share.
+inline std::string sceneText(const std::string& name) {
+    const std::filesystem::path file = dataDir() / "scenes" / (name + ".toml");
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw std::runtime_error(file.string() + ": cannot read");
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
 
 // A fresh scratch directory per test, under the build tree.
 inline std::filesystem::path scratchDir() {

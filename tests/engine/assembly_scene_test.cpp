@@ -3,9 +3,8 @@
 // instances under the [[instance]]'s transform, its part names and materials kept, the
 // tessellation from [import] or the [[mesh]]; bad files and keys are one-line errors. And the
 // shipped demo scene (configs/demos/step_assembly.toml) loads and renders.
+#include "step_assembly.h"
 #include "test_util.h"
-
-#include "generators.h"
 
 #include <rtwall/engine.h>
 
@@ -23,19 +22,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// 21 part instances (3 modules of 7) of 3 parts, written once per process.
-const fs::path& stepFile() {
-    static const fs::path file = [] {
-        const fs::path d = fs::path(RTWALL_BINARY_DIR) / "test-scratch" / ("assembly-scene-" + std::to_string(::getpid()));
-        fs::remove_all(d);
-        gen::GenOptions o;
-        o.out = d;
-        o.instances = 21;
-        gen::genStep(o);
-        return d / "assembly.step";
-    }();
-    return file;
-}
+const fs::path& stepFile() { return test::stepAssembly(); }  // 21 part instances (3 modules of 7) of 3 parts
 
 std::string sceneWith(const std::string& rest) {
     return "[[mesh]]\nname = \"plant\"\nfile = \"" + stepFile().string() + "\"\n" + rest;

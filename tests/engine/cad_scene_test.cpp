@@ -7,6 +7,7 @@
 #include <rtwall/vec.h>
 
 #include "scene_impl.h"
+#include "test_util.h"
 
 #include "generators.h"
 
@@ -39,53 +40,14 @@ fs::path writeScene(const fs::path& dir, const std::string& text) {
 }
 
 std::string loadError(const fs::path& file) {
-    try {
-        loadSceneFile(file);
-    } catch (const InputError& e) {
-        return e.what();
-    }
-    return "(no InputError)";
+    return test::inputErrorOf([&] { loadSceneFile(file); });
 }
 
 // ------------------------------------------------------------------------------------ groups
 
 TEST(SceneGroups, GroupsOfGroupsAreFlattenedWithComposedTransforms) {
     const fs::path dir = scratch("groups");
-    const fs::path file = writeScene(dir, R"(
-[[mesh]]
-name = "box"
-shape = "box"
-[[material]]
-name = "red"
-color = [1, 0, 0]
-[[material]]
-name = "blue"
-color = [0, 0, 1]
-[[group]]
-name = "pair"
-[[group.instance]]
-mesh = "box"
-translate = [1, 0, 0]
-[[group.instance]]
-mesh = "box"
-material = "blue"
-translate = [-1, 0, 0]
-[[group]]
-name = "row"
-[[group.instance]]
-group = "pair"
-translate = [0, 10, 0]
-[[group.instance]]
-group = "pair"
-scale = 2
-translate = [0, 20, 0]
-[[instance]]
-group = "row"
-material = "red"
-translate = [100, 0, 0]
-[[instance]]
-mesh = "box"
-)");
+    const fs::path file = writeScene(dir, test::sceneText("groups"));
     const SceneDesc s = loadSceneFile(file);
     ASSERT_EQ(s.instances.size(), 5u);
     EXPECT_EQ(s.origin, (std::array<double, 3>{0, 0, 0}));

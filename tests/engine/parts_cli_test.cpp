@@ -13,30 +13,7 @@
 namespace rtwall {
 namespace {
 
-const std::string kScene = R"([image]
-width = 64
-height = 48
-tile = 16
-[[mesh]]
-name = "floor"
-shape = "quad"
-[[mesh]]
-name = "box"
-shape = "box"
-[[instance]]
-mesh = "floor"
-scale = 4
-[[instance]]
-mesh = "box"
-scale = 0.5
-translate = [0, 0.5, 0]
-[[light]]
-type = "directional"
-direction = [0.5, -1, -0.3]
-[[camera]]
-position = [0, 3, 5]
-look_at = [0, 0, 0]
-)";
+const std::string kScene = test::sceneText("floor_box");
 
 TEST(PartsCli, HideOnTheCommandLineIsTheSceneWithoutIt) {
     const auto dir = test::scratchDir();

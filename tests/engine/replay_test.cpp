@@ -52,62 +52,7 @@ Image runReplay(std::string command, const std::filesystem::path& out) {
 // A small stochastic scene far from the origin (rebased on load): an area light, rough metal and
 // glass, path traced in the tests below.
 std::filesystem::path writeFarScene(const std::filesystem::path& dir) {
-    return test::writeFile(dir / "far.toml", R"([image]
-width = 64
-height = 48
-tile = 16
-
-[[mesh]]
-name = "floor"
-shape = "quad"
-
-[[mesh]]
-name = "ball"
-shape = "sphere"
-
-[[material]]
-name = "grey"
-color = [0.7, 0.7, 0.7]
-
-[[material]]
-name = "brushed"
-type = "metal"
-color = [0.9, 0.7, 0.4]
-roughness = 0.3
-
-[[material]]
-name = "glass"
-type = "glass"
-
-[[instance]]
-mesh = "floor"
-material = "grey"
-translate = [148376, 1234, -223423]
-scale = [8, 1, 8]
-
-[[instance]]
-mesh = "ball"
-material = "brushed"
-translate = [148376, 1235, -223423]
-
-[[instance]]
-mesh = "ball"
-material = "glass"
-translate = [148377.5, 1234.6, -223422]
-scale = 0.6
-
-[[light]]
-type = "area"
-position = [148375, 1238, -223424]
-edge1 = [2, 0, 0]
-edge2 = [0, 0, 2]
-intensity = 4
-
-[[camera]]
-name = "front"
-position = [148376, 1236, -223417]
-look_at = [148376, 1234.5, -223423]
-)");
+    return test::writeFile(dir / "far.toml", test::sceneText("far_stochastic"));
 }
 
 TEST(TileError, ATileThatThrowsSaysItsFrameItsPixelsAndWhy) {

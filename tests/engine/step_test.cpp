@@ -2,6 +2,7 @@
 // (tools/gen/step_assembly.cpp), read back through the XDE reader: each distinct part tessellated
 // once, placed by as many instances as the assembly uses it, with names, colours and transforms;
 // the tessellation deflections control the triangle count; bad files are one-line errors.
+#include "step_assembly.h"
 #include "test_util.h"
 
 #include "generators.h"
@@ -26,20 +27,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Three modules of seven part instances: 21 instances of 3 parts, written once per process into
-// a directory of its own (ctest runs the tests of this program in parallel processes).
-const fs::path& stepFile() {
-    static const fs::path file = [] {
-        const fs::path d = fs::path(RTWALL_BINARY_DIR) / "test-scratch" / ("step-generated-" + std::to_string(::getpid()));
-        fs::remove_all(d);
-        gen::GenOptions o;
-        o.out = d;
-        o.instances = 21;
-        gen::genStep(o);
-        return d / "assembly.step";
-    }();
-    return file;
-}
+const fs::path& stepFile() { return test::stepAssembly(); }  // 21 instances of 3 parts
 
 std::array<double, 3> centre(const Assembly& a, const AssemblyInstance& in) {
     const Bounds3 b = a.meshes[in.mesh]->bounds();

@@ -89,26 +89,11 @@ TEST(Vrml, ShapesInAGroupAreMergedInWorldCoordinates) {
     for (size_t t = 0; t < mesh.triangleCount(); ++t) EXPECT_GT(test::geometricNormal(mesh, t).z, 0.0f) << t;
 }
 
-// A Transform to (148376, 1234, -223423) is applied in double precision and the result
-// recentred, so the float buffers hold the box exactly.
-TEST(Vrml, FarTransformIsRecentredWithoutLoss) {
-    const TriangleMesh mesh = loadMesh(kMeshes / "box_far.wrl");
-    const auto o = mesh.origin();
-    EXPECT_EQ(o, (std::array<double, 3>{148377.0, 1235.0, -223422.0}));
-    const Bounds3 b = mesh.bounds();
-    EXPECT_EQ(double(b.lo.x) + o[0], 148376.0);
-    EXPECT_EQ(double(b.hi.y) + o[1], 1236.0);
-    EXPECT_EQ(double(b.lo.z) + o[2], -223423.0);
-    EXPECT_NEAR(std::fabs(signedVolume(mesh)), 6.0, 1e-9);
-}
-
 // Recognised by content too: a VRML file without the .wrl extension.
 TEST(Vrml, RecognisedByContent) {
-    const fs::path dir = fs::path(::testing::TempDir()) / "rtwall_vrml_tests";
-    fs::create_directories(dir);
-    fs::copy_file(kMeshes / "box_plain.wrl", dir / "box_vrml", fs::copy_options::overwrite_existing);
+    const fs::path file = test::copyMeshAs("box_plain.wrl", test::tempFolder("rtwall_vrml_tests"), "box_vrml");
     ImportReport report;
-    EXPECT_EQ(loadMesh(dir / "box_vrml", &report).triangleCount(), 12u);
+    EXPECT_EQ(loadMesh(file, &report).triangleCount(), 12u);
     EXPECT_EQ(report.format, "wrl");
 }
 
@@ -142,12 +127,7 @@ INSTANTIATE_TEST_SUITE_P(Files, VrmlBad,
                                            BadVrml{"bad_index_huge.wrl", "polygon 0: point index -294967296 is out of range"},
                                            BadVrml{"bad_no_geometry.wrl", "no shapes"},
                                            BadVrml{"bad_vrml1.wrl", "VRML 1.0 is not supported"}),
-                         [](const ::testing::TestParamInfo<BadVrml>& p) {
-                             std::string name = p.param.file;
-                             for (char& c : name)
-                                 if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                             return name;
-                         });
+                         test::FileCaseName{});
 
 // VTK's VRML parser prints nothing to the terminal either.
 TEST(Vrml, PrintsNothing) {
