@@ -28,6 +28,18 @@ inline std::filesystem::path processScratchDir(const std::string& name) {
     return d;
 }
 
+// A camera at `position` looking at `lookAt`.
+inline CameraDesc cameraAt(Float3 position, Float3 lookAt, float fovY = 45.0f, Float3 up = {0, 1, 0}) {
+    return CameraDesc{.position = position, .lookAt = lookAt, .up = up, .fovY = fovY};
+}
+
+// The image size and tile size of `settings`.
+inline void setImage(RenderSettings& settings, int width, int height, int tileSize) {
+    settings.width = width;
+    settings.height = height;
+    settings.tileSize = tileSize;
+}
+
 // The text of tests/data/scenes/NAME.toml: a small scene the tests share.
 inline std::string sceneText(const std::string& name) {
     const std::filesystem::path file = dataDir() / "scenes" / (name + ".toml");

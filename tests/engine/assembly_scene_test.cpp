@@ -24,18 +24,16 @@ namespace fs = std::filesystem;
 
 const fs::path& stepFile() { return test::stepAssembly(); }  // 21 part instances (3 modules of 7) of 3 parts
 
+// A floor mesh and one instance of the assembly, which the tests below add to.
+const std::string kFloorAndPlant = "\n[[mesh]]\nname = \"floor\"\nshape = \"quad\"\n[[instance]]\nmesh = \"plant\"";
+
 std::string sceneWith(const std::string& rest) {
     return "[[mesh]]\nname = \"plant\"\nfile = \"" + stepFile().string() + "\"\n" + rest;
 }
 
 TEST(AssemblyScene, StepAssemblyPlacedByInstancesWithItsPartsAndMaterials) {
     const auto dir = test::scratchDir();
-    const SceneDesc s = loadSceneFile(test::writeFile(dir / "s.toml", sceneWith(R"(
-[[mesh]]
-name = "floor"
-shape = "quad"
-[[instance]]
-mesh = "plant"
+    const SceneDesc s = loadSceneFile(test::writeFile(dir / "s.toml", sceneWith(kFloorAndPlant + R"(
 [[instance]]
 mesh = "plant"
 translate = [1000, 0, 0]
@@ -173,12 +171,7 @@ TEST(AssemblyScene, BadFilesAndKeysAreOneLineErrors) {
 
 TEST(AssemblyScene, PartsTableHidesIsolatesAndHighlights) {
     const auto dir = test::scratchDir();
-    const SceneDesc s = loadSceneFile(test::writeFile(dir / "s.toml", sceneWith(R"(
-[[mesh]]
-name = "floor"
-shape = "quad"
-[[instance]]
-mesh = "plant"
+    const SceneDesc s = loadSceneFile(test::writeFile(dir / "s.toml", sceneWith(kFloorAndPlant + R"(
 [[instance]]
 mesh = "floor"
 [parts]

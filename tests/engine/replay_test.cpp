@@ -57,9 +57,7 @@ std::filesystem::path writeFarScene(const std::filesystem::path& dir) {
 
 TEST(TileError, ATileThatThrowsSaysItsFrameItsPixelsAndWhy) {
     SceneDesc d = builtinScene("knots", 5000);
-    d.settings.width = 96;
-    d.settings.height = 64;
-    d.settings.tileSize = 32;
+    test::setImage(d.settings, 96, 64, 32);
     d.settings.threads = 2;
     const Scene scene(d);
     const Camera camera(d.cameras.front(), 96, 64);
@@ -157,9 +155,7 @@ TEST(ReplayCommand, ReplaysCamerasAndSettingsThatAreNotTheSceneFiles) {
         ProjectionWindow{desc.cameras.front().lookAt + Float3{-1.7f, -0.9f, 0.3f}, {3.1f, 0.0f, -0.2f}, {0.0f, 2.3f, 0.1f}};
 
     RenderSettings base = desc.settings;
-    base.width = 64;
-    base.height = 48;
-    base.tileSize = 16;
+    test::setImage(base, 64, 48, 16);
     base.threads = 2;
     base.gi = true;
     base.samples = 2;

@@ -162,7 +162,7 @@ TEST(MeshCache, CacheDirKeepsSameNamesApart) {
     EXPECT_NE(meshCachePath(dir / "a" / "m.obj", dir / "cache"), meshCachePath(dir / "b" / "m.obj", dir / "cache"));
     const fs::path src = dir / "a" / "box.obj";
     fs::copy_file(kMeshes / "box_quads.obj", src);
-    const LoadOptions opt = test::cacheOn();
+    LoadOptions opt = test::cacheOn();
     opt.cacheDir = dir / "cache";
     ImportReport r;
     loadMesh(src, opt, &r);

@@ -34,19 +34,19 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "rtwall: error: %s (see 'rtwall --help')\n", e.what());
         return 2;
     }
+    // Whatever a command throws is one line and exit status 1 (130 when interrupted).
+    const auto fail = [](const char* what) {
+        std::fprintf(stderr, "rtwall: error: %s\n", what);
+        return 1;
+    };
     try {
         return run ? run() : 2;
     } catch (const rtwall::Cancelled&) {
         std::fprintf(stderr, "rtwall: interrupted\n");
         return 130;
-    } catch (const rtwall::InputError& e) {
-        std::fprintf(stderr, "rtwall: error: %s\n", e.what());
-        return 1;
     } catch (const std::bad_alloc&) {
-        std::fprintf(stderr, "rtwall: error: out of memory\n");
-        return 1;
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "rtwall: error: %s\n", e.what());
-        return 1;
+        return fail("out of memory");
+    } catch (const std::exception& e) {  // an InputError too: its message names the file and line
+        return fail(e.what());
     }
 }
