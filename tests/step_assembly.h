@@ -13,11 +13,9 @@ namespace rtwall::test {
 // Three modules of seven part instances: 21 instances of 3 parts, written once per process.
 inline const std::filesystem::path& stepAssembly() {
     static const std::filesystem::path file = [] {
-        gen::GenOptions o;
-        o.out = processScratchDir("step-generated");
-        o.instances = 21;
-        gen::genStep(o);
-        return o.out / "assembly.step";
+        const std::filesystem::path dir = processScratchDir("step-generated");
+        gen::genStep({.out = dir, .instances = 21});
+        return dir / "assembly.step";
     }();
     return file;
 }

@@ -194,10 +194,7 @@ TEST(AssemblyScene, ShippedDemoSceneLoadsAndRenders) {
     const auto dir = test::scratchDir();
     fs::create_directories(dir / "configs" / "demos");
     fs::copy_file(test::sourceDir() / "configs" / "demos" / "step_assembly.toml", dir / "configs" / "demos" / "step_assembly.toml");
-    gen::GenOptions o;
-    o.out = dir / "out" / "step-assembly";
-    o.instances = 700;  // what bootstrap.sh asks for
-    gen::genStep(o);
+    gen::genStep({.out = dir / "out" / "step-assembly", .instances = 700});  // what bootstrap.sh asks for
     SceneDesc s = loadSceneFile(dir / "configs" / "demos" / "step_assembly.toml");
     EXPECT_EQ(s.instances.size(), 701u);
     EXPECT_EQ(s.meshes.size(), 4u);

@@ -2,6 +2,7 @@
 // scene file's [parts], a hidden mesh is gone from the PNG as if the scene never had it, on one
 // machine and through local client processes alike; a pattern that matches nothing is one line.
 #include "cli_util.h"
+#include "step_assembly.h"
 #include "test_util.h"
 
 #include "generators.h"
@@ -42,10 +43,7 @@ TEST(PartsCli, HideOnTheCommandLineIsTheSceneWithoutIt) {
 // and highlights: the names a reviewer gives --hide.
 TEST(PartsCli, InfoListsTheScenesPartTree) {
     const auto dir = test::scratchDir();
-    gen::GenOptions o;
-    o.out = dir;
-    o.instances = 14;
-    gen::genStep(o);
+    gen::genStep({.out = dir, .instances = 14});
     test::writeFile(dir / "s.toml", "[[mesh]]\nname = \"plant\"\nfile = \"assembly.step\"\n[[instance]]\nmesh = \"plant\"\n"
                                     "[parts]\nhide = [\"plant/module 2/bolt 1\"]\nhighlight = [\"bracket*\"]\n");
     const auto r = test::runCli(RTWALL_EXE, "info " + (dir / "s.toml").string());

@@ -56,7 +56,7 @@ TEST_P(MeshImportGood, LoadsTheKnownShape) {
     test::expectImported(mesh, report, f.format, f.vertices, f.triangles, f.polygonsTriangulated);
     EXPECT_EQ(report.degenerateTriangles, 0u);
 
-    test::expectBoundsFromZero(mesh, f.box ? Float3{1, 2, 3} : Float3{1, 1, 1});
+    test::expectBounds(mesh, {0, 0, 0}, f.box ? Float3{1, 2, 3} : Float3{1, 1, 1});
     // Closed and wound outward, with the exact volume: catches lost, duplicated, flipped or
     // misaligned faces, which counts and bounds alone would not.
     EXPECT_NEAR(signedVolume(mesh), f.box ? 6.0 : 1.0 / 6.0, 1e-6);

@@ -43,7 +43,7 @@ TEST_P(VtkImportGood, LoadsTheBox) {
     EXPECT_EQ(report.stripsTriangulated, f.strips);
     EXPECT_EQ(report.cellsSkipped, f.skipped);
     EXPECT_EQ(mesh.hasNormals(), f.normals);
-    test::expectBoundsFromZero(mesh, {1, 2, 3});
+    test::expectBounds(mesh, {0, 0, 0}, {1, 2, 3});
     EXPECT_NEAR(std::fabs(signedVolume(mesh)), 6.0, 1e-6);
     EXPECT_EQ(mesh.origin(), (std::array<double, 3>{0, 0, 0}));
     EXPECT_EQ(mesh.positions()[3 * mesh.vertexCount()], 0.0f);  // Embree's padding

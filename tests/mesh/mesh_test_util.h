@@ -47,12 +47,12 @@ inline void expectImported(const TriangleMesh& mesh, const ImportReport& report,
     EXPECT_EQ(report.polygonsTriangulated, polygonsTriangulated);
 }
 
-// The mesh's bounds are [0, hi] exactly.
-inline void expectBoundsFromZero(const TriangleMesh& mesh, Float3 hi) {
+// The mesh's bounds are [lo, hi] exactly.
+inline void expectBounds(const TriangleMesh& mesh, Float3 lo, Float3 hi) {
     const Bounds3 b = mesh.bounds();
-    EXPECT_EQ(b.lo.x, 0.0f);
-    EXPECT_EQ(b.lo.y, 0.0f);
-    EXPECT_EQ(b.lo.z, 0.0f);
+    EXPECT_EQ(b.lo.x, lo.x);
+    EXPECT_EQ(b.lo.y, lo.y);
+    EXPECT_EQ(b.lo.z, lo.z);
     EXPECT_EQ(b.hi.x, hi.x);
     EXPECT_EQ(b.hi.y, hi.y);
     EXPECT_EQ(b.hi.z, hi.z);
