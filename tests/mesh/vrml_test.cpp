@@ -20,15 +20,7 @@ const fs::path kMeshes = fs::path(RTWALL_TEST_DATA_DIR) / "meshes";
 
 using Rgb = std::array<int, 3>;
 
-void expectBounds(const TriangleMesh& m, Float3 lo, Float3 hi) {
-    const Bounds3 b = m.bounds();
-    EXPECT_EQ(b.lo.x, lo.x);
-    EXPECT_EQ(b.lo.y, lo.y);
-    EXPECT_EQ(b.lo.z, lo.z);
-    EXPECT_EQ(b.hi.x, hi.x);
-    EXPECT_EQ(b.hi.y, hi.y);
-    EXPECT_EQ(b.hi.z, hi.z);
-}
+using test::expectBounds;
 
 // Index of the vertex at p (the importer may reorder nothing, but say so through positions).
 size_t vertexAt(const TriangleMesh& m, Float3 p) {
