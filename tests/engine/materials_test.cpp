@@ -610,13 +610,7 @@ TEST(GlobalIllumination, EstimatorIsUnbiased) {
     stats(200, 0, 2, m, v);        // the estimator under test: 200 frames of 2 samples
     stats(100, 100000, 32, rm, rv);  // reference: independent seeds, 3200 samples per pixel
     const size_t n = m.size();
-    const double alpha = 0.01, perTest = 1.0 - std::pow(1.0 - alpha, 1.0 / double(n));
-    // Two-sided normal quantile for perTest (about 3.9 for n = 144), by bisection on erfc.
-    double lo = 0, hi = 10;
-    for (int i = 0; i < 100; ++i) {
-        const double mid = 0.5 * (lo + hi);
-        (std::erfc(mid / std::sqrt(2.0)) > perTest ? lo : hi) = mid;
-    }
+    const double threshold = test::sidakThreshold(0.01, n);
     int failures = 0;
     for (size_t i = 0; i < n; ++i) {
         const double se = std::sqrt(v[i] + rv[i]);
@@ -625,10 +619,10 @@ TEST(GlobalIllumination, EstimatorIsUnbiased) {
             continue;
         }
         const double z = std::fabs(m[i] - rm[i]) / se;
-        if (z > lo) ++failures;
+        if (z > threshold) ++failures;
     }
-    EXPECT_EQ(failures, 0) << "z threshold " << lo;
-    std::printf("GI z-test: %zu values, threshold |z| > %.2f, %d failures\n", n, lo, failures);
+    EXPECT_EQ(failures, 0) << "z threshold " << threshold;
+    std::printf("GI z-test: %zu values, threshold |z| > %.2f, %d failures\n", n, threshold, failures);
 }
 
 TEST(Accumulator, MeanOfFramesInLinearLight) {
