@@ -54,6 +54,15 @@ inline double sidakThreshold(double alpha, size_t tests) {
     return lo;
 }
 
+// configs/demo.toml at width x height; `supersample` 0 keeps the file's.
+inline SceneDesc demoScene(int width, int height, int supersample = 0) {
+    SceneDesc desc = loadSceneFile(sourceDir() / "configs/demo.toml");
+    desc.settings.width = width;
+    desc.settings.height = height;
+    if (supersample > 0) desc.settings.supersample = supersample;
+    return desc;
+}
+
 // The text of tests/data/scenes/NAME.toml: a small scene the tests share.
 inline std::string sceneText(const std::string& name) {
     const std::filesystem::path file = dataDir() / "scenes" / (name + ".toml");
