@@ -90,21 +90,28 @@ TEST_P(FarFromOrigin, IsRecentredWithoutLoss) {
 
 INSTANTIATE_TEST_SUITE_P(Files, FarFromOrigin, ::testing::Values("box_far.vtp", "box_far.wrl"), test::FileCaseName{});
 
-// A VTK file without a known extension is recognised by its content.
-TEST(VtkImport, VtkFileWithoutExtension) {
-    const fs::path file = test::copyMeshAs("box_zlib.vtp", test::tempFolder("rtwall_vtk_tests"), "box_no_ext");
+// The content, not the name, says what a file is: a VTK file or a VRML file without a known
+// extension, and a legacy VTK file named .vtp (read by the legacy reader).
+struct NamedCopy {
+    const char* file;
+    const char* name;  // the copy's name
+    const char* format;
+};
+std::ostream& operator<<(std::ostream& os, const NamedCopy& c) { return os << c.name; }
+class ContentDecides : public ::testing::TestWithParam<NamedCopy> {};
+
+TEST_P(ContentDecides, TheFormat) {
+    const fs::path file = test::copyMeshAs(GetParam().file, test::tempFolder("rtwall_content_tests"), GetParam().name);
     ImportReport report;
     EXPECT_EQ(loadMesh(file, &report).triangleCount(), 12u);
-    EXPECT_EQ(report.format, "vtp");
+    EXPECT_EQ(report.format, GetParam().format);
 }
 
-// A legacy file named .vtp is still read as what it is.
-TEST(VtkImport, ContentDecidesBetweenVtkReaders) {
-    const fs::path file = test::copyMeshAs("box_ascii.vtk", test::tempFolder("rtwall_vtk_tests"), "legacy_named.vtp");
-    ImportReport report;
-    EXPECT_EQ(loadMesh(file, &report).triangleCount(), 12u);
-    EXPECT_EQ(report.format, "vtk");
-}
+INSTANTIATE_TEST_SUITE_P(Files, ContentDecides,
+                         ::testing::Values(NamedCopy{"box_zlib.vtp", "box_no_ext", "vtp"},
+                                           NamedCopy{"box_ascii.vtk", "legacy_named.vtp", "vtk"},
+                                           NamedCopy{"box_plain.wrl", "box_vrml", "wrl"}),
+                         [](const ::testing::TestParamInfo<NamedCopy>& p) { return test::fileTestName(p.param.name); });
 
 struct BadVtk {
     const char* file;

@@ -81,14 +81,6 @@ TEST(Vrml, ShapesInAGroupAreMergedInWorldCoordinates) {
     for (size_t t = 0; t < mesh.triangleCount(); ++t) EXPECT_GT(test::geometricNormal(mesh, t).z, 0.0f) << t;
 }
 
-// Recognised by content too: a VRML file without the .wrl extension.
-TEST(Vrml, RecognisedByContent) {
-    const fs::path file = test::copyMeshAs("box_plain.wrl", test::tempFolder("rtwall_vrml_tests"), "box_vrml");
-    ImportReport report;
-    EXPECT_EQ(loadMesh(file, &report).triangleCount(), 12u);
-    EXPECT_EQ(report.format, "wrl");
-}
-
 struct BadVrml {
     const char* file;
     const char* expect;
