@@ -52,6 +52,12 @@ inline Material material(const std::string& name, MaterialType type, Color color
     return m;
 }
 
+// Meshes 0 and 1: the built-in quad and box.
+inline void addQuadAndBox(SceneDesc& s) {
+    s.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
+    s.meshes.push_back({"box", "shape:box", std::make_shared<const TriangleMesh>(makeBox())});
+}
+
 // A white floor material and a green leaf whose alpha is a checker of `cells`-unit cells: black
 // cells are holes (for the alpha-mask tests).
 inline std::vector<Material> floorAndCheckerLeaf(float cells) {
@@ -78,8 +84,7 @@ inline Light sunFromAbove() {
 inline SceneDesc materialZoo(const std::filesystem::path& dir, int width = 64, int height = 48) {
     SceneDesc s;
     s.meshes.push_back({"sphere", "shape:sphere", std::make_shared<const TriangleMesh>(makeSphere(16, 32))});
-    s.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
-    s.meshes.push_back({"box", "shape:box", std::make_shared<const TriangleMesh>(makeBox())});
+    addQuadAndBox(s);
 
     Material floor = material("floor", MaterialType::Lambert, {0.8f, 0.8f, 0.8f});
     floor.texture.kind = TextureKind::Checker;

@@ -118,8 +118,7 @@ TEST(WhiteFurnace, EveryMaterialConservesEnergy) {
 // the shadow keeps (1 - F)^2 exp(-a d) of the light at normal incidence (docs/shading.md).
 TEST(TransparentShadows, GlassSlabAttenuatesByFresnelAndAbsorption) {
     SceneDesc s;
-    s.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
-    s.meshes.push_back({"box", "shape:box", std::make_shared<const TriangleMesh>(makeBox())});
+    test::addQuadAndBox(s);
     Material floor;
     floor.color = {1, 1, 1};
     Material glass;
@@ -331,8 +330,7 @@ TEST_F(Zoo, PruningAtZeroIsExactlyUnprunedAndDefaultIsClose) {
 // splitting a path, and radiance 30 behind them), 16x12 pixels.
 SceneDesc deepGlass() {
     SceneDesc s;
-    s.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
-    s.meshes.push_back({"box", "shape:box", std::make_shared<const TriangleMesh>(makeBox())});
+    test::addQuadAndBox(s);
     s.meshes.push_back({"sphere", "shape:sphere", std::make_shared<const TriangleMesh>(makeSphere(12, 24))});
     Material lamp = test::material("lamp", MaterialType::Emissive, {1, 1, 1});
     lamp.emission = {30, 28, 24};
@@ -564,8 +562,7 @@ TEST_F(Zoo, FalseColourViewsRender) {
 // at alpha = 0.01 with Sidak correction over every pixel and channel.
 TEST(GlobalIllumination, EstimatorIsUnbiased) {
     SceneDesc s;
-    s.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
-    s.meshes.push_back({"box", "shape:box", std::make_shared<const TriangleMesh>(makeBox())});
+    test::addQuadAndBox(s);
     Material white;
     white.color = {0.8f, 0.8f, 0.8f};
     Material red;
