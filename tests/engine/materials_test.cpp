@@ -511,7 +511,7 @@ TEST(TextureMappings, SphericalAndCylindricalCheckersMatchAnalyticPixels) {
         s.settings.ambient = {0, 0, 0};
         const Scene scene(s);
         const std::vector<float> img = renderLinear(scene, s);
-        const Camera camera(cam, s.settings.width, s.settings.height);
+        const Camera camera(s.cameras.front(), s.settings.width, s.settings.height);
         const Float3 o = camera.origin();
         int checked = 0, light = 0;
         for (int y = 0; y < s.settings.height; ++y)
