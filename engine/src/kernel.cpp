@@ -12,6 +12,7 @@
 #include "shading.h"
 #include "trace.h"
 
+#include <rtwall/engine_testing.h>
 #include <rtwall/vec.h>
 
 #include <algorithm>

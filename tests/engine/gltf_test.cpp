@@ -24,8 +24,7 @@ namespace fs = std::filesystem;
 // tests of this program in parallel processes).
 const fs::path& generated() {
     static const fs::path dir = [] {
-        const fs::path d = fs::path(RTWALL_BINARY_DIR) / "test-scratch" / ("gltf-generated-" + std::to_string(::getpid()));
-        fs::remove_all(d);
+        const fs::path d = test::processScratchDir("gltf-generated");
         const std::string cmd = "python3 " + (test::sourceDir() / "tools" / "gltf_testgen.py").string() + " --malformed --out " + d.string();
         EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
         return d;

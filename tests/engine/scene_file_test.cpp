@@ -19,33 +19,7 @@ TEST(SceneFile, EveryKeyOfTheTablesIsDocumented) {
     EXPECT_TRUE(missing.empty()) << ::testing::PrintToString(missing);
 }
 
-const char* kMinimal = R"([image]
-width = 64
-height = 48
-
-[[mesh]]
-name = "ball"
-shape = "sphere"
-
-[[material]]
-name = "red"
-type = "phong"
-color = [0.8, 0.1, 0.1]
-
-[[instance]]
-mesh = "ball"
-material = "red"
-translate = [1, 2, 3]
-
-[[light]]
-type = "point"
-position = [0, 5, 0]
-
-[[camera]]
-name = "front"
-position = [0, 0, 5]
-look_at = [0, 0, 0]
-)";
+const std::string kMinimal = test::sceneText("minimal");
 
 TEST(SceneFile, LoadsEveryTable) {
     const auto file = writeFile(scratchDir() / "s.toml", kMinimal);

@@ -189,12 +189,7 @@ struct RenderSettings {
     bool operator==(const RenderSettings&) const = default;
 };
 
-// Tests only: the tile of `frame` that holds pixel (x, y) throws instead of rendering, as a bug
-// or a failed allocation would, so that failure reports and their replays can be tested.
-struct InjectedTileFault {
-    uint32_t frame = 0;
-    int x = 0, y = 0;
-};
+struct InjectedTileFault;  // a test hook: rtwall/engine_testing.h
 
 // How this process traces, as opposed to what the image shows (RenderSettings): these never
 // travel to a render client (each has its own) and never change a shaded pixel's bytes; only
@@ -204,7 +199,7 @@ struct TraceOptions {
     // this CPU's widest (packetWidth()), or 4, 8 or 16 forced. Every width gives the same bytes.
     int packetWidth = 0;
     uint32_t clientId = 0;                     // the id the master gave this render client: the client view's colour
-    std::optional<InjectedTileFault> fault;    // tests only
+    std::shared_ptr<const InjectedTileFault> fault;  // null outside tests (rtwall/engine_testing.h)
 };
 
 // How each mesh's BVH is built ([bvh] in scene files): memory against build and render speed.
