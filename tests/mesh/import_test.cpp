@@ -16,8 +16,6 @@ namespace rtwall {
 namespace {
 
 namespace fs = std::filesystem;
-using test::dot;
-using test::length;
 using test::signedVolume;
 
 const fs::path kMeshes = fs::path(RTWALL_TEST_DATA_DIR) / "meshes";
@@ -80,7 +78,7 @@ TEST_P(MeshImportGood, LoadsTheKnownShape) {
         // The generator wrote unit vectors from the shape's centre to each vertex.
         const Float3 centre = f.box ? Float3{0.5f, 1.0f, 1.5f} : Float3{0.25f, 0.25f, 0.25f};
         for (size_t v = 0; v < mesh.vertexCount(); ++v) {
-            const Float3 n = mesh.normal(v), d = test::sub(mesh.position(v), centre);
+            const Float3 n = mesh.normal(v), d = mesh.position(v) - centre;
             EXPECT_NEAR(length(n), 1.0, 1e-6) << "vertex " << v;
             EXPECT_NEAR(dot(n, d) / length(d), 1.0, 1e-5) << "vertex " << v;
         }

@@ -10,9 +10,7 @@
 namespace rtwall {
 namespace {
 
-using test::dot;
 using test::geometricNormal;
-using test::length;
 using test::signedVolume;
 
 // Shading normals must be unit length and on the same side as the geometric normal, or
@@ -125,7 +123,7 @@ TEST(MeshShapes, TorusKnotIsAClosedTubeOfTheGivenRadius) {
         }
         for (int j = 0; j < sides; ++j) {
             const size_t v = size_t(i * sides + j);
-            const Float3 offset = test::sub(knot.position(v), centre);
+            const Float3 offset = knot.position(v) - centre;
             EXPECT_NEAR(length(offset), radius, 1e-5) << "ring " << i;
             EXPECT_NEAR(dot(offset, knot.normal(v)) / radius, 1.0, 1e-4) << "ring " << i;
         }

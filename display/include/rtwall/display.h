@@ -10,7 +10,8 @@
 #pragma once
 
 #include <rtwall/image.h>
-#include <rtwall/mesh.h>
+#include <rtwall/input_error.h>
+#include <rtwall/vec.h>
 
 #include <array>
 #include <cstdint>

@@ -5,7 +5,8 @@
 // "<file>:<line>: <context><what>".
 #pragma once
 
-#include <rtwall/mesh.h>
+#include <rtwall/input_error.h>
+#include <rtwall/vec.h>
 
 #include <toml++/toml.h>
 

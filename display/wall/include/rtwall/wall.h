@@ -8,7 +8,7 @@
 // parsing and a loop over step().
 //
 // Where a change goes:
-// - a key binding or other input: WallInput::handle (display/src/wall/wall_input.cpp);
+// - a key binding or other input: WallInput::handle (display/wall/src/wall_input.cpp);
 // - a control of the operating point and the speed/accuracy sweep: the table in controls.cpp;
 // - a camera-path field: camera_path.cpp (read, write and interpolation, one file);
 // - a per-frame step: WallSession::step (session.cpp); the run config: run_config.cpp.

@@ -105,6 +105,7 @@ private:
     Transform wandGrabTransform_;
     std::optional<SectionPlane> wandPlaneStart_;  // the selected section plane as the trigger took it
     std::optional<Float3> orbitCentre_;  // the scene's centre, taken when the wand starts orbiting
+    void dragHeld(LiveScene& scene, WandPose& p);  // the held object or section plane follows the wand
     bool measureHit(LiveScene& scene, const std::optional<PickResult>& hit, Float3 origin, Float3 direction);
     bool measuring_ = false;
     bool escapeHeld_ = false;  // the Esc that left measure mode: held on, it does not close the wall
