@@ -248,7 +248,7 @@ struct PresentOptions {
     bool falseColour = false;  // tint every tile with the colour of the client that rendered it
     const Image* overlay = nullptr;  // the status overlay (OverlayStage): drawn after `stages`, on top
     int quadBufferEye = 0;     // quad-buffered screens: which eye presentScreen returns (0 left, 1 right)
-    std::vector<ScreenStage*> stages;  // run on every screen in order (the caller keeps them)
+    std::vector<ScreenStage*> stages{};  // run on every screen in order (the caller keeps them)
 };
 
 struct ScreenSample {
