@@ -1,13 +1,12 @@
 // A display node's network side (issue 19): a DEALER to the master for control (NodeHello,
 // NodeFrame, NodeHave, NodeSwap, NodeSwapped) and a ROUTER on which the render clients deliver
-// the tiles its screens show. Tiles are decoded on this thread straight into a NodeAssembly (one
-// image per view); a tile that comes before its frame's NodeFrame (it travels on another
-// connection) waits in a bounded queue. A frame it holds becomes what it shows (NodeImages:
-// accumulated and composed into the eyes as on the single-PC wall) before it says so; the swap
-// presents that. What is presented, and how, is the caller's callback.
+// the tiles its screens show. Tiles are decoded on this thread straight into a FrameAssembler
+// that holds only the tiles routed to this node (one image per view); a tile that comes before
+// its frame's NodeFrame (it travels on another connection) waits in a bounded queue. A frame it
+// holds becomes what it shows (the Compositor: accumulated and composed into the eyes as on the
+// single-PC wall) before it says so; the swap presents that. What is presented, and how, is the caller's callback.
 #include "codec.h"
 #include "net.h"
-#include "node_assembly.h"
 #include "protocol.h"
 #include "security.h"
 
@@ -147,7 +146,8 @@ private:
         }
         master_.connect(run_.connect);
         session_ = 0;
-        shown_ = NodeImages{};  // another session's frames: no running mean goes on across a rejoin
+        shown_ = {};
+        compositor_ = Compositor{};  // another session's frames: no running mean goes on across a rejoin
         routes_.clear();
         early_.clear();
         slots_[0].begun = slots_[1].begun = false;
@@ -213,7 +213,7 @@ private:
                 reportIfComplete();  // the released frame, if it was held back behind the one before
                 const bool held = pendingSwap_ == s.frame;
                 if (run_.present) {
-                    if (held) run_.present(s.frame, &shown_.left(), shown_.right().rgb.empty() ? nullptr : &shown_.right(), s.leftOut);
+                    if (held) run_.present(s.frame, &shown_.left, shown_.right.rgb.empty() ? nullptr : &shown_.right, s.leftOut);
                     else run_.present(s.frame, nullptr, nullptr, s.leftOut);
                 }
                 send(NodeSwapped{s.frame}, s.frame);
@@ -254,8 +254,11 @@ private:
                 for (const TileRect& t : makeTiles(f.width, f.height, f.tileSize)) tiles.push_back({0, t});
             else
                 tiles = viewTiles(f.views, f.width, f.height, f.tileSize);
-            slot.assembly.beginFrame(f.frame, f.width, f.height, tiles, uint32_t(f.views.size()), std::prev(r)->second, index_,
-                                     f.pixels == TilePixels::LinearHalf);
+            FrameHolding held;
+            held.linear = f.pixels == TilePixels::LinearHalf;
+            held.routes = &std::prev(r)->second;
+            held.node = index_;
+            slot.assembly.beginFrame(f.frame, f.width, f.height, tiles, uint32_t(f.views.size()), held);
         } catch (const std::invalid_argument& e) {
             std::fprintf(stderr, "rtwall display: frame %u is skipped: %s\n", f.frame, e.what());
             return;
@@ -289,10 +292,10 @@ private:
         }
         Slot* slot = slotOf(r.frame);
         if (!slot) return;  // stale
-        NodeAssembly& assembly = slot->assembly;
+        FrameAssembler& assembly = slot->assembly;
         TileRect rect;
         TileView view;
-        if (assembly.claim(r.frame, r.tile, rect, view) != NodeAssembly::Claim::Granted) return;
+        if (assembly.claim(r.frame, r.tile, rect, view) != FrameAssembler::Claim::Granted) return;
         try {
             if (r.format != slot->frame.pixels) throw DecodeError("a tile in another pixel format than its frame's");
             if (r.format == TilePixels::LinearHalf) {
@@ -327,15 +330,27 @@ private:
             if (!slot->begun || slot->haveSent) continue;
             if (!slot->assembly.complete()) return;  // the newer waits for the older
             slot->haveSent = true;
-            shown_.show(slot->frame, slot->assembly);
+            show(*slot);
             pendingSwap_ = slot->frame.frame;
             send(NodeHave{slot->frame.frame}, slot->frame.frame);
             return;
         }
     }
 
-    // The slot that holds `frame` (begun in this session), if any.
+    // What the node shows of a frame it holds: made as the single-PC wall makes it.
     struct Slot;
+    void show(const Slot& slot) {
+        const NodeFrame& f = slot.frame;
+        ComposeFrame c;
+        c.views = f.views;
+        c.eyes.assign(f.eyes.begin(), f.eyes.end());
+        c.stochastic = f.stochastic;
+        c.stateSeq = f.stateSeq;
+        c.linear = slot.assembly.linear();
+        shown_ = compositor_.compose(c, slot.assembly.images(), slot.assembly.linearImages());
+    }
+
+    // The slot that holds `frame` (begun in this session), if any.
     Slot* slotOf(uint32_t frame) {
         for (Slot& slot : slots_)
             if (slot.begun && slot.frame.frame == frame) return &slot;
@@ -396,14 +411,15 @@ private:
     std::map<uint32_t, std::vector<uint64_t>> routes_;  // tile masks by their first frame
     // The newest frame (slots_[current_]) and the one before it.
     struct Slot {
-        NodeAssembly assembly;
+        FrameAssembler assembly;
         NodeFrame frame;        // what assembly holds
         bool begun = false;     // holds a frame begun in this session and not yet swapped
         bool haveSent = false;  // shown and reported (NodeHave)
     };
     Slot slots_[2];
     int current_ = 0;
-    NodeImages shown_;                     // what the node shows of the last frame it held
+    Compositor compositor_;                // the running means go on from frame to frame
+    EyeImages shown_;                      // what the node shows of the last frame it held
     std::optional<uint32_t> pendingSwap_;  // shown_'s frame, reported and not yet swapped
     std::vector<zmq::message_t> early_;
     std::vector<uint8_t> scratch_;

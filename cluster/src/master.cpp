@@ -4,7 +4,6 @@
 // the application thread talks to it through a command queue and an inproc wake-up socket, so
 // updates stream to the clients the moment they are made (asynchronous rendering). Tiles are
 // decoded by a small pool of threads straight into the framebuffer.
-#include "assembler.h"
 #include "codec.h"
 #include "net.h"
 #include "protocol.h"

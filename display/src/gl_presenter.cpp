@@ -54,6 +54,43 @@ struct Screen {
 
 }  // namespace
 
+void OverlayStage::drawGl(const WallConfig& wall, size_t screen) {
+    if (!overlay_ || screen != 0 || overlay_->width <= 0) return;
+    const Image& o = *overlay_;
+    const ScreenConfig& c = wall.screens.at(screen);
+    if (!framebuffer_) {
+        glGenTextures(1, &texture_);
+        glGenFramebuffers(1, &framebuffer_);
+        glBindTexture(GL_TEXTURE_2D, texture_);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    }
+    glBindTexture(GL_TEXTURE_2D, texture_);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer_);
+    if (o.width != textureWidth_ || o.height != textureHeight_) {
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, o.width, o.height, 0, GL_RGB, GL_UNSIGNED_BYTE, o.rgb.data());
+        glFramebufferTexture2D(GL_READ_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture_, 0);
+        textureWidth_ = o.width;
+        textureHeight_ = o.height;
+    } else {
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, o.width, o.height, GL_RGB, GL_UNSIGNED_BYTE, o.rgb.data());
+    }
+    const int w = std::min(o.width, c.outputWidth - kOverlayMargin), h = std::min(o.height, c.outputHeight - kOverlayMargin);
+    const int top = c.outputHeight - kOverlayMargin;
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+    if (w > 0 && h > 0)  // image row 0 (the texture's first row) lands at the top: a flipped blit
+        glBlitFramebuffer(0, 0, w, h, kOverlayMargin, top, kOverlayMargin + w, top - h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+void OverlayStage::releaseGl() {
+    glDeleteTextures(1, &texture_);
+    glDeleteFramebuffers(1, &framebuffer_);
+    texture_ = framebuffer_ = 0;
+    textureWidth_ = textureHeight_ = 0;
+}
+
 const char* uploadMethodName(UploadMethod m) { return m == UploadMethod::Pbo ? "pbo" : "texsubimage"; }
 
 struct GlPresenter::Impl {
@@ -63,8 +100,7 @@ struct GlPresenter::Impl {
     std::vector<Screen> screens;
     GLuint wallTex[2] = {0, 0}, ownerTex = 0, pbo[2][2] = {{0, 0}, {0, 0}};
     int texW = 0, texH = 0;  // the frame size the wall textures hold (the wall's, or less: scaled frames)
-    GLuint overlayTex = 0, overlayFbo = 0;  // first context only: framebuffer objects are not shared
-    int overlayW = 0, overlayH = 0;
+    OverlayStage overlay;  // its framebuffer object lives in the first context: they are not shared
     int pboNext = 0;
     int ownerW = 0, ownerH = 0;
     PresentStats stats;
@@ -81,8 +117,7 @@ struct GlPresenter::Impl {
             glDeleteTextures(2, wallTex);
             glDeleteTextures(1, &ownerTex);
             glDeleteBuffers(4, &pbo[0][0]);
-            glDeleteTextures(1, &overlayTex);
-            glDeleteFramebuffers(1, &overlayFbo);
+            overlay.releaseGl();
         }
         for (Screen& s : screens)
             if (s.window) {
@@ -124,32 +159,88 @@ struct GlPresenter::Impl {
         glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, img.width, img.height, GL_RGB, GL_UNSIGNED_BYTE, img.rgb.data());
     }
 
-    // The status overlay, copied 1:1 (no shader, no blending) to the first screen's top-left.
-    void blitOverlay(const Image& o, const ScreenConfig& c) {
-        if (!overlayFbo) {
-            glGenTextures(1, &overlayTex);
-            glGenFramebuffers(1, &overlayFbo);
-            glBindTexture(GL_TEXTURE_2D, overlayTex);
-            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    // Screen s's present program: the shipped fragment shader or the config's; false when it
+    // does not link.
+    bool link(Screen& s, const ShaderSource& vert, const ShaderSource& frag, const ScreenConfig& c) {
+        ShaderSource f = frag;
+        if (!c.fragmentShader.empty()) {
+            std::ifstream in(c.fragmentShader, std::ios::binary);
+            std::ostringstream text;
+            text << in.rdbuf();
+            f = {c.fragmentShader.string(), text.str()};
         }
-        glBindTexture(GL_TEXTURE_2D, overlayTex);
-        glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-        glBindFramebuffer(GL_READ_FRAMEBUFFER, overlayFbo);
-        if (o.width != overlayW || o.height != overlayH) {
-            glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, o.width, o.height, 0, GL_RGB, GL_UNSIGNED_BYTE, o.rgb.data());
-            glFramebufferTexture2D(GL_READ_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, overlayTex, 0);
-            overlayW = o.width;
-            overlayH = o.height;
-        } else {
-            glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, o.width, o.height, GL_RGB, GL_UNSIGNED_BYTE, o.rgb.data());
-        }
-        const int w = std::min(o.width, c.outputWidth - kOverlayMargin), h = std::min(o.height, c.outputHeight - kOverlayMargin);
-        const int top = c.outputHeight - kOverlayMargin;
-        glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
-        if (w > 0 && h > 0)  // image row 0 (the texture's first row) lands at the top: a flipped blit
-            glBlitFramebuffer(0, 0, w, h, kOverlayMargin, top, kOverlayMargin + w, top - h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
-        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        const GLuint vs = compile(GL_VERTEX_SHADER, vert), fs = compile(GL_FRAGMENT_SHADER, f);
+        s.program = glCreateProgram();
+        glAttachShader(s.program, vs);
+        glAttachShader(s.program, fs);
+        glLinkProgram(s.program);
+        glDeleteShader(vs);
+        glDeleteShader(fs);
+        GLint ok = 0;
+        glGetProgramiv(s.program, GL_LINK_STATUS, &ok);
+        if (!ok) return false;
+        glUseProgram(s.program);
+        glUniform1i(glGetUniformLocation(s.program, "wallLeft"), 0);
+        glUniform1i(glGetUniformLocation(s.program, "wallRight"), 1);
+        glUniform1i(glGetUniformLocation(s.program, "owners"), 2);
+        s.uViewport = glGetUniformLocation(s.program, "viewport");
+        s.uOutputSize = glGetUniformLocation(s.program, "outputSize");
+        s.uEyeMode = glGetUniformLocation(s.program, "eyeMode");
+        s.uBlendWidth = glGetUniformLocation(s.program, "blendWidth");
+        s.uBlendInvGamma = glGetUniformLocation(s.program, "blendInvGamma");
+        s.uInvGamma = glGetUniformLocation(s.program, "invGamma");
+        s.uBrightness = glGetUniformLocation(s.program, "brightness");
+        s.uTileSize = glGetUniformLocation(s.program, "tileSize");
+        s.uWallSize = glGetUniformLocation(s.program, "wallSize");
+        s.uFrameSize = glGetUniformLocation(s.program, "frameSize");
+        glGenVertexArrays(1, &s.vao);  // vertex arrays are not shared between contexts
+        return true;
+    }
+
+    // The window's keys, buttons, cursor and wheel go into `input`.
+    static void listen(GLFWwindow* window) {
+        glfwSetKeyCallback(window, [](GLFWwindow* w, int key, int, int action, int mods) {
+            auto* im = static_cast<Impl*>(glfwGetWindowUserPointer(w));
+            if (key < 0 || key >= int(im->input.keyDown.size())) return;
+            im->input.keyDown[size_t(key)] = action != GLFW_RELEASE;
+            if (action == GLFW_PRESS) {
+                im->input.keysPressed.push_back(key);
+                im->input.modsPressed.push_back(mods);
+            }
+        });
+        glfwSetMouseButtonCallback(window, [](GLFWwindow* w, int button, int action, int mods) {
+            auto* im = static_cast<Impl*>(glfwGetWindowUserPointer(w));
+            const bool down = action == GLFW_PRESS;
+            if (button == GLFW_MOUSE_BUTTON_LEFT) {
+                im->input.leftDown = down;
+                if (down) {
+                    im->input.leftPressed = true;
+                    im->input.clickMods = mods;
+                }
+            } else if (button == GLFW_MOUSE_BUTTON_RIGHT) {
+                im->input.rightDown = down;
+            }
+        });
+        glfwSetCursorPosCallback(window, [](GLFWwindow* w, double x, double y) {
+            auto* im = static_cast<Impl*>(glfwGetWindowUserPointer(w));
+            int index = 0;
+            for (size_t k = 0; k < im->screens.size(); ++k)
+                if (im->screens[k].window == w) index = int(k);
+            if (im->haveCursor && index == im->lastWindow && (im->input.leftDown || im->input.rightDown)) {
+                im->input.mouseDx += x - im->lastCursor[0];
+                im->input.mouseDy += y - im->lastCursor[1];
+            }
+            im->haveCursor = true;
+            im->lastWindow = index;
+            im->lastCursor[0] = x;
+            im->lastCursor[1] = y;
+            const ScreenConfig& sc = im->wall.screens[size_t(index)];
+            im->input.wallX = sc.viewport.x + x * sc.viewport.width / sc.outputWidth;
+            im->input.wallY = sc.viewport.y + y * sc.viewport.height / sc.outputHeight;
+        });
+        glfwSetScrollCallback(window, [](GLFWwindow* w, double, double dy) {
+            static_cast<Impl*>(glfwGetWindowUserPointer(w))->input.scroll += dy;
+        });
     }
 
     void draw(size_t i, int eyeMode, int tileSize) {
@@ -227,81 +318,8 @@ std::unique_ptr<GlPresenter> GlPresenter::open(const WallConfig& wall, const Opt
         glfwMakeContextCurrent(win);
         glfwSwapInterval(i == 0 && (options.vsyncOverride < 0 ? wall.vsync : options.vsyncOverride == 1) ? 1 : 0);
 
-        ShaderSource f = frag;
-        if (!c.fragmentShader.empty()) {
-            std::ifstream in(c.fragmentShader, std::ios::binary);
-            std::ostringstream text;
-            text << in.rdbuf();
-            f = {c.fragmentShader.string(), text.str()};
-        }
-        const GLuint vs = compile(GL_VERTEX_SHADER, vert), fs = compile(GL_FRAGMENT_SHADER, f);
-        s.program = glCreateProgram();
-        glAttachShader(s.program, vs);
-        glAttachShader(s.program, fs);
-        glLinkProgram(s.program);
-        glDeleteShader(vs);
-        glDeleteShader(fs);
-        GLint ok = 0;
-        glGetProgramiv(s.program, GL_LINK_STATUS, &ok);
-        if (!ok) return no("the present shaders of screen '" + c.name + "' do not link");
-        glUseProgram(s.program);
-        glUniform1i(glGetUniformLocation(s.program, "wallLeft"), 0);
-        glUniform1i(glGetUniformLocation(s.program, "wallRight"), 1);
-        glUniform1i(glGetUniformLocation(s.program, "owners"), 2);
-        s.uViewport = glGetUniformLocation(s.program, "viewport");
-        s.uOutputSize = glGetUniformLocation(s.program, "outputSize");
-        s.uEyeMode = glGetUniformLocation(s.program, "eyeMode");
-        s.uBlendWidth = glGetUniformLocation(s.program, "blendWidth");
-        s.uBlendInvGamma = glGetUniformLocation(s.program, "blendInvGamma");
-        s.uInvGamma = glGetUniformLocation(s.program, "invGamma");
-        s.uBrightness = glGetUniformLocation(s.program, "brightness");
-        s.uTileSize = glGetUniformLocation(s.program, "tileSize");
-        s.uWallSize = glGetUniformLocation(s.program, "wallSize");
-        s.uFrameSize = glGetUniformLocation(s.program, "frameSize");
-        glGenVertexArrays(1, &s.vao);  // vertex arrays are not shared between contexts
-
-        glfwSetKeyCallback(win, [](GLFWwindow* w, int key, int, int action, int mods) {
-            auto* im = static_cast<Impl*>(glfwGetWindowUserPointer(w));
-            if (key < 0 || key >= int(im->input.keyDown.size())) return;
-            im->input.keyDown[size_t(key)] = action != GLFW_RELEASE;
-            if (action == GLFW_PRESS) {
-                im->input.keysPressed.push_back(key);
-                im->input.modsPressed.push_back(mods);
-            }
-        });
-        glfwSetMouseButtonCallback(win, [](GLFWwindow* w, int button, int action, int mods) {
-            auto* im = static_cast<Impl*>(glfwGetWindowUserPointer(w));
-            const bool down = action == GLFW_PRESS;
-            if (button == GLFW_MOUSE_BUTTON_LEFT) {
-                im->input.leftDown = down;
-                if (down) {
-                    im->input.leftPressed = true;
-                    im->input.clickMods = mods;
-                }
-            } else if (button == GLFW_MOUSE_BUTTON_RIGHT) {
-                im->input.rightDown = down;
-            }
-        });
-        glfwSetCursorPosCallback(win, [](GLFWwindow* w, double x, double y) {
-            auto* im = static_cast<Impl*>(glfwGetWindowUserPointer(w));
-            int index = 0;
-            for (size_t k = 0; k < im->screens.size(); ++k)
-                if (im->screens[k].window == w) index = int(k);
-            if (im->haveCursor && index == im->lastWindow && (im->input.leftDown || im->input.rightDown)) {
-                im->input.mouseDx += x - im->lastCursor[0];
-                im->input.mouseDy += y - im->lastCursor[1];
-            }
-            im->haveCursor = true;
-            im->lastWindow = index;
-            im->lastCursor[0] = x;
-            im->lastCursor[1] = y;
-            const ScreenConfig& sc = im->wall.screens[size_t(index)];
-            im->input.wallX = sc.viewport.x + x * sc.viewport.width / sc.outputWidth;
-            im->input.wallY = sc.viewport.y + y * sc.viewport.height / sc.outputHeight;
-        });
-        glfwSetScrollCallback(win, [](GLFWwindow* w, double, double dy) {
-            static_cast<Impl*>(glfwGetWindowUserPointer(w))->input.scroll += dy;
-        });
+        if (!impl->link(s, vert, frag, c)) return no("the present shaders of screen '" + c.name + "' do not link");
+        Impl::listen(win);
     }
 
     // Textures and pixel buffers live in the first context and are shared by all.
@@ -391,7 +409,10 @@ void GlPresenter::present(const WallFrame& frame, const PresentOptions& options,
         } else {
             im.draw(i, eyeMode, tileSize);
         }
-        if (i == 0 && options.overlay && options.overlay->width > 0) im.blitOverlay(*options.overlay, c);
+        // The screen's stages, then the overlay on top (as presentScreen runs them).
+        for (ScreenStage* stage : options.stages) stage->drawGl(wall, i);
+        im.overlay.set(options.overlay);
+        im.overlay.drawGl(wall, i);
         if (capture) {
             Image& img = (*capture)[i];
             img.width = c.outputWidth;

@@ -114,14 +114,18 @@ Image presentScreen(const WallConfig& wall, size_t index, const WallFrame& frame
             uint8_t* q = out.pixel(x, y);
             for (int k = 0; k < 3; ++k) q[k] = quantise(corrected(c[k], m.weight, s));
         }
-    if (options.overlay && index == 0) {
-        // Pasted as is, after correction: the GL presenter copies it with glBlitFramebuffer.
-        const Image& o = *options.overlay;
-        const int w = std::min(o.width, out.width - kOverlayMargin), h = std::min(o.height, out.height - kOverlayMargin);
-        for (int y = 0; y < h; ++y)
-            for (int x = 0; x < w; ++x) std::memcpy(out.pixel(kOverlayMargin + x, kOverlayMargin + y), o.pixel(x, y), 3);
-    }
+    for (ScreenStage* stage : options.stages) stage->apply(wall, index, out);
+    if (options.overlay) OverlayStage(options.overlay).apply(wall, index, out);
     return out;
+}
+
+void OverlayStage::apply(const WallConfig&, size_t screen, Image& out) const {
+    if (!overlay_ || screen != 0) return;
+    // Pasted as is, after correction: the GL presenter copies it with glBlitFramebuffer.
+    const Image& o = *overlay_;
+    const int w = std::min(o.width, out.width - kOverlayMargin), h = std::min(o.height, out.height - kOverlayMargin);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) std::memcpy(out.pixel(kOverlayMargin + x, kOverlayMargin + y), o.pixel(x, y), 3);
 }
 
 }  // namespace rtwall

@@ -3,10 +3,14 @@
 // The test starts its own Xvfb (a free display number, found with -displayfd).
 #include "display_test_util.h"
 
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/glcorearb.h>
+
 #include <rtwall/engine.h>
 
 #include <csignal>
 #include <cstdlib>
+#include <cstring>
 #include <poll.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -123,6 +127,39 @@ TEST(GlPresenter, TheTwoByTwoWallShowsWhatTheHeadlessPresenterWrites) {
 TEST(GlPresenter, TheStatusOverlaySitsOnTheFirstScreen) {
     const Image status = textImage("rtwall 12.5 fps | 0.84 MB/frame lz4\nclient 1: 300 tiles 85% busy", 2);
     PresentOptions o;
+    o.overlay = &status;
+    expectScreensMatchHeadless(test::sourceDir() / "configs/wall/projectors-2x2.toml", UploadMethod::TexSubImage, o, 0);
+}
+
+// A per-screen stage (issue 26) in both presenters: it paints one rectangle of the second
+// screen, and the GL presenter shows exactly what presentScreen makes with it.
+class PaintStage final : public ScreenStage {
+public:
+    void apply(const WallConfig&, size_t screen, Image& pixels) const override {
+        if (screen != 1) return;
+        for (int y = kY0; y < kY1; ++y)
+            for (int x = kX0; x < kX1; ++x) std::memcpy(pixels.pixel(x, y), kColour, 3);
+    }
+    void drawGl(const WallConfig& wall, size_t screen) override {
+        if (screen != 1) return;
+        const int height = wall.screens[screen].outputHeight;  // GL's rows count from the bottom
+        glEnable(GL_SCISSOR_TEST);
+        glScissor(kX0, height - kY1, kX1 - kX0, kY1 - kY0);
+        glClearColor(kColour[0] / 255.0f, kColour[1] / 255.0f, kColour[2] / 255.0f, 1.0f);
+        glClear(GL_COLOR_BUFFER_BIT);
+        glDisable(GL_SCISSOR_TEST);
+    }
+
+private:
+    static constexpr int kX0 = 5, kY0 = 3, kX1 = 45, kY1 = 20;
+    static constexpr uint8_t kColour[3] = {10, 200, 30};
+};
+
+TEST(GlPresenter, AnInsertedStageShowsWhatTheCpuStageMakes) {
+    PaintStage paint;
+    const Image status = textImage("stage", 2);
+    PresentOptions o;
+    o.stages = {&paint};
     o.overlay = &status;
     expectScreensMatchHeadless(test::sourceDir() / "configs/wall/projectors-2x2.toml", UploadMethod::TexSubImage, o, 0);
 }

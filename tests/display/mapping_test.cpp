@@ -8,6 +8,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <stdexcept>
 
 namespace rtwall {
 namespace {
@@ -213,6 +214,46 @@ TEST(Mapping, StatusTextAndItsOverlay) {
     EXPECT_EQ(first.pixel(kOverlayMargin + 3, kOverlayMargin + 2)[1], 235);
     EXPECT_EQ(first.pixel(kOverlayMargin - 1, kOverlayMargin)[1], f.left.pixel(kOverlayMargin - 1, kOverlayMargin)[1]);
     EXPECT_EQ(presentScreen(w, 1, f, o).rgb, presentScreen(w, 1, f).rgb);
+}
+
+// A per-screen stage inserted after the mapping (issue 26): it paints one rectangle of one
+// screen; every other pixel of every screen is what the wall showed without it, and the overlay
+// still goes on top.
+class PaintStage final : public ScreenStage {
+public:
+    void apply(const WallConfig&, size_t index, Image& pixels) const override {
+        if (index != screen) return;
+        for (int y = 2; y < 12; ++y)
+            for (int x = 4; x < 24; ++x) std::memcpy(pixels.pixel(x, y), colour, 3);
+    }
+    void drawGl(const WallConfig&, size_t) override { throw std::logic_error("a CPU stage"); }
+    size_t screen = 1;
+    uint8_t colour[3] = {10, 200, 30};
+};
+
+TEST(Mapping, AnInsertedStageChangesExactlyItsPixels) {
+    const WallConfig w = loadWallConfig(test::sourceDir() / "configs/wall/projectors-2x2.toml");
+    const WallFrame f = gradientFrame(1600, 1200);
+    PaintStage paint;
+    PresentOptions o;
+    o.stages = {&paint};
+    for (size_t s = 0; s < w.screens.size(); ++s) {
+        const Image plain = presentScreen(w, s, f), staged = presentScreen(w, s, f, o);
+        ASSERT_EQ(plain.rgb.size(), staged.rgb.size());
+        for (int y = 0; y < plain.height; ++y)
+            for (int x = 0; x < plain.width; ++x) {
+                const bool painted = s == 1 && x >= 4 && x < 24 && y >= 2 && y < 12;
+                const uint8_t* expected = painted ? paint.colour : plain.pixel(x, y);
+                ASSERT_EQ(std::memcmp(staged.pixel(x, y), expected, 3), 0) << "screen " << s << " pixel " << x << "," << y;
+            }
+    }
+    // The overlay is drawn after the stages: it covers what they painted.
+    const Image one = textImage("1", 1);
+    o.overlay = &one;
+    paint.screen = 0;
+    const Image first = presentScreen(w, 0, f, o);
+    EXPECT_EQ(std::memcmp(first.pixel(kOverlayMargin + 3, kOverlayMargin + 2), one.pixel(3, 2), 3), 0);
+    EXPECT_EQ(std::memcmp(first.pixel(4, 2), paint.colour, 3), 0);
 }
 
 TEST(Mapping, AFrameLargerThanTheWallOrWithUnlikeEyesIsRefused) {

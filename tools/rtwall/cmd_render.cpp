@@ -9,6 +9,7 @@
 
 #include <rtwall/cluster.h>
 #include <rtwall/engine.h>
+#include <rtwall/frame.h>
 #include <rtwall/wall.h>
 
 #include <chrono>
@@ -82,26 +83,30 @@ Image renderHere(const Scene& scene, const Camera& camera, const SceneDesc& desc
     try {
         if (!o.region.empty() && o.frames > 1) throw InputError("--region renders one frame: give it --frame, not --frames");
         if (o.region.empty()) {
-            // Frames are averaged in linear light, before the 8-bit quantisation clips
-            // each at 1.0 (a GI sample far above 1 would lose its excess in every frame),
-            // at the half precision the cluster sends them in (Accumulator::addLinear). A
+            // The frames' mean is the wall's (the one Compositor): in linear light, before the
+            // 8-bit quantisation clips each at 1.0 (a GI sample far above 1 would lose its
+            // excess in every frame), at the half precision the cluster sends them in. A
             // deterministic scene renders the same image every frame: its 8-bit mean is it.
-            const bool linear = o.frames > 1 && rendersStochastically(desc);
-            Accumulator acc;
+            ComposeFrame mean;
+            mean.stochastic = o.frames > 1;
+            mean.linear = o.frames > 1 && rendersStochastically(desc);
+            Compositor compositor;
             for (int f = 0; f < o.frames; ++f) {
                 TileStats fs;
                 const uint32_t frame = firstFrame + uint32_t(f);
-                if (linear) {
-                    const std::vector<float> rgb = renderFrameLinear(scene, camera, s, frame, &fs, trace);
-                    acc.addLinear(rgb.data(), s.width, s.height);
+                std::vector<Image> image(1);
+                std::vector<float> rgb;
+                if (mean.linear) {
+                    rgb = renderFrameLinear(scene, camera, s, frame, &fs, trace);
+                    image[0].width = s.width;
+                    image[0].height = s.height;
                 } else {
-                    img = renderFrame(scene, camera, s, frame, &fs, trace);
-                    if (o.frames > 1) acc.add(img);
+                    image[0] = renderFrame(scene, camera, s, frame, &fs, trace);
                 }
+                img = compositor.compose(mean, std::move(image), {&rgb, 1}).left;
                 stats.rays += fs.rays;
                 stats.shadowRays += fs.shadowRays;
             }
-            if (o.frames > 1) img = acc.resolve();
         } else {
             const TileRect r = parseRegion(o.region, s);
             img.width = s.width;

@@ -3,11 +3,12 @@
 // A Master owns the scene state and the wall's framebuffer; render clients (other processes,
 // on this PC or others) connect over ZeroMQ, ask for tiles, render them with the engine's
 // renderTile() and send the pixels back. Scheduling and frame assembly are plain classes
-// (cluster/src/scheduler.h, assembler.h) that never see a socket.
+// (cluster/src/scheduler.h; FrameAssembler in rtwall/frame.h) that never see a socket.
 #pragma once
 
 #include <rtwall/engine.h>
 #include <rtwall/engine_testing.h>
+#include <rtwall/frame.h>
 
 #include <atomic>
 #include <cstdint>
@@ -33,8 +34,6 @@ struct CodecSettings {
     int zstdLevel = 1;            // 1..19
     bool operator==(const CodecSettings&) const = default;
 };
-
-struct FrameView;
 
 // A wall on several display PCs (issue 19): render clients send each tile straight to the
 // display nodes whose screens show it; the master carries only control and a small ack per
@@ -106,43 +105,7 @@ MasterCounters operator-(MasterCounters later, const MasterCounters& earlier);
 // "nothing dropped, refused or lost".
 std::string describeCounters(const MasterCounters& c);
 
-// ---- Frames of several views ---------------------------------------------------------------------
-// Both eyes of a stereo wall, and each plane of screens of a non-coplanar wall (a CAVE), render
-// in one frame: one scheduler pass over the tiles of every view, each view with its own
-// off-axis camera, assembled into one image per view (Master::setViews, renderViews).
-
-// A rectangle of the wall image (x, y, width, height in pixels of a reference image).
-struct ViewRegion {
-    int x = 0, y = 0, width = 0, height = 0;
-    bool operator==(const ViewRegion&) const = default;
-};
-
-// One image of a multi-view frame: its camera and the parts of the image it shows (a CAVE plane
-// shows only its screens), in pixels of a refWidth x refHeight image (the wall's), scaled to
-// the frame's resolution as the wall scales a smaller frame (scaledRegion). No regions: the
-// whole image.
-struct FrameView {
-    CameraDesc camera;
-    std::vector<ViewRegion> regions;
-    int refWidth = 0, refHeight = 0;
-    bool operator==(const FrameView&) const = default;
-};
-
-// A tile of a multi-view frame: the view it belongs to and its pixels in that view's image.
-struct ViewTile {
-    uint32_t view = 0;
-    TileRect rect;
-};
-
-// A region's pixels in a width x height frame: x0 rounded down, x1 up (a frame smaller than
-// the wall still covers every pixel of the region), clipped to the frame.
-TileRect scaledRegion(const ViewRegion& region, int refWidth, int refHeight, int width, int height);
-
-// The tiling of a multi-view frame, which master and clients compute alike (a tile's number in
-// the protocol indexes it): view by view, the tiles of makeTiles(width, height, tileSize) that
-// meet one of the view's regions (all of them without regions), in makeTiles order. A client
-// that renders a tile of view v renders it as it would in a frame of v's camera alone.
-std::vector<ViewTile> viewTiles(const std::vector<FrameView>& views, int width, int height, int tileSize);
+// Frames of several views (FrameView, ViewTile, viewTiles): rtwall/frame.h.
 
 struct ClientReport {
     uint32_t id = 0;

@@ -210,10 +210,47 @@ struct WallFrame {
 // empty one, or eyes of different sizes.
 void checkFrameSize(const WallConfig& wall, const WallFrame& frame, const char* who);
 
+// A per-screen stage (issue 26): a step between the frame's eye images and what a screen shows,
+// run on each screen after its pixels are mapped (crop, scale, stereo packing, blend ramps,
+// colour correction), stage after stage. Each is written for both presenters, which must give
+// the same pixels: apply() for presentScreen (the headless presenter, display nodes without a
+// window, the tests), drawGl() for the GL presenter. The status overlay is one (OverlayStage);
+// re-projection, denoising and projector warp come as others.
+class ScreenStage {
+public:
+    virtual ~ScreenStage() = default;
+    // Screen `screen`'s pixels (outputWidth x outputHeight), in place.
+    virtual void apply(const WallConfig& wall, size_t screen, Image& pixels) const = 0;
+    // The same in OpenGL 3.3 core: called with screen `screen`'s context current, its viewport
+    // set and its back buffer (both of a quad-buffered screen) as the draw framebuffer, after
+    // the present shader drew it. Leaves GL_FRAMEBUFFER bound to 0.
+    virtual void drawGl(const WallConfig& wall, size_t screen) = 0;
+    // Frees what drawGl made: the GL presenter calls it with the first screen's context current
+    // before it closes its windows.
+    virtual void releaseGl() {}
+};
+
+// The status overlay: copied 1:1 (no blending, no correction) to the first screen, kOverlayMargin
+// pixels from its top-left, clipped to the screen.
+class OverlayStage final : public ScreenStage {
+public:
+    explicit OverlayStage(const Image* overlay = nullptr) : overlay_(overlay) {}
+    void set(const Image* overlay) { overlay_ = overlay; }
+    void apply(const WallConfig& wall, size_t screen, Image& pixels) const override;
+    void drawGl(const WallConfig& wall, size_t screen) override;
+    void releaseGl() override;
+
+private:
+    const Image* overlay_;
+    unsigned texture_ = 0, framebuffer_ = 0;  // GL names, in the first screen's context
+    int textureWidth_ = 0, textureHeight_ = 0;
+};
+
 struct PresentOptions {
     bool falseColour = false;  // tint every tile with the colour of the client that rendered it
-    const Image* overlay = nullptr;  // the status overlay: copied 1:1 to the first screen, 8 pixels from its top-left
+    const Image* overlay = nullptr;  // the status overlay (OverlayStage): drawn after `stages`, on top
     int quadBufferEye = 0;     // quad-buffered screens: which eye presentScreen returns (0 left, 1 right)
+    std::vector<ScreenStage*> stages{};  // run on every screen in order (the caller keeps them)
 };
 
 struct ScreenSample {

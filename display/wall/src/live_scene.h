@@ -25,6 +25,39 @@ public:
     // sent with sendEyeCamera, which leaves it as it is.
     const CameraDesc& camera() const { return desc_.cameras.front(); }
 
+    // An edited scene file's changes (diffScenes), as far as they may be applied: render settings
+    // not while the operating point sets them (`settingsFixed`), the camera not while a path or
+    // orbit moves it (`cameraScripted`), a material the master refuses not; each refusal is in
+    // the result's `refused`, and what it holds is what was applied.
+    SceneEdit applyEdit(const SceneDesc& edited, bool settingsFixed, bool cameraScripted) {
+        SceneEdit e = diffScenes(desc_, edited);
+        if (e.settings && settingsFixed) {
+            e.refused.push_back("[render] changed, but --target-fps sets the render settings");
+            e.settings.reset();
+        }
+        if (e.camera && cameraScripted) {
+            e.refused.push_back("the camera changed, but a camera path or orbit moves it");
+            e.camera.reset();
+        }
+        std::vector<std::pair<uint32_t, Material>> materials;
+        for (const auto& [i, m] : e.materials) {
+            try {
+                setMaterial(i, m);
+                materials.emplace_back(i, m);
+            } catch (const InputError& err) {
+                e.refused.push_back("material '" + m.name + "': " + err.what());
+            }
+        }
+        e.materials = std::move(materials);
+        for (const auto& [i, l] : e.lights) setLight(i, l);
+        for (const auto& [i, p] : e.sections) setSection(i, p);
+        for (const auto& [i, t] : e.transforms) setInstanceTransform(i, t);
+        if (!e.visibility.empty()) setLoadedVisibility(e.visibility);
+        if (e.settings) setRenderSettings(*e.settings);
+        if (e.camera) setCamera(*e.camera);
+        return e;
+    }
+
     void setCamera(const CameraDesc& camera) {
         master_.setCamera(camera);
         desc_.cameras.front() = camera;

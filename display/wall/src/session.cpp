@@ -1,8 +1,10 @@
 // WallSession: the display master's frame loop (what `rtwall run` runs).
 #include "live_scene.h"
 #include "scene_watcher.h"
+#include "tuning.h"
 #include "wall_input.h"
 
+#include <rtwall/frame.h>
 #include <rtwall/wall.h>
 
 #include <algorithm>
@@ -10,14 +12,15 @@
 #include <cstdio>
 #include <deque>
 #include <fstream>
+#include <span>
 #include <sstream>
 #include <thread>
-#include <tuple>
 
 namespace rtwall {
 
 using wall::LiveScene;
 using wall::SceneWatcher;
+using wall::WallTuning;
 using wall::WallInput;
 
 namespace {
@@ -35,26 +38,6 @@ void fitToRun(SceneDesc& d, const RunConfig& c, const WallConfig& wall) {
         const CameraDesc* cam = d.findCamera(c.camera);
         if (!cam) throw InputError(c.scene + ": no camera named '" + c.camera + "'");
         d.cameras = {*cam};
-    }
-}
-
-std::string codecPointName(const CodecSettings& c, int tile) {
-    std::string n = tileCodecName(c.codec);
-    if (c.codec == TileCodec::Jpeg) n += " q" + std::to_string(c.jpegQuality);
-    return n + ", tile " + std::to_string(tile);
-}
-
-// The pixels of `screens` from a render of the whole image: a view of a CAVE shows only its own
-// walls. Frames smaller than the wall (an operating point) are scaled alike (scaledRegion, the
-// rule by which a multi-view frame picks each view's tiles).
-void copyScreens(Image& to, const Image& from, const WallConfig& wall, const std::vector<size_t>& screens) {
-    for (size_t i : screens) {
-        const PixelRect& v = wall.screens[i].viewport;
-        const TileRect r = scaledRegion({v.x, v.y, v.width, v.height}, wall.width, wall.height, from.width, from.height);
-        for (int y = r.y0; y < r.y1; ++y) {
-            const size_t row = (size_t(y) * size_t(from.width) + size_t(r.x0)) * 3;
-            std::copy(from.rgb.begin() + long(row), from.rgb.begin() + long(row + size_t(r.width()) * 3), to.rgb.begin() + long(row));
-        }
     }
 }
 
@@ -105,24 +88,19 @@ struct WallSession::Impl {
     std::unique_ptr<LiveScene> live;
     std::unique_ptr<WallInput> input;
     std::unique_ptr<SceneWatcher> watcher;
-    std::unique_ptr<OperatingPointController> controller;
-    std::ofstream trace;
+    std::unique_ptr<WallTuning> tuning;  // the operating point (--target-fps)
 
     // Per frame.
     int frame = 0;  // frames stepped
     std::vector<double> frameTimes;
     std::chrono::steady_clock::time_point last;
     uint64_t bytes = 0;
-    uint32_t accumulatedSeq = UINT32_MAX;  // the state the progressive mean is of
-    Accumulator progressive;
+    Compositor compositor;      // the running means of stochastic frames go on from step to step
     std::vector<float> linear;  // the frame in linear RGB when it came as linear tiles
-    int accumulatedFrames = 0, linearFrames = 0;
-    size_t framesOnTarget = 0;
     WallFrame shown;
     FrameReport report;
     // Multi-view frames (views): what each setViews asked for, by tag, until its frame is back
-    // (async returns the frame begun a step earlier); each view's eye and screens; and per view
-    // the accumulation of a still view of a stochastic scene.
+    // (async returns the frame begun a step earlier); each view's eye and screens.
     struct ViewSpec {
         uint64_t tag = 0;
         uint64_t trackerPackets = 0;  // the tracker datagrams counted when its head pose was taken
@@ -134,15 +112,8 @@ struct WallSession::Impl {
     std::vector<int> viewEye;                  // -1 (mono), 0 left, 1 right
     std::vector<std::vector<size_t>> viewScreens;  // a view's screens (empty: it is the whole image)
     std::vector<std::vector<float>> viewLinear;
-    struct ViewAccumulation {
-        Accumulator sum;
-        uint32_t stateSeq = UINT32_MAX;
-        std::optional<CameraDesc> camera;
-    };
-    std::vector<ViewAccumulation> viewAccumulation;
     uint64_t shownTrackerPackets = 0;  // of the head pose the last shown frame was made for
     HeadPose shownHead;
-    size_t viewRestarts = 0;           // view accumulations restarted (a view's camera or the state changed)
     CameraDesc lastNavigation;
     bool moved = false;                // this frame's view moved (navigation, scripted camera, head): the controller favours speed
 
@@ -311,102 +282,9 @@ struct WallSession::Impl {
         return line;
     }
 
-    // An operating point's settings, applied through the one scene state.
-    void apply(const OperatingPoint& p) {
-        const Knobs k = knobsOf(p, baseSettings, baseCodec);
-        live->setRenderSettings(k.settings);
-        master->setCodec(k.codec);
-        if (k.volumeStep > 0)
-            for (size_t m = 0; m < live->desc().materials.size(); ++m)
-                if (live->desc().materials[m].type == MaterialType::Volume && live->desc().materials[m].volumeStep != k.volumeStep) {
-                    Material mat = live->desc().materials[m];
-                    mat.volumeStep = k.volumeStep;
-                    live->setMaterial(uint32_t(m), mat);
-                }
-    }
-
-    // Calibration: each codec and tile size, and four resolutions, for three frames of the first
-    // view; error = 1 - SSIM against the lossless frame (at the wall's resolution). Down to a
-    // quarter of the wall's width: on a 2-core PC the 1600x1200 reference wall (the default run)
-    // reaches an interactive rate only below half.
-    std::vector<OperatingPoint> calibrate() {
-        log("calibrating the operating points (codec x tile size, and resolution, 3 frames each)");
-        const Image lossless = master->renderFrame();
-        std::vector<std::tuple<int, int, double>> grid;  // JPEG quality (0: LZ4), tile, scale
-        for (int q : {0, 95, 90, 75, 50})
-            for (int tile : {32, 64, 128}) grid.emplace_back(q, tile, 1.0);
-        for (double scale : {0.75, 0.5, 0.35, 0.25}) grid.emplace_back(0, 64, scale);
-        std::vector<OperatingPoint> points;
-        for (const auto& [q, tile, scale] : grid) {
-            OperatingPoint p;
-            CodecSettings cs = baseCodec;
-            cs.codec = q == 0 ? TileCodec::Lz4 : TileCodec::Jpeg;
-            if (q) cs.jpegQuality = q;
-            p.name = codecPointName(cs, tile);
-            p.controls = {{"tile", tile}, {"codec", double(int(cs.codec))}, {"scale", scale}};
-            if (scale != 1.0) p.name += ", scale " + std::to_string(scale).substr(0, 4);
-            if (q) p.controls.emplace_back("jpeg_quality", q);
-            apply(p);
-            std::vector<double> times;
-            Image img;
-            for (int i = 0; i < 3; ++i) {
-                FrameReport r;
-                img = master->renderFrame(&r);
-                if (i > 0) times.push_back(r.seconds);
-            }
-            p.frameSeconds = std::max(1e-6, *std::min_element(times.begin(), times.end()));
-            p.error = std::max(0.0, 1.0 - ssimLuminance(resizeBilinear(img, lossless.width, lossless.height), lossless));
-            log(format("  %-20s %7.1f ms  1-SSIM %.5f", p.name.c_str(), p.frameSeconds * 1e3, p.error));
-            points.push_back(p);
-        }
-        return points;
-    }
-
-    void startController(const std::vector<OperatingPoint>& givenFront) {
-        if (config.targetFps <= 0) return;
-        const std::vector<OperatingPoint> points = givenFront.empty() ? calibrate() : givenFront;
-        ControllerOptions co;
-        co.targetFps = config.targetFps;
-        controller = std::make_unique<OperatingPointController>(points, co);
-        apply(controller->current());
-        log(format("target %.1f fps: starting at '%s' (front of %zu points)", config.targetFps,
-                   controller->current().name.c_str(), controller->front().size()));
-        if (!config.trace.empty()) {
-            trace.open(config.trace);
-            if (!trace) throw InputError("--trace: cannot write " + config.trace.string());
-            trace << "frame,seconds,clients,point_index,point\n";
-        }
-    }
-
     SceneEdit applyEdit(const SceneDesc& edited) {
-        SceneEdit e = diffScenes(live->desc(), edited);
-        if (e.settings && controller) {
-            e.refused.push_back("[render] changed, but --target-fps sets the render settings");
-            e.settings.reset();
-        }
-        if (e.camera && (!path.empty() || config.orbit != 0.0)) {
-            e.refused.push_back("the camera changed, but a camera path or orbit moves it");
-            e.camera.reset();
-        }
-        std::vector<std::pair<uint32_t, Material>> materials;
-        for (const auto& [i, m] : e.materials) {
-            try {
-                live->setMaterial(i, m);
-                materials.emplace_back(i, m);
-            } catch (const InputError& err) {
-                e.refused.push_back("material '" + m.name + "': " + err.what());
-            }
-        }
-        e.materials = std::move(materials);
-        for (const auto& [i, l] : e.lights) live->setLight(i, l);
-        for (const auto& [i, p] : e.sections) live->setSection(i, p);
-        for (const auto& [i, t] : e.transforms) live->setInstanceTransform(i, t);
-        if (!e.visibility.empty()) live->setLoadedVisibility(e.visibility);
-        if (e.settings) live->setRenderSettings(*e.settings);
-        if (e.camera) {
-            live->setCamera(*e.camera);
-            input->setCamera(*e.camera);
-        }
+        const SceneEdit e = live->applyEdit(edited, tuning->controller() != nullptr, !path.empty() || config.orbit != 0.0);
+        if (e.camera) input->setCamera(*e.camera);
         const std::string file = config.scene;
         for (const std::string& r : e.refused) log(file + ": " + r + " (not applied)");
         log(format("%s changed: %zu materials, %zu lights, %zu instance transforms, render settings %s, camera %s, %zu "
@@ -465,70 +343,43 @@ struct WallSession::Impl {
         const std::vector<int> eyes = stereo ? std::vector<int>{0, 1} : std::vector<int>{-1};
         for (int eye : eyes) {
             const std::vector<WallView> vs = wallViews(wallConfig, head, eye);
-            for (const WallView& v : vs) {
-                FrameView f;
-                f.camera = input->viewCamera(v.window);
-                if (vs.size() > 1) {
-                    // One plane of several: only its screens' tiles are rendered.
-                    for (size_t i : v.screens) {
-                        const PixelRect& r = wallConfig.screens[i].viewport;
-                        f.regions.push_back({r.x, r.y, r.width, r.height});
-                    }
-                    f.refWidth = wallConfig.width;
-                    f.refHeight = wallConfig.height;
-                    viewScreens.push_back(v.screens);
-                } else {
-                    viewScreens.emplace_back();
-                }
+            for (size_t i = 0; i < vs.size(); ++i) {
+                viewScreens.push_back(vs.size() > 1 ? vs[i].screens : std::vector<size_t>{});
                 viewEye.push_back(eye);
-                out.push_back(std::move(f));
+                out.push_back(frameView(vs, i));
             }
         }
         return out;
     }
 
-    // Each eye's image from its views' images: a whole-image view is the eye's image, planes
-    // give their screens' pixels.
-    void composeEyes(std::vector<Image>& images) {
-        for (int eye : stereo ? std::vector<int>{0, 1} : std::vector<int>{-1}) {
-            Image image;
-            for (size_t v = 0; v < images.size() && v < viewEye.size(); ++v) {
-                if (viewEye[v] != eye) continue;
-                if (viewScreens[v].empty()) {
-                    image = std::move(images[v]);
-                    continue;
-                }
-                if (image.rgb.empty()) {
-                    image.width = images[v].width;
-                    image.height = images[v].height;
-                    image.rgb.assign(images[v].rgb.size(), 0);
-                }
-                copyScreens(image, images[v], wallConfig, viewScreens[v]);
-            }
-            (eye == 1 ? shown.right : shown.left) = std::move(image);
+    // View i of an eye's views with its off-axis camera; one plane of several shows (and has
+    // rendered) only its screens' pixels.
+    FrameView frameView(const std::vector<WallView>& vs, size_t i) {
+        FrameView f;
+        f.camera = input->viewCamera(vs[i].window);
+        if (vs.size() == 1) return f;
+        for (size_t screen : vs[i].screens) {
+            const PixelRect& r = wallConfig.screens[screen].viewport;
+            f.regions.push_back({r.x, r.y, r.width, r.height});
         }
+        f.refWidth = wallConfig.width;
+        f.refHeight = wallConfig.height;
+        return f;
     }
 
-    // A still view of a stochastic scene refines, view by view: a view restarts when the state
-    // changed (any scene change, the navigation camera, the codec) or its own camera did (the
-    // head moved its eye, or its plane's frustum); the others keep accumulating.
-    void accumulateViews(std::vector<Image>& images, const std::vector<FrameView>& rendered) {
-        if (viewAccumulation.size() != images.size()) viewAccumulation = std::vector<ViewAccumulation>(images.size());
-        for (size_t v = 0; v < images.size(); ++v) {
-            ViewAccumulation& a = viewAccumulation[v];
-            const CameraDesc& camera = rendered[v].camera;
-            if (a.stateSeq != report.stateSeq || !a.camera || !(*a.camera == camera)) {
-                a.sum.reset();
-                a.stateSeq = report.stateSeq;
-                a.camera = camera;
-                ++viewRestarts;
-            }
-            if (report.linear && v < viewLinear.size()) a.sum.addLinear(viewLinear[v].data(), images[v].width, images[v].height);
-            else a.sum.add(images[v]);
-            images[v] = a.sum.resolve();
-        }
-        ++accumulatedFrames;
-        linearFrames += report.linear;
+    // What the wall shows of a frame: its views (none: one image) accumulated and composed into
+    // the eyes by the one compositor the display nodes use too.
+    void compose(const std::vector<FrameView>& rendered, std::vector<Image> images,
+                 std::span<const std::vector<float>> linearViews) {
+        ComposeFrame f;
+        f.views = rendered;
+        if (!rendered.empty()) f.eyes = viewEye;
+        f.stochastic = report.stochastic;
+        f.stateSeq = report.stateSeq;
+        f.linear = report.linear;
+        EyeImages eyes = compositor.compose(f, std::move(images), linearViews);
+        shown.left = std::move(eyes.left);
+        shown.right = std::move(eyes.right);
     }
 
     // Renders the frame (both eyes on a stereo wall) into `shown` and `report`.
@@ -548,39 +399,31 @@ struct WallSession::Impl {
             if (images.size() != rendered.views.size())
                 throw std::runtime_error("internal error: a multi-view frame came back with " + std::to_string(images.size()) +
                                          " images for " + std::to_string(rendered.views.size()) + " views");
-            if (!onNodes) {  // on nodes the images are empty: the pixels are on the nodes
-                if (report.stochastic) accumulateViews(images, rendered.views);
-                composeEyes(images);
-            }
+            if (!onNodes) compose(rendered.views, std::move(images), viewLinear);  // on nodes the pixels are on the nodes
         } else if (views) {
             // Each eye, each plane of screens: one render of the wall image with that view's
             // off-axis camera (the way before one-pass frames: tests compare the two).
             const std::vector<int> eyes = stereo ? std::vector<int>{0, 1} : std::vector<int>{-1};
             for (int eye : eyes) {
                 const std::vector<WallView> vs = wallViews(wallConfig, head, eye);
-                Image image;
+                ComposeFrame parts;  // the eye's planes, composed as one-pass views are (not accumulated)
+                std::vector<Image> images;
                 for (size_t i = 0; i < vs.size(); ++i) {
-                    live->sendEyeCamera(input->viewCamera(vs[i].window));
+                    parts.views.push_back(frameView(vs, i));
+                    parts.eyes.push_back(-1);
+                    live->sendEyeCamera(parts.views.back().camera);
                     const bool lastRender = eye == eyes.back() && i + 1 == vs.size();
-                    Image part = master->renderFrame(lastRender ? &report : nullptr);
-                    if (onNodes) continue;
-                    if (vs.size() == 1) {
-                        image = std::move(part);
-                    } else {
-                        if (i == 0) {
-                            image.width = part.width;
-                            image.height = part.height;
-                            image.rgb.assign(part.rgb.size(), 0);
-                        }
-                        copyScreens(image, part, wallConfig, vs[i].screens);
-                    }
+                    images.push_back(master->renderFrame(lastRender ? &report : nullptr));
                 }
-                (eye == 1 ? shown.right : shown.left) = std::move(image);
+                if (!onNodes) (eye == 1 ? shown.right : shown.left) = Compositor{}.compose(parts, std::move(images)).left;
             }
             shownTrackerPackets = trackerState.packets;
             shownHead = head;
         } else {
-            shown.left = master->renderFrame(&report, &linear);
+            std::vector<Image> image(1);
+            image[0] = master->renderFrame(&report, &linear);
+            if (onNodes) shown.left = std::move(image[0]);
+            else compose({}, std::move(image), {&linear, 1});
         }
         shown.number = report.frame;
         // The tile grid of the frame as rendered (the `tile` control and [render] edits change it);
@@ -592,34 +435,6 @@ struct WallSession::Impl {
             if (!viewScreens.empty() && !viewScreens.front().empty()) shown.tileOwners.clear();
         }
         shown.tileSize = live->desc().settings.tileSize;
-        if (!views && report.stochastic && !onNodes) {
-            // A still view refines: each frame has its own sampling seeds; any change to the scene
-            // state (camera, objects, materials, codec) restarts the accumulation. Linear frames
-            // are summed without the 8-bit quantisation.
-            if (report.stateSeq != accumulatedSeq) progressive.reset();
-            accumulatedSeq = report.stateSeq;
-            if (report.linear) progressive.addLinear(linear.data(), shown.left.width, shown.left.height);
-            else progressive.add(shown.left);
-            ++accumulatedFrames;
-            linearFrames += report.linear;
-            shown.left = progressive.resolve();
-        } else {
-            // Deterministic: every frame of a state is the same image; averaging would only cost time.
-            accumulatedSeq = UINT32_MAX;
-        }
-    }
-
-    void observe() {
-        if (!controller) return;
-        if (trace.is_open())
-            trace << frame << ',' << report.seconds << ',' << master->connectedClients() << ',' << controller->currentIndex()
-                  << ",\"" << controller->current().name << "\"" << std::endl;
-        framesOnTarget += report.seconds <= 1.0 / config.targetFps;
-        if (controller->observe(report.seconds, moved)) {
-            apply(controller->current());
-            log(format("frame %d: %.1f ms (budget %.1f ms): operating point -> '%s'", frame, report.seconds * 1e3,
-                       controller->budgetSeconds() * 1e3, controller->current().name.c_str()));
-        }
     }
 
     std::string nodeLine;  // this frame's nodeStatus()
@@ -733,7 +548,8 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
         s.viewSpecs.push_back({0, 0, s.head, s.frameViews()});
         s.master->setViews(s.viewSpecs.back().views, 0);
     }
-    s.startController(givenFront);
+    s.tuning = std::make_unique<WallTuning>(*s.master, *s.live, s.baseSettings, s.baseCodec, s.log);
+    s.tuning->start(c.targetFps, givenFront, c.trace);
     if (c.watch) {
         const std::filesystem::path file = c.scene;
         const RunConfig fitConfig = c;
@@ -797,7 +613,7 @@ bool WallSession::step() {
         s.input->show(s.shown, s.report, s.frameTimes.back());
     }
     s.bytes += s.report.bytes;
-    s.observe();
+    s.tuning->observe(s.frame, s.report, s.moved);
     s.writeFiles();
     s.ranToTheEnd = s.config.frames > 0 && s.frame >= s.config.frames;
     return true;
@@ -839,7 +655,7 @@ const HeadPose& WallSession::lastHead() const { return impl_->head; }
 std::optional<WandPose> WallSession::wand() const { return impl_->input->wand(); }
 uint64_t WallSession::shownTrackerPackets() const { return impl_->shownTrackerPackets; }
 const HeadPose& WallSession::shownHead() const { return impl_->shownHead; }
-size_t WallSession::viewRestarts() const { return impl_->viewRestarts; }
+size_t WallSession::viewRestarts() const { return impl_->compositor.viewRestarts(); }
 const FrameReport& WallSession::lastReport() const { return impl_->report; }
 std::string WallSession::endpoint() const { return impl_->master->endpoint(); }
 bool WallSession::windowed() const { return impl_->input->windowed(); }
@@ -850,12 +666,12 @@ RunSummary WallSession::summary() const {
     r.frames = s.frameTimes.size();
     r.medianFps = r.frames ? 1.0 / median(s.frameTimes) : 0.0;
     r.megabytesPerFrame = r.frames ? double(s.bytes) * 1e-6 / double(r.frames) : 0.0;
-    r.accumulatedFrames = s.accumulatedFrames;
-    r.linearFrames = s.linearFrames;
-    r.framesOnTarget = s.framesOnTarget;
-    if (s.controller) {
-        r.operatingPointChanges = s.controller->changes();
-        r.operatingPoint = s.controller->current().name;
+    r.accumulatedFrames = s.compositor.accumulatedFrames();
+    r.linearFrames = s.compositor.linearFrames();
+    if (const OperatingPointController* c = s.tuning ? s.tuning->controller() : nullptr) {
+        r.framesOnTarget = s.tuning->framesOnTarget();
+        r.operatingPointChanges = c->changes();
+        r.operatingPoint = c->current().name;
     }
     r.counters = s.master->counters();
     return r;

@@ -1,6 +1,6 @@
 // FrameAssembler without a network: each tile of the current frame is written exactly once,
 // at the right place, also with several decode threads racing for the same tiles.
-#include "assembler.h"
+#include <rtwall/frame.h>
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <random>
 #include <thread>
 
-namespace rtwall::cluster {
+namespace rtwall {
 namespace {
 
 using Claim = FrameAssembler::Claim;
@@ -298,4 +298,4 @@ TEST(FrameViews, TilesMeetScaledRegions) {
 }
 
 }  // namespace
-}  // namespace rtwall::cluster
+}  // namespace rtwall

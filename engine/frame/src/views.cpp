@@ -1,5 +1,5 @@
-// The tiling of a multi-view frame (cluster.h): one function for master and clients.
-#include <rtwall/cluster.h>
+// The tiling of a multi-view frame (rtwall/frame.h): one function for master, clients and nodes.
+#include <rtwall/frame.h>
 
 #include <algorithm>
 

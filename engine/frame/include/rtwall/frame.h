@@ -1,0 +1,180 @@
+// rtwall frame: the one path from tiles to the images a wall shows (issue 26).
+//
+// Tiles -> FrameAssembler (one image per view of a frame) -> Compositor (each view accumulated
+// when the frame is stochastic, the views composed into the eyes). The master, the display node,
+// the single-PC wall and `rtwall render` all go this way; none of them composes pixels itself.
+// No sockets and no OpenGL: the library sits below cluster and display.
+#pragma once
+
+#include <rtwall/engine.h>
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+namespace rtwall {
+
+// ---- Views of a frame ------------------------------------------------------------------------
+// Both eyes of a stereo wall, and each plane of screens of a non-coplanar wall (a CAVE), render
+// in one frame: one scheduler pass over the tiles of every view, each view with its own
+// off-axis camera, assembled into one image per view (Master::setViews, renderViews).
+
+// A rectangle of the wall image (x, y, width, height in pixels of a reference image).
+struct ViewRegion {
+    int x = 0, y = 0, width = 0, height = 0;
+    bool operator==(const ViewRegion&) const = default;
+};
+
+// One image of a multi-view frame: its camera and the parts of the image it shows (a CAVE plane
+// shows only its screens), in pixels of a refWidth x refHeight image (the wall's), scaled to
+// the frame's resolution as the wall scales a smaller frame (scaledRegion). No regions: the
+// whole image.
+struct FrameView {
+    CameraDesc camera;
+    std::vector<ViewRegion> regions;
+    int refWidth = 0, refHeight = 0;
+    bool operator==(const FrameView&) const = default;
+};
+
+// A tile of a multi-view frame: the view it belongs to and its pixels in that view's image.
+struct ViewTile {
+    uint32_t view = 0;
+    TileRect rect;
+};
+
+// A region's pixels in a width x height frame: x0 rounded down, x1 up (a frame smaller than
+// the wall still covers every pixel of the region), clipped to the frame.
+TileRect scaledRegion(const ViewRegion& region, int refWidth, int refHeight, int width, int height);
+
+// The tiling of a multi-view frame, which master and clients compute alike (a tile's number in
+// the protocol indexes it): view by view, the tiles of makeTiles(width, height, tileSize) that
+// meet one of the view's regions (all of them without regions), in makeTiles order. A client
+// that renders a tile of view v renders it as it would in a frame of v's camera alone.
+std::vector<ViewTile> viewTiles(const std::vector<FrameView>& views, int width, int height, int tileSize);
+
+// ---- Assembly --------------------------------------------------------------------------------
+
+// What an assembler holds of a frame besides the 8-bit image of each view. Further channels per
+// view (depth, features for a denoiser) join `linear` here: one buffer per view, written through
+// the claim of the tile they came with.
+struct FrameHolding {
+    bool linear = false;  // tiles come as linear RGB too: each view has a linear buffer (3 floats a pixel)
+    // Routing: `routes[t]` is the node mask of tile t and this assembler is bit `node`; it holds
+    // the frame when the tiles routed to it are in (a display node). Null: every tile.
+    const std::vector<uint64_t>* routes = nullptr;
+    unsigned node = 0;
+};
+
+// Gathers a frame's tiles into one image per view, each tile decoded straight into its place at
+// most once. Tiles of any other frame, tiles not routed here and repeats are refused. A plain
+// class without sockets; claim/commit/release are safe from several decode threads at once
+// (atomics per tile: a decode thread never waits for another).
+class FrameAssembler {
+public:
+    // A frame of one image whose tiles are makeTiles(width, height, tileSize), all held here.
+    void beginFrame(uint32_t frame, int width, int height, int tileSize);
+    // A frame of `views` images of width x height whose tiles are `tiles` (viewTiles). Throws
+    // std::invalid_argument when a tile's view is not below `views`, the routes do not match
+    // the tiles or the node is not below 64.
+    void beginFrame(uint32_t frame, int width, int height, const std::vector<ViewTile>& tiles, uint32_t views,
+                    const FrameHolding& options = {});
+
+    enum class Claim { Granted, Stale, Duplicate, NotRouted, Invalid };
+    // Reserves tile `tile` of `frame` for writing. Granted: write its pixels into `view` (rect
+    // gives the size; of a linear frame also into linearAt(viewOf(tile), rect.x0, rect.y0)), then
+    // commit() it, or release() it when decoding failed.
+    Claim claim(uint32_t frame, uint32_t tile, TileRect& rect, TileView& view);
+    void commit(uint32_t tile);
+    void release(uint32_t tile);
+
+    bool complete() const { return done_.load() == expected_; }
+    size_t expected() const { return expected_; }  // tiles held here (routed here)
+    size_t missing() const { return expected_ - done_.load(); }
+    uint32_t frame() const { return frame_; }
+    const std::vector<TileRect>& tiles() const { return tiles_; }
+    uint32_t viewOf(uint32_t tile) const { return view_.empty() ? 0 : view_[tile]; }
+    size_t views() const { return images_.size(); }
+    Image& image(size_t view = 0) { return images_[view]; }
+    const Image& image(size_t view = 0) const { return images_[view]; }
+    // The master takes the images of a complete frame away (std::exchange); the next beginFrame
+    // sizes them again.
+    std::vector<Image>& images() { return images_; }
+    const std::vector<Image>& images() const { return images_; }
+    bool linear() const { return linear_; }
+    const std::vector<std::vector<float>>& linearImages() const { return linearImages_; }
+    float* linearAt(size_t view, int x, int y) {
+        return linearImages_[view].data() + (size_t(y) * size_t(images_[view].width) + size_t(x)) * 3;
+    }
+
+private:
+    uint32_t frame_ = 0;
+    std::vector<Image> images_ = std::vector<Image>(1);  // one per view
+    std::vector<std::vector<float>> linearImages_;       // one per view of a linear frame
+    bool linear_ = false;
+    std::vector<TileRect> tiles_;
+    std::vector<uint32_t> view_;  // each tile's view (empty: all of view 0)
+    // 0 missing, 1 being written, 2 done, 3 not routed here
+    std::unique_ptr<std::atomic<uint8_t>[]> state_;
+    size_t stateSize_ = 0;
+    size_t expected_ = 0;
+    std::atomic<size_t> done_{0};
+
+    void resize(size_t views, int width, int height, bool linear);
+};
+
+// ---- Composition -----------------------------------------------------------------------------
+
+// What the compositor needs to know of a frame besides its images.
+struct ComposeFrame {
+    // The frame's views (empty: a frame of one image without views, the mono image) and each
+    // view's eye: -1 the mono image, 0 the left eye's, 1 the right eye's. A view with regions
+    // gives its eye those pixels, one without is the eye's whole image.
+    std::vector<FrameView> views;
+    std::vector<int> eyes;
+    // A stochastic frame refines: frames of one state are summed (per view: of one state and one
+    // camera); any change of stateSeq restarts the sums.
+    bool stochastic = false;
+    uint32_t stateSeq = 0;
+    bool linear = false;  // the frame came as linear tiles: sum its linear buffers, not its 8-bit images
+};
+
+struct EyeImages {
+    Image left;   // the mono image, or the left eye's
+    Image right;  // the right eye's: empty unless a view is of eye 1
+};
+
+// Turns a frame's view images into the images of the eyes, frame after frame: each view of a
+// stochastic frame is added to its running mean in linear light (Accumulator), which restarts
+// when the state or the view's camera changes (or the number of views); a frame without views
+// has one running mean, which restarts when the state changes. Then the views are composed into
+// the eyes. The single-PC wall and the display nodes make the same bytes of the same frames.
+class Compositor {
+public:
+    // `images`: one per view (one for a frame without views); `linear`: the matching linear
+    // buffers of a linear frame (used when frame.linear).
+    EyeImages compose(const ComposeFrame& frame, std::vector<Image> images,
+                      std::span<const std::vector<float>> linear = {});
+    size_t viewRestarts() const { return viewRestarts_; }       // a view's running mean restarted
+    size_t progressiveRestarts() const { return progressiveRestarts_; }  // the mono running mean restarted
+    int accumulatedFrames() const { return accumulatedFrames_; }  // stochastic frames summed
+    int linearFrames() const { return linearFrames_; }            // of them, as linear tiles
+
+private:
+    struct ViewSum {
+        Accumulator sum;
+        uint32_t stateSeq = UINT32_MAX;
+        std::optional<CameraDesc> camera;
+    };
+    Accumulator progressive_;  // frames without views
+    uint32_t progressiveSeq_ = UINT32_MAX;
+    std::vector<ViewSum> viewSums_;
+    size_t viewRestarts_ = 0, progressiveRestarts_ = 0;
+    int accumulatedFrames_ = 0, linearFrames_ = 0;
+
+    void accumulate(const ComposeFrame& frame, std::vector<Image>& images, std::span<const std::vector<float>> linear);
+};
+
+}  // namespace rtwall
