@@ -1,5 +1,6 @@
 // Off-axis stereo frusta from the wall's physical corners and the viewer's head.
 #include <rtwall/display.h>
+#include <rtwall/vec.h>
 
 #include <algorithm>
 #include <cmath>
@@ -7,39 +8,34 @@
 namespace rtwall {
 
 namespace {
-Float3 add(Float3 a, Float3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-Float3 sub(Float3 a, Float3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Float3 mul(Float3 a, float s) { return {a.x * s, a.y * s, a.z * s}; }
-Float3 cross(Float3 a, Float3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-float len(Float3 a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
 // Divided, not multiplied by the reciprocal: an axis-aligned edge gives exactly the axis, so a
 // static head along a wall's x axis and a tracked head looking straight at it agree to the bit.
 Float3 unit(Float3 a, Float3 fallback) {
-    const float l = len(a);
+    const float l = length(a);
     return l > 0 && std::isfinite(l) ? Float3{a.x / l, a.y / l, a.z / l} : fallback;
 }
-bool near(Float3 a, Float3 b, float tolerance) { return len(sub(a, b)) <= tolerance; }
+bool near(Float3 a, Float3 b, float tolerance) { return length(a - b) <= tolerance; }
 }  // namespace
 
 HeadPose staticHead(const StereoConfig& s) {
     HeadPose h;
     h.position = s.viewer;
-    h.right = unit(sub(s.lowerRight, s.lowerLeft), {1, 0, 0});
-    h.up = unit(sub(s.upperLeft, s.lowerLeft), {0, 1, 0});
+    h.right = unit(s.lowerRight - s.lowerLeft, {1, 0, 0});
+    h.up = unit(s.upperLeft - s.lowerLeft, {0, 1, 0});
     return h;
 }
 
 Float3 eyePosition(const HeadPose& head, double eyeSeparation, int eye) {
     const float half = float(eyeSeparation * 0.5);
     const float side = eye == 0 ? -half : eye == 1 ? half : 0.0f;
-    return add(head.position, mul(head.right, side));
+    return head.position + head.right * side;
 }
 
 EyeWindow wallEyeWindow(const StereoConfig& s, const HeadPose& head, int eye) {
     EyeWindow w;
     w.lowerLeft = s.lowerLeft;
-    w.right = sub(s.lowerRight, s.lowerLeft);
-    w.up = sub(s.upperLeft, s.lowerLeft);
+    w.right = s.lowerRight - s.lowerLeft;
+    w.up = s.upperLeft - s.lowerLeft;
     w.eye = eyePosition(head, s.eyeSeparation, eye);
     return w;
 }
@@ -89,7 +85,7 @@ std::vector<WallView> wallViews(const WallConfig& wall, const HeadPose& head, in
         w.right = {float(right[0]), float(right[1]), float(right[2])};
         w.up = {float(up[0]), float(up[1]), float(up[2])};
         // Screens that line up (one plane, one pixel pitch) share a render.
-        const float tolerance = 1e-5f * (len(w.right) + len(w.up));
+        const float tolerance = 1e-5f * (length(w.right) + length(w.up));
         bool joined = false;
         for (WallView& v : views)
             if (near(v.window.lowerLeft, w.lowerLeft, tolerance) && near(v.window.right, w.right, tolerance) &&
@@ -105,16 +101,16 @@ std::vector<WallView> wallViews(const WallConfig& wall, const HeadPose& head, in
 
 WallToWorld wallToWorld(const Float3& viewer, const ViewPose& pose) {
     // The camera's orthonormal frame, as the engine's Camera builds it.
-    const Float3 forward = unit(sub(pose.lookAt, pose.position), {0, 0, -1});
+    const Float3 forward = unit(pose.lookAt - pose.position, {0, 0, -1});
     Float3 right = unit(cross(forward, pose.up), {0, 0, 0});
-    if (len(right) == 0)
+    if (length(right) == 0)
         right = unit(cross(forward, std::fabs(forward.y) < 0.9f ? Float3{0, 1, 0} : Float3{1, 0, 0}), {1, 0, 0});
     const Float3 up = cross(right, forward);
-    return {pose.position, viewer, right, up, mul(forward, -1.0f)};
+    return {pose.position, viewer, right, up, forward * -1.0f};
 }
 
-Float3 WallToWorld::direction(const Float3& v) const { return add(add(mul(x, v.x), mul(y, v.y)), mul(z, v.z)); }
-Float3 WallToWorld::point(const Float3& p) const { return add(origin, direction(sub(p, viewer))); }
+Float3 WallToWorld::direction(const Float3& v) const { return x * v.x + y * v.y + z * v.z; }
+Float3 WallToWorld::point(const Float3& p) const { return origin + direction(p - viewer); }
 
 EyeWindow eyeWindowInWorld(const EyeWindow& wall, const Float3& viewer, const ViewPose& pose) {
     const WallToWorld m = wallToWorld(viewer, pose);
@@ -165,7 +161,7 @@ void drawWandRay(const WallConfig& wall, const HeadPose& head, int eye, const Fl
     for (const WallView& v : wallViews(wall, head, eye)) {
         const EyeWindow& w = v.window;
         const Float3 n = cross(w.right, w.up);  // towards the viewer's side of the screens
-        const double nn = double(len(n));
+        const double nn = double(length(n));
         if (!(nn > 0)) continue;
         // Signed distance of a point in front of the eye (towards the screens), along the normal.
         auto depth = [&](Float3 p) { return -double(n.x * (p.x - w.eye.x) + n.y * (p.y - w.eye.y) + n.z * (p.z - w.eye.z)) / nn; };
@@ -173,8 +169,8 @@ void drawWandRay(const WallConfig& wall, const HeadPose& head, int eye, const Fl
         double da = depth(a), db = depth(b);
         const double nearPlane = 1e-3;  // metres: the part of the ray behind the eye is not seen
         if (da < nearPlane && db < nearPlane) continue;
-        if (da < nearPlane) a = add(a, mul(sub(b, a), float((nearPlane - da) / (db - da)))), da = nearPlane;
-        if (db < nearPlane) b = add(a, mul(sub(b, a), float((nearPlane - da) / (db - da)))), db = nearPlane;
+        if (da < nearPlane) a = a + (b - a) * float((nearPlane - da) / (db - da)), da = nearPlane;
+        if (db < nearPlane) b = a + (b - a) * float((nearPlane - da) / (db - da)), db = nearPlane;
         const double screenDepth = depth(w.lowerLeft);
         // Onto the plane from the eye, then into the view's image coordinates (y down).
         auto project = [&](Float3 p, double d, double& px, double& py) {

@@ -1,4 +1,5 @@
 #include "rtwall/mesh.h"
+#include "rtwall/vec.h"
 
 #include <cmath>
 #include <numbers>
@@ -7,15 +8,6 @@
 
 namespace rtwall {
 namespace {
-
-Float3 operator+(Float3 a, Float3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-Float3 operator-(Float3 a, Float3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Float3 operator*(float s, Float3 a) { return {s * a.x, s * a.y, s * a.z}; }
-float dot(Float3 a, Float3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-Float3 cross(Float3 a, Float3 b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-Float3 normalize(Float3 a) { return (1.0f / std::sqrt(dot(a, a))) * a; }
 
 void appendNormal(std::vector<float>& normals, Float3 n) {
     normals.push_back(n.x);

@@ -1,6 +1,8 @@
 // The off-axis (generalised perspective) camera: a projection window seen from the eye.
 #include "test_util.h"
 
+#include <rtwall/vec.h>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,30 +11,23 @@
 namespace rtwall {
 namespace {
 
-Float3 add(Float3 a, Float3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-Float3 sub(Float3 a, Float3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Float3 mul(Float3 a, float s) { return {a.x * s, a.y * s, a.z * s}; }
-Float3 cross(Float3 a, Float3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-Float3 unit(Float3 a) { return mul(a, 1.0f / std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z)); }
-
+// Every component within `tol` (0: the same floats).
 void expectNear(Float3 a, Float3 b, float tol, const char* what) {
-    EXPECT_NEAR(a.x, b.x, tol) << what;
-    EXPECT_NEAR(a.y, b.y, tol) << what;
-    EXPECT_NEAR(a.z, b.z, tol) << what;
+    EXPECT_LE(maxAbsComponent(a - b), tol) << what << ": (" << a.x << ", " << a.y << ", " << a.z << ") against ("
+                                           << b.x << ", " << b.y << ", " << b.z << ")";
 }
 
 // The window a symmetric camera implies: the image rectangle at distance 1 along the view axis.
 CameraDesc asWindow(const CameraDesc& c, int width, int height) {
-    const Float3 w = unit(sub(c.lookAt, c.position));
-    const Float3 u = unit(cross(w, c.up));
+    const Float3 w = normalize(c.lookAt - c.position);
+    const Float3 u = normalize(cross(w, c.up));
     const Float3 v = cross(u, w);
     const float halfH = std::tan(float(c.fovY * std::numbers::pi / 360.0));
     const float halfW = halfH * float(width) / float(height);
     CameraDesc o = c;
     o.lookAt = {123, 45, 6};  // unused with a window
     o.fovY = 10;
-    o.window = ProjectionWindow{sub(add(c.position, w), add(mul(u, halfW), mul(v, halfH))), mul(u, 2 * halfW),
-                                mul(v, 2 * halfH)};
+    o.window = ProjectionWindow{(c.position + w) - (u * halfW + v * halfH), u * (2 * halfW), v * (2 * halfH)};
     return o;
 }
 
@@ -44,12 +39,11 @@ TEST(CameraWindow, PixelCornersHitWindowCorners) {
     const Camera cam(c, W, H);
     const ProjectionWindow& w = *c.window;
     expectNear(cam.origin(), c.position, 0, "origin is the eye");
-    expectNear(add(cam.origin(), cam.direction(0, 0)), add(w.lowerLeft, w.up), 1e-5f, "top-left");
-    expectNear(add(cam.origin(), cam.direction(W, 0)), add(add(w.lowerLeft, w.up), w.right), 1e-5f, "top-right");
-    expectNear(add(cam.origin(), cam.direction(0, H)), w.lowerLeft, 1e-5f, "bottom-left");
-    expectNear(add(cam.origin(), cam.direction(W, H)), add(w.lowerLeft, w.right), 1e-5f, "bottom-right");
-    expectNear(add(cam.origin(), cam.direction(W / 2.0f, H / 2.0f)),
-               add(w.lowerLeft, mul(add(w.right, w.up), 0.5f)), 1e-5f, "centre");
+    expectNear(cam.origin() + cam.direction(0, 0), w.lowerLeft + w.up, 1e-5f, "top-left");
+    expectNear(cam.origin() + cam.direction(W, 0), w.lowerLeft + w.up + w.right, 1e-5f, "top-right");
+    expectNear(cam.origin() + cam.direction(0, H), w.lowerLeft, 1e-5f, "bottom-left");
+    expectNear(cam.origin() + cam.direction(W, H), w.lowerLeft + w.right, 1e-5f, "bottom-right");
+    expectNear(cam.origin() + cam.direction(W / 2.0f, H / 2.0f), w.lowerLeft + (w.right + w.up) * 0.5f, 1e-5f, "centre");
 }
 
 TEST(CameraWindow, OffCentreEyeGivesHandComputedAsymmetricFrustum) {
@@ -74,10 +68,7 @@ TEST(CameraWindow, OffCentreEyeGivesHandComputedAsymmetricFrustum) {
 }
 
 TEST(CameraWindow, SymmetricWindowMatchesOrdinaryCamera) {
-    SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    desc.settings.width = 160;
-    desc.settings.height = 120;
-    desc.settings.supersample = 1;
+    SceneDesc desc = test::demoScene(160, 120, 1);
     const Scene scene(desc);
     const CameraDesc plain = desc.cameras.front();
     const CameraDesc windowed = asWindow(plain, desc.settings.width, desc.settings.height);

@@ -10,7 +10,7 @@
 // Build by hand with clang 14 (from the repository root; no CMake needed):
 //   mkdir -p build-fuzz
 //   clang++-14 -std=c++20 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
-//     -Idisplay/include tests/fuzz/fuzz_dtrack.cpp display/src/dtrack.cpp -o build-fuzz/fuzz_dtrack
+//     -Idisplay/include -Iengine/core/include tests/fuzz/fuzz_dtrack.cpp display/src/dtrack.cpp -o build-fuzz/fuzz_dtrack
 // Run (new inputs go to the first directory, the committed seeds are only read):
 //   mkdir -p build-fuzz/corpus-dtrack
 //   build-fuzz/fuzz_dtrack -max_total_time=120 -timeout=10 build-fuzz/corpus-dtrack tests/fuzz/corpus/dtrack

@@ -10,9 +10,7 @@
 namespace rtwall {
 namespace {
 
-using test::dot;
 using test::geometricNormal;
-using test::length;
 using test::signedVolume;
 
 // Shading normals must be unit length and on the same side as the geometric normal, or
@@ -61,13 +59,7 @@ TEST(MeshShapes, BoxIsTheClosedCube) {
     EXPECT_EQ(box.vertexCount(), 8u);
     EXPECT_EQ(box.triangleCount(), 12u);
     EXPECT_FALSE(box.hasNormals());
-    const Bounds3 b = box.bounds();
-    EXPECT_EQ(b.lo.x, -1.0f);
-    EXPECT_EQ(b.lo.y, -1.0f);
-    EXPECT_EQ(b.lo.z, -1.0f);
-    EXPECT_EQ(b.hi.x, 1.0f);
-    EXPECT_EQ(b.hi.y, 1.0f);
-    EXPECT_EQ(b.hi.z, 1.0f);
+    test::expectBounds(box, {-1, -1, -1}, {1, 1, 1});
     EXPECT_DOUBLE_EQ(signedVolume(box), 8.0);
     // Every face normal is an axis: two triangles per axis direction.
     int perAxis[6] = {};
@@ -125,7 +117,7 @@ TEST(MeshShapes, TorusKnotIsAClosedTubeOfTheGivenRadius) {
         }
         for (int j = 0; j < sides; ++j) {
             const size_t v = size_t(i * sides + j);
-            const Float3 offset = test::sub(knot.position(v), centre);
+            const Float3 offset = knot.position(v) - centre;
             EXPECT_NEAR(length(offset), radius, 1e-5) << "ring " << i;
             EXPECT_NEAR(dot(offset, knot.normal(v)) / radius, 1.0, 1e-4) << "ring " << i;
         }

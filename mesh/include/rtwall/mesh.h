@@ -4,6 +4,9 @@
 // engine hands to Embree as shared buffers, so an imported model exists once in memory.
 #pragma once
 
+#include <rtwall/input_error.h>
+#include <rtwall/vec.h>
+
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -19,21 +22,9 @@
 
 namespace rtwall {
 
-// A user-facing input problem (bad file, bad config, bad argument). what() is one line:
-// "<file>:<line or offset>: <what is wrong>", or "<file>: <what is wrong>" where no place is known.
-class InputError : public std::runtime_error {
-public:
-    using std::runtime_error::runtime_error;
-};
-
 namespace detail {
 struct MeshAccess;  // the cache reader fills the buffers directly
 }
-
-struct Float3 {
-    float x = 0, y = 0, z = 0;
-    bool operator==(const Float3&) const = default;
-};
 
 struct Bounds3 {
     Float3 lo{+INFINITY, +INFINITY, +INFINITY};

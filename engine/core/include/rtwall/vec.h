@@ -1,14 +1,17 @@
-// Small float vector helpers on the public Float3, for the engine, the tools and the tests.
+// Float3 and the small vector maths on it, written once for every library, tool and test.
 // Deliberately plain scalar code: the packet kernel gains its speed in Embree's traversal, and
 // scalar shading keeps the packet and single-ray paths bit-identical.
 #pragma once
-
-#include <rtwall/mesh.h>
 
 #include <algorithm>
 #include <cmath>
 
 namespace rtwall {
+
+struct Float3 {
+    float x = 0, y = 0, z = 0;
+    bool operator==(const Float3&) const = default;
+};
 
 inline Float3 operator+(Float3 a, Float3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
 inline Float3 operator-(Float3 a, Float3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }

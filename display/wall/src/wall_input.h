@@ -59,7 +59,7 @@ public:
     bool measurePick(LiveScene& scene, double wallX, double wallY);
     const std::optional<Measurement>& measurement() const { return measurement_; }
     // Section planes (WallSession::setSection): sets slot `index` and makes it the active plane,
-    // the one the section keys (README, "Section planes") move; -1: none.
+    // the one the section keys (docs/design-review.md, "Section planes") move; -1: none.
     void setSection(LiveScene& scene, uint32_t index, const SectionPlane& plane);
     int activeSection() const { return activeSection_; }
     // Parts by name (WallSession::setPartView): applied to the scene, logged, on the overlay.
@@ -105,6 +105,7 @@ private:
     Transform wandGrabTransform_;
     std::optional<SectionPlane> wandPlaneStart_;  // the selected section plane as the trigger took it
     std::optional<Float3> orbitCentre_;  // the scene's centre, taken when the wand starts orbiting
+    void dragHeld(LiveScene& scene, WandPose& p);  // the held object or section plane follows the wand
     bool measureHit(LiveScene& scene, const std::optional<PickResult>& hit, Float3 origin, Float3 direction);
     bool measuring_ = false;
     bool escapeHeld_ = false;  // the Esc that left measure mode: held on, it does not close the wall

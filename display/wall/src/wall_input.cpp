@@ -1,5 +1,6 @@
 #include "wall_input.h"
 
+#include <rtwall/vec.h>
 #include <rtwall/wall.h>
 
 #define GLFW_INCLUDE_NONE
@@ -22,7 +23,6 @@ CameraDesc cameraOf(const CameraDesc& base, const ViewPose& p) {
     c.fovY = p.fovY;
     return c;
 }
-float length(Float3 a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
 }  // namespace
 
 WallInput::WallInput(const WallConfig& wall, const CameraDesc& start, const Options& options,
@@ -38,7 +38,7 @@ WallInput::WallInput(const WallConfig& wall, const CameraDesc& start, const Opti
     if (options.forceHeadless) whyHeadless_ = "--headless";
     else gl_ = GlPresenter::open(options.console ? console_ : wall_, {}, &whyHeadless_);
     if (!gl_ && options.perScreenImages && !options.console) headless_ = std::make_unique<HeadlessPresenter>(wall_, options.outDir);
-    const Float3 d{start.position.x - start.lookAt.x, start.position.y - start.lookAt.y, start.position.z - start.lookAt.z};
+    const Float3 d = start.position - start.lookAt;
     nav_ = std::make_unique<Navigator>(poseOf(start), std::max(0.1f, length(d)));
     // A flystick flies by default, as in every VR wall; its mode button (or Tab) orbits.
     if (wall_.tracking.enabled && wall_.tracking.flystick >= 0) nav_->setMode(Navigator::Mode::Fly);
@@ -66,9 +66,9 @@ CameraDesc WallInput::viewCamera(const EyeWindow& window) const {
     // config's viewer = the camera position, so a tracked head moves within a room that stays
     // put in the scene; 1 metre = 1 world unit): see eyeWindowInWorld.
     const EyeWindow w = eyeWindowInWorld(window, wall_.stereo.viewer, nav_->pose());
-    const Float3 f{c.lookAt.x - c.position.x, c.lookAt.y - c.position.y, c.lookAt.z - c.position.z};
+    const Float3 f = c.lookAt - c.position;
     c.position = w.eye;
-    c.lookAt = {w.eye.x + f.x, w.eye.y + f.y, w.eye.z + f.z};  // unused by the window; kept sensible
+    c.lookAt = w.eye + f;  // unused by the window; kept sensible
     c.window = ProjectionWindow{w.lowerLeft, w.right, w.up};
     return c;
 }
@@ -113,8 +113,8 @@ bool WallInput::measureHit(LiveScene& scene, const std::optional<PickResult>& hi
     }
     // The hit point again from the ray, in double, with the rebased scene's origin added back:
     // the float t Embree found (a few ulps, ~1e-7 of the distance from the eye) is then the only
-    // single-precision error, however far from the file's origin the model lies (README,
-    // "Measuring").
+    // single-precision error, however far from the file's origin the model lies
+    // (docs/design-review.md, "Measuring").
     const std::array<double, 3>& origin = scene.desc().origin;
     const double t = hit->t;
     const std::array<double, 3> p{origin[0] + (double(o.x) + t * double(d.x)), origin[1] + (double(o.y) + t * double(d.y)),
@@ -237,10 +237,6 @@ Float3 rotated(const Float3& v, const Float3& a, double degrees) {
             float(vz * c + cz * s + az * d * (1 - c))};
 }
 
-Float3 cross3(const Float3& a, const Float3& b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-
 Float3 unit(const Float3& v) {
     const float l = length(v);
     return l > 0.0f ? Float3{v.x / l, v.y / l, v.z / l} : Float3{0, 0, 0};
@@ -286,7 +282,7 @@ void WallInput::sectionKey(LiveScene& scene, int key, int mods) {
         SectionPlane p;
         p.enabled = true;
         p.point = c.lookAt;
-        p.normal = unit({c.lookAt.x - c.position.x, c.lookAt.y - c.position.y, c.lookAt.z - c.position.z});
+        p.normal = unit(c.lookAt - c.position);
         if (!(length(p.normal) > 0.0f)) p.normal = {0, 0, -1};
         setSection(scene, uint32_t(slot), p);
         log_(sectionLine(desc));
@@ -304,7 +300,7 @@ void WallInput::sectionKey(LiveScene& scene, int key, int mods) {
     if (key == GLFW_KEY_PAGE_UP || key == GLFW_KEY_PAGE_DOWN) {
         if (sectionStep_ == 0) {
             const Bounds3 b = desc.worldBounds();
-            const double size = b.empty() ? 0.0 : length({b.hi.x - b.lo.x, b.hi.y - b.lo.y, b.hi.z - b.lo.z});
+            const double size = b.empty() ? 0.0 : length(b.hi - b.lo);
             sectionStep_ = size > 0 ? size / 100.0 : 0.01;
         }
         const double step = (key == GLFW_KEY_PAGE_UP ? 1.0 : -1.0) * sectionStep_ * (shift ? 10.0 : 1.0);
@@ -314,7 +310,7 @@ void WallInput::sectionKey(LiveScene& scene, int key, int mods) {
     if (key == GLFW_KEY_LEFT || key == GLFW_KEY_RIGHT)  // about the view's up axis
         p.normal = rotated(n, unit(camera().up), key == GLFW_KEY_LEFT ? degrees : -degrees);
     if (key == GLFW_KEY_UP || key == GLFW_KEY_DOWN) {  // about the horizontal axis in the plane
-        Float3 axis = unit(cross3(n, camera().up));
+        Float3 axis = unit(cross(n, camera().up));
         if (!(length(axis) > 0.0f)) axis = {1, 0, 0};
         p.normal = rotated(n, axis, key == GLFW_KEY_UP ? degrees : -degrees);
     }
@@ -416,156 +412,6 @@ bool WallInput::apply(LiveScene& scene, const InputState& in, double dt) {
         grabbed_.reset();
     }
     return true;
-}
-
-namespace {
-using Mat3 = std::array<double, 9>;
-Mat3 multiply(const Mat3& a, const Mat3& b) {
-    Mat3 m{};
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) m[size_t(3 * r + c)] = a[size_t(3 * r)] * b[size_t(c)] + a[size_t(3 * r + 1)] * b[size_t(3 + c)] + a[size_t(3 * r + 2)] * b[size_t(6 + c)];
-    return m;
-}
-// A joystick axis past the dead zone, rescaled so that full deflection stays 1.
-double deflection(double value, double deadZone) {
-    const double a = std::fabs(value);
-    if (!(a > deadZone)) return 0.0;
-    return std::copysign(std::min(1.0, (a - deadZone) / (1.0 - deadZone)), value);
-}
-}  // namespace
-
-void WallInput::handleWand(LiveScene& scene, const TrackerState& tracker, double dt) {
-    const TrackingConfig& t = wall_.tracking;
-    const WandState& w = tracker.wand;
-    if (!w.seen || w.stale) {
-        if (wandGrab_) log_("wand: lost, instance " + std::to_string(wandGrab_->instance) + " released");
-        wand_.reset();
-        wandGrab_.reset();
-        wandPlaneStart_.reset();
-        wandButtons_.clear();
-        return;
-    }
-    auto pressed = [&](int b) { return w.button(b) && !(b >= 0 && size_t(b) < wandButtons_.size() && wandButtons_[size_t(b)]); };
-    if (options_.interactive && pressed(t.buttonMode)) {
-        nav_->setMode(nav_->mode() == Navigator::Mode::Fly ? Navigator::Mode::Orbit : Navigator::Mode::Fly);
-        orbitCentre_.reset();
-        log_(nav_->mode() == Navigator::Mode::Fly ? "wand: fly" : "wand: orbit about the scene's centre");
-    }
-    if (options_.interactive && pressed(t.buttonHome)) {
-        setCamera(base_);
-        scene.setCamera(camera());
-        log_("wand: back to the start camera");
-    }
-    // The joystick moves the room through the scene, then the wand is placed in the moved room.
-    WallToWorld map = wallToWorld(wall_.stereo.viewer, nav_->pose());
-    if (options_.interactive) {
-        Navigator::Wand nw;
-        nw.x = deflection(w.controller(t.joystickX), t.deadZone);
-        nw.y = deflection(w.controller(t.joystickY), t.deadZone);
-        nw.direction = map.direction(w.direction);
-        nw.speed = t.flySpeed;  // 1 m of the room is 1 scene unit (eyeWindowInWorld)
-        nw.turnDegrees = t.turnSpeed;
-        if (nav_->mode() == Navigator::Mode::Orbit && (nw.x != 0 || nw.y != 0) && !orbitCentre_) {
-            const Bounds3 b = scene.desc().worldBounds();
-            orbitCentre_ = b.empty() ? nav_->pose().lookAt
-                                     : Float3{(b.lo.x + b.hi.x) * 0.5f, (b.lo.y + b.hi.y) * 0.5f, (b.lo.z + b.hi.z) * 0.5f};
-        }
-        if (orbitCentre_) nw.centre = *orbitCentre_;
-        if (nav_->updateWand(nw, dt)) {
-            scene.setCamera(camera());
-            map = wallToWorld(wall_.stereo.viewer, nav_->pose());
-        }
-    }
-    WandPose p;
-    p.wallPosition = w.position;
-    p.wallDirection = w.direction;
-    p.wallRotation = w.rotation;
-    p.origin = map.point(w.position);
-    p.direction = map.direction(w.direction);
-    // The wall's axes in the world are the columns of the room's turn.
-    const Mat3 axes{map.x.x, map.y.x, map.z.x, map.x.y, map.y.y, map.z.y, map.x.z, map.y.z, map.z.z};
-    p.rotation = multiply(axes, w.rotation);
-    p.buttons = w.buttons;
-    p.controllers = w.controllers;
-    p.length = kWandRayLength;
-
-    const bool pick = options_.interactive && w.visible && pressed(t.buttonPick);
-    if (pick && measuring_) {
-        measureHit(scene, scene.pickRay(p.origin, p.direction), p.origin, p.direction);
-    } else if (pick && activeSection_ >= 0) {
-        // A selected section plane: the trigger holds the plane, not an object (Shift+C until
-        // none is selected gives the trigger back to objects).
-        wandPlaneStart_ = scene.desc().sections[size_t(activeSection_)];
-        wandGrabStart_ = p;
-        log_("wand: holds section " + std::to_string(activeSection_));
-    } else if (pick) {
-        wandGrab_ = scene.pickRay(p.origin, p.direction);
-        if (wandGrab_) {
-            wandGrabStart_ = p;
-            wandGrabTransform_ = scene.desc().instances[wandGrab_->instance].transform;
-            char line[128];
-            std::snprintf(line, sizeof line, "wand: picked instance %u at distance %.2f", wandGrab_->instance, double(wandGrab_->t));
-            const std::string part = scene.desc().partPath(scene.desc().instances[wandGrab_->instance].part);
-            log_(part.empty() ? std::string(line) : std::string(line) + ", part '" + part + "'");
-        }
-    }
-    if (wandPlaneStart_ && (!w.button(t.buttonPick) || activeSection_ < 0)) {
-        log_(activeSection_ < 0 ? "wand: section released" : "wand: released " + sectionLine(scene.desc()));
-        wandPlaneStart_.reset();
-    }
-    if (wandGrab_ && !w.button(t.buttonPick)) {
-        log_("wand: released instance " + std::to_string(wandGrab_->instance));
-        wandGrab_.reset();
-    }
-    if ((wandGrab_ || wandPlaneStart_) && w.visible) {
-        // Rigidly with the wand: the object (or plane) is moved by the wand's motion since the
-        // pick, motion = now * start^-1 (world), applied after its transform at the pick.
-        const WandPose& s = wandGrabStart_;
-        const Mat3& r1 = p.rotation;
-        const Mat3& r0 = s.rotation;
-        const Mat3 r0t{r0[0], r0[3], r0[6], r0[1], r0[4], r0[7], r0[2], r0[5], r0[8]};
-        const Mat3 r = multiply(r1, r0t);
-        const std::array<double, 3> p0{s.origin.x, s.origin.y, s.origin.z}, p1{p.origin.x, p.origin.y, p.origin.z};
-        Transform motion;
-        for (int i = 0; i < 3; ++i) {
-            const size_t row = size_t(3 * i);
-            for (int j = 0; j < 3; ++j) motion.m[size_t(4 * i + j)] = r[row + size_t(j)];
-            motion.m[size_t(4 * i + 3)] = p1[size_t(i)] - (r[row] * p0[0] + r[row + 1] * p0[1] + r[row + 2] * p0[2]);
-        }
-        if (wandPlaneStart_) {
-            // The plane's point moves with the wand and its normal turns with it; the plane
-            // stays where it was put when the trigger is let go.
-            SectionPlane plane = *wandPlaneStart_;
-            const Float3 q = plane.point, n = plane.normal;
-            plane.point = {float(motion.m[0] * q.x + motion.m[1] * q.y + motion.m[2] * q.z + motion.m[3]),
-                           float(motion.m[4] * q.x + motion.m[5] * q.y + motion.m[6] * q.z + motion.m[7]),
-                           float(motion.m[8] * q.x + motion.m[9] * q.y + motion.m[10] * q.z + motion.m[11])};
-            plane.normal = {float(r[0] * n.x + r[1] * n.y + r[2] * n.z), float(r[3] * n.x + r[4] * n.y + r[5] * n.z),
-                            float(r[6] * n.x + r[7] * n.y + r[8] * n.z)};
-            setSection(scene, uint32_t(activeSection_), plane);
-            if (const std::optional<PickResult> hit = scene.pickRay(p.origin, p.direction)) p.length = hit->t;
-        } else {
-            scene.setInstanceTransform(wandGrab_->instance, motion * wandGrabTransform_);
-            p.dragging = wandGrab_->instance;
-            p.length = wandGrab_->t;
-        }
-    } else if (w.visible) {
-        if (const std::optional<PickResult> hit = scene.pickRay(p.origin, p.direction)) p.length = hit->t;
-    }
-    wandButtons_ = w.buttons;
-    wand_ = p;
-}
-
-void WallInput::drawWand(WallFrame& frame, const HeadPose& head) const {
-    if (!wand_ || !wall_.tracking.wandRay) return;
-    const Float3 a = wand_->wallPosition, d = wand_->wallDirection;
-    const Float3 b{a.x + d.x * wand_->length, a.y + d.y * wand_->length, a.z + d.z * wand_->length};
-    if (wall_.stereo.mode == StereoMode::None) {
-        drawWandRay(wall_, head, -1, a, b, frame.left);
-    } else {
-        drawWandRay(wall_, head, 0, a, b, frame.left);
-        drawWandRay(wall_, head, 1, a, b, frame.right);
-    }
 }
 
 void WallInput::show(const WallFrame& frame, const FrameReport& report, double frameSeconds) {

@@ -1,8 +1,8 @@
-// RGB8 images and their PNG input/output. Lives in the lowest library so that the display
+// RGB8 images and their PNG input/output. Lives in the lowest library (core) so that the display
 // (which must not link the engine) and the engine's textures read and write images the same way.
 #pragma once
 
-#include <rtwall/mesh.h>
+#include <rtwall/input_error.h>
 
 #include <cstdint>
 #include <filesystem>
