@@ -1311,7 +1311,7 @@ TEST(Protocol, AssetsAndLinearTilesRejectValuesOutOfRange) {
     s = sampleSnapshot();
     s.assets[0].path.clear();
     EXPECT_THROW(decode<SceneSnapshot>(payloadOf(s)), DecodeError);
-    std::vector<uint8_t> p = payloadOf(FrameBegin{1, 2, TilePixels::LinearHalf});
+    std::vector<uint8_t> p = payloadOf(FrameBegin{1, 2, TilePixels::LinearHalf, {FrameView{}}});
     p[8] = 2;
     EXPECT_THROW(decode<FrameBegin>(p), DecodeError);
     p = payloadOf(sampleTileResult());

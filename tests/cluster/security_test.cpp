@@ -272,7 +272,7 @@ private:
         }
         case MsgType::Update: {
             const auto u = decodePayload<Update>(payload, n);
-            for (const Change& c : u.changes) applyChange(desc_, camera_, c);
+            for (const Change& c : u.changes) applyChange(desc_, c);
             state_ = u.seq;
             rebuild();
             break;
@@ -280,6 +280,7 @@ private:
         case MsgType::FrameBegin: {
             const auto fb = decodePayload<FrameBegin>(payload, n);
             if (fb.updateSeq != state_) break;  // the test makes one update at a time: never happens
+            camera_ = fb.views.front().camera;  // a mono frame's one view (protocol 13: the only camera)
             // Everything sent for the last frame, again: results, Ready and requests.
             for (const auto& bytes : sent_) {
                 sendRaw(bytes);
