@@ -70,8 +70,8 @@ public:
 private:
     static constexpr const char* kResultsAddress = "inproc://rtwall-client-results";
 
-    // A multi-view frame's views and tiling (FrameBegin::views), shared by its work items and
-    // never changed once made: a render thread reads it without a lock.
+    // A frame's views and tiling (FrameBegin::views: one view for a mono frame), shared by its
+    // work items and never changed once made: a render thread reads it without a lock.
     struct FrameLayout {
         std::vector<CameraDesc> cameras;  // per view
         std::vector<ViewTile> tiles;
@@ -85,7 +85,7 @@ private:
         uint32_t stateSeq = 0;  // for the result's header
         CodecSettings codec;
         TilePixels pixels = TilePixels::Srgb8;
-        std::shared_ptr<const FrameLayout> layout;  // a multi-view frame's; none: tiles_ and the state's camera
+        std::shared_ptr<const FrameLayout> layout;  // its frame's
     };
 
     // What a render thread is rendering, for the network thread's stall watch. Written per tile
@@ -351,16 +351,14 @@ private:
     // the tile (and is left out of that frame's swap).
     void sendToNodes(const zmq::message_t& msg) {
         const auto* bytes = static_cast<const uint8_t*>(msg.data());
-        // TileResult's payload starts with frame (u32), tile (u32), codec (u8), render
-        // microseconds (u32) and the pixels' length (u32): written by this client itself.
-        constexpr size_t kFixed = kHeaderSize + 17;
-        if (msg.size() < kFixed) return;
-        auto u32At = [&](size_t at) {
-            uint32_t v = 0;
-            for (int i = 0; i < 4; ++i) v |= uint32_t(bytes[at + size_t(i)]) << (8 * i);
-            return v;
-        };
-        const uint32_t frame = u32At(kHeaderSize), tile = u32At(kHeaderSize + 4);
+        if (msg.size() < kHeaderSize) return;
+        TileResultInfo info;
+        try {
+            info = peekTileResult(bytes + kHeaderSize, msg.size() - kHeaderSize);  // written by this client itself
+        } catch (const DecodeError&) {
+            return;
+        }
+        const uint32_t frame = info.frame, tile = info.tile;
         auto routes = tileRoutes_.upper_bound(frame);
         if (routes == tileRoutes_.begin()) return;  // no masks for a frame this old
         const std::vector<uint64_t>& masks = std::prev(routes)->second;
@@ -370,7 +368,7 @@ private:
             zmq::message_t copy(msg.data(), msg.size());
             if (!link.socket.send(copy, zmq::send_flags::dontwait)) ++lostResults_;
         }
-        send(TileDone{frame, tile, u32At(kHeaderSize + 9), u32At(kHeaderSize + 13)}, frame);
+        send(TileDone{frame, tile, info.renderMicros, info.pixelBytes}, frame);
     }
 
     // Returns an exit status when the client should stop.
@@ -634,7 +632,6 @@ private:
         if (!lock.owns_lock()) return;
         const Hash128 hash = stateHash(*snapshot_);
         scene_ = std::move(built_);
-        camera_ = snapshot_->camera;
         setRenderSettings(snapshot_->settings);
         stateSeq_ = snapshot_->updateSeq;
         lock.unlock();
@@ -649,7 +646,6 @@ private:
         trace_.clientId = id_;  // the id the master gave us, for the client false-colour view
         trace_.packetWidth = settings_.packetWidth;  // this PC's CPU decides
         trace_.fault = settings_.tileFault ? injectFault(*settings_.tileFault) : nullptr;
-        tiles_ = makeTiles(renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
     }
 
     void requestResync() {
@@ -682,7 +678,6 @@ private:
     // A change to the engine scene (under sceneMutex_). What each change writes is
     // scene_state.h's; these are the engine's differential calls for it, one per kind of change
     // (a new kind fails to compile in catchUp's std::visit until it has one).
-    void apply(const CameraChange& c) { camera_ = c.camera; }
     void apply(const TransformChange& c) { scene_->setInstanceTransform(c.instance, c.transform); }
     void apply(const VisibilityChange& c) { scene_->setInstanceVisibility(c.instance, c.visibility); }
     void apply(const MaterialChange& c) {
@@ -720,14 +715,11 @@ private:
         blockedSince_ = 0;
         blockedLogged_ = false;
         framePixels_ = fb.pixels;
-        frameLayout_.reset();
-        if (!fb.views.empty()) {
-            // At the state's resolution and tile size, which catchUp just brought to the frame's.
-            auto layout = std::make_shared<FrameLayout>();
-            for (const FrameView& v : fb.views) layout->cameras.push_back(v.camera);
-            layout->tiles = viewTiles(fb.views, renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
-            frameLayout_ = std::move(layout);
-        }
+        // At the state's resolution and tile size, which catchUp just brought to the frame's.
+        auto layout = std::make_shared<FrameLayout>();
+        for (const FrameView& v : fb.views) layout->cameras.push_back(v.camera);
+        layout->tiles = viewTiles(fb.views, renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
+        frameLayout_ = std::move(layout);
         frame_.store(fb.frame);
         lastFrameBegun_ = fb.frame;
         send(TileRequest{fb.frame, prefetch_}, fb.frame);
@@ -910,15 +902,14 @@ private:
             const bool wide = w.pixels == TilePixels::LinearHalf;
             try {
                 std::shared_lock lock(sceneMutex_);
-                const size_t tileCount = w.layout ? w.layout->tiles.size() : tiles_.size();
-                if (w.frame != frame_.load() || !scene_ || w.tile >= tileCount) {  // stale or bogus
+                if (w.frame != frame_.load() || !scene_ || !w.layout || w.tile >= w.layout->tiles.size()) {  // stale or bogus
                     --held_;
                     continue;
                 }
                 if (settings_.replay && !wide && replaySend(out, w)) continue;
                 // A view's tile renders as it would in a frame of that view's camera alone.
-                const TileRect r = w.layout ? w.layout->tiles[w.tile].rect : tiles_[w.tile];
-                const CameraDesc& cameraDesc = w.layout ? w.layout->cameras[w.layout->tiles[w.tile].view] : camera_;
+                const TileRect r = w.layout->tiles[w.tile].rect;
+                const CameraDesc& cameraDesc = w.layout->cameras[w.layout->tiles[w.tile].view];
                 const auto t0 = std::chrono::steady_clock::now();
                 // For the stall watch (watchStalls): this thread is on this tile since now.
                 slot.job.store(uint64_t(w.frame) << 32 | w.tile);
@@ -1035,7 +1026,7 @@ private:
     std::map<Hash128, std::shared_ptr<const TriangleMesh>> meshes_;
     std::map<Hash128, std::shared_ptr<const std::vector<uint8_t>>> assets_;  // texture and volume files
     std::map<Hash128, AssetRef> updateFiles_;  // files named by updates' material changes
-    std::shared_ptr<const FrameLayout> frameLayout_;  // the current frame's, when it has views (network thread)
+    std::shared_ptr<const FrameLayout> frameLayout_;  // the current frame's (network thread)
     std::optional<FrameBegin> deferredFrame_;  // a frame waiting for one of them
     std::optional<FrameBegin> blockedFrame_;   // a frame whose updates wait for the render threads to leave the scene
     double blockedSince_ = 0;
@@ -1048,10 +1039,8 @@ private:
     // Shared with the render threads.
     std::shared_timed_mutex sceneMutex_;  // render threads read; the network thread changes the scene (never waiting long)
     std::unique_ptr<Scene> scene_;
-    CameraDesc camera_;
     RenderSettings renderSettings_;
     TraceOptions trace_;  // this client's own: packet width, id, injected fault
-    std::vector<TileRect> tiles_;
     std::atomic<uint32_t> frame_{0};
 
     std::mutex replayMutex_;

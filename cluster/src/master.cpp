@@ -234,6 +234,8 @@ struct Command {
     bool stochastic = false;    // kBeginFrame: its state renders stochastically
     std::vector<FrameView> views{};  // kBeginFrame: a multi-view frame's views (setViews)
     uint64_t viewsTag = 0;
+    CameraDesc camera{};        // kBeginFrame without views: the mono frame's camera (setCamera)
+    uint32_t shownSeq = 0;      // kBeginFrame: FrameReport::stateSeq (the state's seq and the camera's moves)
 };
 
 }  // namespace
@@ -244,7 +246,11 @@ struct Master::Impl {
     // O(1) per change; clients get the network thread's copy (frameState). stateMutex guards it,
     // seq, the stochastic flag, and the order of the commands it queues (held while queueing).
     SceneDesc scene;       // geometry once, shared with nobody
+    // The mono frames' camera (setCamera). Not scene state: each frame carries it to the clients
+    // in its FrameBegin. Its moves are counted, so that a frame's report says when its camera
+    // changed as it says when its state did (accumulation restarts).
     CameraDesc camera;
+    uint32_t cameraMoves = 0;
     std::vector<MeshRef> meshRefs;    // constant once the network thread runs, which reads it
     std::vector<AssetRef> assetRefs;  // texture and volume files, read once: clients fetch them by hash
     std::map<Hash128, std::shared_ptr<const std::vector<uint8_t>>> assetBytes;
@@ -312,8 +318,11 @@ struct Master::Impl {
     TilePixels framePixels = TilePixels::Srgb8;  // how the current frame's tiles travel
     bool frameStochastic = false;
     std::vector<std::vector<float>> linear;  // the current frame in linear RGB (LinearHalf frames), per view
-    std::vector<FrameView> frameViews;  // the current frame's views (none: the state's camera)
+    std::vector<FrameView> frameViews;  // the current frame's views (none: a mono frame of frameCamera)
     uint64_t frameViewsTag = 0;
+    // What every FrameBegin of the current frame carries: frameViews, or the mono frame's one view.
+    std::vector<FrameView> beginViews;
+    uint32_t shownSeq = 0;  // FrameReport::stateSeq and NodeFrame::stateSeq of the current frame
     bool frameActive = false;
     double frameStart = 0;
     uint64_t frameBytes = 0;
@@ -529,7 +538,7 @@ struct Master::Impl {
             if (send(c, TileRoutes{routesFrame, routes}, currentFrame) != SendResult::Sent) return;
             c.routesFrame = routesFrame;
         }
-        if (send(c, FrameBegin{currentFrame, frameSeq, framePixels, frameViews}, currentFrame) == SendResult::Sent)
+        if (send(c, FrameBegin{currentFrame, frameSeq, framePixels, beginViews}, currentFrame) == SendResult::Sent)
             c.frameBegun = currentFrame;
     }
 
@@ -551,13 +560,20 @@ struct Master::Impl {
         }
     }
 
-    void beginFrame(uint32_t frame, uint32_t stateSeq, const RenderSettings& rs, TilePixels pixels, bool stochastic,
-                    std::vector<FrameView>&& beginViews, uint64_t beginViewsTag) {
+    void beginFrame(Command&& cmd) {
+        const uint32_t frame = cmd.frame, stateSeq = cmd.update.seq;
+        const RenderSettings& rs = cmd.settings;
+        const TilePixels pixels = cmd.pixels;
         currentFrame = frame;
         framePixels = pixels;
-        frameStochastic = stochastic;
-        frameViews = std::move(beginViews);
-        frameViewsTag = beginViewsTag;
+        frameStochastic = cmd.stochastic;
+        frameViews = std::move(cmd.views);
+        frameViewsTag = cmd.viewsTag;
+        shownSeq = cmd.shownSeq;
+        // The views are the frame's only camera on the wire (protocol 13): a mono frame is one
+        // view of the whole image, whose tiling is makeTiles'.
+        if (frameViews.empty()) beginViews.assign(1, FrameView{cmd.camera, {}, 0, 0});
+        else beginViews = frameViews;
         // Every tile writes its part; no clearing. (Swapped with the completed frame's buffer,
         // so a still view allocates nothing.)
         if (pixels == TilePixels::LinearHalf) {
@@ -582,7 +598,7 @@ struct Master::Impl {
             frameStateMessage.reset();
         }
         // What a client's failed tile of this frame is replayed with (onTileFailed).
-        recentFrames.push_back({frame, frameState.camera, frameState.settings, frameViews});
+        recentFrames.push_back({frame, beginViews.front().camera, frameState.settings, frameViews});
         if (recentFrames.size() > kRecentFrames) recentFrames.pop_front();
         frameActive = true;
         frameStart = nowSeconds();
@@ -610,7 +626,7 @@ struct Master::Impl {
         const double seconds = nowSeconds() - frameStart;
         FrameReport r;
         r.frame = currentFrame;
-        r.stateSeq = frameSeq;
+        r.stateSeq = shownSeq;
         r.seconds = seconds;
         r.bytes = frameBytes;
         const SchedulerStats& st = scheduler.stats();
@@ -726,7 +742,7 @@ struct Master::Impl {
             if (!sendNode(n, TileRoutes{routesFrame, routes}, currentFrame)) return;
             n.routesFrame = routesFrame;
         }
-        NodeFrame f{currentFrame, rs.width, rs.height, rs.tileSize, framePixels, frameViews, {}, frameStochastic, frameSeq};
+        NodeFrame f{currentFrame, rs.width, rs.height, rs.tileSize, framePixels, frameViews, {}, frameStochastic, shownSeq};
         const std::vector<int>& eyes = settings.displayNodes.viewEyes;
         for (size_t v = 0; v < frameViews.size(); ++v) f.eyes.push_back(int8_t(v < eyes.size() && eyes[v] >= 0 && eyes[v] <= 1 ? eyes[v] : -1));
         if (sendNode(n, f, currentFrame)) n.frameSent = currentFrame;
@@ -905,10 +921,9 @@ struct Master::Impl {
     void onHello(const std::string& peer, const Header& h, const uint8_t* data, size_t size) {
         const Hello hello = decodePayload<Hello>(data, size);
         if (h.version != kProtocolVersion || hello.protocolVersion != kProtocolVersion) {
-            Goodbye bye{"protocol version " + std::to_string(hello.protocolVersion) + " is not the master's " +
-                        std::to_string(kProtocolVersion)};
-            if (!sendToPeer(router, peer, encodeMessage(header(MsgType::Goodbye), bye))) add(&MasterCounters::failedSends, 1);
             const unsigned theirs = h.version != kProtocolVersion ? h.version : hello.protocolVersion;
+            Goodbye bye{"protocol version " + std::to_string(theirs) + " is not the master's " + std::to_string(kProtocolVersion)};
+            if (!sendToPeer(router, peer, encodeMessage(header(MsgType::Goodbye), bye))) add(&MasterCounters::failedSends, 1);
             count(&MasterCounters::refused, "refused a client",
                   "it speaks protocol version " + std::to_string(theirs) + " (master: " + std::to_string(kProtocolVersion) + ")");
             return;
@@ -1274,7 +1289,7 @@ struct Master::Impl {
             // Never merge across a frame: a frame's state must be a point in the sequence.
             flushUpdates();
             if (cmd.kind == Command::kBeginFrame)
-                beginFrame(cmd.frame, cmd.update.seq, cmd.settings, cmd.pixels, cmd.stochastic, std::move(cmd.views), cmd.viewsTag);
+                beginFrame(std::move(cmd));
             if (cmd.kind == Command::kCodec) {
                 settings.codec = cmd.codec;  // for clients that join later
                 for (auto& [peer, c] : clients)
@@ -1399,7 +1414,7 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
     for (const Material& m : scene.materials)
         for (const std::string& path : filesNamedBy(m))
             if (!s.findAsset(path)) s.addAsset(readAsset(path, scene.files));
-    s.frameState = snapshotOf(s.scene, s.camera, s.meshRefs, s.assetRefs, s.seq);
+    s.frameState = snapshotOf(s.scene, s.meshRefs, s.assetRefs, s.seq);
 
     // The largest legitimate message a client sends is a result for the largest tile allowed.
     // (A linear tile is encoded as an 8-bit tile twice as wide.)
@@ -1605,10 +1620,10 @@ void queueLocked(Master::Impl& s, Command&& cmd) {
 void pushUpdate(Master::Impl& s, Change change, std::vector<Asset> files = {}) {
     {
         std::lock_guard lock(s.stateMutex);
-        applyChange(s.scene, s.camera, change);  // throws for an index out of range, before anything changed
+        applyChange(s.scene, change);  // throws for an index out of range, before anything changed
         for (Asset& file : files)
             if (!s.findAsset(file.first.path)) s.addAsset(std::move(file));
-        if (!std::holds_alternative<CameraChange>(change) && !std::holds_alternative<TransformChange>(change))
+        if (!std::holds_alternative<TransformChange>(change))
             s.stochasticStale = true;
         ++s.seq;
         Command cmd{.kind = Command::kUpdate};
@@ -1622,7 +1637,12 @@ void pushUpdate(Master::Impl& s, Change change, std::vector<Asset> files = {}) {
 
 }  // namespace
 
-void Master::setCamera(const CameraDesc& camera) { pushUpdate(*impl_, CameraChange{camera}); }
+// The next mono frame's view, not an update: it reaches the clients in that frame's FrameBegin.
+void Master::setCamera(const CameraDesc& camera) {
+    std::lock_guard lock(impl_->stateMutex);
+    impl_->camera = camera;
+    ++impl_->cameraMoves;
+}
 void Master::setInstanceTransform(uint32_t instance, const Transform& t) { pushUpdate(*impl_, TransformChange{instance, t}); }
 void Master::setInstanceVisibility(uint32_t instance, Visibility v) { pushUpdate(*impl_, VisibilityChange{instance, v}); }
 void Master::setMaterial(uint32_t material, const Material& value) {
@@ -1712,6 +1732,10 @@ std::vector<Image> Master::renderViews(FrameReport* report, std::vector<std::vec
             cmd.stochastic = s.stateStochastic;
             cmd.views = s.views;
             cmd.viewsTag = s.viewsTag;
+            cmd.camera = s.camera;
+            // Each update and each camera move once: the sequence numbers reports gave when the
+            // camera was an update (frames of one state and one camera accumulate).
+            cmd.shownSeq = s.seq + s.cameraMoves;
             if (cmd.stochastic && s.settings.wideAccumulation) cmd.pixels = TilePixels::LinearHalf;
             queueLocked(s, std::move(cmd));
         }

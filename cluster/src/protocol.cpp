@@ -420,10 +420,6 @@ template <class T> void readVector(Reader& r, std::vector<T>& v, size_t minEleme
 
 // -- Changes -------------------------------------------------------------------------------------
 
-RTWALL_WIRE_FIELDS(CameraChange, 1);
-void write(Writer& w, const CameraChange& c) { write(w, c.camera); }
-void read(Reader& r, CameraChange& c) { read(r, c.camera); }
-
 RTWALL_WIRE_FIELDS(TransformChange, 2);
 void write(Writer& w, const TransformChange& c) {
     w.u32(c.instance);
@@ -496,7 +492,7 @@ template <size_t I> void readAlternative(Reader& r, Change& c) {
 
 void read(Reader& r, Change& c) {
     const uint8_t kind = r.u8();
-    static_assert(std::variant_size_v<Change> == 7, "a new change kind needs a case here");
+    static_assert(std::variant_size_v<Change> == 6, "a new change kind needs a case here");
     switch (kind) {
         case 0: readAlternative<0>(r, c); break;
         case 1: readAlternative<1>(r, c); break;
@@ -504,17 +500,14 @@ void read(Reader& r, Change& c) {
         case 3: readAlternative<3>(r, c); break;
         case 4: readAlternative<4>(r, c); break;
         case 5: readAlternative<5>(r, c); break;
-        case 6: readAlternative<6>(r, c); break;
         default: fail("unknown change kind " + std::to_string(kind));
     }
 }
 
 size_t minChangeSize() {
-    CameraChange camera;
-    camera.camera.name.clear();
     MaterialChange material;
     material.value.name.clear();
-    return 1 + std::min({minEncodedSize(camera), minEncodedSize(TransformChange{}), minEncodedSize(material),
+    return 1 + std::min({minEncodedSize(TransformChange{}), minEncodedSize(material),
                          minEncodedSize(LightChange{}), minEncodedSize(SettingsChange{}),
                          minEncodedSize(SectionChange{}), minEncodedSize(VisibilityChange{})});
 }
@@ -556,7 +549,7 @@ void read(Reader& r, Welcome& m) {
              " ms exceeds the limit");
 }
 
-RTWALL_WIRE_FIELDS(SceneSnapshot, 11);
+RTWALL_WIRE_FIELDS(SceneSnapshot, 10);
 RTWALL_WIRE_FIELDS(BvhSettings, 4);  // written with the snapshot
 // Everything that affects the image, i.e. the snapshot without its sequence number; stateHash
 // hashes exactly these bytes.
@@ -565,7 +558,6 @@ void writeState(Writer& w, const SceneSnapshot& m) {
     writeVector(w, m.materials);
     writeVector(w, m.instances);
     writeVector(w, m.lights);
-    write(w, m.camera);
     write(w, m.settings);
     w.u8(uint8_t(m.bvh.quality));
     w.boolean(m.bvh.compact);
@@ -590,7 +582,6 @@ void read(Reader& r, SceneSnapshot& m) {
     readVector(r, m.materials, materialBytes, kMaxSceneObjects);
     readVector(r, m.instances, instanceBytes, kMaxSceneObjects);
     readVector(r, m.lights, lightBytes, kMaxSceneObjects);
-    read(r, m.camera);
     read(r, m.settings);
     const uint8_t quality = r.u8();
     if (quality > uint8_t(BvhSettings::Quality::High)) fail("BVH quality " + std::to_string(quality) + " is out of range");
@@ -715,6 +706,8 @@ void read(Reader& r, FrameBegin& m) {
         return minEncodedSize(v);
     }();
     readVector(r, m.views, viewBytes, kMaxViews);
+    // Version 13: the views are the frame's only camera; a frame without one cannot be rendered.
+    if (m.views.empty()) fail("frame " + std::to_string(m.frame) + " has no view");
 }
 
 RTWALL_WIRE_FIELDS(TileRequest, 2);
@@ -753,15 +746,28 @@ void write(Writer& w, const TileResult& m) {
     w.blob(m.pixels.data(), m.pixels.size());
     writeEnum(w, m.format);
 }
-void read(Reader& r, TileResult& m) {
+// A TileResult with its pixels as a view into the message: the one reader of its layout, for
+// decodePayload (which copies the pixels) and peekTileResult (which does not).
+struct TileResultView {
+    TileResult fields;  // all but the pixels
+    std::pair<const uint8_t*, size_t> pixels;
+};
+void read(Reader& r, TileResultView& v) {
     // A half-float tile is encoded as an 8-bit tile twice as wide.
     static const size_t maxPixelBytes = maxEncodedTileBytes(2 * kMaxTileSize, kMaxTileSize);
+    TileResult& m = v.fields;
     m.frame = r.u32();
     m.tile = r.u32();
     m.codec = readEnum(r, TileCodec::Jpeg, "tile codec");
     m.renderMicros = r.u32();
-    m.pixels = r.blob(maxPixelBytes);
+    v.pixels = r.blobView(maxPixelBytes);
     m.format = readEnum(r, TilePixels::LinearHalf, "tile pixel format");
+}
+void read(Reader& r, TileResult& m) {
+    TileResultView v;
+    read(r, v);
+    m = std::move(v.fields);
+    m.pixels.assign(v.pixels.first, v.pixels.first + v.pixels.second);
 }
 
 RTWALL_WIRE_FIELDS(Heartbeat, 3);
@@ -1114,6 +1120,14 @@ template <class Msg> Msg decodePayload(const uint8_t* data, size_t size) {
     read(r, msg);
     r.expectEnd();
     return msg;
+}
+
+TileResultInfo peekTileResult(const uint8_t* data, size_t size) {
+    Reader r(data, size);
+    TileResultView v;
+    read(r, v);
+    r.expectEnd();
+    return {v.fields.frame, v.fields.tile, v.fields.renderMicros, uint32_t(v.pixels.second)};
 }
 
 MsgType messageTypeOf(const Hello&) { return MsgType::Hello; }

@@ -1,4 +1,4 @@
-// The rtwall wire protocol, version 11 (2 added the master's peer timeout to Welcome; 3 added
+// The rtwall wire protocol, version 13 (2 added the master's peer timeout to Welcome; 3 added
 // materials, area lights and shading settings; 4 added vertex colours to meshes, the scene's
 // origin and [bvh] settings to the snapshot, spherical and cylindrical texture mappings, texture
 // and volume files by content hash (AssetRequest, AssetData, SceneSnapshot::assets) and linear
@@ -18,7 +18,9 @@
 // tile socket lets in) and to NodeFrame the frame's views with each view's eye (a node assembles
 // one image per view and composes the eyes, as the single-PC wall does) and what a node needs to
 // accumulate a stochastic frame as the single-PC wall does (whether it is stochastic, and its
-// state's sequence number).
+// state's sequence number); 13 made FrameBegin the one route of the viewer's camera to the
+// clients (issue 26): every frame carries its views, a mono frame one view; CameraChange and the
+// snapshot's camera are gone (the camera is not scene state: it moves no sequence number).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one writer and one
@@ -44,7 +46,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 12;  // 12: views and accumulation on display nodes
+inline constexpr uint16_t kProtocolVersion = 13;  // 13: the frame's views are its only camera
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -149,7 +151,6 @@ struct SceneSnapshot {
     std::vector<Material> materials;
     std::vector<InstanceDesc> instances;
     std::vector<Light> lights;
-    CameraDesc camera;
     RenderSettings settings;
     // Version 4: so that a client builds the same BVHs as the master, and knows where the
     // (rebased) coordinates lie in the world.
@@ -180,10 +181,6 @@ struct AssetData {
     std::vector<uint8_t> bytes;
 };
 
-struct CameraChange {
-    CameraDesc camera;
-    bool operator==(const CameraChange&) const = default;
-};
 struct TransformChange {
     uint32_t instance = 0;
     Transform transform;
@@ -218,7 +215,7 @@ struct VisibilityChange {
     Visibility visibility = Visibility::Shown;
     bool operator==(const VisibilityChange&) const = default;
 };
-using Change = std::variant<CameraChange, TransformChange, MaterialChange, LightChange, SettingsChange, SectionChange,
+using Change = std::variant<TransformChange, MaterialChange, LightChange, SettingsChange, SectionChange,
                             VisibilityChange>;
 
 // The changes that take the state from baseSeq to seq. The master merges the updates made
@@ -235,9 +232,10 @@ struct FrameBegin {
     uint32_t frame = 0;
     uint32_t updateSeq = 0;  // the frame renders the state at exactly this sequence number
     TilePixels pixels = TilePixels::Srgb8;  // how its tiles are sent
-    // Version 10: a multi-view frame (Master::setViews): its tiles are viewTiles(views) at the
-    // state's resolution and tile size, each rendered with its view's camera instead of the
-    // state's. Per frame, not state: an eye's camera moves with the head at no sequence number.
+    // The frame's views, 1 to kMaxViews (version 13: the only way a camera reaches a client). Its
+    // tiles are viewTiles(views) at the state's resolution and tile size, each rendered with its
+    // view's camera; a mono frame is one view without regions (makeTiles order). Per frame, not
+    // state: a camera moves at no sequence number.
     std::vector<FrameView> views{};
 };
 
@@ -259,6 +257,17 @@ struct TileResult {
     std::vector<uint8_t> pixels;  // encoded
     TilePixels format = TilePixels::Srgb8;  // LinearHalf: `pixels` are 6 bytes a pixel before the codec
 };
+
+// A TileResult's fields without a copy of its pixels: what a client that forwards its own
+// encoded results to the display nodes reads of one (the message goes on as it is), checked as
+// decodePayload<TileResult> checks them. Throws DecodeError.
+struct TileResultInfo {
+    uint32_t frame = 0;
+    uint32_t tile = 0;
+    uint32_t renderMicros = 0;
+    uint32_t pixelBytes = 0;  // the encoded pixels' length
+};
+TileResultInfo peekTileResult(const uint8_t* data, size_t size);
 
 // From the master all fields are 0. From a client: what it holds, so that the master can tell a
 // lost hand-out from a slow one. `tilesSeen` counts the tiles of every assignment for `frame`

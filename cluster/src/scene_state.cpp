@@ -10,19 +10,19 @@ namespace {
 
 // The members of SceneDesc and SceneSnapshot that the two functions below map, one by one. A
 // member added to either fails the build here until it is mapped (or said not to travel).
-// SceneDesc::sourceFile, other cameras and parts (an assembly's part names: picking and `rtwall
+// SceneDesc::sourceFile, the cameras (version 13: a camera travels only with a frame,
+// FrameBegin::views) and parts (an assembly's part names: picking and `rtwall
 // info` on the master) do not travel.
 static_assert(fieldCount<SceneDesc>() == 12,
               "SceneDesc has a member snapshotOf/sceneOf do not map: map it (or say why it does not travel), "
               "and decide in diffScenes whether an edit of it is an update or needs a restart");
-static_assert(fieldCount<SceneSnapshot>() == 11, "SceneSnapshot has a member snapshotOf/sceneOf do not map");
+static_assert(fieldCount<SceneSnapshot>() == 10, "SceneSnapshot has a member snapshotOf/sceneOf do not map");
 
 // The scene state as plain data, wherever it is held: what changes write.
 struct StateFields {
     std::vector<Material>& materials;
     std::vector<InstanceDesc>& instances;
     std::vector<Light>& lights;
-    CameraDesc& camera;
     RenderSettings& settings;
     SectionPlanes& sections;
     std::vector<AssetRef>* assets;  // a snapshot's files; a SceneDesc holds file bytes, which its owner adds
@@ -38,7 +38,6 @@ template <class T> T& element(std::vector<T>& v, uint32_t i, const char* what) {
 void apply(const StateFields& s, const Change& change) {
     struct Visitor {
         const StateFields& s;
-        void operator()(const CameraChange& c) const { s.camera = c.camera; }
         void operator()(const TransformChange& c) const { element(s.instances, c.instance, "instance").transform = c.transform; }
         void operator()(const MaterialChange& c) const {
             element(s.materials, c.material, "material") = c.value;
@@ -71,7 +70,7 @@ MeshRef meshRefOf(const MeshDesc& mesh) {
     return MeshRef{mesh.name, mesh.source, hashBytes(bytes.data(), bytes.size()), bytes.size()};
 }
 
-SceneSnapshot snapshotOf(const SceneDesc& scene, const CameraDesc& camera, std::vector<MeshRef> meshes,
+SceneSnapshot snapshotOf(const SceneDesc& scene, std::vector<MeshRef> meshes,
                          std::vector<AssetRef> assets, uint32_t seq) {
     if (meshes.size() != scene.meshes.size())
         throw std::logic_error("snapshotOf: " + std::to_string(meshes.size()) + " mesh refs for " +
@@ -82,7 +81,6 @@ SceneSnapshot snapshotOf(const SceneDesc& scene, const CameraDesc& camera, std::
     s.materials = scene.materials;
     s.instances = scene.instances;
     s.lights = scene.lights;
-    s.camera = camera;
     s.settings = scene.settings;
     s.bvh = scene.bvh;
     s.origin = scene.origin;
@@ -108,7 +106,6 @@ std::optional<SceneDesc> sceneOf(const SceneSnapshot& snapshot,
     d.materials = snapshot.materials;
     d.instances = snapshot.instances;
     d.lights = snapshot.lights;
-    d.cameras = {snapshot.camera};
     d.settings = snapshot.settings;
     d.bvh = snapshot.bvh;
     d.origin = snapshot.origin;
@@ -116,19 +113,18 @@ std::optional<SceneDesc> sceneOf(const SceneSnapshot& snapshot,
     return d;
 }
 
-void applyChange(SceneDesc& scene, CameraDesc& camera, const Change& change) {
-    apply({scene.materials, scene.instances, scene.lights, camera, scene.settings, scene.sections, nullptr}, change);
+void applyChange(SceneDesc& scene, const Change& change) {
+    apply({scene.materials, scene.instances, scene.lights, scene.settings, scene.sections, nullptr}, change);
 }
 
 void applyChange(SceneSnapshot& snapshot, const Change& change) {
-    apply({snapshot.materials, snapshot.instances, snapshot.lights, snapshot.camera, snapshot.settings,
+    apply({snapshot.materials, snapshot.instances, snapshot.lights, snapshot.settings,
            snapshot.sections, &snapshot.assets},
           change);
 }
 
 uint64_t objectOf(const Change& change) {
     struct Visitor {
-        uint32_t operator()(const CameraChange&) const { return 0; }  // one camera
         uint32_t operator()(const TransformChange& c) const { return c.instance; }
         uint32_t operator()(const MaterialChange& c) const { return c.material; }
         uint32_t operator()(const LightChange& c) const { return c.light; }

@@ -23,27 +23,26 @@ using FileBytes = std::shared_ptr<const std::vector<uint8_t>>;
 // A mesh as snapshots name it: by the hash of its canonical bytes (encodeMesh).
 MeshRef meshRefOf(const MeshDesc& mesh);
 
-// The state of `scene` seen through `camera`, at sequence number `seq`: its meshes as `meshes`
-// (meshRefOf of each, in order) and the texture and volume files its materials name as
-// `assets`. Not carried: SceneDesc::sourceFile (the master's own path) and cameras other than
-// `camera` (a client renders the current camera only).
-SceneSnapshot snapshotOf(const SceneDesc& scene, const CameraDesc& camera, std::vector<MeshRef> meshes,
+// The state of `scene` at sequence number `seq`: its meshes as `meshes` (meshRefOf of each, in
+// order) and the texture and volume files its materials name as `assets`. Not carried:
+// SceneDesc::sourceFile (the master's own path) and the cameras (each frame carries its views).
+SceneSnapshot snapshotOf(const SceneDesc& scene, std::vector<MeshRef> meshes,
                          std::vector<AssetRef> assets, uint32_t seq);
 
 // And back: the scene a snapshot describes, its meshes and files taken from `meshes` and `files`
-// by hash; nothing while one of them is missing. Its one camera is the snapshot's.
+// by hash; nothing while one of them is missing. It has no camera.
 std::optional<SceneDesc> sceneOf(const SceneSnapshot& snapshot,
                                  const std::map<Hash128, std::shared_ptr<const TriangleMesh>>& meshes,
                                  const std::map<Hash128, FileBytes>& files);
 
-// A change applied to the state as plain data, held as a scene description and its current
-// camera (the master's application state) or as a snapshot (the state of the frame being
+// A change applied to the state as plain data, held as a scene description (the master's
+// application state) or as a snapshot (the state of the frame being
 // rendered; a material change adds the files it names that the snapshot lacks). One
 // implementation for both. Throws DecodeError for an object that does not exist, before
 // anything changed. (A client applies changes to its engine Scene, which has its own
 // differential calls; it dispatches with std::visit, so a new kind of change fails to compile
 // there too.)
-void applyChange(SceneDesc& scene, CameraDesc& camera, const Change& change);
+void applyChange(SceneDesc& scene, const Change& change);
 void applyChange(SceneSnapshot& snapshot, const Change& change);
 
 // The object a change writes (its kind and index): two changes with one key overwrite each other.

@@ -59,7 +59,7 @@ std::vector<std::vector<uint8_t>> everyType(uint64_t session, uint32_t frame) {
     out.push_back(encodeMessage(h, MeshRequest{{1, 2}}));
     out.push_back(encodeMessage(h, MeshData{{1, 2}, {1, 2, 3}}));
     out.push_back(encodeMessage(h, update));
-    out.push_back(encodeMessage(h, FrameBegin{frame, 3, TilePixels::Srgb8}));
+    out.push_back(encodeMessage(h, FrameBegin{frame, 3, TilePixels::Srgb8, {FrameView{}}}));
     out.push_back(encodeMessage(h, TileRequest{frame, 64}));
     out.push_back(encodeMessage(h, TileAssign{frame, {0, 1, 2}}));
     out.push_back(encodeMessage(h, result));

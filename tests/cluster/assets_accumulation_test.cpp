@@ -267,7 +267,7 @@ TEST(ClusterAssets, ATamperedAssetIsRejectedAndCounted) {
     snap.materials = desc.materials;
     snap.instances = desc.instances;
     snap.lights = desc.lights;
-    snap.camera = desc.cameras.front();
+    const std::vector<FrameView> mono{FrameView{desc.cameras.front(), {}, 0, 0}};  // a frame's one view (protocol 13)
     snap.settings = desc.settings;
     const Hash128 textureHash = hashBytes(realBytes.data(), realBytes.size());
     snap.assets.push_back({texture, textureHash, realBytes.size()});

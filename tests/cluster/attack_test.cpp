@@ -183,7 +183,7 @@ TEST(HostileMaster, GarbageNeitherCrashesNorHangsAClient) {
         for (int i = 0; i < 10; ++i, ++sent) fake.resend(peer, junk(1 + rng() % 100));
         for (int i = 0; i < 10; ++i, ++sent) fake.sendParts(peer, {{'x'}, {'y'}});
         // A FrameBegin that would throw the work away, inside a two-frame message: not obeyed.
-        fake.sendParts(peer, {encodeMessage(h, FrameBegin{99, 0, TilePixels::Srgb8}), {'z'}});
+        fake.sendParts(peer, {encodeMessage(h, FrameBegin{99, 0, TilePixels::Srgb8, {FrameView{}}}), {'z'}});
         ++sent;
         for (uint16_t t = 1; t <= kMaxMsgType; ++t) {
             Header bad = h;
@@ -198,7 +198,7 @@ TEST(HostileMaster, GarbageNeitherCrashesNorHangsAClient) {
                 fake.resend(peer, m);
                 ++sent;
             }
-            std::vector<uint8_t> truncated = encodeMessage(h, FrameBegin{7, 0, TilePixels::Srgb8});
+            std::vector<uint8_t> truncated = encodeMessage(h, FrameBegin{7, 0, TilePixels::Srgb8, {FrameView{}}});
             truncated.pop_back();
             fake.resend(peer, truncated);
             ++sent;
@@ -208,7 +208,7 @@ TEST(HostileMaster, GarbageNeitherCrashesNorHangsAClient) {
         fake.send(peer, Ready{0, {1, 2}});
         Header other = h;
         other.session = 0xBAD;
-        fake.resend(peer, encodeMessage(other, FrameBegin{42, 0, TilePixels::Srgb8}));
+        fake.resend(peer, encodeMessage(other, FrameBegin{42, 0, TilePixels::Srgb8, {FrameView{}}}));
         return sent + 3;
     };
     garbage();  // before the handshake: nothing of it counts as a master
@@ -226,7 +226,7 @@ TEST(HostileMaster, GarbageNeitherCrashesNorHangsAClient) {
     snap.materials = desc.materials;
     snap.instances = desc.instances;
     snap.lights = desc.lights;
-    snap.camera = desc.cameras.front();
+    const std::vector<FrameView> mono{FrameView{desc.cameras.front(), {}, 0, 0}};  // a frame's one view (protocol 13)
     snap.settings = desc.settings;
     snap.bvh = desc.bvh;
     snap.origin = desc.origin;
@@ -243,7 +243,7 @@ TEST(HostileMaster, GarbageNeitherCrashesNorHangsAClient) {
     // In the session: garbage again, and assignments without end for tiles that do not exist.
     const uint64_t dropped0 = counters->droppedMessages.load();
     const uint64_t inSession = garbage();
-    fake.send(peer, FrameBegin{5, 0, TilePixels::Srgb8}, 5);
+    fake.send(peer, FrameBegin{5, 0, TilePixels::Srgb8, mono}, 5);
     ASSERT_TRUE(fake.expect(MsgType::TileRequest, 10000));
     std::vector<uint32_t> bogus(kMaxTilesPerMessage);
     for (uint32_t i = 0; i < bogus.size(); ++i) bogus[i] = 1000 + i;
@@ -255,7 +255,7 @@ TEST(HostileMaster, GarbageNeitherCrashesNorHangsAClient) {
     EXPECT_GT(counters->droppedAssignments.load(), 0u) << "its queue has a bound";
 
     // It still works: the next frame, one real tile, rendered right.
-    fake.send(peer, FrameBegin{6, 0, TilePixels::Srgb8}, 6);
+    fake.send(peer, FrameBegin{6, 0, TilePixels::Srgb8, mono}, 6);
     const auto request = fake.expect(MsgType::TileRequest, 10000);
     ASSERT_TRUE(request);
     EXPECT_EQ(decodePayload<TileRequest>(request->payload.data(), request->payload.size()).frame, 6u);

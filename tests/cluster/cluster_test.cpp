@@ -891,7 +891,7 @@ TEST(Cluster, TheClientIgnoresReplayedMasterMessages) {
     snap.materials = desc.materials;
     snap.instances = desc.instances;
     snap.lights = desc.lights;
-    snap.camera = desc.cameras.front();
+    const std::vector<FrameView> mono{FrameView{desc.cameras.front(), {}, 0, 0}};  // a frame's one view (protocol 13)
     snap.settings = desc.settings;
     const std::vector<uint8_t> oldSnapshot = fake.send(peer, snap);
     for (size_t i = 0; i < desc.meshes.size(); ++i) {
@@ -902,7 +902,7 @@ TEST(Cluster, TheClientIgnoresReplayedMasterMessages) {
             if (snap.meshes[k].hash == r.hash) fake.send(peer, MeshData{r.hash, meshBytes[k]});
     }
     ASSERT_TRUE(fake.expect(MsgType::Ready, 30000));
-    const std::vector<uint8_t> oldBegin = fake.send(peer, FrameBegin{1, 0}, 1);
+    const std::vector<uint8_t> oldBegin = fake.send(peer, FrameBegin{1, 0, TilePixels::Srgb8, mono}, 1);
     ASSERT_TRUE(fake.expect(MsgType::TileRequest, 10000));
 
     // The state moves on: frame 2 renders seq 1 (a brighter light).
@@ -912,7 +912,7 @@ TEST(Cluster, TheClientIgnoresReplayedMasterMessages) {
     desc.lights[0].intensity *= 3.0f;
     u.changes.push_back(LightChange{0, desc.lights[0]});
     const std::vector<uint8_t> oldUpdate = fake.send(peer, u);
-    const std::vector<uint8_t> begin2 = fake.send(peer, FrameBegin{2, 1}, 2);
+    const std::vector<uint8_t> begin2 = fake.send(peer, FrameBegin{2, 1, TilePixels::Srgb8, mono}, 2);
     ASSERT_TRUE(fake.expect(MsgType::TileRequest, 10000));
     // Replays: none of these may reach the client's work or state.
     for (const auto* bytes : {&oldSnapshot, &oldBegin, &oldUpdate, &begin2}) fake.resend(peer, *bytes);
@@ -969,7 +969,7 @@ TEST(Cluster, AClientReportsAFailedTileWithItsFrameAndPixels) {
     snap.materials = desc.materials;
     snap.instances = desc.instances;
     snap.lights = desc.lights;
-    snap.camera = desc.cameras.front();
+    const std::vector<FrameView> mono{FrameView{desc.cameras.front(), {}, 0, 0}};  // a frame's one view (protocol 13)
     snap.settings = desc.settings;
     fake.send(peer, snap);
     for (size_t i = 0; i < desc.meshes.size(); ++i) {
@@ -981,11 +981,11 @@ TEST(Cluster, AClientReportsAFailedTileWithItsFrameAndPixels) {
     }
     ASSERT_TRUE(fake.expect(MsgType::Ready, 30000));
     // Frame 1's tile 5 renders; frame 2's tile 0 too, its tile 5 fails.
-    fake.send(peer, FrameBegin{1, 0}, 1);
+    fake.send(peer, FrameBegin{1, 0, TilePixels::Srgb8, mono}, 1);
     ASSERT_TRUE(fake.expect(MsgType::TileRequest, 10000));
     fake.send(peer, TileAssign{1, {5}}, 1);
     ASSERT_TRUE(fake.expect(MsgType::TileResult, 10000)) << "the fault fired in another frame";
-    fake.send(peer, FrameBegin{2, 0}, 2);
+    fake.send(peer, FrameBegin{2, 0, TilePixels::Srgb8, mono}, 2);
     fake.send(peer, TileAssign{2, {0, 5}}, 2);
     std::vector<uint32_t> results;
     fake.onOther = [&](const FakeMaster::Received& m) {

@@ -121,7 +121,6 @@ void expectSame(const SceneSnapshot& a, const SceneSnapshot& b) {
     expectSame(a.materials, b.materials);
     expectSame(a.instances, b.instances);
     expectSame(a.lights, b.lights);
-    expectSame(a.camera, b.camera);
     expectSame(a.settings, b.settings);
     EXPECT_EQ(a.bvh.quality, b.bvh.quality);
     EXPECT_EQ(a.bvh.compact, b.bvh.compact);
@@ -140,7 +139,6 @@ void expectSame(const MeshData& a, const MeshData& b) {
     EXPECT_EQ(a.hash, b.hash);
     EXPECT_EQ(a.mesh, b.mesh);
 }
-void expectSame(const CameraChange& a, const CameraChange& b) { expectSame(a.camera, b.camera); }
 void expectSame(const TransformChange& a, const TransformChange& b) {
     EXPECT_EQ(a.instance, b.instance);
     expectSame(a.transform, b.transform);
@@ -359,7 +357,6 @@ SceneSnapshot sampleSnapshot() {
     s.instances.push_back(InstanceDesc{1, 0, sampleTransform(0)});
     s.instances.push_back(InstanceDesc{0, 1, sampleTransform(1), -1, Visibility::Hidden});
     s.lights = {sampleLight(0), sampleLight(1)};
-    s.camera = sampleCamera();
     s.settings = sampleSettings();
     s.bvh = {BvhSettings::Quality::High, true, true, BvhSettings::Primitives::Triangles};
     s.origin = {1e6 + 0.25, -2e5, 3.0e5 + 1.0 / 1024};
@@ -379,15 +376,10 @@ Update sampleUpdate() {
     Update u;
     u.seq = 17;
     u.baseSeq = 12;
-    u.changes.push_back(CameraChange{sampleCamera()});
-    u.changes.push_back(TransformChange{3, sampleTransform(2)});
-    u.changes.push_back(MaterialChange{5, sampleMaterial(3), {}});
-    u.changes.push_back(MaterialChange{6, sampleMaterial(4), {AssetRef{"tex/rust.png", Hash128{0x1234, 0x5678}, 4096},
-                                                          AssetRef{"vol/smoke.vti", Hash128{0x9abc, 0xdef0}, 1 << 20}}});
-    u.changes.push_back(LightChange{2, sampleLight(1)});
-    u.changes.push_back(SettingsChange{sampleSettings()});
-    u.changes.push_back(CameraChange{sampleOffAxisCamera()});
-    u.changes.push_back(VisibilityChange{4, Visibility::Highlighted});
+    u.changes = {TransformChange{3, sampleTransform(2)}, MaterialChange{5, sampleMaterial(3), {}},
+                 MaterialChange{6, sampleMaterial(4), {AssetRef{"tex/rust.png", Hash128{0x1234, 0x5678}, 4096},
+                                                       AssetRef{"vol/smoke.vti", Hash128{0x9abc, 0xdef0}, 1 << 20}}},
+                 LightChange{2, sampleLight(1)}, SettingsChange{sampleSettings()}, VisibilityChange{4, Visibility::Highlighted}};
     return u;
 }
 
@@ -454,7 +446,7 @@ template <class F> void forEachSample(F&& f) {
     f(MeshRequest{{0xaaaabbbbccccddddull, 0x1111222233334444ull}});
     f(sampleMeshData());
     f(sampleUpdate());
-    f(FrameBegin{1234, 99, TilePixels::LinearHalf});
+    f(FrameBegin{1234, 99, TilePixels::LinearHalf, {FrameView{sampleCamera(), {}, 0, 0}}});  // mono: one view
     f(sampleViewsFrameBegin());
     f(TileRequest{55, 8});
     f(TileAssign{56, {0, 7, 1u << 20, 0xFFFFFFFFu}});
@@ -521,7 +513,6 @@ TEST(Protocol, RoundTripEveryMessage) {
 
 TEST(Protocol, RoundTripEmptyAndLimitValues) {
     SceneSnapshot empty;
-    empty.camera.name.clear();
     expectSame(empty, decode<SceneSnapshot>(payloadOf(empty)));
     expectSame(Update{}, decode<Update>(payloadOf(Update{})));
     expectSame(TileAssign{}, decode<TileAssign>(payloadOf(TileAssign{})));
@@ -542,23 +533,28 @@ TEST(Protocol, RoundTripEmptyAndLimitValues) {
     edges.materials[0].color = {0, 0, 0};
     edges.materials[1].color = {1, 1, 1};
     edges.lights[0].intensity = 0;
-    edges.camera.fovY = 179.9f;
     expectSame(edges, decode<SceneSnapshot>(payloadOf(edges)));
+    FrameBegin wide{7, 3, TilePixels::Srgb8, {FrameView{sampleCamera(), {}, 0, 0}}};
+    wide.views[0].camera.fovY = 179.9f;
+    expectSame(wide, decode<FrameBegin>(payloadOf(wide)));
 }
 
+// Version 13: a camera reaches a client only as a view of a FrameBegin (a mono frame has one).
 TEST(Protocol, RoundTripOffAxisCamera) {
-    SceneSnapshot s = sampleSnapshot();
-    s.camera = sampleOffAxisCamera();
-    expectSame(s, decode<SceneSnapshot>(payloadOf(s)));
-    Update u;
-    u.seq = 2;
-    u.baseSeq = 1;
-    u.changes.push_back(CameraChange{sampleOffAxisCamera()});
-    u.changes.push_back(CameraChange{sampleCamera()});  // and back to symmetric
-    expectSame(u, decode<Update>(payloadOf(u)));
+    FrameBegin plain{2, 1, TilePixels::Srgb8, {FrameView{sampleCamera(), {}, 0, 0}}};
+    FrameBegin offAxis = plain;
+    offAxis.views[0].camera = sampleOffAxisCamera();
+    const FrameBegin back = decode<FrameBegin>(payloadOf(offAxis));
+    expectSame(offAxis, back);
+    expectSame(back.views[0].camera, sampleOffAxisCamera());
     // The window costs a flag byte plus three Float3s; an absent window costs only the flag.
-    SceneSnapshot plain = sampleSnapshot();
-    EXPECT_EQ(payloadOf(s).size(), payloadOf(plain).size() + 36 + (s.camera.name.size() - plain.camera.name.size()));
+    EXPECT_EQ(payloadOf(offAxis).size(),
+              payloadOf(plain).size() + 36 + (offAxis.views[0].camera.name.size() - plain.views[0].camera.name.size()));
+}
+
+// A frame without a view has no camera to render with: the decoder refuses it.
+TEST(Protocol, FrameBeginNeedsAView) {
+    EXPECT_THROW(decode<FrameBegin>(payloadOf(FrameBegin{2, 1, TilePixels::Srgb8, {}})), DecodeError);
 }
 
 TEST(Protocol, EncodeSetsTypeAndLength) {
@@ -575,7 +571,8 @@ TEST(Protocol, GoldenBytes) {
     // (version 2: the shading fields of materials, lights and settings; 4: FrameBegin's tile format;
     // 5: the snapshot's BVH primitives; 6: two-sided emission of materials and area lights; 7: the
     // client's work report in Heartbeat, TileStalled; 8: TileFailed; 9: section planes, instance visibility;
-    // 10: FrameBegin's views; 11: display nodes; 12: views and accumulation on display nodes).
+    // 10: FrameBegin's views; 11: display nodes; 12: views and accumulation on display nodes; 13:
+    // the frame's views are its only camera).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -583,7 +580,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x0C, 0x00,                                      // version (12: views and accumulation on display nodes)
+        0x0D, 0x00,                                      // version (13: the frame's views are its only camera)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -592,7 +589,7 @@ TEST(Protocol, GoldenBytes) {
         0x00, 0x00, 0x00, 0x00,                          // reserved
         0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88,  // payload: frame, update sequence
         0x00,                                            // tile pixels: 8-bit sRGB
-        0x00, 0x00, 0x00, 0x00,                          // no views: the state's camera
+        0x00, 0x00, 0x00, 0x00,                          // no views (the layout only: a decoder wants one)
     };
     EXPECT_EQ(bytes, expected);
 }
@@ -778,17 +775,6 @@ TEST(Protocol, SnapshotRejectsValuesOutOfRange) {
         {"bvh primitives 2", [](SceneSnapshot& s) { s.bvh.primitives = BvhSettings::Primitives(2); }},
         {"origin NaN", [](SceneSnapshot& s) { s.origin[1] = std::numeric_limits<double>::quiet_NaN(); }},
         {"origin inf", [](SceneSnapshot& s) { s.origin[0] = -std::numeric_limits<double>::infinity(); }},
-        {"fov 0", [](SceneSnapshot& s) { s.camera.fovY = 0; }},
-        {"fov 180", [](SceneSnapshot& s) { s.camera.fovY = 180; }},
-        {"fov -10", [](SceneSnapshot& s) { s.camera.fovY = -10; }},
-        {"window NaN", [=](SceneSnapshot& s) {
-             s.camera.window = ProjectionWindow{{0, 0, 0}, {nan, 0, 0}, {0, 1, 0}};
-         }},
-        {"window inf", [=](SceneSnapshot& s) {
-             s.camera.window = ProjectionWindow{{0, 0, inf}, {1, 0, 0}, {0, 1, 0}};
-         }},
-        {"camera NaN", [=](SceneSnapshot& s) { s.camera.lookAt.x = nan; }},
-        {"camera name too long", [](SceneSnapshot& s) { s.camera.name.assign(kMaxStringBytes + 1, 'c'); }},
         {"material type 7", [](SceneSnapshot& s) { s.materials[1].type = MaterialType(7); }},
         {"roughness 1.5", [](SceneSnapshot& s) { s.materials[0].roughness = 1.5f; }},
         {"absorption -1", [](SceneSnapshot& s) { s.materials[0].absorption.y = -1.0f; }},
@@ -829,7 +815,7 @@ TEST(Protocol, SnapshotRejectsValuesOutOfRange) {
         EXPECT_THROW(decode<SceneSnapshot>(payloadOf(s)), DecodeError) << what;
         // The same values arrive in changes, and must be rejected there too.
         Update u;
-        u.changes = {CameraChange{s.camera}, MaterialChange{0, s.materials[0], {}}, MaterialChange{1, s.materials[1], {}},
+        u.changes = {MaterialChange{0, s.materials[0], {}}, MaterialChange{1, s.materials[1], {}},
                      LightChange{0, s.lights[0]}, LightChange{1, s.lights[1]},
                      TransformChange{0, s.instances[0].transform}, TransformChange{1, s.instances[1].transform},
                      SettingsChange{s.settings}};
@@ -839,6 +825,27 @@ TEST(Protocol, SnapshotRejectsValuesOutOfRange) {
         if (!crossReference && !snapshotOnly) {
             EXPECT_THROW(decode<Update>(payloadOf(u)), DecodeError) << what;
         }
+    }
+}
+
+// A camera travels only as a frame's view (version 13): its values are checked there.
+TEST(Protocol, FrameViewCamerasRejectValuesOutOfRange) {
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    const std::vector<std::pair<const char*, std::function<void(CameraDesc&)>>> cases = {
+        {"fov 0", [](CameraDesc& c) { c.fovY = 0; }},
+        {"fov 180", [](CameraDesc& c) { c.fovY = 180; }},
+        {"fov -10", [](CameraDesc& c) { c.fovY = -10; }},
+        {"window NaN", [=](CameraDesc& c) { c.window = ProjectionWindow{{0, 0, 0}, {nan, 0, 0}, {0, 1, 0}}; }},
+        {"window inf", [=](CameraDesc& c) { c.window = ProjectionWindow{{0, 0, inf}, {1, 0, 0}, {0, 1, 0}}; }},
+        {"camera NaN", [=](CameraDesc& c) { c.lookAt.x = nan; }},
+        {"camera name too long", [](CameraDesc& c) { c.name.assign(kMaxStringBytes + 1, 'c'); }},
+    };
+    const FrameBegin good{3, 2, TilePixels::Srgb8, {FrameView{sampleCamera(), {}, 0, 0}}};
+    ASSERT_NO_THROW(decode<FrameBegin>(payloadOf(good)));
+    for (const auto& [what, mutate] : cases) {
+        FrameBegin fb = good;
+        mutate(fb.views[0].camera);
+        EXPECT_THROW(decode<FrameBegin>(payloadOf(fb)), DecodeError) << what;
     }
 }
 
@@ -874,9 +881,9 @@ TEST(Protocol, OtherMessagesRejectValuesOutOfRange) {
     EXPECT_THROW(decode<Hello>(payloadOf(Hello{1, 1025, "big"})), DecodeError);
 
     // Change kinds past the last one.
-    p = payloadOf(Update{1, {SettingsChange{}}});
-    ASSERT_EQ(p[8], 4);
-    p[8] = 5;
+    p = payloadOf(Update{1, {VisibilityChange{}}});
+    ASSERT_EQ(p[8], 5);
+    p[8] = 6;
     EXPECT_THROW(decode<Update>(p), DecodeError);
 
     // Mesh bytes that do not match their hash.
@@ -1012,6 +1019,26 @@ TEST(Protocol, NodeMessageCountsThrowBeforeAllocating) {
         putU32(p, 4, count);
         EXPECT_THROW(decode<NodeSwap>(p), DecodeError) << count;
     }
+}
+
+// A client forwards its own results to the display nodes as they are and tells the master their
+// figures: read with the TileResult decoder's own reader, checked as it checks them.
+TEST(Protocol, PeekTileResultReadsWhatTheDecoderReads) {
+    const TileResult t = sampleTileResult();
+    const std::vector<uint8_t> p = payloadOf(t);
+    const TileResultInfo info = peekTileResult(p.data(), p.size());
+    EXPECT_EQ(info.frame, t.frame);
+    EXPECT_EQ(info.tile, t.tile);
+    EXPECT_EQ(info.renderMicros, t.renderMicros);
+    EXPECT_EQ(info.pixelBytes, t.pixels.size());
+    for (size_t n = 0; n < p.size(); ++n) EXPECT_THROW(peekTileResult(p.data(), n), DecodeError) << n << " bytes";
+    std::vector<uint8_t> longer = p;
+    longer.push_back(0);
+    EXPECT_THROW(peekTileResult(longer.data(), longer.size()), DecodeError);
+    TileResult badCodec = t;
+    badCodec.codec = TileCodec(4);
+    const std::vector<uint8_t> bad = payloadOf(badCodec);
+    EXPECT_THROW(peekTileResult(bad.data(), bad.size()), DecodeError);
 }
 
 TEST(Protocol, TileDoneGoldenBytes) {
@@ -1213,29 +1240,26 @@ SceneDesc sampleScene() {
 
 TEST(Protocol, ApplyChange) {
     SceneDesc scene = sampleScene();
-    CameraDesc camera;
-    applyChange(scene, camera, CameraChange{sampleCamera()});
-    expectSame(camera, sampleCamera());
 
-    applyChange(scene, camera, TransformChange{1, sampleTransform(5)});
+    applyChange(scene, TransformChange{1, sampleTransform(5)});
     expectSame(scene.instances[1].transform, sampleTransform(5));
     expectSame(scene.instances[0].transform, Transform{});
     EXPECT_EQ(scene.instances[1].material, 1u);  // only the transform changes
 
-    applyChange(scene, camera, MaterialChange{0, sampleMaterial(7), {}});
+    applyChange(scene, MaterialChange{0, sampleMaterial(7), {}});
     expectSame(scene.materials[0], sampleMaterial(7));
     expectSame(scene.materials[1], sampleMaterial(1));
 
-    applyChange(scene, camera, LightChange{0, sampleLight(3)});
+    applyChange(scene, LightChange{0, sampleLight(3)});
     expectSame(scene.lights[0], sampleLight(3));
 
-    applyChange(scene, camera, SettingsChange{sampleSettings()});
+    applyChange(scene, SettingsChange{sampleSettings()});
     expectSame(scene.settings, sampleSettings());
 
-    EXPECT_THROW(applyChange(scene, camera, TransformChange{2, {}}), DecodeError);
-    EXPECT_THROW(applyChange(scene, camera, MaterialChange{2, {}, {}}), DecodeError);
-    EXPECT_THROW(applyChange(scene, camera, LightChange{1, {}}), DecodeError);
-    EXPECT_THROW(applyChange(scene, camera, LightChange{0xFFFFFFFFu, {}}), DecodeError);
+    EXPECT_THROW(applyChange(scene, TransformChange{2, {}}), DecodeError);
+    EXPECT_THROW(applyChange(scene, MaterialChange{2, {}, {}}), DecodeError);
+    EXPECT_THROW(applyChange(scene, LightChange{1, {}}), DecodeError);
+    EXPECT_THROW(applyChange(scene, LightChange{0xFFFFFFFFu, {}}), DecodeError);
     expectSame(scene.lights[0], sampleLight(3));  // a failed change leaves the scene alone
 }
 
@@ -1257,8 +1281,6 @@ TEST(Protocol, StateHash) {
         [](SceneSnapshot& x) { x.lights[1].intensity *= 2; },
         [](SceneSnapshot& x) { x.lights[0].twoSided = !x.lights[0].twoSided; },
         [](SceneSnapshot& x) { x.materials[0].twoSided = !x.materials[0].twoSided; },
-        [](SceneSnapshot& x) { x.camera.fovY += 1; },
-        [](SceneSnapshot& x) { x.camera.window = ProjectionWindow{{-1, -1, 0}, {2, 0, 0}, {0, 2, 0}}; },
         [](SceneSnapshot& x) { x.settings.shadows = true; },
         [](SceneSnapshot& x) { x.settings.threads = 3; },
         [](SceneSnapshot& x) { x.bvh.quality = BvhSettings::Quality::Low; },
@@ -1289,7 +1311,7 @@ TEST(Protocol, AssetsAndLinearTilesRejectValuesOutOfRange) {
     s = sampleSnapshot();
     s.assets[0].path.clear();
     EXPECT_THROW(decode<SceneSnapshot>(payloadOf(s)), DecodeError);
-    std::vector<uint8_t> p = payloadOf(FrameBegin{1, 2, TilePixels::LinearHalf});
+    std::vector<uint8_t> p = payloadOf(FrameBegin{1, 2, TilePixels::LinearHalf, {FrameView{}}});
     p[8] = 2;
     EXPECT_THROW(decode<FrameBegin>(p), DecodeError);
     p = payloadOf(sampleTileResult());

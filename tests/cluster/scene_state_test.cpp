@@ -290,7 +290,7 @@ TEST(SceneState, MemberCountsAreExact) {
     EXPECT_EQ(fieldCount<BvhSettings>(), 4u);
     EXPECT_EQ(fieldCount<SectionPlane>(), 5u);
     EXPECT_EQ(fieldCount<SceneDesc>(), 12u);
-    EXPECT_EQ(fieldCount<SceneSnapshot>(), 11u);
+    EXPECT_EQ(fieldCount<SceneSnapshot>(), 10u);
     EXPECT_EQ(std::tuple_size_v<decltype(tieFields(std::declval<RenderSettings&>()))>, fieldCount<RenderSettings>());
 }
 
@@ -298,18 +298,17 @@ TEST(SceneState, TheSamplesSetEveryMember) {
     const SceneDesc d = sampleScene();
     expectAllSet(d, SceneDesc{}, "SceneDesc");
     const Sent sent = sentFor(d);
-    expectAllSet(snapshotOf(d, d.cameras[1], sent.meshes, sent.assets, 42), SceneSnapshot{}, "SceneSnapshot");
+    expectAllSet(snapshotOf(d, sent.meshes, sent.assets, 42), SceneSnapshot{}, "SceneSnapshot");
 }
 
 // SceneDesc -> snapshot -> bytes -> snapshot -> SceneDesc: every member comes back, but for what
-// does not travel: the scene file's path, cameras other than the current one and an assembly's
+// does not travel: the scene file's path, the cameras (a frame carries its views) and an assembly's
 // part names (the instances' part indices do travel). (What is each
 // process's own, the packet width and a client's id, is TraceOptions, never on the wire.)
 TEST(SceneState, EveryMemberTravelsAndComesBack) {
     const SceneDesc d = sampleScene();
     const Sent sent = sentFor(d);
-    const CameraDesc& current = d.cameras[1];
-    const SceneSnapshot snap = snapshotOf(d, current, sent.meshes, sent.assets, 42);
+    const SceneSnapshot snap = snapshotOf(d, sent.meshes, sent.assets, 42);
 
     Header h;
     h.session = 7;
@@ -324,7 +323,7 @@ TEST(SceneState, EveryMemberTravelsAndComesBack) {
     SceneDesc expected = d;
     expected.sourceFile.clear();
     expected.parts.clear();
-    expected.cameras = {current};
+    expected.cameras.clear();
     expectEqualMembers(*back, expected, "SceneDesc");
 }
 
@@ -332,15 +331,14 @@ TEST(SceneState, EveryChangeTravelsAndComesBack) {
     Update u;
     u.seq = 9;
     u.baseSeq = 4;
-    u.changes = {CameraChange{sampleCamera(3)}, TransformChange{1, sampleTransform(4)},
+    u.changes = {TransformChange{1, sampleTransform(4)},
                  MaterialChange{1, sampleMaterial(5), {refOf("tex/new.png", bytesOf("new"))}}, LightChange{1, sampleLight(6)},
                  SettingsChange{sampleSettings()}, SectionChange{5, sampleSection(3)},
                  VisibilityChange{1, Visibility::Hidden}};
-    expectAllSet(std::get<CameraChange>(u.changes[0]).camera, CameraDesc{}, "CameraChange");
-    expectAllSet(std::get<SectionChange>(u.changes[5]).value, SectionPlane{}, "SectionChange");
-    expectAllSet(std::get<MaterialChange>(u.changes[2]).value, Material{}, "MaterialChange");
-    expectAllSet(std::get<LightChange>(u.changes[3]).value, Light{}, "LightChange");
-    expectAllSet(std::get<SettingsChange>(u.changes[4]).settings, RenderSettings{}, "SettingsChange");
+    expectAllSet(std::get<SectionChange>(u.changes[4]).value, SectionPlane{}, "SectionChange");
+    expectAllSet(std::get<MaterialChange>(u.changes[1]).value, Material{}, "MaterialChange");
+    expectAllSet(std::get<LightChange>(u.changes[2]).value, Light{}, "LightChange");
+    expectAllSet(std::get<SettingsChange>(u.changes[3]).settings, RenderSettings{}, "SettingsChange");
     const std::vector<uint8_t> bytes = encodeMessage(Header{}, u);
     EXPECT_TRUE(decodePayload<Update>(bytes.data() + kHeaderSize, bytes.size() - kHeaderSize) == u);
 }
@@ -371,29 +369,27 @@ TEST(SceneState, EveryMemberChangesTheWireBytes) {
     EXPECT_TRUE(sameOnWire(sampleMaterial(1), sampleMaterial(1)));
 }
 
-// One implementation of what a change writes, for a scene description with its camera and for a
+// One implementation of what a change writes, for a scene description and for a
 // snapshot: after the same changes, the description's snapshot is the changed snapshot.
 TEST(SceneState, AChangeDoesTheSameToADescriptionAndToASnapshot) {
     SceneDesc d = sampleScene();
     const Sent sent = sentFor(d);
-    CameraDesc camera = d.cameras[0];
-    SceneSnapshot snap = snapshotOf(d, camera, sent.meshes, sent.assets, 3);
+    SceneSnapshot snap = snapshotOf(d, sent.meshes, sent.assets, 3);
     const AssetRef fresh = refOf("tex/new.png", bytesOf("new"));
     Material m = sampleMaterial(7);
     m.texture.file = fresh.path;
     const std::vector<Change> changes = {
-        CameraChange{sampleCamera(5)}, TransformChange{1, sampleTransform(9)},
+        TransformChange{1, sampleTransform(9)},
         // A file the state holds already and one it does not: only the new one joins the snapshot.
         MaterialChange{0, m, {fresh, sent.assets.front()}}, LightChange{1, sampleLight(4)},
         SettingsChange{RenderSettings{}}, TransformChange{0, sampleTransform(11)}, SectionChange{3, sampleSection(2)}};
     for (const Change& c : changes) {
-        applyChange(d, camera, c);
+        applyChange(d, c);
         applyChange(snap, c);
     }
     std::vector<AssetRef> assets = sent.assets;
     assets.push_back(fresh);
-    EXPECT_TRUE(snapshotOf(d, camera, sent.meshes, assets, 3) == snap);
-    EXPECT_TRUE(camera == sampleCamera(5));
+    EXPECT_TRUE(snapshotOf(d, sent.meshes, assets, 3) == snap);
     EXPECT_TRUE(d.materials[0] == m);
     EXPECT_TRUE(d.instances[0].transform == sampleTransform(11));
     EXPECT_TRUE(d.sections[3] == sampleSection(2));
@@ -403,7 +399,7 @@ TEST(SceneState, AChangeDoesTheSameToADescriptionAndToASnapshot) {
     const SceneSnapshot snapBefore = snap;
     for (const Change& bad : std::vector<Change>{TransformChange{2, {}}, MaterialChange{2, {}, {fresh}}, LightChange{2, {}},
                                                  LightChange{0xFFFFFFFFu, {}}, SectionChange{uint32_t(kMaxSections), {}}}) {
-        EXPECT_THROW(applyChange(d, camera, bad), DecodeError);
+        EXPECT_THROW(applyChange(d, bad), DecodeError);
         EXPECT_THROW(applyChange(snap, bad), DecodeError);
     }
     expectEqualMembers(d, before, "SceneDesc");
@@ -413,7 +409,7 @@ TEST(SceneState, AChangeDoesTheSameToADescriptionAndToASnapshot) {
 TEST(SceneState, SceneOfWaitsForEveryMeshAndFile) {
     const SceneDesc d = sampleScene();
     Sent sent = sentFor(d);
-    const SceneSnapshot snap = snapshotOf(d, d.cameras[0], sent.meshes, sent.assets, 1);
+    const SceneSnapshot snap = snapshotOf(d, sent.meshes, sent.assets, 1);
     ASSERT_TRUE(sceneOf(snap, sent.meshBytes, sent.fileBytes));
     auto meshes = sent.meshBytes;
     meshes.erase(sent.meshes[1].hash);
@@ -432,8 +428,8 @@ TEST(SceneState, MergedUpdatesKeepTheLastChangeToEachObject) {
         return u;
     };
     const std::vector<Update> updates = {
-        update(5, CameraChange{sampleCamera(1)}),    update(6, TransformChange{3, sampleTransform(1)}),
-        update(7, CameraChange{sampleCamera(2)}),    update(8, TransformChange{3, sampleTransform(2)}),
+        update(5, SettingsChange{RenderSettings{}}), update(6, TransformChange{3, sampleTransform(1)}),
+        update(7, SettingsChange{RenderSettings{}}), update(8, TransformChange{3, sampleTransform(2)}),
         update(9, TransformChange{4, sampleTransform(3)}), update(10, MaterialChange{3, sampleMaterial(1), {}}),
         update(11, LightChange{3, sampleLight(1)}),  update(12, SettingsChange{sampleSettings()})};
     MergedUpdate merged;
@@ -444,9 +440,9 @@ TEST(SceneState, MergedUpdatesKeepTheLastChangeToEachObject) {
     EXPECT_EQ(m.seq, 12u);
     // The last change to each object in the place of its first; a transform, a material and a
     // light of the same index are three objects.
-    const std::vector<Change> expected = {CameraChange{sampleCamera(2)}, TransformChange{3, sampleTransform(2)},
+    const std::vector<Change> expected = {SettingsChange{sampleSettings()}, TransformChange{3, sampleTransform(2)},
                                           TransformChange{4, sampleTransform(3)}, MaterialChange{3, sampleMaterial(1), {}},
-                                          LightChange{3, sampleLight(1)}, SettingsChange{sampleSettings()}};
+                                          LightChange{3, sampleLight(1)}};
     EXPECT_TRUE(m.changes == expected);
 
     // Applying the merged update gives the state that applying them one by one gives.
@@ -455,7 +451,7 @@ TEST(SceneState, MergedUpdatesKeepTheLastChangeToEachObject) {
     d.materials.resize(4, d.materials.front());
     d.lights.resize(4, d.lights.front());
     const Sent sent = sentFor(d);
-    SceneSnapshot one = snapshotOf(d, d.cameras[0], sent.meshes, sent.assets, 4), all = one;
+    SceneSnapshot one = snapshotOf(d, sent.meshes, sent.assets, 4), all = one;
     for (const Update& u : updates)
         for (const Change& c : u.changes) applyChange(one, c);
     for (const Change& c : m.changes) applyChange(all, c);
@@ -466,7 +462,7 @@ TEST(SceneState, MergedUpdatesKeepTheLastChangeToEachObject) {
     EXPECT_TRUE(taken.changes == expected);
     EXPECT_TRUE(merged.empty());
     EXPECT_TRUE(merged.update().changes.empty());
-    merged.add(update(13, CameraChange{sampleCamera(4)}));
+    merged.add(update(13, TransformChange{0, sampleTransform(4)}));
     EXPECT_EQ(merged.update().baseSeq, 12u);
     EXPECT_EQ(merged.update().changes.size(), 1u);
 }
@@ -493,7 +489,7 @@ TEST(SceneState, MergedUpdatesKeepEveryFileTheChangesBrought) {
         u.changes.push_back(std::move(c));
         merged.add(std::move(u));
     }
-    SceneSnapshot one = snapshotOf(d, d.cameras[0], sent.meshes, sent.assets, 4), all = one;
+    SceneSnapshot one = snapshotOf(d, sent.meshes, sent.assets, 4), all = one;
     applyChange(one, MaterialChange{0, textured, {fresh}});
     applyChange(one, MaterialChange{1, alsoTextured, {}});
     applyChange(one, MaterialChange{0, d.materials[0], {}});
@@ -506,7 +502,7 @@ TEST(SceneState, MergedUpdatesKeepEveryFileTheChangesBrought) {
 TEST(SceneState, ASnapshotIsHashedFromTheBytesSent) {
     const SceneDesc d = sampleScene();
     const Sent sent = sentFor(d);
-    const SceneSnapshot snap = snapshotOf(d, d.cameras[0], sent.meshes, sent.assets, 17);
+    const SceneSnapshot snap = snapshotOf(d, sent.meshes, sent.assets, 17);
     Header h;
     h.session = 99;
     h.sceneVersion = 17;

@@ -55,6 +55,18 @@ template <class Msg> void checkPayload(const uint8_t* data, size_t size) {
         finding("a decoded payload does not re-encode to the same bytes");
 }
 
+// peekTileResult reads the same layout without copying the pixels: it must agree with the decoder.
+template <> void checkPayload<TileResult>(const uint8_t* data, size_t size) {
+    const TileResult msg = decodePayload<TileResult>(data, size);
+    const TileResultInfo info = peekTileResult(data, size);
+    if (info.frame != msg.frame || info.tile != msg.tile || info.renderMicros != msg.renderMicros ||
+        info.pixelBytes != msg.pixels.size())
+        finding("peekTileResult disagrees with decodePayload<TileResult>");
+    const std::vector<uint8_t> again = encodeMessage(Header{}, msg);
+    if (again.size() != kHeaderSize + size || std::memcmp(again.data() + kHeaderSize, data, size) != 0)
+        finding("a decoded payload does not re-encode to the same bytes");
+}
+
 template <class Msg> void checkMessage(const Header& header, const uint8_t* data, size_t size) {
     const Msg msg = decodePayload<Msg>(data + kHeaderSize, size - kHeaderSize);
     const std::vector<uint8_t> again = encodeMessage(header, msg);

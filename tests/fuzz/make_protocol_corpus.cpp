@@ -89,19 +89,15 @@ int main(int argc, char** argv) {
     seedMessage("mesh-data", mesh);
     Update update;
     update.seq = 3;
-    update.changes = {CameraChange{CameraDesc{}}, TransformChange{0, translation(0, 1, 0)},
+    update.changes = {TransformChange{0, translation(0, 1, 0)},
                       MaterialChange{1, Material{}, {AssetRef{"wood.png", Hash128{1, 2}, 777}}}, LightChange{0, Light{}},
                       SettingsChange{RenderSettings{}}, SectionChange{2, SectionPlane{}},
                       VisibilityChange{0, Visibility::Hidden}};
     seedMessage("update", update);
     CameraDesc offAxis;  // a stereo eye: the projection window travels with the camera
     offAxis.window = ProjectionWindow{{-1.6f, -1.2f, 0.0f}, {3.2f, 0.0f, 0.0f}, {0.0f, 2.4f, 0.0f}};
-    Update eye;
-    eye.seq = 4;
-    eye.baseSeq = 3;
-    eye.changes = {CameraChange{offAxis}};
-    seedMessage("update-off-axis", eye);
-    seedMessage("frame-begin", FrameBegin{3, 2});
+    // Version 13: a mono frame carries its one view (the camera travels only in FrameBegin).
+    seedMessage("frame-begin", FrameBegin{3, 2, TilePixels::Srgb8, {FrameView{}}});
     // Both eyes in one frame; the right eye a CAVE plane with two screens' regions.
     FrameView left{offAxis, {}, 0, 0}, right{offAxis, {{0, 0, 1024, 768}, {2048, 0, 1024, 768}}, 3072, 768};
     right.camera.position.x += 0.065f;

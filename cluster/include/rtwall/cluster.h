@@ -117,7 +117,7 @@ struct ClientReport {
 
 struct FrameReport {
     uint32_t frame = 0;
-    uint32_t stateSeq = 0;          // the scene state the frame shows: changes with every update
+    uint32_t stateSeq = 0;          // the scene state and camera the frame shows: changes with every update and setCamera
     double seconds = 0;             // from frame begin to the last tile
     uint64_t bytes = 0;             // encoded tile bytes received
     uint64_t tilesStolen = 0;
@@ -215,10 +215,14 @@ public:
     // Tiles that clients failed since the last call, oldest first (the 64 newest are kept).
     std::vector<TileFailure> takeTileFailures();
 
+    // The camera of the mono frames (those without setViews' views): the next frame begun
+    // carries it to the clients in its FrameBegin, as a multi-view frame carries its views. Not
+    // an update, but FrameReport::stateSeq moves on with it as with one (an accumulation of a
+    // still view restarts).
+    void setCamera(const CameraDesc& camera);
     // Differential scene updates: only what changes is sent to the clients. They take effect
     // in the next frame that begins after the call. Each costs the same whatever the scene's
     // size: nothing is copied, serialised or hashed whole (a state is hashed when it is sent).
-    void setCamera(const CameraDesc& camera);
     void setInstanceTransform(uint32_t instance, const Transform& transform);
     void setInstanceVisibility(uint32_t instance, Visibility visibility);  // hide, show, highlight
     void setMaterial(uint32_t material, const Material& value);
@@ -245,7 +249,7 @@ public:
     // renderViews returns the frame begun before (its report's viewsTag says which views it
     // shows: the caller's tag, e.g. the tracker packet behind its head pose) and begins one with
     // these. Views are not scene state: a new eye camera moves no sequence number. Empty views:
-    // frames of the state's camera, one image (renderFrame), as before any call.
+    // mono frames of setCamera's camera, one image (renderFrame), as before any call.
     void setViews(std::vector<FrameView> views, uint64_t tag = 0);
     // A frame as renderFrame, one image per view of the frame (one without views); a view's
     // pixels outside its regions' tiles are unspecified. With linear tiles `linear` receives

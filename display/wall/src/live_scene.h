@@ -21,8 +21,8 @@ public:
     }
 
     const SceneDesc& desc() const { return desc_; }
-    // The viewer's camera (the scene's first): each eye of a stereo wall is derived from it and
-    // sent with sendEyeCamera, which leaves it as it is.
+    // The viewer's camera (the scene's first): a mono wall's frames show it; each view of a
+    // wall with views is derived from it (the session's frameViews).
     const CameraDesc& camera() const { return desc_.cameras.front(); }
 
     // An edited scene file's changes (diffScenes), as far as they may be applied: render settings
@@ -62,7 +62,6 @@ public:
         master_.setCamera(camera);
         desc_.cameras.front() = camera;
     }
-    void sendEyeCamera(const CameraDesc& eye) { master_.setCamera(eye); }
     void setInstanceTransform(uint32_t instance, const Transform& transform) {
         master_.setInstanceTransform(instance, transform);
         desc_.instances[instance].transform = transform;

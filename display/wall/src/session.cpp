@@ -190,7 +190,7 @@ struct WallSession::Impl {
             if (!in) throw InputError(config.wall.string() + ": cannot read it");
         }
         std::vector<int> eyes;
-        if (views && config.viewsInOnePass)
+        if (views)
             for (int eye : stereo ? std::vector<int>{0, 1} : std::vector<int>{-1})
                 for (size_t i = 0; i < wallViews(wallConfig, staticHead(wallConfig.stereo), eye).size(); ++i) eyes.push_back(eye);
         config.cluster.displayNodes = displayNodeSettings(wallConfig, text.str(), eyes);
@@ -385,7 +385,7 @@ struct WallSession::Impl {
     // Renders the frame (both eyes on a stereo wall) into `shown` and `report`.
     void render() {
         shown = WallFrame{};
-        if (views && config.viewsInOnePass) {
+        if (views) {
             // Every view's tiles in one scheduler pass. The views go with a tag: with async the
             // frame that comes back was begun with the views of the step before.
             ViewSpec spec{nextViewTag++, trackerState.packets, head, frameViews()};
@@ -400,25 +400,6 @@ struct WallSession::Impl {
                 throw std::runtime_error("internal error: a multi-view frame came back with " + std::to_string(images.size()) +
                                          " images for " + std::to_string(rendered.views.size()) + " views");
             if (!onNodes) compose(rendered.views, std::move(images), viewLinear);  // on nodes the pixels are on the nodes
-        } else if (views) {
-            // Each eye, each plane of screens: one render of the wall image with that view's
-            // off-axis camera (the way before one-pass frames: tests compare the two).
-            const std::vector<int> eyes = stereo ? std::vector<int>{0, 1} : std::vector<int>{-1};
-            for (int eye : eyes) {
-                const std::vector<WallView> vs = wallViews(wallConfig, head, eye);
-                ComposeFrame parts;  // the eye's planes, composed as one-pass views are (not accumulated)
-                std::vector<Image> images;
-                for (size_t i = 0; i < vs.size(); ++i) {
-                    parts.views.push_back(frameView(vs, i));
-                    parts.eyes.push_back(-1);
-                    live->sendEyeCamera(parts.views.back().camera);
-                    const bool lastRender = eye == eyes.back() && i + 1 == vs.size();
-                    images.push_back(master->renderFrame(lastRender ? &report : nullptr));
-                }
-                if (!onNodes) (eye == 1 ? shown.right : shown.left) = Compositor{}.compose(parts, std::move(images)).left;
-            }
-            shownTrackerPackets = trackerState.packets;
-            shownHead = head;
         } else {
             std::vector<Image> image(1);
             image[0] = master->renderFrame(&report, &linear);
@@ -485,12 +466,6 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     }
     s.stereo = s.wallConfig.stereo.mode != StereoMode::None;
     s.views = wallHasViews(s.wallConfig);
-    if (s.views && c.cluster.async && !c.viewsInOnePass) {
-        // A render per eye (and per plane of screens): asynchronous mode would give each the other's camera.
-        s.log(s.stereo ? "stereo wall: asynchronous rendering off, each frame renders the left then the right eye"
-                       : "off-axis wall: asynchronous rendering off, each frame renders each view with its own camera");
-        c.cluster.async = false;
-    }
     if (!s.wallConfig.nodes().empty()) {
         if (c.targetFps > 0 && c.front.empty())
             throw InputError("--target-fps on a wall of display nodes needs --front: the master holds no pixels to calibrate with");
@@ -542,7 +517,7 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     s.input->setPartView(*s.live, {});  // says what the scene file and the command line hid, if anything
     // In a window the wall runs until it is closed, unless a frame count was asked for.
     if (s.input->windowed() && !c.framesGiven) c.frames = 0;
-    if (s.views && c.viewsInOnePass) {
+    if (s.views) {
         // The views from the start: a calibration's frames then cost what the wall's frames do.
         s.head = staticHead(s.wallConfig.stereo);
         s.viewSpecs.push_back({0, 0, s.head, s.frameViews()});

@@ -95,10 +95,6 @@ struct RunConfig {
     std::filesystem::path clientExecutable = "/proc/self/exe";
     bool clientThreads = false;
     std::optional<InjectedTileFault> clientFault;  // tests: client threads fail this tile (ClientSettings::tileFault)
-    // A wall with views (stereo, tracked, a CAVE): every view's tiles in one scheduler pass, with
-    // async as configured. Off: each view is a frame of its own, async off (the way before;
-    // tests and `rtwall bench latency` compare the two).
-    bool viewsInOnePass = true;
     // Where the session's progress lines go (stdout by default).
     std::function<void(const std::string&)> log;
 
