@@ -30,12 +30,68 @@ template <> struct Packet<8> {
     static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) { rtcIntersect8(v, s, c, r); }
     static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, Ray* r) { rtcOccluded8(v, s, c, r); }
 };
+
+// Embree without AVX-512 kernels has no native 16-wide packets and serves rtcIntersect16 and
+// rtcOccluded16 another way, which gave other hits than the same rays one by one or in packets
+// of 8 (Section.PacketsOfEveryWidthMatchTheSingleRayKernel: about 5,000 of 18,432 bytes on an
+// AMD EPYC with AVX2, with section planes, alpha masks and instances). There a packet of 16 goes
+// to Embree as two native packets of 8: the same rays, so the same hits as every other width,
+// and packets of 16 stay selectable (and tested) on every CPU.
+inline bool nativeRay16(RTCScene scene) {
+    static const bool native = [scene] {
+        RTCDevice device = rtcGetSceneDevice(scene);  // retains the device
+        const bool n = rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
+        rtcReleaseDevice(device);
+        return n;
+    }();
+    return native;
+}
+
+// Lanes [8 * half, 8 * half + 8) of a 16-wide ray (or its hit) to or from an 8-wide one.
+template <class R16, class R8> void copyRayLanes(R16& wide, R8& narrow, int half, bool toNarrow) {
+    for (int k = 0; k < 8; ++k) {
+        const int w = 8 * half + k;
+        auto move = [&](auto& a, auto& b) { toNarrow ? void(b[k] = a[w]) : void(a[w] = b[k]); };
+        move(wide.org_x, narrow.org_x), move(wide.org_y, narrow.org_y), move(wide.org_z, narrow.org_z);
+        move(wide.dir_x, narrow.dir_x), move(wide.dir_y, narrow.dir_y), move(wide.dir_z, narrow.dir_z);
+        move(wide.tnear, narrow.tnear), move(wide.tfar, narrow.tfar), move(wide.time, narrow.time);
+        move(wide.mask, narrow.mask), move(wide.id, narrow.id), move(wide.flags, narrow.flags);
+    }
+}
+inline void copyHitLanes(RTCHit16& wide, RTCHit8& narrow, int half, bool toNarrow) {
+    for (int k = 0; k < 8; ++k) {
+        const int w = 8 * half + k;
+        auto move = [&](auto& a, auto& b) { toNarrow ? void(b[k] = a[w]) : void(a[w] = b[k]); };
+        move(wide.Ng_x, narrow.Ng_x), move(wide.Ng_y, narrow.Ng_y), move(wide.Ng_z, narrow.Ng_z);
+        move(wide.u, narrow.u), move(wide.v, narrow.v), move(wide.primID, narrow.primID);
+        move(wide.geomID, narrow.geomID), move(wide.instID[0], narrow.instID[0]);
+    }
+}
+
 template <> struct Packet<16> {
     using RayHit = RTCRayHit16;
     using Ray = RTCRay16;
     static constexpr int blockW = 4, blockH = 4;
-    static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) { rtcIntersect16(v, s, c, r); }
-    static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, Ray* r) { rtcOccluded16(v, s, c, r); }
+    static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) {
+        if (nativeRay16(s)) return rtcIntersect16(v, s, c, r);
+        for (int half = 0; half < 2; ++half) {
+            alignas(32) RTCRayHit8 n;
+            copyRayLanes(r->ray, n.ray, half, true);
+            copyHitLanes(r->hit, n.hit, half, true);
+            rtcIntersect8(v + 8 * half, s, c, &n);
+            copyRayLanes(r->ray, n.ray, half, false);
+            copyHitLanes(r->hit, n.hit, half, false);
+        }
+    }
+    static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, Ray* r) {
+        if (nativeRay16(s)) return rtcOccluded16(v, s, c, r);
+        for (int half = 0; half < 2; ++half) {
+            alignas(32) RTCRay8 n;
+            copyRayLanes(*r, n, half, true);
+            rtcOccluded8(v + 8 * half, s, c, &n);
+            copyRayLanes(*r, n, half, false);
+        }
+    }
 };
 
 template <class RayK>
