@@ -37,7 +37,7 @@ inline constexpr Key kStereoKeys[] = {
 };
 
 inline constexpr Key kTrackingKeys[] = {
-    {.name = "source", .type = KeyType::String, .help = "the IPv4 address to listen on (`0.0.0.0`: every interface) and the UDP port DTrack sends to (0: a free port, printed at start; for tests); `\"vrpn\"`: a VRPN server (`server`), README \"A tracked wall\""},
+    {.name = "source", .type = KeyType::String, .help = "the IPv4 address to listen on (`0.0.0.0`: every interface) and the UDP port DTrack sends to (0: a free port, printed at start; for tests); `\"vrpn\"`: a VRPN server (`server`), [docs/tracking.md](../docs/tracking.md)"},
     {.name = "server", .type = KeyType::String, .help = "the VRPN device and server (port 3883 unless given)"},
     {.name = "buttons", .type = KeyType::String, .help = "VRPN: the `vrpn_Button` and `vrpn_Analog` devices on that server giving the wand's buttons and joystick"},
     {.name = "analog", .type = KeyType::String, .help = "VRPN: the `vrpn_Button` and `vrpn_Analog` devices on that server giving the wand's buttons and joystick"},

@@ -157,7 +157,7 @@ inline constexpr Key kCameraKeys[] = {
 inline constexpr Key kPartsKeys[] = {
     {.name = "hide", .type = KeyType::Strings, .help = "these are not rendered: no pixels, shadows, reflections"},
     {.name = "isolate", .type = KeyType::Strings, .help = "only these are rendered"},
-    {.name = "highlight", .type = KeyType::Strings, .help = "tinted orange and glowing (the colour change README.md states)"},
+    {.name = "highlight", .type = KeyType::Strings, .help = "tinted orange and glowing (the colour change [docs/design-review.md](../docs/design-review.md#parts-hide-isolate-highlight) states)"},
 };
 
 inline constexpr Section kTop{"the scene file", "# Scene files", kTopKeys};

@@ -13,7 +13,9 @@
 
 #include <algorithm>
 #include <fstream>
+#include <iterator>
 #include <map>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -25,6 +27,19 @@ std::string fileBytes(const std::filesystem::path& p) {
     std::stringstream s;
     s << in.rdbuf();
     return s.str();
+}
+
+// The frame to compare: the newest that both nodes presented ("frame_NNNNNN_"). Each node stops
+// after presenting its frames, and a frame released while one node was not in yet (or already
+// gone) carries the left-out overlay on the other, so a node's own newest frame can name the
+// other as left out; a frame both presented was released with both holding it.
+std::string newestFrameOfBoth(const std::filesystem::path& dir) {
+    std::set<std::string> left, right;
+    for (const auto& e : std::filesystem::directory_iterator(dir / "left")) left.insert(e.path().filename().string().substr(0, 13));
+    for (const auto& e : std::filesystem::directory_iterator(dir / "right")) right.insert(e.path().filename().string().substr(0, 13));
+    std::vector<std::string> both;
+    std::set_intersection(left.begin(), left.end(), right.begin(), right.end(), std::back_inserter(both));
+    return both.empty() ? std::string() : both.back();
 }
 
 TEST(DisplayNodeProcesses, EachShowsItsHalfOfTheWallBitIdentical) {
@@ -82,10 +97,8 @@ TEST(DisplayNodeProcesses, EachShowsItsHalfOfTheWallBitIdentical) {
         std::vector<std::filesystem::path> written;
         for (const auto& e : std::filesystem::directory_iterator(dir / name)) written.push_back(e.path());
         ASSERT_EQ(written.size(), 3 * 2u) << name;
-        std::sort(written.begin(), written.end());
-        // frame_NNNNNN_<screen>.png: the reference is presented with the node's frame number.
-        // Its newest frame (frame_NNNNNN_): the first ones may name a node that was not in yet.
-        const std::string stem = written.back().filename().string().substr(0, 13);
+        const std::string stem = newestFrameOfBoth(dir);
+        ASSERT_FALSE(stem.empty()) << "no frame presented by both nodes";
         one.number = uint32_t(std::stoul(stem.substr(6, 6)));
         HeadlessPresenter whole(wall, dir / ("one-" + name));
         whole.present(one);
@@ -165,9 +178,8 @@ TEST(DisplayNodeProcesses, StereoWallShowsBothEyesOfEachNodesScreensBitIdentical
         std::vector<std::filesystem::path> written;
         for (const auto& e : std::filesystem::directory_iterator(dir / name)) written.push_back(e.path());
         ASSERT_EQ(written.size(), 3 * 4u) << name;
-        std::sort(written.begin(), written.end());
-        // Its newest frame (frame_NNNNNN_): the first ones may name a node that was not in yet.
-        const std::string stem = written.back().filename().string().substr(0, 13);
+        const std::string stem = newestFrameOfBoth(dir);
+        ASSERT_FALSE(stem.empty()) << "no frame presented by both nodes";
         one.number = uint32_t(std::stoul(stem.substr(6, 6)));
         HeadlessPresenter whole(wall, dir / ("one-" + name));
         whole.present(one);
@@ -253,9 +265,8 @@ TEST(DisplayNodeProcesses, KeyedNodesWithTheLocalArgumentsWorkAndAKeylessOneIsRe
         std::vector<std::filesystem::path> written;
         for (const auto& e : std::filesystem::directory_iterator(dir / name)) written.push_back(e.path());
         ASSERT_EQ(written.size(), 3 * 2u) << name;
-        std::sort(written.begin(), written.end());
-        // Its newest frame (frame_NNNNNN_): the first ones may name a node that was not in yet.
-        const std::string stem = written.back().filename().string().substr(0, 13);
+        const std::string stem = newestFrameOfBoth(dir);
+        ASSERT_FALSE(stem.empty()) << "no frame presented by both nodes";
         one.number = uint32_t(std::stoul(stem.substr(6, 6)));
         HeadlessPresenter whole(wall, dir / ("one-" + name));
         whole.present(one);
