@@ -52,13 +52,39 @@ inline Material material(const std::string& name, MaterialType type, Color color
     return m;
 }
 
+// Meshes 0 and 1: the built-in quad and box.
+inline void addQuadAndBox(SceneDesc& s) {
+    s.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
+    s.meshes.push_back({"box", "shape:box", std::make_shared<const TriangleMesh>(makeBox())});
+}
+
+// A white floor material and a green leaf whose alpha is a checker of `cells`-unit cells: black
+// cells are holes (for the alpha-mask tests).
+inline std::vector<Material> floorAndCheckerLeaf(float cells) {
+    Material floor;
+    floor.color = {1, 1, 1};
+    Material leaf;
+    leaf.color = {0, 1, 0};
+    leaf.alpha.kind = TextureKind::Checker;
+    leaf.alpha.color2 = {0, 0, 0};
+    leaf.alpha.scale = cells;
+    return {floor, leaf};
+}
+
+// A directional light straight down.
+inline Light sunFromAbove() {
+    Light sun;
+    sun.type = LightType::Directional;
+    sun.direction = {0, -1, 0};
+    return sun;
+}
+
 // Every material kind, textures, a bump, an alpha mask, a volume, glass with absorption; a
 // point light and an area light; transparent shadows on the floor.
 inline SceneDesc materialZoo(const std::filesystem::path& dir, int width = 64, int height = 48) {
     SceneDesc s;
     s.meshes.push_back({"sphere", "shape:sphere", std::make_shared<const TriangleMesh>(makeSphere(16, 32))});
-    s.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
-    s.meshes.push_back({"box", "shape:box", std::make_shared<const TriangleMesh>(makeBox())});
+    addQuadAndBox(s);
 
     Material floor = material("floor", MaterialType::Lambert, {0.8f, 0.8f, 0.8f});
     floor.texture.kind = TextureKind::Checker;

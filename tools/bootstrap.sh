@@ -18,7 +18,7 @@ PACKAGES=(
   cmake ninja-build g++ pkg-config
   libembree-dev        # Embree 3: BVH build and packet traversal
   libopenmesh-dev      # OpenMesh 9: OBJ/OFF/PLY/STL/OM parsers
-  libvtk9-dev          # VTK 9: .vtk/.vtp/.vtu importers (legacy and XML readers, surface filter)
+  libvtk9-dev          # VTK 9: .vtk/.vtp/.vtu/.wrl importers and volume data sets (.vti, legacy .vtk)
   libtomlplusplus-dev  # toml++: scene and wall configs, JSON output
   libcli11-dev         # CLI11: command-line parsing
   libpng-dev           # libpng: PNG images
@@ -27,7 +27,6 @@ PACKAGES=(
   libzmq3-dev cppzmq-dev  # ZeroMQ: master/client transport
   liblz4-dev libzstd-dev libturbojpeg0-dev  # tile codecs
   libxxhash-dev        # content hashes of meshes and scene states
-  libvtk9-dev          # VTK: volume data sets (.vti, legacy .vtk), used only by rtwall_volume_io
   clang libclang-rt-14-dev  # libFuzzer with ASan/UBSan for the fuzz targets
   libasio-dev          # standalone Asio (header-only): the tracker's UDP receiver (DTrack)
   libglfw3-dev libgl-dev  # GLFW and OpenGL 3.3: the wall's windows and input
@@ -77,9 +76,10 @@ case "${1:-}" in
   demo)
     install_missing; build
     if [ -z "${2:-}" ]; then
-      say "running the master with two local render clients on the built-in scene (rtwall run)"
+      say "running the master with two local render clients on the built-in scene, on the reference wall"
+      say "(2x2 projectors, 1600x1200; calibrates, then holds the frame rate: rtwall run)"
       "$BUILD_DIR/tools/rtwall" run --frames 60 --write-every 30 --out out/frames
-      say "frames are in $(pwd)/out/frames/"
+      say "frames (and, headless, each projector's image of them) are in $(pwd)/out/frames/"
     else
       # A named demo scene: generated (rtwall gen NAME, extra arguments passed on), then run on
       # the cluster path like the default.
@@ -111,6 +111,8 @@ case "${1:-}" in
     cmake -S . -B "$BUILD_DIR-fuzz" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
       -DRTWALL_FUZZ=ON -DRTWALL_BUILD_BENCHMARKS=OFF >/dev/null
     cmake --build "$BUILD_DIR-fuzz" -j "$JOBS" --target fuzz_targets  # every fuzz_* target (tests/fuzz)
+    # A finding is written to tests/fuzz/crashes/CORPUS/ (git shows it); the committed ones there
+    # run as the *_regressions tests.
     ctest --test-dir "$BUILD_DIR-fuzz" -L fuzz --output-on-failure --timeout 600
     say "running the test suite"
     ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS" --timeout 900

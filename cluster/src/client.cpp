@@ -648,7 +648,7 @@ private:
         renderSettings_.threads = 1;  // each render thread renders its own tiles
         trace_.clientId = id_;  // the id the master gave us, for the client false-colour view
         trace_.packetWidth = settings_.packetWidth;  // this PC's CPU decides
-        trace_.fault = settings_.tileFault;
+        trace_.fault = settings_.tileFault ? injectFault(*settings_.tileFault) : nullptr;
         tiles_ = makeTiles(renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
     }
 

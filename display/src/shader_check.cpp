@@ -63,8 +63,9 @@ std::vector<std::string> checkShader(const ShaderSource& source, bool fragment) 
     return problems;
 }
 
-std::vector<std::string> checkWall(const std::filesystem::path& file) {
-    const WallConfig wall = loadWallConfig(file);
+std::vector<std::string> checkWall(const std::filesystem::path& file) { return checkWall(loadWallConfig(file)); }
+
+std::vector<std::string> checkWall(const WallConfig& wall) {
     std::vector<std::string> problems = checkShader(presentVertexShader(), false);
     auto more = [&](std::vector<std::string> p) { problems.insert(problems.end(), p.begin(), p.end()); };
     more(checkShader(presentFragmentShader(), true));

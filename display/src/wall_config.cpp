@@ -1,7 +1,9 @@
 // Wall configs: strict reading (every key checked, every problem with its line), validation of
-// the layout as a whole (overlaps, bezels, stereo eyes), and writing back out.
+// the layout as a whole (overlaps, bezels, stereo eyes), and writing back out. The keys, their
+// ranges and their help are the tables in wall_config_keys.h.
+#include "wall_config_keys.h"
+
 #include <rtwall/display.h>
-#include <rtwall/toml_reader.h>
 
 #include <algorithm>
 #include <cctype>
@@ -14,12 +16,14 @@ namespace rtwall {
 
 namespace {
 
+using toml_reader::KeyType;
 using toml_reader::Reader;
 
-// An array of exactly n integers in [lo, hi].
+// An array of exactly n integers in the table's range.
 template <size_t N>
-std::array<int, N> intArray(Reader& r, const std::string& key, std::array<int, N> def, int lo, int hi,
-                            bool required = false) {
+std::array<int, N> intArray(Reader& r, const std::string& key, std::array<int, N> def, bool required = false) {
+    const toml_reader::Key& spec = r.spec(key, KeyType::Integers);
+    const int lo = int(spec.lo), hi = int(spec.hi);
     const toml::node* n = r.find(key);
     if (!n) {
         if (required) r.fail(nullptr, "missing required key '" + key + "'");
@@ -39,8 +43,11 @@ std::array<int, N> intArray(Reader& r, const std::string& key, std::array<int, N
     return v;
 }
 
-// A number for all four edges, or an array of four numbers (left, right, top, bottom).
-std::array<double, 4> edgeNumbers(Reader& r, const std::string& key, std::array<double, 4> def, double lo, double hi) {
+// A number for all four edges, or an array of four numbers (left, right, top, bottom), in the
+// table's range.
+std::array<double, 4> edgeNumbers(Reader& r, const std::string& key, std::array<double, 4> def) {
+    const toml_reader::Key& spec = r.spec(key, KeyType::Numbers);
+    const double lo = spec.lo, hi = spec.hi;
     const toml::node* n = r.find(key);
     if (!n) return def;
     auto one = [&](const toml::node& e, const std::string& what) {
@@ -96,9 +103,9 @@ const char* stereoName(StereoMode m) {
 
 // Options shared by [grid] and [[screen]] (colour correction, output).
 void readScreenCommon(Reader& r, ScreenConfig& s) {
-    s.blendGamma = edgeNumbers(r, "blend_gamma", s.blendGamma, 0.1, 10.0);
-    s.gamma = r.number("gamma", s.gamma, 0.1, 10.0);
-    s.brightness = r.number("brightness", s.brightness, 0.0, 10.0);
+    s.blendGamma = edgeNumbers(r, "blend_gamma", s.blendGamma);
+    s.gamma = r.number("gamma", s.gamma);
+    s.brightness = r.number("brightness", s.brightness);
     s.fullscreen = r.boolean("fullscreen", s.fullscreen);
 }
 
@@ -194,31 +201,28 @@ void readTracking(Reader& r, TrackingConfig& t) {
     for (const char* k : {"server", "buttons", "analog"})
         if (t.kind != TrackingSource::Vrpn && r.has(k))
             r.fail(r.find(k), std::string("key '") + k + "': a VRPN setting, but source is not \"vrpn\"");
-    t.headBody = r.integer("head_body", t.headBody, 0, 1'000'000);
-    t.flystick = r.integer("flystick", t.flystick, -1, 255);
-    t.roomScale = r.number("room_scale", t.roomScale, 1e-9, 1e6);
+    t.headBody = r.integer("head_body", t.headBody);
+    t.flystick = r.integer("flystick", t.flystick);
+    t.roomScale = r.number("room_scale", t.roomScale);
     if (t.roomScale <= 0) r.fail(r.find("room_scale"), "key 'room_scale': must be positive");
     t.roomRotate = r.vec3d("room_rotate", t.roomRotate);
     for (double a : t.roomRotate)
         if (std::fabs(a) > 360) r.fail(r.find("room_rotate"), "key 'room_rotate': angles are degrees in [-360, 360]");
     t.roomTranslate = r.vec3d("room_translate", t.roomTranslate);
-    t.timeoutMs = r.integer("timeout_ms", t.timeoutMs, 1, 60'000);
-    t.predictionMs = r.number("prediction_ms", t.predictionMs, 0.0, 500.0);
-    t.filter = r.choice("filter", "none", {"none", "one_euro"}) == "one_euro" ? TrackingFilter::OneEuro : TrackingFilter::None;
+    t.timeoutMs = r.integer("timeout_ms", t.timeoutMs);
+    t.predictionMs = r.number("prediction_ms", t.predictionMs);
+    t.filter = r.choice("filter", "none") == "one_euro" ? TrackingFilter::OneEuro : TrackingFilter::None;
     for (const char* k : {"min_cutoff", "beta", "derivative_cutoff"})
         if (t.filter == TrackingFilter::None && r.has(k))
             r.fail(r.find(k), std::string("key '") + k + "': a one-euro filter setting, but filter is \"none\" (set filter = \"one_euro\")");
-    t.minCutoff = r.number("min_cutoff", t.minCutoff, 1e-3, 1000.0);
-    t.beta = r.number("beta", t.beta, 0.0, 1e6);
-    t.derivativeCutoff = r.number("derivative_cutoff", t.derivativeCutoff, 1e-3, 1000.0);
-    t.buttonPick = r.integer("button_pick", t.buttonPick, -1, 255);
-    t.buttonMode = r.integer("button_mode", t.buttonMode, -1, 255);
-    t.buttonHome = r.integer("button_home", t.buttonHome, -1, 255);
-    t.joystickX = r.integer("joystick_x", t.joystickX, -1, 255);
-    t.joystickY = r.integer("joystick_y", t.joystickY, -1, 255);
-    t.flySpeed = r.number("fly_speed", t.flySpeed, 0.0, 1e6);
-    t.turnSpeed = r.number("turn_speed", t.turnSpeed, 0.0, 3600.0);
-    t.deadZone = r.number("dead_zone", t.deadZone, 0.0, 0.99);
+    toml_reader::readFields<TrackingConfig>(
+        r, t,
+        {{"min_cutoff", &TrackingConfig::minCutoff}, {"beta", &TrackingConfig::beta},
+         {"derivative_cutoff", &TrackingConfig::derivativeCutoff}, {"button_pick", &TrackingConfig::buttonPick},
+         {"button_mode", &TrackingConfig::buttonMode}, {"button_home", &TrackingConfig::buttonHome},
+         {"joystick_x", &TrackingConfig::joystickX}, {"joystick_y", &TrackingConfig::joystickY},
+         {"fly_speed", &TrackingConfig::flySpeed}, {"turn_speed", &TrackingConfig::turnSpeed},
+         {"dead_zone", &TrackingConfig::deadZone}});
     t.wandDirection = r.vec3d("wand_direction", t.wandDirection);
     const auto& d = t.wandDirection;
     if (!(d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > 1e-12) || !std::isfinite(d[0] + d[1] + d[2]))
@@ -229,18 +233,18 @@ void readTracking(Reader& r, TrackingConfig& t) {
 
 // [[node]] tables: which display node drives which columns and rows of a [grid] (inclusive
 // ranges; both eyes' screens of a passive-stereo grid). Every grid screen on exactly one node.
-void readNodeRegions(toml_reader::Reader& top, const std::filesystem::path& file, WallConfig& w, int cols, int rows) {
+void readNodeRegions(Reader& top, const std::filesystem::path& file, WallConfig& w, int cols, int rows) {
     if (!top.has("node")) return;
     if (cols == 0) top.fail(top.find("node"), "[[node]] regions are for a [grid]; with [[screen]] give node = \"NAME\" on each screen");
     std::vector<int> owner(size_t(cols) * rows, -1);  // region index per cell
     std::vector<std::string> names;
-    toml_reader::forEachTable(top, file, "node", [&](toml_reader::Reader& r, const toml::table&) {
+    toml_reader::forEachTable(top, file, wall_keys::kNode, [&](Reader& r, const toml::table&) {
         const std::string name = r.string("name", "", true);
         if (!validNodeName(name)) r.fail(r.find("name"), "key 'name': '" + name + "' is not a node name (1 to 32 letters, digits, '-' or '_')");
         if (std::find(names.begin(), names.end(), name) != names.end())
             r.fail(r.find("name"), "key 'name': node '" + name + "' has a region already (one [[node]] per node)");
-        const std::array<int, 2> c = intArray<2>(r, "columns", {0, cols - 1}, 0, 63);
-        const std::array<int, 2> rr = intArray<2>(r, "rows", {0, rows - 1}, 0, 63);
+        const std::array<int, 2> c = intArray<2>(r, "columns", {0, cols - 1});
+        const std::array<int, 2> rr = intArray<2>(r, "rows", {0, rows - 1});
         if (c[0] > c[1] || c[1] >= cols)
             r.fail(r.find("columns"), "key 'columns': [" + std::to_string(c[0]) + ", " + std::to_string(c[1]) +
                                           "] is not a first and last column of the grid's 0.." + std::to_string(cols - 1));
@@ -269,195 +273,210 @@ void readNodeRegions(toml_reader::Reader& top, const std::filesystem::path& file
     }
 }
 
-WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
-    using namespace toml_reader;
-    WallConfig w;
-    w.file = file;
-    Reader top(file, root, "");
-    const toml::table* wallT = subTable(top, "wall");
-    if (!wallT) top.fail(nullptr, "missing required table [wall]");
-    Reader wr(file, *wallT, "[wall]: ");
-    w.name = wr.string("name", w.name);
-    const toml::node* widthNode = wr.find("width");
-    const toml::node* heightNode = wr.find("height");
-    w.width = wr.integer("width", 0, 1, 65536);
-    w.height = wr.integer("height", 0, 1, 65536);
-    w.vsync = wr.boolean("vsync", w.vsync);
-    w.swapGroup = wr.integer("swap_group", 0, 0, 1 << 20);
-    w.swapBarrier = wr.integer("swap_barrier", 0, 0, 1 << 20);
-    if (w.swapBarrier > 0 && w.swapGroup == 0) wr.fail(wr.find("swap_barrier"), "key 'swap_barrier': needs swap_group (a barrier binds a swap group)");
-    wr.finish();
-
+// What the sections say about each other while the file is read: the [wall] nodes a [grid]
+// checks its size against, and per screen the node its layout messages point at.
+struct WallParse {
+    WallParse(const std::filesystem::path& f, WallConfig& wall) : file(f), w(wall) {}
+    const std::filesystem::path& file;
+    WallConfig& w;
+    const toml::node* widthNode = nullptr;
+    const toml::node* heightNode = nullptr;
     bool stereoCorners = false;
-    if (const toml::table* t = subTable(top, "stereo")) {
-        Reader r(file, *t, "[stereo]: ");
-        stereoCorners = r.has("lower_left") && r.has("lower_right") && r.has("upper_left");
-        StereoConfig& st = w.stereo;
-        st.mode = stereoFromName(r.choice("mode", "none", {"none", "passive", "side_by_side", "quad_buffer"}));
-        st.eyeSeparation = r.number("eye_separation", st.eyeSeparation, 0.0, 1.0);
-        st.viewer = r.vec3("viewer", st.viewer);
-        st.lowerLeft = r.vec3("lower_left", st.lowerLeft);
-        st.lowerRight = r.vec3("lower_right", st.lowerRight);
-        st.upperLeft = r.vec3("upper_left", st.upperLeft);
-        checkRectangle(r, r.find("upper_left"), st.lowerLeft, st.lowerRight, st.upperLeft, "the wall's");
-        r.finish();
-    }
-    if (const toml::table* t = subTable(top, "tracking")) {
-        Reader r(file, *t, "[tracking]: ");
-        readTracking(r, w.tracking);
-        // The frusta follow from where the head is relative to the physical screens.
-        if (!stereoCorners)
-            top.fail(t, "[tracking]: a tracked wall needs its physical corners: lower_left, lower_right and upper_left in [stereo] "
-                        "(with mode = \"none\" for a mono wall)");
-    }
-    const Eye defaultEye = w.stereo.mode == StereoMode::SideBySide || w.stereo.mode == StereoMode::QuadBuffer ? Eye::Both
-                                                                                                             : Eye::Mono;
-
-    const bool hasGrid = top.has("grid"), hasScreens = top.has("screen");
-    if (hasGrid && hasScreens) top.fail(top.find("screen"), "give either [grid] or [[screen]], not both");
-    if (!hasGrid && !hasScreens) top.fail(nullptr, "a wall needs a [grid] or a list of [[screen]]");
-
+    Eye defaultEye = Eye::Mono;
     std::vector<const toml::node*> viewportNodes;  // per screen, for messages about the layout
     int gridColumns = 0, gridRows = 0;
-    if (hasGrid) {
-        const toml::table* t = subTable(top, "grid");
-        Reader r(file, *t, "[grid]: ");
-        const int cols = r.integer("columns", 1, 1, 64), rows = r.integer("rows", 1, 1, 64);
-        gridColumns = cols;
-        gridRows = rows;
-        const int sw = r.integer("screen_width", 0, 1, 16384), sh = r.integer("screen_height", 0, 1, 16384);
-        if (!r.has("screen_width")) r.fail(nullptr, "missing required key 'screen_width'");
-        if (!r.has("screen_height")) r.fail(nullptr, "missing required key 'screen_height'");
-        std::array<int, 4> bezel{};  // left, right, top, bottom
-        if (r.has("bezel") && r.has("bezel_mm")) r.fail(r.find("bezel_mm"), "give either 'bezel' (pixels) or 'bezel_mm'");
-        bezel = intArray<4>(r, "bezel", bezel, 0, 16384);
-        const toml::node* bezelNode = r.find("bezel");
-        if (r.has("bezel_mm")) {
-            bezelNode = r.find("bezel_mm");
-            const std::array<double, 4> mm = edgeNumbers(r, "bezel_mm", {0, 0, 0, 0}, 0.0, 10000.0);
-            if (!r.has("screen_mm")) r.fail(bezelNode, "key 'bezel_mm' needs 'screen_mm' = [width, height], the visible area in millimetres");
-            const std::array<int, 2> smm = intArray<2>(r, "screen_mm", {0, 0}, 1, 100000);
-            for (int i = 0; i < 4; ++i) bezel[i] = int(std::lround(mm[i] * (i < 2 ? double(sw) / smm[0] : double(sh) / smm[1])));
-        } else if (r.has("screen_mm")) {
-            intArray<2>(r, "screen_mm", {0, 0}, 1, 100000);
-        }
-        if (bezel[0] + bezel[1] >= sw)
-            r.fail(bezelNode, "the bezel (" + std::to_string(bezel[0] + bezel[1]) + " pixels left and right) is wider than the screen (" +
-                                  std::to_string(sw) + ")");
-        if (bezel[2] + bezel[3] >= sh)
-            r.fail(bezelNode, "the bezel (" + std::to_string(bezel[2] + bezel[3]) + " pixels top and bottom) is taller than the screen (" +
-                                  std::to_string(sh) + ")");
-        const int overlap = r.integer("overlap", 0, 0, 16384);
-        if (overlap > 0 && (bezel != std::array<int, 4>{}))
-            r.fail(r.find("overlap"), "overlapping projectors have no bezels: give 'overlap' or a bezel, not both");
-        if (2 * overlap >= std::min(sw, sh)) r.fail(r.find("overlap"), "key 'overlap': must be less than half the screen");
-        ScreenConfig base;
-        readScreenCommon(r, base);
-        const int firstMonitor = r.integer("first_monitor", 0, 0, 64);
-        r.finish();
-        // Bezels between screens are hidden wall pixels; the outer ones are not rendered.
-        const int stepX = sw + bezel[0] + bezel[1] - overlap, stepY = sh + bezel[2] + bezel[3] - overlap;
-        const int total = cols * rows;
-        const bool pairs = w.stereo.mode == StereoMode::Passive;
-        for (int eye = 0; eye < (pairs ? 2 : 1); ++eye)
-            for (int row = 0; row < rows; ++row)
-                for (int col = 0; col < cols; ++col) {
-                    ScreenConfig s = base;
-                    s.name = "c" + std::to_string(col) + "r" + std::to_string(row) + (pairs ? (eye ? "R" : "L") : "");
-                    s.viewport = {col * stepX, row * stepY, sw, sh};
-                    s.outputWidth = sw;
-                    s.outputHeight = sh;
-                    if (overlap > 0) s.blend = {col > 0 ? overlap : 0, col + 1 < cols ? overlap : 0, row > 0 ? overlap : 0,
-                                                row + 1 < rows ? overlap : 0};
-                    s.eye = pairs ? (eye ? Eye::Right : Eye::Left) : defaultEye;
-                    s.monitor = firstMonitor + eye * total + row * cols + col;
-                    s.window = {eye * cols * sw + col * sw, row * sh};
-                    s.line = int(t->source().begin.line);
-                    w.screens.push_back(s);
-                    viewportNodes.push_back(t);
-                }
-        const int gw = cols * stepX - (bezel[0] + bezel[1]) + overlap, gh = rows * stepY - (bezel[2] + bezel[3]) + overlap;
-        if (w.width && w.width != gw) wr.fail(widthNode, "key 'width': " + std::to_string(w.width) + " differs from the grid's " + std::to_string(gw));
-        if (w.height && w.height != gh) wr.fail(heightNode, "key 'height': " + std::to_string(w.height) + " differs from the grid's " + std::to_string(gh));
-        w.width = gw;
-        w.height = gh;
-    } else {
-        if (!w.width) wr.fail(nullptr, "missing required key 'width' (the wall image's size in pixels)");
-        if (!w.height) wr.fail(nullptr, "missing required key 'height' (the wall image's size in pixels)");
-        forEachTable(top, file, "screen", [&](Reader& r, const toml::table& t) {
-            ScreenConfig s;
-            s.line = int(t.source().begin.line);
-            s.name = r.string("name", "screen" + std::to_string(w.screens.size() + 1));
-            const std::array<int, 4> vp = intArray<4>(r, "viewport", {}, 0, 65536, true);
-            const toml::node* vpNode = r.find("viewport");
-            s.viewport = {vp[0], vp[1], vp[2], vp[3]};
-            if (vp[2] < 1 || vp[3] < 1) r.fail(vpNode, "key 'viewport': width and height must be at least 1");
-            if (vp[0] + vp[2] > w.width || vp[1] + vp[3] > w.height)
-                r.fail(vpNode, "key 'viewport': [" + std::to_string(vp[0]) + ", " + std::to_string(vp[1]) + ", " + std::to_string(vp[2]) +
-                                   ", " + std::to_string(vp[3]) + "] reaches outside the " + std::to_string(w.width) + "x" +
-                                   std::to_string(w.height) + " wall");
-            const std::array<int, 2> res = intArray<2>(r, "resolution", {vp[2], vp[3]}, 1, 16384);
-            s.outputWidth = res[0];
-            s.outputHeight = res[1];
-            s.blend = intArray<4>(r, "blend", s.blend, 0, 16384);
-            if (s.blend[0] + s.blend[1] > vp[2] || s.blend[2] + s.blend[3] > vp[3])
-                r.fail(r.find("blend"), "key 'blend': the ramps are wider than the screen's viewport");
-            readScreenCommon(r, s);
-            const std::string eye = r.choice("eye", eyeName(defaultEye), {"mono", "left", "right", "both"});
-            s.eye = eyeFromName(eye);
-            s.monitor = r.integer("monitor", 0, 0, 64);
-            s.window = intArray<2>(r, "window", s.window, -65536, 65536);
-            const std::string shader = r.string("shader", "");
-            if (!shader.empty()) {
-                s.fragmentShader = std::filesystem::absolute(file.parent_path() / shader).lexically_normal();
-                if (!std::filesystem::exists(s.fragmentShader))
-                    r.fail(r.find("shader"), "key 'shader': no such file " + s.fragmentShader.string());
-            }
-            const int corners = r.has("lower_left") + r.has("lower_right") + r.has("upper_left");
-            if (corners > 0 && corners < 3)
-                r.fail(r.find(r.has("lower_left") ? "lower_left" : r.has("lower_right") ? "lower_right" : "upper_left"),
-                       "give all three physical corners (lower_left, lower_right, upper_left; metres) or none");
-            if (corners == 3) {
-                s.hasCorners = true;
-                s.lowerLeft = r.vec3("lower_left", {});
-                s.lowerRight = r.vec3("lower_right", {});
-                s.upperLeft = r.vec3("upper_left", {});
-                checkRectangle(r, r.find("upper_left"), s.lowerLeft, s.lowerRight, s.upperLeft, "the screen's");
-            }
-            if (r.has("node")) {
-                s.node = r.string("node", "");
-                if (!validNodeName(s.node))
-                    r.fail(r.find("node"), "key 'node': '" + s.node + "' is not a node name (1 to 32 letters, digits, '-' or '_')");
-            }
-            for (size_t i = 0; i < w.screens.size(); ++i)
-                if (w.screens[i].name == s.name) r.fail(r.find("name"), "key 'name': '" + s.name + "' is used by another screen");
-            w.screens.push_back(s);
-            viewportNodes.push_back(vpNode);
-        });
+};
+
+Reader readWall(Reader& top, WallParse& p) {
+    const toml::table* wallT = toml_reader::subTable(top, "wall");
+    if (!wallT) top.fail(nullptr, "missing required table [wall]");
+    WallConfig& w = p.w;
+    Reader wr(p.file, *wallT, "[wall]: ", wall_keys::kWall);
+    w.name = wr.string("name", w.name);
+    p.widthNode = wr.find("width");
+    p.heightNode = wr.find("height");
+    w.width = wr.integer("width", 0);
+    w.height = wr.integer("height", 0);
+    w.vsync = wr.boolean("vsync", w.vsync);
+    w.swapGroup = wr.integer("swap_group", 0);
+    w.swapBarrier = wr.integer("swap_barrier", 0);
+    if (w.swapBarrier > 0 && w.swapGroup == 0) wr.fail(wr.find("swap_barrier"), "key 'swap_barrier': needs swap_group (a barrier binds a swap group)");
+    wr.finish();
+    return wr;
+}
+
+void readStereo(Reader& top, WallParse& p) {
+    auto r = toml_reader::sectionReader(top, p.file, wall_keys::kStereo);
+    if (!r) return;
+    p.stereoCorners = r->has("lower_left") && r->has("lower_right") && r->has("upper_left");
+    StereoConfig& st = p.w.stereo;
+    st.mode = stereoFromName(r->choice("mode", "none"));
+    toml_reader::readFields<StereoConfig>(*r, st,
+                                          {{"eye_separation", &StereoConfig::eyeSeparation}, {"viewer", &StereoConfig::viewer},
+                                           {"lower_left", &StereoConfig::lowerLeft}, {"lower_right", &StereoConfig::lowerRight},
+                                           {"upper_left", &StereoConfig::upperLeft}});
+    checkRectangle(*r, r->find("upper_left"), st.lowerLeft, st.lowerRight, st.upperLeft, "the wall's");
+    r->finish();
+}
+
+void readTrackingSection(Reader& top, WallParse& p) {
+    const toml::table* t = toml_reader::subTable(top, "tracking");
+    if (!t) return;
+    Reader r(p.file, *t, "[tracking]: ", wall_keys::kTracking);
+    readTracking(r, p.w.tracking);
+    // The frusta follow from where the head is relative to the physical screens.
+    if (!p.stereoCorners)
+        top.fail(t, "[tracking]: a tracked wall needs its physical corners: lower_left, lower_right and upper_left in [stereo] "
+                    "(with mode = \"none\" for a mono wall)");
+}
+
+// [grid]'s bezels in pixels (left, right, top, bottom), given in pixels or in millimetres of a
+// screen of screen_mm; `bezelNode` is where messages about them point.
+std::array<int, 4> readBezel(Reader& r, int sw, int sh, const toml::node*& bezelNode) {
+    std::array<int, 4> bezel{};  // left, right, top, bottom
+    if (r.has("bezel") && r.has("bezel_mm")) r.fail(r.find("bezel_mm"), "give either 'bezel' (pixels) or 'bezel_mm'");
+    bezel = intArray<4>(r, "bezel", bezel);
+    bezelNode = r.find("bezel");
+    if (r.has("bezel_mm")) {
+        bezelNode = r.find("bezel_mm");
+        const std::array<double, 4> mm = edgeNumbers(r, "bezel_mm", {0, 0, 0, 0});
+        if (!r.has("screen_mm")) r.fail(bezelNode, "key 'bezel_mm' needs 'screen_mm' = [width, height], the visible area in millimetres");
+        const std::array<int, 2> smm = intArray<2>(r, "screen_mm", {0, 0});
+        for (int i = 0; i < 4; ++i) bezel[i] = int(std::lround(mm[i] * (i < 2 ? double(sw) / smm[0] : double(sh) / smm[1])));
+    } else if (r.has("screen_mm")) {
+        intArray<2>(r, "screen_mm", {0, 0});
     }
+    if (bezel[0] + bezel[1] >= sw)
+        r.fail(bezelNode, "the bezel (" + std::to_string(bezel[0] + bezel[1]) + " pixels left and right) is wider than the screen (" +
+                              std::to_string(sw) + ")");
+    if (bezel[2] + bezel[3] >= sh)
+        r.fail(bezelNode, "the bezel (" + std::to_string(bezel[2] + bezel[3]) + " pixels top and bottom) is taller than the screen (" +
+                              std::to_string(sh) + ")");
+    return bezel;
+}
 
-    readNodeRegions(top, file, w, gridColumns, gridRows);
+void readGrid(Reader& top, Reader& wr, WallParse& p) {
+    const toml::table* t = toml_reader::subTable(top, "grid");
+    WallConfig& w = p.w;
+    Reader r(p.file, *t, "[grid]: ", wall_keys::kGrid);
+    const int cols = r.integer("columns", 1), rows = r.integer("rows", 1);
+    p.gridColumns = cols;
+    p.gridRows = rows;
+    const int sw = r.integer("screen_width", 0), sh = r.integer("screen_height", 0);
+    if (!r.has("screen_width")) r.fail(nullptr, "missing required key 'screen_width'");
+    if (!r.has("screen_height")) r.fail(nullptr, "missing required key 'screen_height'");
+    const toml::node* bezelNode = nullptr;
+    const std::array<int, 4> bezel = readBezel(r, sw, sh, bezelNode);
+    const int overlap = r.integer("overlap", 0);
+    if (overlap > 0 && (bezel != std::array<int, 4>{}))
+        r.fail(r.find("overlap"), "overlapping projectors have no bezels: give 'overlap' or a bezel, not both");
+    if (2 * overlap >= std::min(sw, sh)) r.fail(r.find("overlap"), "key 'overlap': must be less than half the screen");
+    ScreenConfig base;
+    readScreenCommon(r, base);
+    const int firstMonitor = r.integer("first_monitor", 0);
+    r.finish();
+    // Bezels between screens are hidden wall pixels; the outer ones are not rendered.
+    const int stepX = sw + bezel[0] + bezel[1] - overlap, stepY = sh + bezel[2] + bezel[3] - overlap;
+    const int total = cols * rows;
+    const bool pairs = w.stereo.mode == StereoMode::Passive;
+    for (int eye = 0; eye < (pairs ? 2 : 1); ++eye)
+        for (int row = 0; row < rows; ++row)
+            for (int col = 0; col < cols; ++col) {
+                ScreenConfig s = base;
+                s.name = "c" + std::to_string(col) + "r" + std::to_string(row) + (pairs ? (eye ? "R" : "L") : "");
+                s.viewport = {col * stepX, row * stepY, sw, sh};
+                s.outputWidth = sw;
+                s.outputHeight = sh;
+                if (overlap > 0) s.blend = {col > 0 ? overlap : 0, col + 1 < cols ? overlap : 0, row > 0 ? overlap : 0,
+                                            row + 1 < rows ? overlap : 0};
+                s.eye = pairs ? (eye ? Eye::Right : Eye::Left) : p.defaultEye;
+                s.monitor = firstMonitor + eye * total + row * cols + col;
+                s.window = {eye * cols * sw + col * sw, row * sh};
+                s.line = int(t->source().begin.line);
+                w.screens.push_back(s);
+                p.viewportNodes.push_back(t);
+            }
+    const int gw = cols * stepX - (bezel[0] + bezel[1]) + overlap, gh = rows * stepY - (bezel[2] + bezel[3]) + overlap;
+    if (w.width && w.width != gw) wr.fail(p.widthNode, "key 'width': " + std::to_string(w.width) + " differs from the grid's " + std::to_string(gw));
+    if (w.height && w.height != gh) wr.fail(p.heightNode, "key 'height': " + std::to_string(w.height) + " differs from the grid's " + std::to_string(gh));
+    w.width = gw;
+    w.height = gh;
+}
 
-    if (const toml::table* t = subTable(top, "headless")) {
-        Reader r(file, *t, "[headless]: ");
-        w.writeEvery = r.integer("write_every", w.writeEvery, 0, 100'000'000);
-        w.video = r.string("video", "");
-        // The name goes to the ffmpeg program on a shell command line: a plain file name only.
-        for (char ch : w.video)
-            if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '.' || ch == '-' || ch == '_'))
-                r.fail(r.find("video"), "key 'video': a plain file name of letters, digits, '.', '-' and '_' (it goes to ffmpeg)");
-        if (w.video.starts_with("-") || w.video.starts_with("."))
-            r.fail(r.find("video"), "key 'video': a plain file name of letters, digits, '.', '-' and '_' (it goes to ffmpeg)");
-        r.finish();
+// One [[screen]] of an explicit list.
+void readScreen(Reader& r, const toml::table& t, WallParse& p) {
+    WallConfig& w = p.w;
+    ScreenConfig s;
+    s.line = int(t.source().begin.line);
+    s.name = r.string("name", "screen" + std::to_string(w.screens.size() + 1));
+    const std::array<int, 4> vp = intArray<4>(r, "viewport", {}, true);
+    const toml::node* vpNode = r.find("viewport");
+    s.viewport = {vp[0], vp[1], vp[2], vp[3]};
+    if (vp[2] < 1 || vp[3] < 1) r.fail(vpNode, "key 'viewport': width and height must be at least 1");
+    if (vp[0] + vp[2] > w.width || vp[1] + vp[3] > w.height)
+        r.fail(vpNode, "key 'viewport': [" + std::to_string(vp[0]) + ", " + std::to_string(vp[1]) + ", " + std::to_string(vp[2]) +
+                           ", " + std::to_string(vp[3]) + "] reaches outside the " + std::to_string(w.width) + "x" +
+                           std::to_string(w.height) + " wall");
+    const std::array<int, 2> res = intArray<2>(r, "resolution", {vp[2], vp[3]});
+    s.outputWidth = res[0];
+    s.outputHeight = res[1];
+    s.blend = intArray<4>(r, "blend", s.blend);
+    if (s.blend[0] + s.blend[1] > vp[2] || s.blend[2] + s.blend[3] > vp[3])
+        r.fail(r.find("blend"), "key 'blend': the ramps are wider than the screen's viewport");
+    readScreenCommon(r, s);
+    s.eye = eyeFromName(r.choice("eye", eyeName(p.defaultEye)));
+    s.monitor = r.integer("monitor", 0);
+    s.window = intArray<2>(r, "window", s.window);
+    const std::string shader = r.string("shader", "");
+    if (!shader.empty()) {
+        s.fragmentShader = std::filesystem::absolute(p.file.parent_path() / shader).lexically_normal();
+        if (!std::filesystem::exists(s.fragmentShader))
+            r.fail(r.find("shader"), "key 'shader': no such file " + s.fragmentShader.string());
     }
-    top.finish();
+    const int corners = r.has("lower_left") + r.has("lower_right") + r.has("upper_left");
+    if (corners > 0 && corners < 3)
+        r.fail(r.find(r.has("lower_left") ? "lower_left" : r.has("lower_right") ? "lower_right" : "upper_left"),
+               "give all three physical corners (lower_left, lower_right, upper_left; metres) or none");
+    if (corners == 3) {
+        s.hasCorners = true;
+        s.lowerLeft = r.vec3("lower_left", {});
+        s.lowerRight = r.vec3("lower_right", {});
+        s.upperLeft = r.vec3("upper_left", {});
+        checkRectangle(r, r.find("upper_left"), s.lowerLeft, s.lowerRight, s.upperLeft, "the screen's");
+    }
+    if (r.has("node")) {
+        s.node = r.string("node", "");
+        if (!validNodeName(s.node))
+            r.fail(r.find("node"), "key 'node': '" + s.node + "' is not a node name (1 to 32 letters, digits, '-' or '_')");
+    }
+    for (size_t i = 0; i < w.screens.size(); ++i)
+        if (w.screens[i].name == s.name) r.fail(r.find("name"), "key 'name': '" + s.name + "' is used by another screen");
+    w.screens.push_back(s);
+    p.viewportNodes.push_back(vpNode);
+}
 
-    // The layout as a whole.
+void readHeadless(Reader& top, WallConfig& w, const std::filesystem::path& file) {
+    auto r = toml_reader::sectionReader(top, file, wall_keys::kHeadless);
+    if (!r) return;
+    w.writeEvery = r->integer("write_every", w.writeEvery);
+    w.video = r->string("video", "");
+    // The name goes to the ffmpeg program on a shell command line: a plain file name only.
+    for (char ch : w.video)
+        if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '.' || ch == '-' || ch == '_'))
+            r->fail(r->find("video"), "key 'video': a plain file name of letters, digits, '.', '-' and '_' (it goes to ffmpeg)");
+    if (w.video.starts_with("-") || w.video.starts_with("."))
+        r->fail(r->find("video"), "key 'video': a plain file name of letters, digits, '.', '-' and '_' (it goes to ffmpeg)");
+    r->finish();
+}
+
+// The layout as a whole: corners and nodes on every screen or none, eyes that fit the stereo
+// mode, overlaps only where blend ramps cover them, at most kMaxDisplayNodes nodes.
+void checkLayout(const WallConfig& w, const toml::table& root, const WallParse& p) {
     bool left = false, right = false;
     for (size_t i = 0; i < w.screens.size(); ++i) {
         const ScreenConfig& s = w.screens[i];
         auto failAt = [&](const std::string& what) {
-            throw InputError(toml_reader::where(file, viewportNodes[i]->source()) + ": screen '" + s.name + "': " + what);
+            throw InputError(toml_reader::where(p.file, p.viewportNodes[i]->source()) + ": screen '" + s.name + "': " + what);
         };
         left |= s.eye == Eye::Left;
         right |= s.eye == Eye::Right;
@@ -492,10 +511,36 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
         }
     }
     if (w.stereo.mode == StereoMode::Passive && (!left || !right))
-        throw InputError(toml_reader::where(file, root.source()) + ": [stereo]: passive stereo needs screens for both eyes");
+        throw InputError(toml_reader::where(p.file, root.source()) + ": [stereo]: passive stereo needs screens for both eyes");
     if (w.nodes().size() > kMaxDisplayNodes)
-        throw InputError(toml_reader::where(file, root.source()) + ": the screens name " + std::to_string(w.nodes().size()) +
+        throw InputError(toml_reader::where(p.file, root.source()) + ": the screens name " + std::to_string(w.nodes().size()) +
                          " display nodes, at most " + std::to_string(kMaxDisplayNodes) + " are supported");
+}
+
+WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
+    WallConfig w;
+    w.file = file;
+    WallParse p(file, w);
+    Reader top(file, root, "", wall_keys::kTop);
+    Reader wr = readWall(top, p);
+    readStereo(top, p);
+    readTrackingSection(top, p);
+    p.defaultEye = w.stereo.mode == StereoMode::SideBySide || w.stereo.mode == StereoMode::QuadBuffer ? Eye::Both : Eye::Mono;
+
+    const bool hasGrid = top.has("grid"), hasScreens = top.has("screen");
+    if (hasGrid && hasScreens) top.fail(top.find("screen"), "give either [grid] or [[screen]], not both");
+    if (!hasGrid && !hasScreens) top.fail(nullptr, "a wall needs a [grid] or a list of [[screen]]");
+    if (hasGrid) {
+        readGrid(top, wr, p);
+    } else {
+        if (!w.width) wr.fail(nullptr, "missing required key 'width' (the wall image's size in pixels)");
+        if (!w.height) wr.fail(nullptr, "missing required key 'height' (the wall image's size in pixels)");
+        toml_reader::forEachTable(top, file, wall_keys::kScreen, [&](Reader& r, const toml::table& t) { readScreen(r, t, p); });
+    }
+    readNodeRegions(top, file, w, p.gridColumns, p.gridRows);
+    readHeadless(top, w, file);
+    top.finish();
+    checkLayout(w, root, p);
     return w;
 }
 

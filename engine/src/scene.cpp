@@ -276,6 +276,55 @@ void updateSections(Scene::Impl& s) {
     s.capModels = std::move(caps);
 }
 
+// Mesh `mi`'s own BVH (an Embree scene of its triangles, or of its triangles paired into quads),
+// appended to s.meshScenes.
+void buildMeshScene(Scene::Impl& s, size_t mi, bool anyAlpha) {
+    const MeshDesc& md = s.desc.meshes[mi];
+    const TriangleMesh& mesh = *md.mesh;
+    MeshPrimitives& mp = s.meshPrims[mi];
+    if (s.desc.bvh.primitives == BvhSettings::Primitives::Auto) mp = pairIntoQuads(mesh);
+    RTCScene ms = rtcNewScene(s.device);
+    s.meshScenes.push_back(ms);
+    rtcSetSceneBuildQuality(ms, buildQuality(s.desc.bvh.quality));
+    rtcSetSceneFlags(ms, sceneFlags(s.desc.bvh, mp.quads > 0));
+    rtcSetSceneProgressMonitorFunction(ms, buildProgress, &s);
+    s.currentMesh = double(mesh.triangleCount());
+    // Shared buffers: Embree reads the mesh's arrays in place, whether the importer
+    // filled them or they are the pages of a mapped cache file (TriangleMesh's
+    // MeshArray); both carry the 16 bytes of tail padding Embree's SIMD loads need.
+    auto attach = [&](RTCGeometryType type, RTCFormat format, const uint32_t* index, size_t byteOffset,
+                      size_t byteStride, size_t count, unsigned id) {
+        RTCGeometry g = rtcNewGeometry(s.device, type);
+        rtcSetGeometryBuildQuality(g, buildQuality(s.desc.bvh.quality));
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, mesh.positions(), 0,
+                                   3 * sizeof(float), mesh.vertexCount());
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, format, index, byteOffset, byteStride, count);
+        rtcSetGeometryMask(g, kMaskAll);  // instances carry the masks that matter
+        if (anyAlpha) setAlphaFilter(g, s);
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(ms, g, id);
+        mp.geometries = id + 1;
+        rtcReleaseGeometry(g);
+    };
+    if (mp.quads > 0) {
+        if (mp.quadIndex.empty())  // the window view of the triangle index array
+            attach(RTC_GEOMETRY_TYPE_QUAD, RTC_FORMAT_UINT4, mesh.indices(), sizeof(uint32_t),
+                   6 * sizeof(uint32_t), mp.quads, 0);
+        else
+            attach(RTC_GEOMETRY_TYPE_QUAD, RTC_FORMAT_UINT4, mp.quadIndex.data(), 0, 4 * sizeof(uint32_t),
+                   mp.quads, 0);
+        if (!mp.single.empty())
+            attach(RTC_GEOMETRY_TYPE_QUAD, RTC_FORMAT_UINT4, mp.singleIndex.data(), 0, 4 * sizeof(uint32_t),
+                   mp.single.size(), 1);
+    } else if (mesh.triangleCount() > 0) {
+        attach(RTC_GEOMETRY_TYPE_TRIANGLE, RTC_FORMAT_UINT3, mesh.indices(), 0, 3 * sizeof(uint32_t),
+               mesh.triangleCount(), 0);
+    }
+    rtcCommitScene(ms);
+    if (s.cancelled) throw Cancelled();
+    checkDevice(s.device, s.lastError, ("building the BVH of mesh '" + md.name + "'").c_str());
+}
+
 }  // namespace
 
 Scene::Scene(const SceneDesc& desc) : Scene(desc, ProgressFn{}) {}
@@ -307,50 +356,7 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
         s.meshScenes.reserve(s.desc.meshes.size());
         s.meshPrims.resize(s.desc.meshes.size());  // not resized again: instances point into it
         for (size_t mi = 0; mi < s.desc.meshes.size(); ++mi) {
-            const MeshDesc& md = s.desc.meshes[mi];
-            const TriangleMesh& mesh = *md.mesh;
-            MeshPrimitives& mp = s.meshPrims[mi];
-            if (s.desc.bvh.primitives == BvhSettings::Primitives::Auto) mp = pairIntoQuads(mesh);
-            RTCScene ms = rtcNewScene(s.device);
-            s.meshScenes.push_back(ms);
-            rtcSetSceneBuildQuality(ms, buildQuality(s.desc.bvh.quality));
-            rtcSetSceneFlags(ms, sceneFlags(s.desc.bvh, mp.quads > 0));
-            rtcSetSceneProgressMonitorFunction(ms, buildProgress, &s);
-            s.currentMesh = double(mesh.triangleCount());
-            // Shared buffers: Embree reads the mesh's arrays in place, whether the importer
-            // filled them or they are the pages of a mapped cache file (TriangleMesh's
-            // MeshArray); both carry the 16 bytes of tail padding Embree's SIMD loads need.
-            auto attach = [&](RTCGeometryType type, RTCFormat format, const uint32_t* index, size_t byteOffset,
-                              size_t byteStride, size_t count, unsigned id) {
-                RTCGeometry g = rtcNewGeometry(s.device, type);
-                rtcSetGeometryBuildQuality(g, buildQuality(s.desc.bvh.quality));
-                rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, mesh.positions(), 0,
-                                           3 * sizeof(float), mesh.vertexCount());
-                rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, format, index, byteOffset, byteStride, count);
-                rtcSetGeometryMask(g, kMaskAll);  // instances carry the masks that matter
-                if (anyAlpha) setAlphaFilter(g, s);
-                rtcCommitGeometry(g);
-                rtcAttachGeometryByID(ms, g, id);
-                mp.geometries = id + 1;
-                rtcReleaseGeometry(g);
-            };
-            if (mp.quads > 0) {
-                if (mp.quadIndex.empty())  // the window view of the triangle index array
-                    attach(RTC_GEOMETRY_TYPE_QUAD, RTC_FORMAT_UINT4, mesh.indices(), sizeof(uint32_t),
-                           6 * sizeof(uint32_t), mp.quads, 0);
-                else
-                    attach(RTC_GEOMETRY_TYPE_QUAD, RTC_FORMAT_UINT4, mp.quadIndex.data(), 0, 4 * sizeof(uint32_t),
-                           mp.quads, 0);
-                if (!mp.single.empty())
-                    attach(RTC_GEOMETRY_TYPE_QUAD, RTC_FORMAT_UINT4, mp.singleIndex.data(), 0, 4 * sizeof(uint32_t),
-                           mp.single.size(), 1);
-            } else if (mesh.triangleCount() > 0) {
-                attach(RTC_GEOMETRY_TYPE_TRIANGLE, RTC_FORMAT_UINT3, mesh.indices(), 0, 3 * sizeof(uint32_t),
-                       mesh.triangleCount(), 0);
-            }
-            rtcCommitScene(ms);
-            if (s.cancelled) throw Cancelled();
-            checkDevice(s.device, lastError, ("building the BVH of mesh '" + md.name + "'").c_str());
+            buildMeshScene(s, mi, anyAlpha);
             s.trianglesBuilt += s.currentMesh;
         }
         s.progress = nullptr;

@@ -167,6 +167,36 @@ struct Fd {
     }
 };
 
+// The child's exit status, its error line, and on success the assembly it left in `memfd`
+// (also written to the cache file when there is one).
+void finishChild(const fs::path& file, const AssemblyKey& key, const fs::path* cacheFile, int status, const std::string& error,
+                 int memfd, CadImport& result) {
+    if (WIFSIGNALED(status))
+        fail(file, "OpenCASCADE crashed reading the file (signal " + std::to_string(WTERMSIG(status)) + ": " +
+                       strsignal(WTERMSIG(status)) + "); the file is malformed");
+    const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    if (code == 3 && !error.empty()) throw InputError(error);
+    if (code != 0) fail(file, "the importer failed (exit status " + std::to_string(code) + ")");
+
+    struct stat st {};
+    if (::fstat(memfd, &st) != 0 || st.st_size <= 0) fail(file, "the importer returned no assembly");
+    const auto size = size_t(st.st_size);
+    void* map = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, memfd, 0);
+    if (map == MAP_FAILED) fail(file, "cannot map the assembly the importer returned");
+    const std::shared_ptr<const void> keep(map, [size](const void* p) { ::munmap(const_cast<void*>(p), size); });
+    const auto* bytes = static_cast<const unsigned char*>(map);
+    std::vector<std::string> warnings = std::move(result.assembly.warnings);
+    result.assembly = decodeAssemblyCache(bytes, size, key, file.string() + " (the importer's result)", keep);
+    result.assembly.warnings = std::move(warnings);
+    if (cacheFile) {
+        try {
+            writeAssemblyCacheBytes(bytes, size, *cacheFile);
+        } catch (const std::exception& e) {
+            result.cacheError = e.what();
+        }
+    }
+}
+
 }  // namespace
 
 CadImport importCad(const fs::path& file, const AssemblyOptions& options, const AssemblyKey& key, const fs::path* cacheFile) {
@@ -269,30 +299,7 @@ CadImport importCad(const fs::path& file, const AssemblyOptions& options, const 
             exited = true;
         }
     }
-    if (WIFSIGNALED(status))
-        fail(file, "OpenCASCADE crashed reading the file (signal " + std::to_string(WTERMSIG(status)) + ": " +
-                       strsignal(WTERMSIG(status)) + "); the file is malformed");
-    const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    if (code == 3 && !error.empty()) throw InputError(error);
-    if (code != 0) fail(file, "the importer failed (exit status " + std::to_string(code) + ")");
-
-    struct stat st {};
-    if (::fstat(memfd.fd, &st) != 0 || st.st_size <= 0) fail(file, "the importer returned no assembly");
-    const auto size = size_t(st.st_size);
-    void* map = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, memfd.fd, 0);
-    if (map == MAP_FAILED) fail(file, "cannot map the assembly the importer returned");
-    const std::shared_ptr<const void> keep(map, [size](const void* p) { ::munmap(const_cast<void*>(p), size); });
-    const auto* bytes = static_cast<const unsigned char*>(map);
-    std::vector<std::string> warnings = std::move(result.assembly.warnings);
-    result.assembly = decodeAssemblyCache(bytes, size, key, file.string() + " (the importer's result)", keep);
-    result.assembly.warnings = std::move(warnings);
-    if (cacheFile) {
-        try {
-            writeAssemblyCacheBytes(bytes, size, *cacheFile);
-        } catch (const std::exception& e) {
-            result.cacheError = e.what();
-        }
-    }
+    finishChild(file, key, cacheFile, status, error, memfd.fd, result);
     return result;
 }
 

@@ -6,6 +6,7 @@
 
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace rtwall::detail {
 
@@ -24,5 +25,15 @@ TriangleMesh loadVtk(VtkKind kind, const std::string& data, const std::string& n
 // Checks the counts a VTK header declares against the size of the file, before VTK allocates
 // anything for them. Exposed for the tests.
 void checkVtkCounts(VtkKind kind, std::string_view data, const std::string& name);
+
+// Header text, shared by the count checks (import_vtk_counts.cpp) and the readers.
+namespace vtkheader {
+[[noreturn]] void fail(const std::string& name, const std::string& what);
+bool startsWith(std::string_view s, std::string_view p);
+// The line from `pos`, at most 256 characters, without its line end.
+std::string_view lineAt(std::string_view data, size_t pos);
+// Splits a header line into whitespace-separated tokens.
+std::vector<std::string_view> tokens(std::string_view line);
+}  // namespace vtkheader
 
 }  // namespace rtwall::detail

@@ -1,231 +1,11 @@
-#include "validate.h"
-
-#include "rtwall/mesh.h"
-
-#include <algorithm>
-#include <cfloat>
-#include <charconv>
-#include <cmath>
-#include <cstdint>
-#include <cstring>
-#include <limits>
-#include <string_view>
-#include <vector>
+// The mesh pre-passes for OBJ, OFF, STL and OM (PLY: validate_ply.cpp), and the entry that picks
+// one by format.
+#include "validate_scan.h"
 
 namespace rtwall::detail {
 namespace {
 
-// ---------------------------------------------------------------------------------------------
-// Errors
-
-[[noreturn]] void fail(const std::string& name, const std::string& what) { throw InputError(name + ": " + what); }
-
-[[noreturn]] void failLine(const std::string& name, size_t line, const std::string& what) {
-    throw InputError(name + ":line " + std::to_string(line) + ": " + what);
-}
-
-[[noreturn]] void failOffset(const std::string& name, size_t offset, const std::string& what) {
-    throw InputError(name + ":offset " + std::to_string(offset) + ": " + what);
-}
-
-// Quotes a token for an error message. Tokens come from untrusted files, so they are shortened
-// and control bytes are escaped: the message stays one printable line.
-std::string quote(std::string_view token) {
-    constexpr size_t kMax = 32;
-    std::string out = "'";
-    for (size_t i = 0; i < token.size() && i < kMax; ++i) {
-        const auto c = static_cast<unsigned char>(token[i]);
-        if (c >= 0x20 && c < 0x7f) {
-            out += char(c);
-        } else {
-            static const char* hex = "0123456789abcdef";
-            out += "\\x";
-            out += hex[c >> 4];
-            out += hex[c & 15];
-        }
-    }
-    if (token.size() > kMax) out += "...";
-    return out + "'";
-}
-
-std::string plural(uint64_t n, std::string_view noun) {
-    std::string word(noun);
-    if (n != 1) word = noun == "vertex" ? "vertices" : word + "s";
-    return std::to_string(n) + " " + word;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Text scanning
-
-// The characters std::istream's operator>> skips.
-constexpr bool isSpace(char c) {
-    return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f';
-}
-
-char lower(char c) { return (c >= 'A' && c <= 'Z') ? char(c - 'A' + 'a') : c; }
-
-bool equalsNoCase(std::string_view a, std::string_view b) {
-    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) { return lower(x) == lower(y); });
-}
-
-void splitTokens(std::string_view line, std::vector<std::string_view>& tokens) {
-    tokens.clear();
-    size_t i = 0;
-    while (i < line.size()) {
-        while (i < line.size() && isSpace(line[i])) ++i;
-        const size_t start = i;
-        while (i < line.size() && !isSpace(line[i])) ++i;
-        if (i > start) tokens.push_back(line.substr(start, i - start));
-    }
-}
-
-// Walks the lines of a buffer; `begin`/`end` exclude the '\n'.
-class Lines {
-public:
-    explicit Lines(std::string& data, size_t start = 0) : data_(data), pos_(start) {}
-    bool next() {
-        if (pos_ >= data_.size()) return false;
-        begin_ = pos_;
-        const size_t nl = data_.find('\n', pos_);
-        end_ = nl == std::string::npos ? data_.size() : nl;
-        pos_ = end_ + 1;
-        ++number_;
-        return true;
-    }
-    std::string_view view() const { return std::string_view(data_).substr(begin_, end_ - begin_); }
-    size_t number() const { return number_; }
-    size_t begin() const { return begin_; }
-    size_t end() const { return end_; }
-    size_t rest() const { return pos_ >= data_.size() ? 0 : data_.size() - pos_; }
-    // Overwrites [from, end of line) with blanks; every reader skips them like any whitespace.
-    void blankFrom(size_t from) { std::fill(data_.begin() + long(from), data_.begin() + long(end_), ' '); }
-    // The OBJ reader trims only " \t\r\n" and then skips any line that starts with other
-    // whitespace, where the other readers would read on; make all whitespace plain blanks.
-    void plainBlanks() {
-        std::replace_if(data_.begin() + long(begin_), data_.begin() + long(end_), [](char c) { return c == '\v' || c == '\f'; }, ' ');
-    }
-    void blankComment() {
-        // Searched within the line only: searching the rest of the buffer made a file without
-        // any '#' quadratic (a 63 MB OBJ ran for minutes in this pre-pass).
-        const size_t hash = view().find('#');
-        if (hash != std::string_view::npos) blankFrom(begin_ + hash);
-    }
-
-private:
-    std::string& data_;
-    size_t pos_;
-    size_t begin_ = 0, end_ = 0, number_ = 0;
-};
-
-// Walks whitespace-separated tokens across lines (ASCII PLY ignores line structure).
-class Tokens {
-public:
-    Tokens(std::string_view data, size_t start, size_t line) : data_(data), pos_(start), line_(line) {}
-    bool next(std::string_view& token) {
-        while (pos_ < data_.size() && isSpace(data_[pos_])) {
-            if (data_[pos_] == '\n') ++line_;
-            ++pos_;
-        }
-        if (pos_ >= data_.size()) return false;
-        const size_t start = pos_;
-        while (pos_ < data_.size() && !isSpace(data_[pos_])) ++pos_;
-        token = data_.substr(start, pos_ - start);
-        return true;
-    }
-    size_t line() const { return line_; }
-
-private:
-    std::string_view data_;
-    size_t pos_;
-    size_t line_;
-};
-
-void rejectNul(const std::string& data, const std::string& name, size_t from = 0) {
-    const size_t nul = data.find('\0', from);
-    if (nul != std::string::npos) failOffset(name, nul, "binary data (a NUL byte) in a text file");
-}
-
-// ---------------------------------------------------------------------------------------------
-// Numbers, parsed the way std::istream would accept them (the readers use operator>>), but
-// requiring the whole token: istream would stop at the first bad character and leave the rest
-// for the next read, which misaligns every value after it.
-
-enum class Num { Ok, Bad, NonFinite, TooLarge };
-
-Num parseFloat(std::string_view t, float& out) {
-    if (t.size() > 1 && t[0] == '+' && t[1] != '-' && t[1] != '+') t.remove_prefix(1);
-    const char* first = t.data();
-    const char* last = t.data() + t.size();
-    auto [ptr, ec] = std::from_chars(first, last, out, std::chars_format::general);
-    if (ec == std::errc::result_out_of_range) {
-        // Either overflow (istream fails) or underflow to a denormal or zero (istream accepts).
-        double d = 0;
-        auto [dptr, dec] = std::from_chars(first, last, d, std::chars_format::general);
-        if (dptr != last) return Num::Bad;
-        if (dec == std::errc() && std::isfinite(d) && std::fabs(d) <= double(FLT_MAX)) {
-            out = float(d);
-            return Num::Ok;
-        }
-        return Num::TooLarge;
-    }
-    if (ec != std::errc() || ptr != last) return Num::Bad;
-    // from_chars accepts "nan" and "inf", which istream does not, and which are no coordinates.
-    if (!std::isfinite(out)) return Num::NonFinite;
-    return Num::Ok;
-}
-
-bool parseInteger(std::string_view t, int64_t& out) {
-    if (t.size() > 1 && t[0] == '+' && t[1] != '-' && t[1] != '+') t.remove_prefix(1);
-    auto [ptr, ec] = std::from_chars(t.data(), t.data() + t.size(), out);
-    return ec == std::errc() && ptr == t.data() + t.size();
-}
-
-std::string describeBadFloat(Num status, std::string_view token) {
-    switch (status) {
-    case Num::NonFinite: return "NaN or infinite value " + quote(token);
-    case Num::TooLarge: return "value " + quote(token) + " is too large for a float";
-    default: return quote(token) + " is not a number";
-    }
-}
-
-// ---------------------------------------------------------------------------------------------
-// Binary reading
-
-uint64_t readUnsigned(const char* p, int bytes, bool bigEndian) {
-    uint64_t v = 0;
-    for (int i = 0; i < bytes; ++i) {
-        const auto b = static_cast<unsigned char>(p[bigEndian ? i : bytes - 1 - i]);
-        v = (v << 8) | b;
-    }
-    return v;
-}
-
-int64_t readSigned(const char* p, int bytes, bool bigEndian) {
-    const uint64_t u = readUnsigned(p, bytes, bigEndian);
-    const int shift = 64 - 8 * bytes;
-    return static_cast<int64_t>(u << shift) >> shift;
-}
-
-float readFloat32(const char* p, bool bigEndian) {
-    const auto u = static_cast<uint32_t>(readUnsigned(p, 4, bigEndian));
-    float f;
-    std::memcpy(&f, &u, 4);
-    return f;
-}
-
-double readFloat64(const char* p, bool bigEndian) {
-    const uint64_t u = readUnsigned(p, 8, bigEndian);
-    double d;
-    std::memcpy(&d, &u, 8);
-    return d;
-}
-
-// a * b + c, saturating instead of wrapping: header counts are untrusted.
-uint64_t mulAdd(uint64_t a, uint64_t b, uint64_t c) {
-    constexpr uint64_t kMax = std::numeric_limits<uint64_t>::max();
-    if (b != 0 && a > (kMax - c) / b) return kMax;
-    return a * b + c;
-}
+using namespace scan;
 
 // ---------------------------------------------------------------------------------------------
 // OBJ
@@ -585,439 +365,6 @@ Prepass validateStl(std::string& data, const std::string& name) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// PLY
-
-struct PlyType {
-    std::string_view name;
-    int size;
-    bool isFloat;
-    bool isSigned;
-};
-
-// Exactly the type names OpenMesh's PLY reader knows.
-constexpr PlyType kPlyTypes[] = {
-    {"char", 1, false, true},   {"uchar", 1, false, false}, {"int8", 1, false, true},    {"uint8", 1, false, false},
-    {"short", 2, false, true},  {"ushort", 2, false, false}, {"int16", 2, false, true},  {"uint16", 2, false, false},
-    {"int", 4, false, true},    {"uint", 4, false, false},  {"int32", 4, false, true},   {"uint32", 4, false, false},
-    {"float", 4, true, true},   {"float32", 4, true, true}, {"double", 8, true, true},   {"float64", 8, true, true},
-};
-
-const PlyType* findPlyType(std::string_view n) {
-    for (const auto& t : kPlyTypes)
-        if (t.name == n) return &t;
-    return nullptr;
-}
-
-enum class PlyRole {
-    Skip,         // read into a scratch string (ASCII) or skipped by size (binary)
-    Coordinate,   // x, y, z
-    VertexFloat,  // normals and texture coordinates: read as float
-    Color,        // read as float for float/float32, as integer otherwise
-    Integer,      // face texnumber: read as unsigned
-    Indices,      // the face's vertex_indices list
-    DropList,     // any other face list (MeshLab's texcoord): the reader would lose its place
-                  // on it, so it is removed from header and data
-};
-
-struct PlyProperty {
-    std::string name;
-    const PlyType* type = nullptr;
-    const PlyType* countType = nullptr;  // set for lists
-    PlyRole role = PlyRole::Skip;
-};
-
-struct PlyElement {
-    std::string name;
-    uint64_t count = 0;
-    size_t line = 0;
-    std::vector<PlyProperty> props;
-};
-
-struct PlyHeader {
-    enum class Encoding { Ascii, BinaryLe, BinaryBe } encoding = Encoding::Ascii;
-    std::string formatText, versionText;
-    std::vector<PlyElement> elements;
-    size_t dataOffset = 0;  // first byte after the end_header line
-    size_t dataLine = 0;    // line number of the end_header line
-    int vertexElement = -1, faceElement = -1;
-    std::vector<std::string> warnings;  // header lines skipped
-};
-
-// Levenshtein distance, for header keywords (a few letters each).
-size_t editDistance(std::string_view a, std::string_view b) {
-    std::vector<size_t> row(b.size() + 1);
-    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
-    for (size_t i = 1; i <= a.size(); ++i) {
-        size_t diagonal = row[0];
-        row[0] = i;
-        for (size_t j = 1; j <= b.size(); ++j) {
-            const size_t above = row[j];
-            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (lower(a[i - 1]) == lower(b[j - 1]) ? 0 : 1)});
-            diagonal = above;
-        }
-    }
-    return row[b.size()];
-}
-
-// A header line that is no keyword could still be meant as one that lays out the data: a
-// misspelt keyword, or the shape of a property line ("<word> <type> <name>", "<word> list ...")
-// or an element line ("<word> <name> <count>"). Skipping such a line would misread every value
-// after it, so it stays an error; any other line cannot change the layout.
-bool mayChangePlyLayout(const std::vector<std::string_view>& tokens) {
-    const std::string_view key = tokens[0].substr(0, 16);
-    for (const std::string_view keyword : {"format", "element", "property", "end_header"})
-        if (editDistance(key, keyword) <= 2) return true;
-    if (tokens.size() >= 2 && (tokens[1] == "list" || findPlyType(tokens[1]))) return true;
-    int64_t count = 0;
-    return tokens.size() == 3 && parseInteger(tokens[2], count);
-}
-
-bool isColorName(std::string_view n) {
-    return n == "red" || n == "green" || n == "blue" || n == "alpha" || n == "diffuse_red" || n == "diffuse_green" ||
-           n == "diffuse_blue";
-}
-
-PlyHeader parsePlyHeader(std::string& data, const std::string& name) {
-    PlyHeader h;
-    std::vector<std::string_view> tokens;
-    Lines lines(data);
-    if (!lines.next()) fail(name, "file is empty");
-    splitTokens(lines.view(), tokens);
-    if (tokens.size() != 1 || (tokens[0] != "ply" && tokens[0] != "PLY")) failLine(name, 1, "not a PLY file (the first line is not 'ply')");
-
-    bool ended = false;
-    while (!ended && lines.next()) {
-        const size_t line = lines.number();
-        const std::string_view text = lines.view();
-        if (text.find('\0') != std::string_view::npos) failLine(name, line, "binary data inside the PLY header");
-        splitTokens(text, tokens);
-        if (tokens.empty()) continue;
-        const std::string_view key = tokens[0];
-        if (key == "comment" || key == "obj_info") continue;
-        if (key == "end_header") {
-            if (tokens.size() != 1) failLine(name, line, "unexpected text after end_header");
-            if (lines.end() == data.size()) failLine(name, line, "truncated: no data after the PLY header");
-            h.dataOffset = std::min(lines.end() + 1, data.size());
-            h.dataLine = line;
-            ended = true;
-        } else if (key == "format") {
-            if (!h.formatText.empty()) failLine(name, line, "second format line");
-            if (!h.elements.empty()) failLine(name, line, "format line after the first element");
-            if (tokens.size() != 3) failLine(name, line, "expected 'format <encoding> <version>'");
-            if (tokens[1] == "ascii")
-                h.encoding = PlyHeader::Encoding::Ascii;
-            else if (tokens[1] == "binary_little_endian")
-                h.encoding = PlyHeader::Encoding::BinaryLe;
-            else if (tokens[1] == "binary_big_endian")
-                h.encoding = PlyHeader::Encoding::BinaryBe;
-            else
-                failLine(name, line, "unknown PLY format " + quote(tokens[1]));
-            float version;
-            if (parseFloat(tokens[2], version) != Num::Ok) failLine(name, line, "bad PLY version " + quote(tokens[2]));
-            h.formatText = tokens[1];
-            h.versionText = tokens[2];
-        } else if (key == "element") {
-            if (h.formatText.empty()) failLine(name, line, "element before the format line");
-            int64_t count;
-            if (tokens.size() != 3) failLine(name, line, "expected 'element <name> <count>'");
-            if (!parseInteger(tokens[2], count) || count < 0 || count > int64_t(std::numeric_limits<uint32_t>::max()))
-                failLine(name, line, "bad element count " + quote(tokens[2]));
-            PlyElement e;
-            e.name = tokens[1];
-            e.count = uint64_t(count);
-            e.line = line;
-            if (e.name == "vertex") {
-                if (h.vertexElement >= 0) failLine(name, line, "second vertex element");
-                h.vertexElement = int(h.elements.size());
-            } else if (e.name == "face") {
-                if (h.faceElement >= 0) failLine(name, line, "second face element");
-                if (h.vertexElement < 0) failLine(name, line, "face element before the vertex element");
-                h.faceElement = int(h.elements.size());
-            }
-            h.elements.push_back(std::move(e));
-        } else if (key == "property") {
-            if (h.elements.empty()) failLine(name, line, "property before any element");
-            PlyElement& e = h.elements.back();
-            PlyProperty p;
-            if (tokens.size() >= 2 && tokens[1] == "list") {
-                if (tokens.size() != 5) failLine(name, line, "expected 'property list <count type> <entry type> <name>'");
-                // The reader accepts only these count types and gives up on anything else.
-                const std::string_view ct = tokens[2];
-                if (!findPlyType(ct)) failLine(name, line, "unknown list count type " + quote(ct));
-                if (findPlyType(ct)->isFloat) failLine(name, line, "list count type " + quote(ct) + " is not an integer type");
-                if (ct != "uchar" && ct != "uint8" && ct != "uint16" && ct != "int")
-                    failLine(name, line, "unsupported list count type " + quote(ct) + " (use uchar, uint8, uint16 or int)");
-                p.countType = findPlyType(ct);
-                p.type = findPlyType(tokens[3]);
-                if (!p.type) failLine(name, line, "unknown list entry type " + quote(tokens[3]));
-                p.name = tokens[4];
-            } else {
-                if (tokens.size() != 3) failLine(name, line, "expected 'property <type> <name>'");
-                p.type = findPlyType(tokens[1]);
-                if (!p.type) failLine(name, line, "unknown property type " + quote(tokens[1]));
-                p.name = tokens[2];
-                // OpenMesh knows texture coordinates as u/v or s/t only; texture_u/texture_v
-                // (and texture_s/texture_t) are renamed in place, padded with blanks in front so
-                // that every byte after the header keeps its offset.
-                if (e.name == "vertex" && (p.name == "texture_u" || p.name == "texture_v" || p.name == "texture_s" ||
-                                           p.name == "texture_t")) {
-                    const char last = p.name.back();
-                    char* at = data.data() + (tokens[2].data() - data.data());
-                    std::fill(at, at + tokens[2].size() - 1, ' ');
-                    at[tokens[2].size() - 1] = last;
-                    p.name = std::string(1, last);
-                }
-            }
-            // The reader finds the type by looking at both words, so a name that is a type name
-            // could be taken for the type.
-            if (findPlyType(p.name)) failLine(name, line, "property name " + quote(p.name) + " is a type name");
-            for (const auto& other : e.props)
-                if (other.name == p.name) failLine(name, line, "second property " + quote(p.name) + " in element " + quote(e.name));
-            const bool binary = h.encoding != PlyHeader::Encoding::Ascii;
-            const bool isVertex = e.name == "vertex", isFace = e.name == "face";
-            if (p.countType) {
-                if (isFace && (p.name == "vertex_indices" || p.name == "vertex_index")) {
-                    if (!e.props.empty()) failLine(name, line, "vertex_indices must be the first face property");
-                    if (p.type->isFloat) failLine(name, line, "vertex_indices has a floating-point entry type");
-                    p.role = PlyRole::Indices;
-                } else if (isFace) {
-                    p.role = PlyRole::DropList;
-                } else if (h.faceElement < 0) {
-                    // The reader skips one value for such a list, whatever its length, and loses
-                    // its place; elements after the faces are never read.
-                    failLine(name, line, "list property " + quote(p.name) + " in element " + quote(e.name) + " is not supported");
-                }
-            } else if (isVertex && (p.name == "x" || p.name == "y" || p.name == "z")) {
-                p.role = PlyRole::Coordinate;
-            } else if (isVertex && (p.name == "nx" || p.name == "ny" || p.name == "nz" || p.name == "u" || p.name == "v" ||
-                                    p.name == "s" || p.name == "t")) {
-                p.role = PlyRole::VertexFloat;
-            } else if ((isVertex || isFace) && isColorName(p.name) && !(isFace && p.name.substr(0, 8) == "diffuse_")) {
-                p.role = PlyRole::Color;
-            } else if (isFace && p.name == "texnumber") {
-                p.role = PlyRole::Integer;
-            }
-            // Binary values are converted by type; these pairs the reader cannot convert and
-            // would not consume, losing its place in the data.
-            if (binary && (p.role == PlyRole::Coordinate || p.role == PlyRole::VertexFloat) && !p.type->isFloat)
-                failLine(name, line, "vertex property " + quote(p.name) + " must be float or double in binary PLY");
-            if (binary && p.role == PlyRole::Color && p.type->isFloat && p.type->size != 4)
-                failLine(name, line, "colour property " + quote(p.name) + " cannot be double in binary PLY");
-            if (binary && p.role == PlyRole::Integer && p.type->isFloat)
-                failLine(name, line, "property " + quote(p.name) + " must be an integer type");
-            e.props.push_back(std::move(p));
-        } else if (mayChangePlyLayout(tokens)) {
-            failLine(name, line, "unknown PLY header keyword " + quote(key) +
-                                     " (it could be a misspelt format, element or property line, which would change how the data is read)");
-        } else {
-            // Blender 2.4x writes "Created by Blender3D 247 - www.blender.org, source file: ..." as
-            // a bare line; other readers skip such lines, and only format, element and property
-            // lines say how the data is laid out.
-            h.warnings.push_back(name + ":line " + std::to_string(line) + ": ignored a PLY header line that is no PLY keyword: " +
-                                 quote(text.substr(0, 60)));
-        }
-    }
-    if (!ended) fail(name, "truncated PLY header: no end_header line");
-    if (h.formatText.empty()) fail(name, "PLY header has no format line");
-    if (h.vertexElement < 0) fail(name, "PLY header has no vertex element");
-    if (h.faceElement < 0) fail(name, "PLY header has no face element");
-    const PlyElement& vertex = h.elements[size_t(h.vertexElement)];
-    for (const char* axis : {"x", "y", "z"})
-        if (std::none_of(vertex.props.begin(), vertex.props.end(), [&](const PlyProperty& p) { return p.name == axis; }))
-            failLine(name, vertex.line, "vertex element has no " + std::string(axis) + " property");
-    const PlyElement& face = h.elements[size_t(h.faceElement)];
-    if (face.props.empty() || face.props[0].role != PlyRole::Indices) failLine(name, face.line, "face element has no vertex_indices list");
-    return h;
-}
-
-// OpenMesh finds binary data by a fixed offset from the last header token and cannot skip
-// comments or unknown lines reliably there; the validated header is therefore rewritten in a
-// canonical form of exactly the same length, the spare bytes as spaces inside the format line.
-void rewritePlyHeader(std::string& data, const PlyHeader& h, bool dropTrailingElements) {
-    std::string body = h.formatText + " " + h.versionText + "\n";
-    for (size_t ei = 0; ei < h.elements.size(); ++ei) {
-        if (dropTrailingElements && int(ei) > h.faceElement) break;
-        const PlyElement& e = h.elements[ei];
-        body += "element " + e.name + " " + std::to_string(e.count) + "\n";
-        for (const auto& p : e.props) {
-            if (p.role == PlyRole::DropList) continue;
-            if (p.countType)
-                body += "property list " + std::string(p.countType->name) + " " + std::string(p.type->name) + " " + p.name + "\n";
-            else
-                body += "property " + std::string(p.type->name) + " " + p.name + "\n";
-        }
-    }
-    body += "end_header\n";
-    const std::string head = "ply\nformat ";
-    // Never longer than the original: the original has every token at least once and at least
-    // one separator between tokens.
-    const size_t pad = h.dataOffset - head.size() - body.size();
-    const std::string header = head + std::string(pad, ' ') + body;
-    std::memcpy(data.data(), header.data(), header.size());
-}
-
-Prepass validatePlyAscii(std::string& data, const std::string& name, const PlyHeader& h) {
-    Prepass out;
-    rejectNul(data, name, h.dataOffset);
-    const uint64_t nV = h.elements[size_t(h.vertexElement)].count;
-    Tokens tokens(data, h.dataOffset, h.dataLine + 1);
-    std::string_view tok;
-    for (size_t ei = 0; ei <= size_t(h.faceElement); ++ei) {
-        const PlyElement& e = h.elements[ei];
-        const bool isVertex = int(ei) == h.vertexElement;
-        // Each value needs a token and a separator: a cheap bound before walking.
-        if (mulAdd(e.count, 2 * e.props.size(), 0) > data.size() - h.dataOffset + 1)
-            failLine(name, e.line,
-                     "truncated: header declares " + plural(e.count, e.name.c_str()) + " but the whole data section has only " +
-                         plural(data.size() - h.dataOffset, "byte"));
-        for (uint64_t i = 0; i < e.count; ++i) {
-            for (const auto& p : e.props) {
-                auto nextToken = [&] {
-                    if (!tokens.next(tok))
-                        failLine(name, tokens.line(),
-                                 "truncated: file ends in " + e.name + " " + std::to_string(i) + " of " + std::to_string(e.count));
-                };
-                auto where = [&] { return e.name + " " + std::to_string(i) + ": "; };
-                auto blankIfDropped = [&] {
-                    if (p.role == PlyRole::DropList)
-                        std::fill_n(data.begin() + (tok.data() - data.data()), tok.size(), ' ');
-                };
-                nextToken();
-                if (p.countType) {
-                    int64_t n;
-                    if (!parseInteger(tok, n) || n < 0 || n > std::numeric_limits<int32_t>::max())
-                        failLine(name, tokens.line(), where() + "bad list length " + quote(tok));
-                    blankIfDropped();
-                    if (p.role == PlyRole::Indices && n < 3) failLine(name, tokens.line(), where() + "face has fewer than 3 corners");
-                    if (p.role == PlyRole::Indices) out.triangles += size_t(n) - 2;
-                    for (int64_t k = 0; k < n; ++k) {
-                        nextToken();
-                        blankIfDropped();
-                        if (p.role != PlyRole::Indices) continue;
-                        int64_t index;
-                        if (!parseInteger(tok, index)) failLine(name, tokens.line(), where() + "bad vertex index " + quote(tok));
-                        if (index < 0 || uint64_t(index) >= nV)
-                            failLine(name, tokens.line(), where() + "vertex index " + std::to_string(index) +
-                                                              " is out of range (the file has " + plural(nV, "vertex") + ")");
-                    }
-                    continue;
-                }
-                const bool readsFloat = p.role == PlyRole::Coordinate || p.role == PlyRole::VertexFloat ||
-                                        (p.role == PlyRole::Color && p.type->isFloat && p.type->size == 4);
-                const bool readsInt = p.role == PlyRole::Integer || (p.role == PlyRole::Color && !readsFloat);
-                if (readsFloat) {
-                    float value;
-                    const Num status = parseFloat(tok, value);
-                    if (status != Num::Ok)
-                        failLine(name, tokens.line(),
-                                 (isVertex && p.role == PlyRole::Coordinate ? "vertex " + std::to_string(i) + ": "
-                                                                            : where() + p.name + ": ") +
-                                     describeBadFloat(status, tok));
-                } else if (readsInt) {
-                    int64_t value;
-                    if (!parseInteger(tok, value) || value < std::numeric_limits<int32_t>::min() ||
-                        value > std::numeric_limits<int32_t>::max())
-                        failLine(name, tokens.line(), where() + p.name + ": " + quote(tok) + " is not an integer");
-                }
-            }
-        }
-    }
-    out.vertices = nV;
-    return out;
-}
-
-Prepass validatePlyBinary(std::string& data, const std::string& name, const PlyHeader& h, bool& compacted) {
-    Prepass out;
-    const bool be = h.encoding == PlyHeader::Encoding::BinaryBe;
-    const uint64_t nV = h.elements[size_t(h.vertexElement)].count;
-
-    // Smallest data the header allows: every scalar, every list length, three corners a face.
-    uint64_t need = 0;
-    for (const auto& e : h.elements) {
-        uint64_t record = 0;
-        for (const auto& p : e.props)
-            record += p.countType ? uint64_t(p.countType->size) + (p.role == PlyRole::Indices ? 3u * uint64_t(p.type->size) : 0u)
-                                  : uint64_t(p.type->size);
-        need = mulAdd(e.count, record, need);
-    }
-    const uint64_t have = data.size() - h.dataOffset;
-    if (need > have)
-        failOffset(name, h.dataOffset,
-                   "truncated: the header's element counts need at least " + std::to_string(need) + " bytes of data but only " +
-                       std::to_string(have) + " follow");
-
-    size_t pos = h.dataOffset;
-    // Face lists the reader cannot skip are squeezed out as the walk goes: every kept value
-    // moves to `kept`, which never passes `pos`, so nothing is overwritten before it is read.
-    size_t kept = pos;
-    auto take = [&](size_t bytes, const PlyElement& e, uint64_t i) {
-        if (data.size() - pos < bytes)
-            failOffset(name, pos, "truncated: file ends in " + e.name + " " + std::to_string(i) + " of " + std::to_string(e.count));
-        const char* p = data.data() + pos;
-        pos += bytes;
-        return p;
-    };
-    for (size_t ei = 0; ei <= size_t(h.faceElement); ++ei) {
-        const PlyElement& e = h.elements[ei];
-        for (uint64_t i = 0; i < e.count; ++i) {
-            for (const auto& p : e.props) {
-                const size_t at = pos;
-                if (p.countType) {
-                    const char* c = take(size_t(p.countType->size), e, i);
-                    const int64_t n = p.countType->isSigned ? readSigned(c, p.countType->size, be)
-                                                            : int64_t(readUnsigned(c, p.countType->size, be));
-                    if (n < 0) failOffset(name, at, e.name + " " + std::to_string(i) + ": negative list length " + std::to_string(n));
-                    if (p.role == PlyRole::Indices && n < 3)
-                        failOffset(name, at, e.name + " " + std::to_string(i) + ": face has fewer than 3 corners");
-                    if (uint64_t(n) * uint64_t(p.type->size) > data.size() - pos)
-                        failOffset(name, at, "truncated: " + e.name + " " + std::to_string(i) + " lists " + std::to_string(n) +
-                                                 " values but the file ends first");
-                    if (p.role == PlyRole::Indices) {
-                        out.triangles += size_t(n) - 2;
-                        for (int64_t k = 0; k < n; ++k) {
-                            const size_t indexAt = pos;
-                            const char* v = take(size_t(p.type->size), e, i);
-                            const int64_t index = p.type->isSigned ? readSigned(v, p.type->size, be)
-                                                                   : int64_t(readUnsigned(v, p.type->size, be));
-                            if (index < 0 || uint64_t(index) >= nV)
-                                failOffset(name, indexAt, "face " + std::to_string(i) + ": vertex index " + std::to_string(index) +
-                                                              " is out of range (the file has " + plural(nV, "vertex") + ")");
-                        }
-                    } else {
-                        pos += size_t(n) * size_t(p.type->size);
-                    }
-                } else {
-                    const char* v = take(size_t(p.type->size), e, i);
-                    if (p.role == PlyRole::Coordinate) {
-                        const double value = p.type->size == 4 ? readFloat32(v, be) : readFloat64(v, be);
-                        if (!std::isfinite(value) || std::fabs(value) > double(FLT_MAX))
-                            failOffset(name, at, "vertex " + std::to_string(i) + " has a NaN or infinite coordinate");
-                    }
-                }
-                if (p.role == PlyRole::DropList) continue;
-                if (kept != at) std::memmove(data.data() + kept, data.data() + at, pos - at);
-                kept += pos - at;
-            }
-        }
-    }
-    // The reader stops after the faces; with lists removed, what follows would be misplaced.
-    compacted = kept != pos;
-    if (compacted) data.resize(kept);
-    out.vertices = nV;
-    return out;
-}
-
-Prepass validatePly(std::string& data, const std::string& name) {
-    const PlyHeader h = parsePlyHeader(data, name);
-    bool compacted = false;
-    Prepass out = h.encoding == PlyHeader::Encoding::Ascii ? validatePlyAscii(data, name, h)
-                                                           : validatePlyBinary(data, name, h, compacted);
-    rewritePlyHeader(data, h, compacted);
-    out.warnings = h.warnings;
-    return out;
-}
-
-// ---------------------------------------------------------------------------------------------
 // OM (OpenMesh's own binary format)
 
 // Layout of OMFormat::Chunk::Header, a little-endian uint16.
@@ -1032,6 +379,44 @@ enum OmEntity { kOmVertex = 0, kOmMesh = 1, kOmFace = 2, kOmEdge = 4, kOmHalfedg
 enum OmType { kOmPos = 0, kOmNormal = 1, kOmTexcoord = 2, kOmStatus = 3, kOmColor = 4, kOmCustom = 6, kOmTopology = 7 };
 constexpr unsigned kOmNewestVersion = (2 << 5) | 2;  // 2.2, what OpenMesh 9 writes and reads
 constexpr unsigned kOmHalfedgeVersion = (2 << 5) | 0;
+
+// The vertex positions of an OM chunk at `pos` (float or double by `bits`): finite and within
+// float range.
+void checkOmPositions(const std::string& data, const std::string& name, size_t pos, uint64_t nV, unsigned bits) {
+    for (uint64_t v = 0; v < nV; ++v) {
+        for (int k = 0; k < 3; ++k) {
+            const size_t offset = pos + size_t(v * (bits == 0 ? 12 : 24)) + size_t(k * (bits == 0 ? 4 : 8));
+            const double value = bits == 0 ? readFloat32(data.data() + offset, false) : readFloat64(data.data() + offset, false);
+            if (!std::isfinite(value) || std::fabs(value) > double(FLT_MAX))
+                failOffset(name, offset, "vertex " + std::to_string(v) + " has a NaN or infinite coordinate");
+        }
+    }
+}
+
+// The face chunk of an OM file before 2.0, at `pos`; returns its size in bytes.
+uint64_t omLegacyFaces(const std::string& data, const std::string& name, size_t pos, uint64_t nF, uint64_t nV, char meshType,
+                       uint64_t intSize, Prepass& out) {
+        // Before 2.0 faces list their vertex indices: 3 or 4 each, or a uint16 count each.
+        size_t p = pos;
+        for (uint64_t f = 0; f < nF; ++f) {
+            uint64_t corners = meshType == 'T' ? 3 : 4;
+            if (meshType == 'P') {
+                if (data.size() - p < 2) failOffset(name, p, "truncated: file ends in face " + std::to_string(f));
+                corners = readUnsigned(data.data() + p, 2, false);
+                p += 2;
+            }
+            if (corners < 3) failOffset(name, p, "face " + std::to_string(f) + " has fewer than 3 corners");
+            if (corners * intSize > data.size() - p) failOffset(name, p, "truncated: file ends in face " + std::to_string(f));
+            for (uint64_t k = 0; k < corners; ++k, p += size_t(intSize)) {
+                const uint64_t index = readUnsigned(data.data() + p, int(intSize), false);
+                if (index >= nV)
+                    failOffset(name, p, "face " + std::to_string(f) + ": vertex index " + std::to_string(index) +
+                                            " is out of range (the file has " + plural(nV, "vertex") + ")");
+            }
+            out.triangles += size_t(corners) - 2;
+        }
+        return p - pos;
+}
 
 Prepass validateOm(std::string& data, const std::string& name) {
     Prepass out;
@@ -1108,14 +493,7 @@ Prepass validateOm(std::string& data, const std::string& name) {
         } else if (c.entity == kOmVertex && c.type == kOmPos) {
             bytes = floatVectors("position");
             out.vertices = size_t(nV);  // only now known to be backed by data
-            for (uint64_t v = 0; v < nV; ++v) {
-                for (int k = 0; k < 3; ++k) {
-                    const size_t offset = pos + size_t(v * (c.bits == 0 ? 12 : 24)) + size_t(k * (c.bits == 0 ? 4 : 8));
-                    const double value = c.bits == 0 ? readFloat32(data.data() + offset, false) : readFloat64(data.data() + offset, false);
-                    if (!std::isfinite(value) || std::fabs(value) > double(FLT_MAX))
-                        failOffset(name, offset, "vertex " + std::to_string(v) + " has a NaN or infinite coordinate");
-                }
-            }
+            checkOmPositions(data, name, pos, nV, c.bits);
         } else if ((c.entity == kOmVertex || c.entity == kOmFace) && c.type == kOmNormal) {
             bytes = floatVectors("normal");
         } else if ((c.entity == kOmVertex || c.entity == kOmHalfedge) && c.type == kOmTexcoord) {
@@ -1136,26 +514,7 @@ Prepass validateOm(std::string& data, const std::string& name) {
                 need(at, bytes, "face topology");
                 out.triangles += size_t(nF);
             } else {
-                // Before 2.0 faces list their vertex indices: 3 or 4 each, or a uint16 count each.
-                size_t p = pos;
-                for (uint64_t f = 0; f < nF; ++f) {
-                    uint64_t corners = meshType == 'T' ? 3 : 4;
-                    if (meshType == 'P') {
-                        if (data.size() - p < 2) failOffset(name, p, "truncated: file ends in face " + std::to_string(f));
-                        corners = readUnsigned(data.data() + p, 2, false);
-                        p += 2;
-                    }
-                    if (corners < 3) failOffset(name, p, "face " + std::to_string(f) + " has fewer than 3 corners");
-                    if (corners * intSize > data.size() - p) failOffset(name, p, "truncated: file ends in face " + std::to_string(f));
-                    for (uint64_t k = 0; k < corners; ++k, p += size_t(intSize)) {
-                        const uint64_t index = readUnsigned(data.data() + p, int(intSize), false);
-                        if (index >= nV)
-                            failOffset(name, p, "face " + std::to_string(f) + ": vertex index " + std::to_string(index) +
-                                                    " is out of range (the file has " + plural(nV, "vertex") + ")");
-                    }
-                    out.triangles += size_t(corners) - 2;
-                }
-                bytes = p - pos;
+                bytes = omLegacyFaces(data, name, pos, nF, nV, meshType, intSize, out);
             }
         } else {
             failOffset(name, at, "unsupported OM chunk (entity " + std::to_string(c.entity) + ", type " + std::to_string(c.type) + ")");

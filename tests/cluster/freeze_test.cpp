@@ -310,7 +310,7 @@ TEST(Issue16, ARefusedKeyIsSaidOnBothSides) {
     EXPECT_GE(master.counters().failedHandshakes, 1u);
 }
 
-// Item 7: `rtwall keys keys/master` where keys/ does not exist, as the README shows it.
+// Item 7: `rtwall keys keys/master` where keys/ does not exist, as docs/security.md shows it.
 TEST(Issue16, KeysMakesItsDirectory) {
     const auto dir = test::scratchDir();
     const auto stem = dir / "new" / "keys" / "master";

@@ -106,7 +106,7 @@ TEST(WallCli, RunWithoutADisplayWritesWhatEachProjectorGets) {
 TEST(WallCli, TheStereoWallWritesDifferentEyes) {
     const auto dir = test::displayScratchDir();
     const Result r = run("run --wall " + (test::sourceDir() / "configs/wall/stereo-passive.toml").string() +
-                         " --headless --frames 1 --write-every 1 --out " + dir.string());
+                         " --headless --frames 1 --write-every 1 --target-fps 0 --out " + dir.string());
     ASSERT_EQ(r.status, 0) << r.output;
     // Both eyes are one rendered frame (one scheduler pass); each eye has its own file.
     std::filesystem::path leftFile, rightFile;

@@ -1,4 +1,5 @@
 #include "display_test_util.h"
+#include "wall_config_keys.h"
 
 namespace rtwall {
 namespace {
@@ -26,6 +27,14 @@ TEST(WallConfig, EveryShippedConfigLoadsWritesAndReloads) {
         EXPECT_EQ(writeWallConfig(b), text);
         EXPECT_TRUE(checkWall(file).empty());
     }
+}
+
+// Mitsuba's rule, every key read: the parser reads only keys of its tables, and every key of the
+// tables is documented, with the tables' help, in configs/README.md.
+TEST(WallConfig, EveryKeyOfTheTablesIsDocumented) {
+    const std::vector<std::string> missing =
+        toml_reader::undocumentedKeys(wall_keys::kAll, test::sourceDir() / "configs/README.md");
+    EXPECT_TRUE(missing.empty()) << ::testing::PrintToString(missing);
 }
 
 TEST(WallConfig, TheReferenceWallIsTwoByTwoProjectors) {

@@ -122,13 +122,28 @@ TEST(Controls, TheJsonTheSweepReadsHasEveryControl) {
     }
 }
 
-TEST(RunConfig, TheEmbeddedDefaultIsTheKnotDemo) {
+// The README's first command runs the knot demo on the reference wall, the shipped 2x2 projector
+// config built into the binary, holding an interactive frame rate.
+TEST(RunConfig, TheEmbeddedDefaultIsTheKnotDemoOnTheReferenceWall) {
     const RunConfig c = defaultRunConfig();
     EXPECT_EQ(c.scene, "builtin:knots");
-    EXPECT_EQ(c.width, 800);
+    EXPECT_EQ(c.width, 0);  // the wall sets the size
     EXPECT_EQ(c.cluster.localClients, 2);
     EXPECT_EQ(c.frames, 60);
     EXPECT_EQ(c.writeEvery, 30);
+    EXPECT_EQ(c.targetFps, kDefaultTargetFps);
+    ASSERT_TRUE(c.loadedWall);
+    EXPECT_TRUE(c.hasWall());
+    EXPECT_EQ(c.wall, "configs/wall/projectors-2x2.toml");
+    EXPECT_EQ(c.loadedWall->width, 1600);
+    EXPECT_EQ(c.loadedWall->height, 1200);
+    EXPECT_EQ(c.loadedWall->screens.size(), 4u);
+    EXPECT_EQ(c.loadedWall->writeEvery, c.writeEvery);  // projector images with the demo's frames, not every frame
+    // Built from the shipped file: equal to it but for how often the headless wall writes.
+    WallConfig shipped = loadWallConfig(test::sourceDir() / "configs/wall/projectors-2x2.toml");
+    shipped.writeEvery = c.writeEvery;
+    EXPECT_TRUE(*c.loadedWall == shipped);
+    EXPECT_TRUE(checkWall(*c.loadedWall).empty());
 }
 
 TEST(RunConfig, PathsAreRelativeToTheFileAndTyposAreErrorsWithTheirLine) {

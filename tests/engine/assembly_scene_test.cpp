@@ -3,9 +3,8 @@
 // instances under the [[instance]]'s transform, its part names and materials kept, the
 // tessellation from [import] or the [[mesh]]; bad files and keys are one-line errors. And the
 // shipped demo scene (configs/demos/step_assembly.toml) loads and renders.
+#include "step_assembly.h"
 #include "test_util.h"
-
-#include "generators.h"
 
 #include <rtwall/engine.h>
 
@@ -23,19 +22,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// 21 part instances (3 modules of 7) of 3 parts, written once per process.
-const fs::path& stepFile() {
-    static const fs::path file = [] {
-        const fs::path d = fs::path(RTWALL_BINARY_DIR) / "test-scratch" / ("assembly-scene-" + std::to_string(::getpid()));
-        fs::remove_all(d);
-        gen::GenOptions o;
-        o.out = d;
-        o.instances = 21;
-        gen::genStep(o);
-        return d / "assembly.step";
-    }();
-    return file;
-}
+const fs::path& stepFile() { return test::stepAssembly(); }  // 21 part instances (3 modules of 7) of 3 parts
+
+// A floor mesh and one instance of the assembly, which the tests below add to.
+const std::string kFloorAndPlant = "\n[[mesh]]\nname = \"floor\"\nshape = \"quad\"\n[[instance]]\nmesh = \"plant\"";
 
 std::string sceneWith(const std::string& rest) {
     return "[[mesh]]\nname = \"plant\"\nfile = \"" + stepFile().string() + "\"\n" + rest;
@@ -43,12 +33,7 @@ std::string sceneWith(const std::string& rest) {
 
 TEST(AssemblyScene, StepAssemblyPlacedByInstancesWithItsPartsAndMaterials) {
     const auto dir = test::scratchDir();
-    const SceneDesc s = loadSceneFile(test::writeFile(dir / "s.toml", sceneWith(R"(
-[[mesh]]
-name = "floor"
-shape = "quad"
-[[instance]]
-mesh = "plant"
+    const SceneDesc s = loadSceneFile(test::writeFile(dir / "s.toml", sceneWith(kFloorAndPlant + R"(
 [[instance]]
 mesh = "plant"
 translate = [1000, 0, 0]
@@ -186,12 +171,7 @@ TEST(AssemblyScene, BadFilesAndKeysAreOneLineErrors) {
 
 TEST(AssemblyScene, PartsTableHidesIsolatesAndHighlights) {
     const auto dir = test::scratchDir();
-    const SceneDesc s = loadSceneFile(test::writeFile(dir / "s.toml", sceneWith(R"(
-[[mesh]]
-name = "floor"
-shape = "quad"
-[[instance]]
-mesh = "plant"
+    const SceneDesc s = loadSceneFile(test::writeFile(dir / "s.toml", sceneWith(kFloorAndPlant + R"(
 [[instance]]
 mesh = "floor"
 [parts]
@@ -214,10 +194,7 @@ TEST(AssemblyScene, ShippedDemoSceneLoadsAndRenders) {
     const auto dir = test::scratchDir();
     fs::create_directories(dir / "configs" / "demos");
     fs::copy_file(test::sourceDir() / "configs" / "demos" / "step_assembly.toml", dir / "configs" / "demos" / "step_assembly.toml");
-    gen::GenOptions o;
-    o.out = dir / "out" / "step-assembly";
-    o.instances = 700;  // what bootstrap.sh asks for
-    gen::genStep(o);
+    gen::genStep({.out = dir / "out" / "step-assembly", .instances = 700});  // what bootstrap.sh asks for
     SceneDesc s = loadSceneFile(dir / "configs" / "demos" / "step_assembly.toml");
     EXPECT_EQ(s.instances.size(), 701u);
     EXPECT_EQ(s.meshes.size(), 4u);

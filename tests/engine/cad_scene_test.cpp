@@ -7,6 +7,7 @@
 #include <rtwall/vec.h>
 
 #include "scene_impl.h"
+#include "test_util.h"
 
 #include "generators.h"
 
@@ -39,53 +40,14 @@ fs::path writeScene(const fs::path& dir, const std::string& text) {
 }
 
 std::string loadError(const fs::path& file) {
-    try {
-        loadSceneFile(file);
-    } catch (const InputError& e) {
-        return e.what();
-    }
-    return "(no InputError)";
+    return test::inputErrorOf([&] { loadSceneFile(file); });
 }
 
 // ------------------------------------------------------------------------------------ groups
 
 TEST(SceneGroups, GroupsOfGroupsAreFlattenedWithComposedTransforms) {
     const fs::path dir = scratch("groups");
-    const fs::path file = writeScene(dir, R"(
-[[mesh]]
-name = "box"
-shape = "box"
-[[material]]
-name = "red"
-color = [1, 0, 0]
-[[material]]
-name = "blue"
-color = [0, 0, 1]
-[[group]]
-name = "pair"
-[[group.instance]]
-mesh = "box"
-translate = [1, 0, 0]
-[[group.instance]]
-mesh = "box"
-material = "blue"
-translate = [-1, 0, 0]
-[[group]]
-name = "row"
-[[group.instance]]
-group = "pair"
-translate = [0, 10, 0]
-[[group.instance]]
-group = "pair"
-scale = 2
-translate = [0, 20, 0]
-[[instance]]
-group = "row"
-material = "red"
-translate = [100, 0, 0]
-[[instance]]
-mesh = "box"
-)");
+    const fs::path file = writeScene(dir, test::sceneText("groups"));
     const SceneDesc s = loadSceneFile(file);
     ASSERT_EQ(s.instances.size(), 5u);
     EXPECT_EQ(s.origin, (std::array<double, 3>{0, 0, 0}));
@@ -318,11 +280,7 @@ Image renderScene(const SceneDesc& s, int w, int h) {
 // Rendered from the mesh files and again from the caches: the same bytes.
 TEST(GeneratedScenes, PowerplantRendersIdenticallyFromSourcesAndCache) {
     const fs::path dir = scratch("powerplant");
-    gen::GenOptions o;
-    o.out = dir;
-    o.triangles = 60000;
-    o.copies = 2;
-    gen::genPowerplant(o);
+    gen::genPowerplant({.out = dir, .triangles = 60000, .copies = 2});
     std::set<std::string> exts;
     for (const auto& e : fs::directory_iterator(dir / "meshes")) exts.insert(e.path().extension().string());
     for (const char* ext : {".vtp", ".vtk", ".vtu", ".ply", ".obj"}) EXPECT_TRUE(exts.count(ext)) << ext;
@@ -377,13 +335,7 @@ TEST(GeneratedScenes, PowerplantRendersIdenticallyFromSourcesAndCache) {
 
 TEST(GeneratedScenes, SunflowerFieldInstancesEveryPlantFromSharedMeshes) {
     const fs::path dir = scratch("sunflowers");
-    gen::GenOptions o;
-    o.out = dir;
-    o.instances = 150;
-    o.triangles = 2000;
-    o.trees = 1;
-    o.treeTriangles = 5000;
-    gen::genSunflowers(o);
+    gen::genSunflowers({.out = dir, .triangles = 2000, .instances = 150, .trees = 1, .treeTriangles = 5000});
     const SceneDesc s = loadSceneFile(dir / "scene.toml");
     // Patches hold 70 plants, so 150 plants make 3 patches = 210 plants; 4 meshes each, plus the
     // ground and the tree.
@@ -420,10 +372,7 @@ namespace {
 // Loading reports progress and stops when asked (Ctrl-C in the command line).
 TEST(SceneLoad, ProgressIsReportedAndCanCancel) {
     const fs::path dir = scratch("load_cancel");
-    gen::GenOptions o;
-    o.out = dir;
-    o.triangles = 5000;
-    gen::genPowerplant(o);
+    gen::genPowerplant({.out = dir, .triangles = 5000});
     std::vector<double> seen;
     SceneLoadOptions lo;
     lo.cache = false;

@@ -68,10 +68,7 @@ TEST(CameraWindow, OffCentreEyeGivesHandComputedAsymmetricFrustum) {
 }
 
 TEST(CameraWindow, SymmetricWindowMatchesOrdinaryCamera) {
-    SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    desc.settings.width = 160;
-    desc.settings.height = 120;
-    desc.settings.supersample = 1;
+    SceneDesc desc = test::demoScene(160, 120, 1);
     const Scene scene(desc);
     const CameraDesc plain = desc.cameras.front();
     const CameraDesc windowed = asWindow(plain, desc.settings.width, desc.settings.height);

@@ -55,28 +55,7 @@ TEST(CliCad, InfoOnVrml) {
 // scene camera does. Read as rebased coordinates it would look 1e6 units away, at nothing.
 TEST(CliCad, CameraPathIsInWorldCoordinates) {
     const auto dir = test::scratchDir();
-    test::writeFile(dir / "far.toml", R"([image]
-width = 96
-height = 72
-[render]
-ambient = [0.1, 0.1, 0.1]
-[[mesh]]
-name = "ball"
-shape = "sphere"
-rings = 16
-segments = 32
-[[instance]]
-mesh = "ball"
-translate = [1000000.5, -200000.25, 300000.125]
-[[light]]
-position = [1000002.5, -199994, 300003]
-intensity = 60
-[[camera]]
-name = "main"
-position = [1000001.75, -199997.25, 300007.5]
-look_at = [1000000.5, -200000.25, 300000.125]
-fov = 40
-)");
+    test::writeFile(dir / "far.toml", test::sceneText("far_ball"));
     auto config = [&](const std::string& name) {
         return test::writeFile(dir / (name + ".toml"), "scene = \"far.toml\"\ncamera = \"main\"\n[cluster]\nclients = 1\nasync = false\n"
                                                        "[run]\nframes = 1\nwrite_every = 1\norbit = 0\nout = \"" + (dir / name).string() + "\"\n");

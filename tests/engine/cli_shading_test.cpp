@@ -79,45 +79,7 @@ TEST(CliShading, HeadlightAtTheDefaultThresholdWithin40DbOfUnpruned) {
 // quantisation; and bit for bit Accumulator::addLinear's mean of those frames, on both paths.
 TEST(CliShading, FramesAverageInLinearLightOnOneMachineAndTheCluster) {
     const auto dir = test::scratchDir();
-    std::string walls;
-    const char* placements[] = {
-        "scale = [2, 1, 2]",
-        "scale = [2, 1, 2]\nrotate = [180, 0, 0]\ntranslate = [0, 3, 0]",
-        "scale = [2, 1, 1.5]\nrotate = [90, 0, 0]\ntranslate = [0, 1.5, -2]",
-        "scale = [2, 1, 1.5]\nrotate = [-90, 0, 0]\ntranslate = [0, 1.5, 2]",
-        "scale = [1.5, 1, 2]\nrotate = [0, 0, -90]\ntranslate = [-2, 1.5, 0]",
-        "scale = [1.5, 1, 2]\nrotate = [0, 0, 90]\ntranslate = [2, 1.5, 0]",
-    };
-    for (const char* p : placements) walls += std::string("[[instance]]\nmesh = \"quad\"\nmaterial = \"white\"\n") + p + "\n\n";
-    const auto file = test::writeFile(dir / "room.toml", R"([image]
-width = 48
-height = 36
-tile = 16
-[render]
-gi = true
-max_depth = 6
-background = [0, 0, 0]
-[[mesh]]
-name = "quad"
-shape = "quad"
-[[material]]
-name = "white"
-color = [0.7, 0.7, 0.7]
-[[material]]
-name = "lamp"
-type = "emissive"
-emission = [20, 20, 20]
-)" + walls + R"([[instance]]
-mesh = "quad"
-material = "lamp"
-scale = [0.3, 1, 0.3]
-rotate = [180, 0, 0]
-translate = [0, 2.99, 0]
-[[camera]]
-position = [1.5, 1.5, 1.8]
-look_at = [-0.5, 0.5, -1.0]
-fov = 60
-)");
+    const auto file = test::writeFile(dir / "room.toml", test::sceneText("gi_room"));
     const int frames = 8;
     Result r = run("render " + file.string() + " --frames " + std::to_string(frames) + " --out " + (dir / "one.png").string());
     ASSERT_EQ(r.status, 0) << r.output;

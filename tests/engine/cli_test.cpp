@@ -104,11 +104,18 @@ TEST(Cli, RenderThroughLocalClientsGivesTheSameBytes) {
     EXPECT_EQ(readPng(dir / "one.png").rgb, readPng(dir / "two.png").rgb);
 }
 
+// The embedded default drives the reference wall (1600x1200, 2x2 projectors): headless here, it
+// writes the frame and each projector's image. (Its operating point calibrates for about half a
+// minute first, so this run turns it off: the demo itself, .ci/run, runs it.)
 TEST(Cli, RunWithTheEmbeddedDefaultAndWithAConfig) {
     const auto dir = test::scratchDir();
-    const Result a = run("run --frames 3 --write-every 3 --out " + dir.string());
+    const Result a = run("run --headless --frames 3 --write-every 3 --target-fps 0 --out " + dir.string());
     ASSERT_EQ(a.status, 0) << a.output;
-    EXPECT_TRUE(std::filesystem::exists(dir / "frame_000003.png")) << a.output;
+    EXPECT_NE(a.output.find("1600x1200"), std::string::npos) << a.output;
+    EXPECT_EQ(readPng(dir / "frame_000003.png").width, 1600) << a.output;
+    for (const char* screen : {"c0r0", "c1r0", "c0r1", "c1r1"})
+        EXPECT_EQ(readPng(dir / ("frame_000003_" + std::string(screen) + ".png")).width, 800) << screen << "\n" << a.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "frame_000001_c0r0.png")) << "projector images every 3rd frame, with the frames";
     EXPECT_NE(a.output.find("median"), std::string::npos) << a.output;
     const Result b = run("run " + (test::sourceDir() / "configs/run/demo.toml").string() + " --frames 2 --write-every 0");
     EXPECT_EQ(b.status, 0) << b.output;

@@ -12,10 +12,7 @@ namespace {
 class Determinism : public ::testing::Test {
 protected:
     static void SetUpTestSuite() {
-        desc_ = new SceneDesc(loadSceneFile(test::sourceDir() / "configs/demo.toml"));
-        desc_->settings.width = 160;
-        desc_->settings.height = 120;
-        desc_->settings.supersample = 1;
+        desc_ = new SceneDesc(test::demoScene(160, 120, 1));
         scene_ = new Scene(*desc_);
     }
     static void TearDownTestSuite() {

@@ -24,8 +24,7 @@ namespace fs = std::filesystem;
 // tests of this program in parallel processes).
 const fs::path& generated() {
     static const fs::path dir = [] {
-        const fs::path d = fs::path(RTWALL_BINARY_DIR) / "test-scratch" / ("gltf-generated-" + std::to_string(::getpid()));
-        fs::remove_all(d);
+        const fs::path d = test::processScratchDir("gltf-generated");
         const std::string cmd = "python3 " + (test::sourceDir() / "tools" / "gltf_testgen.py").string() + " --malformed --out " + d.string();
         EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
         return d;
@@ -139,7 +138,7 @@ TEST(Gltf, VertexColoursTextureAndMaterials) {
     ASSERT_GT(png.size(), 8u);
     EXPECT_EQ(png[1], 'P');  // the encoded PNG, decoded by the engine
 
-    // The mapping onto rtwall's materials (README.md).
+    // The mapping onto rtwall's materials (docs/assemblies.md, "Materials").
     const SceneDesc d = sceneFromMeshFile(generated() / "embedded.gltf");
     auto material = [&](const std::string& name) {
         for (const Material& m : d.materials)

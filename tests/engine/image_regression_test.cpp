@@ -62,18 +62,13 @@ void checkAgainstReference(const std::string& name, const Image& img) {
 }
 
 TEST(ImageRegression, DemoScene) {
-    SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    desc.settings.width = 200;
-    desc.settings.height = 150;
+    SceneDesc desc = test::demoScene(200, 150);
     const Scene scene(desc);
     checkAgainstReference("demo_200x150", renderFrame(scene, Camera(desc.cameras.front(), 200, 150), desc.settings));
 }
 
 TEST(ImageRegression, DemoSceneTopCamera) {
-    SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    desc.settings.width = 120;
-    desc.settings.height = 90;
-    desc.settings.supersample = 1;
+    SceneDesc desc = test::demoScene(120, 90, 1);
     const Scene scene(desc);
     checkAgainstReference("demo_top_120x90",
                           renderFrame(scene, Camera(*desc.findCamera("top"), 120, 90), desc.settings));

@@ -175,14 +175,8 @@ TEST(GlobalIllumination, EmittingFurnaceWithAnAreaLightOnItsCeilingStaysUniform)
         wall(Transform::translate(-1, 0, 0) * Transform::rotateDegrees(0, 0, 1, -90));    // left, facing +x
         wall(Transform::translate(1, 0, 0) * Transform::rotateDegrees(0, 0, 1, 90));      // right, facing -x
         if (light) s.lights = {downLight(-1, 1, -1, 2, 2, le)};
-        CameraDesc cam;
-        cam.position = {0.3f, -0.2f, 0.8f};
-        cam.lookAt = {-0.4f, 0.3f, -1.0f};
-        cam.fovY = 100.0f;
-        s.cameras = {cam};
-        s.settings.width = 12;
-        s.settings.height = 9;
-        s.settings.tileSize = 12;
+        s.cameras = {test::cameraAt({0.3f, -0.2f, 0.8f}, {-0.4f, 0.3f, -1.0f}, 100.0f)};
+        test::setImage(s.settings, 12, 9, 12);
         s.settings.gi = true;
         s.settings.samples = 8;
         s.settings.maxDepth = 40;  // a^39 of the radiance left out: 1.8e-12
@@ -207,12 +201,7 @@ TEST(GlobalIllumination, EmittingFurnaceWithAnAreaLightOnItsCeilingStaysUniform)
             }
         }
         const double expected = le / (1.0 - a);
-        const double alpha = 0.01, perTest = 1.0 - std::pow(1.0 - alpha, 1.0 / double(n));
-        double lo = 0, hi = 10;
-        for (int i = 0; i < 100; ++i) {
-            const double mid = 0.5 * (lo + hi);
-            (std::erfc(mid / std::sqrt(2.0)) > perTest ? lo : hi) = mid;
-        }
+        const double threshold = test::sidakThreshold(0.01, n);
         int failures = 0;
         double total = 0, worstZ = 0;
         for (size_t i = 0; i < n; ++i) {
@@ -222,11 +211,11 @@ TEST(GlobalIllumination, EmittingFurnaceWithAnAreaLightOnItsCeilingStaysUniform)
             // rounding (a floor of 1e-5 of the value).
             const double z = std::fabs(mean - expected) / std::sqrt(var + 1e-10 * expected * expected);
             worstZ = std::max(worstZ, z);
-            failures += z > lo;
+            failures += z > threshold;
             total += mean;
         }
         std::printf("emitting furnace%s: mean %.5f (expected %.5f), worst |z| %.2f, threshold %.2f, %d failures\n",
-                    light ? " with an area light on the ceiling" : "", total / double(n), expected, worstZ, lo, failures);
+                    light ? " with an area light on the ceiling" : "", total / double(n), expected, worstZ, threshold, failures);
         EXPECT_EQ(failures, 0) << (light ? "with" : "without") << " the area light";
         EXPECT_NEAR(total / double(n), expected, 0.005 * expected);
     }
@@ -278,14 +267,8 @@ TEST(GlobalIllumination, EmitterOnAnAreaLightCountsTheLightOnce) {
             place(0, v == LightOnly ? 5 : 4, downQuad(0, y, 0, 0.4, 0.4));
         }
         if (v != FaceOnly) s.lights = {downLight(-0.4f, 1.99f, -0.4f, 0.8f, 0.8f, radiance)};
-        CameraDesc cam;
-        cam.position = {1.2f, 1.1f, 1.9f};
-        cam.lookAt = {-0.3f, 0.4f, -0.8f};
-        cam.fovY = 60.0f;
-        s.cameras = {cam};
-        s.settings.width = 40;
-        s.settings.height = 30;
-        s.settings.tileSize = 16;
+        s.cameras = {test::cameraAt({1.2f, 1.1f, 1.9f}, {-0.3f, 0.4f, -0.8f}, 60.0f)};
+        test::setImage(s.settings, 40, 30, 16);
         s.settings.gi = gi;
         s.settings.samples = 4;
         // Deep enough that the last vertex's light sample (one segment more than a bounce can
@@ -406,12 +389,7 @@ TEST(Emission, PanelUnderACeilingLightsItOnlyWhenTwoSided) {
             s.lights = {l};
         }
         // In the gap, looking up at the ceiling right above the panel's centre.
-        CameraDesc cam;
-        cam.position = {0, float(h / 2), 0};
-        cam.lookAt = {0, 1, 0};
-        cam.up = {0, 0, 1};
-        cam.fovY = 20.0f;
-        s.cameras = {cam};
+        s.cameras = {test::cameraAt({0, float(h / 2), 0}, {0, 1, 0}, 20.0f, {0, 0, 1})};
         s.settings.width = s.settings.height = 8;
         s.settings.tileSize = 8;
         s.settings.gi = gi;

@@ -118,8 +118,7 @@ TEST(WhiteFurnace, EveryMaterialConservesEnergy) {
 // the shadow keeps (1 - F)^2 exp(-a d) of the light at normal incidence (docs/shading.md).
 TEST(TransparentShadows, GlassSlabAttenuatesByFresnelAndAbsorption) {
     SceneDesc s;
-    s.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
-    s.meshes.push_back({"box", "shape:box", std::make_shared<const TriangleMesh>(makeBox())});
+    test::addQuadAndBox(s);
     Material floor;
     floor.color = {1, 1, 1};
     Material glass;
@@ -135,12 +134,8 @@ TEST(TransparentShadows, GlassSlabAttenuatesByFresnelAndAbsorption) {
     sun.direction = {0, -1, 0};
     sun.intensity = 1.0f;
     s.lights = {sun};
-    CameraDesc cam;
-    cam.position = {0, 0.5f, 0};  // under the slab, looking straight down at the floor
-    cam.lookAt = {0, 0, 0};
-    cam.up = {0, 0, -1};
-    cam.fovY = 10.0f;
-    s.cameras = {cam};
+    // Under the slab, looking straight down at the floor.
+    s.cameras = {test::cameraAt({0, 0.5f, 0}, {0, 0, 0}, 10.0f, {0, 0, -1})};
     s.settings.width = s.settings.height = 4;
     s.settings.background = {0, 0, 0};
     const Scene scene(s);
@@ -157,20 +152,10 @@ TEST(TransparentShadows, GlassSlabAttenuatesByFresnelAndAbsorption) {
 TEST(AlphaMask, HolesAreHolesForCameraAndShadowRays) {
     SceneDesc s;
     s.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
-    Material floor;
-    floor.color = {1, 1, 1};
-    Material leaf;
-    leaf.color = {0, 1, 0};
-    leaf.alpha.kind = TextureKind::Checker;
-    leaf.alpha.color2 = {0, 0, 0};
-    leaf.alpha.scale = 1.0f;  // cells of 1 x 1 in object units: [-1,1]^2 has 4 cells, 2 of them holes
-    s.materials = {floor, leaf};
+    s.materials = test::floorAndCheckerLeaf(1.0f);  // cells of 1 x 1 in object units: [-1,1]^2 has 4 cells, 2 of them holes
     s.instances.push_back({0, 0, Transform::scale(10, 1, 10)});
     s.instances.push_back({0, 1, Transform::translate(0, 1, 0)});
-    Light sun;
-    sun.type = LightType::Directional;
-    sun.direction = {0, -1, 0};
-    s.lights = {sun};
+    s.lights = {test::sunFromAbove()};
     s.settings.background = {0, 0, 0};
     s.settings.width = s.settings.height = 32;
     // From above: half the leaf is green, half shows the lit floor (1/pi).
@@ -345,8 +330,7 @@ TEST_F(Zoo, PruningAtZeroIsExactlyUnprunedAndDefaultIsClose) {
 // splitting a path, and radiance 30 behind them), 16x12 pixels.
 SceneDesc deepGlass() {
     SceneDesc s;
-    s.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
-    s.meshes.push_back({"box", "shape:box", std::make_shared<const TriangleMesh>(makeBox())});
+    test::addQuadAndBox(s);
     s.meshes.push_back({"sphere", "shape:sphere", std::make_shared<const TriangleMesh>(makeSphere(12, 24))});
     Material lamp = test::material("lamp", MaterialType::Emissive, {1, 1, 1});
     lamp.emission = {30, 28, 24};
@@ -361,14 +345,8 @@ SceneDesc deepGlass() {
     for (int i = 0; i < 3; ++i)
         s.instances.push_back({1, 1, Transform::translate(0, 0, -1.6 + 0.7 * i) * Transform::scale(1.4, 1.4, 0.08)});
     s.instances.push_back({2, 1, Transform::translate(0.3, 0.1, 0.6) * Transform::scale(0.4, 0.4, 0.4)});
-    CameraDesc cam;
-    cam.position = {0.4f, 0.5f, 4.0f};
-    cam.lookAt = {0, 0, -2};
-    cam.fovY = 35.0f;
-    s.cameras = {cam};
-    s.settings.width = 16;
-    s.settings.height = 12;
-    s.settings.tileSize = 16;
+    s.cameras = {test::cameraAt({0.4f, 0.5f, 4.0f}, {0, 0, -2}, 35.0f)};
+    test::setImage(s.settings, 16, 12, 16);
     s.settings.maxDepth = 12;
     s.settings.background = {0.02f, 0.02f, 0.03f};
     s.settings.ambient = {0, 0, 0};
@@ -526,19 +504,14 @@ TEST(TextureMappings, SphericalAndCylindricalCheckersMatchAnalyticPixels) {
         m.texture.mapping = mapping;
         s.materials = {m};
         s.instances.push_back({0, 0, Transform{}});
-        CameraDesc cam;
-        cam.position = {1.5f, 1.8f, 3.0f};  // sees the +y pole and the +x/+z quadrant
-        cam.lookAt = {0, 0, 0};
-        cam.fovY = 45.0f;
-        s.cameras = {cam};
-        s.settings.width = 48;
-        s.settings.height = 40;
-        s.settings.tileSize = 16;
+        // Sees the +y pole and the +x/+z quadrant.
+        s.cameras = {test::cameraAt({1.5f, 1.8f, 3.0f}, {0, 0, 0}, 45.0f)};
+        test::setImage(s.settings, 48, 40, 16);
         s.settings.background = {0, 0, 0};
         s.settings.ambient = {0, 0, 0};
         const Scene scene(s);
         const std::vector<float> img = renderLinear(scene, s);
-        const Camera camera(cam, s.settings.width, s.settings.height);
+        const Camera camera(s.cameras.front(), s.settings.width, s.settings.height);
         const Float3 o = camera.origin();
         int checked = 0, light = 0;
         for (int y = 0; y < s.settings.height; ++y)
@@ -589,8 +562,7 @@ TEST_F(Zoo, FalseColourViewsRender) {
 // at alpha = 0.01 with Sidak correction over every pixel and channel.
 TEST(GlobalIllumination, EstimatorIsUnbiased) {
     SceneDesc s;
-    s.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
-    s.meshes.push_back({"box", "shape:box", std::make_shared<const TriangleMesh>(makeBox())});
+    test::addQuadAndBox(s);
     Material white;
     white.color = {0.8f, 0.8f, 0.8f};
     Material red;
@@ -605,13 +577,8 @@ TEST(GlobalIllumination, EstimatorIsUnbiased) {
     area.edge2 = {0, 0, 1};  // cross(edge1, edge2) = (0,-1,0): it shines down (it pointed up before)
     area.intensity = 4.0f;
     s.lights = {area};
-    CameraDesc cam;
-    cam.position = {2, 2, 3};
-    cam.lookAt = {0, 0.3f, 0};
-    s.cameras = {cam};
-    s.settings.width = 8;
-    s.settings.height = 6;
-    s.settings.tileSize = 8;
+    s.cameras = {test::cameraAt({2, 2, 3}, {0, 0.3f, 0})};
+    test::setImage(s.settings, 8, 6, 8);
     s.settings.gi = true;
     s.settings.maxDepth = 6;
     s.settings.pruneThreshold = 0.0f;
@@ -640,13 +607,7 @@ TEST(GlobalIllumination, EstimatorIsUnbiased) {
     stats(200, 0, 2, m, v);        // the estimator under test: 200 frames of 2 samples
     stats(100, 100000, 32, rm, rv);  // reference: independent seeds, 3200 samples per pixel
     const size_t n = m.size();
-    const double alpha = 0.01, perTest = 1.0 - std::pow(1.0 - alpha, 1.0 / double(n));
-    // Two-sided normal quantile for perTest (about 3.9 for n = 144), by bisection on erfc.
-    double lo = 0, hi = 10;
-    for (int i = 0; i < 100; ++i) {
-        const double mid = 0.5 * (lo + hi);
-        (std::erfc(mid / std::sqrt(2.0)) > perTest ? lo : hi) = mid;
-    }
+    const double threshold = test::sidakThreshold(0.01, n);
     int failures = 0;
     for (size_t i = 0; i < n; ++i) {
         const double se = std::sqrt(v[i] + rv[i]);
@@ -655,10 +616,10 @@ TEST(GlobalIllumination, EstimatorIsUnbiased) {
             continue;
         }
         const double z = std::fabs(m[i] - rm[i]) / se;
-        if (z > lo) ++failures;
+        if (z > threshold) ++failures;
     }
-    EXPECT_EQ(failures, 0) << "z threshold " << lo;
-    std::printf("GI z-test: %zu values, threshold |z| > %.2f, %d failures\n", n, lo, failures);
+    EXPECT_EQ(failures, 0) << "z threshold " << threshold;
+    std::printf("GI z-test: %zu values, threshold |z| > %.2f, %d failures\n", n, threshold, failures);
 }
 
 TEST(Accumulator, MeanOfFramesInLinearLight) {

@@ -35,9 +35,7 @@ size_t differingBytes(const Image& a, const Image& b) {
 // triangles of knots (as Embree quads), one tile of its floor in shadow.
 SceneDesc smallKnots() {
     SceneDesc d = builtinScene("knots", 5000);
-    d.settings.width = 96;
-    d.settings.height = 64;
-    d.settings.tileSize = 32;
+    test::setImage(d.settings, 96, 64, 32);
     d.settings.threads = 1;
     return d;
 }

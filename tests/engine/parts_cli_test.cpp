@@ -2,6 +2,7 @@
 // scene file's [parts], a hidden mesh is gone from the PNG as if the scene never had it, on one
 // machine and through local client processes alike; a pattern that matches nothing is one line.
 #include "cli_util.h"
+#include "step_assembly.h"
 #include "test_util.h"
 
 #include "generators.h"
@@ -13,30 +14,7 @@
 namespace rtwall {
 namespace {
 
-const std::string kScene = R"([image]
-width = 64
-height = 48
-tile = 16
-[[mesh]]
-name = "floor"
-shape = "quad"
-[[mesh]]
-name = "box"
-shape = "box"
-[[instance]]
-mesh = "floor"
-scale = 4
-[[instance]]
-mesh = "box"
-scale = 0.5
-translate = [0, 0.5, 0]
-[[light]]
-type = "directional"
-direction = [0.5, -1, -0.3]
-[[camera]]
-position = [0, 3, 5]
-look_at = [0, 0, 0]
-)";
+const std::string kScene = test::sceneText("floor_box");
 
 TEST(PartsCli, HideOnTheCommandLineIsTheSceneWithoutIt) {
     const auto dir = test::scratchDir();
@@ -65,10 +43,7 @@ TEST(PartsCli, HideOnTheCommandLineIsTheSceneWithoutIt) {
 // and highlights: the names a reviewer gives --hide.
 TEST(PartsCli, InfoListsTheScenesPartTree) {
     const auto dir = test::scratchDir();
-    gen::GenOptions o;
-    o.out = dir;
-    o.instances = 14;
-    gen::genStep(o);
+    gen::genStep({.out = dir, .instances = 14});
     test::writeFile(dir / "s.toml", "[[mesh]]\nname = \"plant\"\nfile = \"assembly.step\"\n[[instance]]\nmesh = \"plant\"\n"
                                     "[parts]\nhide = [\"plant/module 2/bolt 1\"]\nhighlight = [\"bracket*\"]\n");
     const auto r = test::runCli(RTWALL_EXE, "info " + (dir / "s.toml").string());

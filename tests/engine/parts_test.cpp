@@ -126,7 +126,9 @@ TEST(Parts, HighlightChangesOnlyThatPartsPixels) {
                 ++onPart;
                 changedOnPart += changed;
                 // Warmer: the red channel gains on the blue one.
-                if (changed) EXPECT_GT(int(highlighted.rgb[i]) - int(highlighted.rgb[i + 2]), int(plain.rgb[i]) - int(plain.rgb[i + 2]));
+                if (changed) {
+                    EXPECT_GT(int(highlighted.rgb[i]) - int(highlighted.rgb[i + 2]), int(plain.rgb[i]) - int(plain.rgb[i + 2]));
+                }
             } else {
                 changedElsewhere += changed;
             }

@@ -6,6 +6,7 @@
 #include "cli_util.h"
 
 #include <rtwall/engine.h>
+#include <rtwall/engine_testing.h>
 #include <rtwall/vec.h>
 
 #include <gtest/gtest.h>
@@ -51,74 +52,17 @@ Image runReplay(std::string command, const std::filesystem::path& out) {
 // A small stochastic scene far from the origin (rebased on load): an area light, rough metal and
 // glass, path traced in the tests below.
 std::filesystem::path writeFarScene(const std::filesystem::path& dir) {
-    return test::writeFile(dir / "far.toml", R"([image]
-width = 64
-height = 48
-tile = 16
-
-[[mesh]]
-name = "floor"
-shape = "quad"
-
-[[mesh]]
-name = "ball"
-shape = "sphere"
-
-[[material]]
-name = "grey"
-color = [0.7, 0.7, 0.7]
-
-[[material]]
-name = "brushed"
-type = "metal"
-color = [0.9, 0.7, 0.4]
-roughness = 0.3
-
-[[material]]
-name = "glass"
-type = "glass"
-
-[[instance]]
-mesh = "floor"
-material = "grey"
-translate = [148376, 1234, -223423]
-scale = [8, 1, 8]
-
-[[instance]]
-mesh = "ball"
-material = "brushed"
-translate = [148376, 1235, -223423]
-
-[[instance]]
-mesh = "ball"
-material = "glass"
-translate = [148377.5, 1234.6, -223422]
-scale = 0.6
-
-[[light]]
-type = "area"
-position = [148375, 1238, -223424]
-edge1 = [2, 0, 0]
-edge2 = [0, 0, 2]
-intensity = 4
-
-[[camera]]
-name = "front"
-position = [148376, 1236, -223417]
-look_at = [148376, 1234.5, -223423]
-)");
+    return test::writeFile(dir / "far.toml", test::sceneText("far_stochastic"));
 }
 
 TEST(TileError, ATileThatThrowsSaysItsFrameItsPixelsAndWhy) {
     SceneDesc d = builtinScene("knots", 5000);
-    d.settings.width = 96;
-    d.settings.height = 64;
-    d.settings.tileSize = 32;
+    test::setImage(d.settings, 96, 64, 32);
     d.settings.threads = 2;
     const Scene scene(d);
     const Camera camera(d.cameras.front(), 96, 64);
     TraceOptions trace;
-    trace.fault = InjectedTileFault{7, 40, 20};
+    trace.fault = injectFault({7, 40, 20});
     auto expectFault = [&](const std::function<void()>& render, const char* what) {
         try {
             render();
@@ -211,9 +155,7 @@ TEST(ReplayCommand, ReplaysCamerasAndSettingsThatAreNotTheSceneFiles) {
         ProjectionWindow{desc.cameras.front().lookAt + Float3{-1.7f, -0.9f, 0.3f}, {3.1f, 0.0f, -0.2f}, {0.0f, 2.3f, 0.1f}};
 
     RenderSettings base = desc.settings;
-    base.width = 64;
-    base.height = 48;
-    base.tileSize = 16;
+    test::setImage(base, 64, 48, 16);
     base.threads = 2;
     base.gi = true;
     base.samples = 2;
@@ -251,7 +193,7 @@ TEST(ReplayCommand, ReplaysCamerasAndSettingsThatAreNotTheSceneFiles) {
         RenderSettings s = base;
         TraceOptions trace;
         v.change(s, trace);
-        trace.fault = InjectedTileFault{9, 20, 30};
+        trace.fault = injectFault({9, 20, 30});
         const Camera camera(v.camera, s.width, s.height);
         std::string command;
         try {
@@ -345,7 +287,7 @@ TEST(ReplayCommand, SpellsOutEveryInputThatChangesAPixel) {
     EXPECT_NE(replayCommand(client), replayCommand(other));
     // The injected fault is not replayed: the replay is to render the tile.
     TileReplay faulty = base;
-    faulty.trace.fault = InjectedTileFault{0, 0, 0};
+    faulty.trace.fault = injectFault({0, 0, 0});
     EXPECT_EQ(replayCommand(faulty), baseCommand);
 }
 

@@ -1,4 +1,5 @@
 // Scene files: what loads, and how every kind of mistake is reported (file, line, key).
+#include "scene_file_keys.h"
 #include "test_util.h"
 
 #include <gtest/gtest.h>
@@ -10,33 +11,15 @@ using test::inputErrorOf;
 using test::scratchDir;
 using test::writeFile;
 
-const char* kMinimal = R"([image]
-width = 64
-height = 48
+// Mitsuba's rule, every key read: the loader reads only keys of its tables, and every key of the
+// tables is documented, with the tables' help, in configs/README.md.
+TEST(SceneFile, EveryKeyOfTheTablesIsDocumented) {
+    const std::vector<std::string> missing =
+        toml_reader::undocumentedKeys(scene_keys::kAll, test::sourceDir() / "configs/README.md");
+    EXPECT_TRUE(missing.empty()) << ::testing::PrintToString(missing);
+}
 
-[[mesh]]
-name = "ball"
-shape = "sphere"
-
-[[material]]
-name = "red"
-type = "phong"
-color = [0.8, 0.1, 0.1]
-
-[[instance]]
-mesh = "ball"
-material = "red"
-translate = [1, 2, 3]
-
-[[light]]
-type = "point"
-position = [0, 5, 0]
-
-[[camera]]
-name = "front"
-position = [0, 0, 5]
-look_at = [0, 0, 0]
-)";
+const std::string kMinimal = test::sceneText("minimal");
 
 TEST(SceneFile, LoadsEveryTable) {
     const auto file = writeFile(scratchDir() / "s.toml", kMinimal);

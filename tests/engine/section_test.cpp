@@ -39,9 +39,7 @@ SceneDesc sphereScene(const Transform& placement, int size) {
     green.color = {0, 1, 0};
     s.materials.push_back(green);
     s.instances.push_back({0, 0, placement});
-    s.settings.width = size;
-    s.settings.height = size;
-    s.settings.tileSize = 32;
+    test::setImage(s.settings, size, size, 32);
     s.settings.ambient = {1, 1, 1};
     s.settings.background = {0, 0, 0};
     s.settings.threads = 2;

@@ -2,6 +2,7 @@
 // (tools/gen/step_assembly.cpp), read back through the XDE reader: each distinct part tessellated
 // once, placed by as many instances as the assembly uses it, with names, colours and transforms;
 // the tessellation deflections control the triangle count; bad files are one-line errors.
+#include "step_assembly.h"
 #include "test_util.h"
 
 #include "generators.h"
@@ -26,19 +27,17 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Three modules of seven part instances: 21 instances of 3 parts, written once per process into
-// a directory of its own (ctest runs the tests of this program in parallel processes).
-const fs::path& stepFile() {
-    static const fs::path file = [] {
-        const fs::path d = fs::path(RTWALL_BINARY_DIR) / "test-scratch" / ("step-generated-" + std::to_string(::getpid()));
-        fs::remove_all(d);
-        gen::GenOptions o;
-        o.out = d;
-        o.instances = 21;
-        gen::genStep(o);
-        return d / "assembly.step";
-    }();
-    return file;
+const fs::path& stepFile() { return test::stepAssembly(); }  // 21 instances of 3 parts
+
+// The same instances: meshes, materials, parts and transforms.
+void expectSameInstances(const Assembly& a, const Assembly& b) {
+    ASSERT_EQ(a.instances.size(), b.instances.size());
+    for (size_t i = 0; i < a.instances.size(); ++i) {
+        EXPECT_EQ(a.instances[i].mesh, b.instances[i].mesh);
+        EXPECT_EQ(a.instances[i].material, b.instances[i].material);
+        EXPECT_EQ(a.instances[i].part, b.instances[i].part);
+        EXPECT_EQ(a.instances[i].transform, b.instances[i].transform);
+    }
 }
 
 std::array<double, 3> centre(const Assembly& a, const AssemblyInstance& in) {
@@ -132,13 +131,7 @@ TEST(Step, CacheIsKeyedByContentAndDeflections) {
     EXPECT_EQ(hit.cache, "hit");
     ASSERT_EQ(hit.meshes.size(), first.meshes.size());
     EXPECT_EQ(hit.meshNames, first.meshNames);
-    ASSERT_EQ(hit.instances.size(), first.instances.size());
-    for (size_t i = 0; i < hit.instances.size(); ++i) {
-        EXPECT_EQ(hit.instances[i].mesh, first.instances[i].mesh);
-        EXPECT_EQ(hit.instances[i].material, first.instances[i].material);
-        EXPECT_EQ(hit.instances[i].part, first.instances[i].part);
-        EXPECT_EQ(hit.instances[i].transform, first.instances[i].transform);
-    }
+    ASSERT_NO_FATAL_FAILURE(expectSameInstances(hit, first));
     ASSERT_EQ(hit.parts.size(), first.parts.size());
     for (size_t i = 0; i < hit.parts.size(); ++i) {
         EXPECT_EQ(hit.parts[i].name, first.parts[i].name);
@@ -190,10 +183,7 @@ TEST(Step, CacheIsKeyedByContentAndDeflections) {
 // part holding all 21 placed parts' surfaces: at least 3 x (plate + 4 bolts + 2 brackets).
 TEST(Step, IgesAssemblyReads) {
     const auto dir = test::scratchDir();
-    gen::GenOptions o;
-    o.out = dir;
-    o.instances = 21;
-    gen::genIges(o);
+    gen::genIges({.out = dir, .instances = 21});
     const Assembly a = loadAssembly(dir / "assembly.igs");
     EXPECT_EQ(a.format, "iges");
     ASSERT_FALSE(a.instances.empty());
@@ -233,11 +223,7 @@ TEST(Step, ProgressAndCancel) {
 // the parts land where the flat file puts them.
 TEST(Step, RowsNestTheSameModules) {
     const auto dir = test::scratchDir();
-    gen::GenOptions o;
-    o.out = dir;
-    o.instances = 21;
-    o.rows = true;
-    gen::genStep(o);
+    gen::genStep({.out = dir, .instances = 21, .rows = true});
     const Assembly rows = loadAssembly(dir / "assembly.step"), flat = loadAssembly(stepFile());
     ASSERT_EQ(rows.instances.size(), 21u);
     EXPECT_EQ(rows.parts.at(0).name, "plant");
@@ -282,13 +268,7 @@ TEST(Step, ChildProcessImportMatchesInProcess) {
         EXPECT_EQ(0, std::memcmp(child.meshes[m]->normals(), here.meshes[m]->normals(), 12 * here.meshes[m]->vertexCount()));
         EXPECT_EQ(0, std::memcmp(child.meshes[m]->indices(), here.meshes[m]->indices(), 12 * here.meshes[m]->triangleCount()));
     }
-    ASSERT_EQ(child.instances.size(), here.instances.size());
-    for (size_t i = 0; i < here.instances.size(); ++i) {
-        EXPECT_EQ(child.instances[i].transform, here.instances[i].transform);
-        EXPECT_EQ(child.instances[i].mesh, here.instances[i].mesh);
-        EXPECT_EQ(child.instances[i].material, here.instances[i].material);
-        EXPECT_EQ(child.instances[i].part, here.instances[i].part);
-    }
+    ASSERT_NO_FATAL_FAILURE(expectSameInstances(child, here));
     ASSERT_EQ(child.parts.size(), here.parts.size());
     for (size_t i = 0; i < here.parts.size(); ++i) EXPECT_EQ(child.parts[i].name, here.parts[i].name);
     EXPECT_EQ(child.warnings, here.warnings);
@@ -354,10 +334,7 @@ TEST(Step, DamagedFilesAreOneLineErrors) {
 // that is a segmentation fault; the child process makes it one line naming the file.
 TEST(Step, CrashInsideOpenCascadeIsContained) {
     const auto dir = test::scratchDir();
-    gen::GenOptions o;
-    o.out = dir;
-    o.instances = 11;
-    gen::genStepCurved(o);
+    gen::genStepCurved({.out = dir, .instances = 11});
     std::ifstream in(dir / "assembly.step", std::ios::binary);
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     // The first LINE('',#point,#vector): drop the entity #vector.

@@ -1,5 +1,7 @@
 // Mesh caches (mesh/src/cache.cpp): round trip, and every kind of bad cache is refused and
 // rebuilt, never trusted.
+#include "mesh_test_util.h"
+#include "mesh_test_util.h"
 #include "rtwall/mesh.h"
 
 #include <gtest/gtest.h>
@@ -12,6 +14,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <thread>
 #include <utility>
@@ -24,20 +27,16 @@ namespace fs = std::filesystem;
 
 const fs::path kMeshes = fs::path(RTWALL_TEST_DATA_DIR) / "meshes";
 
-fs::path scratch(const std::string& name) {
-    const fs::path dir = fs::path(::testing::TempDir()) / "rtwall_cache_tests" / name;
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
+using test::readBytes;
+using test::writeBytes;
 
-std::string readBytes(const fs::path& file) {
-    std::ifstream in(file, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-}
+fs::path scratch(const std::string& name) { return test::tempFolder("rtwall_cache_tests/" + name, true); }
 
-void writeBytes(const fs::path& file, const std::string& bytes) {
-    std::ofstream(file, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
+// The cache written beside `src`, its bytes changed by `edit`.
+void editCache(const fs::path& src, const std::function<void(std::string&)>& edit) {
+    std::string bytes = readBytes(meshCachePath(src));
+    edit(bytes);
+    writeBytes(meshCachePath(src), bytes);
 }
 
 void expectSameMesh(const TriangleMesh& a, const TriangleMesh& b) {
@@ -53,18 +52,14 @@ void expectSameMesh(const TriangleMesh& a, const TriangleMesh& b) {
 }
 
 // A copy of a test mesh in a scratch folder, so its cache goes there too.
-fs::path copyMesh(const fs::path& dir, const char* name) {
-    fs::copy_file(kMeshes / name, dir / name);
-    return dir / name;
-}
+fs::path copyMesh(const fs::path& dir, const char* name) { return test::copyMeshAs(name, dir, name); }
 
 class CacheRoundTrip : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(CacheRoundTrip, GivesIdenticalGeometry) {
     const fs::path dir = scratch(std::string("roundtrip_") + std::to_string(std::hash<std::string>{}(GetParam())));
     const fs::path src = copyMesh(dir, GetParam());
-    LoadOptions opt;
-    opt.cache = true;
+    const LoadOptions opt = test::cacheOn();
     ImportReport first, second;
     const TriangleMesh imported = loadMesh(src, opt, &first);
     EXPECT_EQ(first.cache, "written");
@@ -128,8 +123,7 @@ TEST(MeshCache, TruncationAndTrailingBytesAreCaught) {
 TEST(MeshCache, StaleCacheIsRebuilt) {
     const fs::path dir = scratch("stale");
     const fs::path src = copyMesh(dir, "box_quads.obj");
-    LoadOptions opt;
-    opt.cache = true;
+    const LoadOptions opt = test::cacheOn();
     ImportReport r1, r2, r3;
     EXPECT_EQ(loadMesh(src, opt, &r1).triangleCount(), 12u);
     EXPECT_EQ(r1.cache, "written");
@@ -151,12 +145,9 @@ TEST(MeshCache, StaleCacheIsRebuilt) {
 TEST(MeshCache, CorruptCacheIsRebuiltNotTrusted) {
     const fs::path dir = scratch("corrupt");
     const fs::path src = copyMesh(dir, "box_quads.obj");
-    LoadOptions opt;
-    opt.cache = true;
+    const LoadOptions opt = test::cacheOn();
     const TriangleMesh original = loadMesh(src, opt);
-    std::string bytes = readBytes(meshCachePath(src));
-    bytes[200] = char(bytes[200] ^ 1);  // inside the positions (from byte 192)
-    writeBytes(meshCachePath(src), bytes);
+    editCache(src, [](std::string& bytes) { bytes[200] = char(bytes[200] ^ 1); });  // inside the positions (from byte 192)
     ImportReport r;
     const TriangleMesh again = loadMesh(src, opt, &r);
     EXPECT_NE(r.cache.find("checksum"), std::string::npos) << r.cache;
@@ -171,8 +162,7 @@ TEST(MeshCache, CacheDirKeepsSameNamesApart) {
     EXPECT_NE(meshCachePath(dir / "a" / "m.obj", dir / "cache"), meshCachePath(dir / "b" / "m.obj", dir / "cache"));
     const fs::path src = dir / "a" / "box.obj";
     fs::copy_file(kMeshes / "box_quads.obj", src);
-    LoadOptions opt;
-    opt.cache = true;
+    LoadOptions opt = test::cacheOn();
     opt.cacheDir = dir / "cache";
     ImportReport r;
     loadMesh(src, opt, &r);
@@ -208,8 +198,7 @@ bool inside(const void* p, size_t bytes, const std::vector<std::pair<uintptr_t, 
 TEST(MeshCache, CachedMeshIsTheMappedFileNotACopy) {
     const fs::path dir = scratch("inplace");
     const fs::path src = copyMesh(dir, "box_normals.obj");
-    LoadOptions opt;
-    opt.cache = true;
+    const LoadOptions opt = test::cacheOn();
     const TriangleMesh imported = loadMesh(src, opt);
     EXPECT_FALSE(imported.isMapped());
     EXPECT_EQ(imported.mappedBytes(), 0u);
@@ -261,10 +250,8 @@ TEST(MeshCache, OldVersionIsRebuilt) {
     LoadOptions opt;
     opt.cache = true;
     const TriangleMesh original = loadMesh(src, opt);
-    std::string bytes = readBytes(meshCachePath(src));
-    ASSERT_EQ(bytes[8], 5);
-    bytes[8] = 1;
-    writeBytes(meshCachePath(src), bytes);
+    ASSERT_EQ(readBytes(meshCachePath(src))[8], 5);
+    editCache(src, [](std::string& bytes) { bytes[8] = 1; });
     ImportReport r1, r2;
     const TriangleMesh rebuilt = loadMesh(src, opt, &r1);
     EXPECT_EQ(r1.cache.rfind("rebuilt: ", 0), 0u) << r1.cache;

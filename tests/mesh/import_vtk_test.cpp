@@ -39,20 +39,11 @@ TEST_P(VtkImportGood, LoadsTheBox) {
     const VtkFile& f = GetParam();
     ImportReport report;
     const TriangleMesh mesh = loadMesh(kMeshes / f.file, &report);
-    EXPECT_EQ(report.format, f.format);
-    EXPECT_EQ(mesh.vertexCount(), f.vertices);
-    EXPECT_EQ(mesh.triangleCount(), f.triangles);
-    EXPECT_EQ(report.polygonsTriangulated, f.polygonsTriangulated);
+    test::expectImported(mesh, report, f.format, f.vertices, f.triangles, f.polygonsTriangulated);
     EXPECT_EQ(report.stripsTriangulated, f.strips);
     EXPECT_EQ(report.cellsSkipped, f.skipped);
     EXPECT_EQ(mesh.hasNormals(), f.normals);
-    const Bounds3 b = mesh.bounds();
-    EXPECT_EQ(b.lo.x, 0.0f);
-    EXPECT_EQ(b.lo.y, 0.0f);
-    EXPECT_EQ(b.lo.z, 0.0f);
-    EXPECT_EQ(b.hi.x, 1.0f);
-    EXPECT_EQ(b.hi.y, 2.0f);
-    EXPECT_EQ(b.hi.z, 3.0f);
+    test::expectBounds(mesh, {0, 0, 0}, {1, 2, 3});
     EXPECT_NEAR(std::fabs(signedVolume(mesh)), 6.0, 1e-6);
     EXPECT_EQ(mesh.origin(), (std::array<double, 3>{0, 0, 0}));
     EXPECT_EQ(mesh.positions()[3 * mesh.vertexCount()], 0.0f);  // Embree's padding
@@ -68,12 +59,7 @@ INSTANTIATE_TEST_SUITE_P(
                       VtkFile{"box_lz4.vtp", "vtp", 8, 12, false, 6, 0, 1},
                       VtkFile{"box_hex_zlib.vtu", "vtu", 8, 12, false, 6, 0, 0},
                       VtkFile{"box_hex_ascii.vtu", "vtu", 8, 12, false, 6, 0, 0}),
-    [](const ::testing::TestParamInfo<VtkFile>& param) {
-        std::string name = param.param.file;
-        for (char& c : name)
-            if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-        return name;
-    });
+    test::FileCaseName{});
 
 // Triangle strips alternate their winding: all twelve triangles of the strip box must face out
 // the same way as the polygon box (the volume has one sign).
@@ -83,10 +69,13 @@ TEST(VtkImport, StripsKeepAConsistentWinding) {
     EXPECT_NEAR(signedVolume(strips), signedVolume(polys), 1e-6);
 }
 
-// Coordinates near (148376, 1234, -223423) are read in double precision and stored relative to
-// a whole-number origin, so the float buffers hold the box exactly.
-TEST(VtkImport, FarFromOriginIsRecentredWithoutLoss) {
-    const TriangleMesh mesh = loadMesh(kMeshes / "box_far.vtp");
+// Coordinates near (148376, 1234, -223423) are read in double precision (a .vtp file's points, a
+// VRML Transform applied to the box) and stored relative to a whole-number origin, so the float
+// buffers hold the box exactly.
+class FarFromOrigin : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(FarFromOrigin, IsRecentredWithoutLoss) {
+    const TriangleMesh mesh = loadMesh(kMeshes / GetParam());
     const auto o = mesh.origin();
     EXPECT_EQ(o, (std::array<double, 3>{148377.0, 1235.0, -223422.0}));  // the centre, rounded
     const Bounds3 b = mesh.bounds();
@@ -99,25 +88,30 @@ TEST(VtkImport, FarFromOriginIsRecentredWithoutLoss) {
     EXPECT_NEAR(std::fabs(signedVolume(mesh)), 6.0, 1e-9);
 }
 
-// A VTK file without a known extension is recognised by its content.
-TEST(VtkImport, VtkFileWithoutExtension) {
-    const fs::path dir = fs::path(::testing::TempDir()) / "rtwall_vtk_tests";
-    fs::create_directories(dir);
-    fs::copy_file(kMeshes / "box_zlib.vtp", dir / "box_no_ext", fs::copy_options::overwrite_existing);
+INSTANTIATE_TEST_SUITE_P(Files, FarFromOrigin, ::testing::Values("box_far.vtp", "box_far.wrl"), test::FileCaseName{});
+
+// The content, not the name, says what a file is: a VTK file or a VRML file without a known
+// extension, and a legacy VTK file named .vtp (read by the legacy reader).
+struct NamedCopy {
+    const char* file;
+    const char* name;  // the copy's name
+    const char* format;
+};
+std::ostream& operator<<(std::ostream& os, const NamedCopy& c) { return os << c.name; }
+class ContentDecides : public ::testing::TestWithParam<NamedCopy> {};
+
+TEST_P(ContentDecides, TheFormat) {
+    const fs::path file = test::copyMeshAs(GetParam().file, test::tempFolder("rtwall_content_tests"), GetParam().name);
     ImportReport report;
-    EXPECT_EQ(loadMesh(dir / "box_no_ext", &report).triangleCount(), 12u);
-    EXPECT_EQ(report.format, "vtp");
+    EXPECT_EQ(loadMesh(file, &report).triangleCount(), 12u);
+    EXPECT_EQ(report.format, GetParam().format);
 }
 
-// A legacy file named .vtp is still read as what it is.
-TEST(VtkImport, ContentDecidesBetweenVtkReaders) {
-    const fs::path dir = fs::path(::testing::TempDir()) / "rtwall_vtk_tests";
-    fs::create_directories(dir);
-    fs::copy_file(kMeshes / "box_ascii.vtk", dir / "legacy_named.vtp", fs::copy_options::overwrite_existing);
-    ImportReport report;
-    EXPECT_EQ(loadMesh(dir / "legacy_named.vtp", &report).triangleCount(), 12u);
-    EXPECT_EQ(report.format, "vtk");
-}
+INSTANTIATE_TEST_SUITE_P(Files, ContentDecides,
+                         ::testing::Values(NamedCopy{"box_zlib.vtp", "box_no_ext", "vtp"},
+                                           NamedCopy{"box_ascii.vtk", "legacy_named.vtp", "vtk"},
+                                           NamedCopy{"box_plain.wrl", "box_vrml", "wrl"}),
+                         [](const ::testing::TestParamInfo<NamedCopy>& p) { return test::fileTestName(p.param.name); });
 
 struct BadVtk {
     const char* file;
@@ -129,12 +123,7 @@ class VtkImportBad : public ::testing::TestWithParam<BadVtk> {};
 TEST_P(VtkImportBad, IsRejectedWithAReason) {
     const fs::path file = kMeshes / GetParam().file;
     ASSERT_TRUE(fs::exists(file)) << file;
-    std::string message = "(no InputError)";
-    try {
-        loadMesh(file);
-    } catch (const InputError& e) {
-        message = e.what();
-    }
+    const std::string message = test::loadError(file);
     EXPECT_NE(message.find(file.string()), std::string::npos) << message;
     EXPECT_EQ(message.find('\n'), std::string::npos) << "not one line: " << message;
     for (const char* part : GetParam().expect) EXPECT_NE(message.find(part), std::string::npos) << "no '" << part << "' in: " << message;
@@ -160,12 +149,7 @@ INSTANTIATE_TEST_SUITE_P(
                       // vtkXMLDataParser::ReadCompressedData); the child process keeps rtwall alive.
                       BadVtk{"bad_fuzz_vtk_reader_null_deref.vtk", {}},
                       BadVtk{"bad_fuzz_vtp_zero_block_size.vtp", {}}),
-    [](const ::testing::TestParamInfo<BadVtk>& param) {
-        std::string name = param.param.file;
-        for (char& c : name)
-            if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-        return name;
-    });
+    test::FileCaseName{});
 
 // NaN in binary data reaches the importer's own check, which names the point.
 TEST(VtkImport, NanInBinaryDataIsRejected) {

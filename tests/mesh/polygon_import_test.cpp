@@ -5,6 +5,7 @@
 // face the way the face does, and points sampled over it are covered once inside and never
 // outside or in a hole. Also the Blender 2.47 PLY header line, and what stays refused.
 #include "polygon_shapes.h"
+#include "mesh_test_util.h"
 #include "rtwall/mesh.h"
 
 #include <gtest/gtest.h>
@@ -28,10 +29,8 @@ using test::Point2;
 const fs::path kMeshes = fs::path(RTWALL_TEST_DATA_DIR) / "meshes";
 
 fs::path writeTemp(const std::string& name, const std::string& bytes) {
-    const fs::path dir = fs::path(::testing::TempDir()) / "rtwall_polygon_import_tests";
-    fs::create_directories(dir);
-    const fs::path file = dir / name;
-    std::ofstream(file, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+    const fs::path file = test::tempFolder("rtwall_polygon_import_tests") / name;
+    test::writeBytes(file, bytes);
     return file;
 }
 
@@ -117,12 +116,7 @@ TEST_P(PolygonImport, EveryFaceIsCoveredExactly) {
 INSTANTIATE_TEST_SUITE_P(Formats, PolygonImport,
                          ::testing::Values("polygons.obj", "polygons.off", "polygons_ascii.ply", "polygons_le.ply",
                                            "polygons.vtk", "polygons.vtp", "polygons.vtu", "polygons.wrl"),
-                         [](const ::testing::TestParamInfo<const char*>& param) {
-                             std::string name = param.param;
-                             for (char& c : name)
-                                 if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                             return name;
-                         });
+                         test::FileCaseName{});
 
 // OpenMesh's OBJ reader keeps only the first visit of each vertex in a face, which cut the
 // ring's hole open (a gap of one of its 32 segments); the corners are put back. Where the two

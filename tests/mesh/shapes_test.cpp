@@ -59,13 +59,7 @@ TEST(MeshShapes, BoxIsTheClosedCube) {
     EXPECT_EQ(box.vertexCount(), 8u);
     EXPECT_EQ(box.triangleCount(), 12u);
     EXPECT_FALSE(box.hasNormals());
-    const Bounds3 b = box.bounds();
-    EXPECT_EQ(b.lo.x, -1.0f);
-    EXPECT_EQ(b.lo.y, -1.0f);
-    EXPECT_EQ(b.lo.z, -1.0f);
-    EXPECT_EQ(b.hi.x, 1.0f);
-    EXPECT_EQ(b.hi.y, 1.0f);
-    EXPECT_EQ(b.hi.z, 1.0f);
+    test::expectBounds(box, {-1, -1, -1}, {1, 1, 1});
     EXPECT_DOUBLE_EQ(signedVolume(box), 8.0);
     // Every face normal is an axis: two triangles per axis direction.
     int perAxis[6] = {};

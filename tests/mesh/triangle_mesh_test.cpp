@@ -1,3 +1,4 @@
+#include "mesh_test_util.h"
 #include "rtwall/mesh.h"
 
 #include <gtest/gtest.h>
@@ -56,14 +57,8 @@ TEST(TriangleMeshTest, BoundsCoverEveryVertex) {
     mesh.addVertex({1, -2, 3});
     mesh.addVertex({-4, 5, 0.5f});
     mesh.addVertex({0, 0, -7});
-    const Bounds3 b = mesh.bounds();
-    ASSERT_FALSE(b.empty());
-    EXPECT_EQ(b.lo.x, -4.0f);
-    EXPECT_EQ(b.lo.y, -2.0f);
-    EXPECT_EQ(b.lo.z, -7.0f);
-    EXPECT_EQ(b.hi.x, 1.0f);
-    EXPECT_EQ(b.hi.y, 5.0f);
-    EXPECT_EQ(b.hi.z, 3.0f);
+    ASSERT_FALSE(mesh.bounds().empty());
+    test::expectBounds(mesh, {-4, -2, -7}, {1, 5, 3});
 }
 
 TEST(TriangleMeshTest, ResidentBytesCountsReservedCapacity) {

@@ -1,6 +1,7 @@
 // Per-vertex texture coordinates (issue 7): every importer that has them fills
 // TriangleMesh::uvs() with the file's exact values, OBJ seams split vertices, the cache keeps
 // them (and catches a flipped byte in their section), and bad values give one-line errors.
+#include "mesh_test_util.h"
 #include "rtwall/mesh.h"
 
 #include <gtest/gtest.h>
@@ -52,12 +53,7 @@ TEST_P(UVQuad, KeepsTheFilesExactTextureCoordinates) {
 INSTANTIATE_TEST_SUITE_P(Files, UVQuad,
                          ::testing::Values("uv_quad.obj", "uv_quad_ascii.ply", "uv_quad_st_le.ply", "uv_quad_texture_uv.ply",
                                            "uv_quad.off", "uv_quad.vtk", "uv_quad3.vtp", "uv_quad.wrl"),
-                         [](const ::testing::TestParamInfo<const char*>& p) {
-                             std::string name = p.param;
-                             for (char& c : name)
-                                 if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                             return name;
-                         });
+                         test::FileCaseName{});
 
 // OBJ gives vt per face corner. Vertex 1 has vt 1 in the first face and vt 5 in the second: it
 // is split into two vertices at the same position; vertex 3 has vt 3 in both and is not.
@@ -175,26 +171,11 @@ TEST(MeshUVs, SetUVsChecksCountAndValues) {
     EXPECT_FALSE(a.hasUVs());
 }
 
-std::string readAll(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
 // The cache keeps the texture coordinates bit for bit, in place (a view of the mapping), and a
 // flipped byte in their section (the file's last: 4 vertices x 8 bytes, padded to 64) is caught.
 TEST(MeshUVs, CacheRoundTripAndAFlippedUVByte) {
-    const fs::path dir = fs::path(::testing::TempDir()) / "rtwall_uv_cache";
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    const fs::path src = dir / "quad.vtk";
-    fs::copy_file(kMeshes / "uv_quad.vtk", src);
-    LoadOptions lo;
-    lo.cache = true;
-    ImportReport r1, r2;
-    const TriangleMesh first = loadMesh(src, lo, &r1);
-    EXPECT_EQ(r1.cache, "written");
-    const TriangleMesh second = loadMesh(src, lo, &r2);
-    EXPECT_EQ(r2.cache, "hit");
+    const fs::path src = test::copyMeshAs("uv_quad.vtk", test::tempFolder("rtwall_uv_cache", true), "quad.vtk");
+    const auto [first, second] = test::loadThroughCache(src);
     ASSERT_TRUE(second.hasUVs());
     EXPECT_TRUE(second.isMapped());
     EXPECT_EQ(std::vector<float>(second.uvs(), second.uvs() + 8), std::vector<float>(first.uvs(), first.uvs() + 8));
@@ -202,7 +183,7 @@ TEST(MeshUVs, CacheRoundTripAndAFlippedUVByte) {
               std::vector<float>(first.positions(), first.positions() + 12));
 
     const fs::path cache = meshCachePath(src);
-    std::string bytes = readAll(cache);
+    std::string bytes = test::readBytes(cache);
     ASSERT_EQ(bytes.size() % 64, 0u);
     EXPECT_EQ(uint32_t(uint8_t(bytes[8])), 5u);       // cache version 5
     EXPECT_EQ(uint32_t(uint8_t(bytes[48])) & 4u, 4u);  // flag bit 2: texture coordinates
@@ -212,26 +193,18 @@ TEST(MeshUVs, CacheRoundTripAndAFlippedUVByte) {
     ASSERT_EQ(u0, first.uvs()[0]);
     for (size_t i = uvAt + 32; i < bytes.size(); ++i) EXPECT_EQ(bytes[i], 0) << "padding byte " << i;
     bytes[uvAt + 5] = char(bytes[uvAt + 5] ^ 0x01);
-    std::ofstream(cache, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
-    std::string why;
-    EXPECT_FALSE(readMeshCache(cache, src, nullptr, &why));
-    EXPECT_NE(why.find("checksum"), std::string::npos) << why;
+    test::expectChecksumRefuses(cache, src, bytes);
 }
 
 // A version-3 cache (before texture coordinates) is refused with its version named, and rebuilt.
 TEST(MeshUVs, Version3CacheIsRebuilt) {
-    const fs::path dir = fs::path(::testing::TempDir()) / "rtwall_uv_cache_v3";
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    const fs::path src = dir / "quad.obj";
-    fs::copy_file(kMeshes / "uv_quad.obj", src);
-    LoadOptions lo;
-    lo.cache = true;
+    const fs::path src = test::copyMeshAs("uv_quad.obj", test::tempFolder("rtwall_uv_cache_v3", true), "quad.obj");
+    const LoadOptions lo = test::cacheOn();
     loadMesh(src, lo);
     const fs::path cache = meshCachePath(src);
-    std::string bytes = readAll(cache);
+    std::string bytes = test::readBytes(cache);
     bytes[8] = 3;
-    std::ofstream(cache, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
+    test::writeBytes(cache, bytes);
     ImportReport r;
     const TriangleMesh mesh = loadMesh(src, lo, &r);
     EXPECT_NE(r.cache.find("rebuilt: "), std::string::npos) << r.cache;

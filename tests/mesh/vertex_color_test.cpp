@@ -1,6 +1,7 @@
 // Per-vertex colours (issue 3: "point colours are kept when present"): every importer that has
 // them fills TriangleMesh::colors(), the cache keeps them, and data that is not a colour is not
 // kept.
+#include "mesh_test_util.h"
 #include "rtwall/mesh.h"
 
 #include <gtest/gtest.h>
@@ -42,12 +43,7 @@ TEST_P(ColoredTriangle, KeepsEveryVertexColour) {
 INSTANTIATE_TEST_SUITE_P(Files, ColoredTriangle,
                          ::testing::Values("tri_colors_ascii.ply", "tri_colors_float_le.ply", "tri_colors.off", "tri_colors.obj",
                                            "tri_colors.vtk", "tri_colors.vtp"),
-                         [](const ::testing::TestParamInfo<const char*>& p) {
-                             std::string name = p.param;
-                             for (char& c : name)
-                                 if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                             return name;
-                         });
+                         test::FileCaseName{});
 
 // A one-component scalar field is data for a lookup table, not a colour: not kept. Nor are
 // files without colours given any.
@@ -74,18 +70,8 @@ TEST(VertexColors, ResidentBytesCountThem) {
 
 // The cache keeps colours byte for byte, and a flipped colour byte is caught by the checksum.
 TEST(VertexColors, CacheRoundTripKeepsThem) {
-    const fs::path dir = fs::path(::testing::TempDir()) / "rtwall_color_cache";
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    const fs::path src = dir / "tri.ply";
-    fs::copy_file(kMeshes / "tri_colors_ascii.ply", src);
-    LoadOptions lo;
-    lo.cache = true;
-    ImportReport r1, r2;
-    const TriangleMesh first = loadMesh(src, lo, &r1);
-    EXPECT_EQ(r1.cache, "written");
-    const TriangleMesh second = loadMesh(src, lo, &r2);
-    EXPECT_EQ(r2.cache, "hit");
+    const fs::path src = test::copyMeshAs("tri_colors_ascii.ply", test::tempFolder("rtwall_color_cache", true), "tri.ply");
+    const auto [first, second] = test::loadThroughCache(src);
     ASSERT_TRUE(second.hasColors());
     EXPECT_EQ(std::vector<uint8_t>(second.colors(), second.colors() + 9), std::vector<uint8_t>(first.colors(), first.colors() + 9));
     EXPECT_EQ(std::vector<float>(second.positions(), second.positions() + 10),
@@ -94,20 +80,13 @@ TEST(VertexColors, CacheRoundTripKeepsThem) {
     // The colour section is the file's last: its first byte sits at the start of the last
     // 64-byte block.
     const fs::path cache = meshCachePath(src);
-    std::string bytes;
-    {
-        std::ifstream in(cache, std::ios::binary);
-        bytes.assign(std::istreambuf_iterator<char>(in), {});
-    }
+    std::string bytes = test::readBytes(cache);
     ASSERT_EQ(bytes.size() % 64, 0u);
     const size_t colorAt = bytes.size() - 64;
     ASSERT_EQ(uint8_t(bytes[colorAt]), 255);
     ASSERT_EQ(uint8_t(bytes[colorAt + 1]), 128);
     bytes[colorAt + 1] = char(0x7f);
-    std::ofstream(cache, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
-    std::string why;
-    EXPECT_FALSE(readMeshCache(cache, src, nullptr, &why));
-    EXPECT_NE(why.find("checksum"), std::string::npos) << why;
+    test::expectChecksumRefuses(cache, src, bytes);
 }
 
 }  // namespace

@@ -20,15 +20,7 @@ const fs::path kMeshes = fs::path(RTWALL_TEST_DATA_DIR) / "meshes";
 
 using Rgb = std::array<int, 3>;
 
-void expectBounds(const TriangleMesh& m, Float3 lo, Float3 hi) {
-    const Bounds3 b = m.bounds();
-    EXPECT_EQ(b.lo.x, lo.x);
-    EXPECT_EQ(b.lo.y, lo.y);
-    EXPECT_EQ(b.lo.z, lo.z);
-    EXPECT_EQ(b.hi.x, hi.x);
-    EXPECT_EQ(b.hi.y, hi.y);
-    EXPECT_EQ(b.hi.z, hi.z);
-}
+using test::expectBounds;
 
 // Index of the vertex at p (the importer may reorder nothing, but say so through positions).
 size_t vertexAt(const TriangleMesh& m, Float3 p) {
@@ -89,29 +81,6 @@ TEST(Vrml, ShapesInAGroupAreMergedInWorldCoordinates) {
     for (size_t t = 0; t < mesh.triangleCount(); ++t) EXPECT_GT(test::geometricNormal(mesh, t).z, 0.0f) << t;
 }
 
-// A Transform to (148376, 1234, -223423) is applied in double precision and the result
-// recentred, so the float buffers hold the box exactly.
-TEST(Vrml, FarTransformIsRecentredWithoutLoss) {
-    const TriangleMesh mesh = loadMesh(kMeshes / "box_far.wrl");
-    const auto o = mesh.origin();
-    EXPECT_EQ(o, (std::array<double, 3>{148377.0, 1235.0, -223422.0}));
-    const Bounds3 b = mesh.bounds();
-    EXPECT_EQ(double(b.lo.x) + o[0], 148376.0);
-    EXPECT_EQ(double(b.hi.y) + o[1], 1236.0);
-    EXPECT_EQ(double(b.lo.z) + o[2], -223423.0);
-    EXPECT_NEAR(std::fabs(signedVolume(mesh)), 6.0, 1e-9);
-}
-
-// Recognised by content too: a VRML file without the .wrl extension.
-TEST(Vrml, RecognisedByContent) {
-    const fs::path dir = fs::path(::testing::TempDir()) / "rtwall_vrml_tests";
-    fs::create_directories(dir);
-    fs::copy_file(kMeshes / "box_plain.wrl", dir / "box_vrml", fs::copy_options::overwrite_existing);
-    ImportReport report;
-    EXPECT_EQ(loadMesh(dir / "box_vrml", &report).triangleCount(), 12u);
-    EXPECT_EQ(report.format, "wrl");
-}
-
 struct BadVrml {
     const char* file;
     const char* expect;
@@ -124,12 +93,7 @@ class VrmlBad : public ::testing::TestWithParam<BadVrml> {};
 TEST_P(VrmlBad, IsRejectedWithAReason) {
     const fs::path file = kMeshes / GetParam().file;
     ASSERT_TRUE(fs::exists(file)) << file;
-    std::string message = "(no InputError)";
-    try {
-        loadMesh(file);
-    } catch (const InputError& e) {
-        message = e.what();
-    }
+    const std::string message = test::loadError(file);
     EXPECT_EQ(message.rfind(file.string(), 0), 0u) << message;
     EXPECT_EQ(message.find('\n'), std::string::npos) << "not one line: " << message;
     EXPECT_NE(message.find(GetParam().expect), std::string::npos) << "no '" << GetParam().expect << "' in: " << message;
@@ -142,12 +106,7 @@ INSTANTIATE_TEST_SUITE_P(Files, VrmlBad,
                                            BadVrml{"bad_index_huge.wrl", "polygon 0: point index -294967296 is out of range"},
                                            BadVrml{"bad_no_geometry.wrl", "no shapes"},
                                            BadVrml{"bad_vrml1.wrl", "VRML 1.0 is not supported"}),
-                         [](const ::testing::TestParamInfo<BadVrml>& p) {
-                             std::string name = p.param.file;
-                             for (char& c : name)
-                                 if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                             return name;
-                         });
+                         test::FileCaseName{});
 
 // VTK's VRML parser prints nothing to the terminal either.
 TEST(Vrml, PrintsNothing) {

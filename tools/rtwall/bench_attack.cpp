@@ -7,9 +7,7 @@
 namespace rtwall::cli {
 
 void addBenchAttack(CLI::App& bench, Run& run) {
-    auto a = std::make_shared<BenchArgs<bench::AttackOptions>>();
-    bench::AttackOptions& o = a->options;
-    CLI::App* cmd = bench.add_subcommand("attack", "The master under attack (garbage, multi-frame, truncated, oversized, "
+    auto [a, o, cmd] = benchCommand<bench::AttackOptions>(bench, "attack", "The master under attack (garbage, multi-frame, truncated, oversized, "
                                                    "replayed messages, ZMTP junk), with and without CURVE");
     cmd->add_option("--seconds", o.seconds, "Seconds of attack (and as many undisturbed before it), per mode")->check(CLI::Range(0.5, 3600.0));
     cmd->add_option("--rate", o.rate, "Attack messages per second")->check(CLI::Range(1, 1'000'000));
@@ -19,9 +17,7 @@ void addBenchAttack(CLI::App& bench, Run& run) {
 }
 
 void addBenchChaos(CLI::App& bench, Run& run) {
-    auto a = std::make_shared<BenchArgs<bench::ChaosOptions>>();
-    bench::ChaosOptions& o = a->options;
-    CLI::App* cmd = bench.add_subcommand("chaos", "Render while client processes are frozen, killed, restarted and cut off at random");
+    auto [a, o, cmd] = benchCommand<bench::ChaosOptions>(bench, "chaos", "Render while client processes are frozen, killed, restarted and cut off at random");
     cmd->add_option("--seconds", o.seconds, "Seconds of faults")->check(CLI::Range(1.0, 86400.0));
     cmd->add_option("--clients", o.clients, "Client processes")->check(CLI::Range(1, 64));
     cmd->add_option("--seed", o.seed, "Seed of the faults");

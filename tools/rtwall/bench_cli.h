@@ -9,6 +9,7 @@
 #include <functional>
 #include <iostream>
 #include <memory>
+#include <string>
 
 namespace rtwall::cli {
 
@@ -17,6 +18,42 @@ template <class Options> struct BenchArgs {
     Options options;
     bool json = false;
 };
+
+// A benchmark's subcommand of `parent` and the options its command line fills.
+template <class Options> struct BenchCommand {
+    std::shared_ptr<BenchArgs<Options>> args;
+    Options& options;  // args->options
+    CLI::App* cmd;
+};
+
+template <class Options>
+BenchCommand<Options> benchCommand(CLI::App& parent, const std::string& name, const std::string& description) {
+    auto args = std::make_shared<BenchArgs<Options>>();
+    return {args, args->options, parent.add_subcommand(name, description)};
+}
+
+// The options many benchmarks share, with their help text "<what> width<note>" and so on.
+inline void addSizeOptions(CLI::App* cmd, int& width, int& height, int min, int max, const std::string& what = "Image",
+                           const std::string& note = "") {
+    cmd->add_option("--width", width, what + " width" + note)->check(CLI::Range(min, max));
+    cmd->add_option("--height", height, what + " height" + note)->check(CLI::Range(min, max));
+}
+
+inline void addTrianglesOption(CLI::App* cmd, int64_t& triangles, const std::string& help, int64_t max = 100'000'000) {
+    cmd->add_option("--triangles", triangles, help)->check(CLI::Range(int64_t(1000), max));
+}
+
+inline void addThreadsOption(CLI::App* cmd, int& threads, const std::string& help) {
+    cmd->add_option("--threads", threads, help)->check(CLI::Range(0, 1024));
+}
+
+// Where the master listens and the clients start, for runs inside tools/netem.sh's namespaces.
+inline void addNetemOptions(CLI::App* cmd, std::string& bind, std::string& netns, std::string& link,
+                            const std::string& bindHelp, const std::string& netnsHelp) {
+    cmd->add_option("--bind", bind, bindHelp);
+    cmd->add_option("--client-netns", netns, netnsHelp);
+    cmd->add_option("--link", link, "Description of the link, copied into the output");
+}
 
 // Adds --json and makes `run` call `benchmark`: its lines on stdout as it goes, or, with --json,
 // only its result as JSON. The exit status is `status(result)` (0 when not given).

@@ -6,19 +6,15 @@
 namespace rtwall::cli {
 
 void addBenchCluster(CLI::App& bench, Run& run) {
-    auto a = std::make_shared<BenchArgs<bench::ClusterOptions>>();
-    bench::ClusterOptions& o = a->options;
-    CLI::App* cmd = bench.add_subcommand("cluster", "Frames/s, bytes, stealing and busy time of master and local clients");
-    cmd->add_option("--width", o.width, "Image width")->check(CLI::Range(16, 16384));
-    cmd->add_option("--height", o.height, "Image height")->check(CLI::Range(16, 16384));
+    auto [a, o, cmd] = benchCommand<bench::ClusterOptions>(bench, "cluster", "Frames/s, bytes, stealing and busy time of master and local clients");
+    addSizeOptions(cmd, o.width, o.height, 16, 16384);
     cmd->add_option("--tile", o.tile, "Tile size")->check(CLI::Range(4, 1024));
     cmd->add_option("--frames", o.frames, "Measured frames per setting (medians are reported)")->check(CLI::Range(1, 10000));
     cmd->add_option("--max-clients", o.maxClients, "Largest client count in the sweep (1, 2, 4, ... up to it)")->check(CLI::Range(1, 256));
-    cmd->add_option("--triangles", o.triangles, "Triangles of the built-in scene")->check(CLI::Range(int64_t(1000), int64_t(100'000'000)));
+    addTrianglesOption(cmd, o.triangles, "Triangles of the built-in scene");
     cmd->add_flag("--render", o.render, "Clients really render every tile (default: replay pre-encoded tiles)");
-    cmd->add_option("--bind", o.bind, "Master endpoint (tools/netem.sh binds inside its namespaces)");
-    cmd->add_option("--client-netns", o.netns, "Start client i in network namespace <prefix><i> (tools/netem.sh)");
-    cmd->add_option("--link", o.link, "Description of the link, copied into the output");
+    addNetemOptions(cmd, o.bind, o.netns, o.link, "Master endpoint (tools/netem.sh binds inside its namespaces)",
+                    "Start client i in network namespace <prefix><i> (tools/netem.sh)");
     cmd->add_flag("--insecure", o.insecure, "Allow a non-loopback --bind without CURVE keys (tools/netem.sh namespaces)");
     cmd->add_option("--client-counts", o.clientCounts,
                     "Only these client counts (prefetch 4, LZ4, affinity on), e.g. 1,2,3,4: the simulation's validation")

@@ -6,13 +6,10 @@
 namespace rtwall::cli {
 
 void addBenchKernel(CLI::App& bench, Run& run) {
-    auto a = std::make_shared<BenchArgs<bench::KernelOptions>>();
-    bench::KernelOptions& o = a->options;
-    CLI::App* cmd = bench.add_subcommand("kernel", "Primary-ray Mrays/s: packet kernel, single kernel, bare Embree loop");
-    cmd->add_option("--width", o.width, "Image width")->check(CLI::Range(16, 16384));
-    cmd->add_option("--height", o.height, "Image height")->check(CLI::Range(16, 16384));
-    cmd->add_option("--triangles", o.triangles, "Unique triangles in the benchmark scene")->check(CLI::Range(int64_t(1000), int64_t(200'000'000)));
-    cmd->add_option("--threads", o.threads, "Threads (0 = one per hardware thread)")->check(CLI::Range(0, 1024));
+    auto [a, o, cmd] = benchCommand<bench::KernelOptions>(bench, "kernel", "Primary-ray Mrays/s: packet kernel, single kernel, bare Embree loop");
+    addSizeOptions(cmd, o.width, o.height, 16, 16384);
+    addTrianglesOption(cmd, o.triangles, "Unique triangles in the benchmark scene", 200'000'000);
+    addThreadsOption(cmd, o.threads, "Threads (0 = one per hardware thread)");
     cmd->add_option("--rounds", o.rounds, "Interleaved rounds; medians are reported")->check(CLI::Range(1, 1000));
     cmd->add_option("--tile", o.tile, "Tile size")->check(CLI::Range(2, 1024));
     cmd->add_option("--packet-width", o.packetWidth, "Rays per packet, kernel and bare loop (0 = this CPU's widest)")

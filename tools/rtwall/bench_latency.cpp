@@ -6,9 +6,7 @@
 namespace rtwall::cli {
 
 void addBenchLatency(CLI::App& bench, Run& run) {
-    auto a = std::make_shared<BenchArgs<bench::LatencyOptions>>();
-    bench::LatencyOptions& o = a->options;
-    CLI::App* cmd = bench.add_subcommand(
+    auto [a, o, cmd] = benchCommand<bench::LatencyOptions>(bench, 
         "latency", "Tracker datagram to presented frame, and the predicted head's error at 0.5 m/s (mono/stereo, async, prediction)");
     cmd->add_option("--scene", o.scene, "Scene to render");
     cmd->add_option("--widths", o.widths, "Wall image widths, comma-separated (height = 3/4): one frame rate each")

@@ -7,14 +7,11 @@
 namespace rtwall::cli {
 
 void addBenchScene(CLI::App& bench, Run& run) {
-    auto a = std::make_shared<BenchArgs<bench::SceneOptions>>();
-    bench::SceneOptions& o = a->options;
-    CLI::App* cmd = bench.add_subcommand("scene", "Import, cache, BVH build, memory and frame time of a scene file");
+    auto [a, o, cmd] = benchCommand<bench::SceneOptions>(bench, "scene", "Import, cache, BVH build, memory and frame time of a scene file");
     cmd->add_option("scene", o.scene, "Scene file (.toml)")->required();
     cmd->add_option("--camera", o.camera, "Camera (default: the first)");
-    cmd->add_option("--width", o.width, "Image width")->check(CLI::Range(16, 16384));
-    cmd->add_option("--height", o.height, "Image height")->check(CLI::Range(16, 16384));
-    cmd->add_option("--threads", o.threads, "Render threads (0 = one per hardware thread)")->check(CLI::Range(0, 1024));
+    addSizeOptions(cmd, o.width, o.height, 16, 16384);
+    addThreadsOption(cmd, o.threads, "Render threads (0 = one per hardware thread)");
     cmd->add_option("--frames", o.frames, "Frames per setting; the median is reported")->check(CLI::Range(1, 100));
     cmd->add_flag("--sweep", o.sweep, "Also build and render with every BVH quality, compact off and on");
     cmd->add_flag("--skip-parse", o.skipParse, "Do not time a load without caches");

@@ -6,15 +6,12 @@
 namespace rtwall::cli {
 
 void addBenchShading(CLI::App& bench, Run& run) {
-    auto a = std::make_shared<BenchArgs<bench::ShadingOptions>>();
-    bench::ShadingOptions& o = a->options;
-    CLI::App* cmd = bench.add_subcommand("shading", "Shading demos: frame time and PSNR vs pruning, GI samples, volume step");
+    auto [a, o, cmd] = benchCommand<bench::ShadingOptions>(bench, "shading", "Shading demos: frame time and PSNR vs pruning, GI samples, volume step");
     cmd->add_flag("--json", a->json, "Print JSON");
-    cmd->add_option("--width", o.width, "Image width")->check(CLI::Range(16, 8192));
-    cmd->add_option("--height", o.height, "Image height")->check(CLI::Range(16, 8192));
+    addSizeOptions(cmd, o.width, o.height, 16, 8192);
     cmd->add_option("--rounds", o.rounds, "Frames timed per point (median)")->check(CLI::Range(1, 100));
     cmd->add_option("--reference-frames", o.referenceFrames, "Frames averaged for the GI reference")->check(CLI::Range(1, 100000));
-    cmd->add_option("--threads", o.threads, "Render threads (0 = all)")->check(CLI::Range(0, 1024));
+    addThreadsOption(cmd, o.threads, "Render threads (0 = all)");
     cmd->add_option("--dir", o.dir, "Where the demo scenes are written");
     cmd->add_option("--scenes", o.scenes, "Scenes to run (office, headlight, sunflowers)")
         ->check(CLI::IsMember({"office", "headlight", "sunflowers"}))

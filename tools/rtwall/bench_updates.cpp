@@ -6,9 +6,7 @@
 namespace rtwall::cli {
 
 void addBenchUpdates(CLI::App& bench, Run& run) {
-    auto a = std::make_shared<BenchArgs<bench::UpdatesOptions>>();
-    bench::UpdatesOptions& o = a->options;
-    CLI::App* cmd = bench.add_subcommand("updates", "Cost of a camera update per frame with many instances");
+    auto [a, o, cmd] = benchCommand<bench::UpdatesOptions>(bench, "updates", "Cost of a camera update per frame with many instances");
     cmd->add_option("--instances", o.instances, "Instances of one box in the scene")->check(CLI::Range(1, 10'000'000));
     cmd->add_option("--frames", o.frames, "Measured frames, each after one camera update")->check(CLI::Range(1, 100000));
     cmd->add_option("--clients", o.clients, "Local client processes (one render thread each)")->check(CLI::Range(1, 16));

@@ -11,15 +11,13 @@
 namespace rtwall::cli {
 
 void addCheck(CLI::App& app, Run& run) {
-    auto config = std::make_shared<std::string>();
-    CLI::App* cmd = app.add_subcommand("check", "Validate a wall config and compile its shaders (glslang)");
-    cmd->add_option("config", *config, "Wall config (.toml, see configs/README.md)")->required();
-    cmd->callback([&run, config] {
-        run = [config] {
-            const std::vector<std::string> problems = checkWall(*config);  // config problems throw InputError
+    addCommandOfOneArgument(
+        app, run, "check", "Validate a wall config and compile its shaders (glslang)", "config",
+        "Wall config (.toml, see configs/README.md)", [](const std::string& config) {
+            const std::vector<std::string> problems = checkWall(config);  // config problems throw InputError
             for (const std::string& p : problems) std::fprintf(stderr, "rtwall: error: %s\n", p.c_str());
             if (!problems.empty()) return 1;
-            const WallConfig wall = loadWallConfig(*config);
+            const WallConfig wall = loadWallConfig(config);
             // With display nodes, which node drives which screens: what an installer wires up.
             std::string nodes;
             for (const std::string& n : wall.nodes()) {
@@ -27,11 +25,10 @@ void addCheck(CLI::App& app, Run& run) {
                 for (const ScreenConfig& s : wall.screens)
                     if (s.node == n) nodes += " " + s.name;
             }
-            std::printf("%s: ok: '%s', %dx%d wall pixels, %zu screen%s, shaders compile%s\n", config->c_str(), wall.name.c_str(),
+            std::printf("%s: ok: '%s', %dx%d wall pixels, %zu screen%s, shaders compile%s\n", config.c_str(), wall.name.c_str(),
                         wall.width, wall.height, wall.screens.size(), wall.screens.size() == 1 ? "" : "s", nodes.c_str());
             return 0;
-        };
-    });
+        });
 }
 
 }  // namespace rtwall::cli

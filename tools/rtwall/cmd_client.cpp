@@ -31,16 +31,12 @@ void addClient(CLI::App& app, Run& run) {
 }
 
 void addKeys(CLI::App& app, Run& run) {
-    auto stem = std::make_shared<std::string>();
-    CLI::App* cmd = app.add_subcommand("keys", "Make a CURVE key pair: STEM.key (secret, mode 0600) and STEM.pub");
-    cmd->add_option("stem", *stem, "Path without extension, e.g. keys/master")->required();
-    cmd->callback([&run, stem] {
-        run = [stem] {
-            writeNewKeyPair(*stem);
-            std::printf("wrote %s.key (keep it secret) and %s.pub\n", stem->c_str(), stem->c_str());
-            return 0;
-        };
-    });
+    addCommandOfOneArgument(app, run, "keys", "Make a CURVE key pair: STEM.key (secret, mode 0600) and STEM.pub", "stem",
+                            "Path without extension, e.g. keys/master", [](const std::string& stem) {
+                                writeNewKeyPair(stem);
+                                std::printf("wrote %s.key (keep it secret) and %s.pub\n", stem.c_str(), stem.c_str());
+                                return 0;
+                            });
 }
 
 }  // namespace rtwall::cli

@@ -21,7 +21,7 @@ void addRun(CLI::App& app, Run& run) {
         int frames = -1, clients = -1, writeEvery = -1;
         std::string out, bind, cameraPath, wall, front, trace;
         bool insecure = false, headless = false, watch = false, noLocalNodes = false;
-        double targetFps = 0;
+        double targetFps = -1;  // not given
         PartView parts;
     };
     auto o = std::make_shared<Options>();
@@ -42,8 +42,9 @@ void addRun(CLI::App& app, Run& run) {
     cmd->add_flag("--insecure", o->insecure, "Allow a non-loopback bind without CURVE keys (says so loudly)");
     cmd->add_option("--bind", o->bind, "Endpoint for clients, e.g. tcp://0.0.0.0:7700 (default: loopback, any port)");
     cmd->add_option("--target-fps", o->targetFps,
-                    "Hold this frame rate: pick the most accurate settings on the front that do (codec, JPEG quality, tile size)")
-        ->check(CLI::Range(0.1, 10000.0));
+                    "Hold this frame rate: pick the most accurate settings on the front that do (codec, JPEG quality, tile "
+                    "size, resolution); 0: none (the embedded default holds " + std::to_string(int(kDefaultTargetFps)) + ")")
+        ->check(CLI::Range(0.0, 10000.0));
     cmd->add_option("--front", o->front,
                     "Measured front for --target-fps (.toml from tools/speed_accuracy.py); default: calibrate codecs and tile "
                     "sizes on the first frames");
@@ -59,16 +60,22 @@ void addRun(CLI::App& app, Run& run) {
                 c.framesGiven = true;
             }
             if (o->clients >= 0) c.cluster.localClients = o->clients;
-            if (o->writeEvery >= 0) c.writeEvery = o->writeEvery;
+            if (o->writeEvery >= 0) {
+                c.writeEvery = o->writeEvery;
+                if (c.loadedWall) c.loadedWall->writeEvery = o->writeEvery;  // the default's projector images too
+            }
             if (!o->out.empty()) c.out = o->out;
             if (!o->bind.empty()) c.cluster.bind = o->bind;
             if (!o->cameraPath.empty()) c.cameraPath = o->cameraPath;
             if (o->insecure) c.cluster.insecure = true;
             if (o->noLocalNodes) c.localDisplayNodes = false;
-            if (!o->wall.empty()) c.wall = o->wall;
+            if (!o->wall.empty()) {
+                c.wall = o->wall;
+                c.loadedWall.reset();
+            }
             c.headless = o->headless;
             c.watch = o->watch;
-            c.targetFps = o->targetFps;
+            if (o->targetFps >= 0) c.targetFps = o->targetFps;
             c.front = o->front;
             c.trace = o->trace;
             c.parts = o->parts;

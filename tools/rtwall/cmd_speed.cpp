@@ -25,9 +25,7 @@ void addControlOptions(CLI::App* cmd, bench::ControlValues& values, std::initial
 }  // namespace
 
 void addCompare(CLI::App& app, Run& run) {
-    auto a = std::make_shared<BenchArgs<bench::CompareOptions>>();
-    bench::CompareOptions& o = a->options;
-    CLI::App* cmd = app.add_subcommand("compare", "Error of an image against a reference: RMSE, PSNR, SSIM, largest error");
+    auto [a, o, cmd] = benchCommand<bench::CompareOptions>(app, "compare", "Error of an image against a reference: RMSE, PSNR, SSIM, largest error");
     cmd->add_option("image", o.test, "The image to judge (PNG)")->required();
     cmd->add_option("reference", o.reference, "The reference (PNG, same size)")->required();
     cmd->add_option("--diff", o.diff, "Write a false-colour difference image (PNG)");
@@ -37,17 +35,14 @@ void addCompare(CLI::App& app, Run& run) {
 }
 
 void addReference(CLI::App& app, Run& run) {
-    auto a = std::make_shared<BenchArgs<bench::ReferenceOptions>>();
-    bench::ReferenceOptions& o = a->options;
-    CLI::App* cmd = app.add_subcommand(
+    auto [a, o, cmd] = benchCommand<bench::ReferenceOptions>(app, 
         "reference", "Render a converged reference image: many samples per pixel, on this PC (lossless, no cluster)");
     cmd->add_option("scene", o.scene, "Scene file (.toml), mesh file or builtin:NAME")->required();
     cmd->add_option("--out,-o", o.out, "Output PNG")->required();
-    cmd->add_option("--width", o.width, "Image width (overrides the scene)")->check(CLI::Range(1, 16384));
-    cmd->add_option("--height", o.height, "Image height (overrides the scene)")->check(CLI::Range(1, 16384));
+    addSizeOptions(cmd, o.width, o.height, 1, 16384, "Image", " (overrides the scene)");
     cmd->add_option("--camera", o.camera, "Scene camera (default: the first)");
     addControlOptions(cmd, o.controls, {"supersample", "prune", "gi_spp", "volume_step"});  // supersample: 8 x 8 unless given
-    cmd->add_option("--triangles", o.triangles, "Triangles of a builtin scene")->check(CLI::Range(int64_t(1000), int64_t(100'000'000)));
+    addTrianglesOption(cmd, o.triangles, "Triangles of a builtin scene");
     cmd->add_option("--frames", o.frames,
                     "Average this many frames in linear light (path tracing jitters samples per frame; an even count "
                     "also reports the error between its two halves, an estimate of the reference's own error)")
@@ -59,13 +54,10 @@ void addReference(CLI::App& app, Run& run) {
 }
 
 void addBenchTiles(CLI::App& bench, Run& run) {
-    auto a = std::make_shared<BenchArgs<bench::TilesOptions>>();
-    bench::TilesOptions& o = a->options;
-    CLI::App* cmd = bench.add_subcommand(
+    auto [a, o, cmd] = benchCommand<bench::TilesOptions>(bench, 
         "tiles", "Per-tile render, encode and decode times (a tile profile for 'rtwall simulate') and each codec's error");
     cmd->add_option("scene", o.scene, "Scene file (.toml), mesh file or builtin:NAME")->required();
-    cmd->add_option("--width", o.width, "Wall image width (overrides the scene)")->check(CLI::Range(16, 16384));
-    cmd->add_option("--height", o.height, "Wall image height (overrides the scene)")->check(CLI::Range(16, 16384));
+    addSizeOptions(cmd, o.width, o.height, 16, 16384, "Wall image", " (overrides the scene)");
     addControlOptions(cmd, o.controls, {"scale", "tile", "supersample", "prune", "gi_spp", "volume_step"});  // scale: upscaled for the error
     cmd->add_option("--shading", o.shading, "full or eyelight (overrides the scene)")->check(CLI::IsMember({"full", "eyelight"}));
     cmd->add_option("--camera", o.camera, "Scene camera (default: the first)");
@@ -75,14 +67,12 @@ void addBenchTiles(CLI::App& bench, Run& run) {
     cmd->add_option("--reference", o.reference, "Reference PNG at the wall's resolution (rtwall reference): errors are reported");
     cmd->add_option("--profile-out", o.profileOut, "Write the tile profile (TOML) for 'rtwall simulate'");
     cmd->add_option("--save-image", o.saveImage, "Write frame 0 as rendered (lossless, at the render resolution)");
-    cmd->add_option("--triangles", o.triangles, "Triangles of a builtin scene")->check(CLI::Range(int64_t(1000), int64_t(100'000'000)));
+    addTrianglesOption(cmd, o.triangles, "Triangles of a builtin scene");
     callBenchmark(cmd, run, a, bench::tiles);
 }
 
 void addBenchCodecs(CLI::App& bench, Run& run) {
-    auto a = std::make_shared<BenchArgs<bench::CodecsOptions>>();
-    bench::CodecsOptions& o = a->options;
-    CLI::App* cmd = bench.add_subcommand("codecs", "Size and error of any image (PNG) through each tile codec");
+    auto [a, o, cmd] = benchCommand<bench::CodecsOptions>(bench, "codecs", "Size and error of any image (PNG) through each tile codec");
     cmd->add_option("image", o.image, "The image (PNG)")->required();
     cmd->add_option("--codecs", o.codecs, "Comma-separated codecs: raw, lz4, zstd[:LEVEL], jpeg[:QUALITY]");
     cmd->add_option("--tile", o.tile, "Tile size")->check(CLI::Range(4, 1024));
@@ -91,9 +81,7 @@ void addBenchCodecs(CLI::App& bench, Run& run) {
 }
 
 void addSimulate(CLI::App& app, Run& run) {
-    auto a = std::make_shared<BenchArgs<bench::SimulateOptions>>();
-    bench::SimulateOptions& o = a->options;
-    CLI::App* cmd = app.add_subcommand("simulate", "Frames/s, utilisation and link load of N clients: the real tile scheduler "
+    auto [a, o, cmd] = benchCommand<bench::SimulateOptions>(app, "simulate", "Frames/s, utilisation and link load of N clients: the real tile scheduler "
                                                    "against simulated clients and links, fed with a tile profile");
     cmd->add_option("--profile", o.profile, "Tile profile (rtwall bench tiles --profile-out)")->required();
     cmd->add_option("--codec", o.codec, "Which of the profile's codecs, e.g. lz4 or jpeg:75 (default: the first)");

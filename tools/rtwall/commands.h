@@ -5,10 +5,22 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <memory>
+#include <string>
 
 namespace rtwall::cli {
 
 using Run = std::function<int()>;
+
+// A command of `parent` whose one required argument is a string (a path): running it is `work(argument)`.
+inline void addCommandOfOneArgument(CLI::App& parent, Run& run, const std::string& name, const std::string& description,
+                                    const std::string& argument, const std::string& help,
+                                    std::function<int(const std::string&)> work) {
+    auto value = std::make_shared<std::string>();
+    CLI::App* cmd = parent.add_subcommand(name, description);
+    cmd->add_option(argument, *value, help)->required();
+    cmd->callback([&run, value, work] { run = [value, work] { return work(*value); }; });
+}
 
 void addRender(CLI::App& app, Run& run);
 void addInfo(CLI::App& app, Run& run);

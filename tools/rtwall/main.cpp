@@ -10,34 +10,18 @@ int main(int argc, char** argv) {
     CLI::App app{"rtwall: interactive distributed ray tracing for tiled display walls"};
     app.require_subcommand(1);
     rtwall::cli::Run run;
-    rtwall::cli::addRender(app, run);
-    rtwall::cli::addInfo(app, run);
-    rtwall::cli::addClient(app, run);
-    rtwall::cli::addDisplay(app, run);
-    rtwall::cli::addRun(app, run);
-    rtwall::cli::addControls(app, run);
-    rtwall::cli::addKeys(app, run);
-    rtwall::cli::addGen(app, run);
-    rtwall::cli::addCompare(app, run);
-    rtwall::cli::addReference(app, run);
-    rtwall::cli::addSimulate(app, run);
-    rtwall::cli::addTrackerSim(app, run);
+    using namespace rtwall::cli;
+    // In the order --help lists them.
+    for (auto add : {addRender, addInfo, addClient, addDisplay, addRun, addControls, addKeys, addGen, addCompare,
+                     addReference, addSimulate, addTrackerSim})
+        add(app, run);
     CLI::App* bench = app.add_subcommand("bench", "Benchmarks that print their figures (JSON with --json)");
     bench->require_subcommand(1);
-    rtwall::cli::addBenchKernel(*bench, run);
-    rtwall::cli::addBenchCluster(*bench, run);
-    rtwall::cli::addBenchFaults(*bench, run);
-    rtwall::cli::addBenchAttack(*bench, run);
-    rtwall::cli::addBenchChaos(*bench, run);
-    rtwall::cli::addBenchUpdates(*bench, run);
-    rtwall::cli::addBenchLatency(*bench, run);
-    rtwall::cli::addCheck(app, run);
-    rtwall::cli::addBenchDisplay(*bench, run);
-    rtwall::cli::addBenchScene(*bench, run);
-    rtwall::cli::addBenchTiles(*bench, run);
-    rtwall::cli::addBenchCodecs(*bench, run);
-    rtwall::cli::addBenchShading(*bench, run);
-    rtwall::cli::addBenchTessellation(*bench, run);
+    for (auto add : {addBenchKernel, addBenchCluster, addBenchFaults, addBenchAttack, addBenchChaos, addBenchUpdates,
+                     addBenchLatency, addBenchDisplay, addBenchScene, addBenchTiles, addBenchCodecs, addBenchShading,
+                     addBenchTessellation})
+        add(*bench, run);
+    addCheck(app, run);
 
     try {
         app.parse(argc, argv);
@@ -50,19 +34,19 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "rtwall: error: %s (see 'rtwall --help')\n", e.what());
         return 2;
     }
+    // Whatever a command throws is one line and exit status 1 (130 when interrupted).
+    const auto fail = [](const char* what) {
+        std::fprintf(stderr, "rtwall: error: %s\n", what);
+        return 1;
+    };
     try {
         return run ? run() : 2;
     } catch (const rtwall::Cancelled&) {
         std::fprintf(stderr, "rtwall: interrupted\n");
         return 130;
-    } catch (const rtwall::InputError& e) {
-        std::fprintf(stderr, "rtwall: error: %s\n", e.what());
-        return 1;
     } catch (const std::bad_alloc&) {
-        std::fprintf(stderr, "rtwall: error: out of memory\n");
-        return 1;
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "rtwall: error: %s\n", e.what());
-        return 1;
+        return fail("out of memory");
+    } catch (const std::exception& e) {  // an InputError too: its message names the file and line
+        return fail(e.what());
     }
 }

@@ -1,6 +1,7 @@
 // `rtwall render`'s option values: numbers, vectors and points, the camera, the region.
 #include "render_args.h"
 
+#include <rtwall/engine_testing.h>
 #include <rtwall/vec.h>
 
 #include <array>
@@ -105,7 +106,7 @@ TraceOptions traceOptionsOf(const RenderOptions& o) {
     if (o.clientId >= 0) trace.clientId = uint32_t(o.clientId);
     if (!o.fault.empty()) {
         const std::vector<double> f = parseNumbers(o.fault, 3, "--inject-tile-fault");
-        trace.fault = InjectedTileFault{uint32_t(f[0]), int(f[1]), int(f[2])};
+        trace.fault = injectFault({uint32_t(f[0]), int(f[1]), int(f[2])});
     }
     return trace;
 }

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <rtwall/engine.h>
+#include <rtwall/engine_testing.h>
 
 #include <atomic>
 #include <cstdint>

@@ -96,7 +96,7 @@ struct TrackingConfig {
     double minCutoff = 1.0;               // one-euro filter: cutoff (Hz) of a still head
     double beta = 20.0;                   //   cutoff added per m/s of head speed
     double derivativeCutoff = 1.0;        //   cutoff (Hz) of the speed estimate
-    // The flystick (wand): its controls, and how it navigates (README, "Flystick").
+    // The flystick (wand): its controls, and how it navigates (docs/tracking.md, "Flystick").
     int buttonPick = 0;                   // held: pick the object the wand points at and drag it
     int buttonMode = 1;                   // pressed: fly <-> orbit
     int buttonHome = 2;                   // pressed: back to the start camera
@@ -190,6 +190,8 @@ ShaderSource presentFragmentShader();
 std::vector<std::string> checkShader(const ShaderSource& source, bool fragment);
 // Everything `rtwall check` does: the config (throws InputError) and every shader it uses.
 std::vector<std::string> checkWall(const std::filesystem::path& file);
+// The shaders of a wall already loaded (or given in code).
+std::vector<std::string> checkWall(const WallConfig& wall);
 
 // ---------------------------------------------------------------------------------------------
 // Mapping a wall image to the screens (the CPU reference of present.frag)
@@ -281,7 +283,7 @@ struct InputState {
 class GlPresenter {
 public:
     struct Options {
-        // glTexSubImage2D measured faster than PBO streaming (README, bench display): with Mesa's
+        // glTexSubImage2D measured faster than PBO streaming (docs/benchmarks.md, bench display): with Mesa's
         // llvmpipe a PBO is one more CPU copy, not a DMA transfer. Measure again on a real GPU.
         UploadMethod upload = UploadMethod::TexSubImage;
         bool visible = true;
@@ -393,7 +395,7 @@ public:
     void setPose(const ViewPose& p) { pose_ = p; }
     Mode mode() const { return mode_; }
     void setMode(Mode m) { mode_ = m; }
-    // The flystick's joystick over dt seconds (README, "Flystick"). Fly: y moves along the wand's
+    // The flystick's joystick over dt seconds (docs/tracking.md, "Flystick"). Fly: y moves along the wand's
     // pointing direction, x turns about the up axis through the camera. Orbit: x turns the camera
     // about the vertical axis through `centre`, y moves it towards the centre (never past it).
     // True when the pose changed.

@@ -101,7 +101,7 @@ private:
 std::string writeDTrackPacket(const DTrackFrame& frame);
 
 // ---------------------------------------------------------------------------------------------
-// VRPN: the client side of what a tracker needs (README, "VRPN"), written from VRPN 07's
+// VRPN: the client side of what a tracker needs (docs/tracking.md, VRPN), written from VRPN 07's
 // protocol description (Format_Of_Protocol.txt) and sources. A session over TCP: both sides
 // send a 24-byte cookie "vrpn: ver. 07.xx  L" (L: the remote log mode, '0'..'3'; NUL padded),
 // then messages, each a header of six 32-bit big-endian integers (length = 24 + payload length,

@@ -59,7 +59,7 @@ public:
         desc_.sections[section] = plane;
         if (pickScene_) pickScene_->setSection(section, plane);  // what is cut away cannot be picked
     }
-    // Hide, isolate and highlight parts by name (README "Parts"): `view` on top of what the scene
+    // Hide, isolate and highlight parts by name (docs/design-review.md, "Parts"): `view` on top of what the scene
     // was loaded with (its [parts], `--hide` ...), unless `keepLoaded` is false (show all). Only
     // the instances whose visibility changes are sent. Throws InputError for a pattern that
     // matches nothing, before anything changed.

@@ -113,8 +113,8 @@ bool WallInput::measureHit(LiveScene& scene, const std::optional<PickResult>& hi
     }
     // The hit point again from the ray, in double, with the rebased scene's origin added back:
     // the float t Embree found (a few ulps, ~1e-7 of the distance from the eye) is then the only
-    // single-precision error, however far from the file's origin the model lies (README,
-    // "Measuring").
+    // single-precision error, however far from the file's origin the model lies
+    // (docs/design-review.md, "Measuring").
     const std::array<double, 3>& origin = scene.desc().origin;
     const double t = hit->t;
     const std::array<double, 3> p{origin[0] + (double(o.x) + t * double(d.x)), origin[1] + (double(o.y) + t * double(d.y)),

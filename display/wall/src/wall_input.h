@@ -59,7 +59,7 @@ public:
     bool measurePick(LiveScene& scene, double wallX, double wallY);
     const std::optional<Measurement>& measurement() const { return measurement_; }
     // Section planes (WallSession::setSection): sets slot `index` and makes it the active plane,
-    // the one the section keys (README, "Section planes") move; -1: none.
+    // the one the section keys (docs/design-review.md, "Section planes") move; -1: none.
     void setSection(LiveScene& scene, uint32_t index, const SectionPlane& plane);
     int activeSection() const { return activeSection_; }
     // Parts by name (WallSession::setPartView): applied to the scene, logged, on the overlay.

@@ -139,7 +139,7 @@ struct MeshDesc {
     std::shared_ptr<const TriangleMesh> mesh;
 };
 
-// How an instance is shown (design reviews: hide, isolate and highlight parts, README "Parts").
+// How an instance is shown (design reviews: hide, isolate and highlight parts, docs/design-review.md, "Parts").
 // Hidden: not in the scene at all (no pixels, no shadow, no reflection, not picked).
 // Highlighted: its surface colour is multiplied by kHighlightTint and it glows with
 // kHighlightGlow, so it stands out lit or in shadow, whatever its material.
@@ -189,12 +189,7 @@ struct RenderSettings {
     bool operator==(const RenderSettings&) const = default;
 };
 
-// Tests only: the tile of `frame` that holds pixel (x, y) throws instead of rendering, as a bug
-// or a failed allocation would, so that failure reports and their replays can be tested.
-struct InjectedTileFault {
-    uint32_t frame = 0;
-    int x = 0, y = 0;
-};
+struct InjectedTileFault;  // a test hook: rtwall/engine_testing.h
 
 // How this process traces, as opposed to what the image shows (RenderSettings): these never
 // travel to a render client (each has its own) and never change a shaded pixel's bytes; only
@@ -204,7 +199,7 @@ struct TraceOptions {
     // this CPU's widest (packetWidth()), or 4, 8 or 16 forced. Every width gives the same bytes.
     int packetWidth = 0;
     uint32_t clientId = 0;                     // the id the master gave this render client: the client view's colour
-    std::optional<InjectedTileFault> fault;    // tests only
+    std::shared_ptr<const InjectedTileFault> fault;  // null outside tests (rtwall/engine_testing.h)
 };
 
 // How each mesh's BVH is built ([bvh] in scene files): memory against build and render speed.
@@ -323,7 +318,7 @@ void writeVolumeVti(const std::filesystem::path& file, int nx, int ny, int nz, c
 SceneDesc sceneFromMeshFile(const std::filesystem::path& file);
 SceneDesc sceneFromMeshFile(const std::filesystem::path& file, const SceneLoadOptions& options);
 SceneDesc sceneFromAssembly(const Assembly& assembly, const std::filesystem::path& file);
-// How an assembly's metallic-roughness material becomes an rtwall material (README.md, "Formats").
+// How an assembly's metallic-roughness material becomes an rtwall material (docs/assemblies.md, "Materials").
 Material materialFromAssembly(const AssemblyMaterial& material);
 
 // Scenes built in code, shared by tests, benchmarks and examples. "knots": twelve distinct

@@ -76,6 +76,7 @@ struct RunConfig {
     std::filesystem::path cameraPath;     // keyframes to follow (replaces the orbit)
     int width = 0, height = 0;            // override the scene's image size (0: the scene's)
     std::filesystem::path wall;           // a wall config; empty: one window of the image's size
+    std::optional<WallConfig> loadedWall; // a wall given in code (the embedded default's): used instead of loading `wall`
     // Given on the command line only.
     bool headless = false;                // never open windows
     bool watch = false;                   // reload the scene file when it changes on disk
@@ -100,13 +101,19 @@ struct RunConfig {
     bool viewsInOnePass = true;
     // Where the session's progress lines go (stdout by default).
     std::function<void(const std::string&)> log;
+
+    bool hasWall() const { return loadedWall || !wall.empty(); }
 };
 
 // Reads a run config; every problem is an InputError naming the file, line and key.
 RunConfig readRunConfig(const std::filesystem::path& file);
-// The embedded default of `rtwall run` without a config: the built-in knot field, 800x600, two
-// local clients, 60 frames orbiting, every 30th written.
+// The embedded default of `rtwall run` without a config: the built-in knot field on the reference
+// wall (configs/wall/projectors-2x2.toml, built into the binary: 2x2 projectors, 1600x1200), two
+// local clients, 60 frames orbiting, every 30th written (and each projector's image of it where
+// the wall is headless), the operating point holding kDefaultTargetFps.
 RunConfig defaultRunConfig();
+// The frame rate the embedded default holds (`--target-fps`): interactive on a 2-core PC.
+inline constexpr double kDefaultTargetFps = 10.0;
 
 // ---- Controls: what the operating point and the speed/accuracy sweep change ----------------------
 
@@ -170,7 +177,7 @@ struct RunSummary {
 // The lines `rtwall run` prints at the end.
 std::string describeSummary(const RunSummary& summary, double targetFps);
 
-// Measuring on the wall (key M, README "Measuring"): two picked surface points in the scene
+// Measuring on the wall (key M, docs/design-review.md, "Measuring"): two picked surface points in the scene
 // FILE's coordinates (a rebased scene's `origin` added back, in double precision) and their
 // distance in scene units (scenes declare no unit).
 struct Measurement {
@@ -179,7 +186,7 @@ struct Measurement {
     double distance = 0;                     // |b - a| once b is set
 };
 
-// The tracked wand (flystick) as the session's tools see it (README, "Flystick"): the last
+// The tracked wand (flystick) as the session's tools see it (docs/tracking.md, "Flystick"): the last
 // step's pose in the room and in the world, its buttons and joystick, and what it holds.
 struct WandPose {
     Float3 wallPosition, wallDirection;   // wall coordinates (metres); the direction is unit
@@ -221,7 +228,7 @@ public:
     // Section plane slot `index` (< kMaxSections), in the scene's coordinates (relative to
     // scene().origin, as lights are): a differential update to every client, O(1), no BVH is
     // rebuilt. It becomes the active plane (the one the section keys move; -1: none). The wall's
-    // keys (README, "Section planes") and a wand come here alike. Throws for a bad slot or a
+    // keys (docs/design-review.md, "Section planes") and a wand come here alike. Throws for a bad slot or a
     // plane that is not finite or has a zero normal, before anything changed.
     void setSection(uint32_t index, const SectionPlane& plane);
     int activeSection() const;
@@ -241,7 +248,7 @@ public:
     // The measurement under way: nothing before A is picked (and after the mode is left).
     std::optional<Measurement> measurement() const;
     void showTileOwners(bool on);  // the false-colour view of who rendered each tile (key T)
-    // Parts by name (README "Parts"; keys X hide, I isolate, G highlight, U show all, on the part
+    // Parts by name (docs/design-review.md, "Parts"; keys X hide, I isolate, G highlight, U show all, on the part
     // a Ctrl+click picked): `view` on top of what the scene was loaded with (its [parts] and
     // RunConfig::parts). Only the instances whose visibility changes travel. Throws InputError
     // for a pattern that matches nothing, before anything changed. showAllParts also shows what
