@@ -257,28 +257,13 @@ TEST(ClusterAssets, ATamperedAssetIsRejectedAndCounted) {
 
     // The state: the zoo without its volume (so that only the texture is an asset).
     desc.materials[9] = test::material("plain", MaterialType::Lambert, {0.5f, 0.5f, 0.5f});
-    SceneSnapshot snap;
-    std::vector<std::vector<uint8_t>> meshBytes;
-    for (const MeshDesc& m : desc.meshes) {
-        meshBytes.push_back(encodeMesh(*m.mesh));
-        snap.meshes.push_back({m.name, "shape:none", hashBytes(meshBytes.back().data(), meshBytes.back().size()),
-                               meshBytes.back().size()});
-    }
-    snap.materials = desc.materials;
-    snap.instances = desc.instances;
-    snap.lights = desc.lights;
+    test::ScriptedScene scripted = test::scriptedScene(desc);
+    SceneSnapshot& snap = scripted.snapshot;
     const std::vector<FrameView> mono{FrameView{desc.cameras.front(), {}, 0, 0}};  // a frame's one view (protocol 13)
-    snap.settings = desc.settings;
     const Hash128 textureHash = hashBytes(realBytes.data(), realBytes.size());
     snap.assets.push_back({texture, textureHash, realBytes.size()});
     fake.send(peer, snap);
-    for (size_t i = 0; i < desc.meshes.size(); ++i) {
-        const auto req = fake.expect(MsgType::MeshRequest, 10000);
-        ASSERT_TRUE(req);
-        const MeshRequest r = decodePayload<MeshRequest>(req->payload.data(), req->payload.size());
-        for (size_t k = 0; k < snap.meshes.size(); ++k)
-            if (snap.meshes[k].hash == r.hash) fake.send(peer, MeshData{r.hash, meshBytes[k]});
-    }
+    ASSERT_NO_FATAL_FAILURE(test::serveMeshes(fake, peer, scripted));
     const auto assetReq = fake.expect(MsgType::AssetRequest, 10000);
     ASSERT_TRUE(assetReq) << "the client asks for the file it does not have";
     EXPECT_EQ(decodePayload<AssetRequest>(assetReq->payload.data(), assetReq->payload.size()).hash, textureHash);

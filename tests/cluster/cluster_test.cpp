@@ -881,26 +881,11 @@ TEST(Cluster, TheClientIgnoresReplayedMasterMessages) {
     const std::string peer = hello->peer;
     fake.send(peer, Welcome{1, CodecSettings{}, 4, 100, 3000});
 
-    SceneSnapshot snap;
-    std::vector<std::vector<uint8_t>> meshBytes;
-    for (const MeshDesc& m : desc.meshes) {
-        meshBytes.push_back(encodeMesh(*m.mesh));
-        snap.meshes.push_back({m.name, "shape:none", hashBytes(meshBytes.back().data(), meshBytes.back().size()),
-                               meshBytes.back().size()});
-    }
-    snap.materials = desc.materials;
-    snap.instances = desc.instances;
-    snap.lights = desc.lights;
+    test::ScriptedScene scripted = test::scriptedScene(desc);
+    SceneSnapshot& snap = scripted.snapshot;
     const std::vector<FrameView> mono{FrameView{desc.cameras.front(), {}, 0, 0}};  // a frame's one view (protocol 13)
-    snap.settings = desc.settings;
     const std::vector<uint8_t> oldSnapshot = fake.send(peer, snap);
-    for (size_t i = 0; i < desc.meshes.size(); ++i) {
-        const auto req = fake.expect(MsgType::MeshRequest, 10000);
-        ASSERT_TRUE(req);
-        const MeshRequest r = decodePayload<MeshRequest>(req->payload.data(), req->payload.size());
-        for (size_t k = 0; k < snap.meshes.size(); ++k)
-            if (snap.meshes[k].hash == r.hash) fake.send(peer, MeshData{r.hash, meshBytes[k]});
-    }
+    ASSERT_NO_FATAL_FAILURE(test::serveMeshes(fake, peer, scripted));
     ASSERT_TRUE(fake.expect(MsgType::Ready, 30000));
     const std::vector<uint8_t> oldBegin = fake.send(peer, FrameBegin{1, 0, TilePixels::Srgb8, mono}, 1);
     ASSERT_TRUE(fake.expect(MsgType::TileRequest, 10000));
@@ -959,26 +944,11 @@ TEST(Cluster, AClientReportsAFailedTileWithItsFrameAndPixels) {
     ASSERT_TRUE(hello);
     const std::string peer = hello->peer;
     fake.send(peer, Welcome{1, CodecSettings{}, 4, 100, 3000});
-    SceneSnapshot snap;
-    std::vector<std::vector<uint8_t>> meshBytes;
-    for (const MeshDesc& m : desc.meshes) {
-        meshBytes.push_back(encodeMesh(*m.mesh));
-        snap.meshes.push_back({m.name, "shape:none", hashBytes(meshBytes.back().data(), meshBytes.back().size()),
-                               meshBytes.back().size()});
-    }
-    snap.materials = desc.materials;
-    snap.instances = desc.instances;
-    snap.lights = desc.lights;
+    test::ScriptedScene scripted = test::scriptedScene(desc);
+    SceneSnapshot& snap = scripted.snapshot;
     const std::vector<FrameView> mono{FrameView{desc.cameras.front(), {}, 0, 0}};  // a frame's one view (protocol 13)
-    snap.settings = desc.settings;
     fake.send(peer, snap);
-    for (size_t i = 0; i < desc.meshes.size(); ++i) {
-        const auto req = fake.expect(MsgType::MeshRequest, 10000);
-        ASSERT_TRUE(req);
-        const MeshRequest r = decodePayload<MeshRequest>(req->payload.data(), req->payload.size());
-        for (size_t k = 0; k < snap.meshes.size(); ++k)
-            if (snap.meshes[k].hash == r.hash) fake.send(peer, MeshData{r.hash, meshBytes[k]});
-    }
+    ASSERT_NO_FATAL_FAILURE(test::serveMeshes(fake, peer, scripted));
     ASSERT_TRUE(fake.expect(MsgType::Ready, 30000));
     // Frame 1's tile 5 renders; frame 2's tile 0 too, its tile 5 fails.
     fake.send(peer, FrameBegin{1, 0, TilePixels::Srgb8, mono}, 1);

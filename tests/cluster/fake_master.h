@@ -5,6 +5,7 @@
 
 #include "protocol.h"
 
+#include <gtest/gtest.h>
 #include <zmq.hpp>
 
 #include <chrono>
@@ -72,5 +73,37 @@ private:
     zmq::context_t ctx_;
     zmq::socket_t router_;
 };
+
+// A scene as a master sends it: its snapshot, whose meshes[k] has the bytes meshBytes[k].
+struct ScriptedScene {
+    cluster::SceneSnapshot snapshot;
+    std::vector<std::vector<uint8_t>> meshBytes;
+};
+
+inline ScriptedScene scriptedScene(const SceneDesc& desc) {
+    ScriptedScene s;
+    for (const MeshDesc& m : desc.meshes) {
+        s.meshBytes.push_back(cluster::encodeMesh(*m.mesh));
+        const std::vector<uint8_t>& bytes = s.meshBytes.back();
+        s.snapshot.meshes.push_back({m.name, "shape:none", cluster::hashBytes(bytes.data(), bytes.size()), bytes.size()});
+    }
+    s.snapshot.materials = desc.materials;
+    s.snapshot.instances = desc.instances;
+    s.snapshot.lights = desc.lights;
+    s.snapshot.settings = desc.settings;
+    return s;
+}
+
+// Answers the client's request for each of the scene's meshes (10 s each). Fatal failures:
+// call it in ASSERT_NO_FATAL_FAILURE.
+inline void serveMeshes(FakeMaster& fake, const std::string& peer, const ScriptedScene& scene) {
+    for (size_t i = 0; i < scene.meshBytes.size(); ++i) {
+        const auto req = fake.expect(cluster::MsgType::MeshRequest, 10000);
+        ASSERT_TRUE(req);
+        const auto r = cluster::decodePayload<cluster::MeshRequest>(req->payload.data(), req->payload.size());
+        for (size_t k = 0; k < scene.snapshot.meshes.size(); ++k)
+            if (scene.snapshot.meshes[k].hash == r.hash) fake.send(peer, cluster::MeshData{r.hash, scene.meshBytes[k]});
+    }
+}
 
 }  // namespace rtwall::test

@@ -4,7 +4,7 @@
 // with the other. Loopback only; every wait is bounded.
 #include "display_test_util.h"
 
-#include "../cluster/child_process.h"
+#include "child_process.h"
 
 #include <rtwall/display.h>
 

@@ -6,7 +6,7 @@
 // node says so in one line and runs on. Loopback only; every wait is bounded.
 #include "display_test_util.h"
 
-#include "../cluster/child_process.h"
+#include "child_process.h"
 
 #include <rtwall/engine.h>
 
