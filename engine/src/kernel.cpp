@@ -38,11 +38,28 @@ struct Scratch {
     std::vector<Color> accum;
     std::vector<uint32_t> pixelRays;   // false-colour views: rays per pixel
     std::vector<uint16_t> pixelDepth;  // and the deepest ray of each pixel
+    // Depth with the tile (issue 27): each pixel's primary-ray hit distance, null when the
+    // caller asked for none (then nothing is recorded and the colour path is unchanged).
+    std::vector<float> distance;
+    float* distanceOut = nullptr;
 };
 
 // Per-thread scratch buffers: grown to the largest tile once, then reused, so the hot path
 // does not allocate.
 thread_local Scratch tScratch;
+
+// Each valid lane's primary hit distance, the nearest of the pixel's samples (a pixel's
+// sub-pixel samples may hit different surfaces; the warp moves the pixel with its nearest one,
+// so a foreground edge is never pushed behind what it covers). Lanes that hit nothing, or that
+// section planes cut away entirely, keep kBackgroundDepth. Both kernels write the same tfar and
+// geomID into the packet, so they record the same distances.
+template <int K, class RayHitK>
+void recordDistances(const RayHitK& rh, const int* valid, const uint32_t* pixel, float* distance) {
+    for (int k = 0; k < K; ++k) {
+        if (!valid[k] || rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+        distance[pixel[k]] = std::min(distance[pixel[k]], rh.ray.tfar[k]);
+    }
+}
 
 // The primary-ray pass of one tile. Both kernels run this same code and differ only in how
 // the packet is handed to Embree: whole (rtcIntersectK) or lane by lane (rtcIntersect1, with
@@ -138,6 +155,7 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
                             intersectLanes<K>(traceValid, s.top, &ctx, rh);
                         }
                         if (clipping) capPacket<K>(s, traced, enter, rh);
+                        if (sc.distanceOut) recordDistances<K>(rh, valid, pixel, sc.distanceOut);
                         if (eyeLight) {
                             shadeEyeLightPacket<K>(shading, rh, valid, pixel, sampleWeight, sc.accum.data());
                             continue;
@@ -252,11 +270,18 @@ Color ramp(float x) {
 }
 
 // The whole tile into sc.accum (linear RGB), and the per-pixel counts a false-colour view needs.
+// With `depth`, also each pixel's primary hit distance into sc.distance.
 TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileRect& rect, uint32_t frame,
-                         const RenderSettings& settings, const TraceOptions& trace, Scratch& sc);
-// The same, then quantised (or false-coloured) into `out`.
+                         const RenderSettings& settings, const TraceOptions& trace, bool depth, Scratch& sc);
+// The same, then quantised (or false-coloured) into `out`, and the distances into `depth`.
 TileStats renderTileTo(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
-                       const RenderSettings& settings, TileView out, const TraceOptions& trace);
+                       const RenderSettings& settings, TileView out, DepthView depth, const TraceOptions& trace);
+
+// sc.distance (w x h) into the caller's rows.
+void copyDistances(const Scratch& sc, int w, int h, DepthView depth) {
+    for (int j = 0; j < h; ++j)
+        std::copy_n(sc.distance.data() + size_t(j) * size_t(w), size_t(w), depth.data + size_t(j) * depth.stride);
+}
 
 // Runs one tile's work; whatever it throws leaves as a TileError that says which tile of which
 // frame failed (renderFrame's threads, a render client's threads and the CLI all report it).
@@ -320,15 +345,28 @@ TileError::TileError(uint32_t frame, const TileRect& rect, const std::string& re
 
 TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
                      const RenderSettings& settings, TileView out, const TraceOptions& trace) {
-    return asTileWork(rect, frame, trace, [&] { return renderTileTo(scene, camera, rect, frame, settings, out, trace); });
+    return renderTile(scene, camera, rect, frame, settings, out, DepthView{}, trace);
+}
+
+TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
+                     const RenderSettings& settings, TileView out, DepthView depth, const TraceOptions& trace) {
+    return asTileWork(rect, frame, trace,
+                      [&] { return renderTileTo(scene, camera, rect, frame, settings, out, depth, trace); });
 }
 
 TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
                            const RenderSettings& settings, float* out, size_t stride, const TraceOptions& trace) {
+    return renderTileLinear(scene, camera, rect, frame, settings, out, stride, DepthView{}, trace);
+}
+
+TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
+                           const RenderSettings& settings, float* out, size_t stride, DepthView depth,
+                           const TraceOptions& trace) {
     return asTileWork(rect, frame, trace, [&] {
         Scratch& sc = tScratch;
-        const TileStats stats = renderTileInto(scene.impl(), camera, rect, frame, settings, trace, sc);
+        const TileStats stats = renderTileInto(scene.impl(), camera, rect, frame, settings, trace, depth.data != nullptr, sc);
         const int w = rect.width(), h = rect.height();
+        if (depth.data) copyDistances(sc, w, h, depth);
         for (int j = 0; j < h; ++j)
             for (int i = 0; i < w; ++i) {
                 const Color& c = sc.accum[size_t(j) * w + i];
@@ -344,12 +382,13 @@ TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileR
 namespace {
 
 TileStats renderTileTo(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
-                       const RenderSettings& settings, TileView out, const TraceOptions& trace) {
+                       const RenderSettings& settings, TileView out, DepthView depth, const TraceOptions& trace) {
     Scratch& sc = tScratch;
     const auto t0 = std::chrono::steady_clock::now();
-    const TileStats stats = renderTileInto(scene.impl(), camera, rect, frame, settings, trace, sc);
+    const TileStats stats = renderTileInto(scene.impl(), camera, rect, frame, settings, trace, depth.data != nullptr, sc);
     const int w = rect.width(), h = rect.height();
     if (w <= 0 || h <= 0) return stats;
+    if (depth.data) copyDistances(sc, w, h, depth);
 
     // False-colour views replace the shaded colour.
     Color tileColor{0, 0, 0};
@@ -383,7 +422,7 @@ TileStats renderTileTo(const Scene& scene, const Camera& camera, const TileRect&
 }
 
 TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileRect& rect, uint32_t frame,
-                         const RenderSettings& settings, const TraceOptions& trace, Scratch& sc) {
+                         const RenderSettings& settings, const TraceOptions& trace, bool depth, Scratch& sc) {
     const int width = widthFor(trace);
     const Tracer tracer = tracerFor(settings.kernel, width);
     TileStats stats;
@@ -400,6 +439,8 @@ TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileR
     sc.next.clear();
     if (trackDepth) sc.pixelDepth.assign(size_t(w) * h, uint16_t(1));
     if (trackRays) sc.pixelRays.assign(size_t(w) * h, uint32_t(ss * ss * spp));
+    if (depth) sc.distance.assign(size_t(w) * h, kBackgroundDepth);
+    sc.distanceOut = depth ? sc.distance.data() : nullptr;
     // Primary rays: sub-pixel sample outermost, then one coherent packet-shaped pixel block
     // per batch, generated straight into Embree's SoA packet, traced and shaded while hot in L1.
     if (settings.kernel == KernelType::Packet) primaryPassFor<true>(width, s, camera, rect, frame, shading, sc);
@@ -496,6 +537,21 @@ Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings
     });
     if (stats) *stats = st;
     return img;
+}
+
+RenderedFrame renderFrameWithDepth(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+                                   uint32_t frame, const TraceOptions& trace) {
+    RenderedFrame out;
+    out.image.width = settings.width;
+    out.image.height = settings.height;
+    out.image.rgb.assign(size_t(std::max(0, settings.width)) * size_t(std::max(0, settings.height)) * 3, 0);
+    out.depth.assign(size_t(std::max(0, settings.width)) * size_t(std::max(0, settings.height)), kBackgroundDepth);
+    const size_t w = size_t(std::max(0, settings.width));
+    renderTilesInParallel(settings, [&](const TileRect& r) {
+        return renderTile(scene, camera, r, frame, settings, {out.image.pixel(r.x0, r.y0), w * 3},
+                          {out.depth.data() + size_t(r.y0) * w + size_t(r.x0), w}, trace);
+    });
+    return out;
 }
 
 std::vector<float> renderFrameLinear(const Scene& scene, const Camera& camera, const RenderSettings& settings,

@@ -15,6 +15,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -410,6 +411,11 @@ public:
                 corner_.z + du_.z * px + dv_.z * py};
     }
     Float3 origin() const { return origin_; }
+    // direction(px, py) = corner() + du() * px + dv() * py: what re-projection inverts to find
+    // where a world point lands in this camera's image.
+    Float3 corner() const { return corner_; }
+    Float3 du() const { return du_; }
+    Float3 dv() const { return dv_; }
 
 private:
     Float3 origin_, corner_, du_, dv_;
@@ -444,6 +450,22 @@ struct TileView {
     size_t stride = 0;
 };
 
+// Depth with every tile (issue 27): a pixel's depth is the distance from the camera's origin to
+// the surface its primary ray hits first, along that ray, in scene units (the nearest of its
+// sub-pixel samples). Distance along the ray rather than eye-space z because it means the same
+// for every camera, symmetric or off-axis, with no image plane to agree on: the warp puts the
+// point back at origin() + normalize(direction(x + 0.5, y + 0.5)) * depth. (Not the ray-depth
+// false-colour view, ViewMode::Depth, which counts bounces.)
+// Pixels whose rays hit nothing show the background and get kBackgroundDepth: the largest
+// float, not infinity, so that an infinity or NaN from anywhere else stays a hole to the warp.
+inline constexpr float kBackgroundDepth = std::numeric_limits<float>::max();
+
+// Where renderTile writes depth: pixel (rect.x0 + i, rect.y0 + j) goes to data[j*stride + i].
+struct DepthView {
+    float* data = nullptr;  // null: no depth (the colour path is exactly as without)
+    size_t stride = 0;      // floats per row
+};
+
 // Per-tile statistics for benchmarks and false-colour views.
 struct TileStats {
     uint64_t rays = 0;        // closest-hit rays traced
@@ -455,11 +477,18 @@ struct TileStats {
 // bytes never depend on which tile or client rendered it.
 TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
                      const RenderSettings& settings, TileView out, const TraceOptions& trace = {});
+// The same, and each pixel's depth (kBackgroundDepth above) into `depth`. The colour bytes are
+// those of the call without depth.
+TileStats renderTile(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
+                     const RenderSettings& settings, TileView out, DepthView depth, const TraceOptions& trace = {});
 
 // The same, in linear RGB floats (3 per pixel, `stride` floats per row), before quantisation:
 // for tests of the estimators. False-colour views are not applied.
 TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
                            const RenderSettings& settings, float* out, size_t stride, const TraceOptions& trace = {});
+TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
+                           const RenderSettings& settings, float* out, size_t stride, DepthView depth,
+                           const TraceOptions& trace = {});
 
 // Everything that decides one tile's pixels, as `rtwall render` can be told it.
 struct TileReplay {
@@ -526,6 +555,13 @@ std::vector<TileRect> makeTiles(int width, int height, int tileSize);
 // Renders a whole frame on settings.threads threads (tiles handed out on demand).
 Image renderFrame(const Scene& scene, const Camera& camera, const RenderSettings& settings, uint32_t frame = 0,
                   TileStats* stats = nullptr, const TraceOptions& trace = {});
+// A whole frame with its depth (width x height distances, rows top to bottom).
+struct RenderedFrame {
+    Image image;
+    std::vector<float> depth;
+};
+RenderedFrame renderFrameWithDepth(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+                                   uint32_t frame = 0, const TraceOptions& trace = {});
 // The same frame in linear RGB floats (3 per pixel, rows of settings.width pixels), as
 // renderTileLinear writes them: what Accumulator::addLinear averages.
 std::vector<float> renderFrameLinear(const Scene& scene, const Camera& camera, const RenderSettings& settings,
