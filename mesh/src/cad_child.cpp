@@ -52,18 +52,6 @@ namespace {
 
 [[noreturn]] void fail(const fs::path& file, const std::string& what) { throw InputError(file.string() + ": " + what); }
 
-bool writeAll(int fd, const void* data, size_t n) {
-    auto p = static_cast<const char*>(data);
-    while (n > 0) {
-        const ssize_t w = ::write(fd, p, n);
-        if (w < 0 && errno == EINTR) continue;
-        if (w <= 0) return false;
-        p += w;
-        n -= size_t(w);
-    }
-    return true;
-}
-
 // One message line: control characters (a newline inside a name) become spaces.
 void sendLine(int fd, char kind, const std::string& text) {
     std::string line(1, kind);
@@ -301,6 +289,18 @@ CadImport importCad(const fs::path& file, const AssemblyOptions& options, const 
     }
     finishChild(file, key, cacheFile, status, error, memfd.fd, result);
     return result;
+}
+
+bool writeAll(int fd, const void* data, size_t n) {
+    auto p = static_cast<const char*>(data);
+    while (n > 0) {
+        const ssize_t w = ::write(fd, p, n);
+        if (w < 0 && errno == EINTR) continue;
+        if (w <= 0) return false;
+        p += w;
+        n -= size_t(w);
+    }
+    return true;
 }
 
 }  // namespace rtwall::detail

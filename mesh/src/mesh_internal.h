@@ -12,6 +12,15 @@
 
 namespace rtwall::detail {
 
+// A row-major 3x4 affine transform: an assembly node's placement as the importers build it.
+using Affine = std::array<double, 12>;
+// a after b (a * b): b's placement, then a's; the importers compose a node's world this way.
+Affine composeAffine(const Affine& a, const Affine& b);
+
+// Writes all n bytes to fd, again after EINTR; false when it takes no more (the importers' child
+// processes and their pipes and memory files).
+bool writeAll(int fd, const void* data, size_t n);
+
 // The cache reader and the recentring step work on the buffers directly.
 struct MeshAccess {
     static MeshArray<float>& positions(TriangleMesh& m) { return m.positions_; }
