@@ -18,6 +18,18 @@ namespace {
 
 using test::fileBytes;
 
+// The shipped two-node wall (its text and its config) and the demo scene at the wall's size.
+struct TwoNodeWall {
+    std::string text;
+    WallConfig wall;
+    SceneDesc scene;
+};
+TwoNodeWall twoNodeWall() {
+    const std::filesystem::path configFile = test::sourceDir() / "configs/wall/two-nodes-2x2.toml";
+    const WallConfig wall = loadWallConfig(configFile);
+    return {fileBytes(configFile), wall, test::demoScene(wall.width, wall.height, 1)};
+}
+
 // The wall's "left" and "right" node processes and two client threads join `master`; `render`
 // makes frames until both nodes have presented three they held (the last one is compared), bounded.
 void runLeftAndRight(Master& master, test::ClientThreads& clients, const std::filesystem::path& dir,
@@ -29,10 +41,7 @@ void runLeftAndRight(Master& master, test::ClientThreads& clients, const std::fi
 }
 
 TEST(DisplayNodeProcesses, EachShowsItsHalfOfTheWallBitIdentical) {
-    const std::filesystem::path configFile = test::sourceDir() / "configs/wall/two-nodes-2x2.toml";
-    const std::string text = fileBytes(configFile);
-    const WallConfig wall = loadWallConfig(configFile);
-    SceneDesc scene = test::demoScene(wall.width, wall.height, 1);
+    auto [text, wall, scene] = twoNodeWall();
     const std::filesystem::path dir = test::scratchDir();
 
     test::ClientThreads clients;
@@ -92,10 +101,7 @@ TEST(DisplayNodeProcesses, StereoWallShowsBothEyesOfEachNodesScreensBitIdentical
 // join a keyed master and show their screens bit-identical; a node without keys is refused and
 // says why in one line, and gives up after its idle time.
 TEST(DisplayNodeProcesses, KeyedNodesWithTheLocalArgumentsWorkAndAKeylessOneIsRefused) {
-    const std::filesystem::path configFile = test::sourceDir() / "configs/wall/two-nodes-2x2.toml";
-    const std::string text = fileBytes(configFile);
-    const WallConfig wall = loadWallConfig(configFile);
-    SceneDesc scene = test::demoScene(wall.width, wall.height, 1);
+    auto [text, wall, scene] = twoNodeWall();
     const std::filesystem::path dir = test::scratchDir();
     writeNewKeyPair(dir / "master");
 
