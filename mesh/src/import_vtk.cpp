@@ -624,6 +624,7 @@ TriangleMesh loadVtk(VtkKind kind, const std::string& data, const std::string& n
     }
     if (pid == 0) {
         ::close(errPipe[0]);
+        dropInheritedCrashHandlers();
         int code = 4;
         try {
             ImportReport r;

@@ -17,10 +17,6 @@ using Affine = std::array<double, 12>;
 // a after b (a * b): b's placement, then a's; the importers compose a node's world this way.
 Affine composeAffine(const Affine& a, const Affine& b);
 
-// Writes all n bytes to fd, again after EINTR; false when it takes no more (the importers' child
-// processes and their pipes and memory files).
-bool writeAll(int fd, const void* data, size_t n);
-
 // The cache reader and the recentring step work on the buffers directly.
 struct MeshAccess {
     static MeshArray<float>& positions(TriangleMesh& m) { return m.positions_; }
@@ -56,6 +52,11 @@ std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const Impor
 // mapping) on a little-endian host, the mesh's arrays are views of `data`; otherwise copies.
 TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t sourceSize, int64_t sourceMtime,
                              const std::string& name, ImportReport* report, std::shared_ptr<const void> keepAlive);
+
+// For importers that run in a forked child (child_io.cpp): writes all `n` bytes (false on an
+// error), and makes a crash end the child by its signal, with no inherited handler and no core.
+bool writeAll(int fd, const void* data, size_t n);
+void dropInheritedCrashHandlers();
 
 // Reads any supported mesh file, without a cache (import.cpp).
 TriangleMesh importMesh(const std::filesystem::path& file, ImportReport* report);
