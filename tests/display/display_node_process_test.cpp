@@ -40,6 +40,16 @@ void runLeftAndRight(Master& master, test::ClientThreads& clients, const std::fi
     ASSERT_NO_FATAL_FAILURE(test::runUntilNodesEnd(nodes, render));
 }
 
+// The same frame on one PC: the "left" and "right" nodes' newest screens are the whole wall's
+// screens of the single-machine image of `scene`, byte for byte.
+void expectLeftAndRightShowOnePc(const WallConfig& wall, const SceneDesc& scene, const std::filesystem::path& dir) {
+    const Scene reference(scene);
+    WallFrame one;
+    one.left = renderFrame(reference, Camera(scene.cameras.front(), wall.width, wall.height), scene.settings);
+    const std::map<std::string, std::vector<std::string>> screensOf{{"left", {"c0r0", "c0r1"}}, {"right", {"c1r0", "c1r1"}}};
+    test::expectNodeScreensMatchOnePc(wall, one, dir, screensOf, 3 * 2u);
+}
+
 TEST(DisplayNodeProcesses, EachShowsItsHalfOfTheWallBitIdentical) {
     auto [text, wall, scene] = twoNodeWall();
     const std::filesystem::path dir = test::scratchDir();
@@ -51,12 +61,7 @@ TEST(DisplayNodeProcesses, EachShowsItsHalfOfTheWallBitIdentical) {
     auto master = std::make_unique<Master>(scene, cs);
     ASSERT_NO_FATAL_FAILURE(runLeftAndRight(*master, clients, dir, [&] { master->renderFrame(); }));
 
-    // The same frame on one PC: the whole wall's screens from the single-machine image.
-    const Scene reference(scene);
-    WallFrame one;
-    one.left = renderFrame(reference, Camera(scene.cameras.front(), wall.width, wall.height), scene.settings);
-    const std::map<std::string, std::vector<std::string>> screensOf{{"left", {"c0r0", "c0r1"}}, {"right", {"c1r0", "c1r1"}}};
-    test::expectNodeScreensMatchOnePc(wall, one, dir, screensOf, 3 * 2u);
+    expectLeftAndRightShowOnePc(wall, scene, dir);
     master.reset();
 }
 
@@ -132,11 +137,7 @@ TEST(DisplayNodeProcesses, KeyedNodesWithTheLocalArgumentsWorkAndAKeylessOneIsRe
     EXPECT_NE(keyless.output().find("disagree on security"), std::string::npos) << keyless.output();
     EXPECT_FALSE(std::filesystem::exists(dir / "keyless")) << "a refused node presented something";
 
-    const Scene reference(scene);
-    WallFrame one;
-    one.left = renderFrame(reference, Camera(scene.cameras.front(), wall.width, wall.height), scene.settings);
-    const std::map<std::string, std::vector<std::string>> screensOf{{"left", {"c0r0", "c0r1"}}, {"right", {"c1r0", "c1r1"}}};
-    test::expectNodeScreensMatchOnePc(wall, one, dir, screensOf, 3 * 2u);
+    expectLeftAndRightShowOnePc(wall, scene, dir);
     master.reset();
 }
 
