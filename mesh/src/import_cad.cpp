@@ -10,6 +10,7 @@
 // colour over its part's, over its assembly's).
 #include "rtwall/mesh.h"
 
+#include "assembly_import.h"
 #include "mesh_internal.h"
 
 #include <BRepMesh_IncrementalMesh.hxx>
@@ -188,16 +189,7 @@ private:
         return id;
     }
 
-    uint32_t defaultMaterial() const {
-        if (defaultMaterial_ < 0) {
-            AssemblyMaterial m;
-            m.name = "default";
-            m.baseColor = {0.7f, 0.7f, 0.72f, 1.0f};
-            defaultMaterial_ = int(out_.materials.size());
-            out_.materials.push_back(m);
-        }
-        return uint32_t(defaultMaterial_);
-    }
+    uint32_t defaultMaterial() const { return detail::defaultAssemblyMaterial(out_, defaultMaterial_); }
 
     uint32_t partMesh(const TDF_Label& part) {
         const std::string key = labelEntry(part);

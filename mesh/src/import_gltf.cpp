@@ -8,6 +8,7 @@
 // accept regular files only, so a URI naming a device or a FIFO cannot make the import hang.
 #include "rtwall/mesh.h"
 
+#include "assembly_import.h"
 #include "mesh_internal.h"
 
 #include <tiny_gltf.h>
@@ -293,16 +294,7 @@ private:
         return key;
     }
 
-    uint32_t defaultMaterial() {
-        if (defaultMaterial_ < 0) {
-            AssemblyMaterial a;
-            a.name = "default";
-            a.baseColor = {0.7f, 0.7f, 0.72f, 1.0f};
-            defaultMaterial_ = int(out_.materials.size());
-            out_.materials.push_back(a);
-        }
-        return uint32_t(defaultMaterial_);
-    }
+    uint32_t defaultMaterial() { return detail::defaultAssemblyMaterial(out_, defaultMaterial_); }
 
     // One TriangleMesh per primitive, built the first time a node uses it.
     uint32_t primitiveMesh(size_t mesh, size_t prim) {
