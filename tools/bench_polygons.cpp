@@ -116,23 +116,20 @@ double seconds(const std::function<void()>& f) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-}  // namespace
+using Methods = std::pair<const char*, Method>[2];
+using Families = std::vector<std::pair<std::string, std::vector<Input>>>;
 
-int main(int argc, char** argv) {
-    const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
-    const int count = quick ? 50 : 500;
-    const std::pair<const char*, Method> methods[] = {{"rtwall", rtwallMethod}, {"vtk", vtkMethod}};
-
-    // Families of polygons with a known exact triangulation.
-    std::mt19937 rng(2024);
-    std::vector<std::pair<std::string, std::vector<Input>>> families;
+// Families of polygons with a known exact triangulation, `count` of each random kind (from rng,
+// in a fixed order), and the LightWave ring in `count` random planes through (10, -20, 5).
+Families makeFamilies(std::mt19937& rng, int count, std::vector<Input>& turned) {
+    Families families;
     {
         std::vector<Input> shapes;
         const auto file = rtwall::test::fileShapes();
         for (size_t k = 0; k < 7; ++k) shapes.push_back(makeInput(file[k]));
         families.push_back({"file_shapes", shapes});
     }
-    std::vector<Input> polar, rings, holes, nearlyDegenerate, turned;
+    std::vector<Input> polar, rings, holes, nearlyDegenerate;
     for (int i = 0; i < count; ++i) {
         polar.push_back(makeInput(rtwall::test::randomPolar(rng, 4 + int(rng() % 60))));
         const int n = 3 + int(rng() % 50), m = 3 + int(rng() % 50);
@@ -151,25 +148,22 @@ int main(int argc, char** argv) {
                 for (int s = 1; s < 4; ++s) d.corners.push_back({a.u + (b.u - a.u) * s / 4, a.v + (b.v - a.v) * s / 4});
         }
         nearlyDegenerate.push_back(makeInput(d));
-        // The LightWave ring in a random plane through (10, -20, 5).
         std::normal_distribution<double> g;
-        double e1[3] = {g(rng), g(rng), g(rng)}, e2[3] = {g(rng), g(rng), g(rng)};
-        const double l1 = std::sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
-        for (double& x : e1) x /= l1;
-        const double dot = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2];
-        for (int k = 0; k < 3; ++k) e2[k] -= dot * e1[k];
-        const double l2 = std::sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
-        for (double& x : e2) x /= l2;
+        const rtwall::test::PlaneAxes axes = rtwall::test::randomPlane(rng, g);
         const double o[3] = {10, -20, 5};
-        turned.push_back(makeInput(rtwall::test::keyholeRing(32, 32, 1.0, 0.9, 5), o, e1, e2));
+        turned.push_back(makeInput(rtwall::test::keyholeRing(32, 32, 1.0, 0.9, 5), o, axes.e1, axes.e2));
     }
     families.push_back({"random_simple", polar});
     families.push_back({"keyhole_rings", rings});
     families.push_back({"bridged_holes", holes});
     families.push_back({"repeated_and_collinear", nearlyDegenerate});
+    return families;
+}
 
-    toml::table out;
-    toml::table correctness;
+// How many polygons of each family each method triangulates exactly, and how many it said it
+// could not.
+toml::table correctness(const Families& families, const std::vector<Input>& turned, const Methods& methods) {
+    toml::table table;
     for (const auto& [name, inputs] : families) {
         toml::table row;
         for (const auto& [method, triangulate] : methods) {
@@ -183,68 +177,68 @@ int main(int argc, char** argv) {
             row.insert(method, toml::table{{"polygons", int64_t(inputs.size())}, {"exact", good},
                                            {"reported_failure", reportedFailure}});
         }
-        correctness.insert(name, row);
+        table.insert(name, row);
     }
     // In a random plane the float corners are no longer coplanar: checked by area along the normal.
-    {
-        toml::table row;
-        for (const auto& [method, triangulate] : methods) {
-            int good = 0;
-            std::vector<uint32_t> tris;
-            const double expected = rtwall::test::keyholeRing(32, 32, 1.0, 0.9, 5).area;
-            for (const Input& in : turned) {
-                triangulate(in, tris);
-                double area = 0;
-                for (size_t k = 0; k + 2 < tris.size(); k += 3) {
-                    const float* a = &in.positions[3 * tris[k]];
-                    const float* b = &in.positions[3 * tris[k + 1]];
-                    const float* c = &in.positions[3 * tris[k + 2]];
-                    const double ab[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-                    const double ac[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
-                    const double n[3] = {ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0]};
-                    area += std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 2;
-                }
-                good += std::fabs(area - expected) < 1e-5 * expected;
+    toml::table row;
+    for (const auto& [method, triangulate] : methods) {
+        int good = 0;
+        std::vector<uint32_t> tris;
+        const double expected = rtwall::test::keyholeRing(32, 32, 1.0, 0.9, 5).area;
+        for (const Input& in : turned) {
+            triangulate(in, tris);
+            double area = 0;
+            for (size_t k = 0; k + 2 < tris.size(); k += 3) {
+                const float* a = &in.positions[3 * tris[k]];
+                const float* b = &in.positions[3 * tris[k + 1]];
+                const float* c = &in.positions[3 * tris[k + 2]];
+                const double ab[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
+                const double ac[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
+                const double n[3] = {ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0]};
+                area += std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 2;
             }
-            row.insert(method, toml::table{{"polygons", int64_t(turned.size())}, {"exact", good}});
+            good += std::fabs(area - expected) < 1e-5 * expected;
         }
-        correctness.insert("ring_in_random_planes", row);
+        row.insert(method, toml::table{{"polygons", int64_t(turned.size())}, {"exact", good}});
     }
-    out.insert("correctness", correctness);
+    table.insert("ring_in_random_planes", row);
+    return table;
+}
 
-    // Time per polygon: a million quads of a gently curved grid, and concave 16-gons.
-    toml::table speed;
-    {
-        const int grid = quick ? 300 : 1000;
-        Input quad;
-        quad.corners = {0, 1, 2, 3};
-        std::vector<Input> quads;
-        for (int j = 0; j < grid; ++j)
-            for (int i = 0; i < grid; ++i) {
-                Input q = quad;
-                for (const auto& [di, dj] : {std::pair{0, 0}, {1, 0}, {1, 1}, {0, 1}})
-                    q.positions.insert(q.positions.end(), {float(i + di), float(j + dj), 0.001f * float(((i + di) * 7 + (j + dj) * 13) % 5)});
-                quads.push_back(std::move(q));
-            }
-        std::vector<Input> concave;
-        for (int i = 0; i < (quick ? 10000 : 100000); ++i) concave.push_back(makeInput(rtwall::test::randomPolar(rng, 16)));
-        for (const auto& [method, triangulate] : methods) {
-            std::vector<uint32_t> tris;
-            const double tq = seconds([&] {
-                for (const Input& q : quads) triangulate(q, tris);
-            });
-            const double tc = seconds([&] {
-                for (const Input& c : concave) triangulate(c, tris);
-            });
-            speed.insert(method, toml::table{{"quads", int64_t(quads.size())},
-                                             {"ns_per_quad", 1e9 * tq / double(quads.size())},
-                                             {"concave_16gons", int64_t(concave.size())},
-                                             {"ns_per_concave_16gon", 1e9 * tc / double(concave.size())}});
+// Time per polygon: a million quads of a gently curved grid, and concave 16-gons (from rng).
+toml::table speed(bool quick, std::mt19937& rng, const Methods& methods) {
+    toml::table table;
+    const int grid = quick ? 300 : 1000;
+    Input quad;
+    quad.corners = {0, 1, 2, 3};
+    std::vector<Input> quads;
+    for (int j = 0; j < grid; ++j)
+        for (int i = 0; i < grid; ++i) {
+            Input q = quad;
+            for (const auto& [di, dj] : {std::pair{0, 0}, {1, 0}, {1, 1}, {0, 1}})
+                q.positions.insert(q.positions.end(), {float(i + di), float(j + dj), 0.001f * float(((i + di) * 7 + (j + dj) * 13) % 5)});
+            quads.push_back(std::move(q));
         }
+    std::vector<Input> concave;
+    for (int i = 0; i < (quick ? 10000 : 100000); ++i) concave.push_back(makeInput(rtwall::test::randomPolar(rng, 16)));
+    for (const auto& [method, triangulate] : methods) {
+        std::vector<uint32_t> tris;
+        const double tq = seconds([&] {
+            for (const Input& q : quads) triangulate(q, tris);
+        });
+        const double tc = seconds([&] {
+            for (const Input& c : concave) triangulate(c, tris);
+        });
+        table.insert(method, toml::table{{"quads", int64_t(quads.size())},
+                                         {"ns_per_quad", 1e9 * tq / double(quads.size())},
+                                         {"concave_16gons", int64_t(concave.size())},
+                                         {"ns_per_concave_16gon", 1e9 * tc / double(concave.size())}});
     }
-    out.insert("speed", speed);
+    return table;
+}
 
-    // Single large polygons (VTK only up to 20,000 corners: it takes seconds there already).
+// Single large polygons (VTK only up to 20,000 corners: it takes seconds there already).
+toml::array largePolygons(bool quick, const Methods& methods) {
     toml::array large;
     for (const int n : quick ? std::vector<int>{1000, 10000} : std::vector<int>{1000, 10000, 100000, 1000000}) {
         const TestPolygon shapes[] = {rtwall::test::keyholeRing(n, n, 1.0, 0.99), rtwall::test::star(n, 1.0, 0.5),
@@ -261,7 +255,21 @@ int main(int argc, char** argv) {
             large.push_back(row);
         }
     }
-    out.insert("large_polygons", large);
+    return large;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+    const Methods methods = {{"rtwall", rtwallMethod}, {"vtk", vtkMethod}};
+    std::mt19937 rng(2024);
+    std::vector<Input> turned;
+    const Families families = makeFamilies(rng, quick ? 50 : 500, turned);
+    toml::table out;
+    out.insert("correctness", correctness(families, turned, methods));
+    out.insert("speed", speed(quick, rng, methods));
+    out.insert("large_polygons", largePolygons(quick, methods));
     std::cout << toml::json_formatter{out} << "\n";
     return 0;
 }

@@ -133,17 +133,31 @@ template <class T> void checkUniqueId(const std::vector<T>& items, int id, const
     }
 }
 
+// The n items of a line ("body 2 of 3" in every message), each read by `read(who)`; the line
+// must end after the last.
+template <class Read> void readItems(Cursor& c, int n, const char* noun, const char* plural, Read read) {
+    for (int i = 0; i < n; ++i) {
+        const std::string who = std::string(noun) + " " + std::to_string(i + 1) + " of " + std::to_string(n);
+        if (c.atEnd()) throw Malformed(who + ": missing (the line ends after " + std::to_string(i) + ")");
+        read(who);
+    }
+    if (!c.atEnd()) throw Malformed("more than the " + std::to_string(n) + " " + plural + " it announces");
+}
+
+// "[id quality]" of a body or marker, and its position's opening bracket.
+template <class Item> void readIdAndQuality(Cursor& c, Item& item, const std::string& who) {
+    c.expect('[', "before " + who);
+    item.id = int(c.integer(who + ": id", 0, 1'000'000));
+    item.quality = c.number(who + ": quality", -1, 1);
+    c.expect(']', "after " + who + "'s quality");
+    c.expect('[', "before " + who + "'s position");
+}
+
 void parse6d(Cursor& c, DTrackFrame& f) {
     const int n = int(c.integer("the number of bodies", 0, DTrackParser::kMaxItems));
-    for (int i = 0; i < n; ++i) {
-        const std::string who = "body " + std::to_string(i + 1) + " of " + std::to_string(n);
-        if (c.atEnd()) throw Malformed(who + ": missing (the line ends after " + std::to_string(i) + ")");
+    readItems(c, n, "body", "bodies", [&](const std::string& who) {
         DTrackBody b;
-        c.expect('[', "before " + who);
-        b.id = int(c.integer(who + ": id", 0, 1'000'000));
-        b.quality = c.number(who + ": quality", -1, 1);
-        c.expect(']', "after " + who + "'s quality");
-        c.expect('[', "before " + who + "'s position");
+        readIdAndQuality(c, b, who);
         readPosition(c, b.position, who);
         // DTrack 1 adds the Euler angles; the matrix after them says the same.
         if (c.numberBefore(']'))
@@ -152,16 +166,13 @@ void parse6d(Cursor& c, DTrackFrame& f) {
         readRotation(c, b, who);
         f.bodies.push_back(b);
         checkUniqueId(f.bodies, b.id, who);
-    }
-    if (!c.atEnd()) throw Malformed("more than the " + std::to_string(n) + " bodies it announces");
+    });
 }
 
 void parse6df2(Cursor& c, DTrackFrame& f) {
     f.definedFlysticks = int(c.integer("the number of defined flysticks", 0, DTrackParser::kMaxItems));
     const int n = int(c.integer("the number of flysticks", 0, f.definedFlysticks));
-    for (int i = 0; i < n; ++i) {
-        const std::string who = "flystick " + std::to_string(i + 1) + " of " + std::to_string(n);
-        if (c.atEnd()) throw Malformed(who + ": missing (the line ends after " + std::to_string(i) + ")");
+    readItems(c, n, "flystick", "flysticks", [&](const std::string& who) {
         DTrackFlystick s;
         c.expect('[', "before " + who);
         s.pose.id = int(c.integer(who + ": id", 0, f.definedFlysticks - 1));
@@ -187,27 +198,19 @@ void parse6df2(Cursor& c, DTrackFrame& f) {
         c.expect(']', "after " + who + "'s " + std::to_string(buttons) + " buttons and " + std::to_string(controllers) + " controllers");
         f.flysticks.push_back(std::move(s));
         checkUniqueId(f.flysticks, f.flysticks.back().pose.id, who);
-    }
-    if (!c.atEnd()) throw Malformed("more than the " + std::to_string(n) + " flysticks it announces");
+    });
 }
 
 void parse3d(Cursor& c, DTrackFrame& f) {
     const int n = int(c.integer("the number of markers", 0, DTrackParser::kMaxItems));
-    for (int i = 0; i < n; ++i) {
-        const std::string who = "marker " + std::to_string(i + 1) + " of " + std::to_string(n);
-        if (c.atEnd()) throw Malformed(who + ": missing (the line ends after " + std::to_string(i) + ")");
+    readItems(c, n, "marker", "markers", [&](const std::string& who) {
         DTrackMarker m;
-        c.expect('[', "before " + who);
-        m.id = int(c.integer(who + ": id", 0, 1'000'000));
-        m.quality = c.number(who + ": quality", -1, 1);
-        c.expect(']', "after " + who + "'s quality");
-        c.expect('[', "before " + who + "'s position");
+        readIdAndQuality(c, m, who);
         readPosition(c, m.position, who);
         c.expect(']', "after " + who + "'s position");
         f.markers.push_back(m);
         checkUniqueId(f.markers, m.id, who);
-    }
-    if (!c.atEnd()) throw Malformed("more than the " + std::to_string(n) + " markers it announces");
+    });
 }
 
 bool isIdentifier(std::string_view s) {

@@ -4,6 +4,7 @@
 #include <GLFW/glfw3.h>  // key codes only
 
 #include <rtwall/display.h>
+#include <rtwall/double3.h>
 
 #include <algorithm>
 #include <cmath>
@@ -15,24 +16,11 @@
 namespace rtwall {
 
 namespace {
-struct V {
-    double x, y, z;
-};
-V v(Float3 a) { return {a.x, a.y, a.z}; }
-Float3 f(V a) { return {float(a.x), float(a.y), float(a.z)}; }
-V operator+(V a, V b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-V operator-(V a, V b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-V operator*(V a, double s) { return {a.x * s, a.y * s, a.z * s}; }
-double dot(V a, V b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-V cross(V a, V b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-V normalize(V a) {
-    const double l = std::sqrt(dot(a, a));
-    return l > 0 ? a * (1.0 / l) : a;
-}
+using V = Double3;  // the pose in double: small steps far from the origin add up without drifting
 // Rodrigues' rotation of p about unit axis k.
 V rotate(V p, V k, double rad) {
     const double c = std::cos(rad), s = std::sin(rad);
-    return p * c + cross(k, p) * s + k * (dot(k, p) * (1 - c));
+    return p * c + k.cross(p) * s + k * (k.dot(p) * (1 - c));
 }
 constexpr double kRadPerPixel = 0.005;
 constexpr double kMaxPitch = 1.5;  // radians from the horizon: never quite straight up or down
@@ -63,18 +51,18 @@ bool Navigator::update(const InputState& in, double dt) {
         }
     }
 
-    const V up = normalize(v(pose_.up));
-    V pos = v(pose_.position), at = v(pose_.lookAt);
+    const V up = V::of(pose_.up).normalized();
+    V pos = V::of(pose_.position), at = V::of(pose_.lookAt);
     V fwd = at - pos;
-    const double dist = std::sqrt(dot(fwd, fwd));
-    fwd = normalize(fwd);
-    const V right = normalize(cross(fwd, up));
+    const double dist = fwd.length();
+    fwd = fwd.normalized();
+    const V right = fwd.cross(up).normalized();
     const bool picking = in.leftDown && (in.clickMods & GLFW_MOD_CONTROL);
     const double dx = picking ? 0.0 : in.mouseDx, dy = picking ? 0.0 : in.mouseDy;
     // Turns `vec` up or down by `delta` radians of elevation, never past kMaxPitch: asin alone
     // cannot tell a vector that went over the pole from one that did not, so clamp the angle.
     auto pitched = [&](V vec, V axis, double delta, double sign) {
-        const double e = std::asin(std::clamp(dot(normalize(vec), up), -1.0, 1.0));
+        const double e = std::asin(std::clamp(vec.normalized().dot(up), -1.0, 1.0));
         const double target = std::clamp(e + delta, -kMaxPitch, kMaxPitch);
         return rotate(vec, axis, sign * (target - e));
     };
@@ -88,8 +76,8 @@ bool Navigator::update(const InputState& in, double dt) {
         if (down(GLFW_KEY_E)) move = move + up;
         if (down(GLFW_KEY_Q)) move = move - up;
         const double fast = down(GLFW_KEY_LEFT_SHIFT) ? 4.0 : 1.0;
-        if (dot(move, move) > 0) {
-            const V step = normalize(move) * (double(speed_) * fast * dt);
+        if (move.dot(move) > 0) {
+            const V step = move.normalized() * (double(speed_) * fast * dt);
             pos = pos + step;
             at = at + step;
             changed = true;
@@ -97,7 +85,7 @@ bool Navigator::update(const InputState& in, double dt) {
         if (dx != 0 || dy != 0) {
             // Mouse look: the view direction turns about the camera's position.
             V dir = rotate(at - pos, up, -dx * kRadPerPixel);
-            dir = pitched(dir, normalize(cross(dir, up)), -dy * kRadPerPixel, 1.0);
+            dir = pitched(dir, dir.cross(up).normalized(), -dy * kRadPerPixel, 1.0);
             at = pos + dir;
             changed = true;
         }
@@ -105,7 +93,7 @@ bool Navigator::update(const InputState& in, double dt) {
         if (dx != 0 || dy != 0) {
             // Orbit: the camera turns about the look-at point.
             V off = rotate(pos - at, up, -dx * kRadPerPixel);
-            off = pitched(off, normalize(cross(off * -1.0, up)), dy * kRadPerPixel, -1.0);
+            off = pitched(off, (off * -1.0).cross(up).normalized(), dy * kRadPerPixel, -1.0);
             pos = at + off;
             changed = true;
         }
@@ -118,30 +106,30 @@ bool Navigator::update(const InputState& in, double dt) {
             changed = true;
         }
     }
-    pose_.position = f(pos);
-    pose_.lookAt = f(at);
+    pose_.position = pos.toFloat3();
+    pose_.lookAt = at.toFloat3();
     if (recording_) path_.push_back(pose_);
     return changed;
 }
 
 bool Navigator::updateWand(const Wand& w, double dt) {
     if ((w.x == 0 && w.y == 0) || !(dt > 0)) return false;
-    const V up = normalize(v(pose_.up));
-    V pos = v(pose_.position), at = v(pose_.lookAt);
+    const V up = V::of(pose_.up).normalized();
+    V pos = V::of(pose_.position), at = V::of(pose_.lookAt);
     // Joystick right turns right: clockwise seen from above, a negative angle about up.
     const double turn = -w.x * w.turnDegrees * std::numbers::pi / 180.0 * dt;
     if (mode_ == Mode::Fly) {
-        const V step = normalize(v(w.direction)) * (w.y * w.speed * dt);
+        const V step = V::of(w.direction).normalized() * (w.y * w.speed * dt);
         pos = pos + step;
         at = at + step;
         at = pos + rotate(at - pos, up, turn);
     } else {
-        const V c = v(w.centre);
+        const V c = V::of(w.centre);
         pos = c + rotate(pos - c, up, turn);
         at = c + rotate(at - c, up, turn);
         // Towards the centre (y > 0) or away; the view direction stays.
         const V toCentre = c - pos;
-        const double dist = std::sqrt(dot(toCentre, toCentre));
+        const double dist = toCentre.length();
         if (dist > 0) {
             const double step = std::min(w.y * w.speed * dt, dist - 1e-3 * double(speed_));
             if (step > 0 || w.y < 0) {
@@ -151,8 +139,8 @@ bool Navigator::updateWand(const Wand& w, double dt) {
             }
         }
     }
-    pose_.position = f(pos);
-    pose_.lookAt = f(at);
+    pose_.position = pos.toFloat3();
+    pose_.lookAt = at.toFloat3();
     if (recording_) path_.push_back(pose_);
     return true;
 }

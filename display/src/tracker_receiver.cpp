@@ -156,6 +156,17 @@ struct TrackerReceiver::Impl {
         if (messages.size() < 16) messages.push_back(std::move(line));
         else ++lostMessages;
     }
+    // The receiving thread: runs the socket's handlers until stopped; an error ends it with a line.
+    void start() {
+        thread = std::thread([this] {
+            try {
+                io.run();
+            } catch (const std::exception& e) {
+                std::lock_guard<std::mutex> lock(mutex);
+                say(std::string("tracker receiver stopped: ") + e.what());
+            }
+        });
+    }
 };
 
 TrackerReceiver::TrackerReceiver(const TrackingConfig& config) : impl_(std::make_unique<Impl>(config)) {
@@ -163,14 +174,7 @@ TrackerReceiver::TrackerReceiver(const TrackingConfig& config) : impl_(std::make
     if (config.kind == TrackingSource::Vrpn) {
         s.port = config.port;
         s.connectVrpn();
-        s.thread = std::thread([&s] {
-            try {
-                s.io.run();
-            } catch (const std::exception& e) {
-                std::lock_guard<std::mutex> lock(s.mutex);
-                s.say(std::string("tracker receiver stopped: ") + e.what());
-            }
-        });
+        s.start();
         return;
     }
     asio::error_code ec;
@@ -184,14 +188,7 @@ TrackerReceiver::TrackerReceiver(const TrackingConfig& config) : impl_(std::make
                              std::to_string(config.port) + ": " + ec.message());
     s.port = s.socket.local_endpoint().port();
     s.receive();
-    s.thread = std::thread([&s] {
-        try {
-            s.io.run();
-        } catch (const std::exception& e) {
-            std::lock_guard<std::mutex> lock(s.mutex);
-            s.say(std::string("tracker receiver stopped: ") + e.what());
-        }
-    });
+    s.start();
 }
 
 TrackerReceiver::~TrackerReceiver() {

@@ -185,18 +185,7 @@ bool VrpnParser::message(std::string_view header, std::string_view p, std::vecto
     ++messages_;
     const uint32_t seconds = u32(header.data() + 4), micro = u32(header.data() + 8);
     const int32_t sender = i32(header.data() + 12), type = i32(header.data() + 16);
-    if (type == kSenderDescription || type == kTypeDescription) {
-        const char* what = type == kSenderDescription ? "sender" : "type";
-        if (sender < 0 || size_t(sender) >= kMaxNames)
-            return fail(std::string("a ") + what + " id " + std::to_string(sender) + " out of [0, " + std::to_string(kMaxNames) + ")");
-        if (p.size() < 5 || u32(p.data()) != p.size() - 4 || p.back() != '\0' || p.size() - 5 > 99 ||
-            std::memchr(p.data() + 4, '\0', p.size() - 5) != nullptr)
-            return fail(std::string("the name of ") + what + " " + std::to_string(sender) + " is not a length and a NUL-terminated name of at most 99 characters");
-        std::vector<std::string>& names = type == kSenderDescription ? senders_ : types_;
-        if (names.size() <= size_t(sender)) names.resize(size_t(sender) + 1);
-        names[size_t(sender)] = std::string(p.substr(4, p.size() - 5));
-        return true;
-    }
+    if (type == kSenderDescription || type == kTypeDescription) return describe(type, sender, p);
     if (type == kUdpDescription) {
         if (sender > 0 && sender <= 65535) udpOffer_ = sender;
         return true;
@@ -219,101 +208,113 @@ bool VrpnParser::message(std::string_view header, std::string_view p, std::vecto
     const double time = double(seconds % 86400) + micro * 1e-6;  // seconds of the day, as DTrack's ts
     const std::string where = printable(*typeName) + " from '" + printable(*senderName) + "': ";
     if (*typeName == "vrpn_Tracker Pos_Quat") {
-        if (*senderName != config_.device) return true;
-        if (p.size() != 64) {
-            drop(where + std::to_string(p.size()) + " bytes, not 64");
-            return true;
-        }
-        const int32_t sensor = i32(p.data());
-        std::array<double, 3> pos{};
-        std::array<double, 4> q{};  // x y z w
-        for (size_t i = 0; i < 3; ++i) pos[i] = f64(p.data() + 8 + 8 * i);
-        for (size_t i = 0; i < 4; ++i) q[i] = f64(p.data() + 32 + 8 * i);
-        double n = 0;
-        for (double c : q) n += c * c;
-        n = std::sqrt(n);
-        if (!std::isfinite(pos[0] + pos[1] + pos[2]) || std::fabs(pos[0]) > 1e6 || std::fabs(pos[1]) > 1e6 || std::fabs(pos[2]) > 1e6) {
-            drop(where + "sensor " + std::to_string(sensor) + ": a position that is not a finite number within 1e6");
-            return true;
-        }
-        if (!(std::fabs(n - 1) < 1e-3)) {
-            drop(where + "sensor " + std::to_string(sensor) + ": a quaternion of length " + std::to_string(n) + ", not 1");
-            return true;
-        }
-        DTrackBody b;
-        b.id = sensor;
-        b.quality = 1;
-        b.position = pos;
-        b.rotation = rotationOf({q[3] / n, q[0] / n, q[1] / n, q[2] / n});
-        if (sensor == config_.headBody) {
-            DTrackFrame f;
-            f.timestamp = time;
-            f.bodies.push_back(b);
-            out.push_back(std::move(f));
-        }
-        if (sensor == config_.flystick) {
-            wand_ = b;
-            out.push_back(wandFrame(time));
-        }
-        return true;
-    }
-    if (*typeName == "vrpn_Button Change" || *typeName == "vrpn_Button States") {
+        if (*senderName == config_.device) poseReport(where, p, time, out);
+    } else if (*typeName == "vrpn_Button Change" || *typeName == "vrpn_Button States") {
         if (*senderName != config_.buttonDevice) return true;
-        if (*typeName == "vrpn_Button Change") {
-            if (p.size() != 8) {
-                drop(where + std::to_string(p.size()) + " bytes, not 8");
-                return true;
-            }
-            const int32_t button = i32(p.data()), state = i32(p.data() + 4);
-            if (button < 0 || button >= kMaxChannels || (state != 0 && state != 1)) {
-                drop(where + "button " + std::to_string(button) + " to state " + std::to_string(state) + " (buttons 0.." +
-                     std::to_string(kMaxChannels - 1) + ", states 0 or 1)");
-                return true;
-            }
-            if (buttons_.size() <= size_t(button)) buttons_.resize(size_t(button) + 1);
-            buttons_[size_t(button)] = state == 1;
-        } else {
-            const int32_t count = p.size() >= 4 ? i32(p.data()) : -1;
-            if (count < 0 || count > kMaxChannels || p.size() != 4 + 4 * size_t(count)) {
-                drop(where + std::to_string(p.size()) + " bytes for " + std::to_string(count) + " buttons");
-                return true;
-            }
-            std::vector<bool> states(static_cast<size_t>(count));
-            for (int32_t i = 0; i < count; ++i) {
-                const int32_t s = i32(p.data() + 4 + 4 * i);
-                if (s != 0 && s != 1) {
-                    drop(where + "button " + std::to_string(i) + " in state " + std::to_string(s) + ", not 0 or 1");
-                    return true;
-                }
-                states[size_t(i)] = s == 1;
-            }
-            buttons_ = std::move(states);
-        }
-        if (config_.flystick >= 0) out.push_back(wandFrame(time));
-        return true;
-    }
-    if (*typeName == "vrpn_Analog Channel") {
-        if (*senderName != config_.analogDevice) return true;
-        const double count = p.size() >= 8 ? f64(p.data()) : -1;
-        if (!(count >= 0 && count <= kMaxChannels && count == std::floor(count)) || p.size() != 8 + 8 * size_t(count)) {
-            drop(where + std::to_string(p.size()) + " bytes for " + (count == count ? std::to_string(count) : std::string("NaN")) +
-                 " channels");
-            return true;
-        }
-        std::vector<double> channels(static_cast<size_t>(count));
-        for (size_t i = 0; i < channels.size(); ++i) {
-            channels[i] = f64(p.data() + 8 + 8 * i);
-            if (!std::isfinite(channels[i])) {
-                drop(where + "channel " + std::to_string(i) + " is not a finite number");
-                return true;
-            }
-            channels[i] = std::clamp(channels[i], -1.0, 1.0);  // a joystick's axes; other analogs are not read as one
-        }
-        channels_ = std::move(channels);
-        if (config_.flystick >= 0) out.push_back(wandFrame(time));
-        return true;
+        const bool read = *typeName == "vrpn_Button Change" ? buttonChange(where, p) : buttonStates(where, p);
+        if (read && config_.flystick >= 0) out.push_back(wandFrame(time));
+    } else if (*typeName == "vrpn_Analog Channel") {
+        if (*senderName == config_.analogDevice && analogReport(where, p) && config_.flystick >= 0) out.push_back(wandFrame(time));
     }
     return true;  // velocities, pings, text and the rest: not what a tracker needs
+}
+
+bool VrpnParser::describe(int32_t type, int32_t id, std::string_view p) {
+    const char* what = type == kSenderDescription ? "sender" : "type";
+    if (id < 0 || size_t(id) >= kMaxNames)
+        return fail(std::string("a ") + what + " id " + std::to_string(id) + " out of [0, " + std::to_string(kMaxNames) + ")");
+    if (p.size() < 5 || u32(p.data()) != p.size() - 4 || p.back() != '\0' || p.size() - 5 > 99 ||
+        std::memchr(p.data() + 4, '\0', p.size() - 5) != nullptr)
+        return fail(std::string("the name of ") + what + " " + std::to_string(id) + " is not a length and a NUL-terminated name of at most 99 characters");
+    std::vector<std::string>& names = type == kSenderDescription ? senders_ : types_;
+    if (names.size() <= size_t(id)) names.resize(size_t(id) + 1);
+    names[size_t(id)] = std::string(p.substr(4, p.size() - 5));
+    return true;
+}
+
+void VrpnParser::poseReport(const std::string& where, std::string_view p, double time, std::vector<DTrackFrame>& out) {
+    if (p.size() != 64) return drop(where + std::to_string(p.size()) + " bytes, not 64");
+    const int32_t sensor = i32(p.data());
+    std::array<double, 3> pos{};
+    std::array<double, 4> q{};  // x y z w
+    for (size_t i = 0; i < 3; ++i) pos[i] = f64(p.data() + 8 + 8 * i);
+    for (size_t i = 0; i < 4; ++i) q[i] = f64(p.data() + 32 + 8 * i);
+    double n = 0;
+    for (double c : q) n += c * c;
+    n = std::sqrt(n);
+    if (!std::isfinite(pos[0] + pos[1] + pos[2]) || std::fabs(pos[0]) > 1e6 || std::fabs(pos[1]) > 1e6 || std::fabs(pos[2]) > 1e6)
+        return drop(where + "sensor " + std::to_string(sensor) + ": a position that is not a finite number within 1e6");
+    if (!(std::fabs(n - 1) < 1e-3))
+        return drop(where + "sensor " + std::to_string(sensor) + ": a quaternion of length " + std::to_string(n) + ", not 1");
+    DTrackBody b;
+    b.id = sensor;
+    b.quality = 1;
+    b.position = pos;
+    b.rotation = rotationOf({q[3] / n, q[0] / n, q[1] / n, q[2] / n});
+    if (sensor == config_.headBody) {
+        DTrackFrame f;
+        f.timestamp = time;
+        f.bodies.push_back(b);
+        out.push_back(std::move(f));
+    }
+    if (sensor == config_.flystick) {
+        wand_ = b;
+        out.push_back(wandFrame(time));
+    }
+}
+
+bool VrpnParser::buttonChange(const std::string& where, std::string_view p) {
+    if (p.size() != 8) {
+        drop(where + std::to_string(p.size()) + " bytes, not 8");
+        return false;
+    }
+    const int32_t button = i32(p.data()), state = i32(p.data() + 4);
+    if (button < 0 || button >= kMaxChannels || (state != 0 && state != 1)) {
+        drop(where + "button " + std::to_string(button) + " to state " + std::to_string(state) + " (buttons 0.." +
+             std::to_string(kMaxChannels - 1) + ", states 0 or 1)");
+        return false;
+    }
+    if (buttons_.size() <= size_t(button)) buttons_.resize(size_t(button) + 1);
+    buttons_[size_t(button)] = state == 1;
+    return true;
+}
+
+bool VrpnParser::buttonStates(const std::string& where, std::string_view p) {
+    const int32_t count = p.size() >= 4 ? i32(p.data()) : -1;
+    if (count < 0 || count > kMaxChannels || p.size() != 4 + 4 * size_t(count)) {
+        drop(where + std::to_string(p.size()) + " bytes for " + std::to_string(count) + " buttons");
+        return false;
+    }
+    std::vector<bool> states(static_cast<size_t>(count));
+    for (int32_t i = 0; i < count; ++i) {
+        const int32_t s = i32(p.data() + 4 + 4 * i);
+        if (s != 0 && s != 1) {
+            drop(where + "button " + std::to_string(i) + " in state " + std::to_string(s) + ", not 0 or 1");
+            return false;
+        }
+        states[size_t(i)] = s == 1;
+    }
+    buttons_ = std::move(states);
+    return true;
+}
+
+bool VrpnParser::analogReport(const std::string& where, std::string_view p) {
+    const double count = p.size() >= 8 ? f64(p.data()) : -1;
+    if (!(count >= 0 && count <= kMaxChannels && count == std::floor(count)) || p.size() != 8 + 8 * size_t(count)) {
+        drop(where + std::to_string(p.size()) + " bytes for " + (count == count ? std::to_string(count) : std::string("NaN")) + " channels");
+        return false;
+    }
+    std::vector<double> channels(static_cast<size_t>(count));
+    for (size_t i = 0; i < channels.size(); ++i) {
+        channels[i] = f64(p.data() + 8 + 8 * i);
+        if (!std::isfinite(channels[i])) {
+            drop(where + "channel " + std::to_string(i) + " is not a finite number");
+            return false;
+        }
+        channels[i] = std::clamp(channels[i], -1.0, 1.0);  // a joystick's axes; other analogs are not read as one
+    }
+    channels_ = std::move(channels);
+    return true;
 }
 
 }  // namespace rtwall

@@ -18,6 +18,7 @@
 // recomputed whenever instances, materials or lights change (identically on every render client).
 #include "scene_impl.h"
 
+#include <rtwall/double3.h>
 #include <rtwall/vec.h>
 
 #include <algorithm>
@@ -29,17 +30,7 @@ namespace rtwall {
 
 namespace {
 
-struct V3 {
-    double x, y, z;
-};
-V3 sub(const V3& a, const V3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-double dotd(const V3& a, const V3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-V3 crossd(const V3& a, const V3& b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-double lengthd(const V3& a) { return std::sqrt(dotd(a, a)); }
-V3 scaled(const V3& a, double s) { return {a.x * s, a.y * s, a.z * s}; }
-V3 toV3(const Float3& f) { return {f.x, f.y, f.z}; }
-
-V3 applyPoint(const Transform& t, const Float3& p) {
+Double3 applyPoint(const Transform& t, const Float3& p) {
     const auto& m = t.m;
     return {m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
             m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]};
@@ -48,32 +39,32 @@ V3 applyPoint(const Transform& t, const Float3& p) {
 // An area light's parallelogram as a frame: a point's (u, v) along the edges (the unit square
 // is the light) and its height h along the unit normal (the side the light shines to).
 struct LightFrame {
-    V3 corner, n, du, dv;  // u = dot(p - corner, du), v = dot(p - corner, dv), h = dot(p - corner, n)
+    Double3 corner, n, du, dv;  // u = dot(p - corner, du), v = dot(p - corner, dv), h = dot(p - corner, n)
     double tolU = 0, tolV = 0, tolH = 0;
 
     explicit LightFrame(const Light& l) {
-        const V3 e1 = toV3(l.edge1), e2 = toV3(l.edge2);
-        const V3 c = crossd(e1, e2);
-        const double area = lengthd(c);
-        corner = toV3(l.position);
-        n = scaled(c, 1.0 / area);
-        du = scaled(crossd(e2, n), 1.0 / area);  // the dual basis of (edge1, edge2) in the plane
-        dv = scaled(crossd(n, e1), 1.0 / area);
+        const Double3 e1 = Double3::of(l.edge1), e2 = Double3::of(l.edge2);
+        const Double3 c = e1.cross(e2);
+        const double area = c.length();
+        corner = Double3::of(l.position);
+        n = c * (1.0 / area);
+        du = e2.cross(n) * (1.0 / area);  // the dual basis of (edge1, edge2) in the plane
+        dv = n.cross(e1) * (1.0 / area);
         // How far off the parallelogram an emitter may lie and still be its face: 2% of the
         // longer edge, along the normal and along each edge (the office demo's lamp panel is 0.01
         // behind a 1.2-wide light).
-        const double tol = 0.02 * std::max(lengthd(e1), lengthd(e2));
+        const double tol = 0.02 * std::max(e1.length(), e2.length());
         tolH = tol;
-        tolU = tol / lengthd(e1);
-        tolV = tol / lengthd(e2);
+        tolU = tol / e1.length();
+        tolV = tol / e2.length();
     }
-    void uvh(const V3& p, double& u, double& v, double& h) const {
-        const V3 d = sub(p, corner);
-        u = dotd(d, du);
-        v = dotd(d, dv);
-        h = dotd(d, n);
+    void uvh(const Double3& p, double& u, double& v, double& h) const {
+        const Double3 d = p - corner;
+        u = d.dot(du);
+        v = d.dot(dv);
+        h = d.dot(n);
     }
-    bool near(const V3& p) const {
+    bool near(const Double3& p) const {
         double u, v, h;
         uvh(p, u, v, h);
         return std::fabs(h) <= tolH && u >= -tolU && u <= 1.0 + tolU && v >= -tolV && v <= 1.0 + tolV;
@@ -147,12 +138,12 @@ double coverage(const LightFrame& f, const InstanceDesc& in, const InstanceData&
         // The front normal as shading sees it: the object-space winding normal through the
         // normal matrix (so a mirroring transform keeps the side the winding calls outside).
         const Float3 no = cross(b - a, c - a);
-        const V3 nw = toV3(Float3{data.normalMatrix[0] * no.x + data.normalMatrix[1] * no.y + data.normalMatrix[2] * no.z,
+        const Double3 nw = Double3::of(Float3{data.normalMatrix[0] * no.x + data.normalMatrix[1] * no.y + data.normalMatrix[2] * no.z,
                                   data.normalMatrix[3] * no.x + data.normalMatrix[4] * no.y + data.normalMatrix[5] * no.z,
                                   data.normalMatrix[6] * no.x + data.normalMatrix[7] * no.y + data.normalMatrix[8] * no.z});
-        const double len = lengthd(nw);
+        const double len = nw.length();
         if (!(len > 0.0)) continue;
-        const double facing = dotd(nw, f.n) * side / len;  // > 0: the front faces this side of the light
+        const double facing = nw.dot(f.n) * side / len;  // > 0: the front faces this side of the light
         if (!(facing > 0.999 || (twoSided && facing < -0.999))) continue;
         double tri[3][2];
         const Float3* corners[3] = {&a, &b, &c};

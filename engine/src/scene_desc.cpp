@@ -6,21 +6,19 @@
 
 namespace rtwall {
 
-Transform Transform::translate(double x, double y, double z) {
+namespace {
+// The identity with three entries of its row-major matrix set.
+Transform withEntries(int i, int j, int k, double x, double y, double z) {
     Transform t;
-    t.m[3] = x;
-    t.m[7] = y;
-    t.m[11] = z;
+    t.m[i] = x;
+    t.m[j] = y;
+    t.m[k] = z;
     return t;
 }
+}  // namespace
 
-Transform Transform::scale(double x, double y, double z) {
-    Transform t;
-    t.m[0] = x;
-    t.m[5] = y;
-    t.m[10] = z;
-    return t;
-}
+Transform Transform::translate(double x, double y, double z) { return withEntries(3, 7, 11, x, y, z); }
+Transform Transform::scale(double x, double y, double z) { return withEntries(0, 5, 10, x, y, z); }
 
 Transform Transform::rotateDegrees(double ax, double ay, double az, double degrees) {
     const double len = std::sqrt(ax * ax + ay * ay + az * az);

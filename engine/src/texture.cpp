@@ -97,6 +97,20 @@ inline float grad(int hash, float x, float y, float z) {
     return ((h & 1) ? -u : u) + ((h & 2) ? -v : v);
 }
 
+// The lattice cell of p: p's offset in it (x, y, z), the fades of that offset (u, v, w), and the
+// hashes of its corners, as the noise and its gradient both start.
+struct NoiseCell {
+    float x, y, z, u, v, w;
+    int AA, AB, BA, BB;
+};
+inline NoiseCell noiseCell(const Float3& p) {
+    const float fx = std::floor(p.x), fy = std::floor(p.y), fz = std::floor(p.z);
+    const int X = int(int64_t(fx) & 255), Y = int(int64_t(fy) & 255), Z = int(int64_t(fz) & 255);
+    const float x = p.x - fx, y = p.y - fy, z = p.z - fz;
+    const int A = perm(X) + Y, B = perm(X + 1) + Y;
+    return {x, y, z, fade(x), fade(y), fade(z), perm(A) + Z, perm(A + 1) + Z, perm(B) + Z, perm(B + 1) + Z};
+}
+
 Color mix(const Color& a, const Color& b, float t) { return a * (1.0f - t) + b * t; }
 
 }  // namespace
@@ -112,12 +126,7 @@ std::shared_ptr<const TextureImage> loadTextureImage(const std::string& file) {
 }
 
 float perlinNoise(const Float3& p) {
-    const float fx = std::floor(p.x), fy = std::floor(p.y), fz = std::floor(p.z);
-    const int X = int(int64_t(fx) & 255), Y = int(int64_t(fy) & 255), Z = int(int64_t(fz) & 255);
-    const float x = p.x - fx, y = p.y - fy, z = p.z - fz;
-    const float u = fade(x), v = fade(y), w = fade(z);
-    const int A = perm(X) + Y, AA = perm(A) + Z, AB = perm(A + 1) + Z;
-    const int B = perm(X + 1) + Y, BA = perm(B) + Z, BB = perm(B + 1) + Z;
+    const auto [x, y, z, u, v, w, AA, AB, BA, BB] = noiseCell(p);
     return lerp(w,
                 lerp(v, lerp(u, grad(perm(AA), x, y, z), grad(perm(BA), x - 1, y, z)),
                      lerp(u, grad(perm(AB), x, y - 1, z), grad(perm(BB), x - 1, y - 1, z))),
@@ -147,12 +156,7 @@ inline float fadeDerivative(float t) { return 30.0f * t * t * (t * (t - 2.0f) + 
 }  // namespace
 
 float perlinNoiseGrad(const Float3& p, Float3& gradient) {
-    const float fx = std::floor(p.x), fy = std::floor(p.y), fz = std::floor(p.z);
-    const int X = int(int64_t(fx) & 255), Y = int(int64_t(fy) & 255), Z = int(int64_t(fz) & 255);
-    const float x = p.x - fx, y = p.y - fy, z = p.z - fz;
-    const float u = fade(x), v = fade(y), w = fade(z);
-    const int A = perm(X) + Y, AA = perm(A) + Z, AB = perm(A + 1) + Z;
-    const int B = perm(X + 1) + Y, BA = perm(B) + Z, BB = perm(B + 1) + Z;
+    const auto [x, y, z, u, v, w, AA, AB, BA, BB] = noiseCell(p);
     // Corner gradients g and their dot products n with the offset to the corner; the noise is
     // the trilinear blend n = k0 + k1 u + k2 v + k3 w + k4 uv + k5 vw + k6 wu + k7 uvw.
     const Float3 ga = gradVector(perm(AA)), gb = gradVector(perm(BA)), gc = gradVector(perm(AB)),

@@ -52,7 +52,6 @@ namespace {
 
 [[noreturn]] void fail(const fs::path& file, const std::string& what) { throw InputError(file.string() + ": " + what); }
 
-
 // One message line: control characters (a newline inside a name) become spaces.
 void sendLine(int fd, char kind, const std::string& text) {
     std::string line(1, kind);

@@ -10,6 +10,7 @@
 // colour over its part's, over its assembly's).
 #include "rtwall/mesh.h"
 
+#include "assembly_import.h"
 #include "mesh_internal.h"
 
 #include <BRepMesh_IncrementalMesh.hxx>
@@ -55,7 +56,7 @@ namespace rtwall::detail {
 namespace {
 
 namespace fs = std::filesystem;
-using Matrix = std::array<double, 12>;
+using Matrix = Affine;
 
 // More instances than this is an input error (as for glTF and scene files).
 constexpr uint64_t kMaxInstances = uint64_t(1) << 24;
@@ -71,14 +72,6 @@ Matrix toMatrix(const gp_Trsf& t) {
     for (int r = 1; r <= 3; ++r)
         for (int c = 1; c <= 4; ++c) m[size_t(4 * (r - 1) + (c - 1))] = t.Value(r, c);
     return m;
-}
-
-Matrix multiply(const Matrix& a, const Matrix& b) {
-    Matrix r{};
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 4; ++j)
-            r[4 * i + j] = a[4 * i] * b[j] + a[4 * i + 1] * b[4 + j] + a[4 * i + 2] * b[8 + j] + (j == 3 ? a[4 * i + 3] : 0.0);
-    return r;
 }
 
 std::string labelName(const TDF_Label& label) {
@@ -196,16 +189,7 @@ private:
         return id;
     }
 
-    uint32_t defaultMaterial() const {
-        if (defaultMaterial_ < 0) {
-            AssemblyMaterial m;
-            m.name = "default";
-            m.baseColor = {0.7f, 0.7f, 0.72f, 1.0f};
-            defaultMaterial_ = int(out_.materials.size());
-            out_.materials.push_back(m);
-        }
-        return uint32_t(defaultMaterial_);
-    }
+    uint32_t defaultMaterial() const { return detail::defaultAssemblyMaterial(out_, defaultMaterial_); }
 
     uint32_t partMesh(const TDF_Label& part) {
         const std::string key = labelEntry(part);
@@ -256,7 +240,7 @@ private:
             std::string name = labelName(label);
             if (const int c = colourOf(label); c >= 0) mat = c;
             if (shapes_->IsReference(label)) {
-                world = multiply(world, toMatrix(XCAFDoc_ShapeTool::GetLocation(label).Transformation()));
+                world = composeAffine(world, toMatrix(XCAFDoc_ShapeTool::GetLocation(label).Transformation()));
                 TDF_Label ref;
                 if (!shapes_->GetReferredShape(label, ref)) fail(file_, "component " + labelEntry(label) + " refers to nothing");
                 if (name.empty()) name = labelName(ref);
@@ -280,7 +264,7 @@ private:
             in.material = mat >= 0 ? uint32_t(mat) : defaultMaterial();
             in.part = part;
             const auto& o = out_.meshes[in.mesh]->origin();
-            in.transform = multiply(world, Matrix{1, 0, 0, o[0], 0, 1, 0, o[1], 0, 0, 1, o[2]});
+            in.transform = composeAffine(world, Matrix{1, 0, 0, o[0], 0, 1, 0, o[1], 0, 0, 1, o[2]});
             // A location out of double range (1.E+400 in a placement) must not reach Embree.
             for (double v : in.transform)
                 if (!std::isfinite(v)) fail(file_, "the placement of '" + name + "' is not finite");

@@ -8,6 +8,7 @@
 // accept regular files only, so a URI naming a device or a FIFO cannot make the import hang.
 #include "rtwall/mesh.h"
 
+#include "assembly_import.h"
 #include "mesh_internal.h"
 
 #include <tiny_gltf.h>
@@ -26,7 +27,8 @@ namespace rtwall {
 namespace {
 
 namespace fs = std::filesystem;
-using Matrix = std::array<double, 12>;  // row-major 3x4
+using Matrix = detail::Affine;
+using detail::composeAffine;
 
 // More instances than this is an input error, not an allocation: a small file can name a mesh
 // of many primitives from many nodes (the same bound as a scene file's instances).
@@ -41,14 +43,6 @@ std::string oneLine(std::string s) {
     for (size_t i = 0; i < s.size(); ++i)
         if (s[i] == '\n') s.replace(i, 1, "; ");
     return s;
-}
-
-Matrix multiply(const Matrix& a, const Matrix& b) {
-    Matrix r{};
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 4; ++j)
-            r[4 * i + j] = a[4 * i] * b[j] + a[4 * i + 1] * b[4 + j] + a[4 * i + 2] * b[8 + j] + (j == 3 ? a[4 * i + 3] : 0.0);
-    return r;
 }
 
 Matrix fromTrs(const double t[3], const double q[4], const double s[3]) {
@@ -300,16 +294,7 @@ private:
         return key;
     }
 
-    uint32_t defaultMaterial() {
-        if (defaultMaterial_ < 0) {
-            AssemblyMaterial a;
-            a.name = "default";
-            a.baseColor = {0.7f, 0.7f, 0.72f, 1.0f};
-            defaultMaterial_ = int(out_.materials.size());
-            out_.materials.push_back(a);
-        }
-        return uint32_t(defaultMaterial_);
-    }
+    uint32_t defaultMaterial() { return detail::defaultAssemblyMaterial(out_, defaultMaterial_); }
 
     // One TriangleMesh per primitive, built the first time a node uses it.
     uint32_t primitiveMesh(size_t mesh, size_t prim) {
@@ -471,7 +456,7 @@ private:
             in.material = mat >= 0 ? uint32_t(mat) : defaultMaterial();
             in.part = part;
             const auto& o = out_.meshes[in.mesh]->origin();
-            in.transform = multiply(world, Matrix{1, 0, 0, o[0], 0, 1, 0, o[1], 0, 0, 1, o[2]});
+            in.transform = composeAffine(world, Matrix{1, 0, 0, o[0], 0, 1, 0, o[1], 0, 0, 1, o[2]});
             out_.instances.push_back(in);
         }
     }
@@ -503,7 +488,7 @@ private:
             for (size_t c = 0; views[2].data && c < 3; ++c) s[c] = component(views[2], i, c);
             for (double v : {t[0], t[1], t[2], q[0], q[1], q[2], q[3], s[0], s[1], s[2]})
                 if (!std::isfinite(v)) fail(name_, where + ": instance " + std::to_string(i) + " is not finite");
-            addInstances(node, n.mesh, part, multiply(world, fromTrs(t, q, s)));
+            addInstances(node, n.mesh, part, composeAffine(world, fromTrs(t, q, s)));
         }
         return true;
     }
@@ -523,7 +508,7 @@ private:
                 fail(name_, "node " + std::to_string(it.node) + " is reached twice (the nodes must form trees)");
             visited_[size_t(it.node)] = true;
             const tinygltf::Node& n = m_.nodes[size_t(it.node)];
-            const Matrix world = multiply(it.parentWorld, localTransform(n, it.node));
+            const Matrix world = composeAffine(it.parentWorld, localTransform(n, it.node));
             const auto part = uint32_t(out_.parts.size());
             out_.parts.push_back({n.name.empty() ? "node " + std::to_string(it.node) : n.name, it.parentPart});
             if (!gpuInstances(n, it.node, part, world)) addInstances(it.node, n.mesh, part, world);

@@ -536,7 +536,7 @@ TriangleMesh loadVtkHere(VtkKind kind, const std::string& data, const std::strin
             const int fd = ::memfd_create("rtwall-vrml", MFD_CLOEXEC);
             if (fd < 0) fail(name, std::string("cannot hand the file to VTK: ") + std::strerror(errno));
             Closer closer{fd};
-            if (!writeAll(fd, reinterpret_cast<const unsigned char*>(data.data()), data.size()))
+            if (!writeAll(fd, data.data(), data.size()))
                 fail(name, std::string("cannot hand the file to VTK: ") + std::strerror(errno));
             auto window3d = vtkSmartPointer<vtkRenderWindow>::New();  // never rendered: holds the renderer
             auto renderer = vtkSmartPointer<vtkRenderer>::New();
@@ -595,7 +595,6 @@ TriangleMesh loadVtkHere(VtkKind kind, const std::string& data, const std::strin
     }
 }
 
-
 }  // namespace
 
 // VTK's readers crash on some malformed files (a fuzzer finds a NULL dereference in the legacy
@@ -634,7 +633,7 @@ TriangleMesh loadVtk(VtkKind kind, const std::string& data, const std::string& n
             code = writeAll(memfd, bytes.data(), bytes.size()) ? 0 : 5;
         } catch (const InputError& e) {
             const std::string what = e.what();
-            writeAll(errPipe[1], reinterpret_cast<const unsigned char*>(what.data()), what.size());
+            writeAll(errPipe[1], what.data(), what.size());
             code = 3;
         } catch (...) {
         }

@@ -12,6 +12,11 @@
 
 namespace rtwall::detail {
 
+// A row-major 3x4 affine transform: an assembly node's placement as the importers build it.
+using Affine = std::array<double, 12>;
+// a after b (a * b): b's placement, then a's; the importers compose a node's world this way.
+Affine composeAffine(const Affine& a, const Affine& b);
+
 // The cache reader and the recentring step work on the buffers directly.
 struct MeshAccess {
     static MeshArray<float>& positions(TriangleMesh& m) { return m.positions_; }

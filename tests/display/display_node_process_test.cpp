@@ -6,6 +6,7 @@
 
 #include "files.h"
 #include "node_kit.h"
+#include "test_util.h"
 
 #include <rtwall/cluster.h>
 #include <rtwall/wall.h>
@@ -17,33 +18,50 @@ namespace {
 
 using test::fileBytes;
 
-TEST(DisplayNodeProcesses, EachShowsItsHalfOfTheWallBitIdentical) {
+// The shipped two-node wall (its text and its config) and the demo scene at the wall's size.
+struct TwoNodeWall {
+    std::string text;
+    WallConfig wall;
+    SceneDesc scene;
+};
+TwoNodeWall twoNodeWall() {
     const std::filesystem::path configFile = test::sourceDir() / "configs/wall/two-nodes-2x2.toml";
-    const std::string text = fileBytes(configFile);
     const WallConfig wall = loadWallConfig(configFile);
-    SceneDesc scene = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    scene.settings.width = wall.width;
-    scene.settings.height = wall.height;
-    scene.settings.supersample = 1;
-    const std::filesystem::path dir = test::displayScratchDir();
+    return {fileBytes(configFile), wall, test::demoScene(wall.width, wall.height, 1)};
+}
+
+// The wall's "left" and "right" node processes and two client threads join `master`; `render`
+// makes frames until both nodes have presented three they held (the last one is compared), bounded.
+void runLeftAndRight(Master& master, test::ClientThreads& clients, const std::filesystem::path& dir,
+                     const std::function<void()>& render) {
+    test::NodeProcesses nodes = test::startDisplayNodes(RTWALL_EXE, master.endpoint(), {"left", "right"}, dir);
+    for (int i = 0; i < 2; ++i) clients.start(test::localClient(master.endpoint()));
+    ASSERT_TRUE(master.waitForClients(2, 20000));
+    ASSERT_NO_FATAL_FAILURE(test::runUntilNodesEnd(nodes, render));
+}
+
+// The same frame on one PC: the "left" and "right" nodes' newest screens are the whole wall's
+// screens of the single-machine image of `scene`, byte for byte.
+void expectLeftAndRightShowOnePc(const WallConfig& wall, const SceneDesc& scene, const std::filesystem::path& dir) {
+    const Scene reference(scene);
+    WallFrame one;
+    one.left = renderFrame(reference, Camera(scene.cameras.front(), wall.width, wall.height), scene.settings);
+    const std::map<std::string, std::vector<std::string>> screensOf{{"left", {"c0r0", "c0r1"}}, {"right", {"c1r0", "c1r1"}}};
+    test::expectNodeScreensMatchOnePc(wall, one, dir, screensOf, 3 * 2u);
+}
+
+TEST(DisplayNodeProcesses, EachShowsItsHalfOfTheWallBitIdentical) {
+    auto [text, wall, scene] = twoNodeWall();
+    const std::filesystem::path dir = test::scratchDir();
 
     test::ClientThreads clients;
     ClusterSettings cs;
     cs.async = false;
     cs.displayNodes = displayNodeSettings(wall, text);
     auto master = std::make_unique<Master>(scene, cs);
-    test::NodeProcesses nodes = test::startDisplayNodes(RTWALL_EXE, master->endpoint(), {"left", "right"}, dir);
-    for (int i = 0; i < 2; ++i) clients.start(test::localClient(master->endpoint()));
-    ASSERT_TRUE(master->waitForClients(2, 20000));
-    // Frames until both nodes have presented three they held (the last one is compared), bounded.
-    ASSERT_NO_FATAL_FAILURE(test::runUntilNodesEnd(nodes, [&] { master->renderFrame(); }));
+    ASSERT_NO_FATAL_FAILURE(runLeftAndRight(*master, clients, dir, [&] { master->renderFrame(); }));
 
-    // The same frame on one PC: the whole wall's screens from the single-machine image.
-    const Scene reference(scene);
-    WallFrame one;
-    one.left = renderFrame(reference, Camera(scene.cameras.front(), wall.width, wall.height), scene.settings);
-    const std::map<std::string, std::vector<std::string>> screensOf{{"left", {"c0r0", "c0r1"}}, {"right", {"c1r0", "c1r1"}}};
-    test::expectNodeScreensMatchOnePc(wall, one, dir, screensOf, 3 * 2u);
+    expectLeftAndRightShowOnePc(wall, scene, dir);
     master.reset();
 }
 
@@ -55,11 +73,8 @@ TEST(DisplayNodeProcesses, StereoWallShowsBothEyesOfEachNodesScreensBitIdentical
                              "\n[stereo]\nmode = \"passive\"\neye_separation = 0.065\n";
     const WallConfig wall = parseWallConfig(text, "stereo two-node wall");
     ASSERT_EQ(wall.screens.size(), 8u);
-    SceneDesc scene = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    scene.settings.width = wall.width;
-    scene.settings.height = wall.height;
-    scene.settings.supersample = 1;
-    const std::filesystem::path dir = test::displayScratchDir();
+    SceneDesc scene = test::demoScene(wall.width, wall.height, 1);
+    const std::filesystem::path dir = test::scratchDir();
 
     test::ClientThreads clients;
     ClusterSettings cs;
@@ -73,11 +88,7 @@ TEST(DisplayNodeProcesses, StereoWallShowsBothEyesOfEachNodesScreensBitIdentical
         views[size_t(e)].camera.position.x += e == 0 ? -0.3f : 0.3f;
     }
     master->setViews(views);
-    test::NodeProcesses nodes = test::startDisplayNodes(RTWALL_EXE, master->endpoint(), {"left", "right"}, dir);
-    for (int i = 0; i < 2; ++i) clients.start(test::localClient(master->endpoint()));
-    ASSERT_TRUE(master->waitForClients(2, 20000));
-    // Frames until both nodes have presented three they held (the last one is compared), bounded.
-    ASSERT_NO_FATAL_FAILURE(test::runUntilNodesEnd(nodes, [&] { master->renderViews(); }));
+    ASSERT_NO_FATAL_FAILURE(runLeftAndRight(*master, clients, dir, [&] { master->renderViews(); }));
 
     const Scene reference(scene);
     WallFrame one;
@@ -95,14 +106,8 @@ TEST(DisplayNodeProcesses, StereoWallShowsBothEyesOfEachNodesScreensBitIdentical
 // join a keyed master and show their screens bit-identical; a node without keys is refused and
 // says why in one line, and gives up after its idle time.
 TEST(DisplayNodeProcesses, KeyedNodesWithTheLocalArgumentsWorkAndAKeylessOneIsRefused) {
-    const std::filesystem::path configFile = test::sourceDir() / "configs/wall/two-nodes-2x2.toml";
-    const std::string text = fileBytes(configFile);
-    const WallConfig wall = loadWallConfig(configFile);
-    SceneDesc scene = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    scene.settings.width = wall.width;
-    scene.settings.height = wall.height;
-    scene.settings.supersample = 1;
-    const std::filesystem::path dir = test::displayScratchDir();
+    auto [text, wall, scene] = twoNodeWall();
+    const std::filesystem::path dir = test::scratchDir();
     writeNewKeyPair(dir / "master");
 
     test::ClientThreads clients;
@@ -132,11 +137,7 @@ TEST(DisplayNodeProcesses, KeyedNodesWithTheLocalArgumentsWorkAndAKeylessOneIsRe
     EXPECT_NE(keyless.output().find("disagree on security"), std::string::npos) << keyless.output();
     EXPECT_FALSE(std::filesystem::exists(dir / "keyless")) << "a refused node presented something";
 
-    const Scene reference(scene);
-    WallFrame one;
-    one.left = renderFrame(reference, Camera(scene.cameras.front(), wall.width, wall.height), scene.settings);
-    const std::map<std::string, std::vector<std::string>> screensOf{{"left", {"c0r0", "c0r1"}}, {"right", {"c1r0", "c1r1"}}};
-    test::expectNodeScreensMatchOnePc(wall, one, dir, screensOf, 3 * 2u);
+    expectLeftAndRightShowOnePc(wall, scene, dir);
     master.reset();
 }
 

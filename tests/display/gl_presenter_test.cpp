@@ -1,6 +1,7 @@
 // The real GLFW / OpenGL 3.3 path under Xvfb with Mesa's software renderer: the 2x2 wall shows
 // a rendered frame, and each screen's pixels, read back, match the headless presenter's image.
 // The test starts its own Xvfb (a free display number, found with -displayfd).
+#include "cli_util.h"
 #include "display_test_util.h"
 
 #define GL_GLEXT_PROTOTYPES 1
@@ -98,7 +99,7 @@ void expectScreensMatchHeadless(const std::filesystem::path& config, UploadMetho
     o.upload = upload;
     auto gl = GlPresenter::open(wall, o, &why);
     ASSERT_TRUE(gl) << why;
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     // Two frames, so the second really streams new pixels into the texture.
     for (uint32_t n = 1; n <= 2; ++n) {
         const WallFrame frame = renderedFrame(wall.width, wall.height, n, float(n) * 0.3f, wall.stereo.mode != StereoMode::None);
@@ -177,8 +178,8 @@ TEST(GlPresenter, BlendingGammaAndFalseColourMatchTheCpuReference) {
 
 TEST(GlPresenter, StereoScreensShowTheirEyes) {
     expectScreensMatchHeadless(test::sourceDir() / "configs/wall/stereo-passive.toml", UploadMethod::TexSubImage, {}, 0);
-    const auto dir = test::displayScratchDir();
-    const auto sbs = test::writeText(dir / "sbs.toml", "[wall]\nwidth = 320\nheight = 240\n[stereo]\nmode = \"side_by_side\"\n"
+    const auto dir = test::scratchDir();
+    const auto sbs = test::writeFile(dir / "sbs.toml", "[wall]\nwidth = 320\nheight = 240\n[stereo]\nmode = \"side_by_side\"\n"
                                                        "[[screen]]\nviewport = [0, 0, 320, 240]\nresolution = [640, 240]\n");
     expectScreensMatchHeadless(sbs, UploadMethod::TexSubImage, {}, 0);
 }
@@ -186,13 +187,13 @@ TEST(GlPresenter, StereoScreensShowTheirEyes) {
 // A config's own shader is what the window draws: here present.frag with its output inverted,
 // so every pixel must differ from the CPU reference by exactly that.
 TEST(GlPresenter, AConfigShaderReplacesTheShippedOne) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     std::string text = presentFragmentShader().text;
     const std::string last = "colour = vec4(clamp(c * brightness * w, 0.0, 1.0), 1.0);";
     ASSERT_NE(text.find(last), std::string::npos);
     text.replace(text.find(last), last.size(), "colour = vec4(1.0 - clamp(c * brightness * w, 0.0, 1.0), 1.0);");
-    test::writeText(dir / "invert.frag", text);
-    const auto file = test::writeText(dir / "w.toml", "[wall]\nwidth = 160\nheight = 120\n[[screen]]\nviewport = [0, 0, 160, 120]\nshader = \"invert.frag\"\n");
+    test::writeFile(dir / "invert.frag", text);
+    const auto file = test::writeFile(dir / "w.toml", "[wall]\nwidth = 160\nheight = 120\n[[screen]]\nviewport = [0, 0, 160, 120]\nshader = \"invert.frag\"\n");
     ASSERT_TRUE(checkWall(file).empty());
     const WallConfig wall = loadWallConfig(file);
     std::string why;
@@ -208,9 +209,9 @@ TEST(GlPresenter, AConfigShaderReplacesTheShippedOne) {
 }
 
 TEST(GlPresenter, ABrokenConfigShaderIsRefusedBeforeAnyWindowOpens) {
-    const auto dir = test::displayScratchDir();
-    test::writeText(dir / "bad.frag", "#version 330 core\nout vec4 colour;\nvoid main() { colour = nope; }\n");
-    const auto file = test::writeText(dir / "w.toml", "[wall]\nwidth = 64\nheight = 64\n[[screen]]\nviewport = [0, 0, 64, 64]\nshader = \"bad.frag\"\n");
+    const auto dir = test::scratchDir();
+    test::writeFile(dir / "bad.frag", "#version 330 core\nout vec4 colour;\nvoid main() { colour = nope; }\n");
+    const auto file = test::writeFile(dir / "w.toml", "[wall]\nwidth = 64\nheight = 64\n[[screen]]\nviewport = [0, 0, 64, 64]\nshader = \"bad.frag\"\n");
     const auto problems = checkWall(file);
     ASSERT_FALSE(problems.empty());
     EXPECT_NE(problems[0].find("bad.frag:3: 'nope' : undeclared identifier"), std::string::npos) << problems[0];
@@ -251,11 +252,20 @@ TEST(GlPresenter, AFrameAtHalfTheWallsResolutionIsShownUpscaled) {
     EXPECT_THROW(gl->present(tooBig, {}), std::invalid_argument);
 }
 
+// `rtwall run` of the demo on the shipped 2x2 projector wall with `options`, three frames, the
+// third written to `dir`.
+test::CliResult runDemoOnTheWall(const std::filesystem::path& dir, const std::string& options) {
+    return test::runCli(RTWALL_EXE, "run " + (test::sourceDir() / "configs/run/demo.toml").string() + " --wall " +
+                                        (test::sourceDir() / "configs/wall/projectors-2x2.toml").string() + " " + options +
+                                        " --frames 3 --write-every 3 --out " + dir.string(),
+                        300);
+}
+
 // Issue 17: `rtwall run --target-fps` in a window stopped with an error when the controller took
 // an operating point with a scale below 1 (the presenter refused a frame smaller than the wall).
 TEST(GlPresenter, RunInAWindowAtAScaledOperatingPoint) {
-    const auto dir = test::displayScratchDir();
-    const auto front = test::writeText(dir / "front.toml", R"([[point]]
+    const auto dir = test::scratchDir();
+    const auto front = test::writeFile(dir / "front.toml", R"([[point]]
 name = "half resolution"
 frame_s = 0.0001
 error = 0.2
@@ -263,17 +273,9 @@ error = 0.2
 scale = 0.5
 tile = 32
 )");
-    const std::string cmd = "timeout 300 " + std::string(RTWALL_EXE) + " run " + (test::sourceDir() / "configs/run/demo.toml").string() +
-                            " --wall " + (test::sourceDir() / "configs/wall/projectors-2x2.toml").string() +
-                            " --target-fps 1 --front " + front.string() + " --frames 3 --write-every 3 --out " + dir.string() +
-                            " 2>&1";
-    std::string output;
-    FILE* p = popen(cmd.c_str(), "r");
-    ASSERT_TRUE(p);
-    char buf[4096];
-    size_t n;
-    while ((n = fread(buf, 1, sizeof buf, p)) > 0) output.append(buf, n);
-    EXPECT_EQ(pclose(p), 0) << output;
+    const test::CliResult r = runDemoOnTheWall(dir, "--target-fps 1 --front " + front.string());
+    const std::string& output = r.output;
+    EXPECT_EQ(r.status, 0) << output;
     EXPECT_NE(output.find("4 windows"), std::string::npos) << output;
     EXPECT_NE(output.find("starting at 'half resolution'"), std::string::npos) << output;
     EXPECT_EQ(readPng(dir / "frame_000003.png").width, 1600) << output;
@@ -281,17 +283,10 @@ tile = 32
 
 // `rtwall run` opens the wall by itself when there is a display (this test's Xvfb).
 TEST(GlPresenter, RunShowsTheWallInWindowsWhereThereIsADisplay) {
-    const auto dir = test::displayScratchDir();
-    const std::string cmd = "timeout 300 " + std::string(RTWALL_EXE) + " run " + (test::sourceDir() / "configs/run/demo.toml").string() +
-                            " --wall " + (test::sourceDir() / "configs/wall/projectors-2x2.toml").string() +
-                            " --frames 3 --write-every 3 --out " + dir.string() + " 2>&1";
-    std::string output;
-    FILE* p = popen(cmd.c_str(), "r");
-    ASSERT_TRUE(p);
-    char buf[4096];
-    size_t n;
-    while ((n = fread(buf, 1, sizeof buf, p)) > 0) output.append(buf, n);
-    EXPECT_EQ(pclose(p), 0) << output;
+    const auto dir = test::scratchDir();
+    const test::CliResult r = runDemoOnTheWall(dir, "");
+    const std::string& output = r.output;
+    EXPECT_EQ(r.status, 0) << output;
     EXPECT_NE(output.find("4 windows"), std::string::npos) << output;
     EXPECT_TRUE(std::filesystem::exists(dir / "frame_000003.png")) << output;
     EXPECT_FALSE(std::filesystem::exists(dir / "frame_000003_c0r0.png")) << "per-screen files only without a display";

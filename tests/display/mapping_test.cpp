@@ -141,7 +141,7 @@ TEST(Mapping, FalseColourTintsEachTileWithItsClient) {
 }
 
 TEST(Mapping, HeadlessPresenterWritesEveryNthFramePerScreen) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     WallConfig w = loadWallConfig(test::sourceDir() / "configs/wall/projectors-2x2.toml");
     w.writeEvery = 2;
     HeadlessPresenter p(w, dir);
@@ -160,7 +160,7 @@ TEST(Mapping, HeadlessPresenterWritesEveryNthFramePerScreen) {
 // `ffmpeg` on PATH records its arguments and what it was sent, so the test checks exactly what
 // a real ffmpeg would get (CI has no ffmpeg installed).
 TEST(Mapping, HeadlessPresenterPipesEveryFrameToFfmpeg) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     const auto bin = dir / "bin";
     std::filesystem::create_directories(bin);
     {

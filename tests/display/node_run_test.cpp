@@ -5,6 +5,7 @@
 #include "display_test_util.h"
 
 #include "child_process.h"
+#include "files.h"
 
 #include <rtwall/display.h>
 
@@ -13,21 +14,14 @@
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <regex>
 #include <set>
-#include <sstream>
 
 namespace rtwall {
 namespace {
 
-std::string fileBytes(const std::filesystem::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
+using test::fileBytes;
 
 std::vector<std::string> filesIn(const std::filesystem::path& dir) {
     std::vector<std::string> out;
@@ -46,7 +40,7 @@ std::filesystem::path onePcWall(const std::filesystem::path& dir) {
     WallConfig w = loadWallConfig(nodesWall());
     for (ScreenConfig& s : w.screens) s.node.clear();
     const std::filesystem::path file = dir / "one-pc.toml";
-    test::writeText(file, writeWallConfig(w));
+    test::writeFile(file, writeWallConfig(w));
     EXPECT_TRUE(loadWallConfig(file).nodes().empty());
     return file;
 }
@@ -57,7 +51,7 @@ std::vector<std::string> runArgs(const std::filesystem::path& wall, int frames, 
 }
 
 TEST(NodeRun, OneCommandRunsTwoLocalNodesBitIdenticalToOnePc) {
-    const std::filesystem::path dir = test::displayScratchDir();
+    const std::filesystem::path dir = test::scratchDir();
     test::ChildProcess nodes(runArgs(nodesWall(), 4, dir / "nodes"));
     const std::optional<int> status = nodes.wait(240'000);
     ASSERT_TRUE(status.has_value()) << nodes.output();
@@ -94,16 +88,13 @@ TEST(NodeRun, OneCommandRunsTwoLocalNodesBitIdenticalToOnePc) {
 // The node's process among the run's children, by its --node argument.
 pid_t nodeProcess(pid_t run, const std::string& name) {
     for (pid_t kid : test::childrenOf(run)) {
-        std::ifstream in("/proc/" + std::to_string(kid) + "/cmdline", std::ios::binary);
-        std::stringstream s;
-        s << in.rdbuf();
-        if (s.str().find(std::string("--node\0", 7) + name + '\0') != std::string::npos) return kid;
+        if (fileBytes("/proc/" + std::to_string(kid) + "/cmdline").find(std::string("--node\0", 7) + name + '\0') != std::string::npos) return kid;
     }
     return 0;
 }
 
 TEST(NodeRun, AKilledLocalNodeIsSaidAndTheRunFinishesWithTheOther) {
-    const std::filesystem::path dir = test::displayScratchDir();
+    const std::filesystem::path dir = test::scratchDir();
     test::ChildProcess run(runArgs(nodesWall(), 30, dir));
     ASSERT_TRUE(run.waitFor("display nodes: all 2 joined", 120'000)) << run.output();
     ASSERT_TRUE(run.waitFor("frame 10:", 120'000)) << run.output();

@@ -7,31 +7,26 @@
 #include "display_test_util.h"
 
 #include "child_process.h"
+#include "files.h"
+#include "test_util.h"
 
 #include <rtwall/engine.h>
 
-#include <fstream>
 #include <map>
-#include <sstream>
 
 namespace rtwall {
 namespace {
 
-std::string bytesOf(const std::filesystem::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
+using test::fileBytes;
 
 TEST(NodeWindows, TwoWindowedNodesEachShowTheirHalfOfTheWall) {
-    const std::filesystem::path dir = test::displayScratchDir();
+    const std::filesystem::path dir = test::scratchDir();
     WallConfig wall = loadWallConfig(test::sourceDir() / "configs/wall/two-nodes-2x2.toml");
     wall.swapGroup = 1;
     wall.swapBarrier = 1;
-    const std::filesystem::path wallFile = test::writeText(dir / "wall.toml", writeWallConfig(wall));
+    const std::filesystem::path wallFile = test::writeFile(dir / "wall.toml", writeWallConfig(wall));
     // A still camera: every frame is the same image (a windowed master does not orbit anyway).
-    const std::filesystem::path runFile = test::writeText(
+    const std::filesystem::path runFile = test::writeFile(
         dir / "run.toml", "scene = \"" + (test::sourceDir() / "configs/demo.toml").string() + "\"\ncamera = \"main\"\n[run]\norbit = 0.0\n");
 
     test::ChildProcess master({RTWALL_EXE, "run", runFile.string(), "--wall", wallFile.string(), "--no-local-nodes", "--frames", "3",
@@ -55,9 +50,7 @@ TEST(NodeWindows, TwoWindowedNodesEachShowTheirHalfOfTheWall) {
     }
 
     // The single-PC wall: the whole frame on this machine, cut into the four screens.
-    SceneDesc scene = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    scene.settings.width = wall.width;
-    scene.settings.height = wall.height;
+    const SceneDesc scene = test::demoScene(wall.width, wall.height);
     const Scene reference(scene);
     WallFrame one;
     one.left = renderFrame(reference, Camera(*scene.findCamera("main"), wall.width, wall.height), scene.settings);
@@ -73,7 +66,7 @@ TEST(NodeWindows, TwoWindowedNodesEachShowTheirHalfOfTheWall) {
             ASSERT_EQ(f.size(), std::string("frame_000001_c0r0.png").size());
             const std::string screen = f.substr(13, 4);
             ASSERT_NE(std::find(screens.begin(), screens.end(), screen), screens.end()) << "a screen of the other node";
-            EXPECT_EQ(bytesOf(e.path()), bytesOf(dir / "one" / ("frame_000001_" + screen + ".png")));
+            EXPECT_EQ(fileBytes(e.path()), fileBytes(dir / "one" / ("frame_000001_" + screen + ".png")));
             frames += screen == screens.front();
         }
         EXPECT_GE(frames, 2u) << name << ": " << nodes[name]->output();
@@ -83,7 +76,7 @@ TEST(NodeWindows, TwoWindowedNodesEachShowTheirHalfOfTheWall) {
 // The one command with a display: the local nodes open their windows (and write nothing), the
 // master its console window.
 TEST(NodeWindows, OneCommandOpensTheNodesWindowsAndTheMastersConsole) {
-    const std::filesystem::path dir = test::displayScratchDir();
+    const std::filesystem::path dir = test::scratchDir();
     test::ChildProcess run({RTWALL_EXE, "run", (test::sourceDir() / "configs/run/demo.toml").string(), "--wall",
                             (test::sourceDir() / "configs/wall/two-nodes-2x2.toml").string(), "--frames", "3", "--out", dir.string()});
     const std::optional<int> status = run.wait(240'000);

@@ -3,6 +3,7 @@
 // Every frame the cluster shows is the session's state rendered on one machine, byte for byte.
 #include "display_test_util.h"
 #include "parts_scene.h"
+#include "session_test_util.h"
 
 #include <rtwall/wall.h>
 
@@ -17,31 +18,12 @@ namespace rtwall {
 namespace {
 
 RunConfig partsConfig(const std::filesystem::path& dir, std::shared_ptr<std::vector<std::string>> lines) {
-    RunConfig c;
+    RunConfig c = steppedRunConfig(dir);
     c.scene = "parts";
     c.loaded = test::partsScene();
-    c.cluster.localClients = 2;
     c.cluster.async = false;
-    c.clientThreads = true;
-    c.headless = true;
-    c.frames = 0;
-    c.orbit = 0.0;
-    c.writeEvery = 0;
-    c.out = dir;
     c.log = [lines](const std::string& line) { lines->push_back(line); };
     return c;
-}
-
-Image renderState(const SceneDesc& d) {
-    const Scene scene(d);
-    return renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings);
-}
-
-size_t differingBytes(const Image& a, const Image& b) {
-    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
-    size_t n = 0;
-    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
-    return n;
 }
 
 // A wall pixel whose ray hits `instance` first.
@@ -78,12 +60,12 @@ bool logged(const std::vector<std::string>& lines, const std::string& text) {
 }
 
 TEST(PartsSession, PickThenHideIsolateHighlightAndShowAll) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     auto lines = std::make_shared<std::vector<std::string>>();
     WallSession s(partsConfig(dir, lines));
     ASSERT_TRUE(s.step());
     const Image start = s.lastFrame().left;
-    ASSERT_EQ(differingBytes(start, renderState(s.scene())), 0u);
+    ASSERT_EQ(test::differingBytes(start, test::renderFirstCamera(s.scene())), 0u);
 
     key(s, GLFW_KEY_X);  // nothing picked yet: nothing happens
     ASSERT_TRUE(s.step());
@@ -96,8 +78,8 @@ TEST(PartsSession, PickThenHideIsolateHighlightAndShowAll) {
     ASSERT_TRUE(s.step());
     EXPECT_EQ(s.scene().instances[1].visibility, Visibility::Hidden);
     EXPECT_EQ(s.partView().hide, std::vector<std::string>{"asm/left"});
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
-    EXPECT_GT(differingBytes(s.lastFrame().left, start), 0u);
+    EXPECT_EQ(test::bytesOffState(s), 0u);
+    EXPECT_GT(test::differingBytes(s.lastFrame().left, start), 0u);
     EXPECT_TRUE(logged(*lines, "parts: hidden 'asm/left'; 1 of 4 instances hidden"));
 
     ctrlClick(s, pixelOnInstance(s, 2));
@@ -106,23 +88,23 @@ TEST(PartsSession, PickThenHideIsolateHighlightAndShowAll) {
     EXPECT_EQ(s.scene().instances[0].visibility, Visibility::Hidden);
     EXPECT_EQ(s.scene().instances[2].visibility, Visibility::Shown);
     EXPECT_EQ(s.scene().instances[3].visibility, Visibility::Shown);
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_EQ(test::bytesOffState(s), 0u);
     EXPECT_TRUE(logged(*lines, "isolated 'asm/right'"));
 
     key(s, GLFW_KEY_G);
     ASSERT_TRUE(s.step());
     EXPECT_EQ(s.scene().instances[2].visibility, Visibility::Highlighted);
     EXPECT_EQ(s.scene().instances[3].visibility, Visibility::Highlighted);
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_EQ(test::bytesOffState(s), 0u);
 
     key(s, GLFW_KEY_U);
     ASSERT_TRUE(s.step());
     for (const InstanceDesc& in : s.scene().instances) EXPECT_EQ(in.visibility, Visibility::Shown);
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_EQ(test::bytesOffState(s), 0u);
 }
 
 TEST(PartsSession, RunConfigPartsApplyFromTheStart) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     auto lines = std::make_shared<std::vector<std::string>>();
     RunConfig c = partsConfig(dir, lines);
     c.parts.hide = {"knob"};
@@ -131,7 +113,7 @@ TEST(PartsSession, RunConfigPartsApplyFromTheStart) {
     ASSERT_TRUE(s.step());
     EXPECT_EQ(s.scene().instances[3].visibility, Visibility::Hidden);
     EXPECT_EQ(s.scene().instances[1].visibility, Visibility::Highlighted);
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_EQ(test::bytesOffState(s), 0u);
     EXPECT_TRUE(logged(*lines, "1 of 4 instances hidden, 1 highlighted"));
     // A wall view on top keeps them; U shows all.
     s.setPartView(PartView{{"floor"}, {}, {}});
@@ -142,13 +124,13 @@ TEST(PartsSession, RunConfigPartsApplyFromTheStart) {
     s.showAllParts();
     ASSERT_TRUE(s.step());
     for (const InstanceDesc& in : s.scene().instances) EXPECT_EQ(in.visibility, Visibility::Shown);
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_EQ(test::bytesOffState(s), 0u);
 }
 
 // A --watch edit of the scene file's [parts] arrives as visibility changes (applyEdit is what the
 // watcher calls); the wall's own view stays on top of it.
 TEST(PartsSession, AnEditedPartsTableIsAnUpdate) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     auto lines = std::make_shared<std::vector<std::string>>();
     WallSession s(partsConfig(dir, lines));
     ASSERT_TRUE(s.step());
@@ -162,7 +144,7 @@ TEST(PartsSession, AnEditedPartsTableIsAnUpdate) {
     ASSERT_TRUE(s.step());
     EXPECT_EQ(s.scene().instances[0].visibility, Visibility::Hidden);
     EXPECT_EQ(s.scene().instances[1].visibility, Visibility::Highlighted);
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_EQ(test::bytesOffState(s), 0u);
     EXPECT_TRUE(logged(*lines, "camera same, 0 section planes, 2 instance visibilities"));
 }
 

@@ -24,17 +24,17 @@ TEST(Shaders, ABrokenShaderGivesItsLine) {
 }
 
 TEST(Shaders, CheckingAWallCompilesTheShadersItNames) {
-    const auto dir = test::displayScratchDir();
-    test::writeText(dir / "good.frag", presentFragmentShader().text);
-    test::writeText(dir / "bad.frag", "#version 330 core\nout vec4 colour;\n\nvoid main() {\n    colour = vec3(1.0);\n}\n");
+    const auto dir = test::scratchDir();
+    test::writeFile(dir / "good.frag", presentFragmentShader().text);
+    test::writeFile(dir / "bad.frag", "#version 330 core\nout vec4 colour;\n\nvoid main() {\n    colour = vec3(1.0);\n}\n");
     const std::string wall = "[wall]\nwidth = 100\nheight = 100\n[[screen]]\nname = \"a\"\nviewport = [0, 0, 50, 100]\nshader = \"good.frag\"\n"
                              "[[screen]]\nname = \"b\"\nviewport = [50, 0, 50, 100]\nshader = \"SHADER\"\n";
     std::string good = wall;
     good.replace(good.find("SHADER"), 6, "good.frag");
-    EXPECT_TRUE(checkWall(test::writeText(dir / "good.toml", good)).empty());
+    EXPECT_TRUE(checkWall(test::writeFile(dir / "good.toml", good)).empty());
     std::string bad = wall;
     bad.replace(bad.find("SHADER"), 6, "bad.frag");
-    const auto problems = checkWall(test::writeText(dir / "bad.toml", bad));
+    const auto problems = checkWall(test::writeFile(dir / "bad.toml", bad));
     ASSERT_EQ(problems.size(), 1u) << ::testing::PrintToString(problems);
     EXPECT_NE(problems[0].find("bad.frag:5: "), std::string::npos) << problems[0];
 }

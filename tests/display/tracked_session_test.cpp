@@ -2,6 +2,7 @@
 // head at the config's viewer give the very bytes of the static render with that viewer, on a
 // flat 2x2 stereo wall and on a three-wall CAVE; a tilted or moved head changes the eye images.
 #include "display_test_util.h"
+#include "test_util.h"
 
 #include <rtwall/wall.h>
 
@@ -13,48 +14,7 @@
 namespace rtwall {
 namespace {
 
-const char* kScene = R"([image]
-width = 64
-height = 64
-tile = 16
-[render]
-ambient = [0.1, 0.1, 0.1]
-[[mesh]]
-name = "box"
-shape = "box"
-[[mesh]]
-name = "floor"
-shape = "quad"
-[[material]]
-name = "red"
-type = "lambert"
-color = [0.8, 0.2, 0.2]
-[[material]]
-name = "grey"
-type = "lambert"
-color = [0.6, 0.6, 0.6]
-[[instance]]
-mesh = "box"
-material = "red"
-scale = 0.4
-translate = [0.3, 0.4, -1.5]
-[[instance]]
-mesh = "floor"
-material = "grey"
-scale = 8
-[[instance]]
-mesh = "box"
-material = "grey"
-scale = 0.3
-translate = [-1.2, 1.0, 0.8]
-[[light]]
-position = [2, 6, 4]
-intensity = 60
-[[camera]]
-position = [0, 1.7, 0]
-look_at = [0, 1.7, -1]
-fov = 60
-)";
+const std::string kScene = test::sceneText("tracked_boxes");
 
 // The shipped walls' geometry at a few pixels per screen. `viewer` is [stereo]'s.
 std::string flatWall(const char* viewer, bool tracked) {
@@ -108,18 +68,10 @@ write_every = 0
 }
 
 RunConfig config(const std::filesystem::path& dir, const std::string& wallText, const char* name) {
-    RunConfig c;
-    c.scene = test::writeText(dir / "scene.toml", kScene).string();
-    c.wall = test::writeText(dir / name, wallText);
-    c.cluster.localClients = 2;
+    RunConfig c = steppedRunConfig(dir);
+    c.scene = test::writeFile(dir / "scene.toml", kScene).string();
+    c.wall = test::writeFile(dir / name, wallText);
     c.cluster.async = false;
-    c.clientThreads = true;
-    c.headless = true;
-    c.frames = 0;
-    c.orbit = 0.0;
-    c.writeEvery = 0;
-    c.out = dir;
-    c.log = [](const std::string&) {};
     return c;
 }
 
@@ -186,13 +138,13 @@ void checkTrackedEqualsStatic(const std::filesystem::path& dir, std::string (*wa
 }
 
 TEST(TrackedSession, FlatStereoWallTrackedHeadGivesTheStaticRender) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     checkTrackedEqualsStatic(dir, flatWall, "[0.0, 0.2, 2.5]", {0.0f, 0.2f, 2.5f});
     checkTrackedEqualsStatic(dir, flatWall, "[-0.7, 0.35, 1.8]", {-0.7f, 0.35f, 1.8f});
 }
 
 TEST(TrackedSession, CaveTrackedHeadGivesTheStaticRender) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     checkTrackedEqualsStatic(dir, caveWall, "[0.0, 1.7, 0.0]", {0.0f, 1.7f, 0.0f});
     checkTrackedEqualsStatic(dir, caveWall, "[0.4, 1.55, 0.6]", {0.4f, 1.55f, 0.6f});
 }
@@ -200,7 +152,7 @@ TEST(TrackedSession, CaveTrackedHeadGivesTheStaticRender) {
 // No head for timeout_ms: the last pose is held (not flown off at its last velocity), the log and
 // the overlay line say so, and the wall keeps going; the head's return is said too.
 TEST(TrackedSession, ALostHeadIsHeldAndSaid) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     std::string wall = flatWall("[0.0, 0.2, 2.5]", true);
     wall.replace(wall.find("timeout_ms = 60000"), 18, "timeout_ms = 100\nprediction_ms = 50");
     RunConfig c = config(dir, wall, "tracked.toml");
@@ -230,7 +182,7 @@ TEST(TrackedSession, ALostHeadIsHeldAndSaid) {
 // Each CAVE wall is seen through its own frustum: a wall's pixels in the composed image are those
 // of a render with that wall's view alone (and the walls differ from one flat projection).
 TEST(TrackedSession, CaveWallsAreRenderedEachWithItsOwnView) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     WallSession cave(config(dir, caveWall("[0.0, 1.7, 0.0]", false), "cave.toml"));
     ASSERT_TRUE(cave.step());
     const WallFrame& f = cave.lastFrame();
@@ -297,7 +249,7 @@ void expectTransform(const Transform& got, const Transform& want, const char* wh
 }
 
 TEST(WandSession, PickAndDragMovesTheInstanceByExactlyTheWandsMotion) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     RunConfig c = config(dir, wandWall(), "wand.toml");
     std::vector<std::string> lines;
     c.log = [&](const std::string& line) { lines.push_back(line); };
@@ -349,7 +301,7 @@ TEST(WandSession, PickAndDragMovesTheInstanceByExactlyTheWandsMotion) {
 // moves and its normal turns with the wand, exactly as a dragged object would (issue 20: planes
 // movable by the wand); let go, it stays.
 TEST(WandSession, TheTriggerMovesTheSelectedSectionPlane) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     WallSession s(config(dir, wandWall(), "wand.toml"));
     const TrackingConfig t = loadWallConfig(dir / "wand.toml").tracking;
     const Transform box = s.scene().instances[0].transform;
@@ -393,7 +345,7 @@ TEST(WandSession, TheTriggerMovesTheSelectedSectionPlane) {
 
 // In measure mode the trigger sets the points where the wand's ray hits, and moves nothing.
 TEST(WandSession, TheTriggerMeasuresInMeasureMode) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     WallSession s(config(dir, wandWall(), "wand.toml"));
     const TrackingConfig t = loadWallConfig(dir / "wand.toml").tracking;
     const Transform start = s.scene().instances[0].transform;
@@ -420,7 +372,7 @@ TEST(WandSession, TheTriggerMeasuresInMeasureMode) {
 }
 
 TEST(WandSession, JoystickFliesTheCameraAlongTheWandAndHomeReturns) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     // Each step moves by the speed times the previous frame's time, the first frame's counted
     // from the session's start: all of it lies after t0.
     const auto t0 = std::chrono::steady_clock::now();
@@ -465,7 +417,7 @@ TEST(WandSession, JoystickFliesTheCameraAlongTheWandAndHomeReturns) {
 }
 
 TEST(WandSession, TheRayIsDrawnInBothEyesAndOnlyWithAWand) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     WallSession s(config(dir, wandWall(), "wand.toml"));
     const TrackingConfig t = loadWallConfig(dir / "wand.toml").tracking;
     auto rayPixels = [](const Image& img) {
@@ -534,11 +486,11 @@ void checkAsyncEqualsSync(const std::filesystem::path& dir, std::string (*wall)(
 }
 
 TEST(TrackedSession, OnePassStereoAsyncEqualsSync) {
-    checkAsyncEqualsSync(test::displayScratchDir(), flatWall, "[0.0, 0.2, 2.5]", {0.0f, 0.2f, 2.5f}, 2);
+    checkAsyncEqualsSync(test::scratchDir(), flatWall, "[0.0, 0.2, 2.5]", {0.0f, 0.2f, 2.5f}, 2);
 }
 
 TEST(TrackedSession, OnePassCaveAsyncEqualsSync) {
-    checkAsyncEqualsSync(test::displayScratchDir(), caveWall, "[0.0, 1.7, 0.0]", {0.0f, 1.7f, 0.0f}, 6);
+    checkAsyncEqualsSync(test::scratchDir(), caveWall, "[0.0, 1.7, 0.0]", {0.0f, 1.7f, 0.0f}, 6);
 }
 
 // A stochastic scene (GI) on a tracked wall accumulates view by view: still views refine, a head
@@ -546,7 +498,7 @@ TEST(TrackedSession, OnePassCaveAsyncEqualsSync) {
 // head's centre, so turning the head in place keeps accumulating and moving it restarts; on a
 // stereo wall turning the head moves both eyes, so both restart.
 TEST(TrackedSession, HeadMovesRestartOnlyTheViewsTheyChange) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     std::string scene = kScene;
     scene.replace(scene.find("[render]\n"), 9, "[render]\ngi = true\n");
     for (bool stereo : {false, true}) {
@@ -554,7 +506,7 @@ TEST(TrackedSession, HeadMovesRestartOnlyTheViewsTheyChange) {
         std::string wallText = flatWall("[0.0, 0.2, 2.5]", true);
         if (!stereo) wallText.replace(wallText.find("mode = \"passive\""), 16, "mode = \"none\"");
         RunConfig c = config(dir, wallText, "gi.toml");
-        c.scene = test::writeText(dir / "gi-scene.toml", scene).string();
+        c.scene = test::writeFile(dir / "gi-scene.toml", scene).string();
         WallSession s(c);
         const TrackingConfig t = loadWallConfig(dir / "gi.toml").tracking;
         const size_t views = stereo ? 2 : 1;

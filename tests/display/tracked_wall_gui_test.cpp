@@ -4,6 +4,7 @@
 // frames change) and comes back (the static bytes again).
 #include "cli_util.h"
 #include "display_test_util.h"
+#include "test_util.h"
 
 #include <rtwall/tracking.h>
 
@@ -16,37 +17,7 @@
 namespace rtwall {
 namespace {
 
-const char* kScene = R"([image]
-width = 64
-height = 64
-tile = 16
-[render]
-ambient = [0.1, 0.1, 0.1]
-[[mesh]]
-name = "box"
-shape = "box"
-[[mesh]]
-name = "floor"
-shape = "quad"
-[[material]]
-name = "red"
-type = "lambert"
-color = [0.8, 0.2, 0.2]
-[[instance]]
-mesh = "box"
-material = "red"
-scale = 0.5
-translate = [0.3, 0.5, -1.5]
-[[instance]]
-mesh = "floor"
-scale = 8
-[[light]]
-position = [2, 6, 4]
-intensity = 60
-[[camera]]
-position = [0, 1.7, 1]
-look_at = [0, 1.2, -1]
-)";
+const std::string kScene = test::sceneText("tracked_box");
 
 // The shipped tracked wall's geometry and room, with 80x60 projectors and a port of its own.
 std::string wallText(int port) {
@@ -91,18 +62,18 @@ int freeUdpPort() {
 }
 
 TEST(TrackedWall, TheSimulatorDrivesRtwallRunAndTheImagesFollowTheHead) {
-    const auto dir = test::displayScratchDir();
-    test::writeText(dir / "scene.toml", kScene);
+    const auto dir = test::scratchDir();
+    test::writeFile(dir / "scene.toml", kScene);
     // The static render with the viewer, headless.
-    test::writeText(dir / "static.toml", wallText(0));
-    const test::CliResult ref = test::runCli(RTWALL_EXE, "run " + test::writeText(dir / "static-run.toml", runText(dir, "static.toml", 1)).string() + " --headless", 300);
+    test::writeFile(dir / "static.toml", wallText(0));
+    const test::CliResult ref = test::runCli(RTWALL_EXE, "run " + test::writeFile(dir / "static-run.toml", runText(dir, "static.toml", 1)).string() + " --headless", 300);
     ASSERT_EQ(ref.status, 0) << ref.output;
     const Image atViewer = readPng(dir / "frames-static.toml" / fileOf(1));
 
     const int port = freeUdpPort();
-    test::writeText(dir / "tracked.toml", wallText(port));
+    test::writeFile(dir / "tracked.toml", wallText(port));
     const int frames = 200;
-    const auto run = test::writeText(dir / "tracked-run.toml", runText(dir, "tracked.toml", frames));
+    const auto run = test::writeFile(dir / "tracked-run.toml", runText(dir, "tracked.toml", frames));
     // The simulator: the head at the viewer (tracker room: on the floor's origin + 1.7 m up), then
     // 0.5 m to the right, then back; switched when the wall has shown enough frames of each.
     std::atomic<int> phase{0};

@@ -31,8 +31,8 @@ TEST(WallCli, CheckNamesTheScreensOfEachDisplayNode) {
     EXPECT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("4 screens, shaders compile; display nodes: left: c0r0 c0r1; right: c1r0 c1r1\n"), std::string::npos)
         << r.output;
-    const auto dir = test::displayScratchDir();
-    const auto bad = test::writeText(dir / "nodes.toml", "[wall]\nwidth = 100\nheight = 50\n[[screen]]\nviewport = [0, 0, 50, 50]\n"
+    const auto dir = test::scratchDir();
+    const auto bad = test::writeFile(dir / "nodes.toml", "[wall]\nwidth = 100\nheight = 50\n[[screen]]\nviewport = [0, 0, 50, 50]\n"
                                                          "node = \"a\"\n[[screen]]\nviewport = [50, 0, 50, 50]\n");
     r = run("check " + bad.string());
     EXPECT_EQ(r.status, 1);
@@ -53,7 +53,7 @@ TEST(WallCli, DisplayNeedsAnAdvertisedHostForAWildcardBindAndTheMastersKeyWithIt
     r = run("display --connect tcp://127.0.0.1:9 --node left --headless --advertise 'wall pc'");
     EXPECT_EQ(r.status, 1);
     EXPECT_NE(r.output.find("--advertise 'wall pc' is not a host name"), std::string::npos) << r.output;
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     writeNewKeyPair(dir / "node");
     r = run("display --connect tcp://127.0.0.1:9 --node left --headless --key " + (dir / "node.key").string());
     EXPECT_EQ(r.status, 1);
@@ -61,13 +61,13 @@ TEST(WallCli, DisplayNeedsAnAdvertisedHostForAWildcardBindAndTheMastersKeyWithIt
 }
 
 TEST(WallCli, CheckReportsABadConfigAndABadShaderOnOneLine) {
-    const auto dir = test::displayScratchDir();
-    const auto bad = test::writeText(dir / "bad.toml", "[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\ngama = 2\n");
+    const auto dir = test::scratchDir();
+    const auto bad = test::writeFile(dir / "bad.toml", "[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\ngama = 2\n");
     Result r = run("check " + bad.string());
     EXPECT_EQ(r.status, 1);
     EXPECT_EQ(r.output, "rtwall: error: " + bad.string() + ":6: [[screen]] #1: unknown key 'gama'\n");
-    test::writeText(dir / "bad.frag", "#version 330 core\nout vec4 colour;\nvoid main() {\n  colour = 1;\n}\n");
-    const auto shader = test::writeText(dir / "shader.toml", "[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\nshader = \"bad.frag\"\n");
+    test::writeFile(dir / "bad.frag", "#version 330 core\nout vec4 colour;\nvoid main() {\n  colour = 1;\n}\n");
+    const auto shader = test::writeFile(dir / "shader.toml", "[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\nshader = \"bad.frag\"\n");
     r = run("check " + shader.string());
     EXPECT_EQ(r.status, 1);
     EXPECT_NE(r.output.find("bad.frag:4: "), std::string::npos) << r.output;
@@ -82,8 +82,8 @@ TEST(WallCli, CheckReportsABadConfigAndABadShaderOnOneLine) {
 }
 
 TEST(WallCli, RunWithoutADisplayWritesWhatEachProjectorGets) {
-    const auto dir = test::displayScratchDir();
-    const auto wall = test::writeText(dir / "wall.toml", "[wall]\n[grid]\ncolumns = 2\nrows = 2\nscreen_width = 64\nscreen_height = 48\n"
+    const auto dir = test::scratchDir();
+    const auto wall = test::writeFile(dir / "wall.toml", "[wall]\n[grid]\ncolumns = 2\nrows = 2\nscreen_width = 64\nscreen_height = 48\n"
                                                          "[headless]\nwrite_every = 2\n");
     const Result r = run("run " + (test::sourceDir() / "configs/run/demo.toml").string() + " --wall " + wall.string() +
                          " --frames 2 --write-every 2 --out " + dir.string());
@@ -104,7 +104,7 @@ TEST(WallCli, RunWithoutADisplayWritesWhatEachProjectorGets) {
 // The shipped stereo wall: each eye gets its own off-axis view of the wall (from the wall's
 // physical corners, the viewer and the eye separation), so the two eyes' images differ.
 TEST(WallCli, TheStereoWallWritesDifferentEyes) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     const Result r = run("run --wall " + (test::sourceDir() / "configs/wall/stereo-passive.toml").string() +
                          " --headless --frames 1 --write-every 1 --target-fps 0 --out " + dir.string());
     ASSERT_EQ(r.status, 0) << r.output;
@@ -127,7 +127,7 @@ TEST(WallCli, TheStereoWallWritesDifferentEyes) {
 }
 
 TEST(WallCli, TheShippedWallRunConfigRunsHeadless) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     const Result r = run("run " + (test::sourceDir() / "configs/run/wall-2x2.toml").string() + " --frames 1 --write-every 1 --out " +
                          dir.string());
     ASSERT_EQ(r.status, 0) << r.output;
@@ -137,14 +137,14 @@ TEST(WallCli, TheShippedWallRunConfigRunsHeadless) {
 }
 
 TEST(WallCli, ARecordedCameraPathReplays) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     CameraKey a, b, c;
     a.camera.position = {0, 2, 8};
     b.frame = 1;
     b.camera.position = {3, 2, 8};
     c.frame = 2;
     c.camera.position = {3, 2, 8};
-    const auto path = test::writeText(dir / "recorded.toml", writeCameraPath({a, b, c}, {0, 0, 0}));
+    const auto path = test::writeFile(dir / "recorded.toml", writeCameraPath({a, b, c}, {0, 0, 0}));
     const Result r = run("run " + (test::sourceDir() / "configs/run/demo.toml").string() + " --camera-path " + path.string() +
                          " --frames 3 --write-every 0 --out " + dir.string());
     EXPECT_EQ(r.status, 0) << r.output;

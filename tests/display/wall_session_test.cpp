@@ -2,6 +2,7 @@
 // loop, issue 17, each reproduced), the tile-owner view, frames at a fraction of the wall.
 #include "cli_util.h"
 #include "display_test_util.h"
+#include "session_test_util.h"
 
 #include <rtwall/wall.h>
 
@@ -65,31 +66,10 @@ fov = 40
 }
 
 RunConfig sessionConfig(const std::filesystem::path& dir, const std::filesystem::path& scene) {
-    RunConfig c;
+    RunConfig c = steppedRunConfig(dir);
     c.scene = scene.string();
-    c.cluster.localClients = 2;
     c.cluster.async = false;  // each frame shows the state at the time of the call
-    c.clientThreads = true;
-    c.headless = true;
-    c.frames = 0;
-    c.orbit = 0.0;
-    c.writeEvery = 0;
-    c.out = dir;
-    c.log = [](const std::string&) {};
     return c;
-}
-
-// The session's state, rendered on this machine: what the cluster must have shown.
-Image renderState(const SceneDesc& d) {
-    const Scene scene(d);
-    return renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings);
-}
-
-size_t differingBytes(const Image& a, const Image& b) {
-    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
-    size_t n = 0;
-    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
-    return n;
 }
 
 // Where the box's centre is seen: its pixel, found by projecting with the session's camera.
@@ -114,14 +94,14 @@ std::pair<double, double> pixelOf(const WallSession& s, Float3 p) {
 // Issue 17: a --watch edit updated only the loop's copy and the master, so picks went on using
 // the transforms the scene was started with.
 TEST(WallSession, PickingSeesWhatAnEditMoved) {
-    const auto dir = test::displayScratchDir();
-    const auto file = test::writeText(dir / "scene.toml", sceneText(0.0));
+    const auto dir = test::scratchDir();
+    const auto file = test::writeFile(dir / "scene.toml", sceneText(0.0));
     WallSession s(sessionConfig(dir, file));
     ASSERT_TRUE(s.step());
     const auto [x0, y0] = pixelOf(s, {0, 0.5f, 0});
     ASSERT_TRUE(s.pick(x0, y0));
     EXPECT_EQ(s.pick(x0, y0)->instance, 0u) << "the box, where the file put it";
-    const SceneEdit e = s.applyEdit(loadSceneFile(test::writeText(dir / "scene.toml", sceneText(2.0))));
+    const SceneEdit e = s.applyEdit(loadSceneFile(test::writeFile(dir / "scene.toml", sceneText(2.0))));
     EXPECT_EQ(e.transforms.size(), 1u);
     ASSERT_TRUE(s.step());
     const auto p = s.pick(x0, y0);
@@ -129,29 +109,29 @@ TEST(WallSession, PickingSeesWhatAnEditMoved) {
     const auto [x1, y1] = pixelOf(s, {2, 0.5f, 0});
     ASSERT_TRUE(s.pick(x1, y1));
     EXPECT_EQ(s.pick(x1, y1)->instance, 0u) << "the box where the edit moved it";
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_EQ(test::bytesOffState(s), 0u);
 }
 
 // Issue 17: a Ctrl+drag updated only the master and the view's copy, so the loop's state no
 // longer matched the clients', and a later --watch edit was diffed against the wrong state.
 TEST(WallSession, TheStateItHoldsIsWhatTheClientsRender) {
-    const auto dir = test::displayScratchDir();
-    const auto file = test::writeText(dir / "scene.toml", sceneText(0.0));
+    const auto dir = test::scratchDir();
+    const auto file = test::writeFile(dir / "scene.toml", sceneText(0.0));
     WallSession s(sessionConfig(dir, file));
     ASSERT_TRUE(s.step());
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_EQ(test::bytesOffState(s), 0u);
     // A drag (WallInput moves objects through the same call).
     s.setInstanceTransform(0, Transform::translate(-1.5, 0.5, 0.5));
     ASSERT_TRUE(s.step());
     EXPECT_EQ(s.scene().instances[0].transform.m[3], -1.5);
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u) << "after the drag";
+    EXPECT_EQ(test::bytesOffState(s), 0u) << "after the drag";
     // The file changes only a colour: the reload puts the box back where the file has it.
-    const SceneEdit e = s.applyEdit(loadSceneFile(test::writeText(dir / "scene.toml", sceneText(0.0, "[0.2, 0.8, 0.2]"))));
+    const SceneEdit e = s.applyEdit(loadSceneFile(test::writeFile(dir / "scene.toml", sceneText(0.0, "[0.2, 0.8, 0.2]"))));
     EXPECT_EQ(e.materials.size(), 1u);
     ASSERT_EQ(e.transforms.size(), 1u) << "the dragged box differs from the file";
     ASSERT_TRUE(s.step());
     EXPECT_EQ(s.scene().instances[0].transform.m[3], 0.0);
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u) << "after the reload";
+    EXPECT_EQ(test::bytesOffState(s), 0u) << "after the reload";
     // Nothing refused as malformed, unknown, repeated or unexpected. A stale message (a tile
     // request for a frame that has just ended) is normal with two clients and is not counted here.
     const MasterCounters c = s.summary().counters;
@@ -161,8 +141,8 @@ TEST(WallSession, TheStateItHoldsIsWhatTheClientsRender) {
 // Issue 17: the tile-owner view (key T) drew the tile grid the run started with, whatever the
 // tile control or a [render] edit set since.
 TEST(WallSession, TheTileOwnerViewFollowsTheTileSize) {
-    const auto dir = test::displayScratchDir();
-    WallSession s(sessionConfig(dir, test::writeText(dir / "scene.toml", sceneText(0.0))));
+    const auto dir = test::scratchDir();
+    WallSession s(sessionConfig(dir, test::writeFile(dir / "scene.toml", sceneText(0.0))));
     s.showTileOwners(true);
     ASSERT_TRUE(s.step());
     EXPECT_EQ(s.lastFrame().tileSize, 32);
@@ -180,8 +160,8 @@ TEST(WallSession, TheTileOwnerViewFollowsTheTileSize) {
 // for a frame that is not the wall's size), so an operating point with a scale below 1 ended the
 // run. The wall shows it upscaled; the screens get their full size.
 TEST(WallSession, AFrameAtAFractionOfTheWallIsShownUpscaled) {
-    const auto dir = test::displayScratchDir();
-    const auto wall = test::writeText(dir / "wall.toml", R"([wall]
+    const auto dir = test::scratchDir();
+    const auto wall = test::writeFile(dir / "wall.toml", R"([wall]
 name = "pair"
 [grid]
 columns = 2
@@ -191,7 +171,7 @@ screen_height = 64
 [headless]
 write_every = 1
 )");
-    const auto front = test::writeText(dir / "front.toml", R"([[point]]
+    const auto front = test::writeFile(dir / "front.toml", R"([[point]]
 name = "half"
 frame_s = 0.001
 error = 0.5
@@ -199,7 +179,7 @@ error = 0.5
 scale = 0.5
 tile = 16
 )");
-    RunConfig c = sessionConfig(dir, test::writeText(dir / "scene.toml", sceneText(0.0)));
+    RunConfig c = sessionConfig(dir, test::writeFile(dir / "scene.toml", sceneText(0.0)));
     c.wall = wall;
     c.targetFps = 10;
     c.front = front;
@@ -231,8 +211,8 @@ InputState keyPress(int key, int mods = 0) {
 // headless): Ctrl+drag moves an object through the one state, a drag orbits the camera, R records
 // a camera path that replays, Esc ends the run.
 TEST(WallSession, KeysAndMouseChangeTheSceneThroughItsOneState) {
-    const auto dir = test::displayScratchDir();
-    WallSession s(sessionConfig(dir, test::writeText(dir / "scene.toml", sceneText(0.0))));
+    const auto dir = test::scratchDir();
+    WallSession s(sessionConfig(dir, test::writeFile(dir / "scene.toml", sceneText(0.0))));
     ASSERT_TRUE(s.step());
     // Ctrl+click on the box, then drag it 20 pixels to the right.
     const auto [x, y] = pixelOf(s, {0, 0.5f, 0});
@@ -248,7 +228,7 @@ TEST(WallSession, KeysAndMouseChangeTheSceneThroughItsOneState) {
     s.inject(drag);
     ASSERT_TRUE(s.step());
     EXPECT_GT(s.scene().instances[0].transform.m[3], 0.1) << "the box moved right";
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u) << "and the clients render it there";
+    EXPECT_EQ(test::bytesOffState(s), 0u) << "and the clients render it there";
     // Release, then R, an orbiting drag, R: a recorded camera path.
     InputState release;
     s.inject(release);
@@ -277,8 +257,8 @@ TEST(WallSession, KeysAndMouseChangeTheSceneThroughItsOneState) {
 // renders just that tile again (the frame's camera, here not the scene file's, its settings and
 // the client's packet width); run, the command gives the pixels the frame should have had there.
 TEST(WallSession, AFailedTileIsOneLineWithTheCommandThatReplaysIt) {
-    const auto dir = test::displayScratchDir();
-    const std::filesystem::path scene = test::writeText(dir / "scene.toml", sceneText(0.0));
+    const auto dir = test::scratchDir();
+    const std::filesystem::path scene = test::writeFile(dir / "scene.toml", sceneText(0.0));
     RunConfig c = sessionConfig(dir, scene);
     c.cluster.localClients = 1;
     c.cluster.timeoutMs = 500;  // the frame fails soon once its only client has left
@@ -345,7 +325,7 @@ TEST(WallSession, AFailedTileIsOneLineWithTheCommandThatReplaysIt) {
 // Issue 20: picking an object of an assembly names its part (the glTF node path), so that a
 // reviewer on the wall can say which part is meant.
 TEST(WallSession, PickingAnAssemblyNamesThePart) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     const std::string cmd = "python3 " + (std::filesystem::path(RTWALL_SOURCE_DIR) / "tools" / "gltf_testgen.py").string() +
                             " --out " + dir.string();
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
@@ -459,8 +439,8 @@ struct MeasuredSlot {
     std::vector<std::string> lines;
 };
 MeasuredSlot measureSlot(const std::array<double, 3>& at) {
-    const auto dir = test::displayScratchDir();
-    const auto file = test::writeText(dir / "slot.toml", slotSceneText(at));
+    const auto dir = test::scratchDir();
+    const auto file = test::writeFile(dir / "slot.toml", slotSceneText(at));
     RunConfig c = sessionConfig(dir, file);
     auto lines = std::make_shared<std::vector<std::string>>();
     c.log = [lines](const std::string& line) { lines->push_back(line); };
@@ -524,8 +504,8 @@ TEST(WallSession, MeasuringFarFromTheOriginIsAsPrecise) {
 }
 
 TEST(WallSession, MeasureModeKeys) {
-    const auto dir = test::displayScratchDir();
-    const auto file = test::writeText(dir / "slot.toml", slotSceneText({0, 0, 0}));
+    const auto dir = test::scratchDir();
+    const auto file = test::writeFile(dir / "slot.toml", slotSceneText({0, 0, 0}));
     RunConfig c = sessionConfig(dir, file);
     auto lines = std::make_shared<std::vector<std::string>>();
     c.log = [lines](const std::string& line) { lines->push_back(line); };
@@ -601,8 +581,8 @@ TEST(WallSession, MeasureModeKeys) {
 }
 
 TEST(WallSession, MeasuringTheBackgroundSetsNoPoint) {
-    const auto dir = test::displayScratchDir();
-    const auto file = test::writeText(dir / "slot.toml", slotSceneText({0, 0, 0}));
+    const auto dir = test::scratchDir();
+    const auto file = test::writeFile(dir / "slot.toml", slotSceneText({0, 0, 0}));
     RunConfig c = sessionConfig(dir, file);
     auto lines = std::make_shared<std::vector<std::string>>();
     c.log = [lines](const std::string& line) { lines->push_back(line); };
@@ -641,8 +621,8 @@ Float3 unit3(const Float3& v) {
 // step exactly as one machine renders that state (differential updates), and the planes do what
 // the keys say.
 TEST(WallSession, SectionKeysAndSetSectionCutTheScene) {
-    const auto dir = test::displayScratchDir();
-    RunConfig c = sessionConfig(dir, test::writeText(dir / "scene.toml", sceneText(0.0)));
+    const auto dir = test::scratchDir();
+    RunConfig c = sessionConfig(dir, test::writeFile(dir / "scene.toml", sceneText(0.0)));
     auto lines = std::make_shared<std::vector<std::string>>();
     c.log = [lines](const std::string& line) { lines->push_back(line); };
     WallSession s(c);
@@ -660,8 +640,8 @@ TEST(WallSession, SectionKeysAndSetSectionCutTheScene) {
     EXPECT_EQ(added.point, cam.lookAt);
     const Float3 view = unit3({cam.lookAt.x - cam.position.x, cam.lookAt.y - cam.position.y, cam.lookAt.z - cam.position.z});
     EXPECT_NEAR(dot3(unit3(added.normal), view), 1.0, 1e-6);
-    EXPECT_GT(differingBytes(s.lastFrame().left, uncut), 0u) << "the cut shows";
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u) << "and the clients render the state";
+    EXPECT_GT(test::differingBytes(s.lastFrame().left, uncut), 0u) << "the cut shows";
+    EXPECT_EQ(test::bytesOffState(s), 0u) << "and the clients render the state";
     ASSERT_FALSE(lines->empty());
     EXPECT_NE(lines->back().find("section 0: on"), std::string::npos) << lines->back();
 
@@ -677,7 +657,7 @@ TEST(WallSession, SectionKeysAndSetSectionCutTheScene) {
     const Float3 back{s.scene().sections[0].point.x - moved.point.x, s.scene().sections[0].point.y - moved.point.y,
                       s.scene().sections[0].point.z - moved.point.z};
     EXPECT_NEAR(dot3(back, unit3(added.normal)), -10.0 * std::sqrt(16.0 * 16.0 + 16.0 * 16.0 + 2.0 * 2.0) / 100.0, 1e-3);
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_EQ(test::bytesOffState(s), 0u);
 
     // Left turns the normal 5 degrees about the view's up axis; F flips it; V turns it off.
     const Float3 n0 = unit3(s.scene().sections[0].normal);
@@ -694,11 +674,11 @@ TEST(WallSession, SectionKeysAndSetSectionCutTheScene) {
     s.inject(keyPress(GLFW_KEY_F));
     ASSERT_TRUE(s.step());
     EXPECT_NEAR(dot3(unit3(s.scene().sections[0].normal), n1), -1.0, 1e-6);
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_EQ(test::bytesOffState(s), 0u);
     s.inject(keyPress(GLFW_KEY_V));
     ASSERT_TRUE(s.step());
     EXPECT_FALSE(s.scene().sections[0].enabled);
-    EXPECT_EQ(differingBytes(s.lastFrame().left, uncut), 0u) << "a plane turned off cuts nothing";
+    EXPECT_EQ(test::differingBytes(s.lastFrame().left, uncut), 0u) << "a plane turned off cuts nothing";
 
     // The API a wand calls: any slot, in the scene's coordinates; it becomes the active plane.
     SectionPlane p;
@@ -710,7 +690,7 @@ TEST(WallSession, SectionKeysAndSetSectionCutTheScene) {
     EXPECT_EQ(s.activeSection(), 3);
     ASSERT_TRUE(s.step());
     EXPECT_EQ(s.scene().sections[3], p);
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_EQ(test::bytesOffState(s), 0u);
     EXPECT_THROW(s.setSection(uint32_t(kMaxSections), p), std::out_of_range);
     SectionPlane zero = p;
     zero.normal = {0, 0, 0};
@@ -729,7 +709,7 @@ TEST(WallSession, SectionKeysAndSetSectionCutTheScene) {
     EXPECT_EQ(s.activeSection(), -1);
     EXPECT_EQ(s.scene().sections[0], SectionPlane{});
     EXPECT_TRUE(s.scene().sections[3].enabled) << "the other plane stays";
-    EXPECT_EQ(differingBytes(s.lastFrame().left, renderState(s.scene())), 0u);
+    EXPECT_EQ(test::bytesOffState(s), 0u);
 }
 
 }  // namespace
@@ -742,9 +722,9 @@ namespace {
 // processes in `rtwall run`), the master holds no pixels, and each node shows its screens of the
 // single-PC frame exactly, every frame.
 TEST(WallSession, AWallOnDisplayNodesShowsItsScreensOnTheNodes) {
-    const auto dir = test::displayScratchDir();
-    const auto scene = test::writeText(dir / "scene.toml", sceneText(0.0));
-    const auto wall = test::writeText(dir / "wall.toml", "[wall]\nname = \"pair\"\n[grid]\ncolumns = 2\nrows = 1\nscreen_width = 48\n"
+    const auto dir = test::scratchDir();
+    const auto scene = test::writeFile(dir / "scene.toml", sceneText(0.0));
+    const auto wall = test::writeFile(dir / "wall.toml", "[wall]\nname = \"pair\"\n[grid]\ncolumns = 2\nrows = 1\nscreen_width = 48\n"
                                                          "screen_height = 64\n[[node]]\nname = \"a\"\ncolumns = [0, 0]\n[[node]]\n"
                                                          "name = \"b\"\ncolumns = [1, 1]\n[headless]\nwrite_every = 1\n");
     RunConfig c = sessionConfig(dir / "out", scene);
@@ -768,7 +748,7 @@ TEST(WallSession, AWallOnDisplayNodesShowsItsScreensOnTheNodes) {
     EXPECT_NE(log.find("display nodes: all 2 joined (a, b)"), std::string::npos) << log;
 
     WallFrame one;
-    one.left = renderState(desc);
+    one.left = test::renderFirstCamera(desc);
     one.number = 1;
     HeadlessPresenter(loadWallConfig(wall), dir / "one").present(one);
     for (const auto& [node, screen] : std::vector<std::pair<std::string, std::string>>{{"a", "c0r0"}, {"b", "c1r0"}})
@@ -777,14 +757,14 @@ TEST(WallSession, AWallOnDisplayNodesShowsItsScreensOnTheNodes) {
             std::snprintf(name, sizeof name, "frame_%06d_%s.png", frame, screen.c_str());
             const std::filesystem::path shown = dir / "out" / node / name;
             ASSERT_TRUE(std::filesystem::exists(shown)) << shown << "\n" << log;
-            EXPECT_EQ(differingBytes(readPng(shown), readPng(dir / "one" / ("frame_000001_" + screen + ".png"))), 0u) << shown;
+            EXPECT_EQ(test::differingBytes(readPng(shown), readPng(dir / "one" / ("frame_000001_" + screen + ".png"))), 0u) << shown;
         }
 }
 
 TEST(WallSession, ATargetFrameRateOnDisplayNodesNeedsAFront) {
-    const auto dir = test::displayScratchDir();
-    const auto scene = test::writeText(dir / "scene.toml", sceneText(0.0));
-    const auto wall = test::writeText(dir / "wall.toml", "[wall]\n[grid]\ncolumns = 2\nrows = 1\nscreen_width = 48\nscreen_height = 64\n"
+    const auto dir = test::scratchDir();
+    const auto scene = test::writeFile(dir / "scene.toml", sceneText(0.0));
+    const auto wall = test::writeFile(dir / "wall.toml", "[wall]\n[grid]\ncolumns = 2\nrows = 1\nscreen_width = 48\nscreen_height = 64\n"
                                                          "[[node]]\nname = \"a\"\ncolumns = [0, 0]\n[[node]]\nname = \"b\"\ncolumns = [1, 1]\n");
     RunConfig c = sessionConfig(dir, scene);
     c.wall = wall;

@@ -29,7 +29,7 @@ TEST(CameraPath, WrittenInWorldCoordinatesAndReadBackExactly) {
     const std::string text = writeCameraPath({a, b}, origin);
     EXPECT_NE(text.find("position = [1000000.25, -199999, 299998.5]"), std::string::npos) << text;
     EXPECT_NE(text.find("look_at = [1000000, -200000, 300000.5]"), std::string::npos) << text;
-    const auto file = test::writeText(test::displayScratchDir() / "path.toml", text);
+    const auto file = test::writeFile(test::scratchDir() / "path.toml", text);
     const std::vector<CameraKey> back = readCameraPath(file, origin);
     ASSERT_EQ(back.size(), 2u);
     for (size_t i = 0; i < 2; ++i) {
@@ -54,9 +54,9 @@ TEST(CameraPath, InterpolatesBetweenKeysAndHoldsAfterTheLast) {
 }
 
 TEST(CameraPath, BadFilesAreOneLineErrors) {
-    const auto dir = test::displayScratchDir();
+    const auto dir = test::scratchDir();
     auto error = [&](const std::string& text) {
-        const auto file = test::writeText(dir / "bad.toml", text);
+        const auto file = test::writeFile(dir / "bad.toml", text);
         try {
             readCameraPath(file, {0, 0, 0});
         } catch (const InputError& e) {
@@ -147,14 +147,14 @@ TEST(RunConfig, TheEmbeddedDefaultIsTheKnotDemoOnTheReferenceWall) {
 }
 
 TEST(RunConfig, PathsAreRelativeToTheFileAndTyposAreErrorsWithTheirLine) {
-    const auto dir = test::displayScratchDir();
-    const auto file = test::writeText(dir / "run.toml", "scene = \"scene.toml\"\nwall = \"w.toml\"\n[run]\ncamera_path = \"p.toml\"\n");
+    const auto dir = test::scratchDir();
+    const auto file = test::writeFile(dir / "run.toml", "scene = \"scene.toml\"\nwall = \"w.toml\"\n[run]\ncamera_path = \"p.toml\"\n");
     const RunConfig c = readRunConfig(file);
     EXPECT_EQ(c.scene, (dir / "scene.toml").string());
     EXPECT_EQ(c.wall, dir / "w.toml");
     EXPECT_EQ(c.cameraPath, dir / "p.toml");
     EXPECT_EQ(c.orbit, 0.0) << "a camera path replaces the orbit";
-    const auto typo = test::writeText(dir / "typo.toml", "scene = \"x.toml\"\n[cluster]\nclient = 3\n");
+    const auto typo = test::writeFile(dir / "typo.toml", "scene = \"x.toml\"\n[cluster]\nclient = 3\n");
     try {
         readRunConfig(typo);
         ADD_FAILURE() << "a typo was accepted";
@@ -221,11 +221,11 @@ namespace {
 // Display nodes started on this PC (issue 19) unless the run config says they run on their own PCs.
 TEST(RunConfig, LocalDisplayNodesAreOnUnlessTurnedOff) {
     EXPECT_TRUE(defaultRunConfig().localDisplayNodes);
-    const auto dir = test::displayScratchDir();
-    EXPECT_FALSE(readRunConfig(test::writeText(dir / "off.toml", "[cluster]\nlocal_display_nodes = false\n")).localDisplayNodes);
-    EXPECT_TRUE(readRunConfig(test::writeText(dir / "on.toml", "[cluster]\nlocal_display_nodes = true\n")).localDisplayNodes);
+    const auto dir = test::scratchDir();
+    EXPECT_FALSE(readRunConfig(test::writeFile(dir / "off.toml", "[cluster]\nlocal_display_nodes = false\n")).localDisplayNodes);
+    EXPECT_TRUE(readRunConfig(test::writeFile(dir / "on.toml", "[cluster]\nlocal_display_nodes = true\n")).localDisplayNodes);
     try {
-        readRunConfig(test::writeText(dir / "bad.toml", "[cluster]\nclients = 1\nlocal_display_nodes = 0\n"));
+        readRunConfig(test::writeFile(dir / "bad.toml", "[cluster]\nclients = 1\nlocal_display_nodes = 0\n"));
         ADD_FAILURE() << "an integer was taken for a boolean";
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("bad.toml:3: [cluster]: key 'local_display_nodes': expected true or false, got an integer"), std::string::npos)

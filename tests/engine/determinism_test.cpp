@@ -1,5 +1,6 @@
 // Rendering is deterministic by design: the packet and single-ray kernels, any thread count
 // and any tile size give the same bytes.
+#include "image_compare.h"
 #include "test_util.h"
 
 #include <gtest/gtest.h>
@@ -36,19 +37,13 @@ void expectRichImage(const Image& img) {
     EXPECT_GT(colours.size(), 1000u);
 }
 
-size_t differingBytes(const Image& a, const Image& b) {
-    size_t n = 0;
-    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
-    return n;
-}
-
 TEST_F(Determinism, PacketAndSingleKernelsAreBitIdentical) {
     RenderSettings packet = desc_->settings, single = desc_->settings;
     packet.kernel = KernelType::Packet;
     single.kernel = KernelType::Single;
     const Image a = render(packet), b = render(single);
     expectRichImage(a);
-    EXPECT_EQ(differingBytes(a, b), 0u);
+    EXPECT_EQ(test::differingBytes(a, b), 0u);
 }
 
 TEST_F(Determinism, PacketAndSingleAgreeWithSupersampling) {
@@ -56,7 +51,7 @@ TEST_F(Determinism, PacketAndSingleAgreeWithSupersampling) {
     packet.supersample = 3;
     RenderSettings single = packet;
     single.kernel = KernelType::Single;
-    EXPECT_EQ(differingBytes(render(packet), render(single)), 0u);
+    EXPECT_EQ(test::differingBytes(render(packet), render(single)), 0u);
 }
 
 TEST_F(Determinism, ThreadCountDoesNotChangeTheImage) {
@@ -66,7 +61,7 @@ TEST_F(Determinism, ThreadCountDoesNotChangeTheImage) {
     expectRichImage(one);
     for (int threads : {2, 3, 8}) {
         s.threads = threads;
-        EXPECT_EQ(differingBytes(one, render(s)), 0u) << threads << " threads";
+        EXPECT_EQ(test::differingBytes(one, render(s)), 0u) << threads << " threads";
     }
 }
 
@@ -76,7 +71,7 @@ TEST_F(Determinism, TileSizeDoesNotChangeTheImage) {
     const Image ref = render(s);
     for (int tile : {1, 7, 16, 61, 1024}) {
         s.tileSize = tile;
-        EXPECT_EQ(differingBytes(ref, render(s)), 0u) << "tile " << tile;
+        EXPECT_EQ(test::differingBytes(ref, render(s)), 0u) << "tile " << tile;
     }
 }
 

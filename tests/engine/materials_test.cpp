@@ -1,6 +1,7 @@
 // The materials against analytic values: white furnace energy conservation for every
 // material, transparent shadows through a glass slab, alpha masks for camera and shadow rays,
 // ray-tree pruning, GI unbiasedness, and determinism across kernels for every material.
+#include "image_compare.h"
 #include "shading_scenes.h"
 #include "test_util.h"
 
@@ -30,12 +31,6 @@ std::vector<float> renderLinear(const Scene& scene, const SceneDesc& d, uint32_t
 
 Image render(const Scene& scene, const SceneDesc& d, uint32_t frame = 0) {
     return renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings, frame);
-}
-
-size_t differingBytes(const Image& a, const Image& b) {
-    size_t n = 0;
-    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
-    return n;
 }
 
 struct FurnaceCase {
@@ -264,12 +259,12 @@ TEST_F(Zoo, PacketAndSingleKernelsBitIdenticalForEveryMaterialAndGi) {
         SceneDesc single = d;
         single.settings.kernel = KernelType::Single;
         const Image a = render(*scene_, d, 3), b = render(*scene_, single, 3);
-        EXPECT_EQ(differingBytes(a, b), 0u) << "gi " << gi;
+        EXPECT_EQ(test::differingBytes(a, b), 0u) << "gi " << gi;
         // Tile size and thread count do not matter either.
         SceneDesc other = d;
         other.settings.tileSize = 7;
         other.settings.threads = 3;
-        EXPECT_EQ(differingBytes(a, render(*scene_, other, 3)), 0u) << "gi " << gi;
+        EXPECT_EQ(test::differingBytes(a, render(*scene_, other, 3)), 0u) << "gi " << gi;
     }
 }
 
@@ -311,7 +306,7 @@ TEST_F(Zoo, PruningAtZeroIsExactlyUnprunedAndDefaultIsClose) {
     const Image a = renderFrame(*scene_, cam, off.settings, 0, &so);
     const Image b = renderFrame(*scene_, cam, zero.settings, 0, &sz);
     const Image c = renderFrame(*scene_, cam, def.settings, 0, &sd);
-    EXPECT_EQ(differingBytes(a, b), 0u);
+    EXPECT_EQ(test::differingBytes(a, b), 0u);
     EXPECT_EQ(so.rays, sz.rays);
     EXPECT_LT(sd.rays, so.rays);
     // Stated error at the default 0.002: no channel more than 2 levels off, mean below 0.05 levels.

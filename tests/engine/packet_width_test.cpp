@@ -3,6 +3,7 @@
 // the single-ray kernel's bytes on the scenes that hung rtcOccluded16 on AVX-512 CPUs and on
 // the material zoo; and 16-wide shadow rays finish from every stack position (the Embree hang
 // came and went with the stack's address).
+#include "image_compare.h"
 #include "shading_scenes.h"
 #include "test_util.h"
 
@@ -23,13 +24,6 @@
 
 namespace rtwall {
 namespace {
-
-size_t differingBytes(const Image& a, const Image& b) {
-    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
-    size_t n = 0;
-    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
-    return n;
-}
 
 // The scene of TileProfile.RecordsEveryTileOfARealRender, the first test seen to hang: 5000
 // triangles of knots (as Embree quads), one tile of its floor in shadow.
@@ -54,10 +48,10 @@ void expectEveryWidthMatchesSingle(const SceneDesc& d, int frames) {
             packet.kernel = KernelType::Packet;
             TraceOptions trace;
             trace.packetWidth = width;
-            EXPECT_EQ(differingBytes(renderFrame(scene, camera, packet, uint32_t(f), nullptr, trace), reference), 0u)
+            EXPECT_EQ(test::differingBytes(renderFrame(scene, camera, packet, uint32_t(f), nullptr, trace), reference), 0u)
                 << "packets of " << width << ", frame " << f;
             // The single-ray kernel shapes its primary blocks like packets of the width too.
-            EXPECT_EQ(differingBytes(renderFrame(scene, camera, single, uint32_t(f), nullptr, trace), reference), 0u)
+            EXPECT_EQ(test::differingBytes(renderFrame(scene, camera, single, uint32_t(f), nullptr, trace), reference), 0u)
                 << "single-ray kernel in blocks of " << width << ", frame " << f;
         }
     }
@@ -124,7 +118,7 @@ TEST(PacketWidths, SixteenWideShadowsFinishFromEveryStackOffset) {
             for (const TileRect& r : makeTiles(d.settings.width, d.settings.height, d.settings.tileSize))
                 renderTile(scene, camera, r, 1, eye, {scratch.pixel(r.x0, r.y0), size_t(scratch.width) * 3}, sixteen);
             const Image img = renderFrame(scene, camera, s, 0, nullptr, sixteen);
-            std::_Exit(differingBytes(img, reference) == 0 ? 0 : 2);
+            std::_Exit(test::differingBytes(img, reference) == 0 ? 0 : 2);
         }
         int status = 0;
         bool finished = false;

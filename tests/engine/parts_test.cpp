@@ -16,10 +16,7 @@ namespace {
 
 using test::partsScene;
 
-Image render(const SceneDesc& d) {
-    const Scene scene(d);
-    return renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings, 1);
-}
+Image render(const SceneDesc& d) { return test::renderFirstCamera(d, 1); }
 
 size_t differingPixels(const Image& a, const Image& b) {
     size_t n = 0;

@@ -1,6 +1,7 @@
 // Section planes (issue 20): analytic areas of a clipped sphere and of its cap, the shadow of a
 // clipped occluder, the kernels and packet widths bit-identical with planes, picking through a
 // cut, and a plane update that rebuilds nothing.
+#include "image_compare.h"
 #include "shading_scenes.h"
 #include "test_util.h"
 
@@ -186,13 +187,6 @@ TEST(Section, AClippedOccludersShadowShrinks) {
     EXPECT_NEAR(shadowArea(s), (1.0 + std::sqrt(2.0)) * kPi / 2, 0.01 * kPi);
 }
 
-size_t differingBytes(const Image& a, const Image& b) {
-    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
-    size_t n = 0;
-    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
-    return n;
-}
-
 // Every material (mirror, glass, metal, alpha masks, a volume, an area light) cut by two planes
 // with caps: the single-ray kernel and packets of every width give the same bytes, with and
 // without path tracing.
@@ -212,14 +206,14 @@ TEST(Section, PacketsOfEveryWidthMatchTheSingleRayKernel) {
             for (int width : {4, 8, 16}) {
                 TraceOptions trace;
                 trace.packetWidth = width;
-                EXPECT_EQ(differingBytes(renderFrame(scene, camera, d.settings, f, nullptr, trace), reference), 0u)
+                EXPECT_EQ(test::differingBytes(renderFrame(scene, camera, d.settings, f, nullptr, trace), reference), 0u)
                     << "packets of " << width << ", frame " << f << (gi ? ", GI" : "");
             }
             RenderSettings eye = d.settings;
             eye.shading = ShadingMode::EyeLight;
             RenderSettings eyeSingle = eye;
             eyeSingle.kernel = KernelType::Single;
-            EXPECT_EQ(differingBytes(renderFrame(scene, camera, eye, f), renderFrame(scene, camera, eyeSingle, f)), 0u)
+            EXPECT_EQ(test::differingBytes(renderFrame(scene, camera, eye, f), renderFrame(scene, camera, eyeSingle, f)), 0u)
                 << "eye-light preview";
         }
     }
@@ -238,7 +232,7 @@ TEST(Section, MovingAPlaneRebuildsNothing) {
     const Camera camera(d.cameras.front(), d.settings.width, d.settings.height);
     d.sections[2] = moved;
     const Scene fresh(d);
-    EXPECT_EQ(differingBytes(renderFrame(scene, camera, d.settings), renderFrame(fresh, camera, d.settings)), 0u);
+    EXPECT_EQ(test::differingBytes(renderFrame(scene, camera, d.settings), renderFrame(fresh, camera, d.settings)), 0u);
     EXPECT_THROW(scene.setSection(kMaxSections, moved), std::out_of_range);
     EXPECT_THROW(scene.setSection(0, plane({0, 0, 0}, {0, 0, 0})), std::invalid_argument);
     EXPECT_THROW(scene.setSection(0, plane({NAN, 0, 0}, {1, 0, 0})), std::invalid_argument);

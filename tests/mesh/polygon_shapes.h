@@ -140,6 +140,22 @@ inline Point2 unplaceShape(size_t k, Float3 p) {
     return {p.x, p.y};
 }
 
+// A random plane's orthonormal axes (e1, e2): two vectors of `normal` samples, e2 made
+// perpendicular to e1 (Gram-Schmidt), both of unit length.
+struct PlaneAxes {
+    double e1[3], e2[3];
+};
+inline PlaneAxes randomPlane(std::mt19937& rng, std::normal_distribution<double>& normal) {
+    PlaneAxes a{{normal(rng), normal(rng), normal(rng)}, {normal(rng), normal(rng), normal(rng)}};
+    const double l1 = std::sqrt(a.e1[0] * a.e1[0] + a.e1[1] * a.e1[1] + a.e1[2] * a.e1[2]);
+    for (double& x : a.e1) x /= l1;
+    const double d = a.e1[0] * a.e2[0] + a.e1[1] * a.e2[1] + a.e1[2] * a.e2[2];
+    for (int k = 0; k < 3; ++k) a.e2[k] -= d * a.e1[k];
+    const double l2 = std::sqrt(a.e2[0] * a.e2[0] + a.e2[1] * a.e2[1] + a.e2[2] * a.e2[2]);
+    for (double& x : a.e2) x /= l2;
+    return a;
+}
+
 // A star-shaped polygon with n corners at random radii in [0.1, 1]: simple, mostly concave.
 inline TestPolygon randomPolar(std::mt19937& rng, int n) {
     std::uniform_real_distribution<double> radius(0.1, 1.0);

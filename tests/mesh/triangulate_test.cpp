@@ -306,13 +306,9 @@ TEST(PolygonTriangulation, KeyholeRingInAnyPlane) {
     std::normal_distribution<double> normal;
     for (int trial = 0; trial < 50; ++trial) {
         // An orthonormal frame (e1, e2, e1 x e2) from two random vectors.
-        double e1[3] = {normal(rng), normal(rng), normal(rng)}, e2[3] = {normal(rng), normal(rng), normal(rng)};
-        const double l1 = std::sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
-        for (double& x : e1) x /= l1;
-        const double d = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2];
-        for (int k = 0; k < 3; ++k) e2[k] -= d * e1[k];
-        const double l2 = std::sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
-        for (double& x : e2) x /= l2;
+        const test::PlaneAxes axes = test::randomPlane(rng, normal);
+        const double(&e1)[3] = axes.e1;
+        const double(&e2)[3] = axes.e2;
         const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
         const double origin[3] = {10, -20, 5};
         Input in = makeInput(ring.corners);

@@ -131,19 +131,11 @@ private:
 Measured measure(const LatencyOptions& o, const Case& c, const std::filesystem::path& dir) {
     const std::filesystem::path wall = dir / "wall.toml";
     std::ofstream(wall) << wallText(c.width, c.height, c.stereo, c.predictionMs);
-    RunConfig rc;
+    RunConfig rc = steppedRunConfig(dir, o.clients);
     rc.scene = o.scene;
     rc.wall = wall;
-    rc.cluster.localClients = o.clients;
     rc.cluster.threadsPerClient = 1;
     rc.cluster.async = c.async;
-    rc.clientThreads = true;
-    rc.headless = true;
-    rc.frames = 0;
-    rc.orbit = 0;
-    rc.writeEvery = 0;
-    rc.out = dir;
-    rc.log = [](const std::string&) {};
     WallSession session(rc);
     for (int i = 0; i < 3; ++i) session.step();  // warm-up: scene built, affinity settled
 

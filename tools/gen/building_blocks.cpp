@@ -1,6 +1,8 @@
 // Shapes and mesh file writers for the generators.
 #include "generators.h"
 
+#include <rtwall/double3.h>
+
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -14,18 +16,13 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-Vec3 sub(Vec3 a, Vec3 b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 add(Vec3 a, Vec3 b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-Vec3 mul(Vec3 a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-Vec3 cross(Vec3 a, Vec3 b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
-double len(Vec3 a) { return std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
-Vec3 unit(Vec3 a) { return mul(a, 1.0 / len(a)); }
+Double3 d3(const Vec3& a) { return {a[0], a[1], a[2]}; }
 
 // Two unit vectors perpendicular to d and to each other.
-void frame(Vec3 d, Vec3& u, Vec3& v) {
-    const Vec3 helper = std::fabs(d[1]) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
-    u = unit(cross(d, helper));
-    v = cross(d, u);
+void frame(const Double3& d, Double3& u, Double3& v) {
+    const Double3 helper = std::fabs(d.y) < 0.9 ? Double3{0, 1, 0} : Double3{1, 0, 0};
+    u = d.cross(helper).normalized();
+    v = d.cross(u);
 }
 
 void checkedClose(std::ofstream& out, const std::filesystem::path& file) {
@@ -39,23 +36,17 @@ std::ofstream openOut(const std::filesystem::path& file) {
     return out;
 }
 
-template <class T>
-void putBE(std::string& s, T v) {
+// v's bytes in the given byte order (the mesh formats fix theirs).
+template <std::endian Order, class T>
+void putBytes(std::string& s, T v) {
     unsigned char b[sizeof(T)];
     std::memcpy(b, &v, sizeof(T));
-    if constexpr (std::endian::native == std::endian::little)
+    if constexpr (std::endian::native != Order)
         for (size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
     s.append(reinterpret_cast<const char*>(b), sizeof(T));
 }
-
-template <class T>
-void putLE(std::string& s, T v) {
-    unsigned char b[sizeof(T)];
-    std::memcpy(b, &v, sizeof(T));
-    if constexpr (std::endian::native == std::endian::big)
-        for (size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
-    s.append(reinterpret_cast<const char*>(b), sizeof(T));
-}
+template <class T> void putBE(std::string& s, T v) { putBytes<std::endian::big>(s, v); }
+template <class T> void putLE(std::string& s, T v) { putBytes<std::endian::little>(s, v); }
 
 }  // namespace
 
@@ -74,13 +65,13 @@ void addTube(MeshBuilder& m, const std::vector<Vec3>& path, double radius, int s
     if (path.size() < 2) return;
     const uint32_t first = uint32_t(m.vertices());
     for (size_t i = 0; i < path.size(); ++i) {
-        const Vec3 d = unit(i + 1 < path.size() ? sub(path[i + 1], path[i]) : sub(path[i], path[i - 1]));
-        Vec3 u, v;
+        const Double3 d = (i + 1 < path.size() ? d3(path[i + 1]) - d3(path[i]) : d3(path[i]) - d3(path[i - 1])).normalized();
+        Double3 u, v;
         frame(d, u, v);
         for (int s = 0; s < sides; ++s) {
             const double a = 2 * kPi * s / sides;
-            const Vec3 q = add(path[i], add(mul(u, radius * std::cos(a)), mul(v, radius * std::sin(a))));
-            m.vertex(q[0], q[1], q[2]);
+            const Double3 q = d3(path[i]) + (u * (radius * std::cos(a)) + v * (radius * std::sin(a)));
+            m.vertex(q.x, q.y, q.z);
         }
     }
     for (size_t i = 0; i + 1 < path.size(); ++i)
@@ -100,8 +91,8 @@ void addTube(MeshBuilder& m, const std::vector<Vec3>& path, double radius, int s
 
 void addIBeam(MeshBuilder& m, Vec3 a, Vec3 b, double h, double w) {
     // The profile (flanges and web) swept along a-b: 12 corners, long quads between the ends.
-    const Vec3 d = unit(sub(b, a));
-    Vec3 u, v;
+    const Double3 d = (d3(b) - d3(a)).normalized();
+    Double3 u, v;
     frame(d, u, v);
     const double t = 0.1 * h;  // flange and web thickness
     const double px[12] = {-w / 2, w / 2, w / 2, t / 2, t / 2, w / 2, w / 2, -w / 2, -w / 2, -t / 2, -t / 2, -w / 2};
@@ -109,8 +100,8 @@ void addIBeam(MeshBuilder& m, Vec3 a, Vec3 b, double h, double w) {
     uint32_t ring[2][12];
     for (int e = 0; e < 2; ++e)
         for (int k = 0; k < 12; ++k) {
-            const Vec3 q = add(e ? b : a, add(mul(u, px[k]), mul(v, py[k])));
-            ring[e][k] = m.vertex(q[0], q[1], q[2]);
+            const Double3 q = d3(e ? b : a) + (u * px[k] + v * py[k]);
+            ring[e][k] = m.vertex(q.x, q.y, q.z);
         }
     for (int k = 0; k < 12; ++k) m.quad(ring[0][k], ring[0][(k + 1) % 12], ring[1][(k + 1) % 12], ring[1][k]);
     // End caps as three rectangles each (bottom flange, web, top flange).

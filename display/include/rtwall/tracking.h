@@ -156,6 +156,14 @@ private:
     std::optional<DTrackBody> wand_;            // the wand's last pose
     // One message; false (and error_) when the stream cannot go on.
     bool message(std::string_view header, std::string_view payload, std::vector<DTrackFrame>& out);
+    // Its steps: a sender or type name (false: the stream cannot go on), a tracker pose, and the
+    // button and analog reports (false: dropped, with the reason in error_). `where` names the
+    // message for the drop's reason.
+    bool describe(int32_t type, int32_t id, std::string_view payload);
+    void poseReport(const std::string& where, std::string_view payload, double time, std::vector<DTrackFrame>& out);
+    bool buttonChange(const std::string& where, std::string_view payload);
+    bool buttonStates(const std::string& where, std::string_view payload);
+    bool analogReport(const std::string& where, std::string_view payload);
     void drop(const std::string& why);
     bool fail(const std::string& why);
     DTrackFrame wandFrame(double time) const;

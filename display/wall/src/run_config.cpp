@@ -108,4 +108,17 @@ RunConfig defaultRunConfig() {
     return c;
 }
 
+RunConfig steppedRunConfig(const std::filesystem::path& out, int localClients) {
+    RunConfig c;
+    c.cluster.localClients = localClients;
+    c.clientThreads = true;
+    c.headless = true;
+    c.frames = 0;
+    c.orbit = 0.0;
+    c.writeEvery = 0;
+    c.out = out;
+    c.log = [](const std::string&) {};
+    return c;
+}
+
 }  // namespace rtwall

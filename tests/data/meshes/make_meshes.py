@@ -101,19 +101,15 @@ def off_box(normals=False):
 # ---------------------------------------------------------------------------------------- PLY
 
 
+def ply_tet_header(form, comment, after_faces=()):
+    """The header of a tetrahedron with float positions and int indices: `form` ascii or binary,
+    one comment line, and what follows the face indices."""
+    return ["ply", "format %s 1.0" % form, comment, "element vertex 4", "property float x", "property float y",
+            "property float z", "element face 4", "property list uchar int vertex_indices", *after_faces, "end_header"]
+
+
 def ply_tet_ascii():
-    lines = [
-        "ply",
-        "format ascii 1.0",
-        "comment tetrahedron",
-        "element vertex 4",
-        "property float x",
-        "property float y",
-        "property float z",
-        "element face 4",
-        "property list uchar int vertex_indices",
-        "end_header",
-    ]
+    lines = ply_tet_header("ascii", "comment tetrahedron")
     lines += ["%s %s %s" % tuple(map(fmt, v)) for v in TET_V]
     lines += ["3 %d %d %d" % f for f in TET_F]
     return "\n".join(lines) + "\n"
@@ -169,22 +165,9 @@ def ply_tet_binary(big_endian):
 
 def ply_tet_texcoords(binary):
     """MeshLab-style per-corner texture coordinates: a face list besides the vertex indices."""
-    header = [
-        "ply",
-        "format %s 1.0" % ("binary_little_endian" if binary else "ascii"),
-        "comment TextureFile tet.png",
-        "element vertex 4",
-        "property float x",
-        "property float y",
-        "property float z",
-        "element face 4",
-        "property list uchar int vertex_indices",
-        "property list uchar float texcoord",
-        "property int texnumber",
-        "element material 1",
-        "property list uchar uchar name",
-        "end_header",
-    ]
+    header = ply_tet_header("binary_little_endian" if binary else "ascii", "comment TextureFile tet.png",
+                            ["property list uchar float texcoord", "property int texnumber", "element material 1",
+                             "property list uchar uchar name"])
     uv = [0.25, 0.5, 0.75, 0.5, 0.5, 1.0]
     if not binary:
         body = "".join("%s %s %s\n" % tuple(map(fmt, v)) for v in TET_V)

@@ -108,6 +108,10 @@ RunConfig readRunConfig(const std::filesystem::path& file);
 // local clients, 60 frames orbiting, every 30th written (and each projector's image of it where
 // the wall is headless), the operating point holding kDefaultTargetFps.
 RunConfig defaultRunConfig();
+// A session that its caller drives by WallSession::step() (tests, the latency bench): headless,
+// `localClients` clients on threads of this process, no orbit, no frame count, no PNGs, no
+// progress lines; `out` for what it writes all the same. The scene and the wall are the caller's.
+RunConfig steppedRunConfig(const std::filesystem::path& out, int localClients = 2);
 // The frame rate the embedded default holds (`--target-fps`): interactive on a 2-core PC.
 inline constexpr double kDefaultTargetFps = 10.0;
 

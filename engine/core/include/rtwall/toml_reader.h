@@ -198,46 +198,13 @@ public:
     }
 
     Float3 vec3(const std::string& key, Float3 def, bool required = false) {
-        const toml::node* n = find(key);
-        if (!n) {
-            if (required) fail(nullptr, "missing required key '" + key + "'");
-            return def;
-        }
-        auto a = n->as_array();
-        if (!a || a->size() != 3) fail(n, "key '" + key + "': expected an array of 3 numbers");
-        float v[3];
-        for (size_t i = 0; i < 3; ++i) {
-            const toml::node& e = *a->get(i);
-            double d;
-            if (auto x = e.as_integer()) d = double(x->get());
-            else if (auto f = e.as_floating_point()) d = f->get();
-            else fail(n, "key '" + key + "': element " + std::to_string(i) + " is " + typeName(e) + ", not a number");
-            if (!std::isfinite(d) || std::fabs(d) > 1e30)
-                fail(n, "key '" + key + "': element " + std::to_string(i) + " must be finite");
-            v[i] = float(d);
-        }
-        return {v[0], v[1], v[2]};
+        const std::optional<std::array<double, 3>> v = triple(key, required, 1e30, "");
+        return v ? Float3{float((*v)[0]), float((*v)[1]), float((*v)[2])} : def;
     }
 
     // An [x, y, z] in double precision (world placements, CAD coordinates): within 1e15.
     std::array<double, 3> vec3d(const std::string& key, std::array<double, 3> def, bool required = false) {
-        const toml::node* n = find(key);
-        if (!n) {
-            if (required) fail(nullptr, "missing required key '" + key + "'");
-            return def;
-        }
-        auto a = n->as_array();
-        if (!a || a->size() != 3) fail(n, "key '" + key + "': expected an array of 3 numbers");
-        std::array<double, 3> v{};
-        for (size_t i = 0; i < 3; ++i) {
-            const toml::node& e = *a->get(i);
-            if (auto x = e.as_integer()) v[i] = double(x->get());
-            else if (auto f = e.as_floating_point()) v[i] = f->get();
-            else fail(n, "key '" + key + "': element " + std::to_string(i) + " is " + typeName(e) + ", not a number");
-            if (!std::isfinite(v[i]) || std::fabs(v[i]) > 1e15)
-                fail(n, "key '" + key + "': element " + std::to_string(i) + " must be finite and within 1e15");
-        }
-        return v;
+        return triple(key, required, 1e15, " and within 1e15").value_or(def);
     }
 
     // Reports the first key that was never read: a typo or a key in the wrong table.
@@ -261,6 +228,28 @@ public:
     }
 
 private:
+    // The numbers of key's [x, y, z], each finite and within `limit` (`within` says so in the
+    // error); nothing when the key is absent (an error if `required`).
+    std::optional<std::array<double, 3>> triple(const std::string& key, bool required, double limit, const char* within) {
+        const toml::node* n = find(key);
+        if (!n) {
+            if (required) fail(nullptr, "missing required key '" + key + "'");
+            return std::nullopt;
+        }
+        auto a = n->as_array();
+        if (!a || a->size() != 3) fail(n, "key '" + key + "': expected an array of 3 numbers");
+        std::array<double, 3> v{};
+        for (size_t i = 0; i < 3; ++i) {
+            const toml::node& e = *a->get(i);
+            if (auto x = e.as_integer()) v[i] = double(x->get());
+            else if (auto f = e.as_floating_point()) v[i] = f->get();
+            else fail(n, "key '" + key + "': element " + std::to_string(i) + " is " + typeName(e) + ", not a number");
+            if (!std::isfinite(v[i]) || std::fabs(v[i]) > limit)
+                fail(n, "key '" + key + "': element " + std::to_string(i) + " must be finite" + within);
+        }
+        return v;
+    }
+
     void listed(const std::string& key) const {
         if (sections_.empty()) return;
         for (const Section* s : sections_)
