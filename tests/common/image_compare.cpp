@@ -1,5 +1,6 @@
 #include "image_compare.h"
 
+#include <algorithm>
 #include <sstream>
 
 namespace rtwall::test {
@@ -21,6 +22,13 @@ std::string imageDifference(const Image& a, const Image& b) {
     }
     if (a.rgb != b.rgb) return "bytes differ after the last whole pixel";
     return {};
+}
+
+size_t differingBytes(const Image& a, const Image& b) {
+    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
+    size_t n = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
+    return n;
 }
 
 }  // namespace rtwall::test
