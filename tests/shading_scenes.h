@@ -160,6 +160,18 @@ inline SceneDesc materialZoo(const std::filesystem::path& dir, int width = 64, i
     return s;
 }
 
+// The zoo in tiles of 8, as the cluster tests render it; with `giSamples` > 0, path traced with
+// that many samples per pixel.
+inline SceneDesc zooInTilesOf8(const std::filesystem::path& dir, int width, int height, int giSamples = 0) {
+    SceneDesc desc = materialZoo(dir, width, height);
+    desc.settings.tileSize = 8;
+    if (giSamples > 0) {
+        desc.settings.gi = true;
+        desc.settings.samples = giSamples;
+    }
+    return desc;
+}
+
 // White furnace: one white object inside a uniform environment of radiance 1, lit by nothing
 // else; with GI and enough depth every pixel must be 1.
 inline SceneDesc furnace(const Material& m, bool box) {

@@ -59,8 +59,7 @@ std::string writeLegacyVolume(const std::filesystem::path& dir) {
 // The material zoo (a PNG texture and a .vti volume among every material) plus a second volume
 // from a legacy .vtk file; 3 files in all.
 SceneDesc sceneWithFiles(const std::filesystem::path& dir) {
-    SceneDesc d = test::materialZoo(dir, 64, 48);
-    d.settings.tileSize = 8;
+    SceneDesc d = test::zooInTilesOf8(dir, 64, 48);
     Material legacy = test::material("legacy", MaterialType::Volume, {1, 1, 1});
     legacy.volumeFile = writeLegacyVolume(dir);
     legacy.transfer = {{0.0f, {0.2f, 0.4f, 1.0f}, 0.5f}, {1.0f, {1, 1, 1}, 4.0f}};
@@ -265,10 +264,7 @@ TEST(ClusterAssets, ATamperedAssetIsRejectedAndCounted) {
 // them). The 8-bit accumulation they replace differs (its quantisation bias).
 TEST(ClusterAccumulation, LinearTilesAccumulateExactlyAsOneMachine) {
     const auto dir = test::scratchDir();
-    SceneDesc desc = test::materialZoo(dir, 64, 48);
-    desc.settings.tileSize = 8;
-    desc.settings.gi = true;
-    desc.settings.samples = 1;
+    SceneDesc desc = test::zooInTilesOf8(dir, 64, 48, 1);
     const Scene scene(desc);
     ClusterSettings cs = test::inStep();
     cs.prefetch = 2;

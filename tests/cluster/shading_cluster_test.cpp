@@ -22,8 +22,7 @@ using test::singleMachine;
 
 TEST(ClusterShading, EveryMaterialAndGiBitIdenticalToOneMachine) {
     const auto dir = test::scratchDir();
-    SceneDesc desc = test::materialZoo(dir, 64, 48);
-    desc.settings.tileSize = 8;
+    SceneDesc desc = test::zooInTilesOf8(dir, 64, 48);
     LocalCluster cluster(desc, test::eightBitFrames(), 3);
     Master& master = *cluster.master;
     ASSERT_TRUE(cluster.ready());
@@ -59,10 +58,7 @@ TEST(ClusterShading, EveryMaterialAndGiBitIdenticalToOneMachine) {
 // its panel (each client finds the faces again, as one machine does).
 TEST(ClusterShading, LampFacesAndTwoSidedEmissionBitIdenticalToOneMachine) {
     const auto dir = test::scratchDir();
-    SceneDesc desc = test::materialZoo(dir, 48, 36);
-    desc.settings.tileSize = 8;
-    desc.settings.gi = true;
-    desc.settings.samples = 2;
+    SceneDesc desc = test::zooInTilesOf8(dir, 48, 36, 2);
     Material panel = test::material("panel", MaterialType::Emissive, {1, 1, 1});
     panel.emission = {3, 3, 3};  // the zoo's area light: radiance 3 over [0.5, 1.5] x [-1.5, -0.5] at y 3.5
     desc.materials.push_back(panel);
@@ -89,8 +85,7 @@ TEST(ClusterShading, LampFacesAndTwoSidedEmissionBitIdenticalToOneMachine) {
 // turned off as differential updates.
 TEST(ClusterShading, SectionPlanesAndTheirUpdatesBitIdenticalToOneMachine) {
     const auto dir = test::scratchDir();
-    SceneDesc desc = test::materialZoo(dir, 64, 48);
-    desc.settings.tileSize = 8;
+    SceneDesc desc = test::zooInTilesOf8(dir, 64, 48);
     desc.sections[1].enabled = true;
     desc.sections[1].point = {0.3f, 0, 0};
     desc.sections[1].normal = {-1, 0, 0.2f};
@@ -124,8 +119,7 @@ TEST(ClusterShading, SectionPlanesAndTheirUpdatesBitIdenticalToOneMachine) {
 // machine's bytes.
 TEST(ClusterShading, UVTexturedMeshBitIdenticalToOneMachine) {
     const auto dir = test::scratchDir();
-    SceneDesc desc = test::materialZoo(dir, 64, 48);
-    desc.settings.tileSize = 8;
+    SceneDesc desc = test::zooInTilesOf8(dir, 64, 48);
     const std::string file = (test::dataDir() / "meshes" / "uv_seam.obj").string();
     auto mesh = std::make_shared<const TriangleMesh>(loadMesh(file));
     ASSERT_TRUE(mesh->hasUVs());
@@ -158,8 +152,7 @@ TEST(ClusterShading, UVTexturedMeshBitIdenticalToOneMachine) {
 
 TEST(ClusterShading, ClientViewShowsTheIdsTheMasterAssigned) {
     const auto dir = test::scratchDir();
-    SceneDesc desc = test::materialZoo(dir, 64, 48);
-    desc.settings.tileSize = 8;
+    SceneDesc desc = test::zooInTilesOf8(dir, 64, 48);
     desc.settings.view = ViewMode::Client;
     ClusterSettings cs = test::inStep();
     cs.prefetch = 1;
