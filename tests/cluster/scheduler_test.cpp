@@ -40,6 +40,13 @@ void oneTileEach(TileScheduler& s, uint32_t tiles) {
     EXPECT_EQ(s.request(2, 1, 0), std::vector<uint32_t>{1});
 }
 
+// Client 1 alone in frame `frame` of four tiles: it takes all four at time 0.
+void oneClientTakesAll(TileScheduler& s, uint32_t frame) {
+    s.addClient(1);
+    s.beginFrame(frame, 4);
+    EXPECT_EQ(s.request(1, 4, 0.0), range(0, 4));
+}
+
 // A tile is a straggler once older than max(0.05 s, 4 x the median tile time): the numbers the
 // straggler tests work out by hand.
 SchedulerOptions stragglerOptions() {
@@ -213,9 +220,7 @@ TEST(Scheduler, PrefetchingClientsCompletingInVariousOrders) {
 
 TEST(Scheduler, ResultForPreviousOrFutureFrameIsStale) {
     TileScheduler s;
-    s.addClient(1);
-    s.beginFrame(5, 4);
-    EXPECT_EQ(s.request(1, 4, 0), range(0, 4));
+    oneClientTakesAll(s, 5);
     EXPECT_EQ(s.complete(1, 5, 0, 0.1), Result::Accepted);
 
     s.beginFrame(6, 4);
@@ -437,14 +442,24 @@ TEST(SchedulerStealing, IdleClientsStealFromTheBackOfASlowClientsQueue) {
     EXPECT_EQ(s.stats().reissued, 0u);
 }
 
+SchedulerOptions seeded(uint64_t seed) {
+    SchedulerOptions options;
+    options.seed = seed;
+    return options;
+}
+
+// Clients 1, 2 and 3 rendered tiles 0-9, 10-19 and 20-29 of frame 0: their queues in frame 1 of
+// 30 tiles, which is begun.
+void threeQueuesOfTen(TileScheduler& s) {
+    addClients(s, {1, 2, 3});
+    ownFrame(s, 0, {{1, 10}, {2, 10}, {3, 10}}, 0);
+    s.beginFrame(1, 30);
+}
+
 TEST(SchedulerStealing, VictimIsAPeerWithTilesLeft) {
     for (uint64_t seed = 1; seed <= 20; ++seed) {
-        SchedulerOptions options;
-        options.seed = seed;
-        TileScheduler s(options);
-        addClients(s, {1, 2, 3});
-        ownFrame(s, 0, {{1, 10}, {2, 10}, {3, 10}}, 0);
-        s.beginFrame(1, 30);
+        TileScheduler s(seeded(seed));
+        threeQueuesOfTen(s);
         EXPECT_EQ(s.request(2, 10, 1), range(10, 20));  // 2 drained its own queue
         EXPECT_EQ(s.request(1, 10, 1), range(0, 10));
         // Only 3 has tiles left: every steal comes from it, from the back.
@@ -457,12 +472,8 @@ TEST(SchedulerStealing, VictimIsAPeerWithTilesLeft) {
 
 TEST(SchedulerStealing, VictimChoiceIsRandomButReproducible) {
     auto victims = [](uint64_t seed) {
-        SchedulerOptions options;
-        options.seed = seed;
-        TileScheduler s(options);
-        addClients(s, {1, 2, 3});
-        ownFrame(s, 0, {{1, 10}, {2, 10}, {3, 10}}, 0);
-        s.beginFrame(1, 30);
+        TileScheduler s(seeded(seed));
+        threeQueuesOfTen(s);
         EXPECT_EQ(s.request(1, 10, 1), range(0, 10));
         std::vector<ClientId> from;
         uint32_t nextOf2 = 19, nextOf3 = 29;
@@ -709,9 +720,7 @@ TEST(SchedulerStragglers, QueuedTilesComeBeforeReissues) {
 // they go back to it.
 TEST(SchedulerLostHandOuts, ReleasedTilesGoBackToTheOnlyClient) {
     TileScheduler s;
-    s.addClient(1);
-    s.beginFrame(1, 4);
-    EXPECT_EQ(s.request(1, 4, 0.0), range(0, 4));
+    oneClientTakesAll(s, 1);
     EXPECT_EQ(s.complete(1, 1, 0, 0.01), Result::Accepted);
     EXPECT_EQ(s.complete(1, 1, 1, 0.02), Result::Accepted);
     // Tiles 2 and 3: their results were lost. Without a release nothing ever gives them out again.
@@ -986,9 +995,7 @@ TEST(SchedulerProperty, RandomSequencesKeepTheInvariants) {
 
 TEST(SchedulerProperty, SameSeedSameSchedule) {
     auto trace = [](uint64_t seed) {
-        SchedulerOptions options;
-        options.seed = seed;
-        TileScheduler s(options);
+        TileScheduler s(seeded(seed));
         std::mt19937 ops(99);  // the same calls every time; only the scheduler's seed varies
         for (ClientId c = 0; c < 4; ++c) s.addClient(c);
         std::vector<uint32_t> out;
