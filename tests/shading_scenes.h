@@ -1,12 +1,15 @@
-// Small scenes for the shading tests (engine and cluster): every material on one image, and
-// the white furnace. Texture and volume files are written into a scratch directory.
+// Small scenes for the shading tests (engine and cluster): every material on one image, the
+// white furnace, and a sphere over a floor anywhere (far from the origin). Texture and volume files are written into a scratch directory.
 #pragma once
 
 #include <rtwall/engine.h>
 #include <rtwall/image.h>
 
+#include "test_util.h"
+
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -157,6 +160,18 @@ inline SceneDesc materialZoo(const std::filesystem::path& dir, int width = 64, i
     return s;
 }
 
+// The zoo in tiles of 8, as the cluster tests render it; with `giSamples` > 0, path traced with
+// that many samples per pixel.
+inline SceneDesc zooInTilesOf8(const std::filesystem::path& dir, int width, int height, int giSamples = 0) {
+    SceneDesc desc = materialZoo(dir, width, height);
+    desc.settings.tileSize = 8;
+    if (giSamples > 0) {
+        desc.settings.gi = true;
+        desc.settings.samples = giSamples;
+    }
+    return desc;
+}
+
 // White furnace: one white object inside a uniform environment of radiance 1, lit by nothing
 // else; with GI and enough depth every pixel must be 1.
 inline SceneDesc furnace(const Material& m, bool box) {
@@ -179,6 +194,33 @@ inline SceneDesc furnace(const Material& m, bool box) {
     s.settings.pruneThreshold = 0.0f;
     s.settings.samples = 16;
     return s;
+}
+
+// A sphere over a floor at (x, y, z), a point light and a camera looking at the sphere, as
+// scene-file text (the far-from-origin scene) from tests/data/scenes/sphere_over_floor.toml.
+// `head` comes first ([image], [render], [bvh]), the sphere has `rings` x `segments`, and
+// `moreLights` follows the point light.
+inline std::string sphereOverFloor(double x, double y, double z, const std::string& head, int rings, int segments,
+                                   const std::string& moreLights = "") {
+    std::string text = head + "\n" + sceneText("sphere_over_floor");
+    auto fill = [&](const std::string& blank, const std::string& value) {
+        const size_t at = text.find(blank);
+        if (at != std::string::npos) text.replace(at, blank.size(), value);
+    };
+    auto point = [](double px, double py, double pz) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "%.17g, %.17g, %.17g", px, py, pz);
+        return std::string(buf);
+    };
+    fill("@RINGS@", std::to_string(rings));
+    fill("@SEGMENTS@", std::to_string(segments));
+    fill("@BALL@", point(x, y + 1.0, z));
+    fill("@FLOOR@", point(x, y, z));
+    fill("@LIGHT@", point(x + 2, y + 6, z + 3));
+    fill("@MORE_LIGHTS@", moreLights);
+    fill("@EYE@", point(x + 1.5, y + 3, z + 7));
+    fill("@TARGET@", point(x, y + 0.8, z));
+    return text;
 }
 
 }  // namespace rtwall::test

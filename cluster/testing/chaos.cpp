@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <thread>
 
@@ -102,9 +103,208 @@ private:
     pid_t pid_ = -1;
 };
 
+// A few states, cycled frame by frame (the intensity of the first light, if any), and one
+// machine's image of each.
+struct ChaosStates {
+    static constexpr int kCount = 3;
+    std::optional<Light> light;
+    std::vector<float> intensity;
+    std::vector<Image> expected;
+};
+
+ChaosStates chaosStates(const SceneDesc& desc) {
+    ChaosStates states;
+    if (!desc.lights.empty()) states.light = desc.lights[0];
+    for (int k = 0; k < ChaosStates::kCount; ++k) {
+        states.intensity.push_back(desc.lights.empty() ? 0.0f : desc.lights[0].intensity * (1.0f + 0.5f * float(k)));
+        SceneDesc d = desc;
+        if (!d.lights.empty()) d.lights[0].intensity = states.intensity.back();
+        const Scene scene(d);
+        states.expected.push_back(renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings));
+    }
+    return states;
+}
+
+// In-step frames with the run's timeout; with namespaces, bound to the address only they reach.
+ClusterSettings chaosSettings(const ChaosOptions& o, const Namespaces* net) {
+    ClusterSettings cs;
+    cs.async = false;
+    cs.heartbeatMs = std::max(10, o.timeoutMs / 8);
+    cs.timeoutMs = o.timeoutMs;
+    if (net) {
+        cs.bind = net->bind();
+        cs.insecure = true;  // the run's own namespaces; nothing else can reach this address
+    }
+    return cs;
+}
+
+Clock::time_point after(double seconds) {
+    return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+}
+
+// What the three threads of a run share: the master renders frames, the monkey injects faults
+// (one at a time per client, each undone after a random time), the watchdog gives up a frame
+// that never completes.
+class ChaosRun {
+public:
+    ChaosRun(const ChaosOptions& o, Namespaces* net, Master& master, ChaosReport& report)
+        : o_(o), net_(net), master_(master), report_(report), slots_(size_t(o.clients)) {
+        master_.setStopFlag(&giveUp_);
+        for (int i = 0; i < o.clients; ++i) {
+            procs_.push_back(std::make_unique<ClientProcess>(o.exe, master.endpoint(), net ? net->ns(i) : std::string()));
+            procs_.back()->start();
+        }
+    }
+
+    // The frames, each compared with its state's image, while the monkey and the watchdog run;
+    // after the faults, o.framesAfter more.
+    void run(const ChaosStates& states) {
+        std::thread monkey([this] { injectFaults(); });
+        std::thread watchdog([this] { watch(); });
+        renderFrames(states);
+        giveUp_ = true;
+        running_ = false;
+        monkey.join();
+        watchdog.join();
+    }
+
+private:
+    enum class State { Up, Stopped, Dead, Cut };
+    struct Slot {
+        State state = State::Up;
+        Clock::time_point until;
+    };
+
+    void undo(size_t i) {
+        switch (slots_[i].state) {
+        case State::Stopped: procs_[i]->signal(SIGCONT); break;
+        case State::Dead: procs_[i]->start(); break;
+        case State::Cut: net_->cut(int(i), false); break;
+        case State::Up: return;
+        }
+        slots_[i].state = State::Up;
+        lastUndo_ = Clock::now();
+    }
+
+    // A fault of a random kind on client i (up); false for a restart, which has nothing to undo.
+    bool fault(size_t i, Clock::time_point now, std::mt19937_64& rng) {
+        const int kinds = net_ ? 4 : 3;
+        std::lock_guard lock(reportMutex_);
+        ++report_.faults;
+        switch (rng() % kinds) {
+        case 0:
+            procs_[i]->signal(SIGSTOP);
+            slots_[i].state = State::Stopped;
+            ++report_.stops;
+            return true;
+        case 1:
+            procs_[i]->kill();
+            slots_[i].state = State::Dead;
+            ++report_.kills;
+            return true;
+        case 2:  // killed and started again at once (as systemd would)
+            procs_[i]->kill();
+            procs_[i]->start();
+            ++report_.restarts;
+            lastUndo_ = now;
+            return false;
+        default:
+            net_->cut(int(i), true);
+            slots_[i].state = State::Cut;
+            ++report_.linkCuts;
+            return true;
+        }
+    }
+
+    // The monkey's thread: faults at random gaps for o.seconds, then every fault undone.
+    void injectFaults() {
+        std::mt19937_64 rng(o_.seed);
+        std::exponential_distribution<double> gap(1000.0 / std::max(1, o_.faultIntervalMs));
+        std::uniform_int_distribution<int> hold(100, std::max(101, o_.faultMaxMs));
+        const auto end = after(o_.seconds);
+        auto next = after(gap(rng));
+        while (Clock::now() < end && !giveUp_) {
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+            const auto now = Clock::now();
+            for (size_t i = 0; i < slots_.size(); ++i)
+                if (slots_[i].state != State::Up && now >= slots_[i].until) undo(i);
+            if (now < next) continue;
+            next = after(gap(rng));
+            const size_t i = size_t(rng() % slots_.size());
+            if (slots_[i].state != State::Up) continue;
+            if (fault(i, now, rng)) slots_[i].until = now + std::chrono::milliseconds(hold(rng));
+        }
+        for (size_t i = 0; i < slots_.size(); ++i) undo(i);
+        lastUndo_ = Clock::now();
+        faultsOver_ = true;
+    }
+
+    // The watchdog's thread: a frame that never completes ends the run (as a failure) instead of
+    // hanging it.
+    void watch() {
+        while (running_) {
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+            const double s = frameStartedAt_.load();
+            if (s > 0 && std::chrono::duration<double>(Clock::now().time_since_epoch()).count() - s > o_.frameGiveUpSeconds)
+                giveUp_ = true;
+        }
+    }
+
+    void renderFrames(const ChaosStates& states) {
+        int afterFaults = 0;
+        Clock::time_point overAt{};
+        for (uint32_t f = 0; !giveUp_; ++f) {
+            const bool over = faultsOver_.load();
+            if (over && afterFaults == 0) overAt = lastUndo_;
+            if (over && afterFaults >= o_.framesAfter) break;
+            const size_t k = f % ChaosStates::kCount;
+            if (states.light) {
+                Light l = *states.light;
+                l.intensity = states.intensity[k];
+                master_.setLight(0, l);
+            }
+            const auto t0 = Clock::now();
+            frameStartedAt_ = std::chrono::duration<double>(t0.time_since_epoch()).count();
+            try {
+                const Image img = master_.renderFrame();
+                const double s = secondsSince(t0);
+                std::lock_guard lock(reportMutex_);
+                ++report_.frames;
+                report_.framesIdentical += img.rgb == states.expected[k].rgb;
+                if (over) {
+                    report_.worstAfterLastFault = std::max(report_.worstAfterLastFault, s);
+                    if (afterFaults == 0) report_.firstFrameAfterLastFault = secondsSince(overAt);
+                    ++afterFaults;
+                } else {
+                    report_.worstFrameSeconds = std::max(report_.worstFrameSeconds, s);
+                }
+            } catch (const Cancelled&) {
+                ++report_.framesFailed;
+                break;
+            } catch (const std::exception& e) {
+                // "no render client is connected" for a while: every client was down at once.
+                ++report_.framesFailed;
+                if (over) break;
+            }
+            frameStartedAt_ = 0;
+        }
+    }
+
+    const ChaosOptions& o_;
+    Namespaces* net_;
+    Master& master_;
+    ChaosReport& report_;
+    std::vector<std::unique_ptr<ClientProcess>> procs_;
+    std::vector<Slot> slots_;
+    std::mutex reportMutex_;
+    std::atomic<bool> giveUp_{false}, faultsOver_{false}, running_{true};
+    Clock::time_point lastUndo_ = Clock::now();
+    std::atomic<double> frameStartedAt_{0};
+};
+
 }  // namespace
 
-ChaosReport runChaos(const SceneDesc& sceneIn, const ChaosOptions& o) {
+ChaosReport runChaos(const SceneDesc& desc, const ChaosOptions& o) {
     ChaosReport report;
     std::unique_ptr<Namespaces> net;
     if (o.linkCuts) {
@@ -114,163 +314,14 @@ ChaosReport runChaos(const SceneDesc& sceneIn, const ChaosOptions& o) {
             return report;
         }
     }
-    // A few states, cycled frame by frame, and one machine's image of each.
-    SceneDesc desc = sceneIn;
-    constexpr int kStates = 3;
-    std::vector<float> intensity;
-    std::vector<Image> expected;
-    for (int k = 0; k < kStates; ++k) {
-        intensity.push_back(desc.lights.empty() ? 0.0f : desc.lights[0].intensity * (1.0f + 0.5f * float(k)));
-        SceneDesc d = desc;
-        if (!d.lights.empty()) d.lights[0].intensity = intensity.back();
-        const Scene scene(d);
-        expected.push_back(renderFrame(scene, Camera(d.cameras.front(), d.settings.width, d.settings.height), d.settings));
-    }
-
-    ClusterSettings cs;
-    cs.async = false;
-    cs.heartbeatMs = std::max(10, o.timeoutMs / 8);
-    cs.timeoutMs = o.timeoutMs;
-    if (net) {
-        cs.bind = net->bind();
-        cs.insecure = true;  // the run's own namespaces; nothing else can reach this address
-    }
-    Master master(desc, cs);
-    std::atomic<bool> giveUp{false};
-    master.setStopFlag(&giveUp);
-    std::vector<std::unique_ptr<ClientProcess>> procs;
-    for (int i = 0; i < o.clients; ++i) {
-        procs.push_back(std::make_unique<ClientProcess>(o.exe, master.endpoint(), net ? net->ns(i) : std::string()));
-        procs.back()->start();
-    }
+    const ChaosStates states = chaosStates(desc);
+    Master master(desc, chaosSettings(o, net.get()));
+    ChaosRun run(o, net.get(), master, report);
     if (!master.waitForClients(o.clients, 120'000)) {
         report.error = "the client processes did not join";
         return report;
     }
-
-    // The monkey: one fault at a time per client, each undone after a random time.
-    enum class State { Up, Stopped, Dead, Cut };
-    struct Slot {
-        State state = State::Up;
-        Clock::time_point until;
-    };
-    std::vector<Slot> slots(size_t(o.clients));
-    std::mutex reportMutex;
-    std::atomic<bool> faultsOver{false};
-    Clock::time_point lastUndo = Clock::now();
-    auto undo = [&](size_t i) {
-        switch (slots[i].state) {
-        case State::Stopped: procs[i]->signal(SIGCONT); break;
-        case State::Dead: procs[i]->start(); break;
-        case State::Cut: net->cut(int(i), false); break;
-        case State::Up: return;
-        }
-        slots[i].state = State::Up;
-        lastUndo = Clock::now();
-    };
-    std::thread monkey([&] {
-        std::mt19937_64 rng(o.seed);
-        std::exponential_distribution<double> gap(1000.0 / std::max(1, o.faultIntervalMs));
-        std::uniform_int_distribution<int> hold(100, std::max(101, o.faultMaxMs));
-        auto after = [](double seconds) {
-            return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
-        };
-        const auto end = after(o.seconds);
-        auto next = after(gap(rng));
-        while (Clock::now() < end && !giveUp) {
-            std::this_thread::sleep_for(std::chrono::milliseconds(5));
-            const auto now = Clock::now();
-            for (size_t i = 0; i < slots.size(); ++i)
-                if (slots[i].state != State::Up && now >= slots[i].until) undo(i);
-            if (now < next) continue;
-            next = after(gap(rng));
-            const size_t i = size_t(rng() % slots.size());
-            if (slots[i].state != State::Up) continue;
-            const int kinds = net ? 4 : 3;
-            std::lock_guard lock(reportMutex);
-            ++report.faults;
-            switch (rng() % kinds) {
-            case 0:
-                procs[i]->signal(SIGSTOP);
-                slots[i].state = State::Stopped;
-                ++report.stops;
-                break;
-            case 1:
-                procs[i]->kill();
-                slots[i].state = State::Dead;
-                ++report.kills;
-                break;
-            case 2:  // killed and started again at once (as systemd would)
-                procs[i]->kill();
-                procs[i]->start();
-                ++report.restarts;
-                lastUndo = now;
-                continue;
-            default:
-                net->cut(int(i), true);
-                slots[i].state = State::Cut;
-                ++report.linkCuts;
-                break;
-            }
-            slots[i].until = now + std::chrono::milliseconds(hold(rng));
-        }
-        for (size_t i = 0; i < slots.size(); ++i) undo(i);
-        lastUndo = Clock::now();
-        faultsOver = true;
-    });
-    // A frame that never completes ends the run (as a failure) instead of hanging it.
-    std::atomic<double> frameStartedAt{0};
-    std::atomic<bool> running{true};
-    std::thread watchdog([&] {
-        while (running) {
-            std::this_thread::sleep_for(std::chrono::milliseconds(50));
-            const double s = frameStartedAt.load();
-            if (s > 0 && std::chrono::duration<double>(Clock::now().time_since_epoch()).count() - s > o.frameGiveUpSeconds)
-                giveUp = true;
-        }
-    });
-
-    int after = 0;
-    Clock::time_point overAt{};
-    for (uint32_t f = 0; !giveUp; ++f) {
-        const bool over = faultsOver.load();
-        if (over && after == 0) overAt = lastUndo;
-        if (over && after >= o.framesAfter) break;
-        const int k = int(f % kStates);
-        if (!desc.lights.empty()) {
-            Light l = desc.lights[0];
-            l.intensity = intensity[size_t(k)];
-            master.setLight(0, l);
-        }
-        const auto t0 = Clock::now();
-        frameStartedAt = std::chrono::duration<double>(t0.time_since_epoch()).count();
-        try {
-            const Image img = master.renderFrame();
-            const double s = secondsSince(t0);
-            std::lock_guard lock(reportMutex);
-            ++report.frames;
-            report.framesIdentical += img.rgb == expected[size_t(k)].rgb;
-            if (over) {
-                report.worstAfterLastFault = std::max(report.worstAfterLastFault, s);
-                if (after == 0) report.firstFrameAfterLastFault = std::chrono::duration<double>(Clock::now() - overAt).count();
-                ++after;
-            } else {
-                report.worstFrameSeconds = std::max(report.worstFrameSeconds, s);
-            }
-        } catch (const Cancelled&) {
-            ++report.framesFailed;
-            break;
-        } catch (const std::exception& e) {
-            // "no render client is connected" for a while: every client was down at once.
-            ++report.framesFailed;
-            if (over) break;
-        }
-        frameStartedAt = 0;
-    }
-    giveUp = true;
-    running = false;
-    monkey.join();
-    watchdog.join();
+    run.run(states);
     report.counters = master.counters();
     return report;
 }

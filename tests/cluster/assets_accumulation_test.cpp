@@ -26,6 +26,7 @@ namespace rtwall {
 namespace {
 
 using test::LocalCluster;
+using test::differingBytes;
 using test::singleMachine;
 using test::FakeMaster;
 
@@ -44,12 +45,6 @@ std::vector<uint8_t> readFileForTest(const std::string& path) {
     return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
-size_t differingBytes(const Image& a, const Image& b) {
-    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
-    size_t n = 0;
-    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
-    return n;
-}
 
 // A legacy VTK structured-points volume (ASCII), the other format a volume material reads.
 std::string writeLegacyVolume(const std::filesystem::path& dir) {
@@ -64,8 +59,7 @@ std::string writeLegacyVolume(const std::filesystem::path& dir) {
 // The material zoo (a PNG texture and a .vti volume among every material) plus a second volume
 // from a legacy .vtk file; 3 files in all.
 SceneDesc sceneWithFiles(const std::filesystem::path& dir) {
-    SceneDesc d = test::materialZoo(dir, 64, 48);
-    d.settings.tileSize = 8;
+    SceneDesc d = test::zooInTilesOf8(dir, 64, 48);
     Material legacy = test::material("legacy", MaterialType::Volume, {1, 1, 1});
     legacy.volumeFile = writeLegacyVolume(dir);
     legacy.transfer = {{0.0f, {0.2f, 0.4f, 1.0f}, 0.5f}, {1.0f, {1, 1, 1}, 4.0f}};
@@ -83,8 +77,7 @@ TEST(ClusterAssets, TexturesAndVolumesTravelToClientsWithoutTheFiles) {
     std::filesystem::create_directories(files);
     const SceneDesc desc = sceneWithFiles(files);
     const Scene reference(desc);  // reads the files while they are there
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.wideAccumulation = false;  // 8-bit frames, compared with one machine's 8-bit frames
     const auto cache = dir / "cache";
     {
@@ -92,17 +85,12 @@ TEST(ClusterAssets, TexturesAndVolumesTravelToClientsWithoutTheFiles) {
         std::filesystem::rename(files, dir / "elsewhere");  // no client can open the paths now
         ASSERT_FALSE(std::filesystem::exists(desc.materials[6].texture.file));
         // Two clients, one with a cache directory.
-        ClientSettings c;
-        c.connect = cluster.master->endpoint();
-        c.threads = 1;
-        c.exitAfterIdleMs = 4000;
         for (int i = 0; i < 2; ++i) {
-            c.counters = std::make_shared<ClientCounters>();
+            ClientSettings c;
             c.cacheDir = i == 0 ? cache : std::filesystem::path();
-            cluster.counters.push_back(c.counters);
-            cluster.threads.emplace_back([c] { runClient(c); });
+            cluster.add(c);
         }
-        ASSERT_TRUE(cluster.master->waitForClients(2, 30000));
+        ASSERT_TRUE(cluster.ready());
         for (int f = 0; f < 2; ++f) {
             FrameReport r;
             const Image img = cluster.master->renderFrame(&r);
@@ -133,7 +121,7 @@ TEST(ClusterAssets, TexturesAndVolumesTravelToClientsWithoutTheFiles) {
         inMemory.files[(files / e.path().filename()).string()] =
             std::make_shared<const std::vector<uint8_t>>(readFileForTest(e.path().string()));
     LocalCluster again(inMemory, cs, 1, cache);
-    ASSERT_TRUE(again.master->waitForClients(1, 30000));
+    ASSERT_TRUE(again.ready());
     FrameReport r;
     const Image img = again.master->renderFrame(&r);
     EXPECT_EQ(differingBytes(img, singleMachine(reference, desc, r.frame)), 0u);
@@ -154,11 +142,10 @@ TEST(ClusterAssets, AMasterWithFilesInMemory) {
         std::filesystem::remove(path);
     }
     const Scene fromMemory(inMemory);  // the engine decodes them from memory too
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.wideAccumulation = false;
     LocalCluster cluster(inMemory, cs, 2);
-    ASSERT_TRUE(cluster.master->waitForClients(2, 30000));
+    ASSERT_TRUE(cluster.ready());
     FrameReport r;
     const Image img = cluster.master->renderFrame(&r);
     const Image expected = singleMachine(reference, onDisk, r.frame);
@@ -189,35 +176,26 @@ TEST(ClusterAssets, AMaterialChangedToANewFileTravels) {
     desc.files[path] = std::make_shared<const std::vector<uint8_t>>(readFileForTest((dir / "stripes.png").string()));
     ASSERT_FALSE(std::filesystem::exists(path));
 
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.wideAccumulation = false;
     LocalCluster cluster(desc, cs, 2);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(2, 30000));
-    FrameReport r;
-    const Image before = master.renderFrame(&r);
-    EXPECT_EQ(differingBytes(before, singleMachine(desc, r.frame)), 0u);
+    ASSERT_TRUE(cluster.ready());
+    const Image before = cluster.expectFrameOf(desc);
 
     SceneDesc changed = desc;
     changed.materials[0].texture.kind = TextureKind::Image;  // the floor
     changed.materials[0].texture.file = path;
     changed.materials[0].texture.scale = 0.5f;
     master.setMaterial(0, changed.materials[0]);
-    const Image after = master.renderFrame(&r);
-    EXPECT_EQ(differingBytes(after, singleMachine(changed, r.frame)), 0u);
+    const Image after = cluster.expectFrameOf(changed, "the new image");
     EXPECT_GT(differingBytes(after, before), after.rgb.size() / 10) << "the floor shows the new image";
     EXPECT_EQ(cluster.sum(&ClientCounters::assetsReceived), 2u) << "the new file, to each client";
     EXPECT_EQ(cluster.sum(&ClientCounters::rejectedAssets), 0u);
 
-    ClientSettings late;
-    late.connect = master.endpoint();
-    late.threads = 1;
-    late.exitAfterIdleMs = 4000;
-    late.counters = std::make_shared<ClientCounters>();
-    cluster.counters.push_back(late.counters);
-    cluster.threads.emplace_back([late] { runClient(late); });
-    ASSERT_TRUE(master.waitForClients(3, 30000));
+    cluster.add();
+    const std::shared_ptr<ClientCounters> late = cluster.counters.back();
+    ASSERT_TRUE(cluster.ready());
     Material unreadable = changed.materials[0];
     unreadable.texture.file = (dir / "missing.png").string();
     try {
@@ -226,11 +204,8 @@ TEST(ClusterAssets, AMaterialChangedToANewFileTravels) {
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("missing.png"), std::string::npos) << e.what();
     }
-    for (int f = 0; f < 2; ++f) {
-        const Image img = master.renderFrame(&r);
-        EXPECT_EQ(differingBytes(img, singleMachine(changed, r.frame)), 0u) << "frame " << r.frame;
-    }
-    EXPECT_EQ(late.counters->assetsReceived.load(), 1u) << "the late client fetched the new file with the state";
+    for (int f = 0; f < 2; ++f) cluster.expectFrameOf(changed, "with a late client");
+    EXPECT_EQ(late->assetsReceived.load(), 1u) << "the late client fetched the new file with the state";
 }
 
 
@@ -245,21 +220,15 @@ TEST(ClusterAssets, ATamperedAssetIsRejectedAndCounted) {
 
     FakeMaster fake;
     ClientSettings cs;
-    cs.connect = fake.endpoint;
-    cs.threads = 1;
-    cs.exitAfterIdleMs = 3000;
     cs.counters = std::make_shared<ClientCounters>();
-    auto client = std::async(std::launch::async, [cs] { return runClient(cs); });
-    const auto hello = fake.expect(MsgType::Hello, 10000);
-    ASSERT_TRUE(hello);
-    const std::string peer = hello->peer;
-    fake.send(peer, Welcome{1, CodecSettings{}, 4, 100, 3000});
+    auto client = test::startClient(fake, 3000, cs);
+    std::string peer;
+    ASSERT_NO_FATAL_FAILURE(test::welcome(fake, peer));
 
     // The state: the zoo without its volume (so that only the texture is an asset).
     desc.materials[9] = test::material("plain", MaterialType::Lambert, {0.5f, 0.5f, 0.5f});
     test::ScriptedScene scripted = test::scriptedScene(desc);
     SceneSnapshot& snap = scripted.snapshot;
-    const std::vector<FrameView> mono{FrameView{desc.cameras.front(), {}, 0, 0}};  // a frame's one view (protocol 13)
     const Hash128 textureHash = hashBytes(realBytes.data(), realBytes.size());
     snap.assets.push_back({texture, textureHash, realBytes.size()});
     fake.send(peer, snap);
@@ -295,17 +264,13 @@ TEST(ClusterAssets, ATamperedAssetIsRejectedAndCounted) {
 // them). The 8-bit accumulation they replace differs (its quantisation bias).
 TEST(ClusterAccumulation, LinearTilesAccumulateExactlyAsOneMachine) {
     const auto dir = test::scratchDir();
-    SceneDesc desc = test::materialZoo(dir, 64, 48);
-    desc.settings.tileSize = 8;
-    desc.settings.gi = true;
-    desc.settings.samples = 1;
+    SceneDesc desc = test::zooInTilesOf8(dir, 64, 48, 1);
     const Scene scene(desc);
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.prefetch = 2;
     LocalCluster cluster(desc, cs, 3);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(3, 30000));
+    ASSERT_TRUE(cluster.ready());
     constexpr int kFrames = 6;
     Accumulator clusterAcc, localAcc, local8;
     std::vector<float> linear;
@@ -383,10 +348,8 @@ TEST(ClusterAccumulation, OnlyStochasticScenesAccumulate) {
     EXPECT_FALSE(rendersStochastically(depth)) << "false-colour views are not refined";
 
     // The master reports it per frame, and sends linear tiles for stochastic frames only.
-    ClusterSettings cs;
-    cs.async = false;
-    LocalCluster cluster(base, cs, 1);
-    ASSERT_TRUE(cluster.master->waitForClients(1, 30000));
+    LocalCluster cluster(base, test::inStep(), 1);
+    ASSERT_TRUE(cluster.ready());
     FrameReport r;
     std::vector<float> linear{1.0f};
     cluster.master->renderFrame(&r, &linear);
@@ -404,10 +367,8 @@ TEST(ClusterAccumulation, OnlyStochasticScenesAccumulate) {
 TEST(ClusterAccumulation, SetCodecMovesTheStateOn) {
     const auto dir = test::scratchDir();
     SceneDesc desc = test::materialZoo(dir, 32, 24);
-    ClusterSettings cs;
-    cs.async = false;
-    LocalCluster cluster(desc, cs, 1);
-    ASSERT_TRUE(cluster.master->waitForClients(1, 30000));
+    LocalCluster cluster(desc, test::inStep(), 1);
+    ASSERT_TRUE(cluster.ready());
     FrameReport a, b, c;
     cluster.master->renderFrame(&a);
     cluster.master->renderFrame(&b);

@@ -26,15 +26,80 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-SceneDesc smallScene() {
-    SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    desc.settings.width = 96;
-    desc.settings.height = 72;
-    desc.settings.tileSize = 8;
-    desc.settings.supersample = 1;
-    return desc;
+// Random bytes of length n.
+std::vector<uint8_t> junk(std::mt19937_64& rng, size_t n) {
+    std::vector<uint8_t> b(n);
+    for (auto& x : b) x = uint8_t(rng());
+    return b;
 }
 
+// Garbage of every kind from a hostile master to `peer`: bytes, multi-frame messages, a valid
+// FrameBegin inside a multi-frame one, every type with a payload that does not decode, truncated
+// messages, types only clients send and a FrameBegin of another session. Returns how many
+// messages the client must drop.
+uint64_t sendGarbage(test::FakeMaster& fake, const std::string& peer, std::mt19937_64& rng) {
+    using namespace cluster;
+    Header h;
+    h.session = test::FakeMaster::kSession;
+    uint64_t sent = 0;
+    for (int i = 0; i < 10; ++i, ++sent) fake.resend(peer, junk(rng, 1 + rng() % 100));
+    for (int i = 0; i < 10; ++i, ++sent) fake.sendParts(peer, {{'x'}, {'y'}});
+    // A FrameBegin that would throw the work away, inside a two-frame message: not obeyed.
+    fake.sendParts(peer, {encodeMessage(h, FrameBegin{99, 0, TilePixels::Srgb8, {FrameView{}}}), {'z'}});
+    ++sent;
+    for (uint16_t t = 1; t <= kMaxMsgType; ++t) {
+        Header bad = h;
+        bad.type = MsgType(t);
+        std::vector<uint8_t> m = encodeMessage(bad, Goodbye{"x"});  // a payload of the wrong shape
+        m[6] = uint8_t(t);
+        std::vector<uint8_t> payload = junk(rng, 8 + rng() % 64);
+        m.resize(kHeaderSize);
+        m.insert(m.end(), payload.begin(), payload.end());
+        for (int b = 0; b < 4; ++b) m[24 + b] = uint8_t(payload.size() >> (8 * b));
+        if (MsgType(t) != MsgType::Heartbeat && MsgType(t) != MsgType::Goodbye) {
+            fake.resend(peer, m);
+            ++sent;
+        }
+        std::vector<uint8_t> truncated = encodeMessage(h, FrameBegin{7, 0, TilePixels::Srgb8, {FrameView{}}});
+        truncated.pop_back();
+        fake.resend(peer, truncated);
+        ++sent;
+    }
+    // Types only clients send, and a FrameBegin of another session.
+    fake.send(peer, TileRequest{1, 4});
+    fake.send(peer, Ready{0, {1, 2}});
+    Header other = h;
+    other.session = 0xBAD;
+    fake.resend(peer, encodeMessage(other, FrameBegin{42, 0, TilePixels::Srgb8, {FrameView{}}}));
+    return sent + 3;
+}
+
+// Tile 0 of frame `frame` asked of the client at `peer` (the frame begun first): its result
+// (within 20 s) has one machine's pixels. Fatal failures: call it in ASSERT_NO_FATAL_FAILURE.
+void expectTileRenderedRight(test::FakeMaster& fake, const std::string& peer, const SceneDesc& desc, uint32_t frame) {
+    using namespace cluster;
+    fake.send(peer, FrameBegin{frame, 0, TilePixels::Srgb8, test::oneView(desc)}, frame);
+    const auto request = fake.expect(MsgType::TileRequest, 10000);
+    ASSERT_TRUE(request);
+    EXPECT_EQ(decodePayload<TileRequest>(request->payload.data(), request->payload.size()).frame, frame);
+    fake.send(peer, TileAssign{frame, {0}}, frame);
+    std::optional<TileResult> result;
+    for (auto end = Clock::now() + std::chrono::seconds(20); !result && Clock::now() < end;) {
+        const auto r = fake.expect(MsgType::TileResult, 1000);
+        if (!r) continue;
+        TileResult tr = decodePayload<TileResult>(r->payload.data(), r->payload.size());
+        if (tr.frame == frame) result = std::move(tr);
+    }
+    ASSERT_TRUE(result) << "no result for the real tile";
+    const TileRect rect = makeTiles(desc.settings.width, desc.settings.height, desc.settings.tileSize)[0];
+    std::vector<uint8_t> got(size_t(rect.width()) * rect.height() * 3), want(got.size());
+    decodeTile(result->codec, result->pixels.data(), result->pixels.size(), rect.width(), rect.height(), got.data(),
+               size_t(rect.width()) * 3);
+    const Scene scene(desc);
+    renderTile(scene, Camera(desc.cameras.front(), desc.settings.width, desc.settings.height), rect, frame, desc.settings,
+               {want.data(), size_t(rect.width()) * 3});
+    EXPECT_EQ(got, want);
+}
 
 class MasterUnderAttack : public ::testing::TestWithParam<bool> {};
 
@@ -43,28 +108,22 @@ TEST_P(MasterUnderAttack, FramesStayBitIdenticalAndEveryMessageIsCounted) {
     const auto dir = test::scratchDir();
     writeNewKeyPair(dir / "master");
     writeNewKeyPair(dir / "client");
-    const SceneDesc desc = smallScene();
+    const SceneDesc desc = test::quickDemo(96, 72, 8);
     const Image expected = test::singleMachine(desc, 0);
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     if (curve) {
         cs.keyFile = dir / "master.key";
         cs.clientKeys = {dir / "client.pub"};
     }
-    std::vector<std::future<int>> clients;  // destroyed after the master, whose goodbye ends them
-    Master master(desc, cs);
-    std::atomic<bool> stop{false};
-    master.setStopFlag(&stop);
+    test::StoppableCluster cluster(desc, cs);
+    Master& master = *cluster.master;
     for (int i = 0; i < 2; ++i) {
         ClientSettings c;
-        c.connect = master.endpoint();
-        c.threads = 1;
-        c.exitAfterIdleMs = 4000;
         if (curve) {
             c.keyFile = dir / "client.key";
             c.serverKeyFile = dir / "master.pub";
         }
-        clients.push_back(std::async(std::launch::async, [c] { return runClient(c); }));
+        cluster.start(c);
     }
     ASSERT_TRUE(master.waitForClients(2, 30000));
     ASSERT_EQ(master.renderFrame().rgb, expected.rgb);
@@ -87,16 +146,14 @@ TEST_P(MasterUnderAttack, FramesStayBitIdenticalAndEveryMessageIsCounted) {
     double worst = 0;
     while (attacking) {
         const auto t0 = Clock::now();
-        auto f = std::async(std::launch::async, [&] { return master.renderFrame(); });
-        if (f.wait_for(std::chrono::seconds(30)) != std::future_status::ready) {
-            stop = true;
+        const auto img = cluster.frameWithin(30);
+        if (!img) {
             ADD_FAILURE() << "a frame under attack did not complete in 30 s";
             break;
         }
-        const Image img = f.get();
         worst = std::max(worst, std::chrono::duration<double>(Clock::now() - t0).count());
         ++frames;
-        identical += img.rgb == expected.rgb;
+        identical += img->rgb == expected.rgb;
     }
     const testing::AttackReport sent = attack.get();
     // The master reads what is still queued: wait (bounded) until every kind has caught up.
@@ -161,57 +218,14 @@ TEST(HostileMaster, GarbageNeitherCrashesNorHangsAClient) {
     test::FakeMaster fake;
     auto counters = std::make_shared<ClientCounters>();
     ClientSettings cs;
-    cs.connect = fake.endpoint;
-    cs.threads = 1;
-    cs.exitAfterIdleMs = 3000;
     cs.counters = counters;
-    auto client = std::async(std::launch::async, [cs] { return runClient(cs); });
+    auto client = test::startClient(fake, 3000, cs);
     const auto hello = fake.expect(MsgType::Hello, 10000);
     ASSERT_TRUE(hello);
     const std::string peer = hello->peer;
 
     std::mt19937_64 rng(15);
-    auto junk = [&](size_t n) {
-        std::vector<uint8_t> b(n);
-        for (auto& x : b) x = uint8_t(rng());
-        return b;
-    };
-    Header h;
-    h.session = test::FakeMaster::kSession;
-    auto garbage = [&] {
-        uint64_t sent = 0;
-        for (int i = 0; i < 10; ++i, ++sent) fake.resend(peer, junk(1 + rng() % 100));
-        for (int i = 0; i < 10; ++i, ++sent) fake.sendParts(peer, {{'x'}, {'y'}});
-        // A FrameBegin that would throw the work away, inside a two-frame message: not obeyed.
-        fake.sendParts(peer, {encodeMessage(h, FrameBegin{99, 0, TilePixels::Srgb8, {FrameView{}}}), {'z'}});
-        ++sent;
-        for (uint16_t t = 1; t <= kMaxMsgType; ++t) {
-            Header bad = h;
-            bad.type = MsgType(t);
-            std::vector<uint8_t> m = encodeMessage(bad, Goodbye{"x"});  // a payload of the wrong shape
-            m[6] = uint8_t(t);
-            std::vector<uint8_t> payload = junk(8 + rng() % 64);
-            m.resize(kHeaderSize);
-            m.insert(m.end(), payload.begin(), payload.end());
-            for (int b = 0; b < 4; ++b) m[24 + b] = uint8_t(payload.size() >> (8 * b));
-            if (MsgType(t) != MsgType::Heartbeat && MsgType(t) != MsgType::Goodbye) {
-                fake.resend(peer, m);
-                ++sent;
-            }
-            std::vector<uint8_t> truncated = encodeMessage(h, FrameBegin{7, 0, TilePixels::Srgb8, {FrameView{}}});
-            truncated.pop_back();
-            fake.resend(peer, truncated);
-            ++sent;
-        }
-        // Types only clients send, and a FrameBegin of another session.
-        fake.send(peer, TileRequest{1, 4});
-        fake.send(peer, Ready{0, {1, 2}});
-        Header other = h;
-        other.session = 0xBAD;
-        fake.resend(peer, encodeMessage(other, FrameBegin{42, 0, TilePixels::Srgb8, {FrameView{}}}));
-        return sent + 3;
-    };
-    garbage();  // before the handshake: nothing of it counts as a master
+    sendGarbage(fake, peer, rng);  // before the handshake: nothing of it counts as a master
 
     // A proper handshake: welcome, state, the meshes it asks for.
     fake.send(peer, Welcome{7, CodecSettings{}, 4, 100, 5000});
@@ -226,7 +240,6 @@ TEST(HostileMaster, GarbageNeitherCrashesNorHangsAClient) {
     snap.materials = desc.materials;
     snap.instances = desc.instances;
     snap.lights = desc.lights;
-    const std::vector<FrameView> mono{FrameView{desc.cameras.front(), {}, 0, 0}};  // a frame's one view (protocol 13)
     snap.settings = desc.settings;
     snap.bvh = desc.bvh;
     snap.origin = desc.origin;
@@ -242,8 +255,8 @@ TEST(HostileMaster, GarbageNeitherCrashesNorHangsAClient) {
 
     // In the session: garbage again, and assignments without end for tiles that do not exist.
     const uint64_t dropped0 = counters->droppedMessages.load();
-    const uint64_t inSession = garbage();
-    fake.send(peer, FrameBegin{5, 0, TilePixels::Srgb8, mono}, 5);
+    const uint64_t inSession = sendGarbage(fake, peer, rng);
+    fake.send(peer, FrameBegin{5, 0, TilePixels::Srgb8, test::oneView(desc)}, 5);
     ASSERT_TRUE(fake.expect(MsgType::TileRequest, 10000));
     std::vector<uint32_t> bogus(kMaxTilesPerMessage);
     for (uint32_t i = 0; i < bogus.size(); ++i) bogus[i] = 1000 + i;
@@ -255,27 +268,7 @@ TEST(HostileMaster, GarbageNeitherCrashesNorHangsAClient) {
     EXPECT_GT(counters->droppedAssignments.load(), 0u) << "its queue has a bound";
 
     // It still works: the next frame, one real tile, rendered right.
-    fake.send(peer, FrameBegin{6, 0, TilePixels::Srgb8, mono}, 6);
-    const auto request = fake.expect(MsgType::TileRequest, 10000);
-    ASSERT_TRUE(request);
-    EXPECT_EQ(decodePayload<TileRequest>(request->payload.data(), request->payload.size()).frame, 6u);
-    fake.send(peer, TileAssign{6, {0}}, 6);
-    std::optional<TileResult> result;
-    for (auto end = Clock::now() + std::chrono::seconds(20); !result && Clock::now() < end;) {
-        const auto r = fake.expect(MsgType::TileResult, 1000);
-        if (!r) continue;
-        TileResult tr = decodePayload<TileResult>(r->payload.data(), r->payload.size());
-        if (tr.frame == 6) result = std::move(tr);
-    }
-    ASSERT_TRUE(result) << "no result for the real tile";
-    const TileRect rect = makeTiles(desc.settings.width, desc.settings.height, desc.settings.tileSize)[0];
-    std::vector<uint8_t> got(size_t(rect.width()) * rect.height() * 3), want(got.size());
-    decodeTile(result->codec, result->pixels.data(), result->pixels.size(), rect.width(), rect.height(), got.data(),
-               size_t(rect.width()) * 3);
-    const Scene scene(desc);
-    renderTile(scene, Camera(desc.cameras.front(), desc.settings.width, desc.settings.height), rect, 6, desc.settings,
-               {want.data(), size_t(rect.width()) * 3});
-    EXPECT_EQ(got, want);
+    ASSERT_NO_FATAL_FAILURE(expectTileRenderedRight(fake, peer, desc, 6));
 
     // The master falls silent: the client gives up after its idle limit, it does not hang.
     EXPECT_EQ(client.wait_for(std::chrono::seconds(20)), std::future_status::ready);

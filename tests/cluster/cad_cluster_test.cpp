@@ -2,6 +2,7 @@
 // with non-default [bvh] settings, render bit-identically on one machine and on two clients on
 // loopback (protocol version 4 sends colours, the BVH settings and the scene origin).
 #include "local_cluster.h"
+#include "shading_scenes.h"
 #include "test_util.h"
 
 #include "generators.h"
@@ -28,20 +29,27 @@ bool complete(const FrameReport& r) {
     return !r.tileOwners.empty() && std::count(r.tileOwners.begin(), r.tileOwners.end(), UINT32_MAX) == 0;
 }
 
-Image onTwoClients(const SceneDesc& d, FrameReport* report) {
-    ClusterSettings cs;
-    cs.async = false;
+// Frames one at a time, two tiles asked ahead.
+ClusterSettings twoTilesAhead() {
+    ClusterSettings cs = test::inStep();
     cs.prefetch = 2;
-    LocalCluster cluster(d, cs, 2);
-    EXPECT_TRUE(cluster.master->waitForClients(2, 30000));
-    return cluster.master->renderFrame(report);
+    return cs;
 }
 
-size_t differingBytes(const Image& a, const Image& b) {
-    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
-    size_t n = 0;
-    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
-    return n;
+// d on two clients with `cs`: every tile came from a client and the frame is one machine's.
+// Returns the frame's report.
+FrameReport expectTwoClientsMatchOneMachine(const SceneDesc& d, const ClusterSettings& cs = twoTilesAhead()) {
+    LocalCluster cluster(d, cs, 2);
+    EXPECT_TRUE(cluster.ready());
+    FrameReport r;
+    cluster.expectFrameOf(d, "on two clients", &r);
+    EXPECT_TRUE(complete(r));
+    return r;
+}
+
+// The bytes of `img` brighter than `level`: how much of a scene is in view.
+size_t bytesAbove(const Image& img, uint8_t level) {
+    return size_t(std::count_if(img.rgb.begin(), img.rgb.end(), [&](uint8_t b) { return b > level; }));
 }
 
 TEST(CadCluster, ColouredMeshBitIdenticalToOneMachine) {
@@ -59,10 +67,7 @@ TEST(CadCluster, ColouredMeshBitIdenticalToOneMachine) {
         blue = blue || (one.rgb[i + 2] > 2 * one.rgb[i] + 20 && one.rgb[i + 2] > 2 * one.rgb[i + 1] + 20);
     }
     EXPECT_TRUE(green && blue);
-    FrameReport r;
-    const Image cluster = onTwoClients(d, &r);
-    EXPECT_TRUE(complete(r));
-    EXPECT_EQ(differingBytes(singleMachine(d, r.frame), cluster), 0u);
+    expectTwoClientsMatchOneMachine(d);
 }
 
 // A sphere and a floor at (1e6, -2e5, 3e5), rebased on load, built with high quality, compact
@@ -70,59 +75,18 @@ TEST(CadCluster, ColouredMeshBitIdenticalToOneMachine) {
 TEST(CadCluster, FarSceneWithBvhSettingsBitIdenticalToOneMachine) {
     const auto dir = test::scratchDir();
     const double x = 1e6, y = -2e5, z = 3e5;
-    char text[2048];
-    std::snprintf(text, sizeof text, R"([image]
-width = 80
-height = 60
-tile = 8
-[render]
-ambient = [0.1, 0.1, 0.1]
-[bvh]
-quality = "high"
-compact = true
-robust = true
-[[mesh]]
-name = "ball"
-shape = "sphere"
-rings = 24
-segments = 48
-[[mesh]]
-name = "floor"
-shape = "quad"
-[[material]]
-name = "white"
-type = "phong"
-color = [0.8, 0.8, 0.8]
-[[instance]]
-mesh = "ball"
-material = "white"
-translate = [%.17g, %.17g, %.17g]
-[[instance]]
-mesh = "floor"
-scale = 6
-translate = [%.17g, %.17g, %.17g]
-[[light]]
-position = [%.17g, %.17g, %.17g]
-intensity = 60
-[[camera]]
-position = [%.17g, %.17g, %.17g]
-look_at = [%.17g, %.17g, %.17g]
-fov = 40
-)",
-                  x, y + 1.0, z, x, y, z, x + 2, y + 6, z + 3, x + 1.5, y + 3, z + 7, x, y + 0.8, z);
+    const std::string text = test::sphereOverFloor(x, y, z,
+                                                   "[image]\nwidth = 80\nheight = 60\ntile = 8\n[render]\nambient = [0.1, 0.1, 0.1]\n"
+                                                   "[bvh]\nquality = \"high\"\ncompact = true\nrobust = true",
+                                                   24, 48);
     const SceneDesc d = loadSceneFile(test::writeFile(dir / "far.toml", text));
     ASSERT_NE(d.origin, (std::array<double, 3>{0, 0, 0})) << "the scene was rebased";
     ASSERT_EQ(d.bvh.quality, BvhSettings::Quality::High);
     ASSERT_TRUE(d.bvh.compact && d.bvh.robust);
     ASSERT_EQ(d.settings.tileSize, 8);
     const Image one = singleMachine(d, 0);
-    size_t lit = 0;
-    for (uint8_t b : one.rgb) lit += b > 40;
-    EXPECT_GT(lit, one.rgb.size() / 10) << "the scene is in view";
-    FrameReport r;
-    const Image cluster = onTwoClients(d, &r);
-    EXPECT_TRUE(complete(r));
-    EXPECT_EQ(differingBytes(singleMachine(d, r.frame), cluster), 0u);
+    EXPECT_GT(bytesAbove(one, 40), one.rgb.size() / 10) << "the scene is in view";
+    expectTwoClientsMatchOneMachine(d);
 
     // [bvh] primitives travels too (protocol 5): the scene as plain triangles is bit-identical
     // on the cluster as well. (At this size quads and triangles happen to give the same bytes,
@@ -131,10 +95,7 @@ fov = 40
     ASSERT_EQ(d.bvh.primitives, BvhSettings::Primitives::Auto);
     SceneDesc t = d;
     t.bvh.primitives = BvhSettings::Primitives::Triangles;
-    FrameReport rt;
-    const Image clusterT = onTwoClients(t, &rt);
-    EXPECT_TRUE(complete(rt));
-    EXPECT_EQ(differingBytes(singleMachine(t, rt.frame), clusterT), 0u);
+    expectTwoClientsMatchOneMachine(t);
 }
 
 // A glTF assembly (issue 20), written by tools/gltf_testgen.py: instanced meshes, an embedded PNG
@@ -150,22 +111,10 @@ TEST(CadCluster, GltfAssemblyBitIdenticalToOneMachine) {
     d.settings.height = 64;
     d.settings.tileSize = 8;
     const Image one = singleMachine(d, 0);
-    size_t lit = 0;
-    for (uint8_t b : one.rgb) lit += b > 60;
-    EXPECT_GT(lit, one.rgb.size() / 50) << "the assembly is in view";
+    EXPECT_GT(bytesAbove(one, 60), one.rgb.size() / 50) << "the assembly is in view";
     // The steel is rough metal, so the scene renders stochastically: 8-bit tiles, compared with
     // one machine's 8-bit frame (linear half-float tiles round differently by design).
-    ClusterSettings cs;
-    cs.async = false;
-    cs.prefetch = 2;
-    cs.wideAccumulation = false;
-    LocalCluster cluster(d, cs, 2);
-    ASSERT_TRUE(cluster.master->waitForClients(2, 30000));
-    FrameReport r;
-    const Image image = cluster.master->renderFrame(&r);
-    EXPECT_TRUE(r.stochastic);
-    EXPECT_TRUE(complete(r));
-    EXPECT_EQ(differingBytes(singleMachine(d, r.frame), image), 0u);
+    EXPECT_TRUE(expectTwoClientsMatchOneMachine(d, test::eightBitFrames()).stochastic);
 }
 
 // A STEP assembly (issue 20) written through OpenCASCADE by rtwall gen step: three parts, each
@@ -183,13 +132,8 @@ TEST(CadCluster, StepAssemblyBitIdenticalToOneMachine) {
     d.settings.height = 64;
     d.settings.tileSize = 8;
     const Image one = singleMachine(d, 0);
-    size_t lit = 0;
-    for (uint8_t b : one.rgb) lit += b > 60;
-    EXPECT_GT(lit, one.rgb.size() / 50) << "the assembly is in view";
-    FrameReport r;
-    const Image cluster = onTwoClients(d, &r);
-    EXPECT_TRUE(complete(r));
-    EXPECT_EQ(differingBytes(singleMachine(d, r.frame), cluster), 0u);
+    EXPECT_GT(bytesAbove(one, 60), one.rgb.size() / 50) << "the assembly is in view";
+    expectTwoClientsMatchOneMachine(d);
 }
 
 }  // namespace

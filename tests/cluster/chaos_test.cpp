@@ -5,6 +5,7 @@
 // good, and once the faults stop (every client alive again) the next frame must complete within
 // the bound stated here. `rtwall bench chaos` runs the same for longer.
 #include "adversary.h"
+#include "local_cluster.h"
 #include "test_util.h"
 
 #include <rtwall/cluster.h>
@@ -19,14 +20,17 @@ namespace {
 // loaded 2-core machine that is seconds; the bound allows ten.
 constexpr double kBoundAfterLastFault = 10.0;
 
-SceneDesc chaosScene() {
-    SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    desc.settings.width = 96;
-    desc.settings.height = 72;
-    desc.settings.tileSize = 8;
-    desc.settings.supersample = 1;
-    return desc;
+// Four client processes of this build for 12 s, faults drawn from `seed`.
+testing::ChaosOptions chaosOptions(uint64_t seed) {
+    testing::ChaosOptions o;
+    o.exe = RTWALL_EXE;
+    o.clients = 4;
+    o.seconds = 12;
+    o.seed = seed;
+    return o;
 }
+
+testing::ChaosReport chaosOnTheDemo(const testing::ChaosOptions& o) { return testing::runChaos(test::quickDemo(96, 72, 8), o); }
 
 void check(const testing::ChaosReport& r, const char* what) {
     std::printf("chaos (%s): %llu faults (%llu frozen, %llu killed, %llu restarted, %llu links cut); %llu frames, %llu "
@@ -45,12 +49,7 @@ void check(const testing::ChaosReport& r, const char* what) {
 }
 
 TEST(Chaos, ClientsFrozenKilledAndRestartedAtRandom) {
-    testing::ChaosOptions o;
-    o.exe = RTWALL_EXE;
-    o.clients = 4;
-    o.seconds = 12;
-    o.seed = 16;
-    const testing::ChaosReport r = testing::runChaos(chaosScene(), o);
+    const testing::ChaosReport r = chaosOnTheDemo(chaosOptions(16));
     ASSERT_TRUE(r.error.empty()) << r.error;
     check(r, "processes");
     EXPECT_GT(r.stops, 0u);
@@ -60,13 +59,9 @@ TEST(Chaos, ClientsFrozenKilledAndRestartedAtRandom) {
 // The same with the clients' links cut too (each client in a network namespace of its own on a
 // bridge in another; root needed, skipped otherwise).
 TEST(Chaos, LinksCutAndRestoredToo) {
-    testing::ChaosOptions o;
-    o.exe = RTWALL_EXE;
-    o.clients = 4;
-    o.seconds = 12;
-    o.seed = 17;
+    testing::ChaosOptions o = chaosOptions(17);
     o.linkCuts = true;
-    const testing::ChaosReport r = testing::runChaos(chaosScene(), o);
+    const testing::ChaosReport r = chaosOnTheDemo(o);
     if (!r.error.empty()) GTEST_SKIP() << r.error;
     check(r, "processes and links");
     EXPECT_GT(r.linkCuts, 0u);

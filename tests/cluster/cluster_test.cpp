@@ -1,6 +1,7 @@
 // The cluster end to end on loopback: a Master in this process and render clients running
 // runClient() on threads (each with its own ZeroMQ context, so nothing is shared but TCP).
 // Every loop is bounded; every wait has a timeout.
+#include "local_cluster.h"
 #include "test_util.h"
 
 #include "codec.h"
@@ -28,59 +29,9 @@
 namespace rtwall {
 namespace {
 using test::FakeMaster;
-
-class ClientThreads {
-public:
-    ClientThreads(const std::string& endpoint, int count, int threadsEach = 1) {
-        for (int i = 0; i < count; ++i) add(endpoint, threadsEach);
-    }
-    void add(const std::string& endpoint, int threadsEach = 1, const std::filesystem::path& cacheDir = {},
-             int extraTileDelayMs = 0) {
-        ClientSettings cs;
-        cs.extraTileDelayMs = extraTileDelayMs;
-        cs.connect = endpoint;
-        cs.threads = threadsEach;
-        cs.cacheDir = cacheDir;
-        cs.exitAfterIdleMs = 4000;  // never outlive the test by much
-        threads_.emplace_back([cs] { runClient(cs); });
-    }
-    ~ClientThreads() {
-        for (auto& t : threads_) t.join();
-    }
-
-private:
-    std::vector<std::thread> threads_;
-};
-
-// A master with client threads. The master goes first (its goodbye ends the clients), then
-// the client threads are joined, also when a test fails half-way.
-struct LocalCluster {
-    LocalCluster(const SceneDesc& desc, const ClusterSettings& cs, int clientCount)
-        : master(std::make_unique<Master>(desc, cs)), clients(master->endpoint(), clientCount) {}
-    ~LocalCluster() { master.reset(); }
-    std::unique_ptr<Master> master;
-    ClientThreads clients;
-};
-
-SceneDesc demoScene(int width, int height) {
-    SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    desc.settings.width = width;
-    desc.settings.height = height;
-    desc.settings.supersample = 1;
-    return desc;
-}
-
-Image singleMachine(const SceneDesc& desc) {
-    const Scene scene(desc);
-    return renderFrame(scene, Camera(desc.cameras.front(), desc.settings.width, desc.settings.height), desc.settings);
-}
-
-size_t differingBytes(const Image& a, const Image& b) {
-    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
-    size_t n = 0;
-    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
-    return n;
-}
+using test::LocalCluster;
+using test::differingBytes;
+using test::singleMachine;
 
 struct Layout {
     int clients, tile, prefetch;
@@ -91,7 +42,7 @@ class ClusterImage : public ::testing::TestWithParam<Layout> {};
 
 TEST_P(ClusterImage, BitIdenticalToOneMachine) {
     const Layout& l = GetParam();
-    SceneDesc desc = demoScene(160, 120);
+    SceneDesc desc = test::quickDemo(160, 120);
     desc.settings.tileSize = l.tile;
     ClusterSettings cs;
     cs.prefetch = l.prefetch;
@@ -132,14 +83,13 @@ INSTANTIATE_TEST_SUITE_P(Layouts, ClusterImage,
                                            Layout{4, 64, 2, TileCodec::Raw}));
 
 TEST(Cluster, JpegIsCloseButLossy) {
-    SceneDesc desc = demoScene(160, 120);
-    ClusterSettings cs;
-    cs.async = false;
+    SceneDesc desc = test::quickDemo(160, 120);
+    ClusterSettings cs = test::inStep();
     cs.codec.codec = TileCodec::Jpeg;
     cs.codec.jpegQuality = 95;
     LocalCluster cluster(desc, cs, 2);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(2, 30000));
+    ASSERT_TRUE(cluster.ready());
     const Image img = master.renderFrame();
     const Image ref = singleMachine(desc);
     ASSERT_EQ(img.rgb.size(), ref.rgb.size());
@@ -164,13 +114,14 @@ struct AffinityRun {
     double kept() const { return tiles ? double(hits) / double(tiles) : 0.0; }
 };
 AffinityRun affinityRun(bool affinity) {
-    SceneDesc desc = demoScene(320, 240);
+    SceneDesc desc = test::quickDemo(320, 240);
     desc.settings.tileSize = 16;
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.affinity = affinity;
     LocalCluster cluster(desc, cs, 0);
-    for (int i = 0; i < 2; ++i) cluster.clients.add(cluster.master->endpoint(), 1, {}, 2);
+    ClientSettings slow;
+    slow.extraTileDelayMs = 2;
+    for (int i = 0; i < 2; ++i) cluster.add(slow);
     Master& master = *cluster.master;
     AffinityRun run;
     run.joined = master.waitForClients(2, 30000);
@@ -216,12 +167,12 @@ TEST(Cluster, WithoutAffinityNothingIsStolen) {
 }
 
 TEST(Cluster, UpdatesShowInTheNextFrameOnly) {
-    SceneDesc desc = demoScene(96, 72);
+    SceneDesc desc = test::quickDemo(96, 72);
     ClusterSettings cs;
     cs.async = true;
     LocalCluster cluster(desc, cs, 2);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(2, 30000));
+    ASSERT_TRUE(cluster.ready());
 
     SceneDesc moved = desc;
     CameraDesc top = *desc.findCamera("top");
@@ -241,12 +192,10 @@ TEST(Cluster, UpdatesShowInTheNextFrameOnly) {
 }
 
 TEST(Cluster, TransformMaterialAndLightUpdatesMatchARebuiltScene) {
-    SceneDesc desc = demoScene(96, 72);
-    ClusterSettings cs;
-    cs.async = false;
-    LocalCluster cluster(desc, cs, 2);
+    SceneDesc desc = test::quickDemo(96, 72);
+    LocalCluster cluster(desc, test::inStep(), 2);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(2, 30000));
+    ASSERT_TRUE(cluster.ready());
     master.renderFrame();
 
     SceneDesc changed = desc;
@@ -262,7 +211,7 @@ TEST(Cluster, TransformMaterialAndLightUpdatesMatchARebuiltScene) {
 // An off-axis camera (a projection window, as stereo walls use) travels in the snapshot and in
 // updates, and the cluster renders it bit-identical to one machine.
 TEST(Cluster, OffAxisCameraBitIdenticalToOneMachine) {
-    SceneDesc desc = demoScene(96, 72);
+    SceneDesc desc = test::quickDemo(96, 72);
     const CameraDesc plain = desc.cameras.front();
     auto offAxis = [&](float eyeX) {
         // A window 1 unit in front of the camera, shifted left of the eye: an asymmetric frustum.
@@ -289,11 +238,9 @@ TEST(Cluster, OffAxisCameraBitIdenticalToOneMachine) {
     second.cameras = {offAxis(0.3f)};
     ASSERT_GT(differingBytes(singleMachine(first), singleMachine(desc)), 0u) << "the window must change the image";
 
-    ClusterSettings cs;
-    cs.async = false;
-    LocalCluster cluster(first, cs, 2);
+    LocalCluster cluster(first, test::inStep(), 2);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(2, 30000));
+    ASSERT_TRUE(cluster.ready());
     EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(first)), 0u) << "in the snapshot";
     master.setCamera(second.cameras.front());
     EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(second)), 0u) << "in an update";
@@ -305,13 +252,12 @@ TEST(Cluster, OffAxisCameraBitIdenticalToOneMachine) {
 // the gap when a frame needs the missing update, resyncs from the frame's state, and every frame
 // still equals the single-machine image of the state it was begun with.
 TEST(Cluster, LostUpdatesAreDetectedAndResynced) {
-    SceneDesc desc = demoScene(96, 72);
-    ClusterSettings cs;
-    cs.async = false;
+    SceneDesc desc = test::quickDemo(96, 72);
+    ClusterSettings cs = test::inStep();
     cs.dropEveryNthUpdate = 2;
     LocalCluster cluster(desc, cs, 2);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(2, 30000));
+    ASSERT_TRUE(cluster.ready());
     master.renderFrame();
     SceneDesc expect = desc;
     for (int f = 0; f < 5; ++f) {
@@ -333,12 +279,10 @@ TEST(Cluster, LostUpdatesAreDetectedAndResynced) {
 }
 
 TEST(Cluster, LateJoinerGetsTheCurrentStateFirst) {
-    SceneDesc desc = demoScene(96, 72);
-    ClusterSettings cs;
-    cs.async = false;
-    LocalCluster cluster(desc, cs, 1);
+    SceneDesc desc = test::quickDemo(96, 72);
+    LocalCluster cluster(desc, test::inStep(), 1);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(1, 30000));
+    ASSERT_TRUE(cluster.ready());
     master.renderFrame();
     CameraDesc top = *desc.findCamera("top");
     master.setCamera(top);
@@ -346,7 +290,7 @@ TEST(Cluster, LateJoinerGetsTheCurrentStateFirst) {
     master.renderFrame();
     // A client joining now must receive the snapshot with both updates, prove it (state hash)
     // and only then render; the frame must equal the single-machine image of the new state.
-    cluster.clients.add(master.endpoint());
+    cluster.add();
     ASSERT_TRUE(master.waitForClients(2, 30000));
     SceneDesc expect = desc;
     expect.cameras = {top};
@@ -364,7 +308,7 @@ TEST(Cluster, LateJoinerGetsTheCurrentStateFirst) {
 // frame renders gets that frame's state (so that it helps with it at once) and the updates made
 // during it, of every kind. Client 1 is slow (20 ms a tile), so the joiner renders most tiles.
 TEST(Cluster, JoinersGetTheFrameStateAndTheUpdatesSince) {
-    const SceneDesc desc = demoScene(96, 72);
+    const SceneDesc desc = test::quickDemo(96, 72);
     ClusterSettings cs;
     cs.async = true;
     LocalCluster cluster(desc, cs, 0);
@@ -375,7 +319,9 @@ TEST(Cluster, JoinersGetTheFrameStateAndTheUpdatesSince) {
     first.lights[0].intensity *= 1.5f;
     master.setCamera(first.cameras.front());
     master.setLight(0, first.lights[0]);
-    cluster.clients.add(master.endpoint(), 1, {}, 20);
+    ClientSettings slow;
+    slow.extraTileDelayMs = 20;
+    cluster.add(slow);
     ASSERT_TRUE(master.waitForClients(1, 30000));
     FrameReport r1;
     const Image f1 = master.renderFrame(&r1);  // frame 1; frame 2 begins with the same state
@@ -393,7 +339,7 @@ TEST(Cluster, JoinersGetTheFrameStateAndTheUpdatesSince) {
     master.setMaterial(1, second.materials[1]);
     master.setLight(1, second.lights[1]);
     master.setRenderSettings(second.settings);
-    cluster.clients.add(master.endpoint());
+    cluster.add();
     ASSERT_TRUE(master.waitForClients(2, 30000));
 
     FrameReport r2, r3;
@@ -409,9 +355,8 @@ TEST(Cluster, JoinersGetTheFrameStateAndTheUpdatesSince) {
 }
 
 TEST(Cluster, AFrameWithoutAnyClientFailsInsteadOfHanging) {
-    SceneDesc desc = demoScene(32, 24);
-    ClusterSettings cs;
-    cs.async = false;
+    SceneDesc desc = test::quickDemo(32, 24);
+    ClusterSettings cs = test::inStep();
     cs.timeoutMs = 500;
     Master master(desc, cs);
     const auto t0 = std::chrono::steady_clock::now();
@@ -423,25 +368,22 @@ TEST(Cluster, AFrameWithoutAnyClientFailsInsteadOfHanging) {
 // different file under that name) gets the bytes from the master, checks their hash and keeps
 // them in its cache directory; a local file with the wrong content is never trusted.
 TEST(Cluster, MeshesTravelByContentHash) {
-    SceneDesc desc = demoScene(96, 72);
+    SceneDesc desc = test::quickDemo(96, 72);
     const auto cache = test::scratchDir();
     for (MeshDesc& m : desc.meshes)
         if (m.name == "knot") m.source = (test::dataDir() / "meshes/box_quads.obj").string();  // same name, other content
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     {
-        LocalCluster cluster(desc, cs, 0);
-        cluster.clients.add(cluster.master->endpoint(), 1, cache);
-        ASSERT_TRUE(cluster.master->waitForClients(1, 30000));
+        LocalCluster cluster(desc, cs, 1, cache);
+        ASSERT_TRUE(cluster.ready());
         EXPECT_EQ(differingBytes(cluster.master->renderFrame(), singleMachine(desc)), 0u);
     }
     size_t cached = 0;
     for (const auto& e : std::filesystem::directory_iterator(cache)) cached += e.path().extension() == ".rtmesh";
     EXPECT_EQ(cached, desc.meshes.size()) << "every mesh was fetched and cached";
     // A second client finds them all in its cache.
-    LocalCluster again(desc, cs, 0);
-    again.clients.add(again.master->endpoint(), 1, cache);
-    ASSERT_TRUE(again.master->waitForClients(1, 30000));
+    LocalCluster again(desc, cs, 1, cache);
+    ASSERT_TRUE(again.ready());
     EXPECT_EQ(differingBytes(again.master->renderFrame(), singleMachine(desc)), 0u);
 }
 
@@ -515,14 +457,12 @@ private:
 // tiles reopened and rendered by the honest client; the frame still completes, bit-identical.
 TEST(Cluster, UndecodableResultsAreReRendered) {
     using namespace cluster;
-    SceneDesc desc = demoScene(96, 72);
+    SceneDesc desc = test::quickDemo(96, 72);
     desc.settings.tileSize = 8;
     desc.settings.supersample = 4;
-    ClusterSettings cs;
-    cs.async = false;
-    LocalCluster cluster(desc, cs, 1);
+    LocalCluster cluster(desc, test::inStep(), 1);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(1, 30000));
+    ASSERT_TRUE(cluster.ready());
 
     RogueClient rogue(master.endpoint(), 4);
     std::thread frame;
@@ -552,16 +492,15 @@ TEST(Cluster, UndecodableResultsAreReRendered) {
 // or lost its cable): the master must notice within its timeout, put the tiles back, and the
 // frame must still be bit-identical.
 TEST(Cluster, SilentClientLosesNoTile) {
-    SceneDesc desc = demoScene(96, 72);
+    SceneDesc desc = test::quickDemo(96, 72);
     desc.settings.tileSize = 8;
     desc.settings.supersample = 4;  // slow enough that the rogue's request lands mid-frame
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.timeoutMs = 400;
     cs.heartbeatMs = 50;
     LocalCluster cluster(desc, cs, 1);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(1, 30000));
+    ASSERT_TRUE(cluster.ready());
 
     RogueClient rogue(master.endpoint(), 8);
     FrameReport first;
@@ -587,9 +526,8 @@ TEST(Cluster, SilentClientLosesNoTile) {
 // keep answering while it builds, or the master drops it and it builds again on rejoining,
 // never getting in (what `rtwall run` did with its 3-million-triangle scene on a busy machine).
 TEST(Cluster, AClientSlowerToBuildTheSceneThanTheTimeoutStillJoins) {
-    SceneDesc desc = demoScene(64, 48);
-    ClusterSettings cs;
-    cs.async = false;
+    SceneDesc desc = test::quickDemo(64, 48);
+    ClusterSettings cs = test::inStep();
     cs.heartbeatMs = 50;
     cs.timeoutMs = 300;
     auto master = std::make_unique<Master>(desc, cs);
@@ -611,12 +549,10 @@ TEST(Cluster, AClientSlowerToBuildTheSceneThanTheTimeoutStillJoins) {
 // never gets a tile: the master sends the state again instead, and frames come from the honest
 // client alone, bit-identical.
 TEST(Cluster, AClientThatCannotProveTheStateGetsNoTile) {
-    SceneDesc desc = demoScene(96, 72);
-    ClusterSettings cs;
-    cs.async = false;
-    LocalCluster cluster(desc, cs, 1);
+    SceneDesc desc = test::quickDemo(96, 72);
+    LocalCluster cluster(desc, test::inStep(), 1);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(1, 30000));
+    ASSERT_TRUE(cluster.ready());
     RogueClient rogue(master.endpoint(), 4);
     rogue.lieAboutState = true;
     int assigns = 0;
@@ -654,16 +590,15 @@ long residentKiB() {
 // counted as dropped by the master (it is not from a client), and an honest client's frames
 // still complete, bit-identical.
 TEST(Cluster, ASlowMasterKeepsMemoryBoundedAndCountsEveryDrop) {
-    SceneDesc desc = demoScene(96, 72);
-    ClusterSettings cs;
-    cs.async = false;
+    SceneDesc desc = test::quickDemo(96, 72);
+    ClusterSettings cs = test::inStep();
     cs.consumeDelayUs = 1000;
     cs.highWaterMark = 500;
     cs.stragglerFactor = 1e9;  // no re-issued tiles, so no stray results: the flood is all that is dropped
     cs.timeoutMs = 10000;  // the honest client's heartbeats wait behind the flood
     LocalCluster cluster(desc, cs, 1);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(1, 30000));
+    ASSERT_TRUE(cluster.ready());
     EXPECT_EQ(differingBytes(master.renderFrame(), singleMachine(desc)), 0u);
 
     constexpr size_t kMessageBytes = 32 << 10;
@@ -786,15 +721,14 @@ TEST(Transport, SendToAPeerAtItsHighWaterMarkThatDisconnectsNeverBlocks) {
 // Meanwhile an honest client's frames complete, bit-identical.
 TEST(Cluster, APeerThatStopsReadingBlocksNothing) {
     using namespace cluster;
-    SceneDesc desc = demoScene(96, 72);
-    ClusterSettings cs;
-    cs.async = false;
+    SceneDesc desc = test::quickDemo(96, 72);
+    ClusterSettings cs = test::inStep();
     cs.timeoutMs = 20000;  // only a full queue can remove it within this test
     cs.highWaterMark = 8;
     cs.stragglerFactor = 1e9;  // no stray results: the repeated requests are all that is dropped
     LocalCluster cluster(desc, cs, 1);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(1, 30000));
+    ASSERT_TRUE(cluster.ready());
 
     zmq::context_t ctx;
     auto stuck = std::make_unique<zmq::socket_t>(ctx, zmq::socket_type::dealer);
@@ -848,14 +782,9 @@ TEST(Cluster, APeerThatStopsReadingBlocksNothing) {
 TEST(Cluster, TheClientTakesItsTimeoutFromTheMaster) {
     using namespace cluster;
     FakeMaster fake;
-    ClientSettings cs;
-    cs.connect = fake.endpoint;
-    cs.threads = 1;
-    cs.exitAfterIdleMs = 2500;
-    auto client = std::async(std::launch::async, [cs] { return runClient(cs); });
-    const auto hello = fake.expect(MsgType::Hello, 10000);
-    ASSERT_TRUE(hello);
-    fake.send(hello->peer, Welcome{1, CodecSettings{}, 4, 100, 300});
+    auto client = test::startClient(fake, 2500);
+    std::string peer;
+    ASSERT_NO_FATAL_FAILURE(test::welcome(fake, peer, 300));
     const auto start = std::chrono::steady_clock::now();
     const auto again = fake.expect(MsgType::Hello, 2500);
     EXPECT_TRUE(again) << "no new Hello after "
@@ -868,25 +797,16 @@ TEST(Cluster, TheClientTakesItsTimeoutFromTheMaster) {
 // after them it still renders the tiles it is given, for the current state.
 TEST(Cluster, TheClientIgnoresReplayedMasterMessages) {
     using namespace cluster;
-    SceneDesc desc = demoScene(64, 48);
+    SceneDesc desc = test::quickDemo(64, 48);
     desc.settings.tileSize = 16;
     FakeMaster fake;
-    ClientSettings cs;
-    cs.connect = fake.endpoint;
-    cs.threads = 1;
-    cs.exitAfterIdleMs = 3000;
-    auto client = std::async(std::launch::async, [cs] { return runClient(cs); });
-    const auto hello = fake.expect(MsgType::Hello, 10000);
-    ASSERT_TRUE(hello);
-    const std::string peer = hello->peer;
-    fake.send(peer, Welcome{1, CodecSettings{}, 4, 100, 3000});
+    auto client = test::startClient(fake, 3000);
+    std::string peer;
+    ASSERT_NO_FATAL_FAILURE(test::welcome(fake, peer));
 
-    test::ScriptedScene scripted = test::scriptedScene(desc);
-    SceneSnapshot& snap = scripted.snapshot;
-    const std::vector<FrameView> mono{FrameView{desc.cameras.front(), {}, 0, 0}};  // a frame's one view (protocol 13)
-    const std::vector<uint8_t> oldSnapshot = fake.send(peer, snap);
-    ASSERT_NO_FATAL_FAILURE(test::serveMeshes(fake, peer, scripted));
-    ASSERT_TRUE(fake.expect(MsgType::Ready, 30000));
+    const std::vector<FrameView> mono = test::oneView(desc);
+    std::vector<uint8_t> oldSnapshot;
+    ASSERT_NO_FATAL_FAILURE(test::sendScene(fake, peer, test::scriptedScene(desc), &oldSnapshot));
     const std::vector<uint8_t> oldBegin = fake.send(peer, FrameBegin{1, 0, TilePixels::Srgb8, mono}, 1);
     ASSERT_TRUE(fake.expect(MsgType::TileRequest, 10000));
 
@@ -900,7 +820,7 @@ TEST(Cluster, TheClientIgnoresReplayedMasterMessages) {
     const std::vector<uint8_t> begin2 = fake.send(peer, FrameBegin{2, 1, TilePixels::Srgb8, mono}, 2);
     ASSERT_TRUE(fake.expect(MsgType::TileRequest, 10000));
     // Replays: none of these may reach the client's work or state.
-    for (const auto* bytes : {&oldSnapshot, &oldBegin, &oldUpdate, &begin2}) fake.resend(peer, *bytes);
+    for (const std::vector<uint8_t>& bytes : {oldSnapshot, oldBegin, oldUpdate, begin2}) fake.resend(peer, bytes);
     fake.send(peer, TileAssign{2, {1, 5}}, 2);
 
     const Image expected = singleMachine(desc);
@@ -931,25 +851,16 @@ TEST(Cluster, TheClientIgnoresReplayedMasterMessages) {
 // and which tile, with its pixels and why, before it goes away; nothing is lost silently.
 TEST(Cluster, AClientReportsAFailedTileWithItsFrameAndPixels) {
     using namespace cluster;
-    SceneDesc desc = demoScene(64, 48);
+    SceneDesc desc = test::quickDemo(64, 48);
     desc.settings.tileSize = 16;
     FakeMaster fake;
     ClientSettings cs;
-    cs.connect = fake.endpoint;
-    cs.threads = 1;
-    cs.exitAfterIdleMs = 3000;
     cs.tileFault = InjectedTileFault{2, 20, 20};  // frame 2, in tile 5: pixels 16,16 to 32,32
-    auto client = std::async(std::launch::async, [cs] { return runClient(cs); });
-    const auto hello = fake.expect(MsgType::Hello, 10000);
-    ASSERT_TRUE(hello);
-    const std::string peer = hello->peer;
-    fake.send(peer, Welcome{1, CodecSettings{}, 4, 100, 3000});
-    test::ScriptedScene scripted = test::scriptedScene(desc);
-    SceneSnapshot& snap = scripted.snapshot;
-    const std::vector<FrameView> mono{FrameView{desc.cameras.front(), {}, 0, 0}};  // a frame's one view (protocol 13)
-    fake.send(peer, snap);
-    ASSERT_NO_FATAL_FAILURE(test::serveMeshes(fake, peer, scripted));
-    ASSERT_TRUE(fake.expect(MsgType::Ready, 30000));
+    auto client = test::startClient(fake, 3000, cs);
+    std::string peer;
+    ASSERT_NO_FATAL_FAILURE(test::welcome(fake, peer));
+    const std::vector<FrameView> mono = test::oneView(desc);
+    ASSERT_NO_FATAL_FAILURE(test::sendScene(fake, peer, test::scriptedScene(desc)));
     // Frame 1's tile 5 renders; frame 2's tile 0 too, its tile 5 fails.
     fake.send(peer, FrameBegin{1, 0, TilePixels::Srgb8, mono}, 1);
     ASSERT_TRUE(fake.expect(MsgType::TileRequest, 10000));

@@ -4,6 +4,7 @@
 // What is checked is the control: node list and tile masks reach the client, the frame ends on
 // the last ack, the swap barrier releases a frame only when every node holds it, a stalled
 // node is left out (and named) and rejoins. Every loop is bounded; every wait has a timeout.
+#include "local_cluster.h"
 #include "test_util.h"
 
 #include "codec.h"
@@ -33,14 +34,30 @@ namespace {
 using namespace cluster;
 using Clock = std::chrono::steady_clock;
 
-SceneDesc smallScene() {
-    SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    desc.settings.width = 64;
-    desc.settings.height = 48;
-    desc.settings.tileSize = 16;
-    desc.settings.supersample = 1;
-    return desc;
-}
+SceneDesc smallScene() { return test::quickDemo(64, 48, 16); }
+
+// Render clients on threads of the test, joined when it ends. Declare it before the master so
+// that the master goes first (its goodbye ends the clients), also when an assertion returns early.
+class JoinedClients {
+public:
+    JoinedClients() = default;
+    JoinedClients(const JoinedClients&) = delete;
+    JoinedClients& operator=(const JoinedClients&) = delete;
+    ~JoinedClients() {
+        for (auto& t : threads_) t.join();
+    }
+    // `count` one-thread clients of `endpoint` (with the keys of `c`) that give up after `idleMs`
+    // without their master.
+    void start(const std::string& endpoint, int count, int idleMs, ClientSettings c = {}) {
+        c.connect = endpoint;
+        c.threads = 1;
+        c.exitAfterIdleMs = idleMs;
+        for (int i = 0; i < count; ++i) threads_.emplace_back([c] { runClient(c); });
+    }
+
+private:
+    std::vector<std::thread> threads_;
+};
 
 // Node 0 ("left") shows x < 32, node 1 ("right") x >= 32: tiles are 16 wide, so none straddles.
 std::vector<uint64_t> halves(int width, int height, int tileSize, const std::vector<FrameView>&) {
@@ -50,8 +67,7 @@ std::vector<uint64_t> halves(int width, int height, int tileSize, const std::vec
 }
 
 ClusterSettings nodeSettings() {
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.heartbeatMs = 50;
     cs.timeoutMs = 1500;
     cs.displayNodes.names = {"left", "right"};
@@ -108,14 +124,33 @@ protected:
     Clock::time_point lastBeat_{};
 };
 
-class FakeClient : public Peer {
+// A client of the master that only reads the node lists it is sent: it never proves the state,
+// so it is never given tiles (a FakeClient would acknowledge tiles that no node receives).
+class ListReader : public Peer {
 public:
-    FakeClient(zmq::context_t& ctx, const std::string& endpoint, const KeyPair* keys = nullptr, const std::string& serverKey = {})
-        : Peer(ctx, endpoint, keys, serverKey) {
-        put(encodeMessage(Header{}, Hello{kProtocolVersion, 1, "fake-client"}));
-    }
+    ListReader(zmq::context_t& ctx, const std::string& endpoint, const KeyPair* keys = nullptr, const std::string& serverKey = {})
+        : ListReader(ctx, endpoint, keys, serverKey, "list-reader") {}
     std::mutex m;
     std::vector<NodeList> lists;
+
+protected:
+    ListReader(zmq::context_t& ctx, const std::string& endpoint, const KeyPair* keys, const std::string& serverKey,
+               const std::string& name)
+        : Peer(ctx, endpoint, keys, serverKey) {
+        put(encodeMessage(Header{}, Hello{kProtocolVersion, 1, name}));
+    }
+    void on(const Header& h, const uint8_t* p, size_t n) override {
+        std::lock_guard lock(m);
+        if (h.type == MsgType::NodeList) lists.push_back(decodePayload<NodeList>(p, n));
+    }
+};
+
+// A client of the master that proves the state, asks for tiles and acknowledges every tile it
+// is given at once (no pixels); it keeps the node lists and tile routes it is sent.
+class FakeClient : public ListReader {
+public:
+    FakeClient(zmq::context_t& ctx, const std::string& endpoint, const KeyPair* keys = nullptr, const std::string& serverKey = {})
+        : ListReader(ctx, endpoint, keys, serverKey, "fake-client") {}
     std::vector<TileRoutes> routes;
     uint32_t acks = 0;
 
@@ -145,24 +180,6 @@ private:
         }
         default: break;
         }
-    }
-};
-
-// A client of the master that only reads the node lists it is sent: it never proves the state,
-// so it is never given tiles (a FakeClient would acknowledge tiles that no node receives).
-class ListReader : public Peer {
-public:
-    ListReader(zmq::context_t& ctx, const std::string& endpoint, const KeyPair* keys = nullptr, const std::string& serverKey = {})
-        : Peer(ctx, endpoint, keys, serverKey) {
-        put(encodeMessage(Header{}, Hello{kProtocolVersion, 1, "list-reader"}));
-    }
-    std::mutex m;
-    std::vector<NodeList> lists;
-
-private:
-    void on(const Header& h, const uint8_t* p, size_t n) override {
-        std::lock_guard lock(m);
-        if (h.type == MsgType::NodeList) lists.push_back(decodePayload<NodeList>(p, n));
     }
 };
 
@@ -460,14 +477,7 @@ TEST(DisplayNodes, AStalledNodeIsLeftOutAndNamedThenRejoins) {
 // the pixels one machine renders, and the master gets only acks.
 TEST(DisplayNodes, RenderClientsSendEachTileToItsNodesBitIdentical) {
     const SceneDesc scene = smallScene();
-    // Declared in this order so that the master goes first (its goodbye ends the clients), then
-    // the client threads are joined, also when an assertion returns early.
-    struct Joined {
-        std::vector<std::thread> threads;
-        ~Joined() {
-            for (auto& t : threads) t.join();
-        }
-    } clients;
+    JoinedClients clients;
     zmq::context_t ctx{1};
     auto owned = std::make_unique<Master>(scene, nodeSettings());
     Master& master = *owned;
@@ -475,13 +485,7 @@ TEST(DisplayNodes, RenderClientsSendEachTileToItsNodesBitIdentical) {
     Peers peers({&left, &right});
     ASSERT_TRUE(waitFor(left, [&] { return left.index.has_value(); }));
     ASSERT_TRUE(waitFor(right, [&] { return right.index.has_value(); }));
-    for (int i = 0; i < 2; ++i) {
-        ClientSettings cs;
-        cs.connect = master.endpoint();
-        cs.threads = 1;
-        cs.exitAfterIdleMs = 3000;  // never outlive the test by much
-        clients.threads.emplace_back([cs] { runClient(cs); });
-    }
+    clients.start(master.endpoint(), 2, 3000);  // never outlive the test by much
     ASSERT_TRUE(master.waitForClients(2, 10000));
 
     // A frame whose tiles never reach the nodes (or whose acks never come) would not end: it
@@ -584,25 +588,14 @@ struct NodeThread {
 // goes on and names it; restarted, it takes part again.
 TEST(DisplayNodes, NodesPresentTheirTilesAndSurviveAKilledNode) {
     const SceneDesc scene = smallScene();
-    struct Joined {
-        std::vector<std::thread> threads;
-        ~Joined() {
-            for (auto& t : threads) t.join();
-        }
-    } clients;
+    JoinedClients clients;
     ClusterSettings cs = nodeSettings();
     cs.timeoutMs = 1000;
     auto owned = std::make_unique<Master>(scene, cs);
     Master& master = *owned;
     auto left = std::make_unique<NodeThread>(master.endpoint(), "left");
     auto right = std::make_unique<NodeThread>(master.endpoint(), "right");
-    for (int i = 0; i < 2; ++i) {
-        ClientSettings c;
-        c.connect = master.endpoint();
-        c.threads = 1;
-        c.exitAfterIdleMs = 3000;
-        clients.threads.emplace_back([c] { runClient(c); });
-    }
+    clients.start(master.endpoint(), 2, 3000);
     ASSERT_TRUE(master.waitForClients(2, 10000));
     ASSERT_TRUE(waitFor(*left, [&] { return !left->wall.empty(); }));
     ASSERT_TRUE(waitFor(*right, [&] { return !right->wall.empty(); }));
@@ -692,12 +685,7 @@ std::vector<uint64_t> viewHalves(int width, int height, int tileSize, const std:
 
 // A master with render-client threads and two runDisplayNode threads, both joined.
 struct NodeWall {
-    struct Joined {
-        std::vector<std::thread> threads;
-        ~Joined() {
-            for (auto& t : threads) t.join();
-        }
-    } clients;  // joined after the master is gone (its goodbye ends them)
+    JoinedClients clients;  // joined after the master is gone (its goodbye ends them)
     std::unique_ptr<Master> master;
     std::unique_ptr<NodeThread> left, right;
 
@@ -705,13 +693,7 @@ struct NodeWall {
         master = std::make_unique<Master>(scene, cs);
         left = std::make_unique<NodeThread>(master->endpoint(), "left");
         right = std::make_unique<NodeThread>(master->endpoint(), "right");
-        for (int i = 0; i < 2; ++i) {
-            ClientSettings c;
-            c.connect = master->endpoint();
-            c.threads = 1;
-            c.exitAfterIdleMs = 5000;
-            clients.threads.emplace_back([c] { runClient(c); });
-        }
+        clients.start(master->endpoint(), 2, 5000);
     }
     bool ready() {
         return master->waitForClients(2, 20000) && waitFor(*left, [&] { return !left->wall.empty(); }) &&
@@ -884,12 +866,7 @@ TEST(DisplayNodes, CurveKeysOnEveryNodeLinkFramesBitIdenticalAndStrangersRefused
     ClusterSettings cs = nodeSettings();
     cs.keyFile = dir / "master.key";
     cs.localClients = 2;  // the master makes a key pair for its PC's processes
-    struct Joined {
-        std::vector<std::thread> threads;
-        ~Joined() {
-            for (auto& t : threads) t.join();
-        }
-    } clients;
+    JoinedClients clients;
     auto owned = std::make_unique<Master>(scene, cs);
     Master& master = *owned;
     const std::vector<std::string> args = master.localClientArgs();
@@ -902,15 +879,10 @@ TEST(DisplayNodes, CurveKeysOnEveryNodeLinkFramesBitIdenticalAndStrangersRefused
     };
     auto left = std::make_unique<NodeThread>(master.endpoint(), "left", keyed);
     auto right = std::make_unique<NodeThread>(master.endpoint(), "right", keyed);
-    for (int i = 0; i < 2; ++i) {
-        ClientSettings c;
-        c.connect = master.endpoint();
-        c.threads = 1;
-        c.exitAfterIdleMs = 5000;
-        c.keyFile = args[1];
-        c.serverKeyFile = args[3];
-        clients.threads.emplace_back([c] { runClient(c); });
-    }
+    ClientSettings keys;
+    keys.keyFile = args[1];
+    keys.serverKeyFile = args[3];
+    clients.start(master.endpoint(), 2, 5000, keys);
     ASSERT_TRUE(master.waitForClients(2, 20000));
     ASSERT_TRUE(waitFor(*left, [&] { return !left->wall.empty(); }));
     ASSERT_TRUE(waitFor(*right, [&] { return !right->wall.empty(); }));
@@ -1088,45 +1060,61 @@ TEST(DisplayNodes, ANodeIsReachedAtItsAdvertisedHost) {
     EXPECT_TRUE(together) << "the node advertised as localhost never presented a frame";
 }
 
+// A master written by hand for one node thread ("left"): a ROUTER on loopback that the node
+// joins and that sends it messages of session `session`, one by one.
+struct HandMaster {
+    explicit HandMaster(uint64_t sessionId) : session(sessionId) {
+        socket.set(zmq::sockopt::linger, 0);
+        socket.bind("tcp://127.0.0.1:0");
+        node = std::make_unique<NodeThread>(socket.get(zmq::sockopt::last_endpoint), "left");
+        socket.set(zmq::sockopt::rcvtimeo, 5000);
+    }
+    // The node's NodeHello (5 s). Fatal failures: call it in ASSERT_NO_FATAL_FAILURE.
+    void awaitHello() {
+        zmq::message_t identity, msg;
+        ASSERT_TRUE(socket.recv(identity));
+        ASSERT_TRUE(socket.recv(msg));
+        const auto* p = static_cast<const uint8_t*>(msg.data());
+        ASSERT_EQ(decodeHeader(p, msg.size()).type, MsgType::NodeHello);
+        hello = decodePayload<NodeHello>(p + kHeaderSize, msg.size() - kHeaderSize);
+        peer = identity.to_string();
+    }
+    template <class Msg> void put(const Msg& msg, uint32_t frame = 0) {
+        Header h;
+        h.session = session;
+        h.frame = frame;
+        const std::vector<uint8_t> bytes = encodeMessage(h, msg);
+        socket.send(zmq::buffer(peer), zmq::send_flags::sndmore);
+        socket.send(zmq::buffer(bytes));
+    }
+    uint64_t session;
+    zmq::context_t ctx{1};
+    zmq::socket_t socket{ctx, zmq::socket_type::router};
+    std::unique_ptr<NodeThread> node;  // destroyed (stopped and joined) before the socket
+    std::string peer;
+    NodeHello hello;
+};
+
 // A hostile master (a ROUTER of the test's) sends a display node NodeFrames and welcomes whose
 // new fields (protocol 12) are out of range: the node drops and counts each, never crashes or
 // hangs, and still assembles, accumulates and presents a good frame after them.
 TEST(DisplayNodes, ANodeDropsMalformedViewsEyesAndKeysFromAHostileMaster) {
-    zmq::context_t ctx{1};
-    zmq::socket_t master(ctx, zmq::socket_type::router);
-    master.set(zmq::sockopt::linger, 0);
-    master.bind("tcp://127.0.0.1:0");
-    NodeThread node(master.get(zmq::sockopt::last_endpoint), "left");
-    master.set(zmq::sockopt::rcvtimeo, 5000);
-    zmq::message_t identity, hello;
-    ASSERT_TRUE(master.recv(identity));
-    ASSERT_TRUE(master.recv(hello));
-    const Header hh = decodeHeader(static_cast<const uint8_t*>(hello.data()), hello.size());
-    ASSERT_EQ(hh.type, MsgType::NodeHello);
-    const NodeHello nh = decodePayload<NodeHello>(static_cast<const uint8_t*>(hello.data()) + kHeaderSize, hello.size() - kHeaderSize);
-    EXPECT_TRUE(nh.publicKey.empty());  // no keys, no tile key
-    const std::string peer = identity.to_string();
-    auto put = [&](const auto& msg, uint32_t frame = 0) {
-        Header h;
-        h.session = 77;
-        h.frame = frame;
-        const std::vector<uint8_t> bytes = encodeMessage(h, msg);
-        master.send(zmq::buffer(peer), zmq::send_flags::sndmore);
-        master.send(zmq::buffer(bytes));
-    };
+    HandMaster hand(77);
+    ASSERT_NO_FATAL_FAILURE(hand.awaitHello());
+    EXPECT_TRUE(hand.hello.publicKey.empty());  // no keys, no tile key
     // A welcome with a client key that is not Z85: dropped (the node stays out of the session).
     NodeWelcome badWelcome{0, 50, 5000, "[wall]\n", {std::string(40, '~')}};
-    put(badWelcome);
-    ASSERT_TRUE(eventually([&] { return node.counters->droppedMessages.load() >= 1; }));
-    EXPECT_TRUE(node.wall.empty());
-    put(NodeWelcome{0, 50, 5000, "[wall]\n", {}});
-    ASSERT_TRUE(waitFor(node, [&] { return !node.wall.empty(); }));
+    hand.put(badWelcome);
+    ASSERT_TRUE(eventually([&] { return hand.node->counters->droppedMessages.load() >= 1; }));
+    EXPECT_TRUE(hand.node->wall.empty());
+    hand.put(NodeWelcome{0, 50, 5000, "[wall]\n", {}});
+    ASSERT_TRUE(waitFor(*hand.node, [&] { return !hand.node->wall.empty(); }));
 
     SceneDesc scene = smallScene();
     scene.settings.gi = true;
     const std::vector<FrameView> views{{eyeCamera(scene, -0.2f), {}, 0, 0}, {eyeCamera(scene, 0.2f), {}, 0, 0}};
     const std::vector<uint64_t> masks = viewHalves(64, 48, 16, views);
-    put(TileRoutes{1, masks}, 1);
+    hand.put(TileRoutes{1, masks}, 1);
     const NodeFrame good{1, 64, 48, 16, TilePixels::Srgb8, views, {0, 1}, true, 5};
     std::vector<NodeFrame> bad;
     NodeFrame f = good;
@@ -1148,29 +1136,29 @@ TEST(DisplayNodes, ANodeDropsMalformedViewsEyesAndKeysFromAHostileMaster) {
     f.views[1].refWidth = 64;
     f.views[1].refHeight = 48;
     bad.push_back(f);
-    const uint64_t before = node.counters->droppedMessages.load();
-    for (const NodeFrame& b : bad) put(b, 1);
-    ASSERT_TRUE(eventually([&] { return node.counters->droppedMessages.load() >= before + bad.size(); }));
-    EXPECT_EQ(node.counters->droppedMessages.load(), before + bad.size());
+    const uint64_t before = hand.node->counters->droppedMessages.load();
+    for (const NodeFrame& b : bad) hand.put(b, 1);
+    ASSERT_TRUE(eventually([&] { return hand.node->counters->droppedMessages.load() >= before + bad.size(); }));
+    EXPECT_EQ(hand.node->counters->droppedMessages.load(), before + bad.size());
     // Views whose tiling does not match the masks: the frame is skipped, not assembled.
     f = good;
     f.views.push_back(views[0]);
     f.eyes.push_back(-1);
-    put(f, 1);
-    put(NodeSwap{1, {}}, 1);
-    ASSERT_TRUE(waitFor(node, [&] { return !node.shown.empty(); }));
+    hand.put(f, 1);
+    hand.put(NodeSwap{1, {}}, 1);
+    ASSERT_TRUE(waitFor(*hand.node, [&] { return !hand.node->shown.empty(); }));
     {
-        std::lock_guard lock(node.m);
-        EXPECT_FALSE(node.shown.back().image.has_value());  // it did not hold the frame
+        std::lock_guard lock(hand.node->m);
+        EXPECT_FALSE(hand.node->shown.back().image.has_value());  // it did not hold the frame
     }
-    EXPECT_FALSE(node.finished.load());
+    EXPECT_FALSE(hand.node->finished.load());
 
     // Then a good stereo frame: its tiles (from a test client on the node's tile socket) are
     // assembled into both eyes.
-    put(good, 1);
-    zmq::socket_t client(ctx, zmq::socket_type::dealer);
+    hand.put(good, 1);
+    zmq::socket_t client(hand.ctx, zmq::socket_type::dealer);
     client.set(zmq::sockopt::linger, 0);
-    client.connect(nh.endpoint);
+    client.connect(hand.hello.endpoint);
     const std::vector<ViewTile> tiles = viewTiles(views, 64, 48, 16);
     for (uint32_t t = 0; t < tiles.size(); ++t) {
         if (!(masks[t] & 1)) continue;
@@ -1180,19 +1168,19 @@ TEST(DisplayNodes, ANodeDropsMalformedViewsEyesAndKeysFromAHostileMaster) {
         h.frame = 1;
         client.send(zmq::buffer(encodeMessage(h, TileResult{1, t, TileCodec::Raw, 1, pixels})), zmq::send_flags::dontwait);
     }
-    master.set(zmq::sockopt::rcvtimeo, 100);
+    hand.socket.set(zmq::sockopt::rcvtimeo, 100);
     bool have = false;
     for (int i = 0; i < 100 && !have; ++i) {
         zmq::message_t from, msg;
-        if (!master.recv(from) || !master.recv(msg)) continue;
+        if (!hand.socket.recv(from) || !hand.socket.recv(msg)) continue;
         const Header h = decodeHeader(static_cast<const uint8_t*>(msg.data()), msg.size());
         have = h.type == MsgType::NodeHave;
     }
     ASSERT_TRUE(have) << "the node never held the good frame";
-    put(NodeSwap{1, {}}, 1);
-    ASSERT_TRUE(waitFor(node, [&] { return node.shown.size() >= 2; }));
-    std::lock_guard lock(node.m);
-    const NodeThread::Shown& shown = node.shown.back();
+    hand.put(NodeSwap{1, {}}, 1);
+    ASSERT_TRUE(waitFor(*hand.node, [&] { return hand.node->shown.size() >= 2; }));
+    std::lock_guard lock(hand.node->m);
+    const NodeThread::Shown& shown = hand.node->shown.back();
     ASSERT_TRUE(shown.image && shown.right);
     EXPECT_EQ(shown.image->pixel(0, 0)[0], 10);
     EXPECT_EQ(shown.right->pixel(0, 0)[0], 110);
@@ -1211,9 +1199,7 @@ TEST(DisplayNodes, ANodeTheWallDoesNotNameIsRefused) {
 
 TEST(DisplayNodes, AWallWithoutNodesRefusesANode) {
     SceneDesc scene = smallScene();
-    ClusterSettings cs;
-    cs.async = false;
-    Master master(scene, cs);
+    Master master(scene, test::inStep());
     zmq::context_t ctx{1};
     FakeNode node(ctx, master.endpoint(), "left");
     Peers peers({&node});
@@ -1227,33 +1213,16 @@ TEST(DisplayNodes, AWallWithoutNodesRefusesANode) {
 // node keeps both frames, reports and presents them in order (N+1 only once N is swapped), and a
 // frame it was left out of (released before it held it) lets the next one through.
 TEST(DisplayNodes, FramesThatOverlapArePresentedInOrderAndALeftOutFrameLetsTheNextThrough) {
-    zmq::context_t ctx{1};
-    zmq::socket_t master(ctx, zmq::socket_type::router);
-    master.set(zmq::sockopt::linger, 0);
-    master.bind("tcp://127.0.0.1:0");
-    NodeThread node(master.get(zmq::sockopt::last_endpoint), "left");
-    master.set(zmq::sockopt::rcvtimeo, 5000);
-    zmq::message_t identity, hello;
-    ASSERT_TRUE(master.recv(identity));
-    ASSERT_TRUE(master.recv(hello));
-    const NodeHello nh = decodePayload<NodeHello>(static_cast<const uint8_t*>(hello.data()) + kHeaderSize, hello.size() - kHeaderSize);
-    const std::string peer = identity.to_string();
-    auto put = [&](const auto& msg, uint32_t frame = 0) {
-        Header h;
-        h.session = 31;
-        h.frame = frame;
-        const std::vector<uint8_t> bytes = encodeMessage(h, msg);
-        master.send(zmq::buffer(peer), zmq::send_flags::sndmore);
-        master.send(zmq::buffer(bytes));
-    };
-    put(NodeWelcome{0, 50, 5000, "[wall]\n", {}});
-    ASSERT_TRUE(waitFor(node, [&] { return !node.wall.empty(); }));
+    HandMaster hand(31);
+    ASSERT_NO_FATAL_FAILURE(hand.awaitHello());
+    hand.put(NodeWelcome{0, 50, 5000, "[wall]\n", {}});
+    ASSERT_TRUE(waitFor(*hand.node, [&] { return !hand.node->wall.empty(); }));
     const int w = 32, hgt = 32, ts = 16;
     const std::vector<TileRect> rects = makeTiles(w, hgt, ts);
-    put(TileRoutes{1, std::vector<uint64_t>(rects.size(), 1)}, 1);
-    zmq::socket_t client(ctx, zmq::socket_type::dealer);
+    hand.put(TileRoutes{1, std::vector<uint64_t>(rects.size(), 1)}, 1);
+    zmq::socket_t client(hand.ctx, zmq::socket_type::dealer);
     client.set(zmq::sockopt::linger, 0);
-    client.connect(nh.endpoint);
+    client.connect(hand.hello.endpoint);
     auto tile = [&](uint32_t frame, uint32_t t) {
         const std::vector<uint8_t> pixels(size_t(rects[t].width()) * rects[t].height() * 3, uint8_t(10 * frame));
         Header h;
@@ -1264,12 +1233,12 @@ TEST(DisplayNodes, FramesThatOverlapArePresentedInOrderAndALeftOutFrameLetsTheNe
     // The NodeHave frames the node sends within `ms`.
     auto haves = [&](int ms) {
         std::vector<uint32_t> out;
-        master.set(zmq::sockopt::rcvtimeo, 20);
+        hand.socket.set(zmq::sockopt::rcvtimeo, 20);
         const auto end = Clock::now() + std::chrono::milliseconds(ms);
         while (Clock::now() < end) {
             zmq::message_t from, msg;
-            if (!master.recv(from)) continue;
-            if (!master.recv(msg)) continue;
+            if (!hand.socket.recv(from)) continue;
+            if (!hand.socket.recv(msg)) continue;
             const auto* b = static_cast<const uint8_t*>(msg.data());
             if (decodeHeader(b, msg.size()).type == MsgType::NodeHave)
                 out.push_back(decodePayload<NodeHave>(b + kHeaderSize, msg.size() - kHeaderSize).frame);
@@ -1279,44 +1248,44 @@ TEST(DisplayNodes, FramesThatOverlapArePresentedInOrderAndALeftOutFrameLetsTheNe
     auto frameMsg = [&](uint32_t n) { return NodeFrame{n, w, hgt, ts, TilePixels::Srgb8, {}, {}, false, 1}; };
 
     // Frame 1 lacks its last tile when frame 2 begins; frame 2 comes whole.
-    put(frameMsg(1), 1);
+    hand.put(frameMsg(1), 1);
     for (uint32_t t = 0; t + 1 < rects.size(); ++t) tile(1, t);
-    put(frameMsg(2), 2);
+    hand.put(frameMsg(2), 2);
     for (uint32_t t = 0; t < rects.size(); ++t) tile(2, t);
     EXPECT_TRUE(haves(300).empty()) << "frame 2 is not reported before frame 1";
     tile(1, uint32_t(rects.size() - 1));
     EXPECT_EQ(haves(300), std::vector<uint32_t>{1}) << "frame 1 held; frame 2 waits for its swap";
-    put(NodeSwap{1, {}}, 1);
+    hand.put(NodeSwap{1, {}}, 1);
     EXPECT_EQ(haves(300), std::vector<uint32_t>{2}) << "frame 2 reported once frame 1 swapped";
-    put(NodeSwap{2, {}}, 2);
-    ASSERT_TRUE(waitFor(node, [&] { return node.shown.size() >= 2; }));
+    hand.put(NodeSwap{2, {}}, 2);
+    ASSERT_TRUE(waitFor(*hand.node, [&] { return hand.node->shown.size() >= 2; }));
     {
-        std::lock_guard lock(node.m);
-        ASSERT_EQ(node.shown.size(), 2u);
-        EXPECT_EQ(node.shown[0].frame, 1u);
-        ASSERT_TRUE(node.shown[0].image);
-        EXPECT_EQ(node.shown[0].image->pixel(0, 0)[0], 10);
-        EXPECT_EQ(node.shown[1].frame, 2u);
-        ASSERT_TRUE(node.shown[1].image);
-        EXPECT_EQ(node.shown[1].image->pixel(0, 0)[0], 20);
+        std::lock_guard lock(hand.node->m);
+        ASSERT_EQ(hand.node->shown.size(), 2u);
+        EXPECT_EQ(hand.node->shown[0].frame, 1u);
+        ASSERT_TRUE(hand.node->shown[0].image);
+        EXPECT_EQ(hand.node->shown[0].image->pixel(0, 0)[0], 10);
+        EXPECT_EQ(hand.node->shown[1].frame, 2u);
+        ASSERT_TRUE(hand.node->shown[1].image);
+        EXPECT_EQ(hand.node->shown[1].image->pixel(0, 0)[0], 20);
     }
 
     // Frame 3 never completes here; frame 4 does, and waits behind it until the master releases
-    // frame 3 without this node.
-    put(frameMsg(3), 3);
+    // frame 3 without this hand.node->
+    hand.put(frameMsg(3), 3);
     tile(3, 0);
-    put(frameMsg(4), 4);
+    hand.put(frameMsg(4), 4);
     for (uint32_t t = 0; t < rects.size(); ++t) tile(4, t);
     EXPECT_TRUE(haves(300).empty());
-    put(NodeSwap{3, {"left"}}, 3);
+    hand.put(NodeSwap{3, {"left"}}, 3);
     EXPECT_EQ(haves(300), std::vector<uint32_t>{4}) << "frame 3 let go at its swap";
-    put(NodeSwap{4, {}}, 4);
-    ASSERT_TRUE(waitFor(node, [&] { return node.shown.size() >= 4; }));
-    std::lock_guard lock(node.m);
-    EXPECT_FALSE(node.shown[2].image) << "frame 3 was not held";
-    ASSERT_TRUE(node.shown[3].image);
-    EXPECT_EQ(node.shown[3].frame, 4u);
-    EXPECT_EQ(node.shown[3].image->pixel(0, 0)[0], 40);
+    hand.put(NodeSwap{4, {}}, 4);
+    ASSERT_TRUE(waitFor(*hand.node, [&] { return hand.node->shown.size() >= 4; }));
+    std::lock_guard lock(hand.node->m);
+    EXPECT_FALSE(hand.node->shown[2].image) << "frame 3 was not held";
+    ASSERT_TRUE(hand.node->shown[3].image);
+    EXPECT_EQ(hand.node->shown[3].frame, 4u);
+    EXPECT_EQ(hand.node->shown[3].image->pixel(0, 0)[0], 40);
 }
 
 }  // namespace

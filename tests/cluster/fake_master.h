@@ -5,11 +5,14 @@
 
 #include "protocol.h"
 
+#include <rtwall/cluster.h>
+
 #include <gtest/gtest.h>
 #include <zmq.hpp>
 
 #include <chrono>
 #include <functional>
+#include <future>
 #include <optional>
 #include <string>
 #include <vector>
@@ -105,5 +108,36 @@ inline void serveMeshes(FakeMaster& fake, const std::string& peer, const Scripte
             if (scene.snapshot.meshes[k].hash == r.hash) fake.send(peer, cluster::MeshData{r.hash, scene.meshBytes[k]});
     }
 }
+
+// A render client of `fake` on a thread of the test (one render thread) that gives up after
+// `idleMs` without its master; `cs` may set more (counters, say). Its exit status comes back.
+inline std::future<int> startClient(const FakeMaster& fake, int idleMs, ClientSettings cs = {}) {
+    cs.connect = fake.endpoint;
+    cs.threads = 1;
+    cs.exitAfterIdleMs = idleMs;
+    return std::async(std::launch::async, [cs] { return runClient(cs); });
+}
+
+// The client's Hello (within 10 s), answered with a Welcome that gives `peerTimeoutMs` as the
+// master's peer timeout; `peer` names the client. Fatal failures: call it in ASSERT_NO_FATAL_FAILURE.
+inline void welcome(FakeMaster& fake, std::string& peer, uint32_t peerTimeoutMs = 3000) {
+    const auto hello = fake.expect(cluster::MsgType::Hello, 10000);
+    ASSERT_TRUE(hello);
+    peer = hello->peer;
+    fake.send(peer, cluster::Welcome{1, CodecSettings{}, 4, 100, peerTimeoutMs});
+}
+
+// The scene's snapshot sent to `peer` (its bytes kept in `sent`, for a replay), its meshes
+// served and the client's Ready awaited (30 s). Fatal failures: call it in ASSERT_NO_FATAL_FAILURE.
+inline void sendScene(FakeMaster& fake, const std::string& peer, const ScriptedScene& scene,
+                      std::vector<uint8_t>* sent = nullptr) {
+    const std::vector<uint8_t> bytes = fake.send(peer, scene.snapshot);
+    if (sent) *sent = bytes;
+    ASSERT_NO_FATAL_FAILURE(serveMeshes(fake, peer, scene));
+    ASSERT_TRUE(fake.expect(cluster::MsgType::Ready, 30000));
+}
+
+// A frame's one view, of d's first camera (protocol 13 sends views with FrameBegin).
+inline std::vector<FrameView> oneView(const SceneDesc& d) { return {FrameView{d.cameras.front(), {}, 0, 0}}; }
 
 }  // namespace rtwall::test

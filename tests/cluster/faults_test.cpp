@@ -2,6 +2,7 @@
 // killed (SIGKILL) or frozen (SIGSTOP) in the middle of a frame. The frame completes,
 // bit-identical to a fault-free run; the master notices within its timeout; a frozen client
 // that wakes up has its late results dropped, and it rejoins. Every wait is bounded.
+#include "local_cluster.h"
 #include "test_util.h"
 
 #include <algorithm>
@@ -64,10 +65,7 @@ SceneDesc slowScene() {
     return desc;
 }
 
-Image singleMachine(const SceneDesc& desc) {
-    const Scene scene(desc);
-    return renderFrame(scene, Camera(desc.cameras.front(), desc.settings.width, desc.settings.height), desc.settings);
-}
+using test::singleMachine;
 
 template <class F> bool waitUntil(F&& f, int ms) {
     const auto end = Clock::now() + std::chrono::milliseconds(ms);
@@ -79,23 +77,27 @@ template <class F> bool waitUntil(F&& f, int ms) {
 }
 
 ClusterSettings faultSettings() {
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.heartbeatMs = 50;
     cs.timeoutMs = 400;
     return cs;
 }
 
+// The master's second frame, begun on another thread 60 ms before this returns (the first one
+// rendered with every client in): a fault now strikes mid-frame.
+std::future<Image> secondFrameUnderway(Master& master) {
+    master.renderFrame();
+    auto frame = std::async(std::launch::async, [&master] { return master.renderFrame(); });
+    std::this_thread::sleep_for(std::chrono::milliseconds(60));
+    return frame;
+}
+
 TEST(Faults, KilledClientMidFrame) {
-    const SceneDesc desc = slowScene();
-    const Image expected = singleMachine(desc);
-    Master master(desc, faultSettings());
+    const Image expected = singleMachine(slowScene());
+    Master master(slowScene(), faultSettings());
     Process a(master.endpoint()), b(master.endpoint());
     ASSERT_TRUE(master.waitForClients(2, 30000));
-    master.renderFrame();
-
-    auto frame = std::async(std::launch::async, [&] { return master.renderFrame(); });
-    std::this_thread::sleep_for(std::chrono::milliseconds(60));
+    auto frame = secondFrameUnderway(master);
     const auto killedAt = Clock::now();
     kill(b.pid, SIGKILL);
     ASSERT_TRUE(waitUntil([&] { return master.connectedClients() == 1; }, 5000));
@@ -106,15 +108,11 @@ TEST(Faults, KilledClientMidFrame) {
 }
 
 TEST(Faults, FrozenClientMidFrameThenWakesUp) {
-    const SceneDesc desc = slowScene();
-    const Image expected = singleMachine(desc);
-    Master master(desc, faultSettings());
+    const Image expected = singleMachine(slowScene());
+    Master master(slowScene(), faultSettings());
     Process a(master.endpoint()), b(master.endpoint());
     ASSERT_TRUE(master.waitForClients(2, 30000));
-    master.renderFrame();
-
-    auto frame = std::async(std::launch::async, [&] { return master.renderFrame(); });
-    std::this_thread::sleep_for(std::chrono::milliseconds(60));
+    auto frame = secondFrameUnderway(master);
     kill(b.pid, SIGSTOP);
     EXPECT_EQ(frame.get().rgb, expected.rgb) << "its tiles were re-issued or re-queued";
     ASSERT_TRUE(waitUntil([&] { return master.connectedClients() == 1; }, 5000)) << "timed out by heartbeat";
@@ -238,8 +236,7 @@ TEST(Faults, MasterRestartWithoutAReconnectionStorm) {
     // The new master keeps the default heartbeat (250 ms) and timeout (3 s): this part checks that
     // every client comes back, not that a 400 ms timeout survives a loaded machine (under a load
     // of 10 on 2 cores such stalls dropped and re-admitted clients here until the wait ran out).
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.bind = endpoint;
     Master second(desc, cs);
     ASSERT_TRUE(second.waitForClients(kClients, 60000)) << "every client came back";
@@ -282,10 +279,7 @@ TEST_F(CutLink, ClientBehindACutCableMidFrame) {
     Master master(desc, cs);
     Process local(master.endpoint()), remote(master.endpoint(), kNs);
     ASSERT_TRUE(master.waitForClients(2, 30000));
-    master.renderFrame();
-
-    auto frame = std::async(std::launch::async, [&] { return master.renderFrame(); });
-    std::this_thread::sleep_for(std::chrono::milliseconds(60));
+    auto frame = secondFrameUnderway(master);
     const auto cutAt = Clock::now();
     ASSERT_EQ(std::system("ip -n rtwt-cut link set rtwt-n down"), 0);
     ASSERT_TRUE(waitUntil([&] { return master.connectedClients() == 1; }, 5000));

@@ -29,13 +29,27 @@ using Clock = std::chrono::steady_clock;
 
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-SceneDesc demoScene(int width, int height) {
-    SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    desc.settings.width = width;
-    desc.settings.height = height;
-    desc.settings.tileSize = 8;
-    desc.settings.supersample = 1;
-    return desc;
+SceneDesc demoScene(int width, int height) { return test::quickDemo(width, height, 8); }
+
+// Every client of `cluster` joined, frame 1 one machine's (`expected`), and frame 2, in which a
+// render thread gets stuck, within 10 s and one machine's too. Fatal failures: call it in
+// ASSERT_NO_FATAL_FAILURE.
+void expectFrame2PassesTheStuckThread(test::StoppableCluster& cluster, const Image& expected) {
+    ASSERT_TRUE(cluster.ready());
+    ASSERT_EQ(cluster.master->renderFrame().rgb, expected.rgb);
+    const auto t0 = Clock::now();
+    const auto img = cluster.frameWithin(20);
+    ASSERT_TRUE(img) << "frame 2 waited for the stuck thread";
+    EXPECT_LT(since(t0), 10.0);
+    EXPECT_EQ(img->rgb, expected.rgb);
+}
+
+// A client whose first tile of frame 2 or later does not return for 30 s (fault injection).
+ClientSettings stuckFromFrame2() {
+    ClientSettings c;
+    c.stallMs = 30000;
+    c.stallFrame = 2;
+    return c;
 }
 
 // A run config on the demo scene at 160x120: `clients` local clients, `frames` frames.
@@ -45,19 +59,6 @@ std::filesystem::path runConfig(const std::filesystem::path& dir, int clients, i
                            "[image]\nwidth = 160\nheight = 120\n"
                            "[cluster]\nclients = " + std::to_string(clients) + "\nthreads = 1\n" + cluster +
                            "[run]\nframes = " + std::to_string(frames) + "\nwrite_every = 0\norbit = 1.0\n");
-}
-
-// renderFrame on another thread, given up (stop flag) if it takes longer than `seconds`: a
-// frozen master fails the test instead of hanging it.
-std::optional<Image> frameWithin(Master& master, std::atomic<bool>& stop, double seconds, FrameReport* report = nullptr) {
-    auto f = std::async(std::launch::async, [&] { return master.renderFrame(report); });
-    if (f.wait_for(std::chrono::duration<double>(seconds)) == std::future_status::ready) return f.get();
-    stop = true;
-    try {
-        f.get();
-    } catch (const Cancelled&) {
-    }
-    return std::nullopt;
 }
 
 // Issue 16, item 1: a peer sends [b'x', b'y'] twenty times, 50 ms apart, to `rtwall run` with one
@@ -101,27 +102,19 @@ TEST(Issue16, AMultiPartMessageFromAnyPeerDoesNotFreezeTheMaster) {
 TEST(Issue16, ALostTileResultIsRecoveredWithOneClient) {
     const SceneDesc desc = demoScene(96, 72);
     const Image expected = test::singleMachine(desc, 0);
-    ClusterSettings cs;
-    cs.async = false;
-    std::future<int> client;  // destroyed after the master, whose goodbye ends it
-    auto master = std::make_unique<Master>(desc, cs);
-    std::atomic<bool> stop{false};
-    master->setStopFlag(&stop);
+    test::StoppableCluster cluster(desc, test::inStep());
     ClientSettings c;
-    c.connect = master->endpoint();
-    c.threads = 1;
-    c.exitAfterIdleMs = 4000;
     c.dropEveryNthResult = 5;
-    client = std::async(std::launch::async, [c] { return runClient(c); });
-    ASSERT_TRUE(master->waitForClients(1, 30000));
+    cluster.start(c);
+    ASSERT_TRUE(cluster.ready());
     for (int f = 0; f < 3; ++f) {
-        const auto img = frameWithin(*master, stop, 30);
+        const auto img = cluster.frameWithin(30);
         ASSERT_TRUE(img) << "frame " << f << " never completed";
         EXPECT_EQ(img->rgb, expected.rgb) << "frame " << f;
     }
-    EXPECT_GT(master->counters().lostHandOuts, 0u) << describeCounters(master->counters());
-    master.reset();  // its goodbye ends the client
-    EXPECT_EQ(client.get(), 0);
+    EXPECT_GT(cluster.master->counters().lostHandOuts, 0u) << describeCounters(cluster.master->counters());
+    cluster.master.reset();  // its goodbye ends the client
+    EXPECT_EQ(cluster.clients[0].get(), 0);
 }
 
 // Item 3: `rtwall render MESH --clients 3` with one client frozen (SIGSTOP) and one killed as soon
@@ -164,13 +157,12 @@ TEST(Issue16, ALiveClientWhoseQueueIsFullForAMomentStays) {
     desc.settings.width = 64;
     desc.settings.height = 48;
     desc.settings.tileSize = 16;
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.timeoutMs = 10000;
     cs.highWaterMark = 1;
     test::LocalCluster cluster(desc, cs, 1);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(1, 30000));
+    ASSERT_TRUE(cluster.ready());
 
     zmq::context_t ctx;
     zmq::socket_t peer(ctx, zmq::socket_type::dealer);
@@ -327,25 +319,16 @@ TEST(Issue16, KeysMakesItsDirectory) {
 // frame cannot finish (the only client's only render thread is stuck).
 TEST(Issue16, RenderFrameGivesUpWhenTheStopFlagIsSet) {
     const SceneDesc desc = demoScene(64, 48);
-    ClusterSettings cs;
-    cs.async = false;
-    std::future<int> client;  // destroyed after the master, whose goodbye ends it
-    Master master(desc, cs);
-    std::atomic<bool> stop{false};
-    master.setStopFlag(&stop);
-    ClientSettings c;
-    c.connect = master.endpoint();
-    c.threads = 1;
-    c.exitAfterIdleMs = 4000;
-    c.stallMs = 30000;
-    c.stallFrame = 2;
-    client = std::async(std::launch::async, [c] { return runClient(c); });
-    ASSERT_TRUE(master.waitForClients(1, 30000));
+    test::StoppableCluster cluster(desc, test::inStep());
+    Master& master = *cluster.master;
+    ClientSettings c = stuckFromFrame2();
+    cluster.start(c);
+    ASSERT_TRUE(cluster.ready());
     master.renderFrame();
     auto frame = std::async(std::launch::async, [&] { return master.renderFrame(); });
     EXPECT_EQ(frame.wait_for(std::chrono::milliseconds(1500)), std::future_status::timeout) << "the frame should be stuck";
     const auto t0 = Clock::now();
-    stop = true;
+    cluster.stop = true;
     ASSERT_EQ(frame.wait_for(std::chrono::seconds(5)), std::future_status::ready);
     EXPECT_THROW(frame.get(), Cancelled);
     EXPECT_LT(since(t0), 1.0);
@@ -357,35 +340,20 @@ TEST(Issue16, RenderFrameGivesUpWhenTheStopFlagIsSet) {
 TEST(Issue15, AStuckRenderThreadIsReportedAndItsTileRenderedByAnotherClient) {
     SceneDesc desc = demoScene(96, 72);
     const Image expected = test::singleMachine(desc, 0);
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.timeoutMs = 1000;
     cs.heartbeatMs = 100;
-    std::future<int> a, b;  // destroyed after the master, whose goodbye ends them
-    Master master(desc, cs);
-    std::atomic<bool> stop{false};
-    master.setStopFlag(&stop);
+    test::StoppableCluster cluster(desc, cs);
+    Master& master = *cluster.master;
     auto counters = std::make_shared<ClientCounters>();
-    ClientSettings stuck;
-    stuck.connect = master.endpoint();
-    stuck.threads = 1;
-    stuck.exitAfterIdleMs = 4000;
-    stuck.stallMs = 30000;
-    stuck.stallFrame = 2;
+    ClientSettings stuck = stuckFromFrame2();
     stuck.minStallMs = 300;
     stuck.counters = counters;
-    ClientSettings healthy = stuck;
-    healthy.stallMs = 0;
-    healthy.counters = nullptr;
-    a = std::async(std::launch::async, [stuck] { return runClient(stuck); });
-    b = std::async(std::launch::async, [healthy] { return runClient(healthy); });
-    ASSERT_TRUE(master.waitForClients(2, 30000));
-    ASSERT_EQ(master.renderFrame().rgb, expected.rgb);
-    const auto t0 = Clock::now();
-    const auto img = frameWithin(master, stop, 20);
-    ASSERT_TRUE(img) << "frame 2 waited for the stuck thread";
-    EXPECT_LT(since(t0), 10.0);
-    EXPECT_EQ(img->rgb, expected.rgb);
+    ClientSettings healthy;
+    healthy.minStallMs = stuck.minStallMs;
+    cluster.start(stuck);
+    cluster.start(healthy);
+    ASSERT_NO_FATAL_FAILURE(expectFrame2PassesTheStuckThread(cluster, expected));
     // Reported once, after 300 ms, whether a straggler re-issue finished the tile first or not.
     for (int i = 0; i < 500 && master.counters().stalledTiles == 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
     EXPECT_EQ(counters->stalledTiles.load(), 1u);
@@ -395,7 +363,7 @@ TEST(Issue15, AStuckRenderThreadIsReportedAndItsTileRenderedByAnotherClient) {
     // answering and is not dropped, while the other renders the frame.
     desc.lights[0].intensity *= 2.0f;
     master.setLight(0, desc.lights[0]);
-    const auto after = frameWithin(master, stop, 20);
+    const auto after = cluster.frameWithin(20);
     ASSERT_TRUE(after);
     EXPECT_EQ(after->rgb, test::singleMachine(desc, 0).rgb);
     std::this_thread::sleep_for(std::chrono::milliseconds(2 * cs.timeoutMs));
@@ -406,27 +374,12 @@ TEST(Issue15, AStuckRenderThreadIsReportedAndItsTileRenderedByAnotherClient) {
 TEST(Issue15, TheOnlyClientRendersItsStuckTileOnItsOtherThread) {
     const SceneDesc desc = demoScene(96, 72);
     const Image expected = test::singleMachine(desc, 0);
-    ClusterSettings cs;
-    cs.async = false;
-    std::future<int> client;  // destroyed after the master, whose goodbye ends it
-    Master master(desc, cs);
-    std::atomic<bool> stop{false};
-    master.setStopFlag(&stop);
-    ClientSettings c;
-    c.connect = master.endpoint();
-    c.threads = 2;
-    c.exitAfterIdleMs = 4000;
-    c.stallMs = 30000;
-    c.stallFrame = 2;
+    test::StoppableCluster cluster(desc, test::inStep());
+    Master& master = *cluster.master;
+    ClientSettings c = stuckFromFrame2();
     c.minStallMs = 300;
-    client = std::async(std::launch::async, [c] { return runClient(c); });
-    ASSERT_TRUE(master.waitForClients(1, 30000));
-    ASSERT_EQ(master.renderFrame().rgb, expected.rgb);
-    const auto t0 = Clock::now();
-    const auto img = frameWithin(master, stop, 20);
-    ASSERT_TRUE(img) << "frame 2 waited for the stuck thread";
-    EXPECT_LT(since(t0), 10.0);
-    EXPECT_EQ(img->rgb, expected.rgb);
+    cluster.start(c, 2);
+    ASSERT_NO_FATAL_FAILURE(expectFrame2PassesTheStuckThread(cluster, expected));
     EXPECT_EQ(master.counters().stalledTiles, 1u);
 }
 

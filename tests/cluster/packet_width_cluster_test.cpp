@@ -16,26 +16,19 @@ namespace rtwall {
 namespace {
 
 using test::LocalCluster;
+using test::differingBytes;
 using test::singleMachine;
-
-size_t differingBytes(const Image& a, const Image& b) {
-    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
-    size_t n = 0;
-    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
-    return n;
-}
 
 // Renders `frames` frames on three clients of widths 16, 8 and 4 and compares each with one
 // machine (its own CPU's width); every client must have rendered tiles, or the widths were not
 // all put to the test.
 void expectMixedClusterMatchesOneMachine(const SceneDesc& desc, int frames) {
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.prefetch = 2;
     cs.affinity = false;
     cs.wideAccumulation = false;  // 8-bit tiles, compared with one machine's 8-bit frames
     LocalCluster cluster(desc, cs, 3, {}, {16, 8, 4});
-    ASSERT_TRUE(cluster.master->waitForClients(3, 30000));
+    ASSERT_TRUE(cluster.ready());
     const Scene scene(desc);
     std::map<uint32_t, uint64_t> tilesBy;
     for (int f = 0; f < frames; ++f) {

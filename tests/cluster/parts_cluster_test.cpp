@@ -15,14 +15,8 @@ namespace rtwall {
 namespace {
 
 using test::LocalCluster;
+using test::differingBytes;
 using test::singleMachine;
-
-size_t differingBytes(const Image& a, const Image& b) {
-    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
-    size_t n = 0;
-    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
-    return n;
-}
 
 bool complete(const FrameReport& r) {
     return !r.tileOwners.empty() && std::count(r.tileOwners.begin(), r.tileOwners.end(), UINT32_MAX) == 0;
@@ -30,11 +24,10 @@ bool complete(const FrameReport& r) {
 
 TEST(PartsCluster, HideIsolateHighlightBitIdenticalToOneMachine) {
     SceneDesc d = test::partsScene();
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.prefetch = 2;
     LocalCluster cluster(d, cs, 2);
-    ASSERT_TRUE(cluster.master->waitForClients(2, 30000));
+    ASSERT_TRUE(cluster.ready());
     FrameReport r;
     Image first = cluster.master->renderFrame(&r);
     ASSERT_TRUE(complete(r));

@@ -275,6 +275,13 @@ Sent sentFor(const SceneDesc& d) {
     return s;
 }
 
+// The sample scene's snapshot with update sequence `seq`.
+SceneSnapshot sampleSnapshot(uint64_t seq) {
+    const SceneDesc d = sampleScene();
+    const Sent sent = sentFor(d);
+    return snapshotOf(d, sent.meshes, sent.assets, seq);
+}
+
 // -- Tests ---------------------------------------------------------------------------------------
 
 TEST(SceneState, MemberCountsAreExact) {
@@ -500,9 +507,7 @@ TEST(SceneState, MergedUpdatesKeepEveryFileTheChangesBrought) {
 }
 
 TEST(SceneState, ASnapshotIsHashedFromTheBytesSent) {
-    const SceneDesc d = sampleScene();
-    const Sent sent = sentFor(d);
-    const SceneSnapshot snap = snapshotOf(d, sent.meshes, sent.assets, 17);
+    const SceneSnapshot snap = sampleSnapshot(17);
     Header h;
     h.session = 99;
     h.sceneVersion = 17;

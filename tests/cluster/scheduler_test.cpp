@@ -27,6 +27,35 @@ uint64_t sum(const std::map<ClientId, uint64_t>& m) {
     return s;
 }
 
+// Clients added to s, in this order.
+void addClients(TileScheduler& s, std::initializer_list<ClientId> ids) {
+    for (ClientId c : ids) s.addClient(c);
+}
+
+// Clients 1 and 2 in frame 0 of `tiles` tiles: at time 0, 1 takes tile 0 and 2 takes tile 1.
+void oneTileEach(TileScheduler& s, uint32_t tiles) {
+    addClients(s, {1, 2});
+    s.beginFrame(0, tiles);
+    EXPECT_EQ(s.request(1, 1, 0), std::vector<uint32_t>{0});
+    EXPECT_EQ(s.request(2, 1, 0), std::vector<uint32_t>{1});
+}
+
+// Client 1 alone in frame `frame` of four tiles: it takes all four at time 0.
+void oneClientTakesAll(TileScheduler& s, uint32_t frame) {
+    s.addClient(1);
+    s.beginFrame(frame, 4);
+    EXPECT_EQ(s.request(1, 4, 0.0), range(0, 4));
+}
+
+// A tile is a straggler once older than max(0.05 s, 4 x the median tile time): the numbers the
+// straggler tests work out by hand.
+SchedulerOptions stragglerOptions() {
+    SchedulerOptions options;
+    options.minStragglerSeconds = 0.05;
+    options.stragglerFactor = 4;
+    return options;
+}
+
 // Each client in turn, starting with clients[first], asks for `batch` tiles and returns them
 // all before its next turn. Returns who rendered each tile.
 std::vector<ClientId> runRoundRobin(TileScheduler& s, const std::vector<ClientId>& clients, size_t first,
@@ -94,8 +123,7 @@ TEST(Scheduler, SingleClientGetsAllTilesInImageOrderNAtATime) {
 TEST(Scheduler, ReopenedTileIsHandedOutAgain) {
     // An accepted result whose pixels did not decode: the tile must be rendered again.
     TileScheduler s;
-    s.addClient(1);
-    s.addClient(2);
+    addClients(s, {1, 2});
     s.beginFrame(1, 2);
     const auto a = s.request(1, 2, 0.0);
     ASSERT_EQ(a.size(), 2u);
@@ -192,9 +220,7 @@ TEST(Scheduler, PrefetchingClientsCompletingInVariousOrders) {
 
 TEST(Scheduler, ResultForPreviousOrFutureFrameIsStale) {
     TileScheduler s;
-    s.addClient(1);
-    s.beginFrame(5, 4);
-    EXPECT_EQ(s.request(1, 4, 0), range(0, 4));
+    oneClientTakesAll(s, 5);
     EXPECT_EQ(s.complete(1, 5, 0, 0.1), Result::Accepted);
 
     s.beginFrame(6, 4);
@@ -211,8 +237,7 @@ TEST(Scheduler, ResultForPreviousOrFutureFrameIsStale) {
 
 TEST(Scheduler, ResultForTileNeverHandedOutIsUnexpected) {
     TileScheduler s;
-    s.addClient(1);
-    s.addClient(2);
+    addClients(s, {1, 2});
     s.beginFrame(0, 4);
     EXPECT_EQ(s.request(1, 2, 0), range(0, 2));
     EXPECT_EQ(s.complete(1, 0, 4, 0.1), Result::Unexpected) << "out of range";
@@ -273,8 +298,7 @@ TEST(SchedulerAffinity, WithoutAffinityTilesGoToWhoeverAsksFirst) {
 
 TEST(SchedulerAffinity, FirstAskerGetsItsOwnTilesNotTheSharedOrder) {
     TileScheduler s;
-    s.addClient(1);
-    s.addClient(2);
+    addClients(s, {1, 2});
     ownFrame(s, 0, {{1, 3}, {2, 3}}, 0);  // 1 rendered 0..2, 2 rendered 3..5
     s.beginFrame(1, 6);
     EXPECT_EQ(s.request(2, 2, 1.0), range(3, 5)) << "own queue, front first";
@@ -294,8 +318,7 @@ TEST(SchedulerAffinity, EachEyesTilesGoBackToTheirOwnerInOnePass) {
     const uint32_t perEye = uint32_t(makeTiles(64, 32, 16).size()), count = uint32_t(viewTiles(views, 64, 32, 16).size());
     ASSERT_EQ(count, 2 * perEye);
     TileScheduler s;
-    s.addClient(1);
-    s.addClient(2);
+    addClients(s, {1, 2});
     // Frame 0: 1 takes left 0..3 and right 4..7, 2 the rest (its own queue order after frame 0).
     s.beginFrame(0, count);
     std::vector<uint32_t> one = s.request(1, 4, 0.0);
@@ -321,8 +344,7 @@ TEST(SchedulerAffinity, EachEyesTilesGoBackToTheirOwnerInOnePass) {
 
 TEST(SchedulerAffinity, ChangedTileCountStartsFromTheSharedQueue) {
     TileScheduler s;
-    s.addClient(1);
-    s.addClient(2);
+    addClients(s, {1, 2});
     ownFrame(s, 0, {{1, 3}, {2, 3}}, 0);
     s.beginFrame(1, 8);  // resized wall: last frame's owners mean nothing
     EXPECT_EQ(s.request(2, 3, 1.0), range(0, 3));
@@ -339,8 +361,7 @@ TEST(SchedulerAffinity, AffinityOffPutsEverythingInTheSharedQueue) {
     SchedulerOptions options;
     options.affinity = false;
     TileScheduler s(options);
-    s.addClient(1);
-    s.addClient(2);
+    addClients(s, {1, 2});
     ownFrame(s, 0, {{1, 3}, {2, 3}}, 0);
     s.beginFrame(1, 6);
     EXPECT_EQ(s.request(2, 6, 1.0), range(0, 6));
@@ -351,8 +372,7 @@ TEST(SchedulerAffinity, AffinityOffPutsEverythingInTheSharedQueue) {
 
 TEST(SchedulerAffinity, UnfinishedFrameOnlyPassesOnTheTilesThatWereDone) {
     TileScheduler s;
-    s.addClient(1);
-    s.addClient(2);
+    addClients(s, {1, 2});
     s.beginFrame(0, 4);
     EXPECT_EQ(s.request(1, 4, 0), range(0, 4));
     EXPECT_EQ(s.complete(1, 0, 2, 0.1), Result::Accepted);
@@ -367,7 +387,7 @@ TEST(SchedulerAffinity, UnfinishedFrameOnlyPassesOnTheTilesThatWereDone) {
 TEST(SchedulerStealing, IdleClientsStealFromTheBackOfASlowClientsQueue) {
     TileScheduler s;
     const ClientId a = 1, b = 2, slow = 3;
-    for (ClientId c : {a, b, slow}) s.addClient(c);
+    addClients(s, {a, b, slow});
     double now = 0;
     s.beginFrame(0, 48);
     const std::vector<ClientId> lastOwner = runRoundRobin(s, {a, b, slow}, 0, 4, now);
@@ -422,14 +442,24 @@ TEST(SchedulerStealing, IdleClientsStealFromTheBackOfASlowClientsQueue) {
     EXPECT_EQ(s.stats().reissued, 0u);
 }
 
+SchedulerOptions seeded(uint64_t seed) {
+    SchedulerOptions options;
+    options.seed = seed;
+    return options;
+}
+
+// Clients 1, 2 and 3 rendered tiles 0-9, 10-19 and 20-29 of frame 0: their queues in frame 1 of
+// 30 tiles, which is begun.
+void threeQueuesOfTen(TileScheduler& s) {
+    addClients(s, {1, 2, 3});
+    ownFrame(s, 0, {{1, 10}, {2, 10}, {3, 10}}, 0);
+    s.beginFrame(1, 30);
+}
+
 TEST(SchedulerStealing, VictimIsAPeerWithTilesLeft) {
     for (uint64_t seed = 1; seed <= 20; ++seed) {
-        SchedulerOptions options;
-        options.seed = seed;
-        TileScheduler s(options);
-        for (ClientId c : {1, 2, 3}) s.addClient(c);
-        ownFrame(s, 0, {{1, 10}, {2, 10}, {3, 10}}, 0);
-        s.beginFrame(1, 30);
+        TileScheduler s(seeded(seed));
+        threeQueuesOfTen(s);
         EXPECT_EQ(s.request(2, 10, 1), range(10, 20));  // 2 drained its own queue
         EXPECT_EQ(s.request(1, 10, 1), range(0, 10));
         // Only 3 has tiles left: every steal comes from it, from the back.
@@ -442,12 +472,8 @@ TEST(SchedulerStealing, VictimIsAPeerWithTilesLeft) {
 
 TEST(SchedulerStealing, VictimChoiceIsRandomButReproducible) {
     auto victims = [](uint64_t seed) {
-        SchedulerOptions options;
-        options.seed = seed;
-        TileScheduler s(options);
-        for (ClientId c : {1, 2, 3}) s.addClient(c);
-        ownFrame(s, 0, {{1, 10}, {2, 10}, {3, 10}}, 0);
-        s.beginFrame(1, 30);
+        TileScheduler s(seeded(seed));
+        threeQueuesOfTen(s);
         EXPECT_EQ(s.request(1, 10, 1), range(0, 10));
         std::vector<ClientId> from;
         uint32_t nextOf2 = 19, nextOf3 = 29;
@@ -477,8 +503,7 @@ TEST(SchedulerStealing, VictimChoiceIsRandomButReproducible) {
 
 TEST(SchedulerStealing, StolenRunIsHandedOutInImageOrder) {
     TileScheduler s;
-    s.addClient(1);
-    s.addClient(2);
+    addClients(s, {1, 2});
     ownFrame(s, 0, {{1, 8}}, 0);
     s.beginFrame(1, 8);
     EXPECT_EQ(s.request(2, 3, 1), range(5, 8));
@@ -490,7 +515,7 @@ TEST(SchedulerStealing, StolenRunIsHandedOutInImageOrder) {
 
 TEST(SchedulerClients, DeadClientsTilesGoBackAndItsLateResultsAreRejected) {
     TileScheduler s;
-    for (ClientId c : {1, 2, 3}) s.addClient(c);
+    addClients(s, {1, 2, 3});
     ownFrame(s, 0, {{1, 6}, {2, 6}, {3, 6}}, 0);  // 2 owns 6..11
     s.beginFrame(1, 18);
     const std::vector<uint32_t> held = s.request(2, 4, 1.0);
@@ -530,7 +555,7 @@ TEST(SchedulerClients, DeadClientsTilesGoBackAndItsLateResultsAreRejected) {
 
 TEST(SchedulerClients, TileStillRenderedByAReissueIsNotQueuedAgain) {
     TileScheduler s;
-    for (ClientId c : {1, 2, 3}) s.addClient(c);
+    addClients(s, {1, 2, 3});
     s.beginFrame(0, 3);
     EXPECT_EQ(s.request(1, 1, 0), std::vector<uint32_t>{0});
     EXPECT_EQ(s.request(2, 2, 0), range(1, 3));
@@ -547,8 +572,7 @@ TEST(SchedulerClients, TileStillRenderedByAReissueIsNotQueuedAgain) {
 
 TEST(SchedulerClients, LateJoinerStealsWhenEveryTileHasAnOwner) {
     TileScheduler s;
-    s.addClient(1);
-    s.addClient(2);
+    addClients(s, {1, 2});
     ownFrame(s, 0, {{1, 4}, {2, 4}}, 0);
     s.beginFrame(1, 8);
     s.addClient(3);
@@ -560,7 +584,7 @@ TEST(SchedulerClients, LateJoinerStealsWhenEveryTileHasAnOwner) {
 
 TEST(SchedulerClients, DepartedClientsTilesGoToTheSharedQueueNextFrame) {
     TileScheduler s;
-    for (ClientId c : {1, 2}) s.addClient(c);
+    addClients(s, {1, 2});
     ownFrame(s, 0, {{1, 4}, {2, 4}}, 0);
     s.removeClient(2);
     s.addClient(3);
@@ -572,7 +596,7 @@ TEST(SchedulerClients, DepartedClientsTilesGoToTheSharedQueueNextFrame) {
 
 TEST(SchedulerClients, ReturningIdStartsWithoutAffinity) {
     TileScheduler s;
-    for (ClientId c : {1, 2}) s.addClient(c);
+    addClients(s, {1, 2});
     ownFrame(s, 0, {{1, 4}, {2, 4}}, 0);
     s.removeClient(2);
     s.addClient(2);  // a restarted process: its cache is cold
@@ -584,13 +608,9 @@ TEST(SchedulerClients, ReturningIdStartsWithoutAffinity) {
 // --- Stragglers --------------------------------------------------------------------------------
 
 TEST(SchedulerStragglers, HungTileIsReissuedToAnIdleClient) {
-    SchedulerOptions options;
-    options.minStragglerSeconds = 0.05;
-    options.stragglerFactor = 4;
-    TileScheduler s(options);
+    TileScheduler s(stragglerOptions());
     const ClientId hung = 1, worker = 2;
-    s.addClient(hung);
-    s.addClient(worker);
+    addClients(s, {hung, worker});
     s.beginFrame(0, 8);
     EXPECT_EQ(s.request(hung, 1, 0.0), std::vector<uint32_t>{0});
     EXPECT_EQ(s.request(worker, 7, 0.0), range(1, 8));
@@ -615,11 +635,7 @@ TEST(SchedulerStragglers, HungTileIsReissuedToAnIdleClient) {
 
 TEST(SchedulerStragglers, SlowHolderWinsAndTheReissueIsTheDuplicate) {
     TileScheduler s;
-    s.addClient(1);
-    s.addClient(2);
-    s.beginFrame(0, 2);
-    EXPECT_EQ(s.request(1, 1, 0), std::vector<uint32_t>{0});
-    EXPECT_EQ(s.request(2, 1, 0), std::vector<uint32_t>{1});
+    oneTileEach(s, 2);
     EXPECT_EQ(s.complete(2, 0, 1, 0.01), Result::Accepted);
     EXPECT_EQ(s.request(2, 1, 1.0), std::vector<uint32_t>{0});
     EXPECT_EQ(s.complete(1, 0, 0, 1.001), Result::Accepted);
@@ -629,7 +645,7 @@ TEST(SchedulerStragglers, SlowHolderWinsAndTheReissueIsTheDuplicate) {
 
 TEST(SchedulerStragglers, LatencyIsMeasuredFromTheAnsweringHandOut) {
     TileScheduler s;  // min 0.05 s, factor 4
-    for (ClientId c : {1, 2, 3}) s.addClient(c);
+    addClients(s, {1, 2, 3});
     s.beginFrame(0, 3);
     EXPECT_EQ(s.request(1, 1, 0.0), std::vector<uint32_t>{0});
     EXPECT_EQ(s.request(2, 1, 0.0), std::vector<uint32_t>{1});
@@ -644,23 +660,15 @@ TEST(SchedulerStragglers, LatencyIsMeasuredFromTheAnsweringHandOut) {
 
 TEST(SchedulerStragglers, NothingIsReissuedBeforeTheFirstResult) {
     TileScheduler s;
-    s.addClient(1);
-    s.addClient(2);
-    s.beginFrame(0, 2);
-    EXPECT_EQ(s.request(1, 1, 0), std::vector<uint32_t>{0});
-    EXPECT_EQ(s.request(2, 1, 0), std::vector<uint32_t>{1});
+    oneTileEach(s, 2);
     EXPECT_TRUE(s.request(2, 1, 100.0).empty());
     EXPECT_TRUE(s.request(1, 1, 100.0).empty());
     EXPECT_EQ(s.stats().reissued, 0u);
 }
 
 TEST(SchedulerStragglers, ThresholdFollowsTheMedianTileTime) {
-    SchedulerOptions options;
-    options.minStragglerSeconds = 0.05;
-    options.stragglerFactor = 4;
-    TileScheduler s(options);
-    s.addClient(1);
-    s.addClient(2);
+    TileScheduler s(stragglerOptions());
+    addClients(s, {1, 2});
     s.beginFrame(0, 5);
     EXPECT_EQ(s.request(2, 4, 0), range(0, 4));
     // Latencies 0.5, 1, 1, 9: median 1 (the outlier does not drag it, as a mean would to
@@ -676,7 +684,7 @@ TEST(SchedulerStragglers, ThresholdFollowsTheMedianTileTime) {
 
 TEST(SchedulerStragglers, OldestFirstAndAgedFromTheLatestHandOut) {
     TileScheduler s;  // min 0.05 s, factor 4
-    for (ClientId c : {1, 2, 3, 4}) s.addClient(c);
+    addClients(s, {1, 2, 3, 4});
     s.beginFrame(0, 4);
     EXPECT_EQ(s.request(1, 1, 0.0), std::vector<uint32_t>{0});
     EXPECT_EQ(s.request(2, 1, 0.1), std::vector<uint32_t>{1});
@@ -697,11 +705,7 @@ TEST(SchedulerStragglers, OldestFirstAndAgedFromTheLatestHandOut) {
 
 TEST(SchedulerStragglers, QueuedTilesComeBeforeReissues) {
     TileScheduler s;
-    s.addClient(1);
-    s.addClient(2);
-    s.beginFrame(0, 4);
-    EXPECT_EQ(s.request(1, 1, 0), std::vector<uint32_t>{0});
-    EXPECT_EQ(s.request(2, 1, 0), std::vector<uint32_t>{1});
+    oneTileEach(s, 4);
     EXPECT_EQ(s.complete(2, 0, 1, 0.01), Result::Accepted);
     // Tile 0 is a straggler by now, but 2 and 3 are still queued: they come first, and the
     // rest of the request is filled with the re-issue.
@@ -716,9 +720,7 @@ TEST(SchedulerStragglers, QueuedTilesComeBeforeReissues) {
 // they go back to it.
 TEST(SchedulerLostHandOuts, ReleasedTilesGoBackToTheOnlyClient) {
     TileScheduler s;
-    s.addClient(1);
-    s.beginFrame(1, 4);
-    EXPECT_EQ(s.request(1, 4, 0.0), range(0, 4));
+    oneClientTakesAll(s, 1);
     EXPECT_EQ(s.complete(1, 1, 0, 0.01), Result::Accepted);
     EXPECT_EQ(s.complete(1, 1, 1, 0.02), Result::Accepted);
     // Tiles 2 and 3: their results were lost. Without a release nothing ever gives them out again.
@@ -750,8 +752,7 @@ TEST(SchedulerLostHandOuts, AReleasedHandOutsLateResultStillCountsOnce) {
 
 TEST(SchedulerLostHandOuts, ATileStillRenderedElsewhereIsNotQueuedAgain) {
     TileScheduler s(SchedulerOptions{false, 2.0, 0.05, 1});
-    s.addClient(1);
-    s.addClient(2);
+    addClients(s, {1, 2});
     s.beginFrame(1, 2);
     EXPECT_EQ(s.request(1, 1, 0.0), std::vector<uint32_t>{0});
     EXPECT_EQ(s.request(2, 1, 0.0), std::vector<uint32_t>{1});
@@ -767,8 +768,7 @@ TEST(SchedulerLostHandOuts, ATileStillRenderedElsewhereIsNotQueuedAgain) {
 // and to the same client (its other threads) when it is the only one left.
 TEST(SchedulerLostHandOuts, AStuckTileAvoidsItsClientWhileAnotherIsPresent) {
     TileScheduler s(SchedulerOptions{false, 4.0, 0.05, 1});
-    s.addClient(1);
-    s.addClient(2);
+    addClients(s, {1, 2});
     s.beginFrame(1, 4);
     EXPECT_EQ(s.request(1, 2, 0.0), range(0, 2));
     EXPECT_FALSE(s.release(1, 1, 3, true)) << "not its tile";
@@ -786,175 +786,216 @@ TEST(SchedulerLostHandOuts, AStuckTileAvoidsItsClientWhileAnotherIsPresent) {
     EXPECT_EQ(s.request(1, 1, 0.1), std::vector<uint32_t>{0}) << "the only client left: its other threads take it";
 }
 
-TEST(SchedulerProperty, RandomSequencesKeepTheInvariants) {
-    for (uint64_t seed = 1; seed <= 150; ++seed) {
-        SCOPED_TRACE("seed " + std::to_string(seed));
-        std::mt19937_64 rng(seed * 7919);
+// A model of what a TileScheduler driven by random calls must answer: which clients are live,
+// who holds which tile of the frame, what was handed out and released, what is done. Each call
+// checks the scheduler against it.
+class SchedulerModel {
+public:
+    explicit SchedulerModel(uint64_t seed) : rng_(seed * 7919), s_(optionsFor(seed)) {
+        for (uint64_t i = 0, n = 1 + rng_() % 4; i < n; ++i) addClient();
+    }
+
+    // Frame `frame` (sometimes with a new tile count): 300 random calls, the tile counts checked
+    // after each. Fatal failures: call it in ASSERT_NO_FATAL_FAILURE.
+    void randomCalls(uint32_t frame) {
+        frame_ = frame;
+        if (frame == 0 || rng_() % 4 == 0) tiles_ = 1 + uint32_t(rng_() % 40);
+        s_.beginFrame(frame, tiles_);
+        accepted_.assign(tiles_, 0);
+        handed_.clear();
+        holders_.assign(tiles_, {});
+        released_.clear();
+        assigned_ = acceptedCount_ = 0;
+        for (int step = 0; step < 300; ++step) {
+            now_ += rng_() % 50 == 0 ? 1.0 : double(rng_() % 10) * 0.001;
+            randomCall();
+            ASSERT_EQ(s_.remaining(), tiles_ - acceptedCount_);
+            ASSERT_EQ(s_.frameComplete(), acceptedCount_ == tiles_);
+        }
+    }
+
+    // Drain with whoever is left: every tile must be accepted exactly once, and the statistics
+    // add up. Fatal failures: call it in ASSERT_NO_FATAL_FAILURE.
+    void drainAndCheck() {
+        if (live_.empty()) addClient();
+        for (int round = 0; !s_.frameComplete() && round < 1000; ++round) {
+            for (ClientId c : std::vector<ClientId>(live_.begin(), live_.end())) request(c, 4);
+            now_ += 0.001;
+            for (size_t i = 0; i < held_.size();) {
+                if (held_[i].frame == frame_ && live_.count(held_[i].client)) {
+                    const Held h = held_[i];
+                    held_.erase(held_.begin() + std::ptrdiff_t(i));
+                    report(h);
+                } else {
+                    ++i;
+                }
+            }
+        }
+        ASSERT_TRUE(s_.frameComplete());
+        EXPECT_EQ(s_.remaining(), 0u);
+        EXPECT_EQ(accepted_, std::vector<int>(tiles_, 1));
+        EXPECT_EQ(s_.stats().completed, tiles_);
+        EXPECT_EQ(sum(s_.stats().completedBy), tiles_);
+        EXPECT_EQ(s_.stats().assigned, assigned_);
+        EXPECT_EQ(sum(s_.stats().stolenBy), s_.stats().stolen);
+        EXPECT_LE(s_.stats().affinityHits, s_.stats().completed);
+        EXPECT_LE(s_.stats().stolen + s_.stats().reissued, s_.stats().assigned);
+    }
+
+private:
+    struct Held {
+        ClientId client;
+        uint32_t frame, tile;
+    };
+
+    static SchedulerOptions optionsFor(uint64_t seed) {
         SchedulerOptions options;
         options.affinity = seed % 2 == 1;
         options.seed = seed;
         options.stragglerFactor = 2;
-        TileScheduler s(options);
+        return options;
+    }
 
-        std::set<ClientId> live;
-        ClientId nextId = 0;
-        auto addClient = [&] {
-            s.addClient(nextId);
-            live.insert(nextId++);
-        };
-        for (uint64_t i = 0, n = 1 + rng() % 4; i < n; ++i) addClient();
+    void addClient() {
+        s_.addClient(nextId_);
+        live_.insert(nextId_++);
+    }
 
-        struct Held {
-            ClientId client;
-            uint32_t frame, tile;
-        };
-        std::vector<Held> held;  // hand-outs not reported yet, of any frame and any client
-        double now = 0;
-        uint32_t tiles = 0;
+    ClientId pick(const std::set<ClientId>& from) {
+        auto it = from.begin();
+        std::advance(it, std::ptrdiff_t(rng_() % from.size()));
+        return *it;
+    }
 
+    // One call of the scheduler's, drawn at random: a request, a result (held, garbage), a client
+    // never seen, one removed or added, lost hand-outs.
+    void randomCall() {
+        const uint64_t op = rng_() % 21;
+        if (op < 8 && !live_.empty()) {
+            request(pick(live_), 1 + uint32_t(rng_() % 4));
+        } else if (op < 15 && !held_.empty()) {
+            const size_t i = rng_() % held_.size();
+            const Held h = held_[i];
+            held_.erase(held_.begin() + std::ptrdiff_t(i));
+            report(h);
+        } else if (op == 15) {
+            report({ClientId(rng_() % (nextId_ + 2)), frame_, uint32_t(rng_() % (tiles_ + 3))});  // garbage
+        } else if (op == 16) {
+            request(nextId_ + 5, 4);  // a client never seen
+        } else if (op == 17 && !live_.empty()) {
+            removeClient(pick(live_));
+        } else if (op == 18) {
+            addClient();
+        } else if (op == 19 && !live_.empty()) {
+            loseHandOuts(pick(live_));
+        }
+    }
+
+    void request(ClientId c, uint32_t n) {
+        const uint64_t reissuedBefore = s_.stats().reissued;
+        const std::vector<uint32_t> got = s_.request(c, n, now_);
+        EXPECT_LE(got.size(), n);
+        if (!live_.count(c)) {
+            EXPECT_TRUE(got.empty());
+        }
+        std::set<uint32_t> unique;
+        uint64_t heldElsewhere = 0;
+        for (uint32_t t : got) {
+            ASSERT_LT(t, tiles_);
+            EXPECT_TRUE(unique.insert(t).second) << "tile " << t << " twice in one request";
+            EXPECT_EQ(accepted_[t], 0) << "done tile " << t << " handed out";
+            if (handed_.count({t, c})) {  // only after its hand-out was released
+                EXPECT_EQ(released_.erase({t, c}), 1u) << "tile " << t << " handed to " << c << " twice";
+            }
+            heldElsewhere += !holders_[t].empty();
+            holders_[t].insert(c);
+            handed_.insert({t, c});
+            held_.push_back({c, frame_, t});
+        }
+        // A tile somebody is still rendering goes out again only as a re-issue.
+        EXPECT_EQ(heldElsewhere, s_.stats().reissued - reissuedBefore);
+        assigned_ += got.size();
+    }
+
+    void report(const Held& h) {
+        Result expected;
+        if (h.frame != frame_)
+            expected = Result::Stale;
+        else if (h.tile >= tiles_ || !live_.count(h.client) || !handed_.count({h.tile, h.client}))
+            expected = Result::Unexpected;
+        else if (accepted_[h.tile])
+            expected = Result::Duplicate;
+        else
+            expected = Result::Accepted;
+        EXPECT_EQ(s_.complete(h.client, h.frame, h.tile, now_), expected);
+        if (expected == Result::Accepted) {
+            ++accepted_[h.tile];
+            ++acceptedCount_;
+            holders_[h.tile].clear();
+        }
+    }
+
+    void removeClient(ClientId c) {
+        live_.erase(c);
+        // At least the tiles only it held and that are not done come back.
+        size_t onlyHeldByIt = 0;
+        for (uint32_t t = 0; t < tiles_; ++t) {
+            onlyHeldByIt += !accepted_[t] && holders_[t] == std::set<ClientId>{c};
+            holders_[t].erase(c);
+        }
+        for (auto it = handed_.begin(); it != handed_.end();) it = it->second == c ? handed_.erase(it) : std::next(it);
+        for (auto it = released_.begin(); it != released_.end();) it = it->second == c ? released_.erase(it) : std::next(it);
+        EXPECT_GE(s_.removeClient(c), onlyHeldByIt);
+    }
+
+    // Lost hand-outs: all of client c's (idle report), or one stuck tile.
+    void loseHandOuts(ClientId c) {
+        size_t holding = 0;
+        for (uint32_t t = 0; t < tiles_; ++t) holding += holders_[t].count(c);
+        if (rng_() % 2 == 0) {
+            EXPECT_EQ(s_.release(c), holding);
+            for (uint32_t t = 0; t < tiles_; ++t)
+                if (holders_[t].erase(c)) released_.insert({t, c});
+        } else {
+            const uint32_t t = uint32_t(rng_() % (tiles_ + 1));
+            const bool holds = t < tiles_ && holders_[t].count(c);
+            EXPECT_EQ(s_.release(c, frame_, t, rng_() % 2 == 0), holds);
+            if (holds) {
+                holders_[t].erase(c);
+                released_.insert({t, c});
+            }
+        }
+    }
+
+    std::mt19937_64 rng_;
+    TileScheduler s_;
+    std::set<ClientId> live_;
+    ClientId nextId_ = 0;
+    std::vector<Held> held_;  // hand-outs not reported yet, of any frame and any client
+    double now_ = 0;
+    uint32_t frame_ = 0, tiles_ = 0;
+    // Of the current frame:
+    std::vector<int> accepted_;
+    std::set<std::pair<uint32_t, ClientId>> handed_;    // present clients
+    std::vector<std::set<ClientId>> holders_;           // awaiting a result, present clients
+    std::set<std::pair<uint32_t, ClientId>> released_;  // hand-outs released: may be handed to it again
+    uint64_t assigned_ = 0, acceptedCount_ = 0;
+};
+
+TEST(SchedulerProperty, RandomSequencesKeepTheInvariants) {
+    for (uint64_t seed = 1; seed <= 150; ++seed) {
+        SCOPED_TRACE("seed " + std::to_string(seed));
+        SchedulerModel model(seed);
         for (uint32_t frame = 0; frame < 6; ++frame) {
-            if (frame == 0 || rng() % 4 == 0) tiles = 1 + uint32_t(rng() % 40);
-            s.beginFrame(frame, tiles);
-            std::vector<int> accepted(tiles, 0);
-            std::set<std::pair<uint32_t, ClientId>> handed;    // this frame, present clients
-            std::vector<std::set<ClientId>> holders(tiles);    // awaiting a result, present clients
-            std::set<std::pair<uint32_t, ClientId>> released;  // hand-outs released: may be handed to it again
-            uint64_t assigned = 0, acceptedCount = 0;
-
-            auto request = [&](ClientId c, uint32_t n) {
-                const uint64_t reissuedBefore = s.stats().reissued;
-                const std::vector<uint32_t> got = s.request(c, n, now);
-                EXPECT_LE(got.size(), n);
-                if (!live.count(c)) {
-                    EXPECT_TRUE(got.empty());
-                }
-                std::set<uint32_t> unique;
-                uint64_t heldElsewhere = 0;
-                for (uint32_t t : got) {
-                    ASSERT_LT(t, tiles);
-                    EXPECT_TRUE(unique.insert(t).second) << "tile " << t << " twice in one request";
-                    EXPECT_EQ(accepted[t], 0) << "done tile " << t << " handed out";
-                    if (handed.count({t, c})) {  // only after its hand-out was released
-                        EXPECT_EQ(released.erase({t, c}), 1u) << "tile " << t << " handed to " << c << " twice";
-                    }
-                    heldElsewhere += !holders[t].empty();
-                    holders[t].insert(c);
-                    handed.insert({t, c});
-                    held.push_back({c, frame, t});
-                }
-                // A tile somebody is still rendering goes out again only as a re-issue.
-                EXPECT_EQ(heldElsewhere, s.stats().reissued - reissuedBefore);
-                assigned += got.size();
-            };
-            auto report = [&](const Held& h) {
-                Result expected;
-                if (h.frame != frame)
-                    expected = Result::Stale;
-                else if (h.tile >= tiles || !live.count(h.client) || !handed.count({h.tile, h.client}))
-                    expected = Result::Unexpected;
-                else if (accepted[h.tile])
-                    expected = Result::Duplicate;
-                else
-                    expected = Result::Accepted;
-                EXPECT_EQ(s.complete(h.client, h.frame, h.tile, now), expected);
-                if (expected == Result::Accepted) {
-                    ++accepted[h.tile];
-                    ++acceptedCount;
-                    holders[h.tile].clear();
-                }
-            };
-            auto removeClient = [&](ClientId c) {
-                live.erase(c);
-                // At least the tiles only it held and that are not done come back.
-                size_t onlyHeldByIt = 0;
-                for (uint32_t t = 0; t < tiles; ++t) {
-                    onlyHeldByIt += !accepted[t] && holders[t] == std::set<ClientId>{c};
-                    holders[t].erase(c);
-                }
-                for (auto it = handed.begin(); it != handed.end();) it = it->second == c ? handed.erase(it) : std::next(it);
-                for (auto it = released.begin(); it != released.end();) it = it->second == c ? released.erase(it) : std::next(it);
-                EXPECT_GE(s.removeClient(c), onlyHeldByIt);
-            };
-            auto pick = [&](const std::set<ClientId>& from) {
-                auto it = from.begin();
-                std::advance(it, std::ptrdiff_t(rng() % from.size()));
-                return *it;
-            };
-
-            for (int step = 0; step < 300; ++step) {
-                now += rng() % 50 == 0 ? 1.0 : double(rng() % 10) * 0.001;
-                const uint64_t op = rng() % 21;
-                if (op < 8 && !live.empty()) {
-                    request(pick(live), 1 + uint32_t(rng() % 4));
-                } else if (op < 15 && !held.empty()) {
-                    const size_t i = rng() % held.size();
-                    const Held h = held[i];
-                    held.erase(held.begin() + std::ptrdiff_t(i));
-                    report(h);
-                } else if (op == 15) {
-                    report({ClientId(rng() % (nextId + 2)), frame, uint32_t(rng() % (tiles + 3))});  // garbage
-                } else if (op == 16) {
-                    request(nextId + 5, 4);  // a client never seen
-                } else if (op == 17 && !live.empty()) {
-                    removeClient(pick(live));
-                } else if (op == 18) {
-                    addClient();
-                } else if (op == 19 && !live.empty()) {
-                    // Lost hand-outs: all of a client's (idle report), or one stuck tile.
-                    const ClientId c = pick(live);
-                    size_t holding = 0;
-                    for (uint32_t t = 0; t < tiles; ++t) holding += holders[t].count(c);
-                    if (rng() % 2 == 0) {
-                        EXPECT_EQ(s.release(c), holding);
-                        for (uint32_t t = 0; t < tiles; ++t)
-                            if (holders[t].erase(c)) released.insert({t, c});
-                    } else {
-                        const uint32_t t = uint32_t(rng() % (tiles + 1));
-                        const bool holds = t < tiles && holders[t].count(c);
-                        EXPECT_EQ(s.release(c, frame, t, rng() % 2 == 0), holds);
-                        if (holds) {
-                            holders[t].erase(c);
-                            released.insert({t, c});
-                        }
-                    }
-                }
-                ASSERT_EQ(s.remaining(), tiles - acceptedCount);
-                ASSERT_EQ(s.frameComplete(), acceptedCount == tiles);
-            }
-
-            // Drain with whoever is left: every tile must be accepted exactly once.
-            if (live.empty()) addClient();
-            for (int round = 0; !s.frameComplete() && round < 1000; ++round) {
-                for (ClientId c : std::vector<ClientId>(live.begin(), live.end())) request(c, 4);
-                now += 0.001;
-                for (size_t i = 0; i < held.size();) {
-                    if (held[i].frame == frame && live.count(held[i].client)) {
-                        const Held h = held[i];
-                        held.erase(held.begin() + std::ptrdiff_t(i));
-                        report(h);
-                    } else {
-                        ++i;
-                    }
-                }
-            }
-            ASSERT_TRUE(s.frameComplete());
-            EXPECT_EQ(s.remaining(), 0u);
-            EXPECT_EQ(accepted, std::vector<int>(tiles, 1));
-            EXPECT_EQ(s.stats().completed, tiles);
-            EXPECT_EQ(sum(s.stats().completedBy), tiles);
-            EXPECT_EQ(s.stats().assigned, assigned);
-            EXPECT_EQ(sum(s.stats().stolenBy), s.stats().stolen);
-            EXPECT_LE(s.stats().affinityHits, s.stats().completed);
-            EXPECT_LE(s.stats().stolen + s.stats().reissued, s.stats().assigned);
+            ASSERT_NO_FATAL_FAILURE(model.randomCalls(frame));
+            ASSERT_NO_FATAL_FAILURE(model.drainAndCheck());
         }
     }
 }
 
 TEST(SchedulerProperty, SameSeedSameSchedule) {
     auto trace = [](uint64_t seed) {
-        SchedulerOptions options;
-        options.seed = seed;
-        TileScheduler s(options);
+        TileScheduler s(seeded(seed));
         std::mt19937 ops(99);  // the same calls every time; only the scheduler's seed varies
         for (ClientId c = 0; c < 4; ++c) s.addClient(c);
         std::vector<uint32_t> out;

@@ -1,6 +1,7 @@
 // CURVE on every link: only the clients whose public keys the master lists get in, and the
 // master keeps serving frames whatever knocks at its port. Bounded: refused clients give up
 // after their idle limit.
+#include "local_cluster.h"
 #include "test_util.h"
 
 #include "codec.h"
@@ -29,18 +30,9 @@
 namespace rtwall {
 namespace {
 
-SceneDesc smallScene() {
-    SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    desc.settings.width = 64;
-    desc.settings.height = 48;
-    desc.settings.supersample = 1;
-    return desc;
-}
+SceneDesc smallScene() { return test::quickDemo(64, 48); }
 
-Image singleMachine(const SceneDesc& desc) {
-    const Scene scene(desc);
-    return renderFrame(scene, Camera(desc.cameras.front(), desc.settings.width, desc.settings.height), desc.settings);
-}
+using test::singleMachine;
 
 // Runs a client on a thread; it returns 1 when it gives up on the master.
 std::future<int> startClient(const std::string& endpoint, const std::filesystem::path& key,
@@ -63,8 +55,7 @@ TEST(Security, OnlyListedClientsGetIn) {
     test::writeFile(dir / "published.key", "public = \"Yne@$w-vo<fVvi]a<NY6T1ed:M$fCG*[IaLV{hID\"\n"
                                            "secret = \"D:)Q[IlAW!ahhC2ac:9*A}h:p?([4%wOTJ%JR%cs\"\n");
     const SceneDesc desc = smallScene();
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.keyFile = dir / "master.key";
     cs.clientKeys = {dir / "good.pub"};
     auto master = std::make_unique<Master>(desc, cs);
@@ -141,8 +132,7 @@ TEST(Attack, MalformedMessagesReachNothing) {
     using namespace cluster;
     const SceneDesc desc = smallScene();
     const Image expected = singleMachine(desc);
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     auto master = std::make_unique<Master>(desc, cs);
     auto honest = startClient(master->endpoint(), {}, {}, 4000);
     ASSERT_TRUE(master->waitForClients(1, 30000));
@@ -368,8 +358,7 @@ TEST(Attack, ReplayedMessagesOfAnAuthenticatedPeerAreDroppedAndCounted) {
     writeNewKeyPair(dir / "replayer");
     SceneDesc desc = smallScene();
     desc.settings.tileSize = 16;
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.stragglerFactor = 1e9;  // no re-issues: every duplicate below is a replay
     cs.keyFile = dir / "master.key";
     cs.clientKeys = {dir / "replayer.pub"};

@@ -17,31 +17,16 @@ namespace rtwall {
 namespace {
 
 using test::LocalCluster;
+using test::differingBytes;
 using test::singleMachine;
-
-size_t differingBytes(const Image& a, const Image& b) {
-    if (a.rgb.size() != b.rgb.size()) return std::max(a.rgb.size(), b.rgb.size());
-    size_t n = 0;
-    for (size_t i = 0; i < a.rgb.size(); ++i) n += a.rgb[i] != b.rgb[i];
-    return n;
-}
 
 TEST(ClusterShading, EveryMaterialAndGiBitIdenticalToOneMachine) {
     const auto dir = test::scratchDir();
-    SceneDesc desc = test::materialZoo(dir, 64, 48);
-    desc.settings.tileSize = 8;
-    ClusterSettings cs;
-    cs.async = false;
-    cs.prefetch = 2;
-    // 8-bit tiles, compared with one machine's 8-bit frames (linear tiles for accumulation:
-    // assets_accumulation_test.cpp).
-    cs.wideAccumulation = false;
-    LocalCluster cluster(desc, cs, 3);
+    SceneDesc desc = test::zooInTilesOf8(dir, 64, 48);
+    LocalCluster cluster(desc, test::eightBitFrames(), 3);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(3, 30000));
-    FrameReport r;
-    Image img = master.renderFrame(&r);
-    EXPECT_EQ(differingBytes(img, singleMachine(desc, r.frame)), 0u) << "whitted";
+    ASSERT_TRUE(cluster.ready());
+    cluster.expectFrameOf(desc, "whitted");
 
     // GI: each frame has its own seeds; the cluster's progressive mean equals one machine's.
     SceneDesc gi = desc;
@@ -50,11 +35,10 @@ TEST(ClusterShading, EveryMaterialAndGiBitIdenticalToOneMachine) {
     master.setRenderSettings(gi.settings);
     Accumulator clusterAcc, localAcc;
     for (int f = 0; f < 3; ++f) {
-        img = master.renderFrame(&r);
-        const Image local = singleMachine(gi, r.frame);
-        EXPECT_EQ(differingBytes(img, local), 0u) << "gi frame " << r.frame;
+        FrameReport r;
+        const Image img = cluster.expectFrameOf(gi, "gi", &r);
         clusterAcc.add(img);
-        localAcc.add(local);
+        localAcc.add(singleMachine(gi, r.frame));
     }
     EXPECT_EQ(differingBytes(clusterAcc.resolve(), localAcc.resolve()), 0u);
 
@@ -65,8 +49,7 @@ TEST(ClusterShading, EveryMaterialAndGiBitIdenticalToOneMachine) {
     changed.materials[0].texture.kind = TextureKind::Marble;
     master.setMaterial(4, changed.materials[4]);
     master.setMaterial(0, changed.materials[0]);
-    img = master.renderFrame(&r);
-    EXPECT_EQ(differingBytes(img, singleMachine(changed, r.frame)), 0u) << "after material updates";
+    cluster.expectFrameOf(changed, "after material updates");
 }
 
 // An area light with a visible face (an emitting panel in its place, counted once by multiple
@@ -75,10 +58,7 @@ TEST(ClusterShading, EveryMaterialAndGiBitIdenticalToOneMachine) {
 // its panel (each client finds the faces again, as one machine does).
 TEST(ClusterShading, LampFacesAndTwoSidedEmissionBitIdenticalToOneMachine) {
     const auto dir = test::scratchDir();
-    SceneDesc desc = test::materialZoo(dir, 48, 36);
-    desc.settings.tileSize = 8;
-    desc.settings.gi = true;
-    desc.settings.samples = 2;
+    SceneDesc desc = test::zooInTilesOf8(dir, 48, 36, 2);
     Material panel = test::material("panel", MaterialType::Emissive, {1, 1, 1});
     panel.emission = {3, 3, 3};  // the zoo's area light: radiance 3 over [0.5, 1.5] x [-1.5, -0.5] at y 3.5
     desc.materials.push_back(panel);
@@ -86,18 +66,10 @@ TEST(ClusterShading, LampFacesAndTwoSidedEmissionBitIdenticalToOneMachine) {
                               Transform::translate(1.0, 3.505, -1.0) * Transform::rotateDegrees(1, 0, 0, 180) *
                                   Transform::scale(0.5, 1, 0.5)});
     ASSERT_EQ(Scene(desc).lightFace(1), LightFace::Covered);
-    ClusterSettings cs;
-    cs.async = false;
-    cs.prefetch = 2;
-    cs.wideAccumulation = false;  // 8-bit tiles, compared with one machine's 8-bit frames
-    LocalCluster cluster(desc, cs, 3);
+    LocalCluster cluster(desc, test::eightBitFrames(), 3);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(3, 30000));
-    FrameReport r;
-    for (int f = 0; f < 2; ++f) {
-        const Image img = master.renderFrame(&r);
-        EXPECT_EQ(differingBytes(img, singleMachine(desc, r.frame)), 0u) << "frame " << r.frame;
-    }
+    ASSERT_TRUE(cluster.ready());
+    for (int f = 0; f < 2; ++f) cluster.expectFrameOf(desc, "one-sided");
     SceneDesc changed = desc;
     changed.materials.back().twoSided = true;
     changed.lights[1].twoSided = true;
@@ -105,8 +77,7 @@ TEST(ClusterShading, LampFacesAndTwoSidedEmissionBitIdenticalToOneMachine) {
     ASSERT_EQ(Scene(changed).lightFace(1), LightFace::None);
     master.setMaterial(uint32_t(changed.materials.size() - 1), changed.materials.back());
     master.setLight(1, changed.lights[1]);
-    const Image img = master.renderFrame(&r);
-    EXPECT_EQ(differingBytes(img, singleMachine(changed, r.frame)), 0u) << "after the updates";
+    cluster.expectFrameOf(changed, "after the updates");
 }
 
 // Section planes (issue 20, protocol version 9): a scene that starts with one plane (in the
@@ -114,22 +85,14 @@ TEST(ClusterShading, LampFacesAndTwoSidedEmissionBitIdenticalToOneMachine) {
 // turned off as differential updates.
 TEST(ClusterShading, SectionPlanesAndTheirUpdatesBitIdenticalToOneMachine) {
     const auto dir = test::scratchDir();
-    SceneDesc desc = test::materialZoo(dir, 64, 48);
-    desc.settings.tileSize = 8;
+    SceneDesc desc = test::zooInTilesOf8(dir, 64, 48);
     desc.sections[1].enabled = true;
     desc.sections[1].point = {0.3f, 0, 0};
     desc.sections[1].normal = {-1, 0, 0.2f};
-    ClusterSettings cs;
-    cs.async = false;
-    cs.prefetch = 2;
-    cs.wideAccumulation = false;  // 8-bit tiles, compared with one machine's 8-bit frames
-    LocalCluster cluster(desc, cs, 3);
+    LocalCluster cluster(desc, test::eightBitFrames(), 3);
     Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(3, 30000));
-    FrameReport r;
-    Image img = master.renderFrame(&r);
-    EXPECT_EQ(differingBytes(img, singleMachine(desc, r.frame)), 0u) << "the snapshot's plane";
-    const Image before = img;
+    ASSERT_TRUE(cluster.ready());
+    const Image before = cluster.expectFrameOf(desc, "the snapshot's plane");
 
     SceneDesc changed = desc;
     changed.sections[1].point = {-0.5f, 0, 0};
@@ -139,9 +102,8 @@ TEST(ClusterShading, SectionPlanesAndTheirUpdatesBitIdenticalToOneMachine) {
     changed.sections[4].capColor = {0.1f, 0.2f, 0.9f};
     master.setSection(1, changed.sections[1]);
     master.setSection(4, changed.sections[4]);
-    img = master.renderFrame(&r);
-    EXPECT_EQ(differingBytes(img, singleMachine(changed, r.frame)), 0u) << "a plane moved and one added";
-    EXPECT_GT(differingBytes(img, before), 0u) << "the updates changed the picture";
+    EXPECT_GT(differingBytes(cluster.expectFrameOf(changed, "a plane moved and one added"), before), 0u)
+        << "the updates changed the picture";
 
     changed.sections[1].enabled = false;
     master.setSection(1, changed.sections[1]);
@@ -149,8 +111,7 @@ TEST(ClusterShading, SectionPlanesAndTheirUpdatesBitIdenticalToOneMachine) {
     SectionPlane flat = changed.sections[1];
     flat.normal = {0, 0, 0};
     EXPECT_THROW(master.setSection(2, flat), std::invalid_argument);
-    img = master.renderFrame(&r);
-    EXPECT_EQ(differingBytes(img, singleMachine(changed, r.frame)), 0u) << "a plane turned off";
+    cluster.expectFrameOf(changed, "a plane turned off");
 }
 
 // Texture coordinates travel with the mesh (protocol version 5): a UV-textured OBJ (an image by
@@ -158,8 +119,7 @@ TEST(ClusterShading, SectionPlanesAndTheirUpdatesBitIdenticalToOneMachine) {
 // machine's bytes.
 TEST(ClusterShading, UVTexturedMeshBitIdenticalToOneMachine) {
     const auto dir = test::scratchDir();
-    SceneDesc desc = test::materialZoo(dir, 64, 48);
-    desc.settings.tileSize = 8;
+    SceneDesc desc = test::zooInTilesOf8(dir, 64, 48);
     const std::string file = (test::dataDir() / "meshes" / "uv_seam.obj").string();
     auto mesh = std::make_shared<const TriangleMesh>(loadMesh(file));
     ASSERT_TRUE(mesh->hasUVs());
@@ -179,17 +139,11 @@ TEST(ClusterShading, UVTexturedMeshBitIdenticalToOneMachine) {
     const uint32_t meshIndex = uint32_t(desc.meshes.size() - 1), materialIndex = uint32_t(desc.materials.size() - 1);
     desc.instances.push_back({meshIndex, materialIndex, Transform::translate(-1.0, 0.3, 0.5) * Transform::scale(1.5, 1.5, 1.5)});
     desc.instances.push_back({meshIndex, materialIndex, Transform::translate(0.5, 1.2, 0.0) * Transform::rotateDegrees(1, 0, 0, 80)});
-    ClusterSettings cs;
-    cs.async = false;
-    cs.prefetch = 2;
-    cs.wideAccumulation = false;
-    LocalCluster cluster(desc, cs, 2);
-    Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(2, 30000));
+    LocalCluster cluster(desc, test::eightBitFrames(), 2);
+    ASSERT_TRUE(cluster.ready());
     FrameReport r;
-    const Image img = master.renderFrame(&r);
+    cluster.expectFrameOf(desc, "the UV mesh", &r);
     const Image local = singleMachine(desc, r.frame);
-    EXPECT_EQ(differingBytes(img, local), 0u);
     // The UV mesh is in the picture: without it the frame differs.
     SceneDesc without = desc;
     without.instances.resize(without.instances.size() - 2);
@@ -198,17 +152,14 @@ TEST(ClusterShading, UVTexturedMeshBitIdenticalToOneMachine) {
 
 TEST(ClusterShading, ClientViewShowsTheIdsTheMasterAssigned) {
     const auto dir = test::scratchDir();
-    SceneDesc desc = test::materialZoo(dir, 64, 48);
-    desc.settings.tileSize = 8;
+    SceneDesc desc = test::zooInTilesOf8(dir, 64, 48);
     desc.settings.view = ViewMode::Client;
-    ClusterSettings cs;
-    cs.async = false;
+    ClusterSettings cs = test::inStep();
     cs.prefetch = 1;
     LocalCluster cluster(desc, cs, 3);
-    Master& master = *cluster.master;
-    ASSERT_TRUE(master.waitForClients(3, 30000));
+    ASSERT_TRUE(cluster.ready());
     FrameReport r;
-    const Image img = master.renderFrame(&r);
+    const Image img = cluster.master->renderFrame(&r);
     std::set<uint32_t> colours;
     for (size_t i = 0; i + 2 < img.rgb.size(); i += 3)
         colours.insert(uint32_t(img.rgb[i]) << 16 | uint32_t(img.rgb[i + 1]) << 8 | img.rgb[i + 2]);

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <functional>
 
 namespace rtwall {
 namespace {
@@ -211,17 +212,17 @@ TEST(ClusterSimulation, IsDeterministic) {
     EXPECT_EQ(a.stolenPerFrame, b.stolenPerFrame);
 }
 
-TEST(ClusterSimulation, RejectsBadConfigurations) {
-    const TileProfile p = uniformProfile(4, 0.01, 10);
+// The trivial configuration changed by `change` (`what` says how) is refused, for four tiles.
+void expectRejected(const char* what, const std::function<void(SimConfig&)>& change) {
     SimConfig cfg = trivial();
-    cfg.clients = 0;
-    EXPECT_THROW(simulateCluster(p, cfg), InputError);
-    cfg = trivial();
-    cfg.codec = 1;
-    EXPECT_THROW(simulateCluster(p, cfg), InputError);
-    cfg = trivial();
-    cfg.masterSecondsPerResult = -1e-6;
-    EXPECT_THROW(simulateCluster(p, cfg), InputError);
+    change(cfg);
+    EXPECT_THROW(simulateCluster(uniformProfile(4, 0.01, 10), cfg), InputError) << what;
+}
+
+TEST(ClusterSimulation, RejectsBadConfigurations) {
+    expectRejected("no clients", [](SimConfig& c) { c.clients = 0; });
+    expectRejected("a codec the profile lacks", [](SimConfig& c) { c.codec = 1; });
+    expectRejected("a negative master cost", [](SimConfig& c) { c.masterSecondsPerResult = -1e-6; });
 }
 
 // ---- Display nodes (issue 19) ----------------------------------------------------------------
@@ -347,19 +348,19 @@ TEST(ClusterSimulationNodes, ColumnMasksSplitTheWidthAndFanOutAtCutTiles) {
 }
 
 TEST(ClusterSimulationNodes, RejectsBadNodeConfigurations) {
-    const TileProfile p = uniformProfile(4, 0.01, 10);
-    SimConfig cfg = trivial();
-    cfg.displayNodes = 65;
-    EXPECT_THROW(simulateCluster(p, cfg), InputError);
-    cfg = trivial();
-    cfg.displayNodes = 2;
-    cfg.tileNodes = {1, 2, 3};  // 3 masks for 4 tiles
-    EXPECT_THROW(simulateCluster(p, cfg), InputError);
-    cfg.tileNodes = {1, 2, 4, 1};  // node 2 of 2
-    EXPECT_THROW(simulateCluster(p, cfg), InputError);
-    cfg.tileNodes.clear();
-    cfg.nodeDecodeThreads = 0;
-    EXPECT_THROW(simulateCluster(p, cfg), InputError);
+    expectRejected("65 nodes", [](SimConfig& c) { c.displayNodes = 65; });
+    expectRejected("3 masks for 4 tiles", [](SimConfig& c) {
+        c.displayNodes = 2;
+        c.tileNodes = {1, 2, 3};
+    });
+    expectRejected("node 2 of 2", [](SimConfig& c) {
+        c.displayNodes = 2;
+        c.tileNodes = {1, 2, 4, 1};
+    });
+    expectRejected("no node decode thread", [](SimConfig& c) {
+        c.displayNodes = 2;
+        c.nodeDecodeThreads = 0;
+    });
 }
 
 TEST(TileProfile, WritesAndReadsBack) {

@@ -11,11 +11,14 @@
 namespace rtwall::cluster {
 namespace {
 
+// Nodes joined to b, in this order.
+void joinAll(SwapBarrier& b, std::initializer_list<NodeId> nodes) {
+    for (NodeId n : nodes) b.join(n);
+}
+
 TEST(SwapBarrier, ReleasesAFrameOnlyWhenEveryNodeHoldsIt) {
     SwapBarrier b(0.5);
-    b.join(1);
-    b.join(2);
-    b.join(3);
+    joinAll(b, {1, 2, 3});
     EXPECT_FALSE(b.have(1, 1, 0.0));
     EXPECT_FALSE(b.have(3, 1, 0.01));
     EXPECT_FALSE(b.have(1, 1, 0.02));  // a repeat changes nothing
@@ -58,8 +61,7 @@ TEST(SwapBarrier, NoFrameIsReleasedBeforeAllHoldItUnderAnyDelay) {
 
 TEST(SwapBarrier, AStalledNodeIsLeftOutAndRejoins) {
     SwapBarrier b(0.1);
-    b.join(1);
-    b.join(2);
+    joinAll(b, {1, 2});
     EXPECT_FALSE(b.have(1, 1, 1.0));
     EXPECT_FALSE(b.poll(1.05));  // node 2 is late, not yet stalled
     EXPECT_EQ(b.poll(1.2), 1u);  // stalled: frame 1 goes to swap without it
@@ -79,8 +81,7 @@ TEST(SwapBarrier, AStalledNodeIsLeftOutAndRejoins) {
 
 TEST(SwapBarrier, ANodeThatLeavesNoLongerHoldsFramesBack) {
     SwapBarrier b(10);
-    b.join(1);
-    b.join(2);
+    joinAll(b, {1, 2});
     EXPECT_FALSE(b.have(1, 1, 0));
     b.leave(2);
     EXPECT_EQ(b.poll(0.01), 1u);
@@ -94,8 +95,7 @@ TEST(SwapBarrier, ANodeThatLeavesNoLongerHoldsFramesBack) {
 
 TEST(SwapBarrier, ANewerFrameAllHoldSupersedesOlderOnes) {
     SwapBarrier b(10);
-    b.join(1);
-    b.join(2);
+    joinAll(b, {1, 2});
     EXPECT_FALSE(b.have(1, 1, 0));  // node 2 never gets frame 1 (a lost tile)
     EXPECT_FALSE(b.have(1, 2, 0.01));
     EXPECT_EQ(b.have(2, 2, 0.02), 2u);
@@ -105,8 +105,7 @@ TEST(SwapBarrier, ANewerFrameAllHoldSupersedesOlderOnes) {
 
 TEST(SwapBarrier, SkewIsTheSpreadOfTheSwapReports) {
     SwapBarrier b(10);
-    b.join(1);
-    b.join(2);
+    joinAll(b, {1, 2});
     b.have(1, 1, 0);
     ASSERT_EQ(b.have(2, 1, 0), 1u);
     b.swapped(2, 1, 5.0004);

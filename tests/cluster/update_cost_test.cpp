@@ -62,9 +62,7 @@ struct Cost {
 // `update(master, f)` is the f-th update of the run.
 template <class Update> Cost updateCost(int instances, Update&& update) {
     const SceneDesc desc = boxes(instances);
-    ClusterSettings cs;
-    cs.async = false;
-    test::LocalCluster cluster(desc, cs, 1);
+    test::LocalCluster cluster(desc, test::inStep(), 1);
     Master& master = *cluster.master;
     EXPECT_TRUE(master.waitForClients(1, 60'000));
     for (int i = 0; i < 3; ++i) master.renderFrame();
@@ -91,15 +89,24 @@ Cost cameraUpdateCost(int instances) {
     });
 }
 
+// The cost of `what` updates (costOf(instances)) with 10 and with 20,000 instances, printed. The
+// same messages and objects either way; what may differ is noise of other threads (heartbeats,
+// ZeroMQ's own allocations), which is far below one copy of the instances. `updateCopies` and
+// `frameCopies` say what a failure of the update's and of the frame's bound means.
+template <class CostOf>
+void expectTheSameCostWhateverTheInstanceCount(const char* what, CostOf&& costOf, const char* updateCopies,
+                                               const char* frameCopies) {
+    const Cost few = costOf(10);
+    const Cost many = costOf(20'000);
+    std::printf("bytes allocated per %s update: %.0f with 10 instances, %.0f with 20,000; per update and frame: "
+                "%.0f and %.0f\n", what, few.updateBytes, many.updateBytes, few.frameBytes, many.frameBytes);
+    EXPECT_LT(many.updateBytes, few.updateBytes + 1024) << updateCopies;
+    EXPECT_LT(many.frameBytes, few.frameBytes + 256 * 1024) << frameCopies;
+}
+
 TEST(Issue17, ACameraUpdateCostsTheSameWhateverTheInstanceCount) {
-    const Cost few = cameraUpdateCost(10);
-    const Cost many = cameraUpdateCost(20'000);
-    std::printf("bytes allocated per camera update: %.0f with 10 instances, %.0f with 20,000; per update and frame: "
-                "%.0f and %.0f\n", few.updateBytes, many.updateBytes, few.frameBytes, many.frameBytes);
-    // The same messages and objects either way; what may differ is noise of other threads
-    // (heartbeats, ZeroMQ's own allocations), which is far below one copy of the instances.
-    EXPECT_LT(many.updateBytes, few.updateBytes + 1024) << "setCamera serialises or copies the scene state";
-    EXPECT_LT(many.frameBytes, few.frameBytes + 256 * 1024) << "a frame copies the scene state";
+    expectTheSameCostWhateverTheInstanceCount("camera", cameraUpdateCost, "setCamera serialises or copies the scene state",
+                                              "a frame copies the scene state");
 }
 
 // Issue 20: moving a section plane costs the master and the clients the same whatever the
@@ -116,12 +123,8 @@ Cost sectionUpdateCost(int instances) {
 }
 
 TEST(Issue20, ASectionPlaneUpdateCostsTheSameWhateverTheInstanceCount) {
-    const Cost few = sectionUpdateCost(10);
-    const Cost many = sectionUpdateCost(20'000);
-    std::printf("bytes allocated per section update: %.0f with 10 instances, %.0f with 20,000; per update and frame: "
-                "%.0f and %.0f\n", few.updateBytes, many.updateBytes, few.frameBytes, many.frameBytes);
-    EXPECT_LT(many.updateBytes, few.updateBytes + 1024) << "setSection serialises or copies the scene state";
-    EXPECT_LT(many.frameBytes, few.frameBytes + 256 * 1024) << "a plane update copies the scene or rebuilds a BVH";
+    expectTheSameCostWhateverTheInstanceCount("section", sectionUpdateCost, "setSection serialises or copies the scene state",
+                                              "a plane update copies the scene or rebuilds a BVH");
 }
 
 }  // namespace

@@ -15,14 +15,7 @@
 namespace rtwall {
 namespace {
 
-SceneDesc demoScene(int width, int height, int tile) {
-    SceneDesc desc = loadSceneFile(test::sourceDir() / "configs/demo.toml");
-    desc.settings.width = width;
-    desc.settings.height = height;
-    desc.settings.tileSize = tile;
-    desc.settings.supersample = 1;
-    return desc;
-}
+SceneDesc demoScene(int width, int height, int tile) { return test::quickDemo(width, height, tile); }
 
 // The scene's camera moved sideways by `dx` and given an off-axis window: an eye of a wall.
 CameraDesc eye(const SceneDesc& d, float dx) {
@@ -58,7 +51,7 @@ TEST(ViewsCluster, StereoInOnePassEqualsOneFramePerEye) {
         ClusterSettings cs;
         cs.async = async;
         test::LocalCluster cluster(d, cs, 2);
-        ASSERT_TRUE(cluster.master->waitForClients(2, 30000));
+        ASSERT_TRUE(cluster.ready());
         Master& m = *cluster.master;
         // Three head positions, each eye pair in one pass; then the separate renders.
         for (int step = 0; step < 3; ++step) {
@@ -96,10 +89,8 @@ TEST(ViewsCluster, CavePlanesRenderOnlyTheirScreensTiles) {
     // Three planes side by side in a 96x32 image (a CAVE's left, front and right walls), each
     // with its own camera; tiles of 16: each plane needs 2 of the 6 tile columns.
     const SceneDesc d = demoScene(96, 32, 16);
-    ClusterSettings cs;
-    cs.async = false;
-    test::LocalCluster cluster(d, cs, 2);
-    ASSERT_TRUE(cluster.master->waitForClients(2, 30000));
+    test::LocalCluster cluster(d, test::inStep(), 2);
+    ASSERT_TRUE(cluster.ready());
     Master& m = *cluster.master;
     std::vector<FrameView> views;
     for (int plane = 0; plane < 3; ++plane) {
@@ -130,10 +121,8 @@ TEST(ViewsCluster, StochasticViewTilesEqualOneMachinesFrameOfThatNumber) {
     d.settings.gi = true;
 
     ASSERT_TRUE(rendersStochastically(d));
-    ClusterSettings cs;
-    cs.async = false;
-    test::LocalCluster cluster(d, cs, 2);
-    ASSERT_TRUE(cluster.master->waitForClients(2, 30000));
+    test::LocalCluster cluster(d, test::inStep(), 2);
+    ASSERT_TRUE(cluster.ready());
     const std::vector<FrameView> views{{eye(d, -0.0325f), {}, 0, 0}, {eye(d, 0.0325f), {}, 0, 0}};
     cluster.master->setViews(views);
     const Scene scene(d);

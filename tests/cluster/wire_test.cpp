@@ -107,14 +107,8 @@ TEST(Wire, EveryReadChecksTheRemainingBytes) {
         }
         if (size < 4) {
             EXPECT_THROW(r.u32(), DecodeError);
-        }
-        if (size < 4) {
             EXPECT_THROW(r.i32(), DecodeError);
-        }
-        if (size < 4) {
             EXPECT_THROW(r.f32(), DecodeError);
-        }
-        if (size < 4) {
             EXPECT_THROW(r.f32Any(), DecodeError);
         }
         EXPECT_THROW(r.u64(), DecodeError);

@@ -7,6 +7,7 @@
 #include <rtwall/vec.h>
 
 #include "scene_impl.h"
+#include "shading_scenes.h"
 #include "test_util.h"
 
 #include "generators.h"
@@ -99,46 +100,8 @@ TEST(SceneGroups, ExpansionIsBounded) {
 // ------------------------------------------------------------------------- far from the origin
 
 std::string sphereScene(double x, double y, double z) {
-    char buf[2048];
-    std::snprintf(buf, sizeof buf, R"(
-[image]
-width = 160
-height = 120
-[render]
-ambient = [0.1, 0.1, 0.1]
-[[mesh]]
-name = "ball"
-shape = "sphere"
-rings = 48
-segments = 96
-[[mesh]]
-name = "floor"
-shape = "quad"
-[[material]]
-name = "white"
-type = "phong"
-color = [0.8, 0.8, 0.8]
-[[instance]]
-mesh = "ball"
-material = "white"
-translate = [%.17g, %.17g, %.17g]
-[[instance]]
-mesh = "floor"
-scale = 6
-translate = [%.17g, %.17g, %.17g]
-[[light]]
-position = [%.17g, %.17g, %.17g]
-intensity = 60
-[[light]]
-type = "directional"
-direction = [-0.3, -1, -0.2]
-[[camera]]
-position = [%.17g, %.17g, %.17g]
-look_at = [%.17g, %.17g, %.17g]
-fov = 40
-)",
-                  x, y + 1.0, z, x, y, z, x + 2, y + 6, z + 3, x + 1.5, y + 3, z + 7, x, y + 0.8, z);
-    return buf;
+    return test::sphereOverFloor(x, y, z, "\n[image]\nwidth = 160\nheight = 120\n[render]\nambient = [0.1, 0.1, 0.1]", 48, 96,
+                                 "[[light]]\ntype = \"directional\"\ndirection = [-0.3, -1, -0.2]\n");
 }
 
 // A far scene is rebased: the single-precision data is small, the origin holds the offset.
