@@ -2,6 +2,7 @@
 // share one scene, take tiles from a local queue and hand encoded results back through inproc
 // PUSH sockets, so only the network thread ever touches the master's connection.
 #include "codec.h"
+#include "link_socket.h"
 #include "net.h"
 #include "protocol.h"
 #include "scene_state.h"
@@ -117,20 +118,9 @@ private:
         configureSocket(dealer_, int64_t(kHeaderSize + 64 + kMaxMeshBytes), heartbeatMs_, timeoutMs());
         dealer_.set(zmq::sockopt::reconnect_ivl, 100);
         dealer_.set(zmq::sockopt::reconnect_ivl_max, std::max(100, settings_.maxReconnectMs));
-        if (!settings_.keyFile.empty()) {
-            dealer_.set(zmq::sockopt::curve_serverkey, serverKey_);
-            dealer_.set(zmq::sockopt::curve_publickey, keys_.publicKey);
-            dealer_.set(zmq::sockopt::curve_secretkey, keys_.secretKey);
-        }
+        if (!settings_.keyFile.empty()) setCurveClient(dealer_, serverKey_, keys_);
         // The handshake's outcome (a refused key, no CURVE on one side) is said in one line.
-        const std::string monitorAddress = "inproc://rtwall-client-monitor-" + std::to_string(++monitorSeq_);
-        if (zmq_socket_monitor(dealer_.handle(), monitorAddress.c_str(),
-                               ZMQ_EVENT_HANDSHAKE_FAILED_AUTH | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
-                                   ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_SUCCEEDED) == 0) {
-            monitor_ = zmq::socket_t(ctx_, zmq::socket_type::pair);
-            monitor_.set(zmq::sockopt::linger, 0);
-            monitor_.connect(monitorAddress);
-        }
+        monitor_.start(ctx_, dealer_, "inproc://rtwall-client-monitor-" + std::to_string(++monitorSeq_), kMasterLinkEvents);
         dealer_.connect(settings_.connect);
         session_ = 0;
         assignFrame_ = 0;
@@ -285,18 +275,11 @@ private:
             link.socket.set(zmq::sockopt::sndhwm, 1000);
             link.socket.set(zmq::sockopt::reconnect_ivl, 100);
             if (!settings_.keyFile.empty() && !e.serverKey.empty()) {
-                link.socket.set(zmq::sockopt::curve_serverkey, e.serverKey);
-                link.socket.set(zmq::sockopt::curve_publickey, keys_.publicKey);
-                link.socket.set(zmq::sockopt::curve_secretkey, keys_.secretKey);
+                setCurveClient(link.socket, e.serverKey, keys_);
                 // A node that refuses this client's key is said once (readNodeMonitors).
-                const std::string monitorAddress = "inproc://rtwall-client-node-monitor-" + std::to_string(++monitorSeq_);
-                if (zmq_socket_monitor(link.socket.handle(), monitorAddress.c_str(),
-                                       ZMQ_EVENT_HANDSHAKE_FAILED_AUTH | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
-                                           ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL) == 0) {
-                    link.monitor = zmq::socket_t(ctx_, zmq::socket_type::pair);
-                    link.monitor.set(zmq::sockopt::linger, 0);
-                    link.monitor.connect(monitorAddress);
-                }
+                link.monitor.start(ctx_, link.socket, "inproc://rtwall-client-node-monitor-" + std::to_string(++monitorSeq_),
+                                   ZMQ_EVENT_HANDSHAKE_FAILED_AUTH | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
+                                       ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL);
             }
             try {
                 link.socket.connect(e.endpoint);
@@ -314,27 +297,19 @@ private:
     void readNodeMonitors() {
         for (auto& [node, link] : nodeLinks_) {
             if (!link.monitor) continue;
-            for (int i = 0; i < 8; ++i) {
-                zmq::message_t event, address;
-                if (!link.monitor.recv(event, zmq::recv_flags::dontwait)) break;
-                if (!event.more() || !link.monitor.recv(address, zmq::recv_flags::dontwait) || event.size() < 6) continue;
-                discardRestOf(link.monitor, address);
-                uint16_t id;
-                uint32_t value;
-                std::memcpy(&id, event.data(), 2);
-                std::memcpy(&value, static_cast<const uint8_t*>(event.data()) + 2, 4);
-                if (settings_.counters) ++(id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH ? settings_.counters->refusedHandshakes
-                                                                                 : settings_.counters->failedHandshakes);
-                if (link.said) continue;
+            link.monitor.read(8, [&](const MonitorEvent& e) {
+                if (settings_.counters) ++(e.id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH ? settings_.counters->refusedHandshakes
+                                                                                   : settings_.counters->failedHandshakes);
+                if (link.said) return;
                 link.said = true;
-                if (id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH)
+                if (e.id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH)
                     std::fprintf(stderr, "rtwall client %u: display node '%s' at %s refused this client's key %s (status %u): "
                                          "it takes the keys the master gives it\n",
-                                 id_, link.name.c_str(), link.endpoint.c_str(), keys_.publicKey.c_str(), value);
+                                 id_, link.name.c_str(), link.endpoint.c_str(), keys_.publicKey.c_str(), e.value);
                 else
                     std::fprintf(stderr, "rtwall client %u: the CURVE handshake with display node '%s' at %s failed (event %u, "
-                                         "value %u)\n", id_, link.name.c_str(), link.endpoint.c_str(), unsigned(id), value);
-            }
+                                         "value %u)\n", id_, link.name.c_str(), link.endpoint.c_str(), unsigned(e.id), e.value);
+            });
         }
     }
 
@@ -789,50 +764,16 @@ private:
 
     // Handshake events of the connection to the master: a refusal is said, not just "no master".
     void readMonitor() {
-        for (int i = 0; i < 16; ++i) {
-            zmq::message_t event, address;
-            if (!monitor_.recv(event, zmq::recv_flags::dontwait)) return;
-            if (!event.more() || !monitor_.recv(address, zmq::recv_flags::dontwait) || event.size() < 6) continue;
-            discardRestOf(monitor_, address);
-            uint16_t id;
-            uint32_t value;
-            std::memcpy(&id, event.data(), 2);
-            std::memcpy(&value, static_cast<const uint8_t*>(event.data()) + 2, 4);
-            std::string why;
-            if (id == ZMQ_EVENT_HANDSHAKE_SUCCEEDED) {
-                handshakeTrouble_.clear();
-                handshakeFailures_ = 0;
-                continue;
-            }
-            if (id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) {
-                if (settings_.counters) ++settings_.counters->refusedHandshakes;
-                why = "the master refused this client's key (status " + std::to_string(value) + "): is " +
-                      (keys_.publicKey.empty() ? std::string("its key") : keys_.publicKey) + " in the master's client_keys?";
-            } else {
-                if (settings_.counters) ++settings_.counters->failedHandshakes;
-                if (id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL && value == ZMQ_PROTOCOL_ERROR_ZMTP_MECHANISM_MISMATCH)
-                    why = "the master and this client disagree on security: one uses CURVE keys, the other not";
-                else if (id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL)
-                    why = "the handshake failed (ZMTP protocol error " + std::to_string(value) + ")";
-                else
-                    // The master closes the connection as soon as it sees the other mechanism, and
-                    // its greeting may be lost with the reset: keyless, this is the likely cause.
-                    why = settings_.keyFile.empty()
-                              ? "the master broke off the handshake: do the master and this client disagree on security "
-                                "(a master with CURVE keys needs --key and --server-key here)?"
-                              : "the master broke off the CURVE handshake: is --server-key its public key?";
-            }
-            if (why != handshakeTrouble_)
-                std::fprintf(stderr, "rtwall client: %s: %s\n", settings_.connect.c_str(), why.c_str());
-            handshakeTrouble_ = why;
-            ++handshakeFailures_;
-        }
+        monitor_.read(16, [&](const MonitorEvent& e) {
+            handshakes_.onEvent(e, settings_.connect, keys_.publicKey, settings_.counters ? &settings_.counters->refusedHandshakes : nullptr,
+                                settings_.counters ? &settings_.counters->failedHandshakes : nullptr);
+        });
     }
 
     std::string handshakeNote() const {
-        if (handshakeTrouble_.empty()) return {};
-        return " (" + handshakeTrouble_ + "; " + std::to_string(handshakeFailures_) + " failed handshake" +
-               (handshakeFailures_ == 1 ? "" : "s") + ")";
+        if (handshakes_.trouble().empty()) return {};
+        return " (" + handshakes_.trouble() + "; " + std::to_string(handshakes_.failures()) + " failed handshake" +
+               (handshakes_.failures() == 1 ? "" : "s") + ")";
     }
 
     // Replay mode (benchmarks of the master and the link): a tile rendered once is sent again
@@ -999,19 +940,18 @@ private:
     std::atomic<int64_t> held_{0};
     uint32_t assignFrame_ = 0;  // the newest frame it was assigned tiles for
     uint32_t assignSeen_ = 0;   // tiles of that frame's assignments that arrived
-    zmq::socket_t monitor_;     // handshake events of dealer_
+    SocketMonitor monitor_;     // handshake events of dealer_
     struct NodeLink {
         std::string endpoint, serverKey;
         zmq::socket_t socket;
         std::string name;
-        zmq::socket_t monitor;  // handshake events of socket (with CURVE)
+        SocketMonitor monitor;  // handshake events of socket (with CURVE)
         bool said = false;      // its handshake trouble was said
     };
     std::map<uint32_t, NodeLink> nodeLinks_;  // display nodes by index (bit in the tile masks)
     std::map<uint32_t, std::vector<uint64_t>> tileRoutes_;  // tile masks by their first frame; empty: no nodes
     uint64_t monitorSeq_ = 0;
-    std::string handshakeTrouble_;  // the last failed handshake, said when giving up
-    uint64_t handshakeFailures_ = 0;
+    MasterHandshakeWatch handshakes_{"client", "rtwall client"};  // the last failed handshake, said when giving up
     std::unique_ptr<Slot[]> slots_;  // one per render thread
     std::atomic<uint64_t> tileNs_{0}, tilesTimed_{0};  // render time of this client's tiles, for "expected"
     std::atomic<bool> stallInjected_{false};

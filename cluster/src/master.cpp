@@ -5,6 +5,7 @@
 // updates stream to the clients the moment they are made (asynchronous rendering). Tiles are
 // decoded by a small pool of threads straight into the framebuffer.
 #include "codec.h"
+#include "link_socket.h"
 #include "net.h"
 #include "protocol.h"
 #include "scene_state.h"
@@ -269,7 +270,7 @@ struct Master::Impl {
     std::unique_ptr<ZapHandler> zap;  // before the router: it must answer the first handshake
     std::vector<std::string> allowedKeys;  // with CURVE: the client keys (Z85) let in, which display nodes take too
     zmq::socket_t router{ctx, zmq::socket_type::router};
-    zmq::socket_t monitor{ctx, zmq::socket_type::pair};  // the router's failed handshakes
+    SocketMonitor monitor;  // the router's failed handshakes
     zmq::socket_t wakeSend{ctx, zmq::socket_type::pair};
     zmq::socket_t wakeRecv{ctx, zmq::socket_type::pair};
     std::string boundEndpoint;
@@ -1317,30 +1318,22 @@ struct Master::Impl {
     // Connections that broke off in the handshake (the router's monitor): ZMTP garbage, a peer
     // without CURVE or with another server key. Key refusals are the ZAP handler's to count.
     void readMonitor() {
-        for (int i = 0; i < 64; ++i) {
-            zmq::message_t event, address;
-            if (!monitor.recv(event, zmq::recv_flags::dontwait)) return;
-            if (!event.more() || !monitor.recv(address, zmq::recv_flags::dontwait) || event.size() < 6) continue;
-            discardRestOf(monitor, address);
-            uint16_t id;
-            uint32_t value;
-            std::memcpy(&id, event.data(), 2);
-            std::memcpy(&value, static_cast<const uint8_t*>(event.data()) + 2, 4);
+        monitor.read(64, [&](const MonitorEvent& e) {
             uint64_t n;
             {
                 std::lock_guard lock(countersMutex);
                 n = ++counts.failedHandshakes;
             }
-            if (n > kLoggedPerKind) continue;
+            if (n > kLoggedPerKind) return;
             // The monitor names the listening endpoint, not the peer.
             std::string why;
-            if (id != ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL) why = "it broke off (error " + std::to_string(value) + ")";
-            else if (value == ZMQ_PROTOCOL_ERROR_ZMTP_MECHANISM_MISMATCH) why = "the peer uses another security mechanism (no CURVE key?)";
-            else if (value == ZMQ_PROTOCOL_ERROR_ZMTP_CRYPTOGRAPHIC) why = "CURVE failed (a client with another server key?)";
-            else why = "ZMTP protocol error 0x" + hex(value) + " (not a ZeroMQ peer?)";
-            std::fprintf(stderr, "rtwall master: a connection to %s failed its handshake: %s%s\n", address.to_string().c_str(),
+            if (e.id != ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL) why = "it broke off (error " + std::to_string(e.value) + ")";
+            else if (e.value == ZMQ_PROTOCOL_ERROR_ZMTP_MECHANISM_MISMATCH) why = "the peer uses another security mechanism (no CURVE key?)";
+            else if (e.value == ZMQ_PROTOCOL_ERROR_ZMTP_CRYPTOGRAPHIC) why = "CURVE failed (a client with another server key?)";
+            else why = "ZMTP protocol error 0x" + hex(e.value) + " (not a ZeroMQ peer?)";
+            std::fprintf(stderr, "rtwall master: a connection to %s failed its handshake: %s%s\n", e.endpoint.c_str(),
                          why.c_str(), n == kLoggedPerKind ? " (more are counted, not logged)" : "");
-        }
+        });
     }
 
     void loop() {
@@ -1446,8 +1439,7 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
         s.allowedKeys = allowed;
         s.zap = std::make_unique<ZapHandler>(s.ctx, allowed);
         s.router.set(zmq::sockopt::zap_domain, "rtwall");
-        s.router.set(zmq::sockopt::curve_server, 1);
-        s.router.set(zmq::sockopt::curve_secretkey, keys.secretKey);
+        setCurveServer(s.router, keys.secretKey);
     } else {
         const std::string& b = settings.bind;
         const bool loopback = b.starts_with("tcp://127.") || b.starts_with("tcp://localhost:") || b.starts_with("tcp://[::1]:") ||
@@ -1460,11 +1452,9 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
                                  "(--insecure): anyone who reaches this port can join and read the model\n", b.c_str());
     }
     // Connections that break off in the handshake are counted (MasterCounters::failedHandshakes).
-    s.monitor.set(zmq::sockopt::linger, 0);
-    if (zmq_socket_monitor(s.router.handle(), "inproc://rtwall-master-monitor",
-                           ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL) != 0)
+    if (!s.monitor.start(s.ctx, s.router, "inproc://rtwall-master-monitor",
+                         ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL))
         throw std::runtime_error(std::string("zmq_socket_monitor: ") + zmq_strerror(zmq_errno()));
-    s.monitor.connect("inproc://rtwall-master-monitor");
     s.router.bind(settings.bind);
     s.boundEndpoint = s.router.get(zmq::sockopt::last_endpoint);
     const std::string wakeAddress = "inproc://rtwall-master-wake";
@@ -1509,8 +1499,7 @@ Master::~Master() {
     for (auto& [peer, n] : s.nodes)  // display nodes end with the wall instead of waiting for a master that is gone
         if (!n.deathReason) sendToPeer(s.router, n.peer, encodeMessage(s.header(MsgType::Goodbye), Goodbye{"the master is shutting down"}));
     s.decoder.reset();
-    zmq_socket_monitor(s.router.handle(), nullptr, 0);
-    s.monitor.close();
+    s.monitor.stop(s.router);
     s.router.close();
     s.zap.reset();
 }
