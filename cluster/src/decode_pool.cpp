@@ -27,8 +27,8 @@ void DecodePool::run() {
         try {
             if (job.format == TilePixels::LinearHalf) {
                 // Into the linear frame, and quantised into the 8-bit one for display.
-                const size_t stride = size_t(job.imageWidth) * 3;
-                float* dst = job.linear + size_t(job.rect.y0) * stride + size_t(job.rect.x0) * 3;
+                const size_t stride = job.linearStride;
+                float* dst = job.linear;
                 decodeWideTile(job.codec, job.pixels.data(), job.pixels.size(), job.rect.width(),
                                job.rect.height(), dst, stride, scratch);
                 for (int y = 0; y < job.rect.height(); ++y)

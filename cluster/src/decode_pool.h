@@ -28,8 +28,8 @@ public:
         TileRect rect;
         TileView view;
         TilePixels format = TilePixels::Srgb8;
-        float* linear = nullptr;  // LinearHalf: the frame's linear buffer (image width x 3 floats a row)
-        int imageWidth = 0;
+        float* linear = nullptr;  // LinearHalf: the tile's first pixel in the frame's linear buffer
+        size_t linearStride = 0;  // floats from one row of that buffer to the next
     };
 
     // `onComplete`: the frame is complete (called on a decode thread); `onFailure`: a tile did

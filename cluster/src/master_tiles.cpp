@@ -88,8 +88,9 @@ void Master::Impl::onTileResult(ClientState& c, const Header& h, const uint8_t* 
             frameBytes += r.pixels.size();
             c.frameBytes += r.pixels.size();
             const uint32_t v = assembler.viewOf(r.tile);
+            const bool wide = r.format == TilePixels::LinearHalf;
             decoder->push({std::move(r.pixels), r.codec, r.tile, rect, view, r.format,
-                           r.format == TilePixels::LinearHalf ? linear[v].data() : nullptr, assembler.image(v).width});
+                           wide ? assembler.linearAt(v, rect.x0, rect.y0) : nullptr, size_t(assembler.image(v).width) * 3});
         }
     }
     serve(c);
