@@ -135,13 +135,12 @@ void throwIfStopped(const Master::Impl& s) {
     if (flag && flag->load()) throw Cancelled();
 }
 
-}  // namespace
-
-bool Master::waitForClients(int count, int timeoutMs) {
-    Impl& s = *impl_;
+// Waits (under s.m) until `done` holds: false after timeoutMs without it. A stop flag set
+// meanwhile throws Cancelled.
+template <class Done> bool waitUntil(Master::Impl& s, int timeoutMs, Done done) {
     std::unique_lock lock(s.m);
     const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
-    while (s.readyClients < count) {
+    while (!done()) {
         throwIfStopped(s);
         const auto now = std::chrono::steady_clock::now();
         if (now >= end) return false;
@@ -150,17 +149,14 @@ bool Master::waitForClients(int count, int timeoutMs) {
     return true;
 }
 
+}  // namespace
+
+bool Master::waitForClients(int count, int timeoutMs) {
+    return waitUntil(*impl_, timeoutMs, [&] { return impl_->readyClients >= count; });
+}
+
 bool Master::waitForSwap(uint32_t frame, int timeoutMs) {
-    Impl& s = *impl_;
-    std::unique_lock lock(s.m);
-    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
-    while (s.swapReleased < frame) {
-        throwIfStopped(s);
-        const auto now = std::chrono::steady_clock::now();
-        if (now >= end) return false;
-        s.cv.wait_for(lock, std::min<std::chrono::steady_clock::duration>(end - now, std::chrono::milliseconds(100)));
-    }
-    return true;
+    return waitUntil(*impl_, timeoutMs, [&] { return impl_->swapReleased >= frame; });
 }
 
 int Master::awaitClients(int wanted, int timeoutMs, int settleMs) {
@@ -188,16 +184,8 @@ std::vector<std::string> Master::displayNodesPresent() const {
 }
 
 bool Master::waitForDisplayNodes(int timeoutMs) {
-    Impl& s = *impl_;
-    std::unique_lock lock(s.m);
-    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
-    while (s.presentNodes.size() < s.settings.displayNodes.names.size()) {
-        throwIfStopped(s);
-        const auto now = std::chrono::steady_clock::now();
-        if (now >= end) return false;
-        s.cv.wait_for(lock, std::min<std::chrono::steady_clock::duration>(end - now, std::chrono::milliseconds(100)));
-    }
-    return true;
+    const Impl& s = *impl_;
+    return waitUntil(*impl_, timeoutMs, [&] { return s.presentNodes.size() >= s.settings.displayNodes.names.size(); });
 }
 
 void Master::setStopFlag(const std::atomic<bool>* flag) { impl_->stopFlag = flag; }
