@@ -6,6 +6,7 @@
 // holds becomes what it shows (the Compositor: accumulated and composed into the eyes as on the
 // single-PC wall) before it says so; the swap presents that. What is presented, and how, is the caller's callback.
 #include "codec.h"
+#include "link_socket.h"
 #include "net.h"
 #include "protocol.h"
 #include "security.h"
@@ -58,8 +59,7 @@ public:
             zap_ = std::make_unique<ZapHandler>(ctx_, std::vector<std::string>{}, "rtwall display",
                                                 "the client keys the master gave this node");
             tiles_.set(zmq::sockopt::zap_domain, "rtwall-node");
-            tiles_.set(zmq::sockopt::curve_server, 1);
-            tiles_.set(zmq::sockopt::curve_secretkey, tileKeys_.secretKey);
+            setCurveServer(tiles_, tileKeys_.secretKey);
         }
         advertisedNodeEndpoint(run_.bind, run_.advertise);  // a wildcard without --advertise stops before listening
         tiles_.bind(run_.bind);
@@ -108,7 +108,7 @@ public:
                 if (run_.exitAfterIdleMs > 0 && now - idleSince > run_.exitAfterIdleMs * 1e-3) {
                     std::fprintf(stderr, "rtwall display: no master at %s for %d ms, giving up%s\n", run_.connect.c_str(),
                                  run_.exitAfterIdleMs,
-                                 handshakeTrouble_.empty() ? "" : (" (" + handshakeTrouble_ + ")").c_str());
+                                 handshakes_.trouble().empty() ? "" : (" (" + handshakes_.trouble() + ")").c_str());
                     return 1;
                 }
                 // The master went silent: join again (a restarted master, or one that dropped us).
@@ -129,21 +129,10 @@ private:
         // A welcome holds the wall config and the client keys.
         configureSocket(master_, int64_t(kHeaderSize + 64 + kMaxWallConfigBytes + kMaxClientKeys * 48 + (1 << 26)), 250, 3000);
         master_.set(zmq::sockopt::linger, 0);
-        if (keyed()) {
-            master_.set(zmq::sockopt::curve_serverkey, serverKey_);
-            master_.set(zmq::sockopt::curve_publickey, keys_.publicKey);
-            master_.set(zmq::sockopt::curve_secretkey, keys_.secretKey);
-        }
+        if (keyed()) setCurveClient(master_, serverKey_, keys_);
         // The handshake's outcome (a refused key, no CURVE on one side) is said in one line.
-        monitor_ = zmq::socket_t();
-        const std::string monitorAddress = "inproc://rtwall-node-monitor-" + std::to_string(++monitorSeq_);
-        if (zmq_socket_monitor(master_.handle(), monitorAddress.c_str(),
-                               ZMQ_EVENT_HANDSHAKE_FAILED_AUTH | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
-                                   ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL | ZMQ_EVENT_HANDSHAKE_SUCCEEDED) == 0) {
-            monitor_ = zmq::socket_t(ctx_, zmq::socket_type::pair);
-            monitor_.set(zmq::sockopt::linger, 0);
-            monitor_.connect(monitorAddress);
-        }
+        monitor_.reset();
+        monitor_.start(ctx_, master_, "inproc://rtwall-node-monitor-" + std::to_string(++monitorSeq_), kMasterLinkEvents);
         master_.connect(run_.connect);
         session_ = 0;
         shown_ = {};
@@ -359,38 +348,10 @@ private:
 
     // Handshake events of the connection to the master: a refusal is said, not just "no master".
     void readMonitor() {
-        for (int i = 0; i < 16; ++i) {
-            zmq::message_t event, address;
-            if (!monitor_.recv(event, zmq::recv_flags::dontwait)) return;
-            if (!event.more() || !monitor_.recv(address, zmq::recv_flags::dontwait) || event.size() < 6) continue;
-            discardRestOf(monitor_, address);
-            uint16_t id;
-            uint32_t value;
-            std::memcpy(&id, event.data(), 2);
-            std::memcpy(&value, static_cast<const uint8_t*>(event.data()) + 2, 4);
-            if (id == ZMQ_EVENT_HANDSHAKE_SUCCEEDED) {
-                handshakeTrouble_.clear();
-                continue;
-            }
-            std::string why;
-            if (id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH) {
-                if (run_.counters) ++run_.counters->refusedHandshakes;
-                why = "the master refused this node's key (status " + std::to_string(value) + "): is " + keys_.publicKey +
-                      " in the master's client_keys?";
-            } else {
-                if (run_.counters) ++run_.counters->failedHandshakes;
-                if (id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL && value == ZMQ_PROTOCOL_ERROR_ZMTP_MECHANISM_MISMATCH)
-                    why = "the master and this node disagree on security: one uses CURVE keys, the other not";
-                else if (id == ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL)
-                    why = "the handshake failed (ZMTP protocol error " + std::to_string(value) + ")";
-                else
-                    why = keyed() ? "the master broke off the CURVE handshake: is --server-key its public key?"
-                                  : "the master broke off the handshake: do the master and this node disagree on security "
-                                    "(a master with CURVE keys needs --key and --server-key here)?";
-            }
-            if (why != handshakeTrouble_) std::fprintf(stderr, "rtwall display: %s: %s\n", run_.connect.c_str(), why.c_str());
-            handshakeTrouble_ = why;
-        }
+        monitor_.read(16, [&](const MonitorEvent& e) {
+            handshakes_.onEvent(e, run_.connect, keys_.publicKey, run_.counters ? &run_.counters->refusedHandshakes : nullptr,
+                                run_.counters ? &run_.counters->failedHandshakes : nullptr);
+        });
     }
 
     const DisplayNodeRun& run_;
@@ -398,9 +359,9 @@ private:
     std::string serverKey_;    // the master's public key
     zmq::context_t ctx_{1};
     zmq::socket_t master_;
-    zmq::socket_t monitor_;  // handshake events of master_
+    SocketMonitor monitor_;  // handshake events of master_
     uint64_t monitorSeq_ = 0;
-    std::string handshakeTrouble_;  // said once until it changes
+    MasterHandshakeWatch handshakes_{"node", "rtwall display"};  // said once until it changes
     std::unique_ptr<ZapHandler> zap_;  // with CURVE: the tile socket's key check (goes after the socket)
     zmq::socket_t tiles_{ctx_, zmq::socket_type::router};
     std::string endpoint_;

@@ -1,18 +1,9 @@
 // Render-client processes on this PC (LocalClients in rtwall/cluster.h).
 #include <rtwall/cluster.h>
+#include <rtwall/process.h>
 
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <cerrno>
-#include <filesystem>
-#include <chrono>
-#include <csignal>
 #include <cstring>
-#include <thread>
-
-extern char** environ;
+#include <filesystem>
 
 namespace rtwall {
 
@@ -34,36 +25,18 @@ LocalClients::LocalClients(int count, const std::string& endpoint, int threadsEa
                                        std::filesystem::canonical(executable, ec).string()});
             program = "/usr/sbin/ip";
         }
-        std::vector<char*> argv{const_cast<char*>("rtwall")};
-        if (!netnsPrefix.empty()) argv[0] = const_cast<char*>("ip");
-        for (std::string& a : args) argv.push_back(a.data());
-        argv.push_back(nullptr);
-        pid_t pid;
-        const int err = posix_spawn(&pid, program.c_str(), nullptr, nullptr, argv.data(), environ);
+        args.insert(args.begin(), netnsPrefix.empty() ? "rtwall" : "ip");
+        int pid = 0;
+        const int err = spawnProcess(program, args, pid);
         if (err != 0) throw InputError(std::string("cannot start a local render client: ") + std::strerror(err));
         pids_.push_back(pid);
     }
 }
 
 LocalClients::~LocalClients() {
-    // A frozen client (SIGSTOP) acts on SIGTERM only once it runs again.
-    for (pid_t pid : pids_) {
-        kill(pid, SIGTERM);
-        kill(pid, SIGCONT);
-    }
-    // Bounded wait: a client that ignores SIGTERM for 2 s is killed.
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
-    for (pid_t pid : pids_) {
-        int status;
-        while (waitpid(pid, &status, WNOHANG) == 0) {
-            if (std::chrono::steady_clock::now() > deadline) {
-                kill(pid, SIGKILL);
-                waitpid(pid, &status, 0);
-                break;
-            }
-            std::this_thread::sleep_for(std::chrono::milliseconds(10));
-        }
-    }
+    // A frozen client (SIGSTOP) acts on SIGTERM only once it runs again; one that ignores it for
+    // 2 s is killed.
+    endProcesses(pids_, 2000);
 }
 
 }  // namespace rtwall

@@ -1,31 +1,16 @@
 // Display-node processes on this PC (LocalDisplayNodes in rtwall/cluster.h): a wall of several
 // display nodes run in one command on one machine.
 #include <rtwall/cluster.h>
+#include <rtwall/process.h>
 
-#include <spawn.h>
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <cerrno>
-#include <chrono>
 #include <csignal>
 #include <cstring>
-#include <thread>
 #include <utility>
 
-extern char** environ;
-
 namespace rtwall {
-
-namespace {
-
-std::string howEnded(int status) {
-    if (WIFEXITED(status)) return "exited with status " + std::to_string(WEXITSTATUS(status));
-    if (WIFSIGNALED(status)) return std::string("killed by signal ") + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) + ")";
-    return "ended";
-}
-
-}  // namespace
 
 LocalDisplayNodes::LocalDisplayNodes(const std::vector<std::string>& names, const std::string& endpoint, const Options& options) {
     for (const std::string& name : names) {
@@ -36,11 +21,9 @@ LocalDisplayNodes::LocalDisplayNodes(const std::vector<std::string>& names, cons
         args.insert(args.end(), {"--out", (options.outDir / name).string()});
         if (options.headless) args.push_back("--headless");
         args.insert(args.end(), options.extraArgs.begin(), options.extraArgs.end());
-        std::vector<char*> argv{const_cast<char*>("rtwall")};
-        for (std::string& a : args) argv.push_back(a.data());
-        argv.push_back(nullptr);
-        pid_t pid;
-        const int err = posix_spawn(&pid, options.executable.c_str(), nullptr, nullptr, argv.data(), environ);
+        args.insert(args.begin(), "rtwall");
+        int pid = 0;
+        const int err = spawnProcess(options.executable.string(), args, pid);
         if (err != 0) {
             // No destructor runs for a constructor that throws: the ones started so far go here.
             for (const Child& c : children_) {
@@ -62,7 +45,7 @@ void LocalDisplayNodes::reap(bool block) {
             c.ended = true;
             c.status = status;
             endedLines_.push_back("local display node '" + c.name + "' (pid " + std::to_string(c.pid) + ") " +
-                                  (r < 0 ? "is gone" : howEnded(status)));
+                                  (r < 0 ? "is gone" : describeExit(status)));
         }
     }
 }
@@ -86,24 +69,12 @@ int LocalDisplayNodes::pid(const std::string& name) const {
 
 LocalDisplayNodes::~LocalDisplayNodes() {
     // SIGTERM: a node says goodbye and closes its windows; one that does not within 2 s is killed.
-    for (const Child& c : children_)
-        if (!c.ended) {
-            kill(c.pid, SIGTERM);
-            kill(c.pid, SIGCONT);
-        }
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+    std::vector<int> running;
     for (Child& c : children_) {
-        int status;
-        while (!c.ended && waitpid(c.pid, &status, WNOHANG) == 0) {
-            if (std::chrono::steady_clock::now() > deadline) {
-                kill(c.pid, SIGKILL);
-                waitpid(c.pid, &status, 0);
-                break;
-            }
-            std::this_thread::sleep_for(std::chrono::milliseconds(10));
-        }
+        if (!c.ended) running.push_back(c.pid);
         c.ended = true;
     }
+    endProcesses(running, 2000);
 }
 
 }  // namespace rtwall

@@ -3,8 +3,9 @@
 // wait is bounded; the destructor kills what is left.
 #pragma once
 
+#include <rtwall/process.h>
+
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -20,8 +21,6 @@
 #include <thread>
 #include <vector>
 
-extern char** environ;
-
 namespace rtwall::test {
 
 class ChildProcess {
@@ -29,16 +28,7 @@ public:
     explicit ChildProcess(std::vector<std::string> args) {
         int fds[2];
         if (pipe(fds) != 0) return;
-        posix_spawn_file_actions_t actions;
-        posix_spawn_file_actions_init(&actions);
-        posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
-        posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
-        posix_spawn_file_actions_addclose(&actions, fds[0]);
-        std::vector<char*> argv;
-        for (auto& a : args) argv.push_back(a.data());
-        argv.push_back(nullptr);
-        if (posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
-        posix_spawn_file_actions_destroy(&actions);
+        if (args.empty() || spawnProcess(args[0], args, pid_, {fds[1], fds[0]}) != 0) pid_ = -1;
         close(fds[1]);
         reader_ = std::thread([this, fd = fds[0]] {
             char buf[4096];
