@@ -23,10 +23,11 @@
 // snapshot's camera are gone (the camera is not scene state: it moves no sequence number).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
-// layout depends on the type. Each message type is a plain struct with one writer and one
-// reader (protocol.cpp); encodeMessage() measures and writes with the same code. Decoders check
-// every length and range before touching data and throw DecodeError; the caller drops the
-// message and counts it.
+// layout depends on the type. Each message type is a plain struct with one fields() function that
+// describes it for both directions (message_fields.h; protocol_*.cpp by message family), so its
+// encoder and decoder are one piece of code; encodeMessage() measures and writes with the same
+// code. Decoders check every length and range before touching data and throw DecodeError; the
+// caller drops the message and counts it.
 //
 // Header: magic "RTWL" (u32 0x4C575452), protocol version (u16), type (u16), session (u64),
 // frame (u32), scene version = update sequence number (u32), payload length (u32), reserved (u32, 0).

@@ -1,4 +1,4 @@
-// Tests for cluster/src/protocol.cpp: a round trip per message with every field set, the header
+// Tests for the protocol (cluster/src/protocol.h, protocol_*.cpp): a round trip per message with every field set, the header
 // checks, truncation at every byte, hostile counts, value ranges, meshes and scene state.
 #include "protocol.h"
 #include "scene_state.h"

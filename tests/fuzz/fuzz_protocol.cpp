@@ -18,7 +18,7 @@
 //   mkdir -p build-fuzz
 //   clang++-14 -std=c++20 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
 //     -Icluster/src -Icluster/include -Iengine/include -Imesh/include -Iengine/core/include \
-//     tests/fuzz/fuzz_protocol.cpp cluster/src/wire.cpp cluster/src/protocol.cpp cluster/src/codec.cpp \
+//     tests/fuzz/fuzz_protocol.cpp cluster/src/wire.cpp cluster/src/protocol_*.cpp cluster/src/codec.cpp \
 //     mesh/src/triangle_mesh.cpp engine/src/half.cpp -llz4 -lzstd -lturbojpeg -lxxhash -o build-fuzz/fuzz_protocol
 // Run (new inputs go to the first directory, the committed seeds are only read):
 //   mkdir -p build-fuzz/corpus
