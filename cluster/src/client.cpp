@@ -9,6 +9,7 @@
 #include "update_sequencer.h"
 
 #include <rtwall/cluster.h>
+#include <rtwall/cluster_testing.h>
 
 #include <pthread.h>
 #include <unistd.h>
@@ -42,7 +43,7 @@ std::string hexOf(const Hash128& h) {
 
 class ClientRuntime {
 public:
-    explicit ClientRuntime(const ClientSettings& s) : settings_(s) {
+    explicit ClientRuntime(const ClientSettings& s) : settings_(s), faults_(s.faults ? *s.faults : ClientFaults{}) {
         threads_ = s.threads > 0 ? s.threads : int(std::max(1u, std::thread::hardware_concurrency()));
         checkZmqVersion();
         if (!s.keyFile.empty()) {
@@ -246,7 +247,7 @@ private:
             if (!results_.recv(msg, zmq::recv_flags::dontwait)) break;
             // Lost if its queue is full: the master hands the tile out again when this
             // client is idle without it (its heartbeat says so).
-            const int n = settings_.dropEveryNthResult;
+            const int n = faults_.dropEveryNthResult;
             if (n > 0 && ++resultsOut_ % uint64_t(n) == 0) {
                 // Injected loss.
             } else if (!tileRoutes_.empty()) {
@@ -602,7 +603,7 @@ private:
         if (!snapshot_ || ready_ || building_.valid() || built_) return;  // a stale build is redone when it ends
         std::optional<SceneDesc> desc = sceneOf(*snapshot_, meshes_, assets_);
         if (!desc) return;  // still waiting for a mesh, texture or volume
-        building_ = std::async(std::launch::async, [desc = std::move(*desc), delay = settings_.extraSceneBuildMs] {
+        building_ = std::async(std::launch::async, [desc = std::move(*desc), delay = faults_.extraSceneBuildMs] {
             if (delay > 0) std::this_thread::sleep_for(std::chrono::milliseconds(delay));
             return std::make_unique<Scene>(desc);
         });
@@ -645,7 +646,7 @@ private:
         renderSettings_.threads = 1;  // each render thread renders its own tiles
         trace_.clientId = id_;  // the id the master gave us, for the client false-colour view
         trace_.packetWidth = settings_.packetWidth;  // this PC's CPU decides
-        trace_.fault = settings_.tileFault ? injectFault(*settings_.tileFault) : nullptr;
+        trace_.fault = faults_.tileFault ? injectFault(*faults_.tileFault) : nullptr;
     }
 
     void requestResync() {
@@ -863,10 +864,10 @@ private:
         }
     }
 
-    // The injected stall (ClientSettings::stallMs): once, cut short when the client stops.
+    // The injected stall (ClientFaults::stallMs): once, cut short when the client stops.
     void maybeStall(uint32_t frame) {
-        if (settings_.stallMs <= 0 || frame < settings_.stallFrame || stallInjected_.exchange(true)) return;
-        const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(settings_.stallMs);
+        if (faults_.stallMs <= 0 || frame < faults_.stallFrame || stallInjected_.exchange(true)) return;
+        const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(faults_.stallMs);
         while (std::chrono::steady_clock::now() < end && !stopRequested_.load())
             std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
@@ -923,8 +924,8 @@ private:
                     pixels.resize(size_t(r.width()) * r.height() * 3);
                     renderTile(*scene_, camera, r, w.frame, renderSettings_, {pixels.data(), size_t(r.width()) * 3}, trace_);
                 }
-                if (settings_.extraTileDelayMs > 0)
-                    std::this_thread::sleep_for(std::chrono::milliseconds(settings_.extraTileDelayMs));
+                if (faults_.extraTileDelayMs > 0)
+                    std::this_thread::sleep_for(std::chrono::milliseconds(faults_.extraTileDelayMs));
                 maybeStall(w.frame);
                 slot.startNs.store(0);
                 const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -972,6 +973,7 @@ private:
     }
 
     ClientSettings settings_;
+    const ClientFaults faults_;  // none outside tests
     KeyPair keys_;
     std::string serverKey_;
     int threads_ = 1;
@@ -993,7 +995,7 @@ private:
     uint64_t dropped_ = 0;
     std::atomic<uint64_t> droppedResults_{0};
     uint64_t lostResults_ = 0;  // results the connection did not take (its queue to the master full)
-    uint64_t resultsOut_ = 0;   // for dropEveryNthResult
+    uint64_t resultsOut_ = 0;   // for ClientFaults::dropEveryNthResult
     // Tiles this client holds: queued, being rendered, or rendered and not yet handed to the
     // master's connection. 0 = idle (Heartbeat::idle).
     std::atomic<int64_t> held_{0};

@@ -13,6 +13,7 @@
 #include "swap_barrier.h"
 
 #include <rtwall/cluster.h>
+#include <rtwall/cluster_testing.h>
 
 #include <pthread.h>
 #include <stdlib.h>
@@ -1247,7 +1248,7 @@ struct Master::Impl {
     void sendUpdate(const Update& update) {
         for (auto& [peer, c] : clients) {
             if (c.deathReason) continue;
-            const int n = settings.dropEveryNthUpdate;
+            const int n = settings.faults ? settings.faults->dropEveryNthUpdate : 0;
             if (n > 0 && ++c.updatesSent % uint64_t(n) == 0) {  // injected loss
                 ++injectedLosses;
                 continue;
@@ -1381,8 +1382,8 @@ struct Master::Impl {
                 handle(identity, msg);
                 current = nullptr;
                 currentClient = nullptr;
-                if (settings.consumeDelayUs > 0)
-                    std::this_thread::sleep_for(std::chrono::microseconds(settings.consumeDelayUs));
+                if (settings.faults && settings.faults->consumeDelayUs > 0)
+                    std::this_thread::sleep_for(std::chrono::microseconds(settings.faults->consumeDelayUs));
             }
             current = nullptr;
             currentClient = nullptr;

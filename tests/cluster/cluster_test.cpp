@@ -9,6 +9,7 @@
 #include "fake_master.h"
 
 #include <rtwall/cluster.h>
+#include <rtwall/cluster_testing.h>
 
 #include <zmq.hpp>
 
@@ -37,7 +38,7 @@ public:
     void add(const std::string& endpoint, int threadsEach = 1, const std::filesystem::path& cacheDir = {},
              int extraTileDelayMs = 0) {
         ClientSettings cs;
-        cs.extraTileDelayMs = extraTileDelayMs;
+        cs.faults = std::make_shared<const ClientFaults>(ClientFaults{.extraTileDelayMs = extraTileDelayMs});
         cs.connect = endpoint;
         cs.threads = threadsEach;
         cs.cacheDir = cacheDir;
@@ -308,7 +309,7 @@ TEST(Cluster, LostUpdatesAreDetectedAndResynced) {
     SceneDesc desc = demoScene(96, 72);
     ClusterSettings cs;
     cs.async = false;
-    cs.dropEveryNthUpdate = 2;
+    cs.faults = std::make_shared<const MasterFaults>(MasterFaults{.dropEveryNthUpdate = 2});
     LocalCluster cluster(desc, cs, 2);
     Master& master = *cluster.master;
     ASSERT_TRUE(master.waitForClients(2, 30000));
@@ -597,7 +598,7 @@ TEST(Cluster, AClientSlowerToBuildTheSceneThanTheTimeoutStillJoins) {
     slow.connect = master->endpoint();
     slow.threads = 1;
     slow.exitAfterIdleMs = 4000;
-    slow.extraSceneBuildMs = 1500;  // five timeouts
+    slow.faults = std::make_shared<const ClientFaults>(ClientFaults{.extraSceneBuildMs = 1500});  // five timeouts
     std::thread client([slow] { runClient(slow); });
     EXPECT_TRUE(master->waitForClients(1, 20000)) << "it got in despite the slow build";
     if (master->connectedClients() == 1) {
@@ -657,7 +658,7 @@ TEST(Cluster, ASlowMasterKeepsMemoryBoundedAndCountsEveryDrop) {
     SceneDesc desc = demoScene(96, 72);
     ClusterSettings cs;
     cs.async = false;
-    cs.consumeDelayUs = 1000;
+    cs.faults = std::make_shared<const MasterFaults>(MasterFaults{.consumeDelayUs = 1000});
     cs.highWaterMark = 500;
     cs.stragglerFactor = 1e9;  // no re-issued tiles, so no stray results: the flood is all that is dropped
     cs.timeoutMs = 10000;  // the honest client's heartbeats wait behind the flood
@@ -938,7 +939,8 @@ TEST(Cluster, AClientReportsAFailedTileWithItsFrameAndPixels) {
     cs.connect = fake.endpoint;
     cs.threads = 1;
     cs.exitAfterIdleMs = 3000;
-    cs.tileFault = InjectedTileFault{2, 20, 20};  // frame 2, in tile 5: pixels 16,16 to 32,32
+    // Frame 2, in tile 5: pixels 16,16 to 32,32.
+    cs.faults = std::make_shared<const ClientFaults>(ClientFaults{.tileFault = InjectedTileFault{2, 20, 20}});
     auto client = std::async(std::launch::async, [cs] { return runClient(cs); });
     const auto hello = fake.expect(MsgType::Hello, 10000);
     ASSERT_TRUE(hello);

@@ -10,6 +10,7 @@
 #include "../cli_util.h"
 
 #include <rtwall/cluster.h>
+#include <rtwall/cluster_testing.h>
 
 #include <zmq.hpp>
 
@@ -111,7 +112,7 @@ TEST(Issue16, ALostTileResultIsRecoveredWithOneClient) {
     c.connect = master->endpoint();
     c.threads = 1;
     c.exitAfterIdleMs = 4000;
-    c.dropEveryNthResult = 5;
+    c.faults = std::make_shared<const ClientFaults>(ClientFaults{.dropEveryNthResult = 5});
     client = std::async(std::launch::async, [c] { return runClient(c); });
     ASSERT_TRUE(master->waitForClients(1, 30000));
     for (int f = 0; f < 3; ++f) {
@@ -337,8 +338,7 @@ TEST(Issue16, RenderFrameGivesUpWhenTheStopFlagIsSet) {
     c.connect = master.endpoint();
     c.threads = 1;
     c.exitAfterIdleMs = 4000;
-    c.stallMs = 30000;
-    c.stallFrame = 2;
+    c.faults = std::make_shared<const ClientFaults>(ClientFaults{.stallMs = 30000, .stallFrame = 2});
     client = std::async(std::launch::async, [c] { return runClient(c); });
     ASSERT_TRUE(master.waitForClients(1, 30000));
     master.renderFrame();
@@ -370,12 +370,11 @@ TEST(Issue15, AStuckRenderThreadIsReportedAndItsTileRenderedByAnotherClient) {
     stuck.connect = master.endpoint();
     stuck.threads = 1;
     stuck.exitAfterIdleMs = 4000;
-    stuck.stallMs = 30000;
-    stuck.stallFrame = 2;
+    stuck.faults = std::make_shared<const ClientFaults>(ClientFaults{.stallMs = 30000, .stallFrame = 2});
     stuck.minStallMs = 300;
     stuck.counters = counters;
     ClientSettings healthy = stuck;
-    healthy.stallMs = 0;
+    healthy.faults = nullptr;
     healthy.counters = nullptr;
     a = std::async(std::launch::async, [stuck] { return runClient(stuck); });
     b = std::async(std::launch::async, [healthy] { return runClient(healthy); });
@@ -416,8 +415,7 @@ TEST(Issue15, TheOnlyClientRendersItsStuckTileOnItsOtherThread) {
     c.connect = master.endpoint();
     c.threads = 2;
     c.exitAfterIdleMs = 4000;
-    c.stallMs = 30000;
-    c.stallFrame = 2;
+    c.faults = std::make_shared<const ClientFaults>(ClientFaults{.stallMs = 30000, .stallFrame = 2});
     c.minStallMs = 300;
     client = std::async(std::launch::async, [c] { return runClient(c); });
     ASSERT_TRUE(master.waitForClients(1, 30000));
