@@ -52,17 +52,6 @@ namespace {
 
 [[noreturn]] void fail(const fs::path& file, const std::string& what) { throw InputError(file.string() + ": " + what); }
 
-bool writeAll(int fd, const void* data, size_t n) {
-    auto p = static_cast<const char*>(data);
-    while (n > 0) {
-        const ssize_t w = ::write(fd, p, n);
-        if (w < 0 && errno == EINTR) continue;
-        if (w <= 0) return false;
-        p += w;
-        n -= size_t(w);
-    }
-    return true;
-}
 
 // One message line: control characters (a newline inside a name) become spaces.
 void sendLine(int fd, char kind, const std::string& text) {
@@ -97,9 +86,7 @@ uint64_t memoryBudget(uint64_t fileSize) {
 // The child: import, encode, write the bytes into `memfd`; messages on `out`. Never returns.
 [[noreturn]] void runChild(const fs::path& file, const AssemblyOptions& options, const AssemblyKey& key, int memfd, int out,
                            uint64_t fileSize) {
-    // A crash here is the parent's to report: no handler inherited from the parent (a crash
-    // reporter, libFuzzer's, which would record the input as its own finding) runs in the child.
-    for (int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) std::signal(sig, SIG_DFL);
+    dropInheritedCrashHandlers();
 #ifndef RTWALL_CAD_ASAN
     // AddressSanitizer reserves terabytes of shadow address space; the limit is left to it there.
     if (const uint64_t now = addressSpaceNow(); now > 0) {

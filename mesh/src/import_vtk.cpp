@@ -444,8 +444,6 @@ vtkSmartPointer<vtkPolyData> surfaceOf(vtkDataSet* ds, RecordingOutputWindow& wi
 
 namespace {
 
-bool writeAll(int fd, const unsigned char* p, size_t n);
-
 struct Closer {
     int fd;
     ~Closer() { ::close(fd); }
@@ -597,16 +595,6 @@ TriangleMesh loadVtkHere(VtkKind kind, const std::string& data, const std::strin
     }
 }
 
-bool writeAll(int fd, const unsigned char* p, size_t n) {
-    while (n > 0) {
-        const ssize_t w = ::write(fd, p, n);
-        if (w < 0 && errno == EINTR) continue;
-        if (w <= 0) return false;
-        p += w;
-        n -= size_t(w);
-    }
-    return true;
-}
 
 }  // namespace
 
@@ -637,6 +625,7 @@ TriangleMesh loadVtk(VtkKind kind, const std::string& data, const std::string& n
     }
     if (pid == 0) {
         ::close(errPipe[0]);
+        dropInheritedCrashHandlers();
         int code = 4;
         try {
             ImportReport r;

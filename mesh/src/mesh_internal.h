@@ -48,6 +48,11 @@ std::vector<unsigned char> encodeMeshCache(const TriangleMesh& mesh, const Impor
 TriangleMesh decodeMeshCache(const unsigned char* data, size_t size, uint64_t sourceSize, int64_t sourceMtime,
                              const std::string& name, ImportReport* report, std::shared_ptr<const void> keepAlive);
 
+// For importers that run in a forked child (child_io.cpp): writes all `n` bytes (false on an
+// error), and makes a crash end the child by its signal, with no inherited handler and no core.
+bool writeAll(int fd, const void* data, size_t n);
+void dropInheritedCrashHandlers();
+
 // Reads any supported mesh file, without a cache (import.cpp).
 TriangleMesh importMesh(const std::filesystem::path& file, ImportReport* report);
 
