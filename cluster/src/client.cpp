@@ -6,7 +6,7 @@ namespace rtwall {
 
 namespace cluster {
 
-ClientRuntime::ClientRuntime(const ClientSettings& s) : settings_(s) {
+ClientRuntime::ClientRuntime(const ClientSettings& s) : settings_(s), faults_(s.faults ? *s.faults : ClientFaults{}) {
     threads_ = s.threads > 0 ? s.threads : int(std::max(1u, std::thread::hardware_concurrency()));
     checkZmqVersion();
     if (!s.keyFile.empty()) {

@@ -120,7 +120,7 @@ void ClientRuntime::forwardResults(int max) {
         if (!results_.recv(msg, zmq::recv_flags::dontwait)) break;
         // Lost if its queue is full: the master hands the tile out again when this
         // client is idle without it (its heartbeat says so).
-        const int n = settings_.dropEveryNthResult;
+        const int n = faults_.dropEveryNthResult;
         if (n > 0 && ++resultsOut_ % uint64_t(n) == 0) {
             // Injected loss.
         } else if (!tileRoutes_.empty()) {

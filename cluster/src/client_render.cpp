@@ -130,10 +130,10 @@ void ClientRuntime::sendResult(zmq::socket_t& out, const std::vector<uint8_t>& b
     }
 }
 
-// The injected stall (ClientSettings::stallMs): once, cut short when the client stops.
+// The injected stall (ClientFaults::stallMs): once, cut short when the client stops.
 void ClientRuntime::maybeStall(uint32_t frame) {
-    if (settings_.stallMs <= 0 || frame < settings_.stallFrame || stallInjected_.exchange(true)) return;
-    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(settings_.stallMs);
+    if (faults_.stallMs <= 0 || frame < faults_.stallFrame || stallInjected_.exchange(true)) return;
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(faults_.stallMs);
     while (std::chrono::steady_clock::now() < end && !stopRequested_.load())
         std::this_thread::sleep_for(std::chrono::milliseconds(5));
 }
@@ -179,8 +179,8 @@ void ClientRuntime::workerLoop(Slot& slot) {
                 pixels.resize(size_t(r.width()) * r.height() * 3);
                 renderTile(*scene_, camera, r, w.frame, renderSettings_, {pixels.data(), size_t(r.width()) * 3}, trace_);
             }
-            if (settings_.extraTileDelayMs > 0)
-                std::this_thread::sleep_for(std::chrono::milliseconds(settings_.extraTileDelayMs));
+            if (faults_.extraTileDelayMs > 0)
+                std::this_thread::sleep_for(std::chrono::milliseconds(faults_.extraTileDelayMs));
             maybeStall(w.frame);
             slot.startNs.store(0);
             const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

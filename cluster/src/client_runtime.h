@@ -19,6 +19,7 @@
 #include "update_sequencer.h"
 
 #include <rtwall/cluster.h>
+#include <rtwall/cluster_testing.h>
 
 #include <atomic>
 #include <chrono>
@@ -166,6 +167,7 @@ private:
     void workerLoop(Slot& slot);
 
     ClientSettings settings_;
+    const ClientFaults faults_;  // none outside tests
     KeyPair keys_;
     std::string serverKey_;
     int threads_ = 1;
@@ -187,7 +189,7 @@ private:
     uint64_t dropped_ = 0;
     std::atomic<uint64_t> droppedResults_{0};
     uint64_t lostResults_ = 0;  // results the connection did not take (its queue to the master full)
-    uint64_t resultsOut_ = 0;   // for dropEveryNthResult
+    uint64_t resultsOut_ = 0;   // for ClientFaults::dropEveryNthResult
     // Tiles this client holds: queued, being rendered, or rendered and not yet handed to the
     // master's connection. 0 = idle (Heartbeat::idle).
     std::atomic<int64_t> held_{0};

@@ -175,7 +175,7 @@ void ClientRuntime::tryBuildScene() {
     if (!snapshot_ || ready_ || building_.valid() || built_) return;  // a stale build is redone when it ends
     std::optional<SceneDesc> desc = sceneOf(*snapshot_, meshes_, assets_);
     if (!desc) return;  // still waiting for a mesh, texture or volume
-    building_ = std::async(std::launch::async, [desc = std::move(*desc), delay = settings_.extraSceneBuildMs] {
+    building_ = std::async(std::launch::async, [desc = std::move(*desc), delay = faults_.extraSceneBuildMs] {
         if (delay > 0) std::this_thread::sleep_for(std::chrono::milliseconds(delay));
         return std::make_unique<Scene>(desc);
     });
@@ -218,7 +218,7 @@ void ClientRuntime::setRenderSettings(const RenderSettings& fromMaster) {
     renderSettings_.threads = 1;  // each render thread renders its own tiles
     trace_.clientId = id_;  // the id the master gave us, for the client false-colour view
     trace_.packetWidth = settings_.packetWidth;  // this PC's CPU decides
-    trace_.fault = settings_.tileFault ? injectFault(*settings_.tileFault) : nullptr;
+    trace_.fault = faults_.tileFault ? injectFault(*faults_.tileFault) : nullptr;
 }
 
 void ClientRuntime::requestResync() {

@@ -24,6 +24,7 @@
 #include "swap_barrier.h"
 
 #include <rtwall/cluster.h>
+#include <rtwall/cluster_testing.h>
 
 #include <atomic>
 #include <condition_variable>

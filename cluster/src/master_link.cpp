@@ -220,8 +220,8 @@ void Master::Impl::loop() {
             handle(identity, msg);
             current = nullptr;
             currentClient = nullptr;
-            if (settings.consumeDelayUs > 0)
-                std::this_thread::sleep_for(std::chrono::microseconds(settings.consumeDelayUs));
+            if (settings.faults && settings.faults->consumeDelayUs > 0)
+                std::this_thread::sleep_for(std::chrono::microseconds(settings.faults->consumeDelayUs));
         }
         current = nullptr;
         currentClient = nullptr;

@@ -147,7 +147,7 @@ void Master::Impl::onResyncRequest(ClientState& c, const uint8_t* data, size_t s
 void Master::Impl::sendUpdate(const Update& update) {
     for (auto& [peer, c] : clients) {
         if (c.deathReason) continue;
-        const int n = settings.dropEveryNthUpdate;
+        const int n = settings.faults ? settings.faults->dropEveryNthUpdate : 0;
         if (n > 0 && ++c.updatesSent % uint64_t(n) == 0) {  // injected loss
             ++injectedLosses;
             continue;

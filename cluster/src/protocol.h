@@ -23,10 +23,11 @@
 // snapshot's camera are gone (the camera is not scene state: it moves no sequence number).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
-// layout depends on the type. Each message type is a plain struct with one writer and one
-// reader (protocol.cpp); encodeMessage() measures and writes with the same code. Decoders check
-// every length and range before touching data and throw DecodeError; the caller drops the
-// message and counts it.
+// layout depends on the type. Each message type is a plain struct with one fields() function that
+// describes it for both directions (message_fields.h; protocol_*.cpp by message family), so its
+// encoder and decoder are one piece of code; encodeMessage() measures and writes with the same
+// code. Decoders check every length and range before touching data and throw DecodeError; the
+// caller drops the message and counts it.
 //
 // Header: magic "RTWL" (u32 0x4C575452), protocol version (u16), type (u16), session (u64),
 // frame (u32), scene version = update sequence number (u32), payload length (u32), reserved (u32, 0).
@@ -113,6 +114,7 @@ struct Hello {
     uint16_t protocolVersion = kProtocolVersion;
     uint32_t threads = 0;
     std::string host;
+    bool operator==(const Hello&) const = default;
 };
 
 struct Welcome {
@@ -121,6 +123,7 @@ struct Welcome {
     uint32_t prefetch = 4;
     uint32_t heartbeatMs = 250;
     uint32_t timeoutMs = 3000;  // the client declares the master dead after this much silence
+    bool operator==(const Welcome&) const = default;
 };
 
 struct MeshRef {
@@ -163,15 +166,18 @@ struct SceneSnapshot {
 
 struct MeshRequest {
     Hash128 hash{};
+    bool operator==(const MeshRequest&) const = default;
 };
 
 struct MeshData {
     Hash128 hash{};
     std::vector<uint8_t> mesh;  // encodeMesh bytes
+    bool operator==(const MeshData&) const = default;
 };
 
 struct AssetRequest {
     Hash128 hash{};
+    bool operator==(const AssetRequest&) const = default;
 };
 
 // The file's bytes. The decoder checks the size bound only: the receiver checks the hash, so
@@ -179,6 +185,7 @@ struct AssetRequest {
 struct AssetData {
     Hash128 hash{};
     std::vector<uint8_t> bytes;
+    bool operator==(const AssetData&) const = default;
 };
 
 struct TransformChange {
@@ -237,16 +244,19 @@ struct FrameBegin {
     // view's camera; a mono frame is one view without regions (makeTiles order). Per frame, not
     // state: a camera moves at no sequence number.
     std::vector<FrameView> views{};
+    bool operator==(const FrameBegin&) const = default;
 };
 
 struct TileRequest {
     uint32_t frame = 0;
     uint32_t count = 0;
+    bool operator==(const TileRequest&) const = default;
 };
 
 struct TileAssign {
     uint32_t frame = 0;
     std::vector<uint32_t> tiles;
+    bool operator==(const TileAssign&) const = default;
 };
 
 struct TileResult {
@@ -256,6 +266,7 @@ struct TileResult {
     uint32_t renderMicros = 0;
     std::vector<uint8_t> pixels;  // encoded
     TilePixels format = TilePixels::Srgb8;  // LinearHalf: `pixels` are 6 bytes a pixel before the codec
+    bool operator==(const TileResult&) const = default;
 };
 
 // A TileResult's fields without a copy of its pixels: what a client that forwards its own
@@ -279,6 +290,7 @@ struct Heartbeat {
     uint32_t frame = 0;
     uint32_t tilesSeen = 0;
     bool idle = false;
+    bool operator==(const Heartbeat&) const = default;
 };
 
 // A client's render thread has been on this tile far longer than its tiles take: the master
@@ -287,6 +299,7 @@ struct TileStalled {
     uint32_t frame = 0;
     uint32_t tile = 0;
     uint32_t elapsedMs = 0;
+    bool operator==(const TileStalled&) const = default;
 };
 
 // A tile the engine could not render (TileError), sent just before the client's Goodbye: what
@@ -301,6 +314,7 @@ struct TileFailed {
 
 struct Goodbye {
     std::string reason;
+    bool operator==(const Goodbye&) const = default;
 };
 
 // -- Display nodes (version 11) ----------------------------------------------------------------
@@ -313,6 +327,7 @@ struct NodeHello {
     std::string name;
     std::string endpoint;   // the node's ROUTER for tiles
     std::string publicKey;  // its tile socket's CURVE server key (a pair made for the run), Z85; empty without keys
+    bool operator==(const NodeHello&) const = default;
 };
 
 // The node's place in the wall: bit `node` of the tile masks, and the whole wall config (the
@@ -325,6 +340,7 @@ struct NodeWelcome {
     // Version 12: with CURVE, the public keys (Z85) of the render clients the master lets in: the
     // node's tile socket takes only these (its ZAP handler). Empty without keys.
     std::vector<std::string> clientKeys{};
+    bool operator==(const NodeWelcome&) const = default;
 };
 
 // Frame `frame` is width x height in tiles of tileSize (makeTiles order; with views, viewTiles
@@ -344,10 +360,12 @@ struct NodeFrame {
     // and one camera) exactly as the single-PC wall does; LinearHalf tiles only come with it.
     bool stochastic = false;
     uint32_t stateSeq = 0;  // the scene state it renders (any change restarts the sums)
+    bool operator==(const NodeFrame&) const = default;
 };
 
 struct NodeHave {
     uint32_t frame = 0;
+    bool operator==(const NodeHave&) const = default;
 };
 
 // Present `frame`; `leftOut` names the wall's nodes that do not take part in it (stalled, gone
@@ -355,10 +373,12 @@ struct NodeHave {
 struct NodeSwap {
     uint32_t frame = 0;
     std::vector<std::string> leftOut;
+    bool operator==(const NodeSwap&) const = default;
 };
 
 struct NodeSwapped {
     uint32_t frame = 0;
+    bool operator==(const NodeSwapped&) const = default;
 };
 
 struct NodeEndpoint {
@@ -373,6 +393,7 @@ struct NodeEndpoint {
 // node and sends a tile to every node of its mask that the list has.
 struct NodeList {
     std::vector<NodeEndpoint> nodes;
+    bool operator==(const NodeList&) const = default;
 };
 
 // masks[t]: the nodes that show tile t (bit i: node i), for frames from `frame` on until the next
@@ -380,6 +401,7 @@ struct NodeList {
 struct TileRoutes {
     uint32_t frame = 0;
     std::vector<uint64_t> masks;  // at most kMaxTilesPerFrame
+    bool operator==(const TileRoutes&) const = default;
 };
 
 // The client sent tile `tile` of `frame` to its nodes (`bytes` encoded bytes to each): the master
@@ -389,6 +411,7 @@ struct TileDone {
     uint32_t tile = 0;
     uint32_t renderMicros = 0;
     uint32_t bytes = 0;
+    bool operator==(const TileDone&) const = default;
 };
 
 // Whether a name is a node name by the wall config's rule (validNodeName in display.h), for the wire.
@@ -397,10 +420,12 @@ bool isNodeName(const std::string& name);
 struct Ready {
     uint32_t updateSeq = 0;
     Hash128 stateHash{};
+    bool operator==(const Ready&) const = default;
 };
 
 struct ResyncRequest {
     uint32_t lastSeq = 0;
+    bool operator==(const ResyncRequest&) const = default;
 };
 
 // Header alone (for routing before the payload is decoded). Checks magic, length and type

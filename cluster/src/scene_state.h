@@ -4,7 +4,7 @@
 // again, what each change writes, which object a change is about (merging) and when two values
 // differ for the clients. Each function static_asserts the member count of the structs it maps
 // (fields.h), so that a member added to SceneDesc or SceneSnapshot fails the build here until it
-// is mapped; the wire writers do the same for every struct they write (protocol.cpp), and
+// is mapped; the wire fields do the same for every struct they write (protocol_*.cpp), and
 // tests/cluster/scene_state_test.cpp sets every member of every struct to a value other than its
 // default and checks that SceneDesc -> snapshot -> bytes -> snapshot -> SceneDesc gives it back.
 #pragma once

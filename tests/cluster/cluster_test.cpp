@@ -10,6 +10,7 @@
 #include "fake_master.h"
 
 #include <rtwall/cluster.h>
+#include <rtwall/cluster_testing.h>
 
 #include <zmq.hpp>
 
@@ -120,7 +121,7 @@ AffinityRun affinityRun(bool affinity) {
     cs.affinity = affinity;
     LocalCluster cluster(desc, cs, 0);
     ClientSettings slow;
-    slow.extraTileDelayMs = 2;
+    slow.faults = std::make_shared<const ClientFaults>(ClientFaults{.extraTileDelayMs = 2});
     for (int i = 0; i < 2; ++i) cluster.add(slow);
     Master& master = *cluster.master;
     AffinityRun run;
@@ -254,7 +255,7 @@ TEST(Cluster, OffAxisCameraBitIdenticalToOneMachine) {
 TEST(Cluster, LostUpdatesAreDetectedAndResynced) {
     SceneDesc desc = test::quickDemo(96, 72);
     ClusterSettings cs = test::inStep();
-    cs.dropEveryNthUpdate = 2;
+    cs.faults = std::make_shared<const MasterFaults>(MasterFaults{.dropEveryNthUpdate = 2});
     LocalCluster cluster(desc, cs, 2);
     Master& master = *cluster.master;
     ASSERT_TRUE(cluster.ready());
@@ -320,7 +321,7 @@ TEST(Cluster, JoinersGetTheFrameStateAndTheUpdatesSince) {
     master.setCamera(first.cameras.front());
     master.setLight(0, first.lights[0]);
     ClientSettings slow;
-    slow.extraTileDelayMs = 20;
+    slow.faults = std::make_shared<const ClientFaults>(ClientFaults{.extraTileDelayMs = 20});
     cluster.add(slow);
     ASSERT_TRUE(master.waitForClients(1, 30000));
     FrameReport r1;
@@ -535,7 +536,7 @@ TEST(Cluster, AClientSlowerToBuildTheSceneThanTheTimeoutStillJoins) {
     slow.connect = master->endpoint();
     slow.threads = 1;
     slow.exitAfterIdleMs = 4000;
-    slow.extraSceneBuildMs = 1500;  // five timeouts
+    slow.faults = std::make_shared<const ClientFaults>(ClientFaults{.extraSceneBuildMs = 1500});  // five timeouts
     std::thread client([slow] { runClient(slow); });
     EXPECT_TRUE(master->waitForClients(1, 20000)) << "it got in despite the slow build";
     if (master->connectedClients() == 1) {
@@ -592,7 +593,7 @@ long residentKiB() {
 TEST(Cluster, ASlowMasterKeepsMemoryBoundedAndCountsEveryDrop) {
     SceneDesc desc = test::quickDemo(96, 72);
     ClusterSettings cs = test::inStep();
-    cs.consumeDelayUs = 1000;
+    cs.faults = std::make_shared<const MasterFaults>(MasterFaults{.consumeDelayUs = 1000});
     cs.highWaterMark = 500;
     cs.stragglerFactor = 1e9;  // no re-issued tiles, so no stray results: the flood is all that is dropped
     cs.timeoutMs = 10000;  // the honest client's heartbeats wait behind the flood
@@ -855,7 +856,7 @@ TEST(Cluster, AClientReportsAFailedTileWithItsFrameAndPixels) {
     desc.settings.tileSize = 16;
     FakeMaster fake;
     ClientSettings cs;
-    cs.tileFault = InjectedTileFault{2, 20, 20};  // frame 2, in tile 5: pixels 16,16 to 32,32
+    cs.faults = std::make_shared<const ClientFaults>(ClientFaults{.tileFault = InjectedTileFault{2, 20, 20}});  // frame 2, in tile 5: pixels 16,16 to 32,32
     auto client = test::startClient(fake, 3000, cs);
     std::string peer;
     ASSERT_NO_FATAL_FAILURE(test::welcome(fake, peer));

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <rtwall/cluster.h>
+#include <rtwall/cluster_testing.h>
 
 #include <gtest/gtest.h>
 
@@ -297,8 +298,9 @@ TEST_F(CutLink, ClientBehindACutCableMidFrame) {
 //  - delay, jitter and reordering come from tools/netjitter: iptables sends every packet in and
 //    out to an NFQUEUE, where netjitter holds each for 5 +- 5 ms (uniform) before letting it
 //    go, so packets overtake each other as with netem's jitter.
-// On top, the master loses every third update message to each client (dropEveryNthUpdate): a
-// gap that the client must notice when a frame needs the update, and repair with a resync.
+// On top, the master loses every third update message to each client
+// (MasterFaults::dropEveryNthUpdate): a gap that the client must notice when a frame needs the
+// update, and repair with a resync.
 // Every frame must equal the single-machine image of its own state, and the state changes every
 // frame: a tile rendered for an old state, or a gap nobody noticed, would show.
 class ImpairedLink : public ::testing::Test {
@@ -376,7 +378,7 @@ TEST_F(ImpairedLink, FramesCompleteAndEveryUpdateGapIsResynced) {
     cs.insecure = true;     // the test's own namespace and veth; nothing else is reachable
     cs.heartbeatMs = 100;
     cs.timeoutMs = 5000;    // a lost packet costs TCP a 200 ms retransmission, not the client
-    cs.dropEveryNthUpdate = 3;
+    cs.faults = std::make_shared<const MasterFaults>(MasterFaults{.dropEveryNthUpdate = 3});
     Master master(desc, cs);
     Process a(master.endpoint(), kNs), b(master.endpoint(), kNs);
     ASSERT_TRUE(master.waitForClients(2, 60000));

@@ -10,6 +10,7 @@
 #include "../cli_util.h"
 
 #include <rtwall/cluster.h>
+#include <rtwall/cluster_testing.h>
 
 #include <zmq.hpp>
 
@@ -47,8 +48,7 @@ void expectFrame2PassesTheStuckThread(test::StoppableCluster& cluster, const Ima
 // A client whose first tile of frame 2 or later does not return for 30 s (fault injection).
 ClientSettings stuckFromFrame2() {
     ClientSettings c;
-    c.stallMs = 30000;
-    c.stallFrame = 2;
+    c.faults = std::make_shared<const ClientFaults>(ClientFaults{.stallMs = 30000, .stallFrame = 2});
     return c;
 }
 
@@ -104,7 +104,7 @@ TEST(Issue16, ALostTileResultIsRecoveredWithOneClient) {
     const Image expected = test::singleMachine(desc, 0);
     test::StoppableCluster cluster(desc, test::inStep());
     ClientSettings c;
-    c.dropEveryNthResult = 5;
+    c.faults = std::make_shared<const ClientFaults>(ClientFaults{.dropEveryNthResult = 5});
     cluster.start(c);
     ASSERT_TRUE(cluster.ready());
     for (int f = 0; f < 3; ++f) {

@@ -4,6 +4,7 @@
 #include "display_test_util.h"
 #include "session_test_util.h"
 
+#include <rtwall/cluster_testing.h>
 #include <rtwall/wall.h>
 
 #define GLFW_INCLUDE_NONE
@@ -262,7 +263,8 @@ TEST(WallSession, AFailedTileIsOneLineWithTheCommandThatReplaysIt) {
     RunConfig c = sessionConfig(dir, scene);
     c.cluster.localClients = 1;
     c.cluster.timeoutMs = 500;  // the frame fails soon once its only client has left
-    c.clientFault = InjectedTileFault{2, 40, 20};  // frame 2, in the tile of pixels 32,0 to 64,32
+    // Frame 2, in the tile of pixels 32,0 to 64,32.
+    c.clientFaults = std::make_shared<const ClientFaults>(ClientFaults{.tileFault = InjectedTileFault{2, 40, 20}});
     std::vector<std::string> lines;
     c.log = [&](const std::string& line) { lines.push_back(line); };
     WallSession s(c);

@@ -1,15 +1,17 @@
 // libFuzzer target for every decoder that reads bytes from the network: the message header,
 // every message payload, canonical meshes and the four tile codecs.
 //
-// Input layout: the first byte picks the decoder (its value modulo 25), the rest is its input.
+// Input layout: the first byte picks the decoder (its value modulo fuzz::kSelectors, in
+// protocol_selectors.h), the rest is its input.
 //   0      a whole message: decodeHeader, then the payload decoder its type names
-//   1..17  decodePayload<T> for MsgType(n)
-//   18     decodeMesh
-//   19..22 decodeTile for TileCodec(n - 19); three more bytes give the width (1 + b % 64),
+//   1..27  decodePayload<T> for MsgType(n)
+//   28     decodeMesh
+//   29..32 decodeTile for TileCodec(n - 29); three more bytes give the width (1 + b % 64),
 //          the height (1 + b % 64) and the destination's row padding (b % 8)
-//   23..24 decodeWideTile (linear half-float tiles) for LZ4 and zstd, the same three bytes
-// (Protocol version 4 moved the mesh and tile selectors up by 2, version 7 by 1 more;
-// make_protocol_corpus writes the seeds with the new ones.)
+//   33..34 decodeWideTile (linear half-float tiles) for LZ4 and zstd, the same three bytes
+// (Until issue 26 the selectors were taken modulo 25 and the mesh and tile numbers sat among the
+// message types, so the mesh and tile decoders were never reached; make_protocol_corpus writes
+// the seeds with these numbers.)
 // Besides the sanitizers, the target checks that whatever decodes re-encodes to the very same
 // bytes (the encodings are canonical) and that decodeTile writes no byte outside the tile.
 // Only DecodeError is an expected outcome; any other exception aborts as a finding.
@@ -18,7 +20,7 @@
 //   mkdir -p build-fuzz
 //   clang++-14 -std=c++20 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
 //     -Icluster/src -Icluster/include -Iengine/include -Imesh/include -Iengine/core/include \
-//     tests/fuzz/fuzz_protocol.cpp cluster/src/wire.cpp cluster/src/protocol.cpp cluster/src/codec.cpp \
+//     tests/fuzz/fuzz_protocol.cpp cluster/src/wire.cpp cluster/src/protocol_*.cpp cluster/src/codec.cpp \
 //     mesh/src/triangle_mesh.cpp engine/src/half.cpp -llz4 -lzstd -lturbojpeg -lxxhash -o build-fuzz/fuzz_protocol
 // Run (new inputs go to the first directory, the committed seeds are only read):
 //   mkdir -p build-fuzz/corpus
@@ -31,6 +33,7 @@
 //   build/tests/fuzz/make_protocol_corpus tests/fuzz/corpus/protocol
 #include "codec.h"
 #include "protocol.h"
+#include "protocol_selectors.h"
 
 #include <cstdint>
 #include <cstdio>
@@ -95,70 +98,89 @@ void checkMesh(const uint8_t* data, size_t size) {
         finding("a decoded mesh does not re-encode to the same bytes");
 }
 
+// The three bytes before a tile: its width and height (1 to 64) and the destination's row padding
+// (0 to 7 elements).
+struct TileInput {
+    int width = 0, height = 0;
+    size_t rowElements = 0, stride = 0;  // 3 a pixel
+    const uint8_t* data = nullptr;
+    size_t size = 0;
+};
+
+bool readTileInput(const uint8_t* data, size_t size, TileInput& t) {
+    if (size < 3) return false;
+    t.width = 1 + data[0] % 64;
+    t.height = 1 + data[1] % 64;
+    t.rowElements = size_t(t.width) * 3;
+    t.stride = t.rowElements + data[2] % 8;
+    t.data = data + 3;
+    t.size = size - 3;
+    return true;
+}
+
+// A destination exactly as large as the tile needs (the last row has no padding), so that
+// AddressSanitizer sees any write past the end; the padding between rows is checked by hand.
+template <class T> std::vector<T> guardedTile(const TileInput& t, T guard) {
+    return std::vector<T>(t.stride * size_t(t.height - 1) + t.rowElements, guard);
+}
+
+template <class T> void checkPadding(const std::vector<T>& dst, const TileInput& t, T guard, const char* what) {
+    for (int y = 0; y + 1 < t.height; ++y)
+        for (size_t i = t.rowElements; i < t.stride; ++i)
+            if (dst[size_t(y) * t.stride + i] != guard) finding(what);
+}
+
 void checkTile(TileCodec codec, const uint8_t* data, size_t size) {
-    if (size < 3) return;
-    const int width = 1 + data[0] % 64, height = 1 + data[1] % 64;
-    const size_t rowBytes = size_t(width) * 3, stride = rowBytes + data[2] % 8;
-    data += 3;
-    size -= 3;
-    // Exactly as large as the tile needs (the last row has no padding), so AddressSanitizer sees
-    // any write past the end; the padding between rows is checked by hand.
+    TileInput t;
+    if (!readTileInput(data, size, t)) return;
     constexpr uint8_t kGuard = 0xA5;
-    std::vector<uint8_t> dst(stride * size_t(height - 1) + rowBytes, kGuard);
-    decodeTile(codec, data, size, width, height, dst.data(), stride);
-    for (int y = 0; y + 1 < height; ++y)
-        for (size_t i = rowBytes; i < stride; ++i)
-            if (dst[size_t(y) * stride + i] != kGuard) finding("decodeTile wrote into the row padding");
+    std::vector<uint8_t> dst = guardedTile(t, kGuard);
+    decodeTile(codec, t.data, t.size, t.width, t.height, dst.data(), t.stride);
+    checkPadding(dst, t, kGuard, "decodeTile wrote into the row padding");
 
     // A lossless tile that decodes must survive its own codec unchanged.
     if (codec == TileCodec::Lz4 || codec == TileCodec::Zstd) {
         CodecSettings settings;
         settings.codec = codec;
         std::vector<uint8_t> encoded;
-        encodeTile(settings, dst.data(), width, height, stride, encoded);
-        std::vector<uint8_t> back(rowBytes * size_t(height));
-        decodeTile(codec, encoded.data(), encoded.size(), width, height, back.data(), rowBytes);
-        for (int y = 0; y < height; ++y)
-            if (std::memcmp(back.data() + size_t(y) * rowBytes, dst.data() + size_t(y) * stride, rowBytes) != 0)
+        encodeTile(settings, dst.data(), t.width, t.height, t.stride, encoded);
+        std::vector<uint8_t> back(t.rowElements * size_t(t.height));
+        decodeTile(codec, encoded.data(), encoded.size(), t.width, t.height, back.data(), t.rowElements);
+        for (int y = 0; y < t.height; ++y)
+            if (std::memcmp(back.data() + size_t(y) * t.rowElements, dst.data() + size_t(y) * t.stride, t.rowElements) != 0)
                 finding("a lossless tile does not survive a round trip");
     }
 }
 
 void checkWideTile(TileCodec codec, const uint8_t* data, size_t size) {
-    if (size < 3) return;
-    const int width = 1 + data[0] % 64, height = 1 + data[1] % 64;
-    const size_t rowFloats = size_t(width) * 3, stride = rowFloats + data[2] % 8;
-    data += 3;
-    size -= 3;
-    // Exactly as large as the tile needs (no padding after the last row), padding checked by hand.
+    TileInput t;
+    if (!readTileInput(data, size, t)) return;
     const float kGuard = -7.0f;
-    std::vector<float> dst(stride * size_t(height - 1) + rowFloats, kGuard);
+    std::vector<float> dst = guardedTile(t, kGuard);
     std::vector<uint8_t> scratch;
-    decodeWideTile(codec, data, size, width, height, dst.data(), stride, scratch);
-    for (int y = 0; y + 1 < height; ++y)
-        for (size_t i = rowFloats; i < stride; ++i)
-            if (dst[size_t(y) * stride + i] != kGuard) finding("decodeWideTile wrote into the row padding");
+    decodeWideTile(codec, t.data, t.size, t.width, t.height, dst.data(), t.stride, scratch);
+    checkPadding(dst, t, kGuard, "decodeWideTile wrote into the row padding");
 }
 
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (size < 1) return 0;
-    const unsigned selector = data[0] % 25u;
+    const unsigned selector = data[0] % fuzz::kSelectors;
     ++data;
     --size;
     try {
-        if (selector == 0) {
+        if (selector == fuzz::kWholeMessage) {
             const Header header = decodeHeader(data, size);
             Messages::message[size_t(header.type) - 1](header, data, size);
-        } else if (selector <= kMaxMsgType) {
-            Messages::payload[selector - 1](data, size);
-        } else if (selector == 18) {
+        } else if (selector < fuzz::kMesh) {
+            Messages::payload[selector - fuzz::kFirstPayload](data, size);
+        } else if (selector == fuzz::kMesh) {
             checkMesh(data, size);
-        } else if (selector <= 22) {
-            checkTile(TileCodec(selector - 19), data, size);
+        } else if (selector < fuzz::kWideTile) {
+            checkTile(TileCodec(selector - fuzz::kTile), data, size);
         } else {
-            checkWideTile(selector == 23 ? TileCodec::Lz4 : TileCodec::Zstd, data, size);
+            checkWideTile(selector == fuzz::kWideTile ? TileCodec::Lz4 : TileCodec::Zstd, data, size);
         }
     } catch (const DecodeError&) {
         // The expected outcome for malformed input.

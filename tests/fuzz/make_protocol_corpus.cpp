@@ -3,6 +3,7 @@
 //   make_protocol_corpus <directory>
 #include "codec.h"
 #include "protocol.h"
+#include "protocol_selectors.h"
 
 #include <cstdio>
 #include <filesystem>
@@ -124,13 +125,14 @@ int main(int argc, char** argv) {
     seedMessage("node-frame", NodeFrame{3, 128, 64, 32, TilePixels::Srgb8});
     // Version 12: a stereo frame's views with their eyes, accumulated as linear tiles.
     {
-        FrameView left, right;
-        left.camera.position = {-0.0325f, 0.0f, 2.0f};
-        right.camera.position = {0.0325f, 0.0f, 2.0f};
-        right.regions = {{0, 0, 64, 64}};
-        right.refWidth = 128;
-        right.refHeight = 64;
-        seedMessage("node-frame-stereo", NodeFrame{4, 128, 64, 32, TilePixels::LinearHalf, {left, right}, {0, 1}, true, 9});
+        FrameView leftEye, rightEye;
+        leftEye.camera.position = {-0.0325f, 0.0f, 2.0f};
+        rightEye.camera.position = {0.0325f, 0.0f, 2.0f};
+        rightEye.regions = {{0, 0, 64, 64}};
+        rightEye.refWidth = 128;
+        rightEye.refHeight = 64;
+        seedMessage("node-frame-stereo",
+                    NodeFrame{4, 128, 64, 32, TilePixels::LinearHalf, {leftEye, rightEye}, {0, 1}, true, 9});
     }
     seedMessage("node-have", NodeHave{3});
     seedMessage("node-swap", NodeSwap{3, {"right_2"}});
@@ -139,8 +141,8 @@ int main(int argc, char** argv) {
     seedMessage("tile-routes", TileRoutes{3, {1, 3, 2, 0, 1, 3, 2, 2}});
     seedMessage("tile-done", TileDone{3, 17, 1500, 3072});
 
-    writeSeed("mesh-box", 18, encodeMesh(makeBox()));
-    writeSeed("mesh-sphere-normals", 18, encodeMesh(makeSphere(3, 5)));
+    writeSeed("mesh-box", fuzz::kMesh, encodeMesh(makeBox()));
+    writeSeed("mesh-sphere-normals", fuzz::kMesh, encodeMesh(makeSphere(3, 5)));
 
     // An 8x6 gradient tile per codec; the three bytes after the selector give 8x6 and 3 bytes of padding.
     const int w = 8, h = 6;
@@ -153,7 +155,7 @@ int main(int argc, char** argv) {
         settings.codec = codec;
         std::vector<uint8_t> bytes{uint8_t(w - 1), uint8_t(h - 1), 3};
         encodeTile(settings, rgb.data(), w, h, size_t(w) * 3, bytes);
-        writeSeed(std::string("tile-") + codecName(codec), uint8_t(19 + int(codec)), bytes);
+        writeSeed(std::string("tile-") + codecName(codec), uint8_t(fuzz::kTile + unsigned(codec)), bytes);
     }
     // The same gradient as a linear half-float tile, LZ4 and zstd.
     std::vector<float> linear(rgb.size());
@@ -163,7 +165,8 @@ int main(int argc, char** argv) {
         settings.codec = codec;
         std::vector<uint8_t> scratch, bytes{uint8_t(w - 1), uint8_t(h - 1), 3};
         encodeWideTile(settings, linear.data(), w, h, size_t(w) * 3, scratch, bytes);
-        writeSeed(std::string("wide-tile-") + codecName(codec), codec == TileCodec::Lz4 ? 23 : 24, bytes);
+        const unsigned selector = fuzz::kWideTile + (codec == TileCodec::Lz4 ? 0 : 1);
+        writeSeed(std::string("wide-tile-") + codecName(codec), uint8_t(selector), bytes);
     }
     return 0;
 }

@@ -7,7 +7,6 @@
 #pragma once
 
 #include <rtwall/engine.h>
-#include <rtwall/engine_testing.h>
 #include <rtwall/frame.h>
 
 #include <atomic>
@@ -20,6 +19,10 @@
 #include <vector>
 
 namespace rtwall {
+
+// Test hooks, null outside tests: rtwall/cluster_testing.h.
+struct MasterFaults;
+struct ClientFaults;
 
 enum class TileCodec : uint8_t { Raw = 0, Lz4 = 1, Zstd = 2, Jpeg = 3 };
 
@@ -65,8 +68,6 @@ struct ClusterSettings {
     int timeoutMs = 3000;                     // a silent peer is dead after this (clients learn it in Welcome)
     int highWaterMark = 1000;                 // messages queued per peer and direction; a peer whose queue is full is dropped
     double stragglerFactor = 4.0;             // re-issue tiles outstanding this many median tile times
-    int dropEveryNthUpdate = 0;               // fault injection for tests: lose every Nth update message per client
-    int consumeDelayUs = 0;                   // fault injection for tests: the network thread pauses this long per received message (a slow display PC)
     // Frames of a stochastic scene (rendersStochastically: GI, area lights, ...) travel as linear
     // half-float tiles, so that averaging them (progressive refinement) has no 8-bit bias and
     // equals one machine's Accumulator::addLinear exactly. They cost about twice the bytes of
@@ -78,6 +79,7 @@ struct ClusterSettings {
     std::vector<std::filesystem::path> clientKeys;  // public key files of the clients allowed in
     bool insecure = false;
     DisplayNodeSettings displayNodes;
+    std::shared_ptr<const MasterFaults> faults;  // null outside tests (rtwall/cluster_testing.h)
 };
 
 // What the master dropped, refused or could not send, by kind, since it started
@@ -265,7 +267,7 @@ public:
     MasterCounters counters() const;
     uint64_t droppedMessages() const;  // counters().dropped()
     uint64_t failedSends() const;      // counters().failedSends
-    uint64_t injectedUpdateLosses() const;  // update messages dropped by dropEveryNthUpdate
+    uint64_t injectedUpdateLosses() const;  // update messages dropped by MasterFaults::dropEveryNthUpdate (tests)
     uint64_t resyncs() const;          // full states sent again after a client found a gap
     uint64_t refusedConnections() const;  // CURVE clients whose key is not in the config
 
@@ -295,20 +297,13 @@ struct ClientSettings {
     int maxReconnectMs = 5000;          // back-off ceiling
     int exitAfterIdleMs = 0;            // > 0: exit when no master answers for this long
     bool replay = false;                // benchmarks: render each tile once, then resend its bytes
-    int extraTileDelayMs = 0;           // fault injection for tests: emulate a slower PC
-    int extraSceneBuildMs = 0;          // fault injection for tests: a PC slow to build the scene
-    int dropEveryNthResult = 0;         // fault injection for tests: lose every Nth tile result on its way out
-    std::optional<InjectedTileFault> tileFault;  // fault injection for tests: a tile that throws
-    // A render thread that does not return: the first tile of frame stallFrame or later that this
-    // client renders sleeps stallMs on its thread (once; cut short when the client stops).
-    int stallMs = 0;                    // fault injection for tests
-    uint32_t stallFrame = 0;
     // A tile rendering longer than max(minStallMs, 16 x this client's mean tile time) is
     // reported to the master, which hands it to another client (or another thread of this one).
     int minStallMs = 1000;
     std::filesystem::path keyFile;      // this client's key pair: CURVE on (needs serverKeyFile)
     std::filesystem::path serverKeyFile;  // the master's public key: the client checks it
     std::shared_ptr<ClientCounters> counters;  // optional: updated while it runs
+    std::shared_ptr<const ClientFaults> faults;  // null outside tests (rtwall/cluster_testing.h)
 };
 
 // Render-client processes on this PC: `EXECUTABLE client --connect ENDPOINT ...` children (the

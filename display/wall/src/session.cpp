@@ -151,7 +151,7 @@ struct WallSession::Impl {
         c.connect = master->endpoint();
         c.threads = threads;
         c.exitAfterIdleMs = 5000;
-        c.tileFault = config.clientFault;
+        c.faults = config.clientFaults;
         const std::vector<std::string> args = master->localClientArgs();  // --key K --server-key P, with keys
         for (size_t i = 0; i + 1 < args.size(); i += 2) {
             if (args[i] == "--key") c.keyFile = args[i + 1];

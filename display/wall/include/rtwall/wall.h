@@ -94,7 +94,7 @@ struct RunConfig {
     // this process running runClient.
     std::filesystem::path clientExecutable = "/proc/self/exe";
     bool clientThreads = false;
-    std::optional<InjectedTileFault> clientFault;  // tests: client threads fail this tile (ClientSettings::tileFault)
+    std::shared_ptr<const ClientFaults> clientFaults;  // tests: what client threads do wrong (rtwall/cluster_testing.h)
     // Where the session's progress lines go (stdout by default).
     std::function<void(const std::string&)> log;
 

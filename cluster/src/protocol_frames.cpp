@@ -1,0 +1,86 @@
+// Frames and tiles on the wire: a frame's start with its views, tile requests and assignments,
+// results (and acks for tiles that went to display nodes), stalled and failed tiles, routes.
+#include "codec.h"
+#include "protocol_values.h"
+
+namespace rtwall::cluster {
+
+RTWALL_WIRE_MESSAGE(FrameBegin, 4) {
+    static const size_t viewBytes = minViewBytes();
+    io.u32(m.frame);
+    io.u32(m.updateSeq);
+    io.enumUpTo(m.pixels, TilePixels::LinearHalf, "tile pixel format");
+    vectorOf(io, m.views, viewBytes, kMaxViews);
+    // Version 13: the views are the frame's only camera; a frame without one cannot be rendered.
+    io.expect(!m.views.empty(), [&] { return "frame " + std::to_string(m.frame) + " has no view"; });
+}
+
+RTWALL_WIRE_MESSAGE(TileRequest, 2) {
+    io.u32(m.frame);
+    io.u32(m.count);
+    io.expect(m.count <= kMaxTilesPerMessage,
+              [&] { return "tile request for " + std::to_string(m.count) + " tiles exceeds the limit"; });
+}
+
+RTWALL_WIRE_MESSAGE(TileAssign, 2) {
+    io.u32(m.frame);
+    io.sequence(m.tiles, sizeof(uint32_t), kMaxTilesPerMessage, [&](auto& t) { io.u32(t); });
+}
+
+// A TileResult's fields with its pixels as `pixels`: a vector (decodePayload copies them) or a
+// view into the message (peekTileResult does not).
+template <class Io, class Result, class Pixels> void tileResultFields(Io& io, Result& m, Pixels& pixels) {
+    // A half-float tile is encoded as an 8-bit tile twice as wide.
+    static const size_t maxPixelBytes = maxEncodedTileBytes(2 * kMaxTileSize, kMaxTileSize);
+    io.u32(m.frame);
+    io.u32(m.tile);
+    io.enumUpTo(m.codec, TileCodec::Jpeg, "tile codec");
+    io.u32(m.renderMicros);
+    io.blob(pixels, maxPixelBytes);
+    io.enumUpTo(m.format, TilePixels::LinearHalf, "tile pixel format");
+}
+RTWALL_WIRE_MESSAGE(TileResult, 6) { tileResultFields(io, m, m.pixels); }
+
+TileResultInfo peekTileResult(const uint8_t* data, size_t size) {
+    Reader r(data, size);
+    FieldReader io(r);
+    TileResult m;  // all but the pixels
+    std::pair<const uint8_t*, size_t> pixels;
+    tileResultFields(io, m, pixels);
+    r.expectEnd();
+    return {m.frame, m.tile, m.renderMicros, uint32_t(pixels.second)};
+}
+
+RTWALL_WIRE_MESSAGE(TileStalled, 3) {
+    io.u32(m.frame);
+    io.u32(m.tile);
+    io.u32(m.elapsedMs);
+}
+
+RTWALL_WIRE_COUNT(TileRect, 4);  // written with TileFailed
+RTWALL_WIRE_MESSAGE(TileFailed, 5) {
+    io.u32(m.frame);
+    io.u32(m.tile);
+    io.intIn(m.rect.x0, 0, kMaxImageSide - 1, "failed tile x0");
+    io.intIn(m.rect.y0, 0, kMaxImageSide - 1, "failed tile y0");
+    io.intIn(m.rect.x1, int64_t(m.rect.x0) + 1, kMaxImageSide, "failed tile x1");
+    io.intIn(m.rect.y1, int64_t(m.rect.y0) + 1, kMaxImageSide, "failed tile y1");
+    io.intIn(m.packetWidth, 4, 16, "packet width");
+    io.expect(m.packetWidth == 4 || m.packetWidth == 8 || m.packetWidth == 16,
+              [&] { return "packet width " + std::to_string(m.packetWidth) + " is not 4, 8 or 16"; });
+    io.string(m.reason, kMaxStringBytes);
+}
+
+RTWALL_WIRE_MESSAGE(TileRoutes, 2) {
+    io.u32(m.frame);
+    io.sequence(m.masks, sizeof(uint64_t), kMaxTilesPerFrame, [&](auto& mask) { io.u64(mask); }, SendLimit::Strict);
+}
+
+RTWALL_WIRE_MESSAGE(TileDone, 4) {
+    io.u32(m.frame);
+    io.u32(m.tile);
+    io.u32(m.renderMicros);
+    io.u32(m.bytes);
+}
+
+}  // namespace rtwall::cluster

@@ -1,0 +1,151 @@
+// Display nodes on the wire (version 11): a node's hello and welcome, a frame's layout, the swap
+// barrier's have, swap and swapped, and the node list clients send tiles by.
+#include "protocol_values.h"
+
+#include <algorithm>
+
+namespace rtwall::cluster {
+
+namespace {
+
+constexpr size_t kMaxEndpointBytes = 256;
+constexpr size_t kZ85KeyChars = 40;
+
+template <class Io, class S> void nodeName(Io& io, S& name, const char* what) {
+    io.string(name, 32);
+    io.expect(isNodeName(name), [&] {
+        return std::string(what) + " '" + name + "' is not a node name (1 to 32 letters, digits, '-' or '_')";
+    });
+}
+
+template <class Io, class S> void endpoint(Io& io, S& e) {
+    io.string(e, kMaxEndpointBytes);
+    io.expect(!e.empty(), [] { return std::string("empty node endpoint"); });
+    io.expect(std::all_of(e.begin(), e.end(), [](char c) { return c > ' ' && c <= '~'; }),
+              [] { return std::string("node endpoint has a control, space or non-ASCII character"); });
+}
+
+bool z85(char c) {
+    return c > ' ' && c < '~' && c != '"' && c != '\'' && c != ',' && c != ';' && c != '\\' && c != '_' && c != '`' &&
+           c != '|';
+}
+
+// A CURVE key: Z85 (40 characters) or empty (no CURVE).
+template <class Io, class S> void key(Io& io, S& k, const char* what) {
+    io.string(k, kZ85KeyChars);
+    io.expect(k.empty() || k.size() == kZ85KeyChars, [&] {
+        return std::string(what) + " has " + std::to_string(k.size()) + " characters, not 40 (Z85) or 0";
+    });
+    io.expect(std::all_of(k.begin(), k.end(), z85), [&] { return std::string(what) + " is not Z85"; });
+}
+
+template <class Io, class N> void nodeIndex(Io& io, N& node) {
+    io.u32(node);
+    io.expect(node < kMaxNodes,
+              [&] { return "node index " + std::to_string(node) + " is not below " + std::to_string(kMaxNodes); });
+}
+
+}  // namespace
+
+bool isNodeName(const std::string& name) {
+    if (name.empty() || name.size() > 32) return false;
+    for (char c : name)
+        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' || c == '_'))
+            return false;
+    return true;
+}
+
+RTWALL_WIRE_MESSAGE(NodeHello, 4) {
+    io.u16(m.protocolVersion);  // returned as read, so that the master can name both versions
+    nodeName(io, m.name, "node name");
+    endpoint(io, m.endpoint);
+    key(io, m.publicKey, "node public key");
+}
+
+RTWALL_WIRE_MESSAGE(NodeWelcome, 5) {
+    nodeIndex(io, m.node);
+    io.u32(m.heartbeatMs);
+    io.u32(m.timeoutMs);
+    io.expect(m.heartbeatMs >= 1 && m.heartbeatMs <= kMaxTimeoutMs && m.timeoutMs >= m.heartbeatMs &&
+                  m.timeoutMs <= kMaxTimeoutMs,
+              [&] {
+                  return "node heartbeat " + std::to_string(m.heartbeatMs) + " ms and timeout " +
+                         std::to_string(m.timeoutMs) + " ms are out of range";
+              });
+    io.string(m.wall, kMaxWallConfigBytes);
+    io.expect(!m.wall.empty(), [] { return std::string("node welcome without a wall config"); });
+    io.sequence(
+        m.clientKeys, sizeof(uint32_t) + kZ85KeyChars, kMaxClientKeys,
+        [&](auto& k) {
+            key(io, k, "client key");
+            io.expect(!k.empty(), [] { return std::string("empty client key"); });
+        },
+        SendLimit::Strict);
+}
+
+RTWALL_WIRE_MESSAGE(NodeFrame, 9) {
+    static const size_t viewBytes = minViewBytes();
+    io.u32(m.frame);
+    io.intIn(m.width, 1, kMaxImageSide, "node frame width");
+    io.intIn(m.height, 1, kMaxImageSide, "node frame height");
+    io.intIn(m.tileSize, 1, kMaxTileSize, "node frame tile size");
+    uint64_t tiles = 0;
+    if constexpr (Io::decoding) {
+        tiles = uint64_t((m.width + m.tileSize - 1) / m.tileSize) * uint64_t((m.height + m.tileSize - 1) / m.tileSize);
+        if (tiles > kMaxTilesPerFrame) fail("node frame of " + std::to_string(tiles) + " tiles exceeds the limit");
+    }
+    io.enumUpTo(m.pixels, TilePixels::LinearHalf, "tile pixel format");
+    vectorOf(io, m.views, viewBytes, kMaxViews);
+    // Every view may hold every tile: the node's tiling is bounded as one frame's.
+    io.expect(tiles * std::max<uint64_t>(1, m.views.size()) <= kMaxTilesPerFrame, [&] {
+        return "node frame of " + std::to_string(m.views.size()) + " views of " + std::to_string(tiles) +
+               " tiles exceeds the limit";
+    });
+    const auto eyeCount = [&](uint32_t eyes) {
+        if (eyes != m.views.size())
+            fail("node frame with " + std::to_string(eyes) + " view eyes for " + std::to_string(m.views.size()) + " views");
+    };
+    const auto eye = [&](auto& value) {
+        uint8_t e = uint8_t(value);
+        io.u8(e);
+        io.expect(e == 0 || e == 1 || e == 0xff,
+                  [&] { return "view eye " + std::to_string(int(int8_t(e))) + " is not -1, 0 or 1"; });
+        if constexpr (Io::decoding) value = int8_t(e);
+    };
+    io.sequence(m.eyes, 1, kMaxViews, eye, SendLimit::Strict, eyeCount);
+    io.boolean(m.stochastic);
+    io.u32(m.stateSeq);
+    io.expect(m.pixels != TilePixels::LinearHalf || m.stochastic,
+              [] { return std::string("linear tiles for a frame that is not accumulated"); });
+}
+
+RTWALL_WIRE_MESSAGE(NodeHave, 1) { io.u32(m.frame); }
+
+RTWALL_WIRE_MESSAGE(NodeSwap, 2) {
+    io.u32(m.frame);
+    io.sequence(m.leftOut, sizeof(uint32_t) + 1, kMaxNodes, [&](auto& name) { nodeName(io, name, "left-out node"); },
+                SendLimit::Strict);
+}
+
+RTWALL_WIRE_MESSAGE(NodeSwapped, 1) { io.u32(m.frame); }
+
+RTWALL_WIRE_FIELDS(NodeEndpoint, 4) {
+    nodeIndex(io, m.node);
+    nodeName(io, m.name, "node name");
+    endpoint(io, m.endpoint);
+    key(io, m.serverKey, "node server key");
+}
+
+RTWALL_WIRE_MESSAGE(NodeList, 1) {
+    static const size_t endpointBytes = minEncodedSize(NodeEndpoint{});
+    vectorOf(io, m.nodes, endpointBytes, kMaxNodes, SendLimit::Strict);
+    if constexpr (Io::decoding) {
+        uint64_t seen = 0;
+        for (const NodeEndpoint& e : m.nodes) {
+            if (seen & (uint64_t(1) << e.node)) fail("node " + std::to_string(e.node) + " is twice in the node list");
+            seen |= uint64_t(1) << e.node;
+        }
+    }
+}
+
+}  // namespace rtwall::cluster
