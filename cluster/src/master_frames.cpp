@@ -23,12 +23,6 @@ void Master::Impl::beginFrame(Command&& cmd) {
     // view of the whole image, whose tiling is makeTiles'.
     if (frameViews.empty()) beginViews.assign(1, FrameView{cmd.camera, {}, 0, 0});
     else beginViews = frameViews;
-    // Every tile writes its part; no clearing. (Swapped with the completed frame's buffer,
-    // so a still view allocates nothing.)
-    if (pixels == TilePixels::LinearHalf) {
-        linear.resize(std::max<size_t>(1, frameViews.size()));
-        for (std::vector<float>& l : linear) l.resize(size_t(rs.width) * size_t(rs.height) * 3);
-    }
     frameSeq = stateSeq;
     // The frame's state: the last one and every update up to stateSeq, which were all sent
     // before this frame began (runCommands flushes first) and no later one was (commands
@@ -53,9 +47,13 @@ void Master::Impl::beginFrame(Command&& cmd) {
     frameStart = nowSeconds();
     frameBytes = 0;
     frameDecoded = false;
-    if (frameViews.empty()) assembler.beginFrame(frame, rs.width, rs.height, rs.tileSize);
-    else assembler.beginFrame(frame, rs.width, rs.height, viewTiles(frameViews, rs.width, rs.height, rs.tileSize),
-                              uint32_t(frameViews.size()));
+    // A LinearHalf frame's tiles go into the assembler's linear buffers too. Every tile writes
+    // its part; no clearing. (Swapped with the completed frame's buffers, so a still view
+    // allocates nothing.) A mono frame's one view is the whole image: its tiling is makeTiles'.
+    FrameHolding holding;
+    holding.linear = pixels == TilePixels::LinearHalf;
+    assembler.beginFrame(frame, rs.width, rs.height, viewTiles(beginViews, rs.width, rs.height, rs.tileSize),
+                         uint32_t(beginViews.size()), holding);
     scheduler.beginFrame(frame, uint32_t(assembler.tiles().size()));
     if (withNodes()) beginNodeFrame(rs);
     for (auto& [peer, c] : clients) {
@@ -118,7 +116,7 @@ void Master::Impl::finishFrameIfDone() {
         // With nodes the pixels are on the nodes: empty images, one per view.
         if (withNodes()) completedImages.assign(std::max<size_t>(1, frameViews.size()), Image{});
         else completedImages = std::exchange(assembler.images(), std::vector<Image>(1));  // the assembler starts the next frame afresh
-        if (framePixels == TilePixels::LinearHalf) completedLinear.swap(linear);
+        if (framePixels == TilePixels::LinearHalf) completedLinear.swap(assembler.linearImages());
         else completedLinear.clear();
         completedReport = std::move(r);
         completedFrame = currentFrame;

@@ -209,7 +209,6 @@ struct Master::Impl {
     std::deque<TileFailure> tileFailures;  // for takeTileFailures (failuresMutex)
     TilePixels framePixels = TilePixels::Srgb8;  // how the current frame's tiles travel
     bool frameStochastic = false;
-    std::vector<std::vector<float>> linear;  // the current frame in linear RGB (LinearHalf frames), per view
     std::vector<FrameView> frameViews;  // the current frame's views (none: a mono frame of frameCamera)
     uint64_t frameViewsTag = 0;
     // What every FrameBegin of the current frame carries: frameViews, or the mono frame's one view.

@@ -88,10 +88,9 @@ void Master::Impl::onTileResult(ClientState& c, const Header& h, const uint8_t* 
             frameBytes += r.pixels.size();
             c.frameBytes += r.pixels.size();
             const uint32_t v = assembler.viewOf(r.tile);
-            const size_t stride = size_t(assembler.image(v).width) * 3;  // floats a row of the linear frame
-            float* wide = r.format == TilePixels::LinearHalf ? linear[v].data() + size_t(rect.y0) * stride + size_t(rect.x0) * 3
-                                                             : nullptr;
-            decoder->push({std::move(r.pixels), r.codec, r.tile, rect, view, r.format, wide, stride});
+            const bool wide = r.format == TilePixels::LinearHalf;
+            decoder->push({std::move(r.pixels), r.codec, r.tile, rect, view, r.format,
+                           wide ? assembler.linearAt(v, rect.x0, rect.y0) : nullptr, size_t(assembler.image(v).width) * 3});
         }
     }
     serve(c);

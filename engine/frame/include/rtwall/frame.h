@@ -104,6 +104,8 @@ public:
     std::vector<Image>& images() { return images_; }
     const std::vector<Image>& images() const { return images_; }
     bool linear() const { return linear_; }
+    // The master swaps a complete linear frame's buffers with the caller's (renderViews).
+    std::vector<std::vector<float>>& linearImages() { return linearImages_; }
     const std::vector<std::vector<float>>& linearImages() const { return linearImages_; }
     float* linearAt(size_t view, int x, int y) {
         return linearImages_[view].data() + (size_t(y) * size_t(images_[view].width) + size_t(x)) * 3;
