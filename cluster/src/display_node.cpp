@@ -269,7 +269,7 @@ private:
         try {
             const Header h = decodeHeader(bytes, msg.size());
             if (h.type != MsgType::TileResult || h.version != kProtocolVersion || session_ == 0 || h.session != session_) return;
-            r = decodePayload<TileResult>(bytes + kHeaderSize, msg.size() - kHeaderSize);
+            r = decodeMessage<TileResult>(bytes, msg.size());
         } catch (const DecodeError&) {
             if (run_.counters) ++run_.counters->droppedMessages;
             return;

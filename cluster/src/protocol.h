@@ -439,6 +439,13 @@ template <class Msg> std::vector<uint8_t> encodeMessage(Header header, const Msg
 // Decoders: the payload after the header; throw DecodeError.
 template <class Msg> Msg decodePayload(const uint8_t* data, size_t size);
 
+// The same from a whole message (header included, already checked by decodeHeader), so that no
+// caller steps over the header by hand.
+template <class Msg> Msg decodeMessage(const uint8_t* message, size_t size) {
+    if (size < kHeaderSize) throw DecodeError("a message of " + std::to_string(size) + " bytes, shorter than its header");
+    return decodePayload<Msg>(message + kHeaderSize, size - kHeaderSize);
+}
+
 MsgType messageTypeOf(const Hello&);
 MsgType messageTypeOf(const Welcome&);
 MsgType messageTypeOf(const SceneSnapshot&);

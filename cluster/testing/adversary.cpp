@@ -299,10 +299,10 @@ private:
             try {
                 const Header in = decodeHeader(p, msg.size());
                 if (in.type == MsgType::Welcome) session_ = in.session;
-                if (in.type == MsgType::FrameBegin) frame_ = decodePayload<FrameBegin>(p + kHeaderSize, msg.size() - kHeaderSize).frame;
+                if (in.type == MsgType::FrameBegin) frame_ = decodeMessage<FrameBegin>(p, msg.size()).frame;
                 if (in.type == MsgType::SceneSnapshot && !ready_) {
                     // Proves the state honestly once: from now on it is a client.
-                    const SceneSnapshot snap = decodePayload<SceneSnapshot>(p + kHeaderSize, msg.size() - kHeaderSize);
+                    const SceneSnapshot snap = decodeMessage<SceneSnapshot>(p, msg.size());
                     if (!snap.meshes.empty()) mesh_ = snap.meshes.front().hash;
                     put(*member_, inSession(Ready{snap.updateSeq, stateHash(snap)}));
                     ready_ = true;

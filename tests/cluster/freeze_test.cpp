@@ -182,7 +182,7 @@ TEST(Issue16, ALiveClientWhoseQueueIsFullForAMomentStays) {
         const auto* p = static_cast<const uint8_t*>(msg.data());
         const Header in = decodeHeader(p, msg.size());
         h.session = in.session;
-        if (in.type == MsgType::SceneSnapshot) snap = decodePayload<SceneSnapshot>(p + kHeaderSize, msg.size() - kHeaderSize);
+        if (in.type == MsgType::SceneSnapshot) snap = decodeMessage<SceneSnapshot>(p, msg.size());
     }
     ASSERT_TRUE(snap);
     peer.send(zmq::buffer(encodeMessage(h, Ready{snap->updateSeq, stateHash(*snap)})));

@@ -71,7 +71,7 @@ template <> void checkPayload<TileResult>(const uint8_t* data, size_t size) {
 }
 
 template <class Msg> void checkMessage(const Header& header, const uint8_t* data, size_t size) {
-    const Msg msg = decodePayload<Msg>(data + kHeaderSize, size - kHeaderSize);
+    const Msg msg = decodeMessage<Msg>(data, size);
     const std::vector<uint8_t> again = encodeMessage(header, msg);
     if (again.size() != size || std::memcmp(again.data(), data, size) != 0)
         finding("a decoded message does not re-encode to the same bytes");
