@@ -16,11 +16,11 @@
 
 #include <rtwall/cluster.h>
 #include <rtwall/engine.h>
+#include <rtwall/process.h>
 #include <rtwall/wall.h>
 
 #include <toml++/toml.h>
 
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -35,7 +35,6 @@
 #include <sstream>
 #include <thread>
 
-extern char** environ;
 
 namespace rtwall::bench {
 
@@ -84,36 +83,19 @@ public:
                 args.insert(args.begin(), {"ip", "netns", "exec", netns + std::to_string(i + 1)});
                 program = "/usr/sbin/ip";
             }
-            std::vector<char*> argv;
-            for (std::string& a : args) argv.push_back(a.data());
-            argv.push_back(nullptr);
-            pid_t pid;
-            const int err = posix_spawn(&pid, program.c_str(), nullptr, nullptr, argv.data(), environ);
+            int pid = -1;
+            const int err = spawnProcess(program, args, pid);
             if (err != 0) throw InputError(std::string("cannot start a display node process: ") + std::strerror(err));
             pids_.push_back(pid);
         }
     }
-    ~NodeProcesses() {
-        for (pid_t pid : pids_) kill(pid, SIGTERM);
-        const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
-        for (pid_t pid : pids_) {
-            int status;
-            while (waitpid(pid, &status, WNOHANG) == 0) {
-                if (std::chrono::steady_clock::now() > deadline) {
-                    kill(pid, SIGKILL);
-                    waitpid(pid, &status, 0);
-                    break;
-                }
-                std::this_thread::sleep_for(std::chrono::milliseconds(10));
-            }
-        }
-    }
+    ~NodeProcesses() { endProcesses(pids_, 2000); }
     NodeProcesses(const NodeProcesses&) = delete;
     NodeProcesses& operator=(const NodeProcesses&) = delete;
-    const std::vector<pid_t>& pids() const { return pids_; }
+    const std::vector<int>& pids() const { return pids_; }
 
 private:
-    std::vector<pid_t> pids_;
+    std::vector<int> pids_;
 };
 
 // The grid's column count: 4 (or K when K does not divide 4, or a multiple of both), so that
