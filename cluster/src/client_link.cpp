@@ -140,11 +140,7 @@ std::optional<int> ClientRuntime::handle(const zmq::message_t& msg) {
         const Header h = decodeHeader(bytes, msg.size());
         const uint8_t* p = bytes + kHeaderSize;
         const size_t n = msg.size() - kHeaderSize;
-        if (h.version != kProtocolVersion) {
-            std::fprintf(stderr, "rtwall client: the master speaks protocol version %u, this client %u\n",
-                         unsigned(h.version), unsigned(kProtocolVersion));
-            return 1;
-        }
+        if (refuseOtherVersion(h, "rtwall client", "client")) return 1;
         if (h.type == MsgType::Welcome) {
             const Welcome w = decodePayload<Welcome>(p, n);
             if (h.session != session_.load()) {  // a new master session: nothing of the old one counts

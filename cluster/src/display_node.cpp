@@ -159,11 +159,7 @@ private:
             const Header h = decodeHeader(bytes, msg.size());
             const uint8_t* p = bytes + kHeaderSize;
             const size_t n = msg.size() - kHeaderSize;
-            if (h.version != kProtocolVersion) {
-                std::fprintf(stderr, "rtwall display: the master speaks protocol version %u, this node %u\n", unsigned(h.version),
-                             unsigned(kProtocolVersion));
-                return 1;
-            }
+            if (refuseOtherVersion(h, "rtwall display", "node")) return 1;
             if (h.type == MsgType::Goodbye) {
                 std::fprintf(stderr, "rtwall display: the master says goodbye: %s\n", decodePayload<Goodbye>(p, n).reason.c_str());
                 return 0;

@@ -69,4 +69,11 @@ std::string MasterHandshakeWatch::why(const MonitorEvent& e, const std::string& 
     return "the master broke off the CURVE handshake: is --server-key its public key?";
 }
 
+bool refuseOtherVersion(const Header& fromMaster, const char* program, const char* self) {
+    if (fromMaster.version == kProtocolVersion) return false;
+    std::fprintf(stderr, "%s: the master speaks protocol version %u, this %s %u\n", program, unsigned(fromMaster.version), self,
+                 unsigned(kProtocolVersion));
+    return true;
+}
+
 }  // namespace rtwall::cluster

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "net.h"
+#include "protocol.h"
 #include "security.h"
 
 #include <zmq.hpp>
@@ -85,5 +86,10 @@ private:
     std::string trouble_;
     uint64_t failures_ = 0;
 };
+
+// A peer's refusal of a master that speaks another protocol version: prints the one line that
+// names both ("rtwall client: the master speaks protocol version 12, this client 13") and returns
+// true; false when the versions agree. `program` is the log prefix, `self` what this peer is.
+bool refuseOtherVersion(const Header& fromMaster, const char* program, const char* self);
 
 }  // namespace rtwall::cluster

@@ -793,6 +793,25 @@ TEST(Cluster, TheClientTakesItsTimeoutFromTheMaster) {
     EXPECT_EQ(client.get(), 1) << "it gives up after its idle limit";
 }
 
+// A master of another protocol version (older or newer): the client refuses it at once with
+// exit status 1 (its one line names both versions), long before its idle time would end it.
+TEST(Cluster, AClientRefusesAMasterOfAnotherProtocolVersion) {
+    using namespace cluster;
+    for (const uint16_t theirs : {uint16_t(12), uint16_t(kProtocolVersion + 1)}) {
+        FakeMaster fake;
+        auto client = test::startClient(fake, 60000);
+        const auto hello = fake.expect(MsgType::Hello, 10000);
+        ASSERT_TRUE(hello);
+        Header h;
+        h.type = MsgType::Welcome;
+        h.version = theirs;
+        h.session = FakeMaster::kSession;
+        fake.resend(hello->peer, encodeMessage(h, Welcome{1, CodecSettings{}, 4, 100, 3000}));
+        ASSERT_EQ(client.wait_for(std::chrono::seconds(20)), std::future_status::ready) << "version " << theirs;
+        EXPECT_EQ(client.get(), 1) << "version " << theirs;
+    }
+}
+
 // Old master messages sent again (a replayed snapshot, FrameBegin and Update, and the current
 // FrameBegin once more) must not make the client drop its work or go back to an old state:
 // after them it still renders the tiles it is given, for the current state.
