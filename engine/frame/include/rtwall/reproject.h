@@ -46,6 +46,10 @@ struct WarpOptions {
     // copies the view: a static head shows the rendered bytes, all Fresh, for the price of a copy.
     // Off: the warp runs anyway (the tests show that it, too, gives the bytes back).
     bool copySamePose = true;
+    // Threads the warp runs on (0: one per hardware thread). The bytes are the same for any
+    // number: a pixel's winner is the nearest point, the first in row order of equals, whichever
+    // thread splatted it.
+    int threads = 0;
 };
 
 struct WarpedView {
@@ -56,8 +60,8 @@ struct WarpedView {
 };
 
 // Warps views frame after frame into buffers it keeps: after the first frame of a size nothing
-// is allocated. Deterministic: the same inputs give the same bytes (one thread, fixed order;
-// the first source pixel in row order wins a tie).
+// is allocated but the threads. Deterministic: the same inputs give the same bytes, on any
+// number of threads (the first source pixel in row order wins a tie).
 class Reprojector {
 public:
     // The newest view warped to `target` at the newest view's size, holes filled from `older`
@@ -78,9 +82,8 @@ public:
 private:
     WarpedView out_;
     Splat newest_, older_;
-    std::vector<int> left_, right_;  // per row: nearest covered pixel each way
-
-    void fillHoles(const WarpOptions& options);
+    std::vector<uint64_t> newestKeys_, olderKeys_;  // per target pixel: its splat's winner so far
+    std::vector<size_t> rowHoles_;                  // per thread: the holes of its rows
 };
 
 // The same geometry, any name: whether two cameras see alike.
@@ -91,11 +94,11 @@ bool samePose(const CameraDesc& a, const CameraDesc& b);
 void warpDebugColours(const WarpedView& view, Image& out);
 
 // The CPU warp's cost for one width x height screen: a synthetic view (a slanted plane with
-// steps, some background) warped to a moved camera `runs` times.
+// steps, some background) warped to a moved camera `runs` times on `threads` threads.
 struct WarpTiming {
     double medianMs = 0, p95Ms = 0;
     int runs = 0;
 };
-WarpTiming timeReprojection(int width, int height, int runs);
+WarpTiming timeReprojection(int width, int height, int runs, int threads = 1);
 
 }  // namespace rtwall
