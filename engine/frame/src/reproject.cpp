@@ -48,28 +48,37 @@ struct Projector {
                 inv[i][j] = (m[a0][b0] * m[a1][b1] - m[a0][b1] * m[a1][b0]) * r;
             }
     }
-    // The pixel that sees direction `d` (from the origin); false when behind or outside.
-    bool pixelOf(const double d[3], int& px, int& py) const {
-        const double a = inv[0][0] * d[0] + inv[0][1] * d[1] + inv[0][2] * d[2];
-        const double b = inv[1][0] * d[0] + inv[1][1] * d[1] + inv[1][2] * d[2];
-        const double c = inv[2][0] * d[0] + inv[2][1] * d[1] + inv[2][2] * d[2];
+    // M^-1 v: a point's (a, b, c) from its offset v from the origin; linear, so a ray's is its
+    // direction's times the distance along it (splatRows steps it along a row).
+    void solve(const double v[3], double out[3]) const {
+        for (int i = 0; i < 3; ++i) out[i] = inv[i][0] * v[0] + inv[i][1] * v[1] + inv[i][2] * v[2];
+    }
+    // The pixel that sees the point solving to (a, b, c); false when behind or outside. One
+    // division (1 / c, then two products) where a / c and b / c would take two: the quotients
+    // differ from the divided ones by an ulp at most, which moves a point only when it lies
+    // within about 1e-12 pixels of a pixel's edge.
+    bool pixelOf(double a, double b, double c, int& px, int& py) const {
         if (!(c > 0.0)) return false;
-        const double x = std::floor(a / c), y = std::floor(b / c);
+        const double r = 1.0 / c, x = a * r, y = b * r;
+        // Inside [0, width) x [0, height) before the floor: then truncation is the floor.
         if (!(x >= 0.0 && x < double(width) && y >= 0.0 && y < double(height))) return false;
         px = int(x), py = int(y);
         return true;
     }
 };
 
-// A target pixel's winner so far, as one number: the point's distance (its float bits, which
-// order like the floats for the non-negative distances a splat has) above its source pixel's
-// index. The smallest key is the nearest point and, of equals, the first in row order: the rule
-// a single pass in row order keeps (`!(dist < best)` leaves the first of equals), so any number
-// of threads splatting in any order find the same winner.
+// A target pixel's winner so far, as one number: the point's squared distance (as a float,
+// whose bits order like the floats for non-negative values) above its source pixel's index.
+// The smallest key is the nearest point and, of equals, the first in row order: the rule a
+// single pass in row order keeps (a later point replaces only a farther one), so any number of
+// threads splatting in any order find the same winner. Squared, because the square root is
+// then taken once per target pixel (resolveRows), not once per source pixel.
 constexpr uint64_t kNoSplat = ~uint64_t(0);
+// Surfaces stay nearer than the background (kBackgroundDepth, the largest float) however far.
+const float kFarthestSurface = std::nextafter(kBackgroundDepth, 0.0f);
 
-uint64_t splatKey(float dist, size_t source) {
-    return uint64_t(std::bit_cast<uint32_t>(dist)) << 32 | uint64_t(uint32_t(source));
+uint64_t splatKey(float squaredDistance, size_t source) {
+    return uint64_t(std::bit_cast<uint32_t>(squaredDistance)) << 32 | uint64_t(uint32_t(source));
 }
 
 void sizeSplat(Reprojector::Splat& s, std::vector<uint64_t>& keys, int w, int h) {
@@ -99,24 +108,45 @@ template <bool shared>
 void splatRows(const WarpSource& src, const Projector& to, uint64_t* keys, int y0, int y1) {
     const int sw = src.image.width;
     const Camera from(src.camera, sw, src.image.height);
-    const Float3 o = from.origin();
+    const Float3 o = from.origin(), fc = from.corner(), fu = from.du(), fv = from.dv();
+    // Pixel (x, y)'s ray is d = row + du px (px = x + 0.5, row = corner + dv (y + 0.5)), in
+    // double. Its point at distance `depth` is p = d s + shift (s = depth / |d|; shift: from the
+    // target's origin to the source's), so p's (a, b, c) is s (R + X px) + S with R, X, S the
+    // solved row, du and shift, and |p|^2 = depth^2 + 2 s (d . shift) + |shift|^2: a few
+    // products per pixel, each linear or quadratic in px.
     const double shift[3] = {double(o.x) - to.origin[0], double(o.y) - to.origin[1], double(o.z) - to.origin[2]};
-    for (int y = y0; y < y1; ++y)
+    const double du[3] = {fu.x, fu.y, fu.z};
+    double solvedDu[3], solvedShift[3];
+    to.solve(du, solvedDu);
+    to.solve(shift, solvedShift);
+    const double duDu = du[0] * du[0] + du[1] * du[1] + du[2] * du[2];
+    const double duShift = du[0] * shift[0] + du[1] * shift[1] + du[2] * shift[2];
+    const double shiftShift = shift[0] * shift[0] + shift[1] * shift[1] + shift[2] * shift[2];
+    for (int y = y0; y < y1; ++y) {
+        const double py = double(y) + 0.5;
+        const double row[3] = {fc.x + fv.x * py, fc.y + fv.y * py, fc.z + fv.z * py};
+        double r[3];
+        to.solve(row, r);
+        const double rowRow = row[0] * row[0] + row[1] * row[1] + row[2] * row[2];
+        const double rowDu2 = 2.0 * (row[0] * du[0] + row[1] * du[1] + row[2] * du[2]);
+        const double rowShift = row[0] * shift[0] + row[1] * shift[1] + row[2] * shift[2];
         for (int x = 0; x < sw; ++x) {
             const size_t i = size_t(y) * size_t(sw) + size_t(x);
             const float depth = src.depth[i];
             const bool background = depth == kBackgroundDepth;
             if (!background && !(depth > 0.0f && std::isfinite(depth))) continue;  // no depth: a hole
-            const Float3 d = from.direction(float(x) + 0.5f, float(y) + 0.5f);
-            const double len = std::sqrt(double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z);
-            const double s = background ? 1.0 / len : double(depth) / len;
-            double p[3] = {d.x * s, d.y * s, d.z * s};
-            if (!background)
-                for (int k = 0; k < 3; ++k) p[k] += shift[k];
+            const double px = double(x) + 0.5;
+            const double s = (background ? 1.0 : double(depth)) / std::sqrt(rowRow + px * (rowDu2 + px * duDu));
+            const double k = background ? 0.0 : 1.0;  // a direction does not move with the origin
             int tx, ty;
-            if (!to.pixelOf(p, tx, ty)) continue;
-            const float dist = background ? kBackgroundDepth : float(std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]));
-            const uint64_t key = splatKey(dist, i);
+            if (!to.pixelOf(s * (r[0] + solvedDu[0] * px) + k * solvedShift[0], s * (r[1] + solvedDu[1] * px) + k * solvedShift[1],
+                            s * (r[2] + solvedDu[2] * px) + k * solvedShift[2], tx, ty))
+                continue;
+            const double dd = double(depth);
+            const float squared =
+                background ? kBackgroundDepth
+                           : std::clamp(float(dd * dd + 2.0 * s * (rowShift + duShift * px) + shiftShift), 0.0f, kFarthestSurface);
+            const uint64_t key = splatKey(squared, i);
             uint64_t& slot = keys[size_t(ty) * size_t(to.width) + size_t(tx)];
             if constexpr (shared) {
                 std::atomic_ref<uint64_t> atomic(slot);
@@ -127,6 +157,7 @@ void splatRows(const WarpSource& src, const Projector& to, uint64_t* keys, int y
                 slot = key;
             }
         }
+    }
 }
 
 // Target rows [y0, y1): each key's source pixel (bytes and distance) into the splat image.
@@ -139,7 +170,8 @@ void resolveRows(const WarpSource& src, const uint64_t* keys, Reprojector::Splat
             s.depth[t] = kBackgroundDepth;
             continue;
         }
-        s.depth[t] = std::bit_cast<float>(uint32_t(key >> 32));
+        const float squared = std::bit_cast<float>(uint32_t(key >> 32));
+        s.depth[t] = squared == kBackgroundDepth ? kBackgroundDepth : std::sqrt(squared);
         std::memcpy(&s.image.rgb[t * 3], &src.image.rgb[size_t(uint32_t(key)) * 3], 3);
     }
 }
