@@ -275,10 +275,6 @@ std::pair<int, int> rowsOf(int n, int threads, int i) {
 
 }  // namespace
 
-bool samePose(const CameraDesc& a, const CameraDesc& b) {
-    return a.position == b.position && a.lookAt == b.lookAt && a.up == b.up && a.fovY == b.fovY && a.window == b.window;
-}
-
 const WarpedView& Reprojector::warp(const WarpSource& newest, const CameraDesc& target, const WarpSource* older,
                                     const WarpOptions& options) {
     checkSource(newest, "newest");
@@ -343,14 +339,13 @@ const WarpedView& Reprojector::warp(const WarpSource& newest, const CameraDesc& 
 }
 
 void warpDebugColours(const WarpedView& view, Image& out) {
-    static constexpr uint8_t kTint[4][3] = {{0, 200, 0}, {40, 90, 255}, {255, 220, 0}, {255, 0, 0}};
     out.width = view.image.width;
     out.height = view.image.height;
     out.rgb.resize(view.image.rgb.size());
     for (size_t i = 0; i < view.mask.size(); ++i)
         for (int c = 0; c < 3; ++c)
             out.rgb[i * 3 + size_t(c)] =
-                uint8_t((int(view.image.rgb[i * 3 + size_t(c)]) + int(kTint[size_t(view.mask[i])][c]) + 1) / 2);
+                uint8_t((int(view.image.rgb[i * 3 + size_t(c)]) + int(kWarpTints[size_t(view.mask[i])][c]) + 1) / 2);
 }
 
 WarpTiming timeReprojection(int width, int height, int runs, int threads) {
