@@ -9,6 +9,7 @@
 
 #include <rtwall/display.h>
 
+#include "gl_reproject.h"
 #include "swap_group.h"
 
 #include <algorithm>
@@ -28,22 +29,6 @@ std::string gLastGlfwError;
 void onGlfwError(int, const char* what) { gLastGlfwError = what ? what : "unknown GLFW error"; }
 
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-
-GLuint compile(GLenum type, const ShaderSource& src) {
-    const GLuint s = glCreateShader(type);
-    const char* text = src.text.c_str();
-    glShaderSource(s, 1, &text, nullptr);
-    glCompileShader(s);
-    GLint ok = 0;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[2048] = {};
-        glGetShaderInfoLog(s, sizeof log, nullptr, log);
-        glDeleteShader(s);
-        throw InputError(src.name + ": the OpenGL driver does not compile it: " + std::string(log));
-    }
-    return s;
-}
 
 struct Screen {
     GLFWwindow* window = nullptr;
@@ -169,7 +154,7 @@ struct GlPresenter::Impl {
             text << in.rdbuf();
             f = {c.fragmentShader.string(), text.str()};
         }
-        const GLuint vs = compile(GL_VERTEX_SHADER, vert), fs = compile(GL_FRAGMENT_SHADER, f);
+        const GLuint vs = compileShader(GL_VERTEX_SHADER, vert), fs = compileShader(GL_FRAGMENT_SHADER, f);
         s.program = glCreateProgram();
         glAttachShader(s.program, vs);
         glAttachShader(s.program, fs);

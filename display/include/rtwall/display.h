@@ -185,6 +185,9 @@ struct ShaderSource {
 // The shipped shaders (display/shaders/), embedded at build time.
 ShaderSource presentVertexShader();
 ShaderSource presentFragmentShader();
+// The GL re-projection's passes (issue 27, display/shaders/warp_*): a name ending in .vert is a
+// vertex shader, .frag a fragment shader.
+std::vector<ShaderSource> warpShaders();
 // Compiles GLSL 330 core with glslang (no GPU needed). Returns the problems, one line each:
 // "<name>:<line>: <message>", empty when it compiles.
 std::vector<std::string> checkShader(const ShaderSource& source, bool fragment);

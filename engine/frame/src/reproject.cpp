@@ -24,35 +24,9 @@ namespace rtwall {
 
 namespace {
 
-// Where world points land in a camera's image: direction(px, py) = corner + du px + dv py, so
-// a point p seen from the origin solves p - origin = s (du px + dv py + corner): px = a / c,
-// py = b / c for (a, b, c) = M^-1 (p - origin), M = [du dv corner], in front where c > 0.
-struct Projector {
-    double origin[3];
-    double inv[3][3];
-    int width, height;
-
-    Projector(const CameraDesc& desc, int w, int h) : width(w), height(h) {
-        const Camera camera(desc, w, h);
-        const Float3 o = camera.origin(), u = camera.du(), v = camera.dv(), c = camera.corner();
-        origin[0] = o.x, origin[1] = o.y, origin[2] = o.z;
-        const double m[3][3] = {{u.x, v.x, c.x}, {u.y, v.y, c.y}, {u.z, v.z, c.z}};
-        const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-                           m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-        const double r = det != 0.0 ? 1.0 / det : 0.0;  // a degenerate camera sees nothing
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) {
-                // The cofactor of m[j][i]: the inverse is the adjugate over the determinant.
-                const int a0 = (j + 1) % 3, a1 = (j + 2) % 3, b0 = (i + 1) % 3, b1 = (i + 2) % 3;
-                inv[i][j] = (m[a0][b0] * m[a1][b1] - m[a0][b1] * m[a1][b0]) * r;
-            }
-    }
-    // M^-1 v: a point's (a, b, c) from its offset v from the origin; linear, so a ray's is its
-    // direction's times the distance along it (splatRows steps it along a row).
-    void solve(const double v[3], double out[3]) const {
-        for (int i = 0; i < 3; ++i) out[i] = inv[i][0] * v[0] + inv[i][1] * v[1] + inv[i][2] * v[2];
-    }
+// A target camera's image: where a solved point (rtwall/warp.h, ImageProjection) lands.
+struct Projector : ImageProjection {
+    using ImageProjection::ImageProjection;
     // The pixel that sees the point solving to (a, b, c); false when behind or outside. One
     // division (1 / c, then two products) where a / c and b / c would take two: the quotients
     // differ from the divided ones by an ulp at most, which moves a point only when it lies
@@ -89,15 +63,6 @@ void sizeSplat(Reprojector::Splat& s, std::vector<uint64_t>& keys, int w, int h)
     s.depth.resize(n);
     s.covered.resize(n);
     keys.resize(n);
-}
-
-void checkSource(const WarpSource& s, const char* which) {
-    const size_t n = size_t(std::max(0, s.image.width)) * size_t(std::max(0, s.image.height));
-    if (s.depth.size() != n || s.image.rgb.size() != n * 3)
-        throw std::invalid_argument(std::string("reproject: the ") + which + " view has " +
-                                    std::to_string(s.depth.size()) + " depths and " + std::to_string(s.image.rgb.size()) +
-                                    " colour bytes for " + std::to_string(s.image.width) + "x" +
-                                    std::to_string(s.image.height) + " pixels");
 }
 
 // Source rows [y0, y1) of `src` into `keys` (sized for `to`): each pixel with a depth becomes a
@@ -277,8 +242,8 @@ std::pair<int, int> rowsOf(int n, int threads, int i) {
 
 const WarpedView& Reprojector::warp(const WarpSource& newest, const CameraDesc& target, const WarpSource* older,
                                     const WarpOptions& options) {
-    checkSource(newest, "newest");
-    if (older) checkSource(*older, "older");
+    checkWarpSource(newest, "newest");
+    if (older) checkWarpSource(*older, "older");
     const int w = newest.image.width, h = newest.image.height;
     const size_t n = size_t(w) * size_t(h);
     out_.image.width = w;

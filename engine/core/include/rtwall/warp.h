@@ -4,9 +4,42 @@
 // tints. Cameras and the depth convention: rtwall/camera.h.
 #pragma once
 
+#include <rtwall/camera.h>
+#include <rtwall/image.h>
+
 #include <cstdint>
+#include <span>
 
 namespace rtwall {
+
+// A rendered view as the warp reads it: its image, one depth per pixel as renderTile writes it
+// (kBackgroundDepth: background; NaN, infinities, zero and negative: no depth, never moved) and
+// the camera it was rendered with (its own size: an older view may be of another resolution).
+struct WarpSource {
+    const Image& image;
+    std::span<const float> depth;
+    const CameraDesc& camera;
+};
+// Throws std::invalid_argument, naming `which` view and its sizes, unless it has one depth and
+// three colour bytes per pixel.
+void checkWarpSource(const WarpSource& source, const char* which);
+
+// Where world points land in a camera's image: direction(px, py) = corner + du px + dv py, so
+// a point p seen from the origin solves p - origin = s (du px + dv py + corner): px = a / c,
+// py = b / c for (a, b, c) = M^-1 (p - origin), M = [du dv corner], in front where c > 0. In
+// double: both warps take their per-camera constants from it.
+struct ImageProjection {
+    double origin[3];
+    double inv[3][3];  // M^-1 (zero for a degenerate camera, which sees nothing)
+    int width, height;
+
+    ImageProjection(const CameraDesc& desc, int w, int h);
+    // M^-1 v: a point's (a, b, c) from its offset v from the origin; linear, so a ray's is its
+    // direction's times the distance along it.
+    void solve(const double v[3], double out[3]) const {
+        for (int i = 0; i < 3; ++i) out[i] = inv[i][0] * v[0] + inv[i][1] * v[1] + inv[i][2] * v[2];
+    }
+};
 
 // Where each pixel of a re-projected image came from (the debug view's colours).
 enum class WarpPixel : uint8_t {

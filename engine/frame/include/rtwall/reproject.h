@@ -19,14 +19,6 @@
 namespace rtwall {
 
 
-// A rendered view as the warp reads it: its image, one depth per pixel as renderTile writes it
-// (kBackgroundDepth: background; NaN, infinities, zero and negative: no depth, never moved) and
-// the camera it was rendered with (its own size: an older view may be of another resolution).
-struct WarpSource {
-    const Image& image;
-    std::span<const float> depth;
-    const CameraDesc& camera;
-};
 
 
 struct WarpedView {
