@@ -203,5 +203,68 @@ TEST_F(GlWarp, TheOwnPoseGivesTheViewBitForBit) {
     EXPECT_THROW(gl_->warp({a.image, short_, a.camera}, a.camera), std::invalid_argument);
 }
 
+// The GL presenter with warps (WallFrame::warps): two views, each warped to its own target,
+// into the left half and the top right quarter of the eye (the bottom right quarter black),
+// show what the CPU warps composed into the eye (as the Compositor copies regions) show through
+// the headless presenter, to the tolerance above (99.9 % of the pixels identical); and so does
+// the debug view.
+TEST(GlPresenterWarps, TheEyeShowsTheCpuWarpsComposed) {
+    const int w = 160, h = 120;
+    const WallConfig wall = singleScreenWall(w, h);
+    GlPresenter::Options o;
+    o.visible = false;
+    std::string why;
+    auto gl = GlPresenter::open(wall, o, &why);
+    ASSERT_TRUE(gl) << why;
+    const View a = synthetic(w, h, lookingAt({0, 1.2f, 2.0f})), b = synthetic(w, h, lookingAt({0.4f, 1.0f, 2.2f}));
+    const View c = synthetic(w, h, lookingAt({0.5f, 1.2f, 2.0f}));
+    WallFrame frame;
+    frame.number = 1;
+    ViewWarp va;
+    va.regions = {{0, 0, w / 2, h}};
+    va.image = &a.image;
+    va.depth = &a.depth;
+    va.camera = a.camera;
+    va.olderImage = &c.image;
+    va.olderDepth = &c.depth;
+    va.olderCamera = c.camera;
+    va.target = lookingAt({0.25f, 1.15f, 1.9f});
+    ViewWarp vb;
+    vb.regions = {{w / 2, 0, w, h / 2}};
+    vb.image = &b.image;
+    vb.depth = &b.depth;
+    vb.camera = b.camera;
+    vb.target = lookingAt({0.3f, 1.1f, 2.1f});
+    frame.warps = {va, vb};
+    for (bool debug : {false, true}) {
+        frame.warpDebug = debug;
+        std::vector<Image> shown;
+        gl->present(frame, {}, &shown);
+        WallFrame cpu;
+        cpu.left.width = w;
+        cpu.left.height = h;
+        cpu.left.rgb.assign(size_t(w) * size_t(h) * 3, 0);
+        Reprojector warper;
+        for (const ViewWarp& v : frame.warps) {
+            const WarpSource older{v.olderImage ? *v.olderImage : *v.image, v.olderDepth ? *v.olderDepth : *v.depth, v.olderCamera};
+            const WarpedView& out = warper.warp({*v.image, *v.depth, v.camera}, v.target, v.olderImage ? &older : nullptr);
+            Image img = out.image;
+            if (debug) warpDebugColours(out, img);
+            for (const TileRect& r : v.regions)
+                for (int y = r.y0; y < r.y1; ++y)
+                    std::copy_n(img.rgb.begin() + ptrdiff_t((size_t(y) * size_t(w) + size_t(r.x0)) * 3), size_t(r.width()) * 3,
+                                cpu.left.rgb.begin() + ptrdiff_t((size_t(y) * size_t(w) + size_t(r.x0)) * 3));
+        }
+        const Image expected = presentScreen(wall, 0, cpu, {});
+        ASSERT_EQ(shown.size(), 1u);
+        ASSERT_EQ(shown[0].rgb.size(), expected.rgb.size());
+        size_t same = 0;
+        for (size_t i = 0; i < size_t(w) * size_t(h); ++i)
+            same += std::equal(&shown[0].rgb[i * 3], &shown[0].rgb[i * 3 + 3], &expected.rgb[i * 3]);
+        std::printf("[ presenter%s ] %.3f %% of the pixels identical\n", debug ? ", debug view" : "", 100.0 * double(same) / double(w * h));
+        EXPECT_GE(double(same), 0.999 * double(w * h)) << (debug ? "debug view" : "");
+    }
+}
+
 }  // namespace
 }  // namespace rtwall

@@ -9,6 +9,7 @@
 // the engine or the cluster: it is given finished wall images.
 #pragma once
 
+#include <rtwall/camera.h>
 #include <rtwall/image.h>
 #include <rtwall/input_error.h>
 #include <rtwall/vec.h>
@@ -199,6 +200,21 @@ std::vector<std::string> checkWall(const WallConfig& wall);
 // ---------------------------------------------------------------------------------------------
 // Mapping a wall image to the screens (the CPU reference of present.frag)
 
+// One rendered view to be re-projected into an eye's image (issue 27): its newest image, depth
+// and camera, optionally the one before it, and the pose to show it for. The pointers are the
+// caller's and must live through present().
+struct ViewWarp {
+    int eye = 0;                      // 0: the left (mono) eye, 1: the right
+    std::vector<TileRect> regions;    // its pixels in the eye image, empty: the whole image
+    const Image* image = nullptr;
+    const std::vector<float>* depth = nullptr;
+    CameraDesc camera;                // newest
+    const Image* olderImage = nullptr;
+    const std::vector<float>* olderDepth = nullptr;
+    CameraDesc olderCamera;
+    CameraDesc target;
+};
+
 // A finished frame as the renderer delivers it.
 // Its images are the wall's size, or smaller: a frame rendered at a fraction of the wall's
 // resolution is shown upscaled (bilinear, pixel centres aligned, edges clamped).
@@ -208,6 +224,12 @@ struct WallFrame {
     Image right;                        // the right eye (stereo walls only; the left's size)
     std::vector<uint32_t> tileOwners;   // client id per tile of the frame (row-major), for the false-colour view
     int tileSize = 0;                   // in the frame's pixels
+    // Not empty: the GL presenter makes the eyes' images on the GPU from these (each view warped
+    // to its target as Reprojector::warp does, written into its regions of its eye, the rest of
+    // an eye black, as the Compositor composes) instead of uploading left and right; all views
+    // are of one size, the frame's. warpDebug: the warp's debug view (warpDebugColours' tints).
+    std::vector<ViewWarp> warps;
+    bool warpDebug = false;
 };
 // Throws std::invalid_argument, naming `who` and the sizes, for a frame larger than the wall, an
 // empty one, or eyes of different sizes.
