@@ -201,6 +201,9 @@ Reader readWall(Reader& top, WallParse& p) {
     w.width = wr.integer("width", 0);
     w.height = wr.integer("height", 0);
     w.vsync = wr.boolean("vsync", w.vsync);
+    if (wr.has("reproject")) w.reproject = wr.choice("reproject", "off") == "on";
+    w.reprojectDebug = wr.boolean("reproject_debug", w.reprojectDebug);
+    w.refreshHz = wr.number("refresh_hz", w.refreshHz);
     w.swapGroup = wr.integer("swap_group", 0);
     w.swapBarrier = wr.integer("swap_barrier", 0);
     if (w.swapBarrier > 0 && w.swapGroup == 0) wr.fail(wr.find("swap_barrier"), "key 'swap_barrier': needs swap_group (a barrier binds a swap group)");
@@ -470,7 +473,8 @@ bool StereoConfig::operator==(const StereoConfig& o) const {
 
 bool WallConfig::operator==(const WallConfig& o) const {
     return name == o.name && width == o.width && height == o.height && vsync == o.vsync && swapGroup == o.swapGroup &&
-           swapBarrier == o.swapBarrier && screens == o.screens &&
+           swapBarrier == o.swapBarrier && reproject == o.reproject && reprojectDebug == o.reprojectDebug &&
+           refreshHz == o.refreshHz && screens == o.screens &&
            stereo == o.stereo && tracking == o.tracking && writeEvery == o.writeEvery && video == o.video &&
            navigation == o.navigation;
 }
@@ -512,6 +516,9 @@ std::string writeWallConfig(const WallConfig& w) {
     };
     os << "[wall]\nname = " << quoted(w.name) << "\nwidth = " << w.width << "\nheight = " << w.height
        << "\nvsync = " << (w.vsync ? "true" : "false") << "\n";
+    if (w.reproject) os << "reproject = \"" << (*w.reproject ? "on" : "off") << "\"\n";
+    if (w.reprojectDebug) os << "reproject_debug = true\n";
+    if (w.refreshHz != WallConfig{}.refreshHz) os << "refresh_hz = " << num(w.refreshHz) << "\n";
     if (w.swapGroup > 0) os << "swap_group = " << w.swapGroup << "\nswap_barrier = " << w.swapBarrier << "\n";
     os << "\n";
     if (w.stereo.mode != StereoMode::None || w.tracking.enabled) {

@@ -25,6 +25,9 @@ inline constexpr Key kWallKeys[] = {
     {.name = "height", .type = KeyType::Integer, .lo = 1, .hi = 65536, .help = "the wall image in pixels; *required* with `[[screen]]`; with `[grid]` it must match if given"},
     {.name = "vsync", .type = KeyType::Boolean, .help = "swap on the retrace (the first window waits; all windows are swapped together)"},
     {.name = "swap_group", .type = KeyType::Integer, .lo = 0, .hi = 1 << 20, .help = "join this PC's windows to `GLX_NV_swap_group` group N (they swap together in the driver), where the driver has the extension (NVIDIA Quadro/RTX A-series on X11); where it has not, one line says so and the windows swap as without it"},
+    {.name = "reproject", .type = KeyType::Choice, .choices = "off, on", .help = "re-projection ([docs/latency.md](../docs/latency.md)): every refresh shows the newest rendered frame warped to the head pose read just before the swap, so the wall follows the head at the display's rate whatever the render rate (the clients send depth with every tile); off: each rendered frame is shown once, as rendered. Default: on for a tracked wall, else off"},
+    {.name = "reproject_debug", .type = KeyType::Boolean, .help = "with re-projection: tint each pixel by where it came from (green: rendered for this pose, blue: warped, yellow: filled from the frame before, red: filled from its row); the `J` key toggles it"},
+    {.name = "refresh_hz", .type = KeyType::Number, .lo = 1.0, .hi = 1000.0, .help = "with re-projection: presentations a second where no retrace paces them (headless, or `vsync = false`); default 60"},
     {.name = "swap_barrier", .type = KeyType::Integer, .lo = 0, .hi = 1 << 20, .help = "with `swap_group`: bind the group to `GLX_NV_swap_barrier` N, so that the groups of all PCs wired to one frame-lock board (Quadro Sync) swap together in hardware, on top of the master's network barrier"},
 };
 

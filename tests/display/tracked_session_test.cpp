@@ -539,8 +539,11 @@ TEST(WandSession, TheWorldScaleKeysScaleAboutTheHead) {
 // CaveWallsAreRenderedEachWithItsOwnView.)
 void checkAsyncEqualsSync(const std::filesystem::path& dir, std::string (*wall)(const char*, bool), const char* viewer,
                           Float3 at, size_t views) {
+    // Without re-projection: a frame shows the head it was specified with (re-projecting, every
+    // presentation shows the newest head; ReprojectSession tests that).
     RunConfig sc = config(dir, wall(viewer, true), "sync.toml");
     sc.cluster.async = false;
+    sc.reproject = false;
     WallSession sync(sc);
     const TrackingConfig t = loadWallConfig(dir / "sync.toml").tracking;
     const std::vector<std::pair<Float3, double>> heads{{at, 0.0}, {{at.x + 0.3f, at.y - 0.1f, at.z + 0.2f}, 20.0}, {at, -35.0}};
@@ -555,6 +558,7 @@ void checkAsyncEqualsSync(const std::filesystem::path& dir, std::string (*wall)(
         SCOPED_TRACE(async ? "async" : "sync");
         RunConfig oc = config(dir, wall(viewer, true), "onepass.toml");
         oc.cluster.async = async;
+        oc.reproject = false;
         WallSession one(oc);
         packet = 0;
         for (size_t i = 0; i < heads.size(); ++i) {

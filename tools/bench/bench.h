@@ -137,6 +137,9 @@ struct LatencyOptions : Common {
     double rate = 120;            // tracker datagrams a second
     double targetSlackMs = 10;    // latency target: one frame time plus this (async off)
     double targetErrorMm = 5;     // prediction target at 0.5 m/s
+    bool reproject = false;       // each configuration with re-projection off and on (issue 27)
+    double refreshHz = 60;        // the display's refresh re-projecting (headless: paced by the wall)
+    double reprojectSlackMs = 5;  // re-projecting target: one refresh plus this
 };
 toml::table latency(const LatencyOptions& o);
 

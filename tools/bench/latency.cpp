@@ -55,31 +55,32 @@ struct Circle {
 
 // A wall of width x height pixels, 3.2 m x 2.4 m, tracked on 127.0.0.1 (a free port). The room
 // transform is the identity in metres (DTrack millimetres): what is sent is wall coordinates.
-std::string wallText(int width, int height, bool stereo, double predictionMs) {
+std::string wallText(int width, int height, bool stereo, double predictionMs, bool reproject, double refreshHz) {
     char buf[1024];
     std::snprintf(buf, sizeof buf,
-                  "[wall]\nname = \"latency\"\nvsync = false\n[grid]\ncolumns = %d\nrows = %d\nscreen_width = %d\nscreen_height = %d\n"
+                  "[wall]\nname = \"latency\"\nvsync = false\nreproject = \"%s\"\nrefresh_hz = %.3f\n[grid]\ncolumns = %d\nrows = %d\nscreen_width = %d\nscreen_height = %d\n"
                   "[stereo]\nmode = \"%s\"\neye_separation = 0.065\nviewer = [0.0, 0.2, 2.5]\n"
                   "lower_left = [-1.6, -1.2, 0.0]\nlower_right = [1.6, -1.2, 0.0]\nupper_left = [-1.6, 1.2, 0.0]\n"
                   "[tracking]\nsource = \"dtrack://127.0.0.1:0\"\nroom_scale = 0.001\ntimeout_ms = 1000\nprediction_ms = %.3f\n"
                   "filter = \"none\"\n[headless]\nwrite_every = 0\n",
-                  stereo ? 2 : 1, stereo ? 2 : 1, stereo ? width / 2 : width, stereo ? height / 2 : height,
+                  reproject ? "on" : "off", refreshHz, stereo ? 2 : 1, stereo ? 2 : 1, stereo ? width / 2 : width, stereo ? height / 2 : height,
                   stereo ? "passive" : "none", predictionMs);
     return buf;
 }
 
 struct Case {
-    bool stereo = false, async = false;
+    bool stereo = false, async = false, reproject = false;
     double predictionMs = 0;
     int width = 0, height = 0;
 };
 
 struct Measured {
-    std::vector<double> latency;  // seconds, per datagram shown: arrival to the first frame made with it
-    std::vector<double> newest;   // seconds, per frame: arrival of the newest datagram it was made with to its presentation
-    std::vector<double> error;    // metres, per frame shown
-    std::vector<double> frame;    // seconds between presentations
-    std::vector<double> specToPresent;  // seconds from a frame's head pose (its step's start) to its presentation
+    std::vector<double> latency;  // seconds, per datagram shown: arrival to the first presentation made with it
+    std::vector<double> newest;   // seconds, per presentation: arrival of the newest datagram its pose was made with to it
+    std::vector<double> error;    // metres, per presentation
+    std::vector<double> frame;    // seconds between rendered frames (steps)
+    std::vector<double> refresh;  // seconds between presentations
+    std::vector<double> specToPresent;  // seconds from a presentation's head pose being read to it
     uint64_t sent = 0, shownPackets = 0;
 };
 
@@ -130,7 +131,7 @@ private:
 
 Measured measure(const LatencyOptions& o, const Case& c, const std::filesystem::path& dir) {
     const std::filesystem::path wall = dir / "wall.toml";
-    std::ofstream(wall) << wallText(c.width, c.height, c.stereo, c.predictionMs);
+    std::ofstream(wall) << wallText(c.width, c.height, c.stereo, c.predictionMs, c.reproject, o.refreshHz);
     RunConfig rc = steppedRunConfig(dir, o.clients);
     rc.scene = o.scene;
     rc.wall = wall;
@@ -144,50 +145,72 @@ Measured measure(const LatencyOptions& o, const Case& c, const std::filesystem::
     Measured m;
     HeadSender sender(session.trackerPort(), circle, o.rate, start);
     uint64_t lastShown = 0;
-    Clock::time_point lastPresented = Clock::now(), lastStart = lastPresented;
+    Clock::time_point lastStep = Clock::now(), lastPresented = lastStep;
     for (int f = 0; f < o.warmupFrames + o.frames; ++f) {
-        const Clock::time_point stepStart = Clock::now();
         session.step();
-        const Clock::time_point presented = Clock::now();
-        const uint64_t shown = session.shownTrackerPackets();
+        const Clock::time_point stepped = Clock::now();
+        const std::vector<Presentation> shown = session.takePresentations();
         const std::vector<Clock::time_point> times = sender.times();
-        // With async the frame shown was specified (its head pose taken) at the previous step's start.
-        const Clock::time_point specified = c.async ? lastStart : stepStart;
-        lastStart = stepStart;
         if (f < o.warmupFrames) {  // the head comes up to speed, the async pipeline fills
-            lastShown = shown;
-            lastPresented = presented;
+            for (const Presentation& p : shown) lastShown = std::max(lastShown, p.trackerPackets);
+            lastStep = stepped;
+            if (!shown.empty()) lastPresented = shown.back().at;
             continue;
         }
-        m.frame.push_back(std::chrono::duration<double>(presented - lastPresented).count());
-        m.specToPresent.push_back(std::chrono::duration<double>(presented - specified).count());
-        lastPresented = presented;
-        for (uint64_t k = lastShown + 1; k <= shown && k <= times.size(); ++k)
-            m.latency.push_back(std::chrono::duration<double>(presented - times[k - 1]).count());
-        if (shown > lastShown) m.shownPackets += shown - lastShown;
-        if (shown >= 1 && shown <= times.size()) m.newest.push_back(std::chrono::duration<double>(presented - times[shown - 1]).count());
-        lastShown = std::max(lastShown, shown);
-        const std::array<double, 3> truth = circle.at(std::chrono::duration<double>(presented - start).count());
-        const Float3& h = session.shownHead().position;
-        m.error.push_back(std::hypot(h.x - truth[0], h.y - truth[1], h.z - truth[2]));
+        m.frame.push_back(std::chrono::duration<double>(stepped - lastStep).count());
+        lastStep = stepped;
+        // Each presentation: with re-projection several a step, each with the pose read just before it.
+        for (const Presentation& p : shown) {
+            m.refresh.push_back(std::chrono::duration<double>(p.at - lastPresented).count());
+            lastPresented = p.at;
+            m.specToPresent.push_back(std::chrono::duration<double>(p.at - p.posed).count());
+            for (uint64_t k = lastShown + 1; k <= p.trackerPackets && k <= times.size(); ++k)
+                m.latency.push_back(std::chrono::duration<double>(p.at - times[k - 1]).count());
+            if (p.trackerPackets > lastShown) m.shownPackets += p.trackerPackets - lastShown;
+            if (p.trackerPackets >= 1 && p.trackerPackets <= times.size())
+                m.newest.push_back(std::chrono::duration<double>(p.at - times[p.trackerPackets - 1]).count());
+            lastShown = std::max(lastShown, p.trackerPackets);
+            const std::array<double, 3> truth = circle.at(std::chrono::duration<double>(p.at - start).count());
+            const Float3& h = p.head.position;
+            m.error.push_back(std::hypot(h.x - truth[0], h.y - truth[1], h.z - truth[2]));
+        }
     }
     m.sent = sender.times().size();
     return m;
 }
 
-toml::table row(const Case& c, const Measured& m, double targetSlackMs, double targetErrorMm) {
+toml::table medianP95(const std::vector<double>& v, double scale) {
+    return toml::table{{"median", scale * median(v)}, {"p95", scale * quantile(v, 0.95)}};
+}
+
+// The target of the newest datagram's way to the display: one refresh plus 5 ms re-projecting
+// (issue 27), one frame plus the slack otherwise (issue 18).
+double newestTarget(const LatencyOptions& o, const Case& c, const Measured& m) {
+    return c.reproject ? 1.0 / o.refreshHz + o.reprojectSlackMs * 1e-3 : median(m.frame) + o.targetSlackMs * 1e-3;
+}
+
+toml::table row(const LatencyOptions& o, const Case& c, const Measured& m) {
     const double frameS = median(m.frame);
-    const double bound = frameS + targetSlackMs * 1e-3;
+    const double bound = newestTarget(o, c, m);
     size_t late = 0, lateFrames = 0, off = 0;
     for (double l : m.latency) late += l > bound;
     for (double l : m.newest) lateFrames += l > bound;
-    for (double e : m.error) off += e > targetErrorMm * 1e-3;
-    return toml::table{{"stereo", c.stereo},
+    for (double e : m.error) off += e > o.targetErrorMm * 1e-3;
+    const double refreshS = median(m.refresh);
+    return toml::table{{"reproject", c.reproject},
+                       {"stereo", c.stereo},
                        {"async", c.async},
                        {"prediction_ms", c.predictionMs},
                        {"width", c.width},
                        {"height", c.height},
+                       {"render_fps", frameS > 0 ? 1.0 / frameS : 0.0},
+                       {"display_hz", o.refreshHz},
+                       {"presented_hz", refreshS > 0 ? 1.0 / refreshS : 0.0},
+                       {"newest_to_photon_ms", medianP95(m.newest, 1e3)},
+                       {"head_error_mm", medianP95(m.error, 1e3)},
+                       {"newest_to_photon_target_ms", 1e3 * bound},
                        {"frames", int64_t(m.frame.size())},
+                       {"presentations", int64_t(m.newest.size())},
                        {"fps", frameS > 0 ? 1.0 / frameS : 0.0},
                        {"frame_ms_median", 1e3 * frameS},
                        {"frame_ms_p95", 1e3 * quantile(m.frame, 0.95)},
@@ -206,6 +229,30 @@ toml::table row(const Case& c, const Measured& m, double targetSlackMs, double t
                        {"error_over_target", m.error.empty() ? 0.0 : double(off) / double(m.error.size())}};
 }
 
+// A configuration measured without prediction, then with it as far ahead as its presentations
+// take from their head pose (measured without it); both rows.
+void measurePair(const LatencyOptions& o, const Case& c, const std::filesystem::path& dir, toml::array& rows) {
+    const Measured plain = measure(o, c, dir);
+    Case p = c;
+    p.predictionMs = std::max(0.1, std::round(1e3 * median(plain.specToPresent) * 10) / 10);
+    const Measured predicted = measure(o, p, dir);
+    for (const auto& [cc, mm] : {std::pair<const Case&, const Measured&>{c, plain}, {p, predicted}}) {
+        toml::table r = row(o, cc, mm);
+        if (o.text)
+            std::fprintf(o.text, "%-6s %-5s %-9s %4dx%-4d pred %5.1f ms: %5.1f fps, %5.1f Hz shown, every datagram %5.1f ms (p95 %5.1f), "
+                                 "newest to photon %5.1f ms (p95 %5.1f, %4.1f%% over %5.1f ms), head error %5.1f mm "
+                                 "(p95 %5.1f, %4.1f%% over %.0f mm)\n",
+                         cc.stereo ? "stereo" : "mono", cc.async ? "async" : "sync", cc.reproject ? "reproject" : "as-is", cc.width,
+                         cc.height, cc.predictionMs, r["render_fps"].value_or(0.0), r["presented_hz"].value_or(0.0),
+                         r["latency_ms_median"].value_or(0.0), r["latency_ms_p95"].value_or(0.0),
+                         r["frame_latency_ms_median"].value_or(0.0), r["frame_latency_ms_p95"].value_or(0.0),
+                         100 * r["frame_latency_over_target"].value_or(0.0), r["latency_target_ms"].value_or(0.0),
+                         r["error_mm_median"].value_or(0.0), r["error_mm_p95"].value_or(0.0), 100 * r["error_over_target"].value_or(0.0),
+                         o.targetErrorMm);
+        rows.push_back(std::move(r));
+    }
+}
+
 }  // namespace
 
 toml::table latency(const LatencyOptions& o) {
@@ -214,33 +261,19 @@ toml::table latency(const LatencyOptions& o) {
     toml::array rows;
     if (o.text)
         std::fprintf(o.text, "head on a circle at 0.5 m/s, DTrack at %.0f Hz on loopback, %d client threads, scene %s; targets: "
-                             "latency <= frame time + %.0f ms (async off), error <= %.0f mm (prediction on)\n",
-                     o.rate, o.clients, o.scene.c_str(), o.targetSlackMs, o.targetErrorMm);
+                             "newest datagram to photon <= frame time + %.0f ms (async off), <= %.1f ms re-projecting (a %.0f Hz "
+                             "refresh + %.0f ms), error <= %.0f mm (prediction on)\n",
+                     o.rate, o.clients, o.scene.c_str(), o.targetSlackMs, 1e3 / o.refreshHz + o.reprojectSlackMs, o.refreshHz,
+                     o.reprojectSlackMs, o.targetErrorMm);
     for (int width : o.widths)
-        for (bool stereo : {false, true})
-            for (bool async : {false, true}) {
-                Case c{stereo, async, 0.0, width, width * 3 / 4};
-                // Prediction on: as far ahead as this configuration's frames take from their head
-                // pose to their presentation (measured without prediction).
-                const Measured plain = measure(o, c, dir);
-                Case p = c;
-                p.predictionMs = std::max(0.1, std::round(1e3 * median(plain.specToPresent) * 10) / 10);
-                const Measured predicted = measure(o, p, dir);
-                for (const auto& [cc, mm] : {std::pair<const Case&, const Measured&>{c, plain}, {p, predicted}}) {
-                    toml::table r = row(cc, mm, o.targetSlackMs, o.targetErrorMm);
-                    if (o.text)
-                        std::fprintf(o.text, "%-6s %-5s %4dx%-4d pred %5.1f ms: %5.1f fps, every datagram %5.1f ms (p95 %5.1f), "
-                                             "newest per frame %5.1f ms (p95 %5.1f, %4.1f%% over %5.1f ms), head error %5.1f mm "
-                                             "(p95 %5.1f, %4.1f%% over %.0f mm)\n",
-                                     cc.stereo ? "stereo" : "mono", cc.async ? "async" : "sync", cc.width, cc.height, cc.predictionMs,
-                                     r["fps"].value_or(0.0), r["latency_ms_median"].value_or(0.0), r["latency_ms_p95"].value_or(0.0),
-                                     r["frame_latency_ms_median"].value_or(0.0), r["frame_latency_ms_p95"].value_or(0.0),
-                                     100 * r["frame_latency_over_target"].value_or(0.0), r["latency_target_ms"].value_or(0.0),
-                                     r["error_mm_median"].value_or(0.0), r["error_mm_p95"].value_or(0.0),
-                                     100 * r["error_over_target"].value_or(0.0), o.targetErrorMm);
-                    rows.push_back(std::move(r));
-                }
-            }
+        for (bool stereo : {false, true}) {
+            // With --reproject: each size with re-projection off and on (async off: the display
+            // loop never waits for the cluster anyway). Without: async off and on, as issue 18 measured.
+            if (o.reproject)
+                for (bool reproject : {false, true}) measurePair(o, Case{stereo, false, reproject, 0.0, width, width * 3 / 4}, dir, rows);
+            else
+                for (bool async : {false, true}) measurePair(o, Case{stereo, async, false, 0.0, width, width * 3 / 4}, dir, rows);
+        }
     std::error_code ec;
     std::filesystem::remove_all(dir, ec);
     return toml::table{{"benchmark", "latency"},
@@ -250,6 +283,9 @@ toml::table latency(const LatencyOptions& o) {
                        {"head_speed_m_s", 0.5},
                        {"frames", o.frames},
                        {"target_slack_ms", o.targetSlackMs},
+                       {"reproject", o.reproject},
+                       {"display_hz", o.refreshHz},
+                       {"reproject_slack_ms", o.reprojectSlackMs},
                        {"target_error_mm", o.targetErrorMm},
                        {"rows", std::move(rows)}};
 }

@@ -16,6 +16,9 @@ void addBenchLatency(CLI::App& bench, Run& run) {
     cmd->add_option("--frames", o.frames, "Measured frames per configuration")->check(CLI::Range(5, 100000));
     cmd->add_option("--warmup", o.warmupFrames, "Frames before measuring")->check(CLI::Range(0, 10000));
     cmd->add_option("--rate", o.rate, "Tracker datagrams per second")->check(CLI::Range(1.0, 2000.0));
+    cmd->add_flag("--reproject", o.reproject,
+                  "Each configuration with re-projection off and on (the display at --refresh-hz, never waiting for the cluster)");
+    cmd->add_option("--refresh-hz", o.refreshHz, "The display's refresh rate re-projecting")->check(CLI::Range(1.0, 1000.0));
     callBenchmark(cmd, run, a, bench::latency);
 }
 

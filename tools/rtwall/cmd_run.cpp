@@ -19,7 +19,7 @@ void addRun(CLI::App& app, Run& run) {
     struct Options {
         std::string config;
         int frames = -1, clients = -1, writeEvery = -1;
-        std::string out, bind, cameraPath, wall, front, trace;
+        std::string out, bind, cameraPath, wall, front, trace, reproject;
         bool insecure = false, headless = false, watch = false, noLocalNodes = false;
         double targetFps = -1;  // not given
         PartView parts;
@@ -39,6 +39,10 @@ void addRun(CLI::App& app, Run& run) {
                   "transforms, render settings, the camera) as differential updates");
     cmd->add_flag("--no-local-nodes", o->noLocalNodes,
                   "A wall on display nodes: start none on this PC (each runs `rtwall display --connect ... --node NAME` on its own PC)");
+    cmd->add_option("--reproject", o->reproject,
+                    "Re-projection: every refresh shows the newest frame warped to the newest head pose (default: the "
+                    "wall config's `reproject`, on for a tracked wall)")
+        ->check(CLI::IsMember({"on", "off"}));
     cmd->add_flag("--insecure", o->insecure, "Allow a non-loopback bind without CURVE keys (says so loudly)");
     cmd->add_option("--bind", o->bind, "Endpoint for clients, e.g. tcp://0.0.0.0:7700 (default: loopback, any port)");
     cmd->add_option("--target-fps", o->targetFps,
@@ -73,6 +77,7 @@ void addRun(CLI::App& app, Run& run) {
                 c.wall = o->wall;
                 c.loadedWall.reset();
             }
+            if (!o->reproject.empty()) c.reproject = o->reproject == "on";
             c.headless = o->headless;
             c.watch = o->watch;
             if (o->targetFps >= 0) c.targetFps = o->targetFps;

@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -125,6 +126,12 @@ struct WallConfig {
     // swap group `swapGroup`, and with swapBarrier > 0 the group binds to that barrier (a
     // genlocked wall's PCs swap together in hardware, on top of the master's network barrier).
     int swapGroup = 0, swapBarrier = 0;
+    // Re-projection (issue 27): every refresh shows the newest rendered frame warped to the head
+    // pose read just before the swap. Unset: on for a tracked wall (reprojects()).
+    std::optional<bool> reproject;
+    bool reprojectDebug = false;  // tint each pixel by where the warp took it from
+    double refreshHz = 60;        // presentations a second where no retrace paces them (headless, no vsync)
+    bool reprojects() const { return reproject.value_or(tracking.enabled); }
     std::vector<ScreenConfig> screens;
     StereoConfig stereo;
     TrackingConfig tracking;

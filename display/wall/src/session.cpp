@@ -1,27 +1,7 @@
 // WallSession: the display master's frame loop (what `rtwall run` runs).
-#include "live_scene.h"
-#include "scene_watcher.h"
-#include "tuning.h"
-#include "wall_input.h"
-
-#include <rtwall/frame.h>
-#include <rtwall/wall.h>
-
-#include <algorithm>
-#include <chrono>
-#include <cstdio>
-#include <deque>
-#include <fstream>
-#include <span>
-#include <sstream>
-#include <thread>
+#include "session_impl.h"
 
 namespace rtwall {
-
-using wall::LiveScene;
-using wall::SceneWatcher;
-using wall::WallTuning;
-using wall::WallInput;
 
 namespace {
 
@@ -46,400 +26,7 @@ bool samePose(const HeadPose& a, const HeadPose& b) {
     return same(a.position, b.position) && same(a.right, b.right) && same(a.up, b.up);
 }
 
-std::string format(const char* fmt, auto... args) {
-    char buf[512];
-    std::snprintf(buf, sizeof buf, fmt, args...);
-    return buf;
-}
-
 }  // namespace
-
-struct WallSession::Impl {
-    RunConfig config;
-    const std::atomic<bool>* stop = nullptr;
-    std::function<void(const std::string&)> log;
-    WallConfig wallConfig;
-    bool stereo = false;
-    bool views = false;  // off-axis views (stereo, tracked, or screens given by corners)
-    std::unique_ptr<TrackerReceiver> tracker;
-    TrackerState trackerState;
-    HeadPose head;
-    bool trackerStale = false;
-    CameraDesc start;
-    std::vector<CameraKey> path;
-    RenderSettings baseSettings;  // the wall's resolution and the scene's settings before any operating point
-    CodecSettings baseCodec;
-
-    // The scene as loadScene was given it, for replay commands; none for a scene given in code.
-    std::optional<std::string> replaySource;
-
-    std::unique_ptr<Master> master;
-    std::unique_ptr<LocalClients> processes;
-    // A wall on display nodes (issue 19): the screens are on the nodes, the master shows no
-    // pixels (a console window at most); local node processes when the config asks for them.
-    bool onNodes = false;
-    std::unique_ptr<LocalDisplayNodes> nodeProcesses;
-    std::vector<std::thread> nodeThreads;  // with clientThreads (tests): runWallNode, headless
-    std::atomic<bool> stopNodes{false};
-    std::vector<std::string> nodesPresent;  // at the last step, for the log
-    uint64_t nodesLeftOut = 0;              // FrameReport::nodesLeftOut at the last step
-    bool ranToTheEnd = false;               // every frame asked for was stepped
-    std::vector<std::thread> clientThreads;
-    std::unique_ptr<LiveScene> live;
-    std::unique_ptr<WallInput> input;
-    std::unique_ptr<SceneWatcher> watcher;
-    std::unique_ptr<WallTuning> tuning;  // the operating point (--target-fps)
-
-    // Per frame.
-    int frame = 0;  // frames stepped
-    std::vector<double> frameTimes;
-    std::chrono::steady_clock::time_point last;
-    uint64_t bytes = 0;
-    Compositor compositor;      // the running means of stochastic frames go on from step to step
-    std::vector<float> linear;  // the frame in linear RGB when it came as linear tiles
-    WallFrame shown;
-    FrameReport report;
-    // Multi-view frames (views): what each setViews asked for, by tag, until its frame is back
-    // (async returns the frame begun a step earlier); each view's eye and screens.
-    struct ViewSpec {
-        uint64_t tag = 0;
-        uint64_t trackerPackets = 0;  // the tracker datagrams counted when its head pose was taken
-        HeadPose head;
-        std::vector<FrameView> views;
-    };
-    std::deque<ViewSpec> viewSpecs;
-    uint64_t nextViewTag = 1;
-    std::vector<int> viewEye;                  // -1 (mono), 0 left, 1 right
-    std::vector<std::vector<size_t>> viewScreens;  // a view's screens (empty: it is the whole image)
-    std::vector<std::vector<float>> viewLinear;
-    uint64_t shownTrackerPackets = 0;  // of the head pose the last shown frame was made for
-    HeadPose shownHead;
-    CameraDesc lastNavigation;
-    bool moved = false;                // this frame's view moved (navigation, scripted camera, head): the controller favours speed
-
-    ~Impl() {
-        // The master goes first: its goodbye ends the client threads, which are joined after it.
-        watcher.reset();
-        input.reset();
-        live.reset();
-        // The nodes show the last frame before the master says goodbye (bounded: a node that
-        // stalls is left out of it after the barrier's stall time anyway). Not after a stop,
-        // when the wait would throw Cancelled here.
-        if (onNodes && ranToTheEnd && master && !stopped() && !master->displayNodesPresent().empty() &&
-            !master->waitForSwap(report.frame, 3000))
-            log(format("display nodes: frame %u was not swapped within 3 s of its last tile", report.frame));
-        master.reset();
-        for (std::thread& t : clientThreads) t.join();
-        stopNodes = true;  // the master's goodbye ends them; this, one that never joined
-        for (std::thread& t : nodeThreads) t.join();
-        processes.reset();
-        nodeProcesses.reset();
-    }
-
-    bool stopped() const { return stop && stop->load(); }
-
-    void startClients() {
-        const ClusterSettings& cs = config.cluster;
-        const int count = cs.localClients, threads = std::max(1, cs.threadsPerClient);
-        if (count == 0) return;
-        if (!config.clientThreads) {
-            processes = std::make_unique<LocalClients>(count, master->endpoint(), threads, false, std::string{},
-                                                       master->localClientArgs(), config.clientExecutable);
-            return;
-        }
-        ClientSettings c;
-        c.connect = master->endpoint();
-        c.threads = threads;
-        c.exitAfterIdleMs = 5000;
-        c.faults = config.clientFaults;
-        const std::vector<std::string> args = master->localClientArgs();  // --key K --server-key P, with keys
-        for (size_t i = 0; i + 1 < args.size(); i += 2) {
-            if (args[i] == "--key") c.keyFile = args[i + 1];
-            if (args[i] == "--server-key") c.serverKeyFile = args[i + 1];
-        }
-        for (int i = 0; i < count; ++i) clientThreads.emplace_back([c] { runClient(c); });
-    }
-
-    void waitForClients() {
-        const ClusterSettings& cs = config.cluster;
-        // Remote clients may take a while to be started; local ones are here in seconds, and one
-        // that died or froze on the way must not keep the wall dark: go on with the others.
-        const int needed = std::max(1, cs.localClients);
-        const int waitMs = cs.localClients > 0 ? 60'000 : 600'000;
-        if (cs.localClients == 0) log("waiting for clients: rtwall client --connect " + master->endpoint());
-        const int joined = master->awaitClients(needed, waitMs, cs.localClients > 0 ? std::max(3000, 2 * cs.timeoutMs) : waitMs);
-        if (joined == 0)
-            throw InputError("no render client joined " + master->endpoint() + " in time" +
-                             (cs.keyFile.empty() ? "" : " (" + describeCounters(master->counters()) +
-                                                            "; each client needs --key with its public key in client_keys)"));
-        if (joined < needed)
-            log(format("only %d of %d %srender clients joined; rendering with them (the others join when they can)", joined,
-                       needed, cs.localClients > 0 ? "local " : ""));
-    }
-
-    // The wall's screens name display nodes: the master routes every tile to the nodes that show
-    // it, each view by its eye.
-    void routeToNodes() {
-        onNodes = true;
-        std::stringstream text;
-        if (config.loadedWall) {
-            text << writeWallConfig(*config.loadedWall);  // what the nodes parse: loads back equal
-        } else {
-            std::ifstream in(config.wall, std::ios::binary);
-            text << in.rdbuf();
-            if (!in) throw InputError(config.wall.string() + ": cannot read it");
-        }
-        std::vector<int> eyes;
-        if (views)
-            for (int eye : stereo ? std::vector<int>{0, 1} : std::vector<int>{-1})
-                for (size_t i = 0; i < wallViews(wallConfig, staticHead(wallConfig.stereo), eye).size(); ++i) eyes.push_back(eye);
-        config.cluster.displayNodes = displayNodeSettings(wallConfig, text.str(), eyes);
-    }
-
-    std::string joined(const std::vector<std::string>& names) const {
-        std::string out;
-        for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-        return out;
-    }
-
-    // Starts the local nodes (or says how to start them on their PCs) and waits for all of
-    // them, bounded: a node that dies or does not come is said, and the wall runs without it.
-    void startNodes() {
-        const std::vector<std::string>& names = config.cluster.displayNodes.names;
-        if (config.localDisplayNodes && config.clientThreads) {
-            for (const std::string& n : names) {
-                DisplayNodeOptions o;
-                o.connect = master->endpoint();
-                o.name = n;
-                o.headless = true;  // windows belong to the main thread
-                o.out = config.out / n;
-                o.exitAfterIdleMs = 5000;
-                nodeThreads.emplace_back([this, o] {
-                    try {
-                        runWallNode(o, &stopNodes);
-                    } catch (const std::exception& e) {
-                        std::fprintf(stderr, "display node '%s': %s\n", o.name.c_str(), e.what());
-                    }
-                });
-            }
-            log("display nodes: " + joined(names) + " as threads of this process, writing to " + (config.out / "NAME").string());
-        } else if (config.localDisplayNodes) {
-            LocalDisplayNodes::Options o;
-            o.headless = config.headless;
-            o.outDir = config.out;
-            o.extraArgs = master->localClientArgs();
-            o.executable = config.clientExecutable;
-            nodeProcesses = std::make_unique<LocalDisplayNodes>(names, master->endpoint(), o);
-            log("display nodes: started " + joined(names) + " on this PC" +
-                (config.headless ? " (headless: each writes its screens to " + (config.out / "NAME").string() + ")" : ""));
-        } else {
-            for (const std::string& n : names) log("waiting for display node '" + n + "': rtwall display --connect " + master->endpoint() + " --node " + n);
-        }
-        const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(nodeProcesses ? 30 : 120);
-        while (!master->waitForDisplayNodes(200)) {
-            reportNodeProcesses();
-            if ((nodeProcesses && nodeProcesses->running() == 0) || std::chrono::steady_clock::now() >= end) break;
-        }
-        nodesPresent = master->displayNodesPresent();
-        if (nodesPresent.size() < names.size()) {
-            std::vector<std::string> missing;
-            for (const std::string& n : names)
-                if (std::find(nodesPresent.begin(), nodesPresent.end(), n) == nodesPresent.end()) missing.push_back(n);
-            log(format("display nodes: %zu of %zu joined (not there: %s); the wall runs without their screens, they join when they can",
-                       nodesPresent.size(), names.size(), joined(missing).c_str()));
-        } else {
-            log("display nodes: all " + std::to_string(names.size()) + " joined (" + joined(names) + "); the master shows no pixels");
-        }
-    }
-
-    void reportNodeProcesses() {
-        if (nodeProcesses)
-            for (const std::string& line : nodeProcesses->takeEnded()) log(line);
-    }
-
-    // The nodes' state after a frame: said at once when it changes, and on the console.
-    std::string nodeStatus() {
-        reportNodeProcesses();
-        const std::vector<std::string>& names = config.cluster.displayNodes.names;
-        const std::vector<std::string> present = master->displayNodesPresent();
-        if (present != nodesPresent) {
-            log("display nodes there: " + (present.empty() ? std::string("none") : joined(present)) + format(" (%zu of %zu)", present.size(), names.size()));
-            nodesPresent = present;
-        }
-        if (report.nodesLeftOut > nodesLeftOut)
-            log(format("display nodes: %llu more left out of a frame for stalling (%llu in all)",
-                       (unsigned long long)(report.nodesLeftOut - nodesLeftOut), (unsigned long long)report.nodesLeftOut));
-        nodesLeftOut = report.nodesLeftOut;
-        std::string line = format("display nodes %zu/%zu, %llu swaps released, %llu left out, swap skew %.2f ms (max %.2f ms)",
-                                  present.size(), names.size(), (unsigned long long)report.swapsReleased,
-                                  (unsigned long long)report.nodesLeftOut, report.lastSwapSkew * 1e3, report.maxSwapSkew * 1e3);
-        if (present.size() < names.size()) {
-            std::vector<std::string> missing;
-            for (const std::string& n : names)
-                if (std::find(present.begin(), present.end(), n) == present.end()) missing.push_back(n);
-            line += " | not there: " + joined(missing);
-        }
-        return line;
-    }
-
-    SceneEdit applyEdit(const SceneDesc& edited) {
-        const SceneEdit e = live->applyEdit(edited, tuning->controller() != nullptr, !path.empty() || config.orbit != 0.0);
-        if (e.camera) input->setCamera(*e.camera);
-        const std::string file = config.scene;
-        for (const std::string& r : e.refused) log(file + ": " + r + " (not applied)");
-        log(format("%s changed: %zu materials, %zu lights, %zu instance transforms, render settings %s, camera %s, %zu "
-                   "section planes, %zu instance visibilities",
-                   file.c_str(), e.materials.size(), e.lights.size(), e.transforms.size(), e.settings ? "changed" : "same",
-                   e.camera ? "moved" : "same", e.sections.size(), e.visibility.size()));
-        return e;
-    }
-
-    // One line per tile a client failed: which, why, and the command that renders just that tile
-    // again with the frame's camera and settings and the client's packet width. (Changes made to
-    // the scene after it was loaded, other than the camera and settings, are not in it.)
-    void reportTileFailures() {
-        for (const TileFailure& f : master->takeTileFailures()) {
-            std::string line = format("client %u failed frame %u, tile %d,%d,%d,%d: ", f.client, f.frame, f.rect.x0, f.rect.y0,
-                                      f.rect.x1, f.rect.y1) + f.reason;
-            if (replaySource) {
-                TileReplay t;
-                t.scene = *replaySource;
-                t.builtinTriangles = SceneLoadOptions{}.builtinTriangles;  // how the session loads it
-                t.origin = live->desc().origin;
-                t.camera = f.camera;
-                t.settings = f.settings;
-                t.trace.packetWidth = f.packetWidth;
-                t.trace.clientId = f.client;
-                t.frame = f.frame;
-                t.rect = f.rect;
-                line += " (replay: " + replayCommand(t) + ")";
-            } else {
-                line += " (no replay command: the scene was given in code)";
-            }
-            log(line);
-        }
-    }
-
-    // The head this frame's frusta are made for: the tracked one (predicted to display time, or
-    // held after the timeout), else the config's viewer.
-    void updateHead() {
-        head = staticHead(wallConfig.stereo);
-        if (!tracker) return;
-        for (const std::string& line : tracker->takeMessages()) log(line);  // said here, on the session's thread
-        trackerState = tracker->state();
-        if (trackerState.seen) head = trackerState.head;
-        if (trackerState.seen && trackerState.stale != trackerStale)
-            log(trackerState.stale ? describeTracker(trackerState) : "tracker: the head is back");
-        trackerStale = trackerState.seen && trackerState.stale;
-        input->setTrackerLine(describeTracker(trackerState));
-    }
-
-    // Each view of the wall (both eyes, each plane of a CAVE's screens) with its off-axis
-    // camera: its eye, its screens, and its part of the wall image.
-    std::vector<FrameView> frameViews() {
-        std::vector<FrameView> out;
-        viewEye.clear();
-        viewScreens.clear();
-        const std::vector<int> eyes = stereo ? std::vector<int>{0, 1} : std::vector<int>{-1};
-        for (int eye : eyes) {
-            const std::vector<WallView> vs = wallViews(wallConfig, head, eye);
-            for (size_t i = 0; i < vs.size(); ++i) {
-                viewScreens.push_back(vs.size() > 1 ? vs[i].screens : std::vector<size_t>{});
-                viewEye.push_back(eye);
-                out.push_back(frameView(vs, i));
-            }
-        }
-        return out;
-    }
-
-    // View i of an eye's views with its off-axis camera; one plane of several shows (and has
-    // rendered) only its screens' pixels.
-    FrameView frameView(const std::vector<WallView>& vs, size_t i) {
-        FrameView f;
-        f.camera = input->viewCamera(vs[i].window);
-        if (vs.size() == 1) return f;
-        for (size_t screen : vs[i].screens) {
-            const PixelRect& r = wallConfig.screens[screen].viewport;
-            f.regions.push_back({r.x, r.y, r.width, r.height});
-        }
-        f.refWidth = wallConfig.width;
-        f.refHeight = wallConfig.height;
-        return f;
-    }
-
-    // What the wall shows of a frame: its views (none: one image) accumulated and composed into
-    // the eyes by the one compositor the display nodes use too.
-    void compose(const std::vector<FrameView>& rendered, std::vector<Image> images,
-                 std::span<const std::vector<float>> linearViews) {
-        ComposeFrame f;
-        f.views = rendered;
-        if (!rendered.empty()) f.eyes = viewEye;
-        f.stochastic = report.stochastic;
-        f.stateSeq = report.stateSeq;
-        f.linear = report.linear;
-        EyeImages eyes = compositor.compose(f, std::move(images), linearViews);
-        shown.left = std::move(eyes.left);
-        shown.right = std::move(eyes.right);
-    }
-
-    // Renders the frame (both eyes on a stereo wall) into `shown` and `report`.
-    void render() {
-        shown = WallFrame{};
-        if (views) {
-            // Every view's tiles in one scheduler pass. The views go with a tag: with async the
-            // frame that comes back was begun with the views of the step before.
-            ViewSpec spec{nextViewTag++, trackerState.packets, head, frameViews()};
-            master->setViews(spec.views, spec.tag);
-            viewSpecs.push_back(std::move(spec));
-            std::vector<Image> images = master->renderViews(&report, &viewLinear);
-            while (viewSpecs.size() > 1 && viewSpecs.front().tag != report.viewsTag) viewSpecs.pop_front();
-            const ViewSpec& rendered = viewSpecs.front();
-            shownTrackerPackets = rendered.trackerPackets;
-            shownHead = rendered.head;
-            if (images.size() != rendered.views.size())
-                throw std::runtime_error("internal error: a multi-view frame came back with " + std::to_string(images.size()) +
-                                         " images for " + std::to_string(rendered.views.size()) + " views");
-            if (!onNodes) compose(rendered.views, std::move(images), viewLinear);  // on nodes the pixels are on the nodes
-        } else {
-            std::vector<Image> image(1);
-            image[0] = master->renderFrame(&report, &linear);
-            if (onNodes) shown.left = std::move(image[0]);
-            else compose({}, std::move(image), {&linear, 1});
-        }
-        shown.number = report.frame;
-        // The tile grid of the frame as rendered (the `tile` control and [render] edits change it);
-        // a multi-view frame shows the owners of its first view's tiles where that is the whole image.
-        shown.tileOwners = report.tileOwners;
-        if (report.views > 0) {
-            const RenderSettings& rs = live->desc().settings;
-            shown.tileOwners.resize(std::min(shown.tileOwners.size(), makeTiles(rs.width, rs.height, rs.tileSize).size()));
-            if (!viewScreens.empty() && !viewScreens.front().empty()) shown.tileOwners.clear();
-        }
-        shown.tileSize = live->desc().settings.tileSize;
-    }
-
-    std::string nodeLine;  // this frame's nodeStatus()
-
-    void writeFiles() {
-        if (config.writeEvery > 0 && frame % config.writeEvery == 0 && !onNodes) {
-            const std::filesystem::path file = config.out / format("frame_%06u.png", report.frame);
-            // A frame rendered at a lower resolution (operating point) is written as the wall shows it.
-            writePng(resizeBilinear(shown.left, baseSettings.width, baseSettings.height), file);
-            log("wrote " + file.string());
-        }
-        if (frame % 10 == 0 || frame == config.frames) {
-            const size_t n = std::min<size_t>(10, frameTimes.size());
-            const double recent = median(std::vector<double>(frameTimes.end() - long(n), frameTimes.end()));
-            const RenderSettings& s = live->desc().settings;
-            log(format("frame %d: %.1f fps (median of the last %zu), %.2f MB of tiles, %llu stolen, %llu of %zu tiles kept their client",
-                       frame, 1.0 / recent, n, double(report.bytes) * 1e-6, (unsigned long long)report.tilesStolen,
-                       (unsigned long long)report.affinityHits,
-                       // A multi-view frame's tiles are those of all its views.
-                       report.views > 0 ? report.tileOwners.size() : makeTiles(s.width, s.height, s.tileSize).size()) +
-                (onNodes ? "; " + nodeLine : std::string()));
-        }
-    }
-};
 
 WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl_(std::make_unique<Impl>()) {
     Impl& s = *impl_;
@@ -485,6 +72,7 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     }
     if (!c.trace.empty() && c.targetFps <= 0) throw InputError("--trace needs --target-fps");
 
+    s.decideReprojection();
     s.master = std::make_unique<Master>(desc, c.cluster);
     s.master->setStopFlag(stop);
     s.log(format("rtwall master at %s, %dx%d, %d local clients, codec %s%s", s.master->endpoint().c_str(), desc.settings.width,
@@ -517,6 +105,7 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     s.input->setPartView(*s.live, {});  // says what the scene file and the command line hid, if anything
     // In a window the wall runs until it is closed, unless a frame count was asked for.
     if (s.input->windowed() && !c.framesGiven) c.frames = 0;
+    s.startRefresher();
     if (s.views) {
         // The views from the start: a calibration's frames then cost what the wall's frames do.
         s.head = staticHead(s.wallConfig.stereo);
@@ -551,6 +140,10 @@ bool WallSession::step() {
     if (s.stopped() || (s.config.frames > 0 && s.frame >= s.config.frames)) return false;
     const double dt = s.frameTimes.empty() ? 0.0 : s.frameTimes.back();
     if (!s.input->handle(*s.live, dt)) return false;
+    if (s.input->takeWarpDebugPresses() % 2) {
+        s.warpDebug = !s.warpDebug;
+        s.log(std::string("reproject: debug colours ") + (s.warpDebug ? "on" : "off"));
+    }
     ++s.frame;
     if (s.watcher)
         if (std::optional<SceneDesc> edited = s.watcher->poll()) s.applyEdit(*edited);
@@ -586,6 +179,8 @@ bool WallSession::step() {
         s.input->showConsole(s.nodeLine, s.report, s.frameTimes.back());
     } else {
         s.input->show(s.shown, s.report, s.frameTimes.back());
+        s.recordPresentation(s.reproject);
+        if (s.refresher) s.refresher->presented();
     }
     s.bytes += s.report.bytes;
     s.tuning->observe(s.frame, s.report, s.moved);

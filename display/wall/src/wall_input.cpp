@@ -373,6 +373,7 @@ bool WallInput::apply(LiveScene& scene, const InputState& in, double dt) {
             refreshStatus();
         }
         if (key == GLFW_KEY_T) present_.falseColour = !present_.falseColour;
+        if (key == GLFW_KEY_J) ++warpDebugPresses_;  // the re-projection's debug colours (the session toggles them)
         // ] makes the world larger (fewer scene units per metre), [ smaller; two presses double.
         if (options_.interactive && (key == GLFW_KEY_LEFT_BRACKET || key == GLFW_KEY_RIGHT_BRACKET)) {
             setNavigationScale(scale_ * (key == GLFW_KEY_LEFT_BRACKET ? kScaleStep : 1.0 / kScaleStep));

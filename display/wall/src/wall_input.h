@@ -13,6 +13,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rtwall::wall {
@@ -56,6 +57,8 @@ public:
     void setTrackerLine(const std::string& line) { trackerLine_ = line; }
     void setCamera(const CameraDesc& c);  // a camera path, orbit or scene edit moved it
     void showTileOwners(bool on) { present_.falseColour = on; }
+    // Presses of J (the re-projection's debug colours) since the last call.
+    int takeWarpDebugPresses() { return std::exchange(warpDebugPresses_, 0); }
     std::optional<PickResult> pick(LiveScene& scene, double wallX, double wallY);
     // Measure mode (WallSession::setMeasuring and measurePick say what it does).
     void setMeasuring(bool on);
@@ -95,6 +98,7 @@ private:
     std::string whyHeadless_;
     std::unique_ptr<Navigator> nav_;
     PresentOptions present_;
+    int warpDebugPresses_ = 0;
     bool showStatus_ = false;
     Image statusImage_;  // the overlay (H): frame rate, bytes, codec, per-client figures, counters
     double statusClock_ = 0;

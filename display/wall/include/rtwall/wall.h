@@ -25,6 +25,7 @@
 
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -79,6 +80,7 @@ struct RunConfig {
     std::optional<WallConfig> loadedWall; // a wall given in code (the embedded default's): used instead of loading `wall`
     // Given on the command line only.
     bool headless = false;                // never open windows
+    std::optional<bool> reproject;        // --reproject on|off: overrides the wall config's `reproject`
     bool watch = false;                   // reload the scene file when it changes on disk
     double targetFps = 0;                 // > 0: hold this frame rate with the operating point
     std::filesystem::path front;          // the measured front for targetFps (empty: calibrate)
@@ -200,6 +202,18 @@ struct WandPose {
 };
 constexpr float kWandRayLength = 10.0f;  // metres of the room (times the navigation scale in scene units), when the ray hits nothing
 
+// One picture the wall showed. Without re-projection a step shows its frame once; with it the
+// wall shows the newest frame at every refresh while the next one renders, each time warped to
+// the head pose read just before (late latching).
+struct Presentation {
+    std::chrono::steady_clock::time_point at;     // when the presenter had it (headless: took it; GL: swapped)
+    std::chrono::steady_clock::time_point posed;  // when its head pose was read
+    uint32_t frame = 0;               // the rendered frame it shows
+    uint64_t trackerPackets = 0;      // the tracker datagrams counted when its head pose was read
+    HeadPose head;                    // that pose (the frusta it shows)
+    bool warped = false;              // re-projected (else the frame as rendered)
+};
+
 class WallSession {
 public:
     // Loads the scene and the wall, starts the master and the local clients, waits for them and,
@@ -275,6 +289,10 @@ public:
     // shown frame was taken: with async on, the frame shown was specified a step earlier.
     uint64_t shownTrackerPackets() const;
     const HeadPose& shownHead() const;  // and that head (lastHead() with async off)
+    // Whether this wall re-projects (the wall config's `reproject`, RunConfig::reproject).
+    bool reprojecting() const;
+    // The presentations since the last call, oldest first (at most the last 4096 are kept).
+    std::vector<Presentation> takePresentations();
     // View accumulations restarted so far (a stochastic scene on a wall with views: a view
     // restarts when the state or its own camera changed).
     size_t viewRestarts() const;

@@ -188,6 +188,17 @@ public:
     // depth was composed or the targets are not one per view.
     const EyeImages& reproject(std::span<const CameraDesc> targets, const WarpOptions& options = {}, bool debug = false);
     size_t reprojectViews() const { return warpNewest_.size(); }  // views of the newest warp source (0: none)
+    // The sources themselves, for a presenter that warps on the GPU (WallFrame::warps): view v's
+    // newest image, depth and camera; the frame before's (null: none); its view and eye.
+    struct WarpSlot {
+        Image image;
+        std::vector<float> depth;
+        CameraDesc camera;
+    };
+    const WarpSlot& newestSource(size_t view) const { return warpNewest_.at(view); }
+    const WarpSlot* olderSource(size_t view) const { return warpOlder_.size() == warpNewest_.size() ? &warpOlder_.at(view) : nullptr; }
+    const FrameView& sourceView(size_t view) const { return warpViews_.at(view); }
+    int sourceEye(size_t view) const { return warpEyes_.at(view); }
     const WarpedView& warped(size_t view) const { return warpers_.at(view).result(); }  // of the last reproject()
     size_t viewRestarts() const { return viewRestarts_; }       // a view's running mean restarted
     size_t progressiveRestarts() const { return progressiveRestarts_; }  // the mono running mean restarted
@@ -206,13 +217,7 @@ private:
     size_t viewRestarts_ = 0, progressiveRestarts_ = 0;
     int accumulatedFrames_ = 0, linearFrames_ = 0;
 
-    // The re-projection's sources: a view's image, depth and camera; `older` is the frame before.
-    struct WarpSlot {
-        Image image;
-        std::vector<float> depth;
-        CameraDesc camera;
-    };
-    std::vector<WarpSlot> warpNewest_, warpOlder_;
+    std::vector<WarpSlot> warpNewest_, warpOlder_;  // the re-projection's sources; older: the frame before
     std::vector<FrameView> warpViews_;
     std::vector<int> warpEyes_;
     std::vector<Reprojector> warpers_;

@@ -1,0 +1,182 @@
+// The re-projecting wall end to end in one process (loopback, client threads; issue 27): a
+// tracked wall re-projects by default, and with a still head it shows the very bytes of the
+// same wall without re-projection, on one, two and three clients, on a flat stereo wall and a
+// CAVE; while the cluster renders a slow frame the wall keeps presenting, each presentation with
+// the head pose read just before it; the wall config's `reproject` and the run's override.
+#include "display_test_util.h"
+#include "test_util.h"
+
+#include <rtwall/cluster_testing.h>
+#include <rtwall/wall.h>
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+namespace rtwall {
+namespace {
+
+const std::string kScene = test::sceneText("tracked_boxes");
+
+// The shipped 2x2 stereo wall's geometry at a few pixels per screen, tracked (the room is the
+// wall's coordinates in millimetres), the head at `viewer` until a datagram says otherwise.
+std::string trackedWall(const std::string& extra = "") {
+    return R"([wall]
+vsync = false
+)" + extra + R"(
+[grid]
+columns = 2
+rows = 2
+screen_width = 24
+screen_height = 16
+[stereo]
+mode = "passive"
+eye_separation = 0.065
+viewer = [0.0, 0.2, 2.5]
+lower_left = [-1.6, -1.2, 0.0]
+lower_right = [1.6, -1.2, 0.0]
+upper_left = [-1.6, 1.2, 0.0]
+[headless]
+write_every = 0
+[tracking]
+source = "dtrack://127.0.0.1:0"
+room_scale = 0.001
+timeout_ms = 60000
+)";
+}
+
+RunConfig config(const std::filesystem::path& dir, const std::string& wallText, int clients) {
+    RunConfig c = steppedRunConfig(dir, clients);
+    c.scene = test::writeFile(dir / "scene.toml", kScene).string();
+    c.wall = test::writeFile(dir / "wall.toml", wallText);
+    c.cluster.async = false;
+    return c;
+}
+
+// A head at wall position p (metres), facing the wall, as DTrack sends it (millimetres); waits
+// until the session's tracker has it.
+void sendHead(WallSession& s, Float3 p, uint64_t frame) {
+    DTrackFrame f;
+    f.frame = frame;
+    DTrackBody b;
+    b.quality = 1;
+    b.position = {p.x * 1e3, p.y * 1e3, p.z * 1e3};
+    f.bodies.push_back(b);
+    DTrackSender(s.trackerPort()).send(f);
+    for (int i = 0; i < 400; ++i) {  // 2 s at most
+        const std::optional<TrackerState> st = s.tracker();
+        if (st && st->packets >= frame) return;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    ADD_FAILURE() << "the session's tracker did not get datagram " << frame;
+}
+
+TEST(ReprojectSession, ATrackedWallReprojectsByDefaultAndTheOverrideWins) {
+    const auto dir = test::scratchDir();
+    EXPECT_TRUE(parseWallConfig(trackedWall(), "w.toml").reprojects());
+    EXPECT_FALSE(parseWallConfig(trackedWall("reproject = \"off\""), "w.toml").reprojects());
+    {
+        WallSession on(config(dir, trackedWall(), 1));
+        EXPECT_TRUE(on.reprojecting());
+    }
+    RunConfig c = config(dir, trackedWall(), 1);
+    c.reproject = false;
+    WallSession off(c);
+    EXPECT_FALSE(off.reprojecting());
+}
+
+// A still head: every frame shown re-projected is the frame as rendered, byte for byte, and
+// the same bytes as the wall without re-projection, whichever clients rendered which tiles.
+TEST(ReprojectSession, AStillHeadShowsTheUnwarpedImagesOnOneTwoAndThreeClients) {
+    const auto dir = test::scratchDir();
+    const Float3 head{0.1f, 0.25f, 2.2f};
+    std::vector<WallFrame> want;
+    {
+        RunConfig c = config(dir, trackedWall(), 2);
+        c.reproject = false;
+        WallSession plain(c);
+        sendHead(plain, head, 1);
+        for (int i = 0; i < 2; ++i) {
+            ASSERT_TRUE(plain.step());
+            want.push_back(plain.lastFrame());
+        }
+    }
+    ASSERT_FALSE(want[0].left.rgb.empty());
+    ASSERT_FALSE(want[0].right.rgb.empty());
+    for (int clients : {1, 2, 3}) {
+        WallSession s(config(dir, trackedWall(), clients));
+        ASSERT_TRUE(s.reprojecting());
+        sendHead(s, head, 1);
+        for (int i = 0; i < 2; ++i) {
+            ASSERT_TRUE(s.step());
+            EXPECT_EQ(s.lastFrame().left.rgb, want[size_t(i)].left.rgb) << clients << " clients, frame " << i;
+            EXPECT_EQ(s.lastFrame().right.rgb, want[size_t(i)].right.rgb) << clients << " clients, frame " << i;
+        }
+        const std::vector<Presentation> shown = s.takePresentations();
+        ASSERT_FALSE(shown.empty());
+        for (const Presentation& p : shown) EXPECT_EQ(p.head.position.x, head.x);
+    }
+}
+
+// Tiles that take 60 ms each: while the frame renders the wall presents at its refresh, each
+// time with the pose read just before; a head that moves during the frame is shown where it
+// is at once, by warping the frame before, not when the frame it moved in is done.
+TEST(ReprojectSession, TheWallKeepsPresentingTheNewestHeadWhileTheClusterRenders) {
+    const auto dir = test::scratchDir();
+    RunConfig c = config(dir, trackedWall("refresh_hz = 100"), 1);
+    auto faults = std::make_shared<ClientFaults>();
+    faults->extraTileDelayMs = 60;
+    c.clientFaults = faults;
+    WallSession s(c);
+    ASSERT_TRUE(s.reprojecting());
+    sendHead(s, {0.0f, 0.2f, 2.5f}, 1);
+    ASSERT_TRUE(s.step());  // the first frame: nothing to warp while it renders
+    const std::vector<Presentation> first = s.takePresentations();
+    ASSERT_EQ(first.size(), 1u);
+    const uint32_t firstFrame = first[0].frame;
+
+    const Float3 moved{0.3f, 0.2f, 2.4f};
+    std::thread mover([&] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(40));
+        sendHead(s, moved, 2);
+    });
+    ASSERT_TRUE(s.step());
+    mover.join();
+    const std::vector<Presentation> shown = s.takePresentations();
+    // The frame's tiles take at least 60 ms on the one client: several refreshes of 10 ms.
+    ASSERT_GE(shown.size(), 3u);
+    size_t movedRefreshes = 0;
+    for (size_t i = 0; i + 1 < shown.size(); ++i) {
+        EXPECT_EQ(shown[i].frame, firstFrame) << "a refresh shows the newest complete frame";
+        EXPECT_TRUE(shown[i].warped);
+        EXPECT_LE(shown[i].posed, shown[i].at);
+        if (i > 0) {
+            EXPECT_GE(shown[i].trackerPackets, shown[i - 1].trackerPackets);
+        }
+        if (shown[i].trackerPackets == 2) {
+            ++movedRefreshes;
+            EXPECT_FLOAT_EQ(shown[i].head.position.x, moved.x);
+        }
+    }
+    EXPECT_GT(movedRefreshes, 0u) << "the head moved 40 ms into a frame of 60 ms and more: a refresh before its end shows it";
+    EXPECT_GT(shown.back().frame, firstFrame) << "the step ends by showing its new frame";
+    EXPECT_EQ(shown.back().trackerPackets, 2u);
+    EXPECT_FLOAT_EQ(shown.back().head.position.x, moved.x) << "the new frame, rendered for the old head, is shown for the new one";
+}
+
+TEST(ReprojectSession, TheConfigKeysLoadBackAndRefuseWhatTheyCannotBe) {
+    WallConfig w = parseWallConfig(trackedWall("reproject = \"off\"\nreproject_debug = true\nrefresh_hz = 90"), "w.toml");
+    EXPECT_EQ(w.reproject, std::optional<bool>(false));
+    EXPECT_TRUE(w.reprojectDebug);
+    EXPECT_EQ(w.refreshHz, 90.0);
+    EXPECT_EQ(parseWallConfig(writeWallConfig(w), "again.toml"), w);
+    w.reproject.reset();
+    EXPECT_EQ(parseWallConfig(writeWallConfig(w), "again.toml"), w);
+    EXPECT_NE(test::wallError(trackedWall("reproject = \"maybe\"")).find("reproject"), std::string::npos);
+    EXPECT_NE(test::wallError(trackedWall("reproject = true")).find("reproject"), std::string::npos);
+    EXPECT_NE(test::wallError(trackedWall("refresh_hz = 0")).find("refresh_hz"), std::string::npos);
+    EXPECT_NE(test::wallError(trackedWall("refresh_hz = nan")).find("refresh_hz"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rtwall
