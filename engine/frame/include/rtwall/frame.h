@@ -63,6 +63,10 @@ std::vector<ViewTile> viewTiles(const std::vector<FrameView>& views, int width, 
 // the claim of the tile they came with.
 struct FrameHolding {
     bool linear = false;  // tiles come as linear RGB too: each view has a linear buffer (3 floats a pixel)
+    // Tiles come with depth (issue 27): each view has a depth buffer (a float a pixel, distance
+    // along the primary ray, kBackgroundDepth for background), NaN wherever no tile of this frame
+    // wrote (outside a view's regions, tiles not routed here): a hole to the warp.
+    bool depth = false;
     // Routing: `routes[t]` is the node mask of tile t and this assembler is bit `node`; it holds
     // the frame when the tiles routed to it are in (a display node). Null: every tile.
     const std::vector<uint64_t>* routes = nullptr;
@@ -85,8 +89,9 @@ public:
 
     enum class Claim { Granted, Stale, Duplicate, NotRouted, Invalid };
     // Reserves tile `tile` of `frame` for writing. Granted: write its pixels into `view` (rect
-    // gives the size; of a linear frame also into linearAt(viewOf(tile), rect.x0, rect.y0)), then
-    // commit() it, or release() it when decoding failed.
+    // gives the size; of a linear frame also into linearAt(viewOf(tile), rect.x0, rect.y0), of a
+    // frame with depth its depth into depthAt), then commit() it, or release() it when decoding
+    // failed.
     Claim claim(uint32_t frame, uint32_t tile, TileRect& rect, TileView& view);
     void commit(uint32_t tile);
     void release(uint32_t tile);
@@ -111,12 +116,22 @@ public:
     float* linearAt(size_t view, int x, int y) {
         return linearImages_[view].data() + (size_t(y) * size_t(images_[view].width) + size_t(x)) * 3;
     }
+    bool depth() const { return depth_; }
+    // One per view of a frame with depth (width * height floats, row-major); the master swaps a
+    // complete frame's buffers with the caller's as the linear ones.
+    std::vector<std::vector<float>>& depthImages() { return depthImages_; }
+    const std::vector<std::vector<float>>& depthImages() const { return depthImages_; }
+    float* depthAt(size_t view, int x, int y) {
+        return depthImages_[view].data() + size_t(y) * size_t(images_[view].width) + size_t(x);
+    }
 
 private:
     uint32_t frame_ = 0;
     std::vector<Image> images_ = std::vector<Image>(1);  // one per view
     std::vector<std::vector<float>> linearImages_;       // one per view of a linear frame
+    std::vector<std::vector<float>> depthImages_;        // one per view of a frame with depth
     bool linear_ = false;
+    bool depth_ = false;
     std::vector<TileRect> tiles_;
     std::vector<uint32_t> view_;  // each tile's view (empty: all of view 0)
     // 0 missing, 1 being written, 2 done, 3 not routed here
@@ -125,7 +140,7 @@ private:
     size_t expected_ = 0;
     std::atomic<size_t> done_{0};
 
-    void resize(size_t views, int width, int height, bool linear);
+    void resize(size_t views, int width, int height, const FrameHolding& holding);
 };
 
 // ---- Composition -----------------------------------------------------------------------------
