@@ -9,9 +9,11 @@
 #include "gl_reproject.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace rtwall {
 
@@ -23,6 +25,24 @@ ShaderSource warpShader(const std::string& name) {
     throw std::logic_error("no shipped shader " + name);
 }
 
+// InputError, `what` and the driver's log, when `object` (a program, else a shader) did not
+// link (compile); the object is deleted first.
+void checkBuilt(GLuint object, bool program, const std::string& what) {
+    GLint ok = 0;
+    if (program) glGetProgramiv(object, GL_LINK_STATUS, &ok);
+    else glGetShaderiv(object, GL_COMPILE_STATUS, &ok);
+    if (ok) return;
+    char log[2048] = {};
+    if (program) {
+        glGetProgramInfoLog(object, sizeof log, nullptr, log);
+        glDeleteProgram(object);
+    } else {
+        glGetShaderInfoLog(object, sizeof log, nullptr, log);
+        glDeleteShader(object);
+    }
+    throw InputError(what + std::string(log));
+}
+
 GLuint linkProgram(const ShaderSource& vert, const ShaderSource& frag) {
     const GLuint vs = compileShader(GL_VERTEX_SHADER, vert), fs = compileShader(GL_FRAGMENT_SHADER, frag);
     const GLuint program = glCreateProgram();
@@ -31,14 +51,7 @@ GLuint linkProgram(const ShaderSource& vert, const ShaderSource& frag) {
     glLinkProgram(program);
     glDeleteShader(vs);
     glDeleteShader(fs);
-    GLint ok = 0;
-    glGetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char log[2048] = {};
-        glGetProgramInfoLog(program, sizeof log, nullptr, log);
-        glDeleteProgram(program);
-        throw InputError(frag.name + ": the OpenGL driver does not link it: " + std::string(log));
-    }
+    checkBuilt(program, true, frag.name + ": the OpenGL driver does not link it: ");
     return program;
 }
 
@@ -65,14 +78,7 @@ GLuint compileShader(GLenum type, const ShaderSource& src) {
     const char* text = src.text.c_str();
     glShaderSource(s, 1, &text, nullptr);
     glCompileShader(s);
-    GLint ok = 0;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[2048] = {};
-        glGetShaderInfoLog(s, sizeof log, nullptr, log);
-        glDeleteShader(s);
-        throw InputError(src.name + ": the OpenGL driver does not compile it: " + std::string(log));
-    }
+    checkBuilt(s, false, src.name + ": the OpenGL driver does not compile it: ");
     return s;
 }
 
@@ -95,28 +101,19 @@ struct GlReprojector::Impl {
         glGenVertexArrays(1, &vao);
         glGenFramebuffers(1, &fbo);
         glGenRenderbuffers(1, &keys);
-        glGenTextures(2, sourceColour);
-        glGenTextures(2, sourceDepth);
-        glGenTextures(4, &state[0][0]);
-        glGenTextures(4, &stateDepth[0][0]);
-        glGenTextures(1, &composed);
-        glGenTextures(1, &composedDepth);
-        glGenTextures(2, sides);
-        glGenTextures(1, &result);
+        for (auto [names, n] : textures()) glGenTextures(n, names);
     }
     ~Impl() {
         for (GLuint p : {splat, crack, compose, scan, fill}) glDeleteProgram(p);
         glDeleteVertexArrays(1, &vao);
         glDeleteFramebuffers(1, &fbo);
         glDeleteRenderbuffers(1, &keys);
-        glDeleteTextures(2, sourceColour);
-        glDeleteTextures(2, sourceDepth);
-        glDeleteTextures(4, &state[0][0]);
-        glDeleteTextures(4, &stateDepth[0][0]);
-        glDeleteTextures(1, &composed);
-        glDeleteTextures(1, &composedDepth);
-        glDeleteTextures(2, sides);
-        glDeleteTextures(1, &result);
+        for (auto [names, n] : textures()) glDeleteTextures(n, names);
+    }
+    // Every texture name array and its length: made and deleted together.
+    std::array<std::pair<GLuint*, GLsizei>, 8> textures() {
+        return {{{sourceColour, 2}, {sourceDepth, 2}, {&state[0][0], 4}, {&stateDepth[0][0], 4}, {&composed, 1}, {&composedDepth, 1},
+                 {sides, 2}, {&result, 1}}};
     }
 
     void sizeTargets(int width, int height) {

@@ -6,7 +6,8 @@
 // newest view does not cover (disocclusions, the edges it never saw) is filled from an older
 // view warped the same way, then from the row's neighbour on the farther side. The compositor's
 // per-screen stage "reproject" runs this on the CPU (headless, display nodes without GL, tests);
-// the GL presenter is to run the same algorithm in a shader.
+// the GL presenter runs the same algorithm in shaders (display/src/gl_reproject.cpp). What both
+// take and say (WarpSource, WarpOptions, WarpPixel) is core's rtwall/warp.h.
 #pragma once
 
 #include <rtwall/engine.h>
