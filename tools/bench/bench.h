@@ -149,7 +149,8 @@ toml::table latency(const LatencyOptions& o);
 struct ReprojectOptions : Common {
     std::vector<std::string> scenes{"demo", "plant"};  // "demo": the demo scene file; "plant": rtwall gen powerplant
     std::string demo = "configs/demo.toml";
-    std::string dir = "out/bench-reproject";  // the plant is generated here, the failure cases' images written here
+    std::string dir = "out/bench-reproject";  // the plant is generated here
+    std::string images;                       // the failure cases' images are written here (empty: dir)
     int width = 320, height = 240;            // the screen's pixels (a scale model of a wall's)
     double displayHz = 60, seconds = 1;       // displayed frames: seconds * displayHz per configuration
     std::vector<double> speeds{0.1, 0.25, 0.5, 1.0};  // head speed, m/s

@@ -90,7 +90,8 @@ toml::table reprojection(const ReprojectOptions& o) {
     std::vector<rq::Track> tracks;
     for (double fps : o.renderFps) {
         tracks.push_back({fps, 0.0});
-        for (double g : o.guardBands) tracks.push_back({fps, g});
+        for (double g : o.guardBands)
+            if (g > 0) tracks.push_back({fps, g});
     }
     rq::MeasureOptions m;
     m.width = o.width;

@@ -167,12 +167,16 @@ const Rendered& frameOf(TrackState& track, int64_t k, const Scene& scene, const 
 std::vector<Series> measure(const Scene& scene, const RenderSettings& settings, const WallRig& rig, double speed,
                             const std::vector<Track>& tracks, const MeasureOptions& o) {
     const HeadPath head = steppingHead(rig, speed, o.seconds / 2);
+    // One phase per render rate: the tracks of one rate (guard bands) show the same frames at
+    // the same ages, so they differ by their guard band alone.
     std::mt19937_64 rng(o.seed);
+    std::map<double, double> phases;
     std::vector<TrackState> states(tracks.size());
     std::vector<Series> out(tracks.size());
     for (size_t j = 0; j < tracks.size(); ++j) {
         const double period = 1.0 / tracks[j].renderFps;
-        states[j].clock = {period, std::uniform_real_distribution<double>(0, period)(rng)};
+        if (!phases.contains(period)) phases[period] = std::uniform_real_distribution<double>(0, period)(rng);
+        states[j].clock = {period, phases[period]};
         states[j].guardX = int(std::lround(tracks[j].guardBand * o.width / 2));
         states[j].guardY = int(std::lround(tracks[j].guardBand * o.height / 2));
         out[j].renderedPixels = double(o.width + 2 * states[j].guardX) * double(o.height + 2 * states[j].guardY) /

@@ -14,7 +14,8 @@ void addBenchReproject(CLI::App& bench, Run& run) {
         ->delimiter(',')
         ->check(CLI::IsMember({"demo", "plant"}));
     cmd->add_option("--demo", o.demo, "The demo scene file");
-    cmd->add_option("--dir", o.dir, "Where the plant is generated and the failure cases' images are written");
+    cmd->add_option("--dir", o.dir, "Where the plant is generated");
+    cmd->add_option("--images", o.images, "Where the failure cases' images are written (reprojection_CASE.png; default: --dir)");
     addSizeOptions(cmd, o.width, o.height, 16, 4096, "Screen");
     cmd->add_option("--display-hz", o.displayHz, "Display refresh rate")->check(CLI::Range(1.0, 1000.0));
     cmd->add_option("--seconds", o.seconds, "Displayed seconds per configuration")->check(CLI::Range(0.05, 600.0));
@@ -23,7 +24,7 @@ void addBenchReproject(CLI::App& bench, Run& run) {
         ->delimiter(',')
         ->check(CLI::Range(0.5, 1000.0));
     cmd->add_option("--guard-bands", o.guardBands, "Guard bands: share of the width and height rendered beyond the screen, "
-                                                   "comma-separated (none: --guard-bands '')")
+                                                   "comma-separated (none: --guard-bands 0)")
         ->delimiter(',')
         ->check(CLI::Range(0.0, 1.0));
     cmd->add_option("--plant-triangles", o.plantTriangles, "Triangles of the generated plant")
