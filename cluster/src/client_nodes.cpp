@@ -97,7 +97,7 @@ void ClientRuntime::sendToNodes(const zmq::message_t& msg) {
         zmq::message_t copy(msg.data(), msg.size());
         if (!link.socket.send(copy, zmq::send_flags::dontwait)) ++lostResults_;
     }
-    send(TileDone{frame, tile, info.renderMicros, info.pixelBytes}, frame);
+    send(TileDone{frame, tile, info.renderMicros, info.pixelBytes + info.depthBytes}, frame);
 }
 
 }  // namespace rtwall::cluster

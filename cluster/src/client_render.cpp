@@ -35,6 +35,7 @@ void ClientRuntime::onFrameBegin(const FrameBegin& fb) {
     blockedSince_ = 0;
     blockedLogged_ = false;
     framePixels_ = fb.pixels;
+    frameDepth_ = fb.depth;
     // At the state's resolution and tile size, which catchUp just brought to the frame's.
     auto layout = std::make_shared<FrameLayout>();
     for (const FrameView& v : fb.views) layout->cameras.push_back(v.camera);
@@ -62,7 +63,7 @@ void ClientRuntime::onAssign(const TileAssign& a) {
         std::lock_guard lock(workMutex_);
         for (uint32_t t : a.tiles) {
             if (work_.size() >= kMaxQueuedTiles) break;
-            work_.push_back({a.frame, t, stateSeq_, codec_, framePixels_, frameLayout_});
+            work_.push_back({a.frame, t, stateSeq_, codec_, framePixels_, frameDepth_, frameLayout_});
             ++queued;
         }
         held_ += int64_t(queued);
@@ -109,9 +110,11 @@ bool ClientRuntime::replaySend(zmq::socket_t& out, const Work& w) {
     {
         std::lock_guard lock(replayMutex_);
         auto it = replay_.find(w.tile);
-        if (it == replay_.end()) return false;
-        result.codec = it->second.first;
-        result.pixels = it->second.second;  // renderMicros stays 0: a replay costs no rendering
+        // A tile kept without depth is rendered again for a frame that asks for it.
+        if (it == replay_.end() || (w.depth && it->second.depth.empty())) return false;
+        result.codec = it->second.codec;
+        result.pixels = it->second.pixels;  // renderMicros stays 0: a replay costs no rendering
+        if (w.depth) result.depth = it->second.depth;
     }
     result.frame = w.frame;
     result.tile = w.tile;
@@ -138,13 +141,35 @@ void ClientRuntime::maybeStall(uint32_t frame) {
         std::this_thread::sleep_for(std::chrono::milliseconds(5));
 }
 
+// A rendered tile's result: its pixels through the session's codec, and its depth when the frame
+// asked for it.
+void ClientRuntime::encodeResult(const Work& w, const TileRect& r, const std::vector<uint8_t>& pixels,
+                                 const std::vector<float>& linear, const std::vector<float>& depth,
+                                 std::vector<uint8_t>& scratch, TileResult& result) {
+    result.frame = w.frame;
+    result.tile = w.tile;
+    if (w.pixels == TilePixels::LinearHalf) {
+        result.codec = wideCodec(w.codec.codec);
+        result.format = TilePixels::LinearHalf;
+        encodeWideTile(w.codec, linear.data(), r.width(), r.height(), size_t(r.width()) * 3, scratch, result.pixels);
+    } else {
+        result.codec = w.codec.codec;
+        encodeTile(w.codec, pixels.data(), r.width(), r.height(), size_t(r.width()) * 3, result.pixels);
+    }
+    if (!w.depth) return;
+    encodeDepthTile(kDepthCodec, depth.data(), r.width(), r.height(), size_t(r.width()), scratch, result.depth);
+    // Injected damage (tests): the depth cut in half no longer decompresses to the tile's size.
+    const int n = faults_.corruptEveryNthDepth;
+    if (n > 0 && ++depthsOut_ % uint64_t(n) == 0) result.depth.resize(result.depth.size() / 2);
+}
+
 void ClientRuntime::workerLoop(Slot& slot) {
     pthread_setname_np(pthread_self(), "rtw-render");  // rtwall bench cluster attributes CPU time by thread name
     zmq::socket_t out(ctx_, zmq::socket_type::push);
     out.set(zmq::sockopt::linger, 0);
     out.connect(kResultsAddress);
     std::vector<uint8_t> pixels, scratch;
-    std::vector<float> linear;
+    std::vector<float> linear, depth;
     for (;;) {
         Work w;
         {
@@ -154,7 +179,6 @@ void ClientRuntime::workerLoop(Slot& slot) {
             w = work_.front();
             work_.pop_front();
         }
-        const CodecSettings& codec = w.codec;
         const bool wide = w.pixels == TilePixels::LinearHalf;
         try {
             std::shared_lock lock(sceneMutex_);
@@ -171,13 +195,19 @@ void ClientRuntime::workerLoop(Slot& slot) {
             slot.job.store(uint64_t(w.frame) << 32 | w.tile);
             slot.startNs.store(steadyNs());
             const Camera camera(cameraDesc, renderSettings_.width, renderSettings_.height);
+            // Depth only when the frame asks for it: without, the call is the one of a wall
+            // without re-projection (DepthView's null data is that call too).
+            depth.resize(w.depth ? size_t(r.width()) * r.height() : 0);
+            const DepthView depthView{w.depth ? depth.data() : nullptr, size_t(r.width())};
             if (wide) {
                 // Part of an accumulation: linear, before the 8-bit quantisation.
                 linear.resize(size_t(r.width()) * r.height() * 3);
-                renderTileLinear(*scene_, camera, r, w.frame, renderSettings_, linear.data(), size_t(r.width()) * 3, trace_);
+                renderTileLinear(*scene_, camera, r, w.frame, renderSettings_, linear.data(), size_t(r.width()) * 3,
+                                 depthView, trace_);
             } else {
                 pixels.resize(size_t(r.width()) * r.height() * 3);
-                renderTile(*scene_, camera, r, w.frame, renderSettings_, {pixels.data(), size_t(r.width()) * 3}, trace_);
+                renderTile(*scene_, camera, r, w.frame, renderSettings_, {pixels.data(), size_t(r.width()) * 3}, depthView,
+                           trace_);
             }
             if (faults_.extraTileDelayMs > 0)
                 std::this_thread::sleep_for(std::chrono::milliseconds(faults_.extraTileDelayMs));
@@ -187,20 +217,11 @@ void ClientRuntime::workerLoop(Slot& slot) {
             tileNs_ += uint64_t(seconds * 1e9);
             ++tilesTimed_;
             TileResult result;
-            result.frame = w.frame;
-            result.tile = w.tile;
             result.renderMicros = uint32_t(std::min(seconds * 1e6, 4e9));
-            if (wide) {
-                result.codec = wideCodec(codec.codec);
-                result.format = TilePixels::LinearHalf;
-                encodeWideTile(codec, linear.data(), r.width(), r.height(), size_t(r.width()) * 3, scratch, result.pixels);
-            } else {
-                result.codec = codec.codec;
-                encodeTile(codec, pixels.data(), r.width(), r.height(), size_t(r.width()) * 3, result.pixels);
-            }
+            encodeResult(w, r, pixels, linear, depth, scratch, result);
             if (settings_.replay && !wide) {
                 std::lock_guard replayLock(replayMutex_);
-                replay_[w.tile] = {codec.codec, result.pixels};
+                replay_[w.tile] = {w.codec.codec, result.pixels, result.depth};
             }
             const std::vector<uint8_t> bytes = encodeMessage(header(MsgType::TileResult, w.frame, w.stateSeq), result);
             sendResult(out, bytes);

@@ -61,6 +61,7 @@ private:
         uint32_t stateSeq = 0;  // for the result's header
         CodecSettings codec;
         TilePixels pixels = TilePixels::Srgb8;
+        bool depth = false;  // its frame asked for depth (FrameBegin::depth)
         std::shared_ptr<const FrameLayout> layout;  // its frame's
     };
 
@@ -164,6 +165,8 @@ private:
     bool replaySend(zmq::socket_t& out, const Work& w);
     void sendResult(zmq::socket_t& out, const std::vector<uint8_t>& bytes);
     void maybeStall(uint32_t frame);
+    void encodeResult(const Work& w, const TileRect& r, const std::vector<uint8_t>& pixels, const std::vector<float>& linear,
+                      const std::vector<float>& depth, std::vector<uint8_t>& scratch, TileResult& result);
     void workerLoop(Slot& slot);
 
     ClientSettings settings_;
@@ -179,6 +182,7 @@ private:
     uint32_t id_ = 0;
     CodecSettings codec_;  // network thread only (Master::setCodec changes it mid-session); copied into each Work
     TilePixels framePixels_ = TilePixels::Srgb8;  // the current frame's tile format, copied into each Work
+    bool frameDepth_ = false;  // the current frame asked for depth, copied into each Work
     uint32_t prefetch_ = 4;
     int heartbeatMs_ = 250;
     int timeoutMs_ = 3000;
@@ -190,6 +194,7 @@ private:
     std::atomic<uint64_t> droppedResults_{0};
     uint64_t lostResults_ = 0;  // results the connection did not take (its queue to the master full)
     uint64_t resultsOut_ = 0;   // for ClientFaults::dropEveryNthResult
+    std::atomic<uint64_t> depthsOut_{0};  // for ClientFaults::corruptEveryNthDepth
     // Tiles this client holds: queued, being rendered, or rendered and not yet handed to the
     // master's connection. 0 = idle (Heartbeat::idle).
     std::atomic<int64_t> held_{0};
@@ -238,8 +243,13 @@ private:
     TraceOptions trace_;  // this client's own: packet width, id, injected fault
     std::atomic<uint32_t> frame_{0};
 
+    // A tile's encoded result as replay mode sends it again.
+    struct Replayed {
+        TileCodec codec = TileCodec::Raw;
+        std::vector<uint8_t> pixels, depth;  // depth: empty when its frame did not ask for it
+    };
     std::mutex replayMutex_;
-    std::map<uint32_t, std::pair<TileCodec, std::vector<uint8_t>>> replay_;  // tile -> codec, encoded bytes
+    std::map<uint32_t, Replayed> replay_;  // by tile
 
     std::mutex workMutex_;
     std::condition_variable workCv_;

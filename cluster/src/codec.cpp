@@ -2,6 +2,8 @@
 
 #include "wire.h"
 
+#include <rtwall/depth_codec.h>
+
 #include <lz4.h>
 #include <turbojpeg.h>
 #include <zstd.h>
@@ -72,6 +74,55 @@ ZSTD_DCtx* zstdDecompressor() {
     return ctx.get();
 }
 
+// LZ4 or zstd: appends the compressed bytes of src[0, n) to out.
+void compress(TileCodec codec, int zstdLevel, const uint8_t* src, size_t n, std::vector<uint8_t>& out) {
+    const size_t start = out.size();
+    if (codec == TileCodec::Lz4) {
+        const int bound = LZ4_compressBound(int(n));
+        out.resize(start + size_t(bound));
+        const int written = LZ4_compress_default(reinterpret_cast<const char*>(src),
+                                                 reinterpret_cast<char*>(out.data() + start), int(n), bound);
+        if (written <= 0) {
+            out.resize(start);
+            throw std::runtime_error("LZ4: compression failed");
+        }
+        out.resize(start + size_t(written));
+        return;
+    }
+    const size_t bound = ZSTD_compressBound(n);
+    out.resize(start + bound);
+    const size_t written = ZSTD_compressCCtx(zstdCompressor(), out.data() + start, bound, src, n, zstdLevel);
+    if (ZSTD_isError(written)) {
+        out.resize(start);
+        throw std::runtime_error(std::string("zstd: ") + ZSTD_getErrorName(written));
+    }
+    out.resize(start + written);
+}
+
+// The way back, into exactly n bytes at dst; anything else is a DecodeError naming `what`.
+void decompress(TileCodec codec, const uint8_t* data, size_t size, uint8_t* dst, size_t n, const char* what) {
+    if (codec == TileCodec::Lz4) {
+        // Any valid stream for this tile is at most the bound; this also keeps size within int.
+        if (size == 0 || size > size_t(LZ4_compressBound(int(n))))
+            throw DecodeError(std::string("LZ4 ") + what + " of " + std::to_string(size) + " bytes for " +
+                              std::to_string(n) + " bytes");
+        const int got =
+            LZ4_decompress_safe(reinterpret_cast<const char*>(data), reinterpret_cast<char*>(dst), int(size), int(n));
+        if (got < 0 || size_t(got) != n)
+            throw DecodeError(std::string("LZ4 ") + what + " does not decode to " + std::to_string(n) + " bytes");
+        return;
+    }
+    const unsigned long long content = ZSTD_getFrameContentSize(data, size);
+    if (content == ZSTD_CONTENTSIZE_ERROR || content == ZSTD_CONTENTSIZE_UNKNOWN || content != n)
+        throw DecodeError(std::string("zstd ") + what + " does not declare " + std::to_string(n) + " bytes");
+    // Exactly one frame: trailing frames or bytes would be ignored data.
+    const size_t frame = ZSTD_findFrameCompressedSize(data, size);
+    if (ZSTD_isError(frame) || frame != size) throw DecodeError(std::string("zstd ") + what + " is not exactly one frame");
+    const size_t got = ZSTD_decompressDCtx(zstdDecompressor(), dst, n, data, size);
+    if (ZSTD_isError(got)) throw DecodeError(std::string("zstd ") + what + ": " + ZSTD_getErrorName(got));
+    if (got != n) throw DecodeError(std::string("zstd ") + what + " does not decode to " + std::to_string(n) + " bytes");
+}
+
 // The rows packed without padding; a view of the input when it already is.
 const uint8_t* packed(const uint8_t* rgb, int width, int height, size_t stride, std::vector<uint8_t>& scratch) {
     const size_t rowBytes = size_t(width) * 3;
@@ -113,32 +164,10 @@ void encodeTile(const CodecSettings& codec, const uint8_t* rgb, int width, int h
             for (int y = 0; y < height; ++y) out.insert(out.end(), rgb + y * stride, rgb + y * stride + rowBytes);
             return;
         }
-        case TileCodec::Lz4: {
-            const uint8_t* src = packed(rgb, width, height, stride, scratch);
-            const int bound = LZ4_compressBound(int(n));
-            out.resize(start + size_t(bound));
-            const int written = LZ4_compress_default(reinterpret_cast<const char*>(src),
-                                                     reinterpret_cast<char*>(out.data() + start), int(n), bound);
-            if (written <= 0) {
-                out.resize(start);
-                throw std::runtime_error("LZ4: compression failed");
-            }
-            out.resize(start + size_t(written));
+        case TileCodec::Lz4:
+        case TileCodec::Zstd:
+            compress(codec.codec, codec.zstdLevel, packed(rgb, width, height, stride, scratch), n, out);
             return;
-        }
-        case TileCodec::Zstd: {
-            const uint8_t* src = packed(rgb, width, height, stride, scratch);
-            const size_t bound = ZSTD_compressBound(n);
-            out.resize(start + bound);
-            const size_t written =
-                ZSTD_compressCCtx(zstdCompressor(), out.data() + start, bound, src, n, codec.zstdLevel);
-            if (ZSTD_isError(written)) {
-                out.resize(start);
-                throw std::runtime_error(std::string("zstd: ") + ZSTD_getErrorName(written));
-            }
-            out.resize(start + written);
-            return;
-        }
         case TileCodec::Jpeg: {
             // Compressed straight into `out`, sized to TurboJPEG's worst case, without a copy.
             const int subsampling = jpegSubsampling(codec);
@@ -179,29 +208,10 @@ void decodeTile(TileCodec codec, const uint8_t* data, size_t size, int width, in
                 throw DecodeError("raw tile of " + std::to_string(size) + " bytes, expected " + std::to_string(n));
             for (int y = 0; y < height; ++y) std::memcpy(dst + y * dstStride, data + y * rowBytes, rowBytes);
             return;
-        case TileCodec::Lz4: {
-            // Any valid stream for this tile is at most the bound; this also keeps size within int.
-            if (size == 0 || size > size_t(LZ4_compressBound(int(n))))
-                throw DecodeError("LZ4 tile of " + std::to_string(size) + " bytes for " + std::to_string(n) +
-                                  " pixel bytes");
-            const int got = LZ4_decompress_safe(reinterpret_cast<const char*>(data), reinterpret_cast<char*>(target),
-                                                int(size), int(n));
-            if (got < 0 || size_t(got) != n)
-                throw DecodeError("LZ4 tile does not decode to " + std::to_string(n) + " bytes");
+        case TileCodec::Lz4:
+        case TileCodec::Zstd:
+            decompress(codec, data, size, target, n, "tile");
             break;
-        }
-        case TileCodec::Zstd: {
-            const unsigned long long content = ZSTD_getFrameContentSize(data, size);
-            if (content == ZSTD_CONTENTSIZE_ERROR || content == ZSTD_CONTENTSIZE_UNKNOWN || content != n)
-                throw DecodeError("zstd tile does not declare " + std::to_string(n) + " bytes");
-            // Exactly one frame: trailing frames or bytes would be ignored data.
-            const size_t frame = ZSTD_findFrameCompressedSize(data, size);
-            if (ZSTD_isError(frame) || frame != size) throw DecodeError("zstd tile is not exactly one frame");
-            const size_t got = ZSTD_decompressDCtx(zstdDecompressor(), target, n, data, size);
-            if (ZSTD_isError(got)) throw DecodeError(std::string("zstd tile: ") + ZSTD_getErrorName(got));
-            if (got != n) throw DecodeError("zstd tile does not decode to " + std::to_string(n) + " bytes");
-            break;
-        }
         case TileCodec::Jpeg: {
             tjhandle tj = jpegDecompressor();
             int w = 0, h = 0, subsampling = 0, colorspace = 0;
@@ -266,11 +276,52 @@ void decodeWideTile(TileCodec codec, const uint8_t* data, size_t size, int width
     }
 }
 
+void encodeDepthTile(TileCodec codec, const float* depth, int width, int height, size_t stride,
+                     std::vector<uint8_t>& scratch, std::vector<uint8_t>& out) {
+    if (width < 1 || height < 1 || width > kMaxTileSide || height > kMaxTileSide || stride < size_t(width) ||
+        (codec != TileCodec::Lz4 && codec != TileCodec::Zstd))
+        throw std::invalid_argument("encodeDepthTile: tile size " + std::to_string(width) + "x" + std::to_string(height) +
+                                    " or codec " + codecName(codec));
+    const size_t pixels = size_t(width) * size_t(height);
+    scratch.resize(encodedDepthBytes(pixels));
+    uint8_t* lo = scratch.data();
+    uint8_t* hi = scratch.data() + pixels;
+    size_t k = 0;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x, ++k) {
+            const uint16_t code = encodeDepth(depth[size_t(y) * stride + size_t(x)]);
+            lo[k] = uint8_t(code & 0xFF);
+            hi[k] = uint8_t(code >> 8);
+        }
+    compress(codec, kDepthZstdLevel, scratch.data(), scratch.size(), out);
+}
+
+void decodeDepthTile(TileCodec codec, const uint8_t* data, size_t size, int width, int height, float* dst,
+                     size_t dstStride, std::vector<uint8_t>& scratch) {
+    if (width < 1 || height < 1 || width > kMaxTileSide || height > kMaxTileSide || dstStride < size_t(width))
+        throw std::invalid_argument("decodeDepthTile: tile size " + std::to_string(width) + "x" + std::to_string(height));
+    if (codec != TileCodec::Lz4 && codec != TileCodec::Zstd)
+        throw DecodeError(std::string("depth cannot come as ") + codecName(codec));
+    const size_t pixels = size_t(width) * size_t(height);
+    scratch.resize(encodedDepthBytes(pixels));
+    decompress(codec, data, size, scratch.data(), scratch.size(), "depth tile");
+    const uint8_t* lo = scratch.data();
+    const uint8_t* hi = scratch.data() + pixels;
+    size_t k = 0;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x, ++k) dst[size_t(y) * dstStride + size_t(x)] = decodeDepth(uint16_t(lo[k] | (hi[k] << 8)));
+}
+
 size_t maxEncodedTileBytes(int width, int height) {
     const size_t n = tileBytes(width, height, size_t(width) * 3, "maxEncodedTileBytes");
     // 4:2:0 pads to 16x16 blocks and can exceed 4:4:4's bound for small tiles, so take both.
     return std::max({n, size_t(LZ4_compressBound(int(n))), ZSTD_compressBound(n),
                      jpegBufferBound(width, height, TJSAMP_444), jpegBufferBound(width, height, TJSAMP_420)});
+}
+
+size_t maxEncodedDepthBytes(int width, int height) {
+    const size_t n = encodedDepthBytes(tileBytes(width, height, size_t(width) * 3, "maxEncodedDepthBytes") / 3);
+    return std::max(size_t(LZ4_compressBound(int(n))), ZSTD_compressBound(n));
 }
 
 const char* codecName(TileCodec codec) {

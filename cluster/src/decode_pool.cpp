@@ -14,7 +14,7 @@ DecodePool::DecodePool(FrameAssembler& assembler, int threads, std::function<voi
 }
 
 void DecodePool::run() {
-    std::vector<uint8_t> scratch;  // a linear tile's half floats, reused
+    std::vector<uint8_t> scratch;  // a linear tile's half floats or its depth codes, reused
     for (;;) {
         Job job;
         {
@@ -38,6 +38,11 @@ void DecodePool::run() {
                 decodeTile(job.codec, job.pixels.data(), job.pixels.size(), job.rect.width(), job.rect.height(),
                            job.view.data, job.view.stride);
             }
+            // A depth that does not decode drops the whole tile: it is rendered again, both
+            // halves (what its pixels wrote is overwritten then).
+            if (job.depth)
+                decodeDepthTile(kDepthCodec, job.depthBytes.data(), job.depthBytes.size(), job.rect.width(),
+                                job.rect.height(), job.depth, job.depthStride, scratch);
             assembler_.commit(job.tile);
             if (assembler_.complete()) onComplete_();
         } catch (const std::exception&) {

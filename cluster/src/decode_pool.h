@@ -30,6 +30,9 @@ public:
         TilePixels format = TilePixels::Srgb8;
         float* linear = nullptr;  // LinearHalf: the tile's first pixel in the frame's linear buffer
         size_t linearStride = 0;  // floats from one row of that buffer to the next
+        std::vector<uint8_t> depthBytes;  // encoded depth (encodeDepthTile), when the frame has depth
+        float* depth = nullptr;  // then the tile's first pixel in the view's depth buffer
+        size_t depthStride = 0;  // floats from one row of it to the next
     };
 
     // `onComplete`: the frame is complete (called on a decode thread); `onFailure`: a tile did

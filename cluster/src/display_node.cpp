@@ -50,7 +50,7 @@ public:
 
     int operator()() {
         tiles_.set(zmq::sockopt::linger, 0);
-        tiles_.set(zmq::sockopt::maxmsgsize, int64_t(kHeaderSize + 64 + maxEncodedTileBytes(2 * 1024, 1024)));
+        tiles_.set(zmq::sockopt::maxmsgsize, int64_t(maxTileResultBytes()));
         tiles_.set(zmq::sockopt::rcvhwm, 100000);
         if (keyed()) {
             // A CURVE server for the clients' tiles, with a key pair of this run (the clients
@@ -241,6 +241,7 @@ private:
                 tiles = viewTiles(f.views, f.width, f.height, f.tileSize);
             FrameHolding held;
             held.linear = f.pixels == TilePixels::LinearHalf;
+            held.depth = f.depth;
             held.routes = &std::prev(r)->second;
             held.node = index_;
             slot.assembly.beginFrame(f.frame, f.width, f.height, tiles, uint32_t(f.views.size()), held);
@@ -283,6 +284,8 @@ private:
         if (assembly.claim(r.frame, r.tile, rect, view) != FrameAssembler::Claim::Granted) return;
         try {
             if (r.format != slot->frame.pixels) throw DecodeError("a tile in another pixel format than its frame's");
+            if (r.depth.empty() == slot->frame.depth)
+                throw DecodeError(slot->frame.depth ? "a tile without the depth its frame asks for" : "a tile with depth");
             if (r.format == TilePixels::LinearHalf) {
                 // An accumulated frame's tile: into the view's linear image (what is summed) and
                 // quantised into its 8-bit one, as the master does.
@@ -294,6 +297,10 @@ private:
             } else {
                 decodeTile(r.codec, r.pixels.data(), r.pixels.size(), rect.width(), rect.height(), view.data, view.stride);
             }
+            if (slot->frame.depth)
+                decodeDepthTile(kDepthCodec, r.depth.data(), r.depth.size(), rect.width(), rect.height(),
+                                assembly.depthAt(assembly.viewOf(r.tile), rect.x0, rect.y0), size_t(slot->frame.width),
+                                scratch_);
             assembly.commit(r.tile);
         } catch (const DecodeError& e) {
             assembly.release(r.tile);
@@ -333,6 +340,8 @@ private:
         c.stateSeq = f.stateSeq;
         c.linear = slot.assembly.linear();
         shown_ = compositor_.compose(c, slot.assembly.images(), slot.assembly.linearImages());
+        // Each view's depth beside its image, for a warp on the node (issue 27).
+        if (run_.depth && slot.assembly.depth()) run_.depth(f.frame, slot.assembly.depthImages());
     }
 
     // The slot that holds `frame` (begun in this session), if any.

@@ -26,9 +26,9 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
             if (!s.findAsset(path)) s.addAsset(readAsset(path, scene.files));
     s.frameState = snapshotOf(s.app.scene, s.app.meshRefs, s.app.assetRefs, s.app.seq);
 
-    // The largest legitimate message a client sends is a result for the largest tile allowed.
-    // (A linear tile is encoded as an 8-bit tile twice as wide.)
-    const int64_t maxResult = int64_t(kHeaderSize + 64 + maxEncodedTileBytes(2048, 1024));
+    // The largest legitimate message a client sends is a result for the largest tile allowed,
+    // with its depth.
+    const int64_t maxResult = int64_t(maxTileResultBytes());
     if (settings.highWaterMark < 1) throw InputError("the high-water mark must be at least 1 message");
     configureSocket(s.link.router, maxResult, settings.heartbeatMs, settings.timeoutMs, settings.highWaterMark);
     s.link.router.set(zmq::sockopt::router_mandatory, 1);

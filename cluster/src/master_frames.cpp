@@ -52,6 +52,7 @@ void Master::Impl::beginFrame(Command&& cmd) {
     // allocates nothing.) A mono frame's one view is the whole image: its tiling is makeTiles'.
     FrameHolding holding;
     holding.linear = pixels == TilePixels::LinearHalf;
+    holding.depth = settings.depth;
     assembler.beginFrame(frame, rs.width, rs.height, viewTiles(beginViews, rs.width, rs.height, rs.tileSize),
                          uint32_t(beginViews.size()), holding);
     scheduler.beginFrame(frame, uint32_t(assembler.tiles().size()));
@@ -85,6 +86,7 @@ void Master::Impl::finishFrameIfDone() {
     r.tileOwners.assign(scheduler.owners().begin(), scheduler.owners().end());
     r.stochastic = frameStochastic;
     r.linear = framePixels == TilePixels::LinearHalf;
+    r.depth = settings.depth;
     r.views = frameViews.size();
     r.viewsTag = frameViewsTag;
     r.counters = countersNow();
@@ -118,6 +120,8 @@ void Master::Impl::finishFrameIfDone() {
         else completedImages = std::exchange(assembler.images(), std::vector<Image>(1));  // the assembler starts the next frame afresh
         if (framePixels == TilePixels::LinearHalf) completedLinear.swap(assembler.linearImages());
         else completedLinear.clear();
+        if (settings.depth && !withNodes()) completedDepth.swap(assembler.depthImages());
+        else completedDepth.clear();
         completedReport = std::move(r);
         completedFrame = currentFrame;
     }
@@ -169,18 +173,22 @@ bool Master::Impl::runCommands() {
     return true;
 }
 
-Image Master::renderFrame(FrameReport* report, std::vector<float>* linear) {
-    std::vector<std::vector<float>> views;
-    if (linear) views.emplace_back().swap(*linear);  // the caller's buffer goes round for a later frame
-    std::vector<Image> images = renderViews(report, linear ? &views : nullptr);
-    if (linear) {
-        linear->clear();
-        if (!views.empty()) linear->swap(views.front());
+Image Master::renderFrame(FrameReport* report, std::vector<float>* linear, std::vector<float>* depth) {
+    // The caller's buffers go round for a later frame.
+    std::vector<std::vector<float>> linearViews, depthViews;
+    if (linear) linearViews.emplace_back().swap(*linear);
+    if (depth) depthViews.emplace_back().swap(*depth);
+    std::vector<Image> images = renderViews(report, linear ? &linearViews : nullptr, depth ? &depthViews : nullptr);
+    for (auto [one, views] : {std::pair{linear, &linearViews}, std::pair{depth, &depthViews}}) {
+        if (!one) continue;
+        one->clear();
+        if (!views->empty()) one->swap(views->front());
     }
     return std::move(images.front());
 }
 
-std::vector<Image> Master::renderViews(FrameReport* report, std::vector<std::vector<float>>* linear) {
+std::vector<Image> Master::renderViews(FrameReport* report, std::vector<std::vector<float>>* linear,
+                                       std::vector<std::vector<float>>* depth) {
     Impl& s = *impl_;
     auto begin = [&] {
         const uint32_t frame = ++s.lastBegun;
@@ -226,9 +234,11 @@ std::vector<Image> Master::renderViews(FrameReport* report, std::vector<std::vec
         }
         s.inFlight = false;
         if (report) *report = s.completedReport;
-        if (linear) {
-            for (std::vector<float>& l : *linear) l.clear();
-            linear->swap(s.completedLinear);  // the caller's buffers come back for a later frame
+        // The caller's buffers come back for a later frame.
+        for (auto [mine, completed] : {std::pair{linear, &s.completedLinear}, std::pair{depth, &s.completedDepth}}) {
+            if (!mine) continue;
+            for (std::vector<float>& l : *mine) l.clear();
+            mine->swap(*completed);
         }
         return std::move(s.completedImages);
     };

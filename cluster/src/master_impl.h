@@ -177,6 +177,7 @@ struct Master::Impl {
     std::vector<Image> completedImages;  // one per view
     FrameReport completedReport;
     std::vector<std::vector<float>> completedLinear;  // the completed frame's linear pixels per view, when it had linear tiles
+    std::vector<std::vector<float>> completedDepth;   // its depth per view, when its tiles came with depth
     int readyClients = 0;
     uint32_t swapReleased = 0;    // with display nodes: the newest frame the swap barrier released
     std::atomic<const std::atomic<bool>*> stopFlag{nullptr};

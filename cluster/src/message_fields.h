@@ -64,6 +64,12 @@ public:
     template <class E> void enumUpTo(E v, E, const char*) { w_.u8(uint8_t(v)); }
     template <class E> void enumInRange(E v, E, const char*) { w_.u8(uint8_t(v)); }
     template <class F> void expect(bool, F&&) {}
+    // A field at the very end of a message that only some messages carry (version 14's depth):
+    // written only when present, so that a message without it is, byte for byte, what it was
+    // before the field existed.
+    template <class F> void trailing(bool present, F&& each) {
+        if (present) each();
+    }
 
     // A u32 count, then each element.
     template <class T, class Each, class CountCheck = void (*)(uint32_t)>
@@ -141,6 +147,12 @@ public:
     // A check on what was read so far; `message` builds the error text only when it fails.
     template <class F> void expect(bool ok, F&& message) {
         if (!ok) fail(message());
+    }
+    // Present when bytes are left (the field is the message's last); `each` reads it and must
+    // refuse the value the writer leaves out, so that every message has one encoding.
+    template <class F> void trailing(bool& present, F&& each) {
+        present = r_.remaining() > 0;
+        if (present) each();
     }
 
     // A u32 count, checked by countCheck and against maxCount and the bytes left (elements of at

@@ -20,7 +20,10 @@
 // accumulate a stochastic frame as the single-PC wall does (whether it is stochastic, and its
 // state's sequence number); 13 made FrameBegin the one route of the viewer's camera to the
 // clients (issue 26): every frame carries its views, a mono frame one view; CameraChange and the
-// snapshot's camera are gone (the camera is not scene state: it moves no sequence number).
+// snapshot's camera are gone (the camera is not scene state: it moves no sequence number); 14
+// added depth with every tile (issue 27): FrameBegin::depth and NodeFrame::depth ask for it,
+// TileResult::depth carries it. Each is the last field of its message and left out when off, so
+// that a frame without depth travels byte for byte as in version 13.
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one fields() function that
@@ -47,7 +50,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 13;  // 13: the frame's views are its only camera
+inline constexpr uint16_t kProtocolVersion = 14;  // 14: depth with every tile
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -244,6 +247,9 @@ struct FrameBegin {
     // view's camera; a mono frame is one view without regions (makeTiles order). Per frame, not
     // state: a camera moves at no sequence number.
     std::vector<FrameView> views{};
+    // Version 14: every tile's result carries its depth (TileResult::depth). Off, the frame
+    // renders and travels exactly as without.
+    bool depth = false;
     bool operator==(const FrameBegin&) const = default;
 };
 
@@ -266,6 +272,10 @@ struct TileResult {
     uint32_t renderMicros = 0;
     std::vector<uint8_t> pixels;  // encoded
     TilePixels format = TilePixels::Srgb8;  // LinearHalf: `pixels` are 6 bytes a pixel before the codec
+    // Version 14: the tile's depth when its frame asked for it (FrameBegin::depth), else empty:
+    // distance along each pixel's primary ray through the 16-bit log code of rtwall/depth_codec.h,
+    // compressed with kDepthCodec (codec.h, encodeDepthTile).
+    std::vector<uint8_t> depth{};
     bool operator==(const TileResult&) const = default;
 };
 
@@ -277,8 +287,12 @@ struct TileResultInfo {
     uint32_t tile = 0;
     uint32_t renderMicros = 0;
     uint32_t pixelBytes = 0;  // the encoded pixels' length
+    uint32_t depthBytes = 0;  // the encoded depth's length (0: none)
 };
 TileResultInfo peekTileResult(const uint8_t* data, size_t size);
+// The largest TileResult message a decoder accepts (header included): ZMQ_MAXMSGSIZE of the
+// sockets that take tiles.
+size_t maxTileResultBytes();
 
 // From the master all fields are 0. From a client: what it holds, so that the master can tell a
 // lost hand-out from a slow one. `tilesSeen` counts the tiles of every assignment for `frame`
@@ -360,6 +374,9 @@ struct NodeFrame {
     // and one camera) exactly as the single-PC wall does; LinearHalf tiles only come with it.
     bool stochastic = false;
     uint32_t stateSeq = 0;  // the scene state it renders (any change restarts the sums)
+    // Version 14: its tiles carry depth (the frame's FrameBegin asked for it), which the node
+    // keeps per view beside the images. Last, and left out when false, as in FrameBegin.
+    bool depth = false;
     bool operator==(const NodeFrame&) const = default;
 };
 

@@ -5,7 +5,7 @@
 
 namespace rtwall::cluster {
 
-RTWALL_WIRE_MESSAGE(FrameBegin, 4) {
+RTWALL_WIRE_MESSAGE(FrameBegin, 5) {
     static const size_t viewBytes = minViewBytes();
     io.u32(m.frame);
     io.u32(m.updateSeq);
@@ -13,6 +13,11 @@ RTWALL_WIRE_MESSAGE(FrameBegin, 4) {
     vectorOf(io, m.views, viewBytes, kMaxViews);
     // Version 13: the views are the frame's only camera; a frame without one cannot be rendered.
     io.expect(!m.views.empty(), [&] { return "frame " + std::to_string(m.frame) + " has no view"; });
+    // Version 14: depth with every tile, a byte at the end only when asked for.
+    io.trailing(m.depth, [&] {
+        io.boolean(m.depth);
+        io.expect(m.depth, [] { return std::string("a depth flag that says no (it is left out then)"); });
+    });
 }
 
 RTWALL_WIRE_MESSAGE(TileRequest, 2) {
@@ -27,29 +32,43 @@ RTWALL_WIRE_MESSAGE(TileAssign, 2) {
     io.sequence(m.tiles, sizeof(uint32_t), kMaxTilesPerMessage, [&](auto& t) { io.u32(t); });
 }
 
-// A TileResult's fields with its pixels as `pixels`: a vector (decodePayload copies them) or a
-// view into the message (peekTileResult does not).
-template <class Io, class Result, class Pixels> void tileResultFields(Io& io, Result& m, Pixels& pixels) {
-    // A half-float tile is encoded as an 8-bit tile twice as wide.
-    static const size_t maxPixelBytes = maxEncodedTileBytes(2 * kMaxTileSize, kMaxTileSize);
+// A half-float tile is encoded as an 8-bit tile twice as wide.
+const size_t kMaxPixelBytes = maxEncodedTileBytes(2 * kMaxTileSize, kMaxTileSize);
+const size_t kMaxDepthBytes = maxEncodedDepthBytes(kMaxTileSize, kMaxTileSize);
+
+size_t bytesOf(const std::vector<uint8_t>& v) { return v.size(); }
+size_t bytesOf(const std::pair<const uint8_t*, size_t>& view) { return view.second; }
+
+// A TileResult's fields with its pixels and depth as `pixels` and `depth`: vectors
+// (decodePayload copies them) or views into the message (peekTileResult does not).
+template <class Io, class Result, class Bytes> void tileResultFields(Io& io, Result& m, Bytes& pixels, Bytes& depth) {
     io.u32(m.frame);
     io.u32(m.tile);
     io.enumUpTo(m.codec, TileCodec::Jpeg, "tile codec");
     io.u32(m.renderMicros);
-    io.blob(pixels, maxPixelBytes);
+    io.blob(pixels, kMaxPixelBytes);
     io.enumUpTo(m.format, TilePixels::LinearHalf, "tile pixel format");
+    // Version 14: the tile's depth (encodeDepthTile), at the end and only when the frame asked
+    // for it: a tile without depth travels as in version 13.
+    bool withDepth = bytesOf(depth) > 0;
+    io.trailing(withDepth, [&] {
+        io.blob(depth, kMaxDepthBytes);
+        io.expect(bytesOf(depth) > 0, [] { return std::string("an empty depth field (it is left out then)"); });
+    });
 }
-RTWALL_WIRE_MESSAGE(TileResult, 6) { tileResultFields(io, m, m.pixels); }
+RTWALL_WIRE_MESSAGE(TileResult, 7) { tileResultFields(io, m, m.pixels, m.depth); }
 
 TileResultInfo peekTileResult(const uint8_t* data, size_t size) {
     Reader r(data, size);
     FieldReader io(r);
-    TileResult m;  // all but the pixels
-    std::pair<const uint8_t*, size_t> pixels;
-    tileResultFields(io, m, pixels);
+    TileResult m;  // all but the pixels and depth
+    std::pair<const uint8_t*, size_t> pixels{}, depth{};
+    tileResultFields(io, m, pixels, depth);
     r.expectEnd();
-    return {m.frame, m.tile, m.renderMicros, uint32_t(pixels.second)};
+    return {m.frame, m.tile, m.renderMicros, uint32_t(pixels.second), uint32_t(depth.second)};
 }
+
+size_t maxTileResultBytes() { return kHeaderSize + 64 + kMaxPixelBytes + kMaxDepthBytes; }
 
 RTWALL_WIRE_MESSAGE(TileStalled, 3) {
     io.u32(m.frame);

@@ -83,7 +83,7 @@ RTWALL_WIRE_MESSAGE(NodeWelcome, 5) {
         SendLimit::Strict);
 }
 
-RTWALL_WIRE_MESSAGE(NodeFrame, 9) {
+RTWALL_WIRE_MESSAGE(NodeFrame, 10) {
     static const size_t viewBytes = minViewBytes();
     io.u32(m.frame);
     io.intIn(m.width, 1, kMaxImageSide, "node frame width");
@@ -117,6 +117,10 @@ RTWALL_WIRE_MESSAGE(NodeFrame, 9) {
     io.u32(m.stateSeq);
     io.expect(m.pixels != TilePixels::LinearHalf || m.stochastic,
               [] { return std::string("linear tiles for a frame that is not accumulated"); });
+    io.trailing(m.depth, [&] {
+        io.boolean(m.depth);
+        io.expect(m.depth, [] { return std::string("a depth flag that says no (it is left out then)"); });
+    });
 }
 
 RTWALL_WIRE_MESSAGE(NodeHave, 1) { io.u32(m.frame); }

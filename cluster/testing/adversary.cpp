@@ -268,7 +268,7 @@ private:
     void oversized() {
         auto s = socket();
         s->set(zmq::sockopt::linger, 200);
-        std::vector<uint8_t> big(kHeaderSize + maxEncodedTileBytes(2048, 1024) + (1 << 20), 0xAB);
+        std::vector<uint8_t> big(maxTileResultBytes() + (1 << 20), 0xAB);
         if (put(*s, big)) ++r_.oversized;
     }
 

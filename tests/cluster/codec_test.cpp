@@ -4,11 +4,14 @@
 
 #include "wire.h"
 
+#include <rtwall/depth_codec.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 
@@ -409,6 +412,82 @@ TEST(WideTile, RoundTripsExactlyAtHalfPrecision) {
                          DecodeError);
         }
     }
+}
+
+// ---- Depth (issue 27) ----------------------------------------------------------------------------
+
+// A tile's depth with everything the codec must keep: a smooth surface, background, holes
+// (NaN, infinity, zero, negative), and junk in the padding of each row that must not travel.
+std::vector<float> depthTile(int w, int h, size_t stride) {
+    std::vector<float> d(stride * size_t(h), -123.0f);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            float v = 2.0f + 0.01f * float(x) + 0.37f * float(y);
+            if ((x + y) % 7 == 0) v = kBackgroundDepth;
+            if (x == 1 && y == 0) v = std::numeric_limits<float>::quiet_NaN();
+            if (x == 2 && y == 0) v = std::numeric_limits<float>::infinity();
+            if (x == 3 && y == 0) v = -1.0f;
+            if (x == 4 && y == 0) v = 0.0f;
+            if (x == 5 && y == 0) v = 5e9f;  // beyond the code's far end
+            d[size_t(y) * stride + size_t(x)] = v;
+        }
+    return d;
+}
+
+TEST(Codec, DepthComesBackAsItsSixteenBitCode) {
+    for (TileCodec codec : {TileCodec::Lz4, TileCodec::Zstd})
+        for (const Size s : kSizes) {
+            const size_t stride = size_t(s.w) + 3;
+            const std::vector<float> d = depthTile(s.w, s.h, stride);
+            std::vector<uint8_t> scratch, bytes{0xEE};  // appended to what is there
+            encodeDepthTile(codec, d.data(), s.w, s.h, stride, scratch, bytes);
+            ASSERT_EQ(bytes.front(), 0xEE);
+            std::vector<float> back(size_t(s.w) * size_t(s.h) + 1, 42.0f);  // one float past the tile: untouched
+            decodeDepthTile(codec, bytes.data() + 1, bytes.size() - 1, s.w, s.h, back.data(), size_t(s.w), scratch);
+            for (int y = 0; y < s.h; ++y)
+                for (int x = 0; x < s.w; ++x) {
+                    const float want = decodeDepth(encodeDepth(d[size_t(y) * stride + size_t(x)]));
+                    const float got = back[size_t(y) * size_t(s.w) + size_t(x)];
+                    if (std::isnan(want)) EXPECT_TRUE(std::isnan(got)) << x << "," << y;
+                    else EXPECT_EQ(got, want) << x << "," << y << " " << codecName(codec);
+                }
+            EXPECT_EQ(back.back(), 42.0f);
+        }
+}
+
+TEST(Codec, MalformedDepthThrows) {
+    const int w = 32, h = 32;
+    const std::vector<float> d = depthTile(w, h, w);
+    std::vector<uint8_t> scratch, good;
+    encodeDepthTile(kDepthCodec, d.data(), w, h, w, scratch, good);
+    std::vector<float> out(size_t(w) * h + 1, 7.0f);
+    auto throws = [&](const std::vector<uint8_t>& bytes, int tw, int th, TileCodec codec, const char* what) {
+        EXPECT_THROW(decodeDepthTile(codec, bytes.data(), bytes.size(), tw, th, out.data(), size_t(tw), scratch), DecodeError)
+            << what;
+        EXPECT_EQ(out.back(), 7.0f) << what;
+    };
+    throws({}, w, h, kDepthCodec, "empty");
+    throws(std::vector<uint8_t>(good.begin(), good.begin() + ptrdiff_t(good.size() / 2)), w, h, kDepthCodec, "cut in half");
+    throws(good, w, h - 1, kDepthCodec, "a smaller tile's size");
+    throws(good, 16, h, kDepthCodec, "a narrower tile");
+    throws(good, w, h, TileCodec::Raw, "not a depth codec");
+    throws(good, w, h, TileCodec::Jpeg, "not a depth codec");
+    std::vector<uint8_t> garbage(good.size());
+    std::mt19937 rng(5);
+    for (uint8_t& b : garbage) b = uint8_t(rng());
+    throws(garbage, w, h, kDepthCodec, "garbage");
+    std::vector<uint8_t> longer = good;
+    longer.push_back(0);
+    throws(longer, w, h, kDepthCodec, "a byte too many");
+}
+
+TEST(Codec, DepthCompressesAndIsBounded) {
+    const int w = 64, h = 64;
+    const std::vector<float> d = depthTile(w, h, w);
+    std::vector<uint8_t> scratch, bytes;
+    encodeDepthTile(kDepthCodec, d.data(), w, h, w, scratch, bytes);
+    EXPECT_LT(bytes.size(), encodedDepthBytes(size_t(w) * h));
+    EXPECT_LE(bytes.size(), maxEncodedDepthBytes(w, h));
 }
 
 }  // namespace

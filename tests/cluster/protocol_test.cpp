@@ -153,6 +153,7 @@ TileResult sampleTileResult() {
     t.renderMicros = 4567;
     for (int i = 0; i < 300; ++i) t.pixels.push_back(uint8_t(i * 7));
     t.format = TilePixels::LinearHalf;
+    for (int i = 0; i < 70; ++i) t.depth.push_back(uint8_t(i * 5 + 1));  // version 14
     return t;
 }
 
@@ -190,17 +191,19 @@ FrameBegin sampleViewsFrameBegin() {
     right.refWidth = 3072;
     right.refHeight = 768;
     fb.views = {left, right};
+    fb.depth = true;  // version 14
     return fb;
 }
 
 // The same stereo CAVE's frame as a display node is told it (version 12): views, their eyes, and
 // that it accumulates.
 NodeFrame sampleViewsNodeFrame() {
-    NodeFrame f{86, 3072, 768, 64, TilePixels::LinearHalf, sampleViewsFrameBegin().views, {0, 1}, true, 0xA1B2C3D4u};
+    NodeFrame f{86, 3072, 768, 64, TilePixels::LinearHalf, sampleViewsFrameBegin().views, {0, 1}, true, 0xA1B2C3D4u, true};
     return f;
 }
 
-// Calls f with every sample message (FrameBegin and NodeFrame twice: mono and with views).
+// Calls f with every sample message (FrameBegin and NodeFrame twice: mono and with views and
+// depth; TileResult with and without depth).
 template <class F> void forEachSample(F&& f) {
     f(sampleHello());
     f(sampleWelcome());
@@ -213,6 +216,7 @@ template <class F> void forEachSample(F&& f) {
     f(TileRequest{55, 8});
     f(TileAssign{56, {0, 7, 1u << 20, 0xFFFFFFFFu}});
     f(sampleTileResult());
+    f(TileResult{58, 301, TileCodec::Zstd, 12, {1, 2, 3}});  // without depth (version 14's trailing field left out)
     f(Heartbeat{77, 9, true});
     f(Goodbye{"shutting down: operator request"});
     f(Ready{99, {0x0102030405060708ull, 0x1112131415161718ull}});
@@ -336,7 +340,7 @@ TEST(Protocol, GoldenBytes) {
     // 5: the snapshot's BVH primitives; 6: two-sided emission of materials and area lights; 7: the
     // client's work report in Heartbeat, TileStalled; 8: TileFailed; 9: section planes, instance visibility;
     // 10: FrameBegin's views; 11: display nodes; 12: views and accumulation on display nodes; 13:
-    // the frame's views are its only camera).
+    // the frame's views are its only camera; 14: depth with every tile, left out when off).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -344,7 +348,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x0D, 0x00,                                      // version (13: the frame's views are its only camera)
+        0x0E, 0x00,                                      // version (14: depth with every tile)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -356,6 +360,40 @@ TEST(Protocol, GoldenBytes) {
         0x00, 0x00, 0x00, 0x00,                          // no views (the layout only: a decoder wants one)
     };
     EXPECT_EQ(bytes, expected);
+}
+
+// Version 14: depth is each message's last field, there only when asked for, so a frame without
+// depth travels as in version 13 (same payload bytes); a flag or a depth that says "none" is not
+// a second encoding of the same message.
+TEST(Protocol, DepthIsATrailingFieldLeftOutWhenOff) {
+    const FrameView view{sampleCamera(), {}, 0, 0};
+    const std::vector<uint8_t> off = payloadOf(FrameBegin{5, 4, TilePixels::Srgb8, {view}});
+    std::vector<uint8_t> on = off;
+    on.push_back(0x01);
+    EXPECT_EQ(payloadOf(FrameBegin{5, 4, TilePixels::Srgb8, {view}, true}), on);
+    EXPECT_TRUE(decode<FrameBegin>(on).depth);
+    EXPECT_FALSE(decode<FrameBegin>(off).depth);
+    std::vector<uint8_t> no = off;
+    no.push_back(0x00);
+    EXPECT_THROW(decode<FrameBegin>(no), DecodeError);
+
+    const std::vector<uint8_t> plain = payloadOf(TileResult{1, 2, TileCodec::Lz4, 3, {9, 9}});
+    EXPECT_EQ(plain.size(), 4u + 4 + 1 + 4 + 4 + 2 + 1);  // version 13's layout
+    std::vector<uint8_t> withDepth = plain;
+    for (uint8_t b : {0x03, 0x00, 0x00, 0x00, 0xA1, 0xA2, 0xA3}) withDepth.push_back(b);  // u32 length, bytes
+    EXPECT_EQ(payloadOf(TileResult{1, 2, TileCodec::Lz4, 3, {9, 9}, TilePixels::Srgb8, {0xA1, 0xA2, 0xA3}}), withDepth);
+    std::vector<uint8_t> empty = plain;
+    for (uint8_t b : {0x00, 0x00, 0x00, 0x00}) empty.push_back(b);
+    EXPECT_THROW(decode<TileResult>(empty), DecodeError);
+    const TileResultInfo info = peekTileResult(withDepth.data(), withDepth.size());
+    EXPECT_EQ(info.pixelBytes, 2u);
+    EXPECT_EQ(info.depthBytes, 3u);
+
+    NodeFrame node{1, 64, 64, 32};
+    std::vector<uint8_t> nodeOn = payloadOf(node);
+    nodeOn.push_back(0x01);
+    node.depth = true;
+    EXPECT_EQ(payloadOf(node), nodeOn);
 }
 
 // -- Header checks -------------------------------------------------------------------------------
@@ -432,18 +470,30 @@ TEST(Protocol, HeartbeatReportGoldenBytes) {
 
 // -- Truncation and trailing bytes ---------------------------------------------------------------
 
+// A message without its version-14 trailing field (depth), which a decoder takes for a message
+// that never had it: the one truncation that decodes.
+template <class Msg> Msg withoutTrailing(Msg msg) {
+    if constexpr (std::is_same_v<Msg, FrameBegin> || std::is_same_v<Msg, NodeFrame>) msg.depth = false;
+    if constexpr (std::is_same_v<Msg, TileResult>) msg.depth.clear();
+    return msg;
+}
+
 TEST(Protocol, EveryTruncationThrows) {
     forEachSample([&](const auto& msg) {
         using Msg = std::decay_t<decltype(msg)>;
         SCOPED_TRACE("message type " + std::to_string(int(messageTypeOf(msg))));
         const std::vector<uint8_t> bytes = encodeMessage(sampleHeader(), msg);
+        const size_t shorter = encodeMessage(sampleHeader(), withoutTrailing(msg)).size();
         for (size_t cut = 0; cut < bytes.size(); ++cut) {
             // Exactly sized copies, so that AddressSanitizer would see any read past the end.
             const std::vector<uint8_t> whole(bytes.begin(), bytes.begin() + ptrdiff_t(cut));
             EXPECT_THROW(decodeHeader(whole.data(), whole.size()), DecodeError) << "cut at " << cut;
             if (cut >= kHeaderSize) {
                 const std::vector<uint8_t> payload(bytes.begin() + kHeaderSize, bytes.begin() + ptrdiff_t(cut));
-                EXPECT_THROW(decodePayload<Msg>(payload.data(), payload.size()), DecodeError) << "cut at " << cut;
+                if (cut == shorter)  // the whole message before its trailing field: a message without it
+                    EXPECT_EQ(decodePayload<Msg>(payload.data(), payload.size()), withoutTrailing(msg));
+                else
+                    EXPECT_THROW(decodePayload<Msg>(payload.data(), payload.size()), DecodeError) << "cut at " << cut;
             }
         }
         std::vector<uint8_t> trailing(bytes.begin() + kHeaderSize, bytes.end());
@@ -795,7 +845,11 @@ TEST(Protocol, PeekTileResultReadsWhatTheDecoderReads) {
     EXPECT_EQ(info.tile, t.tile);
     EXPECT_EQ(info.renderMicros, t.renderMicros);
     EXPECT_EQ(info.pixelBytes, t.pixels.size());
-    for (size_t n = 0; n < p.size(); ++n) EXPECT_THROW(peekTileResult(p.data(), n), DecodeError) << n << " bytes";
+    EXPECT_EQ(info.depthBytes, t.depth.size());
+    const size_t withoutDepth = payloadOf(withoutTrailing(t)).size();
+    for (size_t n = 0; n < p.size(); ++n)
+        if (n == withoutDepth) EXPECT_EQ(peekTileResult(p.data(), n).depthBytes, 0u);  // a result without depth
+        else EXPECT_THROW(peekTileResult(p.data(), n), DecodeError) << n << " bytes";
     std::vector<uint8_t> longer = p;
     longer.push_back(0);
     EXPECT_THROW(peekTileResult(longer.data(), longer.size()), DecodeError);
@@ -1080,8 +1134,8 @@ TEST(Protocol, AssetsAndLinearTilesRejectValuesOutOfRange) {
     std::vector<uint8_t> p = payloadOf(FrameBegin{1, 2, TilePixels::LinearHalf, {FrameView{}}});
     p[8] = 2;
     EXPECT_THROW(decode<FrameBegin>(p), DecodeError);
-    p = payloadOf(sampleTileResult());
-    p.back() = 7;
+    p = payloadOf(withoutTrailing(sampleTileResult()));
+    p.back() = 7;  // the pixel format
     EXPECT_THROW(decode<TileResult>(p), DecodeError);
     // AssetData claiming more bytes than the bound throws before allocating.
     p = payloadOf(AssetData{{1, 2}, {}});
@@ -1119,8 +1173,10 @@ TEST(Protocol, FrameViewsRoundTripAndRejectBadRegions) {
     putU32(p, 9, 1000);  // the view count
     EXPECT_THROW(decode<FrameBegin>(p), DecodeError);
     // Truncated anywhere: never read past the end.
+    // Truncated anywhere (but right before the trailing depth flag, which is a frame without it):
+    // never read past the end.
     p = payloadOf(fb);
-    for (size_t n = 0; n < p.size(); ++n)
+    for (size_t n = 0; n + 1 < p.size(); ++n)
         EXPECT_THROW(decode<FrameBegin>(std::vector<uint8_t>(p.begin(), p.begin() + long(n))), DecodeError) << n;
 }
 

@@ -73,6 +73,11 @@ struct ClusterSettings {
     // equals one machine's Accumulator::addLinear exactly. They cost about twice the bytes of
     // 8-bit tiles (JPEG is replaced by LZ4 for them); off: 8-bit tiles, accumulated as 8-bit.
     bool wideAccumulation = true;
+    // Depth with every tile (issue 27), for re-projection on the display side: the clients send
+    // each tile's depth (distance along the primary ray, 16-bit log code, zstd; about 0.5 MB per
+    // 1600x1200 frame of the demo scene, docs/cluster.md) and renderViews/renderFrame give it per
+    // view, as do display nodes. Off: nothing changes, the same bytes on the wire and images.
+    bool depth = false;
     // Security: with a key pair every link is CURVE-encrypted and only the listed client public
     // keys get in. Without keys the master listens on loopback only, unless `insecure`.
     std::filesystem::path keyFile;                  // the master's key pair (rtwall keys)
@@ -132,6 +137,7 @@ struct FrameReport {
     std::vector<uint32_t> tileOwners;  // client id that rendered each tile (makeTiles order; of a multi-view frame: viewTiles order); UINT32_MAX: none
     bool stochastic = false;        // the frame's state renders stochastically: frames of one state refine by averaging
     bool linear = false;            // its tiles came as linear half floats (renderFrame can give them)
+    bool depth = false;             // its tiles came with depth (ClusterSettings::depth; renderFrame gives it)
     size_t views = 0;               // images of a multi-view frame (0: one, the state's camera)
     uint64_t viewsTag = 0;          // the tag of the setViews the frame was rendered with
     MasterCounters counters;        // the master's counters when the frame completed
@@ -242,8 +248,12 @@ public:
     // Renders one frame with the current state and returns it. With async on, the next
     // frame's updates already stream to the clients while this one renders. When the frame came
     // as linear tiles (report->linear), `linear` receives it in linear RGB (3 floats a pixel,
-    // each exactly a half float), for Accumulator::addLinear; otherwise it is emptied.
-    Image renderFrame(FrameReport* report = nullptr, std::vector<float>* linear = nullptr);
+    // each exactly a half float), for Accumulator::addLinear; otherwise it is emptied. With
+    // ClusterSettings::depth, `depth` receives the frame's depth (width * height floats,
+    // row-major: each pixel's decodeDepth(encodeDepth(d)), kBackgroundDepth for background);
+    // otherwise it is emptied.
+    Image renderFrame(FrameReport* report = nullptr, std::vector<float>* linear = nullptr,
+                      std::vector<float>* depth = nullptr);
 
     // Frames of several views in one scheduler pass (both eyes, a CAVE's planes): each frame
     // begun after the call renders viewTiles(views) and renderViews gives one image per view, in
@@ -255,8 +265,11 @@ public:
     void setViews(std::vector<FrameView> views, uint64_t tag = 0);
     // A frame as renderFrame, one image per view of the frame (one without views); a view's
     // pixels outside its regions' tiles are unspecified. With linear tiles `linear` receives
-    // each view's linear RGB.
-    std::vector<Image> renderViews(FrameReport* report = nullptr, std::vector<std::vector<float>>* linear = nullptr);
+    // each view's linear RGB; with ClusterSettings::depth `depth` each view's depth as
+    // renderFrame's, NaN outside its regions' tiles (a hole to the warp). Both are emptied
+    // otherwise, and with display nodes (the pixels are on the nodes).
+    std::vector<Image> renderViews(FrameReport* report = nullptr, std::vector<std::vector<float>>* linear = nullptr,
+                                   std::vector<std::vector<float>>* depth = nullptr);
 
     // With display nodes: waits until the swap barrier has released frame `frame` or a later
     // one to the nodes (true), or timeoutMs passed (false). A benchmark paces frames by it, so
@@ -395,6 +408,11 @@ struct DisplayNodeRun {
     // does; both null when this node does not hold that frame (it was left out). `leftOut` names
     // the nodes the wall did not wait for.
     std::function<void(uint32_t frame, const Image* left, const Image* right, const std::vector<std::string>& leftOut)> present;
+    // Optional (issue 27): a frame this node holds whose tiles came with depth
+    // (ClusterSettings::depth), when it becomes what the node shows (before its swap): each
+    // view's depth (width * height floats, as Master::renderViews gives it), NaN outside the
+    // tiles routed to this node. Valid during the call.
+    std::function<void(uint32_t frame, const std::vector<std::vector<float>>& views)> depth;
 };
 
 struct DisplayNodeCounters {

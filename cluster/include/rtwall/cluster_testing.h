@@ -24,6 +24,7 @@ struct ClientFaults {
     int extraTileDelayMs = 0;    // emulate a slower PC
     int extraSceneBuildMs = 0;   // a PC slow to build the scene
     int dropEveryNthResult = 0;  // lose every Nth tile result on its way out
+    int corruptEveryNthDepth = 0;  // cut every Nth tile's encoded depth in half (it no longer decodes)
     std::optional<InjectedTileFault> tileFault{};  // a tile that throws
     // A render thread that does not return: the first tile of frame stallFrame or later that this
     // client renders sleeps stallMs on its thread (once; cut short when the client stops).

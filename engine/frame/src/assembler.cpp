@@ -2,6 +2,7 @@
 #include <rtwall/frame.h>
 
 #include <algorithm>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -14,7 +15,7 @@ constexpr uint8_t kDone = 2;
 constexpr uint8_t kNotRouted = 3;
 }  // namespace
 
-void FrameAssembler::resize(size_t views, int width, int height, bool linear) {
+void FrameAssembler::resize(size_t views, int width, int height, const FrameHolding& holding) {
     width = std::max(0, width);
     height = std::max(0, height);
     images_.resize(std::max<size_t>(1, views));
@@ -27,10 +28,19 @@ void FrameAssembler::resize(size_t views, int width, int height, bool linear) {
             image.height = height;
             image.rgb.assign(size_t(width) * size_t(height) * 3, 0);
         }
-    linear_ = linear;
-    if (linear) {
+    linear_ = holding.linear;
+    if (linear_) {
         linearImages_.resize(images_.size());
         for (std::vector<float>& l : linearImages_) l.resize(size_t(width) * size_t(height) * 3, 0.0f);
+    }
+    // Unlike the pixels, depth never shows last frame's: a stale depth would put last frame's
+    // surfaces where this frame has none. What no tile writes stays a hole.
+    depth_ = holding.depth;
+    if (depth_) {
+        depthImages_.resize(images_.size());
+        for (std::vector<float>& d : depthImages_) d.assign(size_t(width) * size_t(height), std::numeric_limits<float>::quiet_NaN());
+    } else {
+        depthImages_.clear();
     }
 }
 
@@ -52,7 +62,7 @@ void FrameAssembler::beginFrame(uint32_t frame, int width, int height, const std
         if (t.view >= views)
             throw std::invalid_argument("FrameAssembler: a tile of view " + std::to_string(t.view) + " in a frame of " +
                                         std::to_string(views) + " views");
-    resize(views, width, height, o.linear);
+    resize(views, width, height, o);
     tiles_.resize(tiles.size());
     view_.clear();
     for (size_t t = 0; t < tiles.size(); ++t) {

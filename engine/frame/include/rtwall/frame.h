@@ -7,6 +7,7 @@
 #pragma once
 
 #include <rtwall/engine.h>
+#include <rtwall/reproject.h>
 
 #include <atomic>
 #include <cstdint>
@@ -62,6 +63,10 @@ std::vector<ViewTile> viewTiles(const std::vector<FrameView>& views, int width, 
 // the claim of the tile they came with.
 struct FrameHolding {
     bool linear = false;  // tiles come as linear RGB too: each view has a linear buffer (3 floats a pixel)
+    // Tiles come with depth (issue 27): each view has a depth buffer (a float a pixel, distance
+    // along the primary ray, kBackgroundDepth for background), NaN wherever no tile of this frame
+    // wrote (outside a view's regions, tiles not routed here): a hole to the warp.
+    bool depth = false;
     // Routing: `routes[t]` is the node mask of tile t and this assembler is bit `node`; it holds
     // the frame when the tiles routed to it are in (a display node). Null: every tile.
     const std::vector<uint64_t>* routes = nullptr;
@@ -84,8 +89,9 @@ public:
 
     enum class Claim { Granted, Stale, Duplicate, NotRouted, Invalid };
     // Reserves tile `tile` of `frame` for writing. Granted: write its pixels into `view` (rect
-    // gives the size; of a linear frame also into linearAt(viewOf(tile), rect.x0, rect.y0)), then
-    // commit() it, or release() it when decoding failed.
+    // gives the size; of a linear frame also into linearAt(viewOf(tile), rect.x0, rect.y0), of a
+    // frame with depth its depth into depthAt), then commit() it, or release() it when decoding
+    // failed.
     Claim claim(uint32_t frame, uint32_t tile, TileRect& rect, TileView& view);
     void commit(uint32_t tile);
     void release(uint32_t tile);
@@ -110,12 +116,22 @@ public:
     float* linearAt(size_t view, int x, int y) {
         return linearImages_[view].data() + (size_t(y) * size_t(images_[view].width) + size_t(x)) * 3;
     }
+    bool depth() const { return depth_; }
+    // One per view of a frame with depth (width * height floats, row-major); the master swaps a
+    // complete frame's buffers with the caller's as the linear ones.
+    std::vector<std::vector<float>>& depthImages() { return depthImages_; }
+    const std::vector<std::vector<float>>& depthImages() const { return depthImages_; }
+    float* depthAt(size_t view, int x, int y) {
+        return depthImages_[view].data() + size_t(y) * size_t(images_[view].width) + size_t(x);
+    }
 
 private:
     uint32_t frame_ = 0;
     std::vector<Image> images_ = std::vector<Image>(1);  // one per view
     std::vector<std::vector<float>> linearImages_;       // one per view of a linear frame
+    std::vector<std::vector<float>> depthImages_;        // one per view of a frame with depth
     bool linear_ = false;
+    bool depth_ = false;
     std::vector<TileRect> tiles_;
     std::vector<uint32_t> view_;  // each tile's view (empty: all of view 0)
     // 0 missing, 1 being written, 2 done, 3 not routed here
@@ -124,7 +140,7 @@ private:
     size_t expected_ = 0;
     std::atomic<size_t> done_{0};
 
-    void resize(size_t views, int width, int height, bool linear);
+    void resize(size_t views, int width, int height, const FrameHolding& holding);
 };
 
 // ---- Composition -----------------------------------------------------------------------------
@@ -141,6 +157,9 @@ struct ComposeFrame {
     bool stochastic = false;
     uint32_t stateSeq = 0;
     bool linear = false;  // the frame came as linear tiles: sum its linear buffers, not its 8-bit images
+    // Per view, the depth its tiles came with (width x height, distance along the primary ray):
+    // given, the frame's views become the re-projection's newest source (reproject()).
+    std::span<const std::vector<float>> depth{};
 };
 
 struct EyeImages {
@@ -159,6 +178,17 @@ public:
     // buffers of a linear frame (used when frame.linear).
     EyeImages compose(const ComposeFrame& frame, std::vector<Image> images,
                       std::span<const std::vector<float>> linear = {});
+    // Re-projection (issue 27): the views of the last frame composed with depth (as composed:
+    // accumulated when stochastic), each warped from the camera it was rendered with to
+    // `targets[v]` (a view's camera for the pose read just before the swap), holes filled from
+    // the frame composed with depth before it, then composed into the eyes as compose() does.
+    // Targets equal to the rendered cameras give compose()'s bytes. `debug` tints each pixel by
+    // where it came from (warpDebugColours). The images stay the compositor's: nothing is
+    // allocated after the first frame of a size. Throws std::invalid_argument when no frame with
+    // depth was composed or the targets are not one per view.
+    const EyeImages& reproject(std::span<const CameraDesc> targets, const WarpOptions& options = {}, bool debug = false);
+    size_t reprojectViews() const { return warpNewest_.size(); }  // views of the newest warp source (0: none)
+    const WarpedView& warped(size_t view) const { return warpers_.at(view).result(); }  // of the last reproject()
     size_t viewRestarts() const { return viewRestarts_; }       // a view's running mean restarted
     size_t progressiveRestarts() const { return progressiveRestarts_; }  // the mono running mean restarted
     int accumulatedFrames() const { return accumulatedFrames_; }  // stochastic frames summed
@@ -176,7 +206,21 @@ private:
     size_t viewRestarts_ = 0, progressiveRestarts_ = 0;
     int accumulatedFrames_ = 0, linearFrames_ = 0;
 
+    // The re-projection's sources: a view's image, depth and camera; `older` is the frame before.
+    struct WarpSlot {
+        Image image;
+        std::vector<float> depth;
+        CameraDesc camera;
+    };
+    std::vector<WarpSlot> warpNewest_, warpOlder_;
+    std::vector<FrameView> warpViews_;
+    std::vector<int> warpEyes_;
+    std::vector<Reprojector> warpers_;
+    EyeImages warpedEyes_;
+    Image debugView_;
+
     void accumulate(const ComposeFrame& frame, std::vector<Image>& images, std::span<const std::vector<float>> linear);
+    void keepWarpSource(const ComposeFrame& frame, const std::vector<Image>& images);
 };
 
 }  // namespace rtwall
