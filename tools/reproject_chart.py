@@ -21,7 +21,14 @@ def load(paths):
             sys.exit(f"{path}: not a result of rtwall bench reproject --json")
         rows += result["rows"]
         cases.update(result.get("failure_cases", {}))
-    return rows, cases
+    # A configuration measured in two files (the same seed gives the same figures): once.
+    seen, unique = set(), []
+    for r in rows:
+        key = (r["scene"], r["speed_m_s"], r["render_fps"], r["warped"], r["guard_band"], r["width"], r["height"])
+        if key not in seen:
+            seen.add(key)
+            unique.append(r)
+    return unique, cases
 
 
 def plain(rows):
