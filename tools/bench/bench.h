@@ -143,4 +143,26 @@ struct LatencyOptions : Common {
 };
 toml::table latency(const LatencyOptions& o);
 
+// Image quality of re-projected frames (issue 27): a head stepping in front of a tracked wall
+// (off-axis eye cameras) at each speed, a cluster rendering at each rate, a display at displayHz
+// showing the newest complete frame warped to the head's pose at that moment (the frame before
+// it fills holes) or as it is, scored (PSNR, FLIP) against a true render of that pose; guard
+// bands; and the failure cases (thin geometry, mirror and glass, a large disocclusion) with an
+// image each (reproject.cpp, reproject_quality.h).
+struct ReprojectOptions : Common {
+    std::vector<std::string> scenes{"demo", "plant"};  // "demo": the demo scene file; "plant": rtwall gen powerplant
+    std::string demo = "configs/demo.toml";
+    std::string dir = "out/bench-reproject";  // the plant is generated here
+    std::string images;                       // the failure cases' images are written here (empty: dir)
+    int width = 320, height = 240;            // the screen's pixels (a scale model of a wall's)
+    double displayHz = 60, seconds = 1;       // displayed frames: seconds * displayHz per configuration
+    std::vector<double> speeds{0.1, 0.25, 0.5, 1.0};  // head speed, m/s
+    std::vector<double> renderFps{5, 14, 27};
+    std::vector<double> guardBands{0.02, 0.05, 0.1};  // share of the width and height rendered beyond the screen
+    int64_t plantTriangles = 200'000;
+    uint64_t seed = 1;  // the render clocks' phases
+    bool failureCases = true;
+};
+toml::table reprojection(const ReprojectOptions& o);
+
 }  // namespace rtwall::bench

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
                      addBenchLatency, addBenchDisplay, addBenchScene, addBenchTiles, addBenchCodecs, addBenchShading,
                      addBenchTessellation})
         add(*bench, run);
+    addBenchReproject(*bench, run);
     addCheck(app, run);
 
     try {
