@@ -33,8 +33,15 @@ size_t differingDepths(const std::vector<float>& a, const std::vector<float>& b)
     return n;
 }
 
-// The demo scene with its background in view (the camera turned up a little) and a surface.
+// The demo scene's small quick frame: surfaces and background in view.
 SceneDesc depthScene() { return test::quickDemo(96, 64, 16); }
+
+// In step (a frame's report is that frame's), with depth.
+ClusterSettings withDepth() {
+    ClusterSettings cs = test::inStep();
+    cs.depth = true;
+    return cs;
+}
 
 TEST(DepthCluster, MonoDepthIsOneMachinesThroughTheCode) {
     const SceneDesc d = depthScene();
@@ -42,9 +49,7 @@ TEST(DepthCluster, MonoDepthIsOneMachinesThroughTheCode) {
     const Camera camera(d.cameras.front(), 96, 64);
     for (int clients : {1, 2, 3}) {
         SCOPED_TRACE(std::to_string(clients) + " clients");
-        ClusterSettings cs = test::inStep();
-        cs.depth = true;
-        test::LocalCluster cluster(d, cs, clients);
+        test::LocalCluster cluster(d, withDepth(), clients);
         ASSERT_TRUE(cluster.ready());
         for (int f = 0; f < 2; ++f) {
             FrameReport r;
@@ -77,11 +82,8 @@ TEST(DepthCluster, TwoViewsEachGetTheirDepthAndHolesOutsideTheirRegions) {
     views[1].refWidth = 960;
     views[1].refHeight = 640;
     for (int clients : {1, 2, 3}) {
-        SCOPED_TRACE(std::to_string(clients) + " clients");
-        ClusterSettings cs = test::inStep();
-        cs.depth = true;
-        test::LocalCluster cluster(d, cs, clients);
-        ASSERT_TRUE(cluster.ready());
+        test::LocalCluster cluster(d, withDepth(), clients);
+        ASSERT_TRUE(cluster.ready()) << clients << " clients";
         cluster.master->setViews(views);
         FrameReport r;
         std::vector<std::vector<float>> depth;
@@ -98,7 +100,7 @@ TEST(DepthCluster, TwoViewsEachGetTheirDepthAndHolesOutsideTheirRegions) {
             size_t differing = 0;
             for (size_t i = 0; i < want.size(); ++i)
                 differing += std::isnan(want[i]) ? !std::isnan(depth[v][i]) : depth[v][i] != want[i];
-            EXPECT_EQ(differing, 0u) << "view " << v;
+            EXPECT_EQ(differing, 0u) << "view " << v << ", " << clients << " clients";
         }
         EXPECT_NE(depth[0], depth[1]) << "the views must differ, or the test proves little";
     }
@@ -119,9 +121,7 @@ TEST(DepthCluster, WithoutDepthTheBufferIsEmptied) {
 TEST(DepthCluster, ADepthThatDoesNotDecodeIsDroppedAndItsTileRenderedAgain) {
     const SceneDesc d = depthScene();
     const Scene scene(d);
-    ClusterSettings cs = test::inStep();
-    cs.depth = true;
-    test::LocalCluster cluster(d, cs, 0);
+    test::LocalCluster cluster(d, withDepth(), 0);
     ClientSettings bad;
     auto faults = std::make_shared<ClientFaults>();
     faults->corruptEveryNthDepth = 3;  // a third of its tiles' depth arrives cut in half
