@@ -9,6 +9,7 @@
 
 #include <rtwall/display.h>
 
+#include "gl_reproject.h"
 #include "swap_group.h"
 
 #include <algorithm>
@@ -19,6 +20,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 namespace rtwall {
 
@@ -28,22 +30,6 @@ std::string gLastGlfwError;
 void onGlfwError(int, const char* what) { gLastGlfwError = what ? what : "unknown GLFW error"; }
 
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-
-GLuint compile(GLenum type, const ShaderSource& src) {
-    const GLuint s = glCreateShader(type);
-    const char* text = src.text.c_str();
-    glShaderSource(s, 1, &text, nullptr);
-    glCompileShader(s);
-    GLint ok = 0;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[2048] = {};
-        glGetShaderInfoLog(s, sizeof log, nullptr, log);
-        glDeleteShader(s);
-        throw InputError(src.name + ": the OpenGL driver does not compile it: " + std::string(log));
-    }
-    return s;
-}
 
 struct Screen {
     GLFWwindow* window = nullptr;
@@ -91,6 +77,27 @@ void OverlayStage::releaseGl() {
     textureWidth_ = textureHeight_ = 0;
 }
 
+namespace {
+
+// A frame of warps: every view with an image and a depth per pixel, all of one size, at most the
+// wall's (as checkFrameSize asks of the eyes' images).
+void checkWarpFrame(const WallConfig& wall, const WallFrame& frame) {
+    const Image* first = frame.warps[0].image;
+    for (const ViewWarp& v : frame.warps) {
+        if (!v.image || !v.depth)
+            throw std::invalid_argument("GlPresenter::present: a view to warp has no image or no depth");
+        const Image& i = *v.image;
+        if (i.width < 1 || i.height < 1 || i.width > wall.width || i.height > wall.height || i.width != first->width ||
+            i.height != first->height)
+            throw std::invalid_argument("GlPresenter::present: a view to warp is " + std::to_string(i.width) + "x" +
+                                        std::to_string(i.height) + ", the first " + std::to_string(first->width) + "x" +
+                                        std::to_string(first->height) + ", the wall " + std::to_string(wall.width) + "x" +
+                                        std::to_string(wall.height) + ": views are of one size, at most the wall's");
+    }
+}
+
+}  // namespace
+
 const char* uploadMethodName(UploadMethod m) { return m == UploadMethod::Pbo ? "pbo" : "texsubimage"; }
 
 struct GlPresenter::Impl {
@@ -110,10 +117,14 @@ struct GlPresenter::Impl {
     bool haveCursor = false;
     double lastSwap = 0, refresh = 60;
     bool quad = false;
+    std::unique_ptr<GlReprojector> reprojector;  // made with the first frame that has warps
+    GLuint warpFbo[2] = {0, 0};                  // reading a warp's result, drawing into an eye
 
     ~Impl() {
         if (!screens.empty()) {
             glfwMakeContextCurrent(screens[0].window);
+            reprojector.reset();
+            glDeleteFramebuffers(2, warpFbo);
             glDeleteTextures(2, wallTex);
             glDeleteTextures(1, &ownerTex);
             glDeleteBuffers(4, &pbo[0][0]);
@@ -159,6 +170,42 @@ struct GlPresenter::Impl {
         glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, img.width, img.height, GL_RGB, GL_UNSIGNED_BYTE, img.rgb.data());
     }
 
+    // The eyes' images from the frame's warps (issue 27), in the first context: each view warped
+    // on the GPU, then blitted into its regions of its eye's wall texture (the whole texture
+    // when it has none); an eye that gets regions before anything else is cleared to black
+    // first, as the Compositor starts an eye from zero.
+    void warpEyes(const WallFrame& frame) {
+        if (!reprojector) {
+            reprojector = std::make_unique<GlReprojector>();
+            glGenFramebuffers(2, warpFbo);
+        }
+        bool written[2] = {false, false};
+        glDisable(GL_SCISSOR_TEST);
+        for (const ViewWarp& v : frame.warps) {
+            const int eye = v.eye == 1 ? 1 : 0;
+            const WarpSource newest{*v.image, *v.depth, v.camera};
+            const bool hasOlder = v.olderImage && v.olderDepth;
+            const WarpSource older{hasOlder ? *v.olderImage : *v.image, hasOlder ? *v.olderDepth : *v.depth, v.olderCamera};
+            const GLuint result = reprojector->warp(newest, v.target, hasOlder ? &older : nullptr, WarpOptions{}, frame.warpDebug);
+            glBindFramebuffer(GL_READ_FRAMEBUFFER, warpFbo[0]);
+            glFramebufferTexture2D(GL_READ_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, result, 0);
+            glReadBuffer(GL_COLOR_ATTACHMENT0);
+            glBindFramebuffer(GL_DRAW_FRAMEBUFFER, warpFbo[1]);
+            glFramebufferTexture2D(GL_DRAW_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, wallTex[eye], 0);
+            const GLenum attachment = GL_COLOR_ATTACHMENT0;
+            glDrawBuffers(1, &attachment);
+            if (!v.regions.empty() && !written[eye]) {
+                const GLfloat black[4] = {0, 0, 0, 1};
+                glClearBufferfv(GL_COLOR, 0, black);
+            }
+            written[eye] = true;
+            const std::vector<TileRect> whole{{0, 0, texW, texH}};
+            for (const TileRect& r : v.regions.empty() ? whole : v.regions)  // texture row y is image row y
+                glBlitFramebuffer(r.x0, r.y0, r.x1, r.y1, r.x0, r.y0, r.x1, r.y1, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+        }
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    }
+
     // Screen s's present program: the shipped fragment shader or the config's; false when it
     // does not link.
     bool link(Screen& s, const ShaderSource& vert, const ShaderSource& frag, const ScreenConfig& c) {
@@ -169,7 +216,7 @@ struct GlPresenter::Impl {
             text << in.rdbuf();
             f = {c.fragmentShader.string(), text.str()};
         }
-        const GLuint vs = compile(GL_VERTEX_SHADER, vert), fs = compile(GL_FRAGMENT_SHADER, f);
+        const GLuint vs = compileShader(GL_VERTEX_SHADER, vert), fs = compileShader(GL_FRAGMENT_SHADER, f);
         s.program = glCreateProgram();
         glAttachShader(s.program, vs);
         glAttachShader(s.program, fs);
@@ -353,19 +400,28 @@ std::unique_ptr<GlPresenter> GlPresenter::open(const WallConfig& wall, const Opt
 void GlPresenter::present(const WallFrame& frame, const PresentOptions& options, std::vector<Image>* capture) {
     Impl& im = *impl_;
     const WallConfig& wall = im.wall;
-    checkFrameSize(wall, frame, "GlPresenter::present");
-    const bool haveRight = !frame.right.rgb.empty();
+    const bool warping = !frame.warps.empty();
+    if (warping) checkWarpFrame(wall, frame);
+    else checkFrameSize(wall, frame, "GlPresenter::present");
+    const int frameW = warping ? frame.warps[0].image->width : frame.left.width;
+    const int frameH = warping ? frame.warps[0].image->height : frame.left.height;
+    const bool haveRight = warping ? std::any_of(frame.warps.begin(), frame.warps.end(), [](const ViewWarp& v) { return v.eye == 1; })
+                                   : !frame.right.rgb.empty();
 
     double t0 = now();
     glfwMakeContextCurrent(im.screens[0].window);
-    if (frame.left.width != im.texW || frame.left.height != im.texH) im.allocateWallTextures(frame.left.width, frame.left.height);
-    im.upload(im.wallTex[0], im.pbo[0], frame.left);
-    if (haveRight) im.upload(im.wallTex[1], im.pbo[1], frame.right);
-    im.pboNext ^= 1;
+    if (frameW != im.texW || frameH != im.texH) im.allocateWallTextures(frameW, frameH);
+    if (warping) {
+        im.warpEyes(frame);
+    } else {
+        im.upload(im.wallTex[0], im.pbo[0], frame.left);
+        if (haveRight) im.upload(im.wallTex[1], im.pbo[1], frame.right);
+        im.pboNext ^= 1;
+    }
     const int tileSize = options.falseColour && frame.tileSize > 0 ? frame.tileSize : 0;
     if (tileSize > 0) {
         // One texel per tile with the colour of its client: tiny, uploaded directly.
-        const int tw = (frame.left.width + tileSize - 1) / tileSize, th = (frame.left.height + tileSize - 1) / tileSize;
+        const int tw = (frameW + tileSize - 1) / tileSize, th = (frameH + tileSize - 1) / tileSize;
         std::vector<uint8_t> rgb(size_t(tw) * th * 3);
         for (size_t t = 0; t < size_t(tw) * th; ++t) {
             const auto c = ownerColour(t < frame.tileOwners.size() ? frame.tileOwners[t] : UINT32_MAX);

@@ -214,7 +214,12 @@ bool HeadTracker::add(const DTrackFrame& frame, double arrival, std::optional<do
         if (wand_.seen && time - wandTime_ > config_.timeoutMs * 1e-3) {
             for (OneEuroFilter& filter : wandFilters_) filter.reset();
             wandRotation_.reset();
+            // A stale wand's buttons counted as up: its readers saw them let go, so say so, and a
+            // button still down now is pressed anew.
+            recordButtonChanges({});
+            wand_.buttons.clear();
         }
+        recordButtonChanges(f->buttons);
         wand_.buttons = f->buttons;
         wand_.controllers = f->controllers;
         wand_.visible = f->pose.quality >= 0;
@@ -262,6 +267,28 @@ bool HeadTracker::add(const DTrackFrame& frame, double arrival, std::optional<do
     lastTime_ = time;
     seen_ = true;
     return true;
+}
+
+// Each button that differs from the last frame's is one event (a button the frame does not
+// list is up). Frames come in the order the tracker sent them (VRPN: one per button change), so
+// the events keep the order of the presses.
+void HeadTracker::recordButtonChanges(const std::vector<bool>& buttons) {
+    std::vector<ButtonEvent>& events = wand_.events;
+    const std::vector<bool>& before = wand_.buttons;
+    for (size_t i = 0; i < std::max(buttons.size(), before.size()); ++i) {
+        const bool now = i < buttons.size() && buttons[i], was = i < before.size() && before[i];
+        if (now != was) events.push_back({wand_.lastEvent() + 1, int(i), now});
+    }
+    if (events.size() > WandState::kMaxButtonEvents)
+        events.erase(events.begin(), events.end() - std::ptrdiff_t(WandState::kMaxButtonEvents));
+}
+
+std::vector<ButtonEvent> WandState::eventsAfter(uint64_t after, uint64_t* lost) const {
+    std::vector<ButtonEvent> out;
+    for (const ButtonEvent& e : events)
+        if (e.seq > after) out.push_back(e);
+    if (lost) *lost = out.empty() || out.front().seq <= after + 1 ? 0 : out.front().seq - after - 1;
+    return out;
 }
 
 // Least-squares slope of the recent positions over time.

@@ -99,22 +99,38 @@ std::vector<WallView> wallViews(const WallConfig& wall, const HeadPose& head, in
     return views;
 }
 
-WallToWorld wallToWorld(const Float3& viewer, const ViewPose& pose) {
+WallToWorld wallToWorld(const Float3& viewer, const ViewPose& pose, double scale) {
     // The camera's orthonormal frame, as the engine's Camera builds it.
     const Float3 forward = unit(pose.lookAt - pose.position, {0, 0, -1});
     Float3 right = unit(cross(forward, pose.up), {0, 0, 0});
     if (length(right) == 0)
         right = unit(cross(forward, std::fabs(forward.y) < 0.9f ? Float3{0, 1, 0} : Float3{1, 0, 0}), {1, 0, 0});
     const Float3 up = cross(right, forward);
-    return {pose.position, viewer, right, up, forward * -1.0f};
+    return {pose.position, viewer, right, up, forward * -1.0f, float(scale)};
 }
 
 Float3 WallToWorld::direction(const Float3& v) const { return x * v.x + y * v.y + z * v.z; }
-Float3 WallToWorld::point(const Float3& p) const { return origin + direction(p - viewer); }
+// Times 1.0f is exact: an unscaled wall keeps its floats to the bit.
+Float3 WallToWorld::point(const Float3& p) const { return origin + direction(p - viewer) * scale; }
 
-EyeWindow eyeWindowInWorld(const EyeWindow& wall, const Float3& viewer, const ViewPose& pose) {
+EyeWindow eyeWindowInWorld(const EyeWindow& wall, const Float3& viewer, const ViewPose& pose, double scale) {
+    const WallToWorld m = wallToWorld(viewer, pose, scale);
+    return {m.point(wall.eye), m.point(wall.lowerLeft), m.direction(wall.right) * m.scale, m.direction(wall.up) * m.scale};
+}
+
+ViewPose rescaledPose(const ViewPose& pose, const Float3& viewer, double scale, double newScale, const Float3& fixed) {
+    // fixed lands at origin + s R (fixed - viewer); keeping it there at the new scale moves the
+    // origin (the camera) by (s - s') R (fixed - viewer). In double: far from the scene's origin
+    // the float pose would round the step.
     const WallToWorld m = wallToWorld(viewer, pose);
-    return {m.point(wall.eye), m.point(wall.lowerLeft), m.direction(wall.right), m.direction(wall.up)};
+    const Float3 d = m.direction(fixed - viewer);
+    const double k = scale - newScale;
+    const std::array<double, 3> move{k * d.x, k * d.y, k * d.z};
+    auto moved = [&](Float3 p) { return Float3{float(p.x + move[0]), float(p.y + move[1]), float(p.z + move[2])}; };
+    ViewPose out = pose;
+    out.position = moved(pose.position);
+    out.lookAt = moved(pose.lookAt);
+    return out;
 }
 
 namespace {

@@ -69,6 +69,7 @@ std::vector<std::string> checkWall(const WallConfig& wall) {
     std::vector<std::string> problems = checkShader(presentVertexShader(), false);
     auto more = [&](std::vector<std::string> p) { problems.insert(problems.end(), p.begin(), p.end()); };
     more(checkShader(presentFragmentShader(), true));
+    for (const ShaderSource& s : warpShaders()) more(checkShader(s, s.name.ends_with(".frag")));
     std::set<std::filesystem::path> seen;  // a shader several screens share is reported once
     for (const ScreenConfig& s : wall.screens) {
         if (s.fragmentShader.empty() || !seen.insert(s.fragmentShader).second) continue;

@@ -12,6 +12,7 @@ inline constexpr Key kTopKeys[] = {
     {.name = "wall", .type = KeyType::Table},
     {.name = "stereo", .type = KeyType::Table},
     {.name = "tracking", .type = KeyType::Table},
+    {.name = "navigation", .type = KeyType::Table},
     {.name = "grid", .type = KeyType::Table},
     {.name = "screen", .type = KeyType::Tables},
     {.name = "node", .type = KeyType::Tables},
@@ -29,7 +30,7 @@ inline constexpr Key kWallKeys[] = {
 
 inline constexpr Key kStereoKeys[] = {
     {.name = "mode", .type = KeyType::Choice, .choices = "none, passive, side_by_side, quad_buffer", .help = "passive: one screen per eye (`eye = \"left\"`/`\"right\"`); side-by-side: each screen shows the left eye in its left half; quad-buffer: `GL_BACK_LEFT`/`GL_BACK_RIGHT` where the driver has it"},
-    {.name = "eye_separation", .type = KeyType::Number, .lo = 0.0, .hi = 1.0, .help = "metres (scene units)"},
+    {.name = "eye_separation", .type = KeyType::Number, .lo = 0.0, .hi = 1.0, .help = "metres of the room (`[navigation]` `scale` scene units each)"},
     {.name = "viewer", .type = KeyType::Vec3, .help = "the viewer's head, wall coordinates"},
     {.name = "lower_left", .type = KeyType::Vec3, .help = "the wall's physical corners; must span a rectangle"},
     {.name = "lower_right", .type = KeyType::Vec3, .help = "the wall's physical corners; must span a rectangle"},
@@ -57,11 +58,15 @@ inline constexpr Key kTrackingKeys[] = {
     {.name = "button_home", .type = KeyType::Integer, .lo = -1, .hi = 255, .help = "the button that goes back to the start camera"},
     {.name = "joystick_x", .type = KeyType::Integer, .lo = -1, .hi = 255, .help = "the controllers (DTrack) or analog channels (VRPN) of the joystick's axes"},
     {.name = "joystick_y", .type = KeyType::Integer, .lo = -1, .hi = 255, .help = "the controllers (DTrack) or analog channels (VRPN) of the joystick's axes"},
-    {.name = "fly_speed", .type = KeyType::Number, .lo = 0.0, .hi = 1000000.0, .help = "speed at full deflection (1 m of the room is 1 scene unit)"},
+    {.name = "fly_speed", .type = KeyType::Number, .lo = 0.0, .hi = 1000000.0, .help = "speed at full deflection, in metres of the room a second (times `[navigation]` `scale` in scene units)"},
     {.name = "turn_speed", .type = KeyType::Number, .lo = 0.0, .hi = 3600.0, .help = "turning speed at full deflection"},
     {.name = "dead_zone", .type = KeyType::Number, .lo = 0.0, .hi = 0.99, .help = "joystick deflections below this count as none"},
     {.name = "wand_direction", .type = KeyType::Vec3d, .help = "where the wand points, in its body's axes (ART's Flystick: -z)"},
     {.name = "wand_ray", .type = KeyType::Boolean, .help = "draw the wand's ray on the wall"},
+};
+
+inline constexpr Key kNavigationKeys[] = {
+    {.name = "scale", .type = KeyType::Number, .lo = 1e-06, .hi = 1000000.0, .help = "scene units per metre of the room (the wall's corners, the viewer, the tracked head and wand, `eye_separation`, `fly_speed`): 1 shows the scene life-size in scene units of metres; 1000 shows a model in millimetres life-size; 2 makes the viewer a giant to whom the world looks half its size. The keys `[` and `]` change it at run time, about the head"},
 };
 
 inline constexpr Key kGridKeys[] = {
@@ -114,12 +119,13 @@ inline constexpr Section kTop{"the wall config", "# Wall configs", kTopKeys};
 inline constexpr Section kWall{"[wall]", "## `[wall]`", kWallKeys};
 inline constexpr Section kStereo{"[stereo]", "## `[stereo]`", kStereoKeys};
 inline constexpr Section kTracking{"[tracking]", "## `[tracking]`", kTrackingKeys};
+inline constexpr Section kNavigation{"[navigation]", "## `[navigation]`", kNavigationKeys};
 inline constexpr Section kGrid{"[grid]", "## `[grid]`", kGridKeys};
 inline constexpr Section kScreen{"[[screen]]", "## `[[screen]]`", kScreenKeys};
 inline constexpr Section kNode{"[[node]]", "## Display nodes", kNodeKeys};
 inline constexpr Section kHeadless{"[headless]", "## `[headless]`", kHeadlessKeys};
 
 // Every section, for the test that holds them against the documentation.
-inline constexpr const Section* kAll[] = {&kTop, &kWall, &kStereo, &kTracking, &kGrid, &kScreen, &kNode, &kHeadless};
+inline constexpr const Section* kAll[] = {&kTop, &kWall, &kStereo, &kTracking, &kNavigation, &kGrid, &kScreen, &kNode, &kHeadless};
 
 }  // namespace rtwall::wall_keys

@@ -1,8 +1,10 @@
 // Off-axis stereo: each eye's projection window from the wall's physical corners and the viewer.
 #include <rtwall/display.h>
+#include <rtwall/vec.h>
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -170,6 +172,80 @@ TEST(OffAxis, EveryCaveWallGetsItsOwnViewLandingOnItsCorners) {
     ASSERT_EQ(pv.size(), 1u);
     EXPECT_EQ(pv[0].screens, std::vector<size_t>{1});
     EXPECT_FALSE(wallHasViews(loadWallConfig(std::filesystem::path(RTWALL_SOURCE_DIR) / "configs/wall/projectors-2x2.toml")));
+}
+
+// Where the ray from the window's eye to the world point q meets the window: (u, v) in [0, 1]
+// across it, in double.
+std::array<double, 2> projected(const EyeWindow& w, Float3 q) {
+    auto d = [](Float3 a) { return std::array<double, 3>{a.x, a.y, a.z}; };
+    const auto e = d(w.eye), ll = d(w.lowerLeft), r = d(w.right), u = d(w.up), p = d(q);
+    const std::array<double, 3> n{r[1] * u[2] - r[2] * u[1], r[2] * u[0] - r[0] * u[2], r[0] * u[1] - r[1] * u[0]};
+    auto dot = [](const std::array<double, 3>& a, const std::array<double, 3>& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+    const std::array<double, 3> toWall{ll[0] - e[0], ll[1] - e[1], ll[2] - e[2]}, toPoint{p[0] - e[0], p[1] - e[1], p[2] - e[2]};
+    const double t = dot(n, toWall) / dot(n, toPoint);
+    const std::array<double, 3> hit{e[0] + t * toPoint[0] - ll[0], e[1] + t * toPoint[1] - ll[1], e[2] + t * toPoint[2] - ll[2]};
+    return {dot(hit, r) / dot(r, r), dot(hit, u) / dot(u, u)};
+}
+
+// Issue 27: at s scene units per metre a tracked head sees what it sees at scale 1 in the scene
+// made 1/s as large (about the camera, where the room's viewer stands): the room is only scaled.
+TEST(OffAxis, TheNavigationScaleShowsTheSceneAsIfScaledByItsInverse) {
+    const StereoConfig s = wall32x24();
+    HeadPose head;
+    head.position = {0.3f, 0.1f, 1.8f};  // off the viewer
+    ViewPose pose;
+    pose.position = {4, 1.5f, -2};
+    pose.lookAt = {-2, 1.0f, -10};  // turned and tipped: the room's axes are not the world's
+    const std::vector<Float3> scene = {{0, 1, -12}, {3, -2, -7}, {-5, 4, -30}, {4.2f, 1.6f, -2.5f}};
+    for (double scale : {0.25, 2.0, 40.0})
+        for (int eye : {0, 1}) {
+            const EyeWindow room = wallEyeWindow(s, head, eye);
+            const EyeWindow scaled = eyeWindowInWorld(room, s.viewer, pose, scale), unit = eyeWindowInWorld(room, s.viewer, pose);
+            for (const Float3& q : scene) {
+                const Float3 c = pose.position, shrunk{c.x + float((q.x - c.x) / scale), c.y + float((q.y - c.y) / scale),
+                                                       c.z + float((q.z - c.z) / scale)};
+                const std::array<double, 2> a = projected(scaled, q), b = projected(unit, shrunk);
+                EXPECT_NEAR(a[0], b[0], 2e-5) << "scale " << scale << ", eye " << eye;
+                EXPECT_NEAR(a[1], b[1], 2e-5) << "scale " << scale << ", eye " << eye;
+            }
+            // The eyes are the separation times the scale apart in the scene.
+            const EyeWindow other = eyeWindowInWorld(wallEyeWindow(s, head, 1 - eye), s.viewer, pose, scale);
+            EXPECT_NEAR(length(other.eye - scaled.eye), 0.065 * scale, 1e-5 * scale);
+        }
+    // Scale 1 is the rigid map, float for float (the default scale changes no image).
+    const WallToWorld m = wallToWorld(s.viewer, pose, 1.0);
+    const EyeWindow room = wallEyeWindow(s, head, 0), unit = eyeWindowInWorld(room, s.viewer, pose, 1.0);
+    const Float3 eye = m.origin + m.direction(room.eye - s.viewer);
+    EXPECT_TRUE(unit.eye.x == eye.x && unit.eye.y == eye.y && unit.eye.z == eye.z);
+    const Float3 right = m.direction(room.right);
+    EXPECT_TRUE(unit.right.x == right.x && unit.right.y == right.y && unit.right.z == right.z);
+}
+
+// Rescaling about the head keeps the point between the eyes where it is in the scene and moves
+// every other point of the room towards or away from it; the view does not turn.
+TEST(OffAxis, RescalingAboutTheHeadKeepsItsScenePoint) {
+    const StereoConfig s = wall32x24();
+    const Float3 head{0.4f, -0.3f, 1.6f};
+    ViewPose pose;
+    pose.position = {100, 2, -50};
+    pose.lookAt = {97, 2.5f, -54};
+    for (const auto& [from, to] : {std::pair{1.0, 2.0}, std::pair{2.0, 0.5}, std::pair{1.0, 1000.0}}) {
+        const ViewPose p = rescaledPose(pose, s.viewer, from, to, head);
+        const Float3 before = wallToWorld(s.viewer, pose, from).point(head), after = wallToWorld(s.viewer, p, to).point(head);
+        EXPECT_NEAR(after.x, before.x, 1e-4 * std::max(1.0, to)) << from << " -> " << to;
+        EXPECT_NEAR(after.y, before.y, 1e-4 * std::max(1.0, to));
+        EXPECT_NEAR(after.z, before.z, 1e-4 * std::max(1.0, to));
+        const Float3 look = p.lookAt - p.position, was = pose.lookAt - pose.position;
+        EXPECT_NEAR(look.x, was.x, 1e-4);
+        EXPECT_NEAR(look.z, was.z, 1e-4);
+        // A point a metre to the head's right is now `to` scene units from it, not `from`.
+        const Float3 side = wallToWorld(s.viewer, p, to).point({head.x + 1, head.y, head.z});
+        EXPECT_NEAR(length(side - after), to, 1e-4 * std::max(1.0, to));
+    }
+    // At the viewer (an untracked wall) the camera stays where it is.
+    const ViewPose still = rescaledPose(pose, s.viewer, 1.0, 3.0, s.viewer);
+    EXPECT_EQ(still.position, pose.position);
+    EXPECT_EQ(still.lookAt, pose.lookAt);
 }
 
 }  // namespace

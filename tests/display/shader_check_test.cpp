@@ -10,6 +10,19 @@ TEST(Shaders, TheShippedShadersCompile) {
     EXPECT_NE(presentFragmentShader().text.find("uniform ivec4 viewport"), std::string::npos);
 }
 
+// The GL re-projection's passes (issue 27): each compiles as GLSL 330 core, and `rtwall check`
+// (checkWall) compiles them for every wall.
+TEST(Shaders, TheWarpShadersCompile) {
+    const std::vector<ShaderSource> warp = warpShaders();
+    ASSERT_EQ(warp.size(), 6u);
+    for (const ShaderSource& s : warp) {
+        EXPECT_TRUE(s.name.ends_with(".vert") || s.name.ends_with(".frag")) << s.name;
+        const auto problems = checkShader(s, s.name.ends_with(".frag"));
+        EXPECT_TRUE(problems.empty()) << s.name << ": " << (problems.empty() ? "" : problems[0]);
+    }
+    EXPECT_TRUE(checkWall(singleScreenWall(64, 48)).empty());
+}
+
 TEST(Shaders, ABrokenShaderGivesItsLine) {
     const std::string text = "#version 330 core\nout vec4 colour;\nvoid main() {\n    colour = vec4(undefinedThing, 1.0);\n}\n";
     const auto problems = checkShader({"broken.frag", text}, true);

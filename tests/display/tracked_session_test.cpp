@@ -6,6 +6,9 @@
 
 #include <rtwall/wall.h>
 
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>  // key codes
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -440,6 +443,93 @@ TEST(WandSession, TheRayIsDrawnInBothEyesAndOnlyWithAWand) {
     ASSERT_TRUE(quiet.step());
     EXPECT_TRUE(quiet.wand());
     EXPECT_EQ(rayPixels(quiet.lastFrame().left), 0);
+}
+
+// ---- Issue 27: every click between two frames counts; the world scale keys.
+
+// A click of `button` between two steps: pressed in one datagram, let go in the next.
+void clickWand(WallSession& s, const TrackingConfig& t, Float3 p, int button, uint64_t& frame) {
+    std::vector<bool> down(size_t(button) + 1, false);
+    down[size_t(button)] = true;
+    sendWand(s, t, p, 0, down, {0, 0}, ++frame);
+    sendWand(s, t, p, 0, {}, {0, 0}, ++frame);
+}
+
+TEST(WandSession, AClickShorterThanAFrameActsAndSeveralActAsMany) {
+    const auto dir = test::scratchDir();
+    RunConfig c = config(dir, wandWall(), "wand.toml");
+    std::vector<std::string> lines;
+    c.log = [&](const std::string& line) { lines.push_back(line); };
+    WallSession s(c);
+    const TrackingConfig t = loadWallConfig(dir / "wand.toml").tracking;
+    const Transform start = s.scene().instances[0].transform;
+    const auto said = [&](const std::string& what) {
+        return int(std::count_if(lines.begin(), lines.end(), [&](const std::string& l) { return l.find(what) != std::string::npos; }));
+    };
+    // Level with the red box's centre, a metre in front: a click picks it and lets it go.
+    const Float3 atBox{0.3f, 0.4f - 1.7f + 0.2f, -0.5f + 2.5f};
+    uint64_t frame = 0;
+    sendWand(s, t, atBox, 0, {}, {0, 0}, ++frame);
+    ASSERT_TRUE(s.step());
+    clickWand(s, t, atBox, t.buttonPick, frame);
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(said("wand: picked instance 0"), 1);
+    EXPECT_EQ(said("wand: released instance 0"), 1);
+    EXPECT_FALSE(s.wand()->dragging);
+    EXPECT_EQ(s.scene().instances[0].transform, start) << "picked and let go where it was";
+    // Measure mode: one click is point A; three more between the next two frames are B, A, B.
+    s.setMeasuring(true);
+    clickWand(s, t, atBox, t.buttonPick, frame);
+    ASSERT_TRUE(s.step());
+    ASSERT_TRUE(s.measurement());
+    EXPECT_FALSE(s.measurement()->b);
+    for (int i = 0; i < 3; ++i) clickWand(s, t, atBox, t.buttonPick, frame);
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(said(", Ctrl+click B"), 2) << "two points A";
+    EXPECT_EQ(said(" to B "), 2) << "two points B";
+    ASSERT_TRUE(s.measurement() && s.measurement()->b);
+    s.setMeasuring(false);
+    // The mode button twice between two frames: to orbit and back to fly.
+    clickWand(s, t, atBox, t.buttonMode, frame);
+    clickWand(s, t, atBox, t.buttonMode, frame);
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(said("wand: orbit about the scene's centre"), 1);
+    EXPECT_EQ(said("wand: fly"), 1);
+}
+
+// ] and [ scale the world about the tracked head: the point between the eyes stays where it was
+// in the scene, the navigation scale falls or rises by sqrt(2), and the images change.
+TEST(WandSession, TheWorldScaleKeysScaleAboutTheHead) {
+    const auto dir = test::scratchDir();
+    WallSession s(config(dir, flatWall("[0.0, 0.2, 2.5]", true) + "[navigation]\nscale = 2.0\n", "scaled.toml"));
+    const WallConfig wall = loadWallConfig(dir / "scaled.toml");
+    EXPECT_EQ(s.navigationScale(), 2.0);
+    const Float3 head{0.3f, -0.1f, 1.9f};  // off the viewer: scaling about it moves the camera
+    sendHead(s, wall.tracking, head, 0, 1);
+    ASSERT_TRUE(s.step());
+    const WallFrame before = s.lastFrame();
+    auto headInScene = [&] {
+        const CameraDesc c = s.camera();
+        return wallToWorld(wall.stereo.viewer, {c.position, c.lookAt, c.up, c.fovY}, s.navigationScale()).point(head);
+    };
+    const Float3 h0 = headInScene();
+    const CameraDesc c0 = s.camera();
+    InputState key;
+    key.keysPressed = {GLFW_KEY_RIGHT_BRACKET};
+    s.inject(key);
+    ASSERT_TRUE(s.step());
+    EXPECT_NEAR(s.navigationScale(), 2.0 / std::sqrt(2.0), 1e-12) << "] makes the world larger";
+    const Float3 h1 = headInScene();
+    EXPECT_NEAR(h1.x, h0.x, 1e-5);
+    EXPECT_NEAR(h1.y, h0.y, 1e-5);
+    EXPECT_NEAR(h1.z, h0.z, 1e-5);
+    EXPECT_GT(length(s.camera().position - c0.position), 0.05f) << "the camera (the viewer's spot) moved towards the head";
+    EXPECT_NE(s.lastFrame().left.rgb, before.left.rgb);
+    key.keysPressed = {GLFW_KEY_LEFT_BRACKET};
+    s.inject(key);
+    ASSERT_TRUE(s.step());
+    EXPECT_NEAR(s.navigationScale(), 2.0, 1e-12);
+    EXPECT_NEAR(length(s.camera().position - c0.position), 0.0f, 1e-5) << "and back";
 }
 
 // One scheduler pass for every view (issue 18): with asynchronous rendering the eye images of

@@ -132,6 +132,114 @@ TEST(TrackerReceiver, VrpnServerOnLoopbackOverTcpAndUdp) {
     EXPECT_TRUE(std::any_of(said.begin(), said.end(), [](const std::string& l) { return l.find("vrpn message: vrpn_Button Change from 'Tracker0': button 0 to state 5") != std::string::npos; }));
 }
 
+// Issue 27: the frame loop reads the buttons once a frame. The clicks a flystick made between
+// two reads, counted from the events after the last one the reader acted on.
+int clicksSince(const TrackerState& s, uint64_t& seen, int button) {
+    int n = 0;
+    for (const ButtonEvent& e : s.wand.eventsAfter(seen)) n += e.button == button && e.pressed;
+    seen = s.wand.lastEvent();
+    return n;
+}
+
+DTrackFrame flystickButtons(std::vector<bool> buttons, uint64_t frame) {
+    DTrackFrame f;
+    f.frame = frame;
+    DTrackFlystick w;
+    w.pose.quality = 1;
+    w.buttons = std::move(buttons);
+    f.definedFlysticks = 1;
+    f.flysticks.push_back(w);
+    return f;
+}
+
+TEST(TrackerReceiver, DTrackClicksBetweenTwoReadsAreEachSeen) {
+    TrackingConfig c;
+    c.address = "127.0.0.1";
+    c.port = 0;
+    c.flystick = 0;
+    c.timeoutMs = 60'000;
+    TrackerReceiver r(c);
+    DTrackSender sender(r.port());
+    uint64_t seen = 0, frame = 0;
+    sender.send(flystickButtons({false, false}, ++frame));
+    ASSERT_TRUE(waitFor(r, [&](const TrackerState& s) { return s.packets == frame; }));
+    EXPECT_EQ(clicksSince(r.state(), seen, 0), 0);
+    // Pressed and let go between two reads: the state says "up", the click is one.
+    sender.send(flystickButtons({true, false}, ++frame));
+    sender.send(flystickButtons({false, false}, ++frame));
+    ASSERT_TRUE(waitFor(r, [&](const TrackerState& s) { return s.packets == frame; }));
+    TrackerState s = r.state();
+    EXPECT_FALSE(s.wand.button(0));
+    EXPECT_EQ(clicksSince(s, seen, 0), 1);
+    EXPECT_EQ(clicksSince(r.state(), seen, 0), 0) << "a click is seen once";
+    // Four clicks of the trigger and one of button 1 between two reads.
+    for (int i = 0; i < 4; ++i) {
+        sender.send(flystickButtons({true, i == 2}, ++frame));
+        sender.send(flystickButtons({false, false}, ++frame));
+    }
+    ASSERT_TRUE(waitFor(r, [&](const TrackerState& t) { return t.packets == frame; }));
+    s = r.state();
+    uint64_t seen1 = seen;
+    EXPECT_EQ(clicksSince(s, seen, 0), 4);
+    EXPECT_EQ(clicksSince(s, seen1, 1), 1);
+    EXPECT_EQ(s.dropped, 0u);
+}
+
+// The same through VRPN, whose buttons come as "vrpn_Button Change" messages: two clicks in one
+// TCP write, then one by UDP, each between two reads.
+TEST(TrackerReceiver, VrpnClicksBetweenTwoReadsAreEachSeen) {
+    asio::io_context io;
+    asio::ip::tcp::acceptor acceptor(io, asio::ip::tcp::endpoint(asio::ip::make_address("127.0.0.1"), 0));
+    const int port = acceptor.local_endpoint().port();
+    TrackingConfig c;
+    c.enabled = true;
+    c.kind = TrackingSource::Vrpn;
+    c.server = "Wand@127.0.0.1:" + std::to_string(port);
+    c.device = c.buttonDevice = c.analogDevice = "Wand";
+    c.address = "127.0.0.1";
+    c.port = port;
+    c.roomScale = 1;
+    c.flystick = 1;
+    c.timeoutMs = 60'000;
+    TrackerReceiver r(c);
+    asio::ip::tcp::socket peer(io);
+    acceptor.accept(peer);
+    // The client's cookie and its UDP offer (the port in the sender field; VrpnServerOnLoopbackOverTcpAndUdp
+    // reads them in detail).
+    std::string cookie(24, '\0'), header(24, '\0');
+    asio::read(peer, asio::buffer(cookie));
+    asio::read(peer, asio::buffer(header));
+    const auto u32 = [&](size_t at) {
+        return uint32_t(uint8_t(header[at])) << 24 | uint32_t(uint8_t(header[at + 1])) << 16 | uint32_t(uint8_t(header[at + 2])) << 8 |
+               uint32_t(uint8_t(header[at + 3]));
+    };
+    const uint32_t udpPort = u32(12);
+    std::string address((u32(0) - 24 + 7) / 8 * 8, '\0');
+    asio::read(peer, asio::buffer(address));
+
+    std::string session = vrpnCookie() + vrpnName(0, -1, "Wand") + vrpnName(0, -2, "vrpn_Tracker Pos_Quat") +
+                          vrpnName(1, -2, "vrpn_Button Change");
+    session += vrpnMessage(0, 0, 100.0, vrpnPosQuat(1, {0.5, 1.0, 1.5}, {0, 0, 0, 1}));
+    asio::write(peer, asio::buffer(session));
+    ASSERT_TRUE(waitFor(r, [](const TrackerState& s) { return s.wand.seen; }));
+    uint64_t seen = 0;
+    EXPECT_EQ(clicksSince(r.state(), seen, 0), 0);
+    std::string clicks;
+    for (int i = 0; i < 2; ++i)
+        clicks += vrpnMessage(0, 1, 100.1 + i * 0.01, vrpnButtonChange(0, 1)) + vrpnMessage(0, 1, 100.105 + i * 0.01, vrpnButtonChange(0, 0));
+    asio::write(peer, asio::buffer(clicks));
+    ASSERT_TRUE(waitFor(r, [](const TrackerState& s) { return s.wand.lastEvent() == 4; }));
+    TrackerState s = r.state();
+    EXPECT_FALSE(s.wand.button(0));
+    EXPECT_EQ(clicksSince(s, seen, 0), 2);
+    asio::ip::udp::socket udp(io, asio::ip::udp::v4());
+    udp.send_to(asio::buffer(vrpnMessage(0, 1, 100.2, vrpnButtonChange(0, 1)) + vrpnMessage(0, 1, 100.21, vrpnButtonChange(0, 0))),
+                asio::ip::udp::endpoint(asio::ip::make_address("127.0.0.1"), asio::ip::port_type(udpPort)));
+    ASSERT_TRUE(waitFor(r, [](const TrackerState& t) { return t.wand.lastEvent() == 6; }));
+    EXPECT_EQ(clicksSince(r.state(), seen, 0), 1);
+    EXPECT_EQ(r.state().dropped, 0u);
+}
+
 TEST(TrackerReceiver, APortInUseIsAnInputErrorNamingTheSource) {
     TrackingConfig c;
     c.address = "127.0.0.1";

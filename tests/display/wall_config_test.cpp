@@ -264,5 +264,33 @@ TEST(WallConfig, SwapGroupAndBarrierAreReadStrictly) {
               std::string::npos);
 }
 
+// Issue 27: the room's scale in the scene, read strictly and written back.
+TEST(WallConfig, NavigationScaleIsReadStrictlyAndWrittenBack) {
+    const std::string wall = "[wall]\nwidth = 100\nheight = 100\n[[screen]]\nviewport = [0, 0, 100, 100]\n";
+    const WallConfig plain = parseWallConfig(wall, "wall.toml");
+    EXPECT_EQ(plain.navigation.scale, 1.0) << "1 metre is 1 scene unit unless said";
+    EXPECT_EQ(writeWallConfig(plain).find("[navigation]"), std::string::npos) << "the default is not written";
+    const WallConfig scaled = parseWallConfig(wall + "[navigation]\nscale = 2.5\n", "wall.toml");
+    EXPECT_EQ(scaled.navigation.scale, 2.5);
+    EXPECT_FALSE(scaled == plain);
+    const std::string text = writeWallConfig(scaled);
+    EXPECT_NE(text.find("[navigation]\nscale = 2.5\n"), std::string::npos) << text;
+    EXPECT_EQ(parseWallConfig(text, "written.toml"), scaled);
+    EXPECT_EQ(parseWallConfig(wall + "[navigation]\nscale = 1000\n", "wall.toml").navigation.scale, 1000.0) << "an integer is a number";
+    // Zero, negative, not a number, infinite, the wrong type, an unknown key: one line each.
+    const std::vector<std::pair<std::string, std::string>> bad = {
+        {"scale = 0", "wall.toml:7: [navigation]: key 'scale': 0 is out of range [1e-06, 1e+06]"},
+        {"scale = -2.5", "wall.toml:7: [navigation]: key 'scale': -2.5 is out of range [1e-06, 1e+06]"},
+        {"scale = nan", "wall.toml:7: [navigation]: key 'scale': value must be finite"},
+        {"scale = inf", "wall.toml:7: [navigation]: key 'scale': value must be finite"},
+        {"scale = \"2\"", "wall.toml:7: [navigation]: key 'scale': expected a number, got a string"},
+        {"scale = [1, 2]", "wall.toml:7: [navigation]: key 'scale': expected a number, got an array"},
+        {"scael = 2", "wall.toml:7: [navigation]: unknown key 'scael'"},
+    };
+    for (const auto& [line, want] : bad) EXPECT_EQ(wallError(wall + "[navigation]\n" + line + "\n"), want) << line;
+    EXPECT_NE(wallError("navigation = 2\n" + wall).find("wall.toml:1: 'navigation' must be a table"), std::string::npos)
+        << wallError("navigation = 2\n" + wall);
+}
+
 }  // namespace
 }  // namespace rtwall

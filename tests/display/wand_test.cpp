@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -251,6 +252,60 @@ TEST(Wand, OrbitTurnsAboutTheCentreAndApproachesIt) {
     EXPECT_GT(p.x * p.x + p.y * p.y + p.z * p.z, 0.0) << "never past the centre";
     EXPECT_LT(p.x * p.x + p.y * p.y + p.z * p.z, 0.01);
     EXPECT_FALSE(nav.updateWand(Navigator::Wand{}, 1.0)) << "a joystick at rest moves nothing";
+}
+
+// Issue 27: the buttons are read once a frame, but every change the datagrams carried is kept
+// in order, so a click between two reads is one press and one release.
+int presses(const std::vector<ButtonEvent>& events, int button) {
+    return int(std::count_if(events.begin(), events.end(), [&](const ButtonEvent& e) { return e.button == button && e.pressed; }));
+}
+
+TEST(Wand, EveryPressAndReleaseBetweenTwoReadsIsKeptInOrder) {
+    HeadTracker h(shippedRoom());
+    auto add = [&](std::vector<bool> buttons, double t) { h.add(flystickFrame({0, 0, 1200}, kPointingAtScreen, std::move(buttons), {}), t); };
+    add({false, false}, 0.00);
+    EXPECT_TRUE(h.at(0.0).wand.events.empty()) << "released buttons are no change";
+    uint64_t seen = h.at(0.0).wand.lastEvent();
+    // Between two reads: a click of the trigger (two datagrams), and button 1 pressed with it.
+    add({true, false}, 0.01);
+    add({false, true}, 0.02);
+    WandState w = h.at(0.03).wand;
+    EXPECT_FALSE(w.button(0)) << "the state alone has lost the click";
+    const std::vector<ButtonEvent> got = w.eventsAfter(seen);
+    const std::vector<ButtonEvent> want{{1, 0, true}, {2, 0, false}, {3, 1, true}};
+    EXPECT_EQ(got, want);
+    seen = w.lastEvent();
+    EXPECT_TRUE(h.at(0.03).wand.eventsAfter(seen).empty()) << "read once";
+    // Three clicks between two reads are three presses.
+    for (int i = 0; i < 3; ++i) {
+        add({true, true}, 0.04 + 0.02 * i);
+        add({false, true}, 0.05 + 0.02 * i);
+    }
+    EXPECT_EQ(presses(h.at(0.1).wand.eventsAfter(seen), 0), 3);
+    EXPECT_EQ(h.at(0.1).wand.eventsAfter(seen).size(), 6u);
+    // A flystick that lists fewer buttons has the others up.
+    seen = h.at(0.1).wand.lastEvent();
+    add({}, 0.11);
+    EXPECT_EQ(h.at(0.11).wand.eventsAfter(seen), (std::vector<ButtonEvent>{{seen + 1, 1, false}}));
+}
+
+TEST(Wand, ButtonEventsAreBoundedAndALostWandLetsGo) {
+    HeadTracker h(shippedRoom());
+    const double frame = 1.0 / 60;
+    for (int i = 0; i < 100; ++i) h.add(flystickFrame({0, 0, 1200}, kPointingAtScreen, {i % 2 == 0}, {}), i * frame);
+    uint64_t lost = 0;
+    const std::vector<ButtonEvent> e = h.at(100 * frame).wand.eventsAfter(0, &lost);
+    ASSERT_EQ(e.size(), WandState::kMaxButtonEvents);
+    EXPECT_EQ(lost, 100 - WandState::kMaxButtonEvents);
+    EXPECT_EQ(e.back().seq, 100u);
+    EXPECT_FALSE(e.back().pressed);
+    // Held when the wand is lost, still held when it is back after the timeout: the readers took
+    // it as let go meanwhile, so the events say so and it is pressed anew.
+    h.add(flystickFrame({0, 0, 1200}, kPointingAtScreen, {true}, {}), 2.0);
+    EXPECT_TRUE(h.at(2.0).wand.button(0));
+    EXPECT_FALSE(h.at(3.0).wand.button(0)) << "stale";
+    h.add(flystickFrame({0, 0, 1200}, kPointingAtScreen, {true}, {}), 3.0);
+    EXPECT_EQ(h.at(3.0).wand.eventsAfter(100), (std::vector<ButtonEvent>{{101, 0, true}, {102, 0, false}, {103, 0, true}}));
 }
 
 // The ray drawn into each eye's image: a point on the screen's plane is drawn where it is for

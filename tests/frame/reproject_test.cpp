@@ -209,11 +209,51 @@ TEST(FrameReproject, RepeatsBitForBitInTheSameBuffers) {
     EXPECT_EQ(debug.rgb.size(), first.image.rgb.size());
 }
 
+// Any number of threads gives the bytes one thread gives: the box scene warped to a pose that
+// magnifies (cracks), uncovers (holes, filled from an older view and the row) and turns, and
+// the zoo's background, glass and alpha masks moved sideways.
+TEST(FrameReproject, ThreadCountDoesNotChangeABit) {
+    const SceneDesc d = wallAndBox(true);
+    const CameraDesc a = eyeAt(0, 0, 10), b = test::cameraAt({0.45f, 0.2f, 8.5f}, {0.3f, 0.1f, 0}, kFovY), c = eyeAt(0.8f, 0, 10);
+    const RenderedFrame fa = render(d, a), fc = render(d, c);
+    SceneDesc zoo = test::materialZoo(test::scratchDir(), kW, kH);
+    const CameraDesc z = zoo.cameras.front();
+    CameraDesc zMoved = z;
+    zMoved.position = z.position + Float3{0.3f, 0.1f, 0};
+    const RenderedFrame fz = render(zoo, z);
+    const WarpSource older{fc.image, fc.depth, c};
+    struct Case {
+        WarpSource newest;
+        CameraDesc target;
+        const WarpSource* older;
+    };
+    for (const Case& k : {Case{{fa.image, fa.depth, a}, b, &older}, Case{{fa.image, fa.depth, a}, b, nullptr},
+                          Case{{fz.image, fz.depth, z}, zMoved, nullptr}}) {
+        WarpOptions options;
+        options.threads = 1;
+        Reprojector one;
+        const WarpedView& base = one.warp(k.newest, k.target, k.older, options);
+        ASSERT_GT(base.holes, 0u);
+        ASSERT_GT(count(base, WarpPixel::Warped), base.mask.size() / 2);
+        for (int threads : {2, 3, 7, 0}) {
+            options.threads = threads;
+            Reprojector many;
+            const WarpedView& v = many.warp(k.newest, k.target, k.older, options);
+            EXPECT_EQ(v.image.rgb, base.image.rgb) << threads << " threads";
+            EXPECT_EQ(v.depth, base.depth) << threads << " threads";
+            EXPECT_EQ(v.mask, base.mask) << threads << " threads";
+            EXPECT_EQ(v.holes, base.holes) << threads << " threads";
+        }
+    }
+}
+
 TEST(FrameReproject, TimingHookMeasures) {
-    const WarpTiming t = timeReprojection(64, 48, 5);
-    EXPECT_EQ(t.runs, 5);
-    EXPECT_GT(t.medianMs, 0.0);
-    EXPECT_GE(t.p95Ms, t.medianMs);
+    for (int threads : {1, 2}) {
+        const WarpTiming t = timeReprojection(64, 48, 5, threads);
+        EXPECT_EQ(t.runs, 5);
+        EXPECT_GT(t.medianMs, 0.0);
+        EXPECT_GE(t.p95Ms, t.medianMs);
+    }
 }
 
 }  // namespace

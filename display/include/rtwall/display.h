@@ -9,6 +9,7 @@
 // the engine or the cluster: it is given finished wall images.
 #pragma once
 
+#include <rtwall/camera.h>
 #include <rtwall/image.h>
 #include <rtwall/input_error.h>
 #include <rtwall/vec.h>
@@ -109,6 +110,12 @@ struct TrackingConfig {
     bool operator==(const TrackingConfig&) const = default;
 };
 
+// [navigation]: how the physical room (the wall's and the tracker's metres) lies in the scene.
+struct NavigationConfig {
+    double scale = 1.0;  // scene units per metre: 2 makes the viewer a giant (the world looks half its size)
+    bool operator==(const NavigationConfig&) const = default;
+};
+
 struct WallConfig {
     std::filesystem::path file;       // where it was read from (messages, relative shader paths)
     std::string name = "wall";
@@ -121,6 +128,7 @@ struct WallConfig {
     std::vector<ScreenConfig> screens;
     StereoConfig stereo;
     TrackingConfig tracking;
+    NavigationConfig navigation;
     int writeEvery = 1;               // headless: every Nth frame as per-screen PNGs (0: never)
     std::string video;                // headless: also encode the wall to this file through ffmpeg
     bool operator==(const WallConfig& o) const;  // ignores `file` and screen lines
@@ -185,6 +193,9 @@ struct ShaderSource {
 // The shipped shaders (display/shaders/), embedded at build time.
 ShaderSource presentVertexShader();
 ShaderSource presentFragmentShader();
+// The GL re-projection's passes (issue 27, display/shaders/warp_*): a name ending in .vert is a
+// vertex shader, .frag a fragment shader.
+std::vector<ShaderSource> warpShaders();
 // Compiles GLSL 330 core with glslang (no GPU needed). Returns the problems, one line each:
 // "<name>:<line>: <message>", empty when it compiles.
 std::vector<std::string> checkShader(const ShaderSource& source, bool fragment);
@@ -196,6 +207,21 @@ std::vector<std::string> checkWall(const WallConfig& wall);
 // ---------------------------------------------------------------------------------------------
 // Mapping a wall image to the screens (the CPU reference of present.frag)
 
+// One rendered view to be re-projected into an eye's image (issue 27): its newest image, depth
+// and camera, optionally the one before it, and the pose to show it for. The pointers are the
+// caller's and must live through present().
+struct ViewWarp {
+    int eye = 0;                      // 0: the left (mono) eye, 1: the right
+    std::vector<TileRect> regions;    // its pixels in the eye image, empty: the whole image
+    const Image* image = nullptr;
+    const std::vector<float>* depth = nullptr;
+    CameraDesc camera;                // newest
+    const Image* olderImage = nullptr;
+    const std::vector<float>* olderDepth = nullptr;
+    CameraDesc olderCamera;
+    CameraDesc target;
+};
+
 // A finished frame as the renderer delivers it.
 // Its images are the wall's size, or smaller: a frame rendered at a fraction of the wall's
 // resolution is shown upscaled (bilinear, pixel centres aligned, edges clamped).
@@ -205,6 +231,12 @@ struct WallFrame {
     Image right;                        // the right eye (stereo walls only; the left's size)
     std::vector<uint32_t> tileOwners;   // client id per tile of the frame (row-major), for the false-colour view
     int tileSize = 0;                   // in the frame's pixels
+    // Not empty: the GL presenter makes the eyes' images on the GPU from these (each view warped
+    // to its target as Reprojector::warp does, written into its regions of its eye, the rest of
+    // an eye black, as the Compositor composes) instead of uploading left and right; all views
+    // are of one size, the frame's. warpDebug: the warp's debug view (warpDebugColours' tints).
+    std::vector<ViewWarp> warps;
+    bool warpDebug = false;
 };
 // Throws std::invalid_argument, naming `who` and the sizes, for a frame larger than the wall, an
 // empty one, or eyes of different sizes.
@@ -398,19 +430,26 @@ std::vector<WallView> wallViews(const WallConfig& wall, const HeadPose& head, in
 // Whether the wall needs off-axis views even without stereo (tracked, or screens with corners).
 bool wallHasViews(const WallConfig& wall);
 // Maps a wall-coordinate EyeWindow into the world through the navigation pose: the wall frame's
-// x, y, z axes become the camera's right, up and back (= -forward) axes, 1 metre becomes 1 world
-// unit, and the viewer's physical head position `viewer` becomes the camera position. So the
-// pose steers the whole physical room through the scene; pose.fovY is unused.
-EyeWindow eyeWindowInWorld(const EyeWindow& wall, const Float3& viewer, const ViewPose& pose);
-// That map on its own (rigid, 1 metre = 1 unit): where a tracked wand in the room is in the world.
+// x, y, z axes become the camera's right, up and back (= -forward) axes, 1 metre becomes `scale`
+// world units (NavigationConfig::scale), and the viewer's physical head position `viewer`
+// becomes the camera position. So the pose steers the whole physical room through the scene;
+// pose.fovY is unused. Scale 1 gives the very floats the unscaled map gives.
+EyeWindow eyeWindowInWorld(const EyeWindow& wall, const Float3& viewer, const ViewPose& pose, double scale = 1.0);
+// That map on its own (a turn, the scale and a move): where a tracked wand in the room is in the world.
 struct WallToWorld {
     Float3 origin;   // the camera position: where `viewer` lands
     Float3 viewer;
-    Float3 x, y, z;  // the wall's axes in the world: the camera's right, up and back
-    Float3 point(const Float3& wall) const;
-    Float3 direction(const Float3& wall) const;
+    Float3 x, y, z;  // the wall's axes in the world: the camera's right, up and back (unit)
+    float scale = 1.0f;  // world units per metre
+    Float3 point(const Float3& wall) const;      // turned, scaled and moved
+    Float3 direction(const Float3& wall) const;  // turned only: a unit direction stays unit
 };
-WallToWorld wallToWorld(const Float3& viewer, const ViewPose& pose);
+WallToWorld wallToWorld(const Float3& viewer, const ViewPose& pose, double scale = 1.0);
+// The navigation pose that shows the room at `newScale` world units per metre with the wall
+// point `fixed` (the head, between the eyes) where it was in the world at `scale`: the room
+// grows or shrinks about it, so the viewer stays put in the scene and the world about them
+// looks smaller or larger. The pose only moves (it does not turn).
+ViewPose rescaledPose(const ViewPose& pose, const Float3& viewer, double scale, double newScale, const Float3& fixed);
 
 // The wand's ray on the wall, drawn into one eye's image of the whole wall (a frame smaller than
 // the wall is drawn at its scale): the segment from `from` to `to` (wall coordinates, metres) as

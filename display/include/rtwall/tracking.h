@@ -230,6 +230,16 @@ std::array<double, 9> rotationOf(const std::array<double, 4>& quaternion);
 // Spherical interpolation from a to b (unit quaternions, the shorter way round).
 std::array<double, 4> slerp(const std::array<double, 4>& a, const std::array<double, 4>& b, double t);
 
+// One change of a flystick button, as the tracker reported it. The buttons are read once a
+// frame, the tracker sends 60 or more datagrams a second: a click shorter than a frame is seen
+// only as the two changes it made.
+struct ButtonEvent {
+    uint64_t seq = 0;      // 1, 2, ... over the tracker's life: a reader keeps the last one it acted on
+    int button = 0;
+    bool pressed = false;  // down; false: up
+    bool operator==(const ButtonEvent&) const = default;
+};
+
 // The flystick (wand) in wall coordinates, as the last frame gave it (filtered, not predicted:
 // a pointer that runs ahead of the hand is worse than one 10 ms late).
 struct WandState {
@@ -243,6 +253,13 @@ struct WandState {
     std::vector<double> controllers;    // joystick axes, [-1, 1]
     bool button(int i) const { return !stale && i >= 0 && size_t(i) < buttons.size() && buttons[size_t(i)]; }
     double controller(int i) const { return !stale && i >= 0 && size_t(i) < controllers.size() ? controllers[size_t(i)] : 0.0; }
+    // Every press and release, in order, the last kMaxButtonEvents of them (oldest first).
+    std::vector<ButtonEvent> events;
+    // Those after `after` (the seq of the last one the reader acted on), oldest first; `lost`
+    // (optional) is set to how many after it are no longer kept.
+    std::vector<ButtonEvent> eventsAfter(uint64_t after, uint64_t* lost = nullptr) const;
+    uint64_t lastEvent() const { return events.empty() ? 0 : events.back().seq; }
+    static constexpr size_t kMaxButtonEvents = 64;  // 32 clicks: far more than a hand makes in one frame
 };
 
 // What the frame loop knows of the head.
@@ -293,6 +310,7 @@ private:
     std::array<OneEuroFilter, 3> wandFilters_;
     WandState wand_;
     double wandTime_ = 0;
+    void recordButtonChanges(const std::vector<bool>& buttons);  // against wand_.buttons, into wand_.events
     // Tracker timestamps onto the monotonic clock: offset = min(arrival - timestamp) since the
     // tracker's clock last went back (a restart, midnight UTC).
     std::optional<double> clockOffset_;

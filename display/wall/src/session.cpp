@@ -620,6 +620,7 @@ void WallSession::setPartView(const PartView& view) { impl_->input->setPartView(
 const PartView& WallSession::partView() const { return impl_->live->partView(); }
 void WallSession::showAllParts() { impl_->input->showAllParts(*impl_->live); }
 void WallSession::inject(const InputState& input) { impl_->input->inject(input); }
+double WallSession::navigationScale() const { return impl_->input->navigationScale(); }
 const WallFrame& WallSession::lastFrame() const { return impl_->shown; }
 std::optional<TrackerState> WallSession::tracker() const {
     if (!impl_->tracker) return std::nullopt;

@@ -27,7 +27,8 @@ CameraDesc cameraOf(const CameraDesc& base, const ViewPose& p) {
 
 WallInput::WallInput(const WallConfig& wall, const CameraDesc& start, const Options& options,
                      std::function<void(const std::string&)> log)
-    : wall_(wall), base_(start), options_(options), log_(std::move(log)) {
+    : wall_(wall), base_(start), options_(options), log_(std::move(log)), scale_(wall.navigation.scale),
+      head_(staticHead(wall.stereo)) {
     if (options.console) {
         // The wall's aspect, 640 pixels wide at most: clicks map to the wall by one scale.
         const int w = std::min(640, wall_.width), h = std::clamp(int(std::lround(double(w) * wall_.height / wall_.width)), 120, 960);
@@ -44,11 +45,11 @@ WallInput::WallInput(const WallConfig& wall, const CameraDesc& start, const Opti
     if (wall_.tracking.enabled && wall_.tracking.flystick >= 0) nav_->setMode(Navigator::Mode::Fly);
     if (gl_ && options.console)
         log_("wall '" + wall_.name + "': on its display nodes; this PC shows a console window (" + gl_->renderer() +
-             ") with their status; the wall's keys work there (H status, Tab fly/orbit, 1-9 bookmarks, Esc quits, ...)");
+             ") with their status; the wall's keys work there (H status, Tab fly/orbit, 1-9 bookmarks, [ ] world scale, Esc quits, ...)");
     else if (gl_)
         log_("wall '" + wall_.name + "': " + std::to_string(wall_.screens.size()) + " window" +
              (wall_.screens.size() == 1 ? "" : "s") + " (" + gl_->renderer() +
-             "); keys: H status, T tile owners, Tab fly/orbit, 1-9 bookmarks (Ctrl+digit stores), R record, Ctrl+drag "
+             "); keys: H status, T tile owners, Tab fly/orbit, 1-9 bookmarks (Ctrl+digit stores), [ ] world scale, R record, Ctrl+drag "
              "moves an object (and picks its part: X hides, I isolates, G highlights it, U shows all), M measure, C section "
              "plane (Shift+C next, V on/off, F flip, PgUp/PgDn move, arrows turn, Del remove), Esc quits");
     else
@@ -64,8 +65,8 @@ CameraDesc WallInput::viewCamera(const EyeWindow& window) const {
     // Off-axis: the eye sees the wall's physical rectangle as a projection window. The wall frame
     // is carried into the world by the navigation pose (wall x, y, z = camera right, up, back; the
     // config's viewer = the camera position, so a tracked head moves within a room that stays
-    // put in the scene; 1 metre = 1 world unit): see eyeWindowInWorld.
-    const EyeWindow w = eyeWindowInWorld(window, wall_.stereo.viewer, nav_->pose());
+    // put in the scene; 1 metre = scale_ world units): see eyeWindowInWorld.
+    const EyeWindow w = eyeWindowInWorld(window, wall_.stereo.viewer, nav_->pose(), scale_);
     const Float3 f = c.lookAt - c.position;
     c.position = w.eye;
     c.lookAt = w.eye + f;  // unused by the window; kept sensible
@@ -74,6 +75,20 @@ CameraDesc WallInput::viewCamera(const EyeWindow& window) const {
 }
 
 void WallInput::setCamera(const CameraDesc& c) { nav_->setPose(poseOf(c)); }
+
+void WallInput::setNavigationScale(double scale) {
+    // The config's range: a pose of floats carries nothing finer or coarser.
+    scale = std::clamp(scale, 1e-6, 1e6);
+    if (scale == scale_) return;
+    // About the head: the point between the eyes stays where it is in the scene, so the world
+    // grows or shrinks around the viewer instead of running away from them.
+    nav_->setPose(rescaledPose(nav_->pose(), wall_.stereo.viewer, scale_, scale, head_.position));
+    scale_ = scale;
+    char line[96];
+    std::snprintf(line, sizeof line, "navigation: scale %.4g scene units per metre ([ and ] change it)", scale_);
+    log_(line);
+    refreshStatus();
+}
 
 std::optional<PickResult> WallInput::pick(LiveScene& scene, double wallX, double wallY) {
     return scene.pick(camera(), wall_.width, wall_.height, wallX, wallY);
@@ -358,6 +373,11 @@ bool WallInput::apply(LiveScene& scene, const InputState& in, double dt) {
             refreshStatus();
         }
         if (key == GLFW_KEY_T) present_.falseColour = !present_.falseColour;
+        // ] makes the world larger (fewer scene units per metre), [ smaller; two presses double.
+        if (options_.interactive && (key == GLFW_KEY_LEFT_BRACKET || key == GLFW_KEY_RIGHT_BRACKET)) {
+            setNavigationScale(scale_ * (key == GLFW_KEY_LEFT_BRACKET ? kScaleStep : 1.0 / kScaleStep));
+            scene.setCamera(camera());
+        }
         if (key == GLFW_KEY_X || key == GLFW_KEY_I || key == GLFW_KEY_G || key == GLFW_KEY_U) partKey(scene, key);
     }
     for (size_t i = 0; i < in.keysPressed.size(); ++i)
@@ -433,6 +453,11 @@ void WallInput::show(const WallFrame& frame, const FrameReport& report, double f
                           frameSeconds > 0 ? 1.0 / frameSeconds : 0.0, double(report.bytes) * 1e-6, options_.codec.c_str(),
                           (unsigned long long)gl_->stats().late);
             std::string status = line, overlay = line;
+            if (wallHasViews(wall_)) {
+                std::snprintf(line, sizeof line, " | scale %.4g units/m", scale_);
+                status += line;
+                overlay += line;
+            }
             for (const ClientReport& c : report.clients) {
                 std::snprintf(line, sizeof line, " | client %u: %llu tiles (%.2f MB/s) %.0f%% busy", c.id, (unsigned long long)c.tiles,
                               report.seconds > 0 ? double(c.bytes) / report.seconds * 1e-6 : 0.0, 100.0 * c.busyFraction);

@@ -48,6 +48,10 @@ public:
     // wall (wallViews: an eye's window in wall coordinates, carried into the world by the pose).
     CameraDesc camera() const;
     CameraDesc viewCamera(const EyeWindow& window) const;
+    // Scene units per metre of the room ([navigation] scale; the keys [ and ] change it about
+    // the head: setNavigationScale).
+    double navigationScale() const { return scale_; }
+    void setNavigationScale(double scale);
     // A line for the status overlay and the title (the tracker's state); empty: none.
     void setTrackerLine(const std::string& line) { trackerLine_ = line; }
     void setCamera(const CameraDesc& c);  // a camera path, orbit or scene edit moved it
@@ -66,8 +70,10 @@ public:
     void setPartView(LiveScene& scene, const PartView& view);
     void showAllParts(LiveScene& scene);
     // The tracked flystick (a wall with [tracking] and a `flystick`): navigation by its joystick,
-    // its buttons (mode, home, pick and drag or measure), and the ray's length; once per step,
-    // after handle(). Then drawWand draws its ray into the frame's eye images for `head`.
+    // its buttons (mode, home, pick and drag or measure: every press and release since the last
+    // step, in order), and the ray's length; once per step, after handle(). It also takes the
+    // tracked head, about which the world-scale keys scale. Then drawWand draws its ray into the
+    // frame's eye images for `head`.
     void handleWand(LiveScene& scene, const TrackerState& tracker, double dt);
     void drawWand(WallFrame& frame, const HeadPose& head) const;
     const std::optional<WandPose>& wand() const { return wand_; }
@@ -99,7 +105,12 @@ private:
     std::optional<PickResult> grabbed_;
     Transform grabbedStart_;
     std::optional<WandPose> wand_;
-    std::vector<bool> wandButtons_;  // the last step's, for presses
+    uint64_t wandEvents_ = 0;  // the last button event acted on (WandState::events)
+    void wandPress(LiveScene& scene, const WandPose& p);  // the trigger went down with the wand at p
+    void wandRelease(LiveScene& scene);
+    double scale_ = 1.0;  // scene units per metre of the room
+    static constexpr double kScaleStep = 1.4142135623730951;  // a press of [ or ]: two double or halve
+    HeadPose head_;       // the tracked head (or the config's viewer), about which the scale keys scale
     std::optional<PickResult> wandGrab_;
     WandPose wandGrabStart_;
     Transform wandGrabTransform_;

@@ -30,33 +30,42 @@ double deflection(double value, double deadZone) {
 void WallInput::handleWand(LiveScene& scene, const TrackerState& tracker, double dt) {
     const TrackingConfig& t = wall_.tracking;
     const WandState& w = tracker.wand;
+    if (tracker.seen) head_ = tracker.head;  // the world scale keys scale about it
+    uint64_t lost = 0;
+    const std::vector<ButtonEvent> events = w.eventsAfter(wandEvents_, &lost);
+    wandEvents_ = w.lastEvent();
     if (!w.seen || w.stale) {
         if (wandGrab_) log_("wand: lost, instance " + std::to_string(wandGrab_->instance) + " released");
         wand_.reset();
         wandGrab_.reset();
         wandPlaneStart_.reset();
-        wandButtons_.clear();
         return;
     }
-    auto pressed = [&](int b) { return w.button(b) && !(b >= 0 && size_t(b) < wandButtons_.size() && wandButtons_[size_t(b)]); };
-    if (options_.interactive && pressed(t.buttonMode)) {
-        nav_->setMode(nav_->mode() == Navigator::Mode::Fly ? Navigator::Mode::Orbit : Navigator::Mode::Fly);
-        orbitCentre_.reset();
-        log_(nav_->mode() == Navigator::Mode::Fly ? "wand: fly" : "wand: orbit about the scene's centre");
-    }
-    if (options_.interactive && pressed(t.buttonHome)) {
-        setCamera(base_);
-        scene.setCamera(camera());
-        log_("wand: back to the start camera");
+    if (lost > 0) log_("wand: " + std::to_string(lost) + " button changes came faster than the frames and were not acted on");
+    // Every press since the last frame counts, in order, however short: the mode and home
+    // buttons act first, the trigger after the joystick has moved the room.
+    for (const ButtonEvent& e : events) {
+        if (!options_.interactive || !e.pressed) continue;
+        if (e.button == t.buttonMode) {
+            nav_->setMode(nav_->mode() == Navigator::Mode::Fly ? Navigator::Mode::Orbit : Navigator::Mode::Fly);
+            orbitCentre_.reset();
+            log_(nav_->mode() == Navigator::Mode::Fly ? "wand: fly" : "wand: orbit about the scene's centre");
+        }
+        if (e.button == t.buttonHome) {
+            setCamera(base_);
+            scale_ = wall_.navigation.scale;  // the start camera is at the configured scale
+            scene.setCamera(camera());
+            log_("wand: back to the start camera");
+        }
     }
     // The joystick moves the room through the scene, then the wand is placed in the moved room.
-    WallToWorld map = wallToWorld(wall_.stereo.viewer, nav_->pose());
+    WallToWorld map = wallToWorld(wall_.stereo.viewer, nav_->pose(), scale_);
     if (options_.interactive) {
         Navigator::Wand nw;
         nw.x = deflection(w.controller(t.joystickX), t.deadZone);
         nw.y = deflection(w.controller(t.joystickY), t.deadZone);
         nw.direction = map.direction(w.direction);
-        nw.speed = t.flySpeed;  // 1 m of the room is 1 scene unit (eyeWindowInWorld)
+        nw.speed = t.flySpeed * scale_;  // fly_speed is metres of the room a second
         nw.turnDegrees = t.turnSpeed;
         if (nav_->mode() == Navigator::Mode::Orbit && (nw.x != 0 || nw.y != 0) && !orbitCentre_) {
             const Bounds3 b = scene.desc().worldBounds();
@@ -66,7 +75,7 @@ void WallInput::handleWand(LiveScene& scene, const TrackerState& tracker, double
         if (orbitCentre_) nw.centre = *orbitCentre_;
         if (nav_->updateWand(nw, dt)) {
             scene.setCamera(camera());
-            map = wallToWorld(wall_.stereo.viewer, nav_->pose());
+            map = wallToWorld(wall_.stereo.viewer, nav_->pose(), scale_);
         }
     }
     WandPose p;
@@ -80,18 +89,38 @@ void WallInput::handleWand(LiveScene& scene, const TrackerState& tracker, double
     p.rotation = multiply(axes, w.rotation);
     p.buttons = w.buttons;
     p.controllers = w.controllers;
-    p.length = kWandRayLength;
+    p.length = kWandRayLength * float(scale_);
 
-    const bool pick = options_.interactive && w.visible && pressed(t.buttonPick);
-    if (pick && measuring_) {
+    // The trigger's presses and releases in order: a click shorter than a frame picks (or sets a
+    // measure point) and lets go again; several clicks act as many times.
+    for (const ButtonEvent& e : events) {
+        if (e.button != t.buttonPick) continue;
+        if (e.pressed && options_.interactive && w.visible) wandPress(scene, p);
+        else if (!e.pressed) wandRelease(scene);
+    }
+    // What the events may have missed (more changes than kept): the trigger's state now.
+    if ((wandGrab_ || wandPlaneStart_) && !w.button(t.buttonPick)) wandRelease(scene);
+    if (wandPlaneStart_ && activeSection_ < 0) wandRelease(scene);
+    if ((wandGrab_ || wandPlaneStart_) && w.visible) {
+        dragHeld(scene, p);
+    } else if (w.visible) {
+        if (const std::optional<PickResult> hit = scene.pickRay(p.origin, p.direction)) p.length = hit->t;
+    }
+    wand_ = p;
+}
+
+// The trigger pressed with the wand at `p`: a measure point, the selected section plane taken,
+// or the object it points at picked.
+void WallInput::wandPress(LiveScene& scene, const WandPose& p) {
+    if (measuring_) {
         measureHit(scene, scene.pickRay(p.origin, p.direction), p.origin, p.direction);
-    } else if (pick && activeSection_ >= 0) {
+    } else if (activeSection_ >= 0) {
         // A selected section plane: the trigger holds the plane, not an object (Shift+C until
         // none is selected gives the trigger back to objects).
         wandPlaneStart_ = scene.desc().sections[size_t(activeSection_)];
         wandGrabStart_ = p;
         log_("wand: holds section " + std::to_string(activeSection_));
-    } else if (pick) {
+    } else {
         wandGrab_ = scene.pickRay(p.origin, p.direction);
         if (wandGrab_) {
             wandGrabStart_ = p;
@@ -102,21 +131,18 @@ void WallInput::handleWand(LiveScene& scene, const TrackerState& tracker, double
             log_(part.empty() ? std::string(line) : std::string(line) + ", part '" + part + "'");
         }
     }
-    if (wandPlaneStart_ && (!w.button(t.buttonPick) || activeSection_ < 0)) {
+}
+
+// The trigger let go: what it held stays where it was put.
+void WallInput::wandRelease(LiveScene& scene) {
+    if (wandPlaneStart_) {
         log_(activeSection_ < 0 ? "wand: section released" : "wand: released " + sectionLine(scene.desc()));
         wandPlaneStart_.reset();
     }
-    if (wandGrab_ && !w.button(t.buttonPick)) {
+    if (wandGrab_) {
         log_("wand: released instance " + std::to_string(wandGrab_->instance));
         wandGrab_.reset();
     }
-    if ((wandGrab_ || wandPlaneStart_) && w.visible) {
-        dragHeld(scene, p);
-    } else if (w.visible) {
-        if (const std::optional<PickResult> hit = scene.pickRay(p.origin, p.direction)) p.length = hit->t;
-    }
-    wandButtons_ = w.buttons;
-    wand_ = p;
 }
 
 // Rigidly with the wand: the held object (or plane) is moved by the wand's motion since the
@@ -156,7 +182,8 @@ void WallInput::dragHeld(LiveScene& scene, WandPose& p) {
 void WallInput::drawWand(WallFrame& frame, const HeadPose& head) const {
     if (!wand_ || !wall_.tracking.wandRay) return;
     const Float3 a = wand_->wallPosition, d = wand_->wallDirection;
-    const Float3 b{a.x + d.x * wand_->length, a.y + d.y * wand_->length, a.z + d.z * wand_->length};
+    const float metres = wand_->length / float(scale_);  // the length is in scene units
+    const Float3 b{a.x + d.x * metres, a.y + d.y * metres, a.z + d.z * metres};
     if (wall_.stereo.mode == StereoMode::None) {
         drawWandRay(wall_, head, -1, a, b, frame.left);
     } else {

@@ -2,6 +2,8 @@
 #include <rtwall/frame.h>
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 namespace rtwall {
 
@@ -16,6 +18,21 @@ void copyRegions(Image& eye, const Image& from, const FrameView& view) {
             std::copy(from.rgb.begin() + long(row), from.rgb.begin() + long(row + size_t(r.width()) * 3), eye.rgb.begin() + long(row));
         }
     }
+}
+
+// View `view`'s image into its eye's: the whole eye when it has no regions, else the pixels of
+// its regions over black (an eye of several views gets each one's).
+void placeView(Image& eye, const Image& from, const FrameView& view) {
+    if (view.regions.empty()) {
+        eye = from;  // copy-assigned: the eye's buffer is reused at the same size
+        return;
+    }
+    if (eye.rgb.empty()) {
+        eye.width = from.width;
+        eye.height = from.height;
+        eye.rgb.assign(from.rgb.size(), 0);
+    }
+    copyRegions(eye, from, view);
 }
 
 }  // namespace
@@ -59,24 +76,59 @@ EyeImages Compositor::compose(const ComposeFrame& f, std::vector<Image> images, 
     if (images.empty()) return out;
     if (f.stochastic) accumulate(f, images, linear);
     else if (f.views.empty()) progressiveSeq_ = UINT32_MAX;  // deterministic: every frame of a state is the same image
+    keepWarpSource(f, images);
     if (f.views.empty()) {
         out.left = std::move(images[0]);
         return out;
     }
     for (size_t v = 0; v < images.size() && v < f.views.size() && v < f.eyes.size(); ++v) {
         Image& eye = f.eyes[v] == 1 ? out.right : out.left;
-        if (f.views[v].regions.empty()) {
-            eye = std::move(images[v]);
-            continue;
-        }
-        if (eye.rgb.empty()) {
-            eye.width = images[v].width;
-            eye.height = images[v].height;
-            eye.rgb.assign(images[v].rgb.size(), 0);
-        }
-        copyRegions(eye, images[v], f.views[v]);
+        if (f.views[v].regions.empty()) eye = std::move(images[v]);
+        else placeView(eye, images[v], f.views[v]);
     }
     return out;
+}
+
+// The composed views (after accumulation) with their depth and cameras become the newest warp
+// source; the newest before them, the older one, when it had as many views.
+void Compositor::keepWarpSource(const ComposeFrame& f, const std::vector<Image>& images) {
+    const size_t n = std::min({images.size(), f.views.size(), f.eyes.size(), f.depth.size()});
+    if (n == 0 || f.depth.size() != images.size()) return;
+    std::swap(warpNewest_, warpOlder_);
+    if (warpOlder_.size() != n) warpOlder_.clear();  // another set of views: no older source for them
+    warpNewest_.resize(n);
+    for (size_t v = 0; v < n; ++v) {
+        WarpSlot& s = warpNewest_[v];
+        s.image = images[v];  // copy-assigned into the slot's buffers
+        s.depth.assign(f.depth[v].begin(), f.depth[v].end());
+        s.camera = f.views[v].camera;
+    }
+    warpViews_.assign(f.views.begin(), f.views.begin() + long(n));
+    warpEyes_.assign(f.eyes.begin(), f.eyes.begin() + long(n));
+    if (warpers_.size() < n) warpers_.resize(n);
+}
+
+const EyeImages& Compositor::reproject(std::span<const CameraDesc> targets, const WarpOptions& options, bool debug) {
+    const size_t n = warpNewest_.size();
+    if (n == 0) throw std::invalid_argument("reproject: no frame with depth was composed");
+    if (targets.size() != n)
+        throw std::invalid_argument("reproject: " + std::to_string(targets.size()) + " target cameras for " + std::to_string(n) + " views");
+    warpedEyes_.left.rgb.clear();  // the capacity stays: placeView refills it
+    warpedEyes_.right.rgb.clear();
+    for (size_t v = 0; v < n; ++v) {
+        const WarpSlot& s = warpNewest_[v];
+        const bool older = warpOlder_.size() == n;
+        const WarpSource newest{s.image, s.depth, s.camera};
+        const WarpSource before = older ? WarpSource{warpOlder_[v].image, warpOlder_[v].depth, warpOlder_[v].camera} : newest;
+        const WarpedView& w = warpers_[v].warp(newest, targets[v], older ? &before : nullptr, options);
+        const Image* shown = &w.image;
+        if (debug) {
+            warpDebugColours(w, debugView_);
+            shown = &debugView_;
+        }
+        placeView(warpEyes_[v] == 1 ? warpedEyes_.right : warpedEyes_.left, *shown, warpViews_[v]);
+    }
+    return warpedEyes_;
 }
 
 }  // namespace rtwall

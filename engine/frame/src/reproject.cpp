@@ -9,99 +9,136 @@
 #include <rtwall/vec.h>
 
 #include <algorithm>
+#include <atomic>
+#include <barrier>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <thread>
+#include <utility>
 
 namespace rtwall {
 
 namespace {
 
-// Where world points land in a camera's image: direction(px, py) = corner + du px + dv py, so
-// a point p seen from the origin solves p - origin = s (du px + dv py + corner): px = a / c,
-// py = b / c for (a, b, c) = M^-1 (p - origin), M = [du dv corner], in front where c > 0.
-struct Projector {
-    double origin[3];
-    double inv[3][3];
-    int width, height;
-
-    Projector(const CameraDesc& desc, int w, int h) : width(w), height(h) {
-        const Camera camera(desc, w, h);
-        const Float3 o = camera.origin(), u = camera.du(), v = camera.dv(), c = camera.corner();
-        origin[0] = o.x, origin[1] = o.y, origin[2] = o.z;
-        const double m[3][3] = {{u.x, v.x, c.x}, {u.y, v.y, c.y}, {u.z, v.z, c.z}};
-        const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-                           m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-        const double r = det != 0.0 ? 1.0 / det : 0.0;  // a degenerate camera sees nothing
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) {
-                // The cofactor of m[j][i]: the inverse is the adjugate over the determinant.
-                const int a0 = (j + 1) % 3, a1 = (j + 2) % 3, b0 = (i + 1) % 3, b1 = (i + 2) % 3;
-                inv[i][j] = (m[a0][b0] * m[a1][b1] - m[a0][b1] * m[a1][b0]) * r;
-            }
-    }
-    // The pixel that sees direction `d` (from the origin); false when behind or outside.
-    bool pixelOf(const double d[3], int& px, int& py) const {
-        const double a = inv[0][0] * d[0] + inv[0][1] * d[1] + inv[0][2] * d[2];
-        const double b = inv[1][0] * d[0] + inv[1][1] * d[1] + inv[1][2] * d[2];
-        const double c = inv[2][0] * d[0] + inv[2][1] * d[1] + inv[2][2] * d[2];
+// A target camera's image: where a solved point (rtwall/warp.h, ImageProjection) lands.
+struct Projector : ImageProjection {
+    using ImageProjection::ImageProjection;
+    // The pixel that sees the point solving to (a, b, c); false when behind or outside. One
+    // division (1 / c, then two products) where a / c and b / c would take two: the quotients
+    // differ from the divided ones by an ulp at most, which moves a point only when it lies
+    // within about 1e-12 pixels of a pixel's edge.
+    bool pixelOf(double a, double b, double c, int& px, int& py) const {
         if (!(c > 0.0)) return false;
-        const double x = std::floor(a / c), y = std::floor(b / c);
+        const double r = 1.0 / c, x = a * r, y = b * r;
+        // Inside [0, width) x [0, height) before the floor: then truncation is the floor.
         if (!(x >= 0.0 && x < double(width) && y >= 0.0 && y < double(height))) return false;
         px = int(x), py = int(y);
         return true;
     }
 };
 
-void sizeSplat(Reprojector::Splat& s, int w, int h) {
+// A target pixel's winner so far, as one number: the point's squared distance (as a float,
+// whose bits order like the floats for non-negative values) above its source pixel's index.
+// The smallest key is the nearest point and, of equals, the first in row order: the rule a
+// single pass in row order keeps (a later point replaces only a farther one), so any number of
+// threads splatting in any order find the same winner. Squared, because the square root is
+// then taken once per target pixel (resolveRows), not once per source pixel.
+constexpr uint64_t kNoSplat = ~uint64_t(0);
+// Surfaces stay nearer than the background (kBackgroundDepth, the largest float) however far.
+const float kFarthestSurface = std::nextafter(kBackgroundDepth, 0.0f);
+
+uint64_t splatKey(float squaredDistance, size_t source) {
+    return uint64_t(std::bit_cast<uint32_t>(squaredDistance)) << 32 | uint64_t(uint32_t(source));
+}
+
+void sizeSplat(Reprojector::Splat& s, std::vector<uint64_t>& keys, int w, int h) {
     const size_t n = size_t(w) * size_t(h);
     s.image.width = w;
     s.image.height = h;
     s.image.rgb.resize(n * 3);
-    s.depth.assign(n, kBackgroundDepth);
-    s.covered.assign(n, 0);
+    s.depth.resize(n);
+    s.covered.resize(n);
+    keys.resize(n);
 }
 
-void checkSource(const WarpSource& s, const char* which) {
-    const size_t n = size_t(std::max(0, s.image.width)) * size_t(std::max(0, s.image.height));
-    if (s.depth.size() != n || s.image.rgb.size() != n * 3)
-        throw std::invalid_argument(std::string("reproject: the ") + which + " view has " +
-                                    std::to_string(s.depth.size()) + " depths and " + std::to_string(s.image.rgb.size()) +
-                                    " colour bytes for " + std::to_string(s.image.width) + "x" +
-                                    std::to_string(s.image.height) + " pixels");
-}
-
-// Every pixel of `src` with a depth into `out` (sized for `to`), nearest first; background
-// pixels are directions (points at infinity), behind every surface.
-void splat(const WarpSource& src, const Projector& to, Reprojector::Splat& out) {
-    const int sw = src.image.width, sh = src.image.height;
-    const Camera from(src.camera, sw, sh);
-    const Float3 o = from.origin();
+// Source rows [y0, y1) of `src` into `keys` (sized for `to`): each pixel with a depth becomes a
+// key in the target pixel that sees it, the smallest key staying; background pixels are
+// directions (points at infinity), behind every surface. `shared`: other threads write the same
+// keys (an atomic minimum), else a plain one.
+template <bool shared>
+void splatRows(const WarpSource& src, const Projector& to, uint64_t* keys, int y0, int y1) {
+    const int sw = src.image.width;
+    const Camera from(src.camera, sw, src.image.height);
+    const Float3 o = from.origin(), fc = from.corner(), fu = from.du(), fv = from.dv();
+    // Pixel (x, y)'s ray is d = row + du px (px = x + 0.5, row = corner + dv (y + 0.5)), in
+    // double. Its point at distance `depth` is p = d s + shift (s = depth / |d|; shift: from the
+    // target's origin to the source's), so p's (a, b, c) is s (R + X px) + S with R, X, S the
+    // solved row, du and shift, and |p|^2 = depth^2 + 2 s (d . shift) + |shift|^2: a few
+    // products per pixel, each linear or quadratic in px.
     const double shift[3] = {double(o.x) - to.origin[0], double(o.y) - to.origin[1], double(o.z) - to.origin[2]};
-    for (int y = 0; y < sh; ++y)
+    const double du[3] = {fu.x, fu.y, fu.z};
+    double solvedDu[3], solvedShift[3];
+    to.solve(du, solvedDu);
+    to.solve(shift, solvedShift);
+    const double duDu = du[0] * du[0] + du[1] * du[1] + du[2] * du[2];
+    const double duShift = du[0] * shift[0] + du[1] * shift[1] + du[2] * shift[2];
+    const double shiftShift = shift[0] * shift[0] + shift[1] * shift[1] + shift[2] * shift[2];
+    for (int y = y0; y < y1; ++y) {
+        const double py = double(y) + 0.5;
+        const double row[3] = {fc.x + fv.x * py, fc.y + fv.y * py, fc.z + fv.z * py};
+        double r[3];
+        to.solve(row, r);
+        const double rowRow = row[0] * row[0] + row[1] * row[1] + row[2] * row[2];
+        const double rowDu2 = 2.0 * (row[0] * du[0] + row[1] * du[1] + row[2] * du[2]);
+        const double rowShift = row[0] * shift[0] + row[1] * shift[1] + row[2] * shift[2];
         for (int x = 0; x < sw; ++x) {
             const size_t i = size_t(y) * size_t(sw) + size_t(x);
             const float depth = src.depth[i];
             const bool background = depth == kBackgroundDepth;
             if (!background && !(depth > 0.0f && std::isfinite(depth))) continue;  // no depth: a hole
-            const Float3 d = from.direction(float(x) + 0.5f, float(y) + 0.5f);
-            const double len = std::sqrt(double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z);
-            const double s = background ? 1.0 / len : double(depth) / len;
-            double p[3] = {d.x * s, d.y * s, d.z * s};
-            if (!background)
-                for (int k = 0; k < 3; ++k) p[k] += shift[k];
+            const double px = double(x) + 0.5;
+            const double s = (background ? 1.0 : double(depth)) / std::sqrt(rowRow + px * (rowDu2 + px * duDu));
+            const double k = background ? 0.0 : 1.0;  // a direction does not move with the origin
             int tx, ty;
-            if (!to.pixelOf(p, tx, ty)) continue;
-            const size_t t = size_t(ty) * size_t(to.width) + size_t(tx);
-            const float dist = background ? kBackgroundDepth : float(std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]));
-            if (out.covered[t] && !(dist < out.depth[t])) continue;  // the first of equals stays
-            out.covered[t] = 1;
-            out.depth[t] = dist;
-            std::memcpy(&out.image.rgb[t * 3], &src.image.rgb[i * 3], 3);
+            if (!to.pixelOf(s * (r[0] + solvedDu[0] * px) + k * solvedShift[0], s * (r[1] + solvedDu[1] * px) + k * solvedShift[1],
+                            s * (r[2] + solvedDu[2] * px) + k * solvedShift[2], tx, ty))
+                continue;
+            const double dd = double(depth);
+            const float squared =
+                background ? kBackgroundDepth
+                           : std::clamp(float(dd * dd + 2.0 * s * (rowShift + duShift * px) + shiftShift), 0.0f, kFarthestSurface);
+            const uint64_t key = splatKey(squared, i);
+            uint64_t& slot = keys[size_t(ty) * size_t(to.width) + size_t(tx)];
+            if constexpr (shared) {
+                std::atomic_ref<uint64_t> atomic(slot);
+                uint64_t seen = atomic.load(std::memory_order_relaxed);
+                while (key < seen && !atomic.compare_exchange_weak(seen, key, std::memory_order_relaxed)) {
+                }
+            } else if (key < slot) {
+                slot = key;
+            }
         }
+    }
+}
+
+// Target rows [y0, y1): each key's source pixel (bytes and distance) into the splat image.
+void resolveRows(const WarpSource& src, const uint64_t* keys, Reprojector::Splat& s, int y0, int y1) {
+    const size_t w = size_t(s.image.width);
+    for (size_t t = size_t(y0) * w; t < size_t(y1) * w; ++t) {
+        const uint64_t key = keys[t];
+        s.covered[t] = key != kNoSplat;
+        if (key == kNoSplat) {
+            s.depth[t] = kBackgroundDepth;
+            continue;
+        }
+        const float squared = std::bit_cast<float>(uint32_t(key >> 32));
+        s.depth[t] = squared == kBackgroundDepth ? kBackgroundDepth : std::sqrt(squared);
+        std::memcpy(&s.image.rgb[t * 3], &src.image.rgb[size_t(uint32_t(key)) * 3], 3);
+    }
 }
 
 // The two neighbours of coordinate `c` (of `n`) along one axis whose pixel indices are
@@ -115,19 +152,20 @@ bool neighbours(int c, int n, size_t i, size_t step, size_t& a, size_t& b) {
     return true;
 }
 
-// Fills the one-pixel cracks of `s`: an uncovered pixel between two splatted ones (left and
-// right, else above and below; the two inward at the edge) at depths within `ratio` takes the
-// nearer of them. Pass 1 joins splatted pixels only (covered 1) and marks its fills 2; pass 2
-// also joins those and marks its fills 3, closing where a crack row meets a crack column. Each
-// pass reads only what the passes before it wrote, so the order within a pass does not matter.
-void fillCracks(Reprojector::Splat& s, float ratio, uint8_t pass) {
+// Fills the one-pixel cracks of rows [y0, y1) of `s`: an uncovered pixel between two splatted
+// ones (left and right, else above and below; the two inward at the edge) at depths within
+// `ratio` takes the nearer of them. Pass 1 joins splatted pixels only (covered 1) and marks its
+// fills 2; pass 2 also joins those and marks its fills 3, closing where a crack row meets a
+// crack column. Each pass reads only what the passes before it wrote, so the order within a
+// pass does not matter and threads may fill rows side by side.
+void fillCracks(Reprojector::Splat& s, float ratio, uint8_t pass, int y0, int y1) {
     const int w = s.image.width, h = s.image.height;
     auto joins = [&](size_t a, size_t b) {
         if (s.covered[a] == 0 || s.covered[a] > pass || s.covered[b] == 0 || s.covered[b] > pass) return false;
         const float lo = std::min(s.depth[a], s.depth[b]), hi = std::max(s.depth[a], s.depth[b]);
         return hi <= lo * ratio;
     };
-    for (int y = 0; y < h; ++y)
+    for (int y = y0; y < y1; ++y)
         for (int x = 0; x < w; ++x) {
             const size_t i = size_t(y) * size_t(w) + size_t(x);
             if (s.covered[i]) continue;
@@ -146,95 +184,136 @@ void copyPixel(const Reprojector::Splat& from, size_t i, WarpedView& to, size_t 
     to.depth[t] = from.depth[i];
 }
 
-}  // namespace
-
-bool samePose(const CameraDesc& a, const CameraDesc& b) {
-    return a.position == b.position && a.lookAt == b.lookAt && a.up == b.up && a.fovY == b.fovY && a.window == b.window;
+// Target row `y` of `out` from the two splats: the newest view where it covers, else the older,
+// else the fallback: a pixel neither covers takes the nearest covered pixel of its row on the
+// side whose depth is farther (a disocclusion uncovers what lies behind the edge, so the far
+// side continues it; the near side is the occluder that moved away), the left one of equals,
+// the only one when one side has none, the background colour when the row has none. Returns
+// the row's holes (pixels the newest view left uncovered).
+size_t composeRow(const Reprojector::Splat& newest, const Reprojector::Splat* older, const WarpOptions& options,
+                  WarpedView& out, int y) {
+    const int w = out.image.width;
+    const size_t row = size_t(y) * size_t(w);
+    size_t holes = 0;
+    for (size_t i = row; i < row + size_t(w); ++i) {
+        if (newest.covered[i]) {
+            copyPixel(newest, i, out, i);
+            out.mask[i] = WarpPixel::Warped;
+            continue;
+        }
+        ++holes;
+        const bool fromOlder = older && older->covered[i];
+        if (fromOlder) copyPixel(*older, i, out, i);
+        out.mask[i] = fromOlder ? WarpPixel::Older : WarpPixel::Filled;
+    }
+    if (holes == 0) return 0;
+    // Runs of Filled pixels between known ones: every pixel of a run has the same two sides.
+    for (int x = 0; x < w;) {
+        if (out.mask[row + size_t(x)] != WarpPixel::Filled) {
+            ++x;
+            continue;
+        }
+        const int l = x - 1;
+        int r = x;
+        while (r < w && out.mask[row + size_t(r)] == WarpPixel::Filled) ++r;
+        const int end = r;
+        if (r == w) r = -1;
+        const int from = l < 0 ? r : r < 0 ? l : out.depth[row + size_t(r)] > out.depth[row + size_t(l)] ? r : l;
+        for (; x < end; ++x) {
+            const size_t t = row + size_t(x);
+            if (from < 0) {
+                std::memcpy(&out.image.rgb[t * 3], options.background, 3);
+                out.depth[t] = kBackgroundDepth;
+            } else {
+                std::memcpy(&out.image.rgb[t * 3], &out.image.rgb[(row + size_t(from)) * 3], 3);
+                out.depth[t] = out.depth[row + size_t(from)];
+            }
+        }
+    }
+    return holes;
 }
+
+// Rows [0, n) split evenly over `threads` parts: part `i`'s first and end row.
+std::pair<int, int> rowsOf(int n, int threads, int i) {
+    return {int(int64_t(n) * i / threads), int(int64_t(n) * (i + 1) / threads)};
+}
+
+}  // namespace
 
 const WarpedView& Reprojector::warp(const WarpSource& newest, const CameraDesc& target, const WarpSource* older,
                                     const WarpOptions& options) {
-    checkSource(newest, "newest");
-    if (older) checkSource(*older, "older");
+    checkWarpSource(newest, "newest");
+    if (older) checkWarpSource(*older, "older");
     const int w = newest.image.width, h = newest.image.height;
     const size_t n = size_t(w) * size_t(h);
     out_.image.width = w;
     out_.image.height = h;
     out_.image.rgb.resize(n * 3);
     out_.depth.resize(n);
+    out_.mask.resize(n);
     out_.holes = 0;
     if (options.copySamePose && samePose(newest.camera, target)) {
         std::copy(newest.image.rgb.begin(), newest.image.rgb.end(), out_.image.rgb.begin());
         std::copy(newest.depth.begin(), newest.depth.end(), out_.depth.begin());
-        out_.mask.assign(n, WarpPixel::Fresh);
+        std::fill(out_.mask.begin(), out_.mask.end(), WarpPixel::Fresh);
         return out_;
     }
     const Projector to(target, w, h);
-    sizeSplat(newest_, w, h);
-    splat(newest, to, newest_);
-    for (uint8_t pass : {1, 2}) fillCracks(newest_, options.crackRatio, pass);
-    if (older) {
-        sizeSplat(older_, w, h);
-        splat(*older, to, older_);
-        for (uint8_t pass : {1, 2}) fillCracks(older_, options.crackRatio, pass);
-    }
-    out_.mask.resize(n);
-    for (size_t i = 0; i < n; ++i) {
-        if (newest_.covered[i]) {
-            copyPixel(newest_, i, out_, i);
-            out_.mask[i] = WarpPixel::Warped;
-            continue;
+    sizeSplat(newest_, newestKeys_, w, h);
+    if (older) sizeSplat(older_, olderKeys_, w, h);
+    const int hardware = int(std::max(1u, std::thread::hardware_concurrency()));
+    const int threads = std::clamp(options.threads > 0 ? options.threads : hardware, 1, std::max(1, h));
+    rowHoles_.assign(size_t(threads), 0);
+    // Every thread takes its share of rows through the same phases; a phase reads what the ones
+    // before it wrote, so all wait for all between phases. Each phase's result does not depend
+    // on how its rows were shared: the bytes are the same for any number of threads.
+    std::barrier sync(threads);
+    auto phases = [&](int part) {
+        const auto [y0, y1] = rowsOf(h, threads, part);
+        std::fill(newestKeys_.begin() + ptrdiff_t(size_t(y0) * size_t(w)), newestKeys_.begin() + ptrdiff_t(size_t(y1) * size_t(w)),
+                  kNoSplat);
+        if (older)
+            std::fill(olderKeys_.begin() + ptrdiff_t(size_t(y0) * size_t(w)), olderKeys_.begin() + ptrdiff_t(size_t(y1) * size_t(w)),
+                      kNoSplat);
+        sync.arrive_and_wait();
+        auto splatShare = [&](const WarpSource& src, std::vector<uint64_t>& keys) {
+            const auto [s0, s1] = rowsOf(src.image.height, threads, part);
+            if (threads > 1) splatRows<true>(src, to, keys.data(), s0, s1);
+            else splatRows<false>(src, to, keys.data(), s0, s1);
+        };
+        splatShare(newest, newestKeys_);
+        if (older) splatShare(*older, olderKeys_);
+        sync.arrive_and_wait();
+        resolveRows(newest, newestKeys_.data(), newest_, y0, y1);
+        if (older) resolveRows(*older, olderKeys_.data(), older_, y0, y1);
+        for (uint8_t pass : {1, 2}) {
+            sync.arrive_and_wait();
+            fillCracks(newest_, options.crackRatio, pass, y0, y1);
+            if (older) fillCracks(older_, options.crackRatio, pass, y0, y1);
         }
-        ++out_.holes;
-        const bool fromOlder = older && older_.covered[i];
-        if (fromOlder) copyPixel(older_, i, out_, i);
-        out_.mask[i] = fromOlder ? WarpPixel::Older : WarpPixel::Filled;
+        sync.arrive_and_wait();
+        for (int y = y0; y < y1; ++y) rowHoles_[size_t(part)] += composeRow(newest_, older ? &older_ : nullptr, options, out_, y);
+    };
+    {
+        std::vector<std::jthread> helpers;
+        for (int part = 1; part < threads; ++part) helpers.emplace_back(phases, part);
+        phases(0);
     }
-    fillHoles(options);
+    for (size_t holes : rowHoles_) out_.holes += holes;
     return out_;
 }
 
-// The fallback: a pixel neither view covers takes the nearest covered pixel of its row on the
-// side whose depth is farther (a disocclusion uncovers what lies behind the edge, so the far
-// side continues it; the near side is the occluder that moved away), the left one of equals,
-// the only one when one side has none, the background colour when the row has none.
-void Reprojector::fillHoles(const WarpOptions& options) {
-    const int w = out_.image.width, h = out_.image.height;
-    left_.resize(size_t(std::max(0, w)));
-    right_.resize(size_t(std::max(0, w)));
-    for (int y = 0; y < h; ++y) {
-        const size_t row = size_t(y) * size_t(w);
-        auto known = [&](int x) { return out_.mask[row + size_t(x)] != WarpPixel::Filled; };
-        for (int x = 0, last = -1; x < w; ++x) left_[size_t(x)] = last = known(x) ? x : last;
-        for (int x = w - 1, last = -1; x >= 0; --x) right_[size_t(x)] = last = known(x) ? x : last;
-        for (int x = 0; x < w; ++x) {
-            if (known(x)) continue;
-            const int l = left_[size_t(x)], r = right_[size_t(x)];
-            const size_t t = row + size_t(x);
-            if (l < 0 && r < 0) {
-                std::memcpy(&out_.image.rgb[t * 3], options.background, 3);
-                out_.depth[t] = kBackgroundDepth;
-                continue;
-            }
-            const int from = l < 0 ? r : r < 0 ? l : out_.depth[row + size_t(r)] > out_.depth[row + size_t(l)] ? r : l;
-            std::memcpy(&out_.image.rgb[t * 3], &out_.image.rgb[(row + size_t(from)) * 3], 3);
-            out_.depth[t] = out_.depth[row + size_t(from)];
-        }
-    }
-}
-
 void warpDebugColours(const WarpedView& view, Image& out) {
-    static constexpr uint8_t kTint[4][3] = {{0, 200, 0}, {40, 90, 255}, {255, 220, 0}, {255, 0, 0}};
     out.width = view.image.width;
     out.height = view.image.height;
     out.rgb.resize(view.image.rgb.size());
     for (size_t i = 0; i < view.mask.size(); ++i)
         for (int c = 0; c < 3; ++c)
             out.rgb[i * 3 + size_t(c)] =
-                uint8_t((int(view.image.rgb[i * 3 + size_t(c)]) + int(kTint[size_t(view.mask[i])][c]) + 1) / 2);
+                uint8_t((int(view.image.rgb[i * 3 + size_t(c)]) + int(kWarpTints[size_t(view.mask[i])][c]) + 1) / 2);
 }
 
-WarpTiming timeReprojection(int width, int height, int runs) {
+WarpTiming timeReprojection(int width, int height, int runs, int threads) {
     // A view of a slanted floor with a raised block and sky above, rendered from 2 m away; the
     // head then moves 5 cm right and 2 cm forward and turns by a degree.
     CameraDesc from;
@@ -259,10 +338,12 @@ WarpTiming timeReprojection(int width, int height, int runs) {
             for (int c = 0; c < 3; ++c) image.rgb[i * 3 + size_t(c)] = uint8_t((x * 7 + y * 3 + c * 50) & 0xFF);
         }
     Reprojector warper;
+    WarpOptions options;
+    options.threads = threads;
     std::vector<double> ms;
     for (int r = 0; r < runs; ++r) {
         const auto t0 = std::chrono::steady_clock::now();
-        warper.warp({image, depth, from}, to, nullptr, {});
+        warper.warp({image, depth, from}, to, nullptr, options);
         ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     }
     WarpTiming t;

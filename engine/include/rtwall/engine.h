@@ -9,6 +9,7 @@
 // kernel (packet or single-ray).
 #pragma once
 
+#include <rtwall/camera.h>
 #include <rtwall/image.h>
 #include <rtwall/mesh.h>
 
@@ -109,25 +110,6 @@ struct Light {
     Float3 edge2{0, 0, 1};   //   to the side of cross(edge1, edge2) only
     bool twoSided = false;   // area: emits to both sides
     bool operator==(const Light&) const = default;
-};
-
-// An off-axis (generalised perspective) projection: the image is the world-space rectangle with
-// lower-left corner `lowerLeft` and edges `right` (to the lower-right corner) and `up` (to the
-// upper-left corner), seen from the camera's `position`. Pixel (0, 0)'s corner is lowerLeft + up,
-// pixel (width, height)'s corner is lowerLeft + right. lookAt, up and fovY are then unused.
-struct ProjectionWindow {
-    Float3 lowerLeft, right, up;
-    bool operator==(const ProjectionWindow&) const = default;
-};
-
-struct CameraDesc {
-    std::string name = "default";
-    Float3 position{0, 0, 5};
-    Float3 lookAt{0, 0, 0};
-    Float3 up{0, 1, 0};
-    float fovY = 45.0f;  // vertical field of view in degrees
-    std::optional<ProjectionWindow> window;  // absent: the symmetric camera above
-    bool operator==(const CameraDesc&) const = default;
 };
 
 // The camera turned `degrees` about the vertical axis through its look-at point (a demo's and a
@@ -400,33 +382,6 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
-// Pinhole camera with derived per-image state computed once.
-class Camera {
-public:
-    Camera(const CameraDesc& desc, int width, int height);
-    // Direction (unnormalised) through image position (px, py), pixels from the top-left corner.
-    // Inline: the kernel calls it for every primary ray.
-    Float3 direction(float px, float py) const {
-        return {corner_.x + du_.x * px + dv_.x * py, corner_.y + du_.y * px + dv_.y * py,
-                corner_.z + du_.z * px + dv_.z * py};
-    }
-    Float3 origin() const { return origin_; }
-    // direction(px, py) = corner() + du() * px + dv() * py: what re-projection inverts to find
-    // where a world point lands in this camera's image.
-    Float3 corner() const { return corner_; }
-    Float3 du() const { return du_; }
-    Float3 dv() const { return dv_; }
-
-private:
-    Float3 origin_, corner_, du_, dv_;
-};
-
-struct TileRect {
-    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // half-open pixel rectangle [x0,x1) x [y0,y1)
-    int width() const { return x1 - x0; }
-    int height() const { return y1 - y0; }
-};
-
 // A tile that could not be rendered. renderTile and renderTileLinear throw it for anything that
 // goes wrong inside a tile (renderFrame and renderFrameLinear rethrow the first); what() is
 // "frame F, tile x0,y0,x1,y1: reason". The caller knows where the scene and the camera came
@@ -456,9 +411,7 @@ struct TileView {
 // for every camera, symmetric or off-axis, with no image plane to agree on: the warp puts the
 // point back at origin() + normalize(direction(x + 0.5, y + 0.5)) * depth. (Not the ray-depth
 // false-colour view, ViewMode::Depth, which counts bounces.)
-// Pixels whose rays hit nothing show the background and get kBackgroundDepth: the largest
-// float, not infinity, so that an infinity or NaN from anywhere else stays a hole to the warp.
-inline constexpr float kBackgroundDepth = std::numeric_limits<float>::max();
+// Pixels whose rays hit nothing show the background and get kBackgroundDepth (rtwall/camera.h).
 
 // Where renderTile writes depth: pixel (rect.x0 + i, rect.y0 + j) goes to data[j*stride + i].
 struct DepthView {

@@ -195,10 +195,10 @@ struct WandPose {
     std::array<double, 9> rotation{1, 0, 0, 0, 1, 0, 0, 0, 1};      // body to world, row-major
     std::vector<bool> buttons;
     std::vector<double> controllers;
-    float length = 0;                     // of the ray drawn: to what it points at, else kWandRayLength
+    float length = 0;                     // of the ray drawn, scene units: to what it points at, else kWandRayLength
     std::optional<uint32_t> dragging;     // the instance it holds
 };
-constexpr float kWandRayLength = 10.0f;  // scene units (metres of the room), when the ray hits nothing
+constexpr float kWandRayLength = 10.0f;  // metres of the room (times the navigation scale in scene units), when the ray hits nothing
 
 class WallSession {
 public:
@@ -259,6 +259,8 @@ public:
     // Input as if from the wall's windows, applied at the next step() (keys, mouse, picking:
     // display.h's InputState): scripted control and tests; it works headless too.
     void inject(const InputState& input);
+    // Scene units per metre of the room: the wall's [navigation] scale, as the keys [ and ] left it.
+    double navigationScale() const;
 
     // The tracked head (a wall with [tracking]): what the last step used, and the UDP port the
     // tracker's datagrams go to (0 without tracking).

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <rtwall/engine.h>
+#include <rtwall/reproject.h>
 
 #include <atomic>
 #include <cstdint>
@@ -156,6 +157,9 @@ struct ComposeFrame {
     bool stochastic = false;
     uint32_t stateSeq = 0;
     bool linear = false;  // the frame came as linear tiles: sum its linear buffers, not its 8-bit images
+    // Per view, the depth its tiles came with (width x height, distance along the primary ray):
+    // given, the frame's views become the re-projection's newest source (reproject()).
+    std::span<const std::vector<float>> depth{};
 };
 
 struct EyeImages {
@@ -174,6 +178,17 @@ public:
     // buffers of a linear frame (used when frame.linear).
     EyeImages compose(const ComposeFrame& frame, std::vector<Image> images,
                       std::span<const std::vector<float>> linear = {});
+    // Re-projection (issue 27): the views of the last frame composed with depth (as composed:
+    // accumulated when stochastic), each warped from the camera it was rendered with to
+    // `targets[v]` (a view's camera for the pose read just before the swap), holes filled from
+    // the frame composed with depth before it, then composed into the eyes as compose() does.
+    // Targets equal to the rendered cameras give compose()'s bytes. `debug` tints each pixel by
+    // where it came from (warpDebugColours). The images stay the compositor's: nothing is
+    // allocated after the first frame of a size. Throws std::invalid_argument when no frame with
+    // depth was composed or the targets are not one per view.
+    const EyeImages& reproject(std::span<const CameraDesc> targets, const WarpOptions& options = {}, bool debug = false);
+    size_t reprojectViews() const { return warpNewest_.size(); }  // views of the newest warp source (0: none)
+    const WarpedView& warped(size_t view) const { return warpers_.at(view).result(); }  // of the last reproject()
     size_t viewRestarts() const { return viewRestarts_; }       // a view's running mean restarted
     size_t progressiveRestarts() const { return progressiveRestarts_; }  // the mono running mean restarted
     int accumulatedFrames() const { return accumulatedFrames_; }  // stochastic frames summed
@@ -191,7 +206,21 @@ private:
     size_t viewRestarts_ = 0, progressiveRestarts_ = 0;
     int accumulatedFrames_ = 0, linearFrames_ = 0;
 
+    // The re-projection's sources: a view's image, depth and camera; `older` is the frame before.
+    struct WarpSlot {
+        Image image;
+        std::vector<float> depth;
+        CameraDesc camera;
+    };
+    std::vector<WarpSlot> warpNewest_, warpOlder_;
+    std::vector<FrameView> warpViews_;
+    std::vector<int> warpEyes_;
+    std::vector<Reprojector> warpers_;
+    EyeImages warpedEyes_;
+    Image debugView_;
+
     void accumulate(const ComposeFrame& frame, std::vector<Image>& images, std::span<const std::vector<float>> linear);
+    void keepWarpSource(const ComposeFrame& frame, const std::vector<Image>& images);
 };
 
 }  // namespace rtwall

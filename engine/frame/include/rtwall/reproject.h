@@ -10,6 +10,7 @@
 #pragma once
 
 #include <rtwall/engine.h>
+#include <rtwall/warp.h>
 
 #include <cstdint>
 #include <span>
@@ -17,36 +18,8 @@
 
 namespace rtwall {
 
-// Where each pixel of a re-projected image came from (the debug view's colours).
-enum class WarpPixel : uint8_t {
-    Fresh,   // rendered for this very pose: the newest view's pixel, unmoved
-    Warped,  // the newest view's pixel, moved to where the new pose sees it
-    Older,   // a hole of the newest view, filled from the older view
-    Filled,  // a hole of both: the fallback (the row's nearest neighbour on the farther side)
-};
 
-// A rendered view as the warp reads it: its image, one depth per pixel as renderTile writes it
-// (kBackgroundDepth: background; NaN, infinities, zero and negative: no depth, never moved) and
-// the camera it was rendered with (its own size: an older view may be of another resolution).
-struct WarpSource {
-    const Image& image;
-    std::span<const float> depth;
-    const CameraDesc& camera;
-};
 
-struct WarpOptions {
-    // A pixel that no source covers but whose two neighbours (left and right, or above and below)
-    // do, at depths within this ratio of each other, is a crack of a magnified surface, not a
-    // disocclusion: it takes its nearer neighbour and counts as warped (a second pass closes
-    // where a crack row crosses a crack column). Gaps of two pixels and more (a surface seen
-    // over twice as large) stay holes.
-    float crackRatio = 1.05f;
-    uint8_t background[3] = {0, 0, 0};  // a row with no pixel to fill from (never when one has any)
-    // A target camera equal to the newest view's (position, look-at, up, field of view, window)
-    // copies the view: a static head shows the rendered bytes, all Fresh, for the price of a copy.
-    // Off: the warp runs anyway (the tests show that it, too, gives the bytes back).
-    bool copySamePose = true;
-};
 
 struct WarpedView {
     Image image;
@@ -56,8 +29,8 @@ struct WarpedView {
 };
 
 // Warps views frame after frame into buffers it keeps: after the first frame of a size nothing
-// is allocated. Deterministic: the same inputs give the same bytes (one thread, fixed order;
-// the first source pixel in row order wins a tie).
+// is allocated but the threads. Deterministic: the same inputs give the same bytes, on any
+// number of threads (the first source pixel in row order wins a tie).
 class Reprojector {
 public:
     // The newest view warped to `target` at the newest view's size, holes filled from `older`
@@ -78,24 +51,20 @@ public:
 private:
     WarpedView out_;
     Splat newest_, older_;
-    std::vector<int> left_, right_;  // per row: nearest covered pixel each way
-
-    void fillHoles(const WarpOptions& options);
+    std::vector<uint64_t> newestKeys_, olderKeys_;  // per target pixel: its splat's winner so far
+    std::vector<size_t> rowHoles_;                  // per thread: the holes of its rows
 };
-
-// The same geometry, any name: whether two cameras see alike.
-bool samePose(const CameraDesc& a, const CameraDesc& b);
 
 // The debug view: each pixel half its own colour, half its origin's (fresh green, warped blue,
 // older yellow, filled red), into `out` (resized to the view).
 void warpDebugColours(const WarpedView& view, Image& out);
 
 // The CPU warp's cost for one width x height screen: a synthetic view (a slanted plane with
-// steps, some background) warped to a moved camera `runs` times.
+// steps, some background) warped to a moved camera `runs` times on `threads` threads.
 struct WarpTiming {
     double medianMs = 0, p95Ms = 0;
     int runs = 0;
 };
-WarpTiming timeReprojection(int width, int height, int runs);
+WarpTiming timeReprojection(int width, int height, int runs, int threads = 1);
 
 }  // namespace rtwall
