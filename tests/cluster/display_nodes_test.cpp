@@ -13,6 +13,7 @@
 #include "security.h"
 
 #include <rtwall/cluster.h>
+#include <rtwall/depth_codec.h>
 
 #include <zmq.hpp>
 
@@ -20,6 +21,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <functional>
 #include <memory>
@@ -564,6 +566,10 @@ struct NodeThread {
             shown.push_back({frame, left ? std::optional<Image>(*left) : std::nullopt,
                              right ? std::optional<Image>(*right) : std::nullopt, leftOut});
         };
+        run.depth = [this](uint32_t frame, const std::vector<std::vector<float>>& views) {
+            std::lock_guard lock(m);
+            depths.emplace_back(frame, views);
+        };
         thread = std::thread([this] {
             status = runDisplayNode(run);
             finished = true;
@@ -576,6 +582,7 @@ struct NodeThread {
     std::mutex m;
     std::string wall;
     std::vector<Shown> shown;
+    std::vector<std::pair<uint32_t, std::vector<std::vector<float>>>> depths;  // per frame with depth: each view's
     std::atomic<bool> stop{false}, finished{false};
     std::atomic<int> status{-1};
     std::shared_ptr<DisplayNodeCounters> counters = std::make_shared<DisplayNodeCounters>();
@@ -742,6 +749,43 @@ TEST(DisplayNodes, StereoFramesShowBothEyesBitIdentical) {
         ASSERT_TRUE(shown->right.has_value()) << "node " << bit << " presented no right eye";
         EXPECT_TRUE(sameOnNode(*shown->image, leftEye, bit)) << "node " << bit << ", left eye";
         EXPECT_TRUE(sameOnNode(*shown->right, rightEye, bit)) << "node " << bit << ", right eye";
+    }
+}
+
+// Issue 27: with depth, each node keeps each view's depth of the frames it shows: one machine's
+// depth through the depth code on the node's tiles, NaN (a hole) on the other node's. Without,
+// nothing is handed over.
+TEST(DisplayNodes, NodesKeepTheirTilesDepthPerView) {
+    const SceneDesc scene = smallScene();
+    ClusterSettings cs = nodeSettings();
+    cs.depth = true;
+    NodeWall w(scene, cs);
+    ASSERT_TRUE(w.ready());
+    FrameReport report;
+    w.master->renderFrame(&report);
+    ASSERT_TRUE(report.depth);
+    const RenderedFrame one = renderFrameWithDepth(Scene(scene), Camera(scene.cameras.front(), 64, 48), scene.settings,
+                                                   report.frame);
+    for (NodeThread* node : {w.left.get(), w.right.get()}) {
+        const bool isLeft = node == w.left.get();
+        ASSERT_TRUE(w.shownOf(*node, report.frame).has_value());
+        std::vector<std::vector<float>> views;
+        {
+            std::lock_guard lock(node->m);
+            for (const auto& [frame, d] : node->depths)
+                if (frame == report.frame) views = d;
+        }
+        ASSERT_EQ(views.size(), 1u) << (isLeft ? "left" : "right");
+        ASSERT_EQ(views[0].size(), size_t(64 * 48));
+        size_t wrong = 0;
+        for (int y = 0; y < 48; ++y)
+            for (int x = 0; x < 64; ++x) {
+                const size_t i = size_t(y) * 64 + size_t(x);
+                const bool mine = (x < 32) == isLeft;
+                const float got = views[0][i];
+                wrong += mine ? got != decodeDepth(encodeDepth(one.depth[i])) : !std::isnan(got);
+            }
+        EXPECT_EQ(wrong, 0u) << (isLeft ? "left" : "right");
     }
 }
 

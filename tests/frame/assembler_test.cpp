@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <random>
 #include <thread>
 
@@ -255,6 +256,48 @@ TEST(Assembler, MultiViewFrameWritesEachTileIntoItsView) {
     EXPECT_EQ(a.images().size(), 1u);
     EXPECT_EQ(a.tiles().size(), 8u);
     EXPECT_EQ(a.viewOf(7), 0u);
+}
+
+// Issue 27: with FrameHolding::depth each view has a depth buffer, written through the tile's
+// claim (depthAt), and NaN wherever no tile of this frame wrote, even where the last frame's did
+// (a stale depth would be a surface the warp moves that is no longer there).
+TEST(Assembler, DepthBuffersPerViewAreHolesUntilATileWrites) {
+    std::vector<FrameView> views(2);
+    views[1].regions = {{20, 0, 12, 8}};  // x 16..32 of a 32x16 frame
+    views[1].refWidth = 40;
+    views[1].refHeight = 16;
+    const std::vector<ViewTile> tiles = viewTiles(views, 32, 16, 8);
+    FrameHolding holding;
+    holding.depth = true;
+    FrameAssembler a;
+    for (uint32_t frame : {1u, 2u}) {
+        a.beginFrame(frame, 32, 16, tiles, 2, holding);
+        ASSERT_TRUE(a.depth());
+        ASSERT_EQ(a.depthImages().size(), 2u);
+        for (const std::vector<float>& d : a.depthImages()) {
+            ASSERT_EQ(d.size(), size_t(32 * 16));
+            for (float v : d) ASSERT_TRUE(std::isnan(v)) << "frame " << frame;
+        }
+        // Frame 1 writes every tile; frame 2 only view 1's first tile.
+        for (uint32_t t = 0; t < tiles.size(); ++t) {
+            if (frame == 2 && t != 8) continue;
+            TileRect rect;
+            TileView view;
+            ASSERT_EQ(a.claim(frame, t, rect, view), Claim::Granted);
+            for (int y = 0; y < rect.height(); ++y)
+                for (int x = 0; x < rect.width(); ++x) a.depthAt(a.viewOf(t), rect.x0, rect.y0)[y * 32 + x] = float(t + 1);
+            a.commit(t);
+        }
+    }
+    const std::vector<float>& right = a.depthImages()[1];
+    EXPECT_EQ(right[3 * 32 + 17], 9.0f);                // tile 8: x 16..24, y 0..8 of view 1
+    EXPECT_TRUE(std::isnan(right[3 * 32 + 25]));        // tile 9, written in frame 1 only
+    EXPECT_TRUE(std::isnan(right[3 * 32 + 2]));         // outside the view's region
+    EXPECT_TRUE(std::isnan(a.depthImages()[0][0]));     // view 0: nothing this frame
+    // Without depth there are no buffers.
+    a.beginFrame(3, 32, 16, tiles, 2);
+    EXPECT_FALSE(a.depth());
+    EXPECT_TRUE(a.depthImages().empty());
 }
 
 // The tiling of a multi-view frame: view by view, only the tiles that meet a view's regions,

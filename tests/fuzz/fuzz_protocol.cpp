@@ -63,7 +63,7 @@ template <> void checkPayload<TileResult>(const uint8_t* data, size_t size) {
     const TileResult msg = decodePayload<TileResult>(data, size);
     const TileResultInfo info = peekTileResult(data, size);
     if (info.frame != msg.frame || info.tile != msg.tile || info.renderMicros != msg.renderMicros ||
-        info.pixelBytes != msg.pixels.size())
+        info.pixelBytes != msg.pixels.size() || info.depthBytes != msg.depth.size())
         finding("peekTileResult disagrees with decodePayload<TileResult>");
     const std::vector<uint8_t> again = encodeMessage(Header{}, msg);
     if (again.size() != kHeaderSize + size || std::memcmp(again.data() + kHeaderSize, data, size) != 0)

@@ -106,6 +106,9 @@ int main(int argc, char** argv) {
     seedMessage("tile-request", TileRequest{3, 4});
     seedMessage("tile-assign", TileAssign{3, {0, 1, 2, 17}});
     seedMessage("tile-result", TileResult{3, 17, TileCodec::Lz4, 1500, {1, 2, 3, 4, 5}});
+    // Version 14: depth with every tile, each field its message's last and only when asked for.
+    seedMessage("frame-begin-depth", FrameBegin{5, 2, TilePixels::Srgb8, {FrameView{}}, true});
+    seedMessage("tile-result-depth", TileResult{5, 17, TileCodec::Lz4, 1500, {1, 2, 3, 4, 5}, TilePixels::Srgb8, {6, 7, 8}});
     seedMessage("heartbeat", Heartbeat{});
     seedMessage("heartbeat-idle", Heartbeat{3, 12, true});
     seedMessage("tile-stalled", TileStalled{3, 17, 61000});
@@ -123,6 +126,7 @@ int main(int argc, char** argv) {
     seedMessage("node-welcome-keys", NodeWelcome{1, 250, 3000, "[wall]\nrows = 1\ncolumns = 2\n",
                                                  {"rq:rM>}U?@Lns47E1%kR.o@n%FcmmsL/@{H8]yf7"}});
     seedMessage("node-frame", NodeFrame{3, 128, 64, 32, TilePixels::Srgb8});
+    seedMessage("node-frame-depth", NodeFrame{5, 128, 64, 32, TilePixels::Srgb8, {}, {}, false, 0, true});
     // Version 12: a stereo frame's views with their eyes, accumulated as linear tiles.
     {
         FrameView leftEye, rightEye;

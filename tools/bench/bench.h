@@ -36,6 +36,9 @@ struct ClusterOptions : Common {
     int width = 1600, height = 1200, tile = 32, frames = 10, maxClients = 4;
     int64_t triangles = 200'000;
     bool render = false, insecure = false;
+    // --depth (issue 27): each setting measured twice in one run, without and with depth with
+    // every tile (ClusterSettings::depth), for what depth costs in bytes and frames per second.
+    bool depth = false;
     std::string bind = "tcp://127.0.0.1:0", netns, link = "loopback", codec = "lz4";
     std::vector<int> clientCounts;
     // --display-nodes: walls split over these numbers of display-node processes instead

@@ -35,6 +35,7 @@ struct Point {
     int clients, prefetch;
     TileCodec codec;
     bool affinity;
+    bool depth = false;  // depth with every tile (--depth)
 };
 
 // CPU seconds (user + system) of every thread of a process, by thread id, with its name.
@@ -128,6 +129,7 @@ toml::table measure(const SceneDesc& desc, const Image& reference, const Point& 
     cs.prefetch = p.prefetch;
     cs.affinity = p.affinity;
     cs.codec.codec = p.codec;
+    cs.depth = p.depth;
     cs.async = true;
     cs.bind = o.bind;
     cs.insecure = o.insecure;
@@ -164,9 +166,10 @@ toml::table measure(const SceneDesc& desc, const Image& reference, const Point& 
     const double db = psnrDb(first, reference), quality = std::isinf(db) ? 999.0 : db;
     const double tiles = double(makeTiles(o.width, o.height, o.tile).size()) * o.frames;
     if (o.text) {
-        std::fprintf(o.text, "%-9s clients %d prefetch %d %-4s affinity %-3s: %6.1f fps, %6.2f MB/frame, PSNR %5.1f dB, "
-                     "tile latency %6.2f ms, busy %.2f, %.1f stolen/frame, %.0f%% kept their client\n",
+        std::fprintf(o.text, "%-9s clients %d prefetch %d %-4s affinity %-3s depth %-3s: %6.1f fps, %6.2f MB/frame, "
+                     "PSNR %5.1f dB, tile latency %6.2f ms, busy %.2f, %.1f stolen/frame, %.0f%% kept their client\n",
                      p.vary.c_str(), p.clients, p.prefetch, tileCodecName(p.codec), p.affinity ? "on" : "off",
+                     p.depth ? "on" : "off",
                      1.0 / median(times), median(bytes) * 1e-6, quality, median(latency) * 1e3, median(busy),
                      double(stolen) / o.frames, 100.0 * double(hits) / tiles);
         std::fflush(o.text);
@@ -176,6 +179,7 @@ toml::table measure(const SceneDesc& desc, const Image& reference, const Point& 
                        {"prefetch", p.prefetch},
                        {"codec", tileCodecName(p.codec)},
                        {"affinity", p.affinity},
+                       {"depth", p.depth},
                        {"fps", 1.0 / median(times)},
                        {"bytes_per_frame", median(bytes)},
                        {"mean_tile_latency_ms", median(latency) * 1e3},
@@ -212,7 +216,13 @@ toml::table cluster(const ClusterOptions& o) {
     }();
     if (!o.displayNodes.empty()) return clusterNodes(desc, reference, o);
     toml::array results;
-    for (const Point& p : pointsOf(o)) results.push_back(measure(desc, reference, p, o));
+    for (Point p : pointsOf(o)) {
+        results.push_back(measure(desc, reference, p, o));
+        // With --depth the same setting again with depth, right after: the pair shares the load.
+        if (!o.depth) continue;
+        p.depth = true;
+        results.push_back(measure(desc, reference, p, o));
+    }
     return toml::table{{"benchmark", "cluster"}, {"width", o.width}, {"height", o.height}, {"tile", o.tile},
                        {"frames", o.frames}, {"replay", !o.render}, {"link", o.link}, {"results", results}};
 }

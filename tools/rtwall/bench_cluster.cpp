@@ -13,6 +13,7 @@ void addBenchCluster(CLI::App& bench, Run& run) {
     cmd->add_option("--max-clients", o.maxClients, "Largest client count in the sweep (1, 2, 4, ... up to it)")->check(CLI::Range(1, 256));
     addTrianglesOption(cmd, o.triangles, "Triangles of the built-in scene");
     cmd->add_flag("--render", o.render, "Clients really render every tile (default: replay pre-encoded tiles)");
+    cmd->add_flag("--depth", o.depth, "Each setting without and with depth with every tile, in one run (issue 27)");
     addNetemOptions(cmd, o.bind, o.netns, o.link, "Master endpoint (tools/netem.sh binds inside its namespaces)",
                     "Start client i in network namespace <prefix><i> (tools/netem.sh)");
     cmd->add_flag("--insecure", o.insecure, "Allow a non-loopback --bind without CURVE keys (tools/netem.sh namespaces)");

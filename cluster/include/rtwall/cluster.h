@@ -75,7 +75,7 @@ struct ClusterSettings {
     bool wideAccumulation = true;
     // Depth with every tile (issue 27), for re-projection on the display side: the clients send
     // each tile's depth (distance along the primary ray, 16-bit log code, zstd; about 0.5 MB per
-    // 1600x1200 frame of the demo scene, docs/cluster.md) and renderViews/renderFrame give it per
+    // 1600x1200 frame of the demo scene, docs/benchmarks.md) and renderViews/renderFrame give it per
     // view, as do display nodes. Off: nothing changes, the same bytes on the wire and images.
     bool depth = false;
     // Security: with a key pair every link is CURVE-encrypted and only the listed client public
