@@ -4,19 +4,23 @@
 
 namespace rtwall::cluster {
 
-void SwapBarrier::join(NodeId node) {
-    joined_.insert(node);
+void SwapBarrier::join(NodeId node, uint32_t firstFrame) {
+    joined_[node] = firstFrame;
+    newest_.erase(node);
     out_.erase(node);
 }
 
 void SwapBarrier::leave(NodeId node) {
     joined_.erase(node);
+    newest_.erase(node);
     out_.erase(node);
 }
 
 std::optional<uint32_t> SwapBarrier::have(NodeId node, uint32_t frame, double now) {
     if (!joined_.count(node) || (anyReleased_ && frame <= lastReleased_)) return releaseReady();
     if (out_.erase(node)) ++stats_.rejoined;  // it holds a current frame again: it takes part from here on
+    uint32_t& newest = newest_[node];
+    newest = std::max(newest, frame);
     Pending& p = pending_[frame];
     if (p.have.empty()) p.firstSeconds = now;
     p.have.insert(node);
@@ -27,8 +31,8 @@ std::optional<uint32_t> SwapBarrier::poll(double now) {
     for (auto& [frame, p] : pending_) {
         if (now - p.firstSeconds <= stallSeconds_) continue;
         // Everyone still missing from a frame that waited too long is left out.
-        for (NodeId n : joined_)
-            if (!out_.count(n) && !p.have.count(n)) {
+        for (const auto& [n, first] : joined_)
+            if (waitsFor(n, frame) && !p.have.count(n)) {
                 out_.insert(n);
                 ++stats_.leftOut;
             }
@@ -40,17 +44,19 @@ std::optional<uint32_t> SwapBarrier::releaseReady() {
     std::optional<uint32_t> ready;
     for (const auto& [frame, p] : pending_) {
         bool all = true;
-        for (NodeId n : joined_)
-            if (takingPart(n) && !p.have.count(n)) {
+        for (const auto& [n, first] : joined_)
+            if (waitsFor(n, frame) && !p.have.count(n)) {
                 all = false;
                 break;
             }
         // A frame nobody taking part holds (all left) is not released: it waits for a node.
         bool anyone = false;
-        for (NodeId n : p.have) anyone |= takingPart(n);
+        for (NodeId n : p.have) anyone |= takingPart(n, frame);
         if (all && anyone) ready = frame;
     }
     if (!ready) return std::nullopt;
+    const Pending& released = pending_.at(*ready);
+    for (const auto& [n, first] : joined_) stats_.passedOver += takingPart(n, *ready) && !released.have.count(n);
     for (auto it = pending_.begin(); it != pending_.end() && it->first <= *ready;) {
         if (it->first < *ready) ++stats_.superseded;
         it = pending_.erase(it);

@@ -28,34 +28,51 @@ TEST(SwapBarrier, ReleasesAFrameOnlyWhenEveryNodeHoldsIt) {
     EXPECT_EQ(b.stats().released, 1u);
 }
 
-// Random interleavings of several frames' reports, with random delays: a frame is released
-// exactly when its last node reports it (or a newer frame all hold supersedes it), never before.
-TEST(SwapBarrier, NoFrameIsReleasedBeforeAllHoldItUnderAnyDelay) {
+// Random interleavings of nodes that behave as display nodes do: each reports the frames it
+// holds in increasing order, the next only once the barrier released the one before (it waits
+// for that swap), and some lose a frame now and then (a newer one overtook it). A frame is
+// released only when every node holds it or went on to a newer one; with no frame lost, every
+// node holds every released frame; and the wall never waits on itself (every node can always
+// go on: no deadlock without the stall time).
+TEST(SwapBarrier, NoFrameIsReleasedBeforeAllHoldItUnderAnyInterleaving) {
     std::mt19937 rng(11);
-    for (int run = 0; run < 200; ++run) {
-        const int nodes = 1 + int(rng() % 4), frames = 1 + int(rng() % 5);
+    for (int run = 0; run < 400; ++run) {
+        const int nodes = 1 + int(rng() % 4), frames = 1 + int(rng() % 6);
+        const bool losing = run % 2 == 1;
         SwapBarrier b(1e9);  // no stalls here
         for (int n = 0; n < nodes; ++n) b.join(NodeId(n));
-        struct Report {
-            NodeId node;
-            uint32_t frame;
-            double at;
-        };
-        std::vector<Report> reports;
-        for (int f = 1; f <= frames; ++f)
-            for (int n = 0; n < nodes; ++n) reports.push_back({NodeId(n), uint32_t(f), f * 0.016 + (rng() % 1000) * 1e-4});  // up to 100 ms late
-        std::sort(reports.begin(), reports.end(), [](const Report& a, const Report& c) { return a.at < c.at; });
+        // Each node's frames, in order; a losing node misses some (never the last).
+        std::vector<std::vector<uint32_t>> toReport{size_t(nodes)};
+        for (auto& list : toReport)
+            for (int f = 1; f <= frames; ++f)
+                if (!losing || f == frames || rng() % 4 != 0) list.push_back(uint32_t(f));
+        std::vector<size_t> next(size_t(nodes), 0);
+        std::vector<uint32_t> newest(size_t(nodes), 0);
         std::map<uint32_t, std::set<NodeId>> held;
         uint32_t last = 0;
-        for (const Report& r : reports) {
-            held[r.frame].insert(r.node);
-            const auto released = b.have(r.node, r.frame, r.at);
+        double t = 0;
+        for (;;) {
+            std::vector<int> ready;  // nodes whose previous frame is released (or passed over): they may report
+            for (int n = 0; n < nodes; ++n)
+                if (next[size_t(n)] < toReport[size_t(n)].size() && newest[size_t(n)] <= b.lastReleased()) ready.push_back(n);
+            if (ready.empty()) break;
+            const int n = ready[rng() % ready.size()];
+            const uint32_t f = toReport[size_t(n)][next[size_t(n)]++];
+            newest[size_t(n)] = f;
+            held[f].insert(NodeId(n));
+            const auto released = b.have(NodeId(n), f, t += 0.001);
             if (!released) continue;
             ASSERT_GT(*released, last);
-            ASSERT_EQ(held[*released].size(), size_t(nodes)) << "frame " << *released << " released before every node held it";
+            for (int m = 0; m < nodes; ++m)
+                ASSERT_TRUE(held[*released].count(NodeId(m)) || newest[size_t(m)] > *released)
+                    << "frame " << *released << " released while node " << m << " might still hold it";
+            if (!losing) ASSERT_EQ(held[*released].size(), size_t(nodes)) << "frame " << *released << " released before every node held it";
             last = *released;
         }
+        for (int n = 0; n < nodes; ++n)
+            ASSERT_EQ(next[size_t(n)], toReport[size_t(n)].size()) << "node " << n << " waits forever (run " << run << ")";
         EXPECT_EQ(last, uint32_t(frames));  // the newest frame always comes out
+        if (!losing) EXPECT_EQ(b.stats().passedOver, 0u);
     }
 }
 
@@ -91,6 +108,42 @@ TEST(SwapBarrier, ANodeThatLeavesNoLongerHoldsFramesBack) {
     EXPECT_EQ(b.have(2, 2, 0.03), 2u);
     // Reports of nodes that never joined are ignored.
     EXPECT_FALSE(b.have(9, 3, 0.04));
+}
+
+// A node that joins while frames 3 and 4 are under way (3 complete on node 1, 4 begun) may never
+// hold them whole (their tiles left before the clients knew it): they do not wait for it, not
+// even with a stall time that would hold the wall for a minute; frame 5 does.
+TEST(SwapBarrier, ANodeThatJoinsMidFrameTakesPartFromTheNextFrame) {
+    SwapBarrier b(60);
+    joinAll(b, {1});
+    EXPECT_EQ(b.have(1, 1, 0), 1u);
+    EXPECT_EQ(b.have(1, 2, 0.01), 2u);
+    b.join(2, 5);
+    EXPECT_EQ(b.have(1, 3, 0.02), 3u);
+    EXPECT_EQ(b.have(1, 4, 0.03), 4u);
+    EXPECT_FALSE(b.poll(0.04));
+    EXPECT_TRUE(b.leftOut().empty());
+    EXPECT_FALSE(b.have(1, 5, 0.05)) << "frame 5 waits for node 2";
+    EXPECT_EQ(b.have(2, 5, 0.06), 5u);
+    // Past the stall time, a node late for a frame it takes part in is still left out.
+    EXPECT_FALSE(b.have(2, 6, 0.07));
+    EXPECT_EQ(b.poll(61), 6u);
+    EXPECT_EQ(b.leftOut(), (std::vector<NodeId>{1}));
+}
+
+// Node 1 holds frame 2 and waits for its swap before it reports 3; node 2 lost frame 2 (frame 4
+// overtook it) and holds 3. Node 2's report of 3 says it will never hold 2: frame 2 goes at once
+// (not after the stall time, which would hold the wall for a minute here), then 3.
+TEST(SwapBarrier, ANodeThatWentOnToANewerFrameDoesNotHoldAnOlderOneBack) {
+    SwapBarrier b(60);
+    joinAll(b, {1, 2});
+    EXPECT_FALSE(b.have(1, 2, 0));
+    EXPECT_EQ(b.have(2, 3, 0.01), 2u);
+    EXPECT_EQ(b.stats().passedOver, 1u);
+    EXPECT_TRUE(b.leftOut().empty()) << "passed over, not stalled";
+    EXPECT_EQ(b.have(1, 3, 0.02), 3u);
+    EXPECT_EQ(b.stats().superseded, 0u);
+    EXPECT_EQ(b.stats().leftOut, 0u);
 }
 
 TEST(SwapBarrier, ANewerFrameAllHoldSupersedesOlderOnes) {
