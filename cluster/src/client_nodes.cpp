@@ -49,7 +49,8 @@ void ClientRuntime::onNodeList(const NodeList& list) {
 
 // Handshake failures of the links to the nodes, each said once per link.
 void ClientRuntime::readNodeMonitors() {
-    for (auto& [node, link] : nodeLinks_) {
+    for (auto& entry : nodeLinks_) {
+        auto& link = entry.second;  // not a structured binding: clang 14 cannot capture those in the lambda
         if (!link.monitor) continue;
         link.monitor.read(8, [&](const MonitorEvent& e) {
             if (settings_.counters) ++(e.id == ZMQ_EVENT_HANDSHAKE_FAILED_AUTH ? settings_.counters->refusedHandshakes

@@ -5,6 +5,8 @@
 // its frame's NodeFrame (it travels on another connection) waits in a bounded queue. A frame it
 // holds becomes what it shows (the Compositor: accumulated and composed into the eyes as on the
 // single-PC wall) before it says so; the swap presents that. What is presented, and how, is the caller's callback.
+// A re-projecting wall (issue 27) makes each released frame the warp's source at its swap and
+// presents at every pose the master sends (NodePose, once per refresh), warped to that pose.
 #include "codec.h"
 #include "link_socket.h"
 #include "net.h"
@@ -80,14 +82,25 @@ public:
             if (monitor_ && (items[2].revents & ZMQ_POLLIN)) readMonitor();
             if (zap_ && run_.counters) run_.counters->refusedClients = zap_->denied();
             if (items[0].revents & ZMQ_POLLIN) {
+                // Poses queued behind each other (a warp that took longer than a refresh): only
+                // the newest is shown, after everything else that came (a swap before it too).
+                zmq::message_t pose;
                 for (int i = 0; i < 256; ++i) {
                     zmq::message_t msg;
                     if (!master_.recv(msg, zmq::recv_flags::dontwait)) break;
                     if (discardRestOf(master_, msg) > 0) continue;
+                    if (isPose(msg)) {
+                        if (pose.size() > 0 && run_.counters) ++run_.counters->supersededPoses;
+                        pose = std::move(msg);
+                        lastHeard_ = idleSince = nowSeconds();
+                        continue;
+                    }
                     const std::optional<int> status = fromMaster(msg);
                     if (status) return *status;
                     lastHeard_ = idleSince = nowSeconds();
                 }
+                if (pose.size() > 0)
+                    if (const std::optional<int> status = fromMaster(pose)) return *status;
             }
             if (items[1].revents & ZMQ_POLLIN) {
                 for (int i = 0; i < 1024; ++i) {
@@ -124,6 +137,16 @@ private:
 
     bool keyed() const { return !run_.keyFile.empty(); }
 
+    // A NodePose of this session (the rest is looked at by fromMaster, which drops what is wrong).
+    bool isPose(const zmq::message_t& msg) const {
+        try {
+            const Header h = decodeHeader(static_cast<const uint8_t*>(msg.data()), msg.size());
+            return h.type == MsgType::NodePose && session_ != 0 && h.session == session_;
+        } catch (const DecodeError&) {
+            return false;
+        }
+    }
+
     void connect() {
         master_ = zmq::socket_t(ctx_, zmq::socket_type::dealer);
         // A welcome holds the wall config and the client keys.
@@ -137,9 +160,12 @@ private:
         session_ = 0;
         shown_ = {};
         compositor_ = Compositor{};  // another session's frames: no running mean goes on across a rejoin
+        reproject_ = false;          // until the welcome says
+        sourceFrame_ = lastCounted_ = 0;
+        leftOut_.clear();
         routes_.clear();
         early_.clear();
-        slots_[0].begun = slots_[1].begun = false;
+        for (Slot& slot : store_) slot.begun = false;
         pendingSwap_.reset();
         sendNow(master_, encodeMessage(Header{}, NodeHello{kProtocolVersion, run_.name, endpoint_, tileKeys_.publicKey}));
         lastHeard_ = lastSent_ = nowSeconds();
@@ -170,6 +196,7 @@ private:
                 index_ = w.node;
                 heartbeatMs_ = int(std::max(10u, w.heartbeatMs));
                 timeoutMs_ = int(std::max(w.timeoutMs, 2 * w.heartbeatMs));
+                reproject_ = w.reproject;
                 if (zap_) zap_->setAllowed(w.clientKeys);
                 // At once: the master tells the clients where this node is only once it answered
                 // (its tile socket now lets their keys in).
@@ -188,26 +215,30 @@ private:
                 break;
             }
             case MsgType::NodeFrame: onFrame(decodePayload<NodeFrame>(p, n)); break;
+            case MsgType::NodePose: return onPose(decodePayload<NodePose>(p, n));
             case MsgType::NodeSwap: {
                 const NodeSwap s = decodePayload<NodeSwap>(p, n);
                 // Frames before this one were released without this node (it was late): let them
                 // go, shown or not, so that this one can be shown if it is held.
                 if (pendingSwap_ && *pendingSwap_ < s.frame) pendingSwap_.reset();
-                for (Slot& slot : slots_)
+                for (Slot& slot : store_)
                     if (slot.begun && slot.frame.frame < s.frame) slot.begun = false;
                 reportIfComplete();  // the released frame, if it was held back behind the one before
                 const bool held = pendingSwap_ == s.frame;
-                if (run_.present) {
+                if (reproject_) {
+                    // The frame becomes the warp's newest source; the poses show it.
+                    if (const Slot* slot = held ? slotOf(s.frame) : nullptr) keepSource(*slot, s.leftOut);
+                } else if (run_.present) {
                     if (held) run_.present(s.frame, &shown_.left, shown_.right.rgb.empty() ? nullptr : &shown_.right, s.leftOut);
                     else run_.present(s.frame, nullptr, nullptr, s.leftOut);
                 }
                 send(NodeSwapped{s.frame}, s.frame);
                 // Frames up to this one are done with: shown, or released without this node.
                 if (held) pendingSwap_.reset();
-                for (Slot& slot : slots_)
+                for (Slot& slot : store_)
                     if (slot.begun && slot.frame.frame <= s.frame) slot.begun = false;
                 reportIfComplete();
-                if (held && run_.frames > 0 && ++presented_ >= run_.frames) {
+                if (held && !reproject_ && run_.frames > 0 && ++presented_ >= run_.frames) {
                     send(Goodbye{"display node '" + run_.name + "' presented its frames"});
                     return 0;
                 }
@@ -231,7 +262,12 @@ private:
         // The newest frame goes into the older slot: the frame before may still be waiting for
         // its last tiles or its swap (the master begins frame N+1 on N's last ack, which can
         // overtake N's last tile on its way here, and N's NodeSwap comes after N+1 began).
-        Slot& slot = slots_[current_ ^ 1];
+        // Re-projecting, a frame reported and not yet swapped is composed only at its swap: a
+        // frame that came in the meantime must not overwrite it. It is parked (its buffers
+        // trade places with the parked slot's, nothing is copied).
+        if (reproject_ && slots_[current_ ^ 1]->begun && pendingSwap_ == slots_[current_ ^ 1]->frame.frame)
+            std::swap(slots_[current_ ^ 1], parked_);
+        Slot& slot = *slots_[current_ ^ 1];
         try {
             // The clients' tiling of the frame (viewTiles), which the masks index.
             std::vector<ViewTile> tiles;
@@ -271,7 +307,7 @@ private:
             if (run_.counters) ++run_.counters->droppedMessages;
             return;
         }
-        const Slot& newest = slots_[current_];
+        const Slot& newest = *slots_[current_];
         if (!newest.begun || r.frame > newest.frame.frame) {
             if (early_.size() < kMaxEarlyTiles) early_.push_back(std::move(msg));
             return;
@@ -316,13 +352,13 @@ private:
     // and every frame held is presented.
     void reportIfComplete() {
         if (pendingSwap_) return;
-        Slot* older = &slots_[current_ ^ 1];
-        Slot* newer = &slots_[current_];
+        Slot* older = slots_[current_ ^ 1];
+        Slot* newer = slots_[current_];
         for (Slot* slot : {older, newer}) {
             if (!slot->begun || slot->haveSent) continue;
             if (!slot->assembly.complete()) return;  // the newer waits for the older
             slot->haveSent = true;
-            show(*slot);
+            if (!reproject_) show(*slot);  // re-projecting: at its swap (keepSource), not before
             pendingSwap_ = slot->frame.frame;
             send(NodeHave{slot->frame.frame}, slot->frame.frame);
             return;
@@ -344,9 +380,69 @@ private:
         if (run_.depth && slot.assembly.depth()) run_.depth(f.frame, slot.assembly.depthImages());
     }
 
+    // Re-projecting: the released frame becomes the newest warp source (accumulated and composed
+    // as show() does, with each view's depth); the frame before stays the older one.
+    void keepSource(const Slot& slot, const std::vector<std::string>& leftOut) {
+        const NodeFrame& f = slot.frame;
+        ComposeFrame c;
+        c.views = f.views;
+        c.eyes.assign(f.eyes.begin(), f.eyes.end());
+        c.stochastic = f.stochastic;
+        c.stateSeq = f.stateSeq;
+        c.linear = slot.assembly.linear();
+        if (slot.assembly.depth()) c.depth = slot.assembly.depthImages();
+        compositor_.compose(c, slot.assembly.images(), slot.assembly.linearImages());
+        if (run_.depth && slot.assembly.depth()) run_.depth(f.frame, slot.assembly.depthImages());
+        sourceFrame_ = f.frame;
+        leftOut_ = leftOut;
+    }
+
+    // A refresh: the newest source warped to the master's pose, shown at once, and answered.
+    std::optional<int> onPose(const NodePose& pose) {
+        if (!reproject_) {
+            if (run_.counters) ++run_.counters->droppedMessages;
+            std::fprintf(stderr, "rtwall display: dropped a pose from the master: this wall does not re-project\n");
+            return std::nullopt;
+        }
+        if (compositor_.reprojectViews() == 0 || pose.cameras.size() != compositor_.reprojectViews()) {
+            // No frame with depth yet, or a pose for other views than the frame held (the views
+            // changed while this node was left out): the screens keep what they show.
+            if (run_.counters) ++run_.counters->skippedPoses;
+            if (compositor_.reprojectViews() != 0 && !saidMismatch_) {
+                std::fprintf(stderr, "rtwall display: a pose of %zu cameras for a frame of %zu views is not shown\n",
+                             pose.cameras.size(), compositor_.reprojectViews());
+                saidMismatch_ = true;
+            }
+            return std::nullopt;
+        }
+        NodeRefresh r;
+        r.refresh = pose.refresh;
+        r.frame = sourceFrame_;
+        r.compositor = &compositor_;
+        r.targets = pose.cameras;
+        r.debug = pose.debug;
+        r.leftOut = &leftOut_;
+        if (run_.refresh) {
+            run_.refresh(r);
+        } else if (run_.present) {
+            const EyeImages& eyes = compositor_.reproject(pose.cameras, {}, pose.debug);
+            run_.present(sourceFrame_, &eyes.left, eyes.right.rgb.empty() ? nullptr : &eyes.right, leftOut_);
+        }
+        send(NodeShown{pose.refresh}, sourceFrame_);
+        if (run_.counters) ++run_.counters->refreshes;
+        if (sourceFrame_ > lastCounted_) {
+            lastCounted_ = sourceFrame_;
+            if (run_.frames > 0 && ++presented_ >= run_.frames) {
+                send(Goodbye{"display node '" + run_.name + "' presented its frames"});
+                return 0;
+            }
+        }
+        return std::nullopt;
+    }
+
     // The slot that holds `frame` (begun in this session), if any.
     Slot* slotOf(uint32_t frame) {
-        for (Slot& slot : slots_)
+        for (Slot& slot : store_)
             if (slot.begun && slot.frame.frame == frame) return &slot;
         return nullptr;
     }
@@ -382,11 +478,19 @@ private:
         bool begun = false;     // holds a frame begun in this session and not yet swapped
         bool haveSent = false;  // shown and reported (NodeHave)
     };
-    Slot slots_[2];
+    Slot store_[3];
+    Slot* slots_[2] = {&store_[0], &store_[1]};
+    Slot* parked_ = &store_[2];  // re-projecting: a reported frame overtaken by two newer ones, until its swap
     int current_ = 0;
     Compositor compositor_;                // the running means go on from frame to frame
     EyeImages shown_;                      // what the node shows of the last frame it held
     std::optional<uint32_t> pendingSwap_;  // shown_'s frame, reported and not yet swapped
+    // Re-projection (the welcome's flag): the compositor's newest source is sourceFrame_, released
+    // with leftOut_ left out; lastCounted_ is the newest frame counted as presented (run_.frames).
+    bool reproject_ = false;
+    uint32_t sourceFrame_ = 0, lastCounted_ = 0;
+    std::vector<std::string> leftOut_;
+    bool saidMismatch_ = false;
     std::vector<zmq::message_t> early_;
     std::vector<uint8_t> scratch_;
     int presented_ = 0;

@@ -159,6 +159,30 @@ bool Master::waitForSwap(uint32_t frame, int timeoutMs) {
     return waitUntil(*impl_, timeoutMs, [&] { return impl_->swapReleased >= frame; });
 }
 
+void Master::presentPose(std::span<const CameraDesc> cameras, bool debug) {
+    if (!impl_->settings.displayNodes.reproject)
+        throw std::logic_error("Master::presentPose on a master whose display nodes do not re-project");
+    if (cameras.empty() || cameras.size() > kMaxViews)
+        throw std::invalid_argument("Master::presentPose: " + std::to_string(cameras.size()) + " cameras (1 to " +
+                                    std::to_string(kMaxViews) + ", one per view)");
+    {
+        std::lock_guard lock(impl_->poseMutex);
+        PendingPose& p = impl_->pendingPose.emplace();
+        p.cameras.assign(cameras.begin(), cameras.end());
+        for (CameraDesc& c : p.cameras) c.name.clear();  // the nodes need the geometry only
+        p.debug = debug;
+        p.askedAt = nowSeconds();
+    }
+    impl_->wake();
+}
+
+std::vector<NodeRefreshDelay> Master::takeNodeRefreshes() {
+    std::lock_guard lock(impl_->poseMutex);
+    std::vector<NodeRefreshDelay> out(impl_->nodeRefreshes.begin(), impl_->nodeRefreshes.end());
+    impl_->nodeRefreshes.clear();
+    return out;
+}
+
 int Master::awaitClients(int wanted, int timeoutMs, int settleMs) {
     Impl& s = *impl_;
     std::unique_lock lock(s.m);

@@ -26,6 +26,7 @@
 #include <rtwall/cluster.h>
 #include <rtwall/cluster_testing.h>
 
+#include <array>
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
@@ -83,6 +84,13 @@ struct NodeState {
     // clients may now be told where it is; before, a client's handshake could be refused.
     bool answered = false;
     const char* deathReason = nullptr;
+};
+
+// A pose Master::presentPose asked for, not yet sent to the nodes.
+struct PendingPose {
+    std::vector<CameraDesc> cameras;
+    bool debug = false;
+    double askedAt = 0;  // nowSeconds()
 };
 
 // How many of each kind of dropped message are logged (with the peer's address) before the
@@ -233,7 +241,17 @@ struct Master::Impl {
         uint32_t routesFrame = UINT32_MAX;  // the first frame `routes` apply to
         std::tuple<int, int, int, std::vector<FrameView>> routesKey;
         size_t tilesDone = 0;  // with nodes: tiles of the current frame acknowledged (TileDone)
+        // Re-projection (presentPose): the refreshes sent, and when each was asked for (a ring:
+        // an answer older than kPoseRing refreshes is not timed).
+        uint32_t refreshes = 0;
+        static constexpr size_t kPoseRing = 256;
+        std::array<double, kPoseRing> poseAskedAt{};
     } display;
+    // The newest pose presentPose asked for and the network thread has not sent (newest wins),
+    // and the answers for takeNodeRefreshes; both under poseMutex.
+    std::mutex poseMutex;
+    std::optional<PendingPose> pendingPose;
+    std::deque<NodeRefreshDelay> nodeRefreshes;
     bool withNodes() const { return !settings.displayNodes.names.empty(); }
     std::atomic<uint64_t> resyncCount{0};
     std::atomic<uint64_t> injectedLosses{0};
@@ -362,6 +380,7 @@ struct Master::Impl {
     void reapNodes();
     void publishNodes();
     void nodeHousekeeping();
+    void sendPendingPose();
 };
 
 // Queues a command under stateMutex (the caller holds it), so that commands are in sequence order.

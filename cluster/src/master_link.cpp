@@ -193,6 +193,7 @@ void Master::Impl::loop() {
             zmq::message_t ignored;
             while (link.wakeRecv.recv(ignored, zmq::recv_flags::dontwait)) {
             }
+            sendPendingPose();  // a refresh's pose first: it does not wait behind a frame's commands
             if (!runCommands()) return;
             reopenFailedTiles();
         }

@@ -101,13 +101,13 @@ void Master::Impl::onNodeHello(const std::string& peer, const Header& h, const u
     n.lastSeen = nowSeconds();
     NodeState& ref = display.nodes[peer] = n;
     if (!sendNode(ref, NodeWelcome{ref.index, uint32_t(settings.heartbeatMs), uint32_t(settings.timeoutMs),
-                                   settings.displayNodes.wallText, link.allowedKeys})) {
+                                   settings.displayNodes.wallText, link.allowedKeys, settings.displayNodes.reproject})) {
         reapNodes();
         return;
     }
     std::fprintf(stderr, "rtwall master: display node '%s' (%u) joins, tiles to %s\n", ref.name.c_str(), ref.index,
                  ref.endpoint.c_str());
-    display.barrier.join(ref.index);
+    display.barrier.join(ref.index, currentFrame + 1);  // the frame begun now may never reach it whole
     publishNodes();
     if (frameActive) sendNodeFrame(ref, frameState.settings);
 }
@@ -149,6 +149,19 @@ void Master::Impl::handleNode(NodeState& n, const Header& h, const uint8_t* payl
         break;
     }
     case MsgType::NodeSwapped: display.barrier.swapped(n.index, decodePayload<NodeSwapped>(payload, payloadSize).frame, nowSeconds()); break;
+    case MsgType::NodeShown: {
+        const NodeShown shown = decodePayload<NodeShown>(payload, payloadSize);
+        if (!settings.displayNodes.reproject || shown.refresh == 0 || shown.refresh > display.refreshes) {
+            unexpected("display node '" + n.name + "' showed refresh " + std::to_string(shown.refresh) + ", which was never sent");
+            return;
+        }
+        if (display.refreshes - shown.refresh >= DisplayNodes::kPoseRing) return;  // too old to time
+        const double asked = display.poseAskedAt[shown.refresh % DisplayNodes::kPoseRing];
+        std::lock_guard lock(poseMutex);
+        nodeRefreshes.push_back({shown.refresh, n.name, asked, (nowSeconds() - asked) * 1e3});
+        while (nodeRefreshes.size() > 4096) nodeRefreshes.pop_front();
+        break;
+    }
     case MsgType::Heartbeat: decodePayload<Heartbeat>(payload, payloadSize); break;
     case MsgType::Goodbye: {
         const Goodbye bye = decodePayload<Goodbye>(payload, payloadSize);
@@ -194,6 +207,21 @@ void Master::Impl::publishNodes() {
         presentNodes = std::move(present);
     }
     cv.notify_all();
+}
+
+// The newest pose the application asked for (presentPose) to every node, for the newest frame
+// the barrier released: one message, so every node shows one pose in this refresh.
+void Master::Impl::sendPendingPose() {
+    std::optional<PendingPose> pose;
+    {
+        std::lock_guard lock(poseMutex);
+        pose.swap(pendingPose);
+    }
+    if (!pose || display.barrier.lastReleased() == 0) return;
+    NodePose msg{++display.refreshes, display.barrier.lastReleased(), pose->debug, std::move(pose->cameras)};
+    display.poseAskedAt[msg.refresh % DisplayNodes::kPoseRing] = pose->askedAt;
+    for (auto& [peer, n] : display.nodes)
+        if (!n.deathReason && n.answered) sendNode(n, msg, msg.frame);
 }
 
 void Master::Impl::nodeHousekeeping() {

@@ -1,4 +1,4 @@
-// The rtwall wire protocol, version 13 (2 added the master's peer timeout to Welcome; 3 added
+// The rtwall wire protocol, version 15 (2 added the master's peer timeout to Welcome; 3 added
 // materials, area lights and shading settings; 4 added vertex colours to meshes, the scene's
 // origin and [bvh] settings to the snapshot, spherical and cylindrical texture mappings, texture
 // and volume files by content hash (AssetRequest, AssetData, SceneSnapshot::assets) and linear
@@ -23,7 +23,9 @@
 // snapshot's camera are gone (the camera is not scene state: it moves no sequence number); 14
 // added depth with every tile (issue 27): FrameBegin::depth and NodeFrame::depth ask for it,
 // TileResult::depth carries it. Each is the last field of its message and left out when off, so
-// that a frame without depth travels byte for byte as in version 13.
+// that a frame without depth travels byte for byte as in version 13; 15 added re-projection on
+// the display nodes (issue 27): NodeWelcome::reproject, NodePose (every refresh, the cameras to
+// warp the newest released frame to) and NodeShown (a node showed that refresh).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one fields() function that
@@ -50,7 +52,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 14;  // 14: depth with every tile
+inline constexpr uint16_t kProtocolVersion = 15;  // 15: re-projection on the display nodes
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -99,8 +101,11 @@ enum class MsgType : uint16_t {
     NodeList = 25,      // master -> client: where the nodes take tiles
     TileRoutes = 26,    // master -> client and node: each tile's node mask, from a frame on
     TileDone = 27,      // client -> master: a tile went to its nodes (instead of TileResult)
+    // Version 15: re-projection on the display nodes (issue 27).
+    NodePose = 28,      // master -> node, every refresh: show the newest released frame warped to these cameras
+    NodeShown = 29,     // node -> master: it showed that refresh (the master measures the pose's delay)
 };
-inline constexpr uint16_t kMaxMsgType = 27;
+inline constexpr uint16_t kMaxMsgType = 29;
 
 struct Header {
     uint16_t version = kProtocolVersion;
@@ -354,6 +359,10 @@ struct NodeWelcome {
     // Version 12: with CURVE, the public keys (Z85) of the render clients the master lets in: the
     // node's tile socket takes only these (its ZAP handler). Empty without keys.
     std::vector<std::string> clientKeys{};
+    // Version 15: the wall re-projects (issue 27). Frames are no longer shown at their swap but
+    // at every NodePose, warped; the swap makes a frame the warp's newest source. Last, and left
+    // out when false.
+    bool reproject = false;
     bool operator==(const NodeWelcome&) const = default;
 };
 
@@ -396,6 +405,25 @@ struct NodeSwap {
 struct NodeSwapped {
     uint32_t frame = 0;
     bool operator==(const NodeSwapped&) const = default;
+};
+
+// Version 15 (issue 27): one refresh of a re-projecting wall. Every node warps `frame`, the
+// newest frame the swap barrier released (it got that NodeSwap before this, on the same
+// connection), from the cameras it was rendered with to `cameras`, one per view of the frame (the
+// head pose the master read just before sending), and shows it at once. One message for every
+// node: the screens of one refresh show one frame for one pose.
+struct NodePose {
+    uint32_t refresh = 0;  // counts up in a session
+    uint32_t frame = 0;
+    bool debug = false;    // tint warped, filled and fresh pixels (warpDebugColours)
+    std::vector<CameraDesc> cameras;
+    bool operator==(const NodePose&) const = default;
+};
+
+// The node showed refresh `refresh` (answered right after its presentation).
+struct NodeShown {
+    uint32_t refresh = 0;
+    bool operator==(const NodeShown&) const = default;
 };
 
 struct NodeEndpoint {
@@ -490,6 +518,8 @@ MsgType messageTypeOf(const NodeSwapped&);
 MsgType messageTypeOf(const NodeList&);
 MsgType messageTypeOf(const TileRoutes&);
 MsgType messageTypeOf(const TileDone&);
+MsgType messageTypeOf(const NodePose&);
+MsgType messageTypeOf(const NodeShown&);
 
 // Canonical mesh bytes (vertex count, positions, triangle count, indices, normals flag and
 // normals, colours flag and RGB bytes, all little-endian), their hash (XXH3 128-bit) and the way back. decodeMesh

@@ -1,5 +1,6 @@
 // Display nodes on the wire (version 11): a node's hello and welcome, a frame's layout, the swap
-// barrier's have, swap and swapped, and the node list clients send tiles by.
+// barrier's have, swap and swapped, and the node list clients send tiles by; the re-projecting
+// wall's pose every refresh and the node's answer (version 15).
 #include "protocol_values.h"
 
 #include <algorithm>
@@ -62,7 +63,7 @@ RTWALL_WIRE_MESSAGE(NodeHello, 4) {
     key(io, m.publicKey, "node public key");
 }
 
-RTWALL_WIRE_MESSAGE(NodeWelcome, 5) {
+RTWALL_WIRE_MESSAGE(NodeWelcome, 6) {
     nodeIndex(io, m.node);
     io.u32(m.heartbeatMs);
     io.u32(m.timeoutMs);
@@ -81,6 +82,10 @@ RTWALL_WIRE_MESSAGE(NodeWelcome, 5) {
             io.expect(!k.empty(), [] { return std::string("empty client key"); });
         },
         SendLimit::Strict);
+    io.trailing(m.reproject, [&] {
+        io.boolean(m.reproject);
+        io.expect(m.reproject, [] { return std::string("a re-projection flag that says no (it is left out then)"); });
+    });
 }
 
 RTWALL_WIRE_MESSAGE(NodeFrame, 10) {
@@ -132,6 +137,21 @@ RTWALL_WIRE_MESSAGE(NodeSwap, 2) {
 }
 
 RTWALL_WIRE_MESSAGE(NodeSwapped, 1) { io.u32(m.frame); }
+
+RTWALL_WIRE_MESSAGE(NodePose, 4) {
+    static const size_t cameraBytes = [] {
+        CameraDesc c;
+        c.name.clear();
+        return minEncodedSize(c);
+    }();
+    io.u32(m.refresh);
+    io.u32(m.frame);
+    io.boolean(m.debug);
+    vectorOf(io, m.cameras, cameraBytes, kMaxViews, SendLimit::Strict);
+    io.expect(!m.cameras.empty(), [] { return std::string("a node pose without cameras"); });
+}
+
+RTWALL_WIRE_MESSAGE(NodeShown, 1) { io.u32(m.refresh); }
 
 RTWALL_WIRE_FIELDS(NodeEndpoint, 4) {
     nodeIndex(io, m.node);

@@ -82,6 +82,8 @@ std::vector<std::vector<uint8_t>> everyType(uint64_t session, uint32_t frame) {
     out.push_back(encodeMessage(h, NodeList{{{0, "attacker", "tcp://127.0.0.1:9", ""}}}));
     out.push_back(encodeMessage(h, TileRoutes{frame, {1, 1, 1}}));
     out.push_back(encodeMessage(h, TileDone{frame, 1, 100, 12}));
+    out.push_back(encodeMessage(h, NodePose{frame, frame, true, {CameraDesc{}}}));
+    out.push_back(encodeMessage(h, NodeShown{frame}));
     return out;
 }
 

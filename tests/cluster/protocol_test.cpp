@@ -235,6 +235,9 @@ template <class F> void forEachSample(F&& f) {
     f(sampleNodeList());
     f(TileRoutes{84, {1, 3, 0, 0x8000000000000002ull}});
     f(TileDone{85, 14, 2500, 12288});
+    f(NodeWelcome{2, 250, 3000, "[wall]\n", {}, true});  // re-projecting (version 15's trailing flag)
+    f(NodePose{900, 86, true, {sampleCamera(), sampleCamera()}});
+    f(NodeShown{900});
 }
 
 template <class Msg> std::vector<uint8_t> payloadOf(const Msg& msg) {
@@ -348,7 +351,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x0E, 0x00,                                      // version (14: depth with every tile)
+        0x0F, 0x00,                                      // version (15: re-projection on the display nodes)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -475,6 +478,7 @@ TEST(Protocol, HeartbeatReportGoldenBytes) {
 template <class Msg> Msg withoutTrailing(Msg msg) {
     if constexpr (std::is_same_v<Msg, FrameBegin> || std::is_same_v<Msg, NodeFrame>) msg.depth = false;
     if constexpr (std::is_same_v<Msg, TileResult>) msg.depth.clear();
+    if constexpr (std::is_same_v<Msg, NodeWelcome>) msg.reproject = false;
     return msg;
 }
 

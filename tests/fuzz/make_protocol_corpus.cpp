@@ -144,6 +144,17 @@ int main(int argc, char** argv) {
     seedMessage("node-list", NodeList{{{0, "left", "tcp://127.0.0.1:5601", ""}, {1, "right_2", "tcp://127.0.0.1:5602", ""}}});
     seedMessage("tile-routes", TileRoutes{3, {1, 3, 2, 0, 1, 3, 2, 2}});
     seedMessage("tile-done", TileDone{3, 17, 1500, 3072});
+    // Version 15: re-projection on the nodes.
+    seedMessage("node-welcome-reproject", NodeWelcome{1, 250, 3000, "[wall]\nrows = 1\ncolumns = 2\n", {}, true});
+    {
+        CameraDesc leftEye, rightEye;
+        leftEye.name = rightEye.name = "";
+        leftEye.position = {-0.0325f, 0.0f, 2.0f};
+        rightEye.position = {0.0325f, 0.0f, 2.0f};
+        rightEye.window = ProjectionWindow{{-1.6f, -1.2f, 0.0f}, {3.2f, 0.0f, 0.0f}, {0.0f, 2.4f, 0.0f}};
+        seedMessage("node-pose", NodePose{12, 3, false, {leftEye, rightEye}});
+    }
+    seedMessage("node-shown", NodeShown{12});
 
     writeSeed("mesh-box", fuzz::kMesh, encodeMesh(makeBox()));
     writeSeed("mesh-sphere-normals", fuzz::kMesh, encodeMesh(makeSphere(3, 5)));

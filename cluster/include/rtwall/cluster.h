@@ -15,6 +15,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,20 @@ struct DisplayNodeSettings {
     // the list is taken as mono (the node's left image).
     std::vector<int> viewEyes;
     double stallSeconds = 0.5;  // a node this late for a frame the others hold is left out of it (SwapBarrier)
+    // Re-projection (issue 27): the nodes show frames at every Master::presentPose, each warped
+    // to that pose, instead of at their swaps. Frames then need depth (ClusterSettings::depth).
+    bool reproject = false;
+};
+
+// One refresh of a re-projecting wall on display nodes, as the master saw it answered
+// (Master::takeNodeRefreshes).
+struct NodeRefreshDelay {
+    uint32_t refresh = 0;
+    std::string node;
+    double askedAt = 0;  // when Master::presentPose was called: steady_clock seconds since its epoch
+    // From Master::presentPose to the node's NodeShown: the pose's way to the node, its warp and
+    // presentation, and one hop back.
+    double milliseconds = 0;
 };
 
 struct ClusterSettings {
@@ -277,6 +292,17 @@ public:
     // one before).
     bool waitForSwap(uint32_t frame, int timeoutMs);
 
+    // Re-projection on display nodes (DisplayNodeSettings::reproject; issue 27): every node shows
+    // the newest frame the swap barrier released, warped from its views' cameras to `cameras`
+    // (one per view of that frame: the head pose read just before this call), the same pose on
+    // every node. For the application's display loop, once per refresh; returns at once (the
+    // network thread sends it, ahead of any queued command). A pose not yet sent is replaced by a
+    // newer one; nothing is sent before the first release. `debug` tints warped, filled and fresh
+    // pixels on the nodes.
+    void presentPose(std::span<const CameraDesc> cameras, bool debug = false);
+    // The refreshes the nodes answered since the last call, oldest first (at most 4096 kept).
+    std::vector<NodeRefreshDelay> takeNodeRefreshes();
+
     MasterCounters counters() const;
     uint64_t droppedMessages() const;  // counters().dropped()
     uint64_t failedSends() const;      // counters().failedSends
@@ -413,6 +439,24 @@ struct DisplayNodeRun {
     // view's depth (width * height floats, as Master::renderViews gives it), NaN outside the
     // tiles routed to this node. Valid during the call.
     std::function<void(uint32_t frame, const std::vector<std::vector<float>>& views)> depth;
+    // Re-projection (the master's welcome says the wall re-projects; issue 27): a frame is not
+    // presented at its swap but becomes the warp's newest source there, and at every pose the
+    // master sends (NodePose, each refresh) this is called to show it warped to that pose.
+    // Unset: the node warps on the CPU (Compositor::reproject) and calls `present` with the
+    // warped eyes.
+    std::function<void(const struct NodeRefresh&)> refresh;
+};
+
+// One refresh of a re-projecting display node (DisplayNodeRun::refresh), valid during the call.
+struct NodeRefresh {
+    uint32_t refresh = 0;  // the master's count
+    uint32_t frame = 0;    // the frame shown: the newest released frame this node holds
+    // Holds that frame's views with depth, and the frame before: Compositor::reproject(targets,
+    // {}, debug) gives the eyes; a GPU presenter warps its sources (newestSource, olderSource).
+    Compositor* compositor = nullptr;
+    std::span<const CameraDesc> targets;  // one per view: the master's pose
+    bool debug = false;                   // tint warped, filled and fresh pixels
+    const std::vector<std::string>* leftOut = nullptr;  // the nodes the wall did not wait for at that frame's swap
 };
 
 struct DisplayNodeCounters {
@@ -420,6 +464,9 @@ struct DisplayNodeCounters {
     std::atomic<uint64_t> refusedHandshakes{0};  // the master refused this node's key
     std::atomic<uint64_t> failedHandshakes{0};   // other broken handshakes with the master (no CURVE on one side, wrong server key)
     std::atomic<uint64_t> droppedMessages{0};    // malformed or unexpected messages from the master or on the tile socket
+    std::atomic<uint64_t> refreshes{0};          // re-projecting: poses shown
+    std::atomic<uint64_t> skippedPoses{0};       // re-projecting: poses not shown (no frame yet, or not one camera per view)
+    std::atomic<uint64_t> supersededPoses{0};    // re-projecting: poses not shown because a newer one was already there
 };
 
 // The endpoint a node bound at `bound` (tcp://HOST:PORT, as ZMQ_LAST_ENDPOINT gives it) tells

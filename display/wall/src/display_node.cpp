@@ -1,5 +1,7 @@
 // `rtwall display`: a display node of a wall on several PCs (issue 19). The cluster's
 // runDisplayNode does the network and the tiles; this presents the node's own screens.
+#include "gpu_warps.h"
+
 #include <rtwall/wall.h>
 
 #include <cstdio>
@@ -35,16 +37,8 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
             headless = std::make_unique<HeadlessPresenter>(wall, options.out);
         }
     };
-    run.present = [&](uint32_t frame, const Image* left, const Image* right, const std::vector<std::string>& leftOut) {
-        if (!left) return;  // released without this node: nothing new to show
-        // Headless with nothing to write ([headless] write_every = 0, no video; the benchmark's
-        // nodes): the frame would only be copied into a WallFrame and dropped. That copy of the
-        // whole wall-sized frame took milliseconds at 4K and spread the nodes' swaps.
-        if (headless && wall.writeEvery <= 0 && wall.video.empty()) return;
-        WallFrame f;
-        f.number = frame;
-        f.left = *left;
-        if (right) f.right = *right;
+    // A frame to this node's screens: in its windows or to its files, with the left-out overlay.
+    const auto show = [&](WallFrame& f, const std::vector<std::string>& leftOut) {
         Image overlay;
         PresentOptions po;
         if (!leftOut.empty()) {
@@ -62,7 +56,7 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
                 std::filesystem::create_directories(options.capture);
                 for (size_t i = 0; i < shown.size(); ++i) {
                     char name[96];
-                    std::snprintf(name, sizeof name, "frame_%06u_%s.png", frame, wall.screens[i].name.c_str());
+                    std::snprintf(name, sizeof name, "frame_%06u_%s.png", f.number, wall.screens[i].name.c_str());
                     writePng(shown[i], options.capture / name);
                 }
             }
@@ -70,6 +64,35 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
         } else if (headless) {
             headless->present(f, po);
         }
+    };
+    // Headless with nothing to write ([headless] write_every = 0, no video; the benchmark's
+    // nodes): the frame would only be copied into a WallFrame and dropped. That copy of the
+    // whole wall-sized frame took milliseconds at 4K and spread the nodes' swaps.
+    const auto discards = [&] { return headless && wall.writeEvery <= 0 && wall.video.empty(); };
+    run.present = [&](uint32_t frame, const Image* left, const Image* right, const std::vector<std::string>& leftOut) {
+        if (!left) return;  // released without this node: nothing new to show
+        if (discards()) return;
+        WallFrame f;
+        f.number = frame;
+        f.left = *left;
+        if (right) f.right = *right;
+        show(f, leftOut);
+    };
+    // A re-projecting wall (issue 27): each refresh shows the newest frame warped to the master's
+    // pose, on the GPU in windows, else by the CPU warp (which runs even when nothing is written:
+    // it is the node's share of the refresh's work).
+    WallFrame warped;
+    run.refresh = [&](const NodeRefresh& r) {
+        warped.number = r.frame;
+        if (gl) {
+            wall::setGpuWarps(warped, *r.compositor, r.targets, r.debug);
+        } else {
+            const EyeImages& eyes = r.compositor->reproject(r.targets, {}, r.debug);
+            if (discards()) return;
+            warped.left = eyes.left;  // copy-assigned: the buffers are reused
+            warped.right = eyes.right;
+        }
+        show(warped, *r.leftOut);
     };
     return runDisplayNode(run);
 }

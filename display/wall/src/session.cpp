@@ -177,6 +177,10 @@ bool WallSession::step() {
     if (s.onNodes) {
         s.nodeLine = s.nodeStatus();
         s.input->showConsole(s.nodeLine, s.report, s.frameTimes.back());
+        if (s.reproject) {
+            s.recordPresentation(true);
+            s.refresher->presented();
+        }
     } else {
         s.input->show(s.shown, s.report, s.frameTimes.back());
         s.recordPresentation(s.reproject);

@@ -112,7 +112,12 @@ struct WallSession::Impl {
     std::vector<std::vector<float>> viewDepth;  // the rendered frame's, per view
     std::vector<CameraDesc> targets;            // per view: its camera for the latched pose
     std::deque<Presentation> presentations;     // since takePresentations()
+    std::deque<NodeRefreshDelay> nodeRefreshes;  // on display nodes: the refreshes they answered
+    void collectNodeRefreshes();
+    bool reprojects() const;     // what decideReprojection will decide, before it is said
     void decideReprojection();   // before the master starts: whether, and depth from the clients
+    std::vector<CameraDesc> viewCameras(const HeadPose& head);  // every view's camera for `head`, in frameViews' order
+    void latchTargets();         // targets := the views' cameras for the head pose read now
     void startRefresher();       // once the wall's windows are open
     std::vector<Image> renderWhileRefreshing();
     void latchAndWarp();         // shown := the newest frame warped for the pose read now
@@ -198,7 +203,9 @@ struct WallSession::Impl {
         if (views)
             for (int eye : stereo ? std::vector<int>{0, 1} : std::vector<int>{-1})
                 for (size_t i = 0; i < wallViews(wallConfig, staticHead(wallConfig.stereo), eye).size(); ++i) eyes.push_back(eye);
-        config.cluster.displayNodes = displayNodeSettings(wallConfig, text.str(), eyes);
+        const double stallSeconds = config.cluster.displayNodes.stallSeconds;  // the caller's, if set
+        config.cluster.displayNodes = displayNodeSettings(wallConfig, text.str(), eyes, reprojects());
+        config.cluster.displayNodes.stallSeconds = stallSeconds;
     }
 
     std::string joined(const std::vector<std::string>& names) const {
@@ -278,6 +285,15 @@ struct WallSession::Impl {
         std::string line = format("display nodes %zu/%zu, %llu swaps released, %llu left out, swap skew %.2f ms (max %.2f ms)",
                                   present.size(), names.size(), (unsigned long long)report.swapsReleased,
                                   (unsigned long long)report.nodesLeftOut, report.lastSwapSkew * 1e3, report.maxSwapSkew * 1e3);
+        if (reproject) {
+            // The last 100 refreshes the nodes answered: latched pose to each node's answer.
+            collectNodeRefreshes();
+            std::vector<double> ms;
+            for (size_t i = nodeRefreshes.size() > 100 ? nodeRefreshes.size() - 100 : 0; i < nodeRefreshes.size(); ++i)
+                ms.push_back(nodeRefreshes[i].milliseconds);
+            line += ms.empty() ? std::string(", no refresh answered yet")
+                               : format(", pose to node shown %.1f ms (median of %zu)", median(ms), ms.size());
+        }
         if (present.size() < names.size()) {
             std::vector<std::string> missing;
             for (const std::string& n : names)
@@ -345,16 +361,21 @@ struct WallSession::Impl {
         std::vector<FrameView> out;
         viewEye.clear();
         viewScreens.clear();
-        const std::vector<int> eyes = stereo ? std::vector<int>{0, 1} : std::vector<int>{-1};
-        for (int eye : eyes) {
-            const std::vector<WallView> vs = wallViews(wallConfig, head, eye);
-            for (size_t i = 0; i < vs.size(); ++i) {
-                viewScreens.push_back(vs.size() > 1 ? vs[i].screens : std::vector<size_t>{});
-                viewEye.push_back(eye);
-                out.push_back(frameView(vs, i));
-            }
-        }
+        forEachView(head, [&](int eye, const std::vector<WallView>& vs, size_t i) {
+            viewScreens.push_back(vs.size() > 1 ? vs[i].screens : std::vector<size_t>{});
+            viewEye.push_back(eye);
+            out.push_back(frameView(vs, i));
+        });
         return out;
+    }
+
+    // f(eye, the eye's views, i) for every view of the wall for `pose`, eye by eye: the order of
+    // a frame's views.
+    template <class F> void forEachView(const HeadPose& pose, F&& f) {
+        for (int eye : stereo ? std::vector<int>{0, 1} : std::vector<int>{-1}) {
+            const std::vector<WallView> vs = wallViews(wallConfig, pose, eye);
+            for (size_t i = 0; i < vs.size(); ++i) f(eye, vs, i);
+        }
     }
 
     // View i of an eye's views with its off-axis camera; one plane of several shows (and has
@@ -407,7 +428,7 @@ struct WallSession::Impl {
                 throw std::runtime_error("internal error: a multi-view frame came back with " + std::to_string(images.size()) +
                                          " images for " + std::to_string(rendered.views.size()) + " views");
             if (!onNodes) compose(rendered.views, std::move(images), viewLinear);  // on nodes the pixels are on the nodes
-            if (reproject && !onNodes) latchAndWarp();  // the new frame too is shown for the newest pose
+            if (reproject) latchAndWarp();  // the new frame too is shown for the newest pose
         } else {
             std::vector<Image> image(1);
             image[0] = master->renderFrame(&report, &linear);

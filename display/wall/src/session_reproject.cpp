@@ -3,9 +3,14 @@
 // refresh, each view warped from the pose it was rendered for to the pose read just before the
 // presentation (late latching) by the Compositor's re-projection; the frame before it fills
 // what the newest does not cover. A new frame replaces the warp's source as soon as it is in.
+// On display nodes the nodes warp their own screens: this thread sends them the pose it read,
+// every refresh (Master::presentPose).
+#include "gpu_warps.h"
 #include "session_impl.h"
 
 namespace rtwall {
+
+bool WallSession::Impl::reprojects() const { return config.reproject.value_or(wallConfig.reprojects()) && views; }
 
 void WallSession::Impl::decideReprojection() {
     reproject = config.reproject.value_or(wallConfig.reprojects());
@@ -17,11 +22,8 @@ void WallSession::Impl::decideReprojection() {
         reproject = false;
         return;
     }
-    if (onNodes) {
-        log("reproject: off: the display nodes show each frame as rendered (re-projection on the nodes is not built yet)");
-        reproject = false;
-        return;
-    }
+    // On display nodes the nodes warp (routeToNodes asked for it, and for the ring of tiles
+    // around each node's screens); the master sends them the pose at every refresh.
     config.cluster.depth = true;  // every tile comes with its depth
 }
 
@@ -29,9 +31,12 @@ void WallSession::Impl::startRefresher() {
     if (!reproject) return;
     // In windows with vsync the swap waits for the retrace; headless (and without vsync) the
     // loop keeps the configured rate itself.
-    const bool paced = !(input->windowed() && wallConfig.vsync);
+    // On display nodes the master's window is a console: the master keeps the rate and each node
+    // presents the pose when it comes.
+    const bool paced = onNodes || !(input->windowed() && wallConfig.vsync);
     refresher = std::make_unique<Refresher>(wallConfig.refreshHz, paced);
-    log(format("reproject: on, %s%s", paced ? format("%.0f refreshes a second", wallConfig.refreshHz).c_str() : "at the retrace",
+    log(format("reproject: on, %s%s%s", paced ? format("%.0f refreshes a second", wallConfig.refreshHz).c_str() : "at the retrace",
+               onNodes ? ", warped on the display nodes (the master sends each refresh's pose)" : "",
                warpDebug ? ", debug colours" : ""));
 }
 
@@ -40,14 +45,19 @@ std::vector<Image> WallSession::Impl::renderWhileRefreshing() {
     FrameReport pending;  // the worker's: `report` is the shown frame's while it renders
     const std::function<void()> render = [&] { images = master->renderViews(&pending, &viewLinear, &viewDepth); };
     const std::function<void()> present = [&] { presentRefresh(); };
-    refresher->run(render, present, compositor.reprojectViews() > 0);
+    // On nodes: once a frame was released to them (they hold it; the master holds no pixels).
+    refresher->run(render, present, onNodes ? report.swapsReleased > 0 : compositor.reprojectViews() > 0);
     report = std::move(pending);
     return images;
 }
 
-void WallSession::Impl::latchAndWarp() {
-    // A frame that came without depth (none should) is shown as composed, for the pose it was made for.
-    if (compositor.reprojectViews() == 0) return;
+std::vector<CameraDesc> WallSession::Impl::viewCameras(const HeadPose& pose) {
+    std::vector<CameraDesc> cameras;
+    forEachView(pose, [&](int, const std::vector<WallView>& vs, size_t i) { cameras.push_back(input->viewCamera(vs[i].window)); });
+    return cameras;
+}
+
+void WallSession::Impl::latchTargets() {
     shownPosed = std::chrono::steady_clock::now();
     HeadPose latched = staticHead(wallConfig.stereo);
     uint64_t packets = 0;
@@ -56,9 +66,22 @@ void WallSession::Impl::latchAndWarp() {
         if (t.seen) latched = t.head;
         packets = t.packets;
     }
-    targets.clear();
-    for (int eye : stereo ? std::vector<int>{0, 1} : std::vector<int>{-1})
-        for (const WallView& v : wallViews(wallConfig, latched, eye)) targets.push_back(input->viewCamera(v.window));
+    targets = viewCameras(latched);
+    shownHead = latched;
+    shownTrackerPackets = packets;
+}
+
+void WallSession::Impl::latchAndWarp() {
+    if (onNodes) {
+        // The nodes warp: the pose goes to all of them (after the first release; before it the
+        // master sends nothing).
+        latchTargets();
+        master->presentPose(targets, warpDebug);
+        return;
+    }
+    // A frame that came without depth (none should) is shown as composed, for the pose it was made for.
+    if (compositor.reprojectViews() == 0) return;
+    latchTargets();
     if (input->windowed()) {
         warpOnGpu();
     } else {
@@ -66,38 +89,18 @@ void WallSession::Impl::latchAndWarp() {
         shown.left = eyes.left;  // copy-assigned: the buffers are reused
         shown.right = eyes.right;
     }
-    shownHead = latched;
-    shownTrackerPackets = packets;
 }
 
 // In windows the GL presenter warps: the frame carries the compositor's sources and the
 // targets (WallFrame::warps), the same algorithm as the CPU's in shaders.
-void WallSession::Impl::warpOnGpu() {
-    shown.warps.resize(targets.size());
-    for (size_t v = 0; v < targets.size(); ++v) {
-        const Compositor::WarpSlot& newest = compositor.newestSource(v);
-        const Compositor::WarpSlot* older = compositor.olderSource(v);
-        const FrameView& view = compositor.sourceView(v);
-        ViewWarp& w = shown.warps[v];
-        w.eye = compositor.sourceEye(v) == 1 ? 1 : 0;
-        w.regions.clear();
-        for (const ViewRegion& g : view.regions)
-            w.regions.push_back(scaledRegion(g, view.refWidth, view.refHeight, newest.image.width, newest.image.height));
-        w.image = &newest.image;
-        w.depth = &newest.depth;
-        w.camera = newest.camera;
-        w.olderImage = older ? &older->image : nullptr;
-        w.olderDepth = older ? &older->depth : nullptr;
-        w.olderCamera = older ? older->camera : CameraDesc{};
-        w.target = targets[v];
-    }
-    shown.warpDebug = warpDebug;
-}
+void WallSession::Impl::warpOnGpu() { wall::setGpuWarps(shown, compositor, targets, warpDebug); }
 
 void WallSession::Impl::presentRefresh() {
     latchAndWarp();
-    if (tracker) input->drawWand(shown, shownHead);
-    input->show(shown, report, frameTimes.empty() ? 0.0 : frameTimes.back());
+    if (!onNodes) {
+        if (tracker) input->drawWand(shown, shownHead);
+        input->show(shown, report, frameTimes.empty() ? 0.0 : frameTimes.back());
+    }
     recordPresentation(true);
 }
 
@@ -107,6 +110,19 @@ void WallSession::Impl::recordPresentation(bool warped) {
 }
 
 bool WallSession::reprojecting() const { return impl_->reproject; }
+
+void WallSession::Impl::collectNodeRefreshes() {
+    if (!onNodes || !reproject) return;
+    for (NodeRefreshDelay& d : master->takeNodeRefreshes()) nodeRefreshes.push_back(std::move(d));
+    while (nodeRefreshes.size() > 4096) nodeRefreshes.pop_front();
+}
+
+std::vector<NodeRefreshDelay> WallSession::takeNodeRefreshes() {
+    impl_->collectNodeRefreshes();
+    std::vector<NodeRefreshDelay> out(impl_->nodeRefreshes.begin(), impl_->nodeRefreshes.end());
+    impl_->nodeRefreshes.clear();
+    return out;
+}
 
 std::vector<Presentation> WallSession::takePresentations() {
     std::vector<Presentation> out(impl_->presentations.begin(), impl_->presentations.end());

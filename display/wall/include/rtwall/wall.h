@@ -40,8 +40,10 @@ namespace rtwall {
 // The master's settings for a wall whose screens name display nodes: the nodes in the wall's
 // order, the config text each is sent, and the tile masks from TileRouting. A frame of views
 // routes each view's tiles by its eye (viewEyes[v]: -1 mono, 0 left, 1 right); a view without an
-// entry goes to every node that shows either eye of its pixels.
-DisplayNodeSettings displayNodeSettings(const WallConfig& wall, std::string wallText, std::vector<int> viewEyes = {});
+// entry goes to every node that shows either eye of its pixels. `reproject`: the nodes re-project
+// (issue 27), and each also gets the ring of tiles (one tile wide) around what its screens show.
+DisplayNodeSettings displayNodeSettings(const WallConfig& wall, std::string wallText, std::vector<int> viewEyes = {},
+                                        bool reproject = false);
 
 // `rtwall display`: one display node of a wall (runDisplayNode), presenting its screens of the
 // wall config the master sends (nodeWall) in GLFW windows, or as images in `out` when headless
@@ -291,8 +293,12 @@ public:
     const HeadPose& shownHead() const;  // and that head (lastHead() with async off)
     // Whether this wall re-projects (the wall config's `reproject`, RunConfig::reproject).
     bool reprojecting() const;
-    // The presentations since the last call, oldest first (at most the last 4096 are kept).
+    // The presentations since the last call, oldest first (at most the last 4096 are kept). On
+    // display nodes a re-projecting master's presentation is the pose it sent the nodes.
     std::vector<Presentation> takePresentations();
+    // On display nodes, re-projecting: the refreshes the nodes answered since the last call, with
+    // the time from the pose's latching to each node's answer (at most the last 4096 are kept).
+    std::vector<NodeRefreshDelay> takeNodeRefreshes();
     // View accumulations restarted so far (a stochastic scene on a wall with views: a view
     // restarts when the state or its own camera changed).
     size_t viewRestarts() const;
