@@ -143,6 +143,7 @@ struct LatencyOptions : Common {
     bool reproject = false;       // each configuration with re-projection off and on (issue 27)
     double refreshHz = 60;        // the display's refresh re-projecting (headless: paced by the wall)
     double reprojectSlackMs = 5;  // re-projecting target: one refresh plus this
+    bool nodes = false;           // with reproject: also each configuration on two display nodes (threads), re-projecting
 };
 toml::table latency(const LatencyOptions& o);
 

@@ -13,6 +13,10 @@
 // and on (on: prediction_ms = the median time from a frame's head pose to its presentation,
 // measured with it off; the tracker adds the pose's age itself), at a few image sizes
 // (frame rates). Medians and p95, and the share of datagrams and frames over the targets.
+// With --nodes (and --reproject), also on two display nodes (threads here, headless, each
+// warping its own screens on the CPU): a photon is a node's answer to a refresh's pose
+// (NodeShown, as the master receives it: an upper bound by one loopback hop), and
+// pose_to_node_ms is the pose's way from the master to that answer.
 #include "bench.h"
 #include "bench_util.h"
 
@@ -55,7 +59,9 @@ struct Circle {
 
 // A wall of width x height pixels, 3.2 m x 2.4 m, tracked on 127.0.0.1 (a free port). The room
 // transform is the identity in metres (DTrack millimetres): what is sent is wall coordinates.
-std::string wallText(int width, int height, bool stereo, double predictionMs, bool reproject, double refreshHz) {
+// On display nodes: two columns of screens, the left on node "left", the right on node "right"
+// (a mono wall is then two screens side by side).
+std::string wallText(int width, int height, bool stereo, double predictionMs, bool reproject, double refreshHz, bool nodes) {
     char buf[1024];
     std::snprintf(buf, sizeof buf,
                   "[wall]\nname = \"latency\"\nvsync = false\nreproject = \"%s\"\nrefresh_hz = %.3f\n[grid]\ncolumns = %d\nrows = %d\nscreen_width = %d\nscreen_height = %d\n"
@@ -63,15 +69,16 @@ std::string wallText(int width, int height, bool stereo, double predictionMs, bo
                   "lower_left = [-1.6, -1.2, 0.0]\nlower_right = [1.6, -1.2, 0.0]\nupper_left = [-1.6, 1.2, 0.0]\n"
                   "[tracking]\nsource = \"dtrack://127.0.0.1:0\"\nroom_scale = 0.001\ntimeout_ms = 1000\nprediction_ms = %.3f\n"
                   "filter = \"none\"\n[headless]\nwrite_every = 0\n",
-                  reproject ? "on" : "off", refreshHz, stereo ? 2 : 1, stereo ? 2 : 1, stereo ? width / 2 : width, stereo ? height / 2 : height,
-                  stereo ? "passive" : "none", predictionMs);
-    return buf;
+                  reproject ? "on" : "off", refreshHz, stereo || nodes ? 2 : 1, stereo ? 2 : 1,
+                  stereo || nodes ? width / 2 : width, stereo ? height / 2 : height, stereo ? "passive" : "none", predictionMs);
+    return std::string(buf) + (nodes ? "[[node]]\nname = \"left\"\ncolumns = [0, 0]\n[[node]]\nname = \"right\"\ncolumns = [1, 1]\n" : "");
 }
 
 struct Case {
     bool stereo = false, async = false, reproject = false;
     double predictionMs = 0;
     int width = 0, height = 0;
+    bool nodes = false;  // on two display nodes (threads of this process, headless, warping on the CPU)
 };
 
 struct Measured {
@@ -81,8 +88,11 @@ struct Measured {
     std::vector<double> frame;    // seconds between rendered frames (steps)
     std::vector<double> refresh;  // seconds between presentations
     std::vector<double> specToPresent;  // seconds from a presentation's head pose being read to it
+    std::vector<double> poseToNode;     // on nodes: seconds from the master's pose to a node's answer (shown, one hop back)
     uint64_t sent = 0, shownPackets = 0;
 };
+
+double seconds(Clock::time_point t) { return std::chrono::duration<double>(t.time_since_epoch()).count(); }
 
 // Sends the circle's datagrams at `rate` Hz until stopped; the send time of datagram k (1-based,
 // the receiver's packet count after it) is times[k - 1].
@@ -131,7 +141,7 @@ private:
 
 Measured measure(const LatencyOptions& o, const Case& c, const std::filesystem::path& dir) {
     const std::filesystem::path wall = dir / "wall.toml";
-    std::ofstream(wall) << wallText(c.width, c.height, c.stereo, c.predictionMs, c.reproject, o.refreshHz);
+    std::ofstream(wall) << wallText(c.width, c.height, c.stereo, c.predictionMs, c.reproject, o.refreshHz, c.nodes);
     RunConfig rc = steppedRunConfig(dir, o.clients);
     rc.scene = o.scene;
     rc.wall = wall;
@@ -146,6 +156,7 @@ Measured measure(const LatencyOptions& o, const Case& c, const std::filesystem::
     HeadSender sender(session.trackerPort(), circle, o.rate, start);
     uint64_t lastShown = 0;
     Clock::time_point lastStep = Clock::now(), lastPresented = lastStep;
+    std::vector<Presentation> sentPoses;  // on nodes: the poses the master sent, in order
     for (int f = 0; f < o.warmupFrames + o.frames; ++f) {
         session.step();
         const Clock::time_point stepped = Clock::now();
@@ -155,10 +166,43 @@ Measured measure(const LatencyOptions& o, const Case& c, const std::filesystem::
             for (const Presentation& p : shown) lastShown = std::max(lastShown, p.trackerPackets);
             lastStep = stepped;
             if (!shown.empty()) lastPresented = shown.back().at;
+            session.takeNodeRefreshes();
             continue;
         }
         m.frame.push_back(std::chrono::duration<double>(stepped - lastStep).count());
         lastStep = stepped;
+        if (c.nodes) {
+            // The photons are on the nodes: each node's answer to a refresh is its presentation
+            // (an upper bound: it also holds the answer's way back), of the master's pose read
+            // just before that refresh was sent (the newest presentation posed before it).
+            for (const Presentation& p : shown) {
+                m.refresh.push_back(std::chrono::duration<double>(p.at - lastPresented).count());
+                lastPresented = p.at;
+                sentPoses.push_back(p);
+            }
+            std::vector<NodeRefreshDelay> answers = session.takeNodeRefreshes();
+            for (const NodeRefreshDelay& d : answers) {
+                auto it = std::upper_bound(sentPoses.begin(), sentPoses.end(), d.askedAt,
+                                           [](double t, const Presentation& p) { return t < seconds(p.posed); });
+                if (it == sentPoses.begin()) continue;
+                const Presentation& p = *std::prev(it);
+                const double photon = d.askedAt + d.milliseconds * 1e-3;
+                m.poseToNode.push_back(d.milliseconds * 1e-3);
+                m.specToPresent.push_back(photon - seconds(p.posed));
+                if (d.node == "left") {  // every datagram: counted on one node
+                    for (uint64_t k = lastShown + 1; k <= p.trackerPackets && k <= times.size(); ++k)
+                        m.latency.push_back(photon - seconds(times[k - 1]));
+                    if (p.trackerPackets > lastShown) m.shownPackets += p.trackerPackets - lastShown;
+                    lastShown = std::max(lastShown, p.trackerPackets);
+                }
+                if (p.trackerPackets >= 1 && p.trackerPackets <= times.size())
+                    m.newest.push_back(photon - seconds(times[p.trackerPackets - 1]));
+                const std::array<double, 3> truth = circle.at(photon - seconds(start));
+                const Float3& h = p.head.position;
+                m.error.push_back(std::hypot(h.x - truth[0], h.y - truth[1], h.z - truth[2]));
+            }
+            continue;
+        }
         // Each presentation: with re-projection several a step, each with the pose read just before it.
         for (const Presentation& p : shown) {
             m.refresh.push_back(std::chrono::duration<double>(p.at - lastPresented).count());
@@ -197,8 +241,9 @@ toml::table row(const LatencyOptions& o, const Case& c, const Measured& m) {
     for (double l : m.newest) lateFrames += l > bound;
     for (double e : m.error) off += e > o.targetErrorMm * 1e-3;
     const double refreshS = median(m.refresh);
-    return toml::table{{"reproject", c.reproject},
+    toml::table out{{"reproject", c.reproject},
                        {"stereo", c.stereo},
+                       {"nodes", c.nodes},
                        {"async", c.async},
                        {"prediction_ms", c.predictionMs},
                        {"width", c.width},
@@ -227,6 +272,8 @@ toml::table row(const LatencyOptions& o, const Case& c, const Measured& m) {
                        {"error_mm_median", 1e3 * median(m.error)},
                        {"error_mm_p95", 1e3 * quantile(m.error, 0.95)},
                        {"error_over_target", m.error.empty() ? 0.0 : double(off) / double(m.error.size())}};
+    if (c.nodes) out.insert("pose_to_node_ms", medianP95(m.poseToNode, 1e3));
+    return out;
 }
 
 // A configuration measured without prediction, then with it as far ahead as its presentations
@@ -234,15 +281,17 @@ toml::table row(const LatencyOptions& o, const Case& c, const Measured& m) {
 void measurePair(const LatencyOptions& o, const Case& c, const std::filesystem::path& dir, toml::array& rows) {
     const Measured plain = measure(o, c, dir);
     Case p = c;
-    p.predictionMs = std::max(0.1, std::round(1e3 * median(plain.specToPresent) * 10) / 10);
+    // (At most the 500 ms a wall config takes: a configuration that slow misses every target anyway.)
+    p.predictionMs = std::clamp(std::round(1e3 * median(plain.specToPresent) * 10) / 10, 0.1, 500.0);
     const Measured predicted = measure(o, p, dir);
     for (const auto& [cc, mm] : {std::pair<const Case&, const Measured&>{c, plain}, {p, predicted}}) {
         toml::table r = row(o, cc, mm);
         if (o.text)
-            std::fprintf(o.text, "%-6s %-5s %-9s %4dx%-4d pred %5.1f ms: %5.1f fps, %5.1f Hz shown, every datagram %5.1f ms (p95 %5.1f), "
+            std::fprintf(o.text, "%-6s %-5s %-9s%s %4dx%-4d pred %5.1f ms: %5.1f fps, %5.1f Hz shown, every datagram %5.1f ms (p95 %5.1f), "
                                  "newest to photon %5.1f ms (p95 %5.1f, %4.1f%% over %5.1f ms), head error %5.1f mm "
                                  "(p95 %5.1f, %4.1f%% over %.0f mm)\n",
-                         cc.stereo ? "stereo" : "mono", cc.async ? "async" : "sync", cc.reproject ? "reproject" : "as-is", cc.width,
+                         cc.stereo ? "stereo" : "mono", cc.async ? "async" : "sync", cc.reproject ? "reproject" : "as-is",
+                         cc.nodes ? " on nodes" : "", cc.width,
                          cc.height, cc.predictionMs, r["render_fps"].value_or(0.0), r["presented_hz"].value_or(0.0),
                          r["latency_ms_median"].value_or(0.0), r["latency_ms_p95"].value_or(0.0),
                          r["frame_latency_ms_median"].value_or(0.0), r["frame_latency_ms_p95"].value_or(0.0),
@@ -269,9 +318,12 @@ toml::table latency(const LatencyOptions& o) {
         for (bool stereo : {false, true}) {
             // With --reproject: each size with re-projection off and on (async off: the display
             // loop never waits for the cluster anyway). Without: async off and on, as issue 18 measured.
-            if (o.reproject)
+            if (o.reproject) {
                 for (bool reproject : {false, true}) measurePair(o, Case{stereo, false, reproject, 0.0, width, width * 3 / 4}, dir, rows);
-            else
+                // The same wall on two display nodes, each warping its own screens to the pose
+                // the master sends every refresh.
+                if (o.nodes) measurePair(o, Case{stereo, false, true, 0.0, width, width * 3 / 4, true}, dir, rows);
+            } else
                 for (bool async : {false, true}) measurePair(o, Case{stereo, async, false, 0.0, width, width * 3 / 4}, dir, rows);
         }
     std::error_code ec;
@@ -284,6 +336,7 @@ toml::table latency(const LatencyOptions& o) {
                        {"frames", o.frames},
                        {"target_slack_ms", o.targetSlackMs},
                        {"reproject", o.reproject},
+                       {"nodes", o.nodes},
                        {"display_hz", o.refreshHz},
                        {"reproject_slack_ms", o.reprojectSlackMs},
                        {"target_error_mm", o.targetErrorMm},

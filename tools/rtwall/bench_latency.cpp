@@ -18,6 +18,9 @@ void addBenchLatency(CLI::App& bench, Run& run) {
     cmd->add_option("--rate", o.rate, "Tracker datagrams per second")->check(CLI::Range(1.0, 2000.0));
     cmd->add_flag("--reproject", o.reproject,
                   "Each configuration with re-projection off and on (the display at --refresh-hz, never waiting for the cluster)");
+    cmd->add_flag("--nodes", o.nodes,
+                  "With --reproject: also each configuration on two display nodes (threads here) warping their own screens")
+        ->needs("--reproject");
     cmd->add_option("--refresh-hz", o.refreshHz, "The display's refresh rate re-projecting")->check(CLI::Range(1.0, 1000.0));
     callBenchmark(cmd, run, a, bench::latency);
 }
