@@ -281,6 +281,15 @@ private:
             held.routes = &std::prev(r)->second;
             held.node = index_;
             slot.assembly.beginFrame(f.frame, f.width, f.height, tiles, uint32_t(f.views.size()), held);
+            // What this node holds of each view: the bounding box of its routed tiles (its
+            // screens and the ring around them). Re-projecting warps only that.
+            slot.held.assign(std::max<size_t>(1, f.views.size()), TileRect{});
+            for (size_t t = 0; t < tiles.size(); ++t) {
+                if (!(((*held.routes)[t] >> index_) & 1) || tiles[t].view >= slot.held.size()) continue;
+                TileRect& box = slot.held[tiles[t].view];
+                const TileRect& r = tiles[t].rect;
+                box = box.width() <= 0 || box.height() <= 0 ? r : TileRect{std::min(box.x0, r.x0), std::min(box.y0, r.y0), std::max(box.x1, r.x1), std::max(box.y1, r.y1)};
+            }
         } catch (const std::invalid_argument& e) {
             std::fprintf(stderr, "rtwall display: frame %u is skipped: %s\n", f.frame, e.what());
             return;
@@ -391,6 +400,7 @@ private:
         c.stateSeq = f.stateSeq;
         c.linear = slot.assembly.linear();
         if (slot.assembly.depth()) c.depth = slot.assembly.depthImages();
+        c.held = slot.held;
         compositor_.compose(c, slot.assembly.images(), slot.assembly.linearImages());
         if (run_.depth && slot.assembly.depth()) run_.depth(f.frame, slot.assembly.depthImages());
         sourceFrame_ = f.frame;
@@ -477,6 +487,7 @@ private:
         NodeFrame frame;        // what assembly holds
         bool begun = false;     // holds a frame begun in this session and not yet swapped
         bool haveSent = false;  // shown and reported (NodeHave)
+        std::vector<TileRect> held;  // per view: the bounding box of the tiles routed to this node
     };
     Slot store_[3];
     Slot* slots_[2] = {&store_[0], &store_[1]};

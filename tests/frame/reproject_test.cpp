@@ -11,8 +11,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
+#include <optional>
 
 namespace rtwall {
 namespace {
@@ -245,6 +247,73 @@ TEST(FrameReproject, ThreadCountDoesNotChangeABit) {
             EXPECT_EQ(v.holes, base.holes) << threads << " threads";
         }
     }
+}
+
+// A region (a display node's screens and ring) warps only its pixels, reading only its source
+// pixels: outside it the buffers keep what they held; inside it every pixel the whole-view warp
+// moved from within the region is the same, on any number of threads. The region's edges act
+// as the image's. The whole image as a region (or more, clipped) is the whole-view warp; an
+// empty one warps nothing.
+TEST(FrameReproject, ARegionWarpsOnlyItsPixels) {
+    const SceneDesc d = wallAndBox(true);
+    const CameraDesc a = eyeAt(0, 0, 10), b = eyeAt(0.4f, 0, 10), c = eyeAt(0.8f, 0, 10), elsewhere = eyeAt(-0.6f, 0.2f, 9);
+    const RenderedFrame fa = render(d, a), fc = render(d, c);
+    const WarpSource older{fc.image, fc.depth, c};
+    Reprojector whole;
+    const WarpedView base = whole.warp({fa.image, fa.depth, a}, b, &older);
+    ASSERT_GT(base.holes, 0u);
+    for (const TileRect all : {TileRect{0, 0, kW, kH}, TileRect{-5, -9, kW + 5, kH + 30}}) {
+        WarpOptions options;
+        options.region = all;
+        Reprojector r;
+        const WarpedView& v = r.warp({fa.image, fa.depth, a}, b, &older, options);
+        EXPECT_EQ(v.image.rgb, base.image.rgb);
+        EXPECT_EQ(v.mask, base.mask);
+        EXPECT_EQ(v.holes, base.holes);
+    }
+    // The node holds only the region: outside it, no depth (nothing rendered there).
+    const TileRect region{40, 32, 120, 96};
+    auto inside = [&](int x, int y) { return x >= region.x0 && x < region.x1 && y >= region.y0 && y < region.y1; };
+    std::vector<float> held = fa.depth, heldOlder = fc.depth;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x)
+            if (!inside(x, y)) held[size_t(y) * kW + size_t(x)] = heldOlder[size_t(y) * kW + size_t(x)] = std::nanf("");
+    const WarpSource heldOlderSource{fc.image, heldOlder, c};
+    std::optional<WarpedView> one;
+    for (int threads : {1, 3}) {
+        Reprojector r;
+        const WarpedView prior = r.warp({fc.image, fc.depth, c}, elsewhere);  // what the buffers held
+        WarpOptions options;
+        options.threads = threads;
+        options.region = region;
+        const WarpedView& v = r.warp({fa.image, held, a}, b, &heldOlderSource, options);
+        size_t compared = 0;
+        for (int y = 0; y < kH; ++y)
+            for (int x = 0; x < kW; ++x) {
+                const size_t i = size_t(y) * kW + size_t(x);
+                if (!inside(x, y)) {
+                    ASSERT_EQ(std::memcmp(&v.image.rgb[i * 3], &prior.image.rgb[i * 3], 3), 0) << x << "," << y << " is outside";
+                    ASSERT_EQ(v.mask[i], prior.mask[i]);
+                    continue;
+                }
+                // The camera moved 0.4 right: a point seen at x came from x + 4 (wall) or x + 8 (box).
+                if (base.mask[i] != WarpPixel::Warped || x + 8 >= region.x1) continue;
+                EXPECT_EQ(std::memcmp(&v.image.rgb[i * 3], &base.image.rgb[i * 3], 3), 0) << x << "," << y;
+                EXPECT_EQ(v.mask[i], WarpPixel::Warped) << x << "," << y;
+                ++compared;
+            }
+        EXPECT_GT(compared, size_t(region.width() - 8) * size_t(region.height()) * 3 / 4);
+        if (!one) one = v;
+        else EXPECT_EQ(v.image.rgb, one->image.rgb) << threads << " threads";
+    }
+    // An empty region: nothing warped.
+    Reprojector r;
+    const WarpedView prior = r.warp({fc.image, fc.depth, c}, elsewhere);
+    WarpOptions none;
+    none.region = TileRect{10, 10, 10, 50};
+    const WarpedView& v = r.warp({fa.image, fa.depth, a}, b, nullptr, none);
+    EXPECT_EQ(v.image.rgb, prior.image.rgb);
+    EXPECT_EQ(v.holes, 0u);
 }
 
 TEST(FrameReproject, TimingHookMeasures) {

@@ -102,6 +102,7 @@ void Compositor::keepWarpSource(const ComposeFrame& f, const std::vector<Image>&
         s.image = images[v];  // copy-assigned into the slot's buffers
         s.depth.assign(f.depth[v].begin(), f.depth[v].end());
         s.camera = f.views[v].camera;
+        s.held = v < f.held.size() ? std::optional<TileRect>(f.held[v]) : std::nullopt;
     }
     warpViews_.assign(f.views.begin(), f.views.begin() + long(n));
     warpEyes_.assign(f.eyes.begin(), f.eyes.begin() + long(n));
@@ -120,7 +121,9 @@ const EyeImages& Compositor::reproject(std::span<const CameraDesc> targets, cons
         const bool older = warpOlder_.size() == n;
         const WarpSource newest{s.image, s.depth, s.camera};
         const WarpSource before = older ? WarpSource{warpOlder_[v].image, warpOlder_[v].depth, warpOlder_[v].camera} : newest;
-        const WarpedView& w = warpers_[v].warp(newest, targets[v], older ? &before : nullptr, options);
+        WarpOptions o = options;
+        if (!o.region) o.region = s.held;
+        const WarpedView& w = warpers_[v].warp(newest, targets[v], older ? &before : nullptr, o);
         const Image* shown = &w.image;
         if (debug) {
             warpDebugColours(w, debugView_);

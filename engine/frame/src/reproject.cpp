@@ -70,7 +70,7 @@ void sizeSplat(Reprojector::Splat& s, std::vector<uint64_t>& keys, int w, int h)
 // directions (points at infinity), behind every surface. `shared`: other threads write the same
 // keys (an atomic minimum), else a plain one.
 template <bool shared>
-void splatRows(const WarpSource& src, const Projector& to, uint64_t* keys, int y0, int y1) {
+void splatRows(const WarpSource& src, const Projector& to, uint64_t* keys, int y0, int y1, int x0, int x1, const TileRect& into) {
     const int sw = src.image.width;
     const Camera from(src.camera, sw, src.image.height);
     const Float3 o = from.origin(), fc = from.corner(), fu = from.du(), fv = from.dv();
@@ -95,7 +95,7 @@ void splatRows(const WarpSource& src, const Projector& to, uint64_t* keys, int y
         const double rowRow = row[0] * row[0] + row[1] * row[1] + row[2] * row[2];
         const double rowDu2 = 2.0 * (row[0] * du[0] + row[1] * du[1] + row[2] * du[2]);
         const double rowShift = row[0] * shift[0] + row[1] * shift[1] + row[2] * shift[2];
-        for (int x = 0; x < sw; ++x) {
+        for (int x = x0; x < x1; ++x) {
             const size_t i = size_t(y) * size_t(sw) + size_t(x);
             const float depth = src.depth[i];
             const bool background = depth == kBackgroundDepth;
@@ -105,7 +105,8 @@ void splatRows(const WarpSource& src, const Projector& to, uint64_t* keys, int y
             const double k = background ? 0.0 : 1.0;  // a direction does not move with the origin
             int tx, ty;
             if (!to.pixelOf(s * (r[0] + solvedDu[0] * px) + k * solvedShift[0], s * (r[1] + solvedDu[1] * px) + k * solvedShift[1],
-                            s * (r[2] + solvedDu[2] * px) + k * solvedShift[2], tx, ty))
+                            s * (r[2] + solvedDu[2] * px) + k * solvedShift[2], tx, ty) ||
+                tx < into.x0 || tx >= into.x1 || ty < into.y0 || ty >= into.y1)
                 continue;
             const double dd = double(depth);
             const float squared =
@@ -126,9 +127,10 @@ void splatRows(const WarpSource& src, const Projector& to, uint64_t* keys, int y
 }
 
 // Target rows [y0, y1): each key's source pixel (bytes and distance) into the splat image.
-void resolveRows(const WarpSource& src, const uint64_t* keys, Reprojector::Splat& s, int y0, int y1) {
+void resolveRows(const WarpSource& src, const uint64_t* keys, Reprojector::Splat& s, int y0, int y1, const TileRect& r) {
     const size_t w = size_t(s.image.width);
-    for (size_t t = size_t(y0) * w; t < size_t(y1) * w; ++t) {
+    for (int y = y0; y < y1; ++y)
+    for (size_t t = size_t(y) * w + size_t(r.x0); t < size_t(y) * w + size_t(r.x1); ++t) {
         const uint64_t key = keys[t];
         s.covered[t] = key != kNoSplat;
         if (key == kNoSplat) {
@@ -158,20 +160,20 @@ bool neighbours(int c, int n, size_t i, size_t step, size_t& a, size_t& b) {
 // fills 2; pass 2 also joins those and marks its fills 3, closing where a crack row meets a
 // crack column. Each pass reads only what the passes before it wrote, so the order within a
 // pass does not matter and threads may fill rows side by side.
-void fillCracks(Reprojector::Splat& s, float ratio, uint8_t pass, int y0, int y1) {
-    const int w = s.image.width, h = s.image.height;
+void fillCracks(Reprojector::Splat& s, float ratio, uint8_t pass, int y0, int y1, const TileRect& r) {
+    const int w = s.image.width;
     auto joins = [&](size_t a, size_t b) {
         if (s.covered[a] == 0 || s.covered[a] > pass || s.covered[b] == 0 || s.covered[b] > pass) return false;
         const float lo = std::min(s.depth[a], s.depth[b]), hi = std::max(s.depth[a], s.depth[b]);
         return hi <= lo * ratio;
     };
     for (int y = y0; y < y1; ++y)
-        for (int x = 0; x < w; ++x) {
+        for (int x = r.x0; x < r.x1; ++x) {
             const size_t i = size_t(y) * size_t(w) + size_t(x);
             if (s.covered[i]) continue;
             size_t a, b;
-            const bool across = neighbours(x, w, i, 1, a, b) && joins(a, b);
-            if (!across && !(neighbours(y, h, i, size_t(w), a, b) && joins(a, b))) continue;
+            const bool across = neighbours(x - r.x0, r.width(), i, 1, a, b) && joins(a, b);
+            if (!across && !(neighbours(y - r.y0, r.height(), i, size_t(w), a, b) && joins(a, b))) continue;
             const size_t from = s.depth[b] < s.depth[a] ? b : a;
             s.covered[i] = uint8_t(pass + 1);
             s.depth[i] = s.depth[from];
@@ -191,11 +193,11 @@ void copyPixel(const Reprojector::Splat& from, size_t i, WarpedView& to, size_t 
 // the only one when one side has none, the background colour when the row has none. Returns
 // the row's holes (pixels the newest view left uncovered).
 size_t composeRow(const Reprojector::Splat& newest, const Reprojector::Splat* older, const WarpOptions& options,
-                  WarpedView& out, int y) {
+                  WarpedView& out, int y, const TileRect& region) {
     const int w = out.image.width;
     const size_t row = size_t(y) * size_t(w);
     size_t holes = 0;
-    for (size_t i = row; i < row + size_t(w); ++i) {
+    for (size_t i = row + size_t(region.x0); i < row + size_t(region.x1); ++i) {
         if (newest.covered[i]) {
             copyPixel(newest, i, out, i);
             out.mask[i] = WarpPixel::Warped;
@@ -208,16 +210,16 @@ size_t composeRow(const Reprojector::Splat& newest, const Reprojector::Splat* ol
     }
     if (holes == 0) return 0;
     // Runs of Filled pixels between known ones: every pixel of a run has the same two sides.
-    for (int x = 0; x < w;) {
+    for (int x = region.x0; x < region.x1;) {
         if (out.mask[row + size_t(x)] != WarpPixel::Filled) {
             ++x;
             continue;
         }
-        const int l = x - 1;
+        const int l = x > region.x0 ? x - 1 : -1;
         int r = x;
-        while (r < w && out.mask[row + size_t(r)] == WarpPixel::Filled) ++r;
+        while (r < region.x1 && out.mask[row + size_t(r)] == WarpPixel::Filled) ++r;
         const int end = r;
-        if (r == w) r = -1;
+        if (r == region.x1) r = -1;
         const int from = l < 0 ? r : r < 0 ? l : out.depth[row + size_t(r)] > out.depth[row + size_t(l)] ? r : l;
         for (; x < end; ++x) {
             const size_t t = row + size_t(x);
@@ -258,41 +260,53 @@ const WarpedView& Reprojector::warp(const WarpSource& newest, const CameraDesc& 
         std::fill(out_.mask.begin(), out_.mask.end(), WarpPixel::Fresh);
         return out_;
     }
+    // The part warped: the region, clipped; all of the view without one.
+    TileRect region{0, 0, w, h};
+    if (const std::optional<TileRect>& r = options.region)
+        region = {std::clamp(r->x0, 0, w), std::clamp(r->y0, 0, h), std::clamp(r->x1, 0, w), std::clamp(r->y1, 0, h)};
+    if (region.width() <= 0 || region.height() <= 0) return out_;
     const Projector to(target, w, h);
     sizeSplat(newest_, newestKeys_, w, h);
     if (older) sizeSplat(older_, olderKeys_, w, h);
     const int hardware = int(std::max(1u, std::thread::hardware_concurrency()));
-    const int threads = std::clamp(options.threads > 0 ? options.threads : hardware, 1, std::max(1, h));
+    const int threads = std::clamp(options.threads > 0 ? options.threads : hardware, 1, region.height());
     rowHoles_.assign(size_t(threads), 0);
     // Every thread takes its share of rows through the same phases; a phase reads what the ones
     // before it wrote, so all wait for all between phases. Each phase's result does not depend
     // on how its rows were shared: the bytes are the same for any number of threads.
     std::barrier sync(threads);
     auto phases = [&](int part) {
-        const auto [y0, y1] = rowsOf(h, threads, part);
-        std::fill(newestKeys_.begin() + ptrdiff_t(size_t(y0) * size_t(w)), newestKeys_.begin() + ptrdiff_t(size_t(y1) * size_t(w)),
-                  kNoSplat);
-        if (older)
-            std::fill(olderKeys_.begin() + ptrdiff_t(size_t(y0) * size_t(w)), olderKeys_.begin() + ptrdiff_t(size_t(y1) * size_t(w)),
-                      kNoSplat);
+        auto [y0, y1] = rowsOf(region.height(), threads, part);
+        y0 += region.y0;
+        y1 += region.y0;
+        for (int y = y0; y < y1; ++y) {
+            const ptrdiff_t row = ptrdiff_t(size_t(y) * size_t(w));
+            std::fill(newestKeys_.begin() + row + region.x0, newestKeys_.begin() + row + region.x1, kNoSplat);
+            if (older) std::fill(olderKeys_.begin() + row + region.x0, olderKeys_.begin() + row + region.x1, kNoSplat);
+        }
         sync.arrive_and_wait();
+        // A source of the target's size: only the region's pixels (a node holds no others).
         auto splatShare = [&](const WarpSource& src, std::vector<uint64_t>& keys) {
-            const auto [s0, s1] = rowsOf(src.image.height, threads, part);
-            if (threads > 1) splatRows<true>(src, to, keys.data(), s0, s1);
-            else splatRows<false>(src, to, keys.data(), s0, s1);
+            const bool sameSize = src.image.width == w && src.image.height == h;
+            const TileRect from = sameSize ? region : TileRect{0, 0, src.image.width, src.image.height};
+            auto [s0, s1] = rowsOf(from.height(), threads, part);
+            s0 += from.y0;
+            s1 += from.y0;
+            if (threads > 1) splatRows<true>(src, to, keys.data(), s0, s1, from.x0, from.x1, region);
+            else splatRows<false>(src, to, keys.data(), s0, s1, from.x0, from.x1, region);
         };
         splatShare(newest, newestKeys_);
         if (older) splatShare(*older, olderKeys_);
         sync.arrive_and_wait();
-        resolveRows(newest, newestKeys_.data(), newest_, y0, y1);
-        if (older) resolveRows(*older, olderKeys_.data(), older_, y0, y1);
+        resolveRows(newest, newestKeys_.data(), newest_, y0, y1, region);
+        if (older) resolveRows(*older, olderKeys_.data(), older_, y0, y1, region);
         for (uint8_t pass : {1, 2}) {
             sync.arrive_and_wait();
-            fillCracks(newest_, options.crackRatio, pass, y0, y1);
-            if (older) fillCracks(older_, options.crackRatio, pass, y0, y1);
+            fillCracks(newest_, options.crackRatio, pass, y0, y1, region);
+            if (older) fillCracks(older_, options.crackRatio, pass, y0, y1, region);
         }
         sync.arrive_and_wait();
-        for (int y = y0; y < y1; ++y) rowHoles_[size_t(part)] += composeRow(newest_, older ? &older_ : nullptr, options, out_, y);
+        for (int y = y0; y < y1; ++y) rowHoles_[size_t(part)] += composeRow(newest_, older ? &older_ : nullptr, options, out_, y, region);
     };
     {
         std::vector<std::jthread> helpers;

@@ -8,6 +8,7 @@
 #include <rtwall/image.h>
 
 #include <cstdint>
+#include <optional>
 #include <span>
 
 namespace rtwall {
@@ -65,6 +66,13 @@ struct WarpOptions {
     // number: a pixel's winner is the nearest point, the first in row order of equals, whichever
     // thread splatted it.
     int threads = 0;
+    // Only this rectangle of the target is warped, and of a source of the target's size only
+    // its pixels are read: a display node holds and shows only its screens' tiles and the ring
+    // around them, and warping the rest of the view was half of its refresh's work on a
+    // two-node wall. Its edges act as the image's edges (cracks, the row fill); pixels outside
+    // keep what they held; an empty one warps nothing. None (the default): the whole view. The
+    // CPU warp's; a GL warp draws only its window's screens anyway.
+    std::optional<TileRect> region;
 };
 
 // The debug view: each pixel half its own colour, half its origin's tint (fresh green, warped

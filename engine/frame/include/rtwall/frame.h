@@ -160,6 +160,10 @@ struct ComposeFrame {
     // Per view, the depth its tiles came with (width x height, distance along the primary ray):
     // given, the frame's views become the re-projection's newest source (reproject()).
     std::span<const std::vector<float>> depth{};
+    // Per view, the part of it this compositor holds and shows (a display node: the bounding
+    // box of its routed tiles; empty where it holds none): reproject() warps only that
+    // (WarpOptions::region). A view beyond the span: all of it.
+    std::span<const TileRect> held{};
 };
 
 struct EyeImages {
@@ -194,6 +198,7 @@ public:
         Image image;
         std::vector<float> depth;
         CameraDesc camera;
+        std::optional<TileRect> held;  // ComposeFrame::held (none: all of the view)
     };
     const WarpSlot& newestSource(size_t view) const { return warpNewest_.at(view); }
     const WarpSlot* olderSource(size_t view) const { return warpOlder_.size() == warpNewest_.size() ? &warpOlder_.at(view) : nullptr; }
