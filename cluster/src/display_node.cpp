@@ -374,9 +374,11 @@ private:
         }
     }
 
-    // What the node shows of a frame it holds: made as the single-PC wall makes it.
+    // What the node shows of a frame it holds: made as the single-PC wall makes it. Re-projecting
+    // (`source`), with each view's depth and held region, so that the frame becomes the newest
+    // warp source and the one before it the older.
     struct Slot;
-    void show(const Slot& slot) {
+    EyeImages compose(const Slot& slot, bool source) {
         const NodeFrame& f = slot.frame;
         ComposeFrame c;
         c.views = f.views;
@@ -384,25 +386,20 @@ private:
         c.stochastic = f.stochastic;
         c.stateSeq = f.stateSeq;
         c.linear = slot.assembly.linear();
-        shown_ = compositor_.compose(c, slot.assembly.images(), slot.assembly.linearImages());
+        if (source && slot.assembly.depth()) c.depth = slot.assembly.depthImages();
+        if (source) c.held = slot.held;
+        EyeImages out = compositor_.compose(c, slot.assembly.images(), slot.assembly.linearImages());
         // Each view's depth beside its image, for a warp on the node (issue 27).
         if (run_.depth && slot.assembly.depth()) run_.depth(f.frame, slot.assembly.depthImages());
+        return out;
     }
+    void show(const Slot& slot) { shown_ = compose(slot, false); }
 
     // Re-projecting: the released frame becomes the newest warp source (accumulated and composed
-    // as show() does, with each view's depth); the frame before stays the older one.
+    // as show() does); the frame before stays the older one.
     void keepSource(const Slot& slot, const std::vector<std::string>& leftOut) {
         const NodeFrame& f = slot.frame;
-        ComposeFrame c;
-        c.views = f.views;
-        c.eyes.assign(f.eyes.begin(), f.eyes.end());
-        c.stochastic = f.stochastic;
-        c.stateSeq = f.stateSeq;
-        c.linear = slot.assembly.linear();
-        if (slot.assembly.depth()) c.depth = slot.assembly.depthImages();
-        c.held = slot.held;
-        compositor_.compose(c, slot.assembly.images(), slot.assembly.linearImages());
-        if (run_.depth && slot.assembly.depth()) run_.depth(f.frame, slot.assembly.depthImages());
+        compose(slot, true);
         sourceFrame_ = f.frame;
         leftOut_ = leftOut;
     }
