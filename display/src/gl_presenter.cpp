@@ -119,12 +119,14 @@ struct GlPresenter::Impl {
     bool quad = false;
     std::unique_ptr<GlReprojector> reprojector;  // made with the first frame that has warps
     GLuint warpFbo[2] = {0, 0};                  // reading a warp's result, drawing into an eye
+    GLuint paintFbo = 0;                         // painting into an eye (paint())
 
     ~Impl() {
         if (!screens.empty()) {
             glfwMakeContextCurrent(screens[0].window);
             reprojector.reset();
             glDeleteFramebuffers(2, warpFbo);
+            if (paintFbo) glDeleteFramebuffers(1, &paintFbo);
             glDeleteTextures(2, wallTex);
             glDeleteTextures(1, &ownerTex);
             glDeleteBuffers(4, &pbo[0][0]);
@@ -203,6 +205,31 @@ struct GlPresenter::Impl {
             for (const TileRect& r : v.regions.empty() ? whole : v.regions)  // texture row y is image row y
                 glBlitFramebuffer(r.x0, r.y0, r.x1, r.y1, r.x0, r.y0, r.x1, r.y1, GL_COLOR_BUFFER_BIT, GL_NEAREST);
         }
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    }
+
+    // The frame's paints (the wand's ray) over the eyes' textures, once they are made: each
+    // rectangle a scissored clear of its eye's texture (texture row y is image row y; an 8-bit
+    // value v cleared as v / 255 is stored as v).
+    void paint(const std::vector<EyePaint>& paints, bool haveRight) {
+        if (paints.empty()) return;
+        if (!paintFbo) glGenFramebuffers(1, &paintFbo);
+        glBindFramebuffer(GL_DRAW_FRAMEBUFFER, paintFbo);
+        const GLenum attachment = GL_COLOR_ATTACHMENT0;
+        glEnable(GL_SCISSOR_TEST);
+        for (int eye = 0; eye < (haveRight ? 2 : 1); ++eye) {
+            glFramebufferTexture2D(GL_DRAW_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, wallTex[eye], 0);
+            glDrawBuffers(1, &attachment);
+            for (const EyePaint& p : paints) {
+                const int x0 = std::max(p.rect.x0, 0), y0 = std::max(p.rect.y0, 0);
+                const int x1 = std::min(p.rect.x1, texW), y1 = std::min(p.rect.y1, texH);
+                if (p.eye != eye || x1 <= x0 || y1 <= y0) continue;
+                glScissor(x0, y0, x1 - x0, y1 - y0);
+                const GLfloat c[4] = {p.colour[0] / 255.0f, p.colour[1] / 255.0f, p.colour[2] / 255.0f, 1.0f};
+                glClearBufferfv(GL_COLOR, 0, c);
+            }
+        }
+        glDisable(GL_SCISSOR_TEST);
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
     }
 
@@ -418,6 +445,7 @@ void GlPresenter::present(const WallFrame& frame, const PresentOptions& options,
         if (haveRight) im.upload(im.wallTex[1], im.pbo[1], frame.right);
         im.pboNext ^= 1;
     }
+    im.paint(frame.paints, haveRight);
     const int tileSize = options.falseColour && frame.tileSize > 0 ? frame.tileSize : 0;
     if (tileSize > 0) {
         // One texel per tile with the colour of its client: tiny, uploaded directly.

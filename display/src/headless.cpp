@@ -3,6 +3,7 @@
 #include <rtwall/display.h>
 
 #include <cstdio>
+#include <optional>
 #include <cstdlib>
 
 namespace rtwall {
@@ -33,7 +34,16 @@ HeadlessPresenter::~HeadlessPresenter() {
     if (video_) pclose(video_);
 }
 
-void HeadlessPresenter::present(const WallFrame& frame, const PresentOptions& options) {
+void HeadlessPresenter::present(const WallFrame& given, const PresentOptions& options) {
+    // Paints (the GL presenter's way of drawing over eyes it makes itself) on a copy: a frame
+    // comes here with its eye images, which the wand's ray is normally drawn into already.
+    std::optional<WallFrame> painted;
+    if (!given.paints.empty()) {
+        painted = given;
+        applyPaints(painted->paints, 0, painted->left);
+        applyPaints(painted->paints, 1, painted->right);
+    }
+    const WallFrame& frame = painted ? *painted : given;
     ++count_;
     if (video_ && frame.left.width == wall_.width && frame.left.height == wall_.height)
         std::fwrite(frame.left.rgb.data(), 1, frame.left.rgb.size(), video_);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace rtwall {
 
@@ -134,8 +135,11 @@ ViewPose rescaledPose(const ViewPose& pose, const Float3& viewer, double scale, 
 }
 
 namespace {
-// One pixel-wide line from (x0, y0) to (x1, y1) (image pixels), 2 pixels thick, only inside `clip`.
-void drawLine(Image& image, double x0, double y0, double x1, double y1, const PixelRect& clip, std::array<uint8_t, 3> colour) {
+// One pixel-wide line from (x0, y0) to (x1, y1) (image pixels), 2 pixels thick, only inside
+// `clip`, as rectangles of eye `eye`: each step a 2x2 square, clipped, merged with the one before
+// where the two make a rectangle (the same rows, touching columns, or the other way round).
+void lineRects(int eye, double x0, double y0, double x1, double y1, const PixelRect& clip, std::array<uint8_t, 3> colour,
+               std::vector<EyePaint>& out) {
     // Cut to the clip rectangle first (Liang-Barsky): a point almost level with the eye projects
     // far off the screens.
     double t0 = 0, t1 = 1;
@@ -156,24 +160,48 @@ void drawLine(Image& image, double x0, double y0, double x1, double y1, const Pi
     x0 = x0 + ddx * t0, y0 = y0 + ddy * t0;
     const double steps = std::ceil(std::max(std::fabs(x1 - x0), std::fabs(y1 - y0)));
     if (!(steps < 1e6)) return;  // not finite
+    const size_t first = out.size();
     for (int i = 0; i <= int(steps); ++i) {
         const double t = steps > 0 ? i / steps : 0.0;
         const int px = int(std::floor(x0 + (x1 - x0) * t)), py = int(std::floor(y0 + (y1 - y0) * t));
-        for (int dy = 0; dy < 2; ++dy)
-            for (int dx = 0; dx < 2; ++dx) {
-                const int x = px + dx, y = py + dy;
-                if (x < clip.x || y < clip.y || x >= clip.x + clip.width || y >= clip.y + clip.height) continue;
-                uint8_t* pixel = &image.rgb[(size_t(y) * size_t(image.width) + size_t(x)) * 3];
-                pixel[0] = colour[0], pixel[1] = colour[1], pixel[2] = colour[2];
+        const TileRect r{std::max(px, clip.x), std::max(py, clip.y), std::min(px + 2, clip.x + clip.width), std::min(py + 2, clip.y + clip.height)};
+        if (r.width() <= 0 || r.height() <= 0) continue;
+        if (out.size() > first) {
+            TileRect& last = out.back().rect;
+            if (last.y0 == r.y0 && last.y1 == r.y1 && r.x0 <= last.x1 && r.x1 >= last.x0) {
+                last.x0 = std::min(last.x0, r.x0), last.x1 = std::max(last.x1, r.x1);
+                continue;
             }
+            if (last.x0 == r.x0 && last.x1 == r.x1 && r.y0 <= last.y1 && r.y1 >= last.y0) {
+                last.y0 = std::min(last.y0, r.y0), last.y1 = std::max(last.y1, r.y1);
+                continue;
+            }
+        }
+        out.push_back({eye, r, colour});
     }
 }
 }  // namespace
 
+void applyPaints(const std::vector<EyePaint>& paints, int eye, Image& image) {
+    for (const EyePaint& p : paints) {
+        if (p.eye != eye) continue;
+        for (int y = std::max(p.rect.y0, 0); y < std::min(p.rect.y1, image.height); ++y)
+            for (int x = std::max(p.rect.x0, 0); x < std::min(p.rect.x1, image.width); ++x)
+                std::memcpy(&image.rgb[(size_t(y) * size_t(image.width) + size_t(x)) * 3], p.colour.data(), 3);
+    }
+}
+
 void drawWandRay(const WallConfig& wall, const HeadPose& head, int eye, const Float3& from, const Float3& to, Image& image,
                  std::array<uint8_t, 3> colour) {
-    if (image.width <= 0 || image.height <= 0 || wall.width <= 0 || wall.height <= 0) return;
-    const double sx = double(image.width) / wall.width, sy = double(image.height) / wall.height;
+    std::vector<EyePaint> paints;
+    wandRayPaints(wall, head, eye, from, to, image.width, image.height, paints, colour);
+    applyPaints(paints, eye == 1 ? 1 : 0, image);
+}
+
+void wandRayPaints(const WallConfig& wall, const HeadPose& head, int eye, const Float3& from, const Float3& to, int width,
+                   int height, std::vector<EyePaint>& out, std::array<uint8_t, 3> colour) {
+    if (width <= 0 || height <= 0 || wall.width <= 0 || wall.height <= 0) return;
+    const double sx = double(width) / wall.width, sy = double(height) / wall.height;
     for (const WallView& v : wallViews(wall, head, eye)) {
         const EyeWindow& w = v.window;
         const Float3 n = cross(w.right, w.up);  // towards the viewer's side of the screens
@@ -207,8 +235,8 @@ void drawWandRay(const WallConfig& wall, const HeadPose& head, int eye, const Fl
             const PixelRect& r = wall.screens[i].viewport;
             const int cx0 = int(std::floor(r.x * sx)), cy0 = int(std::floor(r.y * sy));
             const PixelRect clip{cx0, cy0, int(std::ceil((r.x + r.width) * sx)) - cx0, int(std::ceil((r.y + r.height) * sy)) - cy0};
-            drawLine(image, x0, y0, x1, y1, {clip.x, clip.y, std::min(clip.width, image.width - clip.x), std::min(clip.height, image.height - clip.y)},
-                     colour);
+            lineRects(eye == 1 ? 1 : 0, x0, y0, x1, y1, {clip.x, clip.y, std::min(clip.width, width - clip.x), std::min(clip.height, height - clip.y)},
+                      colour, out);
         }
     }
 }

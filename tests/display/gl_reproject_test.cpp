@@ -266,5 +266,68 @@ TEST(GlPresenterWarps, TheEyeShowsTheCpuWarpsComposed) {
     }
 }
 
+// The wand's ray over a warped frame (WallFrame::paints): the GL presenter paints it after its
+// warp, where the eye image never passes through the CPU, exactly in the ray's colour, the rest
+// as the CPU warp to the tolerance above; over an uploaded frame it shows what the headless
+// presenter shows of the same frame with the same paints, byte for byte.
+TEST(GlPresenterWarps, PaintsAreDrawnOverTheWarpedEye) {
+    const int w = 160, h = 120;
+    const WallConfig wall = singleScreenWall(w, h);
+    GlPresenter::Options o;
+    o.visible = false;
+    std::string why;
+    auto gl = GlPresenter::open(wall, o, &why);
+    ASSERT_TRUE(gl) << why;
+    const View a = synthetic(w, h, lookingAt({0, 1.2f, 2.0f}));
+    WallFrame frame;
+    frame.number = 1;
+    ViewWarp va;
+    va.image = &a.image;
+    va.depth = &a.depth;
+    va.camera = a.camera;
+    va.target = lookingAt({0.2f, 1.15f, 1.9f});
+    frame.warps = {va};
+    const std::array<uint8_t, 3> yellow{255, 230, 40};
+    frame.paints = {{0, {10, 10, 30, 12}, yellow}, {0, {50, 60, 52, 90}, yellow}, {0, {150, 100, 170, 130}, {9, 99, 199}}};
+    std::vector<Image> shown;
+    gl->present(frame, {}, &shown);
+    ASSERT_EQ(shown.size(), 1u);
+    Reprojector warper;
+    WallFrame cpu;
+    cpu.left = warper.warp({a.image, a.depth, a.camera}, va.target).image;
+    applyPaints(frame.paints, 0, cpu.left);
+    const Image expected = presentScreen(wall, 0, cpu, {});
+    ASSERT_EQ(shown[0].rgb.size(), expected.rgb.size());
+    size_t same = 0, painted = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t i = size_t(y) * size_t(w) + size_t(x);
+            const bool eq = std::equal(&shown[0].rgb[i * 3], &shown[0].rgb[i * 3 + 3], &expected.rgb[i * 3]);
+            same += eq;
+            bool inPaint = false;
+            for (const EyePaint& p : frame.paints)
+                inPaint |= x >= p.rect.x0 && x < p.rect.x1 && y >= p.rect.y0 && y < p.rect.y1;
+            if (inPaint) {
+                ++painted;
+                EXPECT_TRUE(eq) << x << "," << y << ": a painted pixel";
+            }
+        }
+    EXPECT_EQ(painted, size_t(20 * 2 + 2 * 30 + 10 * 20));
+    EXPECT_GE(double(same), 0.999 * double(w * h));
+    // An uploaded frame with paints: the headless presenter's bytes.
+    WallFrame plain;
+    plain.number = 2;
+    plain.left = a.image;
+    plain.paints = frame.paints;
+    gl->present(plain, {}, &shown);
+    const auto dir = test::scratchDir();
+    WallConfig written = wall;
+    written.writeEvery = 1;
+    HeadlessPresenter headless(written, dir);
+    headless.present(plain, {});
+    ASSERT_EQ(headless.written().size(), 1u);
+    EXPECT_EQ(shown[0].rgb, readPng(headless.written()[0]).rgb);
+}
+
 }  // namespace
 }  // namespace rtwall

@@ -229,6 +229,17 @@ struct ViewWarp {
     CameraDesc target;
 };
 
+// A rectangle of one eye's image painted in one colour over what a frame shows (the wand's ray,
+// wandRayPaints), by every presenter once the eye's image is made: uploaded, or warped on the
+// GPU, where the eye images never pass through the CPU.
+struct EyePaint {
+    int eye = 0;    // 0 left/mono, 1 right
+    TileRect rect;  // in the eye image's pixels
+    std::array<uint8_t, 3> colour{};
+};
+// Paints `paints` of eye `eye` into `image`, clipped to it.
+void applyPaints(const std::vector<EyePaint>& paints, int eye, Image& image);
+
 // A finished frame as the renderer delivers it.
 // Its images are the wall's size, or smaller: a frame rendered at a fraction of the wall's
 // resolution is shown upscaled (bilinear, pixel centres aligned, edges clamped).
@@ -244,6 +255,7 @@ struct WallFrame {
     // are of one size, the frame's. warpDebug: the warp's debug view (warpDebugColours' tints).
     std::vector<ViewWarp> warps;
     bool warpDebug = false;
+    std::vector<EyePaint> paints;  // painted over the eyes' images by the presenter (the wand's ray over a GPU warp)
 };
 // Throws std::invalid_argument, naming `who` and the sizes, for a frame larger than the wall, an
 // empty one, or eyes of different sizes.
@@ -465,6 +477,10 @@ ViewPose rescaledPose(const ViewPose& pose, const Float3& viewer, double scale, 
 // parallax in stereo; it is drawn over the scene (not hidden by it: it ends where it hits).
 void drawWandRay(const WallConfig& wall, const HeadPose& head, int eye, const Float3& from, const Float3& to, Image& image,
                  std::array<uint8_t, 3> colour = {255, 230, 40});
+// The same ray as the rectangles it paints into an eye image of width x height (appended to
+// `out`, runs of the line merged): for a presenter that makes the eye images itself.
+void wandRayPaints(const WallConfig& wall, const HeadPose& head, int eye, const Float3& from, const Float3& to, int width,
+                   int height, std::vector<EyePaint>& out, std::array<uint8_t, 3> colour = {255, 230, 40});
 
 // Fly (WASD + mouse look) and orbit (drag around the look-at point, scroll to zoom), camera
 // bookmarks and camera-path recording. Plain state: fed InputState, tested without a window.

@@ -76,7 +76,7 @@ public:
     // its buttons (mode, home, pick and drag or measure: every press and release since the last
     // step, in order), and the ray's length; once per step, after handle(). It also takes the
     // tracked head, about which the world-scale keys scale. Then drawWand draws its ray into the
-    // frame's eye images for `head`.
+    // frame's eye images for `head` (of a frame the GL presenter warps: into its paints).
     void handleWand(LiveScene& scene, const TrackerState& tracker, double dt);
     void drawWand(WallFrame& frame, const HeadPose& head) const;
     const std::optional<WandPose>& wand() const { return wand_; }

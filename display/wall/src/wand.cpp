@@ -180,16 +180,25 @@ void WallInput::dragHeld(LiveScene& scene, WandPose& p) {
 }
 
 void WallInput::drawWand(WallFrame& frame, const HeadPose& head) const {
+    frame.paints.clear();
     if (!wand_ || !wall_.tracking.wandRay) return;
     const Float3 a = wand_->wallPosition, d = wand_->wallDirection;
     const float metres = wand_->length / float(scale_);  // the length is in scene units
     const Float3 b{a.x + d.x * metres, a.y + d.y * metres, a.z + d.z * metres};
+    // A frame the GL presenter warps has no eye images here: it paints the ray after its warp.
+    const bool gpu = !frame.warps.empty();
+    const int width = gpu ? frame.warps[0].image->width : frame.left.width;
+    const int height = gpu ? frame.warps[0].image->height : frame.left.height;
     if (wall_.stereo.mode == StereoMode::None) {
-        drawWandRay(wall_, head, -1, a, b, frame.left);
+        wandRayPaints(wall_, head, -1, a, b, width, height, frame.paints);
     } else {
-        drawWandRay(wall_, head, 0, a, b, frame.left);
-        drawWandRay(wall_, head, 1, a, b, frame.right);
+        wandRayPaints(wall_, head, 0, a, b, width, height, frame.paints);
+        wandRayPaints(wall_, head, 1, a, b, width, height, frame.paints);
     }
+    if (gpu) return;
+    applyPaints(frame.paints, 0, frame.left);
+    applyPaints(frame.paints, 1, frame.right);
+    frame.paints.clear();
 }
 
 }  // namespace rtwall::wall
