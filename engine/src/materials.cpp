@@ -171,7 +171,14 @@ public:
         Float3 t;
         const bool refracts = fr < 1.0f && refractDirection(ray.dir, sp.ns, eta, t);
         c.spawn(ray, offsetOrigin(sp.p, sp.ng, 1.0f), reflect(ray.dir, sp.ns), w * (refracts ? fr : 1.0f), 0);
-        if (refracts) c.spawn(ray, offsetOrigin(sp.p, sp.ng, -1.0f), t, w * albedo(sp) * (1.0f - fr), 1);
+        // The refracted ray keeps the density of the bounce it goes on (and how far it came), as
+        // a volume's does: that bounce's light sample passed straight through this glass
+        // (shadowPass), so a lamp's face it reaches is weighed against that sample by multiple
+        // importance sampling, as if the glass were not there, instead of counted a second time
+        // (issue 28). A reflection keeps none: no light sample finds the lamp in a reflection.
+        if (refracts)
+            c.spawn(ray, offsetOrigin(sp.p, sp.ng, -1.0f), t, w * albedo(sp) * (1.0f - fr), 1, ray.bsdfPdf,
+                    ray.bsdfPdf > 0.0f ? ray.travelled + sp.t : 0.0f);
     }
 
     // Approximation (docs/shading.md): shadow rays go straight through, losing the Fresnel
