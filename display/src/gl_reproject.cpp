@@ -83,12 +83,12 @@ GLuint compileShader(GLenum type, const ShaderSource& src) {
 }
 
 struct GlReprojector::Impl {
-    GLuint splat = 0, crack = 0, compose = 0, scan = 0, fill = 0;  // programs
+    GLuint splat = 0, crack = 0, compose = 0, scan = 0, rowsInit = 0, rowScan = 0, fill = 0;  // programs
     GLuint vao = 0, fbo = 0, keys = 0;                              // keys: the depth renderbuffer
     GLuint sourceColour[2] = {}, sourceDepth[2] = {};               // newest, older
     int sourceW[2] = {-1, -1}, sourceH[2] = {-1, -1};
     GLuint state[2][2] = {}, stateDepth[2][2] = {};                 // per view, ping and pong
-    GLuint composed = 0, composedDepth = 0, sides[2] = {}, result = 0;
+    GLuint composed = 0, composedDepth = 0, sides[2] = {}, rows[2] = {}, result = 0;  // rows: 1 x h
     int w = -1, h = -1;
 
     Impl() {
@@ -97,6 +97,8 @@ struct GlReprojector::Impl {
         crack = linkProgram(full, warpShader("warp_crack.frag"));
         compose = linkProgram(full, warpShader("warp_compose.frag"));
         scan = linkProgram(full, warpShader("warp_scan.frag"));
+        rowsInit = linkProgram(full, warpShader("warp_rows.frag"));
+        rowScan = linkProgram(full, warpShader("warp_rowscan.frag"));
         fill = linkProgram(full, warpShader("warp_fill.frag"));
         glGenVertexArrays(1, &vao);
         glGenFramebuffers(1, &fbo);
@@ -104,16 +106,16 @@ struct GlReprojector::Impl {
         for (auto [names, n] : textures()) glGenTextures(n, names);
     }
     ~Impl() {
-        for (GLuint p : {splat, crack, compose, scan, fill}) glDeleteProgram(p);
+        for (GLuint p : {splat, crack, compose, scan, rowsInit, rowScan, fill}) glDeleteProgram(p);
         glDeleteVertexArrays(1, &vao);
         glDeleteFramebuffers(1, &fbo);
         glDeleteRenderbuffers(1, &keys);
         for (auto [names, n] : textures()) glDeleteTextures(n, names);
     }
     // Every texture name array and its length: made and deleted together.
-    std::array<std::pair<GLuint*, GLsizei>, 8> textures() {
+    std::array<std::pair<GLuint*, GLsizei>, 9> textures() {
         return {{{sourceColour, 2}, {sourceDepth, 2}, {&state[0][0], 4}, {&stateDepth[0][0], 4}, {&composed, 1}, {&composedDepth, 1},
-                 {sides, 2}, {&result, 1}}};
+                 {sides, 2}, {rows, 2}, {&result, 1}}};
     }
 
     void sizeTargets(int width, int height) {
@@ -128,6 +130,7 @@ struct GlReprojector::Impl {
         setTexture(composed, GL_RGBA8, w, h, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
         setTexture(composedDepth, GL_R32F, w, h, GL_RED, GL_FLOAT, nullptr);
         for (GLuint s : sides) setTexture(s, GL_RG32I, w, h, GL_RG_INTEGER, GL_INT, nullptr);
+        for (GLuint r : rows) setTexture(r, GL_RG32I, 1, h, GL_RG_INTEGER, GL_INT, nullptr);
         setTexture(result, GL_RGBA8, w, h, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
         glBindRenderbuffer(GL_RENDERBUFFER, keys);
         glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, w, h);
@@ -246,11 +249,31 @@ struct GlReprojector::Impl {
             fullScreen();
             current = 1 - current;
         }
+        // Rows without a known pixel: the nearest rows that have one, above and below.
+        target({rows[0]}, false);
+        glViewport(0, 0, 1, h);
+        glUseProgram(rowsInit);
+        bindUnit(0, sides[current]);
+        glUniform1i(glGetUniformLocation(rowsInit, "sides"), 0);
+        fullScreen();
+        int currentRows = 0;
+        glUseProgram(rowScan);
+        glUniform1i(glGetUniformLocation(rowScan, "rows"), 0);
+        for (int step = 1; step < h; step *= 2) {
+            target({rows[1 - currentRows]}, false);
+            glViewport(0, 0, 1, h);
+            bindUnit(0, rows[currentRows]);
+            glUniform1i(glGetUniformLocation(rowScan, "step"), step);
+            fullScreen();
+            currentRows = 1 - currentRows;
+        }
         target({result}, false);
         glUseProgram(fill);
         bindUnit(0, composed);
         bindUnit(1, composedDepth);
         bindUnit(2, sides[current]);
+        bindUnit(3, rows[currentRows]);
+        glUniform1i(glGetUniformLocation(fill, "rows"), 3);
         glUniform1i(glGetUniformLocation(fill, "composed"), 0);
         glUniform1i(glGetUniformLocation(fill, "composedDepth"), 1);
         glUniform1i(glGetUniformLocation(fill, "sides"), 2);

@@ -155,7 +155,7 @@ TEST_F(GlWarp, ASyntheticDisocclusionWarpsAsOnTheCpu) {
     expectAgreement(*gl_, a.source(), b, nullptr, {}, false, "synthetic");
     expectAgreement(*gl_, a.source(), b, &older, {}, false, "synthetic + older");
     WarpOptions options;
-    options.background[0] = 200;  // rows the new pose sees beyond the view: the background colour
+    options.background[0] = 200;  // rows the new pose sees beyond the view: the nearest row's pixels (the background never)
     // Looking at the horizon, stepped back and zoomed out: several sky pixels, all equally far,
     // land in one pixel, and the first of them wins.
     const View horizon = synthetic(200, 150, lookingAt({0, 1.2f, 2.0f}, 50, {0, 1.0f, 0}));

@@ -164,8 +164,8 @@ TEST(FrameReproject, HolesAreExactlyTheDisoccludedRegion) {
 }
 
 // Where the newest view has no depth (NaN, infinities, zero, negative) its pixels are not moved:
-// they are holes, filled from the row; a row without any depth takes the background colour; a
-// depth buffer of the wrong size is refused.
+// they are holes, filled from the row; a row without any depth takes the nearest row's pixels,
+// an image without any the background colour; a depth buffer of the wrong size is refused.
 TEST(FrameReproject, DepthThatIsNoDepthIsAHoleAndNeverACrash) {
     const SceneDesc d = wallAndBox(true);
     const CameraDesc a = eyeAt(0, 0, 10);
@@ -187,11 +187,57 @@ TEST(FrameReproject, DepthThatIsNoDepthIsAHoleAndNeverACrash) {
         const bool ok = depth[i] > 0 && depth[i] < INFINITY;
         EXPECT_EQ(v.mask[i], ok ? WarpPixel::Warped : WarpPixel::Filled) << i;
     }
-    EXPECT_EQ(v.image.rgb[size_t(50) * kW * 3], 7);
+    // The row without any depth takes the nearest row that has some (49 and 51 are as near: the
+    // one above), as the row fill left it; the background colour only where no row has any.
+    EXPECT_TRUE(std::equal(v.image.rgb.begin() + ptrdiff_t(size_t(50) * kW * 3), v.image.rgb.begin() + ptrdiff_t(size_t(51) * kW * 3),
+                           v.image.rgb.begin() + ptrdiff_t(size_t(49) * kW * 3)));
+    EXPECT_NE(v.image.rgb[size_t(50) * kW * 3], 7);
+    std::vector<float> none(depth.size(), std::nanf(""));
+    const WarpedView& empty = warper.warp({f.image, none, a}, a, nullptr, options);
+    for (size_t i = 0; i < empty.mask.size(); ++i)
+        ASSERT_TRUE(empty.image.rgb[i * 3] == 7 && empty.image.rgb[i * 3 + 1] == 0 && empty.image.rgb[i * 3 + 2] == 0)
+            << i << ": nothing to fill from: the background";
     for (const CameraDesc& to : {eyeAt(0.5f, 0.3f, 9), eyeAt(0, 0, -10), test::cameraAt({0, 0, 10}, {0, 0, 20}, kFovY)})
         EXPECT_NO_THROW(warper.warp({f.image, depth, a}, to));
     std::vector<float> short_(f.depth.begin(), f.depth.end() - 1);
     EXPECT_THROW(warper.warp({f.image, short_, a}, a), std::invalid_argument);
+}
+
+// Stepping back with a wider view, the new pose sees rows above and below what the view saw:
+// each such row (no pixel from the view) takes the nearest row that has some, as that row was
+// filled, never the background colour (until issue 27's follow-up they were the background:
+// black edges that the guard bands in docs/latency.md had to hide).
+TEST(FrameReproject, ARowNoViewCoveredTakesTheNearestRow) {
+    const SceneDesc d = wallAndBox(true);
+    const CameraDesc a = eyeAt(0, 0, 10);
+    const CameraDesc wide = test::cameraAt({0, 0, 12}, {0, 0, 0}, kFovY * 1.3f);
+    const RenderedFrame f = render(d, a);
+    Reprojector warper;
+    WarpOptions options;
+    options.background[1] = 255;  // a green no render has
+    const WarpedView& v = warper.warp({f.image, f.depth, a}, wide, nullptr, options);
+    std::vector<bool> known(kH, false);
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) known[size_t(y)] = known[size_t(y)] || v.mask[size_t(y) * kW + size_t(x)] != WarpPixel::Filled;
+    int empty = 0;
+    for (int y = 0; y < kH; ++y) {
+        if (known[size_t(y)]) continue;
+        ++empty;
+        int above = y - 1, below = y + 1;
+        while (above >= 0 && !known[size_t(above)]) --above;
+        while (below < kH && !known[size_t(below)]) ++below;
+        const int from = below >= kH || (above >= 0 && y - above <= below - y) ? above : below;
+        ASSERT_GE(from, 0);
+        EXPECT_TRUE(std::equal(v.image.rgb.begin() + ptrdiff_t(size_t(y) * kW * 3), v.image.rgb.begin() + ptrdiff_t(size_t(y + 1) * kW * 3),
+                               v.image.rgb.begin() + ptrdiff_t(size_t(from) * kW * 3)))
+            << "row " << y << " should be row " << from;
+    }
+    EXPECT_GE(empty, 4) << "the wider view should see rows beyond the rendered one at the top and bottom";
+    for (size_t i = 0; i < v.mask.size(); ++i) ASSERT_FALSE(v.image.rgb[i * 3 + 1] == 255 && v.image.rgb[i * 3] == 0) << i;
+    // On any number of threads.
+    options.threads = 3;
+    Reprojector three;
+    EXPECT_EQ(three.warp({f.image, f.depth, a}, wide, nullptr, options).image.rgb, v.image.rgb);
 }
 
 // Frame after frame at one size the warp reuses its buffers and gives the same bytes.

@@ -190,13 +190,14 @@ void copyPixel(const Reprojector::Splat& from, size_t i, WarpedView& to, size_t 
 // else the fallback: a pixel neither covers takes the nearest covered pixel of its row on the
 // side whose depth is farther (a disocclusion uncovers what lies behind the edge, so the far
 // side continues it; the near side is the occluder that moved away), the left one of equals,
-// the only one when one side has none, the background colour when the row has none. Returns
-// the row's holes (pixels the newest view left uncovered).
+// the only one when one side has none, the background colour when the row has none (fillRows
+// then gives it the nearest row's). Returns the row's holes (pixels the newest view left
+// uncovered); `known`: whether any pixel of the row came from a view.
 size_t composeRow(const Reprojector::Splat& newest, const Reprojector::Splat* older, const WarpOptions& options,
-                  WarpedView& out, int y, const TileRect& region) {
+                  WarpedView& out, int y, const TileRect& region, uint8_t& known) {
     const int w = out.image.width;
     const size_t row = size_t(y) * size_t(w);
-    size_t holes = 0;
+    size_t holes = 0, fromOlderCount = 0;
     for (size_t i = row + size_t(region.x0); i < row + size_t(region.x1); ++i) {
         if (newest.covered[i]) {
             copyPixel(newest, i, out, i);
@@ -206,8 +207,10 @@ size_t composeRow(const Reprojector::Splat& newest, const Reprojector::Splat* ol
         ++holes;
         const bool fromOlder = older && older->covered[i];
         if (fromOlder) copyPixel(*older, i, out, i);
+        fromOlderCount += fromOlder;
         out.mask[i] = fromOlder ? WarpPixel::Older : WarpPixel::Filled;
     }
+    known = holes < size_t(region.width()) || fromOlderCount > 0;
     if (holes == 0) return 0;
     // Runs of Filled pixels between known ones: every pixel of a run has the same two sides.
     for (int x = region.x0; x < region.x1;) {
@@ -233,6 +236,26 @@ size_t composeRow(const Reprojector::Splat& newest, const Reprojector::Splat* ol
         }
     }
     return holes;
+}
+
+// A row of `region` that no view covered anywhere (a whole row at the edge the head moved
+// towards: neither frame saw it) takes the nearest row that one did, as the row fill left it
+// (the one above of two as near); the background colour stays only where no row was covered.
+// After every row of the region was composed (composeRow's `known`).
+void fillRows(WarpedView& out, const std::vector<uint8_t>& known, const TileRect& region, int y0, int y1) {
+    const size_t w = size_t(out.image.width);
+    for (int y = y0; y < y1; ++y) {
+        if (known[size_t(y)]) continue;
+        int above = y - 1, below = y + 1;
+        while (above >= region.y0 && !known[size_t(above)]) --above;
+        while (below < region.y1 && !known[size_t(below)]) ++below;
+        const bool hasAbove = above >= region.y0, hasBelow = below < region.y1;
+        if (!hasAbove && !hasBelow) continue;
+        const int from = !hasBelow || (hasAbove && y - above <= below - y) ? above : below;
+        const size_t x0 = size_t(region.x0), n = size_t(region.width());
+        std::memcpy(&out.image.rgb[(size_t(y) * w + x0) * 3], &out.image.rgb[(size_t(from) * w + x0) * 3], n * 3);
+        std::memcpy(&out.depth[size_t(y) * w + x0], &out.depth[size_t(from) * w + x0], n * sizeof(float));
+    }
 }
 
 // Rows [0, n) split evenly over `threads` parts: part `i`'s first and end row.
@@ -271,6 +294,7 @@ const WarpedView& Reprojector::warp(const WarpSource& newest, const CameraDesc& 
     const int hardware = int(std::max(1u, std::thread::hardware_concurrency()));
     const int threads = std::clamp(options.threads > 0 ? options.threads : hardware, 1, region.height());
     rowHoles_.assign(size_t(threads), 0);
+    rowKnown_.resize(size_t(h));
     // Every thread takes its share of rows through the same phases; a phase reads what the ones
     // before it wrote, so all wait for all between phases. Each phase's result does not depend
     // on how its rows were shared: the bytes are the same for any number of threads.
@@ -306,7 +330,10 @@ const WarpedView& Reprojector::warp(const WarpSource& newest, const CameraDesc& 
             if (older) fillCracks(older_, options.crackRatio, pass, y0, y1, region);
         }
         sync.arrive_and_wait();
-        for (int y = y0; y < y1; ++y) rowHoles_[size_t(part)] += composeRow(newest_, older ? &older_ : nullptr, options, out_, y, region);
+        for (int y = y0; y < y1; ++y)
+            rowHoles_[size_t(part)] += composeRow(newest_, older ? &older_ : nullptr, options, out_, y, region, rowKnown_[size_t(y)]);
+        sync.arrive_and_wait();
+        fillRows(out_, rowKnown_, region, y0, y1);
     };
     {
         std::vector<std::jthread> helpers;

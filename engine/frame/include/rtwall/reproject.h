@@ -4,7 +4,8 @@
 // to the camera of the pose read just before the swap: every pixel goes back into the world at
 // its depth and lands where the new camera sees it; the nearest point wins each pixel. What the
 // newest view does not cover (disocclusions, the edges it never saw) is filled from an older
-// view warped the same way, then from the row's neighbour on the farther side. The compositor's
+// view warped the same way, then from the row's neighbour on the farther side (a row with none:
+// from the nearest row that has some). The compositor's
 // per-screen stage "reproject" runs this on the CPU (headless, display nodes without GL, tests);
 // the GL presenter runs the same algorithm in shaders (display/src/gl_reproject.cpp). What both
 // take and say (WarpSource, WarpOptions, WarpPixel) is core's rtwall/warp.h.
@@ -54,6 +55,7 @@ private:
     Splat newest_, older_;
     std::vector<uint64_t> newestKeys_, olderKeys_;  // per target pixel: its splat's winner so far
     std::vector<size_t> rowHoles_;                  // per thread: the holes of its rows
+    std::vector<uint8_t> rowKnown_;                 // per target row: some pixel came from a view
 };
 
 // The debug view: each pixel half its own colour, half its origin's (fresh green, warped blue,
