@@ -226,6 +226,24 @@ struct GlReprojector::Impl {
         }
     }
 
+    // The passes of a scan program (warp_scan.frag, warp_rowscan.frag) with step 1, 2, 4, ...
+    // below `length`, ping-ponging between `textures` (starting from [0]) on targets `width`
+    // wide and h high; returns which of the two holds the result.
+    int scanPasses(GLuint program, const char* input, const GLuint (&textures)[2], int length, int width) {
+        int current = 0;
+        glUseProgram(program);
+        glUniform1i(glGetUniformLocation(program, input), 0);
+        for (int step = 1; step < length; step *= 2) {
+            target({textures[1 - current]}, false);
+            glViewport(0, 0, width, h);
+            bindUnit(0, textures[current]);
+            glUniform1i(glGetUniformLocation(program, "step"), step);
+            fullScreen();
+            current = 1 - current;
+        }
+        return current;
+    }
+
     // The views (or the newest as it is) into composed, then the row scans and the fill.
     void composeAndFill(bool copySource, bool hasOlder, const WarpOptions& options, bool debug) {
         target({composed, composedDepth, sides[0]}, false);
@@ -239,16 +257,7 @@ struct GlReprojector::Impl {
         glUniform1i(glGetUniformLocation(compose, "hasOlder"), hasOlder);
         glUniform1i(glGetUniformLocation(compose, "copySource"), copySource);
         fullScreen();
-        int current = 0;
-        glUseProgram(scan);
-        glUniform1i(glGetUniformLocation(scan, "sides"), 0);
-        for (int step = 1; step < w; step *= 2) {
-            target({sides[1 - current]}, false);
-            bindUnit(0, sides[current]);
-            glUniform1i(glGetUniformLocation(scan, "step"), step);
-            fullScreen();
-            current = 1 - current;
-        }
+        const int current = scanPasses(scan, "sides", sides, w, w);
         // Rows without a known pixel: the nearest rows that have one, above and below.
         target({rows[0]}, false);
         glViewport(0, 0, 1, h);
@@ -256,17 +265,7 @@ struct GlReprojector::Impl {
         bindUnit(0, sides[current]);
         glUniform1i(glGetUniformLocation(rowsInit, "sides"), 0);
         fullScreen();
-        int currentRows = 0;
-        glUseProgram(rowScan);
-        glUniform1i(glGetUniformLocation(rowScan, "rows"), 0);
-        for (int step = 1; step < h; step *= 2) {
-            target({rows[1 - currentRows]}, false);
-            glViewport(0, 0, 1, h);
-            bindUnit(0, rows[currentRows]);
-            glUniform1i(glGetUniformLocation(rowScan, "step"), step);
-            fullScreen();
-            currentRows = 1 - currentRows;
-        }
+        const int currentRows = scanPasses(rowScan, "rows", rows, h, 1);
         target({result}, false);
         glUseProgram(fill);
         bindUnit(0, composed);

@@ -203,6 +203,13 @@ TEST_F(GlWarp, TheOwnPoseGivesTheViewBitForBit) {
     EXPECT_THROW(gl_->warp({a.image, short_, a.camera}, a.camera), std::invalid_argument);
 }
 
+// A GL presenter of `wall` in hidden windows (null, and why, where none opens).
+std::unique_ptr<GlPresenter> hiddenPresenter(const WallConfig& wall, std::string& why) {
+    GlPresenter::Options o;
+    o.visible = false;
+    return GlPresenter::open(wall, o, &why);
+}
+
 // The GL presenter with warps (WallFrame::warps): two views, each warped to its own target,
 // into the left half and the top right quarter of the eye (the bottom right quarter black),
 // show what the CPU warps composed into the eye (as the Compositor copies regions) show through
@@ -211,10 +218,8 @@ TEST_F(GlWarp, TheOwnPoseGivesTheViewBitForBit) {
 TEST(GlPresenterWarps, TheEyeShowsTheCpuWarpsComposed) {
     const int w = 160, h = 120;
     const WallConfig wall = singleScreenWall(w, h);
-    GlPresenter::Options o;
-    o.visible = false;
     std::string why;
-    auto gl = GlPresenter::open(wall, o, &why);
+    const std::unique_ptr<GlPresenter> gl = hiddenPresenter(wall, why);
     ASSERT_TRUE(gl) << why;
     const View a = synthetic(w, h, lookingAt({0, 1.2f, 2.0f})), b = synthetic(w, h, lookingAt({0.4f, 1.0f, 2.2f}));
     const View c = synthetic(w, h, lookingAt({0.5f, 1.2f, 2.0f}));
@@ -273,10 +278,8 @@ TEST(GlPresenterWarps, TheEyeShowsTheCpuWarpsComposed) {
 TEST(GlPresenterWarps, PaintsAreDrawnOverTheWarpedEye) {
     const int w = 160, h = 120;
     const WallConfig wall = singleScreenWall(w, h);
-    GlPresenter::Options o;
-    o.visible = false;
     std::string why;
-    auto gl = GlPresenter::open(wall, o, &why);
+    const std::unique_ptr<GlPresenter> gl = hiddenPresenter(wall, why);
     ASSERT_TRUE(gl) << why;
     const View a = synthetic(w, h, lookingAt({0, 1.2f, 2.0f}));
     WallFrame frame;
