@@ -163,6 +163,7 @@ private:
         reproject_ = false;          // until the welcome says
         sourceFrame_ = lastCounted_ = 0;
         leftOut_.clear();
+        saidMismatch_ = false;
         routes_.clear();
         early_.clear();
         for (Slot& slot : store_) slot.begun = false;

@@ -116,7 +116,6 @@ struct WallSession::Impl {
     void collectNodeRefreshes();
     bool reprojects() const;     // what decideReprojection will decide, before it is said
     void decideReprojection();   // before the master starts: whether, and depth from the clients
-    std::vector<CameraDesc> viewCameras(const HeadPose& head);  // every view's camera for `head`, in frameViews' order
     void latchTargets();         // targets := the views' cameras for the head pose read now
     void startRefresher();       // once the wall's windows are open
     std::vector<Image> renderWhileRefreshing();
@@ -372,7 +371,8 @@ struct WallSession::Impl {
     // f(eye, the eye's views, i) for every view of the wall for `pose`, eye by eye: the order of
     // a frame's views.
     template <class F> void forEachView(const HeadPose& pose, F&& f) {
-        for (int eye : stereo ? std::vector<int>{0, 1} : std::vector<int>{-1}) {
+        static constexpr int kStereo[2] = {0, 1}, kMono[1] = {-1};
+        for (int eye : stereo ? std::span<const int>(kStereo) : std::span<const int>(kMono)) {
             const std::vector<WallView> vs = wallViews(wallConfig, pose, eye);
             for (size_t i = 0; i < vs.size(); ++i) f(eye, vs, i);
         }

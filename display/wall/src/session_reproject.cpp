@@ -51,12 +51,6 @@ std::vector<Image> WallSession::Impl::renderWhileRefreshing() {
     return images;
 }
 
-std::vector<CameraDesc> WallSession::Impl::viewCameras(const HeadPose& pose) {
-    std::vector<CameraDesc> cameras;
-    forEachView(pose, [&](int, const std::vector<WallView>& vs, size_t i) { cameras.push_back(input->viewCamera(vs[i].window)); });
-    return cameras;
-}
-
 void WallSession::Impl::latchTargets() {
     shownPosed = std::chrono::steady_clock::now();
     HeadPose latched = staticHead(wallConfig.stereo);
@@ -66,7 +60,8 @@ void WallSession::Impl::latchTargets() {
         if (t.seen) latched = t.head;
         packets = t.packets;
     }
-    targets = viewCameras(latched);
+    targets.clear();  // refilled in place: no allocation per refresh once it has its size
+    forEachView(latched, [&](int, const std::vector<WallView>& vs, size_t i) { targets.push_back(input->viewCamera(vs[i].window)); });
     shownHead = latched;
     shownTrackerPackets = packets;
 }
