@@ -36,6 +36,7 @@ void ClientRuntime::onFrameBegin(const FrameBegin& fb) {
     blockedLogged_ = false;
     framePixels_ = fb.pixels;
     frameDepth_ = fb.depth;
+    frameFeatures_ = fb.features;
     // At the state's resolution and tile size, which catchUp just brought to the frame's.
     auto layout = std::make_shared<FrameLayout>();
     for (const FrameView& v : fb.views) layout->cameras.push_back(v.camera);
@@ -63,7 +64,7 @@ void ClientRuntime::onAssign(const TileAssign& a) {
         std::lock_guard lock(workMutex_);
         for (uint32_t t : a.tiles) {
             if (work_.size() >= kMaxQueuedTiles) break;
-            work_.push_back({a.frame, t, stateSeq_, codec_, framePixels_, frameDepth_, frameLayout_});
+            work_.push_back({a.frame, t, stateSeq_, codec_, framePixels_, frameDepth_, frameFeatures_, frameLayout_});
             ++queued;
         }
         held_ += int64_t(queued);
@@ -145,7 +146,7 @@ void ClientRuntime::maybeStall(uint32_t frame) {
 // asked for it.
 void ClientRuntime::encodeResult(const Work& w, const TileRect& r, const std::vector<uint8_t>& pixels,
                                  const std::vector<float>& linear, const std::vector<float>& depth,
-                                 std::vector<uint8_t>& scratch, TileResult& result) {
+                                 const FeatureView& features, std::vector<uint8_t>& scratch, TileResult& result) {
     result.frame = w.frame;
     result.tile = w.tile;
     if (w.pixels == TilePixels::LinearHalf) {
@@ -158,6 +159,7 @@ void ClientRuntime::encodeResult(const Work& w, const TileRect& r, const std::ve
     }
     if (!w.depth) return;
     encodeDepthTile(kDepthCodec, depth.data(), r.width(), r.height(), size_t(r.width()), scratch, result.depth);
+    if (w.features) encodeFeatureTile(w.features, features, r.width(), r.height(), scratch, result.features);
     // Injected damage (tests): the depth cut in half no longer decompresses to the tile's size.
     const int n = faults_.corruptEveryNthDepth;
     if (n > 0 && ++depthsOut_ % uint64_t(n) == 0) result.depth.resize(result.depth.size() / 2);
@@ -169,7 +171,8 @@ void ClientRuntime::workerLoop(Slot& slot) {
     out.set(zmq::sockopt::linger, 0);
     out.connect(kResultsAddress);
     std::vector<uint8_t> pixels, scratch;
-    std::vector<float> linear, depth;
+    std::vector<float> linear, depth, albedo, normal;
+    std::vector<uint32_t> ids;
     for (;;) {
         Work w;
         {
@@ -199,11 +202,18 @@ void ClientRuntime::workerLoop(Slot& slot) {
             // without re-projection (DepthView's null data is that call too).
             depth.resize(w.depth ? size_t(r.width()) * r.height() : 0);
             const DepthView depthView{w.depth ? depth.data() : nullptr, size_t(r.width())};
+            // The denoiser's features only when the frame asks for them (a linear frame with depth).
+            const size_t pixelCount = size_t(r.width()) * size_t(r.height());
+            albedo.resize((w.features & kFeatureAlbedo) ? pixelCount * 3 : 0);
+            normal.resize((w.features & kFeatureNormal) ? pixelCount * 3 : 0);
+            ids.resize((w.features & kFeatureId) ? pixelCount : 0);
+            const FeatureView featureView{albedo.empty() ? nullptr : albedo.data(), normal.empty() ? nullptr : normal.data(),
+                                          ids.empty() ? nullptr : ids.data(), size_t(r.width())};
             if (wide) {
                 // Part of an accumulation: linear, before the 8-bit quantisation.
                 linear.resize(size_t(r.width()) * r.height() * 3);
                 renderTileLinear(*scene_, camera, r, w.frame, renderSettings_, linear.data(), size_t(r.width()) * 3,
-                                 depthView, trace_);
+                                 depthView, featureView, trace_);
             } else {
                 pixels.resize(size_t(r.width()) * r.height() * 3);
                 renderTile(*scene_, camera, r, w.frame, renderSettings_, {pixels.data(), size_t(r.width()) * 3}, depthView,
@@ -218,7 +228,7 @@ void ClientRuntime::workerLoop(Slot& slot) {
             ++tilesTimed_;
             TileResult result;
             result.renderMicros = uint32_t(std::min(seconds * 1e6, 4e9));
-            encodeResult(w, r, pixels, linear, depth, scratch, result);
+            encodeResult(w, r, pixels, linear, depth, featureView, scratch, result);
             if (settings_.replay && !wide) {
                 std::lock_guard replayLock(replayMutex_);
                 replay_[w.tile] = {w.codec.codec, result.pixels, result.depth};

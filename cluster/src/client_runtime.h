@@ -62,6 +62,7 @@ private:
         CodecSettings codec;
         TilePixels pixels = TilePixels::Srgb8;
         bool depth = false;  // its frame asked for depth (FrameBegin::depth)
+        uint8_t features = 0;  // and these features (FrameBegin::features)
         std::shared_ptr<const FrameLayout> layout;  // its frame's
     };
 
@@ -166,7 +167,8 @@ private:
     void sendResult(zmq::socket_t& out, const std::vector<uint8_t>& bytes);
     void maybeStall(uint32_t frame);
     void encodeResult(const Work& w, const TileRect& r, const std::vector<uint8_t>& pixels, const std::vector<float>& linear,
-                      const std::vector<float>& depth, std::vector<uint8_t>& scratch, TileResult& result);
+                      const std::vector<float>& depth, const FeatureView& features, std::vector<uint8_t>& scratch,
+                      TileResult& result);
     void workerLoop(Slot& slot);
 
     ClientSettings settings_;
@@ -183,6 +185,7 @@ private:
     CodecSettings codec_;  // network thread only (Master::setCodec changes it mid-session); copied into each Work
     TilePixels framePixels_ = TilePixels::Srgb8;  // the current frame's tile format, copied into each Work
     bool frameDepth_ = false;  // the current frame asked for depth, copied into each Work
+    uint8_t frameFeatures_ = 0;  // and these features
     uint32_t prefetch_ = 4;
     int heartbeatMs_ = 250;
     int timeoutMs_ = 3000;

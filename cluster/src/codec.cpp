@@ -3,6 +3,7 @@
 #include "wire.h"
 
 #include <rtwall/depth_codec.h>
+#include <rtwall/feature_codec.h>
 
 #include <lz4.h>
 #include <turbojpeg.h>
@@ -326,6 +327,27 @@ void decodeDepthTile(TileCodec codec, const uint8_t* data, size_t size, int widt
         for (int x = 0; x < width; ++x, ++k) dst[size_t(y) * dstStride + size_t(x)] = depthOf[lo[k] | (hi[k] << 8)];
 }
 
+void encodeFeatureTile(uint8_t bits, const FeatureView& view, int width, int height, std::vector<uint8_t>& scratch,
+                       std::vector<uint8_t>& out) {
+    if (width < 1 || height < 1 || width > kMaxTileSide || height > kMaxTileSide || view.stride < size_t(width) || bits == 0 ||
+        bits > kFeatureAll)
+        throw std::invalid_argument("encodeFeatureTile: tile size " + std::to_string(width) + "x" + std::to_string(height) +
+                                    " or feature bits " + std::to_string(int(bits)));
+    scratch.resize(encodedFeatureBytes(size_t(width) * size_t(height), bits));
+    encodeFeatures(bits, view.albedo, view.normal, view.id, width, height, view.stride, scratch.data());
+    compress(kDepthCodec, kDepthZstdLevel, scratch.data(), scratch.size(), out);
+}
+
+void decodeFeatureTile(uint8_t bits, const uint8_t* data, size_t size, int width, int height, const FeatureView& view,
+                       std::vector<uint8_t>& scratch) {
+    if (width < 1 || height < 1 || width > kMaxTileSide || height > kMaxTileSide || view.stride < size_t(width) || bits == 0 ||
+        bits > kFeatureAll)
+        throw std::invalid_argument("decodeFeatureTile: tile size " + std::to_string(width) + "x" + std::to_string(height));
+    scratch.resize(encodedFeatureBytes(size_t(width) * size_t(height), bits));
+    decompress(kDepthCodec, data, size, scratch.data(), scratch.size(), "feature tile");
+    decodeFeatures(bits, scratch.data(), scratch.size(), width, height, view.albedo, view.normal, view.id, view.stride);
+}
+
 size_t maxEncodedTileBytes(int width, int height) {
     const size_t n = tileBytes(width, height, size_t(width) * 3, "maxEncodedTileBytes");
     // 4:2:0 pads to 16x16 blocks and can exceed 4:4:4's bound for small tiles, so take both.
@@ -335,6 +357,11 @@ size_t maxEncodedTileBytes(int width, int height) {
 
 size_t maxEncodedDepthBytes(int width, int height) {
     const size_t n = encodedDepthBytes(tileBytes(width, height, size_t(width) * 3, "maxEncodedDepthBytes") / 3);
+    return std::max(size_t(LZ4_compressBound(int(n))), ZSTD_compressBound(n));
+}
+
+size_t maxEncodedFeatureBytes(int width, int height) {
+    const size_t n = encodedFeatureBytes(tileBytes(width, height, size_t(width) * 3, "maxEncodedFeatureBytes") / 3, kFeatureAll);
     return std::max(size_t(LZ4_compressBound(int(n))), ZSTD_compressBound(n));
 }
 

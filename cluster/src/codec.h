@@ -49,10 +49,21 @@ void encodeDepthTile(TileCodec codec, const float* depth, int width, int height,
 void decodeDepthTile(TileCodec codec, const uint8_t* data, size_t size, int width, int height, float* dst,
                      size_t dstStride, std::vector<uint8_t>& scratch);
 
+// A tile's features for the denoiser (issue 28): the bytes of rtwall/feature_codec.h
+// (encodeFeatures: planar, 11 bytes a pixel with every feature), compressed with kDepthCodec.
+// `stride` and `dstStride` count pixels; `view` gives the source or destination buffers.
+void encodeFeatureTile(uint8_t bits, const FeatureView& view, int width, int height, std::vector<uint8_t>& scratch,
+                       std::vector<uint8_t>& out);
+// Throws DecodeError when the data is malformed or does not decode to exactly width x height
+// pixels of those features; never writes outside the view's buffers.
+void decodeFeatureTile(uint8_t bits, const uint8_t* data, size_t size, int width, int height, const FeatureView& view,
+                       std::vector<uint8_t>& scratch);
+
 // Upper bound of an encoded tile's size, for ZMQ_MAXMSGSIZE.
 size_t maxEncodedTileBytes(int width, int height);
 // The same for a tile's encoded depth.
 size_t maxEncodedDepthBytes(int width, int height);
+size_t maxEncodedFeatureBytes(int width, int height);
 
 const char* codecName(TileCodec codec);
 

@@ -43,6 +43,9 @@ void DecodePool::run() {
             if (job.depth)
                 decodeDepthTile(kDepthCodec, job.depthBytes.data(), job.depthBytes.size(), job.rect.width(),
                                 job.rect.height(), job.depth, job.depthStride, scratch);
+            if (job.features)
+                decodeFeatureTile(job.features, job.featureBytes.data(), job.featureBytes.size(), job.rect.width(),
+                                  job.rect.height(), job.featureView, scratch);
             assembler_.commit(job.tile);
             if (assembler_.complete()) onComplete_();
         } catch (const std::exception&) {

@@ -33,6 +33,9 @@ public:
         std::vector<uint8_t> depthBytes;  // encoded depth (encodeDepthTile), when the frame has depth
         float* depth = nullptr;  // then the tile's first pixel in the view's depth buffer
         size_t depthStride = 0;  // floats from one row of it to the next
+        std::vector<uint8_t> featureBytes;  // encoded features (encodeFeatureTile), when the frame has them
+        uint8_t features = 0;               // which
+        FeatureView featureView{};          // then the tile's first pixel in the view's feature buffers
     };
 
     // `onComplete`: the frame is complete (called on a decode thread); `onFailure`: a tile did

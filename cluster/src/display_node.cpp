@@ -332,6 +332,7 @@ private:
             if (r.format != slot->frame.pixels) throw DecodeError("a tile in another pixel format than its frame's");
             if (r.depth.empty() == slot->frame.depth)
                 throw DecodeError(slot->frame.depth ? "a tile without the depth its frame asks for" : "a tile with depth");
+            if (!r.features.empty()) throw DecodeError("a tile with features (display nodes take none)");
             if (r.format == TilePixels::LinearHalf) {
                 // An accumulated frame's tile: into the view's linear image (what is summed) and
                 // quantised into its 8-bit one, as the master does.

@@ -16,6 +16,8 @@ namespace rtwall {
 Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(std::make_unique<Impl>(scene, settings)) {
     Impl& s = *impl_;
     if (scene.cameras.empty()) throw InputError("the scene has no camera");
+    if (settings.features > kFeatureAll || (settings.features && !settings.depth))
+        throw InputError("features for the denoiser need depth with every tile (and bits 1 to 7)");
     s.app.camera = scene.cameras.front();
     std::random_device rd;
     s.session = (uint64_t(rd()) << 32) ^ rd();

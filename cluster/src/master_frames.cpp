@@ -16,6 +16,9 @@ void Master::Impl::beginFrame(Command&& cmd) {
     currentFrame = frame;
     framePixels = pixels;
     frameStochastic = cmd.stochastic;
+    // Features travel with linear frames only (the denoiser works in linear light) and never to
+    // display nodes (they would have to filter with their neighbours' pixels: not yet).
+    frameFeatures = pixels == TilePixels::LinearHalf && !withNodes() ? settings.features : 0;
     frameViews = std::move(cmd.views);
     frameViewsTag = cmd.viewsTag;
     shownSeq = cmd.shownSeq;
@@ -53,6 +56,7 @@ void Master::Impl::beginFrame(Command&& cmd) {
     FrameHolding holding;
     holding.linear = pixels == TilePixels::LinearHalf;
     holding.depth = settings.depth;
+    holding.features = frameFeatures;
     assembler.beginFrame(frame, rs.width, rs.height, viewTiles(beginViews, rs.width, rs.height, rs.tileSize),
                          uint32_t(beginViews.size()), holding);
     scheduler.beginFrame(frame, uint32_t(assembler.tiles().size()));
@@ -87,6 +91,8 @@ void Master::Impl::finishFrameIfDone() {
     r.stochastic = frameStochastic;
     r.linear = framePixels == TilePixels::LinearHalf;
     r.depth = settings.depth;
+    r.features = frameFeatures;
+    r.camera = beginViews.front().camera;
     r.views = frameViews.size();
     r.viewsTag = frameViewsTag;
     r.counters = countersNow();
@@ -122,6 +128,8 @@ void Master::Impl::finishFrameIfDone() {
         else completedLinear.clear();
         if (settings.depth && !withNodes()) completedDepth.swap(assembler.depthImages());
         else completedDepth.clear();
+        if (frameFeatures) completedFeatures.swap(assembler.featureImages());
+        else completedFeatures.clear();
         completedReport = std::move(r);
         completedFrame = currentFrame;
     }
@@ -188,7 +196,7 @@ Image Master::renderFrame(FrameReport* report, std::vector<float>* linear, std::
 }
 
 std::vector<Image> Master::renderViews(FrameReport* report, std::vector<std::vector<float>>* linear,
-                                       std::vector<std::vector<float>>* depth) {
+                                       std::vector<std::vector<float>>* depth, std::vector<FeatureImages>* features) {
     Impl& s = *impl_;
     auto begin = [&] {
         const uint32_t frame = ++s.lastBegun;
@@ -240,6 +248,7 @@ std::vector<Image> Master::renderViews(FrameReport* report, std::vector<std::vec
             for (std::vector<float>& l : *mine) l.clear();
             mine->swap(*completed);
         }
+        if (features) features->swap(s.completedFeatures);  // the caller's buffers come back too
         return std::move(s.completedImages);
     };
     if (!s.settings.async) return wait(begin());

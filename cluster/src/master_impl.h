@@ -186,6 +186,7 @@ struct Master::Impl {
     FrameReport completedReport;
     std::vector<std::vector<float>> completedLinear;  // the completed frame's linear pixels per view, when it had linear tiles
     std::vector<std::vector<float>> completedDepth;   // its depth per view, when its tiles came with depth
+    std::vector<FeatureImages> completedFeatures;     // its features per view, when its tiles came with them
     int readyClients = 0;
     uint32_t swapReleased = 0;    // with display nodes: the newest frame the swap barrier released
     std::atomic<const std::atomic<bool>*> stopFlag{nullptr};
@@ -218,6 +219,7 @@ struct Master::Impl {
     std::deque<TileFailure> tileFailures;  // for takeTileFailures (failuresMutex)
     TilePixels framePixels = TilePixels::Srgb8;  // how the current frame's tiles travel
     bool frameStochastic = false;
+    uint8_t frameFeatures = 0;  // the current frame's tiles carry these features (linear frames only)
     std::vector<FrameView> frameViews;  // the current frame's views (none: a mono frame of frameCamera)
     uint64_t frameViewsTag = 0;
     // What every FrameBegin of the current frame carries: frameViews, or the mono frame's one view.

@@ -37,7 +37,7 @@ void Master::Impl::sendFrameBegin(ClientState& c) {
         if (send(c, TileRoutes{display.routesFrame, display.routes}, currentFrame) != SendResult::Sent) return;
         c.routesFrame = display.routesFrame;
     }
-    if (send(c, FrameBegin{currentFrame, frameSeq, framePixels, beginViews, settings.depth}, currentFrame) == SendResult::Sent)
+    if (send(c, FrameBegin{currentFrame, frameSeq, framePixels, beginViews, settings.depth, frameFeatures}, currentFrame) == SendResult::Sent)
         c.frameBegun = currentFrame;
 }
 

@@ -76,6 +76,11 @@ void Master::Impl::onTileResult(ClientState& c, const Header& h, const uint8_t* 
         unexpected(settings.depth ? "a result without the depth its frame asked for" : "a result with depth its frame did not ask for");
         return;
     }
+    if (r.features.empty() == (frameFeatures != 0)) {
+        unexpected(frameFeatures ? "a result without the features its frame asked for"
+                                 : "a result with features its frame did not ask for");
+        return;
+    }
     const auto result = scheduler.complete(c.id, r.frame, r.tile, nowSeconds());
     if (result == TileScheduler::Result::Unexpected) {
         // A tile never handed to this client (replayed from another frame's hand-outs, or made up).
@@ -89,14 +94,15 @@ void Master::Impl::onTileResult(ClientState& c, const Header& h, const uint8_t* 
         TileRect rect;
         TileView view;
         if (assembler.claim(r.frame, r.tile, rect, view) == FrameAssembler::Claim::Granted) {
-            frameBytes += r.pixels.size() + r.depth.size();
-            c.frameBytes += r.pixels.size() + r.depth.size();
+            frameBytes += r.pixels.size() + r.depth.size() + r.features.size();
+            c.frameBytes += r.pixels.size() + r.depth.size() + r.features.size();
             const uint32_t v = assembler.viewOf(r.tile);
             const bool wide = r.format == TilePixels::LinearHalf;
             const size_t width = size_t(assembler.image(v).width);
             decoder->push({std::move(r.pixels), r.codec, r.tile, rect, view, r.format,
                            wide ? assembler.linearAt(v, rect.x0, rect.y0) : nullptr, width * 3, std::move(r.depth),
-                           settings.depth ? assembler.depthAt(v, rect.x0, rect.y0) : nullptr, width});
+                           settings.depth ? assembler.depthAt(v, rect.x0, rect.y0) : nullptr, width, std::move(r.features),
+                           frameFeatures, frameFeatures ? assembler.featuresAt(v, rect.x0, rect.y0) : FeatureView{}});
         }
     }
     serve(c);

@@ -52,7 +52,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 15;  // 15: re-projection on the display nodes
+inline constexpr uint16_t kProtocolVersion = 16;  // 16: the denoiser's features with tiles
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -255,6 +255,10 @@ struct FrameBegin {
     // Version 14: every tile's result carries its depth (TileResult::depth). Off, the frame
     // renders and travels exactly as without.
     bool depth = false;
+    // Version 16: every tile's result carries these features for the denoiser (FeatureBits,
+    // rtwall/feature_codec.h; TileResult::features). Only with depth and linear tiles; 0: none,
+    // the frame travels exactly as in version 15.
+    uint8_t features = 0;
     bool operator==(const FrameBegin&) const = default;
 };
 
@@ -281,6 +285,9 @@ struct TileResult {
     // distance along each pixel's primary ray through the 16-bit log code of rtwall/depth_codec.h,
     // compressed with kDepthCodec (codec.h, encodeDepthTile).
     std::vector<uint8_t> depth{};
+    // Version 16: its features when its frame asked for them (FrameBegin::features), else empty:
+    // encodeFeatureTile (codec.h), after the depth.
+    std::vector<uint8_t> features{};
     bool operator==(const TileResult&) const = default;
 };
 
@@ -293,6 +300,7 @@ struct TileResultInfo {
     uint32_t renderMicros = 0;
     uint32_t pixelBytes = 0;  // the encoded pixels' length
     uint32_t depthBytes = 0;  // the encoded depth's length (0: none)
+    uint32_t featureBytes = 0;  // the encoded features' length (0: none)
 };
 TileResultInfo peekTileResult(const uint8_t* data, size_t size);
 // The largest TileResult message a decoder accepts (header included): ZMQ_MAXMSGSIZE of the

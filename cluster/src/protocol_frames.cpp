@@ -5,7 +5,7 @@
 
 namespace rtwall::cluster {
 
-RTWALL_WIRE_MESSAGE(FrameBegin, 5) {
+RTWALL_WIRE_MESSAGE(FrameBegin, 6) {
     static const size_t viewBytes = minViewBytes();
     io.u32(m.frame);
     io.u32(m.updateSeq);
@@ -17,6 +17,16 @@ RTWALL_WIRE_MESSAGE(FrameBegin, 5) {
     io.trailing(m.depth, [&] {
         io.boolean(m.depth);
         io.expect(m.depth, [] { return std::string("a depth flag that says no (it is left out then)"); });
+    });
+    // Version 16: the features every tile carries, a byte after the depth flag only when asked
+    // for (never without depth or linear tiles).
+    bool withFeatures = m.features != 0;
+    io.trailing(withFeatures, [&] {
+        io.u8(m.features);
+        io.expect(m.features != 0 && m.features <= kFeatureAll,
+                  [&] { return "feature bits " + std::to_string(int(m.features)) + " (1 to 7; none are left out)"; });
+        io.expect(m.depth && m.pixels == TilePixels::LinearHalf,
+                  [] { return std::string("features asked for without depth or linear tiles"); });
     });
 }
 
@@ -35,13 +45,15 @@ RTWALL_WIRE_MESSAGE(TileAssign, 2) {
 // A half-float tile is encoded as an 8-bit tile twice as wide.
 const size_t kMaxPixelBytes = maxEncodedTileBytes(2 * kMaxTileSize, kMaxTileSize);
 const size_t kMaxDepthBytes = maxEncodedDepthBytes(kMaxTileSize, kMaxTileSize);
+const size_t kMaxFeatureBytes = maxEncodedFeatureBytes(kMaxTileSize, kMaxTileSize);
 
 size_t bytesOf(const std::vector<uint8_t>& v) { return v.size(); }
 size_t bytesOf(const std::pair<const uint8_t*, size_t>& view) { return view.second; }
 
 // A TileResult's fields with its pixels and depth as `pixels` and `depth`: vectors
 // (decodePayload copies them) or views into the message (peekTileResult does not).
-template <class Io, class Result, class Bytes> void tileResultFields(Io& io, Result& m, Bytes& pixels, Bytes& depth) {
+template <class Io, class Result, class Bytes>
+void tileResultFields(Io& io, Result& m, Bytes& pixels, Bytes& depth, Bytes& features) {
     io.u32(m.frame);
     io.u32(m.tile);
     io.enumUpTo(m.codec, TileCodec::Jpeg, "tile codec");
@@ -55,20 +67,26 @@ template <class Io, class Result, class Bytes> void tileResultFields(Io& io, Res
         io.blob(depth, kMaxDepthBytes);
         io.expect(bytesOf(depth) > 0, [] { return std::string("an empty depth field (it is left out then)"); });
     });
+    // Version 16: its features (encodeFeatureTile), after the depth, only when asked for.
+    bool withFeatures = bytesOf(features) > 0;
+    io.trailing(withFeatures, [&] {
+        io.blob(features, kMaxFeatureBytes);
+        io.expect(bytesOf(features) > 0, [] { return std::string("an empty feature field (it is left out then)"); });
+    });
 }
-RTWALL_WIRE_MESSAGE(TileResult, 7) { tileResultFields(io, m, m.pixels, m.depth); }
+RTWALL_WIRE_MESSAGE(TileResult, 8) { tileResultFields(io, m, m.pixels, m.depth, m.features); }
 
 TileResultInfo peekTileResult(const uint8_t* data, size_t size) {
     Reader r(data, size);
     FieldReader io(r);
     TileResult m;  // all but the pixels and depth
-    std::pair<const uint8_t*, size_t> pixels{}, depth{};
-    tileResultFields(io, m, pixels, depth);
+    std::pair<const uint8_t*, size_t> pixels{}, depth{}, features{};
+    tileResultFields(io, m, pixels, depth, features);
     r.expectEnd();
-    return {m.frame, m.tile, m.renderMicros, uint32_t(pixels.second), uint32_t(depth.second)};
+    return {m.frame, m.tile, m.renderMicros, uint32_t(pixels.second), uint32_t(depth.second), uint32_t(features.second)};
 }
 
-size_t maxTileResultBytes() { return kHeaderSize + 64 + kMaxPixelBytes + kMaxDepthBytes; }
+size_t maxTileResultBytes() { return kHeaderSize + 64 + kMaxPixelBytes + kMaxDepthBytes + kMaxFeatureBytes; }
 
 RTWALL_WIRE_MESSAGE(TileStalled, 3) {
     io.u32(m.frame);

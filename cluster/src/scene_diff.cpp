@@ -42,7 +42,7 @@ SceneEdit diffScenes(const SceneDesc& before, const SceneDesc& after) {
     // (scene_state.cpp) asserts the same count. sourceFile and files (bytes by path) are the
     // scene file's own business: a material naming another file is a material edit. parts (an
     // assembly's names) are the master's alone: the clients render without them.
-    static_assert(fieldCount<SceneDesc>() == 12, "SceneDesc has a member diffScenes does not compare");
+    static_assert(fieldCount<SceneDesc>() == 13, "SceneDesc has a member diffScenes does not compare");
     SceneEdit e;
     if (before.meshes.size() != after.meshes.size()) {
         e.refused.push_back(countChange("meshes", before.meshes.size(), after.meshes.size()));
@@ -85,6 +85,7 @@ SceneEdit diffScenes(const SceneDesc& before, const SceneDesc& after) {
         }
     }
     if (!sameOnWire(before.settings, after.settings)) e.settings = after.settings;
+    if (before.denoise != after.denoise) e.denoise = after.denoise;
     for (uint32_t i = 0; i < after.sections.size(); ++i)
         if (!sameOnWire(before.sections[i], after.sections[i])) e.sections.emplace_back(i, after.sections[i]);
     if (!after.cameras.empty() && (before.cameras.empty() || !sameOnWire(before.cameras.front(), after.cameras.front())))

@@ -11,9 +11,9 @@ namespace {
 // The members of SceneDesc and SceneSnapshot that the two functions below map, one by one. A
 // member added to either fails the build here until it is mapped (or said not to travel).
 // SceneDesc::sourceFile, the cameras (version 13: a camera travels only with a frame,
-// FrameBegin::views) and parts (an assembly's part names: picking and `rtwall
-// info` on the master) do not travel.
-static_assert(fieldCount<SceneDesc>() == 12,
+// FrameBegin::views), parts (an assembly's part names: picking and `rtwall
+// info` on the master) and denoise (the display side filters, issue 28) do not travel.
+static_assert(fieldCount<SceneDesc>() == 13,
               "SceneDesc has a member snapshotOf/sceneOf do not map: map it (or say why it does not travel), "
               "and decide in diffScenes whether an edit of it is an update or needs a restart");
 static_assert(fieldCount<SceneSnapshot>() == 10, "SceneSnapshot has a member snapshotOf/sceneOf do not map");

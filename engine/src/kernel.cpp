@@ -42,6 +42,11 @@ struct Scratch {
     // caller asked for none (then nothing is recorded and the colour path is unchanged).
     std::vector<float> distance;
     float* distanceOut = nullptr;
+    // The denoiser's features with the tile (issue 28, FeatureView): sums over the pixel's
+    // samples, each weighted as its colour; ids of the first sample. Unused without features.
+    bool features = false;
+    std::vector<Color> albedo, normal;
+    std::vector<uint32_t> id;
 };
 
 // Per-thread scratch buffers: grown to the largest tile once, then reused, so the hot path
@@ -58,6 +63,21 @@ void recordDistances(const RayHitK& rh, const int* valid, const uint32_t* pixel,
     for (int k = 0; k < K; ++k) {
         if (!valid[k] || rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
         distance[pixel[k]] = std::min(distance[pixel[k]], rh.ray.tfar[k]);
+    }
+}
+
+// Each valid lane's first-hit features (featuresAt) added to its pixel's sums with the sample's
+// weight; the pixel's first sample (`first`) also gives its id. Both kernels write the same hits
+// into the packet, so they record the same features.
+template <int K, class RayHitK>
+void recordFeatures(const ShadingContext& shading, const RayHitK& rh, const int* valid, const uint32_t* pixel,
+                    const Float3& org, float weight, bool first, Scratch& sc) {
+    for (int k = 0; k < K; ++k) {
+        if (!valid[k]) continue;
+        const HitFeatures f = featuresAt(shading, org, {rh.ray.dir_x[k], rh.ray.dir_y[k], rh.ray.dir_z[k]}, hitOf(rh, k));
+        sc.albedo[pixel[k]] += f.albedo * weight;
+        sc.normal[pixel[k]] += f.normal * weight;
+        if (first) sc.id[pixel[k]] = f.id;
     }
 }
 
@@ -156,6 +176,7 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
                         }
                         if (clipping) capPacket<K>(s, traced, enter, rh);
                         if (sc.distanceOut) recordDistances<K>(rh, valid, pixel, sc.distanceOut);
+                        if (sc.features) recordFeatures<K>(shading, rh, valid, pixel, org, sampleWeight, sampleIndex == 0, sc);
                         if (eyeLight) {
                             shadeEyeLightPacket<K>(shading, rh, valid, pixel, sampleWeight, sc.accum.data());
                             continue;
@@ -271,8 +292,10 @@ Color ramp(float x) {
 
 // The whole tile into sc.accum (linear RGB), and the per-pixel counts a false-colour view needs.
 // With `depth`, also each pixel's primary hit distance into sc.distance.
+// With `features`, also the denoiser's features into sc.albedo, sc.normal and sc.id.
 TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileRect& rect, uint32_t frame,
-                         const RenderSettings& settings, const TraceOptions& trace, bool depth, Scratch& sc);
+                         const RenderSettings& settings, const TraceOptions& trace, bool depth, Scratch& sc,
+                         bool features = false);
 // The same, then quantised (or false-coloured) into `out`, and the distances into `depth`.
 TileStats renderTileTo(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
                        const RenderSettings& settings, TileView out, DepthView depth, const TraceOptions& trace);
@@ -281,6 +304,23 @@ TileStats renderTileTo(const Scene& scene, const Camera& camera, const TileRect&
 void copyDistances(const Scratch& sc, int w, int h, DepthView depth) {
     for (int j = 0; j < h; ++j)
         std::copy_n(sc.distance.data() + size_t(j) * size_t(w), size_t(w), depth.data + size_t(j) * depth.stride);
+}
+
+// sc's features (w x h) into the caller's rows: those it asked for.
+void copyFeatures(const Scratch& sc, int w, int h, FeatureView f) {
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) {
+            const size_t from = size_t(j) * size_t(w) + size_t(i), to = size_t(j) * f.stride + size_t(i);
+            if (f.albedo) {
+                const Color& a = sc.albedo[from];
+                f.albedo[3 * to] = a.x, f.albedo[3 * to + 1] = a.y, f.albedo[3 * to + 2] = a.z;
+            }
+            if (f.normal) {
+                const Float3& n = sc.normal[from];
+                f.normal[3 * to] = n.x, f.normal[3 * to + 1] = n.y, f.normal[3 * to + 2] = n.z;
+            }
+            if (f.id) f.id[to] = sc.id[from];
+        }
 }
 
 // Runs one tile's work; whatever it throws leaves as a TileError that says which tile of which
@@ -362,11 +402,19 @@ TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileR
 TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
                            const RenderSettings& settings, float* out, size_t stride, DepthView depth,
                            const TraceOptions& trace) {
+    return renderTileLinear(scene, camera, rect, frame, settings, out, stride, depth, FeatureView{}, trace);
+}
+
+TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
+                           const RenderSettings& settings, float* out, size_t stride, DepthView depth,
+                           FeatureView features, const TraceOptions& trace) {
     return asTileWork(rect, frame, trace, [&] {
         Scratch& sc = tScratch;
-        const TileStats stats = renderTileInto(scene.impl(), camera, rect, frame, settings, trace, depth.data != nullptr, sc);
+        const TileStats stats =
+            renderTileInto(scene.impl(), camera, rect, frame, settings, trace, depth.data != nullptr, sc, features.any());
         const int w = rect.width(), h = rect.height();
         if (depth.data) copyDistances(sc, w, h, depth);
+        if (features.any()) copyFeatures(sc, w, h, features);
         for (int j = 0; j < h; ++j)
             for (int i = 0; i < w; ++i) {
                 const Color& c = sc.accum[size_t(j) * w + i];
@@ -422,7 +470,8 @@ TileStats renderTileTo(const Scene& scene, const Camera& camera, const TileRect&
 }
 
 TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileRect& rect, uint32_t frame,
-                         const RenderSettings& settings, const TraceOptions& trace, bool depth, Scratch& sc) {
+                         const RenderSettings& settings, const TraceOptions& trace, bool depth, Scratch& sc,
+                         bool features) {
     const int width = widthFor(trace);
     const Tracer tracer = tracerFor(settings.kernel, width);
     TileStats stats;
@@ -441,6 +490,12 @@ TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileR
     if (trackRays) sc.pixelRays.assign(size_t(w) * h, uint32_t(ss * ss * spp));
     if (depth) sc.distance.assign(size_t(w) * h, kBackgroundDepth);
     sc.distanceOut = depth ? sc.distance.data() : nullptr;
+    sc.features = features;
+    if (features) {
+        sc.albedo.assign(size_t(w) * h, Color{0, 0, 0});
+        sc.normal.assign(size_t(w) * h, Float3{0, 0, 0});
+        sc.id.assign(size_t(w) * h, 0u);
+    }
     // Primary rays: sub-pixel sample outermost, then one coherent packet-shaped pixel block
     // per batch, generated straight into Embree's SoA packet, traced and shaded while hot in L1.
     if (settings.kernel == KernelType::Packet) primaryPassFor<true>(width, s, camera, rect, frame, shading, sc);
@@ -551,6 +606,25 @@ RenderedFrame renderFrameWithDepth(const Scene& scene, const Camera& camera, con
         return renderTile(scene, camera, r, frame, settings, {out.image.pixel(r.x0, r.y0), w * 3},
                           {out.depth.data() + size_t(r.y0) * w + size_t(r.x0), w}, trace);
     });
+    return out;
+}
+
+FeatureFrame renderFrameFeatures(const Scene& scene, const Camera& camera, const RenderSettings& settings, uint32_t frame,
+                                 TileStats* stats, const TraceOptions& trace) {
+    const size_t w = size_t(std::max(0, settings.width)), n = w * size_t(std::max(0, settings.height));
+    FeatureFrame out;
+    out.linear.assign(n * 3, 0.0f);
+    out.depth.assign(n, kBackgroundDepth);
+    out.albedo.assign(n * 3, 0.0f);
+    out.normal.assign(n * 3, 0.0f);
+    out.id.assign(n, 0u);
+    const TileStats st = renderTilesInParallel(settings, [&](const TileRect& r) {
+        const size_t at = size_t(r.y0) * w + size_t(r.x0);
+        return renderTileLinear(scene, camera, r, frame, settings, out.linear.data() + at * 3, w * 3,
+                                {out.depth.data() + at, w},
+                                {out.albedo.data() + at * 3, out.normal.data() + at * 3, out.id.data() + at, w}, trace);
+    });
+    if (stats) *stats = st;
     return out;
 }
 

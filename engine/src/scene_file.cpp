@@ -25,6 +25,22 @@ ViewMode viewModeFromName(const std::string& name) {
     throw InputError("unknown view '" + name + "' (shaded, depth, rays, tile_time, client)");
 }
 
+DenoiseSettings::Mode denoiseModeFromName(const std::string& name) {
+    if (name == "off") return DenoiseSettings::Mode::Off;
+    if (name == "temporal") return DenoiseSettings::Mode::Temporal;
+    if (name == "svgf") return DenoiseSettings::Mode::Svgf;
+    throw InputError("unknown denoise mode '" + name + "' (off, temporal, svgf)");
+}
+
+const char* denoiseModeName(DenoiseSettings::Mode mode) {
+    switch (mode) {
+    case DenoiseSettings::Mode::Off: return "off";
+    case DenoiseSettings::Mode::Temporal: return "temporal";
+    case DenoiseSettings::Mode::Svgf: return "svgf";
+    }
+    return "off";
+}
+
 namespace {
 
 MaterialType materialTypeFromName(const std::string& type) {
@@ -102,6 +118,18 @@ void readSettings(Reader& top, const std::filesystem::path& file, RenderSettings
         s.view = viewModeFromName(r->choice("view", "shaded"));
         r->finish();
     }
+}
+
+void readDenoise(Reader& top, const std::filesystem::path& file, DenoiseSettings& d) {
+    auto r = sectionReader(top, file, scene_keys::kDenoise);
+    if (!r) return;
+    d.mode = denoiseModeFromName(r->choice("mode", denoiseModeName(d.mode)));
+    toml_reader::readFields<DenoiseSettings>(
+        *r, d,
+        {{"levels", &DenoiseSettings::levels}, {"history", &DenoiseSettings::history},
+         {"sigma_depth", &DenoiseSettings::sigmaDepth}, {"sigma_normal", &DenoiseSettings::sigmaNormal},
+         {"sigma_luminance", &DenoiseSettings::sigmaLuminance}});
+    r->finish();
 }
 
 void readBvh(Reader& top, const std::filesystem::path& file, BvhSettings& b) {
@@ -344,6 +372,7 @@ SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOption
     Reader top(file, root, "", scene_keys::kTop);
     readSettings(top, file, scene.settings);
     readBvh(top, file, scene.bvh);
+    readDenoise(top, file, scene.denoise);
     const LoadSettings load = readLoad(top, file);
     l.meshOptions.cache = options.cache.value_or(load.cache);
     l.meshOptions.cacheDir = load.cacheDir;

@@ -12,6 +12,7 @@ inline constexpr Key kTopKeys[] = {
     {.name = "image", .type = KeyType::Table},
     {.name = "render", .type = KeyType::Table},
     {.name = "bvh", .type = KeyType::Table},
+    {.name = "denoise", .type = KeyType::Table},
     {.name = "load", .type = KeyType::Table},
     {.name = "import", .type = KeyType::Table},
     {.name = "mesh", .type = KeyType::Tables},
@@ -50,6 +51,15 @@ inline constexpr Key kBvhKeys[] = {
     {.name = "compact", .type = KeyType::Boolean, .help = "`RTC_SCENE_FLAG_COMPACT`: less memory, slower rays"},
     {.name = "robust", .type = KeyType::Boolean, .help = "`RTC_SCENE_FLAG_ROBUST` on every BVH: conservative traversal, for thin CAD triangles (the generated power plant sets it)"},
     {.name = "primitives", .type = KeyType::Choice, .choices = "auto, triangles", .help = "what each mesh's BVH is built from. `auto`: consecutive triangles (2k, 2k+1) that share an edge go to Embree as one quad (`RTC_GEOMETRY_TYPE_QUAD`; the same two triangles, so the same picture to rounding), which gives a smaller BVH with half the leaves; a mesh where fewer than 3/4 of the pairs share an edge stays triangles. `triangles`: every triangle as it is"},
+};
+
+inline constexpr Key kDenoiseKeys[] = {
+    {.name = "mode", .type = KeyType::Choice, .choices = "off, temporal, svgf", .help = "what the display side does with the frames of a stochastic scene (GI, area lights, glossy metal, volumes). `off`: a still view's frames are averaged, a moving view shows each frame's own samples. `temporal`: each pixel's history is re-projected from the frames before (rejected where depth, normal or object disagree) and averaged with the new frame. `svgf`: that, then an edge-avoiding a-trous wavelet filter of the illumination (docs/shading.md, \"Denoising\")"},
+    {.name = "levels", .type = KeyType::Integer, .lo = 1, .hi = 10, .help = "a-trous iterations of `svgf`: the filter reaches 2^levels pixels"},
+    {.name = "history", .type = KeyType::Integer, .lo = 1, .hi = 65536, .help = "the most frames a pixel of a moving view averages (its newest frame weighs at least 1/history); a still view averages all, as without a denoiser"},
+    {.name = "sigma_depth", .type = KeyType::Number, .lo = 1e-6, .hi = 1e6, .help = "depth edge stop: neighbours whose depth differs by more than this times the local depth gradient weigh little"},
+    {.name = "sigma_normal", .type = KeyType::Number, .lo = 0.0, .hi = 1e6, .help = "normal edge stop: a neighbour weighs its normals' cosine to this power"},
+    {.name = "sigma_luminance", .type = KeyType::Number, .lo = 1e-6, .hi = 1e6, .help = "luminance edge stop: neighbours whose illumination differs by more than this many standard deviations of the noise weigh little"},
 };
 
 inline constexpr Key kLoadKeys[] = {
@@ -164,6 +174,7 @@ inline constexpr Section kTop{"the scene file", "# Scene files", kTopKeys};
 inline constexpr Section kImage{"[image]", "## `[image]`", kImageKeys};
 inline constexpr Section kRender{"[render]", "## `[render]`", kRenderKeys};
 inline constexpr Section kBvh{"[bvh]", "## `[bvh]`", kBvhKeys};
+inline constexpr Section kDenoise{"[denoise]", "## `[denoise]`", kDenoiseKeys};
 inline constexpr Section kLoad{"[load]", "## `[load]`", kLoadKeys};
 inline constexpr Section kImport{"[import]", "## `[import]`", kImportKeys};
 inline constexpr Section kMesh{"[[mesh]]", "## `[[mesh]]`", kMeshKeys};
@@ -182,6 +193,6 @@ inline constexpr Section kParts{"[parts]", "## `[parts]`", kPartsKeys};
 // Every section, for the test that holds them against the documentation.
 inline constexpr const Section* kAll[] = {&kTop,      &kImage,    &kRender,   &kBvh,      &kLoad,  &kImport,
                                           &kMesh,     &kSphere,   &kTorusKnot, &kMaterial, &kInstance, &kGroup,
-                                          &kLight,    &kSection,  &kCamera,   &kParts};
+                                          &kLight,    &kSection,  &kCamera,   &kParts, &kDenoise};
 
 }  // namespace rtwall::scene_keys

@@ -13,8 +13,10 @@ namespace rtwall {
 
 namespace {
 
+// `bump`: the shading normal bumped where the material says (false: as interpolated, for the
+// denoiser's features, whose normal stop must see geometry, not a plaster's bumps).
 SurfacePoint surfaceAt(const InstanceData& inst, const MaterialModel& model, const Float3& org, const Float3& dir,
-                       const Hit& hit) {
+                       const Hit& hit, bool bump = true) {
     SurfacePoint sp;
     sp.p = org + dir * hit.t;
     sp.t = hit.t;
@@ -42,7 +44,7 @@ SurfacePoint surfaceAt(const InstanceData& inst, const MaterialModel& model, con
     sp.frontFace = dot(ng, dir) < 0.0f;
     if (!sp.frontFace) ng = -ng;
     if (dot(ns, ng) < 0.0f) ns = -ns;
-    ns = model.bumpedNormal(inst, sp, ns);
+    if (bump) ns = model.bumpedNormal(inst, sp, ns);
     if (dot(ns, ng) < 0.0f) ns = ng;
     sp.ng = ng;
     sp.ns = ns;
@@ -101,6 +103,26 @@ void shadeHit(const ShadingContext& ctx, const RayTask& ray, const Hit& hit, Col
         pixel += ray.weight * kHighlightGlow;
     }
     model.shade(c, ray, sp);
+}
+
+HitFeatures featuresAt(const ShadingContext& ctx, const Float3& org, const Float3& dir, const Hit& hit) {
+    HitFeatures f;
+    if (hit.inst == kNoHit) return f;
+    if (hit.inst == kCapHit) {
+        f.albedo = ctx.scene.sections.capColor[hit.prim];
+        const Float3 n = normalize(hit.ng);
+        f.normal = dot(n, dir) > 0.0f ? -n : n;
+        f.id = kCapFeatureId - hit.prim;
+        return f;
+    }
+    const InstanceData& inst = ctx.scene.instances[hit.inst];
+    const MaterialModel& model = *ctx.scene.models[inst.material];
+    SurfacePoint sp = surfaceAt(inst, model, org, dir, hit, false);
+    if (inst.highlighted) sp.tint = sp.tint * kHighlightTint;
+    f.albedo = model.albedo(sp);
+    f.normal = sp.ns;
+    f.id = hit.inst + 1;
+    return f;
 }
 
 ShadowPass shadowPassAt(const ShadingContext& ctx, const ShadowTask& ray, const Hit& hit) {

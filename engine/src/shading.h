@@ -151,6 +151,16 @@ inline void shadeEyeLightPacket(const ShadingContext& ctx, const RayHitK& rh, co
 void shadeHit(const ShadingContext& ctx, const RayTask& ray, const Hit& hit, Color& pixel,
               std::vector<ShadowTask>& shadows, std::vector<RayTask>& next);
 
+// The first hit's features for a denoiser (FeatureView in rtwall/engine.h): the material's
+// reflectance at the hit, the shading normal facing the ray, the instance + 1. A miss: white,
+// zero, 0.
+struct HitFeatures {
+    Color albedo{1, 1, 1};
+    Float3 normal{0, 0, 0};
+    uint32_t id = 0;
+};
+HitFeatures featuresAt(const ShadingContext& ctx, const Float3& org, const Float3& dir, const Hit& hit);
+
 // What part of a shadow ray's light passes its hit `hit`, and where the walk goes on (the
 // ray parameter to continue from). Used only for instances whose material is shadow-transparent.
 struct ShadowPass {

@@ -343,7 +343,8 @@ TEST(Protocol, GoldenBytes) {
     // 5: the snapshot's BVH primitives; 6: two-sided emission of materials and area lights; 7: the
     // client's work report in Heartbeat, TileStalled; 8: TileFailed; 9: section planes, instance visibility;
     // 10: FrameBegin's views; 11: display nodes; 12: views and accumulation on display nodes; 13:
-    // the frame's views are its only camera; 14: depth with every tile, left out when off).
+    // the frame's views are its only camera; 14: depth with every tile, left out when off; 15:
+    // re-projection on the display nodes; 16: the denoiser's features, left out when off).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -351,7 +352,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x0F, 0x00,                                      // version (15: re-projection on the display nodes)
+        0x10, 0x00,                                      // version (16: the denoiser's features with tiles)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -368,6 +369,42 @@ TEST(Protocol, GoldenBytes) {
 // Version 14: depth is each message's last field, there only when asked for, so a frame without
 // depth travels as in version 13 (same payload bytes); a flag or a depth that says "none" is not
 // a second encoding of the same message.
+// Version 16: the denoiser's features, a byte after the depth flag in FrameBegin and a blob after
+// the depth in TileResult, each only when asked for; without depth or linear tiles, with bits
+// outside 1..7 or empty, refused.
+TEST(Protocol, FeaturesAreATrailingFieldAfterTheDepth) {
+    const FrameView view{sampleCamera(), {}, 0, 0};
+    const std::vector<uint8_t> depthOnly = payloadOf(FrameBegin{5, 4, TilePixels::LinearHalf, {view}, true});
+    std::vector<uint8_t> on = depthOnly;
+    on.push_back(kFeatureAll);
+    EXPECT_EQ(payloadOf(FrameBegin{5, 4, TilePixels::LinearHalf, {view}, true, kFeatureAll}), on);
+    EXPECT_EQ(decode<FrameBegin>(on).features, kFeatureAll);
+    EXPECT_EQ(decode<FrameBegin>(depthOnly).features, 0);
+    for (uint8_t bits : {0, 8, 255}) {
+        std::vector<uint8_t> bad = depthOnly;
+        bad.push_back(bits);
+        EXPECT_THROW(decode<FrameBegin>(bad), DecodeError) << int(bits);
+    }
+    // Features of an 8-bit frame.
+    std::vector<uint8_t> srgb = payloadOf(FrameBegin{5, 4, TilePixels::Srgb8, {view}, true});
+    srgb.push_back(kFeatureAll);
+    EXPECT_THROW(decode<FrameBegin>(srgb), DecodeError);
+
+    const TileResult withDepth{1, 2, TileCodec::Lz4, 3, {9, 9}, TilePixels::LinearHalf, {0xA1, 0xA2, 0xA3}};
+    std::vector<uint8_t> p = payloadOf(withDepth);
+    for (uint8_t b : {0x02, 0x00, 0x00, 0x00, 0xB1, 0xB2}) p.push_back(b);
+    TileResult withFeatures = withDepth;
+    withFeatures.features = {0xB1, 0xB2};
+    EXPECT_EQ(payloadOf(withFeatures), p);
+    EXPECT_EQ(decode<TileResult>(p), withFeatures);
+    const TileResultInfo info = peekTileResult(p.data(), p.size());
+    EXPECT_EQ(info.depthBytes, 3u);
+    EXPECT_EQ(info.featureBytes, 2u);
+    std::vector<uint8_t> empty = payloadOf(withDepth);
+    for (uint8_t b : {0x00, 0x00, 0x00, 0x00}) empty.push_back(b);
+    EXPECT_THROW(decode<TileResult>(empty), DecodeError);
+}
+
 TEST(Protocol, DepthIsATrailingFieldLeftOutWhenOff) {
     const FrameView view{sampleCamera(), {}, 0, 0};
     const std::vector<uint8_t> off = payloadOf(FrameBegin{5, 4, TilePixels::Srgb8, {view}});

@@ -250,6 +250,7 @@ SceneDesc sampleScene() {
     d.cameras = {sampleCamera(0), sampleCamera(1)};
     d.settings = sampleSettings();
     for (int i = 0; i < kMaxSections; ++i) d.sections[i] = sampleSection(i);
+    d.denoise = {DenoiseSettings::Mode::Svgf, 3, 12, 2.0f, 64.0f, 8.0f};  // the display side's: does not travel
     for (const Material& m : d.materials)
         for (const std::string& path : {m.texture.file, m.alpha.file, m.volumeFile}) d.files[path] = bytesOf("bytes of " + path);
     return d;
@@ -296,7 +297,7 @@ TEST(SceneState, MemberCountsAreExact) {
     EXPECT_EQ(fieldCount<Transform>(), 1u);  // the std::array, not its 12 doubles
     EXPECT_EQ(fieldCount<BvhSettings>(), 4u);
     EXPECT_EQ(fieldCount<SectionPlane>(), 5u);
-    EXPECT_EQ(fieldCount<SceneDesc>(), 12u);
+    EXPECT_EQ(fieldCount<SceneDesc>(), 13u);
     EXPECT_EQ(fieldCount<SceneSnapshot>(), 10u);
     EXPECT_EQ(std::tuple_size_v<decltype(tieFields(std::declval<RenderSettings&>()))>, fieldCount<RenderSettings>());
 }
@@ -309,8 +310,9 @@ TEST(SceneState, TheSamplesSetEveryMember) {
 }
 
 // SceneDesc -> snapshot -> bytes -> snapshot -> SceneDesc: every member comes back, but for what
-// does not travel: the scene file's path, the cameras (a frame carries its views) and an assembly's
-// part names (the instances' part indices do travel). (What is each
+// does not travel: the scene file's path, the cameras (a frame carries its views), an assembly's
+// part names (the instances' part indices do travel) and the denoiser's settings (the display
+// side's). (What is each
 // process's own, the packet width and a client's id, is TraceOptions, never on the wire.)
 TEST(SceneState, EveryMemberTravelsAndComesBack) {
     const SceneDesc d = sampleScene();
@@ -331,6 +333,7 @@ TEST(SceneState, EveryMemberTravelsAndComesBack) {
     expected.sourceFile.clear();
     expected.parts.clear();
     expected.cameras.clear();
+    expected.denoise = {};
     expectEqualMembers(*back, expected, "SceneDesc");
 }
 
@@ -519,6 +522,26 @@ TEST(SceneState, ASnapshotIsHashedFromTheBytesSent) {
     EXPECT_EQ(encodeSnapshot(h, other).stateHash, e.stateHash) << "the sequence number is not part of the state";
     other.instances[0].transform.m[5] += 1e-9;
     EXPECT_NE(encodeSnapshot(h, other).stateHash, e.stateHash);
+}
+
+}  // namespace
+}  // namespace rtwall::cluster
+
+namespace rtwall::cluster {
+namespace {
+
+// An edited [denoise] is an edit of its own (the display side applies it; nothing is sent).
+TEST(SceneState, ADenoiseEditIsTheDisplaysOwn) {
+    const SceneDesc before = sampleScene();
+    SceneDesc after = before;
+    EXPECT_TRUE(diffScenes(before, after).empty());
+    after.denoise.mode = DenoiseSettings::Mode::Temporal;
+    after.denoise.levels = 4;
+    const SceneEdit e = diffScenes(before, after);
+    ASSERT_TRUE(e.denoise);
+    EXPECT_EQ(*e.denoise, after.denoise);
+    EXPECT_FALSE(e.empty());
+    EXPECT_FALSE(e.settings) << "the render settings the clients get are unchanged";
 }
 
 }  // namespace

@@ -685,6 +685,47 @@ TEST(ShadingSceneFile, BadInputNamesFileLineAndKey) {
     EXPECT_NE(test::inputErrorOf([&] { Scene s(d); }).find("nope.vti"), std::string::npos);
 }
 
+// [denoise] (issue 28): every key read back; each bad value one line naming the file, the line
+// and the key (a NaN, a negative or zero level, an unknown mode, a key that does not exist).
+TEST(ShadingSceneFile, DenoiseTable) {
+    const auto dir = test::scratchDir();
+    const std::string head = "[[mesh]]\nname = \"b\"\nshape = \"box\"\n";
+    const auto good = test::writeFile(dir / "d.toml", head + "[denoise]\nmode = \"svgf\"\nlevels = 3\nhistory = 8\n"
+                                                             "sigma_depth = 2\nsigma_normal = 64\nsigma_luminance = 8\n");
+    const SceneDesc d = loadSceneFile(good);
+    EXPECT_EQ(d.denoise.mode, DenoiseSettings::Mode::Svgf);
+    EXPECT_EQ(d.denoise.levels, 3);
+    EXPECT_EQ(d.denoise.history, 8);
+    EXPECT_EQ(d.denoise.sigmaDepth, 2.0f);
+    EXPECT_EQ(d.denoise.sigmaNormal, 64.0f);
+    EXPECT_EQ(d.denoise.sigmaLuminance, 8.0f);
+    EXPECT_EQ(loadSceneFile(test::writeFile(dir / "n.toml", head)).denoise, DenoiseSettings{}) << "off unless asked for";
+    struct Case {
+        std::string body, expect;
+    };
+    const std::vector<Case> cases = {
+        {"[denoise]\nmode = \"magic\"\n", ":5: [denoise]: key 'mode'"},
+        {"[denoise]\nlevels = -1\n", ":5: [denoise]: key 'levels'"},
+        {"[denoise]\nlevels = 0\n", "key 'levels'"},
+        {"[denoise]\nlevels = 11\n", "key 'levels'"},
+        {"[denoise]\nhistory = 0\n", "key 'history'"},
+        {"[denoise]\nsigma_luminance = nan\n", ":5: [denoise]: key 'sigma_luminance'"},
+        {"[denoise]\nsigma_depth = -1\n", "key 'sigma_depth'"},
+        {"[denoise]\nsigma_normal = inf\n", "key 'sigma_normal'"},
+        {"[denoise]\nsigma_luminance = \"four\"\n", "key 'sigma_luminance'"},
+        {"[denoise]\nstrength = 3\n", "strength"},
+        {"denoise = \"svgf\"\n", "key 'denoise'"},
+    };
+    for (const Case& c : cases) {
+        const auto file = test::writeFile(dir / "s.toml", head + c.body);
+        const std::string msg = test::inputErrorOf([&] { loadSceneFile(file); });
+        EXPECT_NE(msg.find(c.expect), std::string::npos) << c.body << ": " << msg;
+        EXPECT_NE(msg.find("s.toml:"), std::string::npos) << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    }
+    EXPECT_EQ(test::inputErrorOf([] { denoiseModeFromName("fast"); }), "unknown denoise mode 'fast' (off, temporal, svgf)");
+}
+
 // Every key of the format, read back.
 TEST(ShadingSceneFile, ReadsEveryShadingKey) {
     const auto dir = test::scratchDir();

@@ -63,7 +63,8 @@ template <> void checkPayload<TileResult>(const uint8_t* data, size_t size) {
     const TileResult msg = decodePayload<TileResult>(data, size);
     const TileResultInfo info = peekTileResult(data, size);
     if (info.frame != msg.frame || info.tile != msg.tile || info.renderMicros != msg.renderMicros ||
-        info.pixelBytes != msg.pixels.size() || info.depthBytes != msg.depth.size())
+        info.pixelBytes != msg.pixels.size() || info.depthBytes != msg.depth.size() ||
+        info.featureBytes != msg.features.size())
         finding("peekTileResult disagrees with decodePayload<TileResult>");
     const std::vector<uint8_t> again = encodeMessage(Header{}, msg);
     if (again.size() != kHeaderSize + size || std::memcmp(again.data() + kHeaderSize, data, size) != 0)
@@ -162,6 +163,27 @@ void checkWideTile(TileCodec codec, const uint8_t* data, size_t size) {
     checkPadding(dst, t, kGuard, "decodeWideTile wrote into the row padding");
 }
 
+// A feature tile (width - 1, height - 1, feature bits in the low 3 bits of the third byte, 0
+// meaning all, then the compressed features) decodes into its tile and nowhere else.
+void checkFeatureTile(const uint8_t* data, size_t size) {
+    if (size < 3) return;
+    const int w = data[0] % 64 + 1, h = data[1] % 64 + 1;
+    const uint8_t bits = (data[2] & 7) ? uint8_t(data[2] & 7) : uint8_t(kFeatureAll);
+    const size_t stride = size_t(w) + 3, rows = size_t(h);
+    const float kGuard = -7.0f;
+    std::vector<float> albedo(stride * rows * 3, kGuard), normal(stride * rows * 3, kGuard);
+    std::vector<uint32_t> id(stride * rows, 0xDEADBEEFu);
+    std::vector<uint8_t> scratch;
+    decodeFeatureTile(bits, data + 3, size - 3, w, h, {albedo.data(), normal.data(), id.data(), stride}, scratch);
+    for (size_t y = 0; y < rows; ++y)
+        for (size_t x = size_t(w); x < stride; ++x) {
+            if (id[y * stride + x] != 0xDEADBEEFu) finding("decodeFeatureTile wrote an id into the row padding");
+            for (int c = 0; c < 3; ++c)
+                if (albedo[(y * stride + x) * 3 + size_t(c)] != kGuard || normal[(y * stride + x) * 3 + size_t(c)] != kGuard)
+                    finding("decodeFeatureTile wrote into the row padding");
+        }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -179,8 +201,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             checkMesh(data, size);
         } else if (selector < fuzz::kWideTile) {
             checkTile(TileCodec(selector - fuzz::kTile), data, size);
-        } else {
+        } else if (selector < fuzz::kFeatureTile) {
             checkWideTile(selector == fuzz::kWideTile ? TileCodec::Lz4 : TileCodec::Zstd, data, size);
+        } else {
+            checkFeatureTile(data, size);
         }
     } catch (const DecodeError&) {
         // The expected outcome for malformed input.

@@ -155,6 +155,10 @@ int main(int argc, char** argv) {
         seedMessage("node-pose", NodePose{12, 3, false, {leftEye, rightEye}});
     }
     seedMessage("node-shown", NodeShown{12});
+    // Version 16: the denoiser's features after the depth, each only when asked for.
+    seedMessage("frame-begin-features", FrameBegin{6, 2, TilePixels::LinearHalf, {FrameView{}}, true, kFeatureAll});
+    seedMessage("tile-result-features",
+                TileResult{6, 17, TileCodec::Lz4, 1500, {1, 2, 3, 4, 5}, TilePixels::LinearHalf, {6, 7, 8}, {9, 10}});
 
     writeSeed("mesh-box", fuzz::kMesh, encodeMesh(makeBox()));
     writeSeed("mesh-sphere-normals", fuzz::kMesh, encodeMesh(makeSphere(3, 5)));
@@ -182,6 +186,24 @@ int main(int argc, char** argv) {
         encodeWideTile(settings, linear.data(), w, h, size_t(w) * 3, scratch, bytes);
         const unsigned selector = fuzz::kWideTile + (codec == TileCodec::Lz4 ? 0 : 1);
         writeSeed(std::string("wide-tile-") + codecName(codec), uint8_t(selector), bytes);
+    }
+    // An 8x6 tile of features: a floor and an object, every feature and normal and id only.
+    {
+        std::vector<float> albedo(size_t(w) * h * 3), normal(size_t(w) * h * 3);
+        std::vector<uint32_t> id(size_t(w) * h);
+        for (int i = 0; i < w * h; ++i) {
+            const bool object = i % w >= 4;
+            albedo[size_t(i) * 3] = object ? 0.7f : 0.2f;
+            albedo[size_t(i) * 3 + 1] = albedo[size_t(i) * 3 + 2] = 0.3f;
+            normal[size_t(i) * 3 + (object ? 0 : 1)] = 1.0f;
+            id[size_t(i)] = object ? 2u : 1u;
+        }
+        for (uint8_t bits : {uint8_t(kFeatureAll), uint8_t(kFeatureNormal | kFeatureId)}) {
+            std::vector<uint8_t> scratch, packed, bytes{uint8_t(w - 1), uint8_t(h - 1), bits};
+            encodeFeatureTile(bits, {albedo.data(), normal.data(), id.data(), size_t(w)}, w, h, scratch, packed);
+            bytes.insert(bytes.end(), packed.begin(), packed.end());
+            writeSeed("feature-tile-" + std::to_string(int(bits)), uint8_t(fuzz::kFeatureTile), bytes);
+        }
     }
     return 0;
 }

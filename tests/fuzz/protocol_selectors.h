@@ -12,6 +12,7 @@ inline constexpr unsigned kFirstPayload = 1;             // 1..kMaxMsgType: deco
 inline constexpr unsigned kMesh = kMaxMsgType + 1;       // decodeMesh
 inline constexpr unsigned kTile = kMesh + 1;             // + TileCodec: decodeTile (4 codecs)
 inline constexpr unsigned kWideTile = kTile + 4;         // decodeWideTile: + 0 LZ4, + 1 zstd
-inline constexpr unsigned kSelectors = kWideTile + 2;
+inline constexpr unsigned kFeatureTile = kWideTile + 2;  // decodeFeatureTile: the features in the third byte's low bits
+inline constexpr unsigned kSelectors = kFeatureTile + 1;
 
 }  // namespace rtwall::cluster::fuzz

@@ -169,4 +169,27 @@ struct ReprojectOptions : Common {
 };
 toml::table reprojection(const ReprojectOptions& o);
 
+// What the denoiser buys (issue 28, denoise.cpp): PSNR, FLIP, frame rate and flicker of each
+// setting on an orbiting and a still camera against converged references.
+struct DenoiseOptions : Common {
+    std::vector<std::string> scenes{"office"};  // office (rtwall gen office), demo (--demo, with GI), sunflowers (rtwall gen sunflowers)
+    std::string dir = "out/bench-denoise";     // generated scenes go here
+    std::string demo = "configs/demo.toml";
+    std::string images;                        // the last scored frame of each setting as PNG here (empty: none)
+    std::vector<std::string> sizes{"200x150", "640x480"};
+    std::vector<std::string> modes{"off", "temporal", "svgf"};
+    std::vector<int> giSpp{1, 4};
+    int frames = 24;                 // frames of the orbit
+    int scoreEvery = 4;              // every this many-th frame is scored
+    double degreesPerFrame = 0.5;    // the orbit's speed
+    int referenceSpp = 512;          // GI samples of a reference render
+    double stillSeconds = 4;         // the still camera refines at most this long
+    int flickerFrames = 8;
+    int threads = 0;                 // render and denoise threads (0: one per hardware thread)
+    // The filter's controls over the scene's [denoise] (0: the scene's).
+    int levels = 0, history = 0;
+    double sigmaLuminance = 0, sigmaDepth = 0, sigmaNormal = 0;
+};
+toml::table denoise(const DenoiseOptions& o);
+
 }  // namespace rtwall::bench

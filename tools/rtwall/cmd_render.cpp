@@ -39,7 +39,7 @@ Image renderWithClients(SceneDesc desc, const CameraDesc& camera, const RenderOp
     // Frames that are averaged travel as linear half-float tiles, to be averaged in linear light
     // as the single-machine path below does; one frame comes as 8-bit tiles, the bytes
     // renderFrame gives (a linear tile would be rounded to half precision first).
-    cs.wideAccumulation = o.frames > 1;
+    cs.wideAccumulation = o.frames > 1 || (desc.denoise.mode != DenoiseSettings::Mode::Off && rendersStochastically(desc));
     c.loaded = std::move(desc);
     c.frames = o.frames;
     c.framesGiven = true;
@@ -87,16 +87,39 @@ Image renderHere(const Scene& scene, const Camera& camera, const SceneDesc& desc
             // 8-bit quantisation clips each at 1.0 (a GI sample far above 1 would lose its
             // excess in every frame), at the half precision the cluster sends them in. A
             // deterministic scene renders the same image every frame: its 8-bit mean is it.
+            // Denoised ([denoise] or --denoise, a stochastic scene): each frame with its depth
+            // and features, as a cluster delivers them (quantiseAsSent), so that the filter sees
+            // the wall's values.
+            const bool denoise = desc.denoise.mode != DenoiseSettings::Mode::Off && rendersStochastically(desc);
+            const uint8_t bits = featureBitsFor(desc.denoise.mode);
             ComposeFrame mean;
-            mean.stochastic = o.frames > 1;
-            mean.linear = o.frames > 1 && rendersStochastically(desc);
+            mean.stochastic = o.frames > 1 || denoise;
+            mean.linear = mean.stochastic && rendersStochastically(desc);
+            if (denoise) {
+                mean.denoise = desc.denoise;
+                mean.camera = cam;
+                mean.keepForWarp = false;
+            }
+            std::vector<std::vector<float>> depth(1);
+            std::vector<FeatureImages> features(1);
             Compositor compositor;
             for (int f = 0; f < o.frames; ++f) {
                 TileStats fs;
                 const uint32_t frame = firstFrame + uint32_t(f);
                 std::vector<Image> image(1);
                 std::vector<float> rgb;
-                if (mean.linear) {
+                if (denoise) {
+                    FeatureFrame ff = renderFrameFeatures(scene, camera, s, frame, &fs, trace);
+                    quantiseAsSent(ff, bits);
+                    rgb = std::move(ff.linear);
+                    depth[0] = std::move(ff.depth);
+                    features[0] = {std::move(ff.albedo), std::move(ff.normal), std::move(ff.id)};
+                    mean.depth = depth;
+                    mean.features = features;
+                    image[0].width = s.width;
+                    image[0].height = s.height;
+                    image[0].rgb.resize(size_t(s.width) * size_t(s.height) * 3);
+                } else if (mean.linear) {
                     rgb = renderFrameLinear(scene, camera, s, frame, &fs, trace);
                     image[0].width = s.width;
                     image[0].height = s.height;
@@ -126,6 +149,7 @@ int runRender(const RenderOptions& o) {
     applyPartView(desc, o.parts);  // on top of the scene file's [parts]
     RenderSettings& s = desc.settings;
     applyOverrides(s, o);
+    if (!o.denoise.empty()) desc.denoise.mode = denoiseModeFromName(o.denoise);
     const TraceOptions trace = traceOptionsOf(o);
     const CameraDesc cam = chooseCamera(desc, o);
     const char* kernel = s.kernel == KernelType::Packet ? "packet" : "single";
@@ -216,6 +240,8 @@ void addRender(CLI::App& app, Run& run) {
     CLI::Option* gi = cmd->add_flag("--gi", o->gi, "Global illumination: path tracing with next-event estimation");
     cmd->add_flag("--no-gi", o->noGi, "No global illumination (overrides the scene)")->excludes(gi);
     cmd->add_option("--samples", o->samples, "Random samples per pixel sample and frame")->check(CLI::Range(1, 4096));
+    cmd->add_option("--denoise", o->denoise, "Denoise the frames of a stochastic scene (over the scene's [denoise] mode)")
+        ->check(CLI::IsMember({"off", "temporal", "svgf"}));
     cmd->add_option("--supersample", o->supersample, "n x n sub-pixel samples per pixel (overrides the scene)")->check(CLI::Range(1, 16));
     cmd->add_option("--prune", o->prune, "Ray-tree pruning threshold (0 = off)")->check(CLI::Range(0.0, 1.0));
     cmd->add_option("--max-depth", o->maxDepth, "Longest ray path")->check(CLI::Range(1, 64));

@@ -19,7 +19,7 @@ void addRun(CLI::App& app, Run& run) {
     struct Options {
         std::string config;
         int frames = -1, clients = -1, writeEvery = -1;
-        std::string out, bind, cameraPath, wall, front, trace, reproject;
+        std::string out, bind, cameraPath, wall, front, trace, reproject, denoise;
         bool insecure = false, headless = false, watch = false, noLocalNodes = false;
         double targetFps = -1;  // not given
         PartView parts;
@@ -43,6 +43,10 @@ void addRun(CLI::App& app, Run& run) {
                     "Re-projection: every refresh shows the newest frame warped to the newest head pose (default: the "
                     "wall config's `reproject`, on for a tracked wall)")
         ->check(CLI::IsMember({"on", "off"}));
+    cmd->add_option("--denoise", o->denoise,
+                    "Denoise the frames of a stochastic scene: off, temporal or svgf (default: the run config's [run] "
+                    "denoise, else the scene's [denoise] mode)")
+        ->check(CLI::IsMember({"off", "temporal", "svgf"}));
     cmd->add_flag("--insecure", o->insecure, "Allow a non-loopback bind without CURVE keys (says so loudly)");
     cmd->add_option("--bind", o->bind, "Endpoint for clients, e.g. tcp://0.0.0.0:7700 (default: loopback, any port)");
     cmd->add_option("--target-fps", o->targetFps,
@@ -78,6 +82,7 @@ void addRun(CLI::App& app, Run& run) {
                 c.loadedWall.reset();
             }
             if (!o->reproject.empty()) c.reproject = o->reproject == "on";
+            if (!o->denoise.empty()) c.denoise = denoiseModeFromName(o->denoise);
             c.headless = o->headless;
             c.watch = o->watch;
             if (o->targetFps >= 0) c.targetFps = o->targetFps;

@@ -49,6 +49,7 @@ void addBenchCodecs(CLI::App& bench, Run& run);
 void addBenchShading(CLI::App& bench, Run& run);
 void addBenchTessellation(CLI::App& bench, Run& run);  // bench_tessellation.cpp (issue 20)
 void addBenchReproject(CLI::App& bench, Run& run);  // bench_reproject.cpp (issue 27)
+void addBenchDenoise(CLI::App& bench, Run& run);    // bench_denoise.cpp (issue 28)
 void addTrackerSim(CLI::App& app, Run& run);  // cmd_tracker_sim.cpp (issue 18)
 
 }  // namespace rtwall::cli

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
                      addBenchTessellation})
         add(*bench, run);
     addBenchReproject(*bench, run);
+    addBenchDenoise(*bench, run);
     addCheck(app, run);
 
     try {

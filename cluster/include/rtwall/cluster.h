@@ -93,6 +93,10 @@ struct ClusterSettings {
     // 1600x1200 frame of the demo scene, docs/benchmarks.md) and renderViews/renderFrame give it per
     // view, as do display nodes. Off: nothing changes, the same bytes on the wire and images.
     bool depth = false;
+    // The denoiser's features with every tile of a linear frame (issue 28; FeatureBits of
+    // rtwall/feature_codec.h, featureBitsFor the denoise mode; needs depth): renderViews gives
+    // each view's (FeatureImages), for the compositor's denoiser. 0: none, nothing changes.
+    uint8_t features = 0;
     // Security: with a key pair every link is CURVE-encrypted and only the listed client public
     // keys get in. Without keys the master listens on loopback only, unless `insecure`.
     std::filesystem::path keyFile;                  // the master's key pair (rtwall keys)
@@ -153,6 +157,8 @@ struct FrameReport {
     bool stochastic = false;        // the frame's state renders stochastically: frames of one state refine by averaging
     bool linear = false;            // its tiles came as linear half floats (renderFrame can give them)
     bool depth = false;             // its tiles came with depth (ClusterSettings::depth; renderFrame gives it)
+    uint8_t features = 0;           // and these features (ClusterSettings::features, on linear frames only)
+    CameraDesc camera;              // the camera of its first view (of a mono frame: its camera)
     size_t views = 0;               // images of a multi-view frame (0: one, the state's camera)
     uint64_t viewsTag = 0;          // the tag of the setViews the frame was rendered with
     MasterCounters counters;        // the master's counters when the frame completed
@@ -178,10 +184,11 @@ struct SceneEdit {
     std::optional<RenderSettings> settings;
     std::optional<CameraDesc> camera;  // the first camera, when it changed
     std::vector<std::pair<uint32_t, SectionPlane>> sections;  // slots whose plane changed
+    std::optional<DenoiseSettings> denoise;  // the display side's denoiser: applied there, never sent
     std::vector<std::string> refused;
     bool empty() const {
         return materials.empty() && lights.empty() && transforms.empty() && visibility.empty() && !settings && !camera &&
-               sections.empty() &&
+               sections.empty() && !denoise &&
                refused.empty();
     }
 };
@@ -283,8 +290,11 @@ public:
     // each view's linear RGB; with ClusterSettings::depth `depth` each view's depth as
     // renderFrame's, NaN outside its regions' tiles (a hole to the warp). Both are emptied
     // otherwise, and with display nodes (the pixels are on the nodes).
+    // With features (ClusterSettings::features) on a linear frame, `features` receives each
+    // view's (zero outside its regions' tiles), else it is emptied.
     std::vector<Image> renderViews(FrameReport* report = nullptr, std::vector<std::vector<float>>* linear = nullptr,
-                                   std::vector<std::vector<float>>* depth = nullptr);
+                                   std::vector<std::vector<float>>* depth = nullptr,
+                                   std::vector<FeatureImages>* features = nullptr);
 
     // With display nodes: waits until the swap barrier has released frame `frame` or a later
     // one to the nodes (true), or timeoutMs passed (false). A benchmark paces frames by it, so

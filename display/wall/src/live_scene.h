@@ -55,6 +55,7 @@ public:
         if (!e.visibility.empty()) setLoadedVisibility(e.visibility);
         if (e.settings) setRenderSettings(*e.settings);
         if (e.camera) setCamera(*e.camera);
+        if (e.denoise) desc_.denoise = *e.denoise;  // the display side's: the session reads it per frame
         return e;
     }
 

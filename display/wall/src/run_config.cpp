@@ -79,6 +79,7 @@ RunConfig readRunConfig(const std::filesystem::path& file, const toml::table& ro
         c.writeEvery = r.integer("write_every", c.writeEvery, 0, 100'000'000);
         c.out = r.string("out", c.out.string());
         c.orbit = r.number("orbit", c.orbit, -360.0, 360.0);
+        if (r.has("denoise")) c.denoise = denoiseModeFromName(r.choice("denoise", "off", {"off", "temporal", "svgf"}));
         if (r.has("camera_path")) {
             if (r.has("orbit")) r.fail(r.find("camera_path"), "give either 'orbit' or 'camera_path'");
             c.cameraPath = dir / r.string("camera_path", "");

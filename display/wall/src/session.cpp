@@ -73,6 +73,8 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     if (!c.trace.empty() && c.targetFps <= 0) throw InputError("--trace needs --target-fps");
 
     s.decideReprojection();
+    if (c.denoise) desc.denoise.mode = *c.denoise;
+    s.decideDenoising(desc);
     s.master = std::make_unique<Master>(desc, c.cluster);
     s.master->setStopFlag(stop);
     s.log(format("rtwall master at %s, %dx%d, %d local clients, codec %s%s", s.master->endpoint().c_str(), desc.settings.width,

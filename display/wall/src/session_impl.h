@@ -114,6 +114,14 @@ struct WallSession::Impl {
     std::deque<Presentation> presentations;     // since takePresentations()
     std::deque<NodeRefreshDelay> nodeRefreshes;  // on display nodes: the refreshes they answered
     void collectNodeRefreshes();
+    // Denoising (issue 28): frames of a stochastic scene come with their features and depth and
+    // the compositor filters them (rtwall/denoise.h); `denoise` is the scene's [denoise] (or
+    // --denoise) as the cluster was started for it.
+    DenoiseSettings denoise;
+    bool denoising() const { return denoise.mode != DenoiseSettings::Mode::Off; }
+    std::vector<FeatureImages> viewFeatures;       // the rendered frame's, per view
+    std::vector<std::vector<float>> monoLinear;    // a frame without views, as renderViews gives it
+    void decideDenoising(const SceneDesc& desc);   // before the master starts: features from the clients
     bool reprojects() const;     // what decideReprojection will decide, before it is said
     void decideReprojection();   // before the master starts: whether, and depth from the clients
     void latchTargets();         // targets := the views' cameras for the head pose read now
@@ -306,6 +314,18 @@ struct WallSession::Impl {
         const SceneEdit e = live->applyEdit(edited, tuning->controller() != nullptr, !path.empty() || config.orbit != 0.0);
         if (e.camera) input->setCamera(*e.camera);
         const std::string file = config.scene;
+        if (e.denoise && e.denoise->mode != denoise.mode) {
+            // The clients send the features of the mode the session began with: a mode that
+            // reads no more of them switches at once, one that reads more needs a restart.
+            const uint8_t need = featureBitsFor(e.denoise->mode);
+            if ((need & ~config.cluster.features) != 0 || (need && !config.cluster.depth))
+                log(format("%s: [denoise] mode %s needs a restart (the clients send the features of %s)", file.c_str(),
+                           denoiseModeName(e.denoise->mode), denoiseModeName(denoise.mode)));
+            else {
+                denoise.mode = e.denoise->mode;
+                log(format("denoise: %s", denoiseModeName(denoise.mode)));
+            }
+        }
         for (const std::string& r : e.refused) log(file + ": " + r + " (not applied)");
         log(format("%s changed: %zu materials, %zu lights, %zu instance transforms, render settings %s, camera %s, %zu "
                    "section planes, %zu instance visibilities",
@@ -403,7 +423,14 @@ struct WallSession::Impl {
         f.stochastic = report.stochastic;
         f.stateSeq = report.stateSeq;
         f.linear = report.linear;
-        if (reproject) f.depth = viewDepth;  // the frame becomes the warp's newest source
+        if (reproject || denoising()) f.depth = viewDepth;
+        f.keepForWarp = reproject;  // the frame becomes the warp's newest source
+        if (denoising()) {
+            f.denoise = live->desc().denoise;
+            f.denoise.mode = denoise.mode;  // the cluster sends the features of the mode it began with
+            f.features = viewFeatures;
+            f.camera = report.camera;
+        }
         EyeImages eyes = compositor.compose(f, std::move(images), linearViews);
         shown.left = std::move(eyes.left);
         shown.right = std::move(eyes.right);
@@ -418,7 +445,9 @@ struct WallSession::Impl {
             ViewSpec spec{nextViewTag++, trackerState.packets, head, frameViews()};
             master->setViews(spec.views, spec.tag);
             viewSpecs.push_back(std::move(spec));
-            std::vector<Image> images = reproject ? renderWhileRefreshing() : master->renderViews(&report, &viewLinear);
+            std::vector<Image> images = reproject ? renderWhileRefreshing()
+                                                  : master->renderViews(&report, &viewLinear, denoising() ? &viewDepth : nullptr,
+                                                                        denoising() ? &viewFeatures : nullptr);
             while (viewSpecs.size() > 1 && viewSpecs.front().tag != report.viewsTag) viewSpecs.pop_front();
             const ViewSpec& rendered = viewSpecs.front();
             shownTrackerPackets = rendered.trackerPackets;
@@ -431,9 +460,14 @@ struct WallSession::Impl {
             if (reproject) latchAndWarp();  // the new frame too is shown for the newest pose
         } else {
             std::vector<Image> image(1);
-            image[0] = master->renderFrame(&report, &linear);
-            if (onNodes) shown.left = std::move(image[0]);
-            else compose({}, std::move(image), {&linear, 1});
+            if (denoising()) {  // the frame's depth and features too
+                image = master->renderViews(&report, &monoLinear, &viewDepth, &viewFeatures);
+                compose({}, std::move(image), monoLinear);
+            } else {
+                image[0] = master->renderFrame(&report, &linear);
+                if (onNodes) shown.left = std::move(image[0]);
+                else compose({}, std::move(image), {&linear, 1});
+            }
         }
         shown.number = report.frame;
         // The tile grid of the frame as rendered (the `tile` control and [render] edits change it);

@@ -27,6 +27,27 @@ void WallSession::Impl::decideReprojection() {
     config.cluster.depth = true;  // every tile comes with its depth
 }
 
+void WallSession::Impl::decideDenoising(const SceneDesc& desc) {
+    denoise = desc.denoise;
+    if (!denoising()) return;
+    const char* mode = denoiseModeName(denoise.mode);
+    if (onNodes) {
+        log(format("denoise: off: display nodes do not filter their screens yet (the scene asks for %s)", mode));
+        denoise.mode = DenoiseSettings::Mode::Off;
+        return;
+    }
+    if (!config.cluster.wideAccumulation) {
+        log(format("denoise: off: it needs linear tiles (the cluster's wide accumulation; the scene asks for %s)", mode));
+        denoise.mode = DenoiseSettings::Mode::Off;
+        return;
+    }
+    config.cluster.depth = true;
+    config.cluster.features = featureBitsFor(denoise.mode);
+    log(denoise.mode == DenoiseSettings::Mode::Svgf
+            ? format("denoise: svgf (%d levels, history %d), on the frames of a stochastic scene", denoise.levels, denoise.history)
+            : format("denoise: temporal (history %d), on the frames of a stochastic scene", denoise.history));
+}
+
 void WallSession::Impl::startRefresher() {
     if (!reproject) return;
     // In windows with vsync the swap waits for the retrace; headless (and without vsync) the
@@ -43,7 +64,9 @@ void WallSession::Impl::startRefresher() {
 std::vector<Image> WallSession::Impl::renderWhileRefreshing() {
     std::vector<Image> images;
     FrameReport pending;  // the worker's: `report` is the shown frame's while it renders
-    const std::function<void()> render = [&] { images = master->renderViews(&pending, &viewLinear, &viewDepth); };
+    const std::function<void()> render = [&] {
+        images = master->renderViews(&pending, &viewLinear, &viewDepth, denoising() ? &viewFeatures : nullptr);
+    };
     const std::function<void()> present = [&] { presentRefresh(); };
     // On nodes: once a frame was released to them (they hold it; the master holds no pixels).
     refresher->run(render, present, onNodes ? report.swapsReleased > 0 : compositor.reprojectViews() > 0);

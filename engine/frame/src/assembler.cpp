@@ -42,6 +42,22 @@ void FrameAssembler::resize(size_t views, int width, int height, const FrameHold
     } else {
         depthImages_.clear();
     }
+    // Features likewise start from zero (id 0: nothing, never another frame's object).
+    features_ = holding.features;
+    if (features_) {
+        const size_t n = size_t(width) * size_t(height);
+        featureImages_.resize(images_.size());
+        for (FeatureImages& f : featureImages_) {
+            if (features_ & kFeatureAlbedo) f.albedo.assign(n * 3, 0.0f);
+            else f.albedo.clear();
+            if (features_ & kFeatureNormal) f.normal.assign(n * 3, 0.0f);
+            else f.normal.clear();
+            if (features_ & kFeatureId) f.id.assign(n, 0u);
+            else f.id.clear();
+        }
+    } else {
+        featureImages_.clear();
+    }
 }
 
 void FrameAssembler::beginFrame(uint32_t frame, int width, int height, int tileSize) {

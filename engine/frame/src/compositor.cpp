@@ -37,12 +37,46 @@ void placeView(Image& eye, const Image& from, const FrameView& view) {
 
 }  // namespace
 
+// Whether view v of frame f is denoised: a mode, a linear frame, and the view's depth and the
+// features its mode reads, all of the view's size.
+bool Compositor::denoises(const ComposeFrame& f, size_t v, const Image& image, std::span<const std::vector<float>> linear) {
+    if (f.denoise.mode == DenoiseSettings::Mode::Off || !f.linear || v >= linear.size() || v >= f.depth.size() ||
+        v >= f.features.size())
+        return false;
+    const size_t n = size_t(image.width) * size_t(image.height);
+    const FeatureImages& ft = f.features[v];
+    const bool albedo = f.denoise.mode != DenoiseSettings::Mode::Svgf || ft.albedo.size() == 3 * n;
+    return n > 0 && linear[v].size() == 3 * n && f.depth[v].size() == n && ft.normal.size() == 3 * n && ft.id.size() == n &&
+           albedo && (ft.albedo.empty() || ft.albedo.size() == 3 * n);
+}
+
+void Compositor::denoise(Denoiser& denoiser, const ComposeFrame& f, size_t v, const CameraDesc& camera, Image& image,
+                         std::span<const std::vector<float>> linear) {
+    const FeatureImages& ft = f.features[v];
+    const DenoiseInput in{image.width, image.height, linear[v], f.depth[v], ft.albedo, ft.normal, ft.id, camera, f.stateSeq};
+    const std::span<const float> out = denoiser.denoise(in, f.denoise);
+    linearToSrgb8(out.data(), out.size(), image.rgb.data());
+    ++denoisedFrames_;
+}
+
 void Compositor::accumulate(const ComposeFrame& f, std::vector<Image>& images, std::span<const std::vector<float>> linear) {
     auto add = [&](Accumulator& sum, size_t v) {
         if (f.linear && v < linear.size()) sum.addLinear(linear[v].data(), images[v].width, images[v].height);
         else sum.add(images[v]);
         images[v] = sum.resolve();
     };
+    if (f.views.empty() && f.camera && denoises(f, 0, images[0], linear)) {
+        denoise(progressiveDenoiser_, f, 0, *f.camera, images[0], linear);
+        progressiveDenoising_ = true;
+        progressiveSeq_ = UINT32_MAX;  // accumulating again starts afresh
+        ++accumulatedFrames_;
+        ++linearFrames_;
+        return;
+    }
+    if (progressiveDenoising_) {
+        progressiveDenoiser_.reset();
+        progressiveDenoising_ = false;
+    }
     if (f.views.empty()) {
         if (f.stateSeq != progressiveSeq_) {
             progressive_.reset();
@@ -58,6 +92,18 @@ void Compositor::accumulate(const ComposeFrame& f, std::vector<Image>& images, s
         for (size_t v = 0; v < images.size() && v < f.views.size(); ++v) {
             ViewSum& s = viewSums_[v];
             const CameraDesc& camera = f.views[v].camera;
+            if (denoises(f, v, images[v], linear)) {
+                // Denoised: the history goes on across camera moves (re-projected); the
+                // denoiser itself restarts on a new state.
+                denoise(s.denoiser, f, v, camera, images[v], linear);
+                s.denoising = true;
+                s.camera.reset();  // accumulating again starts afresh
+                continue;
+            }
+            if (s.denoising) {
+                s.denoiser.reset();
+                s.denoising = false;
+            }
             if (s.stateSeq != f.stateSeq || !s.camera || !(*s.camera == camera)) {
                 s.sum.reset();
                 s.stateSeq = f.stateSeq;
@@ -93,7 +139,7 @@ EyeImages Compositor::compose(const ComposeFrame& f, std::vector<Image> images, 
 // source; the newest before them, the older one, when it had as many views.
 void Compositor::keepWarpSource(const ComposeFrame& f, const std::vector<Image>& images) {
     const size_t n = std::min({images.size(), f.views.size(), f.eyes.size(), f.depth.size()});
-    if (n == 0 || f.depth.size() != images.size()) return;
+    if (!f.keepForWarp || n == 0 || f.depth.size() != images.size()) return;
     std::swap(warpNewest_, warpOlder_);
     if (warpOlder_.size() != n) warpOlder_.clear();  // another set of views: no older source for them
     warpNewest_.resize(n);

@@ -212,6 +212,25 @@ struct SectionPlane {
     bool caps = true;                 // false: the cut stays open (insides are seen)
     bool operator==(const SectionPlane&) const = default;
 };
+// The denoiser of stochastic frames (issue 28; the filter is rtwall/denoise.h in engine/frame,
+// run on the display side after assembly): what the scene file's [denoise] table and
+// `--denoise` set. Off: frames of a still view are averaged as ever (Accumulator), bit for bit.
+struct DenoiseSettings {
+    enum class Mode { Off, Temporal, Svgf };
+    // Temporal: each pixel's history re-projected from the frames before and averaged with the
+    // new frame. Svgf: that, then an edge-avoiding a-trous wavelet filter of the illumination.
+    Mode mode = Mode::Off;
+    int levels = 5;                 // a-trous iterations (svgf), 1..10: the filter reaches 2^levels pixels
+    int history = 32;               // the most frames a moving view's pixel averages (alpha >= 1/history); still views: all
+    float sigmaDepth = 1.0f;        // edge stops: depth (times the local depth gradient), ...
+    float sigmaNormal = 128.0f;     // ... normal (the cosine's exponent) ...
+    float sigmaLuminance = 4.0f;    // ... and luminance (times the noise's standard deviation)
+    bool operator==(const DenoiseSettings&) const = default;
+};
+// "off", "temporal", "svgf"; anything else is an InputError naming them.
+DenoiseSettings::Mode denoiseModeFromName(const std::string& name);
+const char* denoiseModeName(DenoiseSettings::Mode mode);
+
 inline constexpr int kMaxSections = 6;
 using SectionPlanes = std::array<SectionPlane, kMaxSections>;
 
@@ -230,6 +249,7 @@ struct SceneDesc {
     std::vector<Light> lights;
     std::vector<CameraDesc> cameras;
     RenderSettings settings;
+    DenoiseSettings denoise;  // the display side's: never sent to a render client
     SectionPlanes sections;  // slot i is plane i; disabled slots cut nothing
     // Contents of texture image and volume files by the path a material names: a path found
     // here is decoded from these bytes, not opened (a render client gets them from the master).
@@ -419,6 +439,28 @@ struct DepthView {
     size_t stride = 0;      // floats per row
 };
 
+// Feature buffers with a tile (issue 28): what an edge-avoiding denoiser needs of each pixel's
+// first hit, the mean over the pixel's sub-pixel samples (each weighted as its colour is):
+// - albedo: the reflectance the hit's material shows there (colour or texture times vertex
+//   colour and highlight tint), linear RGB; a miss gives (1, 1, 1), so that the background's
+//   "illumination" is its colour;
+// - normal: the shading normal before bump mapping (interpolated vertex normals, else the
+//   geometric one), world space, facing the ray: the geometry whose edges the filter keeps, not
+//   a plaster's bumps, which vary from pixel to pixel like a texture; a miss gives (0, 0, 0);
+// - id: of the pixel's first sample, the hit instance + 1 (0: a miss; a section plane's cap:
+//   kCapFeatureId - plane).
+// Depth goes with DepthView. Pixel (rect.x0 + i, rect.y0 + j) goes to albedo/normal
+// [(j*stride + i)*3 ...] and id[j*stride + i]. Null pointers: that feature is not computed; all
+// null, the colour path is exactly as without.
+struct FeatureView {
+    float* albedo = nullptr;
+    float* normal = nullptr;
+    uint32_t* id = nullptr;
+    size_t stride = 0;  // pixels per row
+    bool any() const { return albedo || normal || id; }
+};
+inline constexpr uint32_t kCapFeatureId = 0xFFFFFFFFu;
+
 // Per-tile statistics for benchmarks and false-colour views.
 struct TileStats {
     uint64_t rays = 0;        // closest-hit rays traced
@@ -442,6 +484,11 @@ TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileR
 TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
                            const RenderSettings& settings, float* out, size_t stride, DepthView depth,
                            const TraceOptions& trace = {});
+// The same with the denoiser's features (FeatureView); the colour and depth are those of the
+// calls without.
+TileStats renderTileLinear(const Scene& scene, const Camera& camera, const TileRect& rect, uint32_t frame,
+                           const RenderSettings& settings, float* out, size_t stride, DepthView depth,
+                           FeatureView features, const TraceOptions& trace = {});
 
 // Everything that decides one tile's pixels, as `rtwall render` can be told it.
 struct TileReplay {
@@ -519,6 +566,15 @@ RenderedFrame renderFrameWithDepth(const Scene& scene, const Camera& camera, con
 // renderTileLinear writes them: what Accumulator::addLinear averages.
 std::vector<float> renderFrameLinear(const Scene& scene, const Camera& camera, const RenderSettings& settings,
                                      uint32_t frame = 0, TileStats* stats = nullptr, const TraceOptions& trace = {});
+
+// A whole frame in linear RGB with its depth and the denoiser's features (FeatureView), each
+// width x height (times 3 for colour, albedo and normal), rows top to bottom.
+struct FeatureFrame {
+    std::vector<float> linear, depth, albedo, normal;
+    std::vector<uint32_t> id;
+};
+FeatureFrame renderFrameFeatures(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+                                 uint32_t frame = 0, TileStats* stats = nullptr, const TraceOptions& trace = {});
 
 // Picking: the instance that the primary ray through image position (px, py) (pixels from the
 // top-left corner) hits first, where, and how far along the ray (in units of the ray

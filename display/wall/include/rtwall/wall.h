@@ -83,6 +83,7 @@ struct RunConfig {
     // Given on the command line only.
     bool headless = false;                // never open windows
     std::optional<bool> reproject;        // --reproject on|off: overrides the wall config's `reproject`
+    std::optional<DenoiseSettings::Mode> denoise;  // --denoise / [run] denoise: over the scene's [denoise] mode
     bool watch = false;                   // reload the scene file when it changes on disk
     double targetFps = 0;                 // > 0: hold this frame rate with the operating point
     std::filesystem::path front;          // the measured front for targetFps (empty: calibrate)

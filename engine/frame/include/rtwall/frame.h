@@ -6,7 +6,9 @@
 // No sockets and no OpenGL: the library sits below cluster and display.
 #pragma once
 
+#include <rtwall/denoise.h>
 #include <rtwall/engine.h>
+#include <rtwall/feature_codec.h>
 #include <rtwall/reproject.h>
 
 #include <atomic>
@@ -67,10 +69,20 @@ struct FrameHolding {
     // along the primary ray, kBackgroundDepth for background), NaN wherever no tile of this frame
     // wrote (outside a view's regions, tiles not routed here): a hole to the warp.
     bool depth = false;
+    // Tiles come with the denoiser's features (issue 28; FeatureBits, rtwall/feature_codec.h):
+    // each view has the buffers of those bits (FeatureImages), what no tile wrote zero.
+    uint8_t features = 0;
     // Routing: `routes[t]` is the node mask of tile t and this assembler is bit `node`; it holds
     // the frame when the tiles routed to it are in (a display node). Null: every tile.
     const std::vector<uint64_t>* routes = nullptr;
     unsigned node = 0;
+};
+
+// A view's features (FeatureView's, width x height pixels): albedo and normal 3 floats a pixel,
+// id one; the buffers of features a frame does not carry are empty.
+struct FeatureImages {
+    std::vector<float> albedo, normal;
+    std::vector<uint32_t> id;
 };
 
 // Gathers a frame's tiles into one image per view, each tile decoded straight into its place at
@@ -124,14 +136,28 @@ public:
     float* depthAt(size_t view, int x, int y) {
         return depthImages_[view].data() + size_t(y) * size_t(images_[view].width) + size_t(x);
     }
+    uint8_t features() const { return features_; }
+    // One per view of a frame with features; swapped away like the depth.
+    std::vector<FeatureImages>& featureImages() { return featureImages_; }
+    const std::vector<FeatureImages>& featureImages() const { return featureImages_; }
+    // Where a tile at (x, y) of `view` decodes its features: the view's buffers there (null for
+    // features the frame does not carry), rows of the view's width.
+    FeatureView featuresAt(size_t view, int x, int y) {
+        FeatureImages& f = featureImages_[view];
+        const size_t w = size_t(images_[view].width), i = size_t(y) * w + size_t(x);
+        return {f.albedo.empty() ? nullptr : f.albedo.data() + 3 * i, f.normal.empty() ? nullptr : f.normal.data() + 3 * i,
+                f.id.empty() ? nullptr : f.id.data() + i, w};
+    }
 
 private:
     uint32_t frame_ = 0;
     std::vector<Image> images_ = std::vector<Image>(1);  // one per view
     std::vector<std::vector<float>> linearImages_;       // one per view of a linear frame
     std::vector<std::vector<float>> depthImages_;        // one per view of a frame with depth
+    std::vector<FeatureImages> featureImages_;           // one per view of a frame with features
     bool linear_ = false;
     bool depth_ = false;
+    uint8_t features_ = 0;
     std::vector<TileRect> tiles_;
     std::vector<uint32_t> view_;  // each tile's view (empty: all of view 0)
     // 0 missing, 1 being written, 2 done, 3 not routed here
@@ -160,6 +186,16 @@ struct ComposeFrame {
     // Per view, the depth its tiles came with (width x height, distance along the primary ray):
     // given, the frame's views become the re-projection's newest source (reproject()).
     std::span<const std::vector<float>> depth{};
+    // Denoising (issue 28): a stochastic linear frame whose views came with depth and `features`
+    // is denoised view by view (rtwall/denoise.h) instead of accumulated, when denoise.mode is
+    // not Off: history re-projected across camera moves, filtered (svgf). Without depth or
+    // features (or Off) the frame accumulates as ever.
+    DenoiseSettings denoise{};
+    std::span<const FeatureImages> features{};
+    std::optional<CameraDesc> camera;  // a frame without views: its camera (the denoiser needs one)
+    // The views with depth become the re-projection's newest source (false: depth for the
+    // denoiser only).
+    bool keepForWarp = true;
     // Per view, the part of it this compositor holds and shows (a display node: the bounding
     // box of its routed tiles; empty where it holds none): reproject() warps only that
     // (WarpOptions::region). A view beyond the span: all of it.
@@ -207,6 +243,9 @@ public:
     const WarpedView& warped(size_t view) const { return warpers_.at(view).result(); }  // of the last reproject()
     size_t viewRestarts() const { return viewRestarts_; }       // a view's running mean restarted
     size_t progressiveRestarts() const { return progressiveRestarts_; }  // the mono running mean restarted
+    int denoisedFrames() const { return denoisedFrames_; }        // stochastic frames denoised instead
+    // The denoiser of view v (its last frame's stats), once a frame was denoised.
+    const Denoiser* denoiser(size_t view) const { return view < viewSums_.size() ? &viewSums_[view].denoiser : nullptr; }
     int accumulatedFrames() const { return accumulatedFrames_; }  // stochastic frames summed
     int linearFrames() const { return linearFrames_; }            // of them, as linear tiles
 
@@ -215,12 +254,16 @@ private:
         Accumulator sum;
         uint32_t stateSeq = UINT32_MAX;
         std::optional<CameraDesc> camera;
+        Denoiser denoiser;  // its history: frames of any camera, re-projected
+        bool denoising = false;
     };
     Accumulator progressive_;  // frames without views
+    Denoiser progressiveDenoiser_;
+    bool progressiveDenoising_ = false;
     uint32_t progressiveSeq_ = UINT32_MAX;
     std::vector<ViewSum> viewSums_;
     size_t viewRestarts_ = 0, progressiveRestarts_ = 0;
-    int accumulatedFrames_ = 0, linearFrames_ = 0;
+    int accumulatedFrames_ = 0, linearFrames_ = 0, denoisedFrames_ = 0;
 
     std::vector<WarpSlot> warpNewest_, warpOlder_;  // the re-projection's sources; older: the frame before
     std::vector<FrameView> warpViews_;
@@ -230,6 +273,9 @@ private:
     Image debugView_;
 
     void accumulate(const ComposeFrame& frame, std::vector<Image>& images, std::span<const std::vector<float>> linear);
+    static bool denoises(const ComposeFrame& frame, size_t view, const Image& image, std::span<const std::vector<float>> linear);
+    void denoise(Denoiser& denoiser, const ComposeFrame& frame, size_t view, const CameraDesc& camera, Image& image,
+                 std::span<const std::vector<float>> linear);
     void keepWarpSource(const ComposeFrame& frame, const std::vector<Image>& images);
 };
 

@@ -1,0 +1,119 @@
+// rtwall denoising of stochastic frames (issue 28): temporal reuse and an edge-avoiding filter,
+// run on the display side after assembly (a filter must see across tile borders, and the tiles
+// of one screen come from different clients). No sockets, no OpenGL.
+//
+// Per view and frame (DenoiseSettings in rtwall/engine.h says which steps run):
+// 1. Demodulate: the frame's linear colour divided by its first-hit albedo (FeatureView) is the
+//    illumination, which is smooth where textures are not.
+// 2. Temporal reuse: each pixel's point (its depth along its ray) is projected into the previous
+//    frame's camera (ImageProjection, rtwall/warp.h: the geometry of the display-rate warp) and
+//    its history read there bilinearly, each tap kept only where the previous frame saw the same
+//    object, a normal within 25 degrees and a depth within 2 % (+ a pixel's footprint). The new
+//    frame joins the history with weight 1/n, n the history's length plus one, at most
+//    `history` while the camera moves: a moving view averages its last frames, a still view
+//    (the same camera and scene state as the frame before) averages every frame since it
+//    stopped, exactly as the Accumulator does, so it converges to the same unbiased mean.
+//    Luminance moments (first and second) are averaged alike: the noise's variance per frame.
+// 3. Svgf: `levels` passes of the a-trous wavelet (5x5 B3 spline, step 2^i) over the
+//    illumination, each neighbour weighted by edge stops on depth (relative to the local depth
+//    gradient), normal (cosine^sigma_normal), object id (equal or nothing) and luminance
+//    (relative to the standard deviation of the noise of the pixel's mean: the variance of the
+//    frames divided by their number, itself filtered along): a still view's noise falls with its
+//    history, so the filter fades as the mean converges.
+// 4. Remodulate by the albedo.
+// A pixel whose sample is not finite (NaN, infinity) keeps its history and is no neighbour to
+// anyone in that frame; one with neither takes its valid neighbours' filtered value (or black).
+// Background pixels (no hit) show the frame as it is. Deterministic: the same frames give the
+// same bytes on any number of threads.
+#pragma once
+
+#include <rtwall/engine.h>
+#include <rtwall/feature_codec.h>
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace rtwall {
+
+// The features a mode reads (FeatureBits): temporal the normal and the id (with depth), svgf
+// also the albedo; off none. What a cluster sends with each tile.
+inline uint8_t featureBitsFor(DenoiseSettings::Mode mode) {
+    return mode == DenoiseSettings::Mode::Svgf       ? uint8_t(kFeatureAll)
+           : mode == DenoiseSettings::Mode::Temporal ? uint8_t(kFeatureNormal | kFeatureId)
+                                                     : uint8_t(0);
+}
+
+// One machine's frame as a cluster delivers it, in place: the colour at half precision (linear
+// tiles), the depth through its 16-bit code, the features of `bits` through theirs (the rest
+// emptied). The denoiser then filters the very values it would filter on the wall.
+void quantiseAsSent(FeatureFrame& frame, uint8_t bits);
+
+// One view's frame as the denoiser reads it: width x height pixels, rows top to bottom.
+struct DenoiseInput {
+    int width = 0, height = 0;
+    std::span<const float> linear;    // 3 a pixel: this frame's own colour (renderTileLinear)
+    std::span<const float> depth;     // 1 a pixel: DepthView's (kBackgroundDepth: background)
+    std::span<const float> albedo;    // 3 a pixel: FeatureView's (temporal: may be empty, white)
+    std::span<const float> normal;    // 3 a pixel
+    std::span<const uint32_t> id;     // 1 a pixel
+    CameraDesc camera;                // the camera the frame was rendered with
+    uint32_t stateSeq = 0;            // the scene's state: any change discards every history
+};
+
+// What the last frame did.
+struct DenoiseStats {
+    bool still = false;     // same camera and state as the frame before: plain accumulation
+    bool restarted = false; // no history was usable (first frame, camera cut, new state, new size)
+    size_t reused = 0;      // pixels that kept history
+    size_t rejected = 0;    // surface pixels whose history was refused (disocclusion, another object)
+    size_t invalid = 0;     // samples that were not finite
+    size_t clamped = 0;     // fireflies scaled down
+    int maxHistory = 0;     // the longest history of any pixel
+};
+
+class Denoiser {
+public:
+    // One frame of the view: returns its denoised linear colour (3 floats a pixel), kept until
+    // the next call. Throws std::invalid_argument when a span's size does not match the size.
+    // `threads`: 0 one per hardware thread; the bytes are the same for any number. Nothing is
+    // allocated after the first frame of a size but the threads.
+    std::span<const float> denoise(const DenoiseInput& in, const DenoiseSettings& settings, int threads = 0);
+    // Forgets the history: the next frame starts anew (also done by a change of camera cut,
+    // size or state).
+    void reset() { hasPrevious_ = false; }
+    const DenoiseStats& stats() const { return stats_; }
+    // A camera whose view shares so little with the previous one that history is useless (a
+    // cut: another named camera, a jump): the caller says so with reset(); moves are re-projected.
+
+private:
+    int width_ = 0, height_ = 0;
+    bool hasPrevious_ = false;
+    CameraDesc previousCamera_;
+    uint32_t previousState_ = 0;
+    // History (this frame's written over the previous frame's, then swapped).
+    std::vector<float> colour_, colourPrev_;      // 3 a pixel: temporally averaged colour
+    std::vector<float> albedo_, albedoPrev_;      // 3 a pixel: temporally averaged albedo
+    std::vector<float> moments_, momentsPrev_;    // 2 a pixel: mean luminance and mean squared luminance
+    std::vector<float> length_, lengthPrev_;      // frames in the history (0: none)
+    std::vector<float> depthPrev_, normalPrev_;   // the previous frame's features
+    std::vector<uint32_t> idPrev_;
+    // Filter buffers.
+    std::vector<float> variance_, varianceB_;     // of the mean's luminance
+    std::vector<float> filtered_, filteredB_;     // the filter's illumination: planes of red, green, blue
+    std::vector<float> unit_;                     // this frame's unit normals: planes of x, y, z
+    std::vector<uint32_t> key_, centre_;          // the filter's ids: as a neighbour (none: no value), as a centre
+    std::vector<float> rowScratch_;               // per thread: 9 rows of sums and scales
+    std::vector<float> gradient_;                 // depth change per pixel step
+    std::vector<float> zf_;                       // the filter's depth: finite everywhere (0: no surface)
+    std::vector<float> gx_, gy_;                  // signed depth change per pixel step along x and y
+    std::vector<uint8_t> valid_;                  // 1: a value (this frame's or history)
+    std::vector<uint8_t> known_;                  // valid, or given a value by the filter
+    std::vector<float> out_;
+    std::vector<DenoiseStats> partStats_;
+    DenoiseStats stats_;
+
+    void resize(int w, int h);
+};
+
+}  // namespace rtwall

@@ -1,0 +1,272 @@
+// rtwall bench denoise (issue 28): what the denoiser buys. A camera orbits its scene's first
+// camera's look-at point; each frame is rendered with GI (gi_spp samples a pixel), its features
+// and depth (renderFrameFeatures), denoised (rtwall/denoise.h: off, temporal, svgf) and scored
+// against a converged reference of that very view (reference_spp samples, rendered once per
+// scored frame and shared by every setting): PSNR and mean FLIP of the 8-bit images, median and
+// the worst 5 %. Then the camera stands still: how long until the shown image reaches 40 dB
+// (`off` accumulates, as the wall does), and its flicker, the mean absolute change of the shown
+// luminance from frame to frame over its first frames, against the reference's own (two
+// independent converged renders). fps: one over the median of render + denoise per frame on
+// this machine's threads (no cluster); denoise_ms the filter alone.
+#include "bench.h"
+#include "bench_util.h"
+#include "generators.h"
+
+#include <rtwall/denoise.h>
+#include <rtwall/engine.h>
+#include <rtwall/tune.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+namespace rtwall::bench {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// The worst 5 %: the value 95 % of the frames are at least as good as.
+double worst5(std::vector<double> v, bool higherIsBetter) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    const size_t k = size_t(std::floor(0.05 * double(v.size() - 1) + 0.5));
+    return higherIsBetter ? v[k] : v[v.size() - 1 - k];
+}
+
+double finiteDb(double db) { return std::isfinite(db) ? db : kIdenticalPsnr; }
+
+Image toImage(std::span<const float> linear, int w, int h) {
+    Image img;
+    img.width = w;
+    img.height = h;
+    img.rgb.resize(linear.size());
+    linearToSrgb8(linear.data(), linear.size(), img.rgb.data());
+    return img;
+}
+
+// Mean absolute change of the luminance (0..1 of the 8-bit codes) between two images.
+double luminanceChange(const Image& a, const Image& b) {
+    double sum = 0;
+    const size_t n = a.rgb.size() / 3;
+    for (size_t i = 0; i < n; ++i) {
+        auto lum = [](const uint8_t* p) { return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]; };
+        sum += std::fabs(lum(&a.rgb[3 * i]) - lum(&b.rgb[3 * i]));
+    }
+    return n ? sum / (255.0 * double(n)) : 0.0;
+}
+
+struct BenchSceneDesc {
+    SceneDesc desc;
+    CameraDesc camera;
+};
+
+BenchSceneDesc loadBenchScene(const std::string& name, const DenoiseOptions& o) {
+    BenchSceneDesc s;
+    const std::filesystem::path dir = std::filesystem::path(o.dir) / name;
+    if (name == "office") {
+        s.desc = loadSceneFile(gen::writeShadingDemo("office", dir));
+    } else if (name == "demo") {
+        s.desc = loadSceneFile(o.demo);
+    } else if (name == "sunflowers") {
+        gen::GenOptions g;
+        g.out = dir;
+        g.instances = 400;
+        g.trees = 2;
+        g.cache = false;
+        gen::genSunflowers(g);
+        s.desc = loadSceneFile(dir / "scene.toml");
+    } else {
+        throw InputError("bench denoise: unknown scene '" + name + "' (office, demo, sunflowers)");
+    }
+    if (s.desc.cameras.empty()) throw InputError("bench denoise: scene '" + name + "' has no camera");
+    s.camera = s.desc.cameras.front();
+    return s;
+}
+
+// The orbiting camera of frame k: turned about the vertical through the look-at point.
+CameraDesc orbit(const CameraDesc& c, double degrees) {
+    CameraDesc out = c;
+    const double a = degrees * 3.14159265358979 / 180.0;
+    const double dx = double(c.position.x) - c.lookAt.x, dz = double(c.position.z) - c.lookAt.z;
+    out.position.x = float(double(c.lookAt.x) + dx * std::cos(a) - dz * std::sin(a));
+    out.position.z = float(double(c.lookAt.z) + dx * std::sin(a) + dz * std::cos(a));
+    return out;
+}
+
+struct Setting {
+    DenoiseSettings::Mode mode;
+    int spp;
+};
+
+}  // namespace
+
+toml::table denoise(const DenoiseOptions& o) {
+    toml::table out{{"benchmark", "denoise"},
+                    {"frames", o.frames},
+                    {"score_every", o.scoreEvery},
+                    {"degrees_per_frame", o.degreesPerFrame},
+                    {"reference_spp", o.referenceSpp},
+                    {"still_seconds", o.stillSeconds},
+                    {"threads", o.threads},
+                    {"flip", "mean LDR-FLIP, 67 pixels per degree"},
+                    {"p95", "the value 95 % of scored frames are at least as good as (PSNR: 5th percentile)"},
+                    {"flicker", "mean absolute change of the shown luminance (0..1) from frame to frame on a still camera "
+                                "over its first flicker_frames frames; reference_flicker: between two converged references"},
+                    {"fps", "one over the median of render + denoise per frame, this machine, no cluster"}};
+    std::vector<DenoiseSettings::Mode> modes;
+    for (const std::string& m : o.modes) modes.push_back(denoiseModeFromName(m));
+    toml::array rows;
+    for (const std::string& name : o.scenes) {
+        BenchSceneDesc bs = loadBenchScene(name, o);
+        for (const std::string& size : o.sizes) {
+            int w = 0, h = 0;
+            if (std::sscanf(size.c_str(), "%dx%d", &w, &h) != 2 || w < 8 || h < 8 || w > 4096 || h > 4096)
+                throw InputError("bench denoise: size '" + size + "' is not WIDTHxHEIGHT (8..4096)");
+            SceneDesc d = bs.desc;
+            d.settings.width = w;
+            d.settings.height = h;
+            d.settings.gi = true;
+            d.settings.threads = o.threads;
+            const Scene scene(d);
+            RenderSettings ref = d.settings;
+            ref.samples = o.referenceSpp;
+            ref.pruneThreshold = std::min(ref.pruneThreshold, 0.0005f);
+            // The references of the scored frames of the path, and of the still view (twice).
+            std::vector<Image> refs(size_t(o.frames));
+            auto scored = [&](int k) { return k % o.scoreEvery == o.scoreEvery - 1; };
+            const auto tRef = Clock::now();
+            for (int k = 0; k < o.frames; ++k)
+                if (scored(k)) {
+                    const Camera cam(orbit(bs.camera, o.degreesPerFrame * k), w, h);
+                    refs[size_t(k)] = toImage(renderFrameLinear(scene, cam, ref, uint32_t(1'000'000 + k)), w, h);
+                }
+            const Camera still(bs.camera, w, h);
+            const Image stillRef = toImage(renderFrameLinear(scene, still, ref, 2'000'000), w, h);
+            const Image stillRef2 = toImage(renderFrameLinear(scene, still, ref, 2'000'001), w, h);
+            const double referenceFlicker = luminanceChange(stillRef, stillRef2);
+            const double referenceDb = finiteDb(psnrDb(stillRef, stillRef2));
+            if (o.text)
+                std::fprintf(o.text, "%s %dx%d: references in %.1f s (%d samples; two of the still view differ by %.1f dB, "
+                                     "flicker %.5f)\n",
+                             name.c_str(), w, h, secondsSince(tRef), o.referenceSpp, referenceDb, referenceFlicker);
+            for (int spp : o.giSpp)
+                for (DenoiseSettings::Mode mode : modes) {
+                    DenoiseSettings ds = d.denoise;
+                    ds.mode = mode;
+                    if (o.levels) ds.levels = o.levels;
+                    if (o.history) ds.history = o.history;
+                    if (o.sigmaLuminance > 0) ds.sigmaLuminance = float(o.sigmaLuminance);
+                    if (o.sigmaDepth > 0) ds.sigmaDepth = float(o.sigmaDepth);
+                    if (o.sigmaNormal > 0) ds.sigmaNormal = float(o.sigmaNormal);
+                    RenderSettings rs = d.settings;
+                    rs.samples = spp;
+                    // Moving.
+                    Denoiser dn;
+                    std::vector<double> frameS, denoiseS, db, flip;
+                    for (int k = 0; k < o.frames; ++k) {
+                        const CameraDesc cd = orbit(bs.camera, o.degreesPerFrame * k);
+                        const Camera cam(cd, w, h);
+                        const auto t0 = Clock::now();
+                        const FeatureFrame f = renderFrameFeatures(scene, cam, rs, uint32_t(k + 1));
+                        const double tr = secondsSince(t0);
+                        std::span<const float> shown = f.linear;
+                        const auto t1 = Clock::now();
+                        if (mode != DenoiseSettings::Mode::Off)
+                            shown = dn.denoise({w, h, f.linear, f.depth, f.albedo, f.normal, f.id, cd, 0}, ds, o.threads);
+                        const double td = secondsSince(t1);
+                        frameS.push_back(tr + td);
+                        denoiseS.push_back(td);
+                        if (!scored(k)) continue;
+                        const Image img = toImage(shown, w, h);
+                        db.push_back(finiteDb(psnrDb(img, refs[size_t(k)])));
+                        flip.push_back(flipMean(img, refs[size_t(k)]));
+                        if (!o.images.empty() && k == o.frames - 1 - (o.frames % o.scoreEvery)) {
+                            std::filesystem::create_directories(o.images);
+                            writePng(img, std::filesystem::path(o.images) /
+                                              ("denoise_" + name + "_" + std::to_string(w) + "_" + denoiseModeName(mode) + "_" +
+                                               std::to_string(spp) + "spp.png"));
+                            writePng(refs[size_t(k)], std::filesystem::path(o.images) /
+                                                          ("denoise_" + name + "_" + std::to_string(w) + "_reference.png"));
+                        }
+                    }
+                    // Still: accumulate (off) or denoise from a cold start until 40 dB or the time is up.
+                    Denoiser sd;
+                    Accumulator acc;
+                    double elapsed = 0, to40 = -1, stillDb = 0, flicker = 0;
+                    Image previous;
+                    int stillFrames = 0;
+                    for (int k = 0; elapsed < o.stillSeconds || k <= o.flickerFrames; ++k) {
+                        const auto t0 = Clock::now();
+                        const FeatureFrame f = renderFrameFeatures(scene, still, rs, uint32_t(5000 + k));
+                        Image img;
+                        if (mode == DenoiseSettings::Mode::Off) {
+                            acc.addLinear(f.linear.data(), w, h);
+                            img = acc.resolve();
+                        } else {
+                            img = toImage(sd.denoise({w, h, f.linear, f.depth, f.albedo, f.normal, f.id, bs.camera, 0}, ds,
+                                                     o.threads),
+                                          w, h);
+                        }
+                        elapsed += secondsSince(t0);
+                        ++stillFrames;
+                        stillDb = finiteDb(psnrDb(img, stillRef));
+                        if (to40 < 0 && stillDb >= 40.0) to40 = elapsed;
+                        if (k > 0 && k <= o.flickerFrames) flicker += luminanceChange(img, previous) / o.flickerFrames;
+                        previous = std::move(img);
+                        if (to40 >= 0 && k >= o.flickerFrames) break;
+                    }
+                    const double fps = 1.0 / median(frameS);
+                    toml::table common{{"scene", name},
+                                       {"levels", ds.levels},
+                                       {"history", ds.history},
+                                       {"sigma_luminance", ds.sigmaLuminance},
+                                       {"width", w},
+                                       {"height", h},
+                                       {"denoise", denoiseModeName(mode)},
+                                       {"gi_spp", spp},
+                                       {"fps", fps},
+                                       {"render_ms", 1e3 * (median(frameS) - median(denoiseS))},
+                                       {"denoise_ms", 1e3 * median(denoiseS)},
+                                       {"flicker", flicker},
+                                       {"reference_flicker", referenceFlicker},
+                                       {"flicker_ratio", referenceFlicker > 0 ? flicker / referenceFlicker : 0.0}};
+                    toml::table moving = common;
+                    moving.insert("still", false);
+                    moving.insert("psnr_db", median(db));
+                    moving.insert("psnr_db_p95", worst5(db, true));
+                    moving.insert("flip", median(flip));
+                    moving.insert("flip_p95", worst5(flip, false));
+                    moving.insert("scored_frames", int64_t(db.size()));
+                    toml::table st = common;
+                    st.insert("still", true);
+                    st.insert("seconds_to_40db", to40);
+                    st.insert("psnr_db", stillDb);
+                    st.insert("flip", flipMean(previous, stillRef));
+                    st.insert("still_frames", stillFrames);
+                    st.insert("still_seconds", elapsed);
+                    if (o.text) {
+                        std::fprintf(o.text,
+                                     "%-10s %4dx%-4d %-8s %2d spp: %6.1f fps (denoise %5.1f ms) moving %5.1f dB (worst 5%% %5.1f) "
+                                     "FLIP %.3f; still: 40 dB after %s, %5.1f dB after %.1f s, flicker %.5f (%.1fx the reference's)\n",
+                                     name.c_str(), w, h, denoiseModeName(mode), spp, fps, 1e3 * median(denoiseS), median(db),
+                                     worst5(db, true), median(flip),
+                                     to40 < 0 ? "never" : (std::to_string(to40).substr(0, 5) + " s").c_str(), stillDb, elapsed,
+                                     flicker, referenceFlicker > 0 ? flicker / referenceFlicker : 0.0);
+                        std::fflush(o.text);
+                    }
+                    rows.push_back(std::move(moving));
+                    rows.push_back(std::move(st));
+                }
+        }
+    }
+    out.insert("rows", rows);
+    return out;
+}
+
+}  // namespace rtwall::bench
