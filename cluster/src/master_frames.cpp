@@ -79,6 +79,7 @@ void Master::Impl::finishFrameIfDone() {
     FrameReport r;
     r.frame = currentFrame;
     r.stateSeq = shownSeq;
+    r.sceneSeq = frameSeq;
     r.seconds = seconds;
     r.bytes = frameBytes;
     const SchedulerStats& st = scheduler.stats();

@@ -182,7 +182,10 @@ struct DenoiseOptions : Common {
     int frames = 24;                 // frames of the orbit
     int scoreEvery = 4;              // every this many-th frame is scored
     double degreesPerFrame = 0.5;    // the orbit's speed
-    int referenceSpp = 512;          // GI samples of a reference render
+    int referenceSpp = 512;          // GI samples of a reference render of the moving path
+    int stillReferenceSpp = 2048;    // of the still view's references (40 dB needs a reference far better)
+    std::string camera;              // the scene's camera the orbit starts from (empty: its first)
+    std::string tag;                 // the images' names: denoise_[TAG_]SCENE_WIDTH_MODE_SPPspp.png
     double stillSeconds = 4;         // the still camera refines at most this long
     int flickerFrames = 8;
     int threads = 0;                 // render and denoise threads (0: one per hardware thread)

@@ -86,6 +86,11 @@ BenchSceneDesc loadBenchScene(const std::string& name, const DenoiseOptions& o) 
     }
     if (s.desc.cameras.empty()) throw InputError("bench denoise: scene '" + name + "' has no camera");
     s.camera = s.desc.cameras.front();
+    if (!o.camera.empty()) {
+        const CameraDesc* c = s.desc.findCamera(o.camera);
+        if (!c) throw InputError("bench denoise: scene '" + name + "' has no camera '" + o.camera + "'");
+        s.camera = *c;
+    }
     return s;
 }
 
@@ -112,6 +117,7 @@ toml::table denoise(const DenoiseOptions& o) {
                     {"score_every", o.scoreEvery},
                     {"degrees_per_frame", o.degreesPerFrame},
                     {"reference_spp", o.referenceSpp},
+                    {"still_reference_spp", o.stillReferenceSpp},
                     {"still_seconds", o.stillSeconds},
                     {"threads", o.threads},
                     {"flip", "mean LDR-FLIP, 67 pixels per degree"},
@@ -121,7 +127,7 @@ toml::table denoise(const DenoiseOptions& o) {
                     {"fps", "one over the median of render + denoise per frame, this machine, no cluster"}};
     std::vector<DenoiseSettings::Mode> modes;
     for (const std::string& m : o.modes) modes.push_back(denoiseModeFromName(m));
-    toml::array rows;
+    toml::array rows, filterCost;
     for (const std::string& name : o.scenes) {
         BenchSceneDesc bs = loadBenchScene(name, o);
         for (const std::string& size : o.sizes) {
@@ -147,14 +153,49 @@ toml::table denoise(const DenoiseOptions& o) {
                     refs[size_t(k)] = toImage(renderFrameLinear(scene, cam, ref, uint32_t(1'000'000 + k)), w, h);
                 }
             const Camera still(bs.camera, w, h);
-            const Image stillRef = toImage(renderFrameLinear(scene, still, ref, 2'000'000), w, h);
-            const Image stillRef2 = toImage(renderFrameLinear(scene, still, ref, 2'000'001), w, h);
+            RenderSettings stillRefSettings = ref;
+            stillRefSettings.samples = o.stillReferenceSpp;
+            const Image stillRef = toImage(renderFrameLinear(scene, still, stillRefSettings, 2'000'000), w, h);
+            const Image stillRef2 = toImage(renderFrameLinear(scene, still, stillRefSettings, 2'000'001), w, h);
             const double referenceFlicker = luminanceChange(stillRef, stillRef2);
             const double referenceDb = finiteDb(psnrDb(stillRef, stillRef2));
             if (o.text)
-                std::fprintf(o.text, "%s %dx%d: references in %.1f s (%d samples; two of the still view differ by %.1f dB, "
+                std::fprintf(o.text, "%s %dx%d: references in %.1f s (%d samples; the still view's two of %d differ by %.1f dB, "
                                      "flicker %.5f)\n",
-                             name.c_str(), w, h, secondsSince(tRef), o.referenceSpp, referenceDb, referenceFlicker);
+                             name.c_str(), w, h, secondsSince(tRef), o.referenceSpp, o.stillReferenceSpp, referenceDb,
+                             referenceFlicker);
+            // The filter alone (svgf, the scene's settings): one frame's inputs denoised again and
+            // again by a camera that moves a hair each time (re-projection and all), on one
+            // thread and on all.
+            {
+                DenoiseSettings ds = d.denoise;
+                ds.mode = DenoiseSettings::Mode::Svgf;
+                if (o.levels) ds.levels = o.levels;
+                RenderSettings one = d.settings;
+                one.samples = 1;
+                const FeatureFrame f = renderFrameFeatures(scene, still, one, 1);
+                toml::table cost{{"scene", name}, {"width", w}, {"height", h}, {"levels", ds.levels}};
+                for (int threads : {1, 0}) {
+                    Denoiser dn;
+                    std::vector<double> ms;
+                    for (int k = 0; k < 12; ++k) {
+                        CameraDesc c = bs.camera;
+                        c.position.x += 1e-4f * float(k);
+                        const auto t0 = Clock::now();
+                        dn.denoise({w, h, f.linear, f.depth, f.albedo, f.normal, f.id, c, 0}, ds, threads);
+                        if (k >= 2) ms.push_back(1e3 * secondsSince(t0));
+                    }
+                    const double mp = double(w) * double(h) * 1e-6;
+                    cost.insert(threads == 1 ? "ms_one_thread" : "ms_all_threads", median(ms));
+                    cost.insert(threads == 1 ? "ms_per_megapixel_thread" : "ms_per_megapixel_all_threads", median(ms) / mp);
+                }
+                if (o.text)
+                    std::fprintf(o.text, "%s %dx%d: the svgf filter alone takes %.1f ms on one thread (%.0f ms per megapixel), "
+                                         "%.1f ms on all\n",
+                                 name.c_str(), w, h, cost["ms_one_thread"].value_or(0.0),
+                                 cost["ms_per_megapixel_thread"].value_or(0.0), cost["ms_all_threads"].value_or(0.0));
+                filterCost.push_back(std::move(cost));
+            }
             for (int spp : o.giSpp)
                 for (DenoiseSettings::Mode mode : modes) {
                     DenoiseSettings ds = d.denoise;
@@ -188,11 +229,10 @@ toml::table denoise(const DenoiseOptions& o) {
                         flip.push_back(flipMean(img, refs[size_t(k)]));
                         if (!o.images.empty() && k == o.frames - 1 - (o.frames % o.scoreEvery)) {
                             std::filesystem::create_directories(o.images);
+                            const std::string stem = "denoise_" + (o.tag.empty() ? "" : o.tag + "_") + name + "_" + std::to_string(w);
                             writePng(img, std::filesystem::path(o.images) /
-                                              ("denoise_" + name + "_" + std::to_string(w) + "_" + denoiseModeName(mode) + "_" +
-                                               std::to_string(spp) + "spp.png"));
-                            writePng(refs[size_t(k)], std::filesystem::path(o.images) /
-                                                          ("denoise_" + name + "_" + std::to_string(w) + "_reference.png"));
+                                              (stem + "_" + denoiseModeName(mode) + "_" + std::to_string(spp) + "spp.png"));
+                            writePng(refs[size_t(k)], std::filesystem::path(o.images) / (stem + "_reference.png"));
                         }
                     }
                     // Still: accumulate (off) or denoise from a cold start until 40 dB or the time is up.
@@ -266,6 +306,7 @@ toml::table denoise(const DenoiseOptions& o) {
         }
     }
     out.insert("rows", rows);
+    out.insert("filter_cost", filterCost);
     return out;
 }
 

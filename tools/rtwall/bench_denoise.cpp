@@ -21,7 +21,11 @@ void addBenchDenoise(CLI::App& bench, Run& run) {
     cmd->add_option("--frames", o.frames, "Frames of the orbit")->check(CLI::Range(1, 100000));
     cmd->add_option("--score-every", o.scoreEvery, "Score every this many-th frame")->check(CLI::Range(1, 100000));
     cmd->add_option("--degrees-per-frame", o.degreesPerFrame, "Orbit speed")->check(CLI::Range(0.0, 90.0));
-    cmd->add_option("--reference-spp", o.referenceSpp, "GI samples per pixel of the references")->check(CLI::Range(1, 65536));
+    cmd->add_option("--reference-spp", o.referenceSpp, "GI samples per pixel of the moving path's references")->check(CLI::Range(1, 65536));
+    cmd->add_option("--still-reference-spp", o.stillReferenceSpp, "GI samples per pixel of the still view's two references")
+        ->check(CLI::Range(1, 65536));
+    cmd->add_option("--tag", o.tag, "A word in the images' names (denoise_TAG_SCENE_...)");
+    cmd->add_option("--camera", o.camera, "The scene camera the orbit starts from (default: the first)");
     cmd->add_option("--still-seconds", o.stillSeconds, "Longest refinement of the still camera")->check(CLI::Range(0.0, 3600.0));
     cmd->add_option("--flicker-frames", o.flickerFrames, "Still frames the flicker is measured over")->check(CLI::Range(1, 10000));
     cmd->add_option("--levels", o.levels, "A-trous levels (over the scene's [denoise])")->check(CLI::Range(1, 10));

@@ -144,6 +144,7 @@ struct ClientReport {
 struct FrameReport {
     uint32_t frame = 0;
     uint32_t stateSeq = 0;          // the scene state and camera the frame shows: changes with every update and setCamera
+    uint32_t sceneSeq = 0;          // the scene state alone: changes with every update, not with a camera move
     double seconds = 0;             // from frame begin to the last tile
     uint64_t bytes = 0;             // encoded tile bytes received
     uint64_t tilesStolen = 0;

@@ -430,6 +430,7 @@ struct WallSession::Impl {
             f.denoise.mode = denoise.mode;  // the cluster sends the features of the mode it began with
             f.features = viewFeatures;
             f.camera = report.camera;
+            f.sceneSeq = report.sceneSeq;  // a camera move re-projects the history, an edit discards it
         }
         EyeImages eyes = compositor.compose(f, std::move(images), linearViews);
         shown.left = std::move(eyes.left);

@@ -53,7 +53,7 @@ bool Compositor::denoises(const ComposeFrame& f, size_t v, const Image& image, s
 void Compositor::denoise(Denoiser& denoiser, const ComposeFrame& f, size_t v, const CameraDesc& camera, Image& image,
                          std::span<const std::vector<float>> linear) {
     const FeatureImages& ft = f.features[v];
-    const DenoiseInput in{image.width, image.height, linear[v], f.depth[v], ft.albedo, ft.normal, ft.id, camera, f.stateSeq};
+    const DenoiseInput in{image.width, image.height, linear[v], f.depth[v], ft.albedo, ft.normal, ft.id, camera, f.sceneSeq};
     const std::span<const float> out = denoiser.denoise(in, f.denoise);
     linearToSrgb8(out.data(), out.size(), image.rgb.data());
     ++denoisedFrames_;

@@ -192,6 +192,7 @@ struct ComposeFrame {
     // features (or Off) the frame accumulates as ever.
     DenoiseSettings denoise{};
     std::span<const FeatureImages> features{};
+    uint32_t sceneSeq = 0;  // the scene state without camera moves: a change discards the denoiser's history
     std::optional<CameraDesc> camera;  // a frame without views: its camera (the denoiser needs one)
     // The views with depth become the re-projection's newest source (false: depth for the
     // denoiser only).
