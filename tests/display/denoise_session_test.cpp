@@ -2,6 +2,7 @@
 // session ask its clients for features and show denoised frames, the same bytes on 1, 2 and 3
 // clients, and a compositor's own denoising of the frames (what one machine does); off shows the
 // frames as ever; a [denoise] edit that needs more features than the clients send says so.
+#include "display_test_util.h"
 #include "image_compare.h"
 #include "scratch.h"
 #include "test_util.h"
@@ -34,12 +35,6 @@ RunConfig config(const std::filesystem::path& dir, const std::filesystem::path& 
     c.cluster.async = false;
     if (lines) c.log = [lines](const std::string& l) { lines->push_back(l); };
     return c;
-}
-
-bool said(const std::vector<std::string>& lines, const std::string& what) {
-    for (const std::string& l : lines)
-        if (l.find(what) != std::string::npos) return true;
-    return false;
 }
 
 // Frames 1..3 of a still camera, then three of a moving one: the wall's frames are one machine's
@@ -81,7 +76,7 @@ TEST(DenoiseSession, TheWallShowsOneMachinesDenoisedFramesOnAnyNumberOfClients) 
     for (int clients : {1, 2, 3}) {
         auto lines = std::make_shared<std::vector<std::string>>();
         WallSession s(config(dir, scene, clients, lines));
-        EXPECT_TRUE(said(*lines, "denoise: svgf (3 levels, history 32)")) << clients << " clients";
+        EXPECT_TRUE(test::logged(*lines, "denoise: svgf (3 levels, history 32)")) << clients << " clients";
         for (int k = 0; k < 6; ++k) {
             if (k >= 3) s.setCamera(cameras[size_t(k)]);
             ASSERT_TRUE(s.step());
@@ -99,7 +94,7 @@ TEST(DenoiseSession, OffAsksForNothingAndAccumulatesAsBefore) {
     RunConfig c = config(dir, roomWith(dir, "mode = \"svgf\""), 2, lines);
     c.denoise = DenoiseSettings::Mode::Off;  // --denoise off over the scene's svgf
     WallSession off(c);
-    EXPECT_FALSE(said(*lines, "denoise:"));
+    EXPECT_FALSE(test::logged(*lines, "denoise:"));
     for (int k = 0; k < 3; ++k) {
         ASSERT_TRUE(plain.step());
         ASSERT_TRUE(off.step());
@@ -122,10 +117,10 @@ TEST(DenoiseSession, AnEditNeedingMoreFeaturesSaysRestart) {
     edited.denoise.mode = DenoiseSettings::Mode::Svgf;
     const SceneEdit e = s.applyEdit(edited);
     EXPECT_TRUE(e.denoise);
-    EXPECT_TRUE(said(*lines, "room.toml: [denoise] mode svgf needs a restart (the clients send the features of temporal)"));
+    EXPECT_TRUE(test::logged(*lines, "room.toml: [denoise] mode svgf needs a restart (the clients send the features of temporal)"));
     edited.denoise.mode = DenoiseSettings::Mode::Off;
     s.applyEdit(edited);
-    EXPECT_TRUE(said(*lines, "denoise: off"));
+    EXPECT_TRUE(test::logged(*lines, "denoise: off"));
     ASSERT_TRUE(s.step());
 }
 

@@ -53,12 +53,6 @@ void key(WallSession& s, int k) {
     s.inject(in);
 }
 
-bool logged(const std::vector<std::string>& lines, const std::string& text) {
-    for (const std::string& l : lines)
-        if (l.find(text) != std::string::npos) return true;
-    return false;
-}
-
 TEST(PartsSession, PickThenHideIsolateHighlightAndShowAll) {
     const auto dir = test::scratchDir();
     auto lines = std::make_shared<std::vector<std::string>>();
@@ -69,18 +63,18 @@ TEST(PartsSession, PickThenHideIsolateHighlightAndShowAll) {
 
     key(s, GLFW_KEY_X);  // nothing picked yet: nothing happens
     ASSERT_TRUE(s.step());
-    EXPECT_TRUE(logged(*lines, "parts: Ctrl+click a part first"));
+    EXPECT_TRUE(test::logged(*lines, "parts: Ctrl+click a part first"));
 
     ctrlClick(s, pixelOnInstance(s, 1));
     ASSERT_TRUE(s.step());
-    EXPECT_TRUE(logged(*lines, "part 'asm/left'"));
+    EXPECT_TRUE(test::logged(*lines, "part 'asm/left'"));
     key(s, GLFW_KEY_X);
     ASSERT_TRUE(s.step());
     EXPECT_EQ(s.scene().instances[1].visibility, Visibility::Hidden);
     EXPECT_EQ(s.partView().hide, std::vector<std::string>{"asm/left"});
     EXPECT_EQ(test::bytesOffState(s), 0u);
     EXPECT_GT(test::differingBytes(s.lastFrame().left, start), 0u);
-    EXPECT_TRUE(logged(*lines, "parts: hidden 'asm/left'; 1 of 4 instances hidden"));
+    EXPECT_TRUE(test::logged(*lines, "parts: hidden 'asm/left'; 1 of 4 instances hidden"));
 
     ctrlClick(s, pixelOnInstance(s, 2));
     key(s, GLFW_KEY_I);  // the right box's node: the box and its knob, nothing else
@@ -89,7 +83,7 @@ TEST(PartsSession, PickThenHideIsolateHighlightAndShowAll) {
     EXPECT_EQ(s.scene().instances[2].visibility, Visibility::Shown);
     EXPECT_EQ(s.scene().instances[3].visibility, Visibility::Shown);
     EXPECT_EQ(test::bytesOffState(s), 0u);
-    EXPECT_TRUE(logged(*lines, "isolated 'asm/right'"));
+    EXPECT_TRUE(test::logged(*lines, "isolated 'asm/right'"));
 
     key(s, GLFW_KEY_G);
     ASSERT_TRUE(s.step());
@@ -114,7 +108,7 @@ TEST(PartsSession, RunConfigPartsApplyFromTheStart) {
     EXPECT_EQ(s.scene().instances[3].visibility, Visibility::Hidden);
     EXPECT_EQ(s.scene().instances[1].visibility, Visibility::Highlighted);
     EXPECT_EQ(test::bytesOffState(s), 0u);
-    EXPECT_TRUE(logged(*lines, "1 of 4 instances hidden, 1 highlighted"));
+    EXPECT_TRUE(test::logged(*lines, "1 of 4 instances hidden, 1 highlighted"));
     // A wall view on top keeps them; U shows all.
     s.setPartView(PartView{{"floor"}, {}, {}});
     EXPECT_EQ(s.scene().instances[3].visibility, Visibility::Hidden);
@@ -145,7 +139,7 @@ TEST(PartsSession, AnEditedPartsTableIsAnUpdate) {
     EXPECT_EQ(s.scene().instances[0].visibility, Visibility::Hidden);
     EXPECT_EQ(s.scene().instances[1].visibility, Visibility::Highlighted);
     EXPECT_EQ(test::bytesOffState(s), 0u);
-    EXPECT_TRUE(logged(*lines, "camera same, 0 section planes, 2 instance visibilities"));
+    EXPECT_TRUE(test::logged(*lines, "camera same, 0 section planes, 2 instance visibilities"));
 }
 
 }  // namespace

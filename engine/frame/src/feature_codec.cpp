@@ -42,17 +42,21 @@ void octDecode(uint16_t u, uint16_t v, float* n) {
     n[0] = x / l, n[1] = y / l, n[2] = z / l;
 }
 
+// f(i, k) for each pixel of a width x height tile in rows of `stride`: i its index in the rows,
+// k in the planar codes (row-major, no padding).
+template <class F> void forEachPixel(int width, int height, size_t stride, F&& f) {
+    size_t k = 0;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x, ++k) f(size_t(y) * stride + size_t(x), k);
+}
+
 }  // namespace
 
 void encodeFeatures(uint8_t bits, const float* albedo, const float* normal, const uint32_t* id, int width, int height,
                     size_t stride, uint8_t* out) {
     const size_t n = size_t(std::max(0, width)) * size_t(std::max(0, height));
     uint8_t* p = out;
-    auto each = [&](auto&& f) {
-        size_t k = 0;
-        for (int y = 0; y < height; ++y)
-            for (int x = 0; x < width; ++x, ++k) f(size_t(y) * stride + size_t(x), k);
-    };
+    auto each = [&](auto&& f) { forEachPixel(width, height, stride, f); };
     if (bits & kFeatureAlbedo) {
         each([&](size_t i, size_t k) {
             uint8_t c[3];
@@ -84,11 +88,7 @@ void decodeFeatures(uint8_t bits, const uint8_t* in, size_t size, int width, int
                                     std::to_string(height) + " tile (" + std::to_string(encodedFeatureBytes(n, bits)) +
                                     " expected)");
     const uint8_t* p = in;
-    auto each = [&](auto&& f) {
-        size_t k = 0;
-        for (int y = 0; y < height; ++y)
-            for (int x = 0; x < width; ++x, ++k) f(size_t(y) * stride + size_t(x), k);
-    };
+    auto each = [&](auto&& f) { forEachPixel(width, height, stride, f); };
     if (bits & kFeatureAlbedo) {
         each([&](size_t i, size_t k) {
             const uint8_t c[3] = {p[k], p[n + k], p[2 * n + k]};
