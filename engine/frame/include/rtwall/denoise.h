@@ -3,9 +3,7 @@
 // of one screen come from different clients). No sockets, no OpenGL.
 //
 // Per view and frame (DenoiseSettings in rtwall/engine.h says which steps run):
-// 1. Demodulate: the frame's linear colour divided by its first-hit albedo (FeatureView) is the
-//    illumination, which is smooth where textures are not.
-// 2. Temporal reuse: each pixel's point (its depth along its ray) is projected into the previous
+// 1. Temporal reuse: each pixel's point (its depth along its ray) is projected into the previous
 //    frame's camera (ImageProjection, rtwall/warp.h: the geometry of the display-rate warp) and
 //    its history read there bilinearly, each tap kept only where the previous frame saw the same
 //    object, a normal within 25 degrees and a depth within 2 % (+ a pixel's footprint). The new
@@ -13,14 +11,18 @@
 //    `history` while the camera moves: a moving view averages its last frames, a still view
 //    (the same camera and scene state as the frame before) averages every frame since it
 //    stopped, exactly as the Accumulator does, so it converges to the same unbiased mean.
-//    Luminance moments (first and second) are averaged alike: the noise's variance per frame.
+//    The first-hit albedo (FeatureView) and the luminance moments (first and second) of the
+//    demodulated sample are averaged alike: the noise's variance per frame. While the view
+//    moves, fireflies are clamped (kFireflyRatio in denoise.cpp).
+// 2. Demodulate: the averaged colour over the averaged albedo is the illumination, which is
+//    smooth where textures are not.
 // 3. Svgf: `levels` passes of the a-trous wavelet (5x5 B3 spline, step 2^i) over the
 //    illumination, each neighbour weighted by edge stops on depth (relative to the local depth
 //    gradient), normal (cosine^sigma_normal), object id (equal or nothing) and luminance
 //    (relative to the standard deviation of the noise of the pixel's mean: the variance of the
 //    frames divided by their number, itself filtered along): a still view's noise falls with its
 //    history, so the filter fades as the mean converges.
-// 4. Remodulate by the albedo.
+// 4. Remodulate by the averaged albedo (temporal alone: the averaged colour as it is).
 // A pixel whose sample is not finite (NaN, infinity) keeps its history and is no neighbour to
 // anyone in that frame; one with neither takes its valid neighbours' filtered value (or black).
 // Background pixels (no hit) show the frame as it is. Deterministic: the same frames give the
@@ -79,12 +81,11 @@ public:
     // `threads`: 0 one per hardware thread; the bytes are the same for any number. Nothing is
     // allocated after the first frame of a size but the threads.
     std::span<const float> denoise(const DenoiseInput& in, const DenoiseSettings& settings, int threads = 0);
-    // Forgets the history: the next frame starts anew (also done by a change of camera cut,
-    // size or state).
+    // Forgets the history: the next frame starts anew (a new size or scene state does so by
+    // itself). A camera cut (another named camera, a jump) is the caller's to say; a move is
+    // re-projected.
     void reset() { hasPrevious_ = false; }
     const DenoiseStats& stats() const { return stats_; }
-    // A camera whose view shares so little with the previous one that history is useless (a
-    // cut: another named camera, a jump): the caller says so with reset(); moves are re-projected.
 
 private:
     int width_ = 0, height_ = 0;

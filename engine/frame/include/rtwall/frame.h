@@ -245,8 +245,6 @@ public:
     size_t viewRestarts() const { return viewRestarts_; }       // a view's running mean restarted
     size_t progressiveRestarts() const { return progressiveRestarts_; }  // the mono running mean restarted
     int denoisedFrames() const { return denoisedFrames_; }        // stochastic frames denoised instead
-    // The denoiser of view v (its last frame's stats), once a frame was denoised.
-    const Denoiser* denoiser(size_t view) const { return view < viewSums_.size() ? &viewSums_[view].denoiser : nullptr; }
     int accumulatedFrames() const { return accumulatedFrames_; }  // stochastic frames summed
     int linearFrames() const { return linearFrames_; }            // of them, as linear tiles
 
