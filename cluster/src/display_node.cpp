@@ -279,6 +279,7 @@ private:
             FrameHolding held;
             held.linear = f.pixels == TilePixels::LinearHalf;
             held.depth = f.depth;
+            held.features = f.denoise ? f.denoise->features : 0;
             held.routes = &std::prev(r)->second;
             held.node = index_;
             slot.assembly.beginFrame(f.frame, f.width, f.height, tiles, uint32_t(f.views.size()), held);
@@ -294,6 +295,19 @@ private:
         } catch (const std::invalid_argument& e) {
             std::fprintf(stderr, "rtwall display: frame %u is skipped: %s\n", f.frame, e.what());
             return;
+        }
+        // The windows a denoised frame is filtered in: this node's screens' (the wall's).
+       
+        if (f.denoise && run_.denoiseWindows) {
+            try {
+                const std::vector<int> eyes(f.eyes.begin(), f.eyes.end());
+                slot.windows = run_.denoiseWindows(f.width, f.height, f.views, eyes, index_);
+            } catch (const std::exception& e) {
+               
+                if (!saidWindows_)
+                    std::fprintf(stderr, "rtwall display: frame %u is denoised whole, not by screens: %s\n", f.frame, e.what());
+                saidWindows_ = true;
+            }
         }
         current_ ^= 1;
         slot.begun = true;
@@ -332,7 +346,9 @@ private:
             if (r.format != slot->frame.pixels) throw DecodeError("a tile in another pixel format than its frame's");
             if (r.depth.empty() == slot->frame.depth)
                 throw DecodeError(slot->frame.depth ? "a tile without the depth its frame asks for" : "a tile with depth");
-            if (!r.features.empty()) throw DecodeError("a tile with features (display nodes take none)");
+            const uint8_t features = slot->frame.denoise ? slot->frame.denoise->features : 0;
+            if (r.features.empty() == (features != 0))
+                throw DecodeError(features ? "a tile without the features its frame asks for" : "a tile with features");
             if (r.format == TilePixels::LinearHalf) {
                 // An accumulated frame's tile: into the view's linear image (what is summed) and
                 // quantised into its 8-bit one, as the master does.
@@ -348,6 +364,9 @@ private:
                 decodeDepthTile(kDepthCodec, r.depth.data(), r.depth.size(), rect.width(), rect.height(),
                                 assembly.depthAt(assembly.viewOf(r.tile), rect.x0, rect.y0), size_t(slot->frame.width),
                                 scratch_);
+            if (features)
+                decodeFeatureTile(features, r.features.data(), r.features.size(), rect.width(), rect.height(),
+                                  assembly.featuresAt(assembly.viewOf(r.tile), rect.x0, rect.y0), scratch_);
             assembly.commit(r.tile);
         } catch (const DecodeError& e) {
             assembly.release(r.tile);
@@ -388,8 +407,18 @@ private:
         c.stochastic = f.stochastic;
         c.stateSeq = f.stateSeq;
         c.linear = slot.assembly.linear();
-        if (source && slot.assembly.depth()) c.depth = slot.assembly.depthImages();
+        if (slot.assembly.depth() && (source || f.denoise)) c.depth = slot.assembly.depthImages();
+        c.keepForWarp = source;
         if (source) c.held = slot.held;
+        if (f.denoise) {
+            // As the single-PC wall filters the frame (its screens, each with its ring).
+            c.denoise = f.denoise->settings;
+            c.features = slot.assembly.featureImages();
+            c.sceneSeq = f.denoise->sceneSeq;
+            if (f.views.empty()) c.camera = f.denoise->camera;
+            c.denoiseWindows = slot.windows;
+            c.denoiseRing = f.denoise->ring;
+        }
         EyeImages out = compositor_.compose(c, slot.assembly.images(), slot.assembly.linearImages());
         // Each view's depth beside its image, for a warp on the node (issue 27).
         if (run_.depth && slot.assembly.depth()) run_.depth(f.frame, slot.assembly.depthImages());
@@ -487,6 +516,7 @@ private:
         bool begun = false;     // holds a frame begun in this session and not yet swapped
         bool haveSent = false;  // shown and reported (NodeHave)
         std::vector<TileRect> held;  // per view: the bounding box of the tiles routed to this node
+        std::vector<std::vector<TileRect>> windows;  // per view: the denoise windows this node shows
     };
     Slot store_[3];
     Slot* slots_[2] = {&store_[0], &store_[1]};
@@ -501,6 +531,7 @@ private:
     uint32_t sourceFrame_ = 0, lastCounted_ = 0;
     std::vector<std::string> leftOut_;
     bool saidMismatch_ = false;
+    bool saidWindows_ = false;  // a wall whose windows could not be made was said once
     std::vector<zmq::message_t> early_;
     std::vector<uint8_t> scratch_;
     int presented_ = 0;

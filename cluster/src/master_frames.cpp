@@ -3,6 +3,8 @@
 // (Master::renderViews).
 #include "master_impl.h"
 
+#include <rtwall/denoise.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -16,9 +18,14 @@ void Master::Impl::beginFrame(Command&& cmd) {
     currentFrame = frame;
     framePixels = pixels;
     frameStochastic = cmd.stochastic;
-    // Features travel with linear frames only (the denoiser works in linear light) and never to
-    // display nodes (they would have to filter with their neighbours' pixels: not yet).
-    frameFeatures = pixels == TilePixels::LinearHalf && !withNodes() ? settings.features : 0;
+    // Features travel with linear frames only (the denoiser works in linear light). Display
+    // nodes denoise what they hold as the application said (setDenoise), with a mode whose
+    // features the tiles carry.
+    frameFeatures = pixels == TilePixels::LinearHalf ? settings.features : 0;
+    frameDenoise.reset();
+    if (withNodes() && frameFeatures && settings.depth && cmd.denoise.mode != DenoiseSettings::Mode::Off &&
+        (featureBitsFor(cmd.denoise.mode) & ~frameFeatures) == 0)
+        frameDenoise = NodeDenoise{cmd.denoise, cmd.denoiseRing, frameFeatures, stateSeq, cmd.camera};
     frameViews = std::move(cmd.views);
     frameViewsTag = cmd.viewsTag;
     shownSeq = cmd.shownSeq;
@@ -215,6 +222,8 @@ std::vector<Image> Master::renderViews(FrameReport* report, std::vector<std::vec
             cmd.views = s.app.views;
             cmd.viewsTag = s.app.viewsTag;
             cmd.camera = s.app.camera;
+            cmd.denoise = s.app.denoise;
+            cmd.denoiseRing = s.app.denoiseRing;
             // Each update and each camera move once: the sequence numbers reports gave when the
             // camera was an update (frames of one state and one camera accumulate).
             cmd.shownSeq = s.app.seq + s.app.cameraMoves;

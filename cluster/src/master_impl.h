@@ -115,6 +115,8 @@ struct Command {
     uint64_t viewsTag = 0;
     CameraDesc camera{};        // kBeginFrame without views: the mono frame's camera (setCamera)
     uint32_t shownSeq = 0;      // kBeginFrame: FrameReport::stateSeq (the state's seq and the camera's moves)
+    DenoiseSettings denoise{};  // kBeginFrame: how display nodes denoise it (setDenoise)
+    int denoiseRing = 0;
 };
 
 using Asset = std::pair<AssetRef, FileBytes>;
@@ -153,6 +155,8 @@ struct Master::Impl {
         uint32_t seq = 0;              // state sequence number
         std::vector<FrameView> views;  // setViews: what the next frame begun renders
         uint64_t viewsTag = 0;
+        DenoiseSettings denoise;       // setDenoise: how display nodes denoise the next frames
+        int denoiseRing = 0;
         // rendersStochastically(scene), recomputed (O(instances)) only after a change that can
         // alter it: a material, light or settings change (it reads which materials instances
         // use, never their transforms).
@@ -220,6 +224,7 @@ struct Master::Impl {
     TilePixels framePixels = TilePixels::Srgb8;  // how the current frame's tiles travel
     bool frameStochastic = false;
     uint8_t frameFeatures = 0;  // the current frame's tiles carry these features (linear frames only)
+    std::optional<NodeDenoise> frameDenoise;  // with display nodes: how they denoise the current frame
     std::vector<FrameView> frameViews;  // the current frame's views (none: a mono frame of frameCamera)
     uint64_t frameViewsTag = 0;
     // What every FrameBegin of the current frame carries: frameViews, or the mono frame's one view.

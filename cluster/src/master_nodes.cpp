@@ -58,7 +58,7 @@ void Master::Impl::sendNodeFrame(NodeState& n, const RenderSettings& rs) {
         n.routesFrame = display.routesFrame;
     }
     NodeFrame f{currentFrame, rs.width, rs.height, rs.tileSize, framePixels, frameViews, {}, frameStochastic, shownSeq,
-                settings.depth};
+                settings.depth, frameDenoise};
     const std::vector<int>& eyes = settings.displayNodes.viewEyes;
     for (size_t v = 0; v < frameViews.size(); ++v) f.eyes.push_back(int8_t(v < eyes.size() && eyes[v] >= 0 && eyes[v] <= 1 ? eyes[v] : -1));
     if (sendNode(n, f, currentFrame)) n.frameSent = currentFrame;

@@ -247,6 +247,14 @@ void Master::setCodec(const CodecSettings& codec) {
     s.wake();
 }
 
+void Master::setDenoise(const DenoiseSettings& settings, int ring) {
+    if (ring < 0 || ring > 16384) throw InputError("a denoise ring of " + std::to_string(ring) + " pixels");
+    Impl& s = *impl_;
+    std::lock_guard lock(s.app.stateMutex);
+    s.app.denoise = settings;
+    s.app.denoiseRing = ring;
+}
+
 void Master::setViews(std::vector<FrameView> views, uint64_t tag) {
     if (views.size() > kMaxViews) throw InputError("a frame has at most " + std::to_string(kMaxViews) + " views");
     Impl& s = *impl_;

@@ -1,4 +1,4 @@
-// The rtwall wire protocol, version 15 (2 added the master's peer timeout to Welcome; 3 added
+// The rtwall wire protocol, version 17 (2 added the master's peer timeout to Welcome; 3 added
 // materials, area lights and shading settings; 4 added vertex colours to meshes, the scene's
 // origin and [bvh] settings to the snapshot, spherical and cylindrical texture mappings, texture
 // and volume files by content hash (AssetRequest, AssetData, SceneSnapshot::assets) and linear
@@ -25,7 +25,9 @@
 // TileResult::depth carries it. Each is the last field of its message and left out when off, so
 // that a frame without depth travels byte for byte as in version 13; 15 added re-projection on
 // the display nodes (issue 27): NodeWelcome::reproject, NodePose (every refresh, the cameras to
-// warp the newest released frame to) and NodeShown (a node showed that refresh).
+// warp the newest released frame to) and NodeShown (a node showed that refresh); 16 added the
+// denoiser's features with tiles (issue 28: FrameBegin::features, TileResult::features); 17 let
+// display nodes denoise their screens (NodeFrame::denoise).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one fields() function that
@@ -45,6 +47,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -52,7 +55,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 16;  // 16: the denoiser's features with tiles
+inline constexpr uint16_t kProtocolVersion = 17;  // 17: display nodes denoise (NodeFrame::denoise)
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -376,6 +379,19 @@ struct NodeWelcome {
 
 // Frame `frame` is width x height in tiles of tileSize (makeTiles order; with views, viewTiles
 // order), its tiles sent as `pixels`; sent before any of its tiles can reach the node.
+// How a display node denoises a frame (NodeFrame::denoise): the settings (mode not off), the
+// ring of pixels each window of the wall is filtered with (ComposeFrame::denoiseRing), the
+// features its tiles carry (FeatureBits, those of the mode or more), the scene state without
+// camera moves (FrameReport::sceneSeq) and, for a frame without views, its camera.
+struct NodeDenoise {
+    DenoiseSettings settings{};
+    int32_t ring = 0;
+    uint8_t features = 0;
+    uint32_t sceneSeq = 0;
+    CameraDesc camera{};
+    bool operator==(const NodeDenoise&) const = default;
+};
+
 struct NodeFrame {
     uint32_t frame = 0;
     int32_t width = 0;
@@ -394,6 +410,9 @@ struct NodeFrame {
     // Version 14: its tiles carry depth (the frame's FrameBegin asked for it), which the node
     // keeps per view beside the images. Last, and left out when false, as in FrameBegin.
     bool depth = false;
+    // Version 17: a denoised frame (issue 28), last and only after the depth flag: what the
+    // node's compositor filters its screens with, as the single-PC wall's does.
+    std::optional<NodeDenoise> denoise{};
     bool operator==(const NodeFrame&) const = default;
 };
 

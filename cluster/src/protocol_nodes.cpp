@@ -1,7 +1,10 @@
 // Display nodes on the wire (version 11): a node's hello and welcome, a frame's layout, the swap
 // barrier's have, swap and swapped, and the node list clients send tiles by; the re-projecting
-// wall's pose every refresh and the node's answer (version 15).
+// wall's pose every refresh and the node's answer (version 15); how a node denoises a frame
+// (version 17).
 #include "protocol_values.h"
+
+#include <rtwall/denoise.h>
 
 #include <algorithm>
 
@@ -88,7 +91,28 @@ RTWALL_WIRE_MESSAGE(NodeWelcome, 6) {
     });
 }
 
-RTWALL_WIRE_MESSAGE(NodeFrame, 10) {
+RTWALL_WIRE_FIELDS(DenoiseSettings, 6) {
+    io.enumUpTo(m.mode, DenoiseSettings::Mode::Svgf, "denoise mode");
+    io.intIn(m.levels, 1, 10, "denoise levels");
+    io.intIn(m.history, 1, 65536, "denoise history");
+    io.floatIn(m.sigmaDepth, 1e-6f, 1e6f, "denoise sigma_depth");
+    io.floatIn(m.sigmaNormal, 0.0f, 1e6f, "denoise sigma_normal");
+    io.floatIn(m.sigmaLuminance, 1e-6f, 1e6f, "denoise sigma_luminance");
+}
+
+RTWALL_WIRE_FIELDS(NodeDenoise, 5) {
+    fields(io, m.settings);
+    io.expect(m.settings.mode != DenoiseSettings::Mode::Off, [] { return std::string("a denoised frame with mode off"); });
+    io.intIn(m.ring, 0, kMaxImageSide, "denoise ring");
+    io.u8(m.features);
+    io.expect(m.features != 0 && m.features <= kFeatureAll && (featureBitsFor(m.settings.mode) & ~m.features) == 0, [&] {
+        return "feature bits " + std::to_string(int(m.features)) + " for denoise mode " + denoiseModeName(m.settings.mode);
+    });
+    io.u32(m.sceneSeq);
+    fields(io, m.camera);
+}
+
+RTWALL_WIRE_MESSAGE(NodeFrame, 11) {
     static const size_t viewBytes = minViewBytes();
     io.u32(m.frame);
     io.intIn(m.width, 1, kMaxImageSide, "node frame width");
@@ -125,6 +149,13 @@ RTWALL_WIRE_MESSAGE(NodeFrame, 10) {
     io.trailing(m.depth, [&] {
         io.boolean(m.depth);
         io.expect(m.depth, [] { return std::string("a depth flag that says no (it is left out then)"); });
+    });
+    bool denoised = m.denoise.has_value();
+    io.trailing(denoised, [&] {
+        if constexpr (Io::decoding) m.denoise.emplace();
+        fields(io, *m.denoise);
+        io.expect(m.depth && m.pixels == TilePixels::LinearHalf,
+                  [] { return std::string("a denoised frame without depth or linear tiles"); });
     });
 }
 

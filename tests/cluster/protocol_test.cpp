@@ -202,6 +202,27 @@ NodeFrame sampleViewsNodeFrame() {
     return f;
 }
 
+// A denoised frame on a display node (version 17): every setting off its default.
+NodeDenoise sampleNodeDenoise() {
+    NodeDenoise d;
+    d.settings.mode = DenoiseSettings::Mode::Svgf;
+    d.settings.levels = 4;
+    d.settings.history = 17;
+    d.settings.sigmaDepth = 1.5f;
+    d.settings.sigmaNormal = 64.0f;
+    d.settings.sigmaLuminance = 3.0f;
+    d.ring = 47;
+    d.features = kFeatureAll;
+    d.sceneSeq = 0x51525354u;
+    d.camera = sampleCamera();
+    return d;
+}
+NodeFrame sampleDenoisedNodeFrame() {
+    NodeFrame f = sampleViewsNodeFrame();
+    f.denoise = sampleNodeDenoise();
+    return f;
+}
+
 // Calls f with every sample message (FrameBegin and NodeFrame twice: mono and with views and
 // depth; TileResult with and without depth).
 template <class F> void forEachSample(F&& f) {
@@ -229,6 +250,7 @@ template <class F> void forEachSample(F&& f) {
     f(sampleNodeWelcome());
     f(NodeFrame{80, 3840, 2160, 64, TilePixels::LinearHalf, {}, {}, true, 41});
     f(sampleViewsNodeFrame());
+    f(sampleDenoisedNodeFrame());
     f(NodeHave{81});
     f(NodeSwap{82, {"right", "node-3"}});
     f(NodeSwapped{83});
@@ -344,7 +366,8 @@ TEST(Protocol, GoldenBytes) {
     // client's work report in Heartbeat, TileStalled; 8: TileFailed; 9: section planes, instance visibility;
     // 10: FrameBegin's views; 11: display nodes; 12: views and accumulation on display nodes; 13:
     // the frame's views are its only camera; 14: depth with every tile, left out when off; 15:
-    // re-projection on the display nodes; 16: the denoiser's features, left out when off).
+    // re-projection on the display nodes; 16: the denoiser's features, left out when off; 17: how
+    // display nodes denoise, left out when off).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -352,7 +375,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x10, 0x00,                                      // version (16: the denoiser's features with tiles)
+        0x11, 0x00,                                      // version (17: display nodes denoise)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -403,6 +426,36 @@ TEST(Protocol, FeaturesAreATrailingFieldAfterTheDepth) {
     std::vector<uint8_t> empty = payloadOf(withDepth);
     for (uint8_t b : {0x00, 0x00, 0x00, 0x00}) empty.push_back(b);
     EXPECT_THROW(decode<TileResult>(empty), DecodeError);
+}
+
+// Version 17: how a display node denoises a frame, after NodeFrame's depth flag, only when it
+// does; never with mode off, without depth or linear tiles, or with features the mode lacks.
+TEST(Protocol, NodeDenoiseIsATrailingFieldAfterTheDepth) {
+    const NodeFrame plain = sampleViewsNodeFrame();
+    const NodeFrame denoised = sampleDenoisedNodeFrame();
+    const std::vector<uint8_t> a = payloadOf(plain), b = payloadOf(denoised);
+    ASSERT_GT(b.size(), a.size());
+    EXPECT_TRUE(std::equal(a.begin(), a.end(), b.begin())) << "the frame's bytes as before, then the block";
+    EXPECT_EQ(decode<NodeFrame>(b), denoised);
+    auto refused = [&](auto change, const char* what) {
+        NodeFrame f = denoised;
+        change(f);
+        EXPECT_THROW(decode<NodeFrame>(payloadOf(f)), DecodeError) << what;
+    };
+    refused([](NodeFrame& f) { f.denoise->settings.mode = DenoiseSettings::Mode::Off; }, "mode off");
+    refused([](NodeFrame& f) { f.denoise->features = kFeatureNormal | kFeatureId; }, "svgf without albedo");
+    refused([](NodeFrame& f) { f.denoise->features = 0; }, "no features");
+    refused([](NodeFrame& f) { f.denoise->features = 8; }, "bit 3");
+    refused([](NodeFrame& f) { f.denoise->ring = -1; }, "a negative ring");
+    refused([](NodeFrame& f) { f.denoise->settings.levels = 11; }, "11 levels");
+    refused([](NodeFrame& f) { f.denoise->settings.sigmaLuminance = 0.0f; }, "sigma_luminance 0");
+    refused([](NodeFrame& f) { f.denoise->settings.sigmaDepth = std::nanf(""); }, "NaN sigma_depth");
+    refused([](NodeFrame& f) { f.pixels = TilePixels::Srgb8; }, "8-bit tiles");
+    // Temporal needs only normals and ids.
+    NodeFrame temporal = denoised;
+    temporal.denoise->settings.mode = DenoiseSettings::Mode::Temporal;
+    temporal.denoise->features = kFeatureNormal | kFeatureId;
+    EXPECT_EQ(decode<NodeFrame>(payloadOf(temporal)), temporal);
 }
 
 TEST(Protocol, DepthIsATrailingFieldLeftOutWhenOff) {
@@ -513,6 +566,7 @@ TEST(Protocol, HeartbeatReportGoldenBytes) {
 // A message without its version-14 trailing field (depth), which a decoder takes for a message
 // that never had it: the one truncation that decodes.
 template <class Msg> Msg withoutTrailing(Msg msg) {
+    if constexpr (std::is_same_v<Msg, NodeFrame>) msg.denoise.reset();
     if constexpr (std::is_same_v<Msg, FrameBegin> || std::is_same_v<Msg, NodeFrame>) msg.depth = false;
     if constexpr (std::is_same_v<Msg, TileResult>) msg.depth.clear();
     if constexpr (std::is_same_v<Msg, NodeWelcome>) msg.reproject = false;
@@ -525,6 +579,14 @@ TEST(Protocol, EveryTruncationThrows) {
         SCOPED_TRACE("message type " + std::to_string(int(messageTypeOf(msg))));
         const std::vector<uint8_t> bytes = encodeMessage(sampleHeader(), msg);
         const size_t shorter = encodeMessage(sampleHeader(), withoutTrailing(msg)).size();
+        // A denoised node frame ends in two trailing fields: without the second it is one of depth.
+        std::optional<Msg> depthOnly;
+        if constexpr (std::is_same_v<Msg, NodeFrame>)
+            if (msg.denoise) {
+                depthOnly = msg;
+                depthOnly->denoise.reset();
+            }
+        const size_t middle = depthOnly ? encodeMessage(sampleHeader(), *depthOnly).size() : 0;
         for (size_t cut = 0; cut < bytes.size(); ++cut) {
             // Exactly sized copies, so that AddressSanitizer would see any read past the end.
             const std::vector<uint8_t> whole(bytes.begin(), bytes.begin() + ptrdiff_t(cut));
@@ -533,6 +595,8 @@ TEST(Protocol, EveryTruncationThrows) {
                 const std::vector<uint8_t> payload(bytes.begin() + kHeaderSize, bytes.begin() + ptrdiff_t(cut));
                 if (cut == shorter)  // the whole message before its trailing field: a message without it
                     EXPECT_EQ(decodePayload<Msg>(payload.data(), payload.size()), withoutTrailing(msg));
+                else if (depthOnly && cut == middle)
+                    EXPECT_EQ(decodePayload<Msg>(payload.data(), payload.size()), *depthOnly);
                 else
                     EXPECT_THROW(decodePayload<Msg>(payload.data(), payload.size()), DecodeError) << "cut at " << cut;
             }

@@ -116,5 +116,63 @@ TEST(NodeRun, AKilledLocalNodeIsSaidAndTheRunFinishesWithTheOther) {
     EXPECT_FALSE(test::alive(right));
 }
 
+// Denoising on display nodes (issue 28): a path-traced room, svgf, the camera orbiting, on the
+// two-node wall (mono: one image; stereo side by side: a view per eye). Each node filters its
+// screens, each with the ring of pixels around it the single-PC wall filters with, and shows the
+// single-PC wall's screens byte for byte; and they are denoised (not the frames as they came).
+class NodeRunDenoise : public ::testing::TestWithParam<bool> {};
+
+TEST_P(NodeRunDenoise, EachNodeFiltersItsScreensToTheSinglePcWallsBytes) {
+    const bool stereo = GetParam();
+    const std::filesystem::path dir = test::scratchDir();
+    auto wallFile = [&](const std::filesystem::path& from, const std::string& name) {
+        std::string text = fileBytes(from);
+        if (stereo) {  // a table of its own: where it goes in the file does not matter
+            text.insert(0, "[stereo]\nmode = \"side_by_side\"\neye_separation = 0.065\nviewer = [0.0, 0.0, 2.5]\n"
+                              "lower_left = [-1.6, -1.2, 0.0]\nlower_right = [1.6, -1.2, 0.0]\nupper_left = [-1.6, 1.2, 0.0]\n\n");
+        }
+        return test::writeFile(dir / name, text);
+    };
+    const std::filesystem::path nodes = wallFile(nodesWall(), "nodes.toml");
+    WallConfig single = loadWallConfig(nodes);  // the same wall, its screens on the master
+    for (ScreenConfig& sc : single.screens) sc.node.clear();
+    const std::filesystem::path one = test::writeFile(dir / "one.toml", writeWallConfig(single));
+    auto runConfig = [&](const std::string& denoise, const std::string& name) {
+        return test::writeFile(dir / name, "scene = \"" + (test::sourceDir() / "tests/data/scenes/gi_room.toml").string() +
+                                               "\"\n[cluster]\nclients = 2\nthreads = 1\n[run]\nframes = 3\nwrite_every = 1\n"
+                                               "orbit = 2.0\ndenoise = \"" + denoise + "\"\n");
+    };
+    auto run = [&](const std::filesystem::path& config, const std::filesystem::path& wall, const std::string& out) {
+        test::ChildProcess p({RTWALL_EXE, "run", config.string(), "--wall", wall.string(), "--headless", "--out", (dir / out).string()});
+        const std::optional<int> status = p.wait(240'000);
+        EXPECT_EQ(status, std::optional<int>(0)) << p.output();
+        return p.output();
+    };
+    const std::string onNodes = run(runConfig("svgf", "svgf.toml"), nodes, "nodes");
+    EXPECT_NE(onNodes.find("denoise: svgf (5 levels, history 32), on the frames of a stochastic scene, on the display nodes "
+                           "(79-pixel ring around each screen)"),
+              std::string::npos) << onNodes;
+    run(runConfig("svgf", "svgf.toml"), one, "one");
+    run(runConfig("off", "off.toml"), one, "off");
+    size_t compared = 0, denoised = 0;
+    for (const auto& [node, screens] : kScreensOf)
+        for (int frame = 1; frame <= 3; ++frame)
+            for (const std::string& screen : screens) {
+                char name[64];
+                std::snprintf(name, sizeof name, "frame_%06d_%s.png", frame, screen.c_str());
+                SCOPED_TRACE(node + "/" + name);
+                ASSERT_TRUE(std::filesystem::exists(dir / "nodes" / node / name)) << onNodes;
+                const std::string shown = fileBytes(dir / "nodes" / node / name);
+                EXPECT_TRUE(shown == fileBytes(dir / "one" / name)) << "not the single-PC wall's screen";
+                denoised += shown != fileBytes(dir / "off" / name);
+                ++compared;
+            }
+    EXPECT_EQ(compared, 12u);
+    EXPECT_EQ(denoised, compared) << "every screen of every frame filtered";
+}
+
+INSTANTIATE_TEST_SUITE_P(MonoAndStereo, NodeRunDenoise, ::testing::Bool(),
+                         [](const auto& p) { return p.param ? "StereoSideBySide" : "Mono"; });
+
 }  // namespace
 }  // namespace rtwall

@@ -172,8 +172,9 @@ namespace {
 
 // The master's display-node settings from a wall config (issue 19): the nodes in the wall's
 // order, and tile masks that are TileRouting's, per view by its eye.
-TEST(DisplayNodeSettings, RoutesTilesByTheWallsScreens) {
-    const WallConfig wall = parseWallConfig(R"([wall]
+// Two columns of two 320x240 screens with 4-pixel bezels, a node per column.
+WallConfig twoNodeWall() {
+    return parseWallConfig(R"([wall]
 [grid]
 columns = 2
 rows = 2
@@ -187,7 +188,11 @@ columns = [0, 0]
 name = "right"
 columns = [1, 1]
 )",
-                                            "two-nodes.toml");
+                           "two-nodes.toml");
+}
+
+TEST(DisplayNodeSettings, RoutesTilesByTheWallsScreens) {
+    const WallConfig wall = twoNodeWall();
     const DisplayNodeSettings d = displayNodeSettings(wall, "the text", {0, 1});
     EXPECT_EQ(d.names, (std::vector<std::string>{"left", "right"}));
     EXPECT_EQ(d.wallText, "the text");
@@ -210,6 +215,72 @@ columns = [1, 1]
     // A view of unknown eye goes wherever either eye is shown.
     const std::vector<uint64_t> unknown = displayNodeSettings(wall, "", {}).routes(wall.width, wall.height, 48, {whole});
     EXPECT_EQ(unknown, mono);
+}
+
+// Denoising on a wall of several screens (issue 28): each screen is a window of its own (the
+// filter's edges are the screen's and the ring's), overlapping screens share one, a view's
+// windows are its regions' screens; and each node also gets the tiles within the ring of its
+// windows, so that it filters them with the pixels the single-PC wall has.
+TEST(DenoiseWindows, OneWindowPerScreenOverlapsMergedEachWithItsNodes) {
+    const WallConfig wall = twoNodeWall();
+    const TileRouting routing(wall, wall.width, wall.height);
+    const auto mono = denoiseWindows(routing, wall.width, wall.height, {}, {});
+    ASSERT_EQ(mono.size(), 1u);
+    ASSERT_EQ(mono[0].size(), 4u);
+    int left = 0, right = 0;
+    for (const DenoiseWindow& w : mono[0]) {
+        EXPECT_EQ(w.rect.width(), 320);
+        EXPECT_EQ(w.rect.height(), 240);
+        (w.rect.x0 < 320 ? left : right) += 1;
+        EXPECT_EQ(w.nodes, w.rect.x0 < 320 ? 1u : 2u);
+    }
+    EXPECT_EQ(left, 2);
+    EXPECT_EQ(right, 2);
+    EXPECT_EQ(denoiseWindowRects(mono, 0)[0].size(), 2u);
+    EXPECT_EQ(denoiseWindowRects(mono, 1)[0].size(), 2u);
+    EXPECT_EQ(denoiseWindowRects(mono)[0].size(), 4u);
+
+    // The ring: a tile 40 pixels right of the left screens (under the right ones) goes to both
+    // nodes when they denoise with a 64-pixel ring, to the right one alone otherwise.
+    const int tile = 16;
+    const std::vector<uint64_t> plain = displayNodeSettings(wall, "", {-1}).routes(wall.width, wall.height, tile, {});
+    const std::vector<uint64_t> ringed = displayNodeSettings(wall, "", {-1}, false, 64).routes(wall.width, wall.height, tile, {});
+    ASSERT_EQ(plain.size(), ringed.size());
+    const int columns = (wall.width + tile - 1) / tile;
+    auto at = [&](const std::vector<uint64_t>& m, int x, int y) { return m[size_t(y / tile) * size_t(columns) + size_t(x / tile)]; };
+    EXPECT_EQ(at(plain, 324 + 40, 100), 2u);
+    EXPECT_EQ(at(ringed, 324 + 40, 100), 3u);
+    EXPECT_EQ(at(ringed, 324 + 100, 100), 2u);  // beyond the ring
+    for (size_t t = 0; t < plain.size(); ++t) EXPECT_EQ(ringed[t] & plain[t], plain[t]) << "tile " << t << ": the ring adds, never takes";
+
+    // Two projectors blended over each other: one window over both, shown by both.
+    const WallConfig blend = loadWallConfig(test::sourceDir() / "configs/wall/projector-pair-blend.toml");
+    const auto merged = denoiseWindows(TileRouting(blend, blend.width, blend.height), blend.width, blend.height, {}, {});
+    ASSERT_EQ(merged[0].size(), 1u);
+    EXPECT_EQ(merged[0][0].rect, (TileRect{0, 0, blend.width, blend.height}));
+
+    // Views with regions (a CAVE's planes): each view's windows are the screens of its regions,
+    // of its eye.
+    const WallConfig cave = loadWallConfig(test::sourceDir() / "configs/wall/cave-3.toml");
+    std::vector<FrameView> views;
+    std::vector<int> eyes;
+    for (int eye : {0, 1})
+        for (const ScreenConfig& sc : cave.screens) {
+            if ((sc.eye == Eye::Right) != (eye == 1)) continue;
+            FrameView v;
+            v.regions = {{sc.viewport.x, sc.viewport.y, sc.viewport.width, sc.viewport.height}};
+            v.refWidth = cave.width, v.refHeight = cave.height;
+            views.push_back(v);
+            eyes.push_back(eye);
+        }
+    ASSERT_FALSE(views.empty());
+    const auto planes = denoiseWindows(TileRouting(cave, cave.width, cave.height), cave.width, cave.height, views, eyes);
+    ASSERT_EQ(planes.size(), views.size());
+    for (size_t v = 0; v < views.size(); ++v) {
+        ASSERT_EQ(planes[v].size(), 1u) << "view " << v;
+        const ViewRegion& g = views[v].regions[0];
+        EXPECT_EQ(planes[v][0].rect, (TileRect{g.x, g.y, g.x + g.width, g.y + g.height})) << "view " << v;
+    }
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 namespace rtwall {
@@ -131,6 +132,73 @@ TEST(DenoiserOnRenders, AHardShadowKeepsItsEdgeWithinAPixel) {
         ++columns;
     }
     EXPECT_GE(columns, 10) << "the shadow should cross most of these columns";
+}
+
+// A window of the frame (a display node's screen and its ring): for its pixels farther than the
+// filter's reach (denoiseRing) from where it was cut out of the frame, the window's denoiser
+// gives the whole frame's bytes: on the first frame and after the camera moved (the history
+// re-projected through the whole frame's camera, the window's place subtracted). Placed wrongly
+// (the window taken for the whole frame), the moved frame differs.
+TEST(DenoiserOnRenders, AWindowFiltersItsInnerPixelsAsTheWholeFrame) {
+    SceneDesc d = loadSceneFile(test::sourceDir() / "tests/data/scenes/gi_room.toml");
+    d.settings.width = 160;
+    d.settings.height = 120;
+    d.settings.threads = 2;
+    const Scene scene(d);
+    DenoiseSettings s;
+    s.mode = DenoiseSettings::Mode::Svgf;
+    s.levels = 3;
+    const int ring = denoiseRing(s);
+    ASSERT_EQ(ring, 2 * 7 + 3 + 4 + 8);
+    const int w = d.settings.width, h = d.settings.height;
+    const int x0 = 30, y0 = 20, ww = 110, wh = 100;  // cut on the left, top and right; the bottom is the frame's
+    ASSERT_EQ(y0 + wh, h);
+    Denoiser whole, window, misplaced;
+    size_t compared = 0;
+    for (int k = 1; k <= 3; ++k) {
+        CameraDesc cam = d.cameras.front();
+        cam.position.x += 0.01f * float(k - 1);  // a move of a pixel or two a frame
+        FeatureFrame f = renderFrameFeatures(scene, Camera(cam, w, h), d.settings, uint32_t(k));
+        quantiseAsSent(f, kFeatureAll);
+        const std::span<const float> a0 = whole.denoise({w, h, f.linear, f.depth, f.albedo, f.normal, f.id, cam, 0}, s, 2);
+        const std::vector<float> all(a0.begin(), a0.end());
+        // The window's pixels, cut out.
+        auto cut = [&](const auto& v, size_t c) {
+            std::vector<std::remove_cvref_t<decltype(v[0])>> out;
+            for (int y = y0; y < y0 + wh; ++y)
+                out.insert(out.end(), v.begin() + long((size_t(y) * size_t(w) + size_t(x0)) * c),
+                           v.begin() + long((size_t(y) * size_t(w) + size_t(x0 + ww)) * c));
+            return out;
+        };
+        const auto lin = cut(f.linear, 3), dep = cut(f.depth, 1), alb = cut(f.albedo, 3), nor = cut(f.normal, 3);
+        const auto ids = cut(f.id, 1);
+        DenoiseInput in{ww, wh, lin, dep, alb, nor, ids, cam, 0};
+        const DenoiseInput unplaced = in;
+        in.x0 = x0, in.y0 = y0, in.frameWidth = w, in.frameHeight = h;
+        const std::span<const float> p0 = window.denoise(in, s, 2);
+        const std::vector<float> part(p0.begin(), p0.end());
+        const std::span<const float> q0 = misplaced.denoise(unplaced, s, 2);
+        const std::vector<float> wrong(q0.begin(), q0.end());
+        size_t differ = 0, wrongDiffer = 0;
+        for (int y = y0 + ring; y < y0 + wh; ++y)
+            for (int x = x0 + ring; x < x0 + ww - ring; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    const float a = all[(size_t(y) * size_t(w) + size_t(x)) * 3 + size_t(c)];
+                    const size_t j = (size_t(y - y0) * size_t(ww) + size_t(x - x0)) * 3 + size_t(c);
+                    differ += std::memcmp(&a, &part[j], sizeof a) != 0;
+                    wrongDiffer += std::memcmp(&a, &wrong[j], sizeof a) != 0;
+                    ++compared;
+                }
+        EXPECT_EQ(differ, 0u) << "frame " << k;
+        if (k == 1) EXPECT_EQ(wrongDiffer, 0u) << "frame 1 has no history: the place does not matter yet";
+        else EXPECT_GT(wrongDiffer, 100u) << "frame " << k << ": history re-projected without the window's place";
+    }
+    EXPECT_GT(compared, size_t(3 * 3 * 40 * 60));
+    // A window that does not lie inside its frame is refused.
+    FeatureFrame f = renderFrameFeatures(scene, Camera(d.cameras.front(), w, h), d.settings, 1);
+    DenoiseInput in{w, h, f.linear, f.depth, f.albedo, f.normal, f.id, d.cameras.front(), 0};
+    in.x0 = 1, in.frameWidth = w, in.frameHeight = h;
+    EXPECT_THROW(window.denoise(in, s, 1), std::invalid_argument);
 }
 
 }  // namespace

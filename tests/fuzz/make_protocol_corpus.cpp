@@ -160,6 +160,17 @@ int main(int argc, char** argv) {
     seedMessage("tile-result-features",
                 TileResult{6, 17, TileCodec::Lz4, 1500, {1, 2, 3, 4, 5}, TilePixels::LinearHalf, {6, 7, 8}, {9, 10}});
 
+    // Version 17: how a display node denoises a frame, after its depth flag.
+    {
+        NodeDenoise d;
+        d.settings.mode = DenoiseSettings::Mode::Svgf;
+        d.ring = 70;
+        d.features = kFeatureAll;
+        d.sceneSeq = 4;
+        seedMessage("node-frame-denoise",
+                    NodeFrame{7, 128, 64, 32, TilePixels::LinearHalf, {}, {}, true, 9, true, d});
+    }
+
     writeSeed("mesh-box", fuzz::kMesh, encodeMesh(makeBox()));
     writeSeed("mesh-sphere-normals", fuzz::kMesh, encodeMesh(makeSphere(3, 5)));
 

@@ -286,6 +286,12 @@ public:
     // these. Views are not scene state: a new eye camera moves no sequence number. Empty views:
     // mono frames of setCamera's camera, one image (renderFrame), as before any call.
     void setViews(std::vector<FrameView> views, uint64_t tag = 0);
+    // With display nodes (issue 28): the frames begun after the call are denoised on the nodes
+    // with these settings, each window of the wall (DisplayNodeRun::denoiseWindows) with `ring`
+    // pixels around it (ComposeFrame::denoiseRing), when their tiles carry the mode's features
+    // (ClusterSettings::features, linear frames). Mode off (the default): not denoised. Without
+    // nodes the application filters its own frames and this does nothing.
+    void setDenoise(const DenoiseSettings& settings, int ring);
     // A frame as renderFrame, one image per view of the frame (one without views); a view's
     // pixels outside its regions' tiles are unspecified. With linear tiles `linear` receives
     // each view's linear RGB; with ClusterSettings::depth `depth` each view's depth as
@@ -456,6 +462,14 @@ struct DisplayNodeRun {
     // Unset: the node warps on the CPU (Compositor::reproject) and calls `present` with the
     // warped eyes.
     std::function<void(const struct NodeRefresh&)> refresh;
+    // Denoising (issue 28; the master's setDenoise): the windows of a width x height frame with
+    // these views (none: one image) and eyes that this node shows, per view: the rects it
+    // filters, each with the ring of pixels the master gives (ComposeFrame::denoiseWindows).
+    // The wall library gives its screens' windows (TileRouting::denoiseWindows), so that a node
+    // filters them to the single-PC wall's bytes. Unset: each view is one window.
+    std::function<std::vector<std::vector<TileRect>>(int width, int height, const std::vector<FrameView>& views,
+                                                     const std::vector<int>& eyes, unsigned node)>
+        denoiseWindows;
 };
 
 // One refresh of a re-projecting display node (DisplayNodeRun::refresh), valid during the call.

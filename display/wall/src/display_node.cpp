@@ -14,7 +14,7 @@ namespace rtwall {
 int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop) {
     std::unique_ptr<GlPresenter> gl;
     std::unique_ptr<HeadlessPresenter> headless;
-    WallConfig wall;
+    WallConfig wall, whole;  // this node's screens; the whole wall (its denoise windows)
     DisplayNodeRun run;
     run.connect = options.connect;
     run.name = options.name;
@@ -28,7 +28,8 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
     run.onWall = [&](const std::string& text) {
         // The same wall on every (re)join: the presenter is made once.
         if (gl || headless) return;
-        wall = nodeWall(parseWallConfig(text, "the master's wall config"), options.name);
+        whole = parseWallConfig(text, "the master's wall config");
+        wall = nodeWall(whole, options.name);
         std::string whyNot;
         if (!options.headless) gl = GlPresenter::open(wall, {}, &whyNot);
         if (!gl) {
@@ -69,6 +70,13 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
     // nodes): the frame would only be copied into a WallFrame and dropped. That copy of the
     // whole wall-sized frame took milliseconds at 4K and spread the nodes' swaps.
     const auto discards = [&] { return headless && wall.writeEvery <= 0 && wall.video.empty(); };
+    // A denoised frame is filtered in the windows of this node's screens, as the single-PC wall
+    // filters the whole wall's (issue 28).
+    run.denoiseWindows = [&](int width, int height, const std::vector<FrameView>& views, const std::vector<int>& eyes,
+                             unsigned node) {
+        const TileRouting routing(whole, width, height);
+        return denoiseWindowRects(denoiseWindows(routing, width, height, views, eyes), int(node));
+    };
     run.present = [&](uint32_t frame, const Image* left, const Image* right, const std::vector<std::string>& leftOut) {
         if (!left) return;  // released without this node: nothing new to show
         if (discards()) return;

@@ -56,7 +56,7 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     if (!s.wallConfig.nodes().empty()) {
         if (c.targetFps > 0 && c.front.empty())
             throw InputError("--target-fps on a wall of display nodes needs --front: the master holds no pixels to calibrate with");
-        s.routeToNodes();
+        s.onNodes = true;  // routed below, once re-projection and denoising are decided (their rings)
     }
     fitToRun(desc, c, s.wallConfig);
     s.start = desc.cameras.front();
@@ -75,6 +75,7 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     s.decideReprojection();
     if (c.denoise) desc.denoise.mode = *c.denoise;
     s.decideDenoising(desc);
+    if (s.onNodes) s.routeToNodes();
     s.master = std::make_unique<Master>(desc, c.cluster);
     s.master->setStopFlag(stop);
     s.log(format("rtwall master at %s, %dx%d, %d local clients, codec %s%s", s.master->endpoint().c_str(), desc.settings.width,
@@ -244,6 +245,7 @@ RunSummary WallSession::summary() const {
     r.medianFps = r.frames ? 1.0 / median(s.frameTimes) : 0.0;
     r.megabytesPerFrame = r.frames ? double(s.bytes) * 1e-6 / double(r.frames) : 0.0;
     r.accumulatedFrames = s.compositor.accumulatedFrames();
+    r.onNodes = s.onNodes;
     r.linearFrames = s.compositor.linearFrames();
     if (const OperatingPointController* c = s.tuning ? s.tuning->controller() : nullptr) {
         r.framesOnTarget = s.tuning->framesOnTarget();
@@ -258,7 +260,9 @@ std::string describeSummary(const RunSummary& r, double targetFps) {
     std::string out;
     if (r.frames > 0) {
         out += format("%zu frames, median %.1f fps, %.2f MB of tiles per frame\n", r.frames, r.medianFps, r.megabytesPerFrame);
-        if (r.accumulatedFrames > 0)
+        if (r.onNodes)
+            out += "the display nodes composed the frames (accumulated or denoised there; the master holds no pixels)\n";
+        else if (r.accumulatedFrames > 0)
             out += format("progressive refinement: %d of %zu frames accumulated (stochastic scene), %d of them as linear tiles\n",
                           r.accumulatedFrames, r.frames, r.linearFrames);
         else

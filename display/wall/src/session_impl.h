@@ -119,6 +119,12 @@ struct WallSession::Impl {
     // --denoise) as the cluster was started for it.
     DenoiseSettings denoise;
     bool denoising() const { return denoise.mode != DenoiseSettings::Mode::Off; }
+    // The ring of pixels each screen's window is filtered with (ComposeFrame::denoiseRing), fixed
+    // at the start; and the windows of the frame size and views last composed.
+    int denoiseRing = 0;
+    std::vector<std::vector<TileRect>> windowRects;
+    int windowsWidth = -1, windowsHeight = -1;
+    std::vector<FrameView> windowsViews;  // their regions
     std::vector<FeatureImages> viewFeatures;       // the rendered frame's, per view
     std::vector<std::vector<float>> monoLinear;    // a frame without views, as renderViews gives it
     void decideDenoising(const SceneDesc& desc);   // before the master starts: features from the clients
@@ -211,7 +217,7 @@ struct WallSession::Impl {
             for (int eye : stereo ? std::vector<int>{0, 1} : std::vector<int>{-1})
                 for (size_t i = 0; i < wallViews(wallConfig, staticHead(wallConfig.stereo), eye).size(); ++i) eyes.push_back(eye);
         const double stallSeconds = config.cluster.displayNodes.stallSeconds;  // the caller's, if set
-        config.cluster.displayNodes = displayNodeSettings(wallConfig, text.str(), eyes, reprojects());
+        config.cluster.displayNodes = displayNodeSettings(wallConfig, text.str(), eyes, reprojects(), denoiseRing);
         config.cluster.displayNodes.stallSeconds = stallSeconds;
     }
 
@@ -431,6 +437,21 @@ struct WallSession::Impl {
             f.features = viewFeatures;
             f.camera = report.camera;
             f.sceneSeq = report.sceneSeq;  // a camera move re-projects the history, an edit discards it
+            // The wall's screens, each with its ring, as the display nodes filter theirs.
+            const int w = images.empty() ? 0 : images.front().width, h = images.empty() ? 0 : images.front().height;
+            bool same = windowsWidth == w && windowsHeight == h && windowsViews.size() == rendered.size();
+            for (size_t v = 0; same && v < rendered.size(); ++v)
+                same = windowsViews[v].regions == rendered[v].regions && windowsViews[v].refWidth == rendered[v].refWidth &&
+                       windowsViews[v].refHeight == rendered[v].refHeight;
+            if (!same) {
+                windowRects.clear();
+                if (w > 0 && h > 0 && w <= wallConfig.width && h <= wallConfig.height)
+                    windowRects = denoiseWindowRects(denoiseWindows(TileRouting(wallConfig, w, h), w, h, rendered, viewEye));
+                windowsWidth = w, windowsHeight = h;
+                windowsViews = rendered;
+            }
+            f.denoiseWindows = windowRects;
+            f.denoiseRing = denoiseRing;
         }
         EyeImages eyes = compositor.compose(f, std::move(images), linearViews);
         shown.left = std::move(eyes.left);
@@ -439,7 +460,19 @@ struct WallSession::Impl {
 
     // Renders the frame (both eyes on a stereo wall) into `shown` and `report`.
     void render() {
-        if (!reproject) shown = WallFrame{};  // re-projecting, the refreshes show it while the next frame renders
+        if (!reproject) shown = WallFrame{};
+        if (onNodes && denoising()) {  // the nodes filter as compose() would
+            DenoiseSettings d = live->desc().denoise;
+            d.mode = denoise.mode;
+            master->setDenoise(d, denoiseRing);
+            // Each frame's history is the frame before: none may be overtaken unseen on a node,
+            // which holds two (the newest, and the one before until its swap). So the frame
+            // two before the one this begins is swapped first (bounded: a stalled node is left
+            // out by the barrier); the nodes' filter, not the clients, then sets the pace.
+            if (report.frame > 0 && !master->displayNodesPresent().empty() && !master->waitForSwap(report.frame, 3000))
+                log(format("display nodes: frame %u was not swapped within 3 s; a node may skip a frame and restart its "
+                           "denoiser's history", report.frame));
+        }  // re-projecting, the refreshes show it while the next frame renders
         if (views) {
             // Every view's tiles in one scheduler pass. The views go with a tag: with async the
             // frame that comes back was begun with the views of the step before.
@@ -463,7 +496,8 @@ struct WallSession::Impl {
             std::vector<Image> image(1);
             if (denoising()) {  // the frame's depth and features too
                 image = master->renderViews(&report, &monoLinear, &viewDepth, &viewFeatures);
-                compose({}, std::move(image), monoLinear);
+                if (onNodes) shown.left = std::move(image[0]);  // the nodes filter their screens
+                else compose({}, std::move(image), monoLinear);
             } else {
                 image[0] = master->renderFrame(&report, &linear);
                 if (onNodes) shown.left = std::move(image[0]);

@@ -31,11 +31,6 @@ void WallSession::Impl::decideDenoising(const SceneDesc& desc) {
     denoise = desc.denoise;
     if (!denoising()) return;
     const char* mode = denoiseModeName(denoise.mode);
-    if (onNodes) {
-        log(format("denoise: off: display nodes do not filter their screens yet (the scene asks for %s)", mode));
-        denoise.mode = DenoiseSettings::Mode::Off;
-        return;
-    }
     if (!config.cluster.wideAccumulation) {
         log(format("denoise: off: it needs linear tiles (the cluster's wide accumulation; the scene asks for %s)", mode));
         denoise.mode = DenoiseSettings::Mode::Off;
@@ -43,9 +38,15 @@ void WallSession::Impl::decideDenoising(const SceneDesc& desc) {
     }
     config.cluster.depth = true;
     config.cluster.features = featureBitsFor(denoise.mode);
+    // Screen by screen, each with the ring of pixels its filter reaches: the single-PC wall
+    // as the display nodes, which get that ring of tiles around their screens (routeToNodes).
+    // Levels raised later by an edit reach no further than this ring.
+    denoiseRing = rtwall::denoiseRing(denoise);
+    const std::string where = onNodes ? format(", on the display nodes (%d-pixel ring around each screen)", denoiseRing) : "";
     log(denoise.mode == DenoiseSettings::Mode::Svgf
-            ? format("denoise: svgf (%d levels, history %d), on the frames of a stochastic scene", denoise.levels, denoise.history)
-            : format("denoise: temporal (history %d), on the frames of a stochastic scene", denoise.history));
+            ? format("denoise: svgf (%d levels, history %d), on the frames of a stochastic scene%s", denoise.levels,
+                     denoise.history, where.c_str())
+            : format("denoise: temporal (history %d), on the frames of a stochastic scene%s", denoise.history, where.c_str()));
 }
 
 void WallSession::Impl::startRefresher() {

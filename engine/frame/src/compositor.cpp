@@ -50,12 +50,65 @@ bool Compositor::denoises(const ComposeFrame& f, size_t v, const Image& image, s
            albedo && (ft.albedo.empty() || ft.albedo.size() == 3 * n);
 }
 
-void Compositor::denoise(Denoiser& denoiser, const ComposeFrame& f, size_t v, const CameraDesc& camera, Image& image,
+void Compositor::denoise(ViewDenoiser& windows, const ComposeFrame& f, size_t v, const CameraDesc& camera, Image& image,
                          std::span<const std::vector<float>> linear) {
     const FeatureImages& ft = f.features[v];
-    const DenoiseInput in{image.width, image.height, linear[v], f.depth[v], ft.albedo, ft.normal, ft.id, camera, f.sceneSeq};
-    const std::span<const float> out = denoiser.denoise(in, f.denoise);
-    linearToSrgb8(out.data(), out.size(), image.rgb.data());
+    const int w = image.width, h = image.height;
+    const TileRect whole{0, 0, w, h};
+    // The windows of this frame: shown rects clipped to the view, inputs grown by the ring. Other
+    // windows than the last frame's start afresh.
+    std::span<const TileRect> rects(&whole, 1);
+    if (v < f.denoiseWindows.size() && !f.denoiseWindows[v].empty()) rects = f.denoiseWindows[v];
+    const int ring = std::max(0, f.denoiseRing);
+    auto clip = [&](TileRect r, int grow) {
+        return TileRect{std::max(0, r.x0 - grow), std::max(0, r.y0 - grow), std::min(w, r.x1 + grow), std::min(h, r.y1 + grow)};
+    };
+    bool same = windows.size() == rects.size();
+    for (size_t k = 0; same && k < rects.size(); ++k) same = windows[k].shown == clip(rects[k], 0);
+    if (!same) {
+        windows = ViewDenoiser(rects.size());
+        for (size_t k = 0; k < rects.size(); ++k) {
+            windows[k].shown = clip(rects[k], 0);
+            windows[k].input = clip(rects[k], ring);
+        }
+    }
+    for (DenoiseWindow& win : windows) {
+        const TileRect& r = win.input;
+        if (r.width() <= 0 || r.height() <= 0 || win.shown.width() <= 0 || win.shown.height() <= 0) continue;
+        if (r == whole) {  // the whole view: its buffers as they are
+            const DenoiseInput in{w, h, linear[v], f.depth[v], ft.albedo, ft.normal, ft.id, camera, f.sceneSeq};
+            const std::span<const float> out = win.denoiser.denoise(in, f.denoise);
+            for (int y = win.shown.y0; y < win.shown.y1; ++y) {
+                const size_t i = size_t(y) * size_t(w) + size_t(win.shown.x0);
+                linearToSrgb8(out.data() + 3 * i, 3 * size_t(win.shown.width()), image.rgb.data() + 3 * i);
+            }
+            continue;
+        }
+        // A window: its pixels cut out (rows of the view's buffers), placed in the view.
+        const size_t rw = size_t(r.width()), n = rw * size_t(r.height());
+        auto cut = [&](const auto& from, auto& to, size_t channels) {
+            to.resize(from.empty() ? 0 : n * channels);
+            if (from.empty()) return;
+            for (int y = r.y0; y < r.y1; ++y) {
+                const size_t src = (size_t(y) * size_t(w) + size_t(r.x0)) * channels;
+                std::copy(from.begin() + long(src), from.begin() + long(src + rw * channels),
+                          to.begin() + long(size_t(y - r.y0) * rw * channels));
+            }
+        };
+        cut(linear[v], win.linear, 3);
+        cut(f.depth[v], win.depth, 1);
+        cut(ft.albedo, win.albedo, 3);
+        cut(ft.normal, win.normal, 3);
+        cut(ft.id, win.id, 1);
+        DenoiseInput in{r.width(), r.height(), win.linear, win.depth, win.albedo, win.normal, win.id, camera, f.sceneSeq};
+        in.x0 = r.x0, in.y0 = r.y0, in.frameWidth = w, in.frameHeight = h;
+        const std::span<const float> out = win.denoiser.denoise(in, f.denoise);
+        for (int y = win.shown.y0; y < win.shown.y1; ++y) {
+            const size_t from = (size_t(y - r.y0) * rw + size_t(win.shown.x0 - r.x0)) * 3;
+            const size_t to = (size_t(y) * size_t(w) + size_t(win.shown.x0)) * 3;
+            linearToSrgb8(out.data() + from, 3 * size_t(win.shown.width()), image.rgb.data() + to);
+        }
+    }
     ++denoisedFrames_;
 }
 
@@ -74,7 +127,7 @@ void Compositor::accumulate(const ComposeFrame& f, std::vector<Image>& images, s
         return;
     }
     if (progressiveDenoising_) {
-        progressiveDenoiser_.reset();
+        progressiveDenoiser_.clear();
         progressiveDenoising_ = false;
     }
     if (f.views.empty()) {
@@ -101,7 +154,7 @@ void Compositor::accumulate(const ComposeFrame& f, std::vector<Image>& images, s
                 continue;
             }
             if (s.denoising) {
-                s.denoiser.reset();
+                s.denoiser.clear();
                 s.denoising = false;
             }
             if (s.stateSeq != f.stateSeq || !s.camera || !(*s.camera == camera)) {

@@ -110,6 +110,14 @@ void quantiseAsSent(FeatureFrame& f, uint8_t bits) {
     quantiseFeatures(bits & (kFeatureAlbedo | kFeatureNormal), f.albedo.data(), f.normal.data(), f.depth.size());
 }
 
+int denoiseRing(const DenoiseSettings& settings) {
+    if (settings.mode == DenoiseSettings::Mode::Off) return 0;
+    constexpr int kMargin = 8, kNeighbourhood = 1 + 3;  // 3x3 firefly and gradient, 7x7 short history
+    if (settings.mode == DenoiseSettings::Mode::Temporal) return kNeighbourhood + kMargin;
+    const int levels = std::clamp(settings.levels, 1, 10);
+    return 2 * ((1 << levels) - 1) + levels + kNeighbourhood + kMargin;
+}
+
 void Denoiser::resize(int w, int h) {
     const size_t n = size_t(w) * size_t(h);
     for (auto* v : {&colour_, &colourPrev_, &albedo_, &albedoPrev_, &normalPrev_, &filtered_, &filteredB_,
@@ -137,7 +145,15 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
     if (filter || !in.albedo.empty()) checkSpan(in.albedo.size(), n * 3, "the albedo");  // temporal: none is white
     checkSpan(in.normal.size(), n * 3, "the normal");
     checkSpan(in.id.size(), n, "the id");
+    const int fw = in.frameWidth > 0 ? in.frameWidth : w, fh = in.frameWidth > 0 ? in.frameHeight : h;
+    const int wx = in.frameWidth > 0 ? in.x0 : 0, wy = in.frameWidth > 0 ? in.y0 : 0;
+    if (wx < 0 || wy < 0 || wx + w > fw || wy + h > fh)
+        throw std::invalid_argument("Denoiser: a window of " + std::to_string(w) + "x" + std::to_string(h) + " at (" +
+                                    std::to_string(wx) + ", " + std::to_string(wy) + ") is not inside its " +
+                                    std::to_string(fw) + "x" + std::to_string(fh) + " frame");
     resize(w, h);
+    if (wx != x0_ || wy != y0_ || fw != frameWidth_ || fh != frameHeight_) hasPrevious_ = false;
+    x0_ = wx, y0_ = wy, frameWidth_ = fw, frameHeight_ = fh;
 
     const bool restart = !hasPrevious_ || in.stateSeq != previousState_;
     const bool still = !restart && samePose(in.camera, previousCamera_);
@@ -147,9 +163,10 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
     const float sigmaN = std::isfinite(settings.sigmaNormal) && settings.sigmaNormal >= 0 ? settings.sigmaNormal : 128.0f;
     const float sigmaL = std::isfinite(settings.sigmaLuminance) && settings.sigmaLuminance > 0 ? settings.sigmaLuminance : 4.0f;
 
-    const Camera camera(in.camera, w, h);
+    // The camera's geometry is the whole frame's; pixel (x, y) of the window is its (wx + x, wy + y).
+    const Camera camera(in.camera, fw, fh);
     const Float3 origin = camera.origin();
-    const ImageProjection previous(previousCamera_, w, h);
+    const ImageProjection previous(previousCamera_, fw, fh);
 
     const int hardware = int(std::max(1u, std::thread::hardware_concurrency()));
     const int threads = std::clamp(threadCount > 0 ? threadCount : hardware, 1, h);
@@ -253,7 +270,7 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
                 if (still) {
                     if (lengthPrev_[i] > 0.0f) take(i, 1.0f);
                 } else if (!restart) {
-                    const Float3 d = camera.direction(float(x) + 0.5f, float(y) + 0.5f);
+                    const Float3 d = camera.direction(float(wx + x) + 0.5f, float(wy + y) + 0.5f);
                     const double dl = std::sqrt(double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z);
                     const double s = double(depth[i]) / dl;
                     const double v[3] = {double(origin.x) + double(d.x) * s - previous.origin[0],
@@ -261,7 +278,8 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
                                          double(origin.z) + double(d.z) * s - previous.origin[2]};
                     double abc[3];
                     previous.solve(v, abc);
-                    const double px = abc[2] > 0.0 ? abc[0] / abc[2] - 0.5 : -1e9, py = abc[2] > 0.0 ? abc[1] / abc[2] - 0.5 : -1e9;
+                    const double px = abc[2] > 0.0 ? abc[0] / abc[2] - 0.5 - wx : -1e9,
+                                 py = abc[2] > 0.0 ? abc[1] / abc[2] - 0.5 - wy : -1e9;
                     if (px > -2.0 && py > -2.0 && px < double(w) + 1.0 && py < double(h) + 1.0) {
                         const float expected = float(std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
                         const float tolerance = kDepthTolerance * expected + 1.5f * gradient_[i];

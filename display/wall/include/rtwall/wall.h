@@ -42,8 +42,27 @@ namespace rtwall {
 // routes each view's tiles by its eye (viewEyes[v]: -1 mono, 0 left, 1 right); a view without an
 // entry goes to every node that shows either eye of its pixels. `reproject`: the nodes re-project
 // (issue 27), and each also gets the ring of tiles (one tile wide) around what its screens show.
+// `denoiseRing` > 0: the nodes denoise (issue 28), and each also gets the tiles within that
+// many pixels of its screens' windows (denoiseWindows).
 DisplayNodeSettings displayNodeSettings(const WallConfig& wall, std::string wallText, std::vector<int> viewEyes = {},
-                                        bool reproject = false);
+                                        bool reproject = false, int denoiseRing = 0);
+
+// The windows a wall's frame is denoised in (ComposeFrame::denoiseWindows, issue 28), per view of
+// a width x height frame (one list for a frame without views): the frame rects of the screens
+// of the view's eye (views[v]'s eyes[v]: -1 or none the mono/left eye, 1 the right) that meet
+// the view's regions (all of them for a view without regions), overlapping rects (projectors
+// blended over each other) merged into their bounding box until none overlap; each with the
+// nodes that show a screen of it (TileRouting's bits). The single-PC wall filters all of them,
+// a display node those that hold one of its screens: the same windows with the same pixels,
+// the same bytes.
+struct DenoiseWindow {
+    TileRect rect;
+    uint64_t nodes = 0;
+};
+std::vector<std::vector<DenoiseWindow>> denoiseWindows(const TileRouting& routing, int width, int height,
+                                                       const std::vector<FrameView>& views, const std::vector<int>& eyes);
+// The rects of those windows that `node` shows (bit `node`), or all of them (node < 0).
+std::vector<std::vector<TileRect>> denoiseWindowRects(const std::vector<std::vector<DenoiseWindow>>& windows, int node = -1);
 
 // `rtwall display`: one display node of a wall (runDisplayNode), presenting its screens of the
 // wall config the master sends (nodeWall) in GLFW windows, or as images in `out` when headless
@@ -173,6 +192,7 @@ struct RunSummary {
     double megabytesPerFrame = 0;
     int accumulatedFrames = 0;  // frames of a stochastic scene averaged while the view was still
     int linearFrames = 0;       // of which as linear tiles
+    bool onNodes = false;       // display nodes composed the frames (the master holds no pixels)
     // With a target frame rate:
     size_t framesOnTarget = 0;
     uint64_t operatingPointChanges = 0;

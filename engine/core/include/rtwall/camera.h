@@ -59,6 +59,7 @@ struct TileRect {
     int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // half-open pixel rectangle [x0,x1) x [y0,y1)
     int width() const { return x1 - x0; }
     int height() const { return y1 - y0; }
+    bool operator==(const TileRect&) const = default;
 };
 
 // A pixel's depth is the distance from the camera's origin along its primary ray to the surface

@@ -51,7 +51,18 @@ inline uint8_t featureBitsFor(DenoiseSettings::Mode mode) {
 // emptied). The denoiser then filters the very values it would filter on the wall.
 void quantiseAsSent(FeatureFrame& frame, uint8_t bits);
 
-// One view's frame as the denoiser reads it: width x height pixels, rows top to bottom.
+// The pixels a filter reaches beyond a pixel (issue 28): what a window of a frame needs around
+// the part of it that is shown (a display node's screen) for the shown pixels to be filtered as
+// with the whole frame at hand: the a-trous levels' 2 * (2^levels - 1), their 3x3 noise blurs,
+// the 7x7 short-history spread and the 3x3 firefly and gradient neighbourhoods, plus a margin
+// for history moved in from outside (8). Temporal alone: the neighbourhoods and the margin.
+int denoiseRing(const DenoiseSettings& settings);
+
+// One view's frame as the denoiser reads it: width x height pixels, rows top to bottom. A
+// window of a larger frame (a screen and its ring, on a wall of several) says where it lies:
+// its pixel (x, y) is the camera's pixel (x0 + x, y0 + y) of a frameWidth x frameHeight image
+// (0: the input is the whole frame). History and filter see only the window; a history point
+// that moved in from outside it is new there.
 struct DenoiseInput {
     int width = 0, height = 0;
     std::span<const float> linear;    // 3 a pixel: this frame's own colour (renderTileLinear)
@@ -61,6 +72,7 @@ struct DenoiseInput {
     std::span<const uint32_t> id;     // 1 a pixel
     CameraDesc camera;                // the camera the frame was rendered with
     uint32_t stateSeq = 0;            // the scene's state: any change discards every history
+    int x0 = 0, y0 = 0, frameWidth = 0, frameHeight = 0;  // the window's place (frameWidth 0: the whole frame)
 };
 
 // What the last frame did.
@@ -89,6 +101,7 @@ public:
 
 private:
     int width_ = 0, height_ = 0;
+    int x0_ = 0, y0_ = 0, frameWidth_ = 0, frameHeight_ = 0;  // the last frame's window (a new place restarts)
     bool hasPrevious_ = false;
     CameraDesc previousCamera_;
     uint32_t previousState_ = 0;

@@ -194,6 +194,14 @@ struct ComposeFrame {
     std::span<const FeatureImages> features{};
     uint32_t sceneSeq = 0;  // the scene state without camera moves: a change discards the denoiser's history
     std::optional<CameraDesc> camera;  // a frame without views: its camera (the denoiser needs one)
+    // Per view, the windows it is denoised in: each rect is filtered with the view's pixels
+    // within `denoiseRing` (denoiseRing(), rtwall/denoise.h) of it and none beyond, keeps a
+    // history of its own, and gives the view's image its own pixels (the rest stay as they came).
+    // A wall of several screens is filtered screen by screen so that a display node, which holds
+    // its screens and that ring around them, filters them to the single-PC wall's bytes. No
+    // windows for a view (or none given): the whole view is one.
+    std::span<const std::vector<TileRect>> denoiseWindows{};
+    int denoiseRing = 0;
     // The views with depth become the re-projection's newest source (false: depth for the
     // denoiser only).
     bool keepForWarp = true;
@@ -249,15 +257,24 @@ public:
     int linearFrames() const { return linearFrames_; }            // of them, as linear tiles
 
 private:
+    // A view's denoising, window by window (ComposeFrame::denoiseWindows): each window's
+    // history (frames of any camera, re-projected) and its pixels cut out of the view's.
+    struct DenoiseWindow {
+        TileRect shown, input;  // input: shown and its ring, inside the view
+        Denoiser denoiser;
+        std::vector<float> linear, depth, albedo, normal;
+        std::vector<uint32_t> id;
+    };
+    using ViewDenoiser = std::vector<DenoiseWindow>;
     struct ViewSum {
         Accumulator sum;
         uint32_t stateSeq = UINT32_MAX;
         std::optional<CameraDesc> camera;
-        Denoiser denoiser;  // its history: frames of any camera, re-projected
+        ViewDenoiser denoiser;
         bool denoising = false;
     };
     Accumulator progressive_;  // frames without views
-    Denoiser progressiveDenoiser_;
+    ViewDenoiser progressiveDenoiser_;
     bool progressiveDenoising_ = false;
     uint32_t progressiveSeq_ = UINT32_MAX;
     std::vector<ViewSum> viewSums_;
@@ -273,7 +290,7 @@ private:
 
     void accumulate(const ComposeFrame& frame, std::vector<Image>& images, std::span<const std::vector<float>> linear);
     static bool denoises(const ComposeFrame& frame, size_t view, const Image& image, std::span<const std::vector<float>> linear);
-    void denoise(Denoiser& denoiser, const ComposeFrame& frame, size_t view, const CameraDesc& camera, Image& image,
+    void denoise(ViewDenoiser& denoiser, const ComposeFrame& frame, size_t view, const CameraDesc& camera, Image& image,
                  std::span<const std::vector<float>> linear);
     void keepWarpSource(const ComposeFrame& frame, const std::vector<Image>& images);
 };
