@@ -289,8 +289,8 @@ private:
             for (size_t t = 0; t < tiles.size(); ++t) {
                 if (!(((*held.routes)[t] >> index_) & 1) || tiles[t].view >= slot.held.size()) continue;
                 TileRect& box = slot.held[tiles[t].view];
-                const TileRect& r = tiles[t].rect;
-                box = box.width() <= 0 || box.height() <= 0 ? r : TileRect{std::min(box.x0, r.x0), std::min(box.y0, r.y0), std::max(box.x1, r.x1), std::max(box.y1, r.y1)};
+                const TileRect& rect = tiles[t].rect;
+                box = box.width() <= 0 || box.height() <= 0 ? rect : TileRect{std::min(box.x0, rect.x0), std::min(box.y0, rect.y0), std::max(box.x1, rect.x1), std::max(box.y1, rect.y1)};
             }
         } catch (const std::invalid_argument& e) {
             std::fprintf(stderr, "rtwall display: frame %u is skipped: %s\n", f.frame, e.what());

@@ -178,22 +178,68 @@ toml::table denoise(const DenoiseOptions& o) {
                 for (int threads : {1, 0}) {
                     Denoiser dn;
                     std::vector<double> ms;
+                    // One thread: where the time goes, the phases' medians (DenoiseStats::seconds).
+                    std::vector<double> phase[5];
                     for (int k = 0; k < 12; ++k) {
                         CameraDesc c = bs.camera;
                         c.position.x += 1e-4f * float(k);
                         const auto t0 = Clock::now();
                         dn.denoise({w, h, f.linear, f.depth, f.albedo, f.normal, f.id, c, 0}, ds, threads);
-                        if (k >= 2) ms.push_back(1e3 * secondsSince(t0));
+                        if (k < 2) continue;
+                        ms.push_back(1e3 * secondsSince(t0));
+                        const DenoiseStats::Seconds& s = dn.stats().seconds;
+                        const double parts[5] = {s.temporal, s.prepare, s.variance, s.atrous, s.finish};
+                        for (int p = 0; p < 5; ++p) phase[p].push_back(1e3 * parts[p]);
+                    }
+                    if (threads == 1) {
+                        cost.insert("isa", denoiseIsaName(dn.stats().isa));
+                        toml::table phases;
+                        const char* names[5] = {"temporal_ms", "prepare_ms", "variance_ms", "atrous_ms", "finish_ms"};
+                        for (int p = 0; p < 5; ++p) phases.insert(names[p], median(phase[p]));
+                        cost.insert("phases_one_thread", phases);
                     }
                     const double mp = double(w) * double(h) * 1e-6;
                     cost.insert(threads == 1 ? "ms_one_thread" : "ms_all_threads", median(ms));
                     cost.insert(threads == 1 ? "ms_per_megapixel_thread" : "ms_per_megapixel_all_threads", median(ms) / mp);
+                }
+                // Each instruction set this CPU has, on one thread, in the same run (the same bytes:
+                // tested; here only the time).
+                {
+                    const DenoiseIsa before = denoiseIsa();
+                    toml::table byIsa;
+                    for (DenoiseIsa isa : {DenoiseIsa::Sse2, DenoiseIsa::Avx2, DenoiseIsa::Avx512}) {
+                        if (!denoiseIsaSupported(isa)) continue;
+                        setDenoiseIsa(isa);
+                        Denoiser dn;
+                        std::vector<double> ms;
+                        for (int k = 0; k < 12; ++k) {
+                            CameraDesc c = bs.camera;
+                            c.position.x += 1e-4f * float(k);
+                            dn.denoise({w, h, f.linear, f.depth, f.albedo, f.normal, f.id, c, 0}, ds, 1);
+                            if (k >= 2) ms.push_back(1e3 * dn.stats().seconds.atrous);
+                        }
+                        byIsa.insert(denoiseIsaName(isa), median(ms));
+                    }
+                    setDenoiseIsa(before);
+                    cost.insert("atrous_ms_one_thread_by_isa", byIsa);
+                    if (o.text) {
+                        std::fprintf(o.text, "%s %dx%d: the a-trous levels on one thread:", name.c_str(), w, h);
+                        for (const auto& [isa, v] : byIsa) std::fprintf(o.text, " %s %.1f ms", std::string(isa.str()).c_str(), v.value_or(0.0));
+                        std::fprintf(o.text, "\n");
+                    }
                 }
                 if (o.text)
                     std::fprintf(o.text, "%s %dx%d: the svgf filter alone takes %.1f ms on one thread (%.0f ms per megapixel), "
                                          "%.1f ms on all\n",
                                  name.c_str(), w, h, cost["ms_one_thread"].value_or(0.0),
                                  cost["ms_per_megapixel_thread"].value_or(0.0), cost["ms_all_threads"].value_or(0.0));
+                if (o.text) {
+                    const toml::table& ph = *cost["phases_one_thread"].as_table();
+                    std::fprintf(o.text, "%s %dx%d: one thread's phases: temporal %.1f ms, prepare %.1f, variance %.1f, "
+                                         "a-trous %.1f, finish %.1f\n",
+                                 name.c_str(), w, h, ph["temporal_ms"].value_or(0.0), ph["prepare_ms"].value_or(0.0),
+                                 ph["variance_ms"].value_or(0.0), ph["atrous_ms"].value_or(0.0), ph["finish_ms"].value_or(0.0));
+                }
                 filterCost.push_back(std::move(cost));
             }
             for (int spp : o.giSpp)

@@ -14,6 +14,7 @@ std::atomic<bool> gStopNode{false};
 
 void addDisplay(CLI::App& app, Run& run) {
     auto o = std::make_shared<DisplayNodeOptions>();
+    auto isa = std::make_shared<std::string>();
     CLI::App* cmd = app.add_subcommand("display", "Run one display node of a wall on several PCs (the screens its wall config gives it)");
     cmd->add_option("--connect", o->connect, "The master's endpoint, tcp://HOST:PORT")->required();
     cmd->add_option("--node", o->name, "This node's name in the wall config (node = \"...\" or [[node]] name)")->required();
@@ -28,8 +29,10 @@ void addDisplay(CLI::App& app, Run& run) {
     cmd->add_option("--frames", o->frames, "Exit after presenting this many frames (0: until the master ends)")->check(CLI::Range(0, 1 << 30));
     cmd->add_option("--exit-after-idle", o->exitAfterIdleMs, "Exit when no master answers for this many ms (0: wait for ever)")
         ->check(CLI::Range(0, 86'400'000));
-    cmd->callback([&run, o] {
-        run = [o] {
+    addDenoiseIsaOption(cmd, *isa);
+    cmd->callback([&run, o, isa] {
+        run = [o, isa] {
+            applyDenoiseIsa(*isa);
             if (!o->connect.starts_with("tcp://")) throw InputError("--connect '" + o->connect + "': expected tcp://HOST:PORT");
             if (!o->bind.starts_with("tcp://")) throw InputError("--bind '" + o->bind + "': expected tcp://HOST:PORT");
             std::signal(SIGINT, [](int) { gStopNode = true; });

@@ -4,6 +4,8 @@
 #include "commands.h"
 #include "render_args.h"
 
+#include <rtwall/denoise.h>
+
 #include <progress.h>
 #include <tile_failure.h>
 
@@ -19,6 +21,11 @@
 #include <vector>
 
 namespace rtwall::cli {
+
+void applyDenoiseIsa(const std::string& isa) {
+    if (!isa.empty()) setDenoiseIsa(denoiseIsaFromName(isa));
+}
+
 
 namespace {
 
@@ -150,6 +157,7 @@ int runRender(const RenderOptions& o) {
     RenderSettings& s = desc.settings;
     applyOverrides(s, o);
     if (!o.denoise.empty()) desc.denoise.mode = denoiseModeFromName(o.denoise);
+    applyDenoiseIsa(o.denoiseIsa);
     const TraceOptions trace = traceOptionsOf(o);
     const CameraDesc cam = chooseCamera(desc, o);
     const char* kernel = s.kernel == KernelType::Packet ? "packet" : "single";
@@ -242,6 +250,7 @@ void addRender(CLI::App& app, Run& run) {
     cmd->add_option("--samples", o->samples, "Random samples per pixel sample and frame")->check(CLI::Range(1, 4096));
     cmd->add_option("--denoise", o->denoise, "Denoise the frames of a stochastic scene (over the scene's [denoise] mode)")
         ->check(CLI::IsMember({"off", "temporal", "svgf"}));
+    addDenoiseIsaOption(cmd, o->denoiseIsa);
     cmd->add_option("--supersample", o->supersample, "n x n sub-pixel samples per pixel (overrides the scene)")->check(CLI::Range(1, 16));
     cmd->add_option("--prune", o->prune, "Ray-tree pruning threshold (0 = off)")->check(CLI::Range(0.0, 1.0));
     cmd->add_option("--max-depth", o->maxDepth, "Longest ray path")->check(CLI::Range(1, 64));

@@ -19,7 +19,7 @@ void addRun(CLI::App& app, Run& run) {
     struct Options {
         std::string config;
         int frames = -1, clients = -1, writeEvery = -1;
-        std::string out, bind, cameraPath, wall, front, trace, reproject, denoise;
+        std::string out, bind, cameraPath, wall, front, trace, reproject, denoise, denoiseIsa;
         bool insecure = false, headless = false, watch = false, noLocalNodes = false;
         double targetFps = -1;  // not given
         PartView parts;
@@ -47,6 +47,7 @@ void addRun(CLI::App& app, Run& run) {
                     "Denoise the frames of a stochastic scene: off, temporal or svgf (default: the run config's [run] "
                     "denoise, else the scene's [denoise] mode)")
         ->check(CLI::IsMember({"off", "temporal", "svgf"}));
+    addDenoiseIsaOption(cmd, o->denoiseIsa);
     cmd->add_flag("--insecure", o->insecure, "Allow a non-loopback bind without CURVE keys (says so loudly)");
     cmd->add_option("--bind", o->bind, "Endpoint for clients, e.g. tcp://0.0.0.0:7700 (default: loopback, any port)");
     cmd->add_option("--target-fps", o->targetFps,
@@ -83,6 +84,7 @@ void addRun(CLI::App& app, Run& run) {
             }
             if (!o->reproject.empty()) c.reproject = o->reproject == "on";
             if (!o->denoise.empty()) c.denoise = denoiseModeFromName(o->denoise);
+            applyDenoiseIsa(o->denoiseIsa);
             c.headless = o->headless;
             c.watch = o->watch;
             if (o->targetFps >= 0) c.targetFps = o->targetFps;

@@ -22,6 +22,16 @@ inline void addCommandOfOneArgument(CLI::App& parent, Run& run, const std::strin
     cmd->callback([&run, value, work] { run = [value, work] { return work(*value); }; });
 }
 
+// --denoise-isa: the denoiser's instruction set in this process (rtwall/denoise.h, DenoiseIsa),
+// applied by applyDenoiseIsa before the command runs (one line for a CPU that lacks it).
+inline void addDenoiseIsaOption(CLI::App* cmd, std::string& isa) {
+    cmd->add_option("--denoise-isa", isa,
+                    "The denoiser's instruction set: auto (the widest this CPU has), sse2, avx2 or avx512; the same bytes, "
+                    "only the speed differs")
+        ->check(CLI::IsMember({"auto", "sse2", "avx2", "avx512"}));
+}
+void applyDenoiseIsa(const std::string& isa);  // cmd_render.cpp; empty: auto
+
 void addRender(CLI::App& app, Run& run);
 void addInfo(CLI::App& app, Run& run);
 void addClient(CLI::App& app, Run& run);

@@ -10,7 +10,7 @@ namespace rtwall::cli {
 
 struct RenderOptions {
     std::string scene, out, camera, kernel, region, codec = "lz4", view, shading, shadows;
-    std::string cameraPosition, cameraLookAt, cameraUp, cameraWindow, background, ambient, fault, denoise;
+    std::string cameraPosition, cameraLookAt, cameraUp, cameraWindow, background, ambient, fault, denoise, denoiseIsa;
     int width = 0, height = 0, threads = -1, tile = 0, clients = 0, prefetch = 4;
     int samples = 0, maxDepth = 0, frames = 1, packetWidth = 0, supersample = 0;
     int64_t frame = -1, clientId = -1, triangles = 3'000'000;

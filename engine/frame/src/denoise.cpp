@@ -4,11 +4,15 @@
 // depends only on its inputs, never on the order or thread it was computed in.
 #include <rtwall/denoise.h>
 #include <rtwall/depth_codec.h>
+#include <rtwall/input_error.h>
 #include <rtwall/warp.h>
 
 #include <algorithm>
 #include <barrier>
+#include <array>
+#include <atomic>
 #include <bit>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -67,10 +71,12 @@ struct TapRow {
 
 // Adds the tap's weighted neighbours of pixels [xa, xb) to the sums. Restrict-qualified sums
 // and no trapping maths (denoise.cpp's compile options) let the compiler vectorise it: without
-// them it has too many pointers to check for overlap, and a conversion that may trap.
+// them it has too many pointers to check for overlap, and a conversion that may trap. Inlined
+// into one function per instruction set (below), vectorised there at that width.
 template <class Power>
-void accumulateTaps(const TapRow& t, int xa, int xb, float b3, Power power, float* __restrict sumW, float* __restrict sr,
-                    float* __restrict sg, float* __restrict sb, float* __restrict sv) {
+[[gnu::always_inline]] inline void tapLoop(const TapRow& t, int xa, int xb, float b3, Power power, float* __restrict sumW,
+                                           float* __restrict sr, float* __restrict sg, float* __restrict sb,
+                                           float* __restrict sv) {
     const float *rc = t.rc, *gc = t.gc, *bc = t.bc, *rq = t.rq, *gq = t.gq, *bq = t.bq;
     for (int x = xa; x < xb; ++x) {
         const float lc = 0.2126f * rc[x] + 0.7152f * gc[x] + 0.0722f * bc[x];
@@ -87,6 +93,38 @@ void accumulateTaps(const TapRow& t, int xa, int xb, float b3, Power power, floa
     }
 }
 
+// The tap loop for each instruction set: 4 lanes (SSE2, the baseline), 8 (AVX2), 16 (AVX-512).
+// Each lane does the scalar rule's operations in its order (no FMA contraction: -ffp-contract=off,
+// no approximate division or square root), so every width gives the same bytes.
+#define RTWALL_TAPS_ARGS                                                                                        \
+    const TapRow &t, int xa, int xb, float b3, Power power, float *__restrict sumW, float *__restrict sr, \
+        float *__restrict sg, float *__restrict sb, float *__restrict sv
+template <class Power> void tapsSse2(RTWALL_TAPS_ARGS) { tapLoop(t, xa, xb, b3, power, sumW, sr, sg, sb, sv); }
+template <class Power> [[gnu::target("avx2")]] void tapsAvx2(RTWALL_TAPS_ARGS) {
+    tapLoop(t, xa, xb, b3, power, sumW, sr, sg, sb, sv);
+}
+template <class Power> [[gnu::target("avx512f,avx512vl,prefer-vector-width=512")]] void tapsAvx512(RTWALL_TAPS_ARGS) {
+    tapLoop(t, xa, xb, b3, power, sumW, sr, sg, sb, sv);
+}
+template <class Power> void accumulateTaps(DenoiseIsa isa, RTWALL_TAPS_ARGS) {
+    switch (isa) {
+    case DenoiseIsa::Avx512: return tapsAvx512(t, xa, xb, b3, power, sumW, sr, sg, sb, sv);
+    case DenoiseIsa::Avx2: return tapsAvx2(t, xa, xb, b3, power, sumW, sr, sg, sb, sv);
+    default: return tapsSse2(t, xa, xb, b3, power, sumW, sr, sg, sb, sv);
+    }
+}
+#undef RTWALL_TAPS_ARGS
+
+bool supports(DenoiseIsa isa) {
+    switch (isa) {
+    case DenoiseIsa::Avx512: return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+    case DenoiseIsa::Avx2: return __builtin_cpu_supports("avx2");
+    default: return true;
+    }
+}
+
+std::atomic<DenoiseIsa> processIsa{DenoiseIsa::Auto};
+
 std::pair<int, int> rowsOf(int n, int threads, int i) {
     return {int(int64_t(n) * i / threads), int(int64_t(n) * (i + 1) / threads)};
 }
@@ -98,6 +136,38 @@ void checkSpan(size_t got, size_t want, const char* what) {
 }
 
 }  // namespace
+
+DenoiseIsa denoiseIsaFromName(const std::string& name) {
+    if (name == "auto") return DenoiseIsa::Auto;
+    if (name == "sse2") return DenoiseIsa::Sse2;
+    if (name == "avx2") return DenoiseIsa::Avx2;
+    if (name == "avx512") return DenoiseIsa::Avx512;
+    throw InputError("denoise instruction set '" + name + "' is not auto, sse2, avx2 or avx512");
+}
+
+const char* denoiseIsaName(DenoiseIsa isa) {
+    switch (isa) {
+    case DenoiseIsa::Sse2: return "sse2";
+    case DenoiseIsa::Avx2: return "avx2";
+    case DenoiseIsa::Avx512: return "avx512";
+    default: return "auto";
+    }
+}
+
+bool denoiseIsaSupported(DenoiseIsa isa) { return supports(isa); }
+
+DenoiseIsa resolvedDenoiseIsa(DenoiseIsa isa) {
+    if (isa != DenoiseIsa::Auto) return isa;
+    return supports(DenoiseIsa::Avx512) ? DenoiseIsa::Avx512 : supports(DenoiseIsa::Avx2) ? DenoiseIsa::Avx2 : DenoiseIsa::Sse2;
+}
+
+void setDenoiseIsa(DenoiseIsa isa) {
+    if (!supports(isa))
+        throw InputError(std::string("denoise instruction set ") + denoiseIsaName(isa) + ": this CPU does not have it");
+    processIsa.store(isa);
+}
+
+DenoiseIsa denoiseIsa() { return processIsa.load(); }
 
 void quantiseAsSent(FeatureFrame& f, uint8_t bits) {
     std::vector<uint16_t> halfs(f.linear.size());
@@ -168,6 +238,7 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
     const Float3 origin = camera.origin();
     const ImageProjection previous(previousCamera_, fw, fh);
 
+    const DenoiseIsa isa = resolvedDenoiseIsa(processIsa.load());
     const int hardware = int(std::max(1u, std::thread::hardware_concurrency()));
     const int threads = std::clamp(threadCount > 0 ? threadCount : hardware, 1, h);
     partStats_.assign(size_t(threads), DenoiseStats{});
@@ -496,12 +567,12 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
                     // The normal stop inline for exponents 2^0 .. 2^10 (128, the default: seven
                     // squarings), so that the loop vectorises; any other exponent through pow.
                     auto squared = [&]<int S>(std::integral_constant<int, S>) {
-                        accumulateTaps(t, xa, xb, b3, [](float cn) {
+                        accumulateTaps(isa, t, xa, xb, b3, [](float cn) {
                             for (int k = 0; k < S; ++k) cn *= cn;
                             return cn;
                         }, sumW, sr, sg, sb, sv);
                     };
-                    if (!powerOfTwo) accumulateTaps(t, xa, xb, b3, normalPower, sumW, sr, sg, sb, sv);
+                    if (!powerOfTwo) accumulateTaps(isa, t, xa, xb, b3, normalPower, sumW, sr, sg, sb, sv);
                     else switch (squarings) {
                         case 0: squared(std::integral_constant<int, 0>{}); break;
                         case 1: squared(std::integral_constant<int, 1>{}); break;
@@ -514,7 +585,7 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
                         case 8: squared(std::integral_constant<int, 8>{}); break;
                         case 9: squared(std::integral_constant<int, 9>{}); break;
                         case 10: squared(std::integral_constant<int, 10>{}); break;
-                        default: accumulateTaps(t, xa, xb, b3, normalPower, sumW, sr, sg, sb, sv);
+                        default: accumulateTaps(isa, t, xa, xb, b3, normalPower, sumW, sr, sg, sb, sv);
                     }
                 }
             }
@@ -551,10 +622,22 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
             }
     };
 
+    // Where the time goes (DenoiseStats::seconds): the first part's clock after each barrier,
+    // when every part has finished the phase.
+    using Clock = std::chrono::steady_clock;
+    std::array<double, 5> phaseSeconds{};
+    Clock::time_point phaseStart = Clock::now();
+    auto lap = [&](int part, size_t phase) {
+        if (part != 0) return;
+        const Clock::time_point now = Clock::now();
+        phaseSeconds[phase] += std::chrono::duration<double>(now - phaseStart).count();
+        phaseStart = now;
+    };
     auto work = [&](int part) {
         auto [y0, y1] = rowsOf(h, threads, part);
         temporal(y0, y1, partStats_[size_t(part)]);
         sync.arrive_and_wait();
+        lap(part, 0);
         // The previous frame's normals were read by phase 1 only: now they become this frame's
         // (unit length), and the filter's input is the averaged colour over the averaged albedo.
         for (int y = y0; y < y1; ++y)
@@ -573,10 +656,12 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
                 }
             }
         sync.arrive_and_wait();
+        lap(part, 1);
         const float* c = filtered_.data();
         if (filter) {
             variance(y0, y1);
             sync.arrive_and_wait();
+            lap(part, 2);
             const float* v = variance_.data();
             for (int level = 0; level < levels; ++level) {
                 // filtered_ -> filteredB_ -> filtered_ ...; variance_ -> varianceB_ -> variance_ ...
@@ -595,6 +680,7 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
                                 colour_[3 * i + k] = dc[size_t(k) * n + i] * demodulator(albedo_[3 * i + k]);
                         }
                 sync.arrive_and_wait();
+                lap(part, 3);
                 c = dc;
                 v = dv;
             }
@@ -606,10 +692,13 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
     for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
     work(0);
     pool.clear();
+    lap(0, 4);
 
     stats_ = DenoiseStats{};
     stats_.still = still;
     stats_.restarted = restart;
+    stats_.isa = isa;
+    stats_.seconds = {phaseSeconds[0], phaseSeconds[1], phaseSeconds[2], phaseSeconds[3], phaseSeconds[4]};
     for (const DenoiseStats& s : partStats_) {
         stats_.reused += s.reused;
         stats_.rejected += s.rejected;

@@ -34,6 +34,7 @@
 
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace rtwall {
@@ -75,6 +76,18 @@ struct DenoiseInput {
     int x0 = 0, y0 = 0, frameWidth = 0, frameHeight = 0;  // the window's place (frameWidth 0: the whole frame)
 };
 
+// The filter's instruction set, a CPU path of this process (not a scene setting): its tap loop
+// 4 lanes wide (SSE2, every x86-64), 8 (AVX2) or 16 (AVX-512); auto the widest this CPU has.
+// Every one gives the same bytes (tested), so forcing one only changes the speed.
+enum class DenoiseIsa { Auto, Sse2, Avx2, Avx512 };
+DenoiseIsa denoiseIsaFromName(const std::string& name);  // auto, sse2, avx2, avx512; else InputError
+const char* denoiseIsaName(DenoiseIsa isa);
+bool denoiseIsaSupported(DenoiseIsa isa);
+DenoiseIsa resolvedDenoiseIsa(DenoiseIsa isa);  // auto: the widest supported
+// For every Denoiser of this process from its next frame; InputError for one this CPU lacks.
+void setDenoiseIsa(DenoiseIsa isa);
+DenoiseIsa denoiseIsa();
+
 // What the last frame did.
 struct DenoiseStats {
     bool still = false;     // same camera and state as the frame before: plain accumulation
@@ -84,6 +97,14 @@ struct DenoiseStats {
     size_t invalid = 0;     // samples that were not finite
     size_t clamped = 0;     // fireflies scaled down
     int maxHistory = 0;     // the longest history of any pixel
+    DenoiseIsa isa = DenoiseIsa::Sse2;  // the tap loop's instruction set
+    // Where the frame's time went, wall seconds of its phases: temporal reuse, the filter's
+    // inputs (unit normals, keys, demodulation), the variance, the a-trous levels together,
+    // remodulation (with the threads' join).
+    struct Seconds {
+        double temporal = 0, prepare = 0, variance = 0, atrous = 0, finish = 0;
+        double total() const { return temporal + prepare + variance + atrous + finish; }
+    } seconds;
 };
 
 class Denoiser {
