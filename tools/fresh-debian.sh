@@ -104,4 +104,14 @@ chroot "$root" /usr/bin/env -i HOME=/root PATH=/usr/local/sbin:/usr/local/bin:/u
 rc=$?
 set -e
 say "exit status $rc after $(( $(date +%s) - start )) s"
+# Inputs a fuzz run found (crashes, timeouts) are written inside the system, which goes next:
+# they come out into this repository's tests/fuzz/crashes/, to be kept as regression files.
+found=$(cd "$root/srv/rtwall" && git status --porcelain --untracked-files=all -- tests/fuzz/crashes | sed -n 's/^?? //p')
+if [ -n "$found" ]; then
+  while IFS= read -r f; do
+    mkdir -p "$repo/$(dirname "$f")"
+    cp "$root/srv/rtwall/$f" "$repo/$f"
+    say "fuzz input found inside, kept as $repo/$f"
+  done <<<"$found"
+fi
 exit $rc
