@@ -318,7 +318,37 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
                 float* mo = &moments_[2 * i];
                 gradient_[i] = gx_[i] = gy_[i] = 0.0f;
                 for (int k = 0; k < 3; ++k) ao[k] = al[k];
-                if (!isSurface(depth[i])) {  // background (or no depth): shown as it came
+                if (!isSurface(depth[i])) {  // background (or no depth)
+                    // A still view averages it as every pixel: a pixel whose samples fall on a
+                    // leaf in some frames and on the sky in others (a silhouette) converges to
+                    // the plain mean of all of them, as with the Accumulator. Moving: shown as
+                    // it came.
+                    if (still && lengthPrev_[i] > 0.0f) {
+                        const float* hc = &colourPrev_[3 * i];
+                        const float* ha = &albedoPrev_[3 * i];
+                        const float* hm = &momentsPrev_[2 * i];
+                        valid_[i] = 1;
+                        if (!finite) {  // nothing new: the history as it was
+                            length_[i] = lengthPrev_[i];
+                            for (int k = 0; k < 3; ++k) co[k] = hc[k], ao[k] = ha[k];
+                            mo[0] = hm[0], mo[1] = hm[1];
+                            continue;
+                        }
+                        const float len = lengthPrev_[i] + 1.0f, a = 1.0f / len;
+                        float il[3];
+                        for (int k = 0; k < 3; ++k) il[k] = c[k] / demodulator(al[k]);
+                        const float l = luminance(il);
+                        for (int k = 0; k < 3; ++k) {
+                            co[k] = hc[k] + (c[k] - hc[k]) * a;
+                            ao[k] = ha[k] + (al[k] - ha[k]) * a;
+                        }
+                        mo[0] = hm[0] + (l - hm[0]) * a;
+                        mo[1] = hm[1] + (l * l - hm[1]) * a;
+                        length_[i] = len;
+                        ++st.reused;
+                        st.maxHistory = std::max(st.maxHistory, int(std::min(len, 1e9f)));
+                        continue;
+                    }
                     valid_[i] = finite;
                     length_[i] = finite ? 1.0f : 0.0f;
                     for (int k = 0; k < 3; ++k) co[k] = finite ? c[k] : 0.0f;

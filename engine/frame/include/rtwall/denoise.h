@@ -25,7 +25,9 @@
 // 4. Remodulate by the averaged albedo (temporal alone: the averaged colour as it is).
 // A pixel whose sample is not finite (NaN, infinity) keeps its history and is no neighbour to
 // anyone in that frame; one with neither takes its valid neighbours' filtered value (or black).
-// Background pixels (no hit) show the frame as it is. Deterministic: the same frames give the
+// Background pixels (no hit) show the frame as it is while the view moves; a still view averages
+// them as any pixel (a silhouette, hit in some frames and missed in others, converges to the
+// mean of all its samples). Deterministic: the same frames give the
 // same bytes on any number of threads.
 #pragma once
 
