@@ -304,6 +304,17 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
         return count ? sum / float(count) : 0.0f;
     };
 
+    // The history (colour, albedo, luminance moments) joined by a sample with weight a.
+    auto blend = [](const float* hc, const float* ha, const float* hm, const float* c, const float* al, float l, float a,
+                    float* co, float* ao, float* mo) {
+        for (int k = 0; k < 3; ++k) {
+            co[k] = hc[k] + (c[k] - hc[k]) * a;
+            ao[k] = ha[k] + (al[k] - ha[k]) * a;
+        }
+        mo[0] = hm[0] + (l - hm[0]) * a;
+        mo[1] = hm[1] + (l * l - hm[1]) * a;
+    };
+
     // Phase 1: re-project the history (colour, albedo, luminance moments), average.
     auto temporal = [&](int y0, int y1, DenoiseStats& st) {
         for (int y = y0; y < y1; ++y)
@@ -338,12 +349,7 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
                         float il[3];
                         for (int k = 0; k < 3; ++k) il[k] = c[k] / demodulator(al[k]);
                         const float l = luminance(il);
-                        for (int k = 0; k < 3; ++k) {
-                            co[k] = hc[k] + (c[k] - hc[k]) * a;
-                            ao[k] = ha[k] + (al[k] - ha[k]) * a;
-                        }
-                        mo[0] = hm[0] + (l - hm[0]) * a;
-                        mo[1] = hm[1] + (l * l - hm[1]) * a;
+                        blend(hc, ha, hm, c, al, l, a, co, ao, mo);
                         length_[i] = len;
                         ++st.reused;
                         st.maxHistory = std::max(st.maxHistory, int(std::min(len, 1e9f)));
@@ -441,12 +447,7 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
                 if (histLen > 0.0f) {
                     const float len = std::min(histLen + 1.0f, std::max(cap, 1.0f));
                     const float a = 1.0f / len;
-                    for (int k = 0; k < 3; ++k) {
-                        co[k] = hist[k] + (c[k] - hist[k]) * a;
-                        ao[k] = histAl[k] + (al[k] - histAl[k]) * a;
-                    }
-                    mo[0] = histMo[0] + (l - histMo[0]) * a;
-                    mo[1] = histMo[1] + (l * l - histMo[1]) * a;
+                    blend(hist, histAl, histMo, c, al, l, a, co, ao, mo);
                     length_[i] = len;
                 } else {
                     for (int k = 0; k < 3; ++k) co[k] = c[k];
