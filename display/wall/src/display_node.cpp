@@ -72,10 +72,29 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
     const auto discards = [&] { return headless && wall.writeEvery <= 0 && wall.video.empty(); };
     // A denoised frame is filtered in the windows of this node's screens, as the single-PC wall
     // filters the whole wall's (issue 28).
+    // Made again only when the frame's size, views' regions or eyes change (not per frame).
+    struct WindowsKey {
+        int width = -1, height = -1;
+        std::vector<std::vector<ViewRegion>> regions;
+        std::vector<std::pair<int, int>> references;  // each view's refWidth, refHeight
+        std::vector<int> eyes;
+        unsigned node = 0;
+        bool operator==(const WindowsKey&) const = default;
+    };
+    WindowsKey windowsKey;
+    std::vector<std::vector<TileRect>> windows;
     run.denoiseWindows = [&](int width, int height, const std::vector<FrameView>& views, const std::vector<int>& eyes,
                              unsigned node) {
-        const TileRouting routing(whole, width, height);
-        return denoiseWindowRects(denoiseWindows(routing, width, height, views, eyes), int(node));
+        WindowsKey key{width, height, {}, {}, eyes, node};
+        for (const FrameView& v : views) {
+            key.regions.push_back(v.regions);
+            key.references.emplace_back(v.refWidth, v.refHeight);
+        }
+        if (!(key == windowsKey)) {
+            windows = denoiseWindowRects(denoiseWindows(TileRouting(whole, width, height), width, height, views, eyes), int(node));
+            windowsKey = std::move(key);
+        }
+        return windows;
     };
     run.present = [&](uint32_t frame, const Image* left, const Image* right, const std::vector<std::string>& leftOut) {
         if (!left) return;  // released without this node: nothing new to show

@@ -3,14 +3,14 @@
 // parallel. Every phase reads only what the phases before it wrote, and each pixel's value
 // depends only on its inputs, never on the order or thread it was computed in.
 #include <rtwall/denoise.h>
+
+#include "denoise_taps.h"
 #include <rtwall/depth_codec.h>
-#include <rtwall/input_error.h>
 #include <rtwall/warp.h>
 
 #include <algorithm>
 #include <barrier>
 #include <array>
-#include <atomic>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -23,6 +23,8 @@
 namespace rtwall {
 
 namespace {
+
+using namespace denoise_detail;
 
 constexpr float kAlbedoFloor = 1e-3f;     // below this a channel is not divided (nor multiplied back)
 constexpr float kNormalCosine = 0.906f;   // history from a normal within 25 degrees
@@ -38,92 +40,11 @@ constexpr int kShortHistory = 4;          // fewer frames: the variance is estim
 // in as they are: its mean is the Accumulator's, which converges to the unbiased one.
 constexpr float kFireflyRatio = 8.0f;
 
-// e^x for x <= 0 (what the edge stops need), to 2e-6 relative: 2^(x log2 e) as the exponent
-// bits of its whole part times a degree-7 polynomial of its fraction. Branch-free and the same
-// bits on every thread and CPU (no libm, whose vector and scalar forms may differ); several
-// times cheaper than expf, which was a third of the filter's time.
-inline float expNegative(float x) {
-    const float t = std::max(x, -87.0f) * 1.44269504088896f + 127.0f;  // in (1.4, 127]
-    const int whole = int(t);                                        // floor: t > 0
-    const float f = t - float(whole);
-    const float p =
-        1.0f + f * (0.693147181f + f * (0.240226507f + f * (0.0555041087f + f * (0.00961812911f +
-        f * (0.00133335581f + f * (0.000154035304f + f * 0.0000152527338f))))));
-    return p * std::bit_cast<float>(uint32_t(whole) << 23);
-}
-
 inline float luminance(const float* c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
 
 inline bool isSurface(float depth) { return depth > 0.0f && depth < kBackgroundDepth && std::isfinite(depth); }
 
 inline float demodulator(float albedo) { return albedo > kAlbedoFloor ? albedo : 1.0f; }
-
-// The B3 spline's taps, -2..2.
-constexpr float kB3[5] = {1.0f / 16, 1.0f / 4, 3.0f / 8, 1.0f / 4, 1.0f / 16};
-
-// One a-trous tap for a row: the centre pixels' and the neighbours' planes at the tap's offset.
-struct TapRow {
-    const float *rc, *gc, *bc, *rq, *gq, *bq, *zc, *zq, *invL, *nxc, *nyc, *nzc, *nxq, *nyq, *nzq, *vq;
-    const uint32_t *kc, *kq;
-    const float *gx, *gy, *eps;  // the depth stop: sigma_depth times the gradient, and its floor
-    float ox, oy;                // the tap's offset in pixels
-};
-
-// Adds the tap's weighted neighbours of pixels [xa, xb) to the sums. Restrict-qualified sums
-// and no trapping maths (denoise.cpp's compile options) let the compiler vectorise it: without
-// them it has too many pointers to check for overlap, and a conversion that may trap. Inlined
-// into one function per instruction set (below), vectorised there at that width.
-template <class Power>
-[[gnu::always_inline]] inline void tapLoop(const TapRow& t, int xa, int xb, float b3, Power power, float* __restrict sumW,
-                                           float* __restrict sr, float* __restrict sg, float* __restrict sb,
-                                           float* __restrict sv) {
-    const float *rc = t.rc, *gc = t.gc, *bc = t.bc, *rq = t.rq, *gq = t.gq, *bq = t.bq;
-    for (int x = xa; x < xb; ++x) {
-        const float lc = 0.2126f * rc[x] + 0.7152f * gc[x] + 0.0722f * bc[x];
-        const float lq = 0.2126f * rq[x] + 0.7152f * gq[x] + 0.0722f * bq[x];
-        const float phiZ = std::fabs(t.gx[x] * t.ox + t.gy[x] * t.oy) + t.eps[x];
-        const float logW = std::fabs(t.zq[x] - t.zc[x]) / phiZ + std::fabs(lq - lc) * t.invL[x];
-        const float cn = power(std::max(0.0f, t.nxc[x] * t.nxq[x] + t.nyc[x] * t.nyq[x] + t.nzc[x] * t.nzq[x]));
-        const float wt = float(t.kq[x] == t.kc[x]) * (b3 * cn * expNegative(-logW));
-        sumW[x] += wt;
-        sr[x] += wt * rq[x];
-        sg[x] += wt * gq[x];
-        sb[x] += wt * bq[x];
-        sv[x] += wt * wt * t.vq[x];
-    }
-}
-
-// The tap loop for each instruction set: 4 lanes (SSE2, the baseline), 8 (AVX2), 16 (AVX-512).
-// Each lane does the scalar rule's operations in its order (no FMA contraction: -ffp-contract=off,
-// no approximate division or square root), so every width gives the same bytes.
-#define RTWALL_TAPS_ARGS                                                                                        \
-    const TapRow &t, int xa, int xb, float b3, Power power, float *__restrict sumW, float *__restrict sr, \
-        float *__restrict sg, float *__restrict sb, float *__restrict sv
-template <class Power> void tapsSse2(RTWALL_TAPS_ARGS) { tapLoop(t, xa, xb, b3, power, sumW, sr, sg, sb, sv); }
-template <class Power> [[gnu::target("avx2")]] void tapsAvx2(RTWALL_TAPS_ARGS) {
-    tapLoop(t, xa, xb, b3, power, sumW, sr, sg, sb, sv);
-}
-template <class Power> [[gnu::target("avx512f,avx512vl,prefer-vector-width=512")]] void tapsAvx512(RTWALL_TAPS_ARGS) {
-    tapLoop(t, xa, xb, b3, power, sumW, sr, sg, sb, sv);
-}
-template <class Power> void accumulateTaps(DenoiseIsa isa, RTWALL_TAPS_ARGS) {
-    switch (isa) {
-    case DenoiseIsa::Avx512: return tapsAvx512(t, xa, xb, b3, power, sumW, sr, sg, sb, sv);
-    case DenoiseIsa::Avx2: return tapsAvx2(t, xa, xb, b3, power, sumW, sr, sg, sb, sv);
-    default: return tapsSse2(t, xa, xb, b3, power, sumW, sr, sg, sb, sv);
-    }
-}
-#undef RTWALL_TAPS_ARGS
-
-bool supports(DenoiseIsa isa) {
-    switch (isa) {
-    case DenoiseIsa::Avx512: return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
-    case DenoiseIsa::Avx2: return __builtin_cpu_supports("avx2");
-    default: return true;
-    }
-}
-
-std::atomic<DenoiseIsa> processIsa{DenoiseIsa::Auto};
 
 std::pair<int, int> rowsOf(int n, int threads, int i) {
     return {int(int64_t(n) * i / threads), int(int64_t(n) * (i + 1) / threads)};
@@ -136,38 +57,6 @@ void checkSpan(size_t got, size_t want, const char* what) {
 }
 
 }  // namespace
-
-DenoiseIsa denoiseIsaFromName(const std::string& name) {
-    if (name == "auto") return DenoiseIsa::Auto;
-    if (name == "sse2") return DenoiseIsa::Sse2;
-    if (name == "avx2") return DenoiseIsa::Avx2;
-    if (name == "avx512") return DenoiseIsa::Avx512;
-    throw InputError("denoise instruction set '" + name + "' is not auto, sse2, avx2 or avx512");
-}
-
-const char* denoiseIsaName(DenoiseIsa isa) {
-    switch (isa) {
-    case DenoiseIsa::Sse2: return "sse2";
-    case DenoiseIsa::Avx2: return "avx2";
-    case DenoiseIsa::Avx512: return "avx512";
-    default: return "auto";
-    }
-}
-
-bool denoiseIsaSupported(DenoiseIsa isa) { return supports(isa); }
-
-DenoiseIsa resolvedDenoiseIsa(DenoiseIsa isa) {
-    if (isa != DenoiseIsa::Auto) return isa;
-    return supports(DenoiseIsa::Avx512) ? DenoiseIsa::Avx512 : supports(DenoiseIsa::Avx2) ? DenoiseIsa::Avx2 : DenoiseIsa::Sse2;
-}
-
-void setDenoiseIsa(DenoiseIsa isa) {
-    if (!supports(isa))
-        throw InputError(std::string("denoise instruction set ") + denoiseIsaName(isa) + ": this CPU does not have it");
-    processIsa.store(isa);
-}
-
-DenoiseIsa denoiseIsa() { return processIsa.load(); }
 
 void quantiseAsSent(FeatureFrame& f, uint8_t bits) {
     std::vector<uint16_t> halfs(f.linear.size());
@@ -238,7 +127,7 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
     const Float3 origin = camera.origin();
     const ImageProjection previous(previousCamera_, fw, fh);
 
-    const DenoiseIsa isa = resolvedDenoiseIsa(processIsa.load());
+    const DenoiseIsa isa = resolvedDenoiseIsa(denoiseIsa());
     const int hardware = int(std::max(1u, std::thread::hardware_concurrency()));
     const int threads = std::clamp(threadCount > 0 ? threadCount : hardware, 1, h);
     partStats_.assign(size_t(threads), DenoiseStats{});
