@@ -203,10 +203,31 @@ Image Master::renderFrame(FrameReport* report, std::vector<float>* linear, std::
     return std::move(images.front());
 }
 
+namespace {
+constexpr int kNodeHistoryWaitMs = 3000;
+}
+
 std::vector<Image> Master::renderViews(FrameReport* report, std::vector<std::vector<float>>* linear,
                                        std::vector<std::vector<float>>* depth, std::vector<FeatureImages>* features) {
     Impl& s = *impl_;
     auto begin = [&] {
+        // A denoising display node filters each frame with the one before as its history and
+        // holds two (the newest, and the one before until its swap): a third would overtake one
+        // unseen and restart its history. So with nodes present, the frame two before this one
+        // is swapped first (bounded: the barrier leaves a stalled node out within its stall
+        // time); the nodes' filter, not the clients, then sets the pace. Every caller (the wall
+        // session, benchmarks, tests) gets that from here.
+        bool nodesDenoise = false;
+        {
+            std::lock_guard lock(s.app.stateMutex);
+            nodesDenoise = s.app.denoise.mode != DenoiseSettings::Mode::Off;
+        }
+        if (s.withNodes() && s.lastBegun >= 2 && nodesDenoise) {
+            const uint32_t before = s.lastBegun - 1;  // two before the frame begun now
+            if (!displayNodesPresent().empty() && !waitForSwap(before, kNodeHistoryWaitMs))
+                std::fprintf(stderr, "rtwall master: display nodes: frame %u was not swapped within %d ms; a node may "
+                                     "skip a frame and restart its denoiser's history\n", before, kNodeHistoryWaitMs);
+        }
         const uint32_t frame = ++s.lastBegun;
         {
             // The frame renders the state as it is now; later updates belong to later frames.

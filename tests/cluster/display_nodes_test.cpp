@@ -13,12 +13,14 @@
 #include "security.h"
 
 #include <rtwall/cluster.h>
+#include <rtwall/denoise.h>
 #include <rtwall/depth_codec.h>
 
 #include <zmq.hpp>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -228,6 +230,7 @@ public:
     std::optional<std::string> goodbye;
     std::vector<TileRoutes> routes;
     std::vector<NodeFrame> frames;
+    std::vector<double> frameAt;  // when each of `frames` came
     std::vector<Swap> swaps;
     std::vector<double> haveSentAt;  // per NodeHave sent
     double haveDelay = 0;            // seconds between NodeFrame and NodeHave (a slow node)
@@ -260,6 +263,7 @@ private:
         case MsgType::NodeFrame: {
             const NodeFrame f = decodePayload<NodeFrame>(p, n);
             frames.push_back(f);
+            frameAt.push_back(secondsNow());
             delayed_.emplace_back(f.frame, secondsNow() + haveDelay);
             break;
         }
@@ -433,6 +437,42 @@ TEST(DisplayNodes, WaitForSwapReturnsOnlyOnceTheSlowestNodeHoldsTheFrame) {
     const auto t0 = Clock::now();
     EXPECT_FALSE(w.master.waitForSwap(100, 200));  // never begun
     EXPECT_GE(Clock::now() - t0, std::chrono::milliseconds(200));
+}
+
+// A denoising node's history is the frame before, and it holds two frames: with a denoise
+// mode set, the master begins frame N only once frame N-2 was swapped, whatever the caller does
+// (here: frames as fast as a fake client acknowledges, a node 0.15 s slow). Without one the
+// frames run ahead of the swaps (what shows the check can fail).
+TEST(DisplayNodes, WhileNodesDenoiseAFrameBeginsOnlyAfterTheSwapOfTheOneTwoBefore) {
+    for (const bool denoise : {true, false}) {
+        SCOPED_TRACE(denoise ? "denoising" : "not denoising");
+        Wall w;
+        {
+            std::lock_guard lock(w.right.m);
+            w.right.haveDelay = 0.15;
+        }
+        ASSERT_TRUE(waitFor(w.right, [&] { return w.right.index.has_value(); }));
+        ASSERT_TRUE(waitFor(w.left, [&] { return w.left.index.has_value(); }));
+        ASSERT_TRUE(w.master.waitForClients(1, 5000));
+        ASSERT_TRUE(w.master.waitForDisplayNodes(5000));
+        DenoiseSettings d;
+        d.mode = denoise ? DenoiseSettings::Mode::Svgf : DenoiseSettings::Mode::Off;
+        w.master.setDenoise(d, 8);
+        FrameReport report;
+        for (int i = 0; i < 5; ++i) w.master.renderFrame(&report);
+        ASSERT_TRUE(w.master.waitForSwap(report.frame, 5000));
+        std::lock_guard lock(w.left.m);
+        ASSERT_EQ(w.left.frames.size(), 5u);
+        size_t ahead = 0;
+        for (size_t i = 2; i < w.left.frames.size(); ++i) {
+            const uint32_t twoBefore = w.left.frames[i].frame - 2;
+            const auto swap = std::find_if(w.left.swaps.begin(), w.left.swaps.end(),
+                                           [&](const FakeNode::Swap& s) { return s.frame == twoBefore; });
+            ahead += swap == w.left.swaps.end() || swap->at > w.left.frameAt[i];
+        }
+        if (denoise) EXPECT_EQ(ahead, 0u) << "frames begun before the swap of the one two before";
+        else EXPECT_EQ(ahead, 3u) << "without denoising the frames need not wait";
+    }
 }
 
 TEST(DisplayNodes, AStalledNodeIsLeftOutAndNamedThenRejoins) {

@@ -220,7 +220,9 @@ TEST(ReprojectSession, AStillHeadShowsTheUnwarpedImagesOnDisplayNodes) {
             const std::string screen = e.path().filename().string().substr(13);
             std::vector<uint8_t> rgb = readPng(e.path()).rgb;
             const auto [it, fresh] = plain.emplace(screen, rgb);
-            if (!fresh) EXPECT_EQ(it->second, rgb) << e.path() << ": a still head's frames are alike";
+            if (!fresh) {
+                EXPECT_EQ(it->second, rgb) << e.path() << ": a still head's frames are alike";
+            }
         }
         EXPECT_EQ(plain.size(), 4u) << node << ": two cells, two eyes";
         size_t files = 0;

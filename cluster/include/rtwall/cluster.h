@@ -290,7 +290,9 @@ public:
     // with these settings, each window of the wall (DisplayNodeRun::denoiseWindows) with `ring`
     // pixels around it (ComposeFrame::denoiseRing), when their tiles carry the mode's features
     // (ClusterSettings::features, linear frames). Mode off (the default): not denoised. Without
-    // nodes the application filters its own frames and this does nothing.
+    // nodes the application filters its own frames and this does nothing. While a mode is set
+    // and nodes are present, renderViews begins a frame only once the one two before it was
+    // swapped (each node's history is the frame before; it holds two), waiting at most 3 s.
     void setDenoise(const DenoiseSettings& settings, int ring);
     // A frame as renderFrame, one image per view of the frame (one without views); a view's
     // pixels outside its regions' tiles are unspecified. With linear tiles `linear` receives

@@ -465,13 +465,8 @@ struct WallSession::Impl {
             DenoiseSettings d = live->desc().denoise;
             d.mode = denoise.mode;
             master->setDenoise(d, denoiseRing);
-            // Each frame's history is the frame before: none may be overtaken unseen on a node,
-            // which holds two (the newest, and the one before until its swap). So the frame
-            // two before the one this begins is swapped first (bounded: a stalled node is left
-            // out by the barrier); the nodes' filter, not the clients, then sets the pace.
-            if (report.frame > 0 && !master->displayNodesPresent().empty() && !master->waitForSwap(report.frame, 3000))
-                log(format("display nodes: frame %u was not swapped within 3 s; a node may skip a frame and restart its "
-                           "denoiser's history", report.frame));
+            // Each frame's history is the frame before: the master begins a frame only once the
+            // one two before it was swapped (Master::renderViews), so none is overtaken unseen.
         }  // re-projecting, the refreshes show it while the next frame renders
         if (views) {
             // Every view's tiles in one scheduler pass. The views go with a tag: with async the
