@@ -22,6 +22,9 @@ PACKAGES=(
   libtomlplusplus-dev  # toml++: scene and wall configs, JSON output
   libcli11-dev         # CLI11: command-line parsing
   libpng-dev           # libpng: PNG images
+  libzip-dev           # libzip: MPCDI calibration archives (.mpcdi is a zip)
+  zipcmp zipmerge ziptool  # libzip-dev's CMake config names these tools (configure fails without them)
+  libpugixml-dev       # pugixml: MPCDI's mpcdi.xml
   libgtest-dev libgmock-dev  # GoogleTest
   libbenchmark-dev     # Google Benchmark
   libzmq3-dev cppzmq-dev  # ZeroMQ: master/client transport

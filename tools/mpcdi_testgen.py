@@ -1,0 +1,312 @@
+#!/usr/bin/env python3
+"""Writes MPCDI calibration files (.mpcdi) for rtwall's warped screens, with the standard library only.
+
+It is a second, independent MPCDI writer (rtwall reads .mpcdi with libzip, pugixml and libpng),
+so the tests read files rtwall's own code did not make, written the way calibration tools
+write them: a zip of mpcdi.xml, PFM geometry warps (rows bottom to top, little-endian) and PNG
+blend maps (8-bit grey alpha with gamma 2.2 embedded, 8-bit grey beta).
+
+  python3 tools/mpcdi_testgen.py cylinder OUT.mpcdi [--res 320x240] [--grid WxH] [--overlap 0.15]
+      a cylindrical screen section (radius 3 m, 120 degrees, 2.4 m high, axis vertical through
+      (0, y, 3), its middle at z = 0) lit by three overlapping projectors, profile a3 (points in
+      metres, wall coordinates); each projector's image bends ("smile") so that its top and
+      bottom corners land off the screen (NaN samples); alpha maps blend the overlaps to one in
+      linear light, beta maps lift the black of single-projector parts to the overlaps'.
+  python3 tools/mpcdi_testgen.py identity OUT.mpcdi --buffer ID=WxH [--buffer ...] [--shift DX,DY]
+      profile 2d: one buffer per screen, a warp of one sample per pixel that maps each pixel to
+      its own centre (shifted by whole pixels with --shift), no blend maps.
+  python3 tools/mpcdi_testgen.py malformed DIR
+      broken files, each with one thing wrong (the names say what), and good.mpcdi beside them.
+  python3 tools/mpcdi_testgen.py fuzz-seeds DIR
+      the seed corpus of tests/fuzz/fuzz_mpcdi.cpp (its first byte: 0 archive, 1 parts, 2 PFM).
+"""
+import argparse
+import io
+import math
+import os
+import struct
+import sys
+import zipfile
+import zlib
+
+NAN = float("nan")
+
+# ---- the parts --------------------------------------------------------------------------------
+
+
+def pfm(width, height, samples, header=None):
+    """A three-component PFM; samples[j][i] is (x, y, z) of row j from the TOP. Rows are written
+    bottom to top, as the format says; scale -1: little-endian."""
+    out = bytearray((header or "PF\n%d %d\n-1.0\n" % (width, height)).encode("ascii"))
+    for j in reversed(range(height)):
+        row = samples[j]
+        for i in range(width):
+            out += struct.pack("<3f", *row[i])
+    return bytes(out)
+
+
+def png_grey(width, height, values, bits=8):
+    """A grey PNG from values in [0, 1] (row-major, top row first)."""
+    top = (1 << bits) - 1
+    raw = bytearray()
+    for j in range(height):
+        raw.append(0)
+        for i in range(width):
+            v = max(0, min(top, int(round(values[j * width + i] * top))))
+            raw += struct.pack(">H", v) if bits == 16 else bytes([v])
+
+    def chunk(tag, data):
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
+
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, bits, 0, 0, 0, 0)) +
+            chunk(b"IDAT", zlib.compress(bytes(raw), 9)) + chunk(b"IEND", b""))
+
+
+def archive(entries):
+    """A zip of (name, bytes), deflated, as calibration tools write them."""
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
+        for name, data in entries:
+            z.writestr(name, data)
+    return buf.getvalue()
+
+
+def xml(profile, buffers, level=2, file_sets=True):
+    """buffers: [(buffer id, w, h, [(region id, w, h, warp path, alpha path or None, beta path or None)])]."""
+    lines = ['<?xml version="1.0" encoding="utf-8"?>',
+             '<MPCDI profile="%s" geometry="%d" color="1" version="2.0">' % (profile, level), "  <display>"]
+    sets = []
+    for bid, bw, bh, regions in buffers:
+        lines.append('    <buffer id="%s" Xresolution="%d" Yresolution="%d">' % (bid, bw, bh))
+        for rid, rw, rh, warp, alpha, beta in regions:
+            lines.append('      <region id="%s" Xresolution="%d" Yresolution="%d" x="0" y="0" xsize="1" ysize="1"/>' %
+                         (rid, rw, rh))
+            s = ['    <fileset region="%s">' % rid]
+            if warp:
+                unit = "<geometricUnit>m</geometricUnit>" if profile != "2d" else ""
+                s.append("      <geometryWarpFile><path>%s</path>%s<interpolation>linear</interpolation>"
+                         "<originOf3DData>idealEyePoint</originOf3DData></geometryWarpFile>" % (warp, unit))
+            if alpha:
+                s.append("      <alphaMap><path>%s</path><componentDepth>1</componentDepth><bitDepth>8</bitDepth>"
+                         "<gammaEmbedded>2.2</gammaEmbedded></alphaMap>" % alpha)
+            if beta:
+                s.append("      <betaMap><path>%s</path><componentDepth>1</componentDepth><bitDepth>8</bitDepth></betaMap>" % beta)
+            s.append("    </fileset>")
+            sets += s
+        lines.append("    </buffer>")
+    lines.append("  </display>")
+    if file_sets:
+        lines += ["  <files>"] + sets + ["  </files>"]
+    lines.append("</MPCDI>")
+    return ("\n".join(lines) + "\n").encode("utf-8")
+
+
+# ---- the cylinder -------------------------------------------------------------------------------
+
+RADIUS, SPAN_DEG, HEIGHT, AXIS_Z = 3.0, 120.0, 2.4, 3.0
+
+
+def cylinder_point(theta, y):
+    """The screen point at angle theta (radians, 0 in the middle, positive to the right) and height y."""
+    return (RADIUS * math.sin(theta), y, AXIS_Z - RADIUS * math.cos(theta))
+
+
+def projector_ranges(overlap):
+    """Each projector's angle range (radians): three equal parts of the span, overlapping by
+    `overlap` of a projector's width."""
+    span = math.radians(SPAN_DEG)
+    width = span / (3 - 2 * overlap)
+    step = width * (1 - overlap)
+    return [(-span / 2 + k * step, -span / 2 + k * step + width) for k in range(3)]
+
+
+def projector_map(k, u, v, overlap):
+    """Projector k's pixel at (u, v) in [0, 1] from the top left: (theta, y) on the screen, or None
+    off it. The image covers the angle range horizontally and 1.08 x the height, bent by a smile
+    (the middle of a row lower than its ends), so corners fall off the screen."""
+    t0, t1 = projector_ranges(overlap)[k]
+    theta = t0 + (t1 - t0) * u
+    y = HEIGHT * 1.08 * (0.5 - v) - 0.12 * (u - 0.5) ** 2 * HEIGHT + 0.0075 * HEIGHT
+    if abs(y) > HEIGHT / 2:
+        return None
+    return theta, y
+
+
+def blend_weight(k, theta, overlap):
+    """Projector k's share of the light at angle theta: a smooth ramp across each overlap, the
+    shares of all projectors summing to one (linear light)."""
+    ranges = projector_ranges(overlap)
+    t0, t1 = ranges[k]
+    if theta < t0 or theta > t1:
+        return 0.0
+
+    def ramp(x):  # 0 -> 1 smoothly over [0, 1]
+        x = max(0.0, min(1.0, x))
+        return x * x * (3 - 2 * x)
+
+    w = 1.0
+    if k > 0:  # the overlap with the projector to the left
+        lo, hi = t0, ranges[k - 1][1]
+        if theta < hi:
+            w = ramp((theta - lo) / (hi - lo))
+    if k < 2:  # with the one to the right
+        lo, hi = ranges[k + 1][0], t1
+        if theta > lo:
+            w = 1 - ramp((theta - lo) / (hi - lo))
+    return w
+
+
+def cylinder(res, grid, overlap):
+    w, h = res
+    gw, gh = grid
+    buffers, entries = [], []
+    for k in range(3):
+        samples = []
+        for j in range(gh):
+            row = []
+            for i in range(gw):
+                m = projector_map(k, (i + 0.5) / gw, (j + 0.5) / gh, overlap)
+                row.append((NAN, NAN, NAN) if m is None else cylinder_point(*m))
+            samples.append(row)
+        alpha, beta = [], []
+        for j in range(h):
+            for i in range(w):
+                m = projector_map(k, (i + 0.5) / w, (j + 0.5) / h, overlap)
+                if m is None:
+                    alpha.append(0.0)
+                    beta.append(0.0)
+                    continue
+                share = blend_weight(k, m[0], overlap)
+                alpha.append(share ** (1 / 2.2))  # gammaEmbedded 2.2
+                beta.append(0.02 if share >= 1.0 else 0.0)
+        pid = "proj%d" % k
+        entries += [(pid + "_warp.pfm", pfm(gw, gh, samples)), (pid + "_alpha.png", png_grey(w, h, alpha)),
+                    (pid + "_beta.png", png_grey(w, h, beta))]
+        buffers.append((pid, w, h, [(pid + "_region", w, h, pid + "_warp.pfm", pid + "_alpha.png", pid + "_beta.png")]))
+    return archive([("mpcdi.xml", xml("a3", buffers))] + entries)
+
+
+# ---- identity 2d --------------------------------------------------------------------------------
+
+
+def identity_samples(w, h, dx=0, dy=0):
+    """Each pixel to its own centre (u right, v up from the lower left), shifted by whole pixels."""
+    return [[((i + dx + 0.5) / w, 1 - (j + dy + 0.5) / h, 0.0) for i in range(w)] for j in range(h)]
+
+
+def identity(buffers, shift):
+    dx, dy = shift
+    xmlbufs, entries = [], []
+    for bid, (w, h) in buffers:
+        entries.append((bid + ".pfm", pfm(w, h, identity_samples(w, h, dx, dy))))
+        xmlbufs.append((bid, w, h, [(bid + "_region", w, h, bid + ".pfm", None, None)]))
+    return archive([("mpcdi.xml", xml("2d", xmlbufs))] + entries)
+
+
+# ---- malformed ----------------------------------------------------------------------------------
+
+
+def malformed(out):
+    """One file per fault; the file name says what is wrong."""
+    w, h = 8, 6
+    good_warp = pfm(w, h, identity_samples(w, h))
+    one = [("p0", w, h, [("r0", w, h, "r0.pfm", "r0_alpha.png", None)])]
+    good_xml = xml("2d", one)
+    alpha = png_grey(w, h, [1.0] * (w * h))
+    good = archive([("mpcdi.xml", good_xml), ("r0.pfm", good_warp), ("r0_alpha.png", alpha)])
+    files = {
+        "good.mpcdi": good,
+        "truncated-zip.mpcdi": good[: len(good) // 2],
+        "not-a-zip.mpcdi": b"this is not a zip archive at all\n" * 4,
+        "no-mpcdi-xml.mpcdi": archive([("calibration.xml", good_xml), ("r0.pfm", good_warp)]),
+        "missing-warp.mpcdi": archive([("mpcdi.xml", good_xml), ("r0_alpha.png", alpha)]),
+        "no-geometry-warp.mpcdi": archive([("mpcdi.xml", xml("2d", [("p0", w, h, [("r0", w, h, None, None, None)])]))]),
+        "pfm-short.mpcdi": archive([("mpcdi.xml", good_xml), ("r0.pfm", good_warp[:-12]), ("r0_alpha.png", alpha)]),
+        "pfm-huge-header.mpcdi": archive([("mpcdi.xml", good_xml),
+                                          ("r0.pfm", b"PF\n16384 16384\n-1.0\n" + good_warp[-w * h * 12:]),
+                                          ("r0_alpha.png", alpha)]),
+        "pfm-infinite.mpcdi": archive([("mpcdi.xml", good_xml),
+                                       ("r0.pfm", pfm(w, h, [[(math.inf if (i, j) == (3, 2) else 0.5, 0.5, 0.0)
+                                                              for i in range(w)] for j in range(h)])),
+                                       ("r0_alpha.png", alpha)]),
+        "all-nan.mpcdi": archive([("mpcdi.xml", good_xml), ("r0.pfm", pfm(w, h, [[(NAN, NAN, NAN)] * w] * h)),
+                                  ("r0_alpha.png", alpha)]),
+        "alpha-wrong-size.mpcdi": archive([("mpcdi.xml", good_xml), ("r0.pfm", good_warp),
+                                           ("r0_alpha.png", png_grey(w + 1, h, [1.0] * ((w + 1) * h)))]),
+        "unknown-profile.mpcdi": archive([("mpcdi.xml", good_xml.replace(b'profile="2d"', b'profile="4d"')),
+                                          ("r0.pfm", good_warp), ("r0_alpha.png", alpha)]),
+        "bad-xml.mpcdi": archive([("mpcdi.xml", good_xml[:-20]), ("r0.pfm", good_warp), ("r0_alpha.png", alpha)]),
+        "pfm-one-component.mpcdi": archive([("mpcdi.xml", good_xml), ("r0.pfm", b"Pf\n8 6\n-1.0\n" + bytes(w * h * 4)),
+                                            ("r0_alpha.png", alpha)]),
+    }
+    os.makedirs(out, exist_ok=True)
+    for name, data in files.items():
+        with open(os.path.join(out, name), "wb") as f:
+            f.write(data)
+
+
+def fuzz_seeds(out):
+    """Small valid inputs of each of fuzz_mpcdi's three kinds."""
+    os.makedirs(out, exist_ok=True)
+    w, h = 4, 3
+    warp = pfm(w, h, identity_samples(w, h))
+    alpha = png_grey(w, h, [0.5] * (w * h))
+    one = [("p0", w, h, [("r0", w, h, "r0.pfm", "r0_alpha.png", "r0_beta.png")])]
+    text = xml("2d", one)
+    seeds = {
+        "archive-2d": b"\x00" + archive([("mpcdi.xml", text), ("r0.pfm", warp), ("r0_alpha.png", alpha),
+                                          ("r0_beta.png", alpha)]),
+        "archive-a3": b"\x00" + cylinder((8, 6), (4, 3), 0.15),
+        "parts-2d": b"\x01" + text + b"\x00\x00" + warp + b"\x00\x00" + alpha + b"\x00\x00" + alpha,
+        "parts-a3": b"\x01" + xml("a3", one) + b"\x00\x00" + pfm(2, 2, [[(0.0, 1.0, 2.0), (NAN, NAN, NAN)]] * 2),
+        "pfm": b"\x02" + warp,
+    }
+    for name, data in seeds.items():
+        with open(os.path.join(out, name), "wb") as f:
+            f.write(data)
+
+
+def size(text):
+    w, _, h = text.partition("x")
+    return int(w), int(h)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="what", required=True)
+    c = sub.add_parser("cylinder")
+    c.add_argument("out")
+    c.add_argument("--res", type=size, default=(320, 240))
+    c.add_argument("--grid", type=size, default=None, help="warp samples (default: one per pixel)")
+    c.add_argument("--overlap", type=float, default=0.15)
+    i = sub.add_parser("identity")
+    i.add_argument("out")
+    i.add_argument("--buffer", action="append", required=True, help="ID=WxH")
+    i.add_argument("--shift", default="0,0")
+    m = sub.add_parser("malformed")
+    m.add_argument("out")
+    fz = sub.add_parser("fuzz-seeds")
+    fz.add_argument("out")
+    a = p.parse_args()
+    if a.what == "cylinder":
+        data = cylinder(a.res, a.grid or a.res, a.overlap)
+    elif a.what == "identity":
+        bufs = []
+        for b in a.buffer:
+            bid, _, wh = b.partition("=")
+            bufs.append((bid, size(wh)))
+        dx, dy = (int(v) for v in a.shift.split(","))
+        data = identity(bufs, (dx, dy))
+    elif a.what == "fuzz-seeds":
+        fuzz_seeds(a.out)
+        return
+    else:
+        malformed(a.out)
+        return
+    os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
+    with open(a.out, "wb") as f:
+        f.write(data)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
