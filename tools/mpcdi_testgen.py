@@ -6,12 +6,15 @@ so the tests read files rtwall's own code did not make, written the way calibrat
 write them: a zip of mpcdi.xml, PFM geometry warps (rows bottom to top, little-endian) and PNG
 blend maps (8-bit grey alpha with gamma 2.2 embedded, 8-bit grey beta).
 
-  python3 tools/mpcdi_testgen.py cylinder OUT.mpcdi [--res 320x240] [--grid WxH] [--overlap 0.15]
+  python3 tools/mpcdi_testgen.py cylinder OUT.mpcdi [--res 320x240] [--grid WxH] [--overlap 0.15] [--wall OUT.toml]
+                                   [--unit m|dm|cm|mm] [--declare UNIT]
       a cylindrical screen section (radius 3 m, 120 degrees, 2.4 m high, axis vertical through
       (0, y, 3), its middle at z = 0) lit by three overlapping projectors, profile a3 (points in
       metres, wall coordinates); each projector's image bends ("smile") so that its top and
       bottom corners land off the screen (NaN samples); alpha maps blend the overlaps to one in
       linear light, beta maps lift the black of single-projector parts to the overlaps'.
+      --wall also writes the wall config that uses it: three screens side by side in the wall
+      image, each framed by its projector's chord of the cylinder, the viewer on the axis.
   python3 tools/mpcdi_testgen.py identity OUT.mpcdi --buffer ID=WxH [--buffer ...] [--shift DX,DY]
       profile 2d: one buffer per screen, a warp of one sample per pixel that maps each pixel to
       its own centre (shifted by whole pixels with --shift), no blend maps.
@@ -71,7 +74,7 @@ def archive(entries):
     return buf.getvalue()
 
 
-def xml(profile, buffers, level=2, file_sets=True):
+def xml(profile, buffers, level=2, file_sets=True, unit="m"):
     """buffers: [(buffer id, w, h, [(region id, w, h, warp path, alpha path or None, beta path or None)])]."""
     lines = ['<?xml version="1.0" encoding="utf-8"?>',
              '<MPCDI profile="%s" geometry="%d" color="1" version="2.0">' % (profile, level), "  <display>"]
@@ -83,9 +86,9 @@ def xml(profile, buffers, level=2, file_sets=True):
                          (rid, rw, rh))
             s = ['    <fileset region="%s">' % rid]
             if warp:
-                unit = "<geometricUnit>m</geometricUnit>" if profile != "2d" else ""
+                unit_xml = "<geometricUnit>%s</geometricUnit>" % unit if profile != "2d" else ""
                 s.append("      <geometryWarpFile><path>%s</path>%s<interpolation>linear</interpolation>"
-                         "<originOf3DData>idealEyePoint</originOf3DData></geometryWarpFile>" % (warp, unit))
+                         "<originOf3DData>idealEyePoint</originOf3DData></geometryWarpFile>" % (warp, unit_xml))
             if alpha:
                 s.append("      <alphaMap><path>%s</path><componentDepth>1</componentDepth><bitDepth>8</bitDepth>"
                          "<gammaEmbedded>2.2</gammaEmbedded></alphaMap>" % alpha)
@@ -156,7 +159,12 @@ def blend_weight(k, theta, overlap):
     return w
 
 
-def cylinder(res, grid, overlap):
+UNITS = {"m": 1.0, "dm": 10.0, "cm": 100.0, "mm": 1000.0}
+
+
+def cylinder(res, grid, overlap, unit="m", declared=None):
+    """The archive; points in `unit` (mm: 1000 per metre), declared as `declared` (default: the same)."""
+    per_metre = UNITS[unit]
     w, h = res
     gw, gh = grid
     buffers, entries = [], []
@@ -166,7 +174,7 @@ def cylinder(res, grid, overlap):
             row = []
             for i in range(gw):
                 m = projector_map(k, (i + 0.5) / gw, (j + 0.5) / gh, overlap)
-                row.append((NAN, NAN, NAN) if m is None else cylinder_point(*m))
+                row.append((NAN, NAN, NAN) if m is None else tuple(c * per_metre for c in cylinder_point(*m)))
             samples.append(row)
         alpha, beta = [], []
         for j in range(h):
@@ -183,7 +191,33 @@ def cylinder(res, grid, overlap):
         entries += [(pid + "_warp.pfm", pfm(gw, gh, samples)), (pid + "_alpha.png", png_grey(w, h, alpha)),
                     (pid + "_beta.png", png_grey(w, h, beta))]
         buffers.append((pid, w, h, [(pid + "_region", w, h, pid + "_warp.pfm", pid + "_alpha.png", pid + "_beta.png")]))
-    return archive([("mpcdi.xml", xml("a3", buffers))] + entries)
+    return archive([("mpcdi.xml", xml("a3", buffers, unit=declared or unit))] + entries)
+
+
+def cylinder_wall(res, overlap, mpcdi_name, buffers=None):
+    """The wall config of the cylinder: one screen per projector, framed by the chord rectangle of
+    its angle range; [warp] maps buffer projK to screen projK."""
+    w, h = res
+    f = lambda p: "[%.9g, %.9g, %.9g]" % p
+    out = ["# A cylindrical screen section (radius %g m, %g degrees, %g m high) lit by three overlapping" % (RADIUS, SPAN_DEG, HEIGHT),
+           "# projectors, calibrated by an MPCDI file (profile a3) that tools/mpcdi_testgen.py writes:",
+           "#   python3 tools/mpcdi_testgen.py cylinder %s --res %dx%d --wall THIS.toml" % (mpcdi_name, w, h),
+           "# Each projector is a screen of the wall image (side by side), framed by the chord of its part",
+           "# of the cylinder; every projector pixel's ray goes from the eye through the surface point the",
+           "# calibration gives it ([warp], docs/mpcdi.md).",
+           "[wall]", 'name = "curved-3-projectors"', "width = %d" % (3 * w), "height = %d" % h, "",
+           "[stereo]", 'mode = "none"', "viewer = [0.0, 0.0, %g]  # on the cylinder's axis, at its middle height" % AXIS_Z,
+           "lower_left = %s" % f(cylinder_point(-math.radians(SPAN_DEG) / 2, -HEIGHT / 2)),
+           "lower_right = %s" % f(cylinder_point(math.radians(SPAN_DEG) / 2, -HEIGHT / 2)),
+           "upper_left = %s" % f(cylinder_point(-math.radians(SPAN_DEG) / 2, HEIGHT / 2)), ""]
+    for k, (t0, t1) in enumerate(projector_ranges(overlap)):
+        out += ["[[screen]]", 'name = "proj%d"' % k, "viewport = [%d, 0, %d, %d]" % (k * w, w, h),
+                "lower_left = %s" % f(cylinder_point(t0, -HEIGHT / 2)), "lower_right = %s" % f(cylinder_point(t1, -HEIGHT / 2)),
+                "upper_left = %s" % f(cylinder_point(t0, HEIGHT / 2)), ""]
+    mapping = buffers or {"proj%d" % k: "proj%d" % k for k in range(3)}
+    out += ["[warp]", 'mpcdi = "%s"' % mpcdi_name,
+            "buffers = { %s }" % ", ".join('%s = "%s"' % (b, sc) for b, sc in mapping.items()), ""]
+    return "\n".join(out)
 
 
 # ---- identity 2d --------------------------------------------------------------------------------
@@ -279,6 +313,9 @@ def main():
     c.add_argument("--res", type=size, default=(320, 240))
     c.add_argument("--grid", type=size, default=None, help="warp samples (default: one per pixel)")
     c.add_argument("--overlap", type=float, default=0.15)
+    c.add_argument("--wall", default=None, help="also write the wall config that uses it")
+    c.add_argument("--unit", choices=sorted(UNITS), default="m", help="the warp's points in this unit")
+    c.add_argument("--declare", choices=sorted(UNITS), default=None, help="declare this unit instead (a faulty export)")
     i = sub.add_parser("identity")
     i.add_argument("out")
     i.add_argument("--buffer", action="append", required=True, help="ID=WxH")
@@ -289,7 +326,11 @@ def main():
     fz.add_argument("out")
     a = p.parse_args()
     if a.what == "cylinder":
-        data = cylinder(a.res, a.grid or a.res, a.overlap)
+        data = cylinder(a.res, a.grid or a.res, a.overlap, a.unit, a.declare)
+        if a.wall:
+            rel = os.path.relpath(os.path.abspath(a.out), os.path.dirname(os.path.abspath(a.wall)))
+            with open(a.wall, "w") as f:
+                f.write(cylinder_wall(a.res, a.overlap, rel))
     elif a.what == "identity":
         bufs = []
         for b in a.buffer:

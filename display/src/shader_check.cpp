@@ -79,6 +79,7 @@ std::vector<std::string> checkWall(const WallConfig& wall) {
         text << in.rdbuf();
         more(checkShader({s.fragmentShader.string(), text.str()}, true));
     }
+    more(checkWarp(wall));
     return problems;
 }
 

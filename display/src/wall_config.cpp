@@ -9,6 +9,7 @@
 #include <cctype>
 #include <cmath>
 #include <iomanip>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -375,6 +376,36 @@ void readHeadless(Reader& top, WallConfig& w, const std::filesystem::path& file)
     r->finish();
 }
 
+// [warp]: the calibration file and which screen each of its buffers drives (the file itself is
+// read by checkWall and the wall, not here: a config loads without it).
+void readWarp(Reader& top, WallConfig& w, const std::filesystem::path& file) {
+    auto r = toml_reader::sectionReader(top, file, wall_keys::kWarp);
+    if (!r) return;
+    WarpConfig warp;
+    const std::string mpcdi = r->string("mpcdi", "", true);
+    if (mpcdi.empty()) r->fail(r->find("mpcdi"), "key 'mpcdi': an empty path");
+    warp.mpcdi = std::filesystem::absolute(file.parent_path() / mpcdi).lexically_normal();
+    warp.mode = r->choice("mode", "direct", {"direct", "post"}) == "post" ? WarpMode::Post : WarpMode::Direct;
+    const toml::node* buffers = r->find("buffers");
+    if (!buffers) r->fail(nullptr, "missing required key 'buffers' (each MPCDI buffer id to its screen)");
+    const toml::table* t = buffers->as_table();
+    if (!t) r->fail(buffers, "key 'buffers': a table of buffer id = \"screen name\", e.g. { proj0 = \"left\" }");
+    if (t->empty()) r->fail(buffers, "key 'buffers': no buffer is mapped");
+    std::set<std::string> screens;
+    for (const auto& [id, node] : *t) {
+        const auto* name = node.as_string();
+        const std::string key(id.str());
+        if (!name) r->fail(&node, "key 'buffers': buffer '" + key + "' must name a screen (a string)");
+        const auto it = std::find_if(w.screens.begin(), w.screens.end(), [&](const ScreenConfig& sc) { return sc.name == name->get(); });
+        if (it == w.screens.end()) r->fail(&node, "key 'buffers': buffer '" + key + "' names screen '" + name->get() + "', which the wall has not");
+        if (!screens.insert(name->get()).second)
+            r->fail(&node, "key 'buffers': screen '" + name->get() + "' is driven by two buffers");
+        warp.buffers.emplace_back(key, name->get());
+    }
+    r->finish();
+    w.warp = std::move(warp);
+}
+
 // The layout as a whole: corners and nodes on every screen or none, eyes that fit the stereo
 // mode, overlaps only where blend ramps cover them, at most kMaxDisplayNodes nodes.
 void checkLayout(const WallConfig& w, const toml::table& root, const WallParse& p) {
@@ -446,6 +477,7 @@ WallConfig parse(const toml::table& root, const std::filesystem::path& file) {
     }
     readNodeRegions(top, file, w, p.gridColumns, p.gridRows);
     readHeadless(top, w, file);
+    readWarp(top, w, file);
     top.finish();
     checkLayout(w, root, p);
     return w;
@@ -476,7 +508,7 @@ bool WallConfig::operator==(const WallConfig& o) const {
            swapBarrier == o.swapBarrier && reproject == o.reproject && reprojectDebug == o.reprojectDebug &&
            refreshHz == o.refreshHz && screens == o.screens &&
            stereo == o.stereo && tracking == o.tracking && writeEvery == o.writeEvery && video == o.video &&
-           navigation == o.navigation;
+           navigation == o.navigation && warp == o.warp;
 }
 
 WallConfig loadWallConfig(const std::filesystem::path& file) { return parse(toml_reader::parseFile(file), file); }
@@ -521,7 +553,7 @@ std::string writeWallConfig(const WallConfig& w) {
     if (w.refreshHz != WallConfig{}.refreshHz) os << "refresh_hz = " << num(w.refreshHz) << "\n";
     if (w.swapGroup > 0) os << "swap_group = " << w.swapGroup << "\nswap_barrier = " << w.swapBarrier << "\n";
     os << "\n";
-    if (w.stereo.mode != StereoMode::None || w.tracking.enabled) {
+    if (w.stereo.mode != StereoMode::None || w.tracking.enabled || !(w.stereo == StereoConfig{})) {  // the viewer counts on mono walls too
         const StereoConfig& s = w.stereo;
         os << "[stereo]\nmode = \"" << stereoName(s.mode) << "\"\neye_separation = " << num(s.eyeSeparation)
            << "\nviewer = " << f3(s.viewer) << "\nlower_left = " << f3(s.lowerLeft) << "\nlower_right = " << f3(s.lowerRight)
@@ -545,6 +577,13 @@ std::string writeWallConfig(const WallConfig& w) {
            << d3(t.wandDirection) << "\nwand_ray = " << (t.wandRay ? "true" : "false") << "\n\n";
     }
     if (!(w.navigation == NavigationConfig{})) os << "[navigation]\nscale = " << num(w.navigation.scale) << "\n\n";
+    if (w.warp) {
+        os << "[warp]\nmpcdi = " << quoted(w.warp->mpcdi.string()) << "\nmode = \"" << (w.warp->mode == WarpMode::Post ? "post" : "direct")
+           << "\"\nbuffers = { ";
+        for (size_t i = 0; i < w.warp->buffers.size(); ++i)
+            os << (i ? ", " : "") << quoted(w.warp->buffers[i].first) << " = " << quoted(w.warp->buffers[i].second);
+        os << " }\n\n";
+    }
     os << "[headless]\nwrite_every = " << w.writeEvery << "\nvideo = " << quoted(w.video) << "\n";
     for (const ScreenConfig& s : w.screens) {
         os << "\n[[screen]]\nname = " << quoted(s.name) << "\nviewport = [" << s.viewport.x << ", " << s.viewport.y << ", "

@@ -17,6 +17,7 @@ inline constexpr Key kTopKeys[] = {
     {.name = "screen", .type = KeyType::Tables},
     {.name = "node", .type = KeyType::Tables},
     {.name = "headless", .type = KeyType::Table},
+    {.name = "warp", .type = KeyType::Table},
 };
 
 inline constexpr Key kWallKeys[] = {
@@ -118,6 +119,12 @@ inline constexpr Key kHeadlessKeys[] = {
     {.name = "video", .type = KeyType::String, .help = "also pipe the wall image to the `ffmpeg` program (when installed) into this file in the output folder"},
 };
 
+inline constexpr Key kWarpKeys[] = {
+    {.name = "mpcdi", .type = KeyType::String, .help = "the projector calibration: a VESA MPCDI file (`.mpcdi`, [docs/mpcdi.md](../docs/mpcdi.md)), relative to the config; *required*"},
+    {.name = "buffers", .type = KeyType::Table, .help = "each MPCDI buffer id to the screen it drives, e.g. `{ proj0 = \"left\", proj1 = \"right\" }`: the buffer's pixels are the screen's; every buffer of the file mapped, each screen at most once; *required*"},
+    {.name = "mode", .type = KeyType::Choice, .choices = "direct, post", .help = "direct (default): each projector pixel's ray goes from the eye through the point of the screen surface the calibration gives it; post: the screen's flat image is resampled through the warp after rendering (the rasteriser's way, for comparison)"},
+};
+
 inline constexpr Section kTop{"the wall config", "# Wall configs", kTopKeys};
 inline constexpr Section kWall{"[wall]", "## `[wall]`", kWallKeys};
 inline constexpr Section kStereo{"[stereo]", "## `[stereo]`", kStereoKeys};
@@ -127,8 +134,9 @@ inline constexpr Section kGrid{"[grid]", "## `[grid]`", kGridKeys};
 inline constexpr Section kScreen{"[[screen]]", "## `[[screen]]`", kScreenKeys};
 inline constexpr Section kNode{"[[node]]", "## Display nodes", kNodeKeys};
 inline constexpr Section kHeadless{"[headless]", "## `[headless]`", kHeadlessKeys};
+inline constexpr Section kWarp{"[warp]", "## `[warp]`", kWarpKeys};
 
 // Every section, for the test that holds them against the documentation.
-inline constexpr const Section* kAll[] = {&kTop, &kWall, &kStereo, &kTracking, &kNavigation, &kGrid, &kScreen, &kNode, &kHeadless};
+inline constexpr const Section* kAll[] = {&kTop, &kWall, &kStereo, &kTracking, &kNavigation, &kGrid, &kScreen, &kNode, &kHeadless, &kWarp};
 
 }  // namespace rtwall::wall_keys

@@ -7,7 +7,10 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
+#include <cstdlib>
+#include <filesystem>
 #include <cstdio>
 
 namespace rtwall {
@@ -38,6 +41,32 @@ TEST(WallCli, CheckNamesTheScreensOfEachDisplayNode) {
     EXPECT_EQ(r.status, 1);
     EXPECT_EQ(r.output, "rtwall: error: " + bad.string() +
                             ":8: screen 'screen2': key 'node': missing; screen 'screen1' is on node 'a', so every screen needs a node\n");
+}
+
+// [warp] (issue 30): `rtwall check` reads the calibration and says so; a problem in it is a line
+// and exit 1; `rtwall run` refuses the wall in one line while rendering through it is not built.
+TEST(WallCli, CheckReadsTheProjectorCalibrationAndRunRefusesItForNow) {
+    const auto dir = test::scratchDir();
+    const std::string gen = "python3 " + (test::sourceDir() / "tools/mpcdi_testgen.py").string() + " cylinder " +
+                            (dir / "c.mpcdi").string() + " --res 32x24 --wall " + (dir / "c.toml").string();
+    ASSERT_EQ(std::system(gen.c_str()), 0) << gen;
+    Result r = run("check " + (dir / "c.toml").string());
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("3 screens, shaders compile; warp (direct): 3 projectors of c.mpcdi\n"), std::string::npos) << r.output;
+    r = run("run --wall " + (dir / "c.toml").string() + " --headless --frames 1");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.output, "rtwall: error: " + (dir / "c.toml").string() +
+                            ": [warp]: the wall cannot render through a projector calibration yet (rtwall check validates it; "
+                            "docs/mpcdi.md)\n");
+    std::filesystem::resize_file(dir / "c.mpcdi", 100);
+    r = run("check " + (dir / "c.toml").string());
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.output.rfind("rtwall: error: " + (dir / "c.toml").string() + ": [warp]: " + (dir / "c.mpcdi").string() +
+                                 ": not a readable zip archive (",
+                             0),
+              0u)
+        << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1);
 }
 
 // `rtwall display` stops in one line, before listening or connecting, when the clients could not

@@ -12,7 +12,7 @@ namespace rtwall::cli {
 
 void addCheck(CLI::App& app, Run& run) {
     addCommandOfOneArgument(
-        app, run, "check", "Validate a wall config and compile its shaders (glslang)", "config",
+        app, run, "check", "Validate a wall config, compile its shaders (glslang) and check its projector calibration ([warp])", "config",
         "Wall config (.toml, see configs/README.md)", [](const std::string& config) {
             const std::vector<std::string> problems = checkWall(config);  // config problems throw InputError
             for (const std::string& p : problems) std::fprintf(stderr, "rtwall: error: %s\n", p.c_str());
@@ -25,8 +25,15 @@ void addCheck(CLI::App& app, Run& run) {
                 for (const ScreenConfig& s : wall.screens)
                     if (s.node == n) nodes += " " + s.name;
             }
-            std::printf("%s: ok: '%s', %dx%d wall pixels, %zu screen%s, shaders compile%s\n", config.c_str(), wall.name.c_str(),
-                        wall.width, wall.height, wall.screens.size(), wall.screens.size() == 1 ? "" : "s", nodes.c_str());
+            // With [warp], the calibration that was checked against the screens.
+            std::string warp;
+            if (wall.warp)
+                warp = "; warp (" + std::string(wall.warp->mode == WarpMode::Post ? "post" : "direct") + "): " +
+                       std::to_string(wall.warp->buffers.size()) + " projector" + (wall.warp->buffers.size() == 1 ? "" : "s") +
+                       " of " + wall.warp->mpcdi.filename().string();
+            std::printf("%s: ok: '%s', %dx%d wall pixels, %zu screen%s, shaders compile%s%s\n", config.c_str(), wall.name.c_str(),
+                        wall.width, wall.height, wall.screens.size(), wall.screens.size() == 1 ? "" : "s", nodes.c_str(),
+                        warp.c_str());
             return 0;
         });
 }

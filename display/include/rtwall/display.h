@@ -117,6 +117,18 @@ struct NavigationConfig {
     bool operator==(const NavigationConfig&) const = default;
 };
 
+// [warp] (issue 30, docs/mpcdi.md): the screens a projector calibration covers. Each buffer of
+// the MPCDI file is one screen's projector: its pixels are the screen's pixels, and each pixel's
+// ray goes from the eye through the surface point the calibration gives it (`direct`), or the
+// screen's flat image is resampled through the warp after rendering (`post`, for comparison).
+enum class WarpMode { Direct, Post };
+struct WarpConfig {
+    std::filesystem::path mpcdi;  // the .mpcdi file (relative paths resolved against the config's folder)
+    std::vector<std::pair<std::string, std::string>> buffers;  // MPCDI buffer id -> screen name, by id
+    WarpMode mode = WarpMode::Direct;
+    bool operator==(const WarpConfig&) const = default;
+};
+
 struct WallConfig {
     std::filesystem::path file;       // where it was read from (messages, relative shader paths)
     std::string name = "wall";
@@ -136,6 +148,7 @@ struct WallConfig {
     StereoConfig stereo;
     TrackingConfig tracking;
     NavigationConfig navigation;
+    std::optional<WarpConfig> warp;   // projector calibration of some screens ([warp]); none: flat screens
     int writeEvery = 1;               // headless: every Nth frame as per-screen PNGs (0: never)
     std::string video;                // headless: also encode the wall to this file through ffmpeg
     bool operator==(const WallConfig& o) const;  // ignores `file` and screen lines
@@ -206,10 +219,22 @@ std::vector<ShaderSource> warpShaders();
 // Compiles GLSL 330 core with glslang (no GPU needed). Returns the problems, one line each:
 // "<name>:<line>: <message>", empty when it compiles.
 std::vector<std::string> checkShader(const ShaderSource& source, bool fragment);
-// Everything `rtwall check` does: the config (throws InputError) and every shader it uses.
+// Everything `rtwall check` does: the config (throws InputError), every shader it uses and the
+// projector calibration of its [warp] (checkWarp).
 std::vector<std::string> checkWall(const std::filesystem::path& file);
-// The shaders of a wall already loaded (or given in code).
+// The shaders and the calibration of a wall already loaded (or given in code).
 std::vector<std::string> checkWall(const WallConfig& wall);
+struct EyeWindow;
+// [warp] against its MPCDI file (docs/mpcdi.md), one line per problem, "<config>: [warp]: ...":
+// the file reads; every buffer is mapped and every mapped buffer is in it; each buffer has its
+// screen's pixels and its regions tile it; every surface point (3D profiles) or screen
+// coordinate (2D) lies inside the screen's frame (its corners, or its part of [stereo]'s
+// rectangle) within 2 % of its size and no farther from its plane than its diagonal (a wrong
+// geometric unit shows there). Empty without [warp].
+std::vector<std::string> checkWarp(const WallConfig& wall);
+// A screen's frame in wall coordinates (metres): its corners, or its viewport's part of
+// [stereo]'s rectangle.
+EyeWindow screenFrame(const WallConfig& wall, size_t screen);
 
 // ---------------------------------------------------------------------------------------------
 // Mapping a wall image to the screens (the CPU reference of present.frag)

@@ -50,6 +50,10 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
         s.wallConfig = c.loadedWall ? *c.loadedWall : loadWallConfig(c.wall);
         const std::vector<std::string> problems = checkWall(s.wallConfig);
         if (!problems.empty()) throw InputError(problems.front());
+        // Rendering through a calibration is issue 30's next step: refused, not shown flat.
+        if (s.wallConfig.warp)
+            throw InputError(s.wallConfig.file.string() + ": [warp]: the wall cannot render through a projector calibration "
+                             "yet (rtwall check validates it; docs/mpcdi.md)");
     }
     s.stereo = s.wallConfig.stereo.mode != StereoMode::None;
     s.views = wallHasViews(s.wallConfig);

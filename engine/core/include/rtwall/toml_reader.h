@@ -337,7 +337,7 @@ inline std::optional<Reader> sectionReader(Reader& top, const std::filesystem::p
 // The keys of `sections` that `doc` (configs/README.md) does not document under the section's
 // heading, as "section key" lines, and keys whose help is not the documentation's text. A key is
 // documented as `key` in a table row or as `key = ` in an example; a key that is itself a table
-// as `[key]` or `[[key]]` anywhere.
+// as `[key]` or `[[key]]` anywhere (an inline table also as `key` in its section).
 inline std::vector<std::string> undocumentedKeys(std::span<const Section* const> sections, const std::string& doc) {
     std::vector<std::string> out;
     for (const Section* s : sections) {
@@ -356,7 +356,8 @@ inline std::vector<std::string> undocumentedKeys(std::span<const Section* const>
         for (const Key& k : s->keys) {
             const std::string name(k.name);
             const bool documented =
-                k.type == KeyType::Table    ? doc.find("[" + name + "]") != std::string::npos
+                k.type == KeyType::Table    ? doc.find("[" + name + "]") != std::string::npos ||
+                                                  text.find("`" + name + "`") != std::string::npos  // an inline table
                 : k.type == KeyType::Tables ? doc.find("[[" + name + "]]") != std::string::npos
                                             : text.find("`" + name + "`") != std::string::npos ||
                                                   text.find("\n" + name + " = ") != std::string::npos;

@@ -1,0 +1,125 @@
+// `rtwall check` of a wall's [warp] (issue 30): the MPCDI file against the wall it calibrates.
+#include <rtwall/display.h>
+#include <rtwall/input_error.h>
+#include <rtwall/mpcdi.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace rtwall {
+
+EyeWindow screenFrame(const WallConfig& wall, size_t screen) {
+    const ScreenConfig& s = wall.screens.at(screen);
+    EyeWindow f;
+    f.eye = wall.stereo.viewer;
+    if (s.hasCorners) {
+        f.lowerLeft = s.lowerLeft;
+        f.right = s.lowerRight - s.lowerLeft;
+        f.up = s.upperLeft - s.lowerLeft;
+        return f;
+    }
+    const StereoConfig& st = wall.stereo;
+    const Float3 right = st.lowerRight - st.lowerLeft, up = st.upperLeft - st.lowerLeft;
+    const float W = float(wall.width), H = float(wall.height);
+    const PixelRect& vp = s.viewport;
+    f.lowerLeft = st.lowerLeft + right * (float(vp.x) / W) + up * (float(wall.height - (vp.y + vp.height)) / H);
+    f.right = right * (float(vp.width) / W);
+    f.up = up * (float(vp.height) / H);
+    return f;
+}
+
+namespace {
+
+std::string format3(Float3 p) {
+    char text[96];
+    std::snprintf(text, sizeof text, "(%.4g, %.4g, %.4g)", double(p.x), double(p.y), double(p.z));
+    return text;
+}
+
+}  // namespace
+
+std::vector<std::string> checkWarp(const WallConfig& wall) {
+    std::vector<std::string> problems;
+    if (!wall.warp) return problems;
+    const WarpConfig& warp = *wall.warp;
+    const std::string at = wall.file.string() + ": [warp]: ";
+    MpcdiFile file;
+    try {
+        file = readMpcdi(warp.mpcdi);
+    } catch (const InputError& e) {
+        problems.push_back(at + e.what());
+        return problems;
+    }
+    const std::string mpcdiName = warp.mpcdi.filename().string();
+    for (const MpcdiBuffer& b : file.buffers)
+        if (std::none_of(warp.buffers.begin(), warp.buffers.end(), [&](const auto& m) { return m.first == b.id; }))
+            problems.push_back(at + "buffer '" + b.id + "' of " + mpcdiName + " drives no screen (map it in 'buffers')");
+    for (const auto& [id, screenName] : warp.buffers) {
+        const MpcdiBuffer* b = file.buffer(id);
+        if (!b) {
+            std::string have;
+            for (const MpcdiBuffer& o : file.buffers) have += (have.empty() ? "" : ", ") + o.id;
+            problems.push_back(at + "buffer '" + id + "' is not in " + mpcdiName + " (it has " + have + ")");
+            continue;
+        }
+        const auto it = std::find_if(wall.screens.begin(), wall.screens.end(), [&](const ScreenConfig& s) { return s.name == screenName; });
+        const size_t index = size_t(it - wall.screens.begin());
+        const ScreenConfig& screen = *it;
+        const std::string where = at + "buffer '" + id + "' (screen '" + screenName + "'): ";
+        const int sw = screen.outputWidth > 0 ? screen.outputWidth : screen.viewport.width;
+        const int sh = screen.outputHeight > 0 ? screen.outputHeight : screen.viewport.height;
+        if (b->xResolution != sw || b->yResolution != sh) {
+            problems.push_back(where + std::to_string(b->xResolution) + "x" + std::to_string(b->yResolution) +
+                               " pixels, the screen has " + std::to_string(sw) + "x" + std::to_string(sh));
+            continue;
+        }
+        const EyeWindow frame = screenFrame(wall, index);
+        const float width = length(frame.right), height = length(frame.up);
+        const Float3 ex = frame.right * (1.0f / (width * width)), ey = frame.up * (1.0f / (height * height));
+        const Float3 normal = normalize(cross(frame.right, frame.up));
+        const float diagonal = std::sqrt(width * width + height * height);
+        for (const MpcdiRegion& r : b->regions) {
+            const int rw = int(std::lround(r.xSize * b->xResolution)), rh = int(std::lround(r.ySize * b->yResolution));
+            if (r.xResolution != rw || r.yResolution != rh) {
+                problems.push_back(where + "region '" + r.id + "' has " + std::to_string(r.xResolution) + "x" +
+                                   std::to_string(r.yResolution) + " pixels for its " + std::to_string(rw) + "x" +
+                                   std::to_string(rh) + " of the buffer");
+                continue;
+            }
+            size_t outside = 0;
+            std::string first;
+            for (int j = 0; j < r.warp.height; ++j)
+                for (int i = 0; i < r.warp.width; ++i) {
+                    const Float3 p = r.warp.samples[size_t(j) * size_t(r.warp.width) + size_t(i)];
+                    if (std::isnan(p.x) || std::isnan(p.y) || std::isnan(p.z)) continue;
+                    float s = 0, t = 0, off = 0;
+                    if (warpsToSurface(file.profile)) {
+                        const Float3 q = p * float(r.warp.metresPerUnit) - frame.lowerLeft;
+                        s = dot(q, ex);
+                        t = dot(q, ey);
+                        off = std::abs(dot(q, normal));
+                    } else {
+                        s = p.x;
+                        t = p.y;
+                    }
+                    constexpr float kSlack = 0.02f;
+                    if (s < -kSlack || s > 1 + kSlack || t < -kSlack || t > 1 + kSlack || off > diagonal) {
+                        if (outside++ == 0) {
+                            char pos[96];
+                            std::snprintf(pos, sizeof pos, " (%.3g, %.3g of the frame%s)", double(s), double(t),
+                                          off > diagonal ? ", far off its plane" : "");
+                            first = "sample (" + std::to_string(i) + ", " + std::to_string(j) + ") at " + format3(p) + pos;
+                        }
+                    }
+                }
+            if (outside > 0)
+                problems.push_back(where + "region '" + r.id + "': " + std::to_string(outside) + " of " +
+                                   std::to_string(r.warp.validSamples) + " warp samples lie outside the screen's frame, first " +
+                                   first + (warpsToSurface(file.profile) ? "; is the geometric unit right?" : ""));
+        }
+    }
+    return problems;
+}
+
+}  // namespace rtwall

@@ -1,0 +1,136 @@
+// [warp] in wall configs (issue 30): the MPCDI file and the screen each buffer drives, read with
+// the config, checked against the file by checkWall (what `rtwall check` prints), one line per
+// problem and every problem at once. Files from tools/mpcdi_testgen.py (the curved example).
+#include "scratch.h"
+
+#include <rtwall/display.h>
+#include <rtwall/input_error.h>
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <regex>
+
+namespace rtwall {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The cylinder calibration and its wall config in `dir`; `extra`: testgen options.
+fs::path cylinderWall(const fs::path& dir, const std::string& extra = "") {
+    const std::string cmd = "python3 " + (test::sourceDir() / "tools" / "mpcdi_testgen.py").string() + " cylinder " +
+                            (dir / "c.mpcdi").string() + " --res 32x24 --wall " + (dir / "c.toml").string() + " " + extra;
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    return dir / "c.toml";
+}
+
+std::string text(const fs::path& f) {
+    std::ifstream in(f);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// The config with `from` replaced by `to` (regex), written beside it as `name`.
+fs::path edited(const fs::path& config, const std::string& from, const std::string& to, const std::string& name) {
+    const std::string t = text(config), e = std::regex_replace(t, std::regex(from), to);
+    EXPECT_NE(t, e) << "the edit " << from << " changed nothing";
+    return test::writeFile(config.parent_path() / name, e);
+}
+
+std::string loadError(const fs::path& config) {
+    try {
+        loadWallConfig(config);
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+
+TEST(WarpConfig, TheCurvedWallReadsChecksCleanAndWritesBack) {
+    const fs::path dir = test::scratchDir();
+    const WallConfig w = loadWallConfig(cylinderWall(dir));
+    ASSERT_TRUE(w.warp.has_value());
+    EXPECT_EQ(w.warp->mpcdi, dir / "c.mpcdi") << "relative to the config";
+    EXPECT_EQ(w.warp->mode, WarpMode::Direct);
+    const std::vector<std::pair<std::string, std::string>> mapped{{"proj0", "proj0"}, {"proj1", "proj1"}, {"proj2", "proj2"}};
+    EXPECT_EQ(w.warp->buffers, mapped);
+    EXPECT_EQ(checkWarp(w), std::vector<std::string>{});
+    EXPECT_EQ(checkWall(w), std::vector<std::string>{});
+    const WallConfig again = parseWallConfig(writeWallConfig(w), dir / "again.toml");
+    EXPECT_TRUE(again == w);
+    WallConfig post = w;
+    post.warp->mode = WarpMode::Post;
+    EXPECT_FALSE(post == w);
+    EXPECT_TRUE(parseWallConfig(writeWallConfig(post), dir / "post.toml") == post);
+    // A chord frames its projector's part of the cylinder: each screen's frame is its corners.
+    const EyeWindow f = screenFrame(w, 1);
+    EXPECT_EQ(f.lowerLeft, w.screens[1].lowerLeft);
+    EXPECT_EQ(f.right, w.screens[1].lowerRight - w.screens[1].lowerLeft);
+}
+
+TEST(WarpConfig, MillimetresAreMetresTooButAWrongUnitIsNamed) {
+    const fs::path mm = test::scratchDir() / "mm", wrong = test::scratchDir() / "wrong";
+    fs::create_directories(mm);
+    fs::create_directories(wrong);
+    EXPECT_EQ(checkWarp(loadWallConfig(cylinderWall(mm, "--unit mm"))), std::vector<std::string>{});
+    const std::vector<std::string> p = checkWarp(loadWallConfig(cylinderWall(wrong, "--unit mm --declare m")));
+    ASSERT_EQ(p.size(), 3u) << "one line per projector";
+    for (const std::string& line : p) {
+        EXPECT_TRUE(std::regex_search(line, std::regex(" ([0-9]+) of \\1 warp samples lie outside the screen's frame"))) << line;
+        EXPECT_NE(line.find("far off its plane); is the geometric unit right?"), std::string::npos) << line;
+    }
+}
+
+TEST(WarpConfig, ConfigMistakesAreOneLineWithFileLineAndKey) {
+    const fs::path dir = test::scratchDir();
+    const fs::path c = cylinderWall(dir);
+    auto error = [&](const std::string& from, const std::string& to) {
+        return loadError(edited(c, from, to, "e.toml"));
+    };
+    EXPECT_EQ(error("proj2 = \"proj2\"", "proj2 = \"nowhere\""),
+              (dir / "e.toml").string() + ":42: [warp]: key 'buffers': buffer 'proj2' names screen 'nowhere', which the wall has not");
+    EXPECT_EQ(error("proj2 = \"proj2\"", "proj2 = \"proj1\""),
+              (dir / "e.toml").string() + ":42: [warp]: key 'buffers': screen 'proj1' is driven by two buffers");
+    EXPECT_EQ(error("proj2 = \"proj2\"", "proj2 = 3"),
+              (dir / "e.toml").string() + ":42: [warp]: key 'buffers': buffer 'proj2' must name a screen (a string)");
+    EXPECT_EQ(error("buffers = \\{.*\\}", "buffers = {}"), (dir / "e.toml").string() + ":42: [warp]: key 'buffers': no buffer is mapped");
+    EXPECT_EQ(error("buffers = \\{.*\\}", "buffers = 1"),
+              (dir / "e.toml").string() + ":42: [warp]: key 'buffers': a table of buffer id = \"screen name\", e.g. { proj0 = \"left\" }");
+    EXPECT_NE(error("buffers = \\{.*\\}", "").find("[warp]: missing required key 'buffers'"), std::string::npos);
+    EXPECT_NE(error("mpcdi = \"c.mpcdi\"", "").find("[warp]: missing required key 'mpcdi'"), std::string::npos);
+    EXPECT_EQ(error("mpcdi = \"c.mpcdi\"", "mpcdi = \"\""), (dir / "e.toml").string() + ":41: [warp]: key 'mpcdi': an empty path");
+    EXPECT_NE(error("mpcdi = \"c.mpcdi\"", "mpcdi = \"c.mpcdi\"\nmode = \"bent\"").find("key 'mode': 'bent' is not one of direct, post"),
+              std::string::npos);
+    EXPECT_NE(error("mpcdi = \"c.mpcdi\"", "mpcdi = \"c.mpcdi\"\nwarp_it = true").find("warp_it"), std::string::npos);
+}
+
+// Several faults at once: every one is a line of its own.
+TEST(WarpConfig, CheckNamesEveryMismatchBetweenFileAndWall) {
+    const fs::path dir = test::scratchDir();
+    const fs::path c = cylinderWall(dir);
+    const fs::path several =
+        edited(edited(c, "proj2 = \"proj2\"", "proj3 = \"proj2\"", "a.toml"), "viewport = \\[32, 0, 32, 24\\]",
+               "viewport = [32, 0, 32, 24]\nresolution = [16, 12]", "several.toml");
+    const std::vector<std::string> p = checkWall(several);
+    const std::string at = several.string() + ": [warp]: ";
+    const std::vector<std::string> expected{
+        at + "buffer 'proj2' of c.mpcdi drives no screen (map it in 'buffers')",
+        at + "buffer 'proj1' (screen 'proj1'): 32x24 pixels, the screen has 16x12",
+        at + "buffer 'proj3' is not in c.mpcdi (it has proj0, proj1, proj2)",
+    };
+    EXPECT_EQ(p, expected);
+    // A frame that does not hold the surface: the middle screen's lower edge half a metre up.
+    const fs::path up = edited(c, "(lower_(left|right) = \\[-?1.13[0-9]*, )-1.2,", "$1-0.7,", "up.toml");
+    const std::vector<std::string> frame = checkWall(up);
+    ASSERT_EQ(frame.size(), 1u);
+    EXPECT_EQ(frame[0].rfind(up.string() + ": [warp]: buffer 'proj1' (screen 'proj1'): region 'proj1_region': ", 0), 0u) << frame[0];
+    EXPECT_NE(frame[0].find("warp samples lie outside the screen's frame, first sample ("), std::string::npos) << frame[0];
+    // An unreadable calibration: one line, the config's name and the file's problem.
+    fs::remove(dir / "c.mpcdi");
+    const std::vector<std::string> gone = checkWall(c);
+    ASSERT_EQ(gone.size(), 1u);
+    EXPECT_EQ(gone[0], c.string() + ": [warp]: " + (dir / "c.mpcdi").string() +
+                           ": cannot read it (No such file or directory)");
+}
+
+}  // namespace
+}  // namespace rtwall
