@@ -148,9 +148,13 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
                         for (int k = 0; k < K; ++k) {
                             const int i = bx + k % bw, j = by + k / bw;
                             const bool inside = i < w && j < h;
-                            valid[k] = inside ? -1 : 0;
+                            Float3 d = camera.direction(float(rect.x0 + i) + ox[k], float(rect.y0 + j) + oy[k]);
+                            // Through a projector warp, a sample that lands on no screen is not
+                            // traced: its pixel stays black (nothing is accumulated for it).
+                            const bool onScreen = !std::isnan(d.x + d.y + d.z);
+                            if (!onScreen) d = {0.0f, 0.0f, 1.0f};
+                            valid[k] = inside && onScreen ? -1 : 0;
                             pixel[k] = inside ? uint32_t(j * w + i) : 0;
-                            const Float3 d = camera.direction(float(rect.x0 + i) + ox[k], float(rect.y0 + j) + oy[k]);
                             const float inv = 1.0f / std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
                             rh.ray.dir_x[k] = d.x * inv;
                             rh.ray.dir_y[k] = d.y * inv;

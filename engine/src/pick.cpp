@@ -1,10 +1,13 @@
 // Picking for the display's object selection: one ray, the first instance it hits.
 #include "scene_impl.h"
 
+#include <cmath>
+
 namespace rtwall {
 
 std::optional<PickResult> pick(const Scene& scene, const Camera& camera, float px, float py) {
     const Float3 o = camera.origin(), d = camera.direction(px, py);
+    if (std::isnan(d.x + d.y + d.z)) return std::nullopt;  // a projector pixel on no screen (issue 30)
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh{};

@@ -5,9 +5,11 @@
 
 #include <rtwall/display.h>
 #include <rtwall/input_error.h>
+#include <rtwall/mpcdi.h>
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <regex>
 
@@ -130,6 +132,62 @@ TEST(WarpConfig, CheckNamesEveryMismatchBetweenFileAndWall) {
     ASSERT_EQ(gone.size(), 1u);
     EXPECT_EQ(gone[0], c.string() + ": [warp]: " + (dir / "c.mpcdi").string() +
                            ": cannot read it (No such file or directory)");
+}
+
+// The views' warps from the file: a 2D identity is exactly no offset, a whole-pixel shift
+// exactly that shift (in wall pixels, through a screen scaled 2x), 3D points in metres over
+// each screen's viewport.
+TEST(WarpConfig, WallWarpsFromTheFile) {
+    const fs::path dir = test::scratchDir();
+    const std::string gen = "python3 " + (test::sourceDir() / "tools" / "mpcdi_testgen.py").string() + " identity ";
+    ASSERT_EQ(std::system((gen + (dir / "id.mpcdi").string() + " --buffer a=40x30 --buffer b=20x15").c_str()), 0);
+    ASSERT_EQ(std::system((gen + (dir / "shift.mpcdi").string() + " --buffer a=40x30 --buffer b=20x15 --shift 3,-2").c_str()), 0);
+    auto wall = [&](const std::string& mpcdi) {
+        return parseWallConfig("[wall]\nwidth = 80\nheight = 30\n[[screen]]\nname = \"A\"\nviewport = [0, 0, 40, 30]\n"
+                               "[[screen]]\nname = \"B\"\nviewport = [40, 0, 40, 30]\nresolution = [20, 15]\n"
+                               "[warp]\nmpcdi = \"" + mpcdi + "\"\nbuffers = { a = \"A\", b = \"B\" }\n",
+                               dir / "w.toml");
+    };
+    for (const bool shifted : {false, true}) {
+        SCOPED_TRACE(shifted ? "shifted" : "identity");
+        const WallConfig w = wall(shifted ? "shift.mpcdi" : "id.mpcdi");
+        // Shifted, the edge rows and columns look past the screen's frame: named, one line a buffer.
+        EXPECT_EQ(checkWarp(w).size(), shifted ? 2u : 0u);
+        const std::vector<WallWarp> warps = wallWarps(w, readMpcdi(w.warp->mpcdi));
+        ASSERT_EQ(warps.size(), 2u);
+        for (const WallWarp& ww : warps) {
+            ASSERT_EQ(ww.regions.size(), 1u);
+            const ScreenWarp& sw = ww.regions[0];
+            const PixelRect& vp = w.screens[ww.screen].viewport;
+            EXPECT_EQ(sw.rect, (TileRect{vp.x, vp.y, vp.x + vp.width, vp.y + vp.height}));
+            ASSERT_TRUE(sw.warp);
+            EXPECT_EQ(sw.warp->kind, PixelWarp::Kind::ScreenOffsets);
+            // Screen B's buffer is 20x15 over 40x30 wall pixels: a buffer pixel is two wall pixels.
+            const float scale = ww.screen == 1 ? 2.0f : 1.0f;
+            const Float3 want = shifted ? Float3{3 * scale, -2 * scale, 0} : Float3{0, 0, 0};
+            for (const Float3& o : sw.warp->samples) ASSERT_EQ(o, want);
+        }
+    }
+    const fs::path c = cylinderWall(dir, "--unit mm");
+    const WallConfig w = loadWallConfig(c);
+    const std::vector<WallWarp> warps = wallWarps(w, readMpcdi(w.warp->mpcdi));
+    ASSERT_EQ(warps.size(), 3u);
+    const MpcdiFile f = readMpcdi(w.warp->mpcdi);
+    for (size_t k = 0; k < 3; ++k) {
+        const ScreenWarp& sw = warps[k].regions.at(0);
+        EXPECT_EQ(warps[k].screen, k);
+        EXPECT_EQ(sw.rect, (TileRect{int(32 * k), 0, int(32 * k) + 32, 24}));
+        EXPECT_EQ(sw.warp->kind, PixelWarp::Kind::SurfacePoints);
+        const std::vector<Float3>& mm = f.buffers[k].regions[0].warp.samples;
+        ASSERT_EQ(sw.warp->samples.size(), mm.size());
+        for (size_t i = 0; i < mm.size(); ++i) {
+            if (std::isnan(mm[i].x)) {
+                EXPECT_TRUE(std::isnan(sw.warp->samples[i].x));
+                continue;
+            }
+            EXPECT_EQ(sw.warp->samples[i], mm[i] * 0.001f);
+        }
+    }
 }
 
 }  // namespace

@@ -1,12 +1,18 @@
 #include <rtwall/camera.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace rtwall {
 
 Camera::Camera(const CameraDesc& desc, int width, int height) {
     origin_ = desc.position;
+    for (const ScreenWarp& w : desc.warps)
+        if (w.warp && w.warp->width > 0 && w.warp->height > 0 && w.rect.width() > 0 && w.rect.height() > 0 &&
+            w.warp->samples.size() == size_t(w.warp->width) * size_t(w.warp->height))
+            warps_.push_back(w);
     if (desc.window) {
         // Off-axis: rays from the eye through the window; image y grows downwards.
         const ProjectionWindow& w = *desc.window;
@@ -28,8 +34,56 @@ Camera::Camera(const CameraDesc& desc, int width, int height) {
     corner_ = w - u * halfW + v * halfH;
 }
 
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+bool hasNaN(Float3 v) { return std::isnan(v.x) || std::isnan(v.y) || std::isnan(v.z); }
+
+// a + t (b - a), and exactly a where t is 0 (b may be NaN there: a neighbour off the screen
+// does not darken a sample that does not reach it), exactly a where b equals a.
+Float3 lerp(Float3 a, Float3 b, float t) {
+    if (t == 0.0f) return a;
+    return {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), a.z + t * (b.z - a.z)};
+}
+
+// The grid's value at image position (px, py) inside `rect`: bilinear between the samples at
+// pixel centres, clamped at the edges.
+Float3 sampleAt(const PixelWarp& w, const TileRect& rect, float px, float py) {
+    // Grid coordinates of the position; a grid of the rectangle's size needs no scaling (and
+    // so is exact at pixel centres).
+    float gx = px - float(rect.x0), gy = py - float(rect.y0);
+    if (w.width != rect.width()) gx *= float(w.width) / float(rect.width());
+    if (w.height != rect.height()) gy *= float(w.height) / float(rect.height());
+    gx = std::clamp(gx - 0.5f, 0.0f, float(w.width - 1));
+    gy = std::clamp(gy - 0.5f, 0.0f, float(w.height - 1));
+    const int i0 = int(gx), j0 = int(gy);
+    const int i1 = std::min(i0 + 1, w.width - 1), j1 = std::min(j0 + 1, w.height - 1);
+    const float fx = gx - float(i0), fy = gy - float(j0);
+    const auto at = [&](int i, int j) { return w.samples[size_t(j) * size_t(w.width) + size_t(i)]; };
+    const Float3 top = lerp(at(i0, j0), at(i1, j0), fx);
+    if (fy == 0.0f) return top;
+    return lerp(top, lerp(at(i0, j1), at(i1, j1), fx), fy);
+}
+
+}  // namespace
+
+Float3 Camera::warpedDirection(float px, float py) const {
+    const int x = int(std::floor(px)), y = int(std::floor(py));
+    for (const ScreenWarp& v : warps_) {
+        if (x < v.rect.x0 || x >= v.rect.x1 || y < v.rect.y0 || y >= v.rect.y1) continue;
+        const PixelWarp& w = *v.warp;
+        const Float3 s = sampleAt(w, v.rect, px, py);
+        if (hasNaN(s)) return {kNaN, kNaN, kNaN};
+        if (w.kind == PixelWarp::Kind::ScreenOffsets) return flatDirection(px + s.x, py + s.y);
+        return v.room.point(s) - origin_;
+    }
+    return flatDirection(px, py);
+}
+
 bool samePose(const CameraDesc& a, const CameraDesc& b) {
-    return a.position == b.position && a.lookAt == b.lookAt && a.up == b.up && a.fovY == b.fovY && a.window == b.window;
+    return a.position == b.position && a.lookAt == b.lookAt && a.up == b.up && a.fovY == b.fovY && a.window == b.window &&
+           a.warps == b.warps;
 }
 
 }  // namespace rtwall

@@ -1,4 +1,5 @@
-// `rtwall check` of a wall's [warp] (issue 30): the MPCDI file against the wall it calibrates.
+// A wall's [warp] (issue 30): the MPCDI file checked against the wall it calibrates (`rtwall
+// check`), and made into the warps of the views' cameras.
 #include <rtwall/display.h>
 #include <rtwall/input_error.h>
 #include <rtwall/mpcdi.h>
@@ -120,6 +121,59 @@ std::vector<std::string> checkWarp(const WallConfig& wall) {
         }
     }
     return problems;
+}
+
+std::vector<WallWarp> wallWarps(const WallConfig& wall, const MpcdiFile& file) {
+    std::vector<WallWarp> out;
+    if (!wall.warp) return out;
+    for (const auto& [id, screenName] : wall.warp->buffers) {
+        const MpcdiBuffer* b = file.buffer(id);
+        const auto it = std::find_if(wall.screens.begin(), wall.screens.end(), [&](const ScreenConfig& s) { return s.name == screenName; });
+        if (!b || it == wall.screens.end()) continue;
+        WallWarp ww;
+        ww.screen = size_t(it - wall.screens.begin());
+        const PixelRect& vp = it->viewport;
+        // Buffer pixels to wall pixels of the viewport.
+        const double sx = double(vp.width) / b->xResolution, sy = double(vp.height) / b->yResolution;
+        for (const MpcdiRegion& r : b->regions) {
+            ScreenWarp sw;
+            const double bx0 = r.x * b->xResolution, by0 = r.y * b->yResolution;
+            const double bw = r.xSize * b->xResolution, bh = r.ySize * b->yResolution;
+            sw.rect = {vp.x + int(std::lround(bx0 * sx)), vp.y + int(std::lround(by0 * sy)),
+                       vp.x + int(std::lround((bx0 + bw) * sx)), vp.y + int(std::lround((by0 + bh) * sy))};
+            auto grid = std::make_shared<PixelWarp>();
+            grid->width = r.warp.width;
+            grid->height = r.warp.height;
+            grid->samples.resize(r.warp.samples.size());
+            if (warpsToSurface(file.profile)) {
+                grid->kind = PixelWarp::Kind::SurfacePoints;
+                const float m = float(r.warp.metresPerUnit);
+                for (size_t k = 0; k < r.warp.samples.size(); ++k) grid->samples[k] = r.warp.samples[k] * m;
+            } else {
+                grid->kind = PixelWarp::Kind::ScreenOffsets;
+                // The sample's pixel centre and where (u, v) lands on the flat screen, in wall
+                // pixels; u from the left, v up from the bottom of the screen.
+                const double cw = double(sw.rect.width()) / grid->width, ch = double(sw.rect.height()) / grid->height;
+                auto snap = [](double v) { return float(std::round(v * 1024.0) / 1024.0); };
+                for (int j = 0; j < grid->height; ++j)
+                    for (int i = 0; i < grid->width; ++i) {
+                        const size_t k = size_t(j) * size_t(grid->width) + size_t(i);
+                        const Float3 uv = r.warp.samples[k];
+                        if (std::isnan(uv.x) || std::isnan(uv.y) || std::isnan(uv.z)) {
+                            grid->samples[k] = uv;
+                            continue;
+                        }
+                        const double cx = sw.rect.x0 + (i + 0.5) * cw, cy = sw.rect.y0 + (j + 0.5) * ch;
+                        const double px = vp.x + double(uv.x) * vp.width, py = vp.y + (1.0 - double(uv.y)) * vp.height;
+                        grid->samples[k] = {snap(px - cx), snap(py - cy), 0.0f};
+                    }
+            }
+            sw.warp = std::move(grid);
+            ww.regions.push_back(std::move(sw));
+        }
+        out.push_back(std::move(ww));
+    }
+    return out;
 }
 
 }  // namespace rtwall
