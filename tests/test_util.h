@@ -16,7 +16,7 @@ namespace rtwall::test {
 
 // A camera at `position` looking at `lookAt`.
 inline CameraDesc cameraAt(Float3 position, Float3 lookAt, float fovY = 45.0f, Float3 up = {0, 1, 0}) {
-    return CameraDesc{.position = position, .lookAt = lookAt, .up = up, .fovY = fovY, .window = {}, .warps = {}};
+    return CameraDesc{.position = position, .lookAt = lookAt, .up = up, .fovY = fovY, .window = {}};
 }
 
 // The image size and tile size of `settings`.

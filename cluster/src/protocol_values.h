@@ -97,12 +97,7 @@ RTWALL_WIRE_FIELDS(SectionPlane, 5) {
 }
 
 RTWALL_WIRE_COUNT(ProjectionWindow, 3);  // written with the camera
-RTWALL_WIRE_FIELDS(CameraDesc, 7) {
-    // Projector warps (issue 30) are large and fixed: they are to reach the clients once and be
-    // named by the views, not ride with every camera. Until that exists none may be sent.
-    if constexpr (!Io::decoding) {
-        if (!m.warps.empty()) throw std::logic_error("rtwall: a camera with projector warps cannot be sent (not built yet)");
-    }
+RTWALL_WIRE_FIELDS(CameraDesc, 6) {
     io.string(m.name, kMaxStringBytes);
     io.float3(m.position);
     io.float3(m.lookAt);

@@ -38,7 +38,7 @@ SceneDesc knotField(int64_t triangles) {
     }
     s.lights.push_back({LightType::Point, {4, 8, 6}, {}, {1, 1, 1}, 300.0f});
     s.lights.push_back({LightType::Directional, {}, {-0.3f, -1.0f, -0.4f}, {0.9f, 0.95f, 1.0f}, 0.8f});
-    s.cameras.push_back({"default", {0.0f, 5.5f, 7.5f}, {0, -0.3f, 0}, {0, 1, 0}, 50.0f, std::nullopt, {}});
+    s.cameras.push_back({"default", {0.0f, 5.5f, 7.5f}, {0, -0.3f, 0}, {0, 1, 0}, 50.0f, std::nullopt});
     s.settings.width = 1600;
     s.settings.height = 1200;
     s.settings.ambient = {0.05f, 0.05f, 0.05f};

@@ -304,5 +304,18 @@ TEST(RunConfig, LocalDisplayNodesAreOnUnlessTurnedOff) {
     }
 }
 
+// How long the swap barrier waits for a slow display node before it leaves it out of a frame.
+TEST(RunConfig, NodeStallTimeIsAKeyOfTheCluster) {
+    EXPECT_EQ(defaultRunConfig().cluster.displayNodes.stallSeconds, 0.5);
+    const auto dir = test::scratchDir();
+    EXPECT_EQ(readRunConfig(test::writeFile(dir / "s.toml", "[cluster]\nnode_stall_ms = 2500\n")).cluster.displayNodes.stallSeconds, 2.5);
+    try {
+        readRunConfig(test::writeFile(dir / "bad.toml", "[cluster]\nnode_stall_ms = 0\n"));
+        ADD_FAILURE() << "a stall time of 0 was taken";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("bad.toml:2: [cluster]: key 'node_stall_ms': 0 is out of range"), std::string::npos) << e.what();
+    }
+}
+
 }  // namespace
 }  // namespace rtwall

@@ -76,7 +76,7 @@ TEST(Intersection, LambertImageOfSphereMatchesAnalyticNormals) {
     // n the interpolated shading normal: the image encodes the normals. Compare every pixel,
     // in linear space, with the analytic sphere.
     SceneDesc desc = sphereScene(Transform{}, 128, 256);
-    const CameraDesc cam{"c", {0.3f, 0.4f, 4.0f}, {0, 0, 0}, {0, 1, 0}, 40.0f, std::nullopt, {}};
+    const CameraDesc cam{"c", {0.3f, 0.4f, 4.0f}, {0, 0, 0}, {0, 1, 0}, 40.0f, std::nullopt};
     const Float3 l = normalize(Float3{0.5f, 0.7f, 1.0f});  // towards the light
     desc.lights.push_back({LightType::Directional, {}, -l, {1, 1, 1}, float(M_PI)});
     RenderSettings s;
@@ -124,7 +124,7 @@ TEST(Intersection, EyeLightUsesTheGeometricNormal) {
     s.width = s.height = 8;
     s.shading = ShadingMode::EyeLight;
     const Scene scene(desc);
-    const Image img = renderFrame(scene, Camera({"c", {0, 0, 10}, {0, 0, 0}, {0, 1, 0}, 2.0f, std::nullopt, {}}, 8, 8), s);
+    const Image img = renderFrame(scene, Camera({"c", {0, 0, 10}, {0, 0, 0}, {0, 1, 0}, 2.0f, std::nullopt}, 8, 8), s);
     for (int y = 0; y < 8; ++y)
         for (int x = 0; x < 8; ++x) EXPECT_GE(img.pixel(x, y)[0], 254) << x << "," << y;
 }
@@ -133,7 +133,7 @@ TEST(Intersection, NonUniformScaleKeepsNormalsPerpendicular) {
     // An ellipsoid x^2/4 + y^2 + z^2 = 1: its normal at the +x/+y diagonal is known analytically.
     SceneDesc desc = sphereScene(Transform::scale(2, 1, 1), 128, 256);
     const Scene scene(desc);
-    const CameraDesc cam{"c", {6, 0, 0}, {0, 0, 0}, {0, 1, 0}, 10.0f, std::nullopt, {}};
+    const CameraDesc cam{"c", {6, 0, 0}, {0, 0, 0}, {0, 1, 0}, 10.0f, std::nullopt};
     RenderSettings s;
     s.width = s.height = 9;
     s.shading = ShadingMode::EyeLight;

@@ -1,4 +1,4 @@
-// Rays through calibrated projector pixels (issue 30): CameraDesc::warps. A warp of zero
+// Rays through calibrated projector pixels (issue 30): a Camera's warps. A warp of zero
 // offsets is the flat camera bit for bit; a whole-pixel shift moves the image exactly; samples
 // that land on no screen are black; surface points give the ray from the eye through them,
 // checked against a cylinder computed here in double precision, between pixel centres too.
@@ -36,9 +36,9 @@ std::shared_ptr<PixelWarp> offsets(const TileRect& rect, Float3 offset, bool (*o
     return w;
 }
 
-Image render(const SceneDesc& d, const CameraDesc& c) {
+Image render(const SceneDesc& d, const CameraDesc& c, std::vector<ScreenWarp> warps = {}) {
     const Scene scene(d);
-    return renderFrame(scene, Camera(c, d.settings.width, d.settings.height), d.settings);
+    return renderFrame(scene, Camera(c, d.settings.width, d.settings.height, std::move(warps)), d.settings);
 }
 
 const uint8_t* px(const Image& im, int x, int y) { return im.rgb.data() + (size_t(y) * size_t(im.width) + size_t(x)) * 3; }
@@ -47,13 +47,12 @@ TEST(WarpCamera, ZeroOffsetsAreTheFlatCameraBitForBitSupersampledToo) {
     for (int ss : {1, 3}) {
         SceneDesc d = test::demoScene(W, H, ss);
         const CameraDesc flat = flatCamera();
-        CameraDesc warped = flat;
         const TileRect all{0, 0, W, H};
-        warped.warps.push_back({all, offsets(all, {0, 0, 0}), {}});
-        const Image a = render(d, flat), b = render(d, warped);
+        const std::vector<ScreenWarp> warps{{all, offsets(all, {0, 0, 0}), {}}};
+        const Image a = render(d, flat), b = render(d, flat, warps);
         EXPECT_TRUE(a.rgb == b.rgb) << "supersample " << ss;
         // The directions themselves, at centres and between them.
-        const Camera cf(flat, W, H), cw(warped, W, H);
+        const Camera cf(flat, W, H), cw(flat, W, H, warps);
         for (float y : {0.0f, 0.5f, 13.25f, 47.9f})
             for (float x : {0.0f, 0.5f, 31.75f, 63.99f}) EXPECT_EQ(cf.direction(x, y), cw.direction(x, y)) << x << "," << y;
     }
@@ -65,11 +64,10 @@ TEST(WarpCamera, AWholePixelShiftShiftsTheImageExactlyAndOffScreenIsBlack) {
     // random numbers: pruning coins, light samples, which a shifted pixel does not share).
     d.settings.shading = ShadingMode::EyeLight;
     const CameraDesc flat = flatCamera();
-    CameraDesc warped = flat;
     const TileRect all{0, 0, W, H};
     // Pixel (i, j) looks where flat pixel (i + 3, j - 2) looks; a 10x6 block lands on no screen.
-    warped.warps.push_back({all, offsets(all, {3, -2, 0}, [](int i, int j) { return i >= 20 && i < 30 && j >= 10 && j < 16; }), {}});
-    const Image a = render(d, flat), b = render(d, warped);
+    const Image a = render(d, flat),
+                b = render(d, flat, {{all, offsets(all, {3, -2, 0}, [](int i, int j) { return i >= 20 && i < 30 && j >= 10 && j < 16; }), {}}});
     size_t compared = 0, black = 0;
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
@@ -95,10 +93,8 @@ TEST(WarpCamera, AWholePixelShiftShiftsTheImageExactlyAndOffScreenIsBlack) {
 // A warp over part of the image: the rest looks as the flat camera does.
 TEST(WarpCamera, PixelsOutsideEveryWarpLookFlat) {
     const CameraDesc flat = flatCamera();
-    CameraDesc warped = flat;
     const TileRect right{32, 0, 64, 48};
-    warped.warps.push_back({right, offsets(right, {1, 0, 0}), {}});
-    const Camera cf(flat, W, H), cw(warped, W, H);
+    const Camera cf(flat, W, H), cw(flat, W, H, {{right, offsets(right, {1, 0, 0}), {}}});
     EXPECT_EQ(cw.direction(10.5f, 7.5f), cf.direction(10.5f, 7.5f));
     EXPECT_EQ(cw.direction(40.5f, 7.5f), cf.direction(41.5f, 7.5f));
     EXPECT_TRUE(cw.warped());
@@ -136,8 +132,7 @@ TEST(WarpCamera, SurfacePointsGiveRaysFromTheEyeThroughThem) {
     c.position = {10, 0, 0};  // the eye at the viewer
     c.window = ProjectionWindow{{-1, -1, -1}, {2, 0, 0}, {0, 2, 0}};  // unused by warped pixels
     const TileRect rect{0, 0, gw, gh};
-    c.warps.push_back({rect, grid, room});
-    const Camera cam(c, gw, gh);
+    const Camera cam(c, gw, gh, {{rect, grid, room}});
     auto toWorld = [&](std::array<double, 3> p) {  // independent of RoomToWorld::point
         const double dx = p[0] - 0.2, dy = p[1] - 0.1, dz = p[2] - 2.5;
         return std::array<double, 3>{10.0 + 2.0 * dz, 2.0 * dy, -2.0 * dx};
@@ -165,9 +160,7 @@ TEST(WarpCamera, SurfacePointsGiveRaysFromTheEyeThroughThem) {
 // any weight on the NaN neighbour makes it off the screen (black, never a mixed ray).
 TEST(WarpCamera, ANeighbourOffTheScreenReachesOnlySamplesThatInterpolateIt) {
     const TileRect all{0, 0, 4, 4};
-    CameraDesc c = flatCamera();
-    c.warps.push_back({all, offsets(all, {0, 0, 0}, [](int i, int) { return i == 2; }), {}});
-    const Camera cam(c, 4, 4);
+    const Camera cam(flatCamera(), 4, 4, {{all, offsets(all, {0, 0, 0}, [](int i, int) { return i == 2; }), {}}});
     EXPECT_FALSE(std::isnan(cam.direction(1.5f, 1.5f).x));
     EXPECT_TRUE(std::isnan(cam.direction(1.75f, 1.5f).x));
     EXPECT_TRUE(std::isnan(cam.direction(2.5f, 1.5f).x));

@@ -235,8 +235,8 @@ std::vector<std::string> checkWarp(const WallConfig& wall);
 // A screen's frame in wall coordinates (metres): its corners, or its viewport's part of
 // [stereo]'s rectangle.
 EyeWindow screenFrame(const WallConfig& wall, size_t screen);
-// The warps of a wall's calibrated screens (issue 30), for the views' cameras
-// (CameraDesc::warps): per warped screen one ScreenWarp per region of its buffer, over its part
+// The warps of a wall's calibrated screens (issue 30), for the views' cameras (the warps a
+// Camera is made with): per warped screen one ScreenWarp per region of its buffer, over its part
 // of the screen's viewport (wall pixels; a region's y from the top of its buffer). A 2D profile
 // becomes offsets in wall pixels to where the flat view looks (snapped to 1/1024 pixel, so an
 // identity warp is exactly none and a whole-pixel shift exactly that), a 3D one surface points

@@ -7,12 +7,12 @@
 
 namespace rtwall {
 
-Camera::Camera(const CameraDesc& desc, int width, int height) {
+Camera::Camera(const CameraDesc& desc, int width, int height, std::vector<ScreenWarp> warps) {
     origin_ = desc.position;
-    for (const ScreenWarp& w : desc.warps)
+    for (ScreenWarp& w : warps)
         if (w.warp && w.warp->width > 0 && w.warp->height > 0 && w.rect.width() > 0 && w.rect.height() > 0 &&
             w.warp->samples.size() == size_t(w.warp->width) * size_t(w.warp->height))
-            warps_.push_back(w);
+            warps_.push_back(std::move(w));
     if (desc.window) {
         // Off-axis: rays from the eye through the window; image y grows downwards.
         const ProjectionWindow& w = *desc.window;
@@ -82,8 +82,7 @@ Float3 Camera::warpedDirection(float px, float py) const {
 }
 
 bool samePose(const CameraDesc& a, const CameraDesc& b) {
-    return a.position == b.position && a.lookAt == b.lookAt && a.up == b.up && a.fovY == b.fovY && a.window == b.window &&
-           a.warps == b.warps;
+    return a.position == b.position && a.lookAt == b.lookAt && a.up == b.up && a.fovY == b.fovY && a.window == b.window;
 }
 
 }  // namespace rtwall

@@ -75,20 +75,20 @@ struct CameraDesc {
     Float3 up{0, 1, 0};
     float fovY = 45.0f;  // vertical field of view in degrees
     std::optional<ProjectionWindow> window;  // absent: the symmetric camera above
-    std::vector<ScreenWarp> warps;             // calibrated projectors' pixels (issue 30); empty: none
     bool operator==(const CameraDesc&) const = default;
 };
 
 // The same geometry, any name: whether two cameras see alike.
 bool samePose(const CameraDesc& a, const CameraDesc& b);
 
-// Pinhole camera with derived per-image state computed once.
+// Pinhole camera with derived per-image state computed once; with `warps` (issue 30: a wall's
+// calibrated projectors, not scene state) their pixels look where the warps say.
 class Camera {
 public:
-    Camera(const CameraDesc& desc, int width, int height);
+    Camera(const CameraDesc& desc, int width, int height, std::vector<ScreenWarp> warps = {});
     // Direction (unnormalised) through image position (px, py), pixels from the top-left corner.
-    // Inline: the kernel calls it for every primary ray. Through a warp (CameraDesc::warps) a
-    // pixel that lands on no screen gets NaN components: the kernel leaves it black.
+    // Inline: the kernel calls it for every primary ray. Through a warp a pixel that lands on no
+    // screen gets NaN components: the kernel leaves it black.
     Float3 direction(float px, float py) const {
         if (!warps_.empty()) return warpedDirection(px, py);
         return flatDirection(px, py);
