@@ -12,7 +12,9 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <cmath>
 #include <cstdlib>
+#include <regex>
 
 namespace rtwall {
 namespace {
@@ -130,6 +132,45 @@ TEST(CliCad, GltfInfoListsThePartTreeAndBadFilesGiveOneLine) {
     expectOneLineError(run("info " + (dir / "missing_buffer.gltf").string()), 1, "missing.bin");
     expectOneLineError(run("render " + (dir / "bad_json.gltf").string() + " --out x.png"), 1, "bad_json.gltf: ");
     expectOneLineError(run("render " + (dir / "huge_count.gltf").string() + " --out x.png"), 1, "2147483648 elements");
+}
+
+// The six numbers of the JSON "bounds" of `json` (lo then hi), parsed as doubles.
+std::vector<double> boundsOf(const std::string& json) {
+    std::vector<double> v;
+    const size_t at = json.find("\"bounds\" : [");
+    if (at == std::string::npos) return v;
+    const std::regex number("-?[0-9]+(\\.[0-9]+)?([eE][-+]?[0-9]+)?");
+    const std::string rest = json.substr(at + 12);
+    for (auto it = std::sregex_iterator(rest.begin(), rest.end(), number); it != std::sregex_iterator() && v.size() < 6; ++it)
+        v.push_back(std::stod(it->str()));
+    return v;
+}
+
+// rtwall info --json of an assembly (issue 29): its world bounds (what a scene placing it once
+// with no transform says too, through another path), the instances each part places, and what
+// the lean storage costs per unique triangle and per instance.
+TEST(CliCad, AssemblyInfoHasWorldBoundsInstancesPerPartAndBytes) {
+    const auto dir = test::scratchDir();
+    const std::string cmd = "python3 " + (test::sourceDir() / "tools" / "gltf_testgen.py").string() + " --out " + dir.string();
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    const Result a = run("info --json " + (dir / "binary.glb").string());
+    ASSERT_EQ(a.status, 0) << a.output;
+    const auto scene = test::writeFile(dir / "s.toml", "[[mesh]]\nname = \"g\"\nfile = \"binary.glb\"\n[[instance]]\nmesh = \"g\"\n");
+    const Result s = run("info --json " + scene.string());
+    ASSERT_EQ(s.status, 0) << s.output;
+    const std::vector<double> ab = boundsOf(a.output), sb = boundsOf(s.output);
+    ASSERT_EQ(ab.size(), 6u) << a.output;
+    ASSERT_EQ(sb.size(), 6u) << s.output;
+    for (size_t i = 0; i < 6; ++i) EXPECT_NEAR(ab[i], sb[i], 1e-5 * (1 + std::abs(sb[i]))) << i;
+    EXPECT_LT(ab[0], ab[3]);
+    // 11 instances in all, each counted at its part.
+    size_t placed = 0;
+    const std::regex perPart("\"instances\" : ([0-9]+),?\n");
+    for (auto it = std::sregex_iterator(a.output.begin(), a.output.end(), perPart); it != std::sregex_iterator(); ++it)
+        placed += std::stoul((*it)[1].str());
+    EXPECT_EQ(placed, 22u) << "11 at the parts and 11 in the total";
+    EXPECT_NE(a.output.find("\"bytes_per_instance\" : 112"), std::string::npos) << a.output;
+    EXPECT_NE(a.output.find("\"bytes_per_unique_triangle\" : "), std::string::npos) << a.output;
 }
 
 // STEP (issue 20): rtwall gen step writes an assembly through OpenCASCADE; rtwall info lists its

@@ -4,7 +4,10 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -120,9 +123,23 @@ toml::table assemblyInfo(const std::filesystem::path& path, const AssemblyOption
     int64_t unique = 0, instanced = 0;
     for (const auto& m : a.meshes) unique += int64_t(m->triangleCount());
     std::vector<std::vector<uint32_t>> placed(a.parts.size());
+    // World bounds: each instance's mesh bounds, its 8 corners through its transform (which
+    // includes the mesh's origin), in double.
+    std::array<double, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
     for (const AssemblyInstance& in : a.instances) {
         instanced += int64_t(a.meshes[in.mesh]->triangleCount());
         placed[in.part].push_back(in.mesh);
+        const Bounds3 b = a.meshes[in.mesh]->bounds();
+        if (b.empty()) continue;
+        const auto& t = in.transform;
+        for (int corner = 0; corner < 8; ++corner) {
+            const double p[3] = {corner & 1 ? b.hi.x : b.lo.x, corner & 2 ? b.hi.y : b.lo.y, corner & 4 ? b.hi.z : b.lo.z};
+            for (size_t r = 0; r < 3; ++r) {
+                const double w = t[r * 4] * p[0] + t[r * 4 + 1] * p[1] + t[r * 4 + 2] * p[2] + t[r * 4 + 3];
+                lo[r] = std::min(lo[r], w);
+                hi[r] = std::max(hi[r], w);
+            }
+        }
     }
     std::vector<std::string> paths(a.parts.size());
     std::vector<int> depth(a.parts.size(), 0);
@@ -133,7 +150,11 @@ toml::table assemblyInfo(const std::filesystem::path& path, const AssemblyOption
         depth[i] = p.parent >= 0 ? depth[size_t(p.parent)] + 1 : 0;
         toml::array meshes;
         for (uint32_t m : placed[i]) meshes.push_back(a.meshNames[m]);
-        parts.push_back(toml::table{{"name", p.name}, {"path", paths[i]}, {"parent", int64_t(p.parent)}, {"meshes", meshes}});
+        parts.push_back(toml::table{{"name", p.name},
+                                    {"path", paths[i]},
+                                    {"parent", int64_t(p.parent)},
+                                    {"meshes", meshes},
+                                    {"instances", int64_t(placed[i].size())}});
         if (tree) {
             *tree += std::string(2 * size_t(depth[i]), ' ') + p.name;
             if (!placed[i].empty()) {
@@ -162,6 +183,13 @@ toml::table assemblyInfo(const std::filesystem::path& path, const AssemblyOption
                        {"materials", materials},
                        {"triangles", unique},
                        {"instanced_triangles", instanced},
+                       // what the lean storage costs: the unique meshes' bytes per unique
+                       // triangle, and an instance's record (transform, mesh, material, part)
+                       {"bytes_per_unique_triangle", unique > 0 ? double(bytes) / double(unique) : 0.0},
+                       {"bytes_per_instance", int64_t(sizeof(AssemblyInstance))},
+                       {"bounds", a.instances.empty() || lo[0] > hi[0]
+                                      ? toml::array{}
+                                      : toml::array{toml::array{lo[0], lo[1], lo[2]}, toml::array{hi[0], hi[1], hi[2]}}},
                        {"parts", parts}};
 }
 
