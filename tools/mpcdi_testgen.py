@@ -65,6 +65,19 @@ def png_grey(width, height, values, bits=8):
             chunk(b"IDAT", zlib.compress(bytes(raw), 9)) + chunk(b"IEND", b""))
 
 
+def png_blank(width, height):
+    """A black grey PNG, written row by row (a big one compresses to almost nothing)."""
+    comp = zlib.compressobj(9)
+    row = bytes(width + 1)
+    data = b"".join(comp.compress(row) for _ in range(height)) + comp.flush()
+
+    def chunk(tag, payload):
+        return struct.pack(">I", len(payload)) + tag + payload + struct.pack(">I", zlib.crc32(tag + payload) & 0xFFFFFFFF)
+
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0)) +
+            chunk(b"IDAT", data) + chunk(b"IEND", b""))
+
+
 def archive(entries):
     """A zip of (name, bytes), deflated, as calibration tools write them."""
     buf = io.BytesIO()
@@ -270,6 +283,8 @@ def malformed(out):
         "unknown-profile.mpcdi": archive([("mpcdi.xml", good_xml.replace(b'profile="2d"', b'profile="4d"')),
                                           ("r0.pfm", good_warp), ("r0_alpha.png", alpha)]),
         "bad-xml.mpcdi": archive([("mpcdi.xml", good_xml[:-20]), ("r0.pfm", good_warp), ("r0_alpha.png", alpha)]),
+        "alpha-huge.mpcdi": archive([("mpcdi.xml", xml("2d", [("p0", 8200, 8192, [("r0", 8200, 8192, "r0.pfm", "r0_alpha.png", None)])])),
+                                     ("r0.pfm", good_warp), ("r0_alpha.png", png_blank(8200, 8192))]),
         "pfm-one-component.mpcdi": archive([("mpcdi.xml", good_xml), ("r0.pfm", b"Pf\n8 6\n-1.0\n" + bytes(w * h * 4)),
                                             ("r0_alpha.png", alpha)]),
     }

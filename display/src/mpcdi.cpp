@@ -210,6 +210,12 @@ MpcdiMap readMap(std::span<const uint8_t> bytes, int components, int width, int 
         fail(name, "a blend map of " + size + ", its region has " + std::to_string(width) + "x" + std::to_string(height) +
                        " pixels");
     }
+    // A region may be large, and a blank map compresses a thousandfold: bounded like a warp.
+    if (size_t(width) * size_t(height) * size_t(components) > kMaxMpcdiSamples) {
+        png_image_free(&png);
+        fail(name, "a blend map of " + std::to_string(width) + "x" + std::to_string(height) + "x" + std::to_string(components) +
+                       " values, more than " + std::to_string(kMaxMpcdiSamples));
+    }
     const bool wide = png.format & PNG_FORMAT_FLAG_LINEAR;
     png.format = components == 3 ? (wide ? PNG_FORMAT_LINEAR_RGB : PNG_FORMAT_RGB) : (wide ? PNG_FORMAT_LINEAR_Y : PNG_FORMAT_GRAY);
     MpcdiMap m;

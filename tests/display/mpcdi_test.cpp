@@ -179,6 +179,7 @@ TEST(Mpcdi, BadFilesAreOneLineNamingFileAndWhat) {
         {"unknown-profile.mpcdi", "profile '4d' is none of 2d, 3d, a3, sl"},
         {"bad-xml.mpcdi", "mpcdi.xml at byte"},
         {"pfm-one-component.mpcdi", "a one-component PFM (Pf)"},
+        {"alpha-huge.mpcdi", "r0_alpha.png: a blend map of 8200x8192x1 values, more than 67108864"},
     };
     for (const auto& [name, what] : expected) {
         SCOPED_TRACE(name);

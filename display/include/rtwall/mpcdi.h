@@ -80,8 +80,8 @@ struct MpcdiFile {
     const MpcdiBuffer* buffer(const std::string& id) const;  // null when absent
 };
 
-// Limits: no grid larger than this a side or in all, no archive entry larger than kMaxMpcdiEntry
-// (nothing is allocated for more than what was read).
+// Limits: no grid or blend map larger than this a side or in all (a map's values counted), no
+// archive entry larger than kMaxMpcdiEntry (nothing is allocated for more than what was read).
 constexpr int kMaxMpcdiSide = 16384;
 constexpr size_t kMaxMpcdiSamples = size_t(64) << 20;
 constexpr size_t kMaxMpcdiEntry = size_t(1) << 30;
