@@ -85,7 +85,10 @@ void recordFeatures(const ShadingContext& shading, const RayHitK& rh, const int*
 // The primary-ray pass of one tile. Both kernels run this same code and differ only in how
 // the packet is handed to Embree: whole (rtcIntersectK) or lane by lane (rtcIntersect1, with
 // the results written back into the packet), so every value downstream is identical.
-template <int K, bool kUsePackets>
+// kWarped: the camera has projector warps (issue 30). The flat instantiation's ray generation
+// stays as bare as the benchmark's reference loop (a per-lane branch there, or a lambda holding
+// both loops, cost the packet kernel 3-7 % against bare Embree).
+template <int K, bool kUsePackets, bool kWarped>
 void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& rect, uint32_t frame,
                   const ShadingContext& shading, Scratch& sc) {
     using P = Packet<K>;
@@ -103,7 +106,6 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
     // samples pixel centres and frame 0's coins every frame, so its frames do not flicker.
     const bool perFrame = rendersStochastically(settings, s.randomContent);
     const Float3 org = camera.origin();
-    const bool warpedCamera = camera.warped();
 
     RTCIntersectContext ctx;
     initContext(ctx, true);
@@ -147,35 +149,26 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
                             ox[k] = perFrame ? (float(sx) + randomFloat(seed[k], 1000)) / float(ss) : cx;
                             oy[k] = perFrame ? (float(sy) + randomFloat(seed[k], 1001)) / float(ss) : cy;
                         }
-                        // The flat camera's loop stays as bare as the benchmark's reference
-                        // loop (a branch per lane in it cost the kernel ~7 % against bare
-                        // Embree); a warped one (issue 30) looks each sample up, and one that
-                        // lands on no screen is not traced: its pixel stays black.
-                        const auto generate = [&](auto warpedTag) {
-                            constexpr bool warped = decltype(warpedTag)::value;
-                            for (int k = 0; k < K; ++k) {
-                                const int i = bx + k % bw, j = by + k / bw;
-                                const bool inside = i < w && j < h;
-                                const float px = float(rect.x0 + i) + ox[k], py = float(rect.y0 + j) + oy[k];
-                                Float3 d = warped ? camera.direction(px, py) : camera.flatDirection(px, py);
-                                bool onScreen = true;
-                                if constexpr (warped) {
-                                    onScreen = !std::isnan(d.x + d.y + d.z);
-                                    if (!onScreen) d = {0.0f, 0.0f, 1.0f};
-                                }
-                                valid[k] = inside && onScreen ? -1 : 0;
-                                pixel[k] = inside ? uint32_t(j * w + i) : 0;
-                                const float inv = 1.0f / std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-                                rh.ray.dir_x[k] = d.x * inv;
-                                rh.ray.dir_y[k] = d.y * inv;
-                                rh.ray.dir_z[k] = d.z * inv;
-                                rh.ray.tfar[k] = INFINITY;
-                                rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-                                rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+                        for (int k = 0; k < K; ++k) {
+                            const int i = bx + k % bw, j = by + k / bw;
+                            const bool inside = i < w && j < h;
+                            const float px = float(rect.x0 + i) + ox[k], py = float(rect.y0 + j) + oy[k];
+                            Float3 d = kWarped ? camera.direction(px, py) : camera.flatDirection(px, py);
+                            bool onScreen = true;
+                            if constexpr (kWarped) {  // a sample on no screen is not traced: black
+                                onScreen = !std::isnan(d.x + d.y + d.z);
+                                if (!onScreen) d = {0.0f, 0.0f, 1.0f};
                             }
-                        };
-                        if (warpedCamera) generate(std::true_type{});
-                        else generate(std::false_type{});
+                            valid[k] = inside && onScreen ? -1 : 0;
+                            pixel[k] = inside ? uint32_t(j * w + i) : 0;
+                            const float inv = 1.0f / std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+                            rh.ray.dir_x[k] = d.x * inv;
+                            rh.ray.dir_y[k] = d.y * inv;
+                            rh.ray.dir_z[k] = d.z * inv;
+                            rh.ray.tfar[k] = INFINITY;
+                            rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+                            rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+                        }
                         if (clipping)
                             for (int k = 0; k < K; ++k) {
                                 float t0 = 0.0f, t1 = INFINITY;
@@ -218,9 +211,14 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
 template <bool kUsePackets>
 void primaryPassFor(int width, const Scene::Impl& s, const Camera& camera, const TileRect& rect, uint32_t frame,
                     const ShadingContext& shading, Scratch& sc) {
-    if (width == 16) primaryPassK<16, kUsePackets>(s, camera, rect, frame, shading, sc);
-    else if (width == 8) primaryPassK<8, kUsePackets>(s, camera, rect, frame, shading, sc);
-    else primaryPassK<4, kUsePackets>(s, camera, rect, frame, shading, sc);
+    const auto pass = [&](auto warped) {
+        constexpr bool w = decltype(warped)::value;
+        if (width == 16) primaryPassK<16, kUsePackets, w>(s, camera, rect, frame, shading, sc);
+        else if (width == 8) primaryPassK<8, kUsePackets, w>(s, camera, rect, frame, shading, sc);
+        else primaryPassK<4, kUsePackets, w>(s, camera, rect, frame, shading, sc);
+    };
+    if (camera.warped()) pass(std::true_type{});
+    else pass(std::false_type{});
 }
 
 int detectPacketWidth() {
