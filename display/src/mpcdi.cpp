@@ -303,7 +303,7 @@ std::string pathOf(pugi::xml_node file) {
 }
 
 MpcdiMap blendMap(pugi::xml_node map, const MpcdiRegion& region, const MpcdiEntries& entries, const std::string& name,
-                  const char* kind) {
+                  const char* kind, double defaultGamma) {
     const std::string where = describe("region", region.id) + " " + kind;
     const std::string path = pathOf(map);
     if (path.empty()) fail(name, where + " names no file");
@@ -321,7 +321,7 @@ MpcdiMap blendMap(pugi::xml_node map, const MpcdiRegion& region, const MpcdiEntr
         if (*g <= 0 || *g > 10) fail(name, where + " gammaEmbedded is " + shortNumber(*g) + " (above 0, at most 10)");
         m.gammaEmbedded = *g;
     } else {
-        m.gammaEmbedded = std::string(kind) == "alpha map" ? 2.2 : 1.0;
+        m.gammaEmbedded = defaultGamma;
     }
     return m;
 }
@@ -420,17 +420,16 @@ MpcdiFile parseMpcdiXml(std::string_view xml, const MpcdiEntries& entries, const
                 if (method != "linear" && !method.empty())
                     fail(name, where + " geometryWarpFile: interpolation " + quote(method) + " is not supported (linear)");
             }
-            region.warp.geometricUnit = trimmed(child(warpNode, "geometricUnit").text().get());
+            const std::string unit = trimmed(child(warpNode, "geometricUnit").text().get());
             const std::optional<std::vector<uint8_t>> warpBytes = entries(warpPath);
             if (!warpBytes) fail(name, where + " geometry warp " + quote(warpPath) + " is not in the archive");
-            const std::string unit = region.warp.geometricUnit;
             region.warp = parsePfm(*warpBytes, within(name, warpPath));
             region.warp.geometricUnit = unit;
             region.warp.metresPerUnit = warpsToSurface(file.profile) ? metresPer(unit, name, where) : 1.0;
             if (region.warp.validSamples == 0)
                 fail(name, where + " geometry warp " + quote(warpPath) + ": every sample is NaN (the projector lands on no screen)");
-            if (pugi::xml_node a = child(set, "alphaMap")) region.alpha = blendMap(a, region, entries, name, "alpha map");
-            if (pugi::xml_node b = child(set, "betaMap")) region.beta = blendMap(b, region, entries, name, "beta map");
+            if (pugi::xml_node a = child(set, "alphaMap")) region.alpha = blendMap(a, region, entries, name, "alpha map", 2.2);
+            if (pugi::xml_node b = child(set, "betaMap")) region.beta = blendMap(b, region, entries, name, "beta map", 1.0);
         }
         if (buffer.regions.empty()) fail(name, bufferWhere + " has no region");
     }
