@@ -6,8 +6,10 @@
 #include <sys/wait.h>
 
 #include <cerrno>
+#include <chrono>
 #include <csignal>
 #include <cstring>
+#include <thread>
 #include <utility>
 
 namespace rtwall {
@@ -65,6 +67,16 @@ int LocalDisplayNodes::pid(const std::string& name) const {
     for (const Child& c : children_)
         if (c.name == name && !c.ended) return c.pid;
     return 0;
+}
+
+bool LocalDisplayNodes::awaitEnd(int timeoutMs) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeoutMs);
+    for (;;) {
+        reap(false);
+        if (running() == 0) return true;
+        if (std::chrono::steady_clock::now() >= end) return false;
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
 }
 
 LocalDisplayNodes::~LocalDisplayNodes() {

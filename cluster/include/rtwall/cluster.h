@@ -405,6 +405,10 @@ public:
     std::vector<std::string> takeEnded();
     size_t running() const;
     int pid(const std::string& name) const;  // 0: no such node or it ended
+    // Waits (bounded) for every node to end on its own, as each does on the master's goodbye
+    // after showing the frames before it; true when none runs. The destructor's SIGTERM could
+    // otherwise stop a node between the last swap's release and its reading of that swap.
+    bool awaitEnd(int timeoutMs);
 
 private:
     struct Child {

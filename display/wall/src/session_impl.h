@@ -66,6 +66,7 @@ struct WallSession::Impl {
     std::unique_ptr<LocalDisplayNodes> nodeProcesses;
     std::vector<std::thread> nodeThreads;  // with clientThreads (tests): runWallNode, headless
     std::atomic<bool> stopNodes{false};
+    std::atomic<size_t> nodeThreadsEnded{0};
     std::vector<std::string> nodesPresent;  // at the last step, for the log
     uint64_t nodesLeftOut = 0;              // FrameReport::nodesLeftOut at the last step
     bool ranToTheEnd = false;               // every frame asked for was stepped
@@ -148,11 +149,20 @@ struct WallSession::Impl {
         // The nodes show the last frame before the master says goodbye (bounded: a node that
         // stalls is left out of it after the barrier's stall time anyway). Not after a stop,
         // when the wait would throw Cancelled here.
-        if (onNodes && ranToTheEnd && master && !stopped() && !master->displayNodesPresent().empty() &&
-            !master->waitForSwap(report.frame, 3000))
+        const bool nodesFinish = onNodes && ranToTheEnd && master && !stopped() && !master->displayNodesPresent().empty();
+        if (nodesFinish && !master->waitForSwap(report.frame, 3000))
             log(format("display nodes: frame %u was not swapped within 3 s of its last tile", report.frame));
         master.reset();
         for (std::thread& t : clientThreads) t.join();
+        // The swap's release is not its showing: a node reads the swap, shows the frame (denoised
+        // and written, seconds on a loaded PC), then the goodbye, and ends. Stopped before that, it
+        // would never show the last frame. So the nodes get time to end on their own (bounded).
+        if (nodesFinish) {
+            const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+            if (nodeProcesses && !nodeProcesses->awaitEnd(20'000)) log("display nodes: not ended 20 s after the goodbye; stopped");
+            while (nodeThreadsEnded < nodeThreads.size() && std::chrono::steady_clock::now() < until)
+                std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        }
         stopNodes = true;  // the master's goodbye ends them; this, one that never joined
         for (std::thread& t : nodeThreads) t.join();
         processes.reset();
@@ -245,6 +255,7 @@ struct WallSession::Impl {
                     } catch (const std::exception& e) {
                         std::fprintf(stderr, "display node '%s': %s\n", o.name.c_str(), e.what());
                     }
+                    ++nodeThreadsEnded;
                 });
             }
             log("display nodes: " + joined(names) + " as threads of this process, writing to " + (config.out / "NAME").string());
