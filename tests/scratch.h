@@ -7,6 +7,7 @@
 
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -43,6 +44,13 @@ inline std::filesystem::path scratchDir() {
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir;
+}
+
+// Runs tools/mpcdi_testgen.py (issue 30's independent MPCDI writer) with `args`: a test failure
+// naming the command when it fails.
+inline void mpcdiTestgen(const std::string& args) {
+    const std::string cmd = "python3 " + (sourceDir() / "tools" / "mpcdi_testgen.py").string() + " " + args;
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
 }
 
 inline std::filesystem::path writeFile(const std::filesystem::path& path, const std::string& text) {

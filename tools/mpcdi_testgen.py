@@ -207,14 +207,15 @@ def cylinder(res, grid, overlap, unit="m", declared=None):
     return archive([("mpcdi.xml", xml("a3", buffers, unit=declared or unit))] + entries)
 
 
-def cylinder_wall(res, overlap, mpcdi_name, buffers=None):
+def cylinder_wall(res, overlap, mpcdi_name, buffers=None, grid=None):
     """The wall config of the cylinder: one screen per projector, framed by the chord rectangle of
     its angle range; [warp] maps buffer projK to screen projK."""
     w, h = res
     f = lambda p: "[%.9g, %.9g, %.9g]" % p
     out = ["# A cylindrical screen section (radius %g m, %g degrees, %g m high) lit by three overlapping" % (RADIUS, SPAN_DEG, HEIGHT),
            "# projectors, calibrated by an MPCDI file (profile a3) that tools/mpcdi_testgen.py writes:",
-           "#   python3 tools/mpcdi_testgen.py cylinder %s --res %dx%d --wall THIS.toml" % (mpcdi_name, w, h),
+           "#   python3 tools/mpcdi_testgen.py cylinder %s --res %dx%d%s --wall THIS.toml"
+           % (mpcdi_name, w, h, " --grid %dx%d" % grid if grid and tuple(grid) != tuple(res) else ""),
            "# Each projector is a screen of the wall image (side by side), framed by the chord of its part",
            "# of the cylinder; every projector pixel's ray goes from the eye through the surface point the",
            "# calibration gives it ([warp], docs/mpcdi.md).",
@@ -345,7 +346,7 @@ def main():
         if a.wall:
             rel = os.path.relpath(os.path.abspath(a.out), os.path.dirname(os.path.abspath(a.wall)))
             with open(a.wall, "w") as f:
-                f.write(cylinder_wall(a.res, a.overlap, rel))
+                f.write(cylinder_wall(a.res, a.overlap, rel, grid=a.grid))
     elif a.what == "identity":
         bufs = []
         for b in a.buffer:

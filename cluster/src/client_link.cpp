@@ -153,6 +153,8 @@ std::optional<int> ClientRuntime::handle(const zmq::message_t& msg) {
                 lastFrameBegun_ = 0;
                 nodeLinks_.clear();
                 tileRoutes_.clear();
+                warpGrids_.clear();
+                saidWarpGrid_ = false;
             }
             session_ = h.session;
             id_ = w.clientId;
@@ -188,6 +190,12 @@ std::optional<int> ClientRuntime::handle(const zmq::message_t& msg) {
         case MsgType::Heartbeat: decodePayload<Heartbeat>(p, n); break;
         case MsgType::NodeList: onNodeList(decodePayload<NodeList>(p, n)); break;
         case MsgType::TileRoutes: onTileRoutes(decodePayload<TileRoutes>(p, n)); break;
+        case MsgType::WarpGrids: {
+            WarpGrids g = decodePayload<WarpGrids>(p, n);
+            warpGrids_.clear();
+            for (PixelWarp& w : g.grids) warpGrids_.push_back(std::make_shared<const PixelWarp>(std::move(w)));
+            break;
+        }
         case MsgType::Goodbye: {
             const Goodbye bye = decodePayload<Goodbye>(p, n);
             std::fprintf(stderr, "rtwall client %u: the master says goodbye: %s\n", id_, bye.reason.c_str());

@@ -5,6 +5,7 @@
 #include <pthread.h>
 
 #include <cstdio>
+#include <stdexcept>
 
 namespace rtwall::cluster {
 
@@ -39,7 +40,17 @@ void ClientRuntime::onFrameBegin(const FrameBegin& fb) {
     frameFeatures_ = fb.features;
     // At the state's resolution and tile size, which catchUp just brought to the frame's.
     auto layout = std::make_shared<FrameLayout>();
-    for (const FrameView& v : fb.views) layout->cameras.push_back(v.camera);
+    const int width = renderSettings_.width, height = renderSettings_.height;
+    try {
+        for (const FrameView& v : fb.views) layout->cameras.emplace_back(v.camera, width, height, frameWarps(v, warpGrids_, width, height));
+    } catch (const std::out_of_range& e) {
+        // A grid the master never sent this client: it cannot render the frame as the others
+        // do, so it renders none of it (the others do).
+        if (!saidWarpGrid_) std::fprintf(stderr, "rtwall client %u: frame %u names a %s; its tiles are left to others\n", id_, fb.frame, e.what());
+        saidWarpGrid_ = true;
+        drop();
+        return;
+    }
     layout->tiles = viewTiles(fb.views, renderSettings_.width, renderSettings_.height, renderSettings_.tileSize);
     frameLayout_ = std::move(layout);
     frame_.store(fb.frame);
@@ -192,12 +203,11 @@ void ClientRuntime::workerLoop(Slot& slot) {
             if (settings_.replay && !wide && replaySend(out, w)) continue;
             // A view's tile renders as it would in a frame of that view's camera alone.
             const TileRect r = w.layout->tiles[w.tile].rect;
-            const CameraDesc& cameraDesc = w.layout->cameras[w.layout->tiles[w.tile].view];
+            const Camera& camera = w.layout->cameras[w.layout->tiles[w.tile].view];
             const auto t0 = std::chrono::steady_clock::now();
             // For the stall watch (watchStalls): this thread is on this tile since now.
             slot.job.store(uint64_t(w.frame) << 32 | w.tile);
             slot.startNs.store(steadyNs());
-            const Camera camera(cameraDesc, renderSettings_.width, renderSettings_.height);
             // Depth only when the frame asks for it: without, the call is the one of a wall
             // without re-projection (DepthView's null data is that call too).
             depth.resize(w.depth ? size_t(r.width()) * r.height() : 0);

@@ -49,7 +49,7 @@ private:
     // A frame's views and tiling (FrameBegin::views: one view for a mono frame), shared by its
     // work items and never changed once made: a render thread reads it without a lock.
     struct FrameLayout {
-        std::vector<CameraDesc> cameras;  // per view
+        std::vector<Camera> cameras;  // per view, at the frame's resolution, with its warps: made once per frame
         std::vector<ViewTile> tiles;
     };
 
@@ -230,6 +230,8 @@ private:
     std::map<Hash128, std::shared_ptr<const std::vector<uint8_t>>> assets_;  // texture and volume files
     std::map<Hash128, AssetRef> updateFiles_;  // files named by updates' material changes
     std::shared_ptr<const FrameLayout> frameLayout_;  // the current frame's (network thread)
+    std::vector<std::shared_ptr<const PixelWarp>> warpGrids_;  // the master's WarpGrids (network thread)
+    bool saidWarpGrid_ = false;  // a frame naming a grid this client lacks was said once
     std::optional<FrameBegin> deferredFrame_;  // a frame waiting for one of them
     std::optional<FrameBegin> blockedFrame_;   // a frame whose updates wait for the render threads to leave the scene
     double blockedSince_ = 0;

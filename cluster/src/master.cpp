@@ -18,6 +18,14 @@ Master::Master(const SceneDesc& scene, const ClusterSettings& settings) : impl_(
     if (scene.cameras.empty()) throw InputError("the scene has no camera");
     if (settings.features > kFeatureAll || (settings.features && !settings.depth))
         throw InputError("features for the denoiser need depth with every tile (and bits 1 to 7)");
+    if (settings.warpGrids.size() > kMaxWarpGrids)
+        throw InputError(std::to_string(settings.warpGrids.size()) + " warp grids (at most " + std::to_string(kMaxWarpGrids) + ")");
+    for (size_t i = 0; i < settings.warpGrids.size(); ++i) {
+        const PixelWarp* g = settings.warpGrids[i].get();
+        if (!g || g->width < 1 || g->height < 1 || g->width > int(kMaxWarpSide) || g->height > int(kMaxWarpSide) ||
+            g->samples.size() != size_t(g->width) * size_t(g->height) || g->samples.size() > kMaxWarpSamples)
+            throw InputError("warp grid " + std::to_string(i) + " is empty, too large or not its width times height samples");
+    }
     s.app.camera = scene.cameras.front();
     std::random_device rd;
     s.session = (uint64_t(rd()) << 32) ^ rd();

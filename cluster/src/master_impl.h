@@ -62,6 +62,7 @@ struct ClientState {
     uint32_t frameBegun = 0;  // the frame whose FrameBegin reached its queue (a failed send is retried)
     bool needsState = false;  // a state message did not fit its queue: the state goes again
     bool needsWelcome = false;  // a codec change did not fit its queue
+    bool needsWarps = false;    // the wall's warp grids did not fit its queue (they go before its state)
     double fullSince = 0;     // its queue has been full since then (0: not full); too long and it goes
     double retryAt = 0;       // with a full queue: optional sends wait until then
     uint64_t updatesSent = 0; // for fault injection
@@ -345,6 +346,7 @@ struct Master::Impl {
     // Render clients (master_peers.cpp).
     void reap();
     Welcome welcomeFor(const ClientState& c) const;
+    SendResult sendWarpGrids(ClientState& c);
     void sendFrameBegin(ClientState& c);
     void retryPending();
     void onHello(const std::string& peer, const Header& h, const uint8_t* data, size_t size);

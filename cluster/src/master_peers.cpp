@@ -27,6 +27,15 @@ void Master::Impl::reap() {
     if (any) serveAll();
 }
 
+// The wall's warp grids, once per client after its Welcome (none: nothing is sent).
+SendResult Master::Impl::sendWarpGrids(ClientState& c) {
+    if (settings.warpGrids.empty()) return SendResult::Sent;
+    WarpGrids grids;
+    grids.grids.reserve(settings.warpGrids.size());
+    for (const auto& g : settings.warpGrids) grids.grids.push_back(*g);
+    return send(c, grids);
+}
+
 Welcome Master::Impl::welcomeFor(const ClientState& c) const {
     return Welcome{c.id, settings.codec, uint32_t(settings.prefetch), uint32_t(settings.heartbeatMs),
                    uint32_t(settings.timeoutMs)};
@@ -50,6 +59,10 @@ void Master::Impl::retryPending() {
         if (c.needsWelcome) {
             if (send(c, welcomeFor(c)) != SendResult::Sent) continue;
             c.needsWelcome = false;
+        }
+        if (c.needsWarps) {
+            if (sendWarpGrids(c) != SendResult::Sent) continue;
+            c.needsWarps = false;
         }
         if (c.needsState) {
             sendState(c);
@@ -84,8 +97,16 @@ void Master::Impl::onHello(const std::string& peer, const Header& h, const uint8
     if (r == SendResult::Gone) return;
     if (r == SendResult::Sent && withNodes()) send(ref, nodeList());
     if (r == SendResult::Full) {
-        // Both again, in this order: a state before its Welcome would be thrown away.
+        // All again, in this order: a state before its Welcome would be thrown away, and the
+        // grids come before the state (a client is ready for frames only with both).
         ref.needsWelcome = ref.needsState = true;
+        ref.needsWarps = !settings.warpGrids.empty();
+        return;
+    }
+    const SendResult w = sendWarpGrids(ref);
+    if (w == SendResult::Gone) return;
+    if (w == SendResult::Full) {
+        ref.needsWarps = ref.needsState = true;
         return;
     }
     sendState(ref);

@@ -258,6 +258,11 @@ void Master::setDenoise(const DenoiseSettings& settings, int ring) {
 void Master::setViews(std::vector<FrameView> views, uint64_t tag) {
     if (views.size() > kMaxViews) throw InputError("a frame has at most " + std::to_string(kMaxViews) + " views");
     Impl& s = *impl_;
+    for (const FrameView& v : views)
+        for (const WarpRef& w : v.warps)
+            if (w.grid >= s.settings.warpGrids.size() || v.refWidth <= 0 || v.refHeight <= 0)
+                throw InputError("a view names warp grid " + std::to_string(w.grid) + " of " +
+                                 std::to_string(s.settings.warpGrids.size()) + (v.refWidth <= 0 ? " without a reference size" : ""));
     std::lock_guard lock(s.app.stateMutex);
     s.app.views = std::move(views);
     s.app.viewsTag = tag;

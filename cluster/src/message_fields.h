@@ -49,6 +49,7 @@ public:
         w_.f32(v.y);
         w_.f32(v.z);
     }
+    void float3OrNaN(const Float3& v) { float3(v); }
     void hash(const Hash128& h) {
         w_.u64(h[0]);
         w_.u64(h[1]);
@@ -104,6 +105,13 @@ public:
         v.x = r_.f32();
         v.y = r_.f32();
         v.z = r_.f32();
+    }
+    // Finite or NaN (a warp's pixel on no screen): infinity is refused.
+    void float3OrNaN(Float3& v) {
+        v.x = r_.f32Any();
+        v.y = r_.f32Any();
+        v.z = r_.f32Any();
+        if (std::isinf(v.x) || std::isinf(v.y) || std::isinf(v.z)) fail("warp sample is infinite");
     }
     void hash(Hash128& h) {
         h[0] = r_.u64();

@@ -27,7 +27,8 @@
 // the display nodes (issue 27): NodeWelcome::reproject, NodePose (every refresh, the cameras to
 // warp the newest released frame to) and NodeShown (a node showed that refresh); 16 added the
 // denoiser's features with tiles (issue 28: FrameBegin::features, TileResult::features); 17 let
-// display nodes denoise their screens (NodeFrame::denoise).
+// display nodes denoise their screens (NodeFrame::denoise); 18 added calibrated projectors
+// (issue 30): WarpGrids (a wall's projector grids, once after the Welcome) and FrameView::warps.
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one fields() function that
@@ -55,7 +56,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 17;  // 17: display nodes denoise (NodeFrame::denoise)
+inline constexpr uint16_t kProtocolVersion = 18;  // 18: calibrated projectors (WarpGrids, FrameView::warps)
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -73,6 +74,10 @@ inline constexpr uint32_t kMaxNodes = 64;                 // display nodes: node
 inline constexpr uint32_t kMaxTilesPerFrame = 1 << 22;    // a 16384-pixel-square frame of 8-pixel tiles
 inline constexpr size_t kMaxWallConfigBytes = 1 << 20;    // the wall config text a node is sent
 inline constexpr uint32_t kMaxClientKeys = 4096;          // client public keys a node is given
+inline constexpr uint32_t kMaxWarpGrids = 1024;           // calibrated projector regions of a wall
+inline constexpr uint32_t kMaxWarpSide = 16384;           // a warp grid's width or height
+inline constexpr uint64_t kMaxWarpSamples = uint64_t(1) << 26;  // one grid's samples (as the MPCDI reader's bound)
+inline constexpr uint32_t kMaxWarpsPerView = 1024;        // warped rectangles one view names
 
 enum class MsgType : uint16_t {
     Hello = 1,          // client -> master
@@ -107,8 +112,10 @@ enum class MsgType : uint16_t {
     // Version 15: re-projection on the display nodes (issue 27).
     NodePose = 28,      // master -> node, every refresh: show the newest released frame warped to these cameras
     NodeShown = 29,     // node -> master: it showed that refresh (the master measures the pose's delay)
+    // Version 18: calibrated projectors (issue 30).
+    WarpGrids = 30,     // master -> client, after each Welcome: the wall's warp grids, which FrameView::warps name
 };
-inline constexpr uint16_t kMaxMsgType = 29;
+inline constexpr uint16_t kMaxMsgType = 30;
 
 struct Header {
     uint16_t version = kProtocolVersion;
@@ -453,6 +460,14 @@ struct NodeShown {
     bool operator==(const NodeShown&) const = default;
 };
 
+// A calibrated wall's warp grids (ClusterSettings::warpGrids), sent to each client once right
+// after its Welcome: frames name them by index (FrameView::warps). Samples may be NaN (a pixel
+// on no screen), never infinite.
+struct WarpGrids {
+    std::vector<PixelWarp> grids;
+    bool operator==(const WarpGrids&) const = default;
+};
+
 struct NodeEndpoint {
     uint32_t node = 0;  // its bit in the tile masks, below kMaxNodes
     std::string name;
@@ -547,6 +562,7 @@ MsgType messageTypeOf(const TileRoutes&);
 MsgType messageTypeOf(const TileDone&);
 MsgType messageTypeOf(const NodePose&);
 MsgType messageTypeOf(const NodeShown&);
+MsgType messageTypeOf(const WarpGrids&);
 
 // Canonical mesh bytes (vertex count, positions, triangle count, indices, normals flag and
 // normals, colours flag and RGB bytes, all little-endian), their hash (XXH3 128-bit) and the way back. decodeMesh

@@ -184,6 +184,11 @@ RTWALL_WIRE_MESSAGE(NodePose, 4) {
 
 RTWALL_WIRE_MESSAGE(NodeShown, 1) { io.u32(m.refresh); }
 
+RTWALL_WIRE_MESSAGE(WarpGrids, 1) {
+    // Each grid is at least its 13-byte head and one sample.
+    vectorOf(io, m.grids, 1 + 4 + 4 + 4 + 12, kMaxWarpGrids);
+}
+
 RTWALL_WIRE_FIELDS(NodeEndpoint, 4) {
     nodeIndex(io, m.node);
     nodeName(io, m.name, "node name");

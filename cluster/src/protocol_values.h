@@ -168,19 +168,53 @@ RTWALL_WIRE_FIELDS(ViewRegion, 4) {
     io.intIn(m.height, 0, kMaxViewReference, "view region height");
 }
 
-RTWALL_WIRE_FIELDS(FrameView, 4) {
+RTWALL_WIRE_FIELDS(RoomToWorld, 6) {
+    io.float3(m.origin);
+    io.float3(m.viewer);
+    io.float3(m.x);
+    io.float3(m.y);
+    io.float3(m.z);
+    io.floatIn(m.scale, 1e-9f, 1e9f, "room scale");
+}
+
+RTWALL_WIRE_FIELDS(WarpRef, 3) {
+    io.u32(m.grid);
+    io.expect(m.grid < kMaxWarpGrids, [&] { return "warp grid " + std::to_string(m.grid) + " exceeds the limit"; });
+    fields(io, m.rect);
+    fields(io, m.room);
+}
+
+RTWALL_WIRE_FIELDS(FrameView, 5) {
     fields(io, m.camera);
     vectorOf(io, m.regions, 16, kMaxRegionsPerView);
-    const bool regions = !m.regions.empty();
-    // Without regions the view is the whole image and the reference size means nothing.
+    vectorOf(io, m.warps, 4 + 16 + 64, kMaxWarpsPerView);
+    const bool regions = !m.regions.empty() || !m.warps.empty();
+    // Without regions or warps the view is the whole image and the reference size means nothing.
     io.intIn(m.refWidth, regions ? 1 : 0, kMaxViewReference, "view reference width");
     io.intIn(m.refHeight, regions ? 1 : 0, kMaxViewReference, "view reference height");
-    for (const ViewRegion& g : m.regions)
+    const auto inside = [&](const ViewRegion& g, const char* what) {
         io.expect(int64_t(g.x) + g.width <= m.refWidth && int64_t(g.y) + g.height <= m.refHeight, [&] {
-            return "view region " + std::to_string(g.x) + "," + std::to_string(g.y) + "," + std::to_string(g.width) + "," +
-                   std::to_string(g.height) + " is outside its " + std::to_string(m.refWidth) + "x" +
-                   std::to_string(m.refHeight) + " reference image";
+            return std::string(what) + " " + std::to_string(g.x) + "," + std::to_string(g.y) + "," +
+                   std::to_string(g.width) + "," + std::to_string(g.height) + " is outside its " +
+                   std::to_string(m.refWidth) + "x" + std::to_string(m.refHeight) + " reference image";
         });
+    };
+    for (const ViewRegion& g : m.regions) inside(g, "view region");
+    for (const WarpRef& w : m.warps) inside(w.rect, "warp rectangle");
+}
+
+// A projector's warp grid: NaN marks a pixel on no screen; infinity is never a place.
+RTWALL_WIRE_FIELDS(PixelWarp, 4) {
+    io.enumUpTo(m.kind, PixelWarp::Kind::SurfacePoints, "warp kind");
+    io.intIn(m.width, 1, kMaxWarpSide, "warp grid width");
+    io.intIn(m.height, 1, kMaxWarpSide, "warp grid height");
+    const uint64_t count = uint64_t(m.width) * uint64_t(m.height);
+    io.sequence(m.samples, 12, kMaxWarpSamples, [&](auto& v) { io.float3OrNaN(v); }, SendLimit::U32, [&](uint32_t n) {
+        io.expect(n == count, [&] {
+            return "warp grid of " + std::to_string(m.width) + "x" + std::to_string(m.height) + " has " +
+                   std::to_string(n) + " samples";
+        });
+    });
 }
 
 // The smallest encoding of a FrameView: a bound on the views a message can hold.

@@ -17,13 +17,13 @@
 
 namespace rtwall {
 
-namespace {
-
 ShaderSource warpShader(const std::string& name) {
     for (ShaderSource& s : warpShaders())
         if (s.name == name) return s;
     throw std::logic_error("no shipped shader " + name);
 }
+
+namespace {
 
 // InputError, `what` and the driver's log, when `object` (a program, else a shader) did not
 // link (compile); the object is deleted first.
@@ -43,17 +43,6 @@ void checkBuilt(GLuint object, bool program, const std::string& what) {
     throw InputError(what + std::string(log));
 }
 
-GLuint linkProgram(const ShaderSource& vert, const ShaderSource& frag) {
-    const GLuint vs = compileShader(GL_VERTEX_SHADER, vert), fs = compileShader(GL_FRAGMENT_SHADER, frag);
-    const GLuint program = glCreateProgram();
-    glAttachShader(program, vs);
-    glAttachShader(program, fs);
-    glLinkProgram(program);
-    glDeleteShader(vs);
-    glDeleteShader(fs);
-    checkBuilt(program, true, frag.name + ": the OpenGL driver does not link it: ");
-    return program;
-}
 
 void setTexture(GLuint texture, GLenum internal, int w, int h, GLenum format, GLenum type, const void* data) {
     glBindTexture(GL_TEXTURE_2D, texture);
@@ -80,6 +69,18 @@ GLuint compileShader(GLenum type, const ShaderSource& src) {
     glCompileShader(s);
     checkBuilt(s, false, src.name + ": the OpenGL driver does not compile it: ");
     return s;
+}
+
+GLuint linkProgram(const ShaderSource& vert, const ShaderSource& frag) {
+    const GLuint vs = compileShader(GL_VERTEX_SHADER, vert), fs = compileShader(GL_FRAGMENT_SHADER, frag);
+    const GLuint program = glCreateProgram();
+    glAttachShader(program, vs);
+    glAttachShader(program, fs);
+    glLinkProgram(program);
+    glDeleteShader(vs);
+    glDeleteShader(fs);
+    checkBuilt(program, true, frag.name + ": the OpenGL driver does not link it: ");
+    return program;
 }
 
 struct GlReprojector::Impl {

@@ -18,6 +18,10 @@ namespace rtwall {
 // A shader compiled by the current context's driver; InputError (with the driver's log) when
 // it does not compile.
 unsigned compileShader(unsigned type, const ShaderSource& source);
+// A program of two shaders, linked by the current context's driver (InputError with its log).
+unsigned linkProgram(const ShaderSource& vertex, const ShaderSource& fragment);
+// One of the shipped GL passes (warpShaders()) by file name; std::logic_error for no such file.
+ShaderSource warpShader(const std::string& name);
 
 class GlReprojector {
 public:

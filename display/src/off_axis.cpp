@@ -110,9 +110,6 @@ WallToWorld wallToWorld(const Float3& viewer, const ViewPose& pose, double scale
     return {pose.position, viewer, right, up, forward * -1.0f, float(scale)};
 }
 
-Float3 WallToWorld::direction(const Float3& v) const { return x * v.x + y * v.y + z * v.z; }
-// Times 1.0f is exact: an unscaled wall keeps its floats to the bit.
-Float3 WallToWorld::point(const Float3& p) const { return origin + direction(p - viewer) * scale; }
 
 EyeWindow eyeWindowInWorld(const EyeWindow& wall, const Float3& viewer, const ViewPose& pose, double scale) {
     const WallToWorld m = wallToWorld(viewer, pose, scale);

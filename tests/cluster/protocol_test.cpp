@@ -190,9 +190,18 @@ FrameBegin sampleViewsFrameBegin() {
     right.regions = {{0, 0, 1024, 768}, {2048, 0, 1024, 768}};
     right.refWidth = 3072;
     right.refHeight = 768;
+    // Version 18: a calibrated projector's rectangle, its grid and where the room is.
+    right.warps = {{2, {2048, 0, 1024, 768}, {{1, 2, 3}, {0, 1.7f, 2}, {0, 0, -1}, {0, 1, 0}, {1, 0, 0}, 2.5f}}};
     fb.views = {left, right};
     fb.depth = true;  // version 14
     return fb;
+}
+
+// Version 18: a wall's warp grids, one of each kind (finite: NaN never equals itself).
+WarpGrids sampleWarpGrids() {
+    PixelWarp offsets{PixelWarp::Kind::ScreenOffsets, 2, 1, {{0.5f, -1.0f, 0.0f}, {3.0f, 0.25f, 0.0f}}};
+    PixelWarp surface{PixelWarp::Kind::SurfacePoints, 1, 2, {{-1.5f, 0.0f, -2.0f}, {-1.5f, 2.25f, -2.1f}}};
+    return {{offsets, surface}};
 }
 
 // The same stereo CAVE's frame as a display node is told it (version 12): views, their eyes, and
@@ -260,6 +269,7 @@ template <class F> void forEachSample(F&& f) {
     f(NodeWelcome{2, 250, 3000, "[wall]\n", {}, true});  // re-projecting (version 15's trailing flag)
     f(NodePose{900, 86, true, {sampleCamera(), sampleCamera()}});
     f(NodeShown{900});
+    f(sampleWarpGrids());
 }
 
 template <class Msg> std::vector<uint8_t> payloadOf(const Msg& msg) {
@@ -367,7 +377,7 @@ TEST(Protocol, GoldenBytes) {
     // 10: FrameBegin's views; 11: display nodes; 12: views and accumulation on display nodes; 13:
     // the frame's views are its only camera; 14: depth with every tile, left out when off; 15:
     // re-projection on the display nodes; 16: the denoiser's features, left out when off; 17: how
-    // display nodes denoise, left out when off).
+    // display nodes denoise, left out when off; 18: warp grids and each view's warps).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -375,7 +385,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x11, 0x00,                                      // version (17: display nodes denoise)
+        0x12, 0x00,                                      // version (18: calibrated projectors)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame

@@ -9,6 +9,7 @@
 #include <GL/glcorearb.h>
 
 #include <rtwall/engine.h>
+#include <rtwall/mpcdi.h>
 
 #include <cstdlib>
 #include <cstring>
@@ -121,6 +122,21 @@ TEST(GlPresenter, AnInsertedStageShowsWhatTheCpuStageMakes) {
     o.stages = {&paint};
     o.overlay = &status;
     expectScreensMatchHeadless(test::sourceDir() / "configs/wall/projectors-2x2.toml", UploadMethod::TexSubImage, o, 0);
+}
+
+// A calibrated wall's blend (issue 30): the GL stage (projector_blend.frag) against the CPU
+// reference on the curved example's three projectors, alpha and beta maps everywhere. Within
+// one code: the GPU's pow and its float-to-8-bit conversion may round the other way.
+TEST(GlPresenter, TheProjectorBlendMatchesTheCpuReference) {
+    const auto dir = test::scratchDir();
+    test::mpcdiTestgen("cylinder " + (dir / "c.mpcdi").string() + " --res 64x48 --wall " + (dir / "c.toml").string());
+    const WallConfig wall = loadWallConfig(dir / "c.toml");
+    ProjectorBlendStage blend(wall, readMpcdi(wall.warp->mpcdi));
+    PresentOptions o;
+    o.stages = {&blend};
+    expectScreensMatchHeadless(dir / "c.toml", UploadMethod::TexSubImage, o, 1);
+    const WallFrame f = renderedFrame(wall.width, wall.height, 1, 0.0f);
+    for (size_t s = 0; s < 3; ++s) EXPECT_NE(presentScreen(wall, s, f, o).rgb, presentScreen(wall, s, f).rgb) << "not blended";
 }
 
 TEST(GlPresenter, PixelBufferUploadShowsTheSame) {

@@ -18,10 +18,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-void generate(const std::string& args) {
-    const std::string cmd = "python3 " + (test::sourceDir() / "tools" / "mpcdi_testgen.py").string() + " " + args;
-    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-}
+void generate(const std::string& args) { test::mpcdiTestgen(args); }
 
 std::string errorOf(const fs::path& file) {
     try {

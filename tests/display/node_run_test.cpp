@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <csignal>
+#include <cstdlib>
 #include <cstdio>
 #include <map>
 #include <regex>
@@ -83,6 +84,35 @@ TEST(NodeRun, OneCommandRunsTwoLocalNodesBitIdenticalToOnePc) {
             EXPECT_EQ(fileBytes(dir / "nodes" / node / f), fileBytes(dir / "one" / f));
         }
     }
+}
+
+// A calibrated wall (issue 30) on two display nodes: the clients trace through the warps, each
+// node blends its screens with the file's maps, and every screen is the one-PC wall's bytes.
+TEST(NodeRun, TheCurvedWallOnTwoNodesIsTheOnePcWallsBytes) {
+    const std::filesystem::path dir = test::scratchDir();
+    test::mpcdiTestgen("cylinder " + (dir / "c.mpcdi").string() + " --res 64x48 --wall " + (dir / "c.toml").string());
+    WallConfig w = loadWallConfig(dir / "c.toml");
+    w.writeEvery = 1;
+    test::writeFile(dir / "one.toml", writeWallConfig(w));
+    for (ScreenConfig& sc : w.screens) sc.node = sc.name == "proj2" ? "right" : "left";
+    test::writeFile(dir / "nodes.toml", writeWallConfig(w));
+    test::ChildProcess nodes(runArgs(dir / "nodes.toml", 2, dir / "nodes"));
+    ASSERT_EQ(nodes.wait(240'000), std::optional<int>(0)) << nodes.output();
+    EXPECT_EQ(nodes.output().find("without the calibration's blend"), std::string::npos) << nodes.output();
+    test::ChildProcess onePc(runArgs(dir / "one.toml", 2, dir / "one"));
+    ASSERT_EQ(onePc.wait(240'000), std::optional<int>(0)) << onePc.output();
+    size_t compared = 0;
+    for (const auto& [node, screens] : std::map<std::string, std::vector<std::string>>{{"left", {"proj0", "proj1"}}, {"right", {"proj2"}}})
+        for (int frame = 1; frame <= 2; ++frame)
+            for (const std::string& screen : screens) {
+                char name[64];
+                std::snprintf(name, sizeof name, "frame_%06d_%s.png", frame, screen.c_str());
+                SCOPED_TRACE(node + "/" + name);
+                ASSERT_TRUE(std::filesystem::exists(dir / "nodes" / node / name)) << nodes.output();
+                EXPECT_TRUE(fileBytes(dir / "nodes" / node / name) == fileBytes(dir / "one" / name));
+                ++compared;
+            }
+    EXPECT_EQ(compared, 6u);
 }
 
 // The node's process among the run's children, by its --node argument.

@@ -11,6 +11,8 @@
 #include <array>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <cstdio>
 
 namespace rtwall {
@@ -45,19 +47,30 @@ TEST(WallCli, CheckNamesTheScreensOfEachDisplayNode) {
 
 // [warp] (issue 30): `rtwall check` reads the calibration and says so; a problem in it is a line
 // and exit 1; `rtwall run` refuses the wall in one line while rendering through it is not built.
-TEST(WallCli, CheckReadsTheProjectorCalibrationAndRunRefusesItForNow) {
+// The curved example from the command line: checked, run headless (each projector's image
+// written), its post-warp mode refused in one line while it is not built.
+TEST(WallCli, CheckReadsTheProjectorCalibrationAndRunTracesThroughIt) {
     const auto dir = test::scratchDir();
-    const std::string gen = "python3 " + (test::sourceDir() / "tools/mpcdi_testgen.py").string() + " cylinder " +
-                            (dir / "c.mpcdi").string() + " --res 32x24 --wall " + (dir / "c.toml").string();
-    ASSERT_EQ(std::system(gen.c_str()), 0) << gen;
+    test::mpcdiTestgen("cylinder " + (dir / "c.mpcdi").string() + " --res 32x24 --wall " + (dir / "c.toml").string());
     Result r = run("check " + (dir / "c.toml").string());
     EXPECT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("3 screens, shaders compile; warp (direct): 3 projectors of c.mpcdi\n"), std::string::npos) << r.output;
-    r = run("run --wall " + (dir / "c.toml").string() + " --headless --frames 1");
+    r = run("run " + (test::sourceDir() / "configs/run/demo.toml").string() + " --wall " + (dir / "c.toml").string() +
+            " --headless --frames 1 --write-every 1 --out " + (dir / "out").string());
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("warp: c.mpcdi, 3 projector regions on 3 screens, rays through each projector pixel (a3 profile)"),
+              std::string::npos) << r.output;
+    for (const char* p : {"proj0", "proj1", "proj2"})
+        EXPECT_EQ(readPng(dir / "out" / (std::string("frame_000001_") + p + ".png")).width, 32) << p;
+    std::ifstream in(dir / "c.toml");
+    std::string post((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    post += "mode = \"post\"\n";
+    test::writeFile(dir / "post.toml", post);
+    r = run("run --wall " + (dir / "post.toml").string() + " --headless --frames 1");
     EXPECT_EQ(r.status, 1);
-    EXPECT_EQ(r.output, "rtwall: error: " + (dir / "c.toml").string() +
-                            ": [warp]: the wall cannot render through a projector calibration yet (rtwall check validates it; "
-                            "docs/mpcdi.md)\n");
+    EXPECT_EQ(r.output, "rtwall: error: " + (dir / "post.toml").string() +
+                            ": [warp] mode = \"post\": the resampling compositor is not built yet; mode = \"direct\" traces each "
+                            "projector pixel's ray (docs/mpcdi.md)\n");
     std::filesystem::resize_file(dir / "c.mpcdi", 100);
     r = run("check " + (dir / "c.toml").string());
     EXPECT_EQ(r.status, 1);

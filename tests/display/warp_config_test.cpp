@@ -20,9 +20,7 @@ namespace fs = std::filesystem;
 
 // The cylinder calibration and its wall config in `dir`; `extra`: testgen options.
 fs::path cylinderWall(const fs::path& dir, const std::string& extra = "") {
-    const std::string cmd = "python3 " + (test::sourceDir() / "tools" / "mpcdi_testgen.py").string() + " cylinder " +
-                            (dir / "c.mpcdi").string() + " --res 32x24 --wall " + (dir / "c.toml").string() + " " + extra;
-    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    test::mpcdiTestgen("cylinder " + (dir / "c.mpcdi").string() + " --res 32x24 --wall " + (dir / "c.toml").string() + " " + extra);
     return dir / "c.toml";
 }
 
@@ -139,9 +137,8 @@ TEST(WarpConfig, CheckNamesEveryMismatchBetweenFileAndWall) {
 // each screen's viewport.
 TEST(WarpConfig, WallWarpsFromTheFile) {
     const fs::path dir = test::scratchDir();
-    const std::string gen = "python3 " + (test::sourceDir() / "tools" / "mpcdi_testgen.py").string() + " identity ";
-    ASSERT_EQ(std::system((gen + (dir / "id.mpcdi").string() + " --buffer a=40x30 --buffer b=20x15").c_str()), 0);
-    ASSERT_EQ(std::system((gen + (dir / "shift.mpcdi").string() + " --buffer a=40x30 --buffer b=20x15 --shift 3,-2").c_str()), 0);
+    test::mpcdiTestgen("identity " + (dir / "id.mpcdi").string() + " --buffer a=40x30 --buffer b=20x15");
+    test::mpcdiTestgen("identity " + (dir / "shift.mpcdi").string() + " --buffer a=40x30 --buffer b=20x15 --shift 3,-2");
     auto wall = [&](const std::string& mpcdi) {
         return parseWallConfig("[wall]\nwidth = 80\nheight = 30\n[[screen]]\nname = \"A\"\nviewport = [0, 0, 40, 30]\n"
                                "[[screen]]\nname = \"B\"\nviewport = [40, 0, 40, 30]\nresolution = [20, 15]\n"

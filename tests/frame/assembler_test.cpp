@@ -340,5 +340,40 @@ TEST(FrameViews, TilesMeetScaledRegions) {
     EXPECT_EQ(viewTiles({none}, 64, 64, 16).size(), 0u);
 }
 
+// A view's warps at a frame smaller than the wall (issue 30): rectangles scaled as regions are,
+// screen offsets by image pixels per wall pixel (exactly 1 at the wall's size), grids shared
+// (sent once, never copied per frame); a grid the client was not sent throws.
+TEST(Views, FrameWarpsScaleRectanglesAndOffsetsToTheFrame) {
+    auto grid = std::make_shared<const PixelWarp>(PixelWarp{PixelWarp::Kind::ScreenOffsets, 1, 1, {{2.0f, -1.0f, 0.0f}}});
+    const std::vector<std::shared_ptr<const PixelWarp>> grids{nullptr, grid};
+    FrameView v;
+    v.refWidth = 1600;
+    v.refHeight = 1200;
+    RoomToWorld room;
+    room.scale = 3.0f;
+    v.warps = {{1, {800, 600, 800, 600}, room}};
+    const std::vector<ScreenWarp> full = frameWarps(v, grids, 1600, 1200);
+    ASSERT_EQ(full.size(), 1u);
+    EXPECT_EQ(full[0].rect, (TileRect{800, 600, 1600, 1200}));
+    EXPECT_EQ(full[0].warp.get(), grid.get());
+    EXPECT_EQ(full[0].room, room);
+    EXPECT_EQ(full[0].offsetScaleX, 1.0f);
+    EXPECT_EQ(full[0].offsetScaleY, 1.0f);
+    const std::vector<ScreenWarp> half = frameWarps(v, grids, 800, 400);
+    EXPECT_EQ(half[0].rect, (TileRect{400, 200, 800, 400}));
+    EXPECT_EQ(half[0].offsetScaleX, 0.5f);
+    EXPECT_FLOAT_EQ(half[0].offsetScaleY, 1.0f / 3.0f);
+    // Through the camera: the offset of 2 wall pixels is 1 frame pixel at half the width.
+    CameraDesc c;
+    const Camera flat(c, 800, 400), warped(c, 800, 400, half);
+    const Float3 want = flat.direction(401.5f, 300.5f - 1.0f / 3.0f), got = warped.direction(400.5f, 300.5f);
+    EXPECT_FLOAT_EQ(got.x, want.x);
+    EXPECT_FLOAT_EQ(got.y, want.y);
+    v.warps[0].grid = 0;  // null: never sent
+    EXPECT_THROW(frameWarps(v, grids, 800, 400), std::out_of_range);
+    v.warps[0].grid = 2;
+    EXPECT_THROW(frameWarps(v, grids, 800, 400), std::out_of_range);
+}
+
 }  // namespace
 }  // namespace rtwall

@@ -85,11 +85,11 @@ template <class... Msgs> struct Table {
     static constexpr PayloadCheck payload[] = {checkPayload<Msgs>...};
     static constexpr MessageCheck message[] = {checkMessage<Msgs>...};
 };
-// In MsgType order, 1..29.
+// In MsgType order, 1..30.
 using Messages = Table<Hello, Welcome, SceneSnapshot, MeshRequest, MeshData, Update, FrameBegin, TileRequest,
                        TileAssign, TileResult, Heartbeat, Goodbye, Ready, ResyncRequest, AssetRequest, AssetData,
                        TileStalled, TileFailed, NodeHello, NodeWelcome, NodeFrame, NodeHave, NodeSwap, NodeSwapped,
-                       NodeList, TileRoutes, TileDone, NodePose, NodeShown>;
+                       NodeList, TileRoutes, TileDone, NodePose, NodeShown, WarpGrids>;
 static_assert(std::size(Messages::payload) == kMaxMsgType);
 
 void checkMesh(const uint8_t* data, size_t size) {

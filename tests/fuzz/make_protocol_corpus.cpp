@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -169,6 +170,21 @@ int main(int argc, char** argv) {
         d.sceneSeq = 4;
         seedMessage("node-frame-denoise",
                     NodeFrame{7, 128, 64, 32, TilePixels::LinearHalf, {}, {}, true, 9, true, d});
+    }
+
+    // Version 18: calibrated projectors: the grids (one NaN sample: a pixel on no screen) and a
+    // frame whose view names them.
+    {
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        PixelWarp offsets{PixelWarp::Kind::ScreenOffsets, 2, 2, {{0.5f, 0.0f, 0.0f}, {nan, nan, nan}, {0, 1, 0}, {1, 1, 0}}};
+        PixelWarp surface{PixelWarp::Kind::SurfacePoints, 1, 2, {{-1.5f, 0.0f, -2.0f}, {-1.5f, 2.25f, -2.1f}}};
+        seedMessage("warp-grids", WarpGrids{{offsets, surface}});
+        FrameView v;
+        v.camera.name.clear();
+        v.refWidth = 64;
+        v.refHeight = 32;
+        v.warps = {{0, {0, 0, 32, 32}, {}}, {1, {32, 0, 32, 32}, {}}};
+        seedMessage("frame-begin-warps", FrameBegin{8, 2, TilePixels::Srgb8, {v}});
     }
 
     writeSeed("mesh-box", fuzz::kMesh, encodeMesh(makeBox()));

@@ -130,6 +130,19 @@ struct TessellationOptions : Common {
 };
 toml::table tessellation(const TessellationOptions& o);
 
+// What tracing each calibrated projector pixel's ray gains over resampling a flat render
+// through the warp (issue 30): one projector lights a cylindrical section of a fixed chord
+// (3.2 x 2.4 m, the eye 2.5 m before it), its span the warp's strength; direct (rays through
+// the warp; direct_ss2 with 2 x 2 samples a pixel), post and post_2x (a flat render of the
+// projector's pixels, or of twice as many each way, resampled through the warp) against a
+// supersampled direct render, by PSNR and FLIP, with each one's time.
+struct WarpOptions : Common {
+    std::string scene = "configs/demo.toml";
+    int width = 400, height = 300, referenceSupersample = 4, threads = 0, runs = 3;
+    std::vector<double> spans{0, 30, 60, 90, 120};  // degrees of arc; 0: the flat chord itself
+};
+toml::table warp(const WarpOptions& o);
+
 // Motion-to-photon latency of a tracked wall (issue 18): DTrack datagram to the first presented
 // frame made with it, and the head error at presentation, mono/stereo x async off/on x
 // prediction off/on, at each image width (height = 3/4 of it), loopback client threads.

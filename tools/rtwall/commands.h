@@ -58,6 +58,7 @@ void addBenchTiles(CLI::App& bench, Run& run);
 void addBenchCodecs(CLI::App& bench, Run& run);
 void addBenchShading(CLI::App& bench, Run& run);
 void addBenchTessellation(CLI::App& bench, Run& run);  // bench_tessellation.cpp (issue 20)
+void addBenchWarp(CLI::App& bench, Run& run);          // bench_warp.cpp (issue 30)
 void addBenchReproject(CLI::App& bench, Run& run);  // bench_reproject.cpp (issue 27)
 void addBenchDenoise(CLI::App& bench, Run& run);    // bench_denoise.cpp (issue 28)
 void addTrackerSim(CLI::App& app, Run& run);  // cmd_tracker_sim.cpp (issue 18)

@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
     bench->require_subcommand(1);
     for (auto add : {addBenchKernel, addBenchCluster, addBenchFaults, addBenchAttack, addBenchChaos, addBenchUpdates,
                      addBenchLatency, addBenchDisplay, addBenchScene, addBenchTiles, addBenchCodecs, addBenchShading,
-                     addBenchTessellation})
+                     addBenchTessellation, addBenchWarp})
         add(*bench, run);
     addBenchReproject(*bench, run);
     addBenchDenoise(*bench, run);

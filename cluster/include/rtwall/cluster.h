@@ -103,6 +103,9 @@ struct ClusterSettings {
     std::vector<std::filesystem::path> clientKeys;  // public key files of the clients allowed in
     bool insecure = false;
     DisplayNodeSettings displayNodes;
+    // A calibrated wall's projector grids (issue 30): each client gets them once, right after its
+    // Welcome; the views' warps (FrameView::warps) name them by index.
+    std::vector<std::shared_ptr<const PixelWarp>> warpGrids;
     std::shared_ptr<const MasterFaults> faults;  // null outside tests (rtwall/cluster_testing.h)
 };
 

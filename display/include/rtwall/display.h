@@ -334,6 +334,33 @@ private:
     int textureWidth_ = 0, textureHeight_ = 0;
 };
 
+// A calibrated wall's blend (issue 30, docs/mpcdi.md): each MPCDI region's alpha (intensity)
+// and beta (black level) maps on its screen's pixels, applied in linear light before the
+// display encoding: out = beta + (1 - beta) * alpha * in, with in and out sRGB (decoded and
+// encoded again) and each map's embedded gamma undone. A pixel whose alpha is 1 and beta 0 is
+// left as it is, so unit blends change no bit. Screens and regions without maps are untouched.
+// Its GL objects live in the presenter's shared context and its windows' (one vertex array
+// each); they go with the contexts.
+class ProjectorBlendStage final : public ScreenStage {
+public:
+    // The file must have passed checkWarp for `wall`.
+    ProjectorBlendStage(const WallConfig& wall, const MpcdiFile& file);
+    ~ProjectorBlendStage() override;
+    bool blends(size_t screen) const;  // whether any pixel of the screen changes
+    void apply(const WallConfig& wall, size_t screen, Image& pixels) const override;
+    void drawGl(const WallConfig& wall, size_t screen) override;
+    void releaseGl() override;
+
+private:
+    struct Maps {
+        int width = 0, height = 0;
+        std::vector<float> alpha, beta;  // 3 a pixel, top row first; empty: nothing blended
+    };
+    std::vector<Maps> screens_;
+    struct Gl;
+    std::unique_ptr<Gl> gl_;
+};
+
 struct PresentOptions {
     bool falseColour = false;  // tint every tile with the colour of the client that rendered it
     const Image* overlay = nullptr;  // the status overlay (OverlayStage): drawn after `stages`, on top
@@ -492,14 +519,10 @@ bool wallHasViews(const WallConfig& wall);
 // pose.fovY is unused. Scale 1 gives the very floats the unscaled map gives.
 EyeWindow eyeWindowInWorld(const EyeWindow& wall, const Float3& viewer, const ViewPose& pose, double scale = 1.0);
 // That map on its own (a turn, the scale and a move): where a tracked wand in the room is in the world.
-struct WallToWorld {
-    Float3 origin;   // the camera position: where `viewer` lands
-    Float3 viewer;
-    Float3 x, y, z;  // the wall's axes in the world: the camera's right, up and back (unit)
-    float scale = 1.0f;  // world units per metre
-    Float3 point(const Float3& wall) const;      // turned, scaled and moved
-    Float3 direction(const Float3& wall) const;  // turned only: a unit direction stays unit
-};
+// It is core's RoomToWorld (rtwall/camera.h), which a calibrated screen's rays use too: origin is
+// the camera position (where `viewer` lands), x, y, z the wall's axes in the world (the camera's
+// right, up and back, unit), scale world units per metre.
+using WallToWorld = RoomToWorld;
 WallToWorld wallToWorld(const Float3& viewer, const ViewPose& pose, double scale = 1.0);
 // The navigation pose that shows the room at `newScale` world units per metre with the wall
 // point `fixed` (the head, between the eyes) where it was in the world at `scale`: the room

@@ -2,6 +2,7 @@
 // runDisplayNode does the network and the tiles; this presents the node's own screens.
 #include "gpu_warps.h"
 
+#include <rtwall/mpcdi.h>
 #include <rtwall/wall.h>
 
 #include <cstdio>
@@ -15,6 +16,7 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
     std::unique_ptr<GlPresenter> gl;
     std::unique_ptr<HeadlessPresenter> headless;
     WallConfig wall, whole;  // this node's screens; the whole wall (its denoise windows)
+    std::unique_ptr<ProjectorBlendStage> blend;  // a calibrated wall's alpha and beta maps on this node's screens
     DisplayNodeRun run;
     run.connect = options.connect;
     run.name = options.name;
@@ -30,6 +32,19 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
         if (gl || headless) return;
         whole = parseWallConfig(text, "the master's wall config");
         wall = nodeWall(whole, options.name);
+        if (whole.warp) {
+            // A calibrated wall (issue 30): the clients trace through its warps; this node
+            // applies its screens' blend maps, from the file at the master's path (the same
+            // path on every display PC, as the wall's shaders).
+            WallConfig withWarp = wall;
+            withWarp.warp = whole.warp;
+            try {
+                blend = std::make_unique<ProjectorBlendStage>(withWarp, readMpcdi(whole.warp->mpcdi));
+            } catch (const InputError& e) {
+                std::fprintf(stderr, "rtwall display: node '%s' shows its screens without the calibration's blend: %s\n",
+                             options.name.c_str(), e.what());
+            }
+        }
         std::string whyNot;
         if (!options.headless) gl = GlPresenter::open(wall, {}, &whyNot);
         if (!gl) {
@@ -42,6 +57,7 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
     const auto show = [&](WallFrame& f, const std::vector<std::string>& leftOut) {
         Image overlay;
         PresentOptions po;
+        if (blend) po.stages.push_back(blend.get());
         if (!leftOut.empty()) {
             std::string text = "display nodes left out:";
             for (const std::string& n : leftOut) text += " " + n;

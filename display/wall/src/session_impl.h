@@ -10,6 +10,7 @@
 #include "wall_input.h"
 
 #include <rtwall/frame.h>
+#include <rtwall/mpcdi.h>
 #include <rtwall/wall.h>
 
 #include <algorithm>
@@ -65,6 +66,10 @@ struct WallSession::Impl {
     bool onNodes = false;
     std::unique_ptr<LocalDisplayNodes> nodeProcesses;
     std::vector<std::thread> nodeThreads;  // with clientThreads (tests): runWallNode, headless
+    // Per screen of a calibrated wall: its warp grids' indexes (ClusterSettings::warpGrids) and
+    // rectangles in wall pixels; empty without [warp].
+    std::vector<std::vector<std::pair<uint32_t, ViewRegion>>> screenWarps;
+    std::unique_ptr<ProjectorBlendStage> blend;  // its alpha and beta maps on the master's screens
     std::atomic<bool> stopNodes{false};
     std::atomic<size_t> nodeThreadsEnded{0};
     std::vector<std::string> nodesPresent;  // at the last step, for the log
@@ -417,9 +422,20 @@ struct WallSession::Impl {
 
     // View i of an eye's views with its off-axis camera; one plane of several shows (and has
     // rendered) only its screens' pixels.
+    // A calibrated screen's projector pixels look where its warps say (issue 30), the room
+    // placed in the world as the view's window is.
     FrameView frameView(const std::vector<WallView>& vs, size_t i) {
         FrameView f;
         f.camera = input->viewCamera(vs[i].window);
+        if (!screenWarps.empty()) {
+            const RoomToWorld room = input->roomToWorld();
+            for (size_t screen : vs[i].screens)
+                for (const auto& [grid, rect] : screenWarps[screen]) f.warps.push_back({grid, rect, room});
+            if (!f.warps.empty()) {
+                f.refWidth = wallConfig.width;
+                f.refHeight = wallConfig.height;
+            }
+        }
         if (vs.size() == 1) return f;
         for (size_t screen : vs[i].screens) {
             const PixelRect& r = wallConfig.screens[screen].viewport;
@@ -428,6 +444,25 @@ struct WallSession::Impl {
         f.refWidth = wallConfig.width;
         f.refHeight = wallConfig.height;
         return f;
+    }
+
+    // Reads the wall's calibration ([warp], already checked): its grids go to the clients once
+    // (ClusterSettings::warpGrids), and each frame's views name them (screenWarps).
+    void loadWarps(ClusterSettings& cluster) {
+        const MpcdiFile file = readMpcdi(wallConfig.warp->mpcdi);
+        blend = std::make_unique<ProjectorBlendStage>(wallConfig, file);
+        screenWarps.assign(wallConfig.screens.size(), {});
+        size_t regions = 0;
+        for (WallWarp& w : wallWarps(wallConfig, file))
+            for (ScreenWarp& r : w.regions) {
+                screenWarps[w.screen].emplace_back(uint32_t(cluster.warpGrids.size()),
+                                                   ViewRegion{r.rect.x0, r.rect.y0, r.rect.width(), r.rect.height()});
+                cluster.warpGrids.push_back(std::move(r.warp));
+                ++regions;
+            }
+        log(format("warp: %s, %zu projector regions on %zu screens, rays through each projector pixel (%s profile)",
+                   wallConfig.warp->mpcdi.filename().string().c_str(), regions, wallConfig.warp->buffers.size(),
+                   mpcdiProfileName(file.profile)));
     }
 
     // What the wall shows of a frame: its views (none: one image) accumulated and composed into

@@ -29,6 +29,7 @@ WallInput::WallInput(const WallConfig& wall, const CameraDesc& start, const Opti
                      std::function<void(const std::string&)> log)
     : wall_(wall), base_(start), options_(options), log_(std::move(log)), scale_(wall.navigation.scale),
       head_(staticHead(wall.stereo)) {
+    present_.stages = options.stages;
     if (options.console) {
         // The wall's aspect, 640 pixels wide at most: clicks map to the wall by one scale.
         const int w = std::min(640, wall_.width), h = std::clamp(int(std::lround(double(w) * wall_.height / wall_.width)), 120, 960);
@@ -73,6 +74,8 @@ CameraDesc WallInput::viewCamera(const EyeWindow& window) const {
     c.window = ProjectionWindow{w.lowerLeft, w.right, w.up};
     return c;
 }
+
+RoomToWorld WallInput::roomToWorld() const { return wallToWorld(wall_.stereo.viewer, nav_->pose(), scale_); }
 
 void WallInput::setCamera(const CameraDesc& c) { nav_->setPose(poseOf(c)); }
 

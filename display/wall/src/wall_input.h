@@ -30,6 +30,9 @@ public:
         // console of the wall's aspect that shows the nodes' status and takes the keys and the
         // mouse (a click there is a click at that point of the wall); headless, nothing is written.
         bool console = false;
+        // Per-screen stages after the mapping (a calibrated wall's blend), the caller's: run by
+        // the windows or the headless presenter on every frame.
+        std::vector<ScreenStage*> stages;
     };
     WallInput(const WallConfig& wall, const CameraDesc& start, const Options& options,
               std::function<void(const std::string&)> log);
@@ -49,6 +52,9 @@ public:
     // wall (wallViews: an eye's window in wall coordinates, carried into the world by the pose).
     CameraDesc camera() const;
     CameraDesc viewCamera(const EyeWindow& window) const;
+    // The room in the world now (the map viewCamera carries its windows by): where a calibrated
+    // screen's surface points are (issue 30).
+    RoomToWorld roomToWorld() const;
     // Scene units per metre of the room ([navigation] scale; the keys [ and ] change it about
     // the head: setNavigationScale).
     double navigationScale() const { return scale_; }

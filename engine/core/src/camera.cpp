@@ -75,7 +75,10 @@ Float3 Camera::warpedDirection(float px, float py) const {
         const PixelWarp& w = *v.warp;
         const Float3 s = sampleAt(w, v.rect, px, py);
         if (hasNaN(s)) return {kNaN, kNaN, kNaN};
-        if (w.kind == PixelWarp::Kind::ScreenOffsets) return flatDirection(px + s.x, py + s.y);
+        if (w.kind == PixelWarp::Kind::ScreenOffsets) {
+            if (v.offsetScaleX == 1.0f && v.offsetScaleY == 1.0f) return flatDirection(px + s.x, py + s.y);
+            return flatDirection(px + s.x * v.offsetScaleX, py + s.y * v.offsetScaleY);
+        }
         return v.room.point(s) - origin_;
     }
     return flatDirection(px, py);

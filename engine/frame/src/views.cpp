@@ -2,6 +2,8 @@
 #include <rtwall/frame.h>
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 namespace rtwall {
 
@@ -18,6 +20,25 @@ TileRect scaledRegion(const ViewRegion& v, int refWidth, int refHeight, int widt
     r.y0 = std::clamp(r.y0, 0, height);
     r.y1 = std::clamp(r.y1, r.y0, height);
     return r;
+}
+
+std::vector<ScreenWarp> frameWarps(const FrameView& view, std::span<const std::shared_ptr<const PixelWarp>> grids,
+                                   int width, int height) {
+    std::vector<ScreenWarp> out;
+    out.reserve(view.warps.size());
+    for (const WarpRef& ref : view.warps) {
+        if (ref.grid >= grids.size() || !grids[ref.grid])
+            throw std::out_of_range("warp grid " + std::to_string(ref.grid) + " of " + std::to_string(grids.size()));
+        ScreenWarp w;
+        w.rect = scaledRegion(ref.rect, view.refWidth, view.refHeight, width, height);
+        w.warp = grids[ref.grid];
+        w.room = ref.room;
+        // Exactly 1 at the reference size: the offsets then land where they were made to.
+        if (width != view.refWidth) w.offsetScaleX = float(double(width) / view.refWidth);
+        if (height != view.refHeight) w.offsetScaleY = float(double(height) / view.refHeight);
+        out.push_back(std::move(w));
+    }
+    return out;
 }
 
 std::vector<ViewTile> viewTiles(const std::vector<FrameView>& views, int width, int height, int tileSize) {

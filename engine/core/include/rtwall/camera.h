@@ -51,10 +51,8 @@ struct RoomToWorld {
     Float3 origin, viewer;
     Float3 x{1, 0, 0}, y{0, 1, 0}, z{0, 0, 1};
     float scale = 1.0f;
-    Float3 point(Float3 p) const {
-        const Float3 d = p - viewer;
-        return origin + (x * d.x + y * d.y + z * d.z) * scale;
-    }
+    Float3 direction(Float3 v) const { return x * v.x + y * v.y + z * v.z; }  // turned only: a unit direction stays unit
+    Float3 point(Float3 p) const { return origin + direction(p - viewer) * scale; }
     bool operator==(const RoomToWorld&) const = default;
 };
 // A warp over one rectangle of a view's image (a screen's viewport); pixels outside every
@@ -63,8 +61,12 @@ struct ScreenWarp {
     TileRect rect;
     std::shared_ptr<const PixelWarp> warp;
     RoomToWorld room;  // SurfacePoints: where the room is in the world this frame
+    // ScreenOffsets: image pixels per offset unit (an image smaller than the wall the offsets
+    // were made for); 1 multiplies nothing.
+    float offsetScaleX = 1.0f, offsetScaleY = 1.0f;
     bool operator==(const ScreenWarp& o) const {
-        return rect == o.rect && room == o.room && (warp == o.warp || (warp && o.warp && *warp == *o.warp));
+        return rect == o.rect && room == o.room && offsetScaleX == o.offsetScaleX && offsetScaleY == o.offsetScaleY &&
+               (warp == o.warp || (warp && o.warp && *warp == *o.warp));
     }
 };
 

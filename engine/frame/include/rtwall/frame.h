@@ -35,12 +35,40 @@ struct ViewRegion {
 // shows only its screens), in pixels of a refWidth x refHeight image (the wall's), scaled to
 // the frame's resolution as the wall scales a smaller frame (scaledRegion). No regions: the
 // whole image.
+// A calibrated projector's part of a view (issue 30): its pixels (`rect`, in the view's
+// reference pixels) look where warp grid `grid` says; the grids are the wall's, sent to each
+// render client once (ClusterSettings::warpGrids), so a frame only names them. `room` places
+// the room's surface points in the world for this frame (the navigation).
+struct WarpRef {
+    uint32_t grid = 0;
+    ViewRegion rect;
+    RoomToWorld room;
+    bool operator==(const WarpRef&) const = default;
+};
+
 struct FrameView {
     CameraDesc camera;
     std::vector<ViewRegion> regions;
-    int refWidth = 0, refHeight = 0;
+    int refWidth = 0, refHeight = 0;  // also the reference of `warps` (then never 0)
+    std::vector<WarpRef> warps{};
     bool operator==(const FrameView&) const = default;
 };
+
+// A view's warps in a width x height image of it: each reference's rectangle scaled as
+// scaledRegion scales a region, its screen offsets scaled by image pixels per reference pixel.
+// A reference to a grid not in `grids` makes it throw std::out_of_range (a client can then not
+// render the view).
+std::vector<ScreenWarp> frameWarps(const FrameView& view, std::span<const std::shared_ptr<const PixelWarp>> grids,
+                                   int width, int height);
+
+// The rasteriser's way, for comparison with tracing each projector pixel's ray (issue 30's
+// post-warp): the pixels of `warp`'s rectangle of a width x height image of the view,
+// resampled from `flat`, the view rendered flat with `camera` (no warps) at any resolution.
+// Each pixel centre's ray through the warp meets the flat image plane; the 8-bit image is
+// sampled there bilinearly between pixel centres, clamped at its edges, as a GL texture sampler
+// does. A pixel on no screen (NaN) or looking off the flat image is black. `out` gets the
+// width x height size (black where new); only the rectangle's pixels are written.
+void postWarp(const Image& flat, const CameraDesc& camera, const ScreenWarp& warp, int width, int height, Image& out);
 
 // A tile of a multi-view frame: the view it belongs to and its pixels in that view's image.
 struct ViewTile {

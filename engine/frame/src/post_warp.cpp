@@ -1,0 +1,51 @@
+// postWarp (rtwall/frame.h, issue 30): a calibrated projector's pixels resampled from a flat
+// render, the rasteriser's way, for the comparison with tracing each pixel's own ray.
+#include <rtwall/frame.h>
+#include <rtwall/warp.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace rtwall {
+
+void postWarp(const Image& flat, const CameraDesc& camera, const ScreenWarp& warp, int width, int height, Image& out) {
+    if (out.width != width || out.height != height || out.rgb.size() != size_t(std::max(0, width)) * size_t(std::max(0, height)) * 3) {
+        out.width = width;
+        out.height = height;
+        out.rgb.assign(size_t(std::max(0, width)) * size_t(std::max(0, height)) * 3, 0);
+    }
+    const int w = flat.width, h = flat.height;  // the flat render may be finer than the view's image
+    if (!warp.warp || w <= 0 || h <= 0 || width <= 0 || height <= 0) return;
+    // The warp at each pixel centre through a camera of that warp alone: its target direction.
+    const Camera warped(camera, width, height, {warp});
+    const ImageProjection flatImage(camera, w, h);
+    const TileRect r{std::max(0, warp.rect.x0), std::max(0, warp.rect.y0), std::min(width, warp.rect.x1), std::min(height, warp.rect.y1)};
+    for (int y = r.y0; y < r.y1; ++y)
+        for (int x = r.x0; x < r.x1; ++x) {
+            uint8_t* o = out.pixel(x, y);
+            o[0] = o[1] = o[2] = 0;
+            // Where the pixel's ray meets the flat image: the flat pixel a 2D offset names, or
+            // the surface point's projection (the ray's direction from the eye solves like the
+            // point: the two cameras share the eye).
+            const Float3 d = warped.direction(float(x) + 0.5f, float(y) + 0.5f);
+            if (std::isnan(d.x) || std::isnan(d.y) || std::isnan(d.z)) continue;
+            const double v[3] = {d.x, d.y, d.z};
+            double abc[3];
+            flatImage.solve(v, abc);
+            if (!(abc[2] > 0.0)) continue;
+            const double fx = abc[0] / abc[2], fy = abc[1] / abc[2];
+            // Bilinear between pixel centres, clamped at the edges (a texture sampler's
+            // GL_LINEAR with GL_CLAMP_TO_EDGE); a target off the flat image is black.
+            if (!(fx >= 0.0 && fx <= double(w) && fy >= 0.0 && fy <= double(h))) continue;
+            const double gx = std::clamp(fx - 0.5, 0.0, double(w - 1)), gy = std::clamp(fy - 0.5, 0.0, double(h - 1));
+            const int x0 = int(gx), y0 = int(gy), x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
+            const double tx = gx - x0, ty = gy - y0;
+            const uint8_t *a = flat.pixel(x0, y0), *b = flat.pixel(x1, y0), *c = flat.pixel(x0, y1), *e = flat.pixel(x1, y1);
+            for (int k = 0; k < 3; ++k) {
+                const double top = a[k] + tx * (b[k] - a[k]), bottom = c[k] + tx * (e[k] - c[k]);
+                o[k] = uint8_t(std::lround(top + ty * (bottom - top)));
+            }
+        }
+}
+
+}  // namespace rtwall

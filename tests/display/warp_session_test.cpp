@@ -1,0 +1,134 @@
+// A calibrated wall end to end in one process (issue 30; loopback, client threads): the clients
+// get the warp grids once and trace every projector pixel's ray through its calibration. An
+// identity calibration is today's flat wall bit for bit, a whole-pixel shift shifts the image
+// exactly, and the curved three-projector wall is the same bytes on one, two and three clients.
+#include "common/files.h"
+#include "display_test_util.h"
+#include "test_util.h"
+
+#include <rtwall/mpcdi.h>
+#include <rtwall/wall.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+
+namespace rtwall {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kScene = test::sceneText("tracked_boxes");
+
+// Two screens side by side on one plane (one view), 200x150 wall pixels each, 8 mm a pixel;
+// `warp`: the [warp] table, if any.
+std::string twoScreens(const std::string& warp) {
+    return R"([wall]
+width = 400
+height = 150
+vsync = false
+[stereo]
+viewer = [0.0, 0.0, 2.0]
+lower_left = [-1.6, -0.6, 0.0]
+lower_right = [1.6, -0.6, 0.0]
+upper_left = [-1.6, 0.6, 0.0]
+[[screen]]
+name = "A"
+viewport = [0, 0, 200, 150]
+lower_left = [-1.6, -0.6, 0.0]
+lower_right = [0.0, -0.6, 0.0]
+upper_left = [-1.6, 0.6, 0.0]
+[[screen]]
+name = "B"
+viewport = [200, 0, 200, 150]
+lower_left = [0.0, -0.6, 0.0]
+lower_right = [1.6, -0.6, 0.0]
+upper_left = [0.0, 0.6, 0.0]
+[headless]
+write_every = 0
+)" + warp;
+}
+
+
+// The first frame of `wallFile` on `clients` client threads.
+Image render(const fs::path& dir, const fs::path& wallFile, int clients, std::vector<std::string>* log = nullptr) {
+    RunConfig c = steppedRunConfig(dir, clients);
+    c.scene = test::writeFile(dir / "scene.toml", kScene).string();
+    c.wall = wallFile;
+    c.cluster.async = false;
+    if (log) c.log = [log](const std::string& line) { log->push_back(line); };
+    WallSession s(c);
+    EXPECT_TRUE(s.step());
+    return s.lastFrame().left;
+}
+
+TEST(WarpSession, AnIdentityCalibrationIsTheFlatWallBitForBitOnOneTwoAndThreeClients) {
+    const fs::path dir = test::scratchDir();
+    test::mpcdiTestgen("identity " + (dir / "id.mpcdi").string() + " --buffer a=200x150 --buffer b=200x150");
+    const fs::path flat = test::writeFile(dir / "flat.toml", twoScreens(""));
+    const fs::path warped =
+        test::writeFile(dir / "warped.toml", twoScreens("[warp]\nmpcdi = \"id.mpcdi\"\nbuffers = { a = \"A\", b = \"B\" }\n"));
+    const Image want = render(dir, flat, 2);
+    ASSERT_EQ(want.width, 400);
+    ASSERT_NE(std::count(want.rgb.begin(), want.rgb.end(), want.rgb[0]), std::ptrdiff_t(want.rgb.size())) << "a blank image";
+    for (int clients : {1, 2, 3}) {
+        std::vector<std::string> log;
+        EXPECT_EQ(render(dir, warped, clients, &log).rgb, want.rgb) << clients << " clients";
+        EXPECT_TRUE(test::logged(log, "warp: id.mpcdi, 2 projector regions on 2 screens, rays through each projector pixel (2d profile)"));
+    }
+}
+
+// Pixel (x, y) of a calibration shifted by (3, -2) wall pixels looks where the flat wall's
+// pixel (x + 3, y - 2) looks: the same bytes there, everywhere.
+TEST(WarpSession, AWholePixelShiftShiftsTheImageExactly) {
+    const fs::path dir = test::scratchDir();
+    test::mpcdiTestgen("identity " + (dir / "s.mpcdi").string() + " --buffer a=200x150 --buffer b=200x150 --shift 3,-2");
+    const Image flat = render(dir, test::writeFile(dir / "flat.toml", twoScreens("")), 2);
+    const Image shifted = render(
+        dir, test::writeFile(dir / "s.toml", twoScreens("[warp]\nmpcdi = \"s.mpcdi\"\nbuffers = { a = \"A\", b = \"B\" }\n")), 3);
+    ASSERT_EQ(shifted.width, flat.width);
+    size_t differ = 0, compared = 0;
+    for (int y = 2; y < 150; ++y)
+        for (int x = 0; x + 3 < 400; ++x) {
+            differ += std::memcmp(shifted.pixel(x, y), flat.pixel(x + 3, y - 2), 3) != 0;
+            ++compared;
+        }
+    EXPECT_EQ(differ, 0u) << "of " << compared;
+    EXPECT_NE(shifted.rgb, flat.rgb);
+}
+
+// The curved example: every projector pixel's ray through its surface point, the same bytes on
+// one, two and three clients, black where the calibration says the pixel lands on no screen
+// (the corners of each projector's bent image), and not the flat wall's picture.
+TEST(WarpSession, TheCurvedWallIsTheSameOnOneTwoAndThreeClientsAndOffScreenPixelsAreBlack) {
+    const fs::path dir = test::scratchDir();
+    test::mpcdiTestgen("cylinder " + (dir / "c.mpcdi").string() + " --res 64x48 --wall " + (dir / "c.toml").string());
+    const Image one = render(dir, dir / "c.toml", 1);
+    ASSERT_EQ(one.width, 192);
+    EXPECT_EQ(render(dir, dir / "c.toml", 2).rgb, one.rgb);
+    EXPECT_EQ(render(dir, dir / "c.toml", 3).rgb, one.rgb);
+    const MpcdiFile file = readMpcdi(dir / "c.mpcdi");
+    size_t offScreen = 0;
+    for (size_t p = 0; p < 3; ++p) {
+        const MpcdiWarp& w = file.buffers[p].regions[0].warp;
+        ASSERT_EQ(w.width, 64);  // one sample per projector pixel
+        for (int y = 0; y < 48; ++y)
+            for (int x = 0; x < 64; ++x) {
+                const Float3 s = w.samples[size_t(y) * 64 + size_t(x)];
+                const uint8_t* px = one.pixel(int(p) * 64 + x, y);
+                if (std::isnan(s.x)) {
+                    ++offScreen;
+                    EXPECT_EQ(px[0] + px[1] + px[2], 0) << "projector " << p << " pixel " << x << "," << y;
+                }
+            }
+    }
+    EXPECT_GT(offScreen, 0u);
+    // Without its calibration the same wall shows flat projector images.
+    std::string text = test::fileBytes(dir / "c.toml");
+    text.erase(text.find("\n[warp]\n"));
+    EXPECT_NE(render(dir, test::writeFile(dir / "flat.toml", text), 2).rgb, one.rgb);
+}
+
+}  // namespace
+}  // namespace rtwall
