@@ -139,6 +139,24 @@ TEST(GlPresenter, TheProjectorBlendMatchesTheCpuReference) {
     for (size_t s = 0; s < 3; ++s) EXPECT_NE(presentScreen(wall, s, f, o).rgb, presentScreen(wall, s, f).rgb) << "not blended";
 }
 
+// The post-warp (issue 30's comparison mode) in GL against the CPU reference, with the blend
+// after it, on the curved example: within one code.
+TEST(GlPresenter, ThePostWarpMatchesTheCpuReference) {
+    const auto dir = test::scratchDir();
+    test::mpcdiTestgen("cylinder " + (dir / "c.mpcdi").string() + " --res 64x48 --wall " + (dir / "c.toml").string());
+    const WallConfig wall = loadWallConfig(dir / "c.toml");
+    const MpcdiFile file = readMpcdi(wall.warp->mpcdi);
+    PostWarpStage post(wall, file);
+    ProjectorBlendStage blend(wall, file);
+    PresentOptions o;
+    o.stages = {&post, &blend};
+    expectScreensMatchHeadless(dir / "c.toml", UploadMethod::TexSubImage, o, 1);
+    PresentOptions blendOnly;
+    blendOnly.stages = {&blend};
+    const WallFrame f = renderedFrame(wall.width, wall.height, 1, 0.0f);
+    for (size_t s = 0; s < 3; ++s) EXPECT_NE(presentScreen(wall, s, f, o).rgb, presentScreen(wall, s, f, blendOnly).rgb) << "not warped";
+}
+
 TEST(GlPresenter, PixelBufferUploadShowsTheSame) {
     expectScreensMatchHeadless(test::sourceDir() / "configs/wall/projectors-2x2.toml", UploadMethod::Pbo, {}, 0);
 }

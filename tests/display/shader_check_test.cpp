@@ -14,7 +14,7 @@ TEST(Shaders, TheShippedShadersCompile) {
 // (checkWall) compiles them for every wall.
 TEST(Shaders, TheWarpShadersCompile) {
     const std::vector<ShaderSource> warp = warpShaders();
-    ASSERT_EQ(warp.size(), 9u);  // the re-projection's passes and the projector blend
+    ASSERT_EQ(warp.size(), 10u);  // the re-projection's passes, the projector blend and post-warp
     for (const ShaderSource& s : warp) {
         EXPECT_TRUE(s.name.ends_with(".vert") || s.name.ends_with(".frag")) << s.name;
         const auto problems = checkShader(s, s.name.ends_with(".frag"));

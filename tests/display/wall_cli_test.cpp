@@ -48,7 +48,7 @@ TEST(WallCli, CheckNamesTheScreensOfEachDisplayNode) {
 // [warp] (issue 30): `rtwall check` reads the calibration and says so; a problem in it is a line
 // and exit 1; `rtwall run` refuses the wall in one line while rendering through it is not built.
 // The curved example from the command line: checked, run headless (each projector's image
-// written), its post-warp mode refused in one line while it is not built.
+// written), and in post-warp mode (other images); post-warp of a screen of both eyes refused.
 TEST(WallCli, CheckReadsTheProjectorCalibrationAndRunTracesThroughIt) {
     const auto dir = test::scratchDir();
     test::mpcdiTestgen("cylinder " + (dir / "c.mpcdi").string() + " --res 32x24 --wall " + (dir / "c.toml").string());
@@ -66,11 +66,24 @@ TEST(WallCli, CheckReadsTheProjectorCalibrationAndRunTracesThroughIt) {
     std::string post((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     post += "mode = \"post\"\n";
     test::writeFile(dir / "post.toml", post);
-    r = run("run --wall " + (dir / "post.toml").string() + " --headless --frames 1");
+    r = run("run " + (test::sourceDir() / "configs/run/demo.toml").string() + " --wall " + (dir / "post.toml").string() +
+            " --headless --frames 1 --write-every 1 --out " + (dir / "post").string());
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("warp: c.mpcdi, post-warp: flat renders resampled through the calibration on the screens (a3 profile)"),
+              std::string::npos) << r.output;
+    for (const char* p : {"proj0", "proj1", "proj2"}) {
+        const std::string name = std::string("frame_000001_") + p + ".png";
+        EXPECT_NE(readPng(dir / "post" / name).rgb, readPng(dir / "out" / name).rgb) << p << ": post-warp and direct alike";
+    }
+    // A screen that shows both eyes has one flat render per eye: the post-warp refuses it.
+    std::string both = post;
+    both.replace(both.find("mode = \"none\""), 13, "mode = \"quad_buffer\"");
+    test::writeFile(dir / "both.toml", both);
+    r = run("run --wall " + (dir / "both.toml").string() + " --headless --frames 1");
     EXPECT_EQ(r.status, 1);
-    EXPECT_EQ(r.output, "rtwall: error: " + (dir / "post.toml").string() +
-                            ": [warp] mode = \"post\": the resampling compositor is not built yet; mode = \"direct\" traces each "
-                            "projector pixel's ray (docs/mpcdi.md)\n");
+    EXPECT_EQ(r.output, "rtwall: error: " + (dir / "both.toml").string() +
+                            ": [warp] mode = \"post\": post-warp: screen 'proj0' shows both eyes; the post-warp takes one eye a "
+                            "screen\n");
     std::filesystem::resize_file(dir / "c.mpcdi", 100);
     r = run("check " + (dir / "c.toml").string());
     EXPECT_EQ(r.status, 1);

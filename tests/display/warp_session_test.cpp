@@ -130,5 +130,61 @@ TEST(WarpSession, TheCurvedWallIsTheSameOnOneTwoAndThreeClientsAndOffScreenPixel
     EXPECT_NE(render(dir, test::writeFile(dir / "flat.toml", text), 2).rgb, one.rgb);
 }
 
+// The pixels of two images that differ (any channel).
+size_t differing(const Image& a, const Image& b) {
+    size_t n = 0;
+    for (size_t i = 0; i + 2 < a.rgb.size() && i + 2 < b.rgb.size(); i += 3) n += std::memcmp(&a.rgb[i], &b.rgb[i], 3) != 0;
+    return n;
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+    const size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+    return text;
+}
+
+// Stereo through a calibration: each eye's rays go from that eye through the same surface
+// points, so each eye's image is the mono wall's seen from a viewer at that eye (the room put
+// in the world the same way: the mono camera moved by the eye's offset), to the bit.
+TEST(WarpSession, EachEyeOfAStereoWallSeesThroughTheCalibrationFromItself) {
+    const fs::path dir = test::scratchDir();
+    test::mpcdiTestgen("cylinder " + (dir / "c.mpcdi").string() + " --res 64x48 --wall " + (dir / "c.toml").string());
+    const std::string mono = test::fileBytes(dir / "c.toml");
+    const fs::path stereoFile =
+        test::writeFile(dir / "stereo.toml", replaced(mono, "mode = \"none\"", "mode = \"quad_buffer\"\neye_separation = 0.2"));
+    RunConfig c = steppedRunConfig(dir, 2);
+    c.scene = test::writeFile(dir / "scene.toml", kScene).string();
+    c.cluster.async = false;
+    c.wall = stereoFile;
+    WallFrame stereo;
+    CameraDesc camera;
+    {
+        WallSession s(c);
+        ASSERT_TRUE(s.step());
+        stereo = s.lastFrame();
+        camera = s.camera();
+    }
+    ASSERT_EQ(stereo.right.width, stereo.left.width);
+    EXPECT_GT(differing(stereo.left, stereo.right), stereo.left.rgb.size() / 3 / 50) << "the eyes see alike";
+    // The camera's right: the wall's x axis in the world.
+    const Float3 right = normalize(cross(camera.lookAt - camera.position, camera.up));
+    for (const float eye : {-0.1f, 0.1f}) {
+        SCOPED_TRACE(eye < 0 ? "left eye" : "right eye");
+        char viewer[64];
+        std::snprintf(viewer, sizeof viewer, "viewer = [%g, 0.0, 3]", double(eye));
+        c.wall = test::writeFile(dir / "eye.toml", replaced(mono, "viewer = [0.0, 0.0, 3]", viewer));
+        WallSession s(c);
+        CameraDesc moved = camera;
+        moved.position = camera.position + right * eye;
+        moved.lookAt = camera.lookAt + right * eye;
+        s.setCamera(moved);
+        ASSERT_TRUE(s.step());
+        const Image& want = eye < 0 ? stereo.left : stereo.right;
+        const size_t pixels = want.rgb.size() / 3, off = differing(s.lastFrame().left, want);
+        EXPECT_EQ(off, 0u) << off << " of " << pixels << " pixels differ";
+    }
+}
+
 }  // namespace
 }  // namespace rtwall

@@ -361,6 +361,40 @@ private:
     std::unique_ptr<Gl> gl_;
 };
 
+// A calibrated wall's post-warp (issue 30, `[warp] mode = "post"`, the rasteriser's way, for
+// comparison with tracing each projector pixel's ray): each warped screen's flat image (its
+// viewport of a flat render, as mapped to its pixels) resampled through the warp. A pixel's
+// target: for a 2D warp the flat wall position its offset names, for 3D where the ray from the
+// eye through its surface point meets the screen's frame (screenFrame); the screen's pixels
+// are sampled there bilinearly between pixel centres, clamped at the edges (GL_LINEAR); a pixel
+// on no screen or looking off the screen is black. The eyes move (tracking): setEyes before
+// each presentation. Mono and passive-stereo screens (one eye a screen); walls whose screens
+// show both eyes are refused (std::invalid_argument) by the constructor.
+class PostWarpStage final : public ScreenStage {
+public:
+    PostWarpStage(const WallConfig& wall, const MpcdiFile& file);  // the file must have passed checkWarp
+    ~PostWarpStage() override;
+    void setEyes(const Float3& left, const Float3& right);          // wall coordinates, metres (at first: the config's viewer)
+    void apply(const WallConfig& wall, size_t screen, Image& pixels) const override;
+    void drawGl(const WallConfig& wall, size_t screen) override;
+    void releaseGl() override;
+
+private:
+    struct Screen {
+        int width = 0, height = 0;
+        bool surface = false;          // 3D points (else 2D: targets fixed)
+        std::vector<Float3> samples;   // per screen pixel, top row first: surface point, or target (x, y) in screen pixels
+        Float3 lowerLeft, right, up;   // the screen's frame (screenFrame; 3D targets)
+        int eye = 0;                   // 0 left (mono), 1 right
+    };
+    // Per screen pixel where it samples the screen's flat image, x and y in its pixels (NaN: black).
+    void targets(size_t screen, std::vector<float>& out) const;
+    std::vector<Screen> screens_;
+    Float3 eyes_[2]{};
+    struct Gl;
+    std::unique_ptr<Gl> gl_;
+};
+
 struct PresentOptions {
     bool falseColour = false;  // tint every tile with the colour of the client that rendered it
     const Image* overlay = nullptr;  // the status overlay (OverlayStage): drawn after `stages`, on top

@@ -50,17 +50,10 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
         s.wallConfig = c.loadedWall ? *c.loadedWall : loadWallConfig(c.wall);
         const std::vector<std::string> problems = checkWall(s.wallConfig);
         if (!problems.empty()) throw InputError(problems.front());
-        if (s.wallConfig.warp) {
-            // Resampling a flat render through the warp is for comparison and not built yet:
-            // refused, not shown some other way.
-            if (s.wallConfig.warp->mode == WarpMode::Post)
-                throw InputError(s.wallConfig.file.string() + ": [warp] mode = \"post\": the resampling compositor is not built "
-                                 "yet; mode = \"direct\" traces each projector pixel's ray (docs/mpcdi.md)");
-            s.loadWarps(c.cluster);
-        }
+        if (s.wallConfig.warp) s.loadWarps(c.cluster);
     }
     s.stereo = s.wallConfig.stereo.mode != StereoMode::None;
-    s.views = wallHasViews(s.wallConfig) || !s.screenWarps.empty();  // warps travel with views
+    s.views = wallHasViews(s.wallConfig) || s.wallConfig.warp;  // warps travel with views; the post-warp's flat renders are the screens' frames
     if (!s.wallConfig.nodes().empty()) {
         if (c.targetFps > 0 && c.front.empty())
             throw InputError("--target-fps on a wall of display nodes needs --front: the master holds no pixels to calibrate with");
@@ -112,6 +105,7 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     io.interactive = s.path.empty();
     io.codec = tileCodecName(c.cluster.codec.codec);
     io.console = s.onNodes;
+    if (s.postWarp) io.stages.push_back(s.postWarp.get());  // resampled first, then blended
     if (s.blend) io.stages.push_back(s.blend.get());
     s.input = std::make_unique<WallInput>(s.wallConfig, s.start, io, s.log);
     s.input->setPartView(*s.live, {});  // says what the scene file and the command line hid, if anything
@@ -194,6 +188,7 @@ bool WallSession::step() {
             s.refresher->presented();
         }
     } else {
+        s.setPostWarpEyes();
         s.input->show(s.shown, s.report, s.frameTimes.back());
         s.recordPresentation(s.reproject);
         if (s.refresher) s.refresher->presented();

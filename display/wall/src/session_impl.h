@@ -70,6 +70,14 @@ struct WallSession::Impl {
     // rectangles in wall pixels; empty without [warp].
     std::vector<std::vector<std::pair<uint32_t, ViewRegion>>> screenWarps;
     std::unique_ptr<ProjectorBlendStage> blend;  // its alpha and beta maps on the master's screens
+    std::unique_ptr<PostWarpStage> postWarp;     // [warp] mode = "post": the screens' flat images resampled
+    // The post-warp resamples from the eyes of the head the frame is shown for.
+    void setPostWarpEyes() {
+        if (!postWarp) return;
+        const double sep = wallConfig.stereo.eyeSeparation;
+        if (stereo) postWarp->setEyes(eyePosition(head, sep, 0), eyePosition(head, sep, 1));
+        else postWarp->setEyes(eyePosition(head, sep, -1), eyePosition(head, sep, -1));
+    }
     std::atomic<bool> stopNodes{false};
     std::atomic<size_t> nodeThreadsEnded{0};
     std::vector<std::string> nodesPresent;  // at the last step, for the log
@@ -451,6 +459,21 @@ struct WallSession::Impl {
     void loadWarps(ClusterSettings& cluster) {
         const MpcdiFile file = readMpcdi(wallConfig.warp->mpcdi);
         blend = std::make_unique<ProjectorBlendStage>(wallConfig, file);
+        if (wallConfig.warp->mode == WarpMode::Post) {
+            // The comparison mode: flat renders, resampled through the warp on the screens (the
+            // master's: display nodes do not know the head the frame is shown for).
+            if (!wallConfig.nodes().empty())
+                throw InputError(wallConfig.file.string() + ": [warp] mode = \"post\" is for the master's screens; this wall's "
+                                 "are on display nodes (mode = \"direct\" works there)");
+            try {
+                postWarp = std::make_unique<PostWarpStage>(wallConfig, file);
+            } catch (const std::invalid_argument& e) {
+                throw InputError(wallConfig.file.string() + ": [warp] mode = \"post\": " + e.what());
+            }
+            log(format("warp: %s, post-warp: flat renders resampled through the calibration on the screens (%s profile)",
+                       wallConfig.warp->mpcdi.filename().string().c_str(), mpcdiProfileName(file.profile)));
+            return;
+        }
         screenWarps.assign(wallConfig.screens.size(), {});
         size_t regions = 0;
         for (WallWarp& w : wallWarps(wallConfig, file))

@@ -118,6 +118,7 @@ void WallSession::Impl::presentRefresh() {
     latchAndWarp();
     if (!onNodes) {
         if (tracker) input->drawWand(shown, shownHead);
+        setPostWarpEyes();
         input->show(shown, report, frameTimes.empty() ? 0.0 : frameTimes.back());
     }
     recordPresentation(true);

@@ -47,9 +47,9 @@ Float3 lerp(Float3 a, Float3 b, float t) {
     return {a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), a.z + t * (b.z - a.z)};
 }
 
-// The grid's value at image position (px, py) inside `rect`: bilinear between the samples at
-// pixel centres, clamped at the edges.
-Float3 sampleAt(const PixelWarp& w, const TileRect& rect, float px, float py) {
+}  // namespace
+
+Float3 sampleWarp(const PixelWarp& w, const TileRect& rect, float px, float py) {
     // Grid coordinates of the position; a grid of the rectangle's size needs no scaling (and
     // so is exact at pixel centres).
     float gx = px - float(rect.x0), gy = py - float(rect.y0);
@@ -66,14 +66,12 @@ Float3 sampleAt(const PixelWarp& w, const TileRect& rect, float px, float py) {
     return lerp(top, lerp(at(i0, j1), at(i1, j1), fx), fy);
 }
 
-}  // namespace
-
 Float3 Camera::warpedDirection(float px, float py) const {
     const int x = int(std::floor(px)), y = int(std::floor(py));
     for (const ScreenWarp& v : warps_) {
         if (x < v.rect.x0 || x >= v.rect.x1 || y < v.rect.y0 || y >= v.rect.y1) continue;
         const PixelWarp& w = *v.warp;
-        const Float3 s = sampleAt(w, v.rect, px, py);
+        const Float3 s = sampleWarp(w, v.rect, px, py);
         if (hasNaN(s)) return {kNaN, kNaN, kNaN};
         if (w.kind == PixelWarp::Kind::ScreenOffsets) {
             if (v.offsetScaleX == 1.0f && v.offsetScaleY == 1.0f) return flatDirection(px + s.x, py + s.y);

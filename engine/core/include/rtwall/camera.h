@@ -70,6 +70,12 @@ struct ScreenWarp {
     }
 };
 
+// A warp grid's value at image position (px, py) (pixels from the image's top left) inside
+// `rect`: bilinear between the samples at pixel centres, clamped at the rectangle's edges; a
+// NaN neighbour reaches only where its weight is above zero. What Camera's rays follow, and
+// what the post-warp (rtwall/display.h) resamples by.
+Float3 sampleWarp(const PixelWarp& warp, const TileRect& rect, float px, float py);
+
 struct CameraDesc {
     std::string name = "default";
     Float3 position{0, 0, 5};
