@@ -175,7 +175,7 @@ def blend_weight(k, theta, overlap):
 UNITS = {"m": 1.0, "dm": 10.0, "cm": 100.0, "mm": 1000.0}
 
 
-def cylinder(res, grid, overlap, unit="m", declared=None):
+def cylinder(res, grid, overlap, unit="m", declared=None, profile="a3"):
     """The archive; points in `unit` (mm: 1000 per metre), declared as `declared` (default: the same)."""
     per_metre = UNITS[unit]
     w, h = res
@@ -204,7 +204,7 @@ def cylinder(res, grid, overlap, unit="m", declared=None):
         entries += [(pid + "_warp.pfm", pfm(gw, gh, samples)), (pid + "_alpha.png", png_grey(w, h, alpha)),
                     (pid + "_beta.png", png_grey(w, h, beta))]
         buffers.append((pid, w, h, [(pid + "_region", w, h, pid + "_warp.pfm", pid + "_alpha.png", pid + "_beta.png")]))
-    return archive([("mpcdi.xml", xml("a3", buffers, unit=declared or unit))] + entries)
+    return archive([("mpcdi.xml", xml(profile, buffers, unit=declared or unit))] + entries)
 
 
 def cylinder_wall(res, overlap, mpcdi_name, buffers=None, grid=None):
@@ -332,6 +332,7 @@ def main():
     c.add_argument("--wall", default=None, help="also write the wall config that uses it")
     c.add_argument("--unit", choices=sorted(UNITS), default="m", help="the warp's points in this unit")
     c.add_argument("--declare", choices=sorted(UNITS), default=None, help="declare this unit instead (a faulty export)")
+    c.add_argument("--profile", choices=["a3", "3d", "sl"], default="a3", help="the profile mpcdi.xml declares (the points are the same)")
     i = sub.add_parser("identity")
     i.add_argument("out")
     i.add_argument("--buffer", action="append", required=True, help="ID=WxH")
@@ -342,7 +343,7 @@ def main():
     fz.add_argument("out")
     a = p.parse_args()
     if a.what == "cylinder":
-        data = cylinder(a.res, a.grid or a.res, a.overlap, a.unit, a.declare)
+        data = cylinder(a.res, a.grid or a.res, a.overlap, a.unit, a.declare, a.profile)
         if a.wall:
             rel = os.path.relpath(os.path.abspath(a.out), os.path.dirname(os.path.abspath(a.wall)))
             with open(a.wall, "w") as f:

@@ -53,6 +53,12 @@ std::vector<std::string> checkWarp(const WallConfig& wall) {
         return problems;
     }
     const std::string mpcdiName = warp.mpcdi.filename().string();
+    // The 3D simulation profile's warps are coordinates in each region's frustum, not points
+    // on the screen: traced as a3's points they would look right and be wrong. Refused until
+    // the frustum is traced.
+    if (file.profile == MpcdiProfile::Simulation3d)
+        problems.push_back(at + mpcdiName + ": profile 3d (3D simulation: warps in each region's frustum) is not traced yet; "
+                                            "profiles 2d, a3 and sl are (docs/mpcdi.md)");
     for (const MpcdiBuffer& b : file.buffers)
         if (std::none_of(warp.buffers.begin(), warp.buffers.end(), [&](const auto& m) { return m.first == b.id; }))
             problems.push_back(at + "buffer '" + b.id + "' of " + mpcdiName + " drives no screen (map it in 'buffers')");

@@ -132,6 +132,18 @@ TEST(WarpConfig, CheckNamesEveryMismatchBetweenFileAndWall) {
                            ": cannot read it (No such file or directory)");
 }
 
+// A 3D-simulation (`3d`) file: its warps are frustum coordinates, which rtwall does not trace:
+// one line, not a wall that looks right and is wrong. `sl` (shader lamp) points are a3's.
+TEST(WarpConfig, The3dSimulationProfileIsRefusedInOneLine) {
+    const fs::path dir = test::scratchDir();
+    const fs::path c = cylinderWall(dir, "--profile 3d");
+    const std::vector<std::string> problems = checkWarp(loadWallConfig(c));
+    ASSERT_EQ(problems.size(), 1u);
+    EXPECT_EQ(problems[0], c.string() + ": [warp]: c.mpcdi: profile 3d (3D simulation: warps in each region's frustum) is not "
+                                        "traced yet; profiles 2d, a3 and sl are (docs/mpcdi.md)");
+    EXPECT_TRUE(checkWarp(loadWallConfig(cylinderWall(dir, "--profile sl"))).empty());
+}
+
 // The views' warps from the file: a 2D identity is exactly no offset, a whole-pixel shift
 // exactly that shift (in wall pixels, through a screen scaled 2x), 3D points in metres over
 // each screen's viewport.
