@@ -12,6 +12,8 @@ matrix) and four times more by EXT_mesh_gpu_instancing; a quad with vertex colou
 unsigned bytes); a glass pane (KHR_materials_transmission and KHR_materials_ior), without an
 index accessor; a mesh of two primitives, a metal triangle strip and a triangle without a
 material. Unique meshes: 5 (one per primitive); instances: 11; nodes: 9.
+Beside them: shared_accessors.glb (21 glTF meshes, 20 of them over one box's accessors) and
+copied_accessors.glb (the same, each box with accessors of its own): see shared().
 
 With --malformed it also writes broken files, each with one thing wrong (the names say what).
 
@@ -201,6 +203,9 @@ def write_assemblies(out):
     write(os.path.join(out, "external.bin"), blob)
     write(os.path.join(out, "checker.png"), checker_png())
 
+    write(os.path.join(out, "shared_accessors.glb"), shared(False))
+    write(os.path.join(out, "copied_accessors.glb"), shared(True))
+
 
 def write_malformed(out):
     """Broken files, each wrong in one way; the importer must name the file and the fault."""
@@ -256,6 +261,62 @@ def write_malformed(out):
     # The texture's buffer view runs past the BIN chunk (tinygltf 2.7 itself reads it unchecked).
     doc["bufferViews"][doc["images"][0]["bufferView"]]["byteOffset"] = len(blob) + 100000
     write(os.path.join(out, "image_view_outside_buffer.glb"), glb(doc, blob))
+
+
+def plate_geometry(nx, nz):
+    """A flat plate of nx x nz quads (2 nx nz triangles) in the xz plane, normal +y."""
+    pos, nrm, idx = [], [], []
+    for j in range(nz + 1):
+        for i in range(nx + 1):
+            pos.append([-2.0 + 4.0 * i / nx, 0.0, -2.0 + 4.0 * j / nz])
+            nrm.append([0.0, 1.0, 0.0])
+    for j in range(nz):
+        for i in range(nx):
+            a = j * (nx + 1) + i
+            idx += [a, a + nx + 1, a + 1, a + 1, a + nx + 1, a + nx + 2]
+    return pos, nrm, idx
+
+
+def shared(copies):
+    """21 glTF meshes: 20 boxes over the same accessors (as writers that give every copy of a part a
+    mesh of its own write them), alternating two materials, and a plate of 320 triangles; one node
+    each, and a 22nd node placing box mesh 3 four more times by EXT_mesh_gpu_instancing. Stored:
+    2 meshes, 332 unique triangles; instances 25 (608 instanced triangles). With copies=True every
+    box mesh has accessors of its own over the same bytes: 21 meshes as far as accessors tell."""
+    b = Builder()
+    pos, nrm, _, idx = box_geometry()
+
+    def box_primitive():
+        return {"attributes": {"POSITION": b.accessor("VEC3", pos, 3), "NORMAL": b.accessor("VEC3", nrm, 3)},
+                "indices": b.accessor("SCALAR", idx, 1, USHORT)}
+
+    first = box_primitive()
+    meshes = []
+    for i in range(20):
+        prim = dict(box_primitive() if copies and i else first)
+        prim["material"] = i % 2
+        meshes.append({"name": "box%02d" % i, "primitives": [prim]})
+    ppos, pnrm, pidx = plate_geometry(16, 10)
+    meshes.append({"name": "plate", "primitives": [{
+        "attributes": {"POSITION": b.accessor("VEC3", ppos, 3), "NORMAL": b.accessor("VEC3", pnrm, 3)},
+        "indices": b.accessor("SCALAR", pidx, 1, USHORT), "material": 2}]})
+    nodes = [{"name": "plant", "children": list(range(1, 23))}]
+    for i in range(20):
+        nodes.append({"name": "box node %d" % i, "mesh": i, "rotation": quat_y(9.0 * i),
+                      "translation": [-1.6 + 0.8 * (i % 5), 0.25, -1.2 + 0.8 * (i // 5)], "scale": [0.3, 0.3, 0.3]})
+    nodes.append({"name": "plate node", "mesh": 20})
+    bolts = b.accessor("VEC3", [[-1.8, 0.1, 1.8], [1.8, 0.1, 1.8], [1.8, 0.1, -1.8], [-1.8, 0.1, -1.8]], 3)
+    scale = b.accessor("VEC3", [[0.15, 0.15, 0.15]] * 4, 3)
+    nodes.append({"name": "bolts", "mesh": 3,
+                  "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": bolts, "SCALE": scale}}}})
+    doc = {"asset": {"version": "2.0", "generator": "rtwall tools/gltf_testgen.py"},
+           "extensionsUsed": ["EXT_mesh_gpu_instancing"], "scene": 0, "scenes": [{"nodes": [0]}], "nodes": nodes,
+           "meshes": meshes,
+           "materials": [{"name": "red", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.1, 0.1, 1.0], "metallicFactor": 0.0}},
+                         {"name": "blue", "pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.2, 0.8, 1.0], "metallicFactor": 0.0}},
+                         {"name": "floor", "pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.7, 0.6, 1.0], "metallicFactor": 0.0}}],
+           "bufferViews": b.views, "accessors": b.accessors, "buffers": [{"byteLength": len(b.blob)}]}
+    return glb(doc, bytes(b.blob))
 
 
 def write_grid(out, n):

@@ -14,6 +14,7 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstring>
@@ -296,11 +297,24 @@ private:
 
     uint32_t defaultMaterial() { return detail::defaultAssemblyMaterial(out_, defaultMaterial_); }
 
-    // One TriangleMesh per primitive, built the first time a node uses it.
+    // What makes a primitive's triangles: its accessors (POSITION, NORMAL, COLOR_0, TEXCOORD_0,
+    // indices; -1 where absent) and its mode. Writers often give each copy of a part a glTF mesh
+    // of its own over the same accessors; primitives of equal keys are one TriangleMesh, whatever
+    // glTF mesh holds them and whatever material each uses (materials are per instance here).
+    using PrimitiveKey = std::array<int, 6>;
+    static PrimitiveKey primitiveKey(const tinygltf::Primitive& p) {
+        auto attribute = [&](const char* name) {
+            const auto a = p.attributes.find(name);
+            return a == p.attributes.end() ? -1 : a->second;
+        };
+        return {attribute("POSITION"), attribute("NORMAL"), attribute("COLOR_0"), attribute("TEXCOORD_0"), p.indices, p.mode};
+    }
+
+    // One TriangleMesh per distinct primitive key, built the first time a node uses it.
     uint32_t primitiveMesh(size_t mesh, size_t prim) {
-        const uint64_t key = (uint64_t(mesh) << 32) | prim;
-        if (auto it = meshOf_.find(key); it != meshOf_.end()) return it->second;
         const tinygltf::Primitive& p = m_.meshes[mesh].primitives[prim];
+        const PrimitiveKey key = primitiveKey(p);
+        if (auto it = meshOf_.find(key); it != meshOf_.end()) return it->second;
         const std::string where = "mesh " + std::to_string(mesh) + " primitive " + std::to_string(prim);
         auto pos = p.attributes.find("POSITION");
         if (pos == p.attributes.end()) fail(name_, where + " has no POSITION");
@@ -520,7 +534,7 @@ private:
     const std::string& name_;
     Assembly& out_;
     std::vector<bool> visited_;
-    std::map<uint64_t, uint32_t> meshOf_;
+    std::map<PrimitiveKey, uint32_t> meshOf_;
     int defaultMaterial_ = -1;
 };
 

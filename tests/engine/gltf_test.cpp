@@ -183,6 +183,57 @@ TEST(Gltf, ThreeEncodingsRenderAlike) {
     EXPECT_GT(red, 20u);
 }
 
+size_t uniqueTriangles(const Assembly& a) {
+    size_t n = 0;
+    for (const auto& m : a.meshes) n += m->triangleCount();
+    return n;
+}
+
+size_t instancedTriangles(const Assembly& a) {
+    size_t n = 0;
+    for (const AssemblyInstance& in : a.instances) n += a.meshes[in.mesh]->triangleCount();
+    return n;
+}
+
+// Issue 29: 21 glTF meshes, 20 of them over one box's accessors (two materials between them, and
+// four more copies by EXT_mesh_gpu_instancing): the box is stored once. The same assembly with
+// every box over accessors of its own (the same bytes) is 21 meshes as far as accessors tell,
+// and renders to the same bytes.
+TEST(Gltf, PrimitivesOverTheSameAccessorsAreOneMesh) {
+    const Assembly shared = loadAssembly(generated() / "shared_accessors.glb");
+    ASSERT_EQ(shared.meshes.size(), 2u);
+    EXPECT_EQ(uniqueTriangles(shared), 332u);  // 12 + 320
+    ASSERT_EQ(shared.instances.size(), 25u);  // 21 nodes and 4 EXT_mesh_gpu_instancing copies
+    EXPECT_EQ(instancedTriangles(shared), 608u);
+    const uint32_t box = instancesOf(shared, "box node 0").at(0)->mesh;
+    EXPECT_EQ(shared.meshNames[box], "box00");  // named after the first glTF mesh that uses it
+    for (int i = 0; i < 20; ++i) {
+        const AssemblyInstance& in = *instancesOf(shared, "box node " + std::to_string(i)).at(0);
+        EXPECT_EQ(in.mesh, box) << i;
+        EXPECT_EQ(shared.materials[in.material].name, i % 2 ? "blue" : "red") << i;  // its own material
+    }
+    for (const AssemblyInstance* in : instancesOf(shared, "bolts")) EXPECT_EQ(in->mesh, box);
+    EXPECT_EQ(instancesOf(shared, "bolts").size(), 4u);
+
+    const Assembly copied = loadAssembly(generated() / "copied_accessors.glb");
+    EXPECT_EQ(copied.meshes.size(), 21u);
+    EXPECT_EQ(uniqueTriangles(copied), 560u);
+    EXPECT_EQ(instancedTriangles(copied), 608u);
+
+    const Image a = render(sceneFromMeshFile(generated() / "shared_accessors.glb"));
+    const Image b = render(sceneFromMeshFile(generated() / "copied_accessors.glb"));
+    if (std::getenv("RTWALL_DUMP")) writePng(a, "/tmp/gltf_shared.png");
+    EXPECT_TRUE(a.rgb == b.rgb);
+    // Not an empty picture: the red and the blue boxes both show.
+    size_t red = 0, blue = 0;
+    for (size_t i = 0; i + 2 < a.rgb.size(); i += 3) {
+        red += a.rgb[i] > 2 * a.rgb[i + 2] + 30;
+        blue += a.rgb[i + 2] > 2 * a.rgb[i] + 30;
+    }
+    EXPECT_GT(red, 100u);
+    EXPECT_GT(blue, 100u);
+}
+
 TEST(Gltf, MalformedFilesAreOneLineErrors) {
     const struct {
         const char* file;
