@@ -13,7 +13,8 @@ unsigned bytes); a glass pane (KHR_materials_transmission and KHR_materials_ior)
 index accessor; a mesh of two primitives, a metal triangle strip and a triangle without a
 material. Unique meshes: 5 (one per primitive); instances: 11; nodes: 9.
 Beside them: shared_accessors.glb (21 glTF meshes, 20 of them over one box's accessors) and
-copied_accessors.glb (the same, each box with accessors of its own): see shared().
+copied_accessors.glb (the same, each box with accessors of its own): see shared(); alpha.glb
+(glTF's alpha modes and doubleSided): see alpha_assembly().
 
 With --malformed it also writes broken files, each with one thing wrong (the names say what).
 
@@ -29,14 +30,16 @@ import struct
 import zlib
 
 
-def png_rgb(width, height, rgb):
-    """An 8-bit RGB PNG (filter 0 on every row)."""
-    raw = b"".join(b"\x00" + rgb[y * width * 3:(y + 1) * width * 3] for y in range(height))
+def png(width, height, pixels, channels=3):
+    """An 8-bit RGB (channels 3) or RGBA (channels 4) PNG, filter 0 on every row."""
+    row = width * channels
+    raw = b"".join(b"\x00" + pixels[y * row:(y + 1) * row] for y in range(height))
 
     def chunk(kind, data):
         return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
 
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) +
+    colour_type = {3: 2, 4: 6}[channels]
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, colour_type, 0, 0, 0)) +
             chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
 
 
@@ -46,7 +49,7 @@ def checker_png():
     for y in range(n):
         for x in range(n):
             rgb += bytes((230, 30, 30)) if (x + y) % 2 else bytes((240, 240, 240))
-    return png_rgb(n, n, bytes(rgb))
+    return png(n, n, bytes(rgb))
 
 
 FLOAT, UBYTE, USHORT = 5126, 5121, 5123
@@ -205,6 +208,7 @@ def write_assemblies(out):
 
     write(os.path.join(out, "shared_accessors.glb"), shared(False))
     write(os.path.join(out, "copied_accessors.glb"), shared(True))
+    write(os.path.join(out, "alpha.glb"), glb(*alpha_assembly()))
 
 
 def write_malformed(out):
@@ -256,6 +260,10 @@ def write_malformed(out):
     doc, _ = embedded()
     doc["nodes"][7]["children"] = [3]  # box_c (under group) names group as its child: a cycle
     put("node_cycle.gltf", doc)
+
+    doc, blob = alpha_assembly()
+    doc["materials"][1]["alphaMode"] = "SOMETIMES"
+    write(os.path.join(out, "bad_alpha_mode.glb"), glb(doc, blob))
 
     doc, blob = assembly("view")
     # The texture's buffer view runs past the BIN chunk (tinygltf 2.7 itself reads it unchecked).
@@ -317,6 +325,51 @@ def shared(copies):
                          {"name": "floor", "pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.7, 0.6, 1.0], "metallicFactor": 0.0}}],
            "bufferViews": b.views, "accessors": b.accessors, "buffers": [{"byteLength": len(b.blob)}]}
     return glb(doc, bytes(b.blob))
+
+
+def alpha_assembly():
+    """Four unit quads at z = 0 facing +z (UVs 0..1 left to right), centred at x = -2.25, -0.75,
+    0.75, 2.25, before a green backdrop at z = -1:
+      mask    MASK, alphaCutoff 0.4, a red RGBA texture whose left half has alpha 0, right half 255
+      blend   BLEND, blue, baseColorFactor alpha 0.5
+      faded   MASK, baseColorFactor alpha 0.3 (below the default cutoff 0.5: all hole)
+      opaque  OPAQUE, yellow, alpha 0.1 (ignored), doubleSided
+    """
+    b = Builder()
+    quad_uv = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]
+    quad_idx = [0, 1, 2, 0, 2, 3]
+    prims = []
+    for i, x in enumerate((-2.25, -0.75, 0.75, 2.25)):
+        pos = [[x - 0.5, -0.5, 0.0], [x + 0.5, -0.5, 0.0], [x + 0.5, 0.5, 0.0], [x - 0.5, 0.5, 0.0]]
+        prims.append({"attributes": {"POSITION": b.accessor("VEC3", pos, 3),
+                                     "NORMAL": b.accessor("VEC3", [[0.0, 0.0, 1.0]] * 4, 3),
+                                     "TEXCOORD_0": b.accessor("VEC2", quad_uv, 2)},
+                      "indices": b.accessor("SCALAR", quad_idx, 1, UBYTE), "material": i})
+    back = [[-6.0, -4.0, -1.0], [6.0, -4.0, -1.0], [6.0, 4.0, -1.0], [-6.0, 4.0, -1.0]]
+    prims.append({"attributes": {"POSITION": b.accessor("VEC3", back, 3)},
+                  "indices": b.accessor("SCALAR", quad_idx, 1, UBYTE), "material": 4})
+    texels = bytearray()
+    for y in range(2):
+        for x in range(8):
+            texels += bytes((230, 20, 20, 0 if x < 4 else 255))
+    image = b.view(png(8, 2, bytes(texels), channels=4))
+
+    def pbr(rgba):
+        return {"baseColorFactor": rgba, "metallicFactor": 0.0, "roughnessFactor": 1.0}
+
+    doc = {"asset": {"version": "2.0", "generator": "rtwall tools/gltf_testgen.py"}, "scene": 0,
+           "scenes": [{"nodes": [0]}], "nodes": [{"name": "stage", "mesh": 0}],
+           "meshes": [{"name": "quads", "primitives": prims}],
+           "materials": [
+               dict(name="mask", alphaMode="MASK", alphaCutoff=0.4,
+                    pbrMetallicRoughness=dict(pbr([1.0, 1.0, 1.0, 1.0]), baseColorTexture={"index": 0})),
+               dict(name="blend", alphaMode="BLEND", pbrMetallicRoughness=pbr([0.05, 0.05, 0.9, 0.5])),
+               dict(name="faded", alphaMode="MASK", pbrMetallicRoughness=pbr([0.9, 0.1, 0.9, 0.3])),
+               dict(name="opaque", doubleSided=True, pbrMetallicRoughness=pbr([0.9, 0.8, 0.05, 0.1])),
+               dict(name="backdrop", pbrMetallicRoughness=pbr([0.05, 0.7, 0.05, 1.0]))],
+           "textures": [{"source": 0}], "images": [{"bufferView": image, "mimeType": "image/png"}],
+           "bufferViews": b.views, "accessors": b.accessors, "buffers": [{"byteLength": len(b.blob)}]}
+    return doc, bytes(b.blob)
 
 
 def write_grid(out, n):

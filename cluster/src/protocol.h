@@ -1,4 +1,4 @@
-// The rtwall wire protocol, version 17 (2 added the master's peer timeout to Welcome; 3 added
+// The rtwall wire protocol, version 19 (2 added the master's peer timeout to Welcome; 3 added
 // materials, area lights and shading settings; 4 added vertex colours to meshes, the scene's
 // origin and [bvh] settings to the snapshot, spherical and cylindrical texture mappings, texture
 // and volume files by content hash (AssetRequest, AssetData, SceneSnapshot::assets) and linear
@@ -28,7 +28,8 @@
 // warp the newest released frame to) and NodeShown (a node showed that refresh); 16 added the
 // denoiser's features with tiles (issue 28: FrameBegin::features, TileResult::features); 17 let
 // display nodes denoise their screens (NodeFrame::denoise); 18 added calibrated projectors
-// (issue 30): WarpGrids (a wall's projector grids, once after the Welcome) and FrameView::warps.
+// (issue 30): WarpGrids (a wall's projector grids, once after the Welcome) and FrameView::warps;
+// 19 added Material::alphaMode, alphaChannel and opacity (glTF's MASK and BLEND, issue 29).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one fields() function that
@@ -56,7 +57,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 18;  // 18: calibrated projectors (WarpGrids, FrameView::warps)
+inline constexpr uint16_t kProtocolVersion = 19;  // 19: alpha modes and opacity of materials
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).

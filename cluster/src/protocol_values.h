@@ -42,7 +42,7 @@ RTWALL_WIRE_FIELDS(TransferPoint, 3) {  // written with the material
     io.floatIn(m.density, 0.0f, 3.4e38f, "transfer function density");
 }
 
-RTWALL_WIRE_FIELDS(Material, 19) {
+RTWALL_WIRE_FIELDS(Material, 22) {
     io.string(m.name, kMaxStringBytes);
     io.enumUpTo(m.type, MaterialType::Volume, "material type");
     io.unitColor(m.color, "material color");
@@ -71,6 +71,9 @@ RTWALL_WIRE_FIELDS(Material, 19) {
                 });
     io.floatIn(m.volumeStep, 0.01f, 100.0f, "volume step");
     io.boolean(m.twoSided);  // version 6
+    io.enumUpTo(m.alphaMode, AlphaMode::Hashed, "alpha mode");  // version 19
+    io.enumUpTo(m.alphaChannel, AlphaChannel::Alpha, "alpha channel");
+    io.floatIn(m.opacity, 0.0f, 1.0f, "material opacity");
     // A volume material without a file cannot be built; refuse it here rather than in the engine.
     io.expect(m.type != MaterialType::Volume || !m.volumeFile.empty(), [] { return std::string("volume material without a volume file"); });
     io.expect(m.texture.kind != TextureKind::Image || !m.texture.file.empty(), [] { return std::string("image texture without a file"); });

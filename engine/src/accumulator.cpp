@@ -54,6 +54,8 @@ bool samplesRandomly(const SceneDesc& scene) {
         if (!used[i]) continue;
         if (m.type == MaterialType::Metal && m.roughness > 0.0f) return true;  // a sampled glossy lobe
         if (m.type == MaterialType::Volume) return true;                        // a jittered first step
+        if (m.alphaMode == AlphaMode::Hashed && (m.alpha.kind != TextureKind::None || m.opacity < 1.0f))
+            return true;  // a coin per ray and hit: frames of jittered rays average to the blend
     }
     return false;
 }

@@ -5,9 +5,10 @@
 //                  asks for shadow rays (directLight) and spawns secondary rays (spawn).
 //   shadowPass()   how much light a shadow ray keeps when it crosses this surface; opaque
 //                  materials never see shadow rays (Embree's mask skips the fast path for them).
-//   alphaAt()      alpha-masked materials: whether the surface exists at a point; Embree's
-//                  intersection and occlusion filter functions call it, so holes are holes for
-//                  camera, secondary and shadow rays alike.
+//   alphaAt()      alpha-masked materials: whether the surface exists at a point (for a
+//                  hashed alpha: for this ray); Embree's intersection and occlusion filter
+//                  functions call it, so holes are holes for camera, secondary and shadow rays
+//                  alike.
 #pragma once
 
 #include "sampling.h"
@@ -146,8 +147,13 @@ public:
     virtual ShadowPass shadowPass(const ShadingContext&, const ShadowTask&, const SurfacePoint&) const { return {}; }
     virtual bool shadowTransparent() const { return false; }
 
-    bool alphaMasked() const { return alpha_.active(); }
-    bool alphaAt(const Float3& objectPos, const float* uv) const { return alpha_.alpha(objectPos, uv) >= desc_.alphaCutoff; }
+    bool alphaMasked() const { return alpha_.active() || desc_.opacity < 1.0f; }
+    bool alphaHashed() const { return desc_.alphaMode == AlphaMode::Hashed; }
+    // `hash`: uniform in [0, 1), a function of the ray and the triangle (read by Hashed only).
+    bool alphaAt(const Float3& objectPos, const float* uv, float hash) const {
+        const float a = desc_.opacity * (alpha_.active() ? alpha_.alpha(objectPos, uv, desc_.alphaChannel) : 1.0f);
+        return alphaHashed() ? hash < a : a >= desc_.alphaCutoff;
+    }
     bool needsObjectPosition() const { return needsObjectPosition_; }
     // The shading normal after bump mapping (unchanged without a bump).
     // Object mapping: the noise of the object-space position sp.po; Uv mapping: the noise of sp.uv

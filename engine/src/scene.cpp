@@ -1,4 +1,5 @@
 #include "material.h"
+#include "sampling.h"
 #include "scene_files.h"
 #include "scene_impl.h"
 
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <set>
 #include <memory>
 #include <stdexcept>
@@ -182,6 +184,21 @@ MeshPrimitives pairIntoQuads(const TriangleMesh& mesh) {
     return mp;
 }
 
+// A hashed alpha's coin: uniform in [0, 1) from the ray's origin and direction (their bits) and
+// the instance and triangle hit. The same ray meets the same decision in packets and alone, on
+// every machine; rays of other samples (jittered, or bounced elsewhere) meet independent ones.
+float rayTriangleHash(RTCRayN* ray, unsigned N, unsigned k, unsigned inst, uint32_t prim) {
+    const float f[6] = {RTCRayN_org_x(ray, N, k), RTCRayN_org_y(ray, N, k), RTCRayN_org_z(ray, N, k),
+                        RTCRayN_dir_x(ray, N, k), RTCRayN_dir_y(ray, N, k), RTCRayN_dir_z(ray, N, k)};
+    uint32_t h = hashCombine(fmix32(inst + 0x3C6EF372u), prim);
+    for (float x : f) {
+        uint32_t bits;
+        std::memcpy(&bits, &x, 4);
+        h = hashCombine(h, bits);
+    }
+    return float(h >> 8) * (1.0f / 16777216.0f);
+}
+
 // Alpha masks: Embree calls this for every candidate hit of camera, secondary and shadow rays
 // (intersection and occlusion filter alike); a hit where the mask is below its cutoff is
 // rejected, so the ray goes on through the hole. Accepting or rejecting depends on the hit
@@ -201,7 +218,8 @@ void alphaFilter(const RTCFilterFunctionNArguments* args) {
         float uv[2];
         const bool hasUV = data.mesh->hasUVs();
         if (hasUV) meshUVAt(*data.mesh, h.prim, h.u, h.v, uv);
-        if (!model.alphaAt(objectPosition(*data.mesh, h.prim, h.u, h.v), hasUV ? uv : nullptr)) args->valid[k] = 0;
+        const float hash = model.alphaHashed() ? rayTriangleHash(args->ray, args->N, k, inst, h.prim) : 0.0f;
+        if (!model.alphaAt(objectPosition(*data.mesh, h.prim, h.u, h.v), hasUV ? uv : nullptr, hash)) args->valid[k] = 0;
     }
 }
 

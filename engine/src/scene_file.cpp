@@ -223,6 +223,9 @@ void readMaterial(Load& l, Reader& r) {
                                               : TextureMapping::Auto;
     m.alpha = readTexture(r, l.dir, "alpha");
     m.alphaCutoff = float(r.number("alpha_cutoff", m.alphaCutoff));
+    m.alphaChannel = r.choice("alpha_channel", "red") == "alpha" ? AlphaChannel::Alpha : AlphaChannel::Red;
+    m.alphaMode = r.choice("alpha_mode", "mask") == "hashed" ? AlphaMode::Hashed : AlphaMode::Mask;
+    m.opacity = float(r.number("opacity", m.opacity));
     if (m.type == MaterialType::Volume) readVolume(r, l.dir, m);
     if (m.type == MaterialType::Phong) {
         m.specular = r.vec3("specular", {0.5f, 0.5f, 0.5f});

@@ -90,6 +90,16 @@ Material materialFromAssembly(const AssemblyMaterial& a) {
         m.texture.file = a.baseColorTexture;
         m.texture.mapping = TextureMapping::Auto;  // the mesh's UVs where it has them
     }
+    // Alpha: the base colour's alpha times the texture's alpha channel. MASK cuts holes below the
+    // cutoff; BLEND becomes a hashed alpha, which converges to blending as samples accumulate.
+    if (a.alphaMode != AssemblyMaterial::Alpha::Opaque) {
+        m.opacity = std::clamp(a.baseColor[3], 0.0f, 1.0f);
+        m.alphaChannel = AlphaChannel::Alpha;
+        m.alphaCutoff = a.alphaCutoff;
+        m.alphaMode = a.alphaMode == AssemblyMaterial::Alpha::Blend ? AlphaMode::Hashed : AlphaMode::Mask;
+        if (!a.baseColorTexture.empty()) m.alpha = m.texture;
+    }
+    m.twoSided = a.doubleSided;
     return m;
 }
 

@@ -58,19 +58,32 @@ std::shared_ptr<const TextureImage> loadPng(const std::string& file, const std::
     png.version = PNG_IMAGE_VERSION;
     if (!png_image_begin_read_from_memory(&png, bytes.data(), bytes.size()))
         throw InputError(file + ": cannot read PNG: " + png.message);
-    png.format = PNG_FORMAT_RGB;
+    // With an alpha channel where the file has one (8-bit RGBA from libpng's simplified API is not
+    // premultiplied): glTF's MASK and BLEND materials read it.
+    const bool hasAlpha = (png.format & PNG_FORMAT_FLAG_ALPHA) != 0;
+    png.format = hasAlpha ? PNG_FORMAT_RGBA : PNG_FORMAT_RGB;
     if (png.width == 0 || png.height == 0 || png.width > 16384 || png.height > 16384) {
         png_image_free(&png);
         throw InputError(file + ": PNG size " + std::to_string(png.width) + "x" + std::to_string(png.height) +
                          " is out of range");
     }
-    std::vector<uint8_t> rgb(PNG_IMAGE_SIZE(png));
-    if (!png_image_finish_read(&png, nullptr, rgb.data(), 0, nullptr)) {
+    std::vector<uint8_t> pixels(PNG_IMAGE_SIZE(png));
+    if (!png_image_finish_read(&png, nullptr, pixels.data(), 0, nullptr)) {
         const std::string why = png.message;
         png_image_free(&png);
         throw InputError(file + ": cannot read PNG: " + why);
     }
-    return fromSrgb8(int(png.width), int(png.height), rgb.data());
+    if (!hasAlpha) return fromSrgb8(int(png.width), int(png.height), pixels.data());
+    const size_t texels = size_t(png.width) * png.height;
+    std::vector<uint8_t> rgb(3 * texels);
+    std::vector<float> alpha(texels);
+    for (size_t i = 0; i < texels; ++i) {
+        std::copy_n(pixels.data() + 4 * i, 3, rgb.data() + 3 * i);
+        alpha[i] = pixels[4 * i + 3] / 255.0f;  // alpha is linear
+    }
+    auto img = fromSrgb8(int(png.width), int(png.height), rgb.data());
+    img->alpha = std::move(alpha);
+    return img;
 }
 
 // Ken Perlin's reference permutation.
@@ -376,9 +389,7 @@ Texture::Texture(const TextureDesc& desc, const Color& base) : desc_(desc), base
     if (!(desc_.scale > 0.0f)) desc_.scale = 1.0f;
 }
 
-Color Texture::color(const Float3& objectPos, const float* uv) const {
-    Float3 p;
-    float u, v;
+void Texture::coordinates(const Float3& objectPos, const float* uv, float& u, float& v, Float3& p) const {
     if (readsMeshUVs(desc_.mapping, uv != nullptr)) {
         // The patterns see (u, 0, v) as their position, so marble and wood follow the UVs too.
         const float inv = 1.0f / desc_.scale;
@@ -389,6 +400,41 @@ Color Texture::color(const Float3& objectPos, const float* uv) const {
         p = objectPos * (1.0f / desc_.scale);
         textureCoordinates(desc_.mapping, objectPos, desc_.scale, u, v);
     }
+}
+
+// Bilinear, repeating, of a plane of `channels` floats per texel; image row 0 is at v = 1 (the top).
+template <int channels>
+std::array<float, channels> sampleImage(const float* plane, int width, int height, float u, float v) {
+    const float x = (u - std::floor(u)) * float(width) - 0.5f;
+    const float y = (1.0f - (v - std::floor(v))) * float(height) - 0.5f;
+    const float x0f = std::floor(x), y0f = std::floor(y);
+    const float tx = x - x0f, ty = y - y0f;
+    auto wrap = [](int i, int n) { return ((i % n) + n) % n; };
+    const int x0 = wrap(int(x0f), width), x1 = wrap(int(x0f) + 1, width);
+    const int y0 = wrap(int(y0f), height), y1 = wrap(int(y0f) + 1, height);
+    auto at = [&](int xi, int yi, int c) { return plane[(size_t(yi) * width + xi) * channels + c]; };
+    std::array<float, channels> out;
+    for (int c = 0; c < channels; ++c) {
+        const float top = at(x0, y0, c) * (1.0f - tx) + at(x1, y0, c) * tx;
+        const float bottom = at(x0, y1, c) * (1.0f - tx) + at(x1, y1, c) * tx;
+        out[size_t(c)] = top * (1.0f - ty) + bottom * ty;
+    }
+    return out;
+}
+
+float Texture::alpha(const Float3& objectPos, const float* uv, AlphaChannel channel) const {
+    if (channel == AlphaChannel::Red) return color(objectPos, uv).x;
+    if (desc_.kind != TextureKind::Image || image_->alpha.empty()) return 1.0f;
+    float u, v;
+    Float3 p;
+    coordinates(objectPos, uv, u, v, p);
+    return sampleImage<1>(image_->alpha.data(), image_->width, image_->height, u, v)[0];
+}
+
+Color Texture::color(const Float3& objectPos, const float* uv) const {
+    Float3 p;
+    float u, v;
+    coordinates(objectPos, uv, u, v, p);
     switch (desc_.kind) {
     case TextureKind::None: return base_;
     case TextureKind::Checker: {
@@ -405,20 +451,8 @@ Color Texture::color(const Float3& objectPos, const float* uv) const {
         return mix(base_, desc_.color2, ring * ring);
     }
     case TextureKind::Image: {
-        // Bilinear, repeating; image row 0 is at v = 1 (the top).
-        const TextureImage& img = *image_;
-        const float x = (u - std::floor(u)) * float(img.width) - 0.5f;
-        const float y = (1.0f - (v - std::floor(v))) * float(img.height) - 0.5f;
-        const float x0f = std::floor(x), y0f = std::floor(y);
-        const float tx = x - x0f, ty = y - y0f;
-        auto wrap = [](int i, int n) { return ((i % n) + n) % n; };
-        const int x0 = wrap(int(x0f), img.width), x1 = wrap(int(x0f) + 1, img.width);
-        const int y0 = wrap(int(y0f), img.height), y1 = wrap(int(y0f) + 1, img.height);
-        auto at = [&](int xi, int yi) {
-            const float* t = img.rgb.data() + (size_t(yi) * img.width + xi) * 3;
-            return Color{t[0], t[1], t[2]};
-        };
-        return mix(mix(at(x0, y0), at(x1, y0), tx), mix(at(x0, y1), at(x1, y1), tx), ty) * base_;
+        const auto c = sampleImage<3>(image_->rgb.data(), image_->width, image_->height, u, v);
+        return Color{c[0], c[1], c[2]} * base_;
     }
     }
     return base_;

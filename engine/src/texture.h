@@ -14,6 +14,7 @@ namespace rtwall {
 struct TextureImage {
     int width = 0, height = 0;
     std::vector<float> rgb;  // linear, 3 per texel
+    std::vector<float> alpha;  // [0, 1], 1 per texel; empty where the image has no alpha channel (opaque)
 };
 
 // Reads a PNG or JPEG (chosen by content, not extension). Throws InputError "file: what".
@@ -62,10 +63,15 @@ public:
     // `uv`: the mesh's texture coordinates at the point, or null when the mesh has none (the
     // Uv mapping then reads (0, 0); scenes refuse that combination when they load).
     Color color(const Float3& objectPos, const float* uv) const;
-    float alpha(const Float3& objectPos, const float* uv) const { return color(objectPos, uv).x; }  // masks use the red channel
+    // A mask's value: the red channel, or with AlphaChannel::Alpha an image's alpha channel (1 for
+    // an image without one and for the patterns, which have none).
+    float alpha(const Float3& objectPos, const float* uv, AlphaChannel channel) const;
     bool active() const { return desc_.kind != TextureKind::None; }
 
 private:
+    // The (u, v) the pattern or image is looked up at, and the pattern's position p.
+    void coordinates(const Float3& objectPos, const float* uv, float& u, float& v, Float3& p) const;
+
     TextureDesc desc_;
     Color base_;
     std::shared_ptr<const TextureImage> image_;

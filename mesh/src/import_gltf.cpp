@@ -272,6 +272,15 @@ private:
             a.roughness = std::clamp(a.roughness, 0.0f, 1.0f);
             a.transmission = std::clamp(a.transmission, 0.0f, 1.0f);
             if (!(a.ior >= 1.0f && a.ior <= 10.0f)) fail(name_, "material " + std::to_string(i) + ": ior must lie in [1, 10]");
+            a.alphaMode = g.alphaMode == "MASK"    ? AssemblyMaterial::Alpha::Mask
+                          : g.alphaMode == "BLEND" ? AssemblyMaterial::Alpha::Blend
+                                                   : AssemblyMaterial::Alpha::Opaque;
+            if (g.alphaMode != "OPAQUE" && g.alphaMode != "MASK" && g.alphaMode != "BLEND")
+                fail(name_, "material " + std::to_string(i) + ": alphaMode '" + g.alphaMode + "' is not OPAQUE, MASK or BLEND");
+            a.alphaCutoff = float(g.alphaCutoff);
+            if (!(a.alphaCutoff >= 0.0f && a.alphaCutoff <= 1.0f))
+                fail(name_, "material " + std::to_string(i) + ": alphaCutoff must lie in [0, 1]");
+            a.doubleSided = g.doubleSided;
             if (pbr.baseColorTexture.index >= 0) a.baseColorTexture = imageKey(pbr.baseColorTexture.index, i);
             if (pbr.baseColorTexture.index >= 0 && pbr.baseColorTexture.texCoord != 0)
                 out_.warnings.push_back(name_ + ": material " + std::to_string(i) +

@@ -42,6 +42,9 @@ Material sampleMaterial(int k) {
     m.alpha.mapping = k % 2 ? TextureMapping::Auto : TextureMapping::Uv;
     m.bumpMapping = k % 2 ? TextureMapping::Object : TextureMapping::Uv;
     m.twoSided = true;  // version 6
+    m.alphaMode = AlphaMode::Hashed;  // version 19
+    m.alphaChannel = AlphaChannel::Alpha;
+    m.opacity = 0.375f + 0.125f * float(k);
     return m;
 }
 
@@ -377,7 +380,8 @@ TEST(Protocol, GoldenBytes) {
     // 10: FrameBegin's views; 11: display nodes; 12: views and accumulation on display nodes; 13:
     // the frame's views are its only camera; 14: depth with every tile, left out when off; 15:
     // re-projection on the display nodes; 16: the denoiser's features, left out when off; 17: how
-    // display nodes denoise, left out when off; 18: warp grids and each view's warps).
+    // display nodes denoise, left out when off; 18: warp grids and each view's warps; 19: the
+    // materials' alpha modes and opacity).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -385,7 +389,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x12, 0x00,                                      // version (18: calibrated projectors)
+        0x13, 0x00,                                      // version (19: alpha modes)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -713,6 +717,10 @@ TEST(Protocol, SnapshotRejectsValuesOutOfRange) {
         {"texture mapping 8", [](SceneSnapshot& s) { s.materials[0].alpha.mapping = TextureMapping(8); }},
         {"bump mapping xy", [](SceneSnapshot& s) { s.materials[1].bumpMapping = TextureMapping::PlanarXY; }},
         {"bump mapping 8", [](SceneSnapshot& s) { s.materials[1].bumpMapping = TextureMapping(8); }},
+        {"alpha mode 2", [](SceneSnapshot& s) { s.materials[1].alphaMode = AlphaMode(2); }},
+        {"alpha channel 2", [](SceneSnapshot& s) { s.materials[0].alphaChannel = AlphaChannel(2); }},
+        {"opacity NaN", [=](SceneSnapshot& s) { s.materials[0].opacity = nan; }},
+        {"opacity 1.5", [](SceneSnapshot& s) { s.materials[1].opacity = 1.5f; }},
         {"image texture without file", [](SceneSnapshot& s) { s.materials[0].texture.kind = TextureKind::Image; }},
         {"volume without file", [](SceneSnapshot& s) { s.materials[0].type = MaterialType::Volume; }},
         {"volume step 0", [](SceneSnapshot& s) { s.materials[0].volumeStep = 0.0f; }},

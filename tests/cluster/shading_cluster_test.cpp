@@ -50,6 +50,13 @@ TEST(ClusterShading, EveryMaterialAndGiBitIdenticalToOneMachine) {
     master.setMaterial(4, changed.materials[4]);
     master.setMaterial(0, changed.materials[0]);
     cluster.expectFrameOf(changed, "after material updates");
+
+    // The leaf's checker mask becomes a hashed alpha (glTF's BLEND, protocol version 19): every
+    // client flips the same coins for the same rays.
+    changed.materials[7].alphaMode = AlphaMode::Hashed;
+    changed.materials[7].opacity = 0.6f;
+    master.setMaterial(7, changed.materials[7]);
+    cluster.expectFrameOf(changed, "after the leaf's hashed alpha");
 }
 
 // An area light with a visible face (an emitting panel in its place, counted once by multiple

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <map>
 #include <string>
 
 namespace rtwall {
@@ -234,6 +235,123 @@ TEST(Gltf, PrimitivesOverTheSameAccessorsAreOneMesh) {
     EXPECT_GT(blue, 100u);
 }
 
+// glTF's alphaMode, alphaCutoff and doubleSided (issue 29), mapped onto rtwall's alpha modes.
+TEST(Gltf, AlphaModesMapOntoMasksAndHashedAlpha) {
+    const Assembly a = loadAssembly(generated() / "alpha.glb");
+    ASSERT_EQ(a.materials.size(), 5u);
+    using Alpha = AssemblyMaterial::Alpha;
+    EXPECT_EQ(a.materials[0].alphaMode, Alpha::Mask);
+    EXPECT_FLOAT_EQ(a.materials[0].alphaCutoff, 0.4f);
+    EXPECT_EQ(a.materials[1].alphaMode, Alpha::Blend);
+    EXPECT_EQ(a.materials[2].alphaMode, Alpha::Mask);
+    EXPECT_FLOAT_EQ(a.materials[2].alphaCutoff, 0.5f);  // glTF's default
+    EXPECT_EQ(a.materials[3].alphaMode, Alpha::Opaque);
+    EXPECT_TRUE(a.materials[3].doubleSided);
+    EXPECT_FALSE(a.materials[0].doubleSided);
+
+    const SceneDesc d = sceneFromMeshFile(generated() / "alpha.glb");
+    ASSERT_EQ(d.materials.size(), 5u);
+    const Material& mask = d.materials[0];
+    EXPECT_EQ(mask.alphaMode, AlphaMode::Mask);
+    EXPECT_EQ(mask.alphaChannel, AlphaChannel::Alpha);
+    EXPECT_EQ(mask.alpha, mask.texture);  // the base colour texture's alpha
+    EXPECT_FLOAT_EQ(mask.alphaCutoff, 0.4f);
+    EXPECT_EQ(d.materials[1].alphaMode, AlphaMode::Hashed);
+    EXPECT_FLOAT_EQ(d.materials[1].opacity, 0.5f);
+    EXPECT_EQ(d.materials[1].alpha.kind, TextureKind::None);
+    EXPECT_FLOAT_EQ(d.materials[2].opacity, 0.3f);
+    EXPECT_FLOAT_EQ(d.materials[3].opacity, 1.0f);  // OPAQUE ignores alpha
+    EXPECT_TRUE(d.materials[3].twoSided);
+    EXPECT_FALSE(d.materials[4].twoSided);
+    EXPECT_TRUE(rendersStochastically(d));  // the blend's coins average over frames
+}
+
+// The four quads before the green backdrop, seen straight on; each pixel classified.
+struct AlphaStage {
+    SceneDesc scene;
+    AlphaStage(int supersample) : scene(sceneFromMeshFile(generated() / "alpha.glb")) {
+        CameraDesc& c = scene.cameras.front();
+        c.position = {0, 0, 8};
+        c.lookAt = {0, 0, 0};
+        c.up = {0, 1, 0};
+        c.fovY = 30.0f;
+        scene.settings.width = 640;
+        scene.settings.height = 240;
+        scene.settings.threads = 2;
+        scene.settings.supersample = supersample;
+    }
+    Image render(const TraceOptions& trace = {}) const {
+        const Scene s(scene);
+        return renderFrame(s, Camera(scene.cameras.front(), 640, 240), scene.settings, 0, nullptr, trace);
+    }
+};
+// Pixels per scene unit at z = 0, and the pixel column of x there.
+const double kPixelsPerUnit = 120.0 / (8.0 * std::tan(15.0 * M_PI / 180.0));
+int columnOf(double x) { return int(std::lround(320.0 + x * kPixelsPerUnit)); }
+enum class Hue { Green, Red, Blue, Yellow, Other };
+Hue hueAt(const Image& img, int x, int y) {
+    const uint8_t* p = img.rgb.data() + 3 * (size_t(y) * img.width + x);
+    const int r = p[0], g = p[1], b = p[2];
+    if (g > 2 * r + 20 && g > 2 * b + 20) return Hue::Green;
+    if (r > 2 * g + 20 && r > 2 * b + 20) return Hue::Red;
+    if (b > 2 * r + 20 && b > 2 * g + 20) return Hue::Blue;
+    if (r > 2 * b + 20 && g > 2 * b + 20) return Hue::Yellow;
+    return Hue::Other;
+}
+// Counts of each hue over the columns [x0, x1] (scene units at z = 0) and the rows of the
+// quads' middle half (y in [-0.25, 0.25]).
+std::map<Hue, int> hues(const Image& img, double x0, double x1) {
+    std::map<Hue, int> n;
+    const int rows = int(0.25 * kPixelsPerUnit);
+    for (int y = 120 - rows; y <= 120 + rows; ++y)
+        for (int x = columnOf(x0); x <= columnOf(x1); ++x) ++n[hueAt(img, x, y)];
+    return n;
+}
+
+TEST(Gltf, AlphaModesRender) {
+    const AlphaStage one(1);
+    const Image img = one.render();
+    if (std::getenv("RTWALL_DUMP")) writePng(img, "/tmp/gltf_alpha.png");
+    const int area = hues(img, -2.25 - 0.35, -2.25 - 0.1)[Hue::Green] + hues(img, -2.25 - 0.35, -2.25 - 0.1)[Hue::Other];
+    ASSERT_GT(area, 200);
+    // MASK: the texture's transparent left half is a hole, its opaque right half is the red quad.
+    EXPECT_EQ(hues(img, -2.25 - 0.35, -2.25 - 0.1)[Hue::Green], area);
+    EXPECT_EQ(hues(img, -2.25 + 0.1, -2.25 + 0.35)[Hue::Red], area);
+    // MASK with the base colour's alpha 0.3 below the cutoff: all hole; OPAQUE ignores alpha 0.1.
+    const auto faded = hues(img, 0.75 - 0.35, 0.75 + 0.35);
+    EXPECT_EQ(faded.size(), 1u);
+    EXPECT_GT(faded.at(Hue::Green), 0);
+    const auto opaque = hues(img, 2.25 - 0.35, 2.25 + 0.35);
+    EXPECT_EQ(opaque.size(), 1u);
+    EXPECT_GT(opaque.at(Hue::Yellow), 0);
+    // BLEND at alpha 0.5, one ray a pixel: each pixel is the quad or the backdrop, with the
+    // quad's share binomial around one half (n > 1000 pixels: 4 sigma is under 0.06).
+    const auto blend = hues(img, -0.75 - 0.35, -0.75 + 0.35);
+    const int n = blend.count(Hue::Blue) ? blend.at(Hue::Blue) : 0, m = blend.count(Hue::Green) ? blend.at(Hue::Green) : 0;
+    EXPECT_GT(n + m, 1000);
+    EXPECT_EQ(n + m, [&] { int t = 0; for (auto& [h, c] : blend) t += c; return t; }());
+    const double share = double(n) / double(n + m), sigma = std::sqrt(0.25 / double(n + m));
+    EXPECT_NEAR(share, 0.5, 4.0 * sigma) << n << " blue of " << n + m;
+
+    // Deterministic: the same bytes again, from single rays, and from every packet width.
+    EXPECT_TRUE(one.render().rgb == img.rgb);
+    AlphaStage single(1);
+    single.scene.settings.kernel = KernelType::Single;
+    EXPECT_TRUE(single.render().rgb == img.rgb);
+    for (int width : {4, 8, 16}) {
+        TraceOptions trace;
+        trace.packetWidth = width;
+        EXPECT_TRUE(one.render(trace).rgb == img.rgb) << width;
+    }
+
+    // More rays per pixel blend: with 8 x 8 samples hardly a pixel of the quad is all one or the
+    // other, and the mean is the blend of the two colours.
+    const Image many = AlphaStage(8).render();
+    const auto mixed = hues(many, -0.75 - 0.35, -0.75 + 0.35);
+    const int pure = (mixed.count(Hue::Blue) ? mixed.at(Hue::Blue) : 0) + (mixed.count(Hue::Green) ? mixed.at(Hue::Green) : 0);
+    EXPECT_LT(pure, (n + m) / 10) << "pixels still all quad or all backdrop";
+}
+
 TEST(Gltf, MalformedFilesAreOneLineErrors) {
     const struct {
         const char* file;
@@ -248,6 +366,7 @@ TEST(Gltf, MalformedFilesAreOneLineErrors) {
         {"missing_buffer.gltf", "missing.bin"},
         {"huge_count.gltf", "2147483648 elements"},
         {"node_cycle.gltf", "node 3 is reached twice"},
+        {"bad_alpha_mode.glb", "material 1: alphaMode 'SOMETIMES' is not OPAQUE, MASK or BLEND"},
         // Found by fuzz_import_gltf: tinygltf 2.7 read an image's buffer view past its buffer.
         {"image_view_outside_buffer.glb", "image 0: buffer view 12 lies outside its buffer"},
     };

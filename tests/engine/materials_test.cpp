@@ -752,6 +752,9 @@ bump_scale = 0.2
 alpha = "checker"
 alpha_color2 = [0, 0, 0]
 alpha_cutoff = 0.25
+alpha_channel = "alpha"
+alpha_mode = "hashed"
+opacity = 0.75
 emission = [0.5, 0, 0]
 two_sided = true
 [[material]]
@@ -790,6 +793,12 @@ edge2 = [0, 0, 1]
     EXPECT_FLOAT_EQ(m.bump, 0.5f);
     EXPECT_EQ(m.alpha.kind, TextureKind::Checker);
     EXPECT_FLOAT_EQ(m.alphaCutoff, 0.25f);
+    EXPECT_EQ(m.alphaChannel, AlphaChannel::Alpha);
+    EXPECT_EQ(m.alphaMode, AlphaMode::Hashed);
+    EXPECT_FLOAT_EQ(m.opacity, 0.75f);
+    EXPECT_EQ(s.materials[1].alphaMode, AlphaMode::Mask);  // the defaults
+    EXPECT_EQ(s.materials[1].alphaChannel, AlphaChannel::Red);
+    EXPECT_FLOAT_EQ(s.materials[1].opacity, 1.0f);
     EXPECT_FLOAT_EQ(m.emission.x, 0.5f);
     EXPECT_EQ(s.materials[1].transfer.size(), 2u);
     EXPECT_FLOAT_EQ(s.materials[1].volumeStep, 0.3f);

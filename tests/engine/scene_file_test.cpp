@@ -170,6 +170,9 @@ INSTANTIATE_TEST_SUITE_P(
                  "12", "material 'm' has bump_mapping = \"uv\", but mesh 'b'"},
         BadScene{"UnknownMapping", "[[material]]\nname = \"m\"\nalpha = \"checker\"\nalpha_mapping = \"uvw\"\n", "4",
                  "'uvw' is not one of auto, uv, xz"},
+        BadScene{"UnknownAlphaMode", "[[material]]\nname = \"m\"\nalpha_mode = \"blend\"\n", "3",
+                 "'blend' is not one of mask, hashed"},
+        BadScene{"OpacityAboveOne", "[[material]]\nname = \"m\"\nopacity = 1.5\n", "3", "opacity"},
         BadScene{"ZeroScale", "[[mesh]]\nname = \"b\"\nshape = \"box\"\n[[instance]]\nmesh = \"b\"\nscale = [1, 0, 1]\n",
                  "6", "must not be zero"}),
     [](const auto& param) { return std::string(param.param.name); });

@@ -53,6 +53,9 @@ enum class TextureKind { None, Checker, Marble, Wood, Image };
 // only: the noise of the object-space position (what PlanarXZ etc. mean for a bump).
 enum class TextureMapping { PlanarXZ, PlanarXY, PlanarYZ, Spherical, Cylindrical, Uv, Auto, Object };
 
+enum class AlphaMode { Mask, Hashed };
+enum class AlphaChannel { Red, Alpha };
+
 struct TextureDesc {
     TextureKind kind = TextureKind::None;
     std::string file;                           // image: a PNG or JPEG, path as the renderer opens it
@@ -92,6 +95,14 @@ struct Material {
                                                         // Auto: Uv where the mesh has texture coordinates
     TextureDesc alpha;                 // alpha mask: red channel / pattern below `alphaCutoff` is a hole
     float alphaCutoff = 0.5f;
+    // What the mask reads and how: the surface's alpha is opacity x the mask (its red channel, or
+    // the image's alpha channel with AlphaChannel::Alpha; 1 without a mask). Mask: a hole where
+    // the alpha is below alphaCutoff. Hashed (glTF's BLEND): every ray keeps a hit with
+    // probability alpha, decided by a hash of the ray and the triangle, so images stay
+    // deterministic and converge to alpha blending as samples accumulate.
+    AlphaMode alphaMode = AlphaMode::Mask;
+    AlphaChannel alphaChannel = AlphaChannel::Red;
+    float opacity = 1.0f;
     std::string volumeFile;            // volume: VTK image data (.vti, or legacy .vtk structured points)
     std::vector<TransferPoint> transfer;  // volume: transfer function, sorted by value
     float volumeStep = 0.5f;           // volume: ray-march step in voxels (speed/accuracy control)

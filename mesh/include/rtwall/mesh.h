@@ -266,6 +266,11 @@ struct AssemblyMaterial {
     float transmission = 0.0f;                    // KHR_materials_transmission: 0 opaque .. 1 clear
     float ior = 1.5f;                             // KHR_materials_ior
     std::string baseColorTexture;                 // key into Assembly::files (a PNG or JPEG); empty: none
+    // glTF's alphaMode: Opaque ignores alpha; Mask cuts holes where alpha (baseColor[3] times the
+    // texture's alpha) is below alphaCutoff; Blend is partly transparent.
+    enum class Alpha { Opaque, Mask, Blend } alphaMode = Alpha::Opaque;
+    float alphaCutoff = 0.5f;
+    bool doubleSided = false;  // glTF: both sides are the surface (emission leaves both)
 };
 
 // A node of the assembly tree: a glTF node, a STEP assembly, part or part occurrence.
