@@ -107,8 +107,7 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
     const bool perFrame = rendersStochastically(settings, s.randomContent);
     const Float3 org = camera.origin();
 
-    RTCIntersectContext ctx;
-    initContext(ctx, true);
+    TopLevels levels(s, true);
     alignas(64) typename P::RayHit rh;
     alignas(64) int valid[K];
     alignas(64) int traced[K];  // section planes: the lanes with something left to trace
@@ -179,11 +178,10 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
                                 rh.ray.tnear[k] = kept ? t0 : 0.0f;
                                 rh.ray.tfar[k] = kept ? t1 : INFINITY;
                             }
-                        if constexpr (kUsePackets) {
-                            P::intersect(traceValid, s.top, &ctx, &rh);
-                        } else {
-                            intersectLanes<K>(traceValid, s.top, &ctx, rh);
-                        }
+                        levels.each(s, [&](RTCScene scene, RTCIntersectContext* ctx) {
+                            if constexpr (kUsePackets) P::intersect(traceValid, scene, ctx, &rh);
+                            else intersectLanes<K>(traceValid, scene, ctx, rh);
+                        });
                         if (clipping) capPacket<K>(s, traced, enter, rh);
                         if (sc.distanceOut) recordDistances<K>(rh, valid, pixel, sc.distanceOut);
                         if (sc.features) recordFeatures<K>(shading, rh, valid, pixel, org, sampleWeight, sampleIndex == 0, sc);
@@ -246,7 +244,7 @@ void traceShadows(const Tracer& tracer, const ShadingContext& shading, Scratch& 
     sc.occluded.resize(sc.shadows.size());
     const uint32_t firstMask = s.anyShadowTransparent ? kMaskOpaque : kMaskAll;
     clipRays(s.sections, sc.shadows.data(), sc.shadows.size());
-    tracer.shadow(s.top, sc.shadows.data(), sc.occluded.data(), sc.shadows.size(), firstMask, s.coherentOcclusion);
+    tracer.shadow(s, sc.shadows.data(), sc.occluded.data(), sc.shadows.size(), firstMask, s.coherentOcclusion);
     stats.shadowRays += sc.shadows.size();
     if (trackRays)
         for (const ShadowTask& t : sc.shadows) ++sc.pixelRays[t.pixel];
@@ -266,7 +264,7 @@ void traceShadows(const Tracer& tracer, const ShadingContext& shading, Scratch& 
         }
         sc.hits.resize(sc.walk.size());
         clipRays(s.sections, sc.walkRays.data(), sc.walkRays.size());
-        tracer.closest(s.top, sc.walkRays.data(), sc.hits.data(), sc.walk.size(), false, kMaskShadowTransparent);
+        tracer.closest(s, sc.walkRays.data(), sc.hits.data(), sc.walk.size(), false, kMaskShadowTransparent);
         capHits(s, sc.walkRays.data(), sc.hits.data(), sc.walk.size());
         stats.shadowRays += sc.walk.size();
         sc.walkNext.clear();
@@ -528,7 +526,7 @@ TileStats renderTileInto(const Scene::Impl& s, const Camera& camera, const TileR
         sc.next.clear();
         sc.hits.resize(sc.rays.size());
         clipRays(s.sections, sc.rays.data(), sc.rays.size());
-        tracer.closest(s.top, sc.rays.data(), sc.hits.data(), sc.rays.size(), false, kMaskAll);
+        tracer.closest(s, sc.rays.data(), sc.hits.data(), sc.rays.size(), false, kMaskAll);
         capHits(s, sc.rays.data(), sc.hits.data(), sc.rays.size());
         stats.rays += sc.rays.size();
         if (trackDepth)

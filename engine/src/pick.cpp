@@ -8,8 +8,6 @@ namespace rtwall {
 std::optional<PickResult> pick(const Scene& scene, const Camera& camera, float px, float py) {
     const Float3 o = camera.origin(), d = camera.direction(px, py);
     if (std::isnan(d.x + d.y + d.z)) return std::nullopt;  // a projector pixel on no screen (issue 30)
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
     RTCRayHit rh{};
     rh.ray.org_x = o.x;
     rh.ray.org_y = o.y;
@@ -28,7 +26,10 @@ std::optional<PickResult> pick(const Scene& scene, const Camera& camera, float p
     rh.ray.mask = 0xFFFFFFFFu;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(scene.impl().top, &ctx, &rh);
+    // Both top levels (scene_impl.h, part moves): the static one skipping its stale copies.
+    const Scene::Impl& s = scene.impl();
+    TopLevels levels(s, true);
+    levels.each(s, [&](RTCScene level, RTCIntersectContext* c) { rtcIntersect1(level, c, &rh); });
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
     PickResult r;
     r.instance = rh.hit.instID[0];

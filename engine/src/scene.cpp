@@ -18,6 +18,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 namespace rtwall {
 
@@ -85,8 +86,11 @@ RTCBuildQuality buildQuality(BvhSettings::Quality q) {
 // fast quad test is not watertight on the diagonal (a ray exactly along it, as pixel centres
 // of an axis-aligned view of a symmetric part are, passes between the two triangles), and a
 // line of missing pixels is not a speed/accuracy trade a user chose.
+// Every level carries RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION: Embree runs the context filter
+// that skips stale copies in the static top level (scene_impl.h, part moves) from inside the
+// instanced mesh scenes, and asserts that the flag is set there.
 RTCSceneFlags sceneFlags(const BvhSettings& b, bool quads = false) {
-    int f = RTC_SCENE_FLAG_NONE;
+    int f = RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION;
     if (b.compact) f |= RTC_SCENE_FLAG_COMPACT;
     if (b.robust || quads) f |= RTC_SCENE_FLAG_ROBUST;
     return RTCSceneFlags(f);
@@ -252,9 +256,121 @@ void updateShadowTransparency(Scene::Impl& s) {
     for (const InstanceData& d : s.instances) s.anyShadowTransparent |= s.models[d.material]->shadowTransparent();
 }
 
+// An instance of `mesh` for a top level, committed (the caller attaches it).
+RTCGeometry instanceGeometry(RTCDevice device, RTCScene mesh, const float objectToWorld[12], unsigned mask, bool hidden) {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(g, mesh);
+    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, objectToWorld);
+    rtcSetGeometryMask(g, mask);
+    if (hidden) rtcDisableGeometry(g);
+    rtcCommitGeometry(g);
+    return g;
+}
+
+
+// A mover that has not changed for this many commits is folded back into the static top level
+// by the next rebuild.
+constexpr uint64_t kSettleCommits = 8;
+
 }  // namespace
 
+struct TopRebuild {
+    struct Entry {
+        unsigned id;
+        RTCScene mesh;
+        float objectToWorld[12];
+        unsigned mask;
+        bool hidden;
+    };
+    std::vector<Entry> entries;     // what the new top level holds, as it was at the start
+    std::vector<uint8_t> included;  // per instance
+    uint64_t generation = 0, stamp = 0;
+    RTCScene scene = nullptr;
+    std::atomic<bool> done{false};
+    std::thread thread;
+
+    ~TopRebuild() {
+        if (thread.joinable()) thread.join();
+        if (scene) rtcReleaseScene(scene);
+    }
+};
+
 Scene::Impl::~Impl() = default;
+
+namespace {
+
+// Starts a rebuild of the static top level on a thread of its own: every instance but those
+// moving now (movers settled for kSettleCommits commits are folded back in), as they are now.
+void launchRebuild(Scene::Impl& s) {
+    auto r = std::make_unique<TopRebuild>();
+    r->generation = s.topGeneration;
+    r->stamp = s.changeStamp;
+    r->included.assign(s.instances.size(), 0);
+    r->entries.reserve(s.instances.size());
+    for (size_t i = 0; i < s.instances.size(); ++i) {
+        if (s.inMoving[i] && s.commits - s.movedCommit[i] < kSettleCommits) continue;
+        const InstanceData& d = s.instances[i];
+        TopRebuild::Entry e{unsigned(i), s.meshScenes[s.desc.instances[i].mesh], {}, instanceMask(s, d), d.hidden};
+        std::copy(d.objectToWorld, d.objectToWorld + 12, e.objectToWorld);
+        r->entries.push_back(e);
+        r->included[i] = 1;
+    }
+    TopRebuild* job = r.get();
+    RTCDevice device = s.device;
+    const RTCSceneFlags flags = sceneFlags(s.desc.bvh);
+    job->thread = std::thread([job, device, flags] {
+        RTCScene top = rtcNewScene(device);
+        rtcSetSceneFlags(top, flags);
+        for (const TopRebuild::Entry& e : job->entries) {
+            RTCGeometry g = instanceGeometry(device, e.mesh, e.objectToWorld, e.mask, e.hidden);
+            rtcAttachGeometryByID(top, g, e.id);
+            rtcReleaseGeometry(g);
+        }
+        rtcCommitScene(top);
+        job->scene = top;
+        job->done.store(true, std::memory_order_release);
+    });
+    s.rebuild = std::move(r);
+}
+
+// Publishes a finished rebuild: it becomes `top` unless `top` changed meanwhile (then it is
+// dropped, and the next commit starts another). Movers it holds that have not changed since it
+// started leave `moving`.
+void publishRebuild(Scene::Impl& s) {
+    std::unique_ptr<TopRebuild> r = std::move(s.rebuild);
+    if (r->thread.joinable()) r->thread.join();
+    if (r->generation != s.topGeneration || !r->scene) return;
+    rtcReleaseScene(s.top);
+    s.top = r->scene;
+    r->scene = nullptr;
+    s.staleCount = 0;
+    for (size_t i = 0; i < s.instances.size(); ++i) {
+        s.inTop[i] = r->included[i];
+        s.staleInTop[i] = r->included[i] && s.movedStamp[i] > r->stamp;
+        s.staleCount += s.staleInTop[i];
+        if (s.inMoving[i] && r->included[i] && !s.staleInTop[i]) {
+            rtcDetachGeometry(s.moving, unsigned(i));
+            s.inMoving[i] = 0;
+            --s.movingCount;
+            s.movingDirty = true;
+        }
+    }
+}
+
+// The copies of instance i in the top levels, for a change that applies to both.
+template <class F> void forEachCopy(Scene::Impl& s, uint32_t i, F&& f) {
+    if (s.inTop[i]) {
+        f(rtcGetGeometry(s.top, i));
+        s.dirty = true;
+        ++s.topGeneration;
+    }
+    if (s.inMoving[i]) {
+        f(rtcGetGeometry(s.moving, i));
+        s.movingDirty = true;
+    }
+}
+
+}  // namespace
 
 namespace {
 
@@ -383,6 +499,15 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
 
         s.top = rtcNewScene(s.device);
         rtcSetSceneFlags(s.top, sceneFlags(s.desc.bvh));
+        s.moving = rtcNewScene(s.device);
+        rtcSetSceneFlags(s.moving, sceneFlags(s.desc.bvh));
+        rtcCommitScene(s.moving);
+        const size_t n = s.desc.instances.size();
+        s.inTop.assign(n, 1);
+        s.inMoving.assign(n, 0);
+        s.staleInTop.assign(n, 0);
+        s.movedStamp.assign(n, 0);
+        s.movedCommit.assign(n, 0);
         s.instances.resize(s.desc.instances.size());
         for (size_t i = 0; i < s.desc.instances.size(); ++i) {
             const InstanceDesc& in = s.desc.instances[i];
@@ -398,14 +523,9 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
             normalMatrixOf(in.transform, data.normalMatrix);
             worldToObjectOf(in.transform, data.worldToObject);
 
-            RTCGeometry g = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_INSTANCE);
-            rtcSetGeometryInstancedScene(g, s.meshScenes[in.mesh]);
-            rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, data.objectToWorld);
-            rtcSetGeometryMask(g, instanceMask(s, data));
             data.hidden = in.visibility == Visibility::Hidden;
             data.highlighted = in.visibility == Visibility::Highlighted;
-            if (data.hidden) rtcDisableGeometry(g);
-            rtcCommitGeometry(g);
+            RTCGeometry g = instanceGeometry(s.device, s.meshScenes[in.mesh], data.objectToWorld, instanceMask(s, data), data.hidden);
             rtcAttachGeometryByID(s.top, g, unsigned(i));
             rtcReleaseGeometry(g);
         }
@@ -422,6 +542,7 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
     } catch (...) {
         for (RTCScene ms : s.meshScenes) rtcReleaseScene(ms);
         if (s.top) rtcReleaseScene(s.top);
+        if (s.moving) rtcReleaseScene(s.moving);
         rtcReleaseDevice(s.device);
         throw;
     }
@@ -429,7 +550,9 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
 
 Scene::~Scene() {
     if (!impl_) return;
+    impl_->rebuild.reset();  // joins a rebuild in flight
     if (impl_->top) rtcReleaseScene(impl_->top);
+    if (impl_->moving) rtcReleaseScene(impl_->moving);
     for (RTCScene ms : impl_->meshScenes) rtcReleaseScene(ms);
     if (impl_->device) rtcReleaseDevice(impl_->device);
 }
@@ -446,11 +569,28 @@ void Scene::setInstanceTransform(uint32_t instance, const Transform& transform) 
     for (int k = 0; k < 12; ++k) data.objectToWorld[k] = float(transform.m[k]);
     std::copy(normal, normal + 9, data.normalMatrix);
     worldToObjectOf(transform, data.worldToObject);
-    RTCGeometry g = rtcGetGeometry(s.top, instance);
-    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, data.objectToWorld);
-    rtcCommitGeometry(g);
+    // The change goes to the instance's copy in `moving` (made on its first move); its copy in
+    // `top` goes stale, and the next commit starts a rebuild of `top` without it.
+    if (s.inMoving[instance]) {
+        RTCGeometry g = rtcGetGeometry(s.moving, instance);
+        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, data.objectToWorld);
+        rtcCommitGeometry(g);
+    } else {
+        RTCGeometry g = instanceGeometry(s.device, s.meshScenes[s.desc.instances[instance].mesh], data.objectToWorld,
+                                         instanceMask(s, data), data.hidden);
+        rtcAttachGeometryByID(s.moving, g, instance);
+        rtcReleaseGeometry(g);
+        s.inMoving[instance] = 1;
+        ++s.movingCount;
+    }
+    if (s.inTop[instance] && !s.staleInTop[instance]) {
+        s.staleInTop[instance] = 1;
+        ++s.staleCount;
+    }
+    s.movedStamp[instance] = ++s.changeStamp;
+    s.movedCommit[instance] = s.commits;
+    s.movingDirty = true;
     if (mayBeLightFace(s, data)) findLightFaces(s);  // a lamp panel moved onto or off an area light
-    s.dirty = true;
 }
 
 void Scene::setInstanceVisibility(uint32_t instance, Visibility visibility) {
@@ -462,11 +602,8 @@ void Scene::setInstanceVisibility(uint32_t instance, Visibility visibility) {
     data.highlighted = visibility == Visibility::Highlighted;
     if (hidden == data.hidden) return;
     data.hidden = hidden;
-    RTCGeometry g = rtcGetGeometry(s.top, instance);
-    if (hidden) rtcDisableGeometry(g);
-    else rtcEnableGeometry(g);
+    forEachCopy(s, instance, [&](RTCGeometry g) { hidden ? rtcDisableGeometry(g) : rtcEnableGeometry(g); });
     if (mayBeLightFace(s, data)) findLightFaces(s);  // a hidden lamp panel is no face of its area light
-    s.dirty = true;
 }
 
 void Scene::setMaterial(uint32_t material, const Material& value) {
@@ -478,18 +615,23 @@ void Scene::setMaterial(uint32_t material, const Material& value) {
     std::unique_ptr<MaterialModel> model = makeMaterialModel(value);
     s.desc.materials[material] = value;
     s.models[material] = std::move(model);
-    if (s.models[material]->alphaMasked() && !s.filtersInstalled) installAlphaFilters(s);
+    if (s.models[material]->alphaMasked() && !s.filtersInstalled) {
+        // The mesh scenes change: a rebuild of the top level reading them must end first.
+        if (s.rebuild && s.rebuild->thread.joinable()) s.rebuild->thread.join();
+        installAlphaFilters(s);
+    }
     // Shadow rays find shadow-transparent instances by their Embree mask.
     for (size_t i = 0; i < s.instances.size(); ++i) {
         if (s.instances[i].material != material) continue;
-        RTCGeometry g = rtcGetGeometry(s.top, unsigned(i));
-        rtcSetGeometryMask(g, instanceMask(s, s.instances[i]));
-        rtcCommitGeometry(g);
+        const unsigned mask = instanceMask(s, s.instances[i]);
+        forEachCopy(s, uint32_t(i), [&](RTCGeometry g) {
+            rtcSetGeometryMask(g, mask);
+            rtcCommitGeometry(g);
+        });
     }
     updateShadowTransparency(s);
     s.randomContent = samplesRandomly(s.desc);
     findLightFaces(s);  // an emission turned on or off, or made two-sided
-    s.dirty = true;
 }
 
 void Scene::addFile(const std::string& path, std::shared_ptr<const std::vector<uint8_t>> bytes) {
@@ -516,10 +658,35 @@ void Scene::setSection(uint32_t index, const SectionPlane& plane) {
 
 void Scene::commit() {
     Impl& s = *impl_;
-    if (!s.dirty) return;
-    rtcCommitScene(s.top);
-    s.dirty = false;
-    checkDevice(s.device, s.lastError, "refitting the top-level BVH");
+    ++s.commits;
+    if (s.rebuild && s.rebuild->done.load(std::memory_order_acquire)) publishRebuild(s);
+    if (s.dirty) {
+        rtcCommitScene(s.top);
+        s.dirty = false;
+        checkDevice(s.device, s.lastError, "rebuilding the top-level BVH");
+    }
+    if (s.movingDirty) {
+        rtcCommitScene(s.moving);
+        s.movingDirty = false;
+        checkDevice(s.device, s.lastError, "building the BVH of the moving instances");
+    }
+    if (!s.rebuild && s.staleCount > 0) launchRebuild(s);
+}
+
+void Scene::waitForRebuild() {
+    Impl& s = *impl_;
+    if (!s.rebuild) return;
+    publishRebuild(s);
+    if (s.movingDirty) {
+        rtcCommitScene(s.moving);
+        s.movingDirty = false;
+    }
+    checkDevice(s.device, s.lastError, "rebuilding the top-level BVH");
+}
+
+Scene::TopLevelState Scene::topLevelState() const {
+    const Impl& s = *impl_;
+    return {s.movingCount, s.staleCount, s.rebuild != nullptr};
 }
 
 size_t Scene::embreeBytes() const { return size_t(std::max<int64_t>(0, impl_->embreeBytes.load())); }

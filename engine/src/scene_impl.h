@@ -163,6 +163,10 @@ inline bool clipToSections(const SectionState& c, const Float3& org, const Float
     return clipToSections(c, dist, dir, t0, t1, enter);
 }
 
+// A background rebuild of the static top level (scene.cpp): the instances it holds, as they
+// were when it started, and the scene it builds.
+struct TopRebuild;
+
 struct Scene::Impl {
     SceneDesc desc;  // meshes are shared pointers: no second copy of any geometry
     std::string lastError;  // written by Embree's error callback
@@ -186,11 +190,60 @@ struct Scene::Impl {
     bool coherentOcclusion = true;
     std::vector<LightFace> lightFaces;     // per desc.lights entry (findLightFaces)
     bool anyLightFace = false;             // some entry of lightFaces is not None
+    // Part moves (issue 29). `top` is the static top level, rebuilt only in the background; an
+    // instance whose transform changes gets a copy in `moving` (a small top level committed with
+    // every change) and its copy in `top` goes stale: rays traced through `top` skip stale copies
+    // (a context filter function reads staleInTop) and then through `moving`, keeping the closer
+    // hit. A rebuild of `top` starts when a copy goes stale; it leaves out the instances then
+    // moving (movers that have not changed for kSettleCommits commits are folded back in) and a
+    // later commit() publishes it.
+    RTCScene moving = nullptr;
+    std::vector<uint8_t> inTop, inMoving, staleInTop;  // per instance
+    size_t staleCount = 0, movingCount = 0;
+    std::vector<uint64_t> movedStamp;   // per instance: changeStamp at its last transform change
+    std::vector<uint64_t> movedCommit;  // per instance: commits at its last transform change
+    uint64_t changeStamp = 0, commits = 0;
+    uint64_t topGeneration = 0;         // bumped by every change to `top` (visibility, masks)
+    bool movingDirty = false;
+    std::unique_ptr<TopRebuild> rebuild;  // in flight, or done and not yet published
     SectionState sections;                 // the enabled planes of desc.sections
     std::vector<std::unique_ptr<MaterialModel>> capModels;  // per sections entry: Lambert of its cap colour
     InstanceData capInstance;              // what a cap's surface point names as its instance (no mesh)
 
     ~Impl();
+};
+
+// The two top levels traced as one (Scene::Impl, "part moves"): rays go through the static top
+// level, where a context filter skips the stale copies of moving instances, then through the
+// moving instances' level, which keeps a hit only where it is closer. Without movers the
+// second pass and the filter are left out, and tracing is as it was with one level.
+struct TopContext {
+    RTCIntersectContext ctx;  // first: Embree hands the filter this pointer
+    const Scene::Impl* scene;
+};
+inline void skipStaleCopies(const RTCFilterFunctionNArguments* args) {
+    const auto* c = reinterpret_cast<const TopContext*>(args->context);
+    const unsigned inst = args->context->instID[0];
+    if (inst >= c->scene->staleInTop.size() || !c->scene->staleInTop[inst]) return;
+    for (unsigned k = 0; k < args->N; ++k) args->valid[k] = 0;
+}
+struct TopLevels {
+    TopContext top;
+    RTCIntersectContext moving;
+    TopLevels(const Scene::Impl& s, bool coherent) {
+        const RTCIntersectContextFlags flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+        rtcInitIntersectContext(&top.ctx);
+        top.ctx.flags = flags;
+        top.scene = &s;
+        if (s.staleCount > 0) top.ctx.filter = skipStaleCopies;
+        rtcInitIntersectContext(&moving);
+        moving.flags = flags;
+    }
+    // f(scene, context) for each level a ray must go through, static first.
+    template <class F> void each(const Scene::Impl& s, F&& f) {
+        f(s.top, &top.ctx);
+        if (s.movingCount > 0) f(s.moving, &moving);
+    }
 };
 
 }  // namespace rtwall

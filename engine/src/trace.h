@@ -173,10 +173,9 @@ void initContext(RTCIntersectContext& ctx, bool coherent) {
 }
 
 template <int K>
-void traceClosestPacket(RTCScene scene, const RayTask* rays, Hit* hits, size_t n, bool coherent, uint32_t mask) {
+void traceClosestPacket(const Scene::Impl& s, const RayTask* rays, Hit* hits, size_t n, bool coherent, uint32_t mask) {
     using P = Packet<K>;
-    RTCIntersectContext ctx;
-    initContext(ctx, coherent);
+    TopLevels levels(s, coherent);
     alignas(64) typename P::RayHit rh;
     alignas(64) int valid[K];
     for (size_t base = 0; base < n; base += K) {
@@ -188,14 +187,13 @@ void traceClosestPacket(RTCScene scene, const RayTask* rays, Hit* hits, size_t n
             rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
             rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
-        P::intersect(valid, scene, &ctx, &rh);
+        levels.each(s, [&](RTCScene scene, RTCIntersectContext* ctx) { P::intersect(valid, scene, ctx, &rh); });
         for (int k = 0; k < count; ++k) hits[base + k] = hitOf(rh, k);
     }
 }
 
-void traceClosestSingle(RTCScene scene, const RayTask* rays, Hit* hits, size_t n, bool coherent, uint32_t mask) {
-    RTCIntersectContext ctx;
-    initContext(ctx, coherent);
+void traceClosestSingle(const Scene::Impl& s, const RayTask* rays, Hit* hits, size_t n, bool coherent, uint32_t mask) {
+    TopLevels levels(s, coherent);
     alignas(16) RTCRayHit rh;
     for (size_t i = 0; i < n; ++i) {
         const RayTask& t = rays[i];
@@ -217,7 +215,7 @@ void traceClosestSingle(RTCScene scene, const RayTask* rays, Hit* hits, size_t n
         rh.ray.flags = 0;
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(scene, &ctx, &rh);
+        levels.each(s, [&](RTCScene scene, RTCIntersectContext* ctx) { rtcIntersect1(scene, ctx, &rh); });
         Hit& h = hits[i];
         h.inst = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? kNoHit : rh.hit.instID[0];
         h.prim = rh.hit.primID;
@@ -230,10 +228,9 @@ void traceClosestSingle(RTCScene scene, const RayTask* rays, Hit* hits, size_t n
 }
 
 template <int K>
-void traceShadowPacket(RTCScene scene, const ShadowTask* rays, uint8_t* occluded, size_t n, uint32_t mask, bool coherent) {
+void traceShadowPacket(const Scene::Impl& s, const ShadowTask* rays, uint8_t* occluded, size_t n, uint32_t mask, bool coherent) {
     using P = Packet<K>;
-    RTCIntersectContext ctx;
-    initContext(ctx, coherent);
+    TopLevels levels(s, coherent);
     alignas(64) typename P::Ray r;
     alignas(64) int valid[K];
     for (size_t base = 0; base < n; base += K) {
@@ -243,14 +240,14 @@ void traceShadowPacket(RTCScene scene, const ShadowTask* rays, uint8_t* occluded
             valid[k] = k < count && t.tnear <= t.tfar ? -1 : 0;  // an empty interval is not occluded
             setRay(r, k, t.org, t.dir, t.tnear, t.tfar, mask);
         }
-        P::occluded(valid, scene, &ctx, &r);
+        // A ray the static level occludes has tfar = -inf: the moving level skips it.
+        levels.each(s, [&](RTCScene scene, RTCIntersectContext* ctx) { P::occluded(valid, scene, ctx, &r); });
         for (int k = 0; k < count; ++k) occluded[base + k] = r.tfar[k] == -INFINITY;
     }
 }
 
-void traceShadowSingle(RTCScene scene, const ShadowTask* rays, uint8_t* occluded, size_t n, uint32_t mask, bool) {
-    RTCIntersectContext ctx;
-    initContext(ctx, true);
+void traceShadowSingle(const Scene::Impl& s, const ShadowTask* rays, uint8_t* occluded, size_t n, uint32_t mask, bool) {
+    TopLevels levels(s, true);
     alignas(16) RTCRay r;
     for (size_t i = 0; i < n; ++i) {
         const ShadowTask& t = rays[i];
@@ -270,14 +267,14 @@ void traceShadowSingle(RTCScene scene, const ShadowTask* rays, uint8_t* occluded
         r.mask = mask;
         r.id = 0;
         r.flags = 0;
-        rtcOccluded1(scene, &ctx, &r);
+        levels.each(s, [&](RTCScene scene, RTCIntersectContext* ctx) { rtcOccluded1(scene, ctx, &r); });
         occluded[i] = r.tfar == -INFINITY;
     }
 }
 
 struct Tracer {
-    void (*closest)(RTCScene, const RayTask*, Hit*, size_t, bool, uint32_t);
-    void (*shadow)(RTCScene, const ShadowTask*, uint8_t*, size_t, uint32_t, bool coherent);
+    void (*closest)(const Scene::Impl&, const RayTask*, Hit*, size_t, bool, uint32_t);
+    void (*shadow)(const Scene::Impl&, const ShadowTask*, uint8_t*, size_t, uint32_t, bool coherent);
 };
 
 template <int K> Tracer packetTracer() {
@@ -298,6 +295,8 @@ inline void intersectLanes(const int* traceValid, RTCScene scene, RTCIntersectCo
         one.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         one.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(scene, &ctx, &one);
+        // Only a hit is written back: a second top level's miss keeps the first one's hit.
+        if (one.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
         rh.ray.tfar[k] = one.ray.tfar;
         rh.hit.Ng_x[k] = one.hit.Ng_x;
         rh.hit.Ng_y[k] = one.hit.Ng_y;

@@ -115,6 +115,7 @@ struct UpdatesOptions : Common {
     int instances = 100'000, frames = 200, clients = 1;
     int transforms = 0;  // instances moved per frame as well (Master::setInstanceTransform)
     bool async = false;
+    int moving = 0;  // > 0: part moves on one Scene (moving instances per change) instead
 };
 toml::table updates(const UpdatesOptions& o);
 

@@ -7,11 +7,13 @@
 // application thread's time in Master::setCamera, the time of the whole Master::renderFrame
 // (synchronous: begin, the clients' catch-up, the tile, the frame's end), and the network
 // thread's time from the frame's begin to its last tile (FrameReport::seconds). Medians.
+// With --moving K: part moves on one Scene instead (moves() below), the issue 29 figures.
 #include "bench.h"
 #include "bench_util.h"
 
 #include <rtwall/cluster.h>
 #include <rtwall/engine.h>
+#include <rtwall/engine_embree.h>
 
 #include <algorithm>
 #include <chrono>
@@ -57,9 +59,106 @@ SceneDesc manyInstances(int count) {
     return d;
 }
 
+// The bare-Embree reference for a part move: a top level of `count` instances of one box (as
+// manyInstances) that one transform change makes Embree rebuild whole, as the engine's single
+// top level did before moved instances got a level of their own. Per commit, seconds.
+std::vector<double> bareEmbreeRebuilds(int count, int changes) {
+    RTCDevice device = rtcNewDevice(nullptr);
+    const TriangleMesh box = makeBox();
+    RTCScene mesh = rtcNewScene(device);
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 12, box.vertexCount()));
+    std::copy_n(box.positions(), 3 * box.vertexCount(), v);
+    auto* t = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, box.triangleCount()));
+    std::copy_n(box.indices(), 3 * box.triangleCount(), t);
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(mesh, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(mesh);
+    const SceneDesc d = manyInstances(count);
+    RTCScene top = rtcNewScene(device);
+    std::vector<RTCGeometry> instances;
+    for (const InstanceDesc& in : d.instances) {
+        RTCGeometry i = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+        rtcSetGeometryInstancedScene(i, mesh);
+        float m[12];
+        for (int k = 0; k < 12; ++k) m[k] = float(in.transform.m[k]);
+        rtcSetGeometryTransform(i, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, m);
+        rtcCommitGeometry(i);
+        rtcAttachGeometry(top, i);
+        instances.push_back(i);
+    }
+    rtcCommitScene(top);
+    std::vector<double> out;
+    for (int c = 0; c < changes; ++c) {
+        RTCGeometry i = instances[size_t(c * 7919) % instances.size()];
+        float m[12];
+        const Transform t = Transform::translate(0, 0.001 * (c + 1), 0) * d.instances[size_t(c * 7919) % instances.size()].transform;
+        for (int k = 0; k < 12; ++k) m[k] = float(t.m[k]);
+        rtcSetGeometryTransform(i, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, m);
+        rtcCommitGeometry(i);
+        out.push_back(secondsOf([&] { rtcCommitScene(top); }));
+    }
+    for (RTCGeometry i : instances) rtcReleaseGeometry(i);
+    rtcReleaseScene(top);
+    rtcReleaseScene(mesh);
+    rtcReleaseDevice(device);
+    return out;
+}
+
+toml::table timing(const std::vector<double>& seconds) {
+    return toml::table{{"median", 1e3 * median(seconds)}, {"p95", 1e3 * quantile(seconds, 0.95)}};
+}
+
+// Part moves (issue 29): `moving` instances dragged together, frame after frame, on one Scene
+// (what each render client does per change): the cost of the change (setInstanceTransform for
+// each mover, then commit) while the static level is rebuilt in the background, a frame
+// rendered between changes; the frame time with movers against none; and the bare-Embree
+// rebuild that a change cost with one top level.
+toml::table moves(const UpdatesOptions& o) {
+    SceneDesc desc = manyInstances(o.instances);
+    desc.settings.width = desc.settings.height = 128;
+    desc.settings.threads = 0;
+    Scene scene(desc);
+    const Camera camera(desc.cameras.front(), desc.settings.width, desc.settings.height);
+    std::vector<double> still, commits, frames;
+    for (int f = 0; f < 5; ++f) still.push_back(secondsOf([&] { renderFrame(scene, camera, desc.settings); }));
+    std::vector<uint32_t> movers;
+    for (int k = 0; k < o.moving; ++k) movers.push_back(uint32_t((size_t(k) * 7919) % desc.instances.size()));
+    double firstRebuild = 0;
+    for (int f = 0; f < o.frames; ++f) {
+        commits.push_back(secondsOf([&] {
+            for (uint32_t i : movers)
+                scene.setInstanceTransform(i, Transform::translate(0, 0.001 * (f + 1), 0) * desc.instances[i].transform);
+            scene.commit();
+        }));
+        if (f == 0) firstRebuild = secondsOf([&] { scene.waitForRebuild(); });  // the static level without the movers
+        frames.push_back(secondsOf([&] { renderFrame(scene, camera, desc.settings); }));
+    }
+    const std::vector<double> bare = bareEmbreeRebuilds(o.instances, std::min(o.frames, 30));
+    toml::table out{{"benchmark", "updates"},
+                    {"mode", "moves"},
+                    {"instances", o.instances},
+                    {"moving", o.moving},
+                    {"changes", o.frames},
+                    {"commit_ms", timing(commits)},
+                    {"static_rebuild_ms", 1e3 * firstRebuild},
+                    {"bare_embree_top_rebuild_ms", timing(bare)},
+                    {"frame_ms_still", timing(still)},
+                    {"frame_ms_moving", timing(frames)}};
+    if (o.text)
+        std::fprintf(o.text,
+                     "%d instances, %d moving, %d changes: commit %.3f ms (p95 %.3f); static level rebuilt in the background in "
+                     "%.1f ms; bare Embree top-level rebuild %.1f ms (p95 %.1f); frame %.2f ms moving, %.2f ms still (medians)\n",
+                     o.instances, o.moving, o.frames, 1e3 * median(commits), 1e3 * quantile(commits, 0.95), 1e3 * firstRebuild,
+                     1e3 * median(bare), 1e3 * quantile(bare, 0.95), 1e3 * median(frames), 1e3 * median(still));
+    return out;
+}
+
 }  // namespace
 
 toml::table updates(const UpdatesOptions& o) {
+    if (o.moving > 0) return moves(o);
     const SceneDesc desc = manyInstances(o.instances);
     ClusterSettings cs;
     cs.async = o.async;

@@ -14,6 +14,10 @@ void addBenchUpdates(CLI::App& bench, Run& run) {
                     "Instance transforms moved per frame besides the camera (as a dragged object or a "
                     "flystick's pick does)")
         ->check(CLI::Range(0, 100000));
+    cmd->add_option("--moving", o.moving,
+                    "Part moves instead: this many instances dragged per change on one Scene; JSON commit_ms "
+                    "{median, p95} per change, the background rebuild and bare Embree's whole top-level rebuild")
+        ->check(CLI::Range(0, 100000));
     cmd->add_flag("--async", o.async, "Asynchronous frames (as rtwall run): the frame time overlaps the next one's begin");
     callBenchmark(cmd, run, a, bench::updates);
 }

@@ -398,7 +398,19 @@ public:
     // std::out_of_range for a slot >= kMaxSections, std::invalid_argument for a plane that is not
     // finite or has a zero normal.
     void setSection(uint32_t index, const SectionPlane& plane);
+    // Publishes the changes. Moved instances live in a small top level of their own, rebuilt by
+    // each commit (microseconds); the static rest is rebuilt in the background when an instance
+    // starts moving, and a later commit publishes it (never waiting for it). Images are the same
+    // whichever level holds an instance.
     void commit();
+    // Waits for a background rebuild of the static top level and publishes it (benchmarks, tests).
+    void waitForRebuild();
+    struct TopLevelState {
+        size_t moving = 0;      // instances in the moving top level
+        size_t stale = 0;       // static copies that rays skip until a rebuild publishes
+        bool rebuilding = false;  // a rebuild in flight or done but not published
+    };
+    TopLevelState topLevelState() const;
 
     // What the scene recognised as the visible faces of its area lights, as of the last change:
     // per light (None for point and directional lights), and the area light an instance is the
