@@ -14,12 +14,14 @@ index accessor; a mesh of two primitives, a metal triangle strip and a triangle 
 material. Unique meshes: 5 (one per primitive); instances: 11; nodes: 9.
 Beside them: shared_accessors.glb (21 glTF meshes, 20 of them over one box's accessors) and
 copied_accessors.glb (the same, each box with accessors of its own): see shared(); alpha.glb
-(glTF's alpha modes and doubleSided): see alpha_assembly().
+(glTF's alpha modes and doubleSided): see alpha_assembly(); congruent.glb (a flat export of
+congruent shapes and near misses): see congruent().
 
 With --malformed it also writes broken files, each with one thing wrong (the names say what).
 
   python3 tools/gltf_testgen.py --out DIR [--malformed]
   python3 tools/gltf_testgen.py --out DIR --grid N   # a large file for timing: an N x N x N grid of boxes
+  python3 tools/gltf_testgen.py --out DIR --flat-parts N  # a flat export of N parts of 3 shapes (timing)
 """
 import argparse
 import base64
@@ -209,6 +211,7 @@ def write_assemblies(out):
     write(os.path.join(out, "shared_accessors.glb"), shared(False))
     write(os.path.join(out, "copied_accessors.glb"), shared(True))
     write(os.path.join(out, "alpha.glb"), glb(*alpha_assembly()))
+    write(os.path.join(out, "congruent.glb"), congruent())
 
 
 def write_malformed(out):
@@ -372,6 +375,133 @@ def alpha_assembly():
     return doc, bytes(b.blob)
 
 
+def rotation(axis, degrees):
+    """The 3x3 rotation (rows) about a unit axis."""
+    x, y, z = axis
+    n = math.sqrt(x * x + y * y + z * z)
+    x, y, z = x / n, y / n, z / n
+    c, s = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
+    t = 1 - c
+    return [[t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+            [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+            [t * x * z - s * y, t * y * z + s * x, t * z * z + c]]
+
+
+def apply(m, p):
+    return [m[0][0] * p[0] + m[0][1] * p[1] + m[0][2] * p[2], m[1][0] * p[0] + m[1][1] * p[1] + m[1][2] * p[2],
+            m[2][0] * p[0] + m[2][1] * p[1] + m[2][2] * p[2]]
+
+
+def cuboid(sx, sy, sz, offset=(0.0, 0.0, 0.0)):
+    pos, nrm, _, idx = box_geometry()
+    return ([[p[0] * sx + offset[0], p[1] * sy + offset[1], p[2] * sz + offset[2]] for p in pos], nrm, idx)
+
+
+def prism(sides, radius, height):
+    """A closed prism about y, flat-shaded (vertices repeated per face)."""
+    pos, nrm, idx = [], [], []
+    ring = [(radius * math.cos(2 * math.pi * k / sides), radius * math.sin(2 * math.pi * k / sides)) for k in range(sides)]
+    for k in range(sides):
+        (x0, z0), (x1, z1) = ring[k], ring[(k + 1) % sides]
+        a = math.pi * (2 * k + 1) / sides
+        base = len(pos)
+        pos += [[x0, -height / 2, z0], [x1, -height / 2, z1], [x1, height / 2, z1], [x0, height / 2, z0]]
+        nrm += [[math.cos(a), 0.0, math.sin(a)]] * 4
+        idx += [base, base + 2, base + 1, base, base + 3, base + 2]
+    for y, ny in ((height / 2, 1.0), (-height / 2, -1.0)):
+        base = len(pos)
+        pos += [[x, y, z] for (x, z) in ring]
+        nrm += [[0.0, ny, 0.0]] * sides
+        for k in range(1, sides - 1):
+            idx += [base, base + k + 1, base + k] if ny > 0 else [base, base + k, base + k + 1]
+    return pos, nrm, idx
+
+
+def congruent():
+    """A flat export: 23 meshes, each with accessors of its own and its vertices already placed in
+    the world (every node has the identity transform), as meshers and flat CAD exports write them.
+    17 are 3 shapes placed by rigid motions: a plate (x4, and once 500 units out), a bolt (x8), an
+    L bracket (x4). 3 are
+    near misses that must stay apart: the plate scaled by 1.001, a bolt with one vertex moved by
+    1e-3, the bracket mirrored. 3 are a non-planar quad folded along one diagonal, the other, and
+    the first again, turned and moved. Unique after detection: 8 (3 + 3 + 2)."""
+    b = Builder()
+    plate = cuboid(2.0, 0.2, 1.0)
+    bolt = prism(6, 0.15, 0.6)
+    bp, bn, bi = cuboid(0.8, 0.1, 0.4, (0.0, -0.25, 0.0))
+    up, un, ui = cuboid(0.1, 0.5, 0.4, (-0.35, 0.0, 0.0))
+    bracket = (bp + up, bn + un, bi + [i + len(bp) for i in ui])
+    placements = []  # (name, shape, rotation, translation, tweak)
+    for k in range(4):
+        placements.append(("plate %d" % k, plate, rotation((0.2, 1.0, 0.1 * k), 30.0 * k + 7.0), (3.0 * k - 4.5, 0.0, -3.0), None))
+    # 500 units out (400, 300), where floats keep ~3e-5: beyond the tolerance relative to the plate (2.3e-5),
+    # within the precision the file could store (the tolerance's floor).
+    placements.append(("plate far out", plate, rotation((0.0, 1.0, 0.3), 50.0), (400.0, 0.0, 300.0), None))
+    for k in range(8):
+        placements.append(("bolt %d" % k, bolt, rotation((1.0, 0.3 * k, 0.5), 45.0 * k + 11.0), (1.2 * k - 4.2, 0.8, 0.0), None))
+    for k in range(4):
+        placements.append(("bracket %d" % k, bracket, rotation((0.0, 1.0, 0.0), 90.0 * k + 15.0), (3.0 * k - 4.5, 0.3, 3.0), None))
+    placements.append(("plate scaled 1.001", plate, rotation((0.0, 1.0, 0.0), 10.0), (0.0, 0.0, -6.0), "scale"))
+    placements.append(("bolt with a vertex moved", bolt, rotation((1.0, 0.0, 0.0), 20.0), (2.0, 0.8, -6.0), "vertex"))
+    placements.append(("bracket mirrored", bracket, rotation((0.0, 1.0, 0.0), 40.0), (4.0, 0.3, -6.0), "mirror"))
+    # The same four vertices of a non-planar quad folded along one diagonal or the other: other
+    # surfaces, never merged; a moved copy of the first fold is.
+    fold = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.3, 1.0], [0.0, 0.0, 1.0]]
+    fold_n = [[0.0, 1.0, 0.0]] * 4
+    placements.append(("fold a", (fold, fold_n, [0, 2, 1, 0, 3, 2]), rotation((0.0, 1.0, 0.0), 0.0), (-6.0, 0.0, 5.0), None))
+    placements.append(("fold b", (fold, fold_n, [0, 3, 1, 1, 3, 2]), rotation((0.0, 1.0, 0.0), 0.0), (-6.0, 0.0, 5.0), None))
+    placements.append(("fold a moved", (fold, fold_n, [0, 2, 1, 0, 3, 2]), rotation((0.0, 1.0, 0.0), 25.0), (-4.0, 0.0, 5.0), None))
+    meshes, nodes = [], []
+    for name, (pos, nrm, idx), rot, move, tweak in placements:
+        pos = [list(p) for p in pos]
+        nrm = [list(n) for n in nrm]
+        if tweak == "scale":
+            pos = [[1.001 * c for c in p] for p in pos]
+        elif tweak == "vertex":
+            pos[0] = [pos[0][0] + 1e-3, pos[0][1], pos[0][2]]
+        elif tweak == "mirror":
+            pos = [[-p[0], p[1], p[2]] for p in pos]
+            nrm = [[-n[0], n[1], n[2]] for n in nrm]
+        world = [[a + t for a, t in zip(apply(rot, p), move)] for p in pos]
+        normals = [apply(rot, n) for n in nrm]
+        prim = {"attributes": {"POSITION": b.accessor("VEC3", world, 3), "NORMAL": b.accessor("VEC3", normals, 3)},
+                "indices": b.accessor("SCALAR", idx, 1, USHORT), "material": 0 if name.startswith("plate") else 1}
+        meshes.append({"name": name, "primitives": [prim]})
+        nodes.append({"name": name, "mesh": len(meshes) - 1})
+    doc = {"asset": {"version": "2.0", "generator": "rtwall tools/gltf_testgen.py"}, "scene": 0,
+           "scenes": [{"nodes": list(range(len(nodes)))}], "nodes": nodes, "meshes": meshes,
+           "materials": [{"name": "steel", "pbrMetallicRoughness": {"baseColorFactor": [0.6, 0.6, 0.65, 1.0], "metallicFactor": 0.0}},
+                         {"name": "brass", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.6, 0.2, 1.0], "metallicFactor": 0.0}}],
+           "bufferViews": b.views, "accessors": b.accessors, "buffers": [{"byteLength": len(b.blob)}]}
+    return glb(doc, bytes(b.blob))
+
+
+def flat_parts(n):
+    """n parts of 3 shapes (plate, bolt, bracket), each a mesh with accessors of its own and its
+    vertices placed in the world: a flat export for timing congruent-shape detection."""
+    b = Builder()
+    plate = cuboid(2.0, 0.2, 1.0)
+    bolt = prism(8, 0.15, 0.6)
+    bp, bn, bi = cuboid(0.8, 0.1, 0.4, (0.0, -0.25, 0.0))
+    up, un, ui = cuboid(0.1, 0.5, 0.4, (-0.35, 0.0, 0.0))
+    shapes = [plate, bolt, (bp + up, bn + un, bi + [i + len(bp) for i in ui])]
+    side = max(1, int(math.ceil(math.sqrt(n))))
+    meshes, nodes = [], []
+    for k in range(n):
+        pos, nrm, idx = shapes[k % 3]
+        rot = rotation((0.3, 1.0, 0.2 * (k % 7)), 13.0 * k)
+        move = (3.0 * (k % side), 0.0, 3.0 * (k // side))
+        world = [[a + t for a, t in zip(apply(rot, p), move)] for p in pos]
+        prim = {"attributes": {"POSITION": b.accessor("VEC3", world, 3), "NORMAL": b.accessor("VEC3", [apply(rot, q) for q in nrm], 3)},
+                "indices": b.accessor("SCALAR", idx, 1, USHORT)}
+        meshes.append({"name": "part %d" % k, "primitives": [prim]})
+        nodes.append({"name": "part %d" % k, "mesh": k})
+    doc = {"asset": {"version": "2.0", "generator": "rtwall tools/gltf_testgen.py"}, "scene": 0,
+           "scenes": [{"nodes": list(range(n))}], "nodes": nodes, "meshes": meshes,
+           "bufferViews": b.views, "accessors": b.accessors, "buffers": [{"byteLength": len(b.blob)}]}
+    return glb(doc, bytes(b.blob))
+
+
 def write_grid(out, n):
     """An n^3 grid of one box mesh (one node each), for import timing."""
     b = Builder()
@@ -393,8 +523,12 @@ def main():
     p.add_argument("--out", required=True, help="directory to write into (created)")
     p.add_argument("--malformed", action="store_true", help="also write the broken files")
     p.add_argument("--grid", type=int, default=0, help="write gridN.glb: N^3 instances of one box")
+    p.add_argument("--flat-parts", type=int, default=0, help="write flatN.glb: N parts of 3 shapes, each a mesh of its own")
     args = p.parse_args()
     os.makedirs(args.out, exist_ok=True)
+    if args.flat_parts:
+        write(os.path.join(args.out, "flat%d.glb" % args.flat_parts), flat_parts(args.flat_parts))
+        return
     if args.grid:
         write_grid(args.out, args.grid)
         return

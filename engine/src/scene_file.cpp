@@ -164,6 +164,8 @@ scene_file::ImportSettings readImport(Reader& top, const std::filesystem::path& 
     auto r = sectionReader(top, file, scene_keys::kImport);
     if (!r) return s;
     scene_file::readDeflections(*r, s);
+    s.shareCongruent = r->boolean("share_congruent", s.shareCongruent);
+    s.congruenceTolerance = r->number("congruence_tolerance", s.congruenceTolerance);
     r->finish();
     return s;
 }

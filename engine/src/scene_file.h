@@ -21,6 +21,8 @@ namespace rtwall::scene_file {
 struct ImportSettings {
     double linearDeflection = 0.1;
     double angularDeflection = 0.5;
+    bool shareCongruent = true;  // AssemblyOptions::shareCongruent
+    double congruenceTolerance = 1e-5;
 };
 
 // An assembly file (glTF, STEP, IGES) named by a [[mesh]]: its meshes, materials and parts joined

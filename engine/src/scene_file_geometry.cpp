@@ -71,6 +71,8 @@ void loadAssemblyEntry(Load& l, Reader& r, const std::string& name, const std::f
     ao.angularDeflection = tess.angularDeflection;
     ao.cache = l.meshOptions.cache;
     ao.cacheDir = l.meshOptions.cacheDir;
+    ao.shareCongruent = tess.shareCongruent;
+    ao.congruenceTolerance = tess.congruenceTolerance;
     std::error_code ec;
     const double size = double(std::filesystem::file_size(path, ec));
     if (l.options.progress && !ec)

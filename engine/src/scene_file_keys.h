@@ -70,6 +70,8 @@ inline constexpr Key kLoadKeys[] = {
 inline constexpr Key kImportKeys[] = {
     {.name = "linear_deflection", .type = KeyType::Number, .lo = 1e-6, .hi = 1e6, .help = "the largest distance between a surface and its triangles, in the file's units (mm for most CAD files)"},
     {.name = "angular_deflection", .type = KeyType::Number, .lo = 1e-3, .hi = 3.14159, .help = "the largest angle between neighbouring triangles, radians"},
+    {.name = "share_congruent", .type = KeyType::Boolean, .help = "assemblies (glTF, STEP, IGES): meshes that are the same shape up to a rigid motion are stored once, whatever the file declares (docs/assemblies.md); false keeps every mesh the file has"},
+    {.name = "congruence_tolerance", .type = KeyType::Number, .lo = 1e-9, .hi = 1e-1, .help = "how far a vertex may lie from its congruent counterpart, as a fraction of the shape's bounding-box diagonal"},
 };
 
 inline constexpr Key kMeshKeys[] = {

@@ -167,10 +167,6 @@ void capHits(const Scene::Impl& s, const RayTask* rays, Hit* hits, size_t n) {
     }
 }
 
-void initContext(RTCIntersectContext& ctx, bool coherent) {
-    rtcInitIntersectContext(&ctx);
-    ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
-}
 
 template <int K>
 void traceClosestPacket(const Scene::Impl& s, const RayTask* rays, Hit* hits, size_t n, bool coherent, uint32_t mask) {

@@ -18,6 +18,11 @@ std::string lowerExtension(const std::filesystem::path& file) {
     return ext;
 }
 
+Assembly shareCongruent(Assembly a, const AssemblyOptions& options) {
+    if (options.shareCongruent) a.congruentMeshes = detail::shareCongruentMeshes(a, options.congruenceTolerance);
+    return a;
+}
+
 }  // namespace
 
 bool isAssemblyFile(const std::filesystem::path& file) {
@@ -43,7 +48,7 @@ Assembly loadAssembly(const std::filesystem::path& file, const AssemblyOptions& 
         std::string why;
         if (std::optional<Assembly> cached = detail::readAssemblyCache(cacheFile, key, &why)) {
             cached->cache = "hit";
-            return std::move(*cached);
+            return shareCongruent(std::move(*cached), options);
         }
         std::string dirError;
         try {
@@ -59,7 +64,7 @@ Assembly loadAssembly(const std::filesystem::path& file, const AssemblyOptions& 
         else a.cache = why == "no cache" ? "written" : "rebuilt: " + why;
     }
     for (const std::string& w : a.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
-    return a;
+    return shareCongruent(std::move(a), options);
 }
 
 }  // namespace rtwall

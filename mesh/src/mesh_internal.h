@@ -62,6 +62,11 @@ void dropInheritedCrashHandlers();
 TriangleMesh importMesh(const std::filesystem::path& file, ImportReport* report);
 
 
+// Meshes of `a` congruent to an earlier one (a rigid motion within tolerance x its bounding-box
+// diagonal, normals too; never a mirror) are dropped and their instances place the earlier one
+// through the motion (congruence.cpp). Returns how many meshes were dropped.
+size_t shareCongruentMeshes(Assembly& a, double tolerance);
+
 // Assembly importers (import_gltf.cpp, import_cad.cpp); loadAssembly (assembly.cpp) picks one.
 Assembly importGltf(const std::filesystem::path& file);
 // STEP and IGES (import_cad.cpp), in this process. OCCT's document application and static tables

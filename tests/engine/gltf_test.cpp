@@ -199,7 +199,7 @@ size_t instancedTriangles(const Assembly& a) {
 // Issue 29: 21 glTF meshes, 20 of them over one box's accessors (two materials between them, and
 // four more copies by EXT_mesh_gpu_instancing): the box is stored once. The same assembly with
 // every box over accessors of its own (the same bytes) is 21 meshes as far as accessors tell,
-// and renders to the same bytes.
+// 2 after congruent-shape detection, and renders to the same bytes either way.
 TEST(Gltf, PrimitivesOverTheSameAccessorsAreOneMesh) {
     const Assembly shared = loadAssembly(generated() / "shared_accessors.glb");
     ASSERT_EQ(shared.meshes.size(), 2u);
@@ -216,13 +216,27 @@ TEST(Gltf, PrimitivesOverTheSameAccessorsAreOneMesh) {
     for (const AssemblyInstance* in : instancesOf(shared, "bolts")) EXPECT_EQ(in->mesh, box);
     EXPECT_EQ(instancesOf(shared, "bolts").size(), 4u);
 
-    const Assembly copied = loadAssembly(generated() / "copied_accessors.glb");
+    AssemblyOptions off;
+    off.shareCongruent = false;
+    const Assembly copied = loadAssembly(generated() / "copied_accessors.glb", off);
     EXPECT_EQ(copied.meshes.size(), 21u);
     EXPECT_EQ(uniqueTriangles(copied), 560u);
     EXPECT_EQ(instancedTriangles(copied), 608u);
+    // Congruent-shape detection (on by default) finds the copies over other accessors too.
+    const Assembly found = loadAssembly(generated() / "copied_accessors.glb");
+    EXPECT_EQ(found.meshes.size(), 2u);
+    EXPECT_EQ(found.congruentMeshes, 19u);
+    EXPECT_EQ(uniqueTriangles(found), 332u);
 
+    // All three render to the same bytes: the copies are exact, so their motion is exactly the
+    // identity.
     const Image a = render(sceneFromMeshFile(generated() / "shared_accessors.glb"));
     const Image b = render(sceneFromMeshFile(generated() / "copied_accessors.glb"));
+    SceneDesc undetected = sceneFromMeshFile(generated() / "copied_accessors.glb");
+    const SceneDesc flat = sceneFromAssembly(copied, generated() / "copied_accessors.glb");
+    undetected.meshes = flat.meshes;
+    undetected.instances = flat.instances;
+    EXPECT_TRUE(render(undetected).rgb == a.rgb);
     if (std::getenv("RTWALL_DUMP")) writePng(a, "/tmp/gltf_shared.png");
     EXPECT_TRUE(a.rgb == b.rgb);
     // Not an empty picture: the red and the blue boxes both show.
@@ -350,6 +364,71 @@ TEST(Gltf, AlphaModesRender) {
     const auto mixed = hues(many, -0.75 - 0.35, -0.75 + 0.35);
     const int pure = (mixed.count(Hue::Blue) ? mixed.at(Hue::Blue) : 0) + (mixed.count(Hue::Green) ? mixed.at(Hue::Green) : 0);
     EXPECT_LT(pure, (n + m) / 10) << "pixels still all quad or all backdrop";
+}
+
+// Issue 29: a flat export (every solid its own mesh, placed in world coordinates) of 16 solids
+// that are 3 shapes, and 3 near misses: the 3 shapes are found and stored once, each instance
+// placing the kept mesh where its own was; the near misses (scaled by 1.001, a vertex moved by
+// 1e-3, a mirror image) stay apart; so do two folds of one quad (the same vertices, other
+// surfaces), while a moved copy of one fold is merged.
+TEST(Gltf, CongruentShapesAreStoredOnce) {
+    const fs::path file = generated() / "congruent.glb";
+    AssemblyOptions off;
+    off.shareCongruent = false;
+    const Assembly flat = loadAssembly(file, off);
+    const Assembly found = loadAssembly(file);
+    ASSERT_EQ(flat.meshes.size(), 23u);
+    EXPECT_EQ(flat.congruentMeshes, 0u);
+    EXPECT_EQ(found.meshes.size(), 8u);
+    EXPECT_EQ(found.congruentMeshes, 15u);
+    ASSERT_EQ(found.instances.size(), 23u);
+    EXPECT_EQ(instancedTriangles(found), instancedTriangles(flat));
+    EXPECT_LT(uniqueTriangles(found), uniqueTriangles(flat) / 3);
+    // Every instance's world vertices are where the flat file put them (within the tolerance,
+    // 1e-5 of the diagonal, which is under 2.3 here; 500 units out, the floats' precision).
+    for (size_t i = 0; i < found.instances.size(); ++i) {
+        const AssemblyInstance& a = found.instances[i];
+        const AssemblyInstance& b = flat.instances[i];
+        const TriangleMesh& ma = *found.meshes[a.mesh];
+        ASSERT_EQ(ma.vertexCount(), flat.meshes[b.mesh]->vertexCount()) << i;
+        for (size_t v = 0; v < ma.vertexCount(); ++v) {
+            const auto pa = worldVertex(found, a, v), pb = worldVertex(flat, b, v);
+            const double limit = std::max(2.3e-5, 4 * 500.0 * 0x1.0p-23);
+            for (int k = 0; k < 3; ++k) ASSERT_NEAR(pa[k], pb[k], limit) << "instance " << i << " vertex " << v;
+        }
+    }
+    // The near misses kept their own meshes.
+    for (const char* name : {"plate scaled 1.001", "bolt with a vertex moved", "bracket mirrored", "fold b"}) {
+        const uint32_t m = instancesOf(found, name).at(0)->mesh;
+        EXPECT_EQ(std::count_if(found.instances.begin(), found.instances.end(), [&](const AssemblyInstance& in) { return in.mesh == m; }), 1)
+            << name;
+    }
+    EXPECT_EQ(instancesOf(found, "fold a").at(0)->mesh, instancesOf(found, "fold a moved").at(0)->mesh);
+    // 500 units out the file's floats are coarser than the tolerance: the tolerance's floor is
+    // their precision, and the plate there is found.
+    EXPECT_EQ(instancesOf(found, "plate far out").at(0)->mesh, instancesOf(found, "plate 0").at(0)->mesh);
+    // A tolerance of 1e-2 merges the scaled plate and the moved vertex too; never the mirror
+    // or the other fold.
+    AssemblyOptions loose;
+    loose.congruenceTolerance = 1e-2;
+    EXPECT_EQ(loadAssembly(file, loose).meshes.size(), 6u);
+
+    // The renders agree: the merged instances' triangles differ from the file's by float
+    // rounding only (a rigid motion is not exact in floats), so a few edge pixels may differ.
+    const Image a = render(sceneFromMeshFile(file));
+    SceneDesc flatScene = sceneFromMeshFile(file);  // its camera and lights, the flat file's meshes
+    const SceneDesc undetected = sceneFromAssembly(flat, file);
+    flatScene.meshes = undetected.meshes;
+    flatScene.instances = undetected.instances;
+    const Image b = render(flatScene);
+    if (std::getenv("RTWALL_DUMP")) writePng(a, "/tmp/gltf_congruent.png");
+    size_t differing = 0, worst = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) {
+        const size_t d = size_t(std::abs(int(a.rgb[i]) - int(b.rgb[i])));
+        differing += d != 0;
+        worst = std::max(worst, d);
+    }
+    EXPECT_LT(differing, a.rgb.size() / 200) << "worst " << worst;
 }
 
 TEST(Gltf, MalformedFilesAreOneLineErrors) {

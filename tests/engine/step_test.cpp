@@ -249,6 +249,51 @@ TEST(Step, RowsNestTheSameModules) {
     EXPECT_EQ(centres(rows), centres(flat));
 }
 
+// Issue 29: a flat STEP file (every part a solid of its own, placed in its geometry) of 3
+// modules, 21 solids that are 3 shapes, and a mirrored bracket: the 3 shapes are stored once,
+// the mirror apart; every part lands where the file puts it, as in the assembly that declares
+// its reuse.
+TEST(Step, FlatFileCongruentSolidsAreStoredOnce) {
+    const auto dir = test::scratchDir();
+    gen::genStep({.out = dir, .instances = 21, .flat = true});
+    AssemblyOptions off;
+    off.shareCongruent = false;
+    const Assembly flat = loadAssembly(dir / "assembly.step", off);
+    const Assembly found = loadAssembly(dir / "assembly.step");
+    if (std::getenv("RTWALL_DUMP"))
+        for (size_t i = 0; i < flat.meshes.size(); ++i) {
+            const TriangleMesh& m = *flat.meshes[i];
+            uint64_t h = 0;
+            for (size_t k = 0; k < 3 * m.triangleCount(); ++k) h = h * 31 + m.indices()[k];
+            std::printf("%s v=%zu t=%zu idxhash=%llu origin=%g,%g,%g\n", flat.meshNames[i].c_str(), m.vertexCount(), m.triangleCount(),
+                        (unsigned long long)h, m.origin()[0], m.origin()[1], m.origin()[2]);
+        }
+    ASSERT_EQ(flat.instances.size(), 22u);
+    EXPECT_EQ(flat.meshes.size(), 22u);
+    EXPECT_EQ(found.meshes.size(), 4u);  // plate, bolt, bracket, the mirrored bracket
+    EXPECT_EQ(found.congruentMeshes, 18u);
+    ASSERT_EQ(found.instances.size(), 22u);
+    size_t mirroredMesh = SIZE_MAX, uses = 0;
+    for (const AssemblyInstance& in : found.instances)
+        if (found.parts[in.part].name == "bracket mirrored") mirroredMesh = in.mesh;
+    for (const AssemblyInstance& in : found.instances) uses += in.mesh == mirroredMesh;
+    EXPECT_EQ(uses, 1u) << "the mirror image is not merged";
+    // Where the declared assembly (gen step without --flat) puts its 21 parts, the flat file's
+    // parts are too, after detection (the mirrored bracket aside).
+    auto centres = [](const Assembly& a) {
+        std::vector<std::array<long, 3>> c;
+        for (const AssemblyInstance& in : a.instances) {
+            if (a.parts[in.part].name == "bracket mirrored") continue;
+            const auto p = centre(a, in);
+            c.push_back({std::lround(p[0] * 100), std::lround(p[1] * 100), std::lround(p[2] * 100)});
+        }
+        std::sort(c.begin(), c.end());
+        return c;
+    };
+    EXPECT_EQ(centres(found), centres(loadAssembly(stepFile())));
+    EXPECT_EQ(centres(found), centres(flat));
+}
+
 // The import runs in a child process (mesh/src/cad_child.cpp) and hands the assembly back as
 // cache bytes in a memfd: the parent's meshes are views of those pages (the geometry exists once),
 // and the result is the same as an import in this process, warnings included.

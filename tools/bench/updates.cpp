@@ -69,8 +69,8 @@ std::vector<double> bareEmbreeRebuilds(int count, int changes) {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 12, box.vertexCount()));
     std::copy_n(box.positions(), 3 * box.vertexCount(), v);
-    auto* t = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, box.triangleCount()));
-    std::copy_n(box.indices(), 3 * box.triangleCount(), t);
+    auto* tri = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, box.triangleCount()));
+    std::copy_n(box.indices(), 3 * box.triangleCount(), tri);
     rtcCommitGeometry(g);
     rtcAttachGeometry(mesh, g);
     rtcReleaseGeometry(g);

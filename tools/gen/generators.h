@@ -26,6 +26,8 @@ struct GenOptions {
     uint64_t seed = 1;
     bool cache = true;               // write [load] cache = true into the scene
     bool rows = false;               // step, step-curved, iges: modules grouped into one sub-assembly per row
+    bool flat = false;               // step, iges: every part a solid of its own, its placement baked into its
+                                     // geometry (as meshers and flat exports write), plus a mirrored bracket
 };
 
 struct Generator {

@@ -33,6 +33,9 @@ void addGen(CLI::App& app, Run& run) {
     cmd->add_option("--tree-triangles", o->treeTriangles, "sunflowers: triangles per tree (2.5M)")
         ->check(CLI::Range(int64_t(100), int64_t(100'000'000)));
     cmd->add_option("--seed", o->seed, "Random seed (same seed, same files)");
+    cmd->add_flag("--flat", o->flat,
+                  "step, iges: a flat file: every part a solid of its own placed in its geometry (no assembly reuse), and "
+                  "one mirrored bracket");
     cmd->add_flag("--rows", o->rows, "step, step-curved, iges: plant > row sub-assemblies > modules (nested, as large CAD assemblies are)");
     cmd->add_flag("!--no-cache", o->cache, "Write [load] cache = false into the scene");
     cmd->callback([&run, o, name] {

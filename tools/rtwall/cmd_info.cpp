@@ -179,6 +179,7 @@ toml::table assemblyInfo(const std::filesystem::path& path, const AssemblyOption
                        {"mesh_bytes", int64_t(bytes)},  // unique meshes' buffers, mapped cache pages included
                        {"mesh_bytes_mapped", int64_t(mapped)},
                        {"meshes", int64_t(a.meshes.size())},
+                       {"congruent_meshes", int64_t(a.congruentMeshes)},  // found congruent to another, stored once
                        {"instances", int64_t(a.instances.size())},
                        {"materials", materials},
                        {"triangles", unique},
@@ -198,7 +199,7 @@ toml::table assemblyInfo(const std::filesystem::path& path, const AssemblyOption
 void addInfo(CLI::App& app, Run& run) {
     struct Options {
         std::string file;
-        bool json = false, cache = false;
+        bool json = false, cache = false, noCongruence = false;
         double deflection = 0.1, angularDeflection = 0.5;
     };
     auto o = std::make_shared<Options>();
@@ -210,6 +211,7 @@ void addInfo(CLI::App& app, Run& run) {
     cmd->add_option("--angular-deflection", o->angularDeflection, "STEP/IGES: angular tolerance, radians (0.5)")
         ->check(CLI::Range(1e-3, 3.14));
     cmd->add_flag("--cache", o->cache, "STEP/IGES: use FILE.rtwasm when it matches, else write it");
+    cmd->add_flag("--no-congruence", o->noCongruence, "Assemblies: keep every mesh the file has (no congruent-shape detection)");
     cmd->callback([&run, o] {
         run = [o] {
             if (isAssemblyFile(o->file)) {
@@ -219,6 +221,7 @@ void addInfo(CLI::App& app, Run& run) {
                 ao.linearDeflection = o->deflection;
                 ao.angularDeflection = o->angularDeflection;
                 ao.cache = o->cache;
+                ao.shareCongruent = !o->noCongruence;
                 toml::table info = assemblyInfo(o->file, ao, o->json ? nullptr : &tree);
                 if (o->json) {
                     std::cout << toml::json_formatter{info} << "\n";

@@ -299,6 +299,8 @@ struct Assembly {
     std::vector<std::string> warnings;  // one line each, naming the file
     std::string cache;                  // with AssemblyOptions::cache: "hit", "written", "rebuilt: <why>"
                                         // or "not written: <why>"; empty without
+    size_t congruentMeshes = 0;         // meshes found congruent to another and stored once
+                                        // (AssemblyOptions::shareCongruent)
 };
 
 struct AssemblyOptions {
@@ -313,6 +315,12 @@ struct AssemblyOptions {
     bool cache = false;
     std::filesystem::path cacheDir;  // empty: beside the file
     ProgressFn progress;             // STEP/IGES: fraction of parts tessellated; false cancels (Cancelled)
+    // Meshes that are the same shape up to a rigid motion (the same vertex, triangle, texture
+    // coordinate and colour layout; every vertex within congruenceTolerance x the shape's
+    // bounding-box diagonal, every normal within 1e-3) are stored once, whatever the file says;
+    // mirrored copies are not merged. Applied to every format, cached or not.
+    bool shareCongruent = true;
+    double congruenceTolerance = 1e-5;
 };
 
 // True for the extensions read as assemblies (any case).
