@@ -18,7 +18,6 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
-#include <thread>
 
 namespace rtwall {
 
@@ -29,10 +28,14 @@ void embreeErrorHandler(void* userPtr, RTCError code, const char* message) {
     *last = "Embree error " + std::to_string(int(code)) + ": " + (message ? message : "(no message)");
 }
 
+}  // namespace
+
 void checkDevice(RTCDevice device, const std::string& lastError, const char* what) {
     if (rtcGetDeviceError(device) != RTC_ERROR_NONE || !lastError.empty())
         throw std::runtime_error(std::string("while ") + what + ": " + lastError);
 }
+
+namespace {
 
 // Inverse transpose of the upper 3x3, in double precision, so normals stay perpendicular
 // under non-uniform scaling.
@@ -80,6 +83,8 @@ RTCBuildQuality buildQuality(BvhSettings::Quality q) {
     }
 }
 
+}  // namespace
+
 // RTC_SCENE_FLAG_ROBUST, where the scene asks for it, goes on every mesh BVH and on the top
 // level: it makes traversal conservative, so rays along shared edges of thin triangles (common
 // in CAD) do not slip through between boxes. A mesh BVH of quads is always robust: Embree's
@@ -89,12 +94,14 @@ RTCBuildQuality buildQuality(BvhSettings::Quality q) {
 // Every level carries RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION: Embree runs the context filter
 // that skips stale copies in the static top level (scene_impl.h, part moves) from inside the
 // instanced mesh scenes, and asserts that the flag is set there.
-RTCSceneFlags sceneFlags(const BvhSettings& b, bool quads = false) {
+RTCSceneFlags sceneFlags(const BvhSettings& b, bool quads) {
     int f = RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION;
     if (b.compact) f |= RTC_SCENE_FLAG_COMPACT;
     if (b.robust || quads) f |= RTC_SCENE_FLAG_ROBUST;
     return RTCSceneFlags(f);
 }
+
+namespace {
 
 // Inverse of the affine object-to-world transform, in double precision.
 void worldToObjectOf(const Transform& t, float out[12]) {
@@ -247,115 +254,22 @@ void installAlphaFilters(Scene::Impl& s) {
     s.filtersInstalled = true;
 }
 
+}  // namespace
+
 unsigned instanceMask(const Scene::Impl& s, const InstanceData& data) {
     return s.models[data.material]->shadowTransparent() ? kMaskShadowTransparent : kMaskOpaque;
 }
+
+namespace {
 
 void updateShadowTransparency(Scene::Impl& s) {
     s.anyShadowTransparent = false;
     for (const InstanceData& d : s.instances) s.anyShadowTransparent |= s.models[d.material]->shadowTransparent();
 }
 
-// An instance of `mesh` for a top level, committed (the caller attaches it).
-RTCGeometry instanceGeometry(RTCDevice device, RTCScene mesh, const float objectToWorld[12], unsigned mask, bool hidden) {
-    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
-    rtcSetGeometryInstancedScene(g, mesh);
-    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, objectToWorld);
-    rtcSetGeometryMask(g, mask);
-    if (hidden) rtcDisableGeometry(g);
-    rtcCommitGeometry(g);
-    return g;
-}
-
-
-// A mover that has not changed for this many commits is folded back into the static top level
-// by the next rebuild.
-constexpr uint64_t kSettleCommits = 8;
-
 }  // namespace
 
-struct TopRebuild {
-    struct Entry {
-        unsigned id;
-        RTCScene mesh;
-        float objectToWorld[12];
-        unsigned mask;
-        bool hidden;
-    };
-    std::vector<Entry> entries;     // what the new top level holds, as it was at the start
-    std::vector<uint8_t> included;  // per instance
-    uint64_t generation = 0, stamp = 0;
-    RTCScene scene = nullptr;
-    std::atomic<bool> done{false};
-    std::thread thread;
-
-    ~TopRebuild() {
-        if (thread.joinable()) thread.join();
-        if (scene) rtcReleaseScene(scene);
-    }
-};
-
-Scene::Impl::~Impl() = default;
-
 namespace {
-
-// Starts a rebuild of the static top level on a thread of its own: every instance but those
-// moving now (movers settled for kSettleCommits commits are folded back in), as they are now.
-void launchRebuild(Scene::Impl& s) {
-    auto r = std::make_unique<TopRebuild>();
-    r->generation = s.topGeneration;
-    r->stamp = s.changeStamp;
-    r->included.assign(s.instances.size(), 0);
-    r->entries.reserve(s.instances.size());
-    for (size_t i = 0; i < s.instances.size(); ++i) {
-        if (s.inMoving[i] && s.commits - s.movedCommit[i] < kSettleCommits) continue;
-        const InstanceData& d = s.instances[i];
-        TopRebuild::Entry e{unsigned(i), s.meshScenes[s.desc.instances[i].mesh], {}, instanceMask(s, d), d.hidden};
-        std::copy(d.objectToWorld, d.objectToWorld + 12, e.objectToWorld);
-        r->entries.push_back(e);
-        r->included[i] = 1;
-    }
-    TopRebuild* job = r.get();
-    RTCDevice device = s.device;
-    const RTCSceneFlags flags = sceneFlags(s.desc.bvh);
-    job->thread = std::thread([job, device, flags] {
-        RTCScene top = rtcNewScene(device);
-        rtcSetSceneFlags(top, flags);
-        for (const TopRebuild::Entry& e : job->entries) {
-            RTCGeometry g = instanceGeometry(device, e.mesh, e.objectToWorld, e.mask, e.hidden);
-            rtcAttachGeometryByID(top, g, e.id);
-            rtcReleaseGeometry(g);
-        }
-        rtcCommitScene(top);
-        job->scene = top;
-        job->done.store(true, std::memory_order_release);
-    });
-    s.rebuild = std::move(r);
-}
-
-// Publishes a finished rebuild: it becomes `top` unless `top` changed meanwhile (then it is
-// dropped, and the next commit starts another). Movers it holds that have not changed since it
-// started leave `moving`.
-void publishRebuild(Scene::Impl& s) {
-    std::unique_ptr<TopRebuild> r = std::move(s.rebuild);
-    if (r->thread.joinable()) r->thread.join();
-    if (r->generation != s.topGeneration || !r->scene) return;
-    rtcReleaseScene(s.top);
-    s.top = r->scene;
-    r->scene = nullptr;
-    s.staleCount = 0;
-    for (size_t i = 0; i < s.instances.size(); ++i) {
-        s.inTop[i] = r->included[i];
-        s.staleInTop[i] = r->included[i] && s.movedStamp[i] > r->stamp;
-        s.staleCount += s.staleInTop[i];
-        if (s.inMoving[i] && r->included[i] && !s.staleInTop[i]) {
-            rtcDetachGeometry(s.moving, unsigned(i));
-            s.inMoving[i] = 0;
-            --s.movingCount;
-            s.movingDirty = true;
-        }
-    }
-}
 
 // The copies of instance i in the top levels, for a change that applies to both.
 template <class F> void forEachCopy(Scene::Impl& s, uint32_t i, F&& f) {
@@ -550,7 +464,7 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
 
 Scene::~Scene() {
     if (!impl_) return;
-    impl_->rebuild.reset();  // joins a rebuild in flight
+    dropRebuild(*impl_);  // joins a rebuild in flight
     if (impl_->top) rtcReleaseScene(impl_->top);
     if (impl_->moving) rtcReleaseScene(impl_->moving);
     for (RTCScene ms : impl_->meshScenes) rtcReleaseScene(ms);
@@ -617,7 +531,7 @@ void Scene::setMaterial(uint32_t material, const Material& value) {
     s.models[material] = std::move(model);
     if (s.models[material]->alphaMasked() && !s.filtersInstalled) {
         // The mesh scenes change: a rebuild of the top level reading them must end first.
-        if (s.rebuild && s.rebuild->thread.joinable()) s.rebuild->thread.join();
+        joinRebuild(s);
         installAlphaFilters(s);
     }
     // Shadow rays find shadow-transparent instances by their Embree mask.
@@ -656,38 +570,6 @@ void Scene::setSection(uint32_t index, const SectionPlane& plane) {
     updateSections(s);
 }
 
-void Scene::commit() {
-    Impl& s = *impl_;
-    ++s.commits;
-    if (s.rebuild && s.rebuild->done.load(std::memory_order_acquire)) publishRebuild(s);
-    if (s.dirty) {
-        rtcCommitScene(s.top);
-        s.dirty = false;
-        checkDevice(s.device, s.lastError, "rebuilding the top-level BVH");
-    }
-    if (s.movingDirty) {
-        rtcCommitScene(s.moving);
-        s.movingDirty = false;
-        checkDevice(s.device, s.lastError, "building the BVH of the moving instances");
-    }
-    if (!s.rebuild && s.staleCount > 0) launchRebuild(s);
-}
-
-void Scene::waitForRebuild() {
-    Impl& s = *impl_;
-    if (!s.rebuild) return;
-    publishRebuild(s);
-    if (s.movingDirty) {
-        rtcCommitScene(s.moving);
-        s.movingDirty = false;
-    }
-    checkDevice(s.device, s.lastError, "rebuilding the top-level BVH");
-}
-
-Scene::TopLevelState Scene::topLevelState() const {
-    const Impl& s = *impl_;
-    return {s.movingCount, s.staleCount, s.rebuild != nullptr};
-}
 
 size_t Scene::embreeBytes() const { return size_t(std::max<int64_t>(0, impl_->embreeBytes.load())); }
 

@@ -210,8 +210,18 @@ struct Scene::Impl {
     std::vector<std::unique_ptr<MaterialModel>> capModels;  // per sections entry: Lambert of its cap colour
     InstanceData capInstance;              // what a cap's surface point names as its instance (no mesh)
 
+    Impl();  // out of line, as ~Impl: where TopRebuild is complete (top_levels.cpp)
     ~Impl();
 };
+
+// Shared by scene.cpp and top_levels.cpp.
+void checkDevice(RTCDevice device, const std::string& lastError, const char* what);  // throws on an Embree error
+RTCSceneFlags sceneFlags(const BvhSettings& b, bool quads = false);
+unsigned instanceMask(const Scene::Impl& s, const InstanceData& data);  // Embree mask: opaque or shadow-transparent
+// An instance of `mesh` for a top level, committed (the caller attaches it).
+RTCGeometry instanceGeometry(RTCDevice device, RTCScene mesh, const float objectToWorld[12], unsigned mask, bool hidden);
+void joinRebuild(Scene::Impl& s);  // waits for a rebuild's thread (before the mesh scenes change)
+void dropRebuild(Scene::Impl& s);  // joins and discards a rebuild (the scene's end)
 
 // The two top levels traced as one (Scene::Impl, "part moves"): rays go through the static top
 // level, where a context filter skips the stale copies of moving instances, then through the
