@@ -260,14 +260,6 @@ TEST(Step, FlatFileCongruentSolidsAreStoredOnce) {
     off.shareCongruent = false;
     const Assembly flat = loadAssembly(dir / "assembly.step", off);
     const Assembly found = loadAssembly(dir / "assembly.step");
-    if (std::getenv("RTWALL_DUMP"))
-        for (size_t i = 0; i < flat.meshes.size(); ++i) {
-            const TriangleMesh& m = *flat.meshes[i];
-            uint64_t h = 0;
-            for (size_t k = 0; k < 3 * m.triangleCount(); ++k) h = h * 31 + m.indices()[k];
-            std::printf("%s v=%zu t=%zu idxhash=%llu origin=%g,%g,%g\n", flat.meshNames[i].c_str(), m.vertexCount(), m.triangleCount(),
-                        (unsigned long long)h, m.origin()[0], m.origin()[1], m.origin()[2]);
-        }
     ASSERT_EQ(flat.instances.size(), 22u);
     EXPECT_EQ(flat.meshes.size(), 22u);
     EXPECT_EQ(found.meshes.size(), 4u);  // plate, bolt, bracket, the mirrored bracket
