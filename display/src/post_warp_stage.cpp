@@ -5,6 +5,7 @@
 #include <GL/glcorearb.h>
 
 #include <rtwall/display.h>
+#include <rtwall/image_sample.h>
 #include <rtwall/mpcdi.h>
 
 #include "gl_reproject.h"
@@ -19,20 +20,6 @@ namespace rtwall {
 namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-
-// Bilinear between pixel centres, clamped at the edges; false off the image (black).
-bool sample(const Image& im, float x, float y, uint8_t out[3]) {
-    if (!(x >= 0.0f && x <= float(im.width) && y >= 0.0f && y <= float(im.height))) return false;
-    const float gx = std::clamp(x - 0.5f, 0.0f, float(im.width - 1)), gy = std::clamp(y - 0.5f, 0.0f, float(im.height - 1));
-    const int x0 = int(gx), y0 = int(gy), x1 = std::min(x0 + 1, im.width - 1), y1 = std::min(y0 + 1, im.height - 1);
-    const float tx = gx - float(x0), ty = gy - float(y0);
-    const uint8_t *a = im.pixel(x0, y0), *b = im.pixel(x1, y0), *c = im.pixel(x0, y1), *d = im.pixel(x1, y1);
-    for (int k = 0; k < 3; ++k) {
-        const float top = a[k] + tx * float(b[k] - a[k]), bottom = c[k] + tx * float(d[k] - c[k]);
-        out[k] = uint8_t(std::lround(top + ty * (bottom - top)));
-    }
-    return true;
-}
 
 }  // namespace
 
@@ -94,12 +81,18 @@ void PostWarpStage::setEyes(const Float3& left, const Float3& right) {
     eyes_[1] = right;
 }
 
-void PostWarpStage::targets(size_t screen, std::vector<float>& out) const {
+const std::vector<float>& PostWarpStage::targets(size_t screen) const {
     const Screen& s = screens_[screen];
+    // 2D offsets are fixed; 3D points move with the eye: computed again only when it moved.
+    const Float3 e = eyes_[s.eye];
+    if (!s.targets.empty() && (!s.surface || (e.x == s.targetsEye.x && e.y == s.targetsEye.y && e.z == s.targetsEye.z)))
+        return s.targets;
+    s.targetsEye = e;
+    std::vector<float>& out = s.targets;
     out.assign(s.samples.size() * 2, kNaN);
     // 3D: where the ray from the eye through the point meets the frame's plane, solved in
     // double (the frame's edges and normal): e + t (p - e) = ll + a right + b up.
-    const Float3 n = cross(s.right, s.up), e = eyes_[s.eye];
+    const Float3 n = cross(s.right, s.up);
     const double nn = dot(n, n);
     for (size_t i = 0; i < s.samples.size(); ++i) {
         const Float3 p = s.samples[i];
@@ -119,20 +112,20 @@ void PostWarpStage::targets(size_t screen, std::vector<float>& out) const {
         out[2 * i] = float(a * s.width);
         out[2 * i + 1] = float((1.0 - b) * s.height);
     }
+    return out;
 }
 
 void PostWarpStage::apply(const WallConfig&, size_t screen, Image& pixels) const {
     if (screen >= screens_.size() || screens_[screen].samples.empty()) return;
     const Screen& s = screens_[screen];
     if (pixels.width != s.width || pixels.height != s.height) return;
-    std::vector<float> t;
-    targets(screen, t);
-    const Image flat = pixels;
+    const std::vector<float>& t = targets(screen);
+    s.flat = pixels;  // the screen's own copy, reused frame after frame
     for (int y = 0; y < s.height; ++y)
         for (int x = 0; x < s.width; ++x) {
             const size_t i = size_t(y) * size_t(s.width) + size_t(x);
             uint8_t* o = pixels.pixel(x, y);
-            if (std::isnan(t[2 * i]) || !sample(flat, t[2 * i], t[2 * i + 1], o)) o[0] = o[1] = o[2] = 0;
+            if (std::isnan(t[2 * i]) || !sampleBilinear(s.flat, t[2 * i], t[2 * i + 1], o)) o[0] = o[1] = o[2] = 0;
         }
 }
 
@@ -145,7 +138,7 @@ void PostWarpStage::drawGl(const WallConfig&, size_t screen) {
         gl_->screens.resize(screens_.size());
     }
     Gl::Screen& g = gl_->screens[screen];
-    targets(screen, gl_->scratch);
+    gl_->scratch = targets(screen);
     for (float& v : gl_->scratch)
         if (std::isnan(v)) v = -1e9f;  // off every image: black (NaN in a texture is the driver's to read)
     if (!g.vao) {  // in this screen's context: vertex arrays are not shared

@@ -38,6 +38,7 @@ struct ProjectorBlendStage::Gl {
 };
 
 ProjectorBlendStage::ProjectorBlendStage(const WallConfig& wall, const MpcdiFile& file) : screens_(wall.screens.size()) {
+    for (int v = 0; v < 256; ++v) toLinear_[size_t(v)] = decode(float(v) / 255.0f);
     if (!wall.warp) return;
     for (const auto& [id, screenName] : wall.warp->buffers) {
         const MpcdiBuffer* b = file.buffer(id);
@@ -76,12 +77,10 @@ void ProjectorBlendStage::apply(const WallConfig&, size_t screen, Image& pixels)
     if (!blends(screen)) return;
     const Maps& m = screens_[screen];
     if (pixels.width != m.width || pixels.height != m.height) return;
-    float toLinear[256];
-    for (int v = 0; v < 256; ++v) toLinear[v] = decode(float(v) / 255.0f);
     for (size_t k = 0; k < pixels.rgb.size(); ++k) {
         const float a = m.alpha[k], b = m.beta[k];
         if (a == 1.0f && b == 0.0f) continue;
-        const float o = std::clamp(encode(b + (1.0f - b) * a * toLinear[pixels.rgb[k]]), 0.0f, 1.0f);
+        const float o = std::clamp(encode(b + (1.0f - b) * a * toLinear_[pixels.rgb[k]]), 0.0f, 1.0f);
         pixels.rgb[k] = uint8_t(std::lround(o * 255.0f));
     }
 }

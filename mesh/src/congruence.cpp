@@ -248,7 +248,7 @@ size_t shareCongruentMeshes(Assembly& a, double tolerance) {
     for (size_t i = 0; i < n; ++i) {
         target[i] = uint32_t(i);
         const TriangleMesh& m = *a.meshes[i];
-        uint64_t h = fnv(nullptr, 0);
+        uint64_t h = 1469598103934665603ull;  // FNV-1a's offset basis
         if (m.hasUVs()) h = fnv(m.uvs(), 2 * m.vertexCount() * sizeof(float), h);
         if (m.hasColors()) h = fnv(m.colors(), 3 * m.vertexCount(), h);
         const int flags = int(m.hasNormals()) | int(m.hasUVs()) << 1 | int(m.hasColors()) << 2;

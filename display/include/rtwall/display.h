@@ -357,6 +357,7 @@ private:
         std::vector<float> alpha, beta;  // 3 a pixel, top row first; empty: nothing blended
     };
     std::vector<Maps> screens_;
+    std::array<float, 256> toLinear_{};  // sRGB 8-bit to linear, made once
     struct Gl;
     std::unique_ptr<Gl> gl_;
 };
@@ -386,9 +387,15 @@ private:
         std::vector<Float3> samples;   // per screen pixel, top row first: surface point, or target (x, y) in screen pixels
         Float3 lowerLeft, right, up;   // the screen's frame (screenFrame; 3D targets)
         int eye = 0;                   // 0 left (mono), 1 right
+        // targets() for targetsEye (2D: for any eye), and apply's copy of the flat pixels: kept
+        // from frame to frame (one screen is applied by one thread at a time).
+        mutable std::vector<float> targets;
+        mutable Float3 targetsEye{};
+        mutable Image flat;
     };
-    // Per screen pixel where it samples the screen's flat image, x and y in its pixels (NaN: black).
-    void targets(size_t screen, std::vector<float>& out) const;
+    // Per screen pixel where it samples the screen's flat image, x and y in its pixels (NaN:
+    // black); computed again only when the screen's eye has moved (3D points).
+    const std::vector<float>& targets(size_t screen) const;
     std::vector<Screen> screens_;
     Float3 eyes_[2]{};
     struct Gl;

@@ -1,6 +1,7 @@
 // postWarp (rtwall/frame.h, issue 30): a calibrated projector's pixels resampled from a flat
 // render, the rasteriser's way, for the comparison with tracing each pixel's own ray.
 #include <rtwall/frame.h>
+#include <rtwall/image_sample.h>
 #include <rtwall/warp.h>
 
 #include <algorithm>
@@ -34,18 +35,9 @@ void postWarp(const Image& flat, const CameraDesc& camera, const ScreenWarp& war
             flatImage.solve(v, abc);
             if (!(abc[2] > 0.0)) continue;
             const double fx = abc[0] / abc[2], fy = abc[1] / abc[2];
-            // Bilinear between pixel centres, clamped at the edges (a texture sampler's
-            // GL_LINEAR with GL_CLAMP_TO_EDGE); a target off the flat image is black.
-            if (!(fx >= 0.0 && fx <= double(w) && fy >= 0.0 && fy <= double(h))) continue;
-            const double gx = std::clamp(fx - 0.5, 0.0, double(w - 1)), gy = std::clamp(fy - 0.5, 0.0, double(h - 1));
-            const int x0 = int(gx), y0 = int(gy), x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
-            const double tx = gx - x0, ty = gy - y0;
-            const uint8_t *a = flat.pixel(x0, y0), *b = flat.pixel(x1, y0), *c = flat.pixel(x0, y1), *e = flat.pixel(x1, y1);
-            for (int k = 0; k < 3; ++k) {
-                const double top = a[k] + tx * (b[k] - a[k]), bottom = c[k] + tx * (e[k] - c[k]);
-                o[k] = uint8_t(std::lround(top + ty * (bottom - top)));
-            }
+            sampleBilinear(flat, fx, fy, o);  // a target off the flat image stays black
         }
 }
+
 
 }  // namespace rtwall
