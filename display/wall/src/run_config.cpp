@@ -84,11 +84,30 @@ RunConfig readRunConfig(const std::filesystem::path& file, const toml::table& ro
         c.out = r.string("out", c.out.string());
         c.orbit = r.number("orbit", c.orbit, -360.0, 360.0);
         if (r.has("denoise")) c.denoise = denoiseModeFromName(r.choice("denoise", "off", {"off", "temporal", "svgf"}));
+        if (r.has("session")) c.session = dir / r.string("session", "");
         if (r.has("camera_path")) {
             if (r.has("orbit")) r.fail(r.find("camera_path"), "give either 'orbit' or 'camera_path'");
             c.cameraPath = dir / r.string("camera_path", "");
             c.orbit = 0.0;
         }
+        r.finish();
+    }
+    if (const toml::table* t = subTable(top, "web")) {
+        Reader r(file, *t, "[web]: ");
+        WebSettings& w = c.web;
+        w.enabled = r.boolean("enabled", true);
+        w.address = r.string("address", w.address);
+        w.port = r.integer("port", w.port, 0, 65535);
+        w.token = r.string("token", "");
+        if (!w.token.empty() && (w.token.size() < 16 || w.token.size() > 200 ||
+                                 w.token.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789-_.~") != std::string::npos))
+            r.fail(r.find("token"), "key 'token': 16 to 200 characters of A-Z, a-z, 0-9, '-', '_', '.', '~'");
+        if (r.has("certificate")) w.certificate = dir / r.string("certificate", "");
+        if (r.has("key")) w.key = dir / r.string("key", "");
+        if (w.certificate.empty() != w.key.empty()) r.fail(nullptr, "give both 'certificate' and 'key' (TLS), or neither");
+        w.insecure = r.boolean("insecure", false);
+        w.thumbnailsPerSecond = r.number("thumbnails_per_second", w.thumbnailsPerSecond, 0.1, 30.0);
+        w.thumbnailWidth = r.integer("thumbnail_width", w.thumbnailWidth, 32, 4096);
         r.finish();
     }
     top.finish();

@@ -109,6 +109,8 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     if (s.blend) io.stages.push_back(s.blend.get());
     s.input = std::make_unique<WallInput>(s.wallConfig, s.start, io, s.log);
     s.input->setPartView(*s.live, {});  // says what the scene file and the command line hid, if anything
+    for (const InstanceDesc& in : s.live->desc().instances) s.loadedTransforms.push_back(in.transform);
+    if (!c.session.empty()) restoreSession(readSessionState(c.session, s.live->desc()));
     // In a window the wall runs until it is closed, unless a frame count was asked for.
     if (s.input->windowed() && !c.framesGiven) c.frames = 0;
     s.startRefresher();
@@ -146,6 +148,7 @@ bool WallSession::step() {
     if (s.stopped() || (s.config.frames > 0 && s.frame >= s.config.frames)) return false;
     const double dt = s.frameTimes.empty() ? 0.0 : s.frameTimes.back();
     if (!s.input->handle(*s.live, dt)) return false;
+    s.runOperator(*this);  // the console's commands, after the keys'
     if (s.input->takeWarpDebugPresses() % 2) {
         s.warpDebug = !s.warpDebug;
         s.log(std::string("reproject: debug colours ") + (s.warpDebug ? "on" : "off"));
@@ -197,6 +200,7 @@ bool WallSession::step() {
     s.tuning->observe(s.frame, s.report, s.moved);
     s.writeFiles();
     s.ranToTheEnd = s.config.frames > 0 && s.frame >= s.config.frames;
+    s.notifyObservers(*this);
     return true;
 }
 

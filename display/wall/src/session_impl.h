@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <deque>
 #include <fstream>
+#include <mutex>
 #include <span>
 #include <sstream>
 #include <thread>
@@ -151,6 +152,21 @@ struct WallSession::Impl {
     void warpOnGpu();            // ... by the GL presenter
     void presentRefresh();
     void recordPresentation(bool warped);
+    // The operator (issue 31; operator.cpp): commands posted from other threads, run at the next
+    // step after the input; observers called after each step; bookmarks; a camera flight.
+    std::mutex commandsMutex;
+    std::vector<std::function<void(WallSession&)>> commands;
+    std::vector<std::function<void(const WallSession&)>> observers;
+    std::vector<Bookmark> bookmarks;
+    struct Flight {
+        CameraDesc from, to;
+        std::chrono::steady_clock::time_point start;
+        double seconds = 0;
+    };
+    std::optional<Flight> flight;
+    std::vector<Transform> loadedTransforms;  // the instances' as the scene was loaded
+    void runOperator(WallSession& self);
+    void notifyObservers(const WallSession& self);
     bool moved = false;                // this frame's view moved (navigation, scripted camera, head): the controller favours speed
 
     ~Impl() {

@@ -146,10 +146,24 @@ bool WallInput::measureHit(LiveScene& scene, const std::optional<PickResult>& hi
         const double dx = p[0] - measurement_->a[0], dy = p[1] - measurement_->a[1], dz = p[2] - measurement_->a[2];
         measurement_->b = p;
         measurement_->distance = std::sqrt(dx * dx + dy * dy + dz * dz);
+        kept_.push_back(*measurement_);  // the session's list (the console's, a session file's)
         log_(measureLine());
     }
     refreshStatus();
     return true;
+}
+
+std::optional<Measurement> WallInput::measureBetween(LiveScene& scene, double ax, double ay, double bx, double by) {
+    // Measure mode's own picks, its state put back after: the same points as two Ctrl+clicks.
+    const bool was = measuring_;
+    std::optional<Measurement> under = measurement_;
+    measuring_ = true;
+    measurement_.reset();
+    std::optional<Measurement> out;
+    if (measurePick(scene, ax, ay) && measurePick(scene, bx, by)) out = measurement_;
+    measuring_ = was;
+    measurement_ = was ? under : std::nullopt;
+    return out;
 }
 
 std::string WallInput::measureLine() const {

@@ -71,6 +71,9 @@ public:
     bool measuring() const { return measuring_; }
     bool measurePick(LiveScene& scene, double wallX, double wallY);
     const std::optional<Measurement>& measurement() const { return measurement_; }
+    // The complete measurements, oldest first (WallSession::measurements), and two picks as one.
+    std::vector<Measurement>& kept() { return kept_; }
+    std::optional<Measurement> measureBetween(LiveScene& scene, double ax, double ay, double bx, double by);
     // Section planes (WallSession::setSection): sets slot `index` and makes it the active plane,
     // the one the section keys (docs/design-review.md, "Section planes") move; -1: none.
     void setSection(LiveScene& scene, uint32_t index, const SectionPlane& plane);
@@ -131,6 +134,7 @@ private:
     bool measuring_ = false;
     bool escapeHeld_ = false;  // the Esc that left measure mode: held on, it does not close the wall
     std::optional<Measurement> measurement_;
+    std::vector<Measurement> kept_;
     std::string measureLine() const;  // for the status line and overlay while measuring
     int activeSection_ = -1;
     double sectionStep_ = 0;  // how far PageUp/PageDown move a plane: 1/100 of the scene's size

@@ -25,6 +25,29 @@ void writePng(const Image& image, const std::filesystem::path& file) {
     }
 }
 
+std::vector<uint8_t> encodePng(const Image& image) {
+    png_image png{};
+    png.version = PNG_IMAGE_VERSION;
+    png.width = png_uint_32(image.width);
+    png.height = png_uint_32(image.height);
+    png.format = PNG_FORMAT_RGB;
+    png_alloc_size_t size = 0;
+    // The first call sizes the buffer, the second fills it.
+    if (!png_image_write_to_memory(&png, nullptr, &size, 0, image.rgb.data(), image.width * 3, nullptr) || size == 0) {
+        std::string why = png.message;
+        png_image_free(&png);
+        throw InputError("cannot encode PNG: " + why);
+    }
+    std::vector<uint8_t> out(size);
+    if (!png_image_write_to_memory(&png, out.data(), &size, 0, image.rgb.data(), image.width * 3, nullptr)) {
+        std::string why = png.message;
+        png_image_free(&png);
+        throw InputError("cannot encode PNG: " + why);
+    }
+    out.resize(size);
+    return out;
+}
+
 Image readPng(const std::filesystem::path& file) {
     png_image png{};
     png.version = PNG_IMAGE_VERSION;

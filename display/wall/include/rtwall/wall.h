@@ -11,7 +11,9 @@
 // - a key binding or other input: WallInput::handle (display/wall/src/wall_input.cpp);
 // - a control of the operating point and the speed/accuracy sweep: the table in controls.cpp;
 // - a camera-path field: camera_path.cpp (read, write and interpolation, one file);
-// - a per-frame step: WallSession::step (session.cpp); the run config: run_config.cpp.
+// - a per-frame step: WallSession::step (session.cpp); the run config: run_config.cpp;
+// - a change from another thread (the operator console, display/web): WallSession::post, and
+//   the operator's state (bookmarks, flights, measurements, session files): operator.cpp.
 //
 // The GL presenter stays inside the display library; this library joins it to the engine and
 // the cluster, which know nothing of each other's windows.
@@ -83,6 +85,59 @@ struct DisplayNodeOptions {
 };
 int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop = nullptr);
 
+// Measuring on the wall (key M, docs/design-review.md, "Measuring"): two picked surface points in the scene
+// FILE's coordinates (a rebased scene's `origin` added back, in double precision) and their
+// distance in scene units (scenes declare no unit).
+struct Measurement {
+    std::array<double, 3> a{};               // the first point
+    std::optional<std::array<double, 3>> b;  // the second, once picked
+    double distance = 0;                     // |b - a| once b is set
+    bool operator==(const Measurement&) const = default;
+};
+
+// ---- The operator's session (issue 31, docs/web-console.md) --------------------------------------
+
+// A named view: the operator console's bookmarks (the keys' Ctrl+digit slots are the navigator's).
+struct Bookmark {
+    std::string name;
+    CameraDesc camera;  // relative to the scene's origin, as every camera of a SceneDesc
+    bool operator==(const Bookmark&) const = default;
+};
+// What a session file brings back (TOML, docs/web-console.md, "Session files"): the viewer's
+// camera, the bookmarks, the section planes, the part view (on top of what the scene was loaded
+// with), the instances moved away from where the scene put them, and the measurements. Written
+// in the scene file's coordinates (the rebased origin added back, in double), so a file survives
+// a change of origin.
+struct SessionState {
+    CameraDesc camera;
+    std::vector<Bookmark> bookmarks;
+    SectionPlanes sections{};
+    PartView parts;
+    std::vector<std::pair<uint32_t, Transform>> moved;  // instance, its transform (increasing instances)
+    std::vector<Measurement> measurements;              // complete ones (b set)
+    bool operator==(const SessionState&) const = default;
+};
+std::string writeSessionState(const SessionState& state, const SceneDesc& scene);
+// Every problem (TOML, unknown keys, an instance or slot out of range, a non-finite number, a
+// zero normal, a pattern that names no part of `scene`) is an InputError "NAME:LINE: what".
+SessionState parseSessionState(std::string_view text, const std::string& name, const SceneDesc& scene);
+SessionState readSessionState(const std::filesystem::path& file, const SceneDesc& scene);
+
+// `rtwall run --web` and the run config's [web] (issue 31): the operator console, an HTTP server
+// inside the master (rtwall/web.h, display/web/). Loopback unless told otherwise; a bind to
+// another address needs TLS or `insecure`.
+struct WebSettings {
+    bool enabled = false;
+    std::string address = "127.0.0.1";
+    int port = 8480;                           // 0: any free port (said at start)
+    std::string token;                         // empty: a random one, said at start
+    std::filesystem::path certificate, key;    // PEM files: HTTPS
+    bool insecure = false;                     // a non-loopback bind without TLS (said loudly)
+    double thumbnailsPerSecond = 4;            // the live thumbnail's rate, at most
+    int thumbnailWidth = 480;                  // its width in pixels (each eye of a stereo wall)
+    bool operator==(const WebSettings&) const = default;
+};
+
 // ---- Run configs (configs/README.md, "Run configs") ---------------------------------------------
 
 struct RunConfig {
@@ -108,6 +163,8 @@ struct RunConfig {
     std::filesystem::path front;          // the measured front for targetFps (empty: calibrate)
     std::filesystem::path trace;          // with targetFps: one CSV line per frame
     PartView parts;                       // --hide, --isolate, --highlight: on top of the scene file's [parts]
+    std::filesystem::path session;        // --session / [run] session: a session file restored before the first frame
+    WebSettings web;                      // --web / [web]: the operator console (started by the caller: rtwall/web.h)
     // A wall whose screens name display nodes (issue 19): one `rtwall display` process per node
     // on this PC, of clientExecutable (LocalDisplayNodes; the whole wall on one machine), or with
     // clientThreads a headless runWallNode thread per node writing to out/NAME. Off ([cluster]
@@ -202,14 +259,6 @@ struct RunSummary {
 // The lines `rtwall run` prints at the end.
 std::string describeSummary(const RunSummary& summary, double targetFps);
 
-// Measuring on the wall (key M, docs/design-review.md, "Measuring"): two picked surface points in the scene
-// FILE's coordinates (a rebased scene's `origin` added back, in double precision) and their
-// distance in scene units (scenes declare no unit).
-struct Measurement {
-    std::array<double, 3> a{};               // the first point
-    std::optional<std::array<double, 3>> b;  // the second, once picked
-    double distance = 0;                     // |b - a| once b is set
-};
 
 // The tracked wand (flystick) as the session's tools see it (docs/tracking.md, "Flystick"): the last
 // step's pose in the room and in the world, its buttons and joystick, and what it holds.
@@ -323,6 +372,39 @@ public:
     // View accumulations restarted so far (a stochastic scene on a wall with views: a view
     // restarts when the state or its own camera changed).
     size_t viewRestarts() const;
+
+    // ---- The operator console's side (issue 31) ----
+    // Thread-safe: `command` runs on the session's thread at the next step(), after the windows'
+    // and inject()'s input (the keys', the mouse's and the wand's changes), in the order posted:
+    // one scene state, changed only there, and every change a differential update.
+    void post(std::function<void(WallSession&)> command);
+    // Called on the session's thread at the end of every step(), after the frame was shown (where
+    // the console takes its snapshot and thumbnail); it must not block.
+    void addStepObserver(std::function<void(const WallSession&)> observer);
+    const std::vector<Bookmark>& bookmarks() const;
+    void saveBookmark(const std::string& name);  // the viewer's camera now; replaces one of that name
+    bool goToBookmark(const std::string& name, double seconds = 0.8);  // false: no such bookmark
+    bool deleteBookmark(const std::string& name);
+    // The viewer's camera goes to `camera` over `seconds` (smoothstep in time; 0: at once). A
+    // scripted orbit stops (the operator took over); a camera path refuses (false).
+    bool flyTo(const CameraDesc& camera, double seconds);
+    bool flying() const;
+    // The measurements kept (measure mode's complete ones, and measureBetween's), oldest first.
+    const std::vector<Measurement>& measurements() const;
+    // A measurement between what wall pixels a and b show: kept and returned; nothing (and
+    // nothing kept) where either ray hits nothing.
+    std::optional<Measurement> measureBetween(double ax, double ay, double bx, double by);
+    bool deleteMeasurement(size_t index);
+    // The operator's state, and the same brought back: camera (at once), bookmarks, sections,
+    // part view, moved instances (the others back where the scene put them), measurements.
+    SessionState sessionState() const;
+    void restoreSession(const SessionState& state);
+    // The transforms the scene was loaded with (what "moved" is measured against).
+    const std::vector<Transform>& loadedTransforms() const;
+    const WallConfig& wallConfig() const;
+    double frameSeconds() const;  // the last step's, 0 before it
+    size_t steps() const;         // frames stepped
+    std::string operatingPointName() const;  // with a target frame rate: the point held now; else empty
 
     // What the last step showed and measured.
     const WallFrame& lastFrame() const;

@@ -19,5 +19,6 @@ struct Image {
 
 void writePng(const Image& image, const std::filesystem::path& file);  // throws InputError
 Image readPng(const std::filesystem::path& file);                      // throws InputError
+std::vector<uint8_t> encodePng(const Image& image);                    // the bytes writePng writes; throws InputError
 
 }  // namespace rtwall
