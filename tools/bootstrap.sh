@@ -42,6 +42,9 @@ PACKAGES=(
   python3
   python3-matplotlib   # charts of tools/speed_accuracy.py (speed against accuracy)
   libtinygltf-dev      # tinygltf 2.7: glTF 2.0 (.gltf/.glb) parser, the Debian shared library (no implementation TU of ours)
+  libcpp-httplib-dev   # cpp-httplib 0.11: the operator console's HTTP/HTTPS server (rtwall run --web), Debian's OpenSSL build
+  nlohmann-json3-dev   # nlohmann/json: the console API's request bodies
+  chromium chromium-driver python3-selenium  # the console's browser tests: a real headless browser driven by Selenium
   libocct-data-exchange-dev libocct-ocaf-dev libocct-modeling-algorithms-dev  # OpenCASCADE 7.6: STEP/IGES assemblies (XDE), tessellation
 )
 

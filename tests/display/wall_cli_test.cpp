@@ -136,6 +136,34 @@ TEST(WallCli, CheckReportsABadConfigAndABadShaderOnOneLine) {
     EXPECT_NE(r.output.find("bad.frag:4: "), std::string::npos) << r.output;
 }
 
+TEST(WallCli, WebAndSessionOptionsRefuseBadInputOnOneLine) {
+    const auto dir = test::scratchDir();
+    const std::string minimal = (test::sourceDir() / "tests/data/scenes/minimal.toml").string();
+    const std::string scene = test::writeFile(dir / "base.toml", "scene = \"" + minimal + "\"\n[cluster]\nclients = 1\n").string();
+    Result r = run("run " + scene + " --web 99999 --frames 1");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.output, "rtwall: error: --web 99999: expected [ADDR:]PORT with PORT in 0..65535\n");
+    r = run("run " + scene + " --web :80 --frames 1");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.output, "rtwall: error: --web :80: the address before ':' is empty\n");
+    r = run("run " + scene + " --web 0.0.0.0:0 --frames 1 --headless");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.output, "rtwall: error: web: 0.0.0.0 is not loopback: give [web] certificate and key (TLS), or --web-insecure\n");
+    const auto cfg = test::writeFile(dir / "run.toml", "scene = \"" + minimal + "\"\n[web]\ntoken = \"short\"\n");
+    r = run("run " + cfg.string() + " --frames 1");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.output, "rtwall: error: " + cfg.string() + ":3: [web]: key 'token': 16 to 200 characters of A-Z, a-z, 0-9, '-', '_', '.', '~'\n");
+    const auto session = test::writeFile(dir / "s.toml", "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n[[moved]]\ninstance = 99\n"
+                                                        "transform = [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]\n");
+    r = run("run " + scene + " --session " + session.string() + " --frames 1 --headless");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.output.find("rtwall: error: " + session.string() + ":5: [[moved]] #1: key 'instance': 99 does not exist"), std::string::npos)
+        << r.output;
+    r = run("run " + scene + " --session " + (dir / "none.toml").string() + " --frames 1 --headless");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.output.find("none.toml: no such file"), std::string::npos) << r.output;
+}
+
 TEST(WallCli, RunWithoutADisplayWritesWhatEachProjectorGets) {
     const auto dir = test::scratchDir();
     const auto wall = test::writeFile(dir / "wall.toml", "[wall]\n[grid]\ncolumns = 2\nrows = 2\nscreen_width = 64\nscreen_height = 48\n"

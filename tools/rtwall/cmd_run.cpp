@@ -3,6 +3,7 @@
 #include "commands.h"
 
 #include <rtwall/wall.h>
+#include <rtwall/web.h>
 
 #include <atomic>
 #include <csignal>
@@ -13,14 +14,30 @@ namespace rtwall::cli {
 
 namespace {
 std::atomic<bool> gStop{false};
+
+// --web [ADDR:]PORT over the run config's [web].
+WebSettings webFromOption(WebSettings w, const std::string& text) {
+    w.enabled = true;
+    std::string port = text;
+    if (const size_t colon = text.rfind(':'); colon != std::string::npos) {
+        w.address = text.substr(0, colon);
+        if (w.address.size() > 2 && w.address.front() == '[' && w.address.back() == ']') w.address = w.address.substr(1, w.address.size() - 2);
+        port = text.substr(colon + 1);
+        if (w.address.empty()) throw InputError("--web " + text + ": the address before ':' is empty");
+    }
+    if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos || std::stoi(port) > 65535)
+        throw InputError("--web " + text + ": expected [ADDR:]PORT with PORT in 0..65535");
+    w.port = std::stoi(port);
+    return w;
+}
 }  // namespace
 
 void addRun(CLI::App& app, Run& run) {
     struct Options {
         std::string config;
         int frames = -1, clients = -1, writeEvery = -1;
-        std::string out, bind, cameraPath, wall, front, trace, reproject, denoise, denoiseIsa;
-        bool insecure = false, headless = false, watch = false, noLocalNodes = false;
+        std::string out, bind, cameraPath, wall, front, trace, reproject, denoise, denoiseIsa, web, session;
+        bool insecure = false, headless = false, watch = false, noLocalNodes = false, webInsecure = false;
         double targetFps = -1;  // not given
         PartView parts;
     };
@@ -61,6 +78,10 @@ void addRun(CLI::App& app, Run& run) {
     cmd->add_option("--hide", o->parts.hide, "Hide the parts (or meshes) this pattern names: a name, or a path a/b/c when it has a '/'; '*' is any text (repeatable)");
     cmd->add_option("--isolate", o->parts.isolate, "Show only the parts (or meshes) these patterns name (repeatable)");
     cmd->add_option("--highlight", o->parts.highlight, "Highlight the parts (or meshes) this pattern names (repeatable)");
+    cmd->add_option("--web", o->web,
+                    "Serve the operator console at [ADDR:]PORT (docs/web-console.md; default address 127.0.0.1, PORT 0: any free port)");
+    cmd->add_flag("--web-insecure", o->webInsecure, "Allow --web on a non-loopback address without TLS (says so loudly)");
+    cmd->add_option("--session", o->session, "Restore a session file (the console's \"save\") before the first frame");
     cmd->callback([&run, o] {
         run = [o] {
             RunConfig c = o->config.empty() ? defaultRunConfig() : readRunConfig(o->config);
@@ -91,6 +112,10 @@ void addRun(CLI::App& app, Run& run) {
             c.front = o->front;
             c.trace = o->trace;
             c.parts = o->parts;
+            if (!o->session.empty()) c.session = o->session;
+            if (!o->web.empty()) c.web = webFromOption(c.web, o->web);
+            if (o->webInsecure) c.web.insecure = true;
+            if (c.web.enabled) checkWebSettings(c.web);  // refused before anything starts
             // Ctrl-C and SIGTERM end the run between frames, and interrupt a frame that cannot
             // finish (Cancelled: "interrupted", exit status 130).
             std::signal(SIGINT, [](int) { gStop = true; });
@@ -102,6 +127,21 @@ void addRun(CLI::App& app, Run& run) {
                 double targetFps;
                 ~SummaryAtExit() { std::printf("%s\n", describeSummary(session.summary(), targetFps).c_str()); }
             } summaryAtExit{session, c.targetFps};
+            // The operator console: its backend taps the session after each step, its server
+            // answers on its own threads; both go before the session does.
+            std::unique_ptr<ConsoleBackend> backend;
+            std::unique_ptr<WebApi> api;
+            std::unique_ptr<WebServer> server;
+            if (c.web.enabled) {
+                backend = sessionBackend(session, c.web);
+                api = std::make_unique<WebApi>(*backend, c.web.token.empty() ? makeWebToken() : c.web.token);
+                server = std::make_unique<WebServer>(*api, c.web, [](const std::string& line) {
+                    std::printf("%s\n", line.c_str());
+                    std::fflush(stdout);
+                });
+                std::printf("web console: %s\n", server->url().c_str());
+                std::fflush(stdout);
+            }
             // Stopped between frames, the run ends normally; a frame that could not finish
             // throws Cancelled from step() (exit status 130).
             while (session.step()) {

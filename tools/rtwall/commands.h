@@ -45,6 +45,7 @@ void addBenchFaults(CLI::App& bench, Run& run);
 void addBenchAttack(CLI::App& bench, Run& run);  // bench_attack.cpp (issue 16)
 void addBenchChaos(CLI::App& bench, Run& run);
 void addBenchUpdates(CLI::App& bench, Run& run);  // bench_updates.cpp (issue 17)
+void addBenchWeb(CLI::App& bench, Run& run);      // bench_web.cpp (issue 31)
 void addBenchLatency(CLI::App& bench, Run& run);  // bench_latency.cpp (issue 18)
 void addCheck(CLI::App& app, Run& run);
 void addBenchDisplay(CLI::App& bench, Run& run);

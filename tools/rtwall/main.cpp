@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
         add(app, run);
     CLI::App* bench = app.add_subcommand("bench", "Benchmarks that print their figures (JSON with --json)");
     bench->require_subcommand(1);
-    for (auto add : {addBenchKernel, addBenchCluster, addBenchFaults, addBenchAttack, addBenchChaos, addBenchUpdates,
+    for (auto add : {addBenchKernel, addBenchCluster, addBenchFaults, addBenchAttack, addBenchChaos, addBenchUpdates, addBenchWeb,
                      addBenchLatency, addBenchDisplay, addBenchScene, addBenchTiles, addBenchCodecs, addBenchShading,
                      addBenchTessellation, addBenchWarp})
         add(*bench, run);

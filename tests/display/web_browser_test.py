@@ -1,0 +1,183 @@
+#!/usr/bin/env python3
+"""The operator console in a real headless browser (issue 31): Debian's Chromium driven by
+Selenium against `rtwall run --web` (headless, local clients, orbiting).
+
+  web_browser_test.py RTWALL SCRATCH_DIR
+
+It opens the printed URL (the token's cookie), sees the thumbnail change as the camera orbits,
+sets the camera from the page (the orbit stops), hides a part by its checkbox and sees the wall's
+frame change, adds a section plane by the form, saves the session, changes the view, restores the
+session through the page's file input and gets the same frame bit for bit; and `rtwall run
+--session` renders that same frame. Bounded: every wait has a timeout, the run is killed at the end.
+"""
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+import urllib.request
+
+from selenium import webdriver
+from selenium.webdriver.chrome.service import Service
+from selenium.webdriver.common.by import By
+
+RTWALL, SCRATCH = sys.argv[1], sys.argv[2]
+os.makedirs(SCRATCH, exist_ok=True)
+CONFIG = os.path.join(SCRATCH, "run.toml")
+with open(CONFIG, "w") as f:
+    f.write('scene = "builtin:knots"\n[image]\nwidth = 240\nheight = 180\n[cluster]\nclients = 1\nasync = false\n'
+            '[run]\nframes = 0\nwrite_every = 0\norbit = 2.0\n')
+
+
+def fail(what):
+    print("web_browser_test: " + what, file=sys.stderr)
+    sys.exit(1)
+
+
+def wait_for(what, check, seconds=60):
+    end = time.time() + seconds
+    while time.time() < end:
+        value = check()
+        if value:
+            return value
+        time.sleep(0.1)
+    fail("timed out waiting for " + what)
+
+
+run = subprocess.Popen([RTWALL, "run", CONFIG, "--headless", "--web", "127.0.0.1:0", "--out", os.path.join(SCRATCH, "frames")],
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+driver = None
+try:
+    url = None
+    end = time.time() + 120
+    while time.time() < end and url is None:
+        line = run.stdout.readline()
+        if not line:
+            fail("rtwall run ended before the console started")
+        m = re.match(r"web console: (\S+)", line)
+        if m:
+            url = m.group(1)
+    if url is None:
+        fail("no 'web console:' line")
+    base, token = url.split("/?token=")
+
+    def call(method, path, body=None, raw=False):
+        data = None if body is None else (body if isinstance(body, bytes) else json.dumps(body).encode())
+        req = urllib.request.Request(base + path, data=data, method=method, headers={"Authorization": "Bearer " + token})
+        with urllib.request.urlopen(req, timeout=30) as r:
+            payload = r.read()
+        return payload if raw else json.loads(payload)
+
+    def settle():
+        start = call("GET", "/api/status")["steps"]
+        wait_for("three more frames", lambda: call("GET", "/api/status")["steps"] >= start + 3)
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = "/usr/bin/chromium"
+    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--window-size=1280,1000"):
+        options.add_argument(a)
+    options.add_experimental_option("prefs", {"download.default_directory": SCRATCH})
+    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
+    driver.set_page_load_timeout(60)
+    driver.get(url)  # the cookie, then the page
+    if "rtwall console" not in driver.title:
+        fail("the page did not load: " + driver.title)
+
+    # The thumbnail follows the orbit.
+    thumb = driver.find_element(By.ID, "thumbnail")
+    first = wait_for("a thumbnail", lambda: thumb.get_attribute("data-frame"))
+    wait_for("a newer thumbnail", lambda: (thumb.get_attribute("data-frame") or first) != first)
+    src_a = thumb.get_attribute("src")
+    wait_for("the thumbnail's image to change", lambda: thumb.get_attribute("src") != src_a)
+
+    # The camera from the page: the orbit stops.
+    for field, value in (("camera-position", "0.5, 2.5, 9"), ("camera-target", "0, 0, 0"), ("camera-up", "0, 1, 0")):
+        box = driver.find_element(By.ID, field)
+        box.clear()
+        box.send_keys(value)
+    driver.find_element(By.CSS_SELECTOR, "#camera-form button").click()
+    wait_for("the camera", lambda: abs(call("GET", "/api/camera")["position"][2] - 9) < 1e-5 and not call("GET", "/api/status")["flying"])
+    settle()
+    before = call("GET", "/api/screenshot.png", raw=True)
+    settle()
+    if call("GET", "/api/screenshot.png", raw=True) != before:
+        fail("the frame still changes after the camera was set (the orbit did not stop)")
+
+    # Hide a knot by its checkbox (the floor stays: the measurement below clicks on it).
+    parts = call("GET", "/api/parts")["parts"]
+    knot = [p for p in parts if p["path"] == "knot0"]
+    if not knot:
+        fail("the scene lists no part 'knot0': %s" % [p["path"] for p in parts])
+    part = knot[0]["id"]
+    box = wait_for("the part list", lambda: driver.find_elements(By.CSS_SELECTOR, "#parts li[data-id='%d'] input[type=checkbox]" % part))[0]
+    box.click()
+    wait_for("the part hidden", lambda: not call("GET", "/api/parts")["parts"][part]["visible"])
+    settle()
+    hidden = call("GET", "/api/screenshot.png", raw=True)
+    if hidden == before:
+        fail("hiding part 'knot0' did not change the frame")
+
+    # A section plane by the form.
+    driver.find_element(By.ID, "section-normal").clear()
+    driver.find_element(By.ID, "section-normal").send_keys("1, 0, 0")
+    driver.find_element(By.ID, "section-offset").clear()
+    driver.find_element(By.ID, "section-offset").send_keys("0.2")
+    driver.find_element(By.CSS_SELECTOR, "#section-form button").click()
+    wait_for("the section plane", lambda: len(call("GET", "/api/sections")["sections"]) == 1)
+    wait_for("the plane in the page's list", lambda: driver.find_elements(By.CSS_SELECTOR, "#sections li"))
+    settle()
+    cut = call("GET", "/api/screenshot.png", raw=True)
+    if cut == hidden:
+        fail("the section plane did not change the frame")
+
+    # A measurement by two clicks on the thumbnail (right of the cut, low on the floor).
+    from selenium.webdriver.common.action_chains import ActionChains
+    driver.find_element(By.ID, "measure-toggle").click()
+    size = thumb.size
+    for fx, fy in ((0.25, 0.4), (0.3, 0.25)):
+        ActionChains(driver).move_to_element_with_offset(thumb, int(size["width"] * fx), int(size["height"] * fy)).click().perform()
+    listed = wait_for("the measurement", lambda: driver.find_elements(By.CSS_SELECTOR, "#measurements li") or
+                      (driver.find_element(By.ID, "error").text and fail("the page said: " + driver.find_element(By.ID, "error").text)))
+    m = call("GET", "/api/measurements")["measurements"]
+    if len(m) != 1 or not m[0]["distance"] > 0:
+        fail("the measurement by two clicks: %s" % m)
+    if "units" not in listed[0].text:
+        fail("the page lists the measurement as: " + listed[0].text)
+
+    # Save the session, change the view, restore it through the page: the same frame.
+    session = call("GET", "/api/session", raw=True)
+    session_file = os.path.join(SCRATCH, "session.toml")
+    with open(session_file, "wb") as f:
+        f.write(session)
+    driver.find_element(By.ID, "show-all").click()
+    wait_for("all parts shown", lambda: call("GET", "/api/parts")["parts"][part]["visible"])
+    call("POST", "/api/camera", {"position": [3, 1, 6], "target": [0, 0, 0]})
+    settle()
+    if call("GET", "/api/screenshot.png", raw=True) == cut:
+        fail("the view did not change before the restore")
+    driver.find_element(By.ID, "session-file").send_keys(session_file)
+    wait_for("the session restored", lambda: not call("GET", "/api/parts")["parts"][part]["visible"])
+    settle()
+    if call("GET", "/api/screenshot.png", raw=True) != cut:
+        fail("the restored session's frame differs from the saved one")
+    errors = driver.find_element(By.ID, "error").text
+    if errors:
+        fail("the page said: " + errors)
+finally:
+    if driver:
+        driver.quit()
+    run.terminate()
+    try:
+        run.wait(timeout=30)
+    except subprocess.TimeoutExpired:
+        run.kill()
+
+# rtwall run --session: its first frame is the saved one.
+frames = os.path.join(SCRATCH, "again")
+subprocess.run([RTWALL, "run", CONFIG, "--headless", "--frames", "1", "--write-every", "1", "--session", session_file, "--out", frames],
+               check=True, timeout=120, stdout=subprocess.DEVNULL)
+with open(os.path.join(frames, "frame_000001.png"), "rb") as f:
+    if f.read() != cut:
+        fail("rtwall run --session rendered another frame than the one saved")
+print("web_browser_test: ok")
