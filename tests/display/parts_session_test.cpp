@@ -37,21 +37,11 @@ std::pair<double, double> pixelOnInstance(WallSession& s, uint32_t instance) {
 }
 
 void ctrlClick(WallSession& s, std::pair<double, double> at) {
-    InputState press;
-    press.leftPressed = press.leftDown = true;
-    press.clickMods = GLFW_MOD_CONTROL;
-    press.wallX = at.first;
-    press.wallY = at.second;
-    s.inject(press);
+    s.inject(test::ctrlClick(at));
     s.inject(InputState{});  // released
 }
 
-void key(WallSession& s, int k) {
-    InputState in;
-    in.keysPressed = {k};
-    in.modsPressed = {0};
-    s.inject(in);
-}
+void key(WallSession& s, int k) { s.inject(test::keyPress(k)); }
 
 TEST(PartsSession, PickThenHideIsolateHighlightAndShowAll) {
     const auto dir = test::scratchDir();

@@ -23,6 +23,9 @@
 namespace rtwall {
 namespace {
 
+using test::ctrlClick;
+using test::keyPress;
+
 // Two boxes on a floor, lit, a camera looking at them; 96x64 pixels in tiles of 32.
 std::string sceneText(double boxX, const char* boxColour = "[0.8, 0.2, 0.2]") {
     char text[2048];
@@ -199,13 +202,6 @@ tile = 16
         EXPECT_EQ(img.width, 48) << screen;
         EXPECT_EQ(img.height, 64) << screen;
     }
-}
-
-InputState keyPress(int key, int mods = 0) {
-    InputState in;
-    in.keysPressed = {key};
-    in.modsPressed = {mods};
-    return in;
 }
 
 // The wall's keys and mouse, as its windows would report them (injected: the same code path,
@@ -415,14 +411,6 @@ std::pair<double, double> wallPositionOf(const WallSession& s, const std::array<
     return {det(w, r, v) / dd / t, det(w, u, r) / dd / t};
 }
 
-InputState ctrlClick(std::pair<double, double> at) {
-    InputState in;
-    in.leftPressed = in.leftDown = true;
-    in.clickMods = GLFW_MOD_CONTROL;
-    in.wallX = at.first;
-    in.wallY = at.second;
-    return in;
-}
 // Esc as GLFW reports a press: pressed since the last poll, and down.
 InputState escapePress() {
     InputState in = keyPress(GLFW_KEY_ESCAPE);

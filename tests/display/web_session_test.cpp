@@ -9,8 +9,6 @@
 #include <rtwall/web.h>
 #include <rtwall/web_testing.h>
 
-#define GLFW_INCLUDE_NONE
-#include <GLFW/glfw3.h>
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
@@ -187,16 +185,8 @@ TEST(WebConsole, HidingAPartByTheApiIsHidingItByKey) {
     const auto [x, y] = at.get_future().get();
     ASSERT_GE(x, 0);
     w.session->post([x = x, y = y](WallSession& s) {
-        InputState press;
-        press.leftPressed = press.leftDown = true;
-        press.clickMods = GLFW_MOD_CONTROL;
-        press.wallX = x;
-        press.wallY = y;
-        s.inject(press);
-        InputState k;
-        k.keysPressed = {GLFW_KEY_X};
-        k.modsPressed = {0};
-        s.inject(k);
+        s.inject(test::ctrlClick({x, y}));
+        s.inject(test::keyPress(GLFW_KEY_X));
     });
     w.settle();
     w.settle();
