@@ -195,6 +195,38 @@ TEST(WebConsole, HidingAPartByTheApiIsHidingItByKey) {
     std::promise<size_t> off;
     w.session->post([&off](WallSession& s) { off.set_value(test::bytesOffState(s)); });
     EXPECT_EQ(off.get_future().get(), 0u);
+
+    // Isolate the right box's node (the box and its knob), then not.
+    json part = body(c.Post("/api/parts/2", R"({"isolate": true})", "application/json"));
+    EXPECT_EQ(part["hidden"], 0);
+    json view = body(c.Get("/api/parts"))["view"];
+    EXPECT_EQ(view["isolate"], json::array({"asm/right"}));
+    json all = body(c.Get("/api/parts"))["parts"];
+    EXPECT_EQ(all[4]["visible"], false);  // the floor
+    EXPECT_EQ(all[3]["visible"], true);   // the knob, under asm/right
+    body(c.Post("/api/parts/2", R"({"isolate": false})", "application/json"));
+    EXPECT_EQ(body(c.Get("/api/parts"))["view"]["isolate"].size(), 0u);
+}
+
+TEST(WebConsole, TheEventStreamSendsTheStatusOfNewFrames) {
+    Console w(partsConfig());
+    httplib::Client c = w.client();
+    std::string got;
+    int events = 0;
+    auto r = c.Get("/api/events", [&](const char* data, size_t n) {
+        got.append(data, n);
+        size_t at;
+        while ((at = got.find("\n\n")) != std::string::npos) {
+            const std::string event = got.substr(0, at);
+            got.erase(0, at + 2);
+            if (!event.starts_with("event: status\ndata: ")) continue;
+            const json s = json::parse(event.substr(20), nullptr, false);
+            EXPECT_TRUE(s.contains("fps") && s.contains("frame")) << event;
+            ++events;
+        }
+        return events < 3;  // then the client hangs up
+    });
+    EXPECT_EQ(events, 3);
 }
 
 TEST(WebConsole, SectionsBookmarksCameraMeasurements) {
