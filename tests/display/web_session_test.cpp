@@ -341,6 +341,41 @@ TEST(WebConsole, ASavedSessionRestoresTheSameFrame) {
     EXPECT_EQ(writeSessionState(s.sessionState(), s.scene()), saved);
 }
 
+// The JPEG's size from its frame header (SOF0, baseline as libjpeg-turbo writes it).
+std::pair<int, int> jpegSize(const std::string& j) {
+    for (size_t i = 2; i + 9 < j.size(); ++i)
+        if (uint8_t(j[i]) == 0xFF && uint8_t(j[i + 1]) == 0xC0)
+            return {int(uint8_t(j[i + 7])) << 8 | uint8_t(j[i + 8]), int(uint8_t(j[i + 5])) << 8 | uint8_t(j[i + 6])};
+    return {0, 0};
+}
+
+TEST(WebConsole, AStereoWallsThumbnailShowsBothEyesAndEachEyeHasItsScreenshot) {
+    RunConfig c = partsConfig();
+    c.wall = test::writeFile(c.out / "stereo.toml",
+                             "[wall]\nwidth = 192\nheight = 144\n[stereo]\nmode = \"passive\"\neye_separation = 0.065\n"
+                             "viewer = [0.0, 0.0, 2.5]\nlower_left = [-1.6, -1.2, 0.0]\nlower_right = [1.6, -1.2, 0.0]\n"
+                             "upper_left = [-1.6, 1.2, 0.0]\n[[screen]]\nviewport = [0, 0, 192, 144]\neye = \"left\"\n"
+                             "[[screen]]\nviewport = [0, 0, 192, 144]\neye = \"right\"\nwindow = [192, 0]\n");
+    Console w(c);
+    httplib::Client h = w.client();
+    w.settle();
+    EXPECT_EQ(body(h.Get("/api/status"))["wall"]["stereo"], true);
+    auto r = h.Get("/api/thumbnail.jpg");
+    ASSERT_TRUE(r && r->status == 200);
+    EXPECT_EQ(jpegSize(r->body), std::make_pair(2 * 192, 144));  // the eyes side by side, each at the wall's width (under 480)
+    auto left = h.Get("/api/screenshot.png?eye=left"), right = h.Get("/api/screenshot.png?eye=right");
+    ASSERT_TRUE(left && right);
+    ASSERT_EQ(left->status, 200);
+    ASSERT_EQ(right->status, 200);
+    EXPECT_NE(left->body, right->body);  // the eyes see the boxes from 6.5 cm apart
+    // The right eye's PNG is the right eye's frame (a still view: every frame the same bytes).
+    const std::filesystem::path file = w.dir / "right.png";
+    std::ofstream(file, std::ios::binary) << right->body;
+    std::promise<Image> eye;
+    w.session->post([&eye](WallSession& s) { eye.set_value(s.lastFrame().right); });
+    EXPECT_EQ(test::differingBytes(readPng(file), eye.get_future().get()), 0u);
+}
+
 // A raw connection that sends `request` and never reads.
 int stalledReader(int port, const std::string& request) {
     const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
