@@ -208,25 +208,30 @@ TEST(WebConsole, HidingAPartByTheApiIsHidingItByKey) {
     EXPECT_EQ(body(c.Get("/api/parts"))["view"]["isolate"].size(), 0u);
 }
 
-TEST(WebConsole, TheEventStreamSendsTheStatusOfNewFrames) {
+TEST(WebConsole, TheEventStreamSendsTheStatusOfNewFramesAndSaysWhenTheStateChanged) {
     Console w(partsConfig());
     httplib::Client c = w.client();
     std::string got;
-    int events = 0;
+    int events = 0, states = 0;
+    std::thread changer;
     auto r = c.Get("/api/events", [&](const char* data, size_t n) {
         got.append(data, n);
         size_t at;
         while ((at = got.find("\n\n")) != std::string::npos) {
             const std::string event = got.substr(0, at);
             got.erase(0, at + 2);
+            if (event.starts_with("event: state\n")) ++states;
             if (!event.starts_with("event: status\ndata: ")) continue;
             const json s = json::parse(event.substr(20), nullptr, false);
             EXPECT_TRUE(s.contains("fps") && s.contains("frame")) << event;
-            ++events;
+            if (++events == 3)  // then a change from another client (as a key's would be)
+                changer = std::thread([&w] { w.client().Post("/api/parts/1", R"({"visible": false})", "application/json"); });
         }
-        return events < 3;  // then the client hangs up
+        return states == 0 && events < 200;  // then the client hangs up
     });
-    EXPECT_EQ(events, 3);
+    changer.join();
+    EXPECT_GE(events, 3);
+    EXPECT_EQ(states, 1);
 }
 
 TEST(WebConsole, SectionsBookmarksCameraMeasurements) {

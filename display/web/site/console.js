@@ -230,6 +230,7 @@ $('session-file').onchange = async () => {
 
 const events = new EventSource('/api/events');
 events.addEventListener('status', (e) => showStatus(JSON.parse(e.data)));
+events.addEventListener('state', () => refreshAll());  // the keys, the wand or another console changed something
 events.onerror = () => { $('status-line').textContent = 'reconnecting…'; };
 refreshAll();
-setInterval(refreshAll, 3000);  // what the keys and the wand change on the wall shows here too
+setInterval(refreshAll, 15000);  // besides the 'state' events: after a reconnect, say

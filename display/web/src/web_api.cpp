@@ -455,7 +455,7 @@ WebResponse WebApi::handle(const WebRequest& q) {
                     const json now = sectionJson(id, p, origin);
                     std::array<double, 3> n = normal ? *normal : now["normal"].get<std::array<double, 3>>();
                     double d = offset ? *offset : now["offset"].get<double>();
-                    if (normal && !offset) {  // turned about the point on the plane nearest the file's origin... keep its point
+                    if (normal && !offset) {  // a new normal alone turns the plane about its point (the one nearest the origin)
                         const double len = norm(n);
                         d = (n[0] * (p.point.x + origin[0]) + n[1] * (p.point.y + origin[1]) + n[2] * (p.point.z + origin[2])) / len;
                     }

@@ -215,6 +215,12 @@ private:
             sceneSeq_ = r.sceneSeq;
             changed_ = false;
         }
+        // The operator's state without the camera: a new version when any of it changed.
+        c.stateVersion = before ? before->stateVersion : 0;
+        if (before && (c.visibility != before->visibility || !(c.session.sections == before->session.sections) ||
+                       !(c.session.bookmarks == before->session.bookmarks) || c.session.moved != before->session.moved ||
+                       !(c.session.measurements == before->session.measurements) || !(c.session.parts == before->session.parts)))
+            ++c.stateVersion;
         return c;
     }
 

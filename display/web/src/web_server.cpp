@@ -107,12 +107,13 @@ struct WebServer::Impl {
             return refuse(res, 503, "too many event streams open (" + std::to_string(limits.maxStreams) + ")", req);
         }
         auto last = std::make_shared<uint64_t>(0);
+        auto version = std::make_shared<uint64_t>(api.backend().snapshot()->stateVersion);
         auto sent = std::make_shared<std::chrono::steady_clock::time_point>();
         const auto every = std::chrono::duration<double>(1.0 / std::max(0.1, settings.thumbnailsPerSecond));
         res.set_header("Cache-Control", "no-store");
         res.set_chunked_content_provider(
             "text/event-stream",
-            [this, last, sent, every](size_t, httplib::DataSink& sink) {
+            [this, last, version, sent, every](size_t, httplib::DataSink& sink) {
                 if (stopping) return false;
                 const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(every - (std::chrono::steady_clock::now() - *sent));
                 if (wait.count() > 0) std::this_thread::sleep_for(std::min(wait, std::chrono::milliseconds(1000)));
@@ -124,6 +125,10 @@ struct WebServer::Impl {
                     s.path = "/api/status";
                     s.authorization = "Bearer " + api.token();
                     chunk = "event: status\ndata: " + api.handle(s).body + "\n\n";
+                    if (snap->stateVersion != *version) {  // parts, sections, bookmarks, moves or measurements changed
+                        chunk += "event: state\ndata: {\"version\": " + std::to_string(snap->stateVersion) + "}\n\n";
+                        *version = snap->stateVersion;
+                    }
                     *last = snap->steps;
                     *sent = std::chrono::steady_clock::now();
                 } else {

@@ -74,6 +74,9 @@ struct ConsoleSnapshot {
     bool stereo = false;
     bool onNodes = false;      // the pixels are on display nodes (no thumbnail, no screenshot)
     bool flying = false;
+    // Grows whenever the parts' visibility, sections, bookmarks, moved instances or measurements
+    // change (by the console, the keys, the wand or --watch): the event stream's "state" event.
+    uint64_t stateVersion = 0;
     std::array<double, 3> origin{};  // the scene's rebased origin (API coordinates are the file's)
     SessionState session;      // camera, bookmarks, sections, part view, moved instances, measurements
     std::vector<Visibility> visibility;  // per instance
