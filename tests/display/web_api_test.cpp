@@ -2,12 +2,15 @@
 // whose changes never run. Every request needs the token; every bad request is a 4xx with a
 // one-line reason and asks for no change at all.
 #include "parts_scene.h"
+#include "scratch.h"
 
 #include <rtwall/web.h>
 #include <rtwall/web_testing.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+
+#include <fstream>
 
 namespace rtwall {
 namespace {
@@ -159,6 +162,42 @@ TEST_F(Api, AGoodChangeIsPostedOnce) {
     EXPECT_EQ(console.commands, 1);
     EXPECT_EQ(api.handle(post("/api/sections", R"({"normal": [0, 2, 0], "offset": 0.5})")).status, 503);
     EXPECT_EQ(console.commands, 2);
+}
+
+TEST(WebConfig, TheRunConfigsWebTable) {
+    const auto dir = test::scratchDir();
+    auto write = [&](const std::string& text) {
+        std::ofstream(dir / "run.toml") << text;
+        return dir / "run.toml";
+    };
+    RunConfig c = readRunConfig(write("[run]\nsession = \"s.toml\"\n[web]\naddress = \"0.0.0.0\"\nport = 0\n"
+                                      "token = \"abcdefghijklmnop-_.~\"\ncertificate = \"c.pem\"\nkey = \"k.pem\"\n"
+                                      "thumbnails_per_second = 2\nthumbnail_width = 320\n"));
+    EXPECT_TRUE(c.web.enabled);
+    EXPECT_EQ(c.web.address, "0.0.0.0");
+    EXPECT_EQ(c.web.port, 0);
+    EXPECT_EQ(c.web.token, "abcdefghijklmnop-_.~");
+    EXPECT_EQ(c.web.certificate, dir / "c.pem");  // relative to the config
+    EXPECT_EQ(c.web.key, dir / "k.pem");
+    EXPECT_EQ(c.web.thumbnailsPerSecond, 2.0);
+    EXPECT_EQ(c.web.thumbnailWidth, 320);
+    EXPECT_EQ(c.session, dir / "s.toml");
+    EXPECT_FALSE(readRunConfig(write("scene = \"builtin:knots\"\n")).web.enabled);  // no table: no console
+    EXPECT_FALSE(readRunConfig(write("[web]\nenabled = false\n")).web.enabled);
+    auto refused = [&](const std::string& text, const std::string& says) {
+        try {
+            readRunConfig(write(text));
+            ADD_FAILURE() << "accepted: " << text;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << e.what();
+            EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+        }
+    };
+    refused("[web]\ntoken = \"0123456789abcdef ghij\"\n", "key 'token'");
+    refused("[web]\ncertificate = \"c.pem\"\n", "both 'certificate' and 'key'");
+    refused("[web]\nport = 70000\n", "port");
+    refused("[web]\nthumbnails_per_second = 0\n", "thumbnails_per_second");
+    refused("[web]\nadress = \"127.0.0.1\"\n", "unknown key 'adress'");
 }
 
 }  // namespace
