@@ -35,7 +35,7 @@ const std::string kToken = "fuzz-token-0123456789";
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     static testing::FakeConsole console(test::partsScene(), 96, 72);
-    static WebApi api(console, kToken);
+    static WebApi api(console, kToken, std::chrono::milliseconds(5000), std::chrono::milliseconds(0));  // no screenshot pacing: no sleeps
     const std::string in(reinterpret_cast<const char*>(data), size);
     std::string fields[3];
     size_t at = 0;

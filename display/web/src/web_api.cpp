@@ -211,8 +211,9 @@ std::string makeWebToken() {
     return t;
 }
 
-WebApi::WebApi(ConsoleBackend& backend, std::string token, std::chrono::milliseconds commandTimeout)
-    : backend_(backend), token_(std::move(token)), timeout_(commandTimeout) {
+WebApi::WebApi(ConsoleBackend& backend, std::string token, std::chrono::milliseconds commandTimeout,
+               std::chrono::milliseconds screenshotInterval)
+    : backend_(backend), token_(std::move(token)), timeout_(commandTimeout), shotInterval_(screenshotInterval) {
     if (token_.size() < 16) throw std::invalid_argument("WebApi: a token of at least 16 characters");
 }
 
@@ -337,7 +338,7 @@ WebResponse WebApi::handle(const WebRequest& q) {
             } done{shooting_};
             // At most two a second: a quick second one waits for its turn (on this thread, never the wall's).
             const auto last = std::chrono::steady_clock::time_point(std::chrono::steady_clock::duration(lastShot_.load()));
-            std::this_thread::sleep_until(last + std::chrono::milliseconds(500));
+            if (shotInterval_.count() > 0) std::this_thread::sleep_until(last + shotInterval_);
             lastShot_ = std::chrono::steady_clock::now().time_since_epoch().count();
             const std::optional<Image> img = backend_.screenshot(eye, timeout_);
             if (!img) throw Refusal{503, "no frame to take yet"};

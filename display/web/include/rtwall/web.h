@@ -110,7 +110,10 @@ std::unique_ptr<ConsoleBackend> sessionBackend(WallSession& session, const WebSe
 // The API and the page (docs/web-console.md lists every route and its answers).
 class WebApi {
 public:
-    WebApi(ConsoleBackend& backend, std::string token, std::chrono::milliseconds commandTimeout = std::chrono::milliseconds(5000));
+    // commandTimeout: how long a change waits for the wall's next step; screenshotInterval: the
+    // least time between two full-resolution screenshots (a quicker one waits).
+    WebApi(ConsoleBackend& backend, std::string token, std::chrono::milliseconds commandTimeout = std::chrono::milliseconds(5000),
+           std::chrono::milliseconds screenshotInterval = std::chrono::milliseconds(500));
     WebResponse handle(const WebRequest& request);
     // Whether the request carries the token (Bearer or the cookie); constant time in the token.
     bool authorized(const WebRequest& request) const;
@@ -120,7 +123,7 @@ public:
 private:
     ConsoleBackend& backend_;
     std::string token_;
-    std::chrono::milliseconds timeout_;
+    std::chrono::milliseconds timeout_, shotInterval_;
     // Full-resolution screenshots: one at a time (429 for another meanwhile), at most two a
     // second (a quick second one waits): a PNG of the wall costs CPU the local clients need.
     std::atomic<bool> shooting_{false};
