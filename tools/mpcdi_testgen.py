@@ -48,20 +48,22 @@ def pfm(width, height, samples, header=None):
     return bytes(out)
 
 
-def png_grey(width, height, values, bits=8):
-    """A grey PNG from values in [0, 1] (row-major, top row first)."""
+def png_grey(width, height, values, bits=8, channels=1):
+    """A grey (channels 1) or RGB (channels 3) PNG from values in [0, 1] (row-major, top row
+    first, `channels` values a pixel), 8 or 16 bits a value."""
     top = (1 << bits) - 1
     raw = bytearray()
     for j in range(height):
         raw.append(0)
-        for i in range(width):
-            v = max(0, min(top, int(round(values[j * width + i] * top))))
+        for i in range(width * channels):
+            v = max(0, min(top, int(round(values[j * width * channels + i] * top))))
             raw += struct.pack(">H", v) if bits == 16 else bytes([v])
 
     def chunk(tag, data):
         return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
 
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, bits, 0, 0, 0, 0)) +
+    colour_type = 2 if channels == 3 else 0
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, bits, colour_type, 0, 0, 0)) +
             chunk(b"IDAT", zlib.compress(bytes(raw), 9)) + chunk(b"IEND", b""))
 
 
@@ -87,8 +89,9 @@ def archive(entries):
     return buf.getvalue()
 
 
-def xml(profile, buffers, level=2, file_sets=True, unit="m"):
-    """buffers: [(buffer id, w, h, [(region id, w, h, warp path, alpha path or None, beta path or None)])]."""
+def xml(profile, buffers, level=2, file_sets=True, unit="m", alpha_depth=(1, 8), beta_depth=(1, 8), alpha_gamma=2.2):
+    """buffers: [(buffer id, w, h, [(region id, w, h, warp path, alpha path or None, beta path or None)])];
+    the maps' (componentDepth, bitDepth) and the alpha maps' gammaEmbedded."""
     lines = ['<?xml version="1.0" encoding="utf-8"?>',
              '<MPCDI profile="%s" geometry="%d" color="1" version="2.0">' % (profile, level), "  <display>"]
     sets = []
@@ -103,10 +106,11 @@ def xml(profile, buffers, level=2, file_sets=True, unit="m"):
                 s.append("      <geometryWarpFile><path>%s</path>%s<interpolation>linear</interpolation>"
                          "<originOf3DData>idealEyePoint</originOf3DData></geometryWarpFile>" % (warp, unit_xml))
             if alpha:
-                s.append("      <alphaMap><path>%s</path><componentDepth>1</componentDepth><bitDepth>8</bitDepth>"
-                         "<gammaEmbedded>2.2</gammaEmbedded></alphaMap>" % alpha)
+                s.append("      <alphaMap><path>%s</path><componentDepth>%d</componentDepth><bitDepth>%d</bitDepth>"
+                         "<gammaEmbedded>%g</gammaEmbedded></alphaMap>" % ((alpha,) + tuple(alpha_depth) + (alpha_gamma,)))
             if beta:
-                s.append("      <betaMap><path>%s</path><componentDepth>1</componentDepth><bitDepth>8</bitDepth></betaMap>" % beta)
+                s.append("      <betaMap><path>%s</path><componentDepth>%d</componentDepth><bitDepth>%d</bitDepth></betaMap>" %
+                         ((beta,) + tuple(beta_depth)))
             s.append("    </fileset>")
             sets += s
         lines.append("    </buffer>")
@@ -251,6 +255,24 @@ def identity(buffers, shift):
     return archive([("mpcdi.xml", xml("2d", xmlbufs))] + entries)
 
 
+def map_values(w, h, channels, kind):
+    """Distinct values for each pixel and channel: what `depths` writes and the test expects."""
+    n = w * h * channels
+    if kind == "alpha":
+        return [((k * 997 + 13) % 65536) / 65535 for k in range(n)]
+    return [(k % 23) / 22 for k in range(n)]
+
+
+def depths(alpha_depth, beta_depth, w=6, h=4):
+    """A 2D identity calibration of one region whose alpha and beta maps have the given
+    (componentDepth, bitDepth): 16-bit and RGB maps as writers other than ours export them."""
+    entries = [("r.pfm", pfm(w, h, identity_samples(w, h)))]
+    for name, (channels, bits) in (("alpha", alpha_depth), ("beta", beta_depth)):
+        entries.append(("r_%s.png" % name, png_grey(w, h, map_values(w, h, channels, name), bits, channels)))
+    bufs = [("p", w, h, [("r", w, h, "r.pfm", "r_alpha.png", "r_beta.png")])]
+    return archive([("mpcdi.xml", xml("2d", bufs, alpha_depth=alpha_depth, beta_depth=beta_depth, alpha_gamma=1.0))] + entries)
+
+
 # ---- malformed ----------------------------------------------------------------------------------
 
 
@@ -339,6 +361,10 @@ def main():
     i.add_argument("--shift", default="0,0")
     m = sub.add_parser("malformed")
     m.add_argument("out")
+    d = sub.add_parser("depths", help="one region whose blend maps have the given component and bit depths")
+    d.add_argument("out")
+    d.add_argument("--alpha", type=size, default=(1, 16), help="COMPONENTSxBITS (1x16: 16-bit grey)")
+    d.add_argument("--beta", type=size, default=(3, 8), help="COMPONENTSxBITS (3x8: 8-bit RGB)")
     fz = sub.add_parser("fuzz-seeds")
     fz.add_argument("out")
     a = p.parse_args()
@@ -355,6 +381,8 @@ def main():
             bufs.append((bid, size(wh)))
         dx, dy = (int(v) for v in a.shift.split(","))
         data = identity(bufs, (dx, dy))
+    elif a.what == "depths":
+        data = depths(a.alpha, a.beta)
     elif a.what == "fuzz-seeds":
         fuzz_seeds(a.out)
         return

@@ -122,6 +122,43 @@ TEST(Mpcdi, IdentityAndShiftedTwoDimensionalWarps) {
         }
 }
 
+// Blend maps of 16 bits and of three components (RGB), as other writers export them: every value
+// read exactly as written (v / 65535 or v / 255), channel by channel. The values are the writer's
+// (tools/mpcdi_testgen.py map_values): distinct for every pixel and channel.
+TEST(Mpcdi, SixteenBitAndRgbBlendMapsReadAsWritten) {
+    const fs::path dir = test::scratchDir();
+    auto expected = [](int n, bool alpha, int bits) {
+        std::vector<float> v;
+        const double top = bits == 16 ? 65535.0 : 255.0;
+        for (int k = 0; k < n; ++k) {
+            const double x = alpha ? double((k * 997 + 13) % 65536) / 65535.0 : double(k % 23) / 22.0;
+            v.push_back(float(std::round(x * top)) / float(top));  // as the writer quantises and the reader scales
+        }
+        return v;
+    };
+    struct Case {
+        int alphaChannels, alphaBits, betaChannels, betaBits;
+    };
+    for (const Case c : {Case{1, 16, 3, 8}, Case{3, 16, 1, 16}, Case{3, 8, 3, 16}}) {
+        const std::string name = std::to_string(c.alphaChannels) + "x" + std::to_string(c.alphaBits) + "_" +
+                                 std::to_string(c.betaChannels) + "x" + std::to_string(c.betaBits);
+        const fs::path file = dir / (name + ".mpcdi");
+        generate("depths " + file.string() + " --alpha " + std::to_string(c.alphaChannels) + "x" + std::to_string(c.alphaBits) +
+                 " --beta " + std::to_string(c.betaChannels) + "x" + std::to_string(c.betaBits));
+        const MpcdiFile f = readMpcdi(file);
+        ASSERT_EQ(f.buffers.size(), 1u) << name;
+        const MpcdiRegion& r = f.buffers[0].regions.at(0);
+        ASSERT_TRUE(r.alpha && r.beta) << name;
+        EXPECT_EQ(r.alpha->components, c.alphaChannels) << name;
+        EXPECT_EQ(r.beta->components, c.betaChannels) << name;
+        EXPECT_EQ(r.alpha->gammaEmbedded, 1.0) << name;
+        EXPECT_EQ(r.alpha->width, 6);
+        EXPECT_EQ(r.alpha->height, 4);
+        EXPECT_EQ(r.alpha->values, expected(6 * 4 * c.alphaChannels, true, c.alphaBits)) << name;
+        EXPECT_EQ(r.beta->values, expected(6 * 4 * c.betaChannels, false, c.betaBits)) << name;
+    }
+}
+
 // What writers differ in: attribute and element case, filesets inside their region, a path as
 // the element's own text, an unnamed buffer, millimetres.
 TEST(Mpcdi, WritersSpellingsAreRead) {

@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include <cmath>
 #include <cstdlib>
 
@@ -125,6 +127,37 @@ TEST(ProjectorBlend, TheArithmeticIsLinearLightWithTheEmbeddedGammaUndone) {
                 if (a == 1.0 && b == 0.0) EXPECT_EQ(grey.pixel(x, y)[0], 180);
                 else EXPECT_NEAR(grey.pixel(x, y)[0], code, 1) << p << " " << x << "," << y;
             }
+    }
+}
+
+// RGB and 16-bit maps (tools/mpcdi_testgen.py depths): each channel blended by its own alpha and
+// beta, a grey map's value used for all three; a 2D calibration of one 6x4 screen.
+TEST(ProjectorBlend, RgbAndSixteenBitMapsBlendEachChannelByItsOwnValues) {
+    const fs::path dir = test::scratchDir();
+    for (const std::string depths : {"--alpha 1x16 --beta 3x8", "--alpha 3x16 --beta 1x16"}) {
+        test::mpcdiTestgen("depths " + (dir / "d.mpcdi").string() + " " + depths);
+        std::ofstream(dir / "d.toml") << "[wall]\nwidth = 6\nheight = 4\n[[screen]]\nname = \"s\"\nviewport = [0, 0, 6, 4]\n"
+                                         "[warp]\nmpcdi = \"d.mpcdi\"\nbuffers = { p = \"s\" }\n";
+        const WallConfig wall = loadWallConfig(dir / "d.toml");
+        const MpcdiFile file = readMpcdi(wall.warp->mpcdi);
+        const ProjectorBlendStage stage(wall, file);
+        Image grey = filled(6, 4, 180);
+        stage.apply(wall, 0, grey);
+        const MpcdiRegion& r = file.buffers[0].regions[0];
+        ASSERT_TRUE(r.alpha && r.beta);
+        size_t channelsApart = 0;
+        for (int y = 0; y < 4; ++y)
+            for (int x = 0; x < 6; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    const size_t k = size_t(y) * 6 + size_t(x);
+                    auto at = [&](const MpcdiMap& m) { return double(m.values[m.components == 3 ? 3 * k + size_t(c) : k]); };
+                    const double a = at(*r.alpha), b = at(*r.beta);  // gammaEmbedded 1
+                    const double want = b + (1 - b) * a * decode(180);
+                    const double v = want <= 0.0031308 ? want * 12.92 : 1.055 * std::pow(want, 1 / 2.4) - 0.055;
+                    EXPECT_NEAR(grey.pixel(x, y)[c], std::lround(std::clamp(v, 0.0, 1.0) * 255), 1) << depths << " " << x << "," << y << " " << c;
+                    channelsApart += c > 0 && grey.pixel(x, y)[c] != grey.pixel(x, y)[0];
+                }
+        EXPECT_GT(channelsApart, 10u) << depths << ": the channels were blended alike";
     }
 }
 
