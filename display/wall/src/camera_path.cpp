@@ -54,20 +54,24 @@ std::string writeCameraPath(const std::vector<CameraKey>& keys, const std::array
     return os.str();
 }
 
+CameraDesc mixCameras(const CameraDesc& a, const CameraDesc& b, float t) {
+    auto mix = [t](Float3 p, Float3 q) { return Float3{p.x + (q.x - p.x) * t, p.y + (q.y - p.y) * t, p.z + (q.z - p.z) * t}; };
+    CameraDesc c = a;
+    c.position = mix(a.position, b.position);
+    c.lookAt = mix(a.lookAt, b.lookAt);
+    c.up = mix(a.up, b.up);
+    if (length(c.up) < 1e-6f) c.up = t < 0.5f ? a.up : b.up;  // opposite ups have no halfway
+    c.fovY = a.fovY + (b.fovY - a.fovY) * t;
+    return c;
+}
+
 CameraDesc cameraAt(const std::vector<CameraKey>& keys, int frame) {
     if (keys.empty()) throw std::invalid_argument("cameraAt: no keys");
     if (frame <= keys.front().frame) return keys.front().camera;
     for (size_t i = 1; i < keys.size(); ++i)
         if (frame <= keys[i].frame) {
             const CameraKey &a = keys[i - 1], &b = keys[i];
-            const float t = float(frame - a.frame) / float(b.frame - a.frame);
-            auto mix = [t](Float3 p, Float3 q) { return Float3{p.x + (q.x - p.x) * t, p.y + (q.y - p.y) * t, p.z + (q.z - p.z) * t}; };
-            CameraDesc c = a.camera;
-            c.position = mix(a.camera.position, b.camera.position);
-            c.lookAt = mix(a.camera.lookAt, b.camera.lookAt);
-            c.up = mix(a.camera.up, b.camera.up);
-            c.fovY = a.camera.fovY + (b.camera.fovY - a.camera.fovY) * t;
-            return c;
+            return mixCameras(a.camera, b.camera, float(frame - a.frame) / float(b.frame - a.frame));
         }
     return keys.back().camera;
 }

@@ -34,17 +34,8 @@ void WallSession::Impl::runOperator(WallSession& self) {
     const double t = std::min(1.0, std::chrono::duration<double>(std::chrono::steady_clock::now() - flight->start).count() /
                                        std::max(1e-9, flight->seconds));
     CameraDesc c = flight->to;
-    if (t < 1.0) {
-        const float s = float(t * t * (3.0 - 2.0 * t));  // smoothstep: no jolt at either end
-        auto mix = [s](Float3 a, Float3 b) { return Float3{a.x + (b.x - a.x) * s, a.y + (b.y - a.y) * s, a.z + (b.z - a.z) * s}; };
-        c.position = mix(flight->from.position, flight->to.position);
-        c.lookAt = mix(flight->from.lookAt, flight->to.lookAt);
-        c.up = mix(flight->from.up, flight->to.up);
-        if (length(c.up) < 1e-6f) c.up = flight->to.up;  // opposite ups: no halfway
-        c.fovY = flight->from.fovY + (flight->to.fovY - flight->from.fovY) * s;
-    } else {
-        flight.reset();
-    }
+    if (t < 1.0) c = mixCameras(flight->from, flight->to, float(t * t * (3.0 - 2.0 * t)));  // smoothstep: no jolt at either end
+    else flight.reset();
     input->setCamera(c);
     live->setCamera(c);
 }
@@ -122,7 +113,6 @@ bool WallSession::deleteMeasurement(size_t index) {
     return true;
 }
 
-const std::vector<Transform>& WallSession::loadedTransforms() const { return impl_->loadedTransforms; }
 const WallConfig& WallSession::wallConfig() const { return impl_->wallConfig; }
 double WallSession::frameSeconds() const { return impl_->frameTimes.empty() ? 0.0 : impl_->frameTimes.back(); }
 size_t WallSession::steps() const { return impl_->frameTimes.size(); }

@@ -23,23 +23,19 @@ std::string world(Float3 p, const std::array<double, 3>& o) {
     return triple(double(p.x) + o[0], double(p.y) + o[1], double(p.z) + o[2]);
 }
 
+// TOML strings and arrays of them as toml++ writes them (quotes and escapes its own).
 std::string quoted(const std::string& s) {
-    std::string out = "\"";
-    for (unsigned char ch : s) {
-        if (ch == '"' || ch == '\\') out += '\\', out += char(ch);
-        else if (ch < 0x20 || ch == 0x7f) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\u%04x", ch);
-            out += buf;
-        } else out += char(ch);
-    }
-    return out + "\"";
+    std::ostringstream os;
+    os << toml::value<std::string>(s);
+    return os.str();
 }
 
 std::string strings(const std::vector<std::string>& v) {
-    std::string out = "[";
-    for (size_t i = 0; i < v.size(); ++i) out += (i ? ", " : "") + quoted(v[i]);
-    return out + "]";
+    toml::array a;
+    for (const std::string& e : v) a.push_back(e);
+    std::ostringstream os;
+    os << a;
+    return os.str();
 }
 
 void writeCamera(std::ostringstream& os, const CameraDesc& c, const std::array<double, 3>& o) {

@@ -354,7 +354,7 @@ WebResponse WebApi::handle(const WebRequest& q) {
             const std::vector<ConsolePart>& parts = backend_.parts();
             if (route("GET", "parts", 1)) {
                 json list = json::array();
-                for (size_t i = 0; i < parts.size(); ++i) list.push_back(partJson(i, parts[i], snap->visibility));
+                for (size_t i = 0; i < parts.size(); ++i) list.push_back(partJson(i, parts[i], *snap->visibility));
                 const PartView& v = snap->session.parts;
                 return ok({{"parts", list}, {"view", {{"hide", v.hide}, {"isolate", v.isolate}, {"highlight", v.highlight}}}});
             }

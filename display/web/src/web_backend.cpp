@@ -88,9 +88,9 @@ public:
             ticket = ++posted_;
         }
         session_.post([this, command = std::move(command), ticket](WallSession& s) {
-            command(s);
             changed_ = true;  // the next snapshot compares everything again
-            ran_ = std::max(ran_, ticket);
+            ran_ = std::max(ran_, ticket);  // first: a command that throws is answered at once too
+            command(s);
         });
         std::unique_lock<std::mutex> lock(mutex_);
         return cv_.wait_for(lock, timeout, [&] { return published_ >= ticket; });
@@ -200,6 +200,9 @@ private:
         c.stereo = w.stereo.mode != StereoMode::None;
         c.flying = s.flying();
         c.origin = s.scene().origin;
+        // The per-instance parts (visibility, moved instances) are scanned only when the scene
+        // state changed; otherwise they are the last snapshot's, equal by construction.
+        bool perInstanceChanged = false;
         if (before && !changed_ && r.sceneSeq == sceneSeq_ && s.partView() == before->session.parts) {
             c.session.camera = s.camera();
             c.session.bookmarks = s.bookmarks();
@@ -210,15 +213,18 @@ private:
             c.visibility = before->visibility;
         } else {
             c.session = s.sessionState();
-            c.visibility.reserve(s.scene().instances.size());
-            for (const InstanceDesc& in : s.scene().instances) c.visibility.push_back(in.visibility);
+            auto visibility = std::make_shared<std::vector<Visibility>>();
+            visibility->reserve(s.scene().instances.size());
+            for (const InstanceDesc& in : s.scene().instances) visibility->push_back(in.visibility);
+            perInstanceChanged = !before || *visibility != *before->visibility || c.session.moved != before->session.moved;
+            c.visibility = std::move(visibility);
             sceneSeq_ = r.sceneSeq;
             changed_ = false;
         }
         // The operator's state without the camera: a new version when any of it changed.
         c.stateVersion = before ? before->stateVersion : 0;
-        if (before && (c.visibility != before->visibility || !(c.session.sections == before->session.sections) ||
-                       !(c.session.bookmarks == before->session.bookmarks) || c.session.moved != before->session.moved ||
+        if (before && (perInstanceChanged || !(c.session.sections == before->session.sections) ||
+                       !(c.session.bookmarks == before->session.bookmarks) ||
                        !(c.session.measurements == before->session.measurements) || !(c.session.parts == before->session.parts)))
             ++c.stateVersion;
         return c;

@@ -21,7 +21,7 @@ bool loopback(const std::string& address) {
     return address == "127.0.0.1" || address == "::1" || address == "localhost" || address.starts_with("127.");
 }
 
-std::string oneLine(int, const std::string& why) { return nlohmann::json{{"error", why}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace); }
+std::string oneLine(const std::string& why) { return nlohmann::json{{"error", why}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace); }
 
 }  // namespace
 
@@ -63,9 +63,13 @@ struct WebServer::Impl {
     std::chrono::steady_clock::time_point lastSaid{};
     std::mutex logMutex;
     void refuse(httplib::Response& res, int status, const std::string& why, const httplib::Request& req) {
-        ++refused;
         res.status = status;
-        res.set_content(oneLine(status, why), "application/json");
+        res.set_content(oneLine(why), "application/json");
+        counted(status, why, req);
+    }
+    // A refusal counted, and said at most once every 10 s.
+    void counted(int status, const std::string& why, const httplib::Request& req) {
+        ++refused;
         std::lock_guard<std::mutex> lock(logMutex);
         const auto now = std::chrono::steady_clock::now();
         if (now - lastSaid > std::chrono::seconds(10)) {  // said, but a flood is not a flood of lines
@@ -91,7 +95,7 @@ struct WebServer::Impl {
         const WebRequest q = request(req);
         if (req.path == "/api/events") return events(q, req, res);
         WebResponse r = api.handle(q);
-        if (r.status == 401) return refuse(res, 401, nlohmann::json::parse(r.body).value("error", "unauthorized"), req);
+        if (r.status == 401) counted(401, "no token or a wrong one", req);
         res.status = r.status;
         for (const auto& [k, v] : r.headers) res.set_header(k, v);
         res.set_content(std::move(r.body), r.contentType);
@@ -183,9 +187,9 @@ WebServer::WebServer(WebApi& api, const WebSettings& settings, Limits limits, st
         if (!res.body.empty()) return;
         if (res.status == 413) {
             ++s.refused;
-            res.set_content(oneLine(413, "the body is larger than " + std::to_string(s.limits.maxBody) + " bytes"), "application/json");
+            res.set_content(oneLine("the body is larger than " + std::to_string(s.limits.maxBody) + " bytes"), "application/json");
         } else {
-            res.set_content(oneLine(res.status, "bad request: " + req.method.substr(0, 10) + " " + req.path.substr(0, 80)), "application/json");
+            res.set_content(oneLine("bad request: " + req.method.substr(0, 10) + " " + req.path.substr(0, 80)), "application/json");
         }
     });
     h.set_exception_handler([&s](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
@@ -197,7 +201,7 @@ WebServer::WebServer(WebApi& api, const WebSettings& settings, Limits limits, st
         } catch (...) {
         }
         res.status = 500;
-        res.set_content(oneLine(500, why), "application/json");
+        res.set_content(oneLine(why), "application/json");
         s.log("web: " + why);
     });
     if (settings.port == 0) s.port = h.bind_to_any_port(settings.address);

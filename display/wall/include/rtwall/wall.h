@@ -240,6 +240,9 @@ struct CameraKey {
 std::vector<CameraKey> readCameraPath(const std::filesystem::path& file, const std::array<double, 3>& origin);
 std::string writeCameraPath(const std::vector<CameraKey>& keys, const std::array<double, 3>& origin);
 CameraDesc cameraAt(const std::vector<CameraKey>& keys, int frame);
+// a's camera moved t of the way to b's (0: a, 1: b): pose and field of view linearly, an up that
+// would vanish halfway (opposite ups) the nearer end's. Camera paths and the operator's flights.
+CameraDesc mixCameras(const CameraDesc& a, const CameraDesc& b, float t);
 
 // ---- The session ----------------------------------------------------------------------------------
 
@@ -399,8 +402,6 @@ public:
     // part view, moved instances (the others back where the scene put them), measurements.
     SessionState sessionState() const;
     void restoreSession(const SessionState& state);
-    // The transforms the scene was loaded with (what "moved" is measured against).
-    const std::vector<Transform>& loadedTransforms() const;
     const WallConfig& wallConfig() const;
     double frameSeconds() const;  // the last step's, 0 before it
     size_t steps() const;         // frames stepped

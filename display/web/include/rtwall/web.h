@@ -79,7 +79,8 @@ struct ConsoleSnapshot {
     uint64_t stateVersion = 0;
     std::array<double, 3> origin{};  // the scene's rebased origin (API coordinates are the file's)
     SessionState session;      // camera, bookmarks, sections, part view, moved instances, measurements
-    std::vector<Visibility> visibility;  // per instance
+    // Per instance; shared by the snapshots of one scene state (it is copied only when that changed).
+    std::shared_ptr<const std::vector<Visibility>> visibility = std::make_shared<const std::vector<Visibility>>();
 };
 
 // What the API reads and changes. Thread-safe: called from the server's threads.

@@ -21,7 +21,9 @@ public:
         s->origin = scene_.origin;
         if (!scene_.cameras.empty()) s->session.camera = scene_.cameras.front();
         s->session.sections = scene_.sections;
-        for (const InstanceDesc& in : scene_.instances) s->visibility.push_back(in.visibility);
+        auto visibility = std::make_shared<std::vector<Visibility>>();
+        for (const InstanceDesc& in : scene_.instances) visibility->push_back(in.visibility);
+        s->visibility = std::move(visibility);
         s->session.bookmarks.push_back({"start", s->session.camera});
         s->session.measurements.push_back({{0, 0, 0}, std::array<double, 3>{1, 0, 0}, 1.0});
         snapshot_ = s;
