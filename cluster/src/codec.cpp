@@ -365,6 +365,32 @@ size_t maxEncodedFeatureBytes(int width, int height) {
     return std::max(size_t(LZ4_compressBound(int(n))), ZSTD_compressBound(n));
 }
 
+int previewValueBytes(uint32_t largest) { return largest <= 0xFF ? 1 : largest <= 0xFFFF ? 2 : 4; }
+
+void encodePreviewCells(const uint32_t* values, size_t cells, int valueBytes, std::vector<uint8_t>& out,
+                        std::vector<uint8_t>& scratch) {
+    const size_t n = cells * 4;
+    scratch.resize(n * size_t(valueBytes));
+    for (int k = 0; k < valueBytes; ++k) {
+        uint8_t* plane = scratch.data() + size_t(k) * n;
+        for (size_t i = 0; i < n; ++i) plane[i] = uint8_t(values[i] >> (8 * k));
+    }
+    out.clear();
+    compress(TileCodec::Zstd, 1, scratch.data(), scratch.size(), out);
+}
+
+void decodePreviewCells(const uint8_t* data, size_t size, size_t cells, int valueBytes, uint32_t* values,
+                        std::vector<uint8_t>& scratch) {
+    const size_t n = cells * 4;
+    scratch.resize(n * size_t(valueBytes));
+    decompress(TileCodec::Zstd, data, size, scratch.data(), scratch.size(), "preview cells");
+    std::fill(values, values + n, 0u);
+    for (int k = 0; k < valueBytes; ++k) {
+        const uint8_t* plane = scratch.data() + size_t(k) * n;
+        for (size_t i = 0; i < n; ++i) values[i] |= uint32_t(plane[i]) << (8 * k);
+    }
+}
+
 const char* codecName(TileCodec codec) {
     switch (codec) {
         case TileCodec::Raw: return "raw";

@@ -59,6 +59,16 @@ void encodeFeatureTile(uint8_t bits, const FeatureView& view, int width, int hei
 void decodeFeatureTile(uint8_t bits, const uint8_t* data, size_t size, int width, int height, const FeatureView& view,
                        std::vector<uint8_t>& scratch);
 
+// A display node's picture cells (issue 31, NodePreview): `cells` x 4 values (red, green, blue
+// sums and pixel count), each `valueBytes` bytes (1, 2 or 4: previewValueBytes of the largest),
+// stored as byte planes (every value's low byte, then the next) and compressed with zstd at
+// level 1. Decoding checks the stream decodes to exactly that many bytes (DecodeError).
+int previewValueBytes(uint32_t largest);
+void encodePreviewCells(const uint32_t* values, size_t cells, int valueBytes, std::vector<uint8_t>& out,
+                        std::vector<uint8_t>& scratch);
+void decodePreviewCells(const uint8_t* data, size_t size, size_t cells, int valueBytes, uint32_t* values,
+                        std::vector<uint8_t>& scratch);
+
 // Upper bound of an encoded tile's size, for ZMQ_MAXMSGSIZE.
 size_t maxEncodedTileBytes(int width, int height);
 // The same for a tile's encoded depth.

@@ -7,6 +7,8 @@
 // single-PC wall) before it says so; the swap presents that. What is presented, and how, is the caller's callback.
 // A re-projecting wall (issue 27) makes each released frame the warp's source at its swap and
 // presents at every pose the master sends (NodePose, once per refresh), warped to that pose.
+// The frame it presented last stays until the next swap, for the operator console's picture
+// (NodePreviewAsk, issue 31): the node answers with the cells of the pixels it owns.
 #include "codec.h"
 #include "link_socket.h"
 #include "net.h"
@@ -14,6 +16,7 @@
 #include "security.h"
 
 #include <rtwall/cluster.h>
+#include <rtwall/image_box.h>
 
 #include <zmq.hpp>
 
@@ -158,7 +161,8 @@ private:
         monitor_.start(ctx_, master_, "inproc://rtwall-node-monitor-" + std::to_string(++monitorSeq_), kMasterLinkEvents);
         master_.connect(run_.connect);
         session_ = 0;
-        shown_ = {};
+        shown_ = onScreen_ = {};
+        onScreenFrame_ = 0;
         compositor_ = Compositor{};  // another session's frames: no running mean goes on across a rejoin
         reproject_ = false;          // until the welcome says
         sourceFrame_ = lastCounted_ = 0;
@@ -217,6 +221,7 @@ private:
             }
             case MsgType::NodeFrame: onFrame(decodePayload<NodeFrame>(p, n)); break;
             case MsgType::NodePose: return onPose(decodePayload<NodePose>(p, n));
+            case MsgType::NodePreviewAsk: onPreviewAsk(decodePayload<NodePreviewAsk>(p, n)); break;
             case MsgType::NodeSwap: {
                 const NodeSwap s = decodePayload<NodeSwap>(p, n);
                 // Frames before this one were released without this node (it was late): let them
@@ -229,9 +234,17 @@ private:
                 if (reproject_) {
                     // The frame becomes the warp's newest source; the poses show it.
                     if (const Slot* slot = held ? slotOf(s.frame) : nullptr) keepSource(*slot, s.leftOut);
-                } else if (run_.present) {
-                    if (held) run_.present(s.frame, &shown_.left, shown_.right.rgb.empty() ? nullptr : &shown_.right, s.leftOut);
-                    else run_.present(s.frame, nullptr, nullptr, s.leftOut);
+                } else {
+                    if (held) {
+                        // What it shows now stays until the next swap; the next frame is composed
+                        // into the other buffers.
+                        std::swap(onScreen_, shown_);
+                        onScreenFrame_ = s.frame;
+                    }
+                    if (run_.present) {
+                        if (held) run_.present(s.frame, &onScreen_.left, onScreen_.right.rgb.empty() ? nullptr : &onScreen_.right, s.leftOut);
+                        else run_.present(s.frame, nullptr, nullptr, s.leftOut);
+                    }
                 }
                 send(NodeSwapped{s.frame}, s.frame);
                 // Frames up to this one are done with: shown, or released without this node.
@@ -430,7 +443,8 @@ private:
     // as show() does); the frame before stays the older one.
     void keepSource(const Slot& slot, const std::vector<std::string>& leftOut) {
         const NodeFrame& f = slot.frame;
-        compose(slot, true);
+        onScreen_ = compose(slot, true);
+        onScreenFrame_ = f.frame;
         sourceFrame_ = f.frame;
         leftOut_ = leftOut;
     }
@@ -476,6 +490,91 @@ private:
             }
         }
         return std::nullopt;
+    }
+
+    // The operator console's picture (issue 31): the cells of the pixels this node owns of the
+    // frame it presented last, each eye's rows with any in bands of at most
+    // kMaxPreviewPartBytes, then an empty last part. Nothing presented yet (or no owners
+    // function): one part of frame 0.
+    void onPreviewAsk(const NodePreviewAsk& ask) {
+        NodePreview part;
+        part.id = ask.id;
+        part.last = true;
+        const Image* eyes[2] = {&onScreen_.left, onScreen_.right.rgb.empty() ? nullptr : &onScreen_.right};
+        if (onScreenFrame_ == 0 || !run_.previewOwners || onScreen_.left.rgb.empty()) {
+            send(part);
+            return;
+        }
+        part.frame = onScreenFrame_;
+        part.srcWidth = onScreen_.left.width;
+        part.srcHeight = onScreen_.left.height;
+        for (int e = 0; e < 2; ++e) {
+            if (!eyes[e] || !((ask.nodes >> index_) & 1)) continue;
+            const Image& im = *eyes[e];
+            BoxGrid grid;
+            try {
+                grid = boxGrid(im.width, im.height, ask.width);
+            } catch (const std::invalid_argument& err) {
+                std::fprintf(stderr, "rtwall display: no picture for the console: %s\n", err.what());
+                break;
+            }
+            const std::vector<uint8_t>& owners = ownersOf(im.width, im.height, e, ask.nodes);
+            if (owners.size() != size_t(im.width) * size_t(im.height)) break;  // said by ownersOf
+            sums_.assign(grid.cells() * 4, 0);
+            addBoxSums(im, grid, owners.data(), uint8_t(index_), sums_.data());
+            // The bounding box of the cells with pixels of this node.
+            int x0 = grid.width, y0 = grid.height, x1 = 0, y1 = 0;
+            uint32_t largest = 0;
+            for (int y = 0; y < grid.height; ++y)
+                for (int x = 0; x < grid.width; ++x) {
+                    const uint32_t* c = sums_.data() + (size_t(y) * grid.width + x) * 4;
+                    if (c[3] == 0) continue;
+                    x0 = std::min(x0, x), x1 = std::max(x1, x + 1), y0 = std::min(y0, y), y1 = std::max(y1, y + 1);
+                    largest = std::max({largest, c[0], c[1], c[2], c[3]});
+                }
+            if (x1 <= x0) continue;
+            const int valueBytes = previewValueBytes(largest);
+            const size_t rowBytes = size_t(x1 - x0) * 4 * size_t(valueBytes);
+            const int band = int(std::max<size_t>(1, kMaxPreviewPartBytes / rowBytes));
+            for (int y = y0; y < y1; y += band) {
+                const int yEnd = std::min(y1, y + band);
+                band_.clear();
+                for (int row = y; row < yEnd; ++row) {
+                    const uint32_t* from = sums_.data() + (size_t(row) * grid.width + x0) * 4;
+                    band_.insert(band_.end(), from, from + size_t(x1 - x0) * 4);
+                }
+                NodePreview p = part;
+                p.eye = uint8_t(e);
+                p.x0 = x0, p.x1 = x1, p.y0 = y, p.y1 = yEnd;
+                p.valueBytes = uint8_t(valueBytes);
+                p.last = false;
+                encodePreviewCells(band_.data(), band_.size() / 4, valueBytes, p.cells, scratch_);
+                send(p, onScreenFrame_);
+            }
+        }
+        send(part, onScreenFrame_);
+    }
+
+    // Who owns each pixel (DisplayNodeRun::previewOwners), kept while the frame size and the
+    // nodes asked stay the same.
+    const std::vector<uint8_t>& ownersOf(int width, int height, int eye, uint64_t nodes) {
+        OwnersKey key{width, height, nodes};
+        OwnersCache& cache = owners_[eye];
+        if (!(cache.key == key)) {
+            try {
+                cache.owners = run_.previewOwners(width, height, eye, nodes);
+            } catch (const std::exception& e) {
+                std::fprintf(stderr, "rtwall display: no picture for the console: %s\n", e.what());
+                cache.owners.clear();
+            }
+            if (!cache.owners.empty() && cache.owners.size() != size_t(width) * size_t(height)) {
+                std::fprintf(stderr, "rtwall display: no picture for the console: %zu pixel owners for a %dx%d frame\n",
+                             cache.owners.size(), width, height);
+                cache.owners.clear();
+            }
+            cache.key = key;
+        }
+        return cache.owners;
     }
 
     // The slot that holds `frame` (begun in this session), if any.
@@ -524,6 +623,18 @@ private:
     int current_ = 0;
     Compositor compositor_;                // the running means go on from frame to frame
     EyeImages shown_;                      // what the node shows of the last frame it held
+    EyeImages onScreen_;                   // what it presented at the last swap it held (the console's picture)
+    uint32_t onScreenFrame_ = 0;           // onScreen_'s frame; 0: none yet
+    struct OwnersKey {
+        int width = 0, height = 0;
+        uint64_t nodes = 0;
+        bool operator==(const OwnersKey&) const = default;
+    };
+    struct OwnersCache {
+        OwnersKey key;
+        std::vector<uint8_t> owners;
+    } owners_[2];
+    std::vector<uint32_t> sums_, band_;    // a picture's cells, reused
     std::optional<uint32_t> pendingSwap_;  // shown_'s frame, reported and not yet swapped
     // Re-projection (the welcome's flag): the compositor's newest source is sourceFrame_, released
     // with leftOut_ left out; lastCounted_ is the newest frame counted as presented (run_.frames).

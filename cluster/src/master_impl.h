@@ -25,6 +25,7 @@
 
 #include <rtwall/cluster.h>
 #include <rtwall/cluster_testing.h>
+#include <rtwall/image_box.h>
 
 #include <array>
 #include <atomic>
@@ -254,12 +255,44 @@ struct Master::Impl {
         uint32_t refreshes = 0;
         static constexpr size_t kPoseRing = 256;
         std::array<double, kPoseRing> poseAskedAt{};
+        // The newest frames begun on the nodes and their sizes: a picture's part must be of one.
+        struct FrameSize {
+            uint32_t frame = 0;
+            int width = 0, height = 0;
+        };
+        static constexpr size_t kFrameSizes = 64;
+        std::deque<FrameSize> frameSizes;
     } display;
     // The newest pose presentPose asked for and the network thread has not sent (newest wins),
     // and the answers for takeNodeRefreshes; both under poseMutex.
     std::mutex poseMutex;
     std::optional<PendingPose> pendingPose;
     std::deque<NodeRefreshDelay> nodeRefreshes;
+    // Pictures of what the nodes show (nodePicture, issue 31): asked by the application's
+    // threads, sent and collected by the network thread; all under pictureMutex.
+    struct PictureEye {
+        BoxGrid grid;
+        bool direct = false;          // one cell a pixel: the values go straight into `image`
+        std::vector<uint32_t> sums;   // otherwise 4 per cell, added over the answers
+        Image image;
+    };
+    struct PictureTake {
+        int32_t width = 0;
+        bool sent = false;
+        uint64_t asked = 0, answered = 0, refused = 0;  // node bits
+        int32_t srcWidth = 0, srcHeight = 0;            // the first answer's frame size: every other must match
+        PictureEye eyes[2];
+        bool stereo = false;
+        uint32_t oldest = UINT32_MAX, newest = 0;       // frames of the answers with pixels
+    };
+    std::mutex pictureMutex;
+    std::condition_variable pictureCv;
+    std::map<uint32_t, PictureTake> pictures;
+    uint32_t nextPicture = 0;
+    std::vector<uint8_t> pictureScratch;  // the network thread's
+    void sendPictureAsks();
+    void onNodePreview(NodeState& n, const NodePreview& part);
+    void pictureNodeGone(uint32_t node);  // it left, or sent a malformed part
     bool withNodes() const { return !settings.displayNodes.names.empty(); }
     std::atomic<uint64_t> resyncCount{0};
     std::atomic<uint64_t> injectedLosses{0};

@@ -194,6 +194,7 @@ void Master::Impl::loop() {
             while (link.wakeRecv.recv(ignored, zmq::recv_flags::dontwait)) {
             }
             sendPendingPose();  // a refresh's pose first: it does not wait behind a frame's commands
+            if (withNodes()) sendPictureAsks();
             if (!runCommands()) return;
             reopenFailedTiles();
         }

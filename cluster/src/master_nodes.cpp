@@ -49,6 +49,9 @@ void Master::Impl::beginNodeFrame(const RenderSettings& rs) {
         display.routesFrame = currentFrame;
     }
     for (auto& [peer, n] : display.nodes) sendNodeFrame(n, rs);
+    // The frame sizes the nodes may answer a picture with (onNodePreview).
+    display.frameSizes.push_back({currentFrame, rs.width, rs.height});
+    while (display.frameSizes.size() > DisplayNodes::kFrameSizes) display.frameSizes.pop_front();
 }
 
 void Master::Impl::sendNodeFrame(NodeState& n, const RenderSettings& rs) {
@@ -162,6 +165,17 @@ void Master::Impl::handleNode(NodeState& n, const Header& h, const uint8_t* payl
         while (nodeRefreshes.size() > 4096) nodeRefreshes.pop_front();
         break;
     }
+    case MsgType::NodePreview: {
+        NodePreview part;
+        try {
+            part = decodePayload<NodePreview>(payload, payloadSize);
+        } catch (const DecodeError&) {
+            pictureNodeGone(n.index);  // a malformed part: the pictures asked of it go without it
+            throw;
+        }
+        onNodePreview(n, part);
+        break;
+    }
     case MsgType::Heartbeat: decodePayload<Heartbeat>(payload, payloadSize); break;
     case MsgType::Goodbye: {
         const Goodbye bye = decodePayload<Goodbye>(payload, payloadSize);
@@ -183,6 +197,7 @@ void Master::Impl::reapNodes() {
         std::fprintf(stderr, "rtwall master: display node '%s' leaves: %s\n", it->second.name.c_str(), it->second.deathReason);
         // Leaving the barrier may complete a frame the others all hold.
         display.barrier.leave(it->second.index);
+        pictureNodeGone(it->second.index);
         it = display.nodes.erase(it);
         any = true;
     }

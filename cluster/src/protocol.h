@@ -1,4 +1,4 @@
-// The rtwall wire protocol, version 19 (2 added the master's peer timeout to Welcome; 3 added
+// The rtwall wire protocol, version 20 (2 added the master's peer timeout to Welcome; 3 added
 // materials, area lights and shading settings; 4 added vertex colours to meshes, the scene's
 // origin and [bvh] settings to the snapshot, spherical and cylindrical texture mappings, texture
 // and volume files by content hash (AssetRequest, AssetData, SceneSnapshot::assets) and linear
@@ -29,7 +29,9 @@
 // denoiser's features with tiles (issue 28: FrameBegin::features, TileResult::features); 17 let
 // display nodes denoise their screens (NodeFrame::denoise); 18 added calibrated projectors
 // (issue 30): WarpGrids (a wall's projector grids, once after the Welcome) and FrameView::warps;
-// 19 added Material::alphaMode, alphaChannel and opacity (glTF's MASK and BLEND, issue 29).
+// 19 added Material::alphaMode, alphaChannel and opacity (glTF's MASK and BLEND, issue 29); 20
+// added pictures of what the display nodes show (issue 31: the operator console's thumbnail and
+// screenshot of a wall on nodes): NodePreviewAsk and NodePreview.
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one fields() function that
@@ -57,7 +59,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 19;  // 19: alpha modes and opacity of materials
+inline constexpr uint16_t kProtocolVersion = 20;  // 20: pictures of the display nodes' screens
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -115,8 +117,11 @@ enum class MsgType : uint16_t {
     NodeShown = 29,     // node -> master: it showed that refresh (the master measures the pose's delay)
     // Version 18: calibrated projectors (issue 30).
     WarpGrids = 30,     // master -> client, after each Welcome: the wall's warp grids, which FrameView::warps name
+    // Version 20: the operator console's pictures of a wall on display nodes (issue 31).
+    NodePreviewAsk = 31,  // master -> node: the cells of the frame it presented, for a picture this wide
+    NodePreview = 32,     // node -> master: some of those cells (one eye's rows), in parts
 };
-inline constexpr uint16_t kMaxMsgType = 30;
+inline constexpr uint16_t kMaxMsgType = 32;
 
 struct Header {
     uint16_t version = kProtocolVersion;
@@ -469,6 +474,37 @@ struct WarpGrids {
     bool operator==(const WarpGrids&) const = default;
 };
 
+// Version 20 (issue 31): the master asks the nodes in `nodes` (their bits) for a picture of the
+// frame each presented last, `width` cells across each eye (rtwall/image_box.h's BoxGrid; at
+// least the frame's width: every pixel). A pixel several of them show is summed by the lowest
+// numbered only, so that the sums of all answers add up to the picture of the whole frame.
+struct NodePreviewAsk {
+    uint32_t id = 0;
+    int32_t width = 0;  // 1 to kMaxImageSide
+    uint64_t nodes = 0;
+    bool operator==(const NodePreviewAsk&) const = default;
+};
+
+// The largest part of an answer, before compression: a node sends an eye's cells in row bands
+// of at most this many bytes.
+inline constexpr size_t kMaxPreviewPartBytes = size_t(1) << 22;
+
+// A part of a node's answer: the cells [x0, x1) x [y0, y1) of one eye's grid (the frame's eye
+// images are srcWidth x srcHeight), each cell's red, green and blue sums and pixel count over the
+// pixels this node owns, `valueBytes` bytes each, in byte planes (every value's low byte first),
+// compressed with zstd. frame 0: it presented nothing yet (no cells, the answer's only part).
+struct NodePreview {
+    uint32_t id = 0;
+    uint32_t frame = 0;
+    uint8_t eye = 0;  // 0: left (or mono), 1: right
+    int32_t srcWidth = 0, srcHeight = 0;
+    int32_t x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    uint8_t valueBytes = 1;  // 1, 2 or 4
+    bool last = false;       // the node's last part of this answer
+    std::vector<uint8_t> cells;
+    bool operator==(const NodePreview&) const = default;
+};
+
 struct NodeEndpoint {
     uint32_t node = 0;  // its bit in the tile masks, below kMaxNodes
     std::string name;
@@ -564,6 +600,8 @@ MsgType messageTypeOf(const TileDone&);
 MsgType messageTypeOf(const NodePose&);
 MsgType messageTypeOf(const NodeShown&);
 MsgType messageTypeOf(const WarpGrids&);
+MsgType messageTypeOf(const NodePreviewAsk&);
+MsgType messageTypeOf(const NodePreview&);
 
 // Canonical mesh bytes (vertex count, positions, triangle count, indices, normals flag and
 // normals, colours flag and RGB bytes, all little-endian), their hash (XXH3 128-bit) and the way back. decodeMesh

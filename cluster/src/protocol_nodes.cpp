@@ -1,10 +1,12 @@
 // Display nodes on the wire (version 11): a node's hello and welcome, a frame's layout, the swap
 // barrier's have, swap and swapped, and the node list clients send tiles by; the re-projecting
 // wall's pose every refresh and the node's answer (version 15); how a node denoises a frame
-// (version 17).
+// (version 17); pictures of what the nodes show (version 20).
 #include "protocol_values.h"
 
 #include <rtwall/denoise.h>
+
+#include <zstd.h>
 
 #include <algorithm>
 
@@ -187,6 +189,39 @@ RTWALL_WIRE_MESSAGE(NodeShown, 1) { io.u32(m.refresh); }
 RTWALL_WIRE_MESSAGE(WarpGrids, 1) {
     // Each grid is at least its 13-byte head and one sample.
     vectorOf(io, m.grids, 1 + 4 + 4 + 4 + 12, kMaxWarpGrids);
+}
+
+RTWALL_WIRE_MESSAGE(NodePreviewAsk, 3) {
+    io.u32(m.id);
+    io.intIn(m.width, 1, kMaxImageSide, "preview width");
+    io.u64(m.nodes);
+    io.expect(m.nodes != 0, [] { return std::string("a preview asked of no display node"); });
+}
+
+RTWALL_WIRE_MESSAGE(NodePreview, 12) {
+    io.u32(m.id);
+    io.u32(m.frame);
+    io.u8(m.eye);
+    io.expect(m.eye <= 1, [&] { return "preview eye " + std::to_string(m.eye); });
+    io.intIn(m.srcWidth, 0, kMaxImageSide, "preview frame width");
+    io.intIn(m.srcHeight, 0, kMaxImageSide, "preview frame height");
+    io.intIn(m.x0, 0, kMaxImageSide, "preview cell x0");
+    io.intIn(m.y0, 0, kMaxImageSide, "preview cell y0");
+    io.intIn(m.x1, m.x0, kMaxImageSide, "preview cell x1");
+    io.intIn(m.y1, m.y0, kMaxImageSide, "preview cell y1");
+    io.u8(m.valueBytes);
+    io.expect(m.valueBytes == 1 || m.valueBytes == 2 || m.valueBytes == 4,
+              [&] { return "preview values of " + std::to_string(m.valueBytes) + " bytes"; });
+    io.boolean(m.last);
+    static const size_t maxBlob = ZSTD_compressBound(kMaxPreviewPartBytes);
+    io.blob(m.cells, maxBlob);
+    const size_t cells = size_t(m.x1 - m.x0) * size_t(m.y1 - m.y0);
+    io.expect(cells * 4 * m.valueBytes <= kMaxPreviewPartBytes,
+              [&] { return "a preview part of " + std::to_string(cells) + " cells (at most " +
+                           std::to_string(kMaxPreviewPartBytes) + " bytes a part)"; });
+    io.expect((cells == 0) == m.cells.empty(), [] { return std::string("preview cells that do not match their rectangle"); });
+    io.expect(m.frame != 0 || (cells == 0 && m.last), [] { return std::string("cells of no frame"); });
+    io.expect(m.frame == 0 || (m.srcWidth > 0 && m.srcHeight > 0), [] { return std::string("a preview of an empty frame"); });
 }
 
 RTWALL_WIRE_FIELDS(NodeEndpoint, 4) {

@@ -77,6 +77,24 @@ uint64_t TileRouting::route(int x0, int y0, int x1, int y1, int eye) const {
     return mask;
 }
 
+std::vector<uint8_t> TileRouting::owners(int eye, uint64_t nodes) const {
+    std::vector<uint8_t> out(size_t(frameWidth_) * size_t(frameHeight_), 0xFF);
+    if (eye < 0 || eye > 1) return out;
+    for (size_t n = 0; n < needs_.size(); ++n) {
+        if (!((nodes >> n) & 1)) continue;
+        for (const auto& screen : needs_[n]) {
+            const PixelRect& r = screen[size_t(eye)];
+            const int x0 = std::max(0, r.x), x1 = std::min(frameWidth_, r.x + r.width);
+            for (int y = std::max(0, r.y); y < std::min(frameHeight_, r.y + r.height); ++y) {
+                uint8_t* row = out.data() + size_t(y) * size_t(frameWidth_);
+                for (int x = x0; x < x1; ++x)
+                    if (row[x] == 0xFF) row[x] = uint8_t(n);
+            }
+        }
+    }
+    return out;
+}
+
 std::vector<uint64_t> TileRouting::routeTiles(int tileSize, int eye) const {
     std::vector<uint64_t> masks;
     if (tileSize < 1) return masks;

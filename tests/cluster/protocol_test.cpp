@@ -273,6 +273,8 @@ template <class F> void forEachSample(F&& f) {
     f(NodePose{900, 86, true, {sampleCamera(), sampleCamera()}});
     f(NodeShown{900});
     f(sampleWarpGrids());
+    f(NodePreviewAsk{5, 320, 0x3});
+    f(NodePreview{5, 86, 1, 1600, 1200, 0, 10, 320, 20, 2, true, {1, 2, 3}});
 }
 
 template <class Msg> std::vector<uint8_t> payloadOf(const Msg& msg) {
@@ -381,7 +383,7 @@ TEST(Protocol, GoldenBytes) {
     // the frame's views are its only camera; 14: depth with every tile, left out when off; 15:
     // re-projection on the display nodes; 16: the denoiser's features, left out when off; 17: how
     // display nodes denoise, left out when off; 18: warp grids and each view's warps; 19: the
-    // materials' alpha modes and opacity).
+    // materials' alpha modes and opacity; 20: pictures of the display nodes' screens).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -389,7 +391,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x13, 0x00,                                      // version (19: alpha modes)
+        0x14, 0x00,                                      // version (20: node pictures)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame

@@ -4,6 +4,7 @@
 // node changes what it shows.
 #include "display_test_util.h"
 
+#include <bit>
 #include <random>
 
 namespace rtwall {
@@ -283,6 +284,38 @@ TEST(TileRouting, ShippedTwoNodeWallSplitsInHalves) {
     EXPECT_EQ(r.route(0, 0, 32, 32, 0), 1u);
     EXPECT_EQ(r.route(w.width - 32, w.height - 32, w.width, w.height, 0), 2u);
     checkRouting(w, w.width / 8, w.height / 8, 16, false);
+}
+
+// Each pixel's owner for the console's picture (issue 31): the lowest-numbered node asked
+// whose screens read it, nobody under a bezel; a node not asked owns nothing, and its pixels
+// go to another that reads them, where one does.
+TEST(TileRouting, EachPixelHasOneOwnerTheLowestNodeAskedThatShowsIt) {
+    const WallConfig w = parseWallConfig("[wall]\n[grid]\ncolumns = 2\nrows = 2\nscreen_width = 64\nscreen_height = 48\n"
+                                         "overlap = 16\n[[node]]\nname = \"top\"\nrows = [0, 0]\n[[node]]\nname = \"bottom\"\nrows = [1, 1]\n",
+                                         "w.toml");
+    const TileRouting r(w, w.width, w.height);
+    const std::vector<uint8_t> both = r.owners(0, 3), bottom = r.owners(0, 2);
+    ASSERT_EQ(both.size(), size_t(w.width) * w.height);
+    auto at = [&](const std::vector<uint8_t>& o, int x, int y) { return int(o[size_t(y) * w.width + x]); };
+    EXPECT_EQ(at(both, 5, 10), 0);
+    EXPECT_EQ(at(both, 5, 40), 0);   // the blend rows: both read them, the top node owns them
+    EXPECT_EQ(at(both, 5, 60), 1);
+    EXPECT_EQ(at(bottom, 5, 10), 0xFF);  // the top node was not asked: nobody
+    EXPECT_EQ(at(bottom, 5, 40), 1);     // the blend rows go to the bottom node
+    EXPECT_EQ(r.owners(1, 3), std::vector<uint8_t>(both.size(), 0xFF));  // a mono wall has no right eye
+
+    const WallConfig b = loadWallConfig(test::sourceDir() / "configs/wall/two-nodes-2x2.toml");
+    const TileRouting rb(b, b.width, b.height);
+    const std::vector<uint8_t> o = rb.owners(0, 3);
+    // Every pixel a node's screens read is owned by one node, and exactly those are.
+    for (int y = 0; y < b.height; y += 7)
+        for (int x = 0; x < b.width; ++x) {
+            const uint64_t needs = rb.route(x, y, x + 1, y + 1, 0);
+            const int owner = o[size_t(y) * b.width + x];
+            if (needs == 0) EXPECT_EQ(owner, 0xFF) << x << "," << y;
+            else EXPECT_EQ(owner, std::countr_zero(needs)) << x << "," << y;
+        }
+    EXPECT_EQ(std::count(o.begin(), o.end(), 0xFF), 8 * b.height + 8 * b.width - 64) << "the bezels' pixels (8 wide)";
 }
 
 }  // namespace

@@ -3,9 +3,11 @@
 // own as `rtwall run` does. Changes from the API equal the same changes by key, bit for bit;
 // a saved session restores the same frame; attackers never stop the frames.
 #include "display_test_util.h"
+#include "files.h"
 #include "parts_scene.h"
 #include "session_test_util.h"
 
+#include <rtwall/image_box.h>
 #include <rtwall/web.h>
 #include <rtwall/web_testing.h>
 
@@ -380,6 +382,84 @@ TEST(WebConsole, AStereoWallsThumbnailShowsBothEyesAndEachEyeHasItsScreenshot) {
     w.session->post([&eye](WallSession& s) { eye.set_value(s.lastFrame().right); });
     EXPECT_EQ(test::differingBytes(readPng(file), eye.get_future().get()), 0u);
 }
+
+// A wall on display nodes (the shipped two-node 2x2 wall, its nodes threads of this process;
+// mono, and stereo side by side): the master holds no pixels, the console's pictures are the
+// nodes'. Each pixel is summed by one node, so the picture is the one-PC wall's frame
+// box-filtered over the pixels some screen shows (those under the bezels, shown by none, left
+// out), byte for byte; the screenshot is that frame with its bezel pixels black, byte for byte.
+class WebConsoleOnNodes : public ::testing::TestWithParam<bool> {};
+
+TEST_P(WebConsoleOnNodes, ThumbnailAndScreenshotAreTheOnePcWallsPixelsThatTheScreensShow) {
+    const bool stereo = GetParam();
+    RunConfig c = partsConfig();
+    std::string text = test::fileBytes(test::sourceDir() / "configs/wall/two-nodes-2x2.toml");
+    const size_t writes = text.find("write_every = 1");
+    ASSERT_NE(writes, std::string::npos);
+    text.replace(writes, 15, "write_every = 0");  // the nodes write no PNGs
+    if (stereo)
+        text.insert(0, "[stereo]\nmode = \"side_by_side\"\neye_separation = 0.065\nviewer = [0.0, 0.0, 2.5]\n"
+                       "lower_left = [-1.6, -1.2, 0.0]\nlower_right = [1.6, -1.2, 0.0]\nupper_left = [-1.6, 1.2, 0.0]\n\n");
+    c.wall = test::writeFile(c.out / "nodes.toml", text);
+    const WallConfig nodes = loadWallConfig(c.wall);
+    WallConfig single = nodes;
+    for (ScreenConfig& sc : single.screens) sc.node.clear();
+    RunConfig one = c;  // partsConfig() again would empty the scratch directory
+    one.out = c.out / "one";
+    one.wall = test::writeFile(c.out / "one.toml", writeWallConfig(single));
+
+    // The one-PC wall's frame (a still view: every frame the same bytes).
+    WallFrame frame;
+    {
+        Console w(one);
+        w.settle();
+        std::promise<WallFrame> f;
+        w.session->post([&f](WallSession& s) { f.set_value(s.lastFrame()); });
+        frame = f.get_future().get();
+    }
+    ASSERT_EQ(frame.left.width, nodes.width);
+    ASSERT_EQ(frame.right.rgb.empty(), !stereo);
+
+    Console w(c);
+    httplib::Client h = w.client();
+    w.settle();
+    EXPECT_EQ(body(h.Get("/api/status"))["wall"]["on_nodes"], true);
+    const TileRouting routing(nodes, nodes.width, nodes.height);
+    for (int eye = 0; eye < (stereo ? 2 : 1); ++eye) {
+        SCOPED_TRACE(eye ? "right eye" : "left eye");
+        const Image& im = eye ? frame.right : frame.left;
+        const std::vector<uint8_t> owners = routing.owners(eye, 3);
+        // The picture at the console's thumbnail width, straight from the session.
+        const std::optional<NodePicture> pic = w.session->nodePicture(480, std::chrono::seconds(20));
+        ASSERT_TRUE(pic);
+        EXPECT_TRUE(pic->missing.empty());
+        EXPECT_TRUE(pic->oneFrame);
+        EXPECT_GT(pic->frame, 0u);
+        const BoxGrid g = boxGrid(im.width, im.height, 480);
+        std::vector<uint32_t> sums(g.cells() * 4, 0);
+        for (uint8_t node : {0, 1}) addBoxSums(im, g, owners.data(), node, sums.data());
+        const Image expected = boxMeans(g, sums.data());
+        EXPECT_EQ(test::differingBytes(eye ? pic->right : pic->left, expected), 0u);
+        EXPECT_EQ(pic->right.rgb.empty(), !stereo);
+        // The screenshot: every pixel, those under the bezels black.
+        Image shot = im;
+        for (size_t p = 0; p < owners.size(); ++p)
+            if (owners[p] == 0xFF) std::fill_n(shot.rgb.begin() + long(p * 3), 3, uint8_t(0));
+        auto r = h.Get(eye ? "/api/screenshot.png?eye=right" : "/api/screenshot.png");
+        ASSERT_TRUE(r);
+        ASSERT_EQ(r->status, 200) << r->body;
+        const std::filesystem::path file = w.dir / "shot.png";
+        std::ofstream(file, std::ios::binary) << r->body;
+        EXPECT_EQ(test::differingBytes(readPng(file), shot), 0u);
+    }
+    // The thumbnail over HTTP: the eyes side by side, 480 wide each (the console's width).
+    auto r = h.Get("/api/thumbnail.jpg");
+    ASSERT_TRUE(r && r->status == 200) << (r ? r->body : "no answer");
+    EXPECT_EQ(jpegSize(r->body), std::make_pair((stereo ? 2 : 1) * 480, 480 * nodes.height / nodes.width));
+}
+
+INSTANTIATE_TEST_SUITE_P(MonoAndStereo, WebConsoleOnNodes, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& i) { return i.param ? "Stereo" : "Mono"; });
 
 // A raw connection that sends `request` and never reads.
 int stalledReader(int port, const std::string& request) {

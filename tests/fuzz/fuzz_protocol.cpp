@@ -85,11 +85,12 @@ template <class... Msgs> struct Table {
     static constexpr PayloadCheck payload[] = {checkPayload<Msgs>...};
     static constexpr MessageCheck message[] = {checkMessage<Msgs>...};
 };
-// In MsgType order, 1..30.
+// In MsgType order, 1..32.
 using Messages = Table<Hello, Welcome, SceneSnapshot, MeshRequest, MeshData, Update, FrameBegin, TileRequest,
                        TileAssign, TileResult, Heartbeat, Goodbye, Ready, ResyncRequest, AssetRequest, AssetData,
                        TileStalled, TileFailed, NodeHello, NodeWelcome, NodeFrame, NodeHave, NodeSwap, NodeSwapped,
-                       NodeList, TileRoutes, TileDone, NodePose, NodeShown, WarpGrids>;
+                       NodeList, TileRoutes, TileDone, NodePose, NodeShown, WarpGrids, NodePreviewAsk,
+                       NodePreview>;
 static_assert(std::size(Messages::payload) == kMaxMsgType);
 
 void checkMesh(const uint8_t* data, size_t size) {

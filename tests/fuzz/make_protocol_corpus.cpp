@@ -187,6 +187,17 @@ int main(int argc, char** argv) {
         seedMessage("frame-begin-warps", FrameBegin{8, 2, TilePixels::Srgb8, {v}});
     }
 
+    // Version 20: the console's picture of a wall on display nodes: the ask, an answer's part
+    // (one row band of the right eye, compressed cells) and a node that presented nothing yet.
+    seedMessage("node-preview-ask", NodePreviewAsk{3, 320, 0x3});
+    {
+        const uint32_t sums[8] = {2500, 1200, 40, 25, 255, 0, 17, 1};
+        std::vector<uint8_t> z, scratch;
+        encodePreviewCells(sums, 2, 2, z, scratch);
+        seedMessage("node-preview", NodePreview{3, 41, 1, 1600, 1200, 4, 7, 6, 8, 2, true, z});
+    }
+    seedMessage("node-preview-none", NodePreview{3, 0, 0, 0, 0, 0, 0, 0, 0, 1, true, {}});
+
     writeSeed("mesh-box", fuzz::kMesh, encodeMesh(makeBox()));
     writeSeed("mesh-sphere-normals", fuzz::kMesh, encodeMesh(makeSphere(3, 5)));
 

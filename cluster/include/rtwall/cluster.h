@@ -71,6 +71,17 @@ struct NodeRefreshDelay {
     double milliseconds = 0;
 };
 
+// What the display nodes show, as one picture (Master::nodePicture; the operator console's
+// thumbnail and screenshot of a wall on nodes, issue 31).
+struct NodePicture {
+    uint32_t frame = 0;     // the newest frame among the answers (0: no node presented one yet)
+    bool oneFrame = true;   // every node that answered with pixels presented that frame
+    Image left, right;      // each eye box-filtered to the width asked (rtwall/image_box.h); right empty: mono
+    // The wall's nodes not in it: not there, or did not answer in time, or answered wrong (a part
+    // dropped: their pixels black or partly there).
+    std::vector<std::string> missing;
+};
+
 struct ClusterSettings {
     std::string bind = "tcp://127.0.0.1:0";  // master endpoint; port 0 picks a free port
     int localClients = 2;                     // client processes `rtwall run` spawns on this PC
@@ -325,6 +336,15 @@ public:
     // The refreshes the nodes answered since the last call, oldest first (at most 4096 kept).
     std::vector<NodeRefreshDelay> takeNodeRefreshes();
 
+    // A picture of what the display nodes present now (issue 31): every node present is asked
+    // for the frame it presented last, box-filtered to `width` pixels across each eye (at least
+    // the frame's width: every pixel, as the single-PC wall holds it); each pixel is summed by
+    // one node only (DisplayNodeRun::previewOwners), so the picture is the single-PC wall's
+    // box-filtered frame byte for byte where every node presented the same frame. Waits at most
+    // timeoutMs for the answers, on the calling thread (any thread; at most 8 at once). nullopt:
+    // no display node is present, or 8 pictures are already being taken.
+    std::optional<NodePicture> nodePicture(int width, int timeoutMs);
+
     MasterCounters counters() const;
     uint64_t droppedMessages() const;  // counters().dropped()
     uint64_t failedSends() const;      // counters().failedSends
@@ -479,6 +499,13 @@ struct DisplayNodeRun {
     std::function<std::vector<std::vector<TileRect>>(int width, int height, const std::vector<FrameView>& views,
                                                      const std::vector<int>& eyes, unsigned node)>
         denoiseWindows;
+    // The operator console's picture of the wall (issue 31; Master::nodePicture): which node
+    // owns each pixel of the width x height eye image `eye` (0 left or mono, 1 right) when the
+    // nodes `nodes` (their bits) are asked: the lowest-numbered of them whose screens show it,
+    // 0xFF where none does; one byte a pixel, row-major. The node sums the pixels it owns of the
+    // frame it presented last. The wall library gives its screens' (TileRouting::owners).
+    // Unset: the node answers with no pixels.
+    std::function<std::vector<uint8_t>(int width, int height, int eye, uint64_t nodes)> previewOwners;
 };
 
 // One refresh of a re-projecting display node (DisplayNodeRun::refresh), valid during the call.

@@ -196,6 +196,11 @@ public:
     std::vector<uint64_t> routeTiles(int tileSize, int eye) const;
     // The frame pixels node i's screens read, per eye (empty rects where it shows no such eye).
     const std::vector<std::array<PixelRect, 2>>& needs(size_t node) const { return needs_.at(node); }
+    // Which node owns each frame pixel of eye `eye` among the nodes `nodes` (bits): the lowest
+    // numbered whose screens read it, 0xFF where none does (under a bezel). One byte a pixel,
+    // row-major: the pixels each node sums for the operator console's picture (issue 31), so
+    // that no pixel is counted twice.
+    std::vector<uint8_t> owners(int eye, uint64_t nodes) const;
 
 private:
     std::vector<std::string> nodes_;

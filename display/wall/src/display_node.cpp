@@ -112,6 +112,10 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
         }
         return windows;
     };
+    // The console's picture (issue 31): the pixels of this node's screens, each counted once.
+    run.previewOwners = [&](int width, int height, int eye, uint64_t nodes) {
+        return TileRouting(whole, width, height).owners(eye, nodes);
+    };
     run.present = [&](uint32_t frame, const Image* left, const Image* right, const std::vector<std::string>& leftOut) {
         if (!left) return;  // released without this node: nothing new to show
         if (discards()) return;

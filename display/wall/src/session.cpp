@@ -244,6 +244,11 @@ const HeadPose& WallSession::shownHead() const { return impl_->shownHead; }
 size_t WallSession::viewRestarts() const { return impl_->compositor.viewRestarts(); }
 const FrameReport& WallSession::lastReport() const { return impl_->report; }
 std::string WallSession::endpoint() const { return impl_->master->endpoint(); }
+
+std::optional<NodePicture> WallSession::nodePicture(int width, std::chrono::milliseconds timeout) const {
+    if (!impl_->onNodes) return std::nullopt;
+    return impl_->master->nodePicture(width, int(std::min<int64_t>(timeout.count(), INT32_MAX)));
+}
 bool WallSession::windowed() const { return impl_->input->windowed(); }
 
 RunSummary WallSession::summary() const {

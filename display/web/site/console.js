@@ -60,7 +60,7 @@ function showStatus(s) {
     $('camera-target').value = fmt(s.camera.target);
     $('camera-up').value = fmt(s.camera.up);
   }
-  if (!wall.on_nodes && s.frame !== lastThumbFrame) refreshThumbnail(s.frame);
+  if (s.frame !== lastThumbFrame) refreshThumbnail(s.frame);
 }
 
 function drawChart() {

@@ -312,7 +312,6 @@ WebResponse WebApi::handle(const WebRequest& q) {
                        {"flying", s.flying}});
         }
         if (route("GET", "thumbnail.jpg", 1)) {
-            if (snap->onNodes) throw Refusal{503, "the wall's pixels are on its display nodes: the master holds none"};
             uint32_t frame = 0;
             const auto jpeg = backend_.thumbnail(&frame);
             if (!jpeg) throw Refusal{503, "no thumbnail yet: ask again in a moment"};
@@ -323,7 +322,6 @@ WebResponse WebApi::handle(const WebRequest& q) {
             return r;
         }
         if (route("GET", "screenshot.png", 1)) {
-            if (snap->onNodes) throw Refusal{503, "the wall's pixels are on its display nodes: the master holds none"};
             int eye = 0;
             if (q.params.count("eye")) {
                 const std::string& e = q.params.at("eye");
@@ -340,8 +338,9 @@ WebResponse WebApi::handle(const WebRequest& q) {
             const auto last = std::chrono::steady_clock::time_point(std::chrono::steady_clock::duration(lastShot_.load()));
             if (shotInterval_.count() > 0) std::this_thread::sleep_until(last + shotInterval_);
             lastShot_ = std::chrono::steady_clock::now().time_since_epoch().count();
-            const std::optional<Image> img = backend_.screenshot(eye, timeout_);
-            if (!img) throw Refusal{503, "no frame to take yet"};
+            std::string why;
+            const std::optional<Image> img = backend_.screenshot(eye, timeout_, &why);
+            if (!img) throw Refusal{503, why.empty() ? "no frame to take yet" : why};
             WebResponse r;
             r.contentType = "image/png";
             const std::vector<uint8_t> png = encodePng(*img);

@@ -5,6 +5,8 @@
 // queue. The session's thread never waits on a browser: it swaps a pointer under a mutex.
 #include <rtwall/web.h>
 
+#include <rtwall/image_box.h>
+
 #include <turbojpeg.h>
 
 #include <algorithm>
@@ -16,36 +18,26 @@ namespace rtwall {
 
 namespace {
 
-// The eyes side by side, `width` pixels each, box-filtered (every source pixel counts once).
-Image thumbnailOf(const WallFrame& f, int width) {
-    const Image* eyes[2] = {&f.left, f.right.rgb.empty() ? nullptr : &f.right};
-    const Image& src = f.left;
-    if (src.width <= 0 || src.height <= 0) return {};
-    width = std::min(width, src.width);
-    const int height = std::max(1, int(int64_t(src.height) * width / src.width));
-    const int count = eyes[1] ? 2 : 1;
+// The eyes side by side, each box-filtered to `width` pixels across (every source pixel counts
+// once: rtwall/image_box.h, which display nodes sum their screens by too).
+Image sideBySide(const Image& left, const Image* right) {
+    if (!right || right->rgb.empty()) return left;
     Image out;
-    out.width = width * count;
-    out.height = height;
-    out.rgb.assign(size_t(out.width) * height * 3, 0);
-    for (int e = 0; e < count; ++e) {
-        const Image& im = *eyes[e];
-        for (int y = 0; y < height; ++y) {
-            const int y0 = int(int64_t(y) * im.height / height), y1 = std::max(y0 + 1, int(int64_t(y + 1) * im.height / height));
-            for (int x = 0; x < width; ++x) {
-                const int x0 = int(int64_t(x) * im.width / width), x1 = std::max(x0 + 1, int(int64_t(x + 1) * im.width / width));
-                uint32_t sum[3] = {0, 0, 0};
-                for (int sy = y0; sy < y1; ++sy) {
-                    const uint8_t* p = im.pixel(x0, sy);
-                    for (int sx = x0; sx < x1; ++sx, p += 3) sum[0] += p[0], sum[1] += p[1], sum[2] += p[2];
-                }
-                const uint32_t n = uint32_t((y1 - y0) * (x1 - x0));
-                uint8_t* d = out.pixel(e * width + x, y);
-                for (int c = 0; c < 3; ++c) d[c] = uint8_t((sum[c] + n / 2) / n);
-            }
-        }
+    out.width = left.width * 2;
+    out.height = left.height;
+    out.rgb.resize(size_t(out.width) * out.height * 3);
+    const size_t row = size_t(left.width) * 3;
+    for (int y = 0; y < left.height; ++y) {
+        std::copy_n(left.pixel(0, y), row, out.pixel(0, y));
+        std::copy_n(right->pixel(0, y), row, out.pixel(left.width, y));
     }
     return out;
+}
+
+Image thumbnailOf(const WallFrame& f, int width) {
+    if (f.left.width <= 0 || f.left.height <= 0) return {};
+    const Image right = f.right.rgb.empty() ? Image{} : boxPicture(f.right, width);
+    return sideBySide(boxPicture(f.left, width), &right);
 }
 
 std::vector<uint8_t> jpegOf(const Image& im) {
@@ -97,6 +89,7 @@ public:
     }
 
     std::shared_ptr<const std::vector<uint8_t>> thumbnail(uint32_t* frame) override {
+        if (onNodes_) return nodesThumbnail(frame);
         std::shared_ptr<const Image> raw;
         uint32_t rawFrame = 0;
         {
@@ -119,7 +112,8 @@ public:
         return jpeg;
     }
 
-    std::optional<Image> screenshot(int eye, std::chrono::milliseconds timeout) override {
+    std::optional<Image> screenshot(int eye, std::chrono::milliseconds timeout, std::string* why) override {
+        if (onNodes_) return nodesScreenshot(eye, timeout, why);
         auto out = std::make_shared<std::optional<Image>>();
         const bool ran = run(
             [out, eye](WallSession& s) {
@@ -142,12 +136,72 @@ public:
     }
 
 private:
+    // A wall on display nodes: the nodes' picture (WallSession::nodePicture), taken on the
+    // asking thread (never the session's), at most thumbnailsPerSecond; one at a time, a caller
+    // meanwhile gets the last one.
+    std::shared_ptr<const std::vector<uint8_t>> nodesThumbnail(uint32_t* frame) {
+        std::unique_lock<std::mutex> taking(pictureMutex_, std::try_to_lock);
+        const auto now = std::chrono::steady_clock::now();
+        if (taking.owns_lock() && now - lastThumb_ >= std::chrono::duration<double>(1.0 / settings_.thumbnailsPerSecond)) {
+            const std::optional<NodePicture> pic = session_.nodePicture(settings_.thumbnailWidth, std::chrono::seconds(2));
+            if (pic && !pic->left.rgb.empty()) {
+                auto jpeg = std::make_shared<const std::vector<uint8_t>>(jpegOf(sideBySide(pic->left, &pic->right)));
+                std::lock_guard<std::mutex> lock(mutex_);
+                jpeg_ = std::move(jpeg);
+                jpegFrame_ = pic->frame;
+                lastThumb_ = now;
+            }
+        }
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (frame) *frame = jpegFrame_;
+        return jpeg_;
+    }
+
+    // Every node's pixels of one frame, at the wall's resolution as the single-PC wall's
+    // screenshot; refused where a node did not answer or the nodes presented different frames
+    // (asked again, up to three times, before that).
+    std::optional<Image> nodesScreenshot(int eye, std::chrono::milliseconds timeout, std::string* why) {
+        std::lock_guard<std::mutex> taking(pictureMutex_);
+        const auto until = std::chrono::steady_clock::now() + timeout;
+        std::string reason = "no frame to take yet";
+        for (int attempt = 0; attempt < 3 && std::chrono::steady_clock::now() < until; ++attempt) {
+            const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - std::chrono::steady_clock::now());
+            std::optional<NodePicture> pic = session_.nodePicture(16384, left);  // at least the frame's width: every pixel
+            if (!pic) {
+                reason = "no display node is there";
+                break;
+            }
+            if (!pic->missing.empty()) {
+                reason = "display node";
+                reason += pic->missing.size() > 1 ? "s " : " ";
+                for (size_t i = 0; i < pic->missing.size(); ++i) reason += (i ? ", '" : "'") + pic->missing[i] + "'";
+                reason += " did not answer";
+                continue;
+            }
+            if (pic->left.rgb.empty()) continue;  // nothing presented yet
+            if (!pic->oneFrame) {
+                reason = "the display nodes presented different frames";
+                continue;
+            }
+            Image& im = eye == 1 ? pic->right : pic->left;
+            if (im.rgb.empty()) {
+                reason = "the display nodes showed no right eye";
+                break;
+            }
+            const WallConfig& w = session_.wallConfig();
+            return (im.width == w.width && im.height == w.height) ? std::move(im) : resizeBilinear(im, w.width, w.height);
+        }
+        if (why) *why = reason;
+        return std::nullopt;
+    }
+
     WallSession& session_;
     WebSettings settings_;
     const SceneDesc scene_;  // a copy at the start: parts, meshes, instance count and origin are fixed for the run
     const std::vector<ConsolePart> parts_;
     const bool onNodes_;  // fixed for the run
     std::mutex mutex_;
+    std::mutex pictureMutex_;  // a wall on display nodes: one picture taken at a time
     std::condition_variable cv_;
     std::shared_ptr<const ConsoleSnapshot> latest_;
     std::shared_ptr<const Image> thumb_;

@@ -407,6 +407,12 @@ public:
     size_t steps() const;         // frames stepped
     std::string operatingPointName() const;  // with a target frame rate: the point held now; else empty
 
+    // A wall on display nodes (summary().onNodes; the master holds no pixels): a picture of
+    // what the nodes present now, each eye `width` pixels across, box-filtered
+    // (Master::nodePicture). Any thread, while the session lives; waits at most `timeout`.
+    // nullopt: no display node is present (or too many pictures are being taken at once).
+    std::optional<NodePicture> nodePicture(int width, std::chrono::milliseconds timeout) const;
+
     // What the last step showed and measured.
     const WallFrame& lastFrame() const;
     const FrameReport& lastReport() const;

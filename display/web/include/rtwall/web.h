@@ -72,7 +72,7 @@ struct ConsoleSnapshot {
     std::string operatingPoint;
     int wallWidth = 0, wallHeight = 0;
     bool stereo = false;
-    bool onNodes = false;      // the pixels are on display nodes (no thumbnail, no screenshot)
+    bool onNodes = false;      // the pixels are on display nodes (the pictures come from them)
     bool flying = false;
     // Grows whenever the parts' visibility, sections, bookmarks, moved instances or measurements
     // change (by the console, the keys, the wand or --watch): the event stream's "state" event.
@@ -96,8 +96,9 @@ public:
     // The live thumbnail (JPEG; both eyes side by side on a stereo wall), and the frame it shows;
     // null before the first one or where there are no pixels. Asking keeps thumbnails coming.
     virtual std::shared_ptr<const std::vector<uint8_t>> thumbnail(uint32_t* frame = nullptr) = 0;
-    // The wall's frame at its full resolution (eye 0 left or mono, 1 right); nothing within the timeout.
-    virtual std::optional<Image> screenshot(int eye, std::chrono::milliseconds timeout) = 0;
+    // The wall's frame at its full resolution (eye 0 left or mono, 1 right); nothing within the
+    // timeout, or where it cannot be had (then `why` says why, in a few words).
+    virtual std::optional<Image> screenshot(int eye, std::chrono::milliseconds timeout, std::string* why = nullptr) = 0;
     // Blocks until a snapshot newer than `frame` is published or the timeout passes (the event stream).
     virtual std::shared_ptr<const ConsoleSnapshot> waitNewer(uint64_t steps, std::chrono::milliseconds timeout) = 0;
 };

@@ -36,7 +36,7 @@ public:
         return false;
     }
     std::shared_ptr<const std::vector<uint8_t>> thumbnail(uint32_t*) override { return nullptr; }
-    std::optional<Image> screenshot(int, std::chrono::milliseconds) override { return std::nullopt; }
+    std::optional<Image> screenshot(int, std::chrono::milliseconds, std::string*) override { return std::nullopt; }
     std::shared_ptr<const ConsoleSnapshot> waitNewer(uint64_t, std::chrono::milliseconds) override { return snapshot_; }
 
     std::atomic<int> commands{0};  // changes asked for (each would have been posted)
