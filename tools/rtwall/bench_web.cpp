@@ -3,6 +3,8 @@
 // its frame times measured quiet, with a page open (the event stream and the thumbnail at its
 // rate), and under attack (a flood of requests, requests without the token, oversized bodies,
 // screenshots, readers that never read), phase after phase in one run: ratios, not absolutes.
+// With --nodes the wall is on two display nodes and the pictures come from them (and take a
+// time of their own: picture_ms, screenshot_picture_ms).
 #include "bench_cli.h"
 
 #include <rtwall/web.h>
@@ -13,6 +15,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <optional>
+#include <tuple>
 #include <thread>
 
 namespace rtwall::cli {
@@ -25,6 +29,7 @@ struct WebBenchOptions {
     int width = 640, height = 480;
     int clients = 2;
     int attackers = 4;
+    bool nodes = false;  // the wall on two display nodes (threads of this process): the pictures come from them
 };
 
 double cpuSeconds(int who) {
@@ -45,6 +50,14 @@ toml::table benchWeb(const WebBenchOptions& o) {
     c.scene = "builtin:knots";
     c.width = o.width;
     c.height = o.height;
+    if (o.nodes) {
+        // A 2x2 wall of the bench's size, its columns on display nodes "left" and "right".
+        c.loadedWall = parseWallConfig("[wall]\n[grid]\ncolumns = 2\nrows = 2\nscreen_width = " + std::to_string(o.width / 2) +
+                                           "\nscreen_height = " + std::to_string(o.height / 2) +
+                                           "\n[[node]]\nname = \"left\"\ncolumns = [0, 0]\n[[node]]\nname = \"right\"\n"
+                                           "columns = [1, 1]\n[headless]\nwrite_every = 0\n",
+                                       "bench web --nodes");
+    }
     WallSession session(c);
     WebSettings w;
     w.enabled = true;
@@ -83,9 +96,27 @@ toml::table benchWeb(const WebBenchOptions& o) {
     };
     toml::table out;
     out.insert("frames", o.frames);
+    out.insert("on_nodes", o.nodes);
     toml::table quietMs = measure("quiet");
     cpuOfPhase("quiet", quietMs);
     out.insert("quiet_ms", quietMs);
+    if (o.nodes) {
+        // The nodes' pictures, asked with the wall idle: a thumbnail's (480 wide, the console's)
+        // and a screenshot's (every pixel), the ask to the last node's last part.
+        for (const auto& [name, width, count] : {std::tuple{"picture_ms", 480, 20}, std::tuple{"screenshot_picture_ms", 16384, 5}}) {
+            std::vector<double> ms;
+            for (int i = 0; i < count; ++i) {
+                const auto t0 = std::chrono::steady_clock::now();
+                const std::optional<NodePicture> pic = session.nodePicture(width, std::chrono::seconds(10));
+                if (!pic || !pic->missing.empty() || pic->left.rgb.empty()) throw std::runtime_error("the display nodes gave no picture");
+                ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+            }
+            toml::table t = stats(ms);
+            if (o.text) std::fprintf(o.text, "%-9s %s %.1f ms median, %.1f ms p95 (%d)\n", "nodes", name, t["median"].value_or(0.0),
+                                     t["p95"].value_or(0.0), count);
+            out.insert(name, t);
+        }
+    }
 
     std::atomic<bool> stop{false};
     std::atomic<uint64_t> requests{0}, answered{0}, refused{0};
@@ -151,6 +182,7 @@ void addBenchWeb(CLI::App& bench, Run& run) {
     cmd->add_option("--frames", o.frames, "Frames measured per phase (quiet, a page open, attacked)")->check(CLI::Range(5, 100000));
     addSizeOptions(cmd, o.width, o.height, 16, 8192);
     cmd->add_option("--clients", o.clients, "Local render clients (threads)")->check(CLI::Range(1, 64));
+    cmd->add_flag("--nodes", o.nodes, "The wall on two display nodes (threads of this process): the thumbnail and screenshots come from them");
     cmd->add_option("--attackers", o.attackers, "Attacking connections (flood, no token, oversized bodies, screenshots, in turn)")
         ->check(CLI::Range(0, 64));
     callBenchmark(cmd, run, a, benchWeb);
