@@ -268,6 +268,18 @@ def write_malformed(out):
     doc["materials"][1]["alphaMode"] = "SOMETIMES"
     write(os.path.join(out, "bad_alpha_mode.glb"), glb(doc, blob))
 
+    # Zero scales: box_a flat on one axis, and one of the four bolts (EXT_mesh_gpu_instancing)
+    # squashed to a point. Legal glTF (exporters hide objects so); nothing can be traced through
+    # them: the importer leaves those instances out, one warning line per node.
+    doc, blob = assembly("view")
+    doc["nodes"][1]["scale"] = [1.0, 0.0, 1.0]
+    bolts_s = doc["accessors"][doc["nodes"][6]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["SCALE"]]
+    view = doc["bufferViews"][bolts_s["bufferView"]]
+    patched = bytearray(blob)
+    at = view.get("byteOffset", 0) + bolts_s.get("byteOffset", 0) + 2 * 12  # the third bolt's scale
+    patched[at:at + 12] = struct.pack("<3f", 0.0, 0.0, 0.0)
+    write(os.path.join(out, "zero_scale.glb"), glb(doc, bytes(patched)))
+
     doc, blob = assembly("view")
     # The texture's buffer view runs past the BIN chunk (tinygltf 2.7 itself reads it unchecked).
     doc["bufferViews"][doc["images"][0]["bufferView"]]["byteOffset"] = len(blob) + 100000

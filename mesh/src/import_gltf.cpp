@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <new>
 #include <string>
 #include <system_error>
@@ -53,6 +54,26 @@ Matrix fromTrs(const double t[3], const double q[4], const double s[3]) {
                          2 * (x * z - y * w),     2 * (y * z + x * w),     1 - 2 * (x * x + y * y)};
     return {r[0] * s[0], r[1] * s[1], r[2] * s[2], t[0], r[3] * s[0], r[4] * s[1], r[5] * s[2], t[1],
             r[6] * s[0], r[7] * s[1], r[8] * s[2], t[2]};
+}
+
+// A transform its instance cannot be traced through: one that squashes the mesh flat (a zero
+// scale), or whose matrix or inverse float cannot hold (Embree traces instances through float
+// matrices and their inverses). Such an instance would only give NaN rays.
+bool singularInFloat(const Matrix& m) {
+    double f[12];
+    for (int i = 0; i < 12; ++i) {
+        f[i] = double(float(m[size_t(i)]));
+        if (!std::isfinite(float(m[size_t(i)]))) return true;
+    }
+    const double c00 = f[5] * f[10] - f[6] * f[9], c01 = f[6] * f[8] - f[4] * f[10], c02 = f[4] * f[9] - f[5] * f[8];
+    const double det = f[0] * c00 + f[1] * c01 + f[2] * c02;
+    if (!std::isfinite(det) || det == 0) return true;
+    // The inverse's elements are the cofactors over the determinant.
+    const double cof[9] = {c00, c01, c02, f[2] * f[9] - f[1] * f[10], f[0] * f[10] - f[2] * f[8], f[1] * f[8] - f[0] * f[9],
+                           f[1] * f[6] - f[2] * f[5], f[2] * f[4] - f[0] * f[6], f[0] * f[5] - f[1] * f[4]};
+    for (double c : cof)
+        if (!std::isfinite(float(c / det))) return true;
+    return false;
 }
 
 // Linear [0, 1] to the 8-bit sRGB encoding TriangleMesh colours use.
@@ -149,9 +170,16 @@ public:
         }
         visited_.assign(m_.nodes.size(), false);
         for (int r : roots) visit(r, -1, Matrix{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0});
+        // One line per node whose instances were left out, however many (GPU instancing).
+        for (const auto& [node, count] : singular_)
+            out_.warnings.push_back(name_ + ": node " + std::to_string(node) + ": " + std::to_string(count) +
+                                    (count == 1 ? " instance" : " instances") +
+                                    " with a singular transform (a zero scale) left out: nothing can be traced through it");
     }
 
 private:
+    std::map<int, size_t> singular_;  // instances left out for a singular transform, by node
+
     struct View {
         const unsigned char* data = nullptr;
         size_t stride = 0, count = 0, components = 0;
@@ -464,6 +492,10 @@ private:
 
     void addInstances(int node, int mesh, uint32_t part, const Matrix& world) {
         if (mesh < 0) return;
+        if (singularInFloat(world)) {
+            ++singular_[node];
+            return;
+        }
         if (size_t(mesh) >= m_.meshes.size()) fail(name_, "node " + std::to_string(node) + ": mesh " + std::to_string(mesh) + " does not exist");
         const auto& prims = m_.meshes[size_t(mesh)].primitives;
         if (out_.instances.size() + prims.size() > kMaxInstances)

@@ -431,6 +431,34 @@ TEST(Gltf, CongruentShapesAreStoredOnce) {
     EXPECT_LT(differing, a.rgb.size() / 200) << "worst " << worst;
 }
 
+// Zero scales are legal glTF (exporters hide objects so), but nothing can be traced through a
+// flat instance: box_a (scale 0 on y) and one of the four GPU-instanced bolts (scale 0) are left
+// out, one warning line per node naming the file; the rest loads as ever.
+TEST(Gltf, ZeroScaleInstancesAreLeftOutWithOneLinePerNode) {
+    const Assembly a = loadAssembly(generated() / "zero_scale.glb");
+    EXPECT_EQ(a.instances.size(), 9u);
+    EXPECT_TRUE(instancesOf(a, "box_a").empty());
+    EXPECT_EQ(instancesOf(a, "bolts").size(), 3u);
+    EXPECT_EQ(instancesOf(a, "box_b").size(), 1u);
+    std::vector<std::string> singular;
+    for (const std::string& w : a.warnings)
+        if (w.find("singular transform") != std::string::npos) singular.push_back(w);
+    ASSERT_EQ(singular.size(), 2u) << ::testing::PrintToString(a.warnings);
+    const std::string file = (generated() / "zero_scale.glb").string();
+    EXPECT_EQ(singular[0], file + ": node 1: 1 instance with a singular transform (a zero scale) left out: nothing can be traced through it");
+    EXPECT_EQ(singular[1].rfind(file + ": node 6: 1 instance", 0), 0u) << singular[1];
+    // It renders as the same assembly with those two instances taken out.
+    Assembly full = loadAssembly(generated() / "binary.glb");
+    const size_t boxA = partNamed(full, "box_a"), bolts = partNamed(full, "bolts");
+    size_t bolt = 0;
+    std::vector<AssemblyInstance> kept;
+    for (const AssemblyInstance& in : full.instances)
+        if (in.part != boxA && !(in.part == bolts && bolt++ == 2)) kept.push_back(in);
+    full.instances = kept;
+    EXPECT_TRUE(render(sceneFromAssembly(full, generated() / "binary.glb")).rgb ==
+                render(sceneFromAssembly(a, generated() / "zero_scale.glb")).rgb);
+}
+
 TEST(Gltf, MalformedFilesAreOneLineErrors) {
     const struct {
         const char* file;
