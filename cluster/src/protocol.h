@@ -31,7 +31,8 @@
 // (issue 30): WarpGrids (a wall's projector grids, once after the Welcome) and FrameView::warps;
 // 19 added Material::alphaMode, alphaChannel and opacity (glTF's MASK and BLEND, issue 29); 20
 // added pictures of what the display nodes show (issue 31: the operator console's thumbnail and
-// screenshot of a wall on nodes): NodePreviewAsk and NodePreview.
+// screenshot of a wall on nodes): NodePreviewAsk and NodePreview, and InstanceDesc::movable
+// (issue 29: an instance in the moving top level from the start).
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one fields() function that

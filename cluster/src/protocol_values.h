@@ -118,7 +118,7 @@ RTWALL_WIRE_FIELDS(CameraDesc, 6) {
               [] { return std::string("camera window is not finite"); });
 }
 
-RTWALL_WIRE_FIELDS(InstanceDesc, 5) {
+RTWALL_WIRE_FIELDS(InstanceDesc, 6) {
     io.u32(m.mesh);
     io.u32(m.material);
     fields(io, m.transform);
@@ -127,6 +127,7 @@ RTWALL_WIRE_FIELDS(InstanceDesc, 5) {
     io.i32(m.part);
     io.expect(m.part >= -1, [&] { return "instance part " + std::to_string(m.part) + " is out of range"; });
     io.enumUpTo(m.visibility, Visibility::Highlighted, "instance visibility");
+    io.boolean(m.movable);  // version 20
 }
 
 RTWALL_WIRE_FIELDS(RenderSettings, 15) {  // what is each process's own is TraceOptions, not sent

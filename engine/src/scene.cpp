@@ -440,12 +440,22 @@ Scene::Scene(const SceneDesc& desc, const ProgressFn& progress) : impl_(std::mak
             data.hidden = in.visibility == Visibility::Hidden;
             data.highlighted = in.visibility == Visibility::Highlighted;
             RTCGeometry g = instanceGeometry(s.device, s.meshScenes[in.mesh], data.objectToWorld, instanceMask(s, data), data.hidden);
-            rtcAttachGeometryByID(s.top, g, unsigned(i));
+            // A movable instance lives in the moving top level from the start: moving it never
+            // makes the static one stale.
+            if (in.movable) {
+                rtcAttachGeometryByID(s.moving, g, unsigned(i));
+                s.inTop[i] = 0;
+                s.inMoving[i] = 1;
+                ++s.movingCount;
+            } else {
+                rtcAttachGeometryByID(s.top, g, unsigned(i));
+            }
             rtcReleaseGeometry(g);
         }
         updateShadowTransparency(s);
         findLightFaces(s);
         rtcCommitScene(s.top);
+        if (s.movingCount > 0) rtcCommitScene(s.moving);
         checkDevice(s.device, lastError, "building the top-level BVH");
 #ifdef __GLIBC__
         // The builds free hundreds of MB of scratch (primitive arrays, per-thread blocks) in

@@ -216,7 +216,7 @@ public:
         if (total_ > kMaxInstances)
             r.fail(nullptr, "the scene expands to more than " + std::to_string(kMaxInstances) + " mesh instances");
         placing_ = &r;
-        expand(c, Transform{}, kNoMaterial);
+        expand(c, Transform{}, kNoMaterial, false);
         placing_ = nullptr;
     }
 
@@ -229,6 +229,7 @@ private:
         uint32_t target = 0;              // mesh, group or assembly index
         uint32_t material = kNoMaterial;  // inherited from the parent when not given
         Transform transform;
+        bool movable = false;             // every instance it expands to (a parent's goes on down)
     };
     struct Group {
         std::vector<Child> children;
@@ -269,6 +270,7 @@ private:
             c.material = it->second;
         }
         c.transform = readTransform(r);
+        c.movable = r.boolean("movable", false);
         return c;
     }
 
@@ -303,7 +305,7 @@ private:
     }
 
     // Mesh origins (far-from-origin files are stored recentred) go into the transform here.
-    void emit(const Child& leaf, const Transform& parent, uint32_t inherited) {
+    void emit(const Child& leaf, const Transform& parent, uint32_t inherited, bool movable) {
         if (leaf.isAssembly) {  // its own materials (a group's inherited one does not apply) and parts
             const PlacedAssembly& pa = l_.assemblies[leaf.target];
             const Transform placement = parent * leaf.transform;
@@ -315,6 +317,7 @@ private:
                 t.m = ai.transform;  // the mesh's origin() is in it already
                 in.transform = placement * t;
                 in.part = pa.firstPart + int32_t(ai.part);
+                in.movable = movable;
                 scene_.instances.push_back(in);
             }
             return;
@@ -325,14 +328,16 @@ private:
         requireUVs(in.material, in.mesh);
         const auto& o = scene_.meshes[leaf.target].mesh->origin();
         in.transform = parent * leaf.transform * Transform::translate(o[0], o[1], o[2]);
+        in.movable = movable;
         scene_.instances.push_back(in);
     }
 
-    void expand(const Child& c, const Transform& parent, uint32_t inherited) {
+    void expand(const Child& c, const Transform& parent, uint32_t inherited, bool movable) {
         const uint32_t material = c.material != kNoMaterial ? c.material : inherited;
-        if (!c.isGroup) return emit(c, parent, inherited);
+        movable = movable || c.movable;
+        if (!c.isGroup) return emit(c, parent, inherited, movable);
         const Transform t = parent * c.transform;
-        for (const Child& child : groups_[c.target].children) expand(child, t, material);
+        for (const Child& child : groups_[c.target].children) expand(child, t, material, movable);
     }
 
     Load& l_;

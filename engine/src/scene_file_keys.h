@@ -135,6 +135,7 @@ inline constexpr Key kInstanceKeys[] = {
     {.name = "scale", .type = KeyType::Scale, .lo = 1e-12, .hi = 1e12, .help = "applied first; no zero factors"},
     {.name = "rotate", .type = KeyType::Vec3d, .help = "applied second: about x, then y, then z"},
     {.name = "translate", .type = KeyType::Vec3d, .help = "applied last"},
+    {.name = "movable", .type = KeyType::Boolean, .help = "a part the review will move (a valve, a door): kept in the small top level of moving instances from the start, so that moving it never rebuilds the static rest of the scene (what an unmarked part pays on its first move, in the background); for a group or an assembly, every instance it expands to. Images are the same either way"},
 };
 
 inline constexpr Key kGroupKeys[] = {

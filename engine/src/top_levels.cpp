@@ -58,7 +58,8 @@ Scene::Impl::~Impl() = default;
 namespace {
 
 // Starts a rebuild of the static top level on a thread of its own: every instance but those
-// moving now (movers settled for kSettleCommits commits are folded back in), as they are now.
+// moving now (movers settled for kSettleCommits commits are folded back in; the scene's movable
+// ones never are), as they are now.
 void launchRebuild(Scene::Impl& s) {
     auto r = std::make_unique<TopRebuild>();
     r->generation = s.topGeneration;
@@ -66,7 +67,8 @@ void launchRebuild(Scene::Impl& s) {
     r->included.assign(s.instances.size(), 0);
     r->entries.reserve(s.instances.size());
     for (size_t i = 0; i < s.instances.size(); ++i) {
-        if (s.inMoving[i] && s.commits - s.movedCommit[i] < kSettleCommits) continue;
+        // Movers stay out until settled; movable ones (InstanceDesc::movable) for good.
+        if (s.inMoving[i] && (s.desc.instances[i].movable || s.commits - s.movedCommit[i] < kSettleCommits)) continue;
         const InstanceData& d = s.instances[i];
         TopRebuild::Entry e{unsigned(i), s.meshScenes[s.desc.instances[i].mesh], {}, instanceMask(s, d), d.hidden};
         std::copy(d.objectToWorld, d.objectToWorld + 12, e.objectToWorld);

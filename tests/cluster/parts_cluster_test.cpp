@@ -62,5 +62,34 @@ TEST(PartsCluster, HideIsolateHighlightBitIdenticalToOneMachine) {
     EXPECT_THROW(cluster.master->setInstanceVisibility(4, Visibility::Hidden), std::exception);
 }
 
+// Parts the scene marks movable (issue 29) reach the clients (protocol 20), which keep them in
+// their moving top level from the start: each frame of a drag equals one machine's render of
+// the same state, marked or not, on 1, 2 and 3 clients. (The boxes are lifted off the floor:
+// at coincident faces the two top levels tie, a known debt: see the issue 29 note.)
+TEST(PartsCluster, MovablePartsDraggedBitIdenticalToOneMachine) {
+    SceneDesc d = test::partsScene();
+    for (size_t i = 1; i < d.instances.size(); ++i)
+        d.instances[i].transform = Transform::translate(0, 0.05 * double(i), 0) * d.instances[i].transform;
+    d.instances[2].movable = true;
+    SceneDesc unmarked = d;
+    unmarked.instances[2].movable = false;
+    for (int clients : {1, 2, 3}) {
+        SCOPED_TRACE(std::to_string(clients) + " clients");
+        ClusterSettings cs = test::inStep();
+        LocalCluster cluster(d, cs, clients);
+        ASSERT_TRUE(cluster.ready());
+        SceneDesc state = unmarked;
+        for (int step = 0; step < 3; ++step) {
+            const Transform t = Transform::translate(0.2 * step, 0.1 * step, -0.15 * step) * d.instances[2].transform;
+            if (step > 0) cluster.master->setInstanceTransform(2, t);
+            state.instances[2].transform = t;
+            FrameReport r;
+            const Image frame = cluster.master->renderFrame(&r);
+            ASSERT_TRUE(complete(r));
+            EXPECT_EQ(differingBytes(frame, singleMachine(state, r.frame)), 0u) << "step " << step;
+        }
+    }
+}
+
 }  // namespace
 }  // namespace rtwall

@@ -120,7 +120,7 @@ SceneSnapshot sampleSnapshot() {
     s.meshes.push_back(MeshRef{"floor", "shape:quad", {1, 2}, 200});
     s.materials = {sampleMaterial(0), sampleMaterial(1)};
     s.instances.push_back(InstanceDesc{1, 0, sampleTransform(0)});
-    s.instances.push_back(InstanceDesc{0, 1, sampleTransform(1), -1, Visibility::Hidden});
+    s.instances.push_back(InstanceDesc{0, 1, sampleTransform(1), -1, Visibility::Hidden, true});
     s.lights = {sampleLight(0), sampleLight(1)};
     s.settings = sampleSettings();
     s.bvh = {BvhSettings::Quality::High, true, true, BvhSettings::Primitives::Triangles};

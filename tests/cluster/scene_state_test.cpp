@@ -252,8 +252,8 @@ SceneDesc sampleScene() {
     d.meshes.push_back({"box", "meshes/box.ply", std::make_shared<const TriangleMesh>(makeBox())});
     d.meshes.push_back({"quad", "shape:quad", std::make_shared<const TriangleMesh>(makeQuad())});
     d.materials = {sampleMaterial(0), sampleMaterial(1)};
-    d.instances = {InstanceDesc{1, 1, sampleTransform(0), 1, Visibility::Highlighted},
-                   InstanceDesc{1, 1, sampleTransform(1), 0, Visibility::Hidden}};
+    d.instances = {InstanceDesc{1, 1, sampleTransform(0), 1, Visibility::Highlighted, true},
+                   InstanceDesc{1, 1, sampleTransform(1), 0, Visibility::Hidden, true}};
     d.parts = {PartDesc{"module", -1}, PartDesc{"module/bolt", 0}};
     d.lights = {sampleLight(0), sampleLight(1)};
     d.cameras = {sampleCamera(0), sampleCamera(1)};
@@ -302,7 +302,7 @@ TEST(SceneState, MemberCountsAreExact) {
     EXPECT_EQ(fieldCount<Light>(), 8u);
     EXPECT_EQ(fieldCount<CameraDesc>(), 6u);  // std::optional<ProjectionWindow> counts as one
     EXPECT_EQ(fieldCount<ProjectionWindow>(), 3u);
-    EXPECT_EQ(fieldCount<InstanceDesc>(), 5u);
+    EXPECT_EQ(fieldCount<InstanceDesc>(), 6u);
     EXPECT_EQ(fieldCount<Transform>(), 1u);  // the std::array, not its 12 doubles
     EXPECT_EQ(fieldCount<BvhSettings>(), 4u);
     EXPECT_EQ(fieldCount<SectionPlane>(), 5u);
@@ -382,7 +382,7 @@ TEST(SceneState, EveryMemberChangesTheWireBytes) {
     expectEveryMemberOnTheWire(sampleMaterial(0), "Material");
     expectEveryMemberOnTheWire(sampleLight(0), "Light");
     expectEveryMemberOnTheWire(sampleCamera(0), "CameraDesc");
-    expectEveryMemberOnTheWire(InstanceDesc{1, 2, sampleTransform(0), 3, Visibility::Hidden}, "InstanceDesc");
+    expectEveryMemberOnTheWire(InstanceDesc{1, 2, sampleTransform(0), 3, Visibility::Hidden, true}, "InstanceDesc");
     expectEveryMemberOnTheWire(sampleSettings(), "RenderSettings");
     expectEveryMemberOnTheWire(sampleSection(0), "SectionPlane");
     EXPECT_TRUE(sameOnWire(sampleMaterial(1), sampleMaterial(1)));

@@ -70,6 +70,13 @@ void expectAsFresh(const Scene& live, const std::string& when) {
             << when << (kernel == KernelType::Single ? " (single rays)" : " (packets)");
 }
 
+size_t differingPixels(const Image& a, const Image& b) {
+    size_t n = 0;
+    for (size_t i = 0; i + 2 < a.rgb.size() && a.rgb.size() == b.rgb.size(); i += 3)
+        n += a.rgb[i] != b.rgb[i] || a.rgb[i + 1] != b.rgb[i + 1] || a.rgb[i + 2] != b.rgb[i + 2];
+    return a.rgb.size() == b.rgb.size() ? n : SIZE_MAX;
+}
+
 Transform lifted(const SceneDesc& d, uint32_t i, int step) {
     return Transform::translate(0.3 * step, 0.4 * (step % 3), -0.2 * step) * d.instances[i].transform;
 }
@@ -102,6 +109,62 @@ TEST_P(Moves, EveryFrameIsTheImageOfAFreshScene) {
     expectAsFresh(live, "after the rebuild");
 }
 INSTANTIATE_TEST_SUITE_P(OneAndAHundred, Moves, ::testing::Values(1, 100));
+
+// Instances the scene marks movable (InstanceDesc::movable) live in the moving level from the
+// start: dragging them never makes the static level stale nor starts a rebuild, resting never
+// folds them back, and every image is the image of the same state built without the marks.
+TEST(Moves, MovableInstancesNeverRebuildTheStaticLevel) {
+    SceneDesc d = grid();
+    const std::vector<uint32_t> marked = {5, 21, 42};  // a grey box, the glass one and the leaf
+    for (uint32_t i : marked) d.instances[i].movable = true;
+    const auto unmarked = [](SceneDesc x) {
+        for (InstanceDesc& in : x.instances) in.movable = false;
+        return x;
+    };
+    Scene live(d), dragged(unmarked(d));  // `dragged`: the same moves of unmarked parts
+    Scene::TopLevelState st = live.topLevelState();
+    EXPECT_EQ(st.moving, 3u);
+    EXPECT_EQ(st.stale, 0u);
+    EXPECT_TRUE(render(live).rgb == render(Scene(unmarked(live.desc()))).rgb);
+    for (int step = 1; step <= 12; ++step) {
+        for (uint32_t i : marked) {
+            live.setInstanceTransform(i, lifted(d, i, step));
+            dragged.setInstanceTransform(i, lifted(d, i, step));
+        }
+        live.commit();
+        dragged.commit();
+        st = live.topLevelState();
+        EXPECT_EQ(st.moving, 3u) << step;
+        EXPECT_EQ(st.stale, 0u) << step;
+        EXPECT_FALSE(st.rebuilding) << step << ": a marked part's move rebuilt the static level";
+        if (step % 4 != 0) continue;
+        dragged.waitForRebuild();
+        const Scene plain(unmarked(live.desc()));
+        for (KernelType kernel : {KernelType::Packet, KernelType::Single}) {
+            const std::string what = "step " + std::to_string(step) + (kernel == KernelType::Single ? " (single rays)" : " (packets)");
+            const Image image = render(live, kernel);
+            EXPECT_EQ(differingPixels(image, render(dragged, kernel)), 0u) << what << ": as the unmarked parts dragged there";
+            // Against the state built afresh: equal, but for 2 pixels of single rays at step 12,
+            // which the unmarked parts dragged there show too (a debt of the two top levels, not
+            // of the marks: see the issue 29 note).
+            const size_t off = differingPixels(image, render(plain, kernel));
+            if (step == 12 && kernel == KernelType::Single) EXPECT_LE(off, 2u) << what;
+            else EXPECT_EQ(off, 0u) << what;
+        }
+    }
+    // An unmarked part still goes the usual way, and its rebuild leaves the marked ones out.
+    live.setInstanceTransform(7, lifted(d, 7, 1));
+    live.commit();
+    live.waitForRebuild();
+    for (int i = 0; i < 10; ++i) live.commit();  // 7 and the marked ones rest
+    live.setInstanceTransform(9, lifted(d, 9, 1));
+    live.commit();
+    live.waitForRebuild();
+    st = live.topLevelState();
+    EXPECT_EQ(st.moving, 4u) << "7 rested and was folded back; the marked three stay; 9 moves";
+    EXPECT_EQ(st.stale, 0u);
+    expectAsFresh(live, "marked and unmarked movers");
+}
 
 // Movers that rest are folded back into the static level by the next rebuild; one moved while a
 // rebuild that holds it runs is stale in what it publishes; a visibility change during a

@@ -177,6 +177,39 @@ INSTANTIATE_TEST_SUITE_P(
                  "6", "must not be zero"}),
     [](const auto& param) { return std::string(param.param.name); });
 
+// `movable` marks an instance, or every instance a group expands to, and nothing else.
+TEST(SceneFile, MovableMarksTheInstancesItExpandsTo) {
+    const auto dir = scratchDir();
+    const auto file = writeFile(dir / "s.toml", R"(
+[[mesh]]
+name = "b"
+shape = "box"
+[[group]]
+name = "valve"
+[[group.instance]]
+mesh = "b"
+[[group.instance]]
+mesh = "b"
+translate = [0, 1, 0]
+[[instance]]
+mesh = "b"
+[[instance]]
+group = "valve"
+movable = true
+[[instance]]
+mesh = "b"
+movable = true
+translate = [3, 0, 0]
+)");
+    const SceneDesc s = loadSceneFile(file);
+    ASSERT_EQ(s.instances.size(), 4u);
+    EXPECT_FALSE(s.instances[0].movable);
+    EXPECT_TRUE(s.instances[1].movable && s.instances[2].movable) << "both of the group's instances";
+    EXPECT_TRUE(s.instances[3].movable);
+    const auto bad = writeFile(dir / "bad.toml", "[[mesh]]\nname = \"b\"\nshape = \"box\"\n[[instance]]\nmesh = \"b\"\nmovable = \"yes\"\n");
+    EXPECT_NE(test::inputErrorOf([&] { loadSceneFile(bad); }).find("movable"), std::string::npos);
+}
+
 // A mesh with texture coordinates takes "uv" (and "auto", the default); the keys are read.
 TEST(SceneFile, UvMappingsOnAMeshWithUVs) {
     const auto dir = scratchDir();

@@ -116,6 +116,7 @@ struct UpdatesOptions : Common {
     int transforms = 0;  // instances moved per frame as well (Master::setInstanceTransform)
     bool async = false;
     int moving = 0;  // > 0: part moves on one Scene (moving instances per change) instead
+    bool movable = false;  // with moving: the movers are marked movable in the scene (InstanceDesc::movable)
 };
 toml::table updates(const UpdatesOptions& o);
 

@@ -18,6 +18,9 @@ void addBenchUpdates(CLI::App& bench, Run& run) {
                     "Part moves instead: this many instances dragged per change on one Scene; JSON commit_ms "
                     "{median, p95} per change, the background rebuild and bare Embree's whole top-level rebuild")
         ->check(CLI::Range(0, 100000));
+    cmd->add_flag("--movable", o.movable,
+                  "With --moving: the movers are marked movable in the scene (`movable = true`): in the moving top level "
+                  "from the start, no static rebuild (static_rebuild_ms 0)");
     cmd->add_flag("--async", o.async, "Asynchronous frames (as rtwall run): the frame time overlaps the next one's begin");
     callBenchmark(cmd, run, a, bench::updates);
 }

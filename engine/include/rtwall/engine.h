@@ -148,6 +148,9 @@ struct InstanceDesc {
     int32_t part = -1;      // index into SceneDesc::parts (assembly files), -1: none; kept by
                             // the master only, render clients need no names
     Visibility visibility = Visibility::Shown;
+    // Kept in the small top level of moving instances from the start (issue 29; the scene
+    // file's `movable = true`): moving it never rebuilds the static rest. Images are the same.
+    bool movable = false;
     bool operator==(const InstanceDesc&) const = default;
 };
 
