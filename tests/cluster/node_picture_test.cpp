@@ -184,6 +184,17 @@ Image onePcFrame(const SceneDesc& scene, const FrameView& view) {
     return c.compose(f, images).left;
 }
 
+// The scene, its one view, and that view's one-PC frame.
+struct OnePc {
+    SceneDesc scene = test::demoScene(kW, kH);
+    FrameView view;
+    Image frame;
+    OnePc() {
+        view.camera = scene.cameras.front();
+        frame = onePcFrame(scene, view);
+    }
+};
+
 // The pixels of `im` where `keep(x)`, the others black.
 Image only(const Image& im, bool (*keep)(int x)) {
     Image out = im;
@@ -202,13 +213,9 @@ void renderAndSwap(Master& m) {
 }
 
 TEST(NodePicture, TwoHonestNodesGiveTheOnePcFrameAndALeavingOneIsNamed) {
-    const SceneDesc scene = test::demoScene(kW, kH);
-    FrameView view;
-    view.camera = scene.cameras.front();
-    const Image one = onePcFrame(scene, view);
-
+    const OnePc ref;
     ClientThreads clients;
-    Master m(scene, nodesSettings());
+    Master m(ref.scene, nodesSettings());
     auto left = std::make_unique<NodeThread>(m.endpoint(), "left");
     auto right = std::make_unique<NodeThread>(m.endpoint(), "right");
     ASSERT_TRUE(m.waitForDisplayNodes(20000));
@@ -221,18 +228,18 @@ TEST(NodePicture, TwoHonestNodesGiveTheOnePcFrameAndALeavingOneIsNamed) {
 
     clients.start(m.endpoint());
     ASSERT_TRUE(m.waitForClients(1, 20000));
-    m.setViews({view});
+    m.setViews({ref.view});
     ASSERT_NO_FATAL_FAILURE(renderAndSwap(m));
     pic = m.nodePicture(kW, 10000);
     ASSERT_TRUE(pic);
     EXPECT_TRUE(pic->missing.empty());
     EXPECT_TRUE(pic->oneFrame);
     EXPECT_GT(pic->frame, 0u);
-    EXPECT_EQ(pic->left.rgb, one.rgb) << "every pixel, each from its one node";
+    EXPECT_EQ(pic->left.rgb, ref.frame.rgb) << "every pixel, each from its one node";
     EXPECT_TRUE(pic->right.rgb.empty());
     pic = m.nodePicture(37, 10000);
     ASSERT_TRUE(pic);
-    EXPECT_EQ(pic->left.rgb, boxPicture(one, 37).rgb) << "the sums of both nodes' cells make the whole's picture";
+    EXPECT_EQ(pic->left.rgb, boxPicture(ref.frame, 37).rgb) << "the sums of both nodes' cells make the whole's picture";
     EXPECT_THROW(m.nodePicture(0, 100), std::invalid_argument);
 
     // The right node leaves: the left one, the only one asked, owns every pixel (it holds every
@@ -243,7 +250,7 @@ TEST(NodePicture, TwoHonestNodesGiveTheOnePcFrameAndALeavingOneIsNamed) {
     pic = m.nodePicture(kW, 10000);
     ASSERT_TRUE(pic);
     EXPECT_EQ(pic->missing, std::vector<std::string>{"right"});
-    EXPECT_EQ(pic->left.rgb, one.rgb);
+    EXPECT_EQ(pic->left.rgb, ref.frame.rgb);
     left->stop();
     for (int i = 0; i < 400 && !m.displayNodesPresent().empty(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
     EXPECT_FALSE(m.nodePicture(kW, 1000)) << "no node there: no picture";
@@ -252,20 +259,16 @@ TEST(NodePicture, TwoHonestNodesGiveTheOnePcFrameAndALeavingOneIsNamed) {
 class NodePictureAttack : public ::testing::TestWithParam<int> {};
 
 TEST_P(NodePictureAttack, AHostileNodeIsNamedMissingAndTheHonestPixelsStayExact) {
-    const SceneDesc scene = test::demoScene(kW, kH);
-    FrameView view;
-    view.camera = scene.cameras.front();
-    const Image one = onePcFrame(scene, view);
-
+    const OnePc ref;
     ClientThreads clients;
-    Master m(scene, nodesSettings());
+    Master m(ref.scene, nodesSettings());
     NodeThread left(m.endpoint(), "left");
     HostileNode right(m.endpoint());
     right.mode = GetParam();
     ASSERT_TRUE(m.waitForDisplayNodes(20000));
     clients.start(m.endpoint());
     ASSERT_TRUE(m.waitForClients(1, 20000));
-    m.setViews({view});
+    m.setViews({ref.view});
     ASSERT_NO_FATAL_FAILURE(renderAndSwap(m));
     const uint64_t droppedBefore = m.droppedMessages();
     const auto start = std::chrono::steady_clock::now();
@@ -274,7 +277,7 @@ TEST_P(NodePictureAttack, AHostileNodeIsNamedMissingAndTheHonestPixelsStayExact)
     EXPECT_EQ(pic->missing, std::vector<std::string>{"right"});
     // The left half is the left node's, exactly; the right half black but for what a dropped
     // part may have put there (nothing: every part here is refused whole).
-    EXPECT_EQ(pic->left.rgb, only(one, [](int x) { return x < kW / 2; }).rgb);
+    EXPECT_EQ(pic->left.rgb, only(ref.frame, [](int x) { return x < kW / 2; }).rgb);
     if (GetParam() == HostileNode::Silent) {
         EXPECT_GE(std::chrono::steady_clock::now() - start, std::chrono::milliseconds(1400)) << "it waited for the silent node";
     } else {
