@@ -8,11 +8,13 @@ It opens the printed URL (the token's cookie), sees the thumbnail change as the 
 sets the camera from the page (the orbit stops), hides a part by its checkbox and sees the wall's
 frame change, adds a section plane by the form, saves the session, changes the view, restores the
 session through the page's file input and gets the same frame bit for bit; and `rtwall run
---session` renders that same frame. Bounded: every wait has a timeout, the run is killed at the end.
+--session` renders that same frame; on a wall of two display nodes the thumbnail (from the
+nodes) appears and follows the orbit and the screenshot is the wall's. Bounded: every wait has a timeout, the run is killed at the end.
 """
 import json
 import os
 import re
+import struct
 import subprocess
 import sys
 import time
@@ -20,7 +22,9 @@ import urllib.request
 
 from selenium import webdriver
 from selenium.webdriver.chrome.service import Service
+from selenium.common.exceptions import StaleElementReferenceException
 from selenium.webdriver.common.by import By
+from selenium.webdriver.common.keys import Keys
 
 RTWALL, SCRATCH = sys.argv[1], sys.argv[2]
 os.makedirs(SCRATCH, exist_ok=True)
@@ -93,10 +97,16 @@ try:
 
     # The camera from the page: the orbit stops.
     for field, value in (("camera-position", "0.5, 2.5, 9"), ("camera-target", "0, 0, 0"), ("camera-up", "0, 1, 0")):
+        # As an operator does: into the field, everything selected, typed over. (WebDriver's
+        # clear() takes the focus away again, and the field follows the camera until typed in.)
         box = driver.find_element(By.ID, field)
-        box.clear()
+        box.click()
+        box.send_keys(Keys.CONTROL, "a")
         box.send_keys(value)
+    typed = [driver.find_element(By.ID, f).get_attribute("value") for f in ("camera-position", "camera-target", "camera-up")]
     driver.find_element(By.CSS_SELECTOR, "#camera-form button").click()
+    if typed != ["0.5, 2.5, 9", "0, 0, 0", "0, 1, 0"]:
+        fail("the camera fields hold " + repr(typed) + ", not what was typed")
     wait_for("the camera", lambda: abs(call("GET", "/api/camera")["position"][2] - 9) < 1e-5 and not call("GET", "/api/status")["flying"])
     settle()
     before = call("GET", "/api/screenshot.png", raw=True)
@@ -137,13 +147,21 @@ try:
     size = thumb.size
     for fx, fy in ((0.25, 0.4), (0.3, 0.25)):
         ActionChains(driver).move_to_element_with_offset(thumb, int(size["width"] * fx), int(size["height"] * fy)).click().perform()
-    listed = wait_for("the measurement", lambda: driver.find_elements(By.CSS_SELECTOR, "#measurements li") or
-                      (driver.find_element(By.ID, "error").text and fail("the page said: " + driver.find_element(By.ID, "error").text)))
+    def measurement_listed():
+        said = driver.find_element(By.ID, "error").text
+        if said:
+            fail("the page said: " + said)
+        try:  # the list is drawn anew on every state event: an item may go stale under our hands
+            items = driver.find_elements(By.CSS_SELECTOR, "#measurements li")
+            return items[0].text if items else None
+        except StaleElementReferenceException:
+            return None
+    listed = wait_for("the measurement", measurement_listed)
     m = call("GET", "/api/measurements")["measurements"]
     if len(m) != 1 or not m[0]["distance"] > 0:
         fail("the measurement by two clicks: %s" % m)
-    if "units" not in listed[0].text:
-        fail("the page lists the measurement as: " + listed[0].text)
+    if "units" not in listed:
+        fail("the page lists the measurement as: " + listed)
 
     # Save the session, change the view, restore it through the page: the same frame.
     session = call("GET", "/api/session", raw=True)
@@ -164,6 +182,56 @@ try:
     errors = driver.find_element(By.ID, "error").text
     if errors:
         fail("the page said: " + errors)
+finally:
+    if driver:
+        driver.quit()
+    run.terminate()
+    try:
+        run.wait(timeout=30)
+    except subprocess.TimeoutExpired:
+        run.kill()
+
+# A wall on two display nodes (local `rtwall display` processes): the pictures come from the
+# nodes; the page's thumbnail appears and follows the orbit, and the screenshot is the wall's.
+WALL = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "configs", "wall", "two-nodes-2x2.toml")
+run = subprocess.Popen([RTWALL, "run", CONFIG, "--wall", WALL, "--headless", "--web", "127.0.0.1:0", "--out",
+                        os.path.join(SCRATCH, "nodes")], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+driver = None
+try:
+    url = None
+    end = time.time() + 120
+    while time.time() < end and url is None:
+        line = run.stdout.readline()
+        if not line:
+            fail("rtwall run on display nodes ended before the console started")
+        m = re.match(r"web console: (\S+)", line)
+        if m:
+            url = m.group(1)
+    if url is None:
+        fail("no 'web console:' line on display nodes")
+    base, token = url.split("/?token=")
+    options = webdriver.ChromeOptions()
+    options.binary_location = "/usr/bin/chromium"
+    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--window-size=1280,1000"):
+        options.add_argument(a)
+    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
+    driver.set_page_load_timeout(60)
+    driver.get(url)
+    thumb = driver.find_element(By.ID, "thumbnail")
+    first = wait_for("a thumbnail from the nodes", lambda: thumb.get_attribute("data-frame"))
+    wait_for("a newer thumbnail from the nodes", lambda: (thumb.get_attribute("data-frame") or first) != first)
+    src_a = thumb.get_attribute("src")
+    wait_for("the nodes' thumbnail to change", lambda: thumb.get_attribute("src") != src_a)
+    if driver.execute_script("return document.getElementById('thumbnail').naturalWidth") != 480:
+        fail("the nodes' thumbnail is not 480 pixels wide")
+    req = urllib.request.Request(base + "/api/screenshot.png", headers={"Authorization": "Bearer " + token})
+    with urllib.request.urlopen(req, timeout=60) as r:
+        png = r.read()
+    if png[:8] != b"\x89PNG\r\n\x1a\n" or struct.unpack(">II", png[16:24]) != (648, 488):
+        fail("the screenshot of the wall on display nodes is not a 648x488 PNG")
+    errors = driver.find_element(By.ID, "error").text
+    if errors:
+        fail("the page on display nodes said: " + errors)
 finally:
     if driver:
         driver.quit()

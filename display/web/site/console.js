@@ -55,7 +55,9 @@ function showStatus(s) {
   fpsHistory.push(s.fps);
   if (fpsHistory.length > 120) fpsHistory.shift();
   drawChart();
-  if (!cameraEdited) {  // the fields follow the camera until the operator types in one
+  // The fields follow the camera until the operator types in one, and not while one has the
+  // focus (a click into a field, then a status update, would replace what is about to be typed).
+  if (!cameraEdited && !$('camera-form').contains(document.activeElement)) {
     $('camera-position').value = fmt(s.camera.position);
     $('camera-target').value = fmt(s.camera.target);
     $('camera-up').value = fmt(s.camera.up);
