@@ -280,6 +280,7 @@ struct Master::Impl {
         int32_t width = 0;
         bool sent = false;
         uint64_t asked = 0, answered = 0, refused = 0;  // node bits
+        uint64_t blank = 0;                             // answered that it presented nothing yet
         int32_t srcWidth = 0, srcHeight = 0;            // the first answer's frame size: every other must match
         PictureEye eyes[2];
         bool stereo = false;

@@ -45,7 +45,7 @@ std::optional<NodePicture> Master::nodePicture(int width, int timeoutMs) {
     NodePicture out;
     const std::vector<std::string>& names = s.settings.displayNodes.names;
     for (size_t i = 0; i < names.size(); ++i)
-        if (!(take.answered >> i & 1) || (take.refused >> i & 1)) out.missing.push_back(names[i]);  // asked or not there
+        if (!(take.answered >> i & 1) || ((take.refused | take.blank) >> i & 1)) out.missing.push_back(names[i]);
     if (take.srcWidth == 0) return out;  // no pixels came
     out.frame = take.newest;
     out.oneFrame = take.oldest == take.newest;
@@ -173,6 +173,7 @@ void Master::Impl::onNodePreview(NodeState& n, const NodePreview& part) {
         }
         if (part.eye == 1) take.stereo = true;
     }
+    if (part.frame == 0) take.blank |= bit;  // nothing presented yet: not in the picture
     if (part.last) {
         take.answered |= bit;
         pictureCv.notify_all();

@@ -77,8 +77,8 @@ struct NodePicture {
     uint32_t frame = 0;     // the newest frame among the answers (0: no node presented one yet)
     bool oneFrame = true;   // every node that answered with pixels presented that frame
     Image left, right;      // each eye box-filtered to the width asked (rtwall/image_box.h); right empty: mono
-    // The wall's nodes not in it: not there, or did not answer in time, or answered wrong (a part
-    // dropped: their pixels black or partly there).
+    // The wall's nodes not in it: not there, presented nothing yet, did not answer in time, or
+    // answered wrong (a part dropped: their pixels black or partly there).
     std::vector<std::string> missing;
 };
 

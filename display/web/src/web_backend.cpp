@@ -13,6 +13,7 @@
 #include <condition_variable>
 #include <deque>
 #include <mutex>
+#include <thread>
 
 namespace rtwall {
 
@@ -158,14 +159,18 @@ private:
     }
 
     // Every node's pixels of one frame, at the wall's resolution as the single-PC wall's
-    // screenshot; refused where a node did not answer or the nodes presented different frames
-    // (asked again, up to three times, before that).
+    // screenshot; refused where a node gave none (not there, nothing presented yet, no answer)
+    // or the nodes presented different frames (asked again, up to three times, a quarter of a
+    // second apart, before that).
     std::optional<Image> nodesScreenshot(int eye, std::chrono::milliseconds timeout, std::string* why) {
         std::lock_guard<std::mutex> taking(pictureMutex_);
         const auto until = std::chrono::steady_clock::now() + timeout;
         std::string reason = "no frame to take yet";
         for (int attempt = 0; attempt < 3 && std::chrono::steady_clock::now() < until; ++attempt) {
-            const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(until - std::chrono::steady_clock::now());
+            if (attempt > 0) std::this_thread::sleep_for(std::min<std::chrono::steady_clock::duration>(
+                                 std::chrono::milliseconds(250), until - std::chrono::steady_clock::now()));
+            const auto left = std::max(std::chrono::milliseconds(0), std::chrono::duration_cast<std::chrono::milliseconds>(
+                                                                         until - std::chrono::steady_clock::now()));
             std::optional<NodePicture> pic = session_.nodePicture(16384, left);  // at least the frame's width: every pixel
             if (!pic) {
                 reason = "no display node is there";
@@ -175,7 +180,7 @@ private:
                 reason = "display node";
                 reason += pic->missing.size() > 1 ? "s " : " ";
                 for (size_t i = 0; i < pic->missing.size(); ++i) reason += (i ? ", '" : "'") + pic->missing[i] + "'";
-                reason += " did not answer";
+                reason += " gave no pixels (not there, nothing shown yet, or no answer)";
                 continue;
             }
             if (pic->left.rgb.empty()) continue;  // nothing presented yet
