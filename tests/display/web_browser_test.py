@@ -49,21 +49,66 @@ def wait_for(what, check, seconds=60):
     fail("timed out waiting for " + what)
 
 
-run = subprocess.Popen([RTWALL, "run", CONFIG, "--headless", "--web", "127.0.0.1:0", "--out", os.path.join(SCRATCH, "frames")],
-                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-driver = None
-try:
-    url = None
+def start_console(*extra):
+    """`rtwall run CONFIG --headless --web` with `extra` arguments; the process and its printed URL."""
+    run = subprocess.Popen([RTWALL, "run", CONFIG, "--headless", "--web", "127.0.0.1:0", *extra],
+                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     end = time.time() + 120
-    while time.time() < end and url is None:
+    while time.time() < end:
         line = run.stdout.readline()
         if not line:
-            fail("rtwall run ended before the console started")
+            fail("rtwall run %s ended before the console started" % " ".join(extra))
         m = re.match(r"web console: (\S+)", line)
         if m:
-            url = m.group(1)
-    if url is None:
-        fail("no 'web console:' line")
+            return run, m.group(1)
+    fail("no 'web console:' line from rtwall run " + " ".join(extra))
+
+
+def open_browser(url, downloads=None):
+    """Headless Chromium on the printed URL (its cookie, then the page)."""
+    options = webdriver.ChromeOptions()
+    options.binary_location = "/usr/bin/chromium"
+    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--window-size=1280,1000"):
+        options.add_argument(a)
+    if downloads:
+        options.add_experimental_option("prefs", {"download.default_directory": downloads})
+    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
+    driver.set_page_load_timeout(60)
+    driver.get(url)
+    if "rtwall console" not in driver.title:
+        fail("the page did not load: " + driver.title)
+    return driver
+
+
+def thumbnail_follows_orbit(driver, where):
+    """The page's thumbnail appears, a newer one comes and its image changes; the element."""
+    thumb = driver.find_element(By.ID, "thumbnail")
+    first = wait_for("a thumbnail" + where, lambda: thumb.get_attribute("data-frame"))
+    wait_for("a newer thumbnail" + where, lambda: (thumb.get_attribute("data-frame") or first) != first)
+    src_a = thumb.get_attribute("src")
+    wait_for("the thumbnail's image to change" + where, lambda: thumb.get_attribute("src") != src_a)
+    return thumb
+
+
+def page_said_nothing(driver, where):
+    errors = driver.find_element(By.ID, "error").text
+    if errors:
+        fail("the page" + where + " said: " + errors)
+
+
+def stop(run, driver):
+    if driver:
+        driver.quit()
+    run.terminate()
+    try:
+        run.wait(timeout=30)
+    except subprocess.TimeoutExpired:
+        run.kill()
+
+
+run, url = start_console("--out", os.path.join(SCRATCH, "frames"))
+driver = None
+try:
     base, token = url.split("/?token=")
 
     def call(method, path, body=None, raw=False):
@@ -77,23 +122,10 @@ try:
         start = call("GET", "/api/status")["steps"]
         wait_for("three more frames", lambda: call("GET", "/api/status")["steps"] >= start + 3)
 
-    options = webdriver.ChromeOptions()
-    options.binary_location = "/usr/bin/chromium"
-    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--window-size=1280,1000"):
-        options.add_argument(a)
-    options.add_experimental_option("prefs", {"download.default_directory": SCRATCH})
-    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
-    driver.set_page_load_timeout(60)
-    driver.get(url)  # the cookie, then the page
-    if "rtwall console" not in driver.title:
-        fail("the page did not load: " + driver.title)
+    driver = open_browser(url, SCRATCH)
 
     # The thumbnail follows the orbit.
-    thumb = driver.find_element(By.ID, "thumbnail")
-    first = wait_for("a thumbnail", lambda: thumb.get_attribute("data-frame"))
-    wait_for("a newer thumbnail", lambda: (thumb.get_attribute("data-frame") or first) != first)
-    src_a = thumb.get_attribute("src")
-    wait_for("the thumbnail's image to change", lambda: thumb.get_attribute("src") != src_a)
+    thumb = thumbnail_follows_orbit(driver, "")
 
     # The camera from the page: the orbit stops.
     for field, value in (("camera-position", "0.5, 2.5, 9"), ("camera-target", "0, 0, 0"), ("camera-up", "0, 1, 0")):
@@ -179,49 +211,19 @@ try:
     settle()
     if call("GET", "/api/screenshot.png", raw=True) != cut:
         fail("the restored session's frame differs from the saved one")
-    errors = driver.find_element(By.ID, "error").text
-    if errors:
-        fail("the page said: " + errors)
+    page_said_nothing(driver, "")
 finally:
-    if driver:
-        driver.quit()
-    run.terminate()
-    try:
-        run.wait(timeout=30)
-    except subprocess.TimeoutExpired:
-        run.kill()
+    stop(run, driver)
 
 # A wall on two display nodes (local `rtwall display` processes): the pictures come from the
 # nodes; the page's thumbnail appears and follows the orbit, and the screenshot is the wall's.
 WALL = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "configs", "wall", "two-nodes-2x2.toml")
-run = subprocess.Popen([RTWALL, "run", CONFIG, "--wall", WALL, "--headless", "--web", "127.0.0.1:0", "--out",
-                        os.path.join(SCRATCH, "nodes")], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+run, url = start_console("--wall", WALL, "--out", os.path.join(SCRATCH, "nodes"))
 driver = None
 try:
-    url = None
-    end = time.time() + 120
-    while time.time() < end and url is None:
-        line = run.stdout.readline()
-        if not line:
-            fail("rtwall run on display nodes ended before the console started")
-        m = re.match(r"web console: (\S+)", line)
-        if m:
-            url = m.group(1)
-    if url is None:
-        fail("no 'web console:' line on display nodes")
     base, token = url.split("/?token=")
-    options = webdriver.ChromeOptions()
-    options.binary_location = "/usr/bin/chromium"
-    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--window-size=1280,1000"):
-        options.add_argument(a)
-    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
-    driver.set_page_load_timeout(60)
-    driver.get(url)
-    thumb = driver.find_element(By.ID, "thumbnail")
-    first = wait_for("a thumbnail from the nodes", lambda: thumb.get_attribute("data-frame"))
-    wait_for("a newer thumbnail from the nodes", lambda: (thumb.get_attribute("data-frame") or first) != first)
-    src_a = thumb.get_attribute("src")
-    wait_for("the nodes' thumbnail to change", lambda: thumb.get_attribute("src") != src_a)
+    driver = open_browser(url)
+    thumbnail_follows_orbit(driver, " on display nodes")
     if driver.execute_script("return document.getElementById('thumbnail').naturalWidth") != 480:
         fail("the nodes' thumbnail is not 480 pixels wide")
     req = urllib.request.Request(base + "/api/screenshot.png", headers={"Authorization": "Bearer " + token})
@@ -229,17 +231,9 @@ try:
         png = r.read()
     if png[:8] != b"\x89PNG\r\n\x1a\n" or struct.unpack(">II", png[16:24]) != (648, 488):
         fail("the screenshot of the wall on display nodes is not a 648x488 PNG")
-    errors = driver.find_element(By.ID, "error").text
-    if errors:
-        fail("the page on display nodes said: " + errors)
+    page_said_nothing(driver, " on display nodes")
 finally:
-    if driver:
-        driver.quit()
-    run.terminate()
-    try:
-        run.wait(timeout=30)
-    except subprocess.TimeoutExpired:
-        run.kill()
+    stop(run, driver)
 
 # rtwall run --session: its first frame is the saved one.
 frames = os.path.join(SCRATCH, "again")

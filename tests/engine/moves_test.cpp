@@ -81,6 +81,15 @@ Transform lifted(const SceneDesc& d, uint32_t i, int step) {
     return Transform::translate(0.3 * step, 0.4 * (step % 3), -0.2 * step) * d.instances[i].transform;
 }
 
+// Every mover rests (10 commits), then instance i starts moving; after the rebuild that follows.
+Scene::TopLevelState restThenMove(Scene& live, const SceneDesc& d, uint32_t i) {
+    for (int k = 0; k < 10; ++k) live.commit();
+    live.setInstanceTransform(i, lifted(d, i, 1));
+    live.commit();
+    live.waitForRebuild();
+    return live.topLevelState();
+}
+
 class Moves : public ::testing::TestWithParam<int> {};
 
 // 1 and 100 parts dragged over several frames: each frame as a fresh scene; the static level is
@@ -156,11 +165,7 @@ TEST(Moves, MovableInstancesNeverRebuildTheStaticLevel) {
     live.setInstanceTransform(7, lifted(d, 7, 1));
     live.commit();
     live.waitForRebuild();
-    for (int i = 0; i < 10; ++i) live.commit();  // 7 and the marked ones rest
-    live.setInstanceTransform(9, lifted(d, 9, 1));
-    live.commit();
-    live.waitForRebuild();
-    st = live.topLevelState();
+    st = restThenMove(live, d, 9);  // 7 and the marked ones rest
     EXPECT_EQ(st.moving, 4u) << "7 rested and was folded back; the marked three stay; 9 moves";
     EXPECT_EQ(st.stale, 0u);
     expectAsFresh(live, "marked and unmarked movers");
@@ -186,11 +191,7 @@ TEST(Moves, SettledMoversFoldBackAndRacesStayExact) {
     EXPECT_EQ(st.stale, 1u) << "5's copy in the new static level is from before its last move";
     live.commit();
     expectAsFresh(live, "5 stale in the new static level");
-    for (int i = 0; i < 10; ++i) live.commit();
-    live.setInstanceTransform(9, lifted(d, 9, 1));
-    live.commit();
-    live.waitForRebuild();
-    st = live.topLevelState();
+    st = restThenMove(live, d, 9);
     EXPECT_EQ(st.moving, 1u) << "5 and 7 rested and were folded back; 9 moves";
     EXPECT_EQ(st.stale, 0u);
     expectAsFresh(live, "after folding");
