@@ -501,6 +501,7 @@ private:
         part.id = ask.id;
         part.last = true;
         const Image* eyes[2] = {&onScreen_.left, onScreen_.right.rgb.empty() ? nullptr : &onScreen_.right};
+        const bool asked = (ask.nodes >> index_) & 1;  // else it owns no pixel: only the last part
         if (onScreenFrame_ == 0 || !run_.previewOwners || onScreen_.left.rgb.empty()) {
             send(part);
             return;
@@ -508,8 +509,8 @@ private:
         part.frame = onScreenFrame_;
         part.srcWidth = onScreen_.left.width;
         part.srcHeight = onScreen_.left.height;
-        for (int e = 0; e < 2; ++e) {
-            if (!eyes[e] || !((ask.nodes >> index_) & 1)) continue;
+        for (int e = 0; e < 2 && asked; ++e) {
+            if (!eyes[e]) continue;
             const Image& im = *eyes[e];
             BoxGrid grid;
             try {

@@ -13,7 +13,6 @@
 namespace rtwall {
 
 namespace {
-constexpr int kMaxPictureWidth = 16384;               // NodePreviewAsk's width limit (kMaxImageSide)
 constexpr size_t kMaxPicturesAtOnce = 8;
 constexpr size_t kMaxPictureCells = size_t(1) << 22;  // a box-filtered picture's cells per eye (a thumbnail)
 }  // namespace
@@ -21,9 +20,9 @@ constexpr size_t kMaxPictureCells = size_t(1) << 22;  // a box-filtered picture'
 std::optional<NodePicture> Master::nodePicture(int width, int timeoutMs) {
     Impl& s = *impl_;
     if (!s.withNodes()) return std::nullopt;
-    if (width < 1 || width > kMaxPictureWidth)
+    if (width < 1 || width > kNodePictureEveryPixel)
         throw std::invalid_argument("Master::nodePicture: width " + std::to_string(width) + " (1 to " +
-                                    std::to_string(kMaxPictureWidth) + ")");
+                                    std::to_string(kNodePictureEveryPixel) + ")");
     uint32_t id;
     {
         std::lock_guard lock(s.pictureMutex);
@@ -52,9 +51,15 @@ std::optional<NodePicture> Master::nodePicture(int width, int timeoutMs) {
     for (int e = 0; e < (take.stereo ? 2 : 1); ++e) {
         Impl::PictureEye& eye = take.eyes[e];
         Image& im = e == 0 ? out.left : out.right;
-        if (eye.direct) im = std::move(eye.image);
-        else if (!eye.sums.empty()) im = boxMeans(eye.grid, eye.sums.data());
-        else im = boxMeans(eye.grid, std::vector<uint32_t>(eye.grid.cells() * 4, 0).data());  // nobody's pixels: black
+        if (eye.direct && !eye.image.rgb.empty()) {
+            im = std::move(eye.image);
+        } else if (!eye.direct && !eye.sums.empty()) {
+            im = boxMeans(eye.grid, eye.sums.data());
+        } else {  // no part of this eye came: black
+            im.width = eye.grid.width;
+            im.height = eye.grid.height;
+            im.rgb.assign(eye.grid.cells() * 3, 0);
+        }
     }
     return out;
 }

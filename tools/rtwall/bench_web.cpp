@@ -103,7 +103,7 @@ toml::table benchWeb(const WebBenchOptions& o) {
     if (o.nodes) {
         // The nodes' pictures, asked with the wall idle: a thumbnail's (480 wide, the console's)
         // and a screenshot's (every pixel), the ask to the last node's last part.
-        for (const auto& [name, width, count] : {std::tuple{"picture_ms", 480, 20}, std::tuple{"screenshot_picture_ms", 16384, 5}}) {
+        for (const auto& [name, width, count] : {std::tuple{"picture_ms", 480, 20}, std::tuple{"screenshot_picture_ms", kNodePictureEveryPixel, 5}}) {
             std::vector<double> ms;
             for (int i = 0; i < count; ++i) {
                 const auto t0 = std::chrono::steady_clock::now();

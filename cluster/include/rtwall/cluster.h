@@ -73,6 +73,7 @@ struct NodeRefreshDelay {
 
 // What the display nodes show, as one picture (Master::nodePicture; the operator console's
 // thumbnail and screenshot of a wall on nodes, issue 31).
+inline constexpr int kNodePictureEveryPixel = 16384;  // the largest width asked: at least any frame's, so every pixel
 struct NodePicture {
     uint32_t frame = 0;     // the newest frame among the answers (0: no node presented one yet)
     bool oneFrame = true;   // every node that answered with pixels presented that frame

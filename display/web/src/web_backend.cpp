@@ -171,7 +171,7 @@ private:
                                  std::chrono::milliseconds(250), until - std::chrono::steady_clock::now()));
             const auto left = std::max(std::chrono::milliseconds(0), std::chrono::duration_cast<std::chrono::milliseconds>(
                                                                          until - std::chrono::steady_clock::now()));
-            std::optional<NodePicture> pic = session_.nodePicture(16384, left);  // at least the frame's width: every pixel
+            std::optional<NodePicture> pic = session_.nodePicture(kNodePictureEveryPixel, left);
             if (!pic) {
                 reason = "no display node is there";
                 break;
@@ -300,7 +300,8 @@ private:
         bool makeThumb;
         {
             std::lock_guard<std::mutex> lock(mutex_);
-            makeThumb = wanted_ && now - lastAsked_ < std::chrono::seconds(5) &&
+            // On display nodes the thumbnail is the nodes' (nodesThumbnail): the master has no pixels.
+            makeThumb = !onNodes_ && wanted_ && now - lastAsked_ < std::chrono::seconds(5) &&
                         now - lastThumb_ >= std::chrono::duration<double>(1.0 / settings_.thumbnailsPerSecond);
         }
         std::shared_ptr<const Image> thumb;
