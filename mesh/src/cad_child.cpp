@@ -112,6 +112,7 @@ uint64_t memoryBudget(uint64_t fileSize) {
         // is the only user.
         const Assembly a = importCadHere(file, o, false);
         for (const std::string& w : a.warnings) sendLine(out, 'W', w);
+        sendLine(out, 'R', a.reader);
         const std::vector<unsigned char> bytes = encodeAssemblyCache(a, key);
         code = writeAll(memfd, bytes.data(), bytes.size()) ? 0 : 5;
     } catch (const InputError& e) {
@@ -239,7 +240,9 @@ CadImport importCad(const fs::path& file, const AssemblyOptions& options, const 
     const auto stallWall = std::chrono::seconds(int64_t(10 * stallCpu));
     auto lastMessage = std::chrono::steady_clock::now();
     double cpuAtLastMessage = 0;
-    std::string pending, error;
+    std::string pending, error, reader;
+    double lastFraction = 0;
+    auto lastAsked = std::chrono::steady_clock::now();
     char buf[4096];
     int status = 0;
     for (bool exited = false, open = true; !exited;) {
@@ -263,14 +266,26 @@ CadImport importCad(const fs::path& file, const AssemblyOptions& options, const 
             if (line.size() < 2) continue;
             const std::string text = line.substr(2);
             if (line[0] == 'P') {
-                if (options.progress && !options.progress(std::strtod(text.c_str(), nullptr))) {
+                lastFraction = std::strtod(text.c_str(), nullptr);
+                if (options.progress && !options.progress(lastFraction)) {
                     if (!exited) killChild();
                     throw Cancelled();
                 }
             } else if (line[0] == 'W') {
                 result.assembly.warnings.push_back(text);
+            } else if (line[0] == 'R') {
+                reader = text;
             } else if (line[0] == 'E' && error.empty()) {
                 error = text;
+            }
+        }
+        // Parsing a large file reports nothing for seconds: the progress function is still asked
+        // every 0.1 s, so that a cancel (Ctrl-C) takes effect at once.
+        if (!exited && options.progress && std::chrono::steady_clock::now() - lastAsked > std::chrono::milliseconds(100)) {
+            lastAsked = std::chrono::steady_clock::now();
+            if (!options.progress(lastFraction)) {
+                killChild();
+                throw Cancelled();
             }
         }
         if (!exited && (cpuSecondsOf(pid) - cpuAtLastMessage > stallCpu || std::chrono::steady_clock::now() - lastMessage > stallWall)) {
@@ -286,6 +301,7 @@ CadImport importCad(const fs::path& file, const AssemblyOptions& options, const 
         }
     }
     finishChild(file, key, cacheFile, status, error, memfd.fd, result);
+    result.assembly.reader = reader;
     return result;
 }
 

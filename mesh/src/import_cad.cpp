@@ -1,16 +1,19 @@
-// STEP and IGES assemblies through OpenCASCADE's XDE document (the one OCCT translation unit of
-// the importer, so that OCCT's large headers are compiled once).
+// STEP and IGES assemblies through OpenCASCADE (with import_step_direct.cpp, the two OCCT
+// translation units of the importer).
 //
-// STEPCAFControl_Reader / IGESCAFControl_Reader transfer the file into a TDocStd_Document whose
-// XCAFDoc_ShapeTool holds the assembly structure: free shapes (roots), assemblies whose
-// components reference other labels with a location, and simple shapes (the parts). Each part
-// label is tessellated once (BRepMesh_IncrementalMesh) into one TriangleMesh; every component
-// that references it, however deep, becomes an instance with the product of the locations on
-// its path. Names come from TDataStd_Name, colours from XCAFDoc_ColorTool (a component's own
-// colour over its part's, over its assembly's).
+// The product structure comes as a CadTree (cad_tree.h): for STEP from rtwall's direct reader
+// (import_step_direct.cpp, linear in the part instances) where the file holds nothing only XDE
+// reads, else, and for IGES, from OCCT's XDE document (STEPCAFControl_Reader /
+// IGESCAFControl_Reader into a TDocStd_Document whose XCAFDoc_ShapeTool holds free shapes,
+// assemblies whose components reference other labels with a location, and simple shapes; names
+// from TDataStd_Name, colours from XCAFDoc_ColorTool). One walk turns either tree into the
+// Assembly: each part tessellated once (BRepMesh_IncrementalMesh) into one TriangleMesh; every
+// component that places it, however deep, an instance with the product of the locations on its
+// path; a component's colour over its part's, over its assembly's.
 #include "rtwall/mesh.h"
 
 #include "assembly_import.h"
+#include "cad_tree.h"
 #include "mesh_internal.h"
 
 #include <BRepMesh_IncrementalMesh.hxx>
@@ -61,9 +64,11 @@ using Matrix = Affine;
 // More instances than this is an input error (as for glTF and scene files).
 constexpr uint64_t kMaxInstances = uint64_t(1) << 24;
 constexpr uint32_t kNoMesh = UINT32_MAX;  // a part without triangles
-// The share of a load's progress that reading and transferring the file takes (tessellating the
-// distinct parts, the rest).
+// The shares of a load's progress: through XDE, reading and transferring the file takes the
+// first 0.9 (tessellating the distinct parts, the rest); through the direct STEP reader, reading
+// the file the first 0.4, transferring the distinct parts up to 0.6.
 constexpr double kTransferShare = 0.9;
+constexpr double kDirectReadShare = 0.4, kDirectTransferShare = 0.6;
 
 [[noreturn]] void fail(const fs::path& file, const std::string& what) { throw InputError(file.string() + ": " + what); }
 
@@ -126,10 +131,11 @@ TriangleMesh tessellate(const TopoDS_Shape& shape, const AssemblyOptions& option
     return mesh;
 }
 
-class XdeReader {
+// XDE's labels as a CadTree: one product per distinct label (a part or an assembly), one
+// component per component label.
+class XdeTree {
 public:
-    XdeReader(const fs::path& file, const AssemblyOptions& options, const Handle(TDocStd_Document)& doc, Assembly& out)
-        : file_(file), options_(options), out_(out) {
+    XdeTree(const fs::path& file, const Handle(TDocStd_Document)& doc, CadTree& tree) : file_(file), tree_(tree) {
         shapes_ = XCAFDoc_DocumentTool::ShapeTool(doc->Main());
         colors_ = XCAFDoc_DocumentTool::ColorTool(doc->Main());
     }
@@ -138,130 +144,155 @@ public:
         TDF_LabelSequence roots;
         shapes_->GetFreeShapes(roots);
         if (roots.IsEmpty()) fail(file_, "no shapes in the file");
-        // CAD files are z-up; rtwall's cameras are y-up: turn the model -90 degrees about x.
-        const Matrix zUp{1, 0, 0, 0, 0, 0, 1, 0, 0, -1, 0, 0};
-        countParts(roots);
-        for (const TDF_Label& r : roots) visit(r, -1, zUp, -1);
+        for (const TDF_Label& r : roots) tree_.roots.push_back(product(r, 0));
     }
 
 private:
-    // How many distinct parts there are, for the progress report.
-    void countParts(const TDF_LabelSequence& roots) {
-        std::vector<TDF_Label> stack(roots.begin(), roots.end());
-        std::map<std::string, bool> seen;
-        while (!stack.empty()) {
-            TDF_Label l = stack.back();
-            stack.pop_back();
-            if (shapes_->IsReference(l)) {
-                TDF_Label ref;
-                if (shapes_->GetReferredShape(l, ref)) l = ref;
-            }
-            if (!seen.emplace(labelEntry(l), true).second) continue;
-            if (shapes_->IsAssembly(l)) {
-                TDF_LabelSequence comps;
-                shapes_->GetComponents(l, comps, false);
-                stack.insert(stack.end(), comps.begin(), comps.end());
-            } else {
-                ++partsTotal_;
-            }
-        }
-    }
-
-    int colourOf(const TDF_Label& label) const {
+    CadColour colourOf(const TDF_Label& label) const {
         Quantity_Color c;
-        if (colors_->GetColor(label, XCAFDoc_ColorSurf, c) || colors_->GetColor(label, XCAFDoc_ColorGen, c)) return material(c);
-        return -1;
+        if (colors_->GetColor(label, XCAFDoc_ColorSurf, c) || colors_->GetColor(label, XCAFDoc_ColorGen, c))
+            return std::array<float, 3>{float(c.Red()), float(c.Green()), float(c.Blue())};
+        return std::nullopt;
     }
 
-    int material(const Quantity_Color& c) const {
-        // Quantity_Color is linear RGB, as AssemblyMaterial's base colour.
-        const std::array<float, 3> rgb{float(c.Red()), float(c.Green()), float(c.Blue())};
+    uint32_t product(const TDF_Label& label, size_t depth) {
+        const std::string key = labelEntry(label);
+        if (auto it = index_.find(key); it != index_.end()) return it->second;
+        // A cycle makes a component refer to an assembly above it; the walk then stops at 64.
+        if (depth > 64) fail(file_, "assemblies nest more than 64 deep (a cycle?)");
+        const auto id = uint32_t(tree_.products.size());
+        index_[key] = id;
+        CadProduct p;
+        p.name = labelName(label);
+        p.key = key;
+        p.colour = colourOf(label);
+        p.assembly = shapes_->IsAssembly(label);
+        if (!p.assembly && (!XCAFDoc_ShapeTool::GetShape(label, p.shape) || p.shape.IsNull())) fail(file_, "part " + key + " has no shape");
+        tree_.products.push_back(std::move(p));
+        if (!tree_.products[id].assembly) return id;
+        TDF_LabelSequence comps;
+        shapes_->GetComponents(label, comps, false);
+        for (const TDF_Label& c : comps) {
+            TDF_Label ref;
+            if (!shapes_->GetReferredShape(c, ref)) fail(file_, "component " + labelEntry(c) + " refers to nothing");
+            CadComponent k;
+            k.location = XCAFDoc_ShapeTool::GetLocation(c).Transformation();
+            k.name = labelName(c);
+            k.colour = colourOf(c);
+            k.product = product(ref, depth + 1);
+            tree_.products[id].components.push_back(std::move(k));
+        }
+        return id;
+    }
+
+    const fs::path& file_;
+    CadTree& tree_;
+    Handle(XCAFDoc_ShapeTool) shapes_;
+    Handle(XCAFDoc_ColorTool) colors_;
+    std::map<std::string, uint32_t> index_;
+};
+
+// A CadTree as an Assembly: every part tessellated once; every component that places it,
+// however deep, an instance with the product of the locations on its path. A component's colour
+// over its part's, over its assembly's.
+class CadAssembler {
+public:
+    CadAssembler(const fs::path& file, const AssemblyOptions& options, const CadTree& tree, double progressFrom, Assembly& out)
+        : file_(file), options_(options), tree_(tree), from_(progressFrom), out_(out), meshOf_(tree.products.size(), kUnknown) {
+        for (const CadProduct& p : tree.products) partsTotal_ += p.assembly ? 0 : 1;
+    }
+
+    void build() {
+        // CAD files are z-up; rtwall's cameras are y-up: turn the model -90 degrees about x.
+        const Matrix zUp{1, 0, 0, 0, 0, 0, 1, 0, 0, -1, 0, 0};
+        for (uint32_t r : tree_.roots) visit(r, zUp);
+    }
+
+private:
+    static constexpr uint32_t kUnknown = UINT32_MAX - 1;
+
+    int material(const std::array<float, 3>& rgb) {
         auto it = materialOf_.find(rgb);
         if (it != materialOf_.end()) return it->second;
         AssemblyMaterial m;
         char name[32];
         std::snprintf(name, sizeof name, "colour %.3f %.3f %.3f", double(rgb[0]), double(rgb[1]), double(rgb[2]));
         m.name = name;
-        m.baseColor = {rgb[0], rgb[1], rgb[2], 1.0f};
+        m.baseColor = {rgb[0], rgb[1], rgb[2], 1.0f};  // Quantity_Color is linear RGB, as the base colour
         const int id = int(out_.materials.size());
         out_.materials.push_back(m);
         materialOf_[rgb] = id;
         return id;
     }
 
-    uint32_t defaultMaterial() const { return detail::defaultAssemblyMaterial(out_, defaultMaterial_); }
-
-    uint32_t partMesh(const TDF_Label& part) {
-        const std::string key = labelEntry(part);
-        if (auto it = meshOf_.find(key); it != meshOf_.end()) return it->second;
-        TopoDS_Shape shape;
-        if (!XCAFDoc_ShapeTool::GetShape(part, shape) || shape.IsNull()) fail(file_, "part " + key + " has no shape");
+    uint32_t partMesh(uint32_t product) {
+        if (meshOf_[product] != kUnknown) return meshOf_[product];
+        const CadProduct& p = tree_.products[product];
         TriangleMesh mesh;
         try {
-            mesh = tessellate(shape, options_);
+            mesh = tessellate(p.shape, options_);
         } catch (const InputError& e) {
-            fail(file_, "part '" + labelName(part) + "' (" + key + "): " + e.what());
+            fail(file_, "part '" + p.name + "' (" + p.key + "): " + e.what());
         }
         ++partsDone_;
         if (options_.progress &&
-            !options_.progress(kTransferShare + (1.0 - kTransferShare) * double(partsDone_) / double(std::max<size_t>(partsTotal_, 1))))
+            !options_.progress(from_ + (1.0 - from_) * double(partsDone_) / double(std::max<size_t>(partsTotal_, 1))))
             throw Cancelled();
-        const std::string name = labelName(part);
         if (mesh.triangleCount() == 0) {
             // Wires, points, or faces OCCT could not mesh: nothing to render, no instances.
-            out_.warnings.push_back(file_.string() + ": part '" + (name.empty() ? key : name) + "' has no surface to tessellate; skipped");
-            meshOf_[key] = kNoMesh;
-            return kNoMesh;
+            out_.warnings.push_back(file_.string() + ": part '" + (p.name.empty() ? p.key : p.name) + "' has no surface to tessellate; skipped");
+            return meshOf_[product] = kNoMesh;
         }
         const auto id = uint32_t(out_.meshes.size());
         out_.meshes.push_back(std::make_shared<const TriangleMesh>(std::move(mesh)));
-        out_.meshNames.push_back(name.empty() ? "part " + key : name);
-        meshOf_[key] = id;
-        return id;
+        out_.meshNames.push_back(p.name.empty() ? "part " + p.key : p.name);
+        return meshOf_[product] = id;
     }
 
-    // `label` is a free shape, a component (a reference with a location) or an assembly.
-    void visit(const TDF_Label& root, int parentPart, const Matrix& parentWorld, int parentMaterial) {
+    void visit(uint32_t root, const Matrix& rootWorld) {
         struct Item {
-            TDF_Label label;
+            uint32_t product;
+            const CadComponent* via;  // null for a root
             int parentPart;
             Matrix world;
             int material;
             size_t depth;
         };
-        std::vector<Item> stack{{root, parentPart, parentWorld, parentMaterial, 0}};
+        std::vector<Item> stack{{root, nullptr, -1, rootWorld, -1, 0}};
         while (!stack.empty()) {
             Item it = stack.back();
             stack.pop_back();
             if (it.depth > 64) fail(file_, "assemblies nest more than 64 deep (a cycle?)");
-            TDF_Label label = it.label;
+            const CadProduct& p = tree_.products[it.product];
             Matrix world = it.world;
             int mat = it.material;
-            std::string name = labelName(label);
-            if (const int c = colourOf(label); c >= 0) mat = c;
-            if (shapes_->IsReference(label)) {
-                world = composeAffine(world, toMatrix(XCAFDoc_ShapeTool::GetLocation(label).Transformation()));
-                TDF_Label ref;
-                if (!shapes_->GetReferredShape(label, ref)) fail(file_, "component " + labelEntry(label) + " refers to nothing");
-                if (name.empty()) name = labelName(ref);
-                if (const int c = colourOf(ref); c >= 0 && colourOf(label) < 0) mat = c;
-                label = ref;
+            std::string name;
+            if (it.via) {
+                name = it.via->name;
+                if (it.via->colour) mat = material(*it.via->colour);
+                world = composeAffine(world, toMatrix(it.via->location));
+                if (name.empty()) name = p.name;
+                if (p.colour) {
+                    const int c = material(*p.colour);
+                    if (!it.via->colour) mat = c;
+                }
+            } else {
+                name = p.name;
+                if (p.colour) mat = material(*p.colour);
             }
-            if (name.empty()) name = (shapes_->IsAssembly(label) ? "assembly " : "part ") + labelEntry(label);
+            if (name.empty()) name = (p.assembly ? "assembly " : "part ") + p.key;
             const auto part = uint32_t(out_.parts.size());
             out_.parts.push_back({name, it.parentPart});
-            if (shapes_->IsAssembly(label)) {
-                TDF_LabelSequence comps;
-                shapes_->GetComponents(label, comps, false);
-                for (Standard_Integer i = comps.Length(); i >= 1; --i)
-                    stack.push_back({comps.Value(i), int(part), world, mat, it.depth + 1});
+            if (p.assembly) {
+                for (size_t i = p.components.size(); i-- > 0;)
+                    stack.push_back({p.components[i].product, &p.components[i], int(part), world, mat, it.depth + 1});
                 continue;
             }
             if (out_.instances.size() >= kMaxInstances) fail(file_, "more than " + std::to_string(kMaxInstances) + " part instances");
             AssemblyInstance in;
-            in.mesh = partMesh(label);
+            in.mesh = partMesh(it.product);
             if (in.mesh == kNoMesh) continue;
-            in.material = mat >= 0 ? uint32_t(mat) : defaultMaterial();
+            in.material = mat >= 0 ? uint32_t(mat) : detail::defaultAssemblyMaterial(out_, defaultMaterial_);
             in.part = part;
             const auto& o = out_.meshes[in.mesh]->origin();
             in.transform = composeAffine(world, Matrix{1, 0, 0, o[0], 0, 1, 0, o[1], 0, 0, 1, o[2]});
@@ -274,12 +305,12 @@ private:
 
     const fs::path& file_;
     const AssemblyOptions& options_;
+    const CadTree& tree_;
+    double from_;
     Assembly& out_;
-    Handle(XCAFDoc_ShapeTool) shapes_;
-    Handle(XCAFDoc_ColorTool) colors_;
-    std::map<std::string, uint32_t> meshOf_;
-    mutable std::map<std::array<float, 3>, int> materialOf_;
-    mutable int defaultMaterial_ = -1;
+    std::vector<uint32_t> meshOf_;  // per product
+    std::map<std::array<float, 3>, int> materialOf_;
+    int defaultMaterial_ = -1;
     size_t partsTotal_ = 0, partsDone_ = 0;
 };
 
@@ -288,18 +319,18 @@ private:
 // progress function that returns false makes it a user break, which OCCT's transfer honours.
 class TransferProgress : public Message_ProgressIndicator {
 public:
-    TransferProgress(const ProgressFn& fn, double share) : fn_(fn), share_(share) {}
+    TransferProgress(const ProgressFn& fn, double from, double to) : fn_(fn), from_(from), share_(to - from) {}
     bool cancelled() const { return cancelled_; }
 
 protected:
     void Show(const Message_ProgressScope&, const Standard_Boolean) override {
-        if (fn_ && !cancelled_ && !fn_(share_ * GetPosition())) cancelled_ = true;
+        if (fn_ && !cancelled_ && !fn_(from_ + share_ * GetPosition())) cancelled_ = true;
     }
     Standard_Boolean UserBreak() override { return cancelled_; }
 
 private:
     const ProgressFn& fn_;
-    double share_;
+    double from_, share_;
     std::atomic<bool> cancelled_{false};
 };
 
@@ -335,26 +366,47 @@ Assembly importCadHere(const fs::path& file, const AssemblyOptions& options, boo
             Handle(TDocStd_Document) doc;
             Document() { XCAFApp_Application::GetApplication()->NewDocument("MDTV-XCAF", doc); }
             ~Document() { XCAFApp_Application::GetApplication()->Close(doc); }
-        } document;
-        Handle(TDocStd_Document)& doc = document.doc;
-        bool ok = false;
-        const Handle(TransferProgress) progress = new TransferProgress(options.progress, kTransferShare);
+        };
+        CadTree tree;
+        double tessellationFrom = kTransferShare;
+        // XDE's transfer into a document and its labels as the tree, its progress from `from`.
+        auto throughXde = [&](auto& reader, double from) {
+            Document document;
+            const Handle(TransferProgress) progress = new TransferProgress(options.progress, from, kTransferShare);
+            const bool ok = reader.Transfer(document.doc, progress->Start());
+            if (progress->cancelled()) throw Cancelled();
+            if (!ok) fail(file, "OpenCASCADE could not transfer the file's shapes");
+            XdeTree(file, document.doc, tree).read();
+        };
         if (iges) {
             IGESCAFControl_Reader reader;
             reader.SetColorMode(true);
             reader.SetNameMode(true);
             if (reader.ReadFile(file.c_str()) != IFSelect_RetDone) fail(file, "not a readable IGES file");
-            ok = reader.Transfer(doc, progress->Start());
+            throughXde(reader, 0.0);
+            out.reader = "xde";
         } else {
             STEPCAFControl_Reader reader;
             reader.SetColorMode(true);
             reader.SetNameMode(true);
             if (reader.ReadFile(file.c_str()) != IFSelect_RetDone) fail(file, "not a readable STEP file");
-            ok = reader.Transfer(doc, progress->Start());
+            if (options.progress && !options.progress(kDirectReadShare)) throw Cancelled();
+            std::string why = "asked for (AssemblyOptions::stepThroughXde)";
+            if (!options.stepThroughXde) {
+                const ProgressFn parts = [&](double f) {
+                    return !options.progress || options.progress(kDirectReadShare + (kDirectTransferShare - kDirectReadShare) * f);
+                };
+                if (readStepDirect(reader.ChangeReader(), file, parts, tree, why)) {
+                    out.reader = "direct";
+                    tessellationFrom = kDirectTransferShare;
+                }
+            }
+            if (out.reader.empty()) {
+                throughXde(reader, kDirectReadShare);
+                out.reader = "xde: " + why;
+            }
         }
-        if (progress->cancelled()) throw Cancelled();
-        if (!ok) fail(file, "OpenCASCADE could not transfer the file's shapes");
-        XdeReader(file, options, doc, out).read();
+        CadAssembler(file, options, tree, tessellationFrom, out).build();
     } catch (const Standard_Failure& e) {
         fail(file, std::string("OpenCASCADE: ") + (e.GetMessageString() && *e.GetMessageString() ? e.GetMessageString() : e.DynamicType()->Name()));
     } catch (const std::bad_alloc&) {

@@ -2,6 +2,7 @@
 // errors for bad files, bad scenes and bad arguments.
 #include "test_util.h"
 #include "cli_util.h"
+#include "child_process.h"
 
 #include <rtwall/image.h>
 
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <regex>
+#include <thread>
 
 namespace rtwall {
 namespace {
@@ -187,6 +189,10 @@ TEST(CliCad, StepGenInfoCacheAndBadFile) {
     const Result first = run("info --json --cache " + step);
     ASSERT_EQ(first.status, 0) << first.output;
     EXPECT_NE(first.output.find("\"cache\" : \"written\""), std::string::npos) << first.output;
+    EXPECT_NE(first.output.find("\"reader\" : \"direct\""), std::string::npos) << first.output;
+    const Result xde = run("info --json --step-xde " + step);
+    EXPECT_NE(xde.output.find("\"reader\" : \"xde: asked for"), std::string::npos) << xde.output;
+    EXPECT_NE(xde.output.find("\"instances\" : 14"), std::string::npos) << xde.output;
     const Result second = run("info --json --cache " + step);
     EXPECT_NE(second.output.find("\"cache\" : \"hit\""), std::string::npos) << second.output;
     EXPECT_NE(second.output.find("\"path\" : \"plant/module 2/bracket 2\""), std::string::npos) << second.output;
@@ -196,6 +202,37 @@ TEST(CliCad, StepGenInfoCacheAndBadFile) {
     const auto bad = test::writeFile(dir / "bad.step", "ISO-10303-21;\nHEADER;\nthis is not a header\n");
     expectOneLineError(run("info " + bad.string()), 1, bad.string() + ": ");
     expectOneLineError(run("render " + bad.string() + " --out x.png"), 1, bad.string() + ": ");
+}
+
+}  // namespace
+}  // namespace rtwall
+
+namespace rtwall {
+namespace {
+
+// Ctrl-C while the importing child says nothing (parsing a large file, here stopped outright):
+// the parent still asks its progress function every 0.1 s, so rtwall info ends "interrupted"
+// (status 130) and takes the child with it. Before, it waited for the child's next report, or
+// for the stall limit (minutes).
+TEST(CliCad, CtrlCStopsAStepImportThatReportsNothing) {
+    const auto dir = test::scratchDir();
+    const Result g = run("gen step --rows --out " + dir.string() + " --instances 70000");
+    ASSERT_EQ(g.status, 0) << g.output;
+    test::ChildProcess info({RTWALL_EXE, "info", "--json", (dir / "assembly.step").string()});
+    std::vector<pid_t> importer;
+    for (int i = 0; i < 20000 && importer.empty() && test::alive(info.pid()); ++i) {
+        importer = test::childrenOf(info.pid());
+        if (importer.empty()) std::this_thread::sleep_for(std::chrono::microseconds(100));
+    }
+    ASSERT_EQ(importer.size(), 1u) << "no importing child seen: " << info.output();
+    ASSERT_EQ(::kill(importer[0], SIGSTOP), 0);
+    info.signal(SIGINT);
+    const auto status = info.wait(20000);
+    ::kill(importer[0], SIGCONT);
+    ASSERT_TRUE(status) << "rtwall info waited for a child that reports nothing";
+    EXPECT_EQ(*status, 130) << info.output();
+    EXPECT_NE(info.output().find("interrupted"), std::string::npos) << info.output();
+    EXPECT_FALSE(test::alive(importer[0])) << "the importing child was left behind";
 }
 
 }  // namespace

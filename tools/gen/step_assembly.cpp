@@ -209,10 +209,16 @@ void writeAssembly(const GenOptions& o, bool iges, PartSet set) {
             writer.SetNameMode(true);
             ok = writer.Transfer(doc) && writer.Write(file.c_str());
         } else {
+            // The unit is a static of OCCT's, read at the transfer: set for this file, then put back.
+            const std::string unitBefore = Interface_Static::CVal("write.step.unit");
+            if (!o.stepUnit.empty() && !Interface_Static::SetCVal("write.step.unit", o.stepUnit.c_str()))
+                throw std::runtime_error(what + "unknown length unit '" + o.stepUnit + "'");
             STEPCAFControl_Writer writer;
             writer.SetColorMode(true);
             writer.SetNameMode(true);
-            if (!writer.Transfer(doc, STEPControl_AsIs)) throw std::runtime_error(what + "OpenCASCADE could not transfer the assembly");
+            const bool transferred = writer.Transfer(doc, STEPControl_AsIs);
+            Interface_Static::SetCVal("write.step.unit", unitBefore.c_str());
+            if (!transferred) throw std::runtime_error(what + "OpenCASCADE could not transfer the assembly");
             ok = writer.Write(file.c_str()) == IFSelect_RetDone;
         }
         if (!ok) throw std::runtime_error(what + "cannot write " + file.string());

@@ -37,6 +37,8 @@ void addGen(CLI::App& app, Run& run) {
                   "step, iges: a flat file: every part a solid of its own placed in its geometry (no assembly reuse), and "
                   "one mirrored bracket");
     cmd->add_flag("--rows", o->rows, "step, step-curved, iges: plant > row sub-assemblies > modules (nested, as large CAD assemblies are)");
+    cmd->add_option("--unit", o->stepUnit, "step, step-curved: the file's length unit (MM, M, CM, INCH, FT, ...; MM)")
+        ->check(CLI::IsMember({"MM", "M", "CM", "KM", "UM", "INCH", "FT", "MI", "MIL"}));
     cmd->add_flag("!--no-cache", o->cache, "Write [load] cache = false into the scene");
     cmd->callback([&run, o, name] {
         run = [o, name] {

@@ -2,6 +2,8 @@
 
 #include <rtwall/engine.h>
 
+#include <progress.h>
+
 #include <toml++/toml.h>
 
 #include <algorithm>
@@ -10,6 +12,7 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -176,6 +179,9 @@ toml::table assemblyInfo(const std::filesystem::path& path, const AssemblyOption
                        {"format", a.format},
                        {"load_seconds", seconds},
                        {"cache", a.cache.empty() ? std::string("off") : a.cache},
+                       // STEP/IGES imported: "direct" (rtwall's own structure reader), "xde" or
+                       // "xde: <why not direct>"; empty from a cache or for other formats
+                       {"reader", a.reader},
                        {"mesh_bytes", int64_t(bytes)},  // unique meshes' buffers, mapped cache pages included
                        {"mesh_bytes_mapped", int64_t(mapped)},
                        {"meshes", int64_t(a.meshes.size())},
@@ -199,7 +205,7 @@ toml::table assemblyInfo(const std::filesystem::path& path, const AssemblyOption
 void addInfo(CLI::App& app, Run& run) {
     struct Options {
         std::string file;
-        bool json = false, cache = false, noCongruence = false;
+        bool json = false, cache = false, noCongruence = false, stepXde = false;
         double deflection = 0.1, angularDeflection = 0.5;
     };
     auto o = std::make_shared<Options>();
@@ -212,6 +218,9 @@ void addInfo(CLI::App& app, Run& run) {
         ->check(CLI::Range(1e-3, 3.14));
     cmd->add_flag("--cache", o->cache, "STEP/IGES: use FILE.rtwasm when it matches, else write it");
     cmd->add_flag("--no-congruence", o->noCongruence, "Assemblies: keep every mesh the file has (no congruent-shape detection)");
+    cmd->add_flag("--step-xde", o->stepXde,
+                  "STEP: read the product structure through OCCT's XDE document, not rtwall's direct reader (the same "
+                  "assembly; XDE's time grows as the square of the part instances)");
     cmd->callback([&run, o] {
         run = [o] {
             if (isAssemblyFile(o->file)) {
@@ -222,6 +231,11 @@ void addInfo(CLI::App& app, Run& run) {
                 ao.angularDeflection = o->angularDeflection;
                 ao.cache = o->cache;
                 ao.shareCongruent = !o->noCongruence;
+                ao.stepThroughXde = o->stepXde;
+                // A progress bar on a terminal; Ctrl-C stops the import.
+                bench::installInterruptHandler();
+                std::optional<bench::ProgressBar> bar;
+                ao.progress = bar.emplace("importing", 1, "").fn();
                 toml::table info = assemblyInfo(o->file, ao, o->json ? nullptr : &tree);
                 if (o->json) {
                     std::cout << toml::json_formatter{info} << "\n";

@@ -76,7 +76,7 @@ SceneDesc loadWithProgress(const std::string& scene, const RenderOptions& o) {
     lo.angularDeflection = o.angularDeflection;
     if (o.cache) lo.cache = true;
     if (sceneSourceKind(scene) == SceneSourceKind::SceneFile) lo.progress = bar.emplace("loading", 1, "").fn();
-    else if (isAssemblyFile(scene)) lo.progress = bar.emplace("tessellating", 1, "").fn();
+    else if (isAssemblyFile(scene)) lo.progress = bar.emplace("importing", 1, "").fn();
     return loadScene(scene, lo);
 }
 

@@ -301,6 +301,8 @@ struct Assembly {
                                         // or "not written: <why>"; empty without
     size_t congruentMeshes = 0;         // meshes found congruent to another and stored once
                                         // (AssemblyOptions::shareCongruent)
+    std::string reader;                 // STEP/IGES, imported (not cached): "direct" (STEP's own
+                                        // structure reader), "xde" (IGES) or "xde: <why not direct>"
 };
 
 struct AssemblyOptions {
@@ -321,6 +323,9 @@ struct AssemblyOptions {
     // mirrored copies are not merged. Applied to every format, cached or not.
     bool shareCongruent = true;
     double congruenceTolerance = 1e-5;
+    // STEP: read the product structure through OCCT's XDE document even where rtwall's direct
+    // reader could (the same assembly; XDE's transfer grows as occurrences x uses of a product).
+    bool stepThroughXde = false;
 };
 
 // True for the extensions read as assemblies (any case).
