@@ -27,6 +27,7 @@ import argparse
 import base64
 import json
 import math
+import random
 import os
 import struct
 import zlib
@@ -429,14 +430,35 @@ def prism(sides, radius, height):
     return pos, nrm, idx
 
 
+def renumbered(shape, seed):
+    """The same surface with its vertices and triangles in another order (each triangle started
+    at another corner, its winding kept)."""
+    pos, nrm, idx = shape
+    rng = random.Random(seed)
+    order = list(range(len(pos)))
+    rng.shuffle(order)  # new vertex k is old vertex order[k]
+    new_of = {old: new for new, old in enumerate(order)}
+    tris = [[new_of[i] for i in idx[t:t + 3]] for t in range(0, len(idx), 3)]
+    rng.shuffle(tris)
+    out = []
+    for t in tris:
+        r = rng.randrange(3)
+        out += t[r:] + t[:r]
+    return [pos[k] for k in order], [nrm[k] for k in order], out
+
+
 def congruent():
-    """A flat export: 23 meshes, each with accessors of its own and its vertices already placed in
+    """A flat export: 32 meshes, each with accessors of its own and its vertices already placed in
     the world (every node has the identity transform), as meshers and flat CAD exports write them.
     17 are 3 shapes placed by rigid motions: a plate (x4, and once 500 units out), a bolt (x8), an
     L bracket (x4). 3 are
     near misses that must stay apart: the plate scaled by 1.001, a bolt with one vertex moved by
     1e-3, the bracket mirrored. 3 are a non-planar quad folded along one diagonal, the other, and
-    the first again, turned and moved. Unique after detection: 8 (3 + 3 + 2)."""
+    the first again, turned and moved. 5 are renumbered (vertex and triangle order shuffled):
+    two bolts and a bracket, found; a bolt with a vertex moved, kept apart; a mirrored bracket,
+    found as a copy of the other mirror image. 4 are true mirror images (wound outward) and a
+    chiral corner: the mirrored bracket is the bracket turned (found), the corner turned is found,
+    the corner mirrored is not. Unique after detection: 11 (3 + 3 + 2 + 1 + 2)."""
     b = Builder()
     plate = cuboid(2.0, 0.2, 1.0)
     bolt = prism(6, 0.15, 0.6)
@@ -456,6 +478,26 @@ def congruent():
     placements.append(("plate scaled 1.001", plate, rotation((0.0, 1.0, 0.0), 10.0), (0.0, 0.0, -6.0), "scale"))
     placements.append(("bolt with a vertex moved", bolt, rotation((1.0, 0.0, 0.0), 20.0), (2.0, 0.8, -6.0), "vertex"))
     placements.append(("bracket mirrored", bracket, rotation((0.0, 1.0, 0.0), 40.0), (4.0, 0.3, -6.0), "mirror"))
+    # Copies numbered otherwise (another writer's vertex and triangle order): found without a
+    # given correspondence; a renumbered near miss stays apart, a renumbered mirror image is
+    # congruent to the other mirror image only.
+    placements.append(("bolt renumbered 1", renumbered(bolt, 1), rotation((0.3, 1.0, 0.2), 33.0), (-4.0, 0.8, 6.0), None))
+    placements.append(("bolt renumbered 2", renumbered(bolt, 2), rotation((1.0, 0.0, 0.4), 71.0), (-2.5, 0.8, 6.0), None))
+    placements.append(("bracket renumbered", renumbered(bracket, 3), rotation((0.0, 1.0, 0.2), 123.0), (-1.0, 0.3, 6.0), None))
+    placements.append(("bolt renumbered, vertex moved", renumbered(bolt, 4), rotation((0.0, 0.0, 1.0), 12.0), (0.5, 0.8, 6.0), "vertex"))
+    placements.append(("bracket renumbered mirrored", renumbered(bracket, 5), rotation((0.0, 1.0, 0.0), 200.0), (2.0, 0.3, 6.0), "mirror"))
+    # Mirror images wound outward (a true mirror, as a CAD mirror makes it): the L bracket has a
+    # plane of symmetry, so its mirror image is the bracket turned and is found; a corner of
+    # three arms of different lengths has none (it is chiral): its mirror image stays apart,
+    # while a turned copy of it is found.
+    ap, an, ai = cuboid(0.6, 0.05, 0.05, (0.6, 0.0, 0.0))
+    bp2, bn2, bi2 = cuboid(0.05, 0.4, 0.05, (0.0, 0.4, 0.0))
+    cp, cn, ci = cuboid(0.05, 0.05, 0.25, (0.0, 0.0, 0.25))
+    corner = (ap + bp2 + cp, an + bn2 + cn, ai + [i + len(ap) for i in bi2] + [i + len(ap) + len(bp2) for i in ci])
+    placements.append(("bracket mirrored outward", bracket, rotation((0.0, 1.0, 0.0), 70.0), (4.0, 0.3, 7.5), "mirror out"))
+    placements.append(("corner", corner, rotation((0.0, 1.0, 0.0), 0.0), (-6.0, 0.5, -8.0), None))
+    placements.append(("corner turned", corner, rotation((1.0, 1.0, 0.0), 80.0), (-4.0, 0.5, -8.0), None))
+    placements.append(("corner mirrored", corner, rotation((0.0, 1.0, 0.0), 30.0), (-2.0, 0.5, -8.0), "mirror out"))
     # The same four vertices of a non-planar quad folded along one diagonal or the other: other
     # surfaces, never merged; a moved copy of the first fold is.
     fold = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.3, 1.0], [0.0, 0.0, 1.0]]
@@ -471,9 +513,11 @@ def congruent():
             pos = [[1.001 * c for c in p] for p in pos]
         elif tweak == "vertex":
             pos[0] = [pos[0][0] + 1e-3, pos[0][1], pos[0][2]]
-        elif tweak == "mirror":
+        elif tweak in ("mirror", "mirror out"):
             pos = [[-p[0], p[1], p[2]] for p in pos]
             nrm = [[-n[0], n[1], n[2]] for n in nrm]
+            if tweak == "mirror out":  # the winding turned too, so that the faces still face out
+                idx = [i for t in range(0, len(idx), 3) for i in (idx[t], idx[t + 2], idx[t + 1])]
         world = [[a + t for a, t in zip(apply(rot, p), move)] for p in pos]
         normals = [apply(rot, n) for n in nrm]
         prim = {"attributes": {"POSITION": b.accessor("VEC3", world, 3), "NORMAL": b.accessor("VEC3", normals, 3)},

@@ -366,10 +366,13 @@ TEST(Gltf, AlphaModesRender) {
     EXPECT_LT(pure, (n + m) / 10) << "pixels still all quad or all backdrop";
 }
 
-// Issue 29: a flat export (every solid its own mesh, placed in world coordinates) of 16 solids
-// that are 3 shapes, and 3 near misses: the 3 shapes are found and stored once, each instance
-// placing the kept mesh where its own was; the near misses (scaled by 1.001, a vertex moved by
-// 1e-3, a mirror image) stay apart; so do two folds of one quad (the same vertices, other
+// Issue 29: a flat export (every solid its own mesh, placed in world coordinates) of 20 solids
+// that are 3 shapes, 3 of them with their vertices and triangles numbered otherwise, and 5 near
+// misses: the 3 shapes are found and stored once, each instance placing the kept mesh where its
+// own was; the near misses (scaled by 1.001, a vertex moved by 1e-3, renumbered or not) stay
+// apart, and so do two inside-out mirror images from the bracket (not from each other) and the
+// true mirror image of a chiral corner, while the true mirror image of the bracket, which has a
+// plane of symmetry, is the bracket turned; so do two folds of one quad (the same vertices, other
 // surfaces), while a moved copy of one fold is merged.
 TEST(Gltf, CongruentShapesAreStoredOnce) {
     const fs::path file = generated() / "congruent.glb";
@@ -377,33 +380,64 @@ TEST(Gltf, CongruentShapesAreStoredOnce) {
     off.shareCongruent = false;
     const Assembly flat = loadAssembly(file, off);
     const Assembly found = loadAssembly(file);
-    ASSERT_EQ(flat.meshes.size(), 23u);
+    ASSERT_EQ(flat.meshes.size(), 32u);
     EXPECT_EQ(flat.congruentMeshes, 0u);
-    EXPECT_EQ(found.meshes.size(), 8u);
-    EXPECT_EQ(found.congruentMeshes, 15u);
-    ASSERT_EQ(found.instances.size(), 23u);
+    EXPECT_EQ(found.meshes.size(), 11u);
+    EXPECT_EQ(found.congruentMeshes, 21u);
+    ASSERT_EQ(found.instances.size(), 32u);
     EXPECT_EQ(instancedTriangles(found), instancedTriangles(flat));
-    EXPECT_LT(uniqueTriangles(found), uniqueTriangles(flat) / 3);
+    EXPECT_EQ(uniqueTriangles(flat), 618u);
+    EXPECT_EQ(uniqueTriangles(found), 208u);  // the 11 kept shapes
     // Every instance's world vertices are where the flat file put them (within the tolerance,
     // 1e-5 of the diagonal, which is under 2.3 here; 500 units out, the floats' precision).
     for (size_t i = 0; i < found.instances.size(); ++i) {
         const AssemblyInstance& a = found.instances[i];
         const AssemblyInstance& b = flat.instances[i];
         const TriangleMesh& ma = *found.meshes[a.mesh];
-        ASSERT_EQ(ma.vertexCount(), flat.meshes[b.mesh]->vertexCount()) << i;
-        for (size_t v = 0; v < ma.vertexCount(); ++v) {
-            const auto pa = worldVertex(found, a, v), pb = worldVertex(flat, b, v);
-            const double limit = std::max(2.3e-5, 4 * 500.0 * 0x1.0p-23);
+        const size_t n = ma.vertexCount();
+        ASSERT_EQ(n, flat.meshes[b.mesh]->vertexCount()) << i;
+        const double limit = std::max(2.3e-5, 4 * 500.0 * 0x1.0p-23);
+        // A renumbered copy's vertex v is some vertex of the file's mesh, each used once.
+        const std::string& part = found.parts[a.part].name;
+        const bool renumbered = part.find("renumbered") != std::string::npos || part == "bracket mirrored outward";
+        std::vector<bool> taken(n);
+        for (size_t v = 0; v < n; ++v) {
+            const auto pa = worldVertex(found, a, v);
+            size_t match = v;
+            if (renumbered) {
+                match = n;
+                for (size_t w = 0; w < n && match == n; ++w) {
+                    const auto pb = worldVertex(flat, b, w);
+                    if (!taken[w] && std::fabs(pa[0] - pb[0]) <= limit && std::fabs(pa[1] - pb[1]) <= limit &&
+                        std::fabs(pa[2] - pb[2]) <= limit)
+                        match = w;
+                }
+                ASSERT_LT(match, n) << "instance " << i << " vertex " << v << ": no vertex of the file there";
+                taken[match] = true;
+            }
+            const auto pb = worldVertex(flat, b, match);
             for (int k = 0; k < 3; ++k) ASSERT_NEAR(pa[k], pb[k], limit) << "instance " << i << " vertex " << v;
         }
     }
     // The near misses kept their own meshes.
-    for (const char* name : {"plate scaled 1.001", "bolt with a vertex moved", "bracket mirrored", "fold b"}) {
+    for (const char* name : {"plate scaled 1.001", "bolt with a vertex moved", "fold b", "bolt renumbered, vertex moved", "corner mirrored"}) {
         const uint32_t m = instancesOf(found, name).at(0)->mesh;
         EXPECT_EQ(std::count_if(found.instances.begin(), found.instances.end(), [&](const AssemblyInstance& in) { return in.mesh == m; }), 1)
             << name;
     }
     EXPECT_EQ(instancesOf(found, "fold a").at(0)->mesh, instancesOf(found, "fold a moved").at(0)->mesh);
+    // Renumbered copies are found without a given correspondence.
+    for (const char* name : {"bolt renumbered 1", "bolt renumbered 2"})
+        EXPECT_EQ(instancesOf(found, name).at(0)->mesh, instancesOf(found, "bolt 0").at(0)->mesh) << name;
+    EXPECT_EQ(instancesOf(found, "bracket renumbered").at(0)->mesh, instancesOf(found, "bracket 0").at(0)->mesh);
+    // The two mirror images are congruent to each other, never to the bracket.
+    const uint32_t mirrored = instancesOf(found, "bracket mirrored").at(0)->mesh;
+    EXPECT_EQ(instancesOf(found, "bracket renumbered mirrored").at(0)->mesh, mirrored);
+    EXPECT_NE(mirrored, instancesOf(found, "bracket 0").at(0)->mesh);
+    // A true mirror image (wound outward) of the bracket, which has a plane of symmetry, is the
+    // bracket turned; the chiral corner's is not the corner, though a turned corner is.
+    EXPECT_EQ(instancesOf(found, "bracket mirrored outward").at(0)->mesh, instancesOf(found, "bracket 0").at(0)->mesh);
+    EXPECT_EQ(instancesOf(found, "corner turned").at(0)->mesh, instancesOf(found, "corner").at(0)->mesh);
     // 500 units out the file's floats are coarser than the tolerance: the tolerance's floor is
     // their precision, and the plate there is found.
     EXPECT_EQ(instancesOf(found, "plate far out").at(0)->mesh, instancesOf(found, "plate 0").at(0)->mesh);
@@ -411,7 +445,7 @@ TEST(Gltf, CongruentShapesAreStoredOnce) {
     // or the other fold.
     AssemblyOptions loose;
     loose.congruenceTolerance = 1e-2;
-    EXPECT_EQ(loadAssembly(file, loose).meshes.size(), 6u);
+    EXPECT_EQ(loadAssembly(file, loose).meshes.size(), 8u);
 
     // The renders agree: the merged instances' triangles differ from the file's by float
     // rounding only (a rigid motion is not exact in floats), so a few edge pixels may differ.

@@ -317,10 +317,11 @@ struct AssemblyOptions {
     bool cache = false;
     std::filesystem::path cacheDir;  // empty: beside the file
     ProgressFn progress;             // STEP/IGES: fraction of parts tessellated; false cancels (Cancelled)
-    // Meshes that are the same shape up to a rigid motion (the same vertex, triangle, texture
-    // coordinate and colour layout; every vertex within congruenceTolerance x the shape's
-    // bounding-box diagonal, every normal within 1e-3) are stored once, whatever the file says;
-    // mirrored copies are not merged. Applied to every format, cached or not.
+    // Meshes that are the same shape up to a rigid motion (the same vertices, texture
+    // coordinates and colours, in any numbering; every vertex within congruenceTolerance x the
+    // shape's bounding-box diagonal, every normal within 1e-3; the same triangles or a planar
+    // retriangulation) are stored once, whatever the file says; a chiral shape's mirror image is
+    // not merged. Applied to every format, cached or not.
     bool shareCongruent = true;
     double congruenceTolerance = 1e-5;
     // STEP: read the product structure through OCCT's XDE document even where rtwall's direct
