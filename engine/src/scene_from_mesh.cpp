@@ -162,27 +162,38 @@ SceneDesc sceneFromMeshFile(const std::filesystem::path& file, const SceneLoadOp
         ao.angularDeflection = options.angularDeflection;
         ao.cache = options.cache.value_or(false);
         ao.progress = options.progress;
+        ao.shareCongruent = options.shareCongruent;
         const auto t0 = std::chrono::steady_clock::now();
         const Assembly a = loadAssembly(file, ao);
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         if (options.stats) scene_file::countImport(*options.stats, a.cache, seconds);
         return sceneFromAssembly(a, file);
     }
-    SceneDesc scene;
-    scene.sourceFile = file;
-    MeshDesc md;
-    md.name = file.stem().string();
-    md.source = file.string();
-    md.mesh = std::make_shared<const TriangleMesh>(loadMesh(file));
-    scene.meshes.push_back(md);
-    // A far-from-origin file is stored recentred; the scene stays in those small coordinates
-    // and records where they lie.
-    scene.origin = md.mesh->origin();
     Material m;
     m.name = "default";
     m.type = MaterialType::Phong;
     m.color = {0.7f, 0.7f, 0.72f};
     m.specular = {0.2f, 0.2f, 0.2f};
+    auto mesh = std::make_shared<const TriangleMesh>(loadMesh(file));
+    if (options.shareCongruent) {
+        // Repeated bodies (a plant exported as one mesh): the distinct ones, placed by instances.
+        const Assembly a = shareCongruentBodies(mesh, file.stem().string());
+        if (a.congruentMeshes > 0) {
+            SceneDesc scene = sceneFromAssembly(a, file);  // its meshes' sources are "FILE#NAME", as assemblies'
+            scene.materials.assign(1, m);
+            return scene;
+        }
+    }
+    SceneDesc scene;
+    scene.sourceFile = file;
+    MeshDesc md;
+    md.name = file.stem().string();
+    md.source = file.string();
+    md.mesh = std::move(mesh);
+    scene.meshes.push_back(md);
+    // A far-from-origin file is stored recentred; the scene stays in those small coordinates
+    // and records where they lie.
+    scene.origin = md.mesh->origin();
     scene.materials.push_back(m);
     scene.instances.push_back(InstanceDesc{});
     scene.cameras.push_back(scene_file::framingCamera(scene.worldBounds()));

@@ -25,9 +25,20 @@ toml::array boundsArray(const Bounds3& b) {
                        toml::array{double(b.hi.x), double(b.hi.y), double(b.hi.z)}};
 }
 
-toml::table meshInfo(const std::filesystem::path& path) {
+toml::table meshInfo(const std::filesystem::path& path, bool shareCongruent) {
     ImportReport report;
-    const TriangleMesh mesh = loadMesh(path, &report);
+    const auto loaded = std::make_shared<const TriangleMesh>(loadMesh(path, &report));
+    const TriangleMesh& mesh = *loaded;
+    // Repeated bodies, as `rtwall render FILE` stores them (shareCongruentBodies).
+    int64_t sharedMeshes = 1, sharedInstances = 1, sharedTriangles = int64_t(mesh.triangleCount()), congruent = 0;
+    if (shareCongruent) {
+        const Assembly a = shareCongruentBodies(loaded, path.stem().string());
+        sharedMeshes = int64_t(a.meshes.size());
+        sharedInstances = int64_t(a.instances.size());
+        sharedTriangles = 0;
+        for (const auto& m : a.meshes) sharedTriangles += int64_t(m->triangleCount());
+        congruent = int64_t(a.congruentMeshes);
+    }
     return toml::table{{"file", path.string()},
                        {"format", report.format},
                        {"triangles", int64_t(mesh.triangleCount())},
@@ -48,7 +59,13 @@ toml::table meshInfo(const std::filesystem::path& path) {
                        {"cells_skipped", int64_t(report.cellsSkipped)},
                        // bounds are relative to origin (CAD files far from their origin are recentred)
                        {"origin", toml::array{mesh.origin()[0], mesh.origin()[1], mesh.origin()[2]}},
-                       {"resident_bytes", int64_t(mesh.residentBytes())}};
+                       {"resident_bytes", int64_t(mesh.residentBytes())},
+                       // bodies found congruent to another and stored once; the meshes, instances
+                       // and unique triangles of the scene the file becomes (1, 1, triangles: none)
+                       {"congruent_bodies", congruent},
+                       {"scene_meshes", sharedMeshes},
+                       {"scene_instances", sharedInstances},
+                       {"scene_unique_triangles", sharedTriangles}};
 }
 
 // A scene (file or builtin): the counts; for a scene file that brings in assemblies, their part
@@ -217,7 +234,8 @@ void addInfo(CLI::App& app, Run& run) {
     cmd->add_option("--angular-deflection", o->angularDeflection, "STEP/IGES: angular tolerance, radians (0.5)")
         ->check(CLI::Range(1e-3, 3.14));
     cmd->add_flag("--cache", o->cache, "STEP/IGES: use FILE.rtwasm when it matches, else write it");
-    cmd->add_flag("--no-congruence", o->noCongruence, "Assemblies: keep every mesh the file has (no congruent-shape detection)");
+    cmd->add_flag("--no-congruence", o->noCongruence,
+                  "Assemblies and mesh files: keep every mesh (every body) the file has (no congruent-shape detection)");
     cmd->add_flag("--step-xde", o->stepXde,
                   "STEP: read the product structure through OCCT's XDE document, not rtwall's direct reader (the same "
                   "assembly; XDE's time grows as the square of the part instances)");
@@ -247,7 +265,7 @@ void addInfo(CLI::App& app, Run& run) {
             }
             std::string tree;
             const toml::table info = sceneSourceKind(o->file) == SceneSourceKind::MeshFile
-                                         ? meshInfo(o->file)
+                                         ? meshInfo(o->file, !o->noCongruence)
                                          : sceneInfo(o->file, o->json ? nullptr : &tree);
             if (o->json) std::cout << toml::json_formatter{info} << "\n";
             else std::cout << info << "\n" << (tree.empty() ? "" : "\n# part tree of its assemblies (part  [instances])\n" + tree);

@@ -322,6 +322,10 @@ struct SceneLoadOptions {
     // their assembly cache, `progress` counts parts tessellated.
     double linearDeflection = 0.1;   // file units (millimetres for most CAD files)
     double angularDeflection = 0.5;  // radians
+    // A mesh or assembly file opened as the scene: shapes (assembly meshes, or the bodies of a mesh
+    // file) that are the same up to a rigid motion are stored once (AssemblyOptions::shareCongruent,
+    // shareCongruentBodies). Scene files say it in [import].
+    bool shareCongruent = true;
 };
 SceneDesc loadSceneFile(const std::filesystem::path& file, const SceneLoadOptions& options);
 
@@ -331,7 +335,8 @@ void writeVolumeVti(const std::filesystem::path& file, int nx, int ny, int nz, c
 
 // A scene made of one mesh file, with a camera that frames its bounds and a default light. An
 // assembly file (isAssemblyFile: glTF, STEP, IGES) becomes its meshes, each stored once, placed by
-// its instances, with its materials and its part tree.
+// its instances, with its materials and its part tree; a mesh file whose bodies repeat, its
+// distinct bodies placed by instances (shareCongruentBodies).
 SceneDesc sceneFromMeshFile(const std::filesystem::path& file);
 SceneDesc sceneFromMeshFile(const std::filesystem::path& file, const SceneLoadOptions& options);
 SceneDesc sceneFromAssembly(const Assembly& assembly, const std::filesystem::path& file);

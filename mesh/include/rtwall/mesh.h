@@ -336,6 +336,13 @@ bool isAssemblyFile(const std::filesystem::path& file);
 // index out of range, a missing external buffer or image, a node tree with a cycle; never
 // allocates much more than the file and the buffers it names hold.
 Assembly loadAssembly(const std::filesystem::path& file, const AssemblyOptions& options = {});
+// A mesh file that holds many bodies (triangles joined through shared vertices; a plant exported
+// as one OBJ, PLY or STL): bodies that are the same shape up to a rigid motion (the test of
+// AssemblyOptions::shareCongruent, at `tolerance`) are stored once and placed by instances; the
+// bodies without a copy stay together in one mesh, placed first. With no two bodies congruent,
+// one body, or a soup of unconnected triangles (under 4 triangles a body), the assembly is the
+// mesh as given, one instance (congruentMeshes 0). Parts: one, `name`; format "mesh".
+Assembly shareCongruentBodies(std::shared_ptr<const TriangleMesh> mesh, const std::string& name, double tolerance = 1e-5);
 // glTF from memory (the fuzz target): JSON or GLB by content; external files are not read
 // (a URI other than a data: URI is an InputError naming `name`).
 Assembly decodeGltf(const unsigned char* data, size_t size, const std::string& name);
