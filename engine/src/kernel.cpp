@@ -107,7 +107,7 @@ void primaryPassK(const Scene::Impl& s, const Camera& camera, const TileRect& re
     const bool perFrame = rendersStochastically(settings, s.randomContent);
     const Float3 org = camera.origin();
 
-    TopLevels levels(s, true);
+    TopLevels levels(s, true, true);
     alignas(64) typename P::RayHit rh;
     alignas(64) int valid[K];
     alignas(64) int traced[K];  // section planes: the lanes with something left to trace

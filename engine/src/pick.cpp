@@ -28,8 +28,8 @@ std::optional<PickResult> pick(const Scene& scene, const Camera& camera, float p
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     // Both top levels (scene_impl.h, part moves): the static one skipping its stale copies.
     const Scene::Impl& s = scene.impl();
-    TopLevels levels(s, true);
-    levels.each(s, [&](RTCScene level, RTCIntersectContext* c) { rtcIntersect1(level, c, &rh); });
+    TopLevels levels(s, true, true);
+    levels.each(s, [&](RTCScene level, RTCIntersectContext* c) { withTies(c, rh, [&] { rtcIntersect1(level, c, &rh); }); });
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
     PickResult r;
     r.instance = rh.hit.instID[0];

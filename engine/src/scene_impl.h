@@ -5,7 +5,9 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -226,33 +228,106 @@ void dropRebuild(Scene::Impl& s);  // joins and discards a rebuild (the scene's 
 // The two top levels traced as one (Scene::Impl, "part moves"): rays go through the static top
 // level, where a context filter skips the stale copies of moving instances, then through the
 // moving instances' level, which keeps a hit only where it is closer. Without movers the
-// second pass and the filter are left out, and tracing is as it was with one level.
+// second pass is left out.
+//
+// Closest-hit queries also settle ties by rule: of two hits at the same distance (coincident
+// faces: a part resting on another, two copies overlapping), the one of the lower instance, then
+// the lower triangle, wins. Embree keeps whichever it meets last where its own test lets the
+// second one through at all (it compares the unnormalised distance with tfar scaled, so an equal
+// distance passes or not by rounding): which one depends on the BVH and on which level holds the
+// instance, and a part that moves and comes back could show other pixels than a full rebuild at
+// the same state. So the filter sees every candidate hit (Embree has set the ray's tfar to the
+// candidate's distance), keeps per lane the hit committed so far, and sets tfar a little beyond
+// it (16 float steps, kTieReach), so that a candidate at the same distance always reaches the
+// filter, and one beyond is refused there. withTies primes the committed hit before each Embree
+// call from what the ray holds (a hit from the level before, or none) and puts the exact
+// distance back afterwards.
 struct TopContext {
     RTCIntersectContext ctx;  // first: Embree hands the filter this pointer
-    const Scene::Impl* scene;
+    const Scene::Impl* scene = nullptr;
+    bool skipStale = false;  // the static level while some instance moves
+    bool ties = false;       // a closest-hit query: the tie rule
+    float tieT[16];          // per lane: the committed hit's distance (INFINITY: none yet),
+    unsigned tieInst[16], tiePrim[16];  // its instance and triangle
 };
-inline void skipStaleCopies(const RTCFilterFunctionNArguments* args) {
-    const auto* c = reinterpret_cast<const TopContext*>(args->context);
+inline float tieReach(float t) { return t + std::max(t * 0x1.0p-19f, 0x1.0p-126f); }
+inline void topFilter(const RTCFilterFunctionNArguments* args) {
+    auto* c = reinterpret_cast<TopContext*>(const_cast<RTCIntersectContext*>(args->context));
     const unsigned inst = args->context->instID[0];
-    if (inst >= c->scene->staleInTop.size() || !c->scene->staleInTop[inst]) return;
-    for (unsigned k = 0; k < args->N; ++k) args->valid[k] = 0;
+    if (c->skipStale && inst < c->scene->staleInTop.size() && c->scene->staleInTop[inst]) {
+        for (unsigned k = 0; k < args->N; ++k) args->valid[k] = 0;
+        return;
+    }
+    if (!c->ties) return;
+    for (unsigned k = 0; k < args->N; ++k) {
+        if (!args->valid[k]) continue;
+        float& tfar = RTCRayN_tfar(args->ray, args->N, k);
+        const float t = tfar;
+        const unsigned prim = RTCHitN_primID(args->hit, args->N, k);
+        if (t > c->tieT[k] || (t == c->tieT[k] && (inst > c->tieInst[k] || (inst == c->tieInst[k] && prim >= c->tiePrim[k])))) {
+            args->valid[k] = 0;  // farther, or the committed hit wins the tie (Embree puts tfar back)
+            continue;
+        }
+        c->tieT[k] = t;
+        c->tieInst[k] = inst;
+        c->tiePrim[k] = prim;
+        tfar = tieReach(t);
+    }
+}
+inline TopContext* tieContext(RTCIntersectContext* c) {
+    return c->filter == topFilter && reinterpret_cast<TopContext*>(c)->ties ? reinterpret_cast<TopContext*>(c) : nullptr;
+}
+// call() is one Embree closest-hit call on `c` for `rh` (RTCRayHit4/8/16): the tie rule around
+// it (nothing for any other context).
+template <class RayHitK, class F>
+inline void withTies(RTCIntersectContext* c, RayHitK& rh, F&& call) {
+    TopContext* t = tieContext(c);
+    constexpr int K = int(sizeof(rh.ray.tfar) / sizeof(float));
+    if (t)
+        for (int k = 0; k < K; ++k) {
+            const bool hit = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+            t->tieT[k] = hit ? rh.ray.tfar[k] : INFINITY;
+            t->tieInst[k] = rh.hit.instID[0][k];
+            t->tiePrim[k] = rh.hit.primID[k];
+            if (hit) rh.ray.tfar[k] = tieReach(rh.ray.tfar[k]);
+        }
+    call();
+    if (t)
+        for (int k = 0; k < K; ++k)
+            if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) rh.ray.tfar[k] = t->tieT[k];
+}
+template <class F>
+inline void withTies(RTCIntersectContext* c, RTCRayHit& rh, F&& call) {
+    TopContext* t = tieContext(c);
+    const bool hit = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+    if (t) {
+        t->tieT[0] = hit ? rh.ray.tfar : INFINITY;
+        t->tieInst[0] = rh.hit.instID[0];
+        t->tiePrim[0] = rh.hit.primID;
+        if (hit) rh.ray.tfar = tieReach(rh.ray.tfar);
+    }
+    call();
+    if (t && rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) rh.ray.tfar = t->tieT[0];
 }
 struct TopLevels {
-    TopContext top;
-    RTCIntersectContext moving;
-    TopLevels(const Scene::Impl& s, bool coherent) {
+    TopContext top, moving;
+    // `closest`: for closest-hit queries (the tie rule); shadow queries leave it out.
+    TopLevels(const Scene::Impl& s, bool coherent, bool closest) {
         const RTCIntersectContextFlags flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
-        rtcInitIntersectContext(&top.ctx);
-        top.ctx.flags = flags;
-        top.scene = &s;
-        if (s.staleCount > 0) top.ctx.filter = skipStaleCopies;
-        rtcInitIntersectContext(&moving);
-        moving.flags = flags;
+        for (TopContext* c : {&top, &moving}) {
+            rtcInitIntersectContext(&c->ctx);
+            c->ctx.flags = flags;
+            c->scene = &s;
+            c->ties = closest;
+        }
+        top.skipStale = s.staleCount > 0;
+        if (top.skipStale || closest) top.ctx.filter = topFilter;
+        if (closest) moving.ctx.filter = topFilter;
     }
     // f(scene, context) for each level a ray must go through, static first.
     template <class F> void each(const Scene::Impl& s, F&& f) {
         f(s.top, &top.ctx);
-        if (s.movingCount > 0) f(s.moving, &moving);
+        if (s.movingCount > 0) f(s.moving, &moving.ctx);
     }
 };
 

@@ -20,14 +20,18 @@ template <> struct Packet<4> {
     using RayHit = RTCRayHit4;
     using Ray = RTCRay4;
     static constexpr int blockW = 2, blockH = 2;
-    static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) { rtcIntersect4(v, s, c, r); }
+    static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) {
+        withTies(c, *r, [&] { rtcIntersect4(v, s, c, r); });
+    }
     static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, Ray* r) { rtcOccluded4(v, s, c, r); }
 };
 template <> struct Packet<8> {
     using RayHit = RTCRayHit8;
     using Ray = RTCRay8;
     static constexpr int blockW = 4, blockH = 2;
-    static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) { rtcIntersect8(v, s, c, r); }
+    static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) {
+        withTies(c, *r, [&] { rtcIntersect8(v, s, c, r); });
+    }
     static void occluded(const int* v, RTCScene s, RTCIntersectContext* c, Ray* r) { rtcOccluded8(v, s, c, r); }
 };
 
@@ -73,12 +77,12 @@ template <> struct Packet<16> {
     using Ray = RTCRay16;
     static constexpr int blockW = 4, blockH = 4;
     static void intersect(const int* v, RTCScene s, RTCIntersectContext* c, RayHit* r) {
-        if (nativeRay16(s)) return rtcIntersect16(v, s, c, r);
+        if (nativeRay16(s)) return withTies(c, *r, [&] { rtcIntersect16(v, s, c, r); });
         for (int half = 0; half < 2; ++half) {
             alignas(32) RTCRayHit8 n;
             copyRayLanes(r->ray, n.ray, half, true);
             copyHitLanes(r->hit, n.hit, half, true);
-            rtcIntersect8(v + 8 * half, s, c, &n);
+            withTies(c, n, [&] { rtcIntersect8(v + 8 * half, s, c, &n); });
             copyRayLanes(r->ray, n.ray, half, false);
             copyHitLanes(r->hit, n.hit, half, false);
         }
@@ -171,7 +175,7 @@ void capHits(const Scene::Impl& s, const RayTask* rays, Hit* hits, size_t n) {
 template <int K>
 void traceClosestPacket(const Scene::Impl& s, const RayTask* rays, Hit* hits, size_t n, bool coherent, uint32_t mask) {
     using P = Packet<K>;
-    TopLevels levels(s, coherent);
+    TopLevels levels(s, coherent, true);
     alignas(64) typename P::RayHit rh;
     alignas(64) int valid[K];
     for (size_t base = 0; base < n; base += K) {
@@ -189,7 +193,7 @@ void traceClosestPacket(const Scene::Impl& s, const RayTask* rays, Hit* hits, si
 }
 
 void traceClosestSingle(const Scene::Impl& s, const RayTask* rays, Hit* hits, size_t n, bool coherent, uint32_t mask) {
-    TopLevels levels(s, coherent);
+    TopLevels levels(s, coherent, true);
     alignas(16) RTCRayHit rh;
     for (size_t i = 0; i < n; ++i) {
         const RayTask& t = rays[i];
@@ -211,7 +215,7 @@ void traceClosestSingle(const Scene::Impl& s, const RayTask* rays, Hit* hits, si
         rh.ray.flags = 0;
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        levels.each(s, [&](RTCScene scene, RTCIntersectContext* ctx) { rtcIntersect1(scene, ctx, &rh); });
+        levels.each(s, [&](RTCScene scene, RTCIntersectContext* ctx) { withTies(ctx, rh, [&] { rtcIntersect1(scene, ctx, &rh); }); });
         Hit& h = hits[i];
         h.inst = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? kNoHit : rh.hit.instID[0];
         h.prim = rh.hit.primID;
@@ -226,7 +230,7 @@ void traceClosestSingle(const Scene::Impl& s, const RayTask* rays, Hit* hits, si
 template <int K>
 void traceShadowPacket(const Scene::Impl& s, const ShadowTask* rays, uint8_t* occluded, size_t n, uint32_t mask, bool coherent) {
     using P = Packet<K>;
-    TopLevels levels(s, coherent);
+    TopLevels levels(s, coherent, false);
     alignas(64) typename P::Ray r;
     alignas(64) int valid[K];
     for (size_t base = 0; base < n; base += K) {
@@ -243,7 +247,7 @@ void traceShadowPacket(const Scene::Impl& s, const ShadowTask* rays, uint8_t* oc
 }
 
 void traceShadowSingle(const Scene::Impl& s, const ShadowTask* rays, uint8_t* occluded, size_t n, uint32_t mask, bool) {
-    TopLevels levels(s, true);
+    TopLevels levels(s, true, false);
     alignas(16) RTCRay r;
     for (size_t i = 0; i < n; ++i) {
         const ShadowTask& t = rays[i];
@@ -288,10 +292,17 @@ inline void intersectLanes(const int* traceValid, RTCScene scene, RTCIntersectCo
         one.ray = {rh.ray.org_x[k], rh.ray.org_y[k], rh.ray.org_z[k], rh.ray.tnear[k],
                    rh.ray.dir_x[k], rh.ray.dir_y[k], rh.ray.dir_z[k], 0.0f, rh.ray.tfar[k],
                    kMaskAll, 0, 0};
-        one.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        one.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(scene, &ctx, &one);
-        // Only a hit is written back: a second top level's miss keeps the first one's hit.
+        // The lane's hit from the level before, whole: the tie rule starts from it, and a miss
+        // in this level keeps it.
+        one.hit.Ng_x = rh.hit.Ng_x[k];
+        one.hit.Ng_y = rh.hit.Ng_y[k];
+        one.hit.Ng_z = rh.hit.Ng_z[k];
+        one.hit.u = rh.hit.u[k];
+        one.hit.v = rh.hit.v[k];
+        one.hit.primID = rh.hit.primID[k];
+        one.hit.geomID = rh.hit.geomID[k];
+        one.hit.instID[0] = rh.hit.instID[0][k];
+        withTies(&ctx, one, [&] { rtcIntersect1(scene, &ctx, &one); });
         if (one.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
         rh.ray.tfar[k] = one.ray.tfar;
         rh.hit.Ng_x[k] = one.hit.Ng_x;

@@ -153,12 +153,10 @@ TEST(Moves, MovableInstancesNeverRebuildTheStaticLevel) {
             const std::string what = "step " + std::to_string(step) + (kernel == KernelType::Single ? " (single rays)" : " (packets)");
             const Image image = render(live, kernel);
             EXPECT_EQ(differingPixels(image, render(dragged, kernel)), 0u) << what << ": as the unmarked parts dragged there";
-            // Against the state built afresh: equal, but for 2 pixels of single rays at step 12,
-            // which the unmarked parts dragged there show too (a debt of the two top levels, not
-            // of the marks: see the issue 29 note).
-            const size_t off = differingPixels(image, render(plain, kernel));
-            if (step == 12 && kernel == KernelType::Single) EXPECT_LE(off, 2u) << what;
-            else EXPECT_EQ(off, 0u) << what;
+            // Against the state built afresh: equal. At step 12 the glass box rests on the floor,
+            // and two single rays hit its bottom and the floor at the same distance: the tie rule
+            // (scene_impl.h, TopContext) picks the same one whichever level holds the box.
+            EXPECT_EQ(differingPixels(image, render(plain, kernel)), 0u) << what;
         }
     }
     // An unmarked part still goes the usual way, and its rebuild leaves the marked ones out.
