@@ -91,13 +91,9 @@ fs::path writeObj(const fs::path& file, const std::vector<Body>& bodies) {
     return file;
 }
 
-Image render(const SceneDesc& d) {
-    SceneDesc s = d;
-    s.settings.width = 160;
-    s.settings.height = 120;
-    s.settings.threads = 2;
-    const Scene scene(s);
-    return renderFrame(scene, Camera(s.cameras.front(), s.settings.width, s.settings.height), s.settings);
+Image render(SceneDesc s) {  // small and quick
+    s.settings.width = 160, s.settings.height = 120, s.settings.threads = 2;
+    return test::renderFirstCamera(s);
 }
 
 TEST(MeshBodies, RepeatedBodiesOfAMeshFileAreStoredOnce) {
