@@ -111,6 +111,29 @@ TEST(StepDirect, LengthUnitsScalePlacements) {
     }
 }
 
+// Placements written the other way round (the relationship's first representation the
+// assembly's, its transformation's items swapped, as some writers do): OCCT inverts the
+// transformation; so does the direct reader, and the parts land where they did.
+TEST(StepDirect, ReversedRelationshipsPlaceTheSame) {
+    std::ifstream in(test::stepAssembly());
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string s = std::regex_replace(
+        text.str(), std::regex(R"(REPRESENTATION_RELATIONSHIP\('([^']*)','([^']*)',(#\d+),(#\d+)\)(\s*REPRESENTATION_RELATIONSHIP_WITH_TRANSFORMATION))"),
+        "REPRESENTATION_RELATIONSHIP('$1','$2',$4,$3)$5");
+    s = std::regex_replace(s, std::regex(R"(ITEM_DEFINED_TRANSFORMATION\('([^']*)','([^']*)',(#\d+),(#\d+)\))"),
+                           "ITEM_DEFINED_TRANSFORMATION('$1','$2',$4,$3)");
+    ASSERT_NE(s, text.str());
+    const fs::path file = test::scratchDir() / "reversed.step";
+    std::ofstream(file) << s;
+    expectDirectMatchesXde(file);
+    const Assembly reversed = load(file, false), plain = load(test::stepAssembly(), false);
+    ASSERT_EQ(reversed.instances.size(), plain.instances.size());
+    for (size_t i = 0; i < plain.instances.size(); ++i)
+        for (size_t k = 0; k < 12; ++k)
+            EXPECT_NEAR(reversed.instances[i].transform[k], plain.instances[i].transform[k], 1e-9) << i << " " << k;
+}
+
 // A construct only XDE reads (here an overriding style: component colours) sends the file
 // through XDE, which says so; the result is still the file's.
 TEST(StepDirect, WhatOnlyXdeReadsFallsBackToXde) {
