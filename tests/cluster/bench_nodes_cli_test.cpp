@@ -1,6 +1,7 @@
 // `rtwall bench cluster --display-nodes K` as a user meets it (issue 19): one-line errors for
 // counts and settings it cannot run, and a short run of two display-node processes, two
-// replaying clients and the master on loopback whose figures are checked where they are exact.
+// replaying clients and the master on loopback whose figures are checked where they are exact;
+// and `--features` (issue 28): what the denoiser's features add to the bytes of a GI frame.
 #include "cli_util.h"
 
 #include <gtest/gtest.h>
@@ -79,6 +80,32 @@ TEST(BenchClusterNodes, ANodeProcessStopsCleanlyOnSigterm) {
         EXPECT_EQ(r.status, 0) << r.output;
         EXPECT_EQ(r.output.find("error"), std::string::npos) << r.output;
     }
+}
+
+}  // namespace
+}  // namespace rtwall
+
+namespace rtwall {
+namespace {
+
+// `rtwall bench cluster --features` (issue 28): the GI scene's frames, plain and then with depth
+// and each mode's features, in one run; what travels grows by the features the mode reads
+// (temporal: normal and id; svgf: also the albedo), and an unknown mode is refused.
+TEST(BenchClusterFeatures, EachModeSendsItsFeaturesAndCostsBytes) {
+    const test::CliResult r = test::runCli(
+        RTWALL_EXE, "bench cluster --json --width 128 --height 64 --tile 16 --frames 2 --client-counts 1 --features temporal,svgf", 120);
+    ASSERT_EQ(r.status, 0) << r.output;
+    const size_t key = r.output.find("\"benchmark\"");
+    ASSERT_NE(key, std::string::npos) << r.output;
+    const std::string out = r.output.substr(r.output.rfind('{', key));
+    const std::vector<double> bytes = numbersOf(out, "bytes_per_frame");
+    ASSERT_EQ(bytes.size(), 3u) << out;
+    EXPECT_LT(bytes[0], bytes[1]) << "depth, normal and id with every tile";
+    EXPECT_LT(bytes[1], bytes[2]) << "and the albedo";
+    for (const char* mode : {"\"off\"", "\"temporal\"", "\"svgf\""}) EXPECT_NE(out.find(mode), std::string::npos) << mode;
+    const test::CliResult bad = test::runCli(RTWALL_EXE, "bench cluster --width 128 --height 64 --features median", 30);
+    EXPECT_NE(bad.status, 0);
+    EXPECT_NE(bad.output.find("--features"), std::string::npos) << bad.output;
 }
 
 }  // namespace

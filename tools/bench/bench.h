@@ -39,6 +39,10 @@ struct ClusterOptions : Common {
     // --depth (issue 27): each setting measured twice in one run, without and with depth with
     // every tile (ClusterSettings::depth), for what depth costs in bytes and frames per second.
     bool depth = false;
+    // --features MODE,... (issue 28): the scene with GI (linear half-float tiles, as a stochastic
+    // scene travels), each setting measured plain, then with depth and the features each denoise
+    // mode reads (featureBitsFor), in one run: what the denoiser's features cost on the link.
+    std::vector<std::string> features;
     std::string bind = "tcp://127.0.0.1:0", netns, link = "loopback", codec = "lz4";
     std::vector<int> clientCounts;
     // --display-nodes: walls split over these numbers of display-node processes instead

@@ -12,6 +12,7 @@
 #include "bench_util.h"
 
 #include <rtwall/cluster.h>
+#include <rtwall/denoise.h>
 #include <rtwall/engine.h>
 
 #include <toml++/toml.h>
@@ -36,6 +37,7 @@ struct Point {
     TileCodec codec;
     bool affinity;
     bool depth = false;  // depth with every tile (--depth)
+    std::string features = "off";  // the denoise mode whose features travel (--features)
 };
 
 // CPU seconds (user + system) of every thread of a process, by thread id, with its name.
@@ -130,6 +132,7 @@ toml::table measure(const SceneDesc& desc, const Image& reference, const Point& 
     cs.affinity = p.affinity;
     cs.codec.codec = p.codec;
     cs.depth = p.depth;
+    cs.features = p.features == "off" ? uint8_t(0) : featureBitsFor(denoiseModeFromName(p.features));
     cs.async = true;
     cs.bind = o.bind;
     cs.insecure = o.insecure;
@@ -166,10 +169,10 @@ toml::table measure(const SceneDesc& desc, const Image& reference, const Point& 
     const double db = psnrDb(first, reference), quality = std::isinf(db) ? 999.0 : db;
     const double tiles = double(makeTiles(o.width, o.height, o.tile).size()) * o.frames;
     if (o.text) {
-        std::fprintf(o.text, "%-9s clients %d prefetch %d %-4s affinity %-3s depth %-3s: %6.1f fps, %6.2f MB/frame, "
+        std::fprintf(o.text, "%-9s clients %d prefetch %d %-4s affinity %-3s depth %-3s features %-8s: %6.1f fps, %6.2f MB/frame, "
                      "PSNR %5.1f dB, tile latency %6.2f ms, busy %.2f, %.1f stolen/frame, %.0f%% kept their client\n",
                      p.vary.c_str(), p.clients, p.prefetch, tileCodecName(p.codec), p.affinity ? "on" : "off",
-                     p.depth ? "on" : "off",
+                     p.depth ? "on" : "off", p.features.c_str(),
                      1.0 / median(times), median(bytes) * 1e-6, quality, median(latency) * 1e3, median(busy),
                      double(stolen) / o.frames, 100.0 * double(hits) / tiles);
         std::fflush(o.text);
@@ -180,6 +183,8 @@ toml::table measure(const SceneDesc& desc, const Image& reference, const Point& 
                        {"codec", tileCodecName(p.codec)},
                        {"affinity", p.affinity},
                        {"depth", p.depth},
+                       {"features", p.features},
+                       {"linear_tiles", !o.features.empty()},
                        {"fps", 1.0 / median(times)},
                        {"bytes_per_frame", median(bytes)},
                        {"mean_tile_latency_ms", median(latency) * 1e3},
@@ -209,6 +214,11 @@ toml::table cluster(const ClusterOptions& o) {
     desc.settings.height = o.height;
     desc.settings.tileSize = o.tile;
     desc.settings.shading = ShadingMode::EyeLight;  // cheap first renders; replay does the rest
+    if (!o.features.empty()) {
+        // A stochastic scene: its frames travel as linear half-float tiles, which carry features.
+        desc.settings.shading = ShadingMode::Full;
+        desc.settings.gi = true;
+    }
     // Reference for the error of each setting: the single-machine image.
     const Image reference = [&] {
         const Scene scene(desc);
@@ -218,12 +228,19 @@ toml::table cluster(const ClusterOptions& o) {
     toml::array results;
     for (Point p : pointsOf(o)) {
         results.push_back(measure(desc, reference, p, o));
-        // With --depth the same setting again with depth, right after: the pair shares the load.
-        if (!o.depth) continue;
-        p.depth = true;
-        results.push_back(measure(desc, reference, p, o));
+        // With --depth (--features) the same setting again with depth (and each mode's
+        // features), right after: the set shares the load.
+        if (o.depth) {
+            p.depth = true;
+            results.push_back(measure(desc, reference, p, o));
+        }
+        for (const std::string& mode : o.features) {
+            p.depth = true;
+            p.features = mode;
+            results.push_back(measure(desc, reference, p, o));
+        }
     }
-    return toml::table{{"benchmark", "cluster"}, {"width", o.width}, {"height", o.height}, {"tile", o.tile},
+    return toml::table{{"benchmark", "cluster"}, {"width", o.width}, {"height", o.height}, {"tile", o.tile}, {"gi", desc.settings.gi},
                        {"frames", o.frames}, {"replay", !o.render}, {"link", o.link}, {"results", results}};
 }
 

@@ -14,6 +14,11 @@ void addBenchCluster(CLI::App& bench, Run& run) {
     addTrianglesOption(cmd, o.triangles, "Triangles of the built-in scene");
     cmd->add_flag("--render", o.render, "Clients really render every tile (default: replay pre-encoded tiles)");
     cmd->add_flag("--depth", o.depth, "Each setting without and with depth with every tile, in one run (issue 27)");
+    cmd->add_option("--features", o.features,
+                    "The scene with GI; each setting plain, then with depth and the features of each of these denoise modes "
+                    "(temporal, svgf), in one run (issue 28)")
+        ->delimiter(',')
+        ->check(CLI::IsMember({"temporal", "svgf"}));
     addNetemOptions(cmd, o.bind, o.netns, o.link, "Master endpoint (tools/netem.sh binds inside its namespaces)",
                     "Start client i in network namespace <prefix><i> (tools/netem.sh)");
     cmd->add_flag("--insecure", o.insecure, "Allow a non-loopback --bind without CURVE keys (tools/netem.sh namespaces)");
