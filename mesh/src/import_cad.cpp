@@ -82,7 +82,7 @@ Matrix toMatrix(const gp_Trsf& t) {
 std::string labelName(const TDF_Label& label) {
     Handle(TDataStd_Name) name;
     if (!label.FindAttribute(TDataStd_Name::GetID(), name)) return {};
-    return TCollection_AsciiString(name->Get(), '?').ToCString();
+    return TCollection_AsciiString(name->Get()).ToCString();  // UTF-8 (OCCT converts without a replacement character)
 }
 
 std::string labelEntry(const TDF_Label& label) {

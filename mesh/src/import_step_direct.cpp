@@ -49,6 +49,8 @@
 #include <StepVisual_StyleContextSelect.hxx>
 #include <StepVisual_StyledItem.hxx>
 #include <StepVisual_StyledItemTarget.hxx>
+#include <TCollection_AsciiString.hxx>
+#include <TCollection_ExtendedString.hxx>
 #include <TCollection_HAsciiString.hxx>
 #include <TopLoc_Location.hxx>
 #include <TransferBRep.hxx>
@@ -66,22 +68,29 @@ namespace {
 
 using Entity = const Standard_Transient*;
 
-std::string text(const Handle(TCollection_HAsciiString)& s) { return s.IsNull() ? std::string() : std::string(s->ToCString()); }
+// A name as XDE's document gives it to rtwall: through TCollection_ExtendedString as
+// STEPCAFControl_Reader::convertName makes it (decoded as UTF-8 unless the file's code page says
+// otherwise), back to UTF-8 as import_cad.cpp's labelName does, so that names are the same
+// bytes whichever reader read the file, and valid UTF-8 (StepDirect.NamesOutsideAsciiAreXdesNames).
+std::string text(const Handle(TCollection_HAsciiString)& s, bool utf8) {
+    if (s.IsNull()) return {};
+    return TCollection_AsciiString(TCollection_ExtendedString(s->String(), utf8)).ToCString();
+}
 bool hasText(const Handle(TCollection_HAsciiString)& s) { return !s.IsNull() && s->UsefullLength() > 0; }
 
 // STEPCAFControl_Reader::ReadNames: a product's name, else its id.
-std::string productName(const Handle(StepBasic_ProductDefinition)& pd) {
+std::string productName(const Handle(StepBasic_ProductDefinition)& pd, bool utf8) {
     const Handle(StepBasic_ProductDefinitionFormation) f = pd->Formation();
     const Handle(StepBasic_Product) p = f.IsNull() ? Handle(StepBasic_Product)() : f->OfProduct();
     if (p.IsNull()) return {};
-    return hasText(p->Name()) ? text(p->Name()) : text(p->Id());
+    return hasText(p->Name()) ? text(p->Name(), utf8) : text(p->Id(), utf8);
 }
 
 // An occurrence's description, else its name, else its id.
-std::string occurrenceName(const Handle(StepRepr_NextAssemblyUsageOccurrence)& n) {
-    if (n->HasDescription() && hasText(n->Description())) return text(n->Description());
-    if (hasText(n->Name())) return text(n->Name());
-    return text(n->Id());
+std::string occurrenceName(const Handle(StepRepr_NextAssemblyUsageOccurrence)& n, bool utf8) {
+    if (n->HasDescription() && hasText(n->Description())) return text(n->Description(), utf8);
+    if (hasText(n->Name())) return text(n->Name(), utf8);
+    return text(n->Id(), utf8);
 }
 
 // STEPControl_ActorRead::PrepareUnits: the representation's length and angle units become
@@ -116,6 +125,7 @@ public:
         : reader_(reader), file_(file), progress_(progress), tree_(tree) {}
 
     bool read(std::string& why) {
+        utf8_ = reader_.StepModel()->SourceCodePage() != Resource_FormatType_NoConversion;
         if (!scan(why) || !structure(why)) return false;
         transferParts();
         colourParts();
@@ -215,7 +225,7 @@ private:
             if (d.children.empty() && d.rep.IsNull()) continue;  // no shape: OCCT transfers nothing either
             d.product = uint32_t(tree_.products.size());
             CadProduct p;
-            p.name = productName(d.pd);
+            p.name = productName(d.pd, utf8_);
             p.key = "#" + std::to_string(reader_.StepModel()->Number(d.pd));
             p.assembly = !d.children.empty();
             tree_.products.push_back(std::move(p));
@@ -235,7 +245,7 @@ private:
                 if (child.product == UINT32_MAX) continue;  // a product without shape: no component
                 CadComponent c;
                 c.product = child.product;
-                c.name = occurrenceName(o);
+                c.name = occurrenceName(o, utf8_);
                 if (!placement(o, c.location, why)) return false;
                 p.components.push_back(std::move(c));
             }
@@ -367,6 +377,7 @@ private:
     const std::filesystem::path& file_;
     const ProgressFn& progress_;
     CadTree& tree_;
+    bool utf8_ = true;  // the file's strings are UTF-8 (its code page)
     std::vector<Definition> definitions_;
     std::unordered_map<Entity, size_t> defOf_;                                             // product definition -> definitions_
     std::unordered_map<Entity, Handle(StepRepr_ProductDefinitionShape)> shapeOf_;           // PD or NAUO -> its PDS

@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 #include <regex>
@@ -132,6 +133,23 @@ TEST(StepDirect, ReversedRelationshipsPlaceTheSame) {
     for (size_t i = 0; i < plain.instances.size(); ++i)
         for (size_t k = 0; k < 12; ++k)
             EXPECT_NEAR(reversed.instances[i].transform[k], plain.instances[i].transform[k], 1e-9) << i << " " << k;
+}
+
+// Names outside ASCII (UTF-8 in the file, as CAD tools write German or Japanese part names) come
+// out as XDE's document gives them, and both give them in UTF-8, as written (before, XDE's names
+// came through Latin-1 with '?' for the rest: "Schraube \xD8" "8 ???", not valid UTF-8).
+TEST(StepDirect, NamesOutsideAsciiAreXdesNames) {
+    std::ifstream in(test::stepAssembly());
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string s = std::regex_replace(text.str(), std::regex("'bolt'"), "'Schraube \xC3\x98" "8 \xE3\x83\x9C\xE3\x83\xAB\xE3\x83\x88'");
+    ASSERT_NE(s, text.str());
+    const fs::path file = test::scratchDir() / "names.step";
+    std::ofstream(file) << s;
+    expectDirectMatchesXde(file);
+    const Assembly a = load(file, false);
+    EXPECT_NE(std::find(a.meshNames.begin(), a.meshNames.end(), "Schraube \xC3\x98" "8 \xE3\x83\x9C\xE3\x83\xAB\xE3\x83\x88"),
+              a.meshNames.end());
 }
 
 // A construct only XDE reads (here an overriding style: component colours) sends the file
