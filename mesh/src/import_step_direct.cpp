@@ -389,7 +389,11 @@ private:
 }  // namespace
 
 bool readStepDirect(STEPControl_Reader& reader, const std::filesystem::path& file, const ProgressFn& progress, CadTree& tree,
-                    std::string& why) {
+                    std::string& why, size_t& occurrences) {
+    const Handle(StepData_StepModel) model = reader.StepModel();
+    occurrences = 0;
+    for (Standard_Integer i = 1; i <= model->NbEntities(); ++i)
+        occurrences += model->Value(i)->DynamicType() == STANDARD_TYPE(StepRepr_NextAssemblyUsageOccurrence);
     return DirectReader(reader, file, progress, tree).read(why);
 }
 

@@ -154,25 +154,51 @@ TEST(StepDirect, NamesOutsideAsciiAreXdesNames) {
 
 // A construct only XDE reads (here an overriding style: component colours) sends the file
 // through XDE, which says so; the result is still the file's.
-TEST(StepDirect, WhatOnlyXdeReadsFallsBackToXde) {
-    std::ifstream in(test::stepAssembly());
+// The same file with an overriding twin of its first style (component colours: only XDE reads
+// them).
+std::string withOverridingStyle(const fs::path& file) {
+    std::ifstream in(file);
     std::stringstream text;
     text << in.rdbuf();
     std::string s = text.str();
-    // #N=STYLED_ITEM('name',(#P),#I); gets an overriding twin of the same colour on the same item.
     std::smatch m;
-    ASSERT_TRUE(std::regex_search(s, m, std::regex(R"(#(\d+) ?= ?STYLED_ITEM\(('[^']*'),\((#\d+)\),(#\d+)\) ?;)")));
-    const std::string twin = "#999999=OVER_RIDING_STYLED_ITEM(" + m[2].str() + ",(" + m[3].str() + ")," + m[4].str() + ",#" +
+    if (!std::regex_search(s, m, std::regex(R"(#(\d+) ?= ?STYLED_ITEM\(('[^']*'),\((#\d+)\),(#\d+)\) ?;)"))) return {};
+    const std::string twin = "#9999999=OVER_RIDING_STYLED_ITEM(" + m[2].str() + ",(" + m[3].str() + ")," + m[4].str() + ",#" +
                              m[1].str() + ");\n";
     const size_t end = s.find("ENDSEC;", size_t(m.position(0)));
-    ASSERT_NE(end, std::string::npos);
+    if (end == std::string::npos) return {};
     s.insert(end, twin);
+    return s;
+}
+
+TEST(StepDirect, WhatOnlyXdeReadsFallsBackToXde) {
+    const std::string s = withOverridingStyle(test::stepAssembly());
+    ASSERT_FALSE(s.empty());
     const fs::path file = test::scratchDir() / "overriding.step";
     std::ofstream(file) << s;
     const Assembly a = load(file, false);
     EXPECT_EQ(a.reader, "xde: overriding styles (component colours)");
     expectSameAssembly(a, load(file, true));
     EXPECT_EQ(a.instances.size(), 21u);
+    EXPECT_TRUE(a.warnings.empty()) << "10 occurrences: XDE is quick there";
+}
+
+// A large file that must go through XDE says so, and why, in one warning line.
+TEST(StepDirect, ALargeFileThatFallsBackToXdeSaysWhy) {
+    const auto dir = test::scratchDir();
+    gen::genStep({.out = dir, .instances = 9100});  // 1,300 modules of 7: 1,307 occurrences (NAUOs)
+    const std::string s = withOverridingStyle(dir / "assembly.step");
+    ASSERT_FALSE(s.empty());
+    std::ofstream(dir / "overriding.step") << s;
+    AssemblyOptions o;
+    o.shareCongruent = false;
+    const Assembly a = loadAssembly(dir / "overriding.step", o);
+    EXPECT_EQ(a.reader, "xde: overriding styles (component colours)");
+    ASSERT_EQ(a.warnings.size(), 1u);
+    EXPECT_NE(a.warnings[0].find("overriding.step: read through OpenCASCADE's XDE document, whose import time grows as the square of "
+                                 "its 1307 assembly occurrences"),
+              std::string::npos) << a.warnings[0];
+    EXPECT_NE(a.warnings[0].find("because the file has overriding styles (component colours)"), std::string::npos) << a.warnings[0];
 }
 
 }  // namespace
