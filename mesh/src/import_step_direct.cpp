@@ -62,6 +62,7 @@
 #include <gp_Ax3.hxx>
 
 #include <unordered_map>
+#include <unordered_set>
 
 namespace rtwall::detail {
 namespace {
@@ -111,12 +112,6 @@ void prepareUnits(const Handle(StepRepr_Representation)& rep) {
     const int angleMode = Interface_Static::IVal("step.angleunit.mode");
     const double angle = angleMode == 0 ? unit.PlaneAngleFactor() : angleMode == 1 ? 1.0 : M_PI / 180.0;
     StepData_GlobalFactors::Intance().InitializeFactors(unit.LengthFactor(), angle, unit.SolidAngleFactor());
-}
-
-bool holds(const Handle(StepRepr_Representation)& rep, const Handle(Standard_Transient)& item) {
-    for (Standard_Integer i = 1; i <= rep->NbItems(); ++i)
-        if (rep->ItemsValue(i) == item) return true;
-    return false;
 }
 
 class DirectReader {
@@ -312,6 +307,16 @@ private:
         return true;
     }
 
+    // Whether `item` is one of `rep`'s items. An assembly's representation holds one axis
+    // placement per component (20,000 under one root in a flat plant): its items go into a set
+    // the first time, or the check per occurrence would make the walk quadratic again.
+    bool holds(const Handle(StepRepr_Representation)& rep, const Handle(Standard_Transient)& item) {
+        auto [it, fresh] = itemsOf_.try_emplace(rep.get());
+        if (fresh)
+            for (Standard_Integer i = 1; i <= rep->NbItems(); ++i) it->second.insert(rep->ItemsValue(i).get());
+        return it->second.count(item.get()) > 0;
+    }
+
     // One OCCT transfer per distinct part; a part's own location moves into its components.
     void transferParts() {
         const Handle(Transfer_TransientProcess) tp = reader_.WS()->TransferReader()->TransientProcess();
@@ -383,6 +388,7 @@ private:
     std::unordered_map<Entity, Handle(StepRepr_ProductDefinitionShape)> shapeOf_;           // PD or NAUO -> its PDS
     std::unordered_map<Entity, Handle(StepShape_ContextDependentShapeRepresentation)> placementOf_;  // PDS -> CDSR
     std::unordered_map<Entity, Entity> repOwner_;                                          // representation -> its PD
+    std::unordered_map<Entity, std::unordered_set<Entity>> itemsOf_;                       // representation -> its items (holds)
     std::vector<Handle(StepVisual_StyledItem)> styles_;
 };
 
