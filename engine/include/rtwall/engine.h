@@ -319,7 +319,7 @@ struct SceneLoadOptions {
     SceneLoadStats* stats = nullptr;
     int64_t builtinTriangles = 3'000'000;  // builtin:NAME: about this many triangles
     // STEP/IGES files: the tessellation (AssemblyOptions); `cache` (off when unset) uses and writes
-    // their assembly cache, `progress` counts parts tessellated.
+    // their assembly cache, `progress` follows the import (parse, transfer, tessellation).
     double linearDeflection = 0.1;   // file units (millimetres for most CAD files)
     double angularDeflection = 0.5;  // radians
     // A mesh or assembly file opened as the scene: shapes (assembly meshes, or the bodies of a mesh

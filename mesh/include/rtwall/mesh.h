@@ -316,7 +316,7 @@ struct AssemblyOptions {
     // deflections, checksummed and validated in full before use, replaced by rename.
     bool cache = false;
     std::filesystem::path cacheDir;  // empty: beside the file
-    ProgressFn progress;             // STEP/IGES: fraction of parts tessellated; false cancels (Cancelled)
+    ProgressFn progress;             // STEP/IGES: fraction of the import (parse, transfer, tessellation); false cancels (Cancelled)
     // Meshes that are the same shape up to a rigid motion (the same vertices, texture
     // coordinates and colours, in any numbering; every vertex within congruenceTolerance x the
     // shape's bounding-box diagonal, every normal within 1e-3; the same triangles or a planar
