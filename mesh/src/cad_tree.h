@@ -52,9 +52,8 @@ struct CadTree {
 // (component colours and overrides, mapped-item assemblies, external references, placements by
 // Cartesian operators, assemblies with shapes of their own); the caller then uses XDE.
 // `progress` sees the fraction of distinct parts transferred; false cancels (Cancelled).
-// `occurrences` receives how many NEXT_ASSEMBLY_USAGE_OCCURRENCEs the file holds (counted before
-// any refusal): XDE's time grows as their square.
-bool readStepDirect(STEPControl_Reader& reader, const std::filesystem::path& file, const ProgressFn& progress, CadTree& tree,
-                    std::string& why, size_t& occurrences);
+// `occurrences` receives how many NEXT_ASSEMBLY_USAGE_OCCURRENCEs the file holds (counted in the
+// same pass, whatever is refused): XDE's time grows as their square.
+bool readStepDirect(STEPControl_Reader& reader, const ProgressFn& progress, CadTree& tree, std::string& why, size_t& occurrences);
 
 }  // namespace rtwall::detail

@@ -402,7 +402,7 @@ Assembly importCadHere(const fs::path& file, const AssemblyOptions& options, boo
                     return !options.progress || options.progress(kDirectReadShare + (kDirectTransferShare - kDirectReadShare) * f);
                 };
                 size_t occurrences = 0;
-                if (readStepDirect(reader.ChangeReader(), file, parts, tree, why, occurrences)) {
+                if (readStepDirect(reader.ChangeReader(), parts, tree, why, occurrences)) {
                     out.reader = "direct";
                     tessellationFrom = kDirectTransferShare;
                 } else if (occurrences >= kSlowXdeOccurrences) {

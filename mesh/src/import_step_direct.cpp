@@ -116,12 +116,12 @@ void prepareUnits(const Handle(StepRepr_Representation)& rep) {
 
 class DirectReader {
 public:
-    DirectReader(STEPControl_Reader& reader, const std::filesystem::path& file, const ProgressFn& progress, CadTree& tree)
-        : reader_(reader), file_(file), progress_(progress), tree_(tree) {}
+    DirectReader(STEPControl_Reader& reader, const ProgressFn& progress, CadTree& tree)
+        : reader_(reader), progress_(progress), tree_(tree) {}
 
-    bool read(std::string& why) {
+    bool read(std::string& why, size_t& occurrences) {
         utf8_ = reader_.StepModel()->SourceCodePage() != Resource_FormatType_NoConversion;
-        if (!scan(why) || !structure(why)) return false;
+        if (!scan(why, occurrences) || !structure(why)) return false;
         transferParts();
         colourParts();
         return true;
@@ -136,20 +136,25 @@ private:
         uint32_t product = UINT32_MAX;
     };
 
-    // One pass over the entities: everything the structure needs, keyed by entity.
-    bool scan(std::string& why) {
+    // One pass over the entities: everything the structure needs, keyed by entity. A construct
+    // only XDE reads is the refusal (`why`, the first one met); the pass still counts every
+    // occurrence, which the caller's warning names.
+    bool scan(std::string& why, size_t& occurrenceCount) {
         const Handle(StepData_StepModel) model = reader_.StepModel();
         const Standard_Integer n = model->NbEntities();
         std::vector<Handle(StepRepr_NextAssemblyUsageOccurrence)> occurrences;
         std::vector<Handle(StepShape_ShapeDefinitionRepresentation)> sdrs;
         std::vector<Handle(StepShape_ContextDependentShapeRepresentation)> cdsrs;
+        auto refuse = [&](const char* what) {
+            if (why.empty()) why = what;
+        };
         for (Standard_Integer i = 1; i <= n; ++i) {
             const Handle(Standard_Transient)& e = model->Value(i);
             if (e.IsNull()) continue;
             if (e->IsKind(STANDARD_TYPE(StepBasic_ProductDefinition))) {
                 if (e->IsKind(STANDARD_TYPE(StepBasic_ProductDefinitionWithAssociatedDocuments))) {
-                    why = "product definitions with associated documents (external references)";
-                    return false;
+                    refuse("product definitions with associated documents (external references)");
+                    continue;
                 }
                 defOf_[e.get()] = definitions_.size();
                 definitions_.push_back({Handle(StepBasic_ProductDefinition)::DownCast(e), {}, {}, false, UINT32_MAX});
@@ -165,23 +170,24 @@ private:
                 cdsrs.push_back(Handle(StepShape_ContextDependentShapeRepresentation)::DownCast(e));
             } else if (e->IsKind(STANDARD_TYPE(StepVisual_StyledItem))) {
                 if (e->IsKind(STANDARD_TYPE(StepVisual_OverRidingStyledItem))) {
-                    why = "overriding styles (component colours)";
-                    return false;
+                    refuse("overriding styles (component colours)");
+                    continue;
                 }
                 const auto style = Handle(StepVisual_StyledItem)::DownCast(e);
                 for (Standard_Integer k = 1; k <= style->NbStyles(); ++k) {
                     const auto byContext = Handle(StepVisual_PresentationStyleByContext)::DownCast(style->StylesValue(k));
                     if (!byContext.IsNull() && !byContext->StyleContext().Representation().IsNull()) {
-                        why = "styles in a component's context (component colours)";
-                        return false;
+                        refuse("styles in a component's context (component colours)");
+                        break;
                     }
                 }
                 styles_.push_back(style);
             } else if (e->IsKind(STANDARD_TYPE(StepRepr_MappedItem))) {
-                why = "mapped items";
-                return false;
+                refuse("mapped items");
             }
         }
+        occurrenceCount = occurrences.size();
+        if (!why.empty()) return false;
         // The representation of each product definition's shape (the first, as OCCT's actor
         // would find more than one and make a compound: left to XDE).
         for (const auto& sdr : sdrs) {
@@ -379,7 +385,6 @@ private:
     }
 
     STEPControl_Reader& reader_;
-    const std::filesystem::path& file_;
     const ProgressFn& progress_;
     CadTree& tree_;
     bool utf8_ = true;  // the file's strings are UTF-8 (its code page)
@@ -394,13 +399,10 @@ private:
 
 }  // namespace
 
-bool readStepDirect(STEPControl_Reader& reader, const std::filesystem::path& file, const ProgressFn& progress, CadTree& tree,
-                    std::string& why, size_t& occurrences) {
-    const Handle(StepData_StepModel) model = reader.StepModel();
+bool readStepDirect(STEPControl_Reader& reader, const ProgressFn& progress, CadTree& tree, std::string& why, size_t& occurrences) {
+    why.clear();
     occurrences = 0;
-    for (Standard_Integer i = 1; i <= model->NbEntities(); ++i)
-        occurrences += model->Value(i)->DynamicType() == STANDARD_TYPE(StepRepr_NextAssemblyUsageOccurrence);
-    return DirectReader(reader, file, progress, tree).read(why);
+    return DirectReader(reader, progress, tree).read(why, occurrences);
 }
 
 }  // namespace rtwall::detail

@@ -28,7 +28,7 @@ struct GenOptions {
     bool rows = false;               // step, step-curved, iges: modules grouped into one sub-assembly per row
     bool flat = false;               // step, iges: every part a solid of its own, its placement baked into its
                                      // geometry (as meshers and flat exports write), plus a mirrored bracket
-    std::string stepUnit;            // step, step-curved: the file's length unit as OCCT's write.step.unit
+    std::string stepUnit{};          // step, step-curved: the file's length unit as OCCT's write.step.unit
                                      // names it ("MM", "M", "INCH", ...); empty: millimetres
 };
 
