@@ -365,6 +365,7 @@ def main():
     d.add_argument("out")
     d.add_argument("--alpha", type=size, default=(1, 16), help="COMPONENTSxBITS (1x16: 16-bit grey)")
     d.add_argument("--beta", type=size, default=(3, 8), help="COMPONENTSxBITS (3x8: 8-bit RGB)")
+    d.add_argument("--res", type=size, default=(6, 4), help="the region's (and buffer's) pixels, WxH")
     fz = sub.add_parser("fuzz-seeds")
     fz.add_argument("out")
     a = p.parse_args()
@@ -382,7 +383,7 @@ def main():
         dx, dy = (int(v) for v in a.shift.split(","))
         data = identity(bufs, (dx, dy))
     elif a.what == "depths":
-        data = depths(a.alpha, a.beta)
+        data = depths(a.alpha, a.beta, *a.res)
     elif a.what == "fuzz-seeds":
         fuzz_seeds(a.out)
         return

@@ -139,6 +139,28 @@ TEST(GlPresenter, TheProjectorBlendMatchesTheCpuReference) {
     for (size_t s = 0; s < 3; ++s) EXPECT_NE(presentScreen(wall, s, f, o).rgb, presentScreen(wall, s, f).rgb) << "not blended";
 }
 
+// RGB and 16-bit maps (tools/mpcdi_testgen.py depths: every pixel's and channel's value its
+// own) through the GL stage against the CPU reference: each channel by its own alpha and beta.
+TEST(GlPresenter, RgbAndSixteenBitBlendMapsMatchTheCpuReference) {
+    const auto dir = test::scratchDir();
+    for (const std::string depths : {"--alpha 3x16 --beta 3x8", "--alpha 1x16 --beta 3x16", "--alpha 3x8 --beta 1x8"}) {
+        SCOPED_TRACE(depths);
+        test::mpcdiTestgen("depths " + (dir / "d.mpcdi").string() + " --res 64x48 " + depths);
+        test::writeFile(dir / "d.toml", "[wall]\nwidth = 64\nheight = 48\n[[screen]]\nname = \"s\"\nviewport = [0, 0, 64, 48]\n"
+                                        "[warp]\nmpcdi = \"d.mpcdi\"\nbuffers = { p = \"s\" }\n");
+        const WallConfig wall = loadWallConfig(dir / "d.toml");
+        ASSERT_TRUE(checkWall(dir / "d.toml").empty());
+        ProjectorBlendStage blend(wall, readMpcdi(wall.warp->mpcdi));
+        PresentOptions o;
+        o.stages = {&blend};
+        expectScreensMatchHeadless(dir / "d.toml", UploadMethod::TexSubImage, o, 1);
+        // The maps' values differ per channel (a GL path that read one channel for all three
+        // would be off by far more than a code), and they do change the picture.
+        const WallFrame f = renderedFrame(64, 48, 1, 0.0f);
+        EXPECT_NE(presentScreen(wall, 0, f, o).rgb, presentScreen(wall, 0, f).rgb) << "not blended";
+    }
+}
+
 // The post-warp (issue 30's comparison mode) in GL against the CPU reference, with the blend
 // after it, on the curved example: within one code.
 TEST(GlPresenter, ThePostWarpMatchesTheCpuReference) {
