@@ -7,12 +7,15 @@
 #include "test_util.h"
 
 #include <rtwall/mpcdi.h>
+#include <rtwall/tracking.h>
 #include <rtwall/wall.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <chrono>
 #include <cstring>
+#include <thread>
 
 namespace rtwall {
 namespace {
@@ -184,6 +187,70 @@ TEST(WarpSession, EachEyeOfAStereoWallSeesThroughTheCalibrationFromItself) {
         const size_t pixels = want.rgb.size() / 3, off = differing(s.lastFrame().left, want);
         EXPECT_EQ(off, 0u) << off << " of " << pixels << " pixels differ";
     }
+}
+
+// Head tracking through a calibration, from DTrack datagrams on loopback: the head's datagram
+// moves the eye the rays leave from (datagram, parser, room transform, eye), so a head 0.25 m
+// right of the viewer gives the bytes of the static wall whose viewer stands there (the room put
+// in the world as for the stereo eyes above), and back at the viewer the untracked bytes.
+TEST(WarpSession, ATrackedHeadMovesTheEyeOfTheCurvedWallsRays) {
+    const fs::path dir = test::scratchDir();
+    test::mpcdiTestgen("cylinder " + (dir / "c.mpcdi").string() + " --res 64x48 --wall " + (dir / "c.toml").string());
+    const std::string mono = test::fileBytes(dir / "c.toml");
+    RunConfig c = steppedRunConfig(dir, 2);
+    c.scene = test::writeFile(dir / "scene.toml", kScene).string();
+    c.cluster.async = false;
+    c.wall = dir / "c.toml";
+    Image atViewer;
+    CameraDesc camera;
+    {
+        WallSession s(c);
+        ASSERT_TRUE(s.step());
+        atViewer = s.lastFrame().left;
+        camera = s.camera();
+    }
+    const Float3 right = normalize(cross(camera.lookAt - camera.position, camera.up));
+    Image moved;
+    {
+        RunConfig m = c;
+        m.wall = test::writeFile(dir / "moved.toml", replaced(mono, "viewer = [0.0, 0.0, 3]", "viewer = [0.25, 0.0, 3]"));
+        WallSession s(m);
+        CameraDesc shifted = camera;
+        shifted.position = camera.position + right * 0.25f;
+        shifted.lookAt = camera.lookAt + right * 0.25f;
+        s.setCamera(shifted);
+        ASSERT_TRUE(s.step());
+        moved = s.lastFrame().left;
+    }
+    ASSERT_GT(differing(moved, atViewer), atViewer.rgb.size() / 3 / 50) << "the moved viewer sees alike";
+
+    c.wall = test::writeFile(dir / "tracked.toml", mono + "[tracking]\nsource = \"dtrack://127.0.0.1:0\"\ntimeout_ms = 60000\n");
+    WallSession tracked(c);
+    ASSERT_GT(tracked.trackerPort(), 0);
+    auto sendHead = [&](double x, uint64_t frame) {
+        DTrackFrame f;
+        f.frame = frame;
+        DTrackBody b;
+        b.quality = 1;
+        b.position = {x * 1e3, 0.0, 3e3};  // millimetres; the room is the wall's frame
+        f.bodies.push_back(b);
+        DTrackSender(tracked.trackerPort()).send(f);
+        for (int i = 0; i < 400; ++i) {  // 2 s at most
+            const std::optional<TrackerState> st = tracked.tracker();
+            if (st && st->packets >= frame) return;
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+        ADD_FAILURE() << "the session's tracker did not get datagram " << frame;
+    };
+    ASSERT_TRUE(tracked.step());
+    EXPECT_EQ(differing(tracked.lastFrame().left, atViewer), 0u) << "before any datagram: the config's viewer";
+    sendHead(0.25, 1);
+    ASSERT_TRUE(tracked.step());
+    EXPECT_EQ(tracked.lastHead().position.x, 0.25f);
+    EXPECT_EQ(differing(tracked.lastFrame().left, moved), 0u) << "the head 0.25 m right";
+    sendHead(0.0, 2);
+    ASSERT_TRUE(tracked.step());
+    EXPECT_EQ(differing(tracked.lastFrame().left, atViewer), 0u) << "the head back at the viewer";
 }
 
 }  // namespace
