@@ -89,17 +89,24 @@ def archive(entries):
     return buf.getvalue()
 
 
-def xml(profile, buffers, level=2, file_sets=True, unit="m", alpha_depth=(1, 8), beta_depth=(1, 8), alpha_gamma=2.2):
+def xml(profile, buffers, level=2, file_sets=True, unit="m", alpha_depth=(1, 8), beta_depth=(1, 8), alpha_gamma=2.2,
+        frusta=None):
     """buffers: [(buffer id, w, h, [(region id, w, h, warp path, alpha path or None, beta path or None)])];
-    the maps' (componentDepth, bitDepth) and the alpha maps' gammaEmbedded."""
+    the maps' (componentDepth, bitDepth) and the alpha maps' gammaEmbedded; frusta: region id ->
+    (yaw, pitch, roll, leftAngle, rightAngle, upAngle, downAngle), degrees (profile 3d)."""
     lines = ['<?xml version="1.0" encoding="utf-8"?>',
              '<MPCDI profile="%s" geometry="%d" color="1" version="2.0">' % (profile, level), "  <display>"]
     sets = []
     for bid, bw, bh, regions in buffers:
         lines.append('    <buffer id="%s" Xresolution="%d" Yresolution="%d">' % (bid, bw, bh))
         for rid, rw, rh, warp, alpha, beta in regions:
-            lines.append('      <region id="%s" Xresolution="%d" Yresolution="%d" x="0" y="0" xsize="1" ysize="1"/>' %
-                         (rid, rw, rh))
+            region = '      <region id="%s" Xresolution="%d" Yresolution="%d" x="0" y="0" xsize="1" ysize="1"' % (rid, rw, rh)
+            if frusta and rid in frusta:
+                names = ("yaw", "pitch", "roll", "leftAngle", "rightAngle", "upAngle", "downAngle")
+                lines += [region + ">", "        <frustum>" + "".join("<%s>%.12g</%s>" % (n, v, n) for n, v in zip(names, frusta[rid])) +
+                          "</frustum>", "      </region>"]
+            else:
+                lines.append(region + "/>")
             s = ['    <fileset region="%s">' % rid]
             if warp:
                 unit_xml = "<geometricUnit>%s</geometricUnit>" % unit if profile != "2d" else ""
@@ -179,12 +186,68 @@ def blend_weight(k, theta, overlap):
 UNITS = {"m": 1.0, "dm": 10.0, "cm": 100.0, "mm": 1000.0}
 
 
+# Profile 3d: each projector's frustum from the eye point on the cylinder's axis (the wall's
+# viewer), turned by these pitch and roll besides its yaw, so that every turn is exercised.
+FRUSTUM_PITCH, FRUSTUM_ROLL = 2.0, 1.5
+
+
+def turned(v, yaw, pitch, roll):
+    """v turned by Ry(-yaw) Rx(pitch) Rz(-roll) (degrees): positive yaw turns right, positive
+    pitch up, positive roll lowers the right side (SGCT's reading, Christie's description)."""
+    x, y, z = v
+    r = math.radians(-roll)
+    x, y = math.cos(r) * x - math.sin(r) * y, math.sin(r) * x + math.cos(r) * y
+    p = math.radians(pitch)
+    y, z = math.cos(p) * y - math.sin(p) * z, math.sin(p) * y + math.cos(p) * z
+    a = math.radians(-yaw)
+    return (math.cos(a) * x + math.sin(a) * z, y, -math.sin(a) * x + math.cos(a) * z)
+
+
+def unturned(v, yaw, pitch, roll):
+    """The inverse of turned(): the same turns undone in the reverse order."""
+    x, y, z = v
+    a = math.radians(yaw)
+    x, z = math.cos(a) * x + math.sin(a) * z, -math.sin(a) * x + math.cos(a) * z
+    p = math.radians(-pitch)
+    y, z = math.cos(p) * y - math.sin(p) * z, math.sin(p) * y + math.cos(p) * z
+    r = math.radians(roll)
+    return (math.cos(r) * x - math.sin(r) * y, math.sin(r) * x + math.cos(r) * y, z)
+
+
+def frustum_samples(k, overlap, points):
+    """Projector k's points (rows of (x, y, z) in metres, or NaN) as frustum coordinates (u, v, 0)
+    seen from the eye point (0, 0, AXIS_Z), and its frustum (yaw, pitch, roll, left, right, up,
+    down): yawed to the middle of its angle range, the angles enclosing its points with 2% to spare."""
+    yaw = math.degrees(sum(projector_ranges(overlap)[k]) / 2)
+    tans = []
+    for row in points:
+        out = []
+        for p in row:
+            if math.isnan(p[0]):
+                out.append(None)
+                continue
+            x, y, z = unturned((p[0], p[1], p[2] - AXIS_Z), yaw, FRUSTUM_PITCH, FRUSTUM_ROLL)
+            out.append((x / -z, y / -z))
+        tans.append(out)
+    flat = [t for row in tans for t in row if t]
+    lo_x, hi_x = min(t[0] for t in flat), max(t[0] for t in flat)
+    lo_y, hi_y = min(t[1] for t in flat), max(t[1] for t in flat)
+    pad_x, pad_y = 0.02 * (hi_x - lo_x), 0.02 * (hi_y - lo_y)
+    lo_x, hi_x, lo_y, hi_y = lo_x - pad_x, hi_x + pad_x, lo_y - pad_y, hi_y + pad_y
+    samples = [[(NAN, NAN, NAN) if t is None else ((t[0] - lo_x) / (hi_x - lo_x), (t[1] - lo_y) / (hi_y - lo_y), 0.0)
+                for t in row] for row in tans]
+    angles = tuple(math.degrees(math.atan(v)) for v in (lo_x, hi_x, hi_y, lo_y))
+    return samples, (yaw, FRUSTUM_PITCH, FRUSTUM_ROLL) + angles
+
+
+
 def cylinder(res, grid, overlap, unit="m", declared=None, profile="a3"):
-    """The archive; points in `unit` (mm: 1000 per metre), declared as `declared` (default: the same)."""
+    """The archive; points in `unit` (mm: 1000 per metre), declared as `declared` (default: the
+    same). Profile 3d: the same projector pixels as frustum coordinates seen from the viewer."""
     per_metre = UNITS[unit]
     w, h = res
     gw, gh = grid
-    buffers, entries = [], []
+    buffers, entries, frusta = [], [], {}
     for k in range(3):
         samples = []
         for j in range(gh):
@@ -193,6 +256,9 @@ def cylinder(res, grid, overlap, unit="m", declared=None, profile="a3"):
                 m = projector_map(k, (i + 0.5) / gw, (j + 0.5) / gh, overlap)
                 row.append((NAN, NAN, NAN) if m is None else tuple(c * per_metre for c in cylinder_point(*m)))
             samples.append(row)
+        if profile == "3d":
+            samples, frusta["proj%d_region" % k] = frustum_samples(k, overlap, [[tuple(c / per_metre for c in p) for p in row]
+                                                                       for row in samples])
         alpha, beta = [], []
         for j in range(h):
             for i in range(w):
@@ -208,7 +274,7 @@ def cylinder(res, grid, overlap, unit="m", declared=None, profile="a3"):
         entries += [(pid + "_warp.pfm", pfm(gw, gh, samples)), (pid + "_alpha.png", png_grey(w, h, alpha)),
                     (pid + "_beta.png", png_grey(w, h, beta))]
         buffers.append((pid, w, h, [(pid + "_region", w, h, pid + "_warp.pfm", pid + "_alpha.png", pid + "_beta.png")]))
-    return archive([("mpcdi.xml", xml(profile, buffers, unit=declared or unit))] + entries)
+    return archive([("mpcdi.xml", xml(profile, buffers, unit=declared or unit, frusta=frusta))] + entries)
 
 
 def cylinder_wall(res, overlap, mpcdi_name, buffers=None, grid=None):
@@ -310,6 +376,12 @@ def malformed(out):
                                      ("r0.pfm", good_warp), ("r0_alpha.png", png_blank(8200, 8192))]),
         "pfm-one-component.mpcdi": archive([("mpcdi.xml", good_xml), ("r0.pfm", b"Pf\n8 6\n-1.0\n" + bytes(w * h * 4)),
                                             ("r0_alpha.png", alpha)]),
+        "3d-no-frustum.mpcdi": archive([("mpcdi.xml", xml("3d", one)), ("r0.pfm", good_warp), ("r0_alpha.png", alpha)]),
+        "3d-no-left-angle.mpcdi": archive([("mpcdi.xml", xml("3d", one, frusta={"r0": (0, 0, 0, -20, 20, 15, -15)})
+                                            .replace(b"<leftAngle>-20</leftAngle>", b"")),
+                                           ("r0.pfm", good_warp), ("r0_alpha.png", alpha)]),
+        "3d-empty-frustum.mpcdi": archive([("mpcdi.xml", xml("3d", one, frusta={"r0": (0, 0, 0, 20, -20, 15, -15)})),
+                                           ("r0.pfm", good_warp), ("r0_alpha.png", alpha)]),
     }
     os.makedirs(out, exist_ok=True)
     for name, data in files.items():
@@ -330,6 +402,7 @@ def fuzz_seeds(out):
                                           ("r0_beta.png", alpha)]),
         "archive-a3": b"\x00" + cylinder((8, 6), (4, 3), 0.15),
         "parts-2d": b"\x01" + text + b"\x00\x00" + warp + b"\x00\x00" + alpha + b"\x00\x00" + alpha,
+        "archive-3d": b"\x00" + cylinder((8, 6), (4, 3), 0.15, profile="3d"),
         "parts-a3": b"\x01" + xml("a3", one) + b"\x00\x00" + pfm(2, 2, [[(0.0, 1.0, 2.0), (NAN, NAN, NAN)]] * 2),
         "pfm": b"\x02" + warp,
     }
@@ -354,7 +427,8 @@ def main():
     c.add_argument("--wall", default=None, help="also write the wall config that uses it")
     c.add_argument("--unit", choices=sorted(UNITS), default="m", help="the warp's points in this unit")
     c.add_argument("--declare", choices=sorted(UNITS), default=None, help="declare this unit instead (a faulty export)")
-    c.add_argument("--profile", choices=["a3", "3d", "sl"], default="a3", help="the profile mpcdi.xml declares (the points are the same)")
+    c.add_argument("--profile", choices=["a3", "3d", "sl"], default="a3",
+                   help="a3, sl: surface points; 3d: the same pixels as coordinates in each projector's frustum from the viewer")
     i = sub.add_parser("identity")
     i.add_argument("out")
     i.add_argument("--buffer", action="append", required=True, help="ID=WxH")

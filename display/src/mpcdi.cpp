@@ -338,6 +338,29 @@ const char* mpcdiProfileName(MpcdiProfile p) {
     return "?";
 }
 
+FrustumAxes frustumAxes(const MpcdiFrustum& f) {
+    constexpr double kDegree = 3.14159265358979323846 / 180.0;
+    const double l = std::tan(f.leftAngle * kDegree), r = std::tan(f.rightAngle * kDegree);
+    const double d = std::tan(f.downAngle * kDegree), t = std::tan(f.upAngle * kDegree);
+    // In the frustum's own frame (x right, y up, -z its axis), then turned: roll about z,
+    // pitch about x, yaw about y, negated or not so that positive yaw turns right, positive
+    // pitch up and positive roll lowers the right side: R = Ry(-yaw) Rx(pitch) Rz(-roll).
+    const double cr = std::cos(-f.roll * kDegree), sr = std::sin(-f.roll * kDegree);
+    const double cp = std::cos(f.pitch * kDegree), sp = std::sin(f.pitch * kDegree);
+    const double cy = std::cos(-f.yaw * kDegree), sy = std::sin(-f.yaw * kDegree);
+    const auto turned = [&](double x, double y, double z) {
+        const double x1 = cr * x - sr * y, y1 = sr * x + cr * y;     // Rz(-roll)
+        const double y2 = cp * y1 - sp * z, z2 = sp * y1 + cp * z;   // Rx(pitch)
+        return std::array<double, 3>{cy * x1 + sy * z2, y2, -sy * x1 + cy * z2};  // Ry(-yaw)
+    };
+    return {turned(l, d, -1.0), turned(r - l, 0.0, 0.0), turned(0.0, t - d, 0.0)};
+}
+
+Float3 FrustumAxes::direction(double u, double v) const {
+    return {float(corner[0] + u * right[0] + v * up[0]), float(corner[1] + u * right[1] + v * up[1]),
+            float(corner[2] + u * right[2] + v * up[2])};
+}
+
 const MpcdiBuffer* MpcdiFile::buffer(const std::string& id) const {
     for (const MpcdiBuffer& b : buffers)
         if (b.id == id) return &b;
@@ -399,13 +422,22 @@ MpcdiFile parseMpcdiXml(std::string_view xml, const MpcdiEntries& entries, const
                 MpcdiFrustum fr;
                 const std::string fw = where + " frustum";
                 for (auto [key, out] : {std::pair{"yaw", &fr.yaw}, {"pitch", &fr.pitch}, {"roll", &fr.roll}, {"leftAngle", &fr.leftAngle},
-                                        {"rightAngle", &fr.rightAngle}, {"upAngle", &fr.upAngle}, {"downAngle", &fr.downAngle}})
-                    *out = optionalNumber(f, key, name, fw).value_or(0);
-                if (fr.leftAngle >= fr.rightAngle || fr.downAngle >= fr.upAngle || fr.rightAngle - fr.leftAngle >= 180 ||
-                    fr.upAngle - fr.downAngle >= 180)
-                    fail(name, fw + ": its angles span no view (left < right, down < up, each less than 180 degrees)");
+                                        {"rightAngle", &fr.rightAngle}, {"upAngle", &fr.upAngle}, {"downAngle", &fr.downAngle}}) {
+                    const std::optional<double> v = optionalNumber(f, key, name, fw);
+                    // The angles bound the view: a frustum without one is no frustum (the
+                    // MPCDI SDK's -1 defaults would pass for a 1-degree view). Turns default to 0.
+                    if (!v && std::string_view(key).ends_with("Angle")) fail(name, fw + " has no " + key);
+                    if (v && std::abs(*v) > 360) fail(name, fw + " " + key + " is " + shortNumber(*v) + " degrees (at most 360 either way)");
+                    *out = v.value_or(0);
+                }
+                const auto inside = [](double a) { return a > -90 && a < 90; };
+                if (fr.leftAngle >= fr.rightAngle || fr.downAngle >= fr.upAngle || !inside(fr.leftAngle) || !inside(fr.rightAngle) ||
+                    !inside(fr.upAngle) || !inside(fr.downAngle))
+                    fail(name, fw + ": its angles span no view (left < right, down < up, each between -90 and 90 degrees)");
                 region.frustum = fr;
             }
+            if (file.profile == MpcdiProfile::Simulation3d && !region.frustum)
+                fail(name, where + " has no <frustum> (profile 3d: its warp holds coordinates in that frustum)");
             pugi::xml_node set = filesets.count(region.id) ? filesets[region.id] : pugi::xml_node{};
             if (!set) set = child(regionNode, "fileset");
             if (!set)

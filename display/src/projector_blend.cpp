@@ -56,7 +56,7 @@ ProjectorBlendStage::ProjectorBlendStage(const WallConfig& wall, const MpcdiFile
             }
             // The region's pixels in the buffer, which has the screen's pixels (checkWarp); a
             // map has the region's resolution, one value per projector pixel.
-            const int x0 = int(std::lround(r.x * b->xResolution)), y0 = int(std::lround(r.y * b->yResolution));
+            const int x0 = int(std::lround(r.x * b->xResolution)), y0 = int(std::lround(regionTop(*wall.warp, r) * b->yResolution));
             for (int j = 0; j < r.yResolution; ++j)
                 for (int i = 0; i < r.xResolution; ++i) {
                     const int x = x0 + i, y = y0 + j;

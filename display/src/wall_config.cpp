@@ -386,6 +386,9 @@ void readWarp(Reader& top, WallConfig& w, const std::filesystem::path& file) {
     if (mpcdi.empty()) r->fail(r->find("mpcdi"), "key 'mpcdi': an empty path");
     warp.mpcdi = std::filesystem::absolute(file.parent_path() / mpcdi).lexically_normal();
     warp.mode = r->choice("mode", "direct", {"direct", "post"}) == "post" ? WarpMode::Post : WarpMode::Direct;
+    warp.regionYFromBottom = r->choice("region_y", "top", {"top", "bottom"}) == "bottom";
+    if (r->has("eyepoint")) warp.eyepoint = r->vec3("eyepoint", {});
+    warp.frustumDistance = r->number("frustum_distance", warp.frustumDistance, 0.01, 1e6);
     const toml::node* buffers = r->find("buffers");
     if (!buffers) r->fail(nullptr, "missing required key 'buffers' (each MPCDI buffer id to its screen)");
     const toml::table* t = buffers->as_table();
@@ -579,7 +582,10 @@ std::string writeWallConfig(const WallConfig& w) {
     if (!(w.navigation == NavigationConfig{})) os << "[navigation]\nscale = " << num(w.navigation.scale) << "\n\n";
     if (w.warp) {
         os << "[warp]\nmpcdi = " << quoted(w.warp->mpcdi.string()) << "\nmode = \"" << (w.warp->mode == WarpMode::Post ? "post" : "direct")
-           << "\"\nbuffers = { ";
+           << "\"\nregion_y = \"" << (w.warp->regionYFromBottom ? "bottom" : "top") << "\"\nfrustum_distance = "
+           << num(w.warp->frustumDistance);
+        if (w.warp->eyepoint) os << "\neyepoint = " << f3(*w.warp->eyepoint);
+        os << "\nbuffers = { ";
         for (size_t i = 0; i < w.warp->buffers.size(); ++i)
             os << (i ? ", " : "") << quoted(w.warp->buffers[i].first) << " = " << quoted(w.warp->buffers[i].second);
         os << " }\n\n";

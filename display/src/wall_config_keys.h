@@ -123,6 +123,9 @@ inline constexpr Key kWarpKeys[] = {
     {.name = "mpcdi", .type = KeyType::String, .help = "the projector calibration: a VESA MPCDI file (`.mpcdi`, [docs/mpcdi.md](../docs/mpcdi.md)), relative to the config; *required*"},
     {.name = "buffers", .type = KeyType::Table, .help = "each MPCDI buffer id to the screen it drives, e.g. `{ proj0 = \"left\", proj1 = \"right\" }`: the buffer's pixels are the screen's; every buffer of the file mapped, each screen at most once; *required*"},
     {.name = "mode", .type = KeyType::Choice, .choices = "direct, post", .help = "direct (default): each projector pixel's ray goes from the eye through the point of the screen surface the calibration gives it; post: the screen's flat image is resampled through the warp after rendering (the rasteriser's way, for comparison)"},
+    {.name = "region_y", .type = KeyType::Choice, .choices = "top, bottom", .help = "where the file's regions lie in their buffers: `y` counted from the buffer's top (default, as nDisplay reads it) or from its bottom (as SGCT does); the readers disagree, so a region of a partial buffer may need this"},
+    {.name = "eyepoint", .type = KeyType::Vec3, .help = "profile `3d` (3D simulation): the calibration's eye point, the apex of its regions' frusta, in room coordinates, metres. Default: `[stereo] viewer`"},
+    {.name = "frustum_distance", .type = KeyType::Number, .help = "profile `3d`: each projector pixel's ray is fixed as the point at this distance (metres, along the frustum's axis) in its frustum direction from the eye point; a tracked or stereo eye looks through those points (SGCT's way). Default 10"},
 };
 
 inline constexpr Section kTop{"the wall config", "# Wall configs", kTopKeys};

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace rtwall {
 
@@ -38,7 +39,21 @@ std::string format3(Float3 p) {
     return text;
 }
 
+// Profile 3d: where a region's frustum coordinates put each projector pixel's ray, as points in
+// room coordinates (metres): along its frustum direction from the calibration's eye point, at
+// the frustum distance along the frustum's axis. NaN samples stay NaN.
+Float3 simulationPoint(const FrustumAxes& axes, Float3 eyepoint, double distance, Float3 uv) {
+    if (std::isnan(uv.x) || std::isnan(uv.y) || std::isnan(uv.z)) return uv;
+    return eyepoint + axes.direction(uv.x, uv.y) * float(distance);
+}
+
+Float3 eyepointOf(const WallConfig& wall) { return wall.warp->eyepoint.value_or(wall.stereo.viewer); }
+
 }  // namespace
+
+double regionTop(const WarpConfig& warp, const MpcdiRegion& region) {
+    return warp.regionYFromBottom ? 1.0 - region.y - region.ySize : region.y;
+}
 
 std::vector<std::string> checkWarp(const WallConfig& wall) {
     std::vector<std::string> problems;
@@ -53,12 +68,8 @@ std::vector<std::string> checkWarp(const WallConfig& wall) {
         return problems;
     }
     const std::string mpcdiName = warp.mpcdi.filename().string();
-    // The 3D simulation profile's warps are coordinates in each region's frustum, not points
-    // on the screen: traced as a3's points they would look right and be wrong. Refused until
-    // the frustum is traced.
-    if (file.profile == MpcdiProfile::Simulation3d)
-        problems.push_back(at + mpcdiName + ": profile 3d (3D simulation: warps in each region's frustum) is not traced yet; "
-                                            "profiles 2d, a3 and sl are (docs/mpcdi.md)");
+    const bool simulation = file.profile == MpcdiProfile::Simulation3d;
+    const Float3 eyepoint = eyepointOf(wall);
     for (const MpcdiBuffer& b : file.buffers)
         if (std::none_of(warp.buffers.begin(), warp.buffers.end(), [&](const auto& m) { return m.first == b.id; }))
             problems.push_back(at + "buffer '" + b.id + "' of " + mpcdiName + " drives no screen (map it in 'buffers')");
@@ -86,6 +97,7 @@ std::vector<std::string> checkWarp(const WallConfig& wall) {
         const Float3 ex = frame.right * (1.0f / (width * width)), ey = frame.up * (1.0f / (height * height));
         const Float3 normal = normalize(cross(frame.right, frame.up));
         const float diagonal = std::sqrt(width * width + height * height);
+        const float eyeDepth = dot(eyepoint - frame.lowerLeft, normal);
         for (const MpcdiRegion& r : b->regions) {
             const int rw = int(std::lround(r.xSize * b->xResolution)), rh = int(std::lround(r.ySize * b->yResolution));
             if (r.xResolution != rw || r.yResolution != rh) {
@@ -96,12 +108,26 @@ std::vector<std::string> checkWarp(const WallConfig& wall) {
             }
             size_t outside = 0;
             std::string first;
+            const FrustumAxes axes = simulation ? frustumAxes(*r.frustum) : FrustumAxes{};
             for (int j = 0; j < r.warp.height; ++j)
                 for (int i = 0; i < r.warp.width; ++i) {
                     const Float3 p = r.warp.samples[size_t(j) * size_t(r.warp.width) + size_t(i)];
                     if (std::isnan(p.x) || std::isnan(p.y) || std::isnan(p.z)) continue;
                     float s = 0, t = 0, off = 0;
-                    if (warpsToSurface(file.profile)) {
+                    if (simulation) {
+                        // Where the pixel's ray from the eye point meets the screen's frame (a
+                        // curved screen's chord: the ray passes the surface on its way); behind
+                        // the eye point or parallel to the frame: outside.
+                        const Float3 d = axes.direction(p.x, p.y);
+                        const float den = dot(d, normal), along = den != 0.0f ? -eyeDepth / den : -1.0f;
+                        if (along > 0.0f) {
+                            const Float3 q = eyepoint + d * along - frame.lowerLeft;
+                            s = dot(q, ex);
+                            t = dot(q, ey);
+                        } else {
+                            s = t = std::numeric_limits<float>::infinity();
+                        }
+                    } else if (warpsToSurface(file.profile)) {
                         const Float3 q = p * float(r.warp.metresPerUnit) - frame.lowerLeft;
                         s = dot(q, ex);
                         t = dot(q, ey);
@@ -123,7 +149,9 @@ std::vector<std::string> checkWarp(const WallConfig& wall) {
             if (outside > 0)
                 problems.push_back(where + "region '" + r.id + "': " + std::to_string(outside) + " of " +
                                    std::to_string(r.warp.validSamples) + " warp samples lie outside the screen's frame, first " +
-                                   first + (warpsToSurface(file.profile) ? "; is the geometric unit right?" : ""));
+                                   first + (warpsToSurface(file.profile) ? "; is the geometric unit right?"
+                                            : simulation             ? "; are the eye point and the frustum right?"
+                                                                     : ""));
         }
     }
     return problems;
@@ -143,7 +171,8 @@ std::vector<WallWarp> wallWarps(const WallConfig& wall, const MpcdiFile& file) {
         const double sx = double(vp.width) / b->xResolution, sy = double(vp.height) / b->yResolution;
         for (const MpcdiRegion& r : b->regions) {
             ScreenWarp sw;
-            const double bx0 = r.x * b->xResolution, by0 = r.y * b->yResolution;
+            const double bx0 = r.x * b->xResolution;
+            const double by0 = regionTop(*wall.warp, r) * b->yResolution;
             const double bw = r.xSize * b->xResolution, bh = r.ySize * b->yResolution;
             sw.rect = {vp.x + int(std::lround(bx0 * sx)), vp.y + int(std::lround(by0 * sy)),
                        vp.x + int(std::lround((bx0 + bw) * sx)), vp.y + int(std::lround((by0 + bh) * sy))};
@@ -151,7 +180,13 @@ std::vector<WallWarp> wallWarps(const WallConfig& wall, const MpcdiFile& file) {
             grid->width = r.warp.width;
             grid->height = r.warp.height;
             grid->samples.resize(r.warp.samples.size());
-            if (warpsToSurface(file.profile)) {
+            if (file.profile == MpcdiProfile::Simulation3d) {
+                grid->kind = PixelWarp::Kind::SurfacePoints;
+                const FrustumAxes axes = frustumAxes(*r.frustum);
+                const Float3 eyepoint = eyepointOf(wall);
+                for (size_t k = 0; k < r.warp.samples.size(); ++k)
+                    grid->samples[k] = simulationPoint(axes, eyepoint, wall.warp->frustumDistance, r.warp.samples[k]);
+            } else if (warpsToSurface(file.profile)) {
                 grid->kind = PixelWarp::Kind::SurfacePoints;
                 const float m = float(r.warp.metresPerUnit);
                 for (size_t k = 0; k < r.warp.samples.size(); ++k) grid->samples[k] = r.warp.samples[k] * m;

@@ -214,6 +214,9 @@ TEST(Mpcdi, BadFilesAreOneLineNamingFileAndWhat) {
         {"bad-xml.mpcdi", "mpcdi.xml at byte"},
         {"pfm-one-component.mpcdi", "a one-component PFM (Pf)"},
         {"alpha-huge.mpcdi", "r0_alpha.png: a blend map of 8200x8192x1 values, more than 67108864"},
+        {"3d-no-frustum.mpcdi", "region 'r0' has no <frustum> (profile 3d: its warp holds coordinates in that frustum)"},
+        {"3d-no-left-angle.mpcdi", "region 'r0' frustum has no leftAngle"},
+        {"3d-empty-frustum.mpcdi", "region 'r0' frustum: its angles span no view (left < right, down < up, each between -90 and 90 degrees)"},
     };
     for (const auto& [name, what] : expected) {
         SCOPED_TRACE(name);
@@ -271,6 +274,33 @@ TEST(Mpcdi, PfmHeadersAreCheckedBeforeAnySampleIsRead) {
     EXPECT_EQ(error("PF\n1 1\n-1.0\n" + std::string(13, '\0')),
               "w.pfm: PFM header says 1x1 (12 bytes of samples) but the file holds 13");
     EXPECT_EQ(error("PF\n1 1\n-1.0\n" + std::string(12, '\0')), "(no error)");
+}
+
+// The frustum's turns and angles, pinned by their documented meaning (SGCT's reading,
+// Christie's description): positive yaw turns the view right (+x), positive pitch up (+y),
+// positive roll lowers the right side; the angles are signed and bound the image plane at
+// tan(angle) one unit along the axis; (u, v) run right and up from the lower left.
+TEST(Mpcdi, FrustumDirectionsFollowTheDocumentedTurns) {
+    auto near = [](Float3 a, Float3 b) { return std::abs(a.x - b.x) < 1e-6f && std::abs(a.y - b.y) < 1e-6f && std::abs(a.z - b.z) < 1e-6f; };
+    MpcdiFrustum f{.leftAngle = -45, .rightAngle = 45, .upAngle = 45, .downAngle = -45};
+    EXPECT_TRUE(near(frustumDirection(f, 0.5, 0.5), {0, 0, -1}));
+    EXPECT_TRUE(near(frustumDirection(f, 1, 0.5), {1, 0, -1}));   // u to the right
+    EXPECT_TRUE(near(frustumDirection(f, 0.5, 1), {0, 1, -1}));   // v up
+    EXPECT_TRUE(near(frustumDirection(f, 0, 0), {-1, -1, -1}));   // the lower left
+    MpcdiFrustum yawed = f;
+    yawed.yaw = 90;
+    EXPECT_TRUE(near(frustumDirection(yawed, 0.5, 0.5), {1, 0, 0}));
+    EXPECT_TRUE(near(frustumDirection(yawed, 1, 0.5), {1, 0, 1}));  // its right is the room's +z now
+    MpcdiFrustum pitched = f;
+    pitched.pitch = 90;
+    EXPECT_TRUE(near(frustumDirection(pitched, 0.5, 0.5), {0, 1, 0}));
+    MpcdiFrustum rolled = f;
+    rolled.roll = 90;
+    EXPECT_TRUE(near(frustumDirection(rolled, 1, 0.5), {0, -1, -1}));  // the right side lowered
+    MpcdiFrustum offAxis{.leftAngle = -10, .rightAngle = 30, .upAngle = 20, .downAngle = -5};
+    const Float3 d = frustumDirection(offAxis, 0, 1);
+    EXPECT_NEAR(d.x, std::tan(-10 * 3.14159265358979 / 180), 1e-6);
+    EXPECT_NEAR(d.y, std::tan(20 * 3.14159265358979 / 180), 1e-6);
 }
 
 }  // namespace

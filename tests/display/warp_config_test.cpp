@@ -132,16 +132,125 @@ TEST(WarpConfig, CheckNamesEveryMismatchBetweenFileAndWall) {
                            ": cannot read it (No such file or directory)");
 }
 
-// A 3D-simulation (`3d`) file: its warps are frustum coordinates, which rtwall does not trace:
-// one line, not a wall that looks right and is wrong. `sl` (shader lamp) points are a3's.
-TEST(WarpConfig, The3dSimulationProfileIsRefusedInOneLine) {
+// The expected ray of frustum coordinates (u, v), derived apart from the reader's matrices: the
+// frustum's axis, right and up vectors from the meaning of yaw (a turn right about the room's
+// up), pitch (up) and roll (the right side down), then the image plane spanned by the angles.
+Float3 expectedDirection(const MpcdiFrustum& f, double u, double v) {
+    const double k = 3.14159265358979323846 / 180, y = f.yaw * k, p = f.pitch * k, r = f.roll * k;
+    const double forward[3] = {std::sin(y) * std::cos(p), std::sin(p), -std::cos(y) * std::cos(p)};
+    const double right0[3] = {std::cos(y), 0, std::sin(y)};
+    const double up0[3] = {-std::sin(y) * std::sin(p), std::cos(p), std::cos(y) * std::sin(p)};
+    const double tx = std::tan(f.leftAngle * k) + u * (std::tan(f.rightAngle * k) - std::tan(f.leftAngle * k));
+    const double ty = std::tan(f.downAngle * k) + v * (std::tan(f.upAngle * k) - std::tan(f.downAngle * k));
+    double d[3];
+    for (int i = 0; i < 3; ++i) {
+        const double right = right0[i] * std::cos(r) - up0[i] * std::sin(r), up = right0[i] * std::sin(r) + up0[i] * std::cos(r);
+        d[i] = forward[i] + tx * right + ty * up;
+    }
+    return {float(d[0]), float(d[1]), float(d[2])};
+}
+
+// A 3D-simulation (`3d`) file: the cylinder's projector pixels as coordinates in each
+// projector's frustum (yawed, pitched and rolled) from the viewer. Its points lie at the frustum
+// distance along each pixel's frustum direction from the eye point (the config's viewer, or
+// `eyepoint`), the direction derived apart; checked clean; and the directions from the eye point
+// are the a3 file's to the cylinder's surface (the same pixels, written two ways).
+TEST(WarpConfig, The3dSimulationProfileTracesEachPixelAlongItsFrustumDirection) {
     const fs::path dir = test::scratchDir();
     const fs::path c = cylinderWall(dir, "--profile 3d");
-    const std::vector<std::string> problems = checkWarp(loadWallConfig(c));
-    ASSERT_EQ(problems.size(), 1u);
-    EXPECT_EQ(problems[0], c.string() + ": [warp]: c.mpcdi: profile 3d (3D simulation: warps in each region's frustum) is not "
-                                        "traced yet; profiles 2d, a3 and sl are (docs/mpcdi.md)");
+    const WallConfig w = loadWallConfig(c);
+    EXPECT_TRUE(checkWarp(w).empty());
+    const MpcdiFile f = readMpcdi(w.warp->mpcdi);
+    ASSERT_EQ(f.profile, MpcdiProfile::Simulation3d);
+    const Float3 eye = w.stereo.viewer;
+    const std::vector<WallWarp> warps = wallWarps(w, f);
+    ASSERT_EQ(warps.size(), 3u);
+    const fs::path a3dir = dir / "a3";
+    fs::create_directories(a3dir);
+    const WallConfig a3 = loadWallConfig(cylinderWall(a3dir));
+    const std::vector<WallWarp> surface = wallWarps(a3, readMpcdi(a3.warp->mpcdi));
+    double worstAngle = 0, worstToSurface = 0;
+    size_t valid = 0;
+    for (size_t k = 0; k < 3; ++k) {
+        const MpcdiRegion& r = f.buffers[k].regions.at(0);
+        ASSERT_TRUE(r.frustum);
+        EXPECT_NE(r.frustum->pitch, 0.0);
+        EXPECT_NE(r.frustum->roll, 0.0);
+        const PixelWarp& g = *warps[k].regions.at(0).warp;
+        EXPECT_EQ(g.kind, PixelWarp::Kind::SurfacePoints);
+        for (size_t i = 0; i < g.samples.size(); ++i) {
+            const Float3 uv = r.warp.samples[i], p = g.samples[i];
+            if (std::isnan(uv.x)) {
+                EXPECT_TRUE(std::isnan(p.x));
+                continue;
+            }
+            ++valid;
+            const Float3 want = expectedDirection(*r.frustum, uv.x, uv.y);
+            const Float3 got = p - eye;
+            // 10 m along the axis: the axis is the direction's unit component along it.
+            EXPECT_NEAR(length(got) / length(want), 10.0, 1e-3) << i;
+            worstAngle = std::max(worstAngle, double(length(cross(normalize(got), normalize(want)))));
+            const Float3 toSurface = surface[k].regions.at(0).warp->samples[i] - eye;
+            worstToSurface = std::max(worstToSurface, double(length(cross(normalize(got), normalize(toSurface)))));
+        }
+    }
+    EXPECT_GT(valid, 3u * 32 * 24 / 2);
+    EXPECT_LT(worstAngle, 2e-6) << "radians";
+    EXPECT_LT(worstToSurface, 2e-6) << "radians";
+    // The eye point and distance from [warp]: the points move with them.
+    const WallConfig moved = loadWallConfig(edited(c, "\\[warp\\]\n", "[warp]\neyepoint = [0.5, 0.25, 3]\nfrustum_distance = 4\n", "m.toml"));
+    const MpcdiRegion& r0 = f.buffers[0].regions[0];
+    const std::vector<WallWarp> mw = wallWarps(moved, f);
+    for (size_t i = 0; i < r0.warp.samples.size(); ++i) {
+        if (std::isnan(r0.warp.samples[i].x)) continue;
+        const Float3 d = mw[0].regions[0].warp->samples[i] - Float3{0.5f, 0.25f, 3.0f};
+        ASSERT_NEAR(length(d) / length(expectedDirection(*r0.frustum, r0.warp.samples[i].x, r0.warp.samples[i].y)), 4.0, 1e-3);
+    }
+    // An eye point that puts the frusta's rays off the screens: named per buffer.
+    const std::vector<std::string> off = checkWarp(loadWallConfig(edited(c, "\\[warp\\]\n", "[warp]\neyepoint = [0, 0, -8]\n", "o.toml")));
+    ASSERT_EQ(off.size(), 3u);
+    EXPECT_NE(off[0].find("are the eye point and the frustum right?"), std::string::npos) << off[0];
     EXPECT_TRUE(checkWarp(loadWallConfig(cylinderWall(dir, "--profile sl"))).empty());
+}
+
+// A region of part of its buffer: its y counts from the buffer's top (default, nDisplay's
+// reading) or, with region_y = "bottom", from its bottom (SGCT's); its warp's rectangle and its
+// blend map move accordingly, x alike either way.
+TEST(WarpConfig, RegionYCountsFromTheTopOrTheBottom) {
+    const fs::path dir = test::scratchDir();
+    test::mpcdiTestgen("identity " + (dir / "id.mpcdi").string() + " --buffer a=40x30");
+    MpcdiFile f = readMpcdi(dir / "id.mpcdi");
+    MpcdiRegion& r = f.buffers[0].regions.at(0);
+    r.x = 0.25;
+    r.xSize = 0.5;
+    r.y = 0.2;
+    r.ySize = 0.4;
+    r.xResolution = 20;
+    r.yResolution = 12;
+    r.alpha = MpcdiMap{.width = 20, .height = 12, .components = 1, .values = std::vector<float>(20 * 12, 0.5f), .gammaEmbedded = 1};
+    for (const bool bottom : {false, true}) {
+        SCOPED_TRACE(bottom ? "from the bottom" : "from the top");
+        const WallConfig w = parseWallConfig(std::string("[wall]\nwidth = 40\nheight = 30\n[[screen]]\nname = \"A\"\nviewport = [0, 0, 40, 30]\n") +
+                                                 "[warp]\nmpcdi = \"id.mpcdi\"\nbuffers = { a = \"A\" }\n" + (bottom ? "region_y = \"bottom\"\n" : ""),
+                                             dir / "w.toml");
+        EXPECT_EQ(w.warp->regionYFromBottom, bottom);
+        const std::vector<WallWarp> warps = wallWarps(w, f);
+        ASSERT_EQ(warps.size(), 1u);
+        // Rows 6..17 from the top (0.2 of 30 pixels down), or 12..23 (0.2 up from the bottom).
+        const int top = bottom ? 12 : 6;
+        EXPECT_EQ(warps[0].regions.at(0).rect, (TileRect{10, top, 30, top + 12}));
+        const ProjectorBlendStage blend(w, f);
+        Image white;
+        white.width = 40;
+        white.height = 30;
+        white.rgb.assign(40 * 30 * 3, 255);
+        blend.apply(w, 0, white);
+        for (int y = 0; y < 30; ++y)
+            for (int x = 0; x < 40; ++x) {
+                const bool inside = x >= 10 && x < 30 && y >= top && y < top + 12;
+                ASSERT_EQ(white.pixel(x, y)[0] != 255, inside) << x << "," << y;
+            }
+    }
 }
 
 // The views' warps from the file: a 2D identity is exactly no offset, a whole-pixel shift

@@ -101,6 +101,20 @@ TEST(WarpSession, AWholePixelShiftShiftsTheImageExactly) {
     EXPECT_NE(shifted.rgb, flat.rgb);
 }
 
+// The pixels of two images that differ (any channel).
+size_t differing(const Image& a, const Image& b) {
+    size_t n = 0;
+    for (size_t i = 0; i + 2 < a.rgb.size() && i + 2 < b.rgb.size(); i += 3) n += std::memcmp(&a.rgb[i], &b.rgb[i], 3) != 0;
+    return n;
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+    const size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+    return text;
+}
+
 // The curved example: every projector pixel's ray through its surface point, the same bytes on
 // one, two and three clients, black where the calibration says the pixel lands on no screen
 // (the corners of each projector's bent image), and not the flat wall's picture.
@@ -131,20 +145,6 @@ TEST(WarpSession, TheCurvedWallIsTheSameOnOneTwoAndThreeClientsAndOffScreenPixel
     std::string text = test::fileBytes(dir / "c.toml");
     text.erase(text.find("\n[warp]\n"));
     EXPECT_NE(render(dir, test::writeFile(dir / "flat.toml", text), 2).rgb, one.rgb);
-}
-
-// The pixels of two images that differ (any channel).
-size_t differing(const Image& a, const Image& b) {
-    size_t n = 0;
-    for (size_t i = 0; i + 2 < a.rgb.size() && i + 2 < b.rgb.size(); i += 3) n += std::memcmp(&a.rgb[i], &b.rgb[i], 3) != 0;
-    return n;
-}
-
-std::string replaced(std::string text, const std::string& from, const std::string& to) {
-    const size_t at = text.find(from);
-    EXPECT_NE(at, std::string::npos) << from;
-    if (at != std::string::npos) text.replace(at, from.size(), to);
-    return text;
 }
 
 // Stereo through a calibration: each eye's rays go from that eye through the same surface
@@ -187,6 +187,31 @@ TEST(WarpSession, EachEyeOfAStereoWallSeesThroughTheCalibrationFromItself) {
         const size_t pixels = want.rgb.size() / 3, off = differing(s.lastFrame().left, want);
         EXPECT_EQ(off, 0u) << off << " of " << pixels << " pixels differ";
     }
+}
+
+// Profile 3d (3D simulation): the same projector pixels written as directions in each
+// projector's frustum from the viewer. From that eye point the rays are the a3 file's to the
+// cylinder's surface up to rounding (the directions are computed two ways), the same bytes on
+// one, two and three clients. From another eye the two differ: the 3d file's rays are fixed
+// on the frustum distance's plane (10 m), the a3 file's on the screen itself.
+TEST(WarpSession, The3dProfileSeesFromItsEyePointWhatTheSurfacePointsShow) {
+    const fs::path dir = test::scratchDir();
+    test::mpcdiTestgen("cylinder " + (dir / "c3.mpcdi").string() + " --res 64x48 --profile 3d --wall " + (dir / "c3.toml").string());
+    test::mpcdiTestgen("cylinder " + (dir / "ca.mpcdi").string() + " --res 64x48 --wall " + (dir / "ca.toml").string());
+    std::vector<std::string> log;
+    const Image sim = render(dir, dir / "c3.toml", 1, &log);
+    EXPECT_TRUE(test::logged(log, "warp: c3.mpcdi, 3 projector regions on 3 screens, rays through each projector pixel (3d profile)"));
+    EXPECT_EQ(render(dir, dir / "c3.toml", 2).rgb, sim.rgb);
+    EXPECT_EQ(render(dir, dir / "c3.toml", 3).rgb, sim.rgb);
+    const Image surface = render(dir, dir / "ca.toml", 2);
+    const size_t pixels = sim.rgb.size() / 3, off = differing(sim, surface);
+    EXPECT_LT(off, pixels / 200) << off << " of " << pixels << " pixels differ";  // edges a rounding apart
+    const std::string moved = replaced(test::fileBytes(dir / "c3.toml"), "viewer = [0.0, 0.0, 3]", "viewer = [0.4, 0.0, 3]");
+    const std::string movedSurface = replaced(test::fileBytes(dir / "ca.toml"), "viewer = [0.0, 0.0, 3]", "viewer = [0.4, 0.0, 3]");
+    // The eye point stays where the calibration was made (the old viewer).
+    const Image simMoved = render(dir, test::writeFile(dir / "m3.toml", replaced(moved, "[warp]\n", "[warp]\neyepoint = [0, 0, 3]\n")), 2);
+    const Image surfaceMoved = render(dir, test::writeFile(dir / "ma.toml", movedSurface), 2);
+    EXPECT_GT(differing(simMoved, surfaceMoved), pixels / 20) << "parallax: the frustum plane is not the screen";
 }
 
 // Head tracking through a calibration, from DTrack datagrams on loopback: the head's datagram

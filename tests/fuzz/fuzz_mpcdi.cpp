@@ -56,6 +56,13 @@ void checkFile(const MpcdiFile& f) {
         if (b.regions.empty()) finding("a buffer without regions was accepted", b.id);
         for (const MpcdiRegion& r : b.regions) {
             checkWarp(r.warp);
+            if (f.profile == MpcdiProfile::Simulation3d && !r.frustum) finding("a 3d region without a frustum was accepted", r.id);
+            if (r.frustum)  // the wall traces along these: finite at the frustum's corners, hence inside it
+                for (const double u : {0.0, 1.0})
+                    for (const double v : {0.0, 1.0}) {
+                        const Float3 d = frustumDirection(*r.frustum, u, v);
+                        if (!std::isfinite(d.x) || !std::isfinite(d.y) || !std::isfinite(d.z)) finding("a frustum direction is not finite", r.id);
+                    }
             if (r.warp.validSamples == 0) finding("an all-NaN warp was accepted", r.id);
             for (const auto* m : {&r.alpha, &r.beta}) {
                 if (!*m) continue;

@@ -126,6 +126,14 @@ struct WarpConfig {
     std::filesystem::path mpcdi;  // the .mpcdi file (relative paths resolved against the config's folder)
     std::vector<std::pair<std::string, std::string>> buffers;  // MPCDI buffer id -> screen name, by id
     WarpMode mode = WarpMode::Direct;
+    // Where the file's regions lie in their buffers: y counted from the buffer's top (default;
+    // nDisplay's reading) or its bottom (SGCT's, PyMPCDI's); the readers disagree (docs/mpcdi.md).
+    bool regionYFromBottom = false;
+    // Profile 3d (3D simulation): the calibration's eye point, the apex of its regions' frusta,
+    // in room coordinates (default: [stereo] viewer), and the distance of the plane the frusta's
+    // rays are fixed on (SGCT's default, 10 m): a tracked or stereo eye looks through those points.
+    std::optional<Float3> eyepoint;
+    double frustumDistance = 10;
     bool operator==(const WarpConfig&) const = default;
 };
 
@@ -232,26 +240,32 @@ std::vector<std::string> checkWall(const WallConfig& wall);
 struct EyeWindow;
 // [warp] against its MPCDI file (docs/mpcdi.md), one line per problem, "<config>: [warp]: ...":
 // the file reads; every buffer is mapped and every mapped buffer is in it; each buffer has its
-// screen's pixels and its regions tile it; every surface point (3D profiles) or screen
-// coordinate (2D) lies inside the screen's frame (its corners, or its part of [stereo]'s
-// rectangle) within 2 % of its size and no farther from its plane than its diagonal (a wrong
-// geometric unit shows there). Empty without [warp].
+// screen's pixels and its regions tile it; every surface point (a3, sl), screen coordinate
+// (2d) or frustum ray from the eye point (3d, where it meets the frame's plane) lies inside the
+// screen's frame (its corners, or its part of [stereo]'s rectangle) within 2 % of its size, and
+// a surface point no farther from its plane than its diagonal (a wrong geometric unit shows
+// there). Empty without [warp].
 std::vector<std::string> checkWarp(const WallConfig& wall);
 // A screen's frame in wall coordinates (metres): its corners, or its viewport's part of
 // [stereo]'s rectangle.
 EyeWindow screenFrame(const WallConfig& wall, size_t screen);
 // The warps of a wall's calibrated screens (issue 30), for the views' cameras (the warps a
 // Camera is made with): per warped screen one ScreenWarp per region of its buffer, over its part
-// of the screen's viewport (wall pixels; a region's y from the top of its buffer). A 2D profile
-// becomes offsets in wall pixels to where the flat view looks (snapped to 1/1024 pixel, so an
-// identity warp is exactly none and a whole-pixel shift exactly that), a 3D one surface points
-// in metres; `room` is left to each frame's view. The file must have passed checkWarp.
+// of the screen's viewport (wall pixels; regionTop places it). A 2D profile becomes offsets in
+// wall pixels to where the flat view looks (snapped to 1/1024 pixel, so an identity warp is
+// exactly none and a whole-pixel shift exactly that), a3 and sl surface points in metres, and
+// 3d the points one frustum distance along each pixel's frustum direction from the eye point;
+// `room` is left to each frame's view. The file must have passed checkWarp.
 struct WallWarp {
     size_t screen = 0;
     std::vector<ScreenWarp> regions;
 };
 struct MpcdiFile;
+struct MpcdiRegion;
 std::vector<WallWarp> wallWarps(const WallConfig& wall, const MpcdiFile& file);
+// A region's top row in its buffer, a fraction of the buffer's height from its top: its y, or
+// with region_y = "bottom" the y of its bottom counted from the buffer's bottom.
+double regionTop(const WarpConfig& warp, const MpcdiRegion& region);
 
 // ---------------------------------------------------------------------------------------------
 // Mapping a wall image to the screens (the CPU reference of present.frag)

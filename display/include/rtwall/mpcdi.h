@@ -13,13 +13,15 @@
 //   centres: sample (i, j) belongs to the region point ((i + 0.5) / W, (j + 0.5) / H) from the
 //   top left, so a grid of the region's resolution is one sample per projector pixel;
 // - 2D-profile warps hold (u, v, unused) in [0, 1], u to the right and v up from the lower left
-//   of the screen (texture coordinates, as PFM rows run); 3D profiles (`3d`, `a3`, `sl`) hold
-//   points (x, y, z) on the screen surface in the file's geometric unit;
+//   of the screen (texture coordinates, as PFM rows run); `3d` warps (u, v, unused) the same way
+//   in each region's frustum (frustumDirection); `a3` and `sl` hold points (x, y, z) on the
+//   screen surface in the file's geometric unit;
 // - a NaN sample marks a projector pixel that lands on no screen (shown black), not an error.
 #pragma once
 
 #include <rtwall/vec.h>
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -33,8 +35,9 @@ namespace rtwall {
 
 enum class MpcdiProfile { Flat2d, Simulation3d, Advanced3d, ShaderLamp };  // "2d", "3d", "a3", "sl"
 const char* mpcdiProfileName(MpcdiProfile profile);
-// 3D profiles warp to points on the screen surface; the 2D profile to normalised screen coordinates.
-inline bool warpsToSurface(MpcdiProfile p) { return p != MpcdiProfile::Flat2d; }
+// a3 and sl warp to points on the screen surface; 2d to normalised screen coordinates and 3d to
+// normalised coordinates in each region's frustum.
+inline bool warpsToSurface(MpcdiProfile p) { return p == MpcdiProfile::Advanced3d || p == MpcdiProfile::ShaderLamp; }
 
 // A geometry warp: one sample per grid point, top row first.
 struct MpcdiWarp {
@@ -53,9 +56,24 @@ struct MpcdiMap {
     double gammaEmbedded = 1;      // alpha maps: the gamma the values were made for (1: linear)
 };
 
-struct MpcdiFrustum {  // 3D simulation profile: the region's view, degrees
+// 3D simulation profile: the region's view from the calibration's eye point, degrees. The four
+// angles are signed (left and down usually negative) and required; the turns default to 0.
+struct MpcdiFrustum {
     double yaw = 0, pitch = 0, roll = 0, leftAngle = 0, rightAngle = 0, upAngle = 0, downAngle = 0;
 };
+// The direction (not normalised; its component along the frustum's axis is 1) of frustum
+// coordinates (u, v), u to the right and v up from the lower left, in the calibration's frame
+// (x right, y up, -z forward). The conventions are SGCT's reader's and Christie's
+// description of what its tool writes (docs/mpcdi.md): the frustum's image plane spans
+// tan(leftAngle)..tan(rightAngle) and tan(downAngle)..tan(upAngle) at distance 1, turned by
+// Ry(-yaw) Rx(pitch) Rz(-roll): positive yaw turns right, positive pitch up, positive roll lowers
+// the right side.
+struct FrustumAxes {
+    std::array<double, 3> corner, right, up;  // direction(u, v) = corner + u right + v up
+    Float3 direction(double u, double v) const;
+};
+FrustumAxes frustumAxes(const MpcdiFrustum& frustum);
+inline Float3 frustumDirection(const MpcdiFrustum& frustum, double u, double v) { return frustumAxes(frustum).direction(u, v); }
 
 struct MpcdiRegion {
     std::string id;
