@@ -114,12 +114,13 @@ Image presentScreen(const WallConfig& wall, size_t index, const WallFrame& frame
             uint8_t* q = out.pixel(x, y);
             for (int k = 0; k < 3; ++k) q[k] = quantise(corrected(c[k], m.weight, s));
         }
-    for (ScreenStage* stage : options.stages) stage->apply(wall, index, out);
-    if (options.overlay) OverlayStage(options.overlay).apply(wall, index, out);
+    const int bufferEye = quad ? options.quadBufferEye : 0;
+    for (ScreenStage* stage : options.stages) stage->apply(wall, index, bufferEye, out);
+    if (options.overlay) OverlayStage(options.overlay).apply(wall, index, bufferEye, out);
     return out;
 }
 
-void OverlayStage::apply(const WallConfig&, size_t screen, Image& out) const {
+void OverlayStage::apply(const WallConfig&, size_t screen, int, Image& out) const {
     if (!overlay_ || screen != 0) return;
     // Pasted as is, after correction: the GL presenter copies it with glBlitFramebuffer.
     const Image& o = *overlay_;

@@ -73,7 +73,7 @@ ProjectorBlendStage::~ProjectorBlendStage() = default;
 
 bool ProjectorBlendStage::blends(size_t screen) const { return screen < screens_.size() && !screens_[screen].alpha.empty(); }
 
-void ProjectorBlendStage::apply(const WallConfig&, size_t screen, Image& pixels) const {
+void ProjectorBlendStage::apply(const WallConfig&, size_t screen, int, Image& pixels) const {
     if (!blends(screen)) return;
     const Maps& m = screens_[screen];
     if (pixels.width != m.width || pixels.height != m.height) return;

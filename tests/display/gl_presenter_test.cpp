@@ -95,7 +95,7 @@ TEST(GlPresenter, TheStatusOverlaySitsOnTheFirstScreen) {
 // screen, and the GL presenter shows exactly what presentScreen makes with it.
 class PaintStage final : public ScreenStage {
 public:
-    void apply(const WallConfig&, size_t screen, Image& pixels) const override {
+    void apply(const WallConfig&, size_t screen, int, Image& pixels) const override {
         if (screen != 1) return;
         for (int y = kY0; y < kY1; ++y)
             for (int x = kX0; x < kX1; ++x) std::memcpy(pixels.pixel(x, y), kColour, 3);
@@ -177,6 +177,23 @@ TEST(GlPresenter, ThePostWarpMatchesTheCpuReference) {
     blendOnly.stages = {&blend};
     const WallFrame f = renderedFrame(wall.width, wall.height, 1, 0.0f);
     for (size_t s = 0; s < 3; ++s) EXPECT_NE(presentScreen(wall, s, f, o).rgb, presentScreen(wall, s, f, blendOnly).rgb) << "not warped";
+}
+
+// A side-by-side screen's post-warp in GL: each eye's half warped alone (the shader finds its
+// pane), against the CPU reference within one code.
+TEST(GlPresenter, ThePostWarpOfASideBySideScreenMatchesTheCpuReference) {
+    const auto dir = test::scratchDir();
+    test::mpcdiTestgen("identity " + (dir / "s.mpcdi").string() + " --buffer a=128x48 --shift 5,-3");
+    const auto file = test::writeFile(dir / "sbs.toml", "[wall]\nwidth = 64\nheight = 48\n[stereo]\nmode = \"side_by_side\"\n"
+                                                        "[[screen]]\nname = \"A\"\nviewport = [0, 0, 64, 48]\nresolution = [128, 48]\n"
+                                                        "[warp]\nmpcdi = \"s.mpcdi\"\nbuffers = { a = \"A\" }\nmode = \"post\"\n");
+    const WallConfig wall = loadWallConfig(file);
+    PostWarpStage post(wall, readMpcdi(wall.warp->mpcdi));
+    PresentOptions o;
+    o.stages = {&post};
+    expectScreensMatchHeadless(file, UploadMethod::TexSubImage, o, 1);
+    const WallFrame f = renderedFrame(64, 48, 1, 0.0f, true);
+    EXPECT_NE(presentScreen(wall, 0, f, o).rgb, presentScreen(wall, 0, f).rgb) << "not warped";
 }
 
 TEST(GlPresenter, PixelBufferUploadShowsTheSame) {

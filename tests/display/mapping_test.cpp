@@ -221,7 +221,7 @@ TEST(Mapping, StatusTextAndItsOverlay) {
 // still goes on top.
 class PaintStage final : public ScreenStage {
 public:
-    void apply(const WallConfig&, size_t index, Image& pixels) const override {
+    void apply(const WallConfig&, size_t index, int, Image& pixels) const override {
         if (index != screen) return;
         for (int y = 2; y < 12; ++y)
             for (int x = 4; x < 24; ++x) std::memcpy(pixels.pixel(x, y), colour, 3);

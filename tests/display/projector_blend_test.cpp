@@ -44,7 +44,7 @@ TEST(ProjectorBlend, WithoutMapsNoPixelChanges) {
     Image im = filled(40, 30, 0);
     for (size_t i = 0; i < im.rgb.size(); ++i) im.rgb[i] = uint8_t(i * 7);
     const Image before = im;
-    stage.apply(w, 0, im);
+    stage.apply(w, 0, 0, im);
     EXPECT_EQ(im.rgb, before.rgb);
 }
 
@@ -66,7 +66,7 @@ TEST(ProjectorBlend, TheCurvedWallsProjectorsSumToOneOnWhite) {
     for (size_t p = 0; p < 3; ++p) {
         ASSERT_TRUE(stage.blends(p));
         Image white = filled(W, H, 255);
-        stage.apply(wall, p, white);
+        stage.apply(wall, p, 0, white);
         const MpcdiWarp& warp = file.buffers[p].regions[0].warp;
         ASSERT_EQ(warp.width, W);
         for (int i = 0; i < W; ++i) {
@@ -113,7 +113,7 @@ TEST(ProjectorBlend, TheArithmeticIsLinearLightWithTheEmbeddedGammaUndone) {
     const ProjectorBlendStage stage(wall, file);
     for (size_t p = 0; p < 3; ++p) {
         Image grey = filled(32, 24, 180);
-        stage.apply(wall, p, grey);
+        stage.apply(wall, p, 0, grey);
         const MpcdiRegion& r = file.buffers[p].regions[0];
         ASSERT_TRUE(r.alpha && r.beta);
         EXPECT_EQ(r.alpha->gammaEmbedded, 2.2);
@@ -142,7 +142,7 @@ TEST(ProjectorBlend, RgbAndSixteenBitMapsBlendEachChannelByItsOwnValues) {
         const MpcdiFile file = readMpcdi(wall.warp->mpcdi);
         const ProjectorBlendStage stage(wall, file);
         Image grey = filled(6, 4, 180);
-        stage.apply(wall, 0, grey);
+        stage.apply(wall, 0, 0, grey);
         const MpcdiRegion& r = file.buffers[0].regions[0];
         ASSERT_TRUE(r.alpha && r.beta);
         size_t channelsApart = 0;

@@ -244,7 +244,7 @@ TEST(WarpConfig, RegionYCountsFromTheTopOrTheBottom) {
         white.width = 40;
         white.height = 30;
         white.rgb.assign(40 * 30 * 3, 255);
-        blend.apply(w, 0, white);
+        blend.apply(w, 0, 0, white);
         for (int y = 0; y < 30; ++y)
             for (int x = 0; x < 40; ++x) {
                 const bool inside = x >= 10 && x < 30 && y >= top && y < top + 12;

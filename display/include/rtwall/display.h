@@ -326,8 +326,10 @@ void checkFrameSize(const WallConfig& wall, const WallFrame& frame, const char* 
 class ScreenStage {
 public:
     virtual ~ScreenStage() = default;
-    // Screen `screen`'s pixels (outputWidth x outputHeight), in place.
-    virtual void apply(const WallConfig& wall, size_t screen, Image& pixels) const = 0;
+    // Screen `screen`'s pixels (outputWidth x outputHeight), in place. `eye`: which eye's buffer
+    // of a quad-buffered screen they are (0 left, 1 right); 0 on every other screen, whose
+    // pixels show the eyes its packing says (one eye, or both side by side).
+    virtual void apply(const WallConfig& wall, size_t screen, int eye, Image& pixels) const = 0;
     // The same in OpenGL 3.3 core: called with screen `screen`'s context current, its viewport
     // set and its back buffer (both of a quad-buffered screen) as the draw framebuffer, after
     // the present shader drew it. Leaves GL_FRAMEBUFFER bound to 0.
@@ -343,7 +345,7 @@ class OverlayStage final : public ScreenStage {
 public:
     explicit OverlayStage(const Image* overlay = nullptr) : overlay_(overlay) {}
     void set(const Image* overlay) { overlay_ = overlay; }
-    void apply(const WallConfig& wall, size_t screen, Image& pixels) const override;
+    void apply(const WallConfig& wall, size_t screen, int eye, Image& pixels) const override;
     void drawGl(const WallConfig& wall, size_t screen) override;
     void releaseGl() override;
 
@@ -366,7 +368,7 @@ public:
     ProjectorBlendStage(const WallConfig& wall, const MpcdiFile& file);
     ~ProjectorBlendStage() override;
     bool blends(size_t screen) const;  // whether any pixel of the screen changes
-    void apply(const WallConfig& wall, size_t screen, Image& pixels) const override;
+    void apply(const WallConfig& wall, size_t screen, int eye, Image& pixels) const override;
     void drawGl(const WallConfig& wall, size_t screen) override;
     void releaseGl() override;
 
@@ -387,34 +389,42 @@ private:
 // target: for a 2D warp the flat wall position its offset names, for 3D where the ray from the
 // eye through its surface point meets the screen's frame (screenFrame); the screen's pixels
 // are sampled there bilinearly between pixel centres, clamped at the edges (GL_LINEAR); a pixel
-// on no screen or looking off the screen is black. The eyes move (tracking): setEyes before
-// each presentation. Mono and passive-stereo screens (one eye a screen); walls whose screens
-// show both eyes are refused (std::invalid_argument) by the constructor.
+// on no screen or looking off the screen is black. Every stereo packing: each eye's image on a
+// screen (its half of a side-by-side screen, its buffer of a quad-buffered one, a passive
+// screen's one eye) is warped alone, from that eye. The eyes move (tracking): setEyes before
+// each presentation, with the eyes the shown frame was rendered for.
 class PostWarpStage final : public ScreenStage {
 public:
     PostWarpStage(const WallConfig& wall, const MpcdiFile& file);  // the file must have passed checkWarp
     ~PostWarpStage() override;
     void setEyes(const Float3& left, const Float3& right);          // wall coordinates, metres (at first: the config's viewer)
-    void apply(const WallConfig& wall, size_t screen, Image& pixels) const override;
+    void apply(const WallConfig& wall, size_t screen, int eye, Image& pixels) const override;
     void drawGl(const WallConfig& wall, size_t screen) override;
     void releaseGl() override;
 
 private:
-    struct Screen {
-        int width = 0, height = 0;
-        bool surface = false;          // 3D points (else 2D: targets fixed)
-        std::vector<Float3> samples;   // per screen pixel, top row first: surface point, or target (x, y) in screen pixels
-        Float3 lowerLeft, right, up;   // the screen's frame (screenFrame; 3D targets)
+    // One eye's image on a screen: columns x0 .. x0 + width of its pixels.
+    struct Pane {
+        int x0 = 0, width = 0;
         int eye = 0;                   // 0 left (mono), 1 right
+        std::vector<Float3> samples;   // per pane pixel, top row first: surface point, or target (x, y) in pane pixels
         // targets() for targetsEye (2D: for any eye), and apply's copy of the flat pixels: kept
         // from frame to frame (one screen is applied by one thread at a time).
         mutable std::vector<float> targets;
         mutable Float3 targetsEye{};
         mutable Image flat;
     };
-    // Per screen pixel where it samples the screen's flat image, x and y in its pixels (NaN:
-    // black); computed again only when the screen's eye has moved (3D points).
-    const std::vector<float>& targets(size_t screen) const;
+    struct Screen {
+        int width = 0, height = 0;
+        bool surface = false;          // 3D points (else 2D: targets fixed)
+        bool quad = false;             // each pane is a buffer of its own (quad buffer)
+        Float3 lowerLeft, right, up;   // the screen's frame (screenFrame; 3D targets)
+        std::vector<Pane> panes;       // empty: not warped
+    };
+    // Per pane pixel where it samples the pane's flat image, x and y in its pixels (NaN:
+    // black); computed again only when the pane's eye has moved (3D points).
+    const std::vector<float>& targets(const Screen& s, const Pane& p) const;
+    void applyPane(const Screen& s, const Pane& p, Image& pixels) const;
     std::vector<Screen> screens_;
     Float3 eyes_[2]{};
     struct Gl;

@@ -72,12 +72,14 @@ struct WallSession::Impl {
     std::vector<std::vector<std::pair<uint32_t, ViewRegion>>> screenWarps;
     std::unique_ptr<ProjectorBlendStage> blend;  // its alpha and beta maps on the master's screens
     std::unique_ptr<PostWarpStage> postWarp;     // [warp] mode = "post": the screens' flat images resampled
-    // The post-warp resamples from the eyes of the head the frame is shown for.
+    // The post-warp resamples from the eyes the shown image was made for: the head its frame
+    // was rendered with (with async frames, a step older than the newest), or re-projecting,
+    // the pose it was warped to.
     void setPostWarpEyes() {
         if (!postWarp) return;
         const double sep = wallConfig.stereo.eyeSeparation;
-        if (stereo) postWarp->setEyes(eyePosition(head, sep, 0), eyePosition(head, sep, 1));
-        else postWarp->setEyes(eyePosition(head, sep, -1), eyePosition(head, sep, -1));
+        if (stereo) postWarp->setEyes(eyePosition(shownHead, sep, 0), eyePosition(shownHead, sep, 1));
+        else postWarp->setEyes(eyePosition(shownHead, sep, -1), eyePosition(shownHead, sep, -1));
     }
     std::atomic<bool> stopNodes{false};
     std::atomic<size_t> nodeThreadsEnded{0};
