@@ -241,6 +241,8 @@ private:
                         std::swap(onScreen_, shown_);
                         onScreenFrame_ = s.frame;
                     }
+                    if (held && run_.roomEyes)
+                        if (const Slot* slot = slotOf(s.frame); slot && slot->frame.roomEyes) run_.roomEyes(*slot->frame.roomEyes);
                     if (run_.present) {
                         if (held) run_.present(s.frame, &onScreen_.left, onScreen_.right.rgb.empty() ? nullptr : &onScreen_.right, s.leftOut);
                         else run_.present(s.frame, nullptr, nullptr, s.leftOut);
@@ -474,6 +476,7 @@ private:
         r.targets = pose.cameras;
         r.debug = pose.debug;
         r.leftOut = &leftOut_;
+        if (run_.roomEyes && pose.roomEyes) run_.roomEyes(*pose.roomEyes);
         if (run_.refresh) {
             run_.refresh(r);
         } else if (run_.present) {

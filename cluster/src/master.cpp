@@ -169,7 +169,7 @@ bool Master::waitForSwap(uint32_t frame, int timeoutMs) {
     return waitUntil(*impl_, timeoutMs, [&] { return impl_->swapReleased >= frame; });
 }
 
-void Master::presentPose(std::span<const CameraDesc> cameras, bool debug) {
+void Master::presentPose(std::span<const CameraDesc> cameras, bool debug, std::optional<std::array<Float3, 2>> roomEyes) {
     if (!impl_->settings.displayNodes.reproject)
         throw std::logic_error("Master::presentPose on a master whose display nodes do not re-project");
     if (cameras.empty() || cameras.size() > kMaxViews)
@@ -181,6 +181,7 @@ void Master::presentPose(std::span<const CameraDesc> cameras, bool debug) {
         p.cameras.assign(cameras.begin(), cameras.end());
         for (CameraDesc& c : p.cameras) c.name.clear();  // the nodes need the geometry only
         p.debug = debug;
+        p.roomEyes = roomEyes;
         p.askedAt = nowSeconds();
     }
     impl_->wake();

@@ -28,6 +28,7 @@ void Master::Impl::beginFrame(Command&& cmd) {
         frameDenoise = NodeDenoise{cmd.denoise, cmd.denoiseRing, frameFeatures, stateSeq, cmd.camera};
     frameViews = std::move(cmd.views);
     frameViewsTag = cmd.viewsTag;
+    frameRoomEyes = cmd.roomEyes;
     shownSeq = cmd.shownSeq;
     // The views are the frame's only camera on the wire (protocol 13): a mono frame is one
     // view of the whole image, whose tiling is makeTiles'.
@@ -242,6 +243,7 @@ std::vector<Image> Master::renderViews(FrameReport* report, std::vector<std::vec
             cmd.stochastic = s.app.stateStochastic;
             cmd.views = s.app.views;
             cmd.viewsTag = s.app.viewsTag;
+            cmd.roomEyes = s.app.roomEyes;
             cmd.camera = s.app.camera;
             cmd.denoise = s.app.denoise;
             cmd.denoiseRing = s.app.denoiseRing;

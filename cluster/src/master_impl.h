@@ -92,6 +92,7 @@ struct NodeState {
 struct PendingPose {
     std::vector<CameraDesc> cameras;
     bool debug = false;
+    std::optional<std::array<Float3, 2>> roomEyes;
     double askedAt = 0;  // nowSeconds()
 };
 
@@ -115,6 +116,7 @@ struct Command {
     bool stochastic = false;    // kBeginFrame: its state renders stochastically
     std::vector<FrameView> views{};  // kBeginFrame: a multi-view frame's views (setViews)
     uint64_t viewsTag = 0;
+    std::optional<std::array<Float3, 2>> roomEyes{};  // kBeginFrame: the views' eyes in the room (setViews)
     CameraDesc camera{};        // kBeginFrame without views: the mono frame's camera (setCamera)
     uint32_t shownSeq = 0;      // kBeginFrame: FrameReport::stateSeq (the state's seq and the camera's moves)
     DenoiseSettings denoise{};  // kBeginFrame: how display nodes denoise it (setDenoise)
@@ -157,6 +159,7 @@ struct Master::Impl {
         uint32_t seq = 0;              // state sequence number
         std::vector<FrameView> views;  // setViews: what the next frame begun renders
         uint64_t viewsTag = 0;
+        std::optional<std::array<Float3, 2>> roomEyes;
         DenoiseSettings denoise;       // setDenoise: how display nodes denoise the next frames
         int denoiseRing = 0;
         // rendersStochastically(scene), recomputed (O(instances)) only after a change that can
@@ -229,6 +232,7 @@ struct Master::Impl {
     std::optional<NodeDenoise> frameDenoise;  // with display nodes: how they denoise the current frame
     std::vector<FrameView> frameViews;  // the current frame's views (none: a mono frame of frameCamera)
     uint64_t frameViewsTag = 0;
+    std::optional<std::array<Float3, 2>> frameRoomEyes;  // the current frame's views' eyes (setViews)
     // What every FrameBegin of the current frame carries: frameViews, or the mono frame's one view.
     std::vector<FrameView> beginViews;
     uint32_t shownSeq = 0;  // FrameReport::stateSeq and NodeFrame::stateSeq of the current frame

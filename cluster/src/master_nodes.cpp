@@ -61,7 +61,7 @@ void Master::Impl::sendNodeFrame(NodeState& n, const RenderSettings& rs) {
         n.routesFrame = display.routesFrame;
     }
     NodeFrame f{currentFrame, rs.width, rs.height, rs.tileSize, framePixels, frameViews, {}, frameStochastic, shownSeq,
-                settings.depth, frameDenoise};
+                settings.depth, frameDenoise, frameRoomEyes};
     const std::vector<int>& eyes = settings.displayNodes.viewEyes;
     for (size_t v = 0; v < frameViews.size(); ++v) f.eyes.push_back(int8_t(v < eyes.size() && eyes[v] >= 0 && eyes[v] <= 1 ? eyes[v] : -1));
     if (sendNode(n, f, currentFrame)) n.frameSent = currentFrame;
@@ -233,7 +233,7 @@ void Master::Impl::sendPendingPose() {
         pose.swap(pendingPose);
     }
     if (!pose || display.barrier.lastReleased() == 0) return;
-    NodePose msg{++display.refreshes, display.barrier.lastReleased(), pose->debug, std::move(pose->cameras)};
+    NodePose msg{++display.refreshes, display.barrier.lastReleased(), pose->debug, std::move(pose->cameras), pose->roomEyes};
     display.poseAskedAt[msg.refresh % DisplayNodes::kPoseRing] = pose->askedAt;
     for (auto& [peer, n] : display.nodes)
         if (!n.deathReason && n.answered) sendNode(n, msg, msg.frame);

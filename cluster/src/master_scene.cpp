@@ -255,7 +255,7 @@ void Master::setDenoise(const DenoiseSettings& settings, int ring) {
     s.app.denoiseRing = ring;
 }
 
-void Master::setViews(std::vector<FrameView> views, uint64_t tag) {
+void Master::setViews(std::vector<FrameView> views, uint64_t tag, std::optional<std::array<Float3, 2>> roomEyes) {
     if (views.size() > kMaxViews) throw InputError("a frame has at most " + std::to_string(kMaxViews) + " views");
     Impl& s = *impl_;
     for (const FrameView& v : views)
@@ -266,6 +266,7 @@ void Master::setViews(std::vector<FrameView> views, uint64_t tag) {
     std::lock_guard lock(s.app.stateMutex);
     s.app.views = std::move(views);
     s.app.viewsTag = tag;
+    s.app.roomEyes = roomEyes;
 }
 
 }  // namespace rtwall

@@ -32,7 +32,10 @@
 // 19 added Material::alphaMode, alphaChannel and opacity (glTF's MASK and BLEND, issue 29); 20
 // added pictures of what the display nodes show (issue 31: the operator console's thumbnail and
 // screenshot of a wall on nodes): NodePreviewAsk and NodePreview, and InstanceDesc::movable
-// (issue 29: an instance in the moving top level from the start).
+// (issue 29: an instance in the moving top level from the start); 21 added the eyes a frame was
+// rendered for, in the wall's room, to NodeFrame and NodePose (issue 30: display nodes that
+// post-warp a calibrated wall's screens resample from them): in NodeFrame a byte now says which
+// of its optional parts (depth, denoise settings, eyes) follow; in NodePose they are last.
 //
 // Every message is one ZeroMQ frame: a fixed 32-byte little-endian header, then a payload whose
 // layout depends on the type. Each message type is a plain struct with one fields() function that
@@ -60,7 +63,7 @@
 namespace rtwall::cluster {
 
 inline constexpr uint32_t kMagic = 0x4C575452u;
-inline constexpr uint16_t kProtocolVersion = 20;  // 20: pictures of the display nodes' screens
+inline constexpr uint16_t kProtocolVersion = 21;  // 21: the frame's eyes to post-warping display nodes
 inline constexpr size_t kHeaderSize = 32;
 
 // Limits every decoder enforces (and ZMQ_MAXMSGSIZE is derived from).
@@ -422,11 +425,16 @@ struct NodeFrame {
     bool stochastic = false;
     uint32_t stateSeq = 0;  // the scene state it renders (any change restarts the sums)
     // Version 14: its tiles carry depth (the frame's FrameBegin asked for it), which the node
-    // keeps per view beside the images. Last, and left out when false, as in FrameBegin.
+    // keeps per view beside the images.
     bool depth = false;
-    // Version 17: a denoised frame (issue 28), last and only after the depth flag: what the
-    // node's compositor filters its screens with, as the single-PC wall's does.
+    // Version 17: a denoised frame (issue 28): what the node's compositor filters its screens
+    // with, as the single-PC wall's does.
     std::optional<NodeDenoise> denoise{};
+    // Version 21: the eyes (left, right; a mono frame's twice) its views were made from, in the
+    // wall's room coordinates (Master::setViews' roomEyes): a post-warping wall's nodes resample
+    // their screens from them (issue 30). Since 21 a byte before these three says which of
+    // them follow (each absent alone).
+    std::optional<std::array<Float3, 2>> roomEyes{};
     bool operator==(const NodeFrame&) const = default;
 };
 
@@ -458,6 +466,7 @@ struct NodePose {
     uint32_t frame = 0;
     bool debug = false;    // tint warped, filled and fresh pixels (warpDebugColours)
     std::vector<CameraDesc> cameras;
+    std::optional<std::array<Float3, 2>> roomEyes{};  // version 21: the eyes of `cameras` in the room (as NodeFrame's)
     bool operator==(const NodePose&) const = default;
 };
 

@@ -114,7 +114,7 @@ RTWALL_WIRE_FIELDS(NodeDenoise, 5) {
     fields(io, m.camera);
 }
 
-RTWALL_WIRE_MESSAGE(NodeFrame, 11) {
+RTWALL_WIRE_MESSAGE(NodeFrame, 12) {
     static const size_t viewBytes = minViewBytes();
     io.u32(m.frame);
     io.intIn(m.width, 1, kMaxImageSide, "node frame width");
@@ -148,17 +148,23 @@ RTWALL_WIRE_MESSAGE(NodeFrame, 11) {
     io.u32(m.stateSeq);
     io.expect(m.pixels != TilePixels::LinearHalf || m.stochastic,
               [] { return std::string("linear tiles for a frame that is not accumulated"); });
-    io.trailing(m.depth, [&] {
-        io.boolean(m.depth);
-        io.expect(m.depth, [] { return std::string("a depth flag that says no (it is left out then)"); });
-    });
-    bool denoised = m.denoise.has_value();
-    io.trailing(denoised, [&] {
+    // Version 21: one byte says which optional parts follow (bit 0: its tiles carry depth, bit 1:
+    // the denoise settings, bit 2: the room eyes), so that each may come without the others.
+    uint8_t tail = uint8_t((m.depth ? 1 : 0) | (m.denoise ? 2 : 0) | (m.roomEyes ? 4 : 0));
+    io.u8(tail);
+    io.expect(tail < 8, [&] { return "node frame parts " + std::to_string(int(tail)); });
+    if constexpr (Io::decoding) m.depth = (tail & 1) != 0;
+    if (tail & 2) {
         if constexpr (Io::decoding) m.denoise.emplace();
         fields(io, *m.denoise);
         io.expect(m.depth && m.pixels == TilePixels::LinearHalf,
                   [] { return std::string("a denoised frame without depth or linear tiles"); });
-    });
+    }
+    if (tail & 4) {
+        if constexpr (Io::decoding) m.roomEyes.emplace();
+        io.float3((*m.roomEyes)[0]);
+        io.float3((*m.roomEyes)[1]);
+    }
 }
 
 RTWALL_WIRE_MESSAGE(NodeHave, 1) { io.u32(m.frame); }
@@ -171,7 +177,7 @@ RTWALL_WIRE_MESSAGE(NodeSwap, 2) {
 
 RTWALL_WIRE_MESSAGE(NodeSwapped, 1) { io.u32(m.frame); }
 
-RTWALL_WIRE_MESSAGE(NodePose, 4) {
+RTWALL_WIRE_MESSAGE(NodePose, 5) {
     static const size_t cameraBytes = [] {
         CameraDesc c;
         c.name.clear();
@@ -182,6 +188,12 @@ RTWALL_WIRE_MESSAGE(NodePose, 4) {
     io.boolean(m.debug);
     vectorOf(io, m.cameras, cameraBytes, kMaxViews, SendLimit::Strict);
     io.expect(!m.cameras.empty(), [] { return std::string("a node pose without cameras"); });
+    bool eyes = m.roomEyes.has_value();  // version 21: last, left out when absent
+    io.trailing(eyes, [&] {
+        if constexpr (Io::decoding) m.roomEyes.emplace();
+        io.float3((*m.roomEyes)[0]);
+        io.float3((*m.roomEyes)[1]);
+    });
 }
 
 RTWALL_WIRE_MESSAGE(NodeShown, 1) { io.u32(m.refresh); }

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <array>
 #include <limits>
 #include <random>
 #include <set>
@@ -235,6 +236,13 @@ NodeFrame sampleDenoisedNodeFrame() {
     return f;
 }
 
+// A post-warping wall's frame (version 21): its eyes in the room, with the denoised frame's parts.
+NodeFrame sampleEyesNodeFrame() {
+    NodeFrame f = sampleDenoisedNodeFrame();
+    f.roomEyes = std::array<Float3, 2>{Float3{-0.0325f, 1.7f, 2.5f}, Float3{0.0325f, 1.7f, 2.5f}};
+    return f;
+}
+
 // Calls f with every sample message (FrameBegin and NodeFrame twice: mono and with views and
 // depth; TileResult with and without depth).
 template <class F> void forEachSample(F&& f) {
@@ -263,6 +271,7 @@ template <class F> void forEachSample(F&& f) {
     f(NodeFrame{80, 3840, 2160, 64, TilePixels::LinearHalf, {}, {}, true, 41});
     f(sampleViewsNodeFrame());
     f(sampleDenoisedNodeFrame());
+    f(sampleEyesNodeFrame());
     f(NodeHave{81});
     f(NodeSwap{82, {"right", "node-3"}});
     f(NodeSwapped{83});
@@ -271,6 +280,7 @@ template <class F> void forEachSample(F&& f) {
     f(TileDone{85, 14, 2500, 12288});
     f(NodeWelcome{2, 250, 3000, "[wall]\n", {}, true});  // re-projecting (version 15's trailing flag)
     f(NodePose{900, 86, true, {sampleCamera(), sampleCamera()}});
+    f(NodePose{901, 86, false, {sampleCamera()}, std::array<Float3, 2>{Float3{-0.03f, 1.7f, 2.5f}, Float3{0.03f, 1.7f, 2.5f}}});
     f(NodeShown{900});
     f(sampleWarpGrids());
     f(NodePreviewAsk{5, 320, 0x3});
@@ -383,7 +393,8 @@ TEST(Protocol, GoldenBytes) {
     // the frame's views are its only camera; 14: depth with every tile, left out when off; 15:
     // re-projection on the display nodes; 16: the denoiser's features, left out when off; 17: how
     // display nodes denoise, left out when off; 18: warp grids and each view's warps; 19: the
-    // materials' alpha modes and opacity; 20: pictures of the display nodes' screens).
+    // materials' alpha modes and opacity; 20: pictures of the display nodes' screens; 21: the
+    // eyes a frame was made for, to display nodes).
     Header h;
     h.session = 0x0807060504030201ull;
     h.frame = 0x0C0B0A09u;
@@ -391,7 +402,7 @@ TEST(Protocol, GoldenBytes) {
     const std::vector<uint8_t> bytes = encodeMessage(h, FrameBegin{0x44332211u, 0x88776655u});
     const std::vector<uint8_t> expected{
         'R',  'T',  'W',  'L',                           // magic 0x4C575452
-        0x14, 0x00,                                      // version (20: node pictures)
+        0x15, 0x00,                                      // version (21: the frame's eyes to nodes)
         0x07, 0x00,                                      // type FrameBegin
         0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08,  // session
         0x09, 0x0A, 0x0B, 0x0C,                          // frame
@@ -444,14 +455,16 @@ TEST(Protocol, FeaturesAreATrailingFieldAfterTheDepth) {
     EXPECT_THROW(decode<TileResult>(empty), DecodeError);
 }
 
-// Version 17: how a display node denoises a frame, after NodeFrame's depth flag, only when it
-// does; never with mode off, without depth or linear tiles, or with features the mode lacks.
-TEST(Protocol, NodeDenoiseIsATrailingFieldAfterTheDepth) {
+// Version 17: how a display node denoises a frame, after NodeFrame's parts byte (bit 1, since
+// version 21), only when it does; never with mode off, without depth or linear tiles, or with
+// features the mode lacks.
+TEST(Protocol, NodeDenoiseFollowsTheFrameOnlyWhenItDenoises) {
     const NodeFrame plain = sampleViewsNodeFrame();
     const NodeFrame denoised = sampleDenoisedNodeFrame();
     const std::vector<uint8_t> a = payloadOf(plain), b = payloadOf(denoised);
     ASSERT_GT(b.size(), a.size());
-    EXPECT_TRUE(std::equal(a.begin(), a.end(), b.begin())) << "the frame's bytes as before, then the block";
+    EXPECT_TRUE(std::equal(a.begin(), a.end() - 1, b.begin())) << "the frame's bytes as before, then the block";
+    EXPECT_EQ(b[a.size() - 1], a.back() | 0x02) << "the parts byte says so";
     EXPECT_EQ(decode<NodeFrame>(b), denoised);
     auto refused = [&](auto change, const char* what) {
         NodeFrame f = denoised;
@@ -498,11 +511,51 @@ TEST(Protocol, DepthIsATrailingFieldLeftOutWhenOff) {
     EXPECT_EQ(info.pixelBytes, 2u);
     EXPECT_EQ(info.depthBytes, 3u);
 
+    // A node frame says in one byte which of its optional parts follow (version 21): depth is bit 0.
     NodeFrame node{1, 64, 64, 32};
     std::vector<uint8_t> nodeOn = payloadOf(node);
-    nodeOn.push_back(0x01);
+    ASSERT_EQ(nodeOn.back(), 0x00);
+    nodeOn.back() = 0x01;
     node.depth = true;
     EXPECT_EQ(payloadOf(node), nodeOn);
+}
+
+// Version 21: the eyes a frame was rendered for, in the wall's room (a post-warping wall's
+// nodes resample from them): in NodeFrame bit 2 of its parts byte and two points after the
+// rest, with or without depth and denoising; in NodePose last, left out when absent. Never
+// infinite or NaN, never a parts byte with bits it does not know.
+TEST(Protocol, TheRoomEyesGoToTheNodesWithOrWithoutTheOtherParts) {
+    const std::array<Float3, 2> eyes{Float3{-0.0325f, 1.7f, 2.5f}, Float3{0.0325f, 1.7f, 2.5f}};
+    for (NodeFrame f : {NodeFrame{80, 3840, 2160, 64, TilePixels::Srgb8, {}, {}, false, 41}, sampleViewsNodeFrame(),
+                        sampleDenoisedNodeFrame()}) {
+        const std::vector<uint8_t> without = payloadOf(f);
+        f.roomEyes = eyes;
+        std::vector<uint8_t> with = payloadOf(f);
+        ASSERT_EQ(with.size(), without.size() + 24);
+        EXPECT_EQ(decode<NodeFrame>(with), f);
+        // The parts byte is where it was, with bit 2 set.
+        NodeFrame undenoised = f;
+        undenoised.denoise.reset();
+        undenoised.roomEyes.reset();
+        const size_t partsAt = payloadOf(undenoised).size() - 1;
+        EXPECT_EQ(with[partsAt], without[partsAt] | 0x04);
+        for (const float bad : {std::numeric_limits<float>::infinity(), std::nanf("")}) {
+            NodeFrame b = f;
+            (*b.roomEyes)[1].y = bad;
+            EXPECT_THROW(decode<NodeFrame>(payloadOf(b)), DecodeError);
+        }
+        std::vector<uint8_t> unknown = with;
+        unknown[partsAt] |= 0x08;
+        EXPECT_THROW(decode<NodeFrame>(unknown), DecodeError);
+    }
+    NodePose pose{900, 86, true, {sampleCamera()}};
+    const std::vector<uint8_t> plain = payloadOf(pose);
+    pose.roomEyes = eyes;
+    const std::vector<uint8_t> with = payloadOf(pose);
+    ASSERT_EQ(with.size(), plain.size() + 24);
+    EXPECT_TRUE(std::equal(plain.begin(), plain.end(), with.begin()));
+    EXPECT_EQ(decode<NodePose>(with), pose);
+    EXPECT_THROW(decode<NodePose>(std::vector<uint8_t>(with.begin(), with.end() - 4)), DecodeError);
 }
 
 // -- Header checks -------------------------------------------------------------------------------
@@ -580,10 +633,11 @@ TEST(Protocol, HeartbeatReportGoldenBytes) {
 // -- Truncation and trailing bytes ---------------------------------------------------------------
 
 // A message without its version-14 trailing field (depth), which a decoder takes for a message
-// that never had it: the one truncation that decodes.
+// that never had it: the one truncation that decodes. (A NodeFrame says in a byte which parts
+// follow since version 21: no truncation of it decodes.)
 template <class Msg> Msg withoutTrailing(Msg msg) {
-    if constexpr (std::is_same_v<Msg, NodeFrame>) msg.denoise.reset();
-    if constexpr (std::is_same_v<Msg, FrameBegin> || std::is_same_v<Msg, NodeFrame>) msg.depth = false;
+    if constexpr (std::is_same_v<Msg, NodePose>) msg.roomEyes.reset();
+    if constexpr (std::is_same_v<Msg, FrameBegin>) msg.depth = false;
     if constexpr (std::is_same_v<Msg, TileResult>) msg.depth.clear();
     if constexpr (std::is_same_v<Msg, NodeWelcome>) msg.reproject = false;
     return msg;
@@ -595,14 +649,6 @@ TEST(Protocol, EveryTruncationThrows) {
         SCOPED_TRACE("message type " + std::to_string(int(messageTypeOf(msg))));
         const std::vector<uint8_t> bytes = encodeMessage(sampleHeader(), msg);
         const size_t shorter = encodeMessage(sampleHeader(), withoutTrailing(msg)).size();
-        // A denoised node frame ends in two trailing fields: without the second it is one of depth.
-        std::optional<Msg> depthOnly;
-        if constexpr (std::is_same_v<Msg, NodeFrame>)
-            if (msg.denoise) {
-                depthOnly = msg;
-                depthOnly->denoise.reset();
-            }
-        const size_t middle = depthOnly ? encodeMessage(sampleHeader(), *depthOnly).size() : 0;
         for (size_t cut = 0; cut < bytes.size(); ++cut) {
             // Exactly sized copies, so that AddressSanitizer would see any read past the end.
             const std::vector<uint8_t> whole(bytes.begin(), bytes.begin() + ptrdiff_t(cut));
@@ -611,8 +657,6 @@ TEST(Protocol, EveryTruncationThrows) {
                 const std::vector<uint8_t> payload(bytes.begin() + kHeaderSize, bytes.begin() + ptrdiff_t(cut));
                 if (cut == shorter)  // the whole message before its trailing field: a message without it
                     EXPECT_EQ(decodePayload<Msg>(payload.data(), payload.size()), withoutTrailing(msg));
-                else if (depthOnly && cut == middle)
-                    EXPECT_EQ(decodePayload<Msg>(payload.data(), payload.size()), *depthOnly);
                 else
                     EXPECT_THROW(decodePayload<Msg>(payload.data(), payload.size()), DecodeError) << "cut at " << cut;
             }
@@ -918,7 +962,7 @@ TEST(Protocol, NodeMessagesRejectValuesOutOfRange) {
     f.pixels = TilePixels::Srgb8;
     EXPECT_NO_THROW(decode<NodeFrame>(payloadOf(f)));
     p = payloadOf(NodeFrame{1, 10, 10, 8});
-    p[p.size() - 5] = 2;  // the stochastic flag is a boolean
+    p[p.size() - 6] = 2;  // the stochastic flag is a boolean (before the state and the parts byte)
     EXPECT_THROW(decode<NodeFrame>(p), DecodeError);
     // Two views of a frame at the tile limit are over it.
     f = sampleViewsNodeFrame();

@@ -86,33 +86,48 @@ TEST(NodeRun, OneCommandRunsTwoLocalNodesBitIdenticalToOnePc) {
     }
 }
 
-// A calibrated wall (issue 30) on two display nodes: the clients trace through the warps, each
-// node blends its screens with the file's maps, and every screen is the one-PC wall's bytes.
+// A calibrated wall (issue 30) on two display nodes: the clients trace through the warps (or,
+// post-warping, render flat and each node resamples its screens from the eyes each frame names),
+// each node blends its screens with the file's maps, and every screen is the one-PC wall's bytes;
+// post-warped also on quad-buffered screens (each eye's buffer from its eye).
 TEST(NodeRun, TheCurvedWallOnTwoNodesIsTheOnePcWallsBytes) {
-    const std::filesystem::path dir = test::scratchDir();
-    test::mpcdiTestgen("cylinder " + (dir / "c.mpcdi").string() + " --res 64x48 --wall " + (dir / "c.toml").string());
-    WallConfig w = loadWallConfig(dir / "c.toml");
-    w.writeEvery = 1;
-    test::writeFile(dir / "one.toml", writeWallConfig(w));
-    for (ScreenConfig& sc : w.screens) sc.node = sc.name == "proj2" ? "right" : "left";
-    test::writeFile(dir / "nodes.toml", writeWallConfig(w));
-    test::ChildProcess nodes(runArgs(dir / "nodes.toml", 2, dir / "nodes"));
-    ASSERT_EQ(nodes.wait(240'000), std::optional<int>(0)) << nodes.output();
-    EXPECT_EQ(nodes.output().find("without the calibration's blend"), std::string::npos) << nodes.output();
-    test::ChildProcess onePc(runArgs(dir / "one.toml", 2, dir / "one"));
-    ASSERT_EQ(onePc.wait(240'000), std::optional<int>(0)) << onePc.output();
-    size_t compared = 0;
-    for (const auto& [node, screens] : std::map<std::string, std::vector<std::string>>{{"left", {"proj0", "proj1"}}, {"right", {"proj2"}}})
-        for (int frame = 1; frame <= 2; ++frame)
-            for (const std::string& screen : screens) {
-                char name[64];
-                std::snprintf(name, sizeof name, "frame_%06d_%s.png", frame, screen.c_str());
-                SCOPED_TRACE(node + "/" + name);
-                ASSERT_TRUE(std::filesystem::exists(dir / "nodes" / node / name)) << nodes.output();
-                EXPECT_TRUE(fileBytes(dir / "nodes" / node / name) == fileBytes(dir / "one" / name));
-                ++compared;
-            }
-    EXPECT_EQ(compared, 6u);
+    for (const std::string variant : {"direct", "post", "post-quad"}) {
+        SCOPED_TRACE(variant);
+        const std::filesystem::path dir = test::scratchDir() / variant;
+        std::filesystem::create_directories(dir);
+        test::mpcdiTestgen("cylinder " + (dir / "c.mpcdi").string() + " --res 64x48 --wall " + (dir / "c.toml").string());
+        std::string text = fileBytes(dir / "c.toml");
+        if (variant == "post-quad") text.replace(text.find("mode = \"none\""), 13, "mode = \"quad_buffer\"");
+        test::writeFile(dir / "c.toml", text);
+        WallConfig w = loadWallConfig(dir / "c.toml");
+        w.writeEvery = 1;
+        if (variant != "direct") w.warp->mode = WarpMode::Post;
+        test::writeFile(dir / "one.toml", writeWallConfig(w));
+        for (ScreenConfig& sc : w.screens) sc.node = sc.name == "proj2" ? "right" : "left";
+        test::writeFile(dir / "nodes.toml", writeWallConfig(w));
+        test::ChildProcess nodes(runArgs(dir / "nodes.toml", 2, dir / "nodes"));
+        ASSERT_EQ(nodes.wait(240'000), std::optional<int>(0)) << nodes.output();
+        EXPECT_EQ(nodes.output().find("without the calibration's"), std::string::npos) << nodes.output();
+        test::ChildProcess onePc(runArgs(dir / "one.toml", 2, dir / "one"));
+        ASSERT_EQ(onePc.wait(240'000), std::optional<int>(0)) << onePc.output();
+        size_t compared = 0;
+        const std::vector<std::string> suffixes = variant == "post-quad" ? std::vector<std::string>{"_left", "_right"} : std::vector<std::string>{""};
+        for (const auto& [node, screens] : std::map<std::string, std::vector<std::string>>{{"left", {"proj0", "proj1"}}, {"right", {"proj2"}}})
+            for (int frame = 1; frame <= 2; ++frame)
+                for (const std::string& screen : screens)
+                    for (const std::string& eye : suffixes) {
+                        char name[64];
+                        std::snprintf(name, sizeof name, "frame_%06d_%s%s.png", frame, screen.c_str(), eye.c_str());
+                        SCOPED_TRACE(node + "/" + name);
+                        ASSERT_TRUE(std::filesystem::exists(dir / "nodes" / node / name)) << nodes.output();
+                        EXPECT_TRUE(fileBytes(dir / "nodes" / node / name) == fileBytes(dir / "one" / name));
+                        ++compared;
+                    }
+        EXPECT_EQ(compared, 6u * suffixes.size());
+        if (variant == "post-quad") {  // the eyes' buffers differ: each was warped from its own eye
+            EXPECT_NE(fileBytes(dir / "one" / "frame_000002_proj1_left.png"), fileBytes(dir / "one" / "frame_000002_proj1_right.png"));
+        }
+    }
 }
 
 // The node's process among the run's children, by its --node argument.

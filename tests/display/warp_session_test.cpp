@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <chrono>
 #include <cstring>
+#include <map>
 #include <thread>
 
 namespace rtwall {
@@ -276,6 +277,68 @@ TEST(WarpSession, ATrackedHeadMovesTheEyeOfTheCurvedWallsRays) {
     sendHead(0.0, 2);
     ASSERT_TRUE(tracked.step());
     EXPECT_EQ(differing(tracked.lastFrame().left, atViewer), 0u) << "the head back at the viewer";
+}
+
+// The post-warp on display nodes follows the tracked head: each frame tells the nodes the eyes
+// its flat views were rendered from, and each node resamples its screens from them. A head
+// 0.25 m right of the viewer (DTrack, before the first frame): the nodes' screens are the
+// one-PC wall's at that head, to the bit, and not what the config's viewer would make of the
+// same flat images.
+TEST(WarpSession, PostWarpingDisplayNodesResampleFromTheTrackedEyes) {
+    const fs::path dir = test::scratchDir();
+    test::mpcdiTestgen("cylinder " + (dir / "c.mpcdi").string() + " --res 64x48 --wall " + (dir / "c.toml").string());
+    const std::string tracking = "[tracking]\nsource = \"dtrack://127.0.0.1:0\"\ntimeout_ms = 60000\n";
+    WallConfig w = loadWallConfig(dir / "c.toml");
+    w.warp->mode = WarpMode::Post;
+    const std::string one = writeWallConfig(w) + tracking;
+    for (ScreenConfig& sc : w.screens) sc.node = sc.name == "proj2" ? "b" : "a";
+    const std::string nodes = writeWallConfig(w) + tracking;
+    // Each run's screens of its last frame, once every screen was written twice (still head, still scene).
+    auto run = [&](const std::string& name, const std::string& wallText, bool moved) {
+        const fs::path out = dir / name;
+        RunConfig c = steppedRunConfig(out, 2);
+        c.scene = test::writeFile(dir / "scene.toml", kScene).string();
+        c.wall = test::writeFile(dir / (name + ".toml"), wallText);
+        c.cluster.async = false;
+        c.writeEvery = 1;
+        c.cluster.displayNodes.stallSeconds = 60;  // no node left out on a loaded machine
+        WallSession s(c);
+        if (moved) {
+            DTrackFrame f;
+            f.frame = 1;
+            DTrackBody b;
+            b.quality = 1;
+            b.position = {250.0, 0.0, 3000.0};
+            f.bodies.push_back(b);
+            DTrackSender(s.trackerPort()).send(f);
+            for (int i = 0; i < 400 && !(s.tracker() && s.tracker()->packets >= 1); ++i)
+                std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+        std::map<std::string, fs::path> newest;  // screen -> its newest file
+        const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+        for (int i = 0; i < 3 || (newest.size() < 3 && std::chrono::steady_clock::now() < until); ++i) {
+            EXPECT_TRUE(s.step());
+            newest.clear();
+            std::error_code ec;
+            fs::create_directories(out, ec);
+            for (const auto& e : fs::recursive_directory_iterator(out)) {
+                const std::string file = e.path().filename().string();  // frame_NNNNNN_projK.png
+                if (!e.is_regular_file() || file.size() != 22 || file.compare(0, 6, "frame_") != 0) continue;
+                fs::path& n = newest[file.substr(13, 5)];
+                if (n.empty() || file > n.filename().string()) n = e.path();
+            }
+        }
+        std::map<std::string, std::vector<uint8_t>> last;
+        for (const auto& [screen, file] : newest) last[screen] = readPng(file).rgb;
+        return last;
+    };
+    const auto atHead = run("one", one, true), onNodes = run("nodes", nodes, true), fixed = run("fixed", one, false);
+    ASSERT_EQ(atHead.size(), 3u);
+    ASSERT_EQ(onNodes.size(), 3u);
+    for (const auto& [screen, rgb] : atHead) {
+        EXPECT_TRUE(onNodes.at(screen) == rgb) << screen << ": the node's post-warp is not the one-PC wall's";
+        EXPECT_FALSE(fixed.at(screen) == rgb) << screen << ": the head did not move the picture";
+    }
 }
 
 }  // namespace

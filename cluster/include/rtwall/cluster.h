@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <array>
 #include <optional>
 #include <span>
 #include <string>
@@ -300,7 +301,9 @@ public:
     // shows: the caller's tag, e.g. the tracker packet behind its head pose) and begins one with
     // these. Views are not scene state: a new eye camera moves no sequence number. Empty views:
     // mono frames of setCamera's camera, one image (renderFrame), as before any call.
-    void setViews(std::vector<FrameView> views, uint64_t tag = 0);
+    // `roomEyes` (issue 30): the eyes (left, right) the views were made from, in the wall's room
+    // coordinates, for display nodes that post-warp their screens (DisplayNodeRun::roomEyes).
+    void setViews(std::vector<FrameView> views, uint64_t tag = 0, std::optional<std::array<Float3, 2>> roomEyes = {});
     // With display nodes (issue 28): the frames begun after the call are denoised on the nodes
     // with these settings, each window of the wall (DisplayNodeRun::denoiseWindows) with `ring`
     // pixels around it (ComposeFrame::denoiseRing), when their tiles carry the mode's features
@@ -333,7 +336,8 @@ public:
     // network thread sends it, ahead of any queued command). A pose not yet sent is replaced by a
     // newer one; nothing is sent before the first release. `debug` tints warped, filled and fresh
     // pixels on the nodes.
-    void presentPose(std::span<const CameraDesc> cameras, bool debug = false);
+    // `roomEyes`: the eyes of `cameras` in the room, as setViews' (post-warping nodes).
+    void presentPose(std::span<const CameraDesc> cameras, bool debug = false, std::optional<std::array<Float3, 2>> roomEyes = {});
     // The refreshes the nodes answered since the last call, oldest first (at most 4096 kept).
     std::vector<NodeRefreshDelay> takeNodeRefreshes();
 
@@ -492,6 +496,11 @@ struct DisplayNodeRun {
     // Unset: the node warps on the CPU (Compositor::reproject) and calls `present` with the
     // warped eyes.
     std::function<void(const struct NodeRefresh&)> refresh;
+    // Optional (issue 30): the eyes, in the wall's room coordinates, that the frame about to be
+    // presented (or the pose about to be shown) was made for, when the master gave them
+    // (Master::setViews, presentPose): called just before `present` or `refresh`. A post-warping
+    // wall's node resamples its screens from them.
+    std::function<void(const std::array<Float3, 2>& roomEyes)> roomEyes;
     // Denoising (issue 28; the master's setDenoise): the windows of a width x height frame with
     // these views (none: one image) and eyes that this node shows, per view: the rects it
     // filters, each with the ring of pixels the master gives (ComposeFrame::denoiseWindows).

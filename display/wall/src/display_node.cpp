@@ -17,6 +17,7 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
     std::unique_ptr<HeadlessPresenter> headless;
     WallConfig wall, whole;  // this node's screens; the whole wall (its denoise windows)
     std::unique_ptr<ProjectorBlendStage> blend;  // a calibrated wall's alpha and beta maps on this node's screens
+    std::unique_ptr<PostWarpStage> postWarp;     // [warp] mode = "post": this node's screens resampled through the warp
     DisplayNodeRun run;
     run.connect = options.connect;
     run.name = options.name;
@@ -33,16 +34,19 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
         whole = parseWallConfig(text, "the master's wall config");
         wall = nodeWall(whole, options.name);
         if (whole.warp) {
-            // A calibrated wall (issue 30): the clients trace through its warps; this node
-            // applies its screens' blend maps, from the file at the master's path (the same
-            // path on every display PC, as the wall's shaders).
+            // A calibrated wall (issue 30): the clients trace through its warps (or render flat
+            // for the post-warp, which this node does); this node applies its screens' blend
+            // maps, from the file at the master's path (the same path on every display PC, as
+            // the wall's shaders).
             WallConfig withWarp = wall;
             withWarp.warp = whole.warp;
             try {
-                blend = std::make_unique<ProjectorBlendStage>(withWarp, readMpcdi(whole.warp->mpcdi));
+                const MpcdiFile file = readMpcdi(whole.warp->mpcdi);
+                if (whole.warp->mode == WarpMode::Post) postWarp = std::make_unique<PostWarpStage>(withWarp, file);
+                blend = std::make_unique<ProjectorBlendStage>(withWarp, file);
             } catch (const InputError& e) {
-                std::fprintf(stderr, "rtwall display: node '%s' shows its screens without the calibration's blend: %s\n",
-                             options.name.c_str(), e.what());
+                std::fprintf(stderr, "rtwall display: node '%s' shows its screens without the calibration's %s: %s\n",
+                             options.name.c_str(), whole.warp->mode == WarpMode::Post ? "post-warp and blend" : "blend", e.what());
             }
         }
         std::string whyNot;
@@ -57,6 +61,7 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
     const auto show = [&](WallFrame& f, const std::vector<std::string>& leftOut) {
         Image overlay;
         PresentOptions po;
+        if (postWarp) po.stages.push_back(postWarp.get());  // resampled first, then blended
         if (blend) po.stages.push_back(blend.get());
         if (!leftOut.empty()) {
             std::string text = "display nodes left out:";
@@ -124,6 +129,11 @@ int runWallNode(const DisplayNodeOptions& options, const std::atomic<bool>* stop
         f.left = *left;
         if (right) f.right = *right;
         show(f, leftOut);
+    };
+    // The post-warp resamples from the eyes the frame (or the pose) was made for, as the master
+    // says with each.
+    run.roomEyes = [&](const std::array<Float3, 2>& eyes) {
+        if (postWarp) postWarp->setEyes(eyes[0], eyes[1]);
     };
     // A re-projecting wall (issue 27): each refresh shows the newest frame warped to the master's
     // pose, on the GPU in windows, else by the CPU warp (which runs even when nothing is written:

@@ -118,7 +118,7 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
         // The views from the start: a calibration's frames then cost what the wall's frames do.
         s.head = staticHead(s.wallConfig.stereo);
         s.viewSpecs.push_back({0, 0, s.head, s.frameViews()});
-        s.master->setViews(s.viewSpecs.back().views, 0);
+        s.master->setViews(s.viewSpecs.back().views, 0, s.nodeEyes(s.head));
     }
     s.tuning = std::make_unique<WallTuning>(*s.master, *s.live, s.baseSettings, s.baseCodec, s.log);
     s.tuning->start(c.targetFps, givenFront, c.trace);

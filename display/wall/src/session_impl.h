@@ -74,12 +74,21 @@ struct WallSession::Impl {
     std::unique_ptr<PostWarpStage> postWarp;     // [warp] mode = "post": the screens' flat images resampled
     // The post-warp resamples from the eyes the shown image was made for: the head its frame
     // was rendered with (with async frames, a step older than the newest), or re-projecting,
-    // the pose it was warped to.
+    // the pose it was warped to. On display nodes the eyes go with each frame and pose.
+    bool postWarping = false;
+    std::array<Float3, 2> postWarpEyes(const HeadPose& h) const {
+        const double sep = wallConfig.stereo.eyeSeparation;
+        if (stereo) return {eyePosition(h, sep, 0), eyePosition(h, sep, 1)};
+        return {eyePosition(h, sep, -1), eyePosition(h, sep, -1)};
+    }
+    std::optional<std::array<Float3, 2>> nodeEyes(const HeadPose& h) const {
+        if (!postWarping || !onNodes) return std::nullopt;
+        return postWarpEyes(h);
+    }
     void setPostWarpEyes() {
         if (!postWarp) return;
-        const double sep = wallConfig.stereo.eyeSeparation;
-        if (stereo) postWarp->setEyes(eyePosition(shownHead, sep, 0), eyePosition(shownHead, sep, 1));
-        else postWarp->setEyes(eyePosition(shownHead, sep, -1), eyePosition(shownHead, sep, -1));
+        const std::array<Float3, 2> e = postWarpEyes(shownHead);
+        postWarp->setEyes(e[0], e[1]);
     }
     std::atomic<bool> stopNodes{false};
     std::atomic<size_t> nodeThreadsEnded{0};
@@ -478,16 +487,10 @@ struct WallSession::Impl {
         const MpcdiFile file = readMpcdi(wallConfig.warp->mpcdi);
         blend = std::make_unique<ProjectorBlendStage>(wallConfig, file);
         if (wallConfig.warp->mode == WarpMode::Post) {
-            // The comparison mode: flat renders, resampled through the warp on the screens (the
-            // master's: display nodes do not know the head the frame is shown for).
-            if (!wallConfig.nodes().empty())
-                throw InputError(wallConfig.file.string() + ": [warp] mode = \"post\" is for the master's screens; this wall's "
-                                 "are on display nodes (mode = \"direct\" works there)");
-            try {
-                postWarp = std::make_unique<PostWarpStage>(wallConfig, file);
-            } catch (const std::invalid_argument& e) {
-                throw InputError(wallConfig.file.string() + ": [warp] mode = \"post\": " + e.what());
-            }
+            // The comparison mode: flat renders, resampled through the warp on the screens: the
+            // master's here, a display node's there (each frame tells the nodes its eyes).
+            postWarping = true;
+            postWarp = std::make_unique<PostWarpStage>(wallConfig, file);
             log(format("warp: %s, post-warp: flat renders resampled through the calibration on the screens (%s profile)",
                        wallConfig.warp->mpcdi.filename().string().c_str(), mpcdiProfileName(file.profile)));
             return;
@@ -559,7 +562,7 @@ struct WallSession::Impl {
             // Every view's tiles in one scheduler pass. The views go with a tag: with async the
             // frame that comes back was begun with the views of the step before.
             ViewSpec spec{nextViewTag++, trackerState.packets, head, frameViews()};
-            master->setViews(spec.views, spec.tag);
+            master->setViews(spec.views, spec.tag, nodeEyes(spec.head));
             viewSpecs.push_back(std::move(spec));
             std::vector<Image> images = reproject ? renderWhileRefreshing()
                                                   : master->renderViews(&report, &viewLinear, denoising() ? &viewDepth : nullptr,

@@ -95,7 +95,7 @@ void WallSession::Impl::latchAndWarp() {
         // The nodes warp: the pose goes to all of them (after the first release; before it the
         // master sends nothing).
         latchTargets();
-        master->presentPose(targets, warpDebug);
+        master->presentPose(targets, warpDebug, nodeEyes(shownHead));
         return;
     }
     // A frame that came without depth (none should) is shown as composed, for the pose it was made for.
