@@ -5,6 +5,7 @@
 #include "protocol.h"
 #include "protocol_selectors.h"
 
+#include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -170,6 +171,21 @@ int main(int argc, char** argv) {
         d.sceneSeq = 4;
         seedMessage("node-frame-denoise",
                     NodeFrame{7, 128, 64, 32, TilePixels::LinearHalf, {}, {}, true, 9, true, d});
+    }
+
+    // Version 21: the eyes a frame and a pose were made for (a post-warping wall's nodes), alone
+    // and with the frame's other optional parts.
+    {
+        const std::array<Float3, 2> eyes{Float3{-0.0325f, 1.7f, 2.5f}, Float3{0.0325f, 1.7f, 2.5f}};
+        seedMessage("node-frame-eyes", NodeFrame{8, 128, 64, 32, TilePixels::Srgb8, {}, {}, false, 0, false, {}, eyes});
+        NodeDenoise d;
+        d.settings.mode = DenoiseSettings::Mode::Temporal;
+        d.ring = 8;
+        d.features = kFeatureNormal | kFeatureId;
+        seedMessage("node-frame-denoise-eyes", NodeFrame{9, 128, 64, 32, TilePixels::LinearHalf, {}, {}, true, 9, true, d, eyes});
+        CameraDesc c;
+        c.name.clear();
+        seedMessage("node-pose-eyes", NodePose{13, 4, false, {c}, eyes});
     }
 
     // Version 18: calibrated projectors: the grids (one NaN sample: a pixel on no screen) and a
