@@ -341,5 +341,49 @@ TEST(WarpSession, PostWarpingDisplayNodesResampleFromTheTrackedEyes) {
     }
 }
 
+// A click picks what the calibrated pixel shows: its ray through the projector pixel's surface
+// point, as the frame rendered it. The room is put in the world by a rotation and a scale, so
+// the angle between the rays of two clicked pixels is the angle between the eye's rays through
+// their surface points; the wall's plain camera (a flat screen's) gives other angles.
+TEST(WarpSession, AClickPicksAlongTheCalibratedPixelsRay) {
+    const fs::path dir = test::scratchDir();
+    test::mpcdiTestgen("cylinder " + (dir / "c.mpcdi").string() + " --res 64x48 --wall " + (dir / "c.toml").string());
+    RunConfig c = steppedRunConfig(dir, 1);
+    c.scene = test::writeFile(dir / "scene.toml", kScene).string();
+    c.wall = dir / "c.toml";
+    c.cluster.async = false;
+    WallSession s(c);
+    ASSERT_TRUE(s.step());
+    const WallConfig wall = loadWallConfig(dir / "c.toml");
+    const MpcdiFile file = readMpcdi(dir / "c.mpcdi");
+    const Float3 viewer = wall.stereo.viewer;
+    const Camera flat(s.camera(), wall.width, wall.height);
+    struct Hit {
+        Float3 ray, room, flat;  // the pick's ray (world), the surface point's (room), the plain camera's
+    };
+    std::vector<Hit> hits;
+    for (int k = 0; k < 3; ++k)
+        for (int y = 4; y < 48; y += 8)
+            for (int x = 4; x < 64; x += 8) {
+                const Float3 p = file.buffers[size_t(k)].regions[0].warp.samples[size_t(y) * 64 + size_t(x)];
+                if (std::isnan(p.x)) continue;
+                const double wx = 64 * k + x + 0.5, wy = y + 0.5;
+                const std::optional<PickResult> r = s.pick(wx, wy);
+                if (!r) continue;
+                hits.push_back({normalize(r->point - s.camera().position), normalize(p - viewer),
+                                normalize(flat.direction(float(wx), float(wy)))});
+            }
+    ASSERT_GT(hits.size(), 20u) << "the scene is not under the pixels";
+    double worst = 0, flatWorst = 0;
+    for (size_t i = 0; i < hits.size(); ++i)
+        for (size_t j = i + 1; j < hits.size(); ++j) {
+            const double want = std::acos(std::clamp(double(dot(hits[i].room, hits[j].room)), -1.0, 1.0));
+            worst = std::max(worst, std::abs(std::acos(std::clamp(double(dot(hits[i].ray, hits[j].ray)), -1.0, 1.0)) - want));
+            flatWorst = std::max(flatWorst, std::abs(std::acos(std::clamp(double(dot(hits[i].flat, hits[j].flat)), -1.0, 1.0)) - want));
+        }
+    EXPECT_LT(worst, 1e-3) << "radians";
+    EXPECT_GT(flatWorst, 0.05) << "the plain camera would pick the same: the test shows nothing";
+}
+
 }  // namespace
 }  // namespace rtwall

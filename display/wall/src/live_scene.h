@@ -131,8 +131,11 @@ public:
 
     // The instance the ray through image position (x, y) of a width x height image hits first.
     std::optional<PickResult> pick(const CameraDesc& camera, int width, int height, double x, double y) {
+        return pick(Camera(camera, width, height), x, y);
+    }
+    std::optional<PickResult> pick(const Camera& camera, double x, double y) {
         if (!pickScene_) pickScene_ = std::make_unique<Scene>(desc_);
-        return rtwall::pick(*pickScene_, Camera(camera, width, height), float(x), float(y));
+        return rtwall::pick(*pickScene_, camera, float(x), float(y));
     }
 
     // The instance a ray (a tracked wand's) hits first; t in units of `direction`. The engine's

@@ -108,6 +108,8 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     if (s.postWarp) io.stages.push_back(s.postWarp.get());  // resampled first, then blended
     if (s.blend) io.stages.push_back(s.blend.get());
     s.input = std::make_unique<WallInput>(s.wallConfig, s.start, io, s.log);
+    // Clicks pick (and measure) with the view that shows the pixel, as it was rendered.
+    if (s.views) s.input->setPickCamera([&s](double x, double y) { return s.pickCamera(x, y); });
     s.input->setPartView(*s.live, {});  // says what the scene file and the command line hid, if anything
     for (const InstanceDesc& in : s.live->desc().instances) s.loadedTransforms.push_back(in.transform);
     if (!c.session.empty()) restoreSession(readSessionState(c.session, s.live->desc()));

@@ -455,6 +455,21 @@ struct WallSession::Impl {
         }
     }
 
+    // The camera that shows wall pixel (x, y) (WallInput::setPickCamera): the view whose part of
+    // the wall holds it (the left eye's of a stereo wall), off-axis, through its calibration's
+    // warps, as the frame renders it; none on a pixel no view shows.
+    std::optional<Camera> pickCamera(double x, double y) {
+        std::optional<Camera> out;
+        forEachView(head, [&](int eye, const std::vector<WallView>& vs, size_t i) {
+            if (out || eye == 1) return;
+            const FrameView f = frameView(vs, i);
+            bool inside = f.regions.empty();
+            for (const ViewRegion& r : f.regions) inside = inside || (x >= r.x && x < r.x + r.width && y >= r.y && y < r.y + r.height);
+            if (inside) out.emplace(f.camera, wallConfig.width, wallConfig.height, frameWarps(f, config.cluster.warpGrids, wallConfig.width, wallConfig.height));
+        });
+        return out;
+    }
+
     // View i of an eye's views with its off-axis camera; one plane of several shows (and has
     // rendered) only its screens' pixels.
     // A calibrated screen's projector pixels look where its warps say (issue 30), the room

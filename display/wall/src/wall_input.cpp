@@ -93,8 +93,14 @@ void WallInput::setNavigationScale(double scale) {
     refreshStatus();
 }
 
+Camera WallInput::pickCamera(double wallX, double wallY) const {
+    if (pickCamera_)
+        if (std::optional<Camera> c = pickCamera_(wallX, wallY)) return std::move(*c);
+    return Camera(camera(), wall_.width, wall_.height);
+}
+
 std::optional<PickResult> WallInput::pick(LiveScene& scene, double wallX, double wallY) {
-    return scene.pick(camera(), wall_.width, wall_.height, wallX, wallY);
+    return scene.pick(pickCamera(wallX, wallY), wallX, wallY);
 }
 
 namespace {
@@ -118,8 +124,8 @@ void WallInput::setMeasuring(bool on) {
 
 bool WallInput::measurePick(LiveScene& scene, double wallX, double wallY) {
     if (!measuring_) return false;
-    const Camera cam(camera(), wall_.width, wall_.height);
-    return measureHit(scene, pick(scene, wallX, wallY), cam.origin(), cam.direction(float(wallX), float(wallY)));
+    const Camera cam = pickCamera(wallX, wallY);
+    return measureHit(scene, scene.pick(cam, wallX, wallY), cam.origin(), cam.direction(float(wallX), float(wallY)));
 }
 
 // A hit of the ray o + t d (a click's or the wand's) as the next point of the measurement.

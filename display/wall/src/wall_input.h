@@ -66,6 +66,11 @@ public:
     // Presses of J (the re-projection's debug colours) since the last call.
     int takeWarpDebugPresses() { return std::exchange(warpDebugPresses_, 0); }
     std::optional<PickResult> pick(LiveScene& scene, double wallX, double wallY);
+    // The camera a click at wall pixel (x, y) picks with: the session's (setPickCamera: the view
+    // that shows the pixel, off-axis and through its calibration), else the wall's camera.
+    using PickCamera = std::function<std::optional<Camera>(double wallX, double wallY)>;
+    void setPickCamera(PickCamera f) { pickCamera_ = std::move(f); }
+    Camera pickCamera(double wallX, double wallY) const;
     // Measure mode (WallSession::setMeasuring and measurePick say what it does).
     void setMeasuring(bool on);
     bool measuring() const { return measuring_; }
@@ -99,6 +104,7 @@ public:
 private:
     WallConfig wall_;
     CameraDesc base_;
+    PickCamera pickCamera_;
     Options options_;
     std::function<void(const std::string&)> log_;
     std::unique_ptr<GlPresenter> gl_;
