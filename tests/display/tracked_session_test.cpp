@@ -208,6 +208,40 @@ TEST(TrackedSession, CaveWallsAreRenderedEachWithItsOwnView) {
     }
 }
 
+
+// A click on a CAVE wall picks along that wall's view (the left eye's: a wall's pixels in the
+// composed image are its view's), not along the wall's plain camera, which only the front wall
+// shares.
+TEST(TrackedSession, AClickOnACaveWallPicksThroughThatWallsView) {
+    const auto dir = test::scratchDir();
+    WallSession cave(config(dir, caveWall("[0.0, 1.7, 0.0]", false), "cave.toml"));
+    ASSERT_TRUE(cave.step());
+    const WallConfig wall = loadWallConfig(dir / "cave.toml");
+    const std::vector<WallView> views = wallViews(wall, staticHead(wall.stereo), 0);
+    ASSERT_EQ(views.size(), 3u);
+    const Camera plain(cave.camera(), wall.width, wall.height);
+    size_t hits = 0, plainApart = 0;
+    for (const WallView& v : views) {
+        CameraDesc cam = cave.camera();
+        const EyeWindow w = eyeWindowInWorld(v.window, wall.stereo.viewer, {cam.position, cam.lookAt, cam.up, cam.fovY});
+        cam.position = w.eye;
+        cam.window = ProjectionWindow{w.lowerLeft, w.right, w.up};
+        const Camera view(cam, wall.width, wall.height);
+        const PixelRect& vp = wall.screens[v.screens[0]].viewport;
+        for (int y = 1; y < vp.height; y += 4)
+            for (int x = vp.x + 1; x < vp.x + vp.width; x += 4) {
+                const std::optional<PickResult> r = cave.pick(x + 0.5, y + 0.5);
+                if (!r) continue;
+                ++hits;
+                const Float3 got = normalize(r->point - view.origin()), want = normalize(view.direction(x + 0.5f, y + 0.5f));
+                EXPECT_LT(length(got - want), 1e-3f) << x << "," << y;
+                plainApart += length(normalize(plain.direction(x + 0.5f, y + 0.5f)) - want) > 0.05f;
+            }
+    }
+    EXPECT_GT(hits, 20u);
+    EXPECT_GT(plainApart, hits / 4) << "the plain camera would pick alike: the test shows nothing";
+}
+
 // ---- The flystick (issue 18): scripted DTrack datagrams of flystick 0 in the shipped room.
 
 // The flystick at wall position p (metres), pointing at the screen turned `yaw` degrees to the
