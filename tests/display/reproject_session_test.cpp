@@ -4,6 +4,7 @@
 // CAVE; while the cluster renders a slow frame the wall keeps presenting, each presentation with
 // the head pose read just before it; the wall config's `reproject` and the run's override.
 #include "display_test_util.h"
+#include "session_tracker.h"
 #include "test_util.h"
 
 #include <rtwall/cluster_testing.h>
@@ -57,21 +58,7 @@ RunConfig config(const std::filesystem::path& dir, const std::string& wallText, 
 
 // A head at wall position p (metres), facing the wall, as DTrack sends it (millimetres); waits
 // until the session's tracker has it.
-void sendHead(WallSession& s, Float3 p, uint64_t frame) {
-    DTrackFrame f;
-    f.frame = frame;
-    DTrackBody b;
-    b.quality = 1;
-    b.position = {p.x * 1e3, p.y * 1e3, p.z * 1e3};
-    f.bodies.push_back(b);
-    DTrackSender(s.trackerPort()).send(f);
-    for (int i = 0; i < 400; ++i) {  // 2 s at most
-        const std::optional<TrackerState> st = s.tracker();
-        if (st && st->packets >= frame) return;
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    ADD_FAILURE() << "the session's tracker did not get datagram " << frame;
-}
+void sendHead(WallSession& s, Float3 p, uint64_t frame) { test::sendHeadAt(s, p.x * 1e3, p.y * 1e3, p.z * 1e3, frame); }
 
 TEST(ReprojectSession, ATrackedWallReprojectsByDefaultAndTheOverrideWins) {
     const auto dir = test::scratchDir();

@@ -2,6 +2,7 @@
 // head at the config's viewer give the very bytes of the static render with that viewer, on a
 // flat 2x2 stereo wall and on a three-wall CAVE; a tilted or moved head changes the eye images.
 #include "display_test_util.h"
+#include "session_tracker.h"
 #include "test_util.h"
 
 #include <rtwall/wall.h>
@@ -91,13 +92,7 @@ void sendHead(WallSession& s, const TrackingConfig& t, Float3 p, double roll, ui
     // About the room's y axis (the viewing direction): x tips up towards z (room up).
     b.rotation = {c, 0, -sn, 0, 1, 0, sn, 0, c};
     f.bodies.push_back(b);
-    DTrackSender(s.trackerPort()).send(f);
-    for (int i = 0; i < 400; ++i) {  // 2 s at most
-        const std::optional<TrackerState> st = s.tracker();
-        if (st && st->packets >= frame) return;
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    ADD_FAILURE() << "the session's tracker did not get datagram " << frame;
+    test::sendToSession(s, f, frame);
 }
 
 bool sameBytes(const WallFrame& a, const WallFrame& b) {
@@ -266,13 +261,7 @@ void sendWand(WallSession& s, const TrackingConfig& t, Float3 p, double yaw, std
     w.controllers = std::move(joystick);
     f.definedFlysticks = 1;
     f.flysticks.push_back(w);
-    DTrackSender(s.trackerPort()).send(f);
-    for (int i = 0; i < 400; ++i) {
-        const std::optional<TrackerState> st = s.tracker();
-        if (st && st->packets >= frame) return;
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    ADD_FAILURE() << "the session's tracker did not get datagram " << frame;
+    test::sendToSession(s, f, frame);
 }
 
 std::string wandWall() { return flatWall("[0.0, 0.2, 2.5]", true) + "flystick = 0\n"; }

@@ -3,6 +3,7 @@
 // identity calibration is today's flat wall bit for bit, a whole-pixel shift shifts the image
 // exactly, and the curved three-projector wall is the same bytes on one, two and three clients.
 #include "common/files.h"
+#include "session_tracker.h"
 #include "display_test_util.h"
 #include "test_util.h"
 
@@ -253,21 +254,8 @@ TEST(WarpSession, ATrackedHeadMovesTheEyeOfTheCurvedWallsRays) {
     c.wall = test::writeFile(dir / "tracked.toml", mono + "[tracking]\nsource = \"dtrack://127.0.0.1:0\"\ntimeout_ms = 60000\n");
     WallSession tracked(c);
     ASSERT_GT(tracked.trackerPort(), 0);
-    auto sendHead = [&](double x, uint64_t frame) {
-        DTrackFrame f;
-        f.frame = frame;
-        DTrackBody b;
-        b.quality = 1;
-        b.position = {x * 1e3, 0.0, 3e3};  // millimetres; the room is the wall's frame
-        f.bodies.push_back(b);
-        DTrackSender(tracked.trackerPort()).send(f);
-        for (int i = 0; i < 400; ++i) {  // 2 s at most
-            const std::optional<TrackerState> st = tracked.tracker();
-            if (st && st->packets >= frame) return;
-            std::this_thread::sleep_for(std::chrono::milliseconds(5));
-        }
-        ADD_FAILURE() << "the session's tracker did not get datagram " << frame;
-    };
+    // Millimetres; the room is the wall's frame.
+    auto sendHead = [&](double x, uint64_t frame) { test::sendHeadAt(tracked, x * 1e3, 0.0, 3e3, frame); };
     ASSERT_TRUE(tracked.step());
     EXPECT_EQ(differing(tracked.lastFrame().left, atViewer), 0u) << "before any datagram: the config's viewer";
     sendHead(0.25, 1);
@@ -303,17 +291,7 @@ TEST(WarpSession, PostWarpingDisplayNodesResampleFromTheTrackedEyes) {
         c.writeEvery = 1;
         c.cluster.displayNodes.stallSeconds = 60;  // no node left out on a loaded machine
         WallSession s(c);
-        if (moved) {
-            DTrackFrame f;
-            f.frame = 1;
-            DTrackBody b;
-            b.quality = 1;
-            b.position = {250.0, 0.0, 3000.0};
-            f.bodies.push_back(b);
-            DTrackSender(s.trackerPort()).send(f);
-            for (int i = 0; i < 400 && !(s.tracker() && s.tracker()->packets >= 1); ++i)
-                std::this_thread::sleep_for(std::chrono::milliseconds(5));
-        }
+        if (moved) test::sendHeadAt(s, 250.0, 0.0, 3000.0, 1);
         std::map<std::string, fs::path> newest;  // screen -> its newest file
         const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(60);
         for (int i = 0; i < 3 || (newest.size() < 3 && std::chrono::steady_clock::now() < until); ++i) {
