@@ -75,14 +75,13 @@ struct WallSession::Impl {
     // The post-warp resamples from the eyes the shown image was made for: the head its frame
     // was rendered with (with async frames, a step older than the newest), or re-projecting,
     // the pose it was warped to. On display nodes the eyes go with each frame and pose.
-    bool postWarping = false;
     std::array<Float3, 2> postWarpEyes(const HeadPose& h) const {
         const double sep = wallConfig.stereo.eyeSeparation;
         if (stereo) return {eyePosition(h, sep, 0), eyePosition(h, sep, 1)};
         return {eyePosition(h, sep, -1), eyePosition(h, sep, -1)};
     }
     std::optional<std::array<Float3, 2>> nodeEyes(const HeadPose& h) const {
-        if (!postWarping || !onNodes) return std::nullopt;
+        if (!postWarp || !onNodes) return std::nullopt;
         return postWarpEyes(h);
     }
     void setPostWarpEyes() {
@@ -504,7 +503,6 @@ struct WallSession::Impl {
         if (wallConfig.warp->mode == WarpMode::Post) {
             // The comparison mode: flat renders, resampled through the warp on the screens: the
             // master's here, a display node's there (each frame tells the nodes its eyes).
-            postWarping = true;
             postWarp = std::make_unique<PostWarpStage>(wallConfig, file);
             log(format("warp: %s, post-warp: flat renders resampled through the calibration on the screens (%s profile)",
                        wallConfig.warp->mpcdi.filename().string().c_str(), mpcdiProfileName(file.profile)));
