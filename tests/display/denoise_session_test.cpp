@@ -1,7 +1,8 @@
 // Denoising on the wall (issue 28): a scene whose [denoise] asks for svgf (or --denoise) makes the
 // session ask its clients for features and show denoised frames, the same bytes on 1, 2 and 3
 // clients, and a compositor's own denoising of the frames (what one machine does); off shows the
-// frames as ever; a [denoise] edit that needs more features than the clients send says so.
+// frames as ever; a [denoise] edit that needs more features than the clients send says so; an
+// operating point of a front switches the filter.
 #include "display_test_util.h"
 #include "image_compare.h"
 #include "scratch.h"
@@ -122,6 +123,43 @@ TEST(DenoiseSession, AnEditNeedingMoreFeaturesSaysRestart) {
     s.applyEdit(edited);
     EXPECT_TRUE(test::logged(*lines, "denoise: off"));
     ASSERT_TRUE(s.step());
+}
+
+// An operating point naming the denoise control (`rtwall run --target-fps --front`): the scene
+// asks for none, the clients send svgf's features from the start, and the point's svgf shows the
+// very frames the scene's own [denoise] svgf would.
+TEST(DenoiseSession, AFrontsPointSwitchesTheFilter) {
+    const auto dir = test::scratchDir();
+    const auto front = test::writeFile(dir / "front.toml", R"([[point]]
+name = "svgf"
+frame_s = 0.001
+error = 0.5
+controls = { denoise = 2 }
+)");
+    auto lines = std::make_shared<std::vector<std::string>>();
+    RunConfig c = config(dir, roomWith(dir, ""), 2, lines);
+    c.targetFps = 1;
+    c.front = front;
+    WallSession byPoint(c);
+    EXPECT_TRUE(test::logged(*lines, "denoise: off now; the operating points may switch it up to svgf"));
+    EXPECT_TRUE(test::logged(*lines, "denoise: svgf"));
+    std::filesystem::create_directories(dir / "svgf");
+    WallSession byScene(config(dir, roomWith(dir / "svgf", "mode = \"svgf\""), 2));
+    for (int k = 0; k < 3; ++k) {
+        ASSERT_TRUE(byPoint.step());
+        ASSERT_TRUE(byScene.step());
+        EXPECT_EQ(byPoint.lastReport().features, kFeatureAll);
+        EXPECT_EQ(test::differingBytes(byPoint.lastFrame().left, byScene.lastFrame().left), 0u) << "frame " << k;
+    }
+    // Without linear tiles there is nothing to filter: said at the start, and the point's mode is
+    // refused with the reason.
+    lines->clear();
+    c.cluster.wideAccumulation = false;
+    WallSession narrow(c);
+    EXPECT_TRUE(test::logged(*lines, "denoise: off: it needs linear tiles (the cluster's wide accumulation; the front asks for svgf)"));
+    EXPECT_TRUE(test::logged(*lines, "operating point: denoise mode svgf: not applied: it needs linear tiles"));
+    ASSERT_TRUE(narrow.step());
+    EXPECT_EQ(narrow.lastReport().features, 0);
 }
 
 }  // namespace

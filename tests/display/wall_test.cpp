@@ -89,7 +89,8 @@ TEST(Controls, EveryControlHasOneNameAndAppliesWithinItsRange) {
             changed |= k.settings.tileSize != base.tileSize || k.settings.width != base.width ||
                        k.settings.supersample != base.supersample || k.settings.pruneThreshold != base.pruneThreshold ||
                        k.settings.gi != base.gi || k.codec.codec != CodecSettings{}.codec ||
-                       k.codec.jpegQuality != CodecSettings{}.jpegQuality || k.volumeStep != 0;
+                       k.codec.jpegQuality != CodecSettings{}.jpegQuality || k.volumeStep != 0 ||
+                       k.denoise == DenoiseSettings::Mode::Svgf;
         }
         EXPECT_TRUE(changed) << c.name << " changes nothing";
         for (double v : c.sweep) EXPECT_TRUE(v >= c.min && v <= c.max) << c.name << " sweeps " << v;
@@ -110,6 +111,21 @@ TEST(Controls, EveryControlHasOneNameAndAppliesWithinItsRange) {
     OperatingPoint half;
     half.controls = {{"scale", 0.5}};
     EXPECT_EQ(knobsOf(half, base, {}).settings.width, 800);
+    // The denoise control names its modes; a point without it leaves the filter alone, and a
+    // value between two modes is refused with their names.
+    OperatingPoint dn;
+    dn.name = "p2";
+    EXPECT_FALSE(knobsOf(dn, base, {}).denoise);
+    dn.controls = {{"denoise", 1}};
+    EXPECT_EQ(knobsOf(dn, base, {}).denoise, DenoiseSettings::Mode::Temporal);
+    dn.controls = {{"denoise", 1.5}};
+    try {
+        knobsOf(dn, base, {});
+        ADD_FAILURE() << "denoise 1.5 was applied";
+    } catch (const InputError& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  "operating point 'p2': control 'denoise' = 1.500000 is not a whole number (0 off, 1 temporal, 2 svgf)");
+    }
 }
 
 TEST(Controls, TheJsonTheSweepReadsHasEveryControl) {
@@ -119,6 +135,7 @@ TEST(Controls, TheJsonTheSweepReadsHasEveryControl) {
         if (*c.option) {
             EXPECT_NE(json.find("\"option\" : \"" + std::string(c.option) + "\""), std::string::npos) << c.name;
         }
+        for (const std::string& n : c.names) EXPECT_NE(json.find("\"" + n + "\""), std::string::npos) << c.name << ": " << n;
     }
 }
 

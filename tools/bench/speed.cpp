@@ -46,6 +46,7 @@ void ControlValues::apply(SceneDesc& desc) const {
         if (v) p.controls.emplace_back(name, *v);
     const Knobs k = knobsOf(p, desc.settings, {});
     desc.settings = k.settings;
+    if (k.denoise) desc.denoise.mode = *k.denoise;
     if (k.volumeStep > 0)
         for (Material& m : desc.materials)
             if (m.type == MaterialType::Volume) m.volumeStep = k.volumeStep;

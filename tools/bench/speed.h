@@ -59,6 +59,10 @@ struct TilesOptions : Common {
     double orbitDegrees = 1.0;
     ControlValues controls;
     int64_t triangles = 3'000'000;
+    // With the denoise control: the frames of the orbit that arrives at the scored view, and its
+    // speed (the filter's temporal reuse needs a history; issue 28).
+    int denoiseFrames = 8;
+    double denoiseDegrees = 0.5;
 };
 toml::table tiles(const TilesOptions& o);
 

@@ -4,9 +4,12 @@
 #include "speed_util.h"
 #include "tile_failure.h"
 
+#include <rtwall/denoise.h>
 #include <rtwall/tune.h>
 
 #include <algorithm>
+#include <chrono>
+#include <thread>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -59,6 +62,52 @@ toml::array codecRows(const TileProfile& profile, const std::vector<CodecSetting
     return rows;
 }
 
+// What the wall shows of the scored view with the scene's [denoise] mode (issue 28), when the
+// camera arrives at it turning `degrees` a frame about the look-at point: each of `frames` frames
+// rendered whole with its features (all threads), quantised as the cluster sends them and
+// filtered by one Denoiser; the last is the view (frame time aside: the tile profile's).
+toml::table denoisedRow(const Scene& scene, const SceneDesc& desc, const CameraDesc& view, int frames, double degrees,
+                        const std::optional<Image>& reference, int wallW, int wallH, std::FILE* text) {
+    const RenderSettings& s = desc.settings;
+    RenderSettings rs = s;
+    rs.threads = 0;
+    const uint8_t bits = featureBitsFor(desc.denoise.mode);
+    Denoiser dn;
+    std::vector<double> ms;
+    std::vector<float> shown;
+    for (int k = 0; k < frames; ++k) {
+        const CameraDesc cd = k == frames - 1 ? view : orbitCamera(view, degrees * (frames - 1 - k));
+        FeatureFrame f = renderFrameFeatures(scene, Camera(cd, s.width, s.height), rs, uint32_t(k + 1));
+        quantiseAsSent(f, bits);
+        const auto t0 = std::chrono::steady_clock::now();
+        const std::span<const float> out = dn.denoise({s.width, s.height, f.linear, f.depth, f.albedo, f.normal, f.id, cd, 0}, desc.denoise);
+        ms.push_back(1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        if (k == frames - 1) shown.assign(out.begin(), out.end());
+    }
+    Image img;
+    img.width = s.width;
+    img.height = s.height;
+    img.rgb.resize(shown.size());
+    linearToSrgb8(shown.data(), shown.size(), img.rgb.data());
+    const size_t pixels = size_t(s.width) * size_t(s.height);
+    // Linear half-float colour, the 16-bit depth code and the mode's features, before any compression.
+    const double bytes = double(pixels * (6 + 2) + encodedFeatureBytes(pixels, bits));
+    std::sort(ms.begin(), ms.end());
+    toml::table row{{"denoise", denoiseModeName(desc.denoise.mode)},
+                    {"frames", frames},
+                    {"degrees_per_frame", degrees},
+                    {"filter_ms", ms[ms.size() / 2]},
+                    {"threads", int(std::max(1u, std::thread::hardware_concurrency()))},
+                    {"bytes_per_frame", bytes}};
+    if (reference) row.insert("error", errorTable(compareImages(resizeBilinear(img, wallW, wallH), *reference)));
+    if (text)
+        std::fprintf(text, "denoise %s after %d frames of %g degrees: filter %.1f ms a frame, %.3f MB/frame%s\n",
+                     denoiseModeName(desc.denoise.mode), frames, degrees, ms[ms.size() / 2], bytes * 1e-6,
+                     reference ? (", PSNR " + std::to_string((*row["error"].as_table())["psnr_db"].value_or(0.0)) + " dB").c_str()
+                               : "");
+    return row;
+}
+
 }  // namespace
 
 toml::table tiles(const TilesOptions& o) {
@@ -68,6 +117,10 @@ toml::table tiles(const TilesOptions& o) {
     o.controls.apply(desc);
     if (!o.shading.empty()) s.shading = o.shading == "eyelight" ? ShadingMode::EyeLight : ShadingMode::Full;
     s.threads = 1;
+    // The scene's [denoise] or --denoise; only path-traced frames are filtered (as on the wall).
+    const bool denoised = desc.denoise.mode != DenoiseSettings::Mode::Off && s.gi;
+    if (o.controls.value("denoise").value_or(0) > 0 && !s.gi)
+        throw InputError("bench tiles: --denoise filters path-traced frames; this scene renders without GI (--gi-spp)");
     std::vector<CodecSettings> codecs;
     for (const std::string& c : splitList(o.codecs)) codecs.push_back(parseCodec(c));
     if (codecs.empty()) throw InputError("--codecs: no codec given");
@@ -110,6 +163,8 @@ toml::table tiles(const TilesOptions& o) {
                     {"render_s_per_frame", renderArray},
                     {"codecs", rows}};
     if (!o.profileOut.empty()) out.insert("profile", o.profileOut);
+    if (denoised)
+        out.insert("denoised", denoisedRow(scene, desc, start, o.denoiseFrames, o.denoiseDegrees, reference, wallW, wallH, o.text));
     if (o.text)
         std::fprintf(o.text, "%s at %dx%d (wall %dx%d), tile %d, %dx%d samples: %zu tiles, %.3f s per frame on one thread\n",
                      o.scene.c_str(), s.width, s.height, wallW, wallH, s.tileSize, s.supersample, s.supersample,

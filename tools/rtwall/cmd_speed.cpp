@@ -58,7 +58,11 @@ void addBenchTiles(CLI::App& bench, Run& run) {
         "tiles", "Per-tile render, encode and decode times (a tile profile for 'rtwall simulate') and each codec's error");
     cmd->add_option("scene", o.scene, "Scene file (.toml), mesh file or builtin:NAME")->required();
     addSizeOptions(cmd, o.width, o.height, 16, 16384, "Wall image", " (overrides the scene)");
-    addControlOptions(cmd, o.controls, {"scale", "tile", "supersample", "prune", "gi_spp", "volume_step"});  // scale: upscaled for the error
+    addControlOptions(cmd, o.controls, {"scale", "tile", "supersample", "prune", "gi_spp", "volume_step", "denoise"});  // scale: upscaled for the error
+    cmd->add_option("--denoise-frames", o.denoiseFrames,
+                    "With --denoise: frames of the orbit that arrives at the scored view (the filter's history)")
+        ->check(CLI::Range(1, 10000));
+    cmd->add_option("--denoise-orbit", o.denoiseDegrees, "With --denoise: its degrees per frame")->check(CLI::Range(-90.0, 90.0));
     cmd->add_option("--shading", o.shading, "full or eyelight (overrides the scene)")->check(CLI::IsMember({"full", "eyelight"}));
     cmd->add_option("--camera", o.camera, "Scene camera (default: the first)");
     cmd->add_option("--frames", o.frames, "Frames to time, the camera orbiting --orbit degrees per frame")->check(CLI::Range(1, 1000));

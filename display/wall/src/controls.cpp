@@ -29,22 +29,27 @@ void setGiSpp(Knobs& k, const RenderSettings&, double v) {  // 0: no GI; n: path
     k.settings.samples = std::max(1, int(v));
 }
 void setVolumeStep(Knobs& k, const RenderSettings&, double v) { k.volumeStep = float(v); }
+void setDenoise(Knobs& k, const RenderSettings&, double v) { k.denoise = DenoiseSettings::Mode(int(v)); }
 
 }  // namespace
 
 const std::vector<Control>& controls() {
     static const std::vector<Control> table = {
-        {"tile", "--tile", "Tile size in pixels", 4, 1024, {32, 64, 128}, "{}", setTile},
-        {"codec", "", "Tile codec: 0 raw, 1 LZ4, 2 zstd, 3 JPEG (TileCodec)", 0, 3, {}, "{}", setCodec},
-        {"jpeg_quality", "", "JPEG quality of the tiles", 1, 100, {}, "q{}", setJpegQuality},
+        {"tile", "--tile", "Tile size in pixels", 4, 1024, {32, 64, 128}, "{}", setTile, {}},
+        {"codec", "", "Tile codec: 0 raw, 1 LZ4, 2 zstd, 3 JPEG (TileCodec)", 0, 3, {}, "{}", setCodec, {}},
+        {"jpeg_quality", "", "JPEG quality of the tiles", 1, 100, {}, "q{}", setJpegQuality, {}},
         {"scale", "--scale", "Render at this fraction of the wall's resolution; the wall shows it upscaled", 0.05, 1.0,
-         {0.5, 0.75, 1.0}, "{}x", setScale},
-        {"supersample", "--supersample", "n x n samples per pixel", 1, 32, {1, 2}, "{}x{}", setSupersample},
+         {0.5, 0.75, 1.0}, "{}x", setScale, {}},
+        {"supersample", "--supersample", "n x n samples per pixel", 1, 32, {1, 2}, "{}x{}", setSupersample, {}},
         {"prune", "--prune", "Ray-tree pruning threshold (0: never prune)", 0, 1, {0.0005, 0.002, 0.01, 0.05}, "{}",
-         setPrune},
-        {"gi_spp", "--gi-spp", "Path-traced GI samples per pixel sample (0: GI off)", 0, 4096, {1, 4, 16}, "{} spp", setGiSpp},
+         setPrune, {}},
+        {"gi_spp", "--gi-spp", "Path-traced GI samples per pixel sample (0: GI off)", 0, 4096, {1, 4, 16}, "{} spp", setGiSpp, {}},
         {"volume_step", "--volume-step", "Ray-march step of every volume material, in voxels", 0.01, 100,
-         {0.25, 1.0, 4.0}, "{} voxels", setVolumeStep},
+         {0.25, 1.0, 4.0}, "{} voxels", setVolumeStep, {}},
+        // Scored over a moving sequence, not one frame (temporal reuse needs history): `rtwall
+        // bench tiles --denoise` renders the frames of a short orbit that ends at the scored view.
+        {"denoise", "--denoise", "Denoise the frames on the display side: 0 off, 1 temporal, 2 svgf (GI scenes)", 0, 2,
+         {0, 1, 2}, "{}", setDenoise, {"off", "temporal", "svgf"}},
     };
     return table;
 }
@@ -65,6 +70,11 @@ std::string controlsJson() {
         for (double v : c.sweep) sweep.push_back(v);
         out.push_back(toml::table{{"name", c.name}, {"option", c.option}, {"help", c.help}, {"min", c.min},
                                   {"max", c.max}, {"sweep", std::move(sweep)}, {"label", c.label}});
+        if (!c.names.empty()) {
+            toml::array names;
+            for (const std::string& n : c.names) names.push_back(n);
+            out.back().as_table()->insert("names", std::move(names));
+        }
     }
     std::ostringstream os;
     os << toml::json_formatter{toml::table{{"controls", std::move(out)}}};
@@ -72,12 +82,20 @@ std::string controlsJson() {
 }
 
 Knobs knobsOf(const OperatingPoint& p, const RenderSettings& base, const CodecSettings& baseCodec) {
-    Knobs k{base, baseCodec};
+    Knobs k{base, baseCodec, 0, std::nullopt};
     for (const auto& [name, v] : p.controls) {
         const Control& c = control(name, p.name);
         if (!(v >= c.min && v <= c.max))
             throw InputError("operating point '" + p.name + "': control '" + name + "' = " + std::to_string(v) +
                              " is outside [" + std::to_string(c.min) + ", " + std::to_string(c.max) + "]");
+        if (!c.names.empty() && v != std::floor(v))
+            throw InputError("operating point '" + p.name + "': control '" + name + "' = " + std::to_string(v) +
+                             " is not a whole number (" + [&] {
+                                 std::string list;
+                                 for (size_t i = 0; i < c.names.size(); ++i)
+                                     list += (i ? ", " : "") + std::to_string(i) + " " + c.names[i];
+                                 return list;
+                             }() + ")");
         c.apply(k, base, v);
     }
     return k;

@@ -66,16 +66,18 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
     if (!c.cameraPath.empty()) s.path = readCameraPath(c.cameraPath, desc.origin);
     // A given front is checked before anything starts: a mistake in it is one line, at once.
     std::vector<OperatingPoint> givenFront;
+    DenoiseSettings::Mode frontDenoise = DenoiseSettings::Mode::Off;  // the most demanding mode a point names
     if (!c.front.empty()) {
         if (c.targetFps <= 0) throw InputError("--front needs --target-fps");
         givenFront = readFront(c.front);
-        for (const OperatingPoint& p : givenFront) knobsOf(p, desc.settings, c.cluster.codec);  // unknown controls fail now
+        for (const OperatingPoint& p : givenFront)  // unknown controls fail now
+            if (const Knobs k = knobsOf(p, desc.settings, c.cluster.codec); k.denoise) frontDenoise = std::max(frontDenoise, *k.denoise);
     }
     if (!c.trace.empty() && c.targetFps <= 0) throw InputError("--trace needs --target-fps");
 
     s.decideReprojection();
     if (c.denoise) desc.denoise.mode = *c.denoise;
-    s.decideDenoising(desc);
+    s.decideDenoising(desc, frontDenoise);
     if (s.onNodes) s.routeToNodes();
     s.master = std::make_unique<Master>(desc, c.cluster);
     s.master->setStopFlag(stop);
@@ -122,7 +124,8 @@ WallSession::WallSession(RunConfig config, const std::atomic<bool>* stop) : impl
         s.viewSpecs.push_back({0, 0, s.head, s.frameViews()});
         s.master->setViews(s.viewSpecs.back().views, 0, s.nodeEyes(s.head));
     }
-    s.tuning = std::make_unique<WallTuning>(*s.master, *s.live, s.baseSettings, s.baseCodec, s.log);
+    s.tuning = std::make_unique<WallTuning>(*s.master, *s.live, s.baseSettings, s.baseCodec, s.log,
+                                            [&s](DenoiseSettings::Mode m) { s.setDenoiseMode(m, "operating point: denoise"); });
     s.tuning->start(c.targetFps, givenFront, c.trace);
     if (c.watch) {
         const std::filesystem::path file = c.scene;

@@ -144,6 +144,28 @@ struct WallSession::Impl {
     // --denoise) as the cluster was started for it.
     DenoiseSettings denoise;
     bool denoising() const { return denoise.mode != DenoiseSettings::Mode::Off; }
+    // The mode whose features the clients send (the scene's, or the most demanding one an
+    // operating point of --front names): a mode that reads no more switches at once.
+    DenoiseSettings::Mode sentFeatures = DenoiseSettings::Mode::Off;
+    // Switches the filter (an edit, an operating point): true if applied, else one line naming
+    // `who` and why (the clients do not send its features: a restart would).
+    bool setDenoiseMode(DenoiseSettings::Mode mode, const std::string& who) {
+        if (mode == denoise.mode) return true;
+        const uint8_t need = featureBitsFor(mode);
+        if (need && !config.cluster.wideAccumulation) {
+            log(format("%s mode %s: not applied: it needs linear tiles (the cluster's wide accumulation)", who.c_str(),
+                       denoiseModeName(mode)));
+            return false;
+        }
+        if ((need & ~config.cluster.features) != 0 || (need && !config.cluster.depth)) {
+            log(format("%s mode %s needs a restart (the clients send the features of %s)", who.c_str(), denoiseModeName(mode),
+                       denoiseModeName(sentFeatures)));
+            return false;
+        }
+        denoise.mode = mode;
+        log(format("denoise: %s", denoiseModeName(denoise.mode)));
+        return true;
+    }
     // The ring of pixels each screen's window is filtered with (ComposeFrame::denoiseRing), fixed
     // at the start; and the windows of the frame size and views last composed.
     int denoiseRing = 0;
@@ -152,7 +174,9 @@ struct WallSession::Impl {
     std::vector<FrameView> windowsViews;  // their regions
     std::vector<FeatureImages> viewFeatures;       // the rendered frame's, per view
     std::vector<std::vector<float>> monoLinear;    // a frame without views, as renderViews gives it
-    void decideDenoising(const SceneDesc& desc);   // before the master starts: features from the clients
+    // Before the master starts: the features the clients send, for the scene's mode or the most
+    // demanding one the operating points name (`frontMost`).
+    void decideDenoising(const SceneDesc& desc, DenoiseSettings::Mode frontMost);
     bool reprojects() const;     // what decideReprojection will decide, before it is said
     void decideReprojection();   // before the master starts: whether, and depth from the clients
     void latchTargets();         // targets := the views' cameras for the head pose read now
@@ -370,18 +394,7 @@ struct WallSession::Impl {
         const SceneEdit e = live->applyEdit(edited, tuning->controller() != nullptr, !path.empty() || config.orbit != 0.0);
         if (e.camera) input->setCamera(*e.camera);
         const std::string file = config.scene;
-        if (e.denoise && e.denoise->mode != denoise.mode) {
-            // The clients send the features of the mode the session began with: a mode that
-            // reads no more of them switches at once, one that reads more needs a restart.
-            const uint8_t need = featureBitsFor(e.denoise->mode);
-            if ((need & ~config.cluster.features) != 0 || (need && !config.cluster.depth))
-                log(format("%s: [denoise] mode %s needs a restart (the clients send the features of %s)", file.c_str(),
-                           denoiseModeName(e.denoise->mode), denoiseModeName(denoise.mode)));
-            else {
-                denoise.mode = e.denoise->mode;
-                log(format("denoise: %s", denoiseModeName(denoise.mode)));
-            }
-        }
+        if (e.denoise) setDenoiseMode(e.denoise->mode, file + ": [denoise]");
         for (const std::string& r : e.refused) log(file + ": " + r + " (not applied)");
         log(format("%s changed: %zu materials, %zu lights, %zu instance transforms, render settings %s, camera %s, %zu "
                    "section planes, %zu instance visibilities",

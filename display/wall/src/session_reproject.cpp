@@ -27,26 +27,34 @@ void WallSession::Impl::decideReprojection() {
     config.cluster.depth = true;  // every tile comes with its depth
 }
 
-void WallSession::Impl::decideDenoising(const SceneDesc& desc) {
+void WallSession::Impl::decideDenoising(const SceneDesc& desc, DenoiseSettings::Mode frontMost) {
     denoise = desc.denoise;
-    if (!denoising()) return;
-    const char* mode = denoiseModeName(denoise.mode);
+    const DenoiseSettings::Mode most = std::max(denoise.mode, frontMost);  // off < temporal < svgf
+    if (most == DenoiseSettings::Mode::Off) return;
     if (!config.cluster.wideAccumulation) {
-        log(format("denoise: off: it needs linear tiles (the cluster's wide accumulation; the scene asks for %s)", mode));
+        log(format("denoise: off: it needs linear tiles (the cluster's wide accumulation; %s asks for %s)",
+                   most == denoise.mode ? "the scene" : "the front", denoiseModeName(most)));
         denoise.mode = DenoiseSettings::Mode::Off;
         return;
     }
+    sentFeatures = most;
     config.cluster.depth = true;
-    config.cluster.features = featureBitsFor(denoise.mode);
+    config.cluster.features = featureBitsFor(most);
     // Screen by screen, each with the ring of pixels its filter reaches: the single-PC wall
     // as the display nodes, which get that ring of tiles around their screens (routeToNodes).
     // Levels raised later by an edit reach no further than this ring.
-    denoiseRing = rtwall::denoiseRing(denoise);
+    DenoiseSettings widest = denoise;
+    widest.mode = most;
+    denoiseRing = rtwall::denoiseRing(widest);
     const std::string where = onNodes ? format(", on the display nodes (%d-pixel ring around each screen)", denoiseRing) : "";
-    log(denoise.mode == DenoiseSettings::Mode::Svgf
-            ? format("denoise: svgf (%d levels, history %d), on the frames of a stochastic scene%s", denoise.levels,
-                     denoise.history, where.c_str())
-            : format("denoise: temporal (history %d), on the frames of a stochastic scene%s", denoise.history, where.c_str()));
+    if (denoise.mode == DenoiseSettings::Mode::Svgf)
+        log(format("denoise: svgf (%d levels, history %d), on the frames of a stochastic scene%s", denoise.levels,
+                   denoise.history, where.c_str()));
+    else if (denoise.mode == DenoiseSettings::Mode::Temporal)
+        log(format("denoise: temporal (history %d), on the frames of a stochastic scene%s", denoise.history, where.c_str()));
+    if (frontMost > denoise.mode)
+        log(format("denoise: %s now; the operating points may switch it up to %s (the clients send its features)%s",
+                   denoiseModeName(denoise.mode), denoiseModeName(frontMost), where.c_str()));
 }
 
 void WallSession::Impl::startRefresher() {

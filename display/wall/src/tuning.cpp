@@ -18,14 +18,20 @@ std::string pointName(const CodecSettings& c, int tile) {
 }  // namespace
 
 WallTuning::WallTuning(Master& master, LiveScene& live, RenderSettings baseSettings, CodecSettings baseCodec,
-                       std::function<void(const std::string&)> log)
-    : master_(master), live_(live), baseSettings_(baseSettings), baseCodec_(baseCodec), log_(std::move(log)) {}
+                       std::function<void(const std::string&)> log, std::function<void(DenoiseSettings::Mode)> setDenoise)
+    : master_(master),
+      live_(live),
+      baseSettings_(baseSettings),
+      baseCodec_(baseCodec),
+      log_(std::move(log)),
+      setDenoise_(std::move(setDenoise)) {}
 
 // An operating point's settings, applied through the one scene state.
 void WallTuning::apply(const OperatingPoint& p) {
     const Knobs k = knobsOf(p, baseSettings_, baseCodec_);
     live_.setRenderSettings(k.settings);
     master_.setCodec(k.codec);
+    if (k.denoise && setDenoise_) setDenoise_(*k.denoise);
     if (k.volumeStep > 0)
         for (size_t m = 0; m < live_.desc().materials.size(); ++m)
             if (live_.desc().materials[m].type == MaterialType::Volume && live_.desc().materials[m].volumeStep != k.volumeStep) {

@@ -20,8 +20,9 @@ namespace rtwall::wall {
 
 class WallTuning {
 public:
+    // `setDenoise`: a point naming the denoise control switches the display side's filter.
     WallTuning(Master& master, LiveScene& live, RenderSettings baseSettings, CodecSettings baseCodec,
-               std::function<void(const std::string&)> log);
+               std::function<void(const std::string&)> log, std::function<void(DenoiseSettings::Mode)> setDenoise);
     // With targetFps > 0: the controller starts at its front's first point (the front calibrated
     // now when none is given), and the trace file is opened when one is named. Else nothing.
     void start(double targetFps, const std::vector<OperatingPoint>& givenFront, const std::filesystem::path& traceFile);
@@ -37,6 +38,7 @@ private:
     RenderSettings baseSettings_;  // the wall's resolution and the scene's settings before any operating point
     CodecSettings baseCodec_;
     std::function<void(const std::string&)> log_;
+    std::function<void(DenoiseSettings::Mode)> setDenoise_;
     double targetFps_ = 0;
     std::unique_ptr<OperatingPointController> controller_;
     std::ofstream trace_;

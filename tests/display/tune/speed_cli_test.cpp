@@ -105,6 +105,29 @@ TEST(SpeedCli, ReferenceEstimatesItsOwnErrorFromTwoHalves) {
     EXPECT_GE(std::stod(m[1]), 99.0);
 }
 
+// bench tiles --denoise (the sweep's denoise control): the view the camera arrives at after an
+// orbit of 8 frames, filtered, is scored beside the raw frame, and svgf at one GI sample a pixel
+// is far closer to the converged reference than the raw frame; a scene without GI is refused.
+TEST(SpeedCli, BenchTilesScoresTheDenoisedViewOfAnOrbit) {
+    const auto dir = test::scratchDir();
+    ASSERT_EQ(run("gen office --out " + (dir / "office").string()).status, 0);
+    const std::string scene = (dir / "office" / "office.toml").string(), ref = (dir / "ref.png").string();
+    const std::string size = " --width 64 --height 48";
+    ASSERT_EQ(run("reference " + scene + " --out " + ref + size + " --supersample 1 --gi-spp 16 --frames 32 --json").status, 0);
+    const Result r = run("bench tiles " + scene + size + " --gi-spp 1 --codecs raw --denoise 2 --reference " + ref + " --json");
+    ASSERT_EQ(r.status, 0) << r.output;
+    std::vector<double> db;
+    const std::regex psnr("\"psnr_db\" : ([0-9.e+-]+)");
+    for (std::sregex_iterator m(r.output.begin(), r.output.end(), psnr), e; m != e; ++m) db.push_back(std::stod((*m)[1]));
+    ASSERT_EQ(db.size(), 2u) << r.output;  // the raw codec's, then the denoised view's
+    EXPECT_NE(r.output.find("\"denoise\" : \"svgf\""), std::string::npos) << r.output;
+    EXPECT_GT(db[1], db[0] + 4.0) << r.output;
+    expectOneLineError(run("bench tiles builtin:knots --triangles 2000" + size + " --codecs raw --denoise 2"),
+                       "--denoise filters path-traced frames");
+    expectOneLineError(run("bench tiles " + scene + size + " --gi-spp 1 --codecs raw --denoise 1.5"),
+                       "control 'denoise' = 1.500000 is not a whole number (0 off, 1 temporal, 2 svgf)");
+}
+
 TEST(SpeedCli, SimulateAndRunFrontsReportMistakesWithTheirFile) {
     expectOneLineError(run("simulate --profile /nonexistent/profile.toml"), "/nonexistent/profile.toml");
     const auto front = test::scratchDir() / "front.toml";  // once in this test

@@ -203,6 +203,9 @@ struct Knobs {
     RenderSettings settings;
     CodecSettings codec;
     float volumeStep = 0;  // > 0: every volume material's ray-march step, in voxels
+    // The display side's denoising (issue 28) where a point names it. The cluster must send the
+    // features of the most demanding mode of the front (the session asks for them at its start).
+    std::optional<DenoiseSettings::Mode> denoise;
 };
 
 struct Control {
@@ -213,6 +216,7 @@ struct Control {
     std::vector<double> sweep;  // what tools/speed_accuracy.py sweeps unless a scene says otherwise
     const char* label;   // a value's name in charts: "{}" stands for the value
     void (*apply)(Knobs& knobs, const RenderSettings& base, double value);
+    std::vector<std::string> names;  // a whole-number control's values by name (value i: names[i]); else empty
 };
 // Every control, in one table (controls.cpp). tools/speed_accuracy.py reads it from
 // `rtwall controls --json`.
