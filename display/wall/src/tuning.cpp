@@ -31,7 +31,8 @@ void WallTuning::apply(const OperatingPoint& p) {
     const Knobs k = knobsOf(p, baseSettings_, baseCodec_);
     live_.setRenderSettings(k.settings);
     master_.setCodec(k.codec);
-    if (k.denoise && setDenoise_) setDenoise_(*k.denoise);
+    // A point of a front that names the filter elsewhere but not here: the scene's own mode.
+    if (setDenoise_ && (k.denoise || frontNamesDenoise_)) setDenoise_(k.denoise.value_or(live_.desc().denoise.mode));
     if (k.volumeStep > 0)
         for (size_t m = 0; m < live_.desc().materials.size(); ++m)
             if (live_.desc().materials[m].type == MaterialType::Volume && live_.desc().materials[m].volumeStep != k.volumeStep) {
@@ -84,6 +85,8 @@ void WallTuning::start(double targetFps, const std::vector<OperatingPoint>& give
     if (targetFps <= 0) return;
     targetFps_ = targetFps;
     const std::vector<OperatingPoint> points = givenFront.empty() ? calibrate() : givenFront;
+    for (const OperatingPoint& p : points)
+        for (const auto& [name, value] : p.controls) frontNamesDenoise_ |= name == "denoise";
     ControllerOptions co;
     co.targetFps = targetFps;
     controller_ = std::make_unique<OperatingPointController>(points, co);

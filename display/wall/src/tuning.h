@@ -39,6 +39,7 @@ private:
     CodecSettings baseCodec_;
     std::function<void(const std::string&)> log_;
     std::function<void(DenoiseSettings::Mode)> setDenoise_;
+    bool frontNamesDenoise_ = false;  // a point without the control then means the scene's mode
     double targetFps_ = 0;
     std::unique_ptr<OperatingPointController> controller_;
     std::ofstream trace_;
