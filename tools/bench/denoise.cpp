@@ -1,13 +1,16 @@
 // rtwall bench denoise (issue 28): what the denoiser buys. A camera orbits its scene's first
-// camera's look-at point; each frame is rendered with GI (gi_spp samples a pixel), its features
-// and depth (renderFrameFeatures), denoised (rtwall/denoise.h: off, temporal, svgf) and scored
-// against a converged reference of that very view (reference_spp samples, rendered once per
-// scored frame and shared by every setting): PSNR and mean FLIP of the 8-bit images, median and
-// the worst 5 %. Then the camera stands still: how long until the shown image reaches 40 dB
-// (`off` accumulates, as the wall does), and its flicker, the mean absolute change of the shown
-// luminance from frame to frame over its first frames, against the reference's own (two
-// independent converged renders). fps: one over the median of render + denoise per frame on
-// this machine's threads (no cluster); denoise_ms the filter alone.
+// camera's look-at point, arriving at that camera on the last frame; each frame is rendered with
+// GI (gi_spp samples a pixel), its features and depth (renderFrameFeatures), denoised
+// (rtwall/denoise.h: off, temporal, svgf) and scored against a converged reference of that very
+// view (reference_spp samples, rendered once per scored frame and shared by every setting): PSNR
+// and mean FLIP of the 8-bit images, median and the worst 5 %. Then the camera stops there and
+// the view stays still for flicker_frames frames: the flicker is the mean absolute change of the
+// shown luminance from frame to frame, from the last moving frame on, against the reference's own
+// (two independent converged renders of the view): what a viewer sees when the walk stops (`off`
+// accumulates from the stop, as the wall does; the filters go on with their history). Then the
+// same view from a cold start (a cut): how long until the shown image reaches 40 dB, and the
+// flicker of its first frames (flicker_cold). fps: one over the median of render + denoise per
+// frame on this machine's threads (no cluster); denoise_ms the filter alone.
 #include "bench.h"
 #include "bench_util.h"
 #include "generators.h"
@@ -122,8 +125,11 @@ toml::table denoise(const DenoiseOptions& o) {
                     {"threads", o.threads},
                     {"flip", "mean LDR-FLIP, 67 pixels per degree"},
                     {"p95", "the value 95 % of scored frames are at least as good as (PSNR: 5th percentile)"},
-                    {"flicker", "mean absolute change of the shown luminance (0..1) from frame to frame on a still camera "
-                                "over its first flicker_frames frames; reference_flicker: between two converged references"},
+                    {"flicker", "mean absolute change of the shown luminance (0..1) from frame to frame on a camera that "
+                                "stopped after the orbit, over flicker_frames frames from the last moving one; flicker_cold: "
+                                "the same over the first frames after a cut (a cold start); reference_flicker: between two "
+                                "converged references"},
+                    {"flicker_frames", o.flickerFrames},
                     {"fps", "one over the median of render + denoise per frame, this machine, no cluster"}};
     std::vector<DenoiseSettings::Mode> modes;
     for (const std::string& m : o.modes) modes.push_back(denoiseModeFromName(m));
@@ -146,10 +152,12 @@ toml::table denoise(const DenoiseOptions& o) {
             // The references of the scored frames of the path, and of the still view (twice).
             std::vector<Image> refs(size_t(o.frames));
             auto scored = [&](int k) { return k % o.scoreEvery == o.scoreEvery - 1; };
+            // Frame k's camera: the orbit arrives at the scene's camera (the still view) on the last frame.
+            auto pathCamera = [&](int k) { return k == o.frames - 1 ? bs.camera : orbit(bs.camera, o.degreesPerFrame * (o.frames - 1 - k)); };
             const auto tRef = Clock::now();
             for (int k = 0; k < o.frames; ++k)
                 if (scored(k)) {
-                    const Camera cam(orbit(bs.camera, o.degreesPerFrame * k), w, h);
+                    const Camera cam(pathCamera(k), w, h);
                     refs[size_t(k)] = toImage(renderFrameLinear(scene, cam, ref, uint32_t(1'000'000 + k)), w, h);
                 }
             const Camera still(bs.camera, w, h);
@@ -256,8 +264,9 @@ toml::table denoise(const DenoiseOptions& o) {
                     // Moving.
                     Denoiser dn;
                     std::vector<double> frameS, denoiseS, db, flip;
+                    Image lastMoving;
                     for (int k = 0; k < o.frames; ++k) {
-                        const CameraDesc cd = orbit(bs.camera, o.degreesPerFrame * k);
+                        const CameraDesc cd = pathCamera(k);
                         const Camera cam(cd, w, h);
                         const auto t0 = Clock::now();
                         const FeatureFrame f = renderFrameFeatures(scene, cam, rs, uint32_t(k + 1));
@@ -269,6 +278,7 @@ toml::table denoise(const DenoiseOptions& o) {
                         const double td = secondsSince(t1);
                         frameS.push_back(tr + td);
                         denoiseS.push_back(td);
+                        if (k == o.frames - 1) lastMoving = toImage(shown, w, h);
                         if (!scored(k)) continue;
                         const Image img = toImage(shown, w, h);
                         db.push_back(finiteDb(psnrDb(img, refs[size_t(k)])));
@@ -281,10 +291,34 @@ toml::table denoise(const DenoiseOptions& o) {
                             writePng(refs[size_t(k)], std::filesystem::path(o.images) / (stem + "_reference.png"));
                         }
                     }
+                    // Stopped: the walk ends at the still view and the view stays; off accumulates
+                    // from the last moving frame (the wall's accumulator restarts at a camera move
+                    // and goes on while it stays), the filters go on with their history.
+                    double flicker = 0;
+                    {
+                        Accumulator stopped;
+                        if (mode == DenoiseSettings::Mode::Off)  // the last moving frame, again: its seed, its view
+                            stopped.addLinear(renderFrameFeatures(scene, still, rs, uint32_t(o.frames)).linear.data(), w, h);
+                        Image previous = lastMoving;
+                        for (int k = 1; k <= o.flickerFrames; ++k) {
+                            const FeatureFrame f = renderFrameFeatures(scene, still, rs, uint32_t(o.frames + k));
+                            Image img;
+                            if (mode == DenoiseSettings::Mode::Off) {
+                                stopped.addLinear(f.linear.data(), w, h);
+                                img = stopped.resolve();
+                            } else {
+                                img = toImage(dn.denoise({w, h, f.linear, f.depth, f.albedo, f.normal, f.id, bs.camera, 0}, ds,
+                                                         o.threads),
+                                              w, h);
+                            }
+                            flicker += luminanceChange(img, previous) / o.flickerFrames;
+                            previous = std::move(img);
+                        }
+                    }
                     // Still: accumulate (off) or denoise from a cold start until 40 dB or the time is up.
                     Denoiser sd;
                     Accumulator acc;
-                    double elapsed = 0, to40 = -1, stillDb = 0, flicker = 0;
+                    double elapsed = 0, to40 = -1, stillDb = 0, flickerCold = 0;
                     Image previous;
                     int stillFrames = 0;
                     for (int k = 0; elapsed < o.stillSeconds || k <= o.flickerFrames; ++k) {
@@ -303,7 +337,7 @@ toml::table denoise(const DenoiseOptions& o) {
                         ++stillFrames;
                         stillDb = finiteDb(psnrDb(img, stillRef));
                         if (to40 < 0 && stillDb >= 40.0) to40 = elapsed;
-                        if (k > 0 && k <= o.flickerFrames) flicker += luminanceChange(img, previous) / o.flickerFrames;
+                        if (k > 0 && k <= o.flickerFrames) flickerCold += luminanceChange(img, previous) / o.flickerFrames;
                         previous = std::move(img);
                         if (to40 >= 0 && k >= o.flickerFrames) break;
                     }
@@ -321,7 +355,9 @@ toml::table denoise(const DenoiseOptions& o) {
                                        {"denoise_ms", 1e3 * median(denoiseS)},
                                        {"flicker", flicker},
                                        {"reference_flicker", referenceFlicker},
-                                       {"flicker_ratio", referenceFlicker > 0 ? flicker / referenceFlicker : 0.0}};
+                                       {"flicker_ratio", referenceFlicker > 0 ? flicker / referenceFlicker : 0.0},
+                                       {"flicker_cold", flickerCold},
+                                       {"flicker_cold_ratio", referenceFlicker > 0 ? flickerCold / referenceFlicker : 0.0}};
                     toml::table moving = common;
                     moving.insert("still", false);
                     moving.insert("psnr_db", median(db));
@@ -339,11 +375,13 @@ toml::table denoise(const DenoiseOptions& o) {
                     if (o.text) {
                         std::fprintf(o.text,
                                      "%-10s %4dx%-4d %-8s %2d spp: %6.1f fps (denoise %5.1f ms) moving %5.1f dB (worst 5%% %5.1f) "
-                                     "FLIP %.3f; still: 40 dB after %s, %5.1f dB after %.1f s, flicker %.5f (%.1fx the reference's)\n",
+                                     "FLIP %.3f; still: 40 dB after %s, %5.1f dB after %.1f s, flicker after the stop %.5f (%.1fx "
+                                     "the reference's; after a cut %.1fx)\n",
                                      name.c_str(), w, h, denoiseModeName(mode), spp, fps, 1e3 * median(denoiseS), median(db),
                                      worst5(db, true), median(flip),
                                      to40 < 0 ? "never" : (std::to_string(to40).substr(0, 5) + " s").c_str(), stillDb, elapsed,
-                                     flicker, referenceFlicker > 0 ? flicker / referenceFlicker : 0.0);
+                                     flicker, referenceFlicker > 0 ? flicker / referenceFlicker : 0.0,
+                                     referenceFlicker > 0 ? flickerCold / referenceFlicker : 0.0);
                         std::fflush(o.text);
                     }
                     rows.push_back(std::move(moving));

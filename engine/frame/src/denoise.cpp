@@ -588,17 +588,10 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
                 float* dc = (level & 1) ? filtered_.data() : filteredB_.data();
                 float* dv = (level & 1) ? variance_.data() : varianceB_.data();
                 atrous(y0, y1, 1 << level, c, v, dc, dv, &rowScratch_[size_t(part) * 9 * size_t(w)]);
-                // A moving view keeps the first level's result as its history (SVGF's feedback:
-                // the next frame starts from a smoother mean); a still view its plain mean, so
-                // that it converges to the unbiased one.
-                if (level == 0 && !still)
-                    for (int y = y0; y < y1; ++y)
-                        for (int x = 0; x < w; ++x) {
-                            const size_t i = size_t(y) * size_t(w) + size_t(x);
-                            if (!valid_[i] || !isSurface(depth[i])) continue;
-                            for (int k = 0; k < 3; ++k)
-                                colour_[3 * i + k] = dc[size_t(k) * n + i] * demodulator(albedo_[3 * i + k]);
-                        }
+                // The history stays the plain (re-projected) mean, moving or still: SVGF feeds the
+                // first level's result back as the next frame's history, but over a history of up
+                // to 32 frames that blur compounds frame after frame (on the demo with GI it cost
+                // 1.8 dB against no feedback, 37.3 against 39.1; on the office 0.2 dB).
                 sync.arrive_and_wait();
                 lap(part, 3);
                 c = dc;
