@@ -3,8 +3,8 @@
 
     tools/denoise_chart.py OUT_DIR BENCH.json [BENCH.json ...] [--images DIR]
 
-Writes OUT_DIR/denoise-front.png: moving-camera PSNR against frames per second, one point per
-setting (denoise mode x GI samples) and image size, the Pareto front of each size drawn; and, with
+Writes OUT_DIR/denoise-front.png: per scene, moving-camera PSNR against frames per second, one
+point per setting (denoise mode x GI samples) and image size, the Pareto front of each size drawn; and, with
 --images (the bench's --images folder), OUT_DIR/denoise-CASE.png strips (off | temporal | svgf |
 converged reference) for every set of images the folder holds.
 """
@@ -33,27 +33,30 @@ def front(points):
 
 
 def chart(rows, path):
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    sizes = sorted({(r["width"], r["height"]) for r in rows})
-    for w, h in sizes:
-        pts = []
-        for r in rows:
-            if r["still"] or (r["width"], r["height"]) != (w, h):
-                continue
-            pts.append((r["fps"], r["psnr_db"]))
-            ax.scatter(r["fps"], r["psnr_db"], marker=MARKERS.get(r["denoise"], "x"), s=50)
-            ax.annotate(f'{r["denoise"]} {r["gi_spp"]}spp', (r["fps"], r["psnr_db"]), textcoords="offset points",
-                        xytext=(4, 3), fontsize=7)
-        f = front(pts)
-        ax.plot([p[0] for p in f], [p[1] for p in f], "-", alpha=0.5, label=f"{w}x{h}: front")
-    ax.axhline(30, color="grey", ls=":", lw=1)
-    ax.set_xscale("log")
-    ax.set_xlabel("frames per second (render + denoise, this 2-core PC, no cluster)")
-    ax.set_ylabel("PSNR of the moving camera's frames, dB")
-    ax.set_title("office: o off, s temporal, ^ svgf; dotted: the 30 dB target", fontsize=10)
-    ax.legend(fontsize=8)
+    """One panel per scene: moving PSNR against fps, a front per image size."""
+    scenes = list(dict.fromkeys(r["scene"] for r in rows))
+    fig, axes = plt.subplots(1, len(scenes), figsize=(6.5 * len(scenes), 4.5), squeeze=False)
+    for ax, scene in zip(axes[0], scenes):
+        mine = [r for r in rows if r["scene"] == scene and not r["still"]]
+        for w, h in sorted({(r["width"], r["height"]) for r in mine}):
+            pts = []
+            for r in mine:
+                if (r["width"], r["height"]) != (w, h):
+                    continue
+                pts.append((r["fps"], r["psnr_db"]))
+                ax.scatter(r["fps"], r["psnr_db"], marker=MARKERS.get(r["denoise"], "x"), s=50)
+                ax.annotate(f'{r["denoise"]} {r["gi_spp"]}spp', (r["fps"], r["psnr_db"]), textcoords="offset points",
+                            xytext=(4, 3), fontsize=7)
+            f = front(pts)
+            ax.plot([p[0] for p in f], [p[1] for p in f], "-", alpha=0.5, label=f"{w}x{h}: front")
+        ax.axhline(30, color="grey", ls=":", lw=1)
+        ax.set_xscale("log")
+        ax.set_xlabel("frames per second (render + denoise, this 2-core PC, no cluster)")
+        ax.set_ylabel("PSNR of the moving camera's frames, dB")
+        ax.set_title(f"{scene}: o off, s temporal, ^ svgf; dotted: the 30 dB target", fontsize=10)
+        ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
 
 
