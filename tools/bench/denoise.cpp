@@ -294,6 +294,15 @@ toml::table denoise(const DenoiseOptions& o) {
                     // Stopped: the walk ends at the still view and the view stays; off accumulates
                     // from the last moving frame (the wall's accumulator restarts at a camera move
                     // and goes on while it stays), the filters go on with their history.
+                    // A still frame as the wall shows it: off the running mean, else the filter's.
+                    auto showStill = [&](Accumulator& mean, Denoiser& filter, const FeatureFrame& f) {
+                        if (mode != DenoiseSettings::Mode::Off)
+                            return toImage(filter.denoise({w, h, f.linear, f.depth, f.albedo, f.normal, f.id, bs.camera, 0}, ds,
+                                                          o.threads),
+                                           w, h);
+                        mean.addLinear(f.linear.data(), w, h);
+                        return mean.resolve();
+                    };
                     double flicker = 0;
                     {
                         Accumulator stopped;
@@ -301,16 +310,7 @@ toml::table denoise(const DenoiseOptions& o) {
                             stopped.addLinear(renderFrameFeatures(scene, still, rs, uint32_t(o.frames)).linear.data(), w, h);
                         Image previous = lastMoving;
                         for (int k = 1; k <= o.flickerFrames; ++k) {
-                            const FeatureFrame f = renderFrameFeatures(scene, still, rs, uint32_t(o.frames + k));
-                            Image img;
-                            if (mode == DenoiseSettings::Mode::Off) {
-                                stopped.addLinear(f.linear.data(), w, h);
-                                img = stopped.resolve();
-                            } else {
-                                img = toImage(dn.denoise({w, h, f.linear, f.depth, f.albedo, f.normal, f.id, bs.camera, 0}, ds,
-                                                         o.threads),
-                                              w, h);
-                            }
+                            Image img = showStill(stopped, dn, renderFrameFeatures(scene, still, rs, uint32_t(o.frames + k)));
                             flicker += luminanceChange(img, previous) / o.flickerFrames;
                             previous = std::move(img);
                         }
@@ -323,16 +323,7 @@ toml::table denoise(const DenoiseOptions& o) {
                     int stillFrames = 0;
                     for (int k = 0; elapsed < o.stillSeconds || k <= o.flickerFrames; ++k) {
                         const auto t0 = Clock::now();
-                        const FeatureFrame f = renderFrameFeatures(scene, still, rs, uint32_t(5000 + k));
-                        Image img;
-                        if (mode == DenoiseSettings::Mode::Off) {
-                            acc.addLinear(f.linear.data(), w, h);
-                            img = acc.resolve();
-                        } else {
-                            img = toImage(sd.denoise({w, h, f.linear, f.depth, f.albedo, f.normal, f.id, bs.camera, 0}, ds,
-                                                     o.threads),
-                                          w, h);
-                        }
+                        Image img = showStill(acc, sd, renderFrameFeatures(scene, still, rs, uint32_t(5000 + k)));
                         elapsed += secondsSince(t0);
                         ++stillFrames;
                         stillDb = finiteDb(psnrDb(img, stillRef));
