@@ -35,6 +35,7 @@
 #include <rtwall/feature_codec.h>
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -109,12 +110,26 @@ struct DenoiseStats {
     } seconds;
 };
 
+// The filter's threads (denoise.cpp): started by a Denoiser's first frame, and again when their
+// number changes, then woken for each frame; a frame allocates nothing. A copy starts its own.
+class DenoiseWorkers;
+class DenoiseWorkerPool {
+public:
+    DenoiseWorkerPool();
+    DenoiseWorkerPool(const DenoiseWorkerPool&);
+    DenoiseWorkerPool& operator=(const DenoiseWorkerPool&);
+    DenoiseWorkerPool(DenoiseWorkerPool&&) noexcept;
+    DenoiseWorkerPool& operator=(DenoiseWorkerPool&&) noexcept;
+    ~DenoiseWorkerPool();
+    std::unique_ptr<DenoiseWorkers> workers;
+};
+
 class Denoiser {
 public:
     // One frame of the view: returns its denoised linear colour (3 floats a pixel), kept until
     // the next call. Throws std::invalid_argument when a span's size does not match the size.
     // `threads`: 0 one per hardware thread; the bytes are the same for any number. Nothing is
-    // allocated after the first frame of a size but the threads.
+    // allocated after the first frame of a size and thread count (tested): the threads stay.
     std::span<const float> denoise(const DenoiseInput& in, const DenoiseSettings& settings, int threads = 0);
     // Forgets the history: the next frame starts anew (a new size or scene state does so by
     // itself). A camera cut (another named camera, a jump) is the caller's to say; a move is
@@ -149,6 +164,7 @@ private:
     std::vector<float> out_;
     std::vector<DenoiseStats> partStats_;
     DenoiseStats stats_;
+    DenoiseWorkerPool pool_;
 
     void resize(int w, int h);
 };
