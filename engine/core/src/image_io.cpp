@@ -18,9 +18,22 @@ void writePng(const Image& image, const std::filesystem::path& file) {
     png.width = png_uint_32(image.width);
     png.height = png_uint_32(image.height);
     png.format = PNG_FORMAT_RGB;
-    if (!png_image_write_to_file(&png, file.c_str(), 0, image.rgb.data(), image.width * 3, nullptr)) {
+    // Written beside it and renamed into place: whoever reads the file (a test, a viewer watching
+    // the frames folder) sees the whole picture or none, never a half-written one.
+    std::filesystem::path part = file;
+    part += ".part";
+    if (!png_image_write_to_file(&png, part.c_str(), 0, image.rgb.data(), image.width * 3, nullptr)) {
         std::string why = png.message;
         png_image_free(&png);
+        std::error_code ec;
+        std::filesystem::remove(part, ec);
+        throw InputError(file.string() + ": cannot write PNG: " + why);
+    }
+    std::error_code ec;
+    std::filesystem::rename(part, file, ec);
+    if (ec) {
+        const std::string why = ec.message();
+        std::filesystem::remove(part, ec);
         throw InputError(file.string() + ": cannot write PNG: " + why);
     }
 }
