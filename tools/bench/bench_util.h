@@ -1,6 +1,7 @@
 // Small helpers every benchmark shares: medians (rtwall/tune.h), timing, PSNR.
 #pragma once
 
+#include <rtwall/engine.h>
 #include <rtwall/image.h>
 #include <rtwall/tune.h>
 
@@ -9,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <span>
 #include <sstream>
 
 namespace rtwall::bench {
@@ -40,6 +42,17 @@ inline double psnrDb(const Image& a, const Image& b) {
     }
     if (se == 0) return INFINITY;
     return 10.0 * std::log10(255.0 * 255.0 * double(a.rgb.size()) / se);
+}
+
+// A linear frame (3 floats a pixel, as renderFrameLinear and the denoiser give it) as the 8-bit
+// sRGB image the wall shows.
+inline Image srgbImage(std::span<const float> linear, int width, int height) {
+    Image img;
+    img.width = width;
+    img.height = height;
+    img.rgb.resize(linear.size());
+    linearToSrgb8(linear.data(), linear.size(), img.rgb.data());
+    return img;
 }
 
 // A result as TOML text, for the benchmarks whose human-readable form is their whole result.

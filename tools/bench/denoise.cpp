@@ -44,15 +44,6 @@ double worst5(std::vector<double> v, bool higherIsBetter) {
 
 double finiteDb(double db) { return std::isfinite(db) ? db : kIdenticalPsnr; }
 
-Image toImage(std::span<const float> linear, int w, int h) {
-    Image img;
-    img.width = w;
-    img.height = h;
-    img.rgb.resize(linear.size());
-    linearToSrgb8(linear.data(), linear.size(), img.rgb.data());
-    return img;
-}
-
 // Mean absolute change of the luminance (0..1 of the 8-bit codes) between two images.
 double luminanceChange(const Image& a, const Image& b) {
     double sum = 0;
@@ -158,13 +149,13 @@ toml::table denoise(const DenoiseOptions& o) {
             for (int k = 0; k < o.frames; ++k)
                 if (scored(k)) {
                     const Camera cam(pathCamera(k), w, h);
-                    refs[size_t(k)] = toImage(renderFrameLinear(scene, cam, ref, uint32_t(1'000'000 + k)), w, h);
+                    refs[size_t(k)] = srgbImage(renderFrameLinear(scene, cam, ref, uint32_t(1'000'000 + k)), w, h);
                 }
             const Camera still(bs.camera, w, h);
             RenderSettings stillRefSettings = ref;
             stillRefSettings.samples = o.stillReferenceSpp;
-            const Image stillRef = toImage(renderFrameLinear(scene, still, stillRefSettings, 2'000'000), w, h);
-            const Image stillRef2 = toImage(renderFrameLinear(scene, still, stillRefSettings, 2'000'001), w, h);
+            const Image stillRef = srgbImage(renderFrameLinear(scene, still, stillRefSettings, 2'000'000), w, h);
+            const Image stillRef2 = srgbImage(renderFrameLinear(scene, still, stillRefSettings, 2'000'001), w, h);
             const double referenceFlicker = luminanceChange(stillRef, stillRef2);
             const double referenceDb = finiteDb(psnrDb(stillRef, stillRef2));
             if (o.text)
@@ -265,6 +256,7 @@ toml::table denoise(const DenoiseOptions& o) {
                     Denoiser dn;
                     std::vector<double> frameS, denoiseS, db, flip;
                     Image lastMoving;
+                    std::vector<float> lastLinear;  // the last moving frame's own samples (at the still view)
                     for (int k = 0; k < o.frames; ++k) {
                         const CameraDesc cd = pathCamera(k);
                         const Camera cam(cd, w, h);
@@ -278,9 +270,12 @@ toml::table denoise(const DenoiseOptions& o) {
                         const double td = secondsSince(t1);
                         frameS.push_back(tr + td);
                         denoiseS.push_back(td);
-                        if (k == o.frames - 1) lastMoving = toImage(shown, w, h);
+                        if (k == o.frames - 1) {
+                            lastMoving = srgbImage(shown, w, h);
+                            lastLinear = f.linear;
+                        }
                         if (!scored(k)) continue;
-                        const Image img = toImage(shown, w, h);
+                        const Image img = srgbImage(shown, w, h);
                         db.push_back(finiteDb(psnrDb(img, refs[size_t(k)])));
                         flip.push_back(flipMean(img, refs[size_t(k)]));
                         if (!o.images.empty() && k == o.frames - 1 - (o.frames % o.scoreEvery)) {
@@ -297,7 +292,7 @@ toml::table denoise(const DenoiseOptions& o) {
                     // A still frame as the wall shows it: off the running mean, else the filter's.
                     auto showStill = [&](Accumulator& mean, Denoiser& filter, const FeatureFrame& f) {
                         if (mode != DenoiseSettings::Mode::Off)
-                            return toImage(filter.denoise({w, h, f.linear, f.depth, f.albedo, f.normal, f.id, bs.camera, 0}, ds,
+                            return srgbImage(filter.denoise({w, h, f.linear, f.depth, f.albedo, f.normal, f.id, bs.camera, 0}, ds,
                                                           o.threads),
                                            w, h);
                         mean.addLinear(f.linear.data(), w, h);
@@ -306,8 +301,7 @@ toml::table denoise(const DenoiseOptions& o) {
                     double flicker = 0;
                     {
                         Accumulator stopped;
-                        if (mode == DenoiseSettings::Mode::Off)  // the last moving frame, again: its seed, its view
-                            stopped.addLinear(renderFrameFeatures(scene, still, rs, uint32_t(o.frames)).linear.data(), w, h);
+                        if (mode == DenoiseSettings::Mode::Off) stopped.addLinear(lastLinear.data(), w, h);
                         Image previous = lastMoving;
                         for (int k = 1; k <= o.flickerFrames; ++k) {
                             Image img = showStill(stopped, dn, renderFrameFeatures(scene, still, rs, uint32_t(o.frames + k)));

@@ -43,10 +43,7 @@ Timed timed(const Scene& scene, const Camera& cam, const RenderSettings& s, int 
         Image img;
         t.push_back(secondsOf([&] {
             linear = renderFrameLinear(scene, cam, s, uint32_t(r + 1), &st);
-            img.width = s.width;
-            img.height = s.height;
-            img.rgb.resize(linear.size());
-            linearToSrgb8(linear.data(), linear.size(), img.rgb.data());
+            img = srgbImage(linear, s.width, s.height);
         }));
         if (r == 0) out.first = img;
         if (stochastic) acc.addLinear(linear.data(), s.width, s.height);

@@ -2,6 +2,7 @@
 // error.
 #include "speed.h"
 #include "speed_util.h"
+#include "bench_util.h"
 #include "tile_failure.h"
 
 #include <rtwall/denoise.h>
@@ -84,11 +85,7 @@ toml::table denoisedRow(const Scene& scene, const SceneDesc& desc, const CameraD
         ms.push_back(1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         if (k == frames - 1) shown.assign(out.begin(), out.end());
     }
-    Image img;
-    img.width = s.width;
-    img.height = s.height;
-    img.rgb.resize(shown.size());
-    linearToSrgb8(shown.data(), shown.size(), img.rgb.data());
+    const Image img = srgbImage(shown, s.width, s.height);
     const size_t pixels = size_t(s.width) * size_t(s.height);
     // Linear half-float colour, the 16-bit depth code and the mode's features, before any compression.
     const double bytes = double(pixels * (6 + 2) + encodedFeatureBytes(pixels, bits));
