@@ -88,16 +88,6 @@ BenchSceneDesc loadBenchScene(const std::string& name, const DenoiseOptions& o) 
     return s;
 }
 
-// The orbiting camera of frame k: turned about the vertical through the look-at point.
-CameraDesc orbit(const CameraDesc& c, double degrees) {
-    CameraDesc out = c;
-    const double a = degrees * 3.14159265358979 / 180.0;
-    const double dx = double(c.position.x) - c.lookAt.x, dz = double(c.position.z) - c.lookAt.z;
-    out.position.x = float(double(c.lookAt.x) + dx * std::cos(a) - dz * std::sin(a));
-    out.position.z = float(double(c.lookAt.z) + dx * std::sin(a) + dz * std::cos(a));
-    return out;
-}
-
 struct Setting {
     DenoiseSettings::Mode mode;
     int spp;
@@ -143,8 +133,11 @@ toml::table denoise(const DenoiseOptions& o) {
             // The references of the scored frames of the path, and of the still view (twice).
             std::vector<Image> refs(size_t(o.frames));
             auto scored = [&](int k) { return k % o.scoreEvery == o.scoreEvery - 1; };
-            // Frame k's camera: the orbit arrives at the scene's camera (the still view) on the last frame.
-            auto pathCamera = [&](int k) { return k == o.frames - 1 ? bs.camera : orbit(bs.camera, o.degreesPerFrame * (o.frames - 1 - k)); };
+            // Frame k's camera: the orbit arrives at the scene's camera (the still view) on the last
+            // frame (turning against orbitCamera's sense: the path of the figures in docs/shading.md).
+            auto pathCamera = [&](int k) {
+                return k == o.frames - 1 ? bs.camera : orbitCamera(bs.camera, -o.degreesPerFrame * (o.frames - 1 - k));
+            };
             const auto tRef = Clock::now();
             for (int k = 0; k < o.frames; ++k)
                 if (scored(k)) {
