@@ -18,6 +18,26 @@
 namespace rtwall {
 namespace {
 
+// Pixels [x0, x0 + ww) x [y0, y0 + wh) of a frame's features (a display node's screen), kept for
+// the DenoiseInput of that window.
+struct FeatureWindow {
+    std::vector<float> linear, depth, albedo, normal;
+    std::vector<uint32_t> id;
+    int ww, wh;
+
+    FeatureWindow(const FeatureFrame& f, int w, int x0, int y0, int ww_, int wh_) : ww(ww_), wh(wh_) {
+        auto cut = [&](const auto& v, size_t c, auto& out) {
+            for (int y = y0; y < y0 + wh; ++y)
+                out.insert(out.end(), v.begin() + long((size_t(y) * size_t(w) + size_t(x0)) * c),
+                           v.begin() + long((size_t(y) * size_t(w) + size_t(x0 + ww)) * c));
+        };
+        cut(f.linear, 3, linear), cut(f.depth, 1, depth), cut(f.albedo, 3, albedo), cut(f.normal, 3, normal);
+        cut(f.id, 1, id);
+    }
+    // Without a place (frameWidth 0), the window is taken for a whole frame.
+    DenoiseInput input(const CameraDesc& cam) const { return {ww, wh, linear, depth, albedo, normal, id, cam, 0}; }
+};
+
 double rms(const std::vector<double>& a, std::span<const float> b) {
     double s = 0;
     for (size_t i = 0; i < a.size(); ++i) s += (a[i] - double(b[i])) * (a[i] - double(b[i]));
@@ -165,16 +185,8 @@ TEST(DenoiserOnRenders, AWindowFiltersItsInnerPixelsAsTheWholeFrame) {
         const std::span<const float> a0 = whole.denoise({w, h, f.linear, f.depth, f.albedo, f.normal, f.id, cam, 0}, s, 2);
         const std::vector<float> all(a0.begin(), a0.end());
         // The window's pixels, cut out.
-        auto cut = [&](const auto& v, size_t c) {
-            std::vector<std::remove_cvref_t<decltype(v[0])>> out;
-            for (int y = y0; y < y0 + wh; ++y)
-                out.insert(out.end(), v.begin() + long((size_t(y) * size_t(w) + size_t(x0)) * c),
-                           v.begin() + long((size_t(y) * size_t(w) + size_t(x0 + ww)) * c));
-            return out;
-        };
-        const auto lin = cut(f.linear, 3), dep = cut(f.depth, 1), alb = cut(f.albedo, 3), nor = cut(f.normal, 3);
-        const auto ids = cut(f.id, 1);
-        DenoiseInput in{ww, wh, lin, dep, alb, nor, ids, cam, 0};
+        const FeatureWindow cut(f, w, x0, y0, ww, wh);
+        DenoiseInput in = cut.input(cam);
         const DenoiseInput unplaced = in;
         in.x0 = x0, in.y0 = y0, in.frameWidth = w, in.frameHeight = h;
         const std::span<const float> p0 = window.denoise(in, s, 2);
@@ -203,10 +215,12 @@ TEST(DenoiserOnRenders, AWindowFiltersItsInnerPixelsAsTheWholeFrame) {
     EXPECT_THROW(window.denoise(in, s, 1), std::invalid_argument);
 }
 
-// Every instruction set of the filter's tap loop this CPU has (SSE2 4 lanes, AVX2 8, AVX-512 16)
-// gives the same bytes, frame after frame with a moving camera, for the normal stop's three
-// code paths (a power of two: squarings; another whole exponent; any other: pow). An
-// instruction set this CPU lacks is refused in one line.
+// Every instruction set of the filter's vectorised loops this CPU has (SSE2 4 lanes, AVX2 8,
+// AVX-512 16: the a-trous tap loop, temporal reuse's row pass and its luminances) gives the same
+// bytes, frame after frame with a moving camera, for the normal stop's three code paths (a power
+// of two: squarings; another whole exponent; any other: pow) and for a window of a larger frame
+// (a display node's screen: the re-projection's place). An instruction set this CPU lacks is
+// refused in one line.
 TEST(DenoiserOnRenders, EveryInstructionSetGivesTheSameBytes) {
     SceneDesc d = loadSceneFile(test::sourceDir() / "tests/data/scenes/gi_room.toml");
     d.settings.width = 96;
@@ -214,10 +228,11 @@ TEST(DenoiserOnRenders, EveryInstructionSetGivesTheSameBytes) {
     const Scene scene(d);
     const DenoiseIsa before = denoiseIsa();
     std::vector<std::string> ran;
-    for (float sigmaNormal : {128.0f, 100.0f, 64.5f}) {
+    for (float sigmaNormal : {128.0f, 100.0f, 64.5f, 0.0f}) {
+        const bool window = sigmaNormal == 0.0f;  // then the default stop, on a window
         DenoiseSettings s;
         s.mode = DenoiseSettings::Mode::Svgf;
-        s.sigmaNormal = sigmaNormal;
+        if (!window) s.sigmaNormal = sigmaNormal;
         std::vector<float> want;
         for (DenoiseIsa isa : {DenoiseIsa::Sse2, DenoiseIsa::Avx2, DenoiseIsa::Avx512}) {
             if (!denoiseIsaSupported(isa)) {
@@ -232,8 +247,13 @@ TEST(DenoiserOnRenders, EveryInstructionSetGivesTheSameBytes) {
                 CameraDesc cam = d.cameras.front();
                 cam.position.x += 0.02f * float(k);
                 FeatureFrame f = renderFrameFeatures(scene, Camera(cam, d.settings.width, d.settings.height), d.settings, uint32_t(k));
-                const std::span<const float> out =
-                    dn.denoise({d.settings.width, d.settings.height, f.linear, f.depth, f.albedo, f.normal, f.id, cam, 0}, s, 2);
+                DenoiseInput in{d.settings.width, d.settings.height, f.linear, f.depth, f.albedo, f.normal, f.id, cam, 0};
+                const FeatureWindow cut(f, d.settings.width, 10, 8, 60, 50);
+                if (window) {
+                    in = cut.input(cam);
+                    in.x0 = 10, in.y0 = 8, in.frameWidth = d.settings.width, in.frameHeight = d.settings.height;
+                }
+                const std::span<const float> out = dn.denoise(in, s, 2);
                 got.insert(got.end(), out.begin(), out.end());
             }
             EXPECT_EQ(dn.stats().isa, isa);
@@ -253,3 +273,4 @@ TEST(DenoiserOnRenders, EveryInstructionSetGivesTheSameBytes) {
 
 }  // namespace
 }  // namespace rtwall
+

@@ -195,30 +195,36 @@ toml::table denoise(const DenoiseOptions& o) {
                     cost.insert(threads == 1 ? "ms_per_megapixel_thread" : "ms_per_megapixel_all_threads", median(ms) / mp);
                 }
                 // Each instruction set this CPU has, on one thread, in the same run (the same bytes:
-                // tested; here only the time).
+                // tested; here only the time): the a-trous tap loop and temporal reuse's row pass.
                 {
                     const DenoiseIsa before = denoiseIsa();
-                    toml::table byIsa;
+                    toml::table byIsa, temporalByIsa;
                     for (DenoiseIsa isa : {DenoiseIsa::Sse2, DenoiseIsa::Avx2, DenoiseIsa::Avx512}) {
                         if (!denoiseIsaSupported(isa)) continue;
                         setDenoiseIsa(isa);
                         Denoiser dn;
-                        std::vector<double> ms;
+                        std::vector<double> ms, temporalMs;
                         for (int k = 0; k < 12; ++k) {
                             CameraDesc c = bs.camera;
                             c.position.x += 1e-4f * float(k);
                             dn.denoise({w, h, f.linear, f.depth, f.albedo, f.normal, f.id, c, 0}, ds, 1);
-                            if (k >= 2) ms.push_back(1e3 * dn.stats().seconds.atrous);
+                            if (k < 2) continue;
+                            ms.push_back(1e3 * dn.stats().seconds.atrous);
+                            temporalMs.push_back(1e3 * dn.stats().seconds.temporal);
                         }
                         byIsa.insert(denoiseIsaName(isa), median(ms));
+                        temporalByIsa.insert(denoiseIsaName(isa), median(temporalMs));
                     }
                     setDenoiseIsa(before);
                     cost.insert("atrous_ms_one_thread_by_isa", byIsa);
-                    if (o.text) {
-                        std::fprintf(o.text, "%s %dx%d: the a-trous levels on one thread:", name.c_str(), w, h);
-                        for (const auto& [isa, v] : byIsa) std::fprintf(o.text, " %s %.1f ms", std::string(isa.str()).c_str(), v.value_or(0.0));
-                        std::fprintf(o.text, "\n");
-                    }
+                    cost.insert("temporal_ms_one_thread_by_isa", temporalByIsa);
+                    if (o.text)
+                        for (const auto& [what, table] : {std::pair{"the a-trous levels", &byIsa}, std::pair{"temporal reuse", &temporalByIsa}}) {
+                            std::fprintf(o.text, "%s %dx%d: %s on one thread:", name.c_str(), w, h, what);
+                            for (const auto& [isa, v] : *table)
+                                std::fprintf(o.text, " %s %.1f ms", std::string(isa.str()).c_str(), v.value_or(0.0));
+                            std::fprintf(o.text, "\n");
+                        }
                 }
                 if (o.text)
                     std::fprintf(o.text, "%s %dx%d: the svgf filter alone takes %.1f ms on one thread (%.0f ms per megapixel), "

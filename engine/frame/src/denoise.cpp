@@ -203,58 +203,6 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
     const float* normal = in.normal.data();
     const uint32_t* id = in.id.data();
 
-    // The unit normal of pixel i of this frame (zero without one).
-    auto unitNormal = [&](size_t i, float out[3]) {
-        const float* v = normal + 3 * i;
-        const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        const float s = l > 0.0f && std::isfinite(l) ? 1.0f / l : 0.0f;
-        out[0] = v[0] * s, out[1] = v[1] * s, out[2] = v[2] * s;
-    };
-    // Depth change per pixel step at (x, y) along x and y (gx_, gy_, signed): per axis the
-    // one-sided difference of smaller size to a neighbour of the same object (an edge does not
-    // make a surface look steep); the larger size is the gradient's magnitude.
-    auto gradientAt = [&](int x, int y) {
-        const size_t i = size_t(y) * size_t(w) + size_t(x);
-        float g[2] = {0.0f, 0.0f};
-        for (int axis = 0; axis < 2; ++axis) {
-            float best = INFINITY;
-            for (int s : {-1, 1}) {
-                const int qx = x + (axis == 0 ? s : 0), qy = y + (axis == 1 ? s : 0);
-                if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
-                const size_t q = size_t(qy) * size_t(w) + size_t(qx);
-                if (id[q] != id[i] || !isSurface(depth[q])) continue;
-                const float d = float(s) * (depth[q] - depth[i]);
-                if (std::fabs(d) < std::fabs(best)) best = d;
-            }
-            if (std::isfinite(best)) g[axis] = best;
-        }
-        gx_[i] = g[0];
-        gy_[i] = g[1];
-        return std::max(std::fabs(g[0]), std::fabs(g[1]));
-    };
-
-    // The mean demodulated luminance of (x, y)'s 3x3 neighbours of the same object with a finite
-    // sample (0: none).
-    auto neighbourMean = [&](int x, int y) {
-        const size_t i = size_t(y) * size_t(w) + size_t(x);
-        float sum = 0.0f;
-        int count = 0;
-        for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-                const int qx = x + dx, qy = y + dy;
-                if ((dx == 0 && dy == 0) || qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
-                const size_t q = size_t(qy) * size_t(w) + size_t(qx);
-                if (id[q] != id[i] || !isSurface(depth[q])) continue;
-                const float* cq = rgb + 3 * q;
-                if (!(std::isfinite(cq[0]) && std::isfinite(cq[1]) && std::isfinite(cq[2]))) continue;
-                float v[3];
-                for (int k = 0; k < 3; ++k) v[k] = cq[k] / demodulator(albedo ? albedo[3 * q + k] : 1.0f);
-                sum += luminance(v);
-                ++count;
-            }
-        return count ? sum / float(count) : 0.0f;
-    };
-
     // The history (colour, albedo, luminance moments) joined by a sample with weight a.
     auto blend = [](const float* hc, const float* ha, const float* hm, const float* c, const float* al, float l, float a,
                     float* co, float* ao, float* mo) {
@@ -267,82 +215,147 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
     };
 
     // Phase 1: re-project the history (colour, albedo, luminance moments), average.
-    auto temporal = [&](int y0, int y1, DenoiseStats& st) {
-        for (int y = y0; y < y1; ++y)
+    // The rows' arithmetic that does not read the history (depth gradients; where each point
+    // lies in the previous frame) comes first, vectorised per instruction set
+    // (denoise_detail::temporalRow); the per-pixel rest is scalar.
+    const bool reproject = !still && !restart;
+    denoise_detail::TemporalRow rowIn{};
+    rowIn.w = w;
+    rowIn.reproject = reproject;
+    rowIn.cornerX = camera.corner().x, rowIn.cornerY = camera.corner().y, rowIn.cornerZ = camera.corner().z;
+    rowIn.duX = camera.du().x, rowIn.duY = camera.du().y, rowIn.duZ = camera.du().z;
+    rowIn.dvX = camera.dv().x, rowIn.dvY = camera.dv().y, rowIn.dvZ = camera.dv().z;
+    rowIn.wx = wx;
+    rowIn.wxD = double(wx), rowIn.wyD = double(wy);
+    rowIn.origin[0] = double(origin.x), rowIn.origin[1] = double(origin.y), rowIn.origin[2] = double(origin.z);
+    for (int k = 0; k < 3; ++k) {
+        rowIn.prevOrigin[k] = previous.origin[k];
+        for (int j = 0; j < 3; ++j) rowIn.inv[k][j] = previous.inv[k][j];
+    }
+    reprojected_.resize(size_t(threads) * 2 * size_t(w));
+
+    auto temporal = [&](int y0, int y1, DenoiseStats& st, int part) {
+        // Plain pointers: a store through valid_ (bytes may alias anything) would otherwise make
+        // the compiler load every vector's data pointer again.
+        const float* const colourPrevP = colourPrev_.data();
+        const float* const albedoPrevP = albedoPrev_.data();
+        const float* const momentsPrevP = momentsPrev_.data();
+        const float* const lengthPrevP = lengthPrev_.data();
+        const uint32_t* const idPrevP = idPrev_.data();
+        const float* const normalPrevP = normalPrev_.data();
+        const float* const depthPrevP = depthPrev_.data();
+        float* const colourP = colour_.data();
+        float* const albedoP = albedo_.data();
+        float* const momentsP = moments_.data();
+        float* const lengthP = length_.data();
+        uint8_t* const validP = valid_.data();
+        float* const unitP = unit_.data();
+        float* const gradientP = gradient_.data();
+        double* pxRow = &reprojected_[size_t(part) * 2 * size_t(w)];
+        double* pyRow = pxRow + w;
+        float* expectedRow = &rowScratch_[size_t(part) * 9 * size_t(w)];
+        // Rows y - 1, y and y + 1's demodulated luminances (and whether each pixel has one) for
+        // the firefly clamp of a moving view: row r in slot r % 3.
+        float* lumRing = expectedRow + w;
+        float* okRing = expectedRow + 4 * size_t(w);
+        auto luminances = [&](int yy) {
+            const size_t row = size_t(yy) * size_t(w), slot = size_t(yy % 3) * size_t(w);
+            denoise_detail::luminanceRow(isa, w, rgb + 3 * row, albedo ? albedo + 3 * row : nullptr, depth + row,
+                                         lumRing + slot, okRing + slot);
+        };
+        if (!still)
+            for (int yy = std::max(0, y0 - 1); yy <= y0 && yy < y1; ++yy) luminances(yy);
+        // The mean demodulated luminance of (x, y)'s 3x3 neighbours of the same object with a
+        // finite sample (0: none).
+        auto neighbourMean = [&](int x, int y) {
+            const size_t i = size_t(y) * size_t(w) + size_t(x);
+            float sum = 0.0f;
+            int count = 0;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int qx = x + dx, qy = y + dy;
+                    if ((dx == 0 && dy == 0) || qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+                    const size_t q = size_t(qy) * size_t(w) + size_t(qx), slot = size_t(qy % 3) * size_t(w) + size_t(qx);
+                    if (id[q] != id[i] || okRing[slot] == 0.0f) continue;
+                    sum += lumRing[slot];
+                    ++count;
+                }
+            return count ? sum / float(count) : 0.0f;
+        };
+        for (int y = y0; y < y1; ++y) {
+            const size_t row = size_t(y) * size_t(w);
+            denoise_detail::TemporalRow tr = rowIn;
+            tr.z = depth + row, tr.id = id + row;
+            tr.up = y > 0, tr.down = y + 1 < h;
+            tr.zUp = tr.up ? tr.z - w : tr.z, tr.idUp = tr.up ? tr.id - w : tr.id;
+            tr.zDown = tr.down ? tr.z + w : tr.z, tr.idDown = tr.down ? tr.id + w : tr.id;
+            tr.py = float(wy + y) + 0.5f;
+            tr.normal = normal + 3 * row;
+            if (!still && y + 1 < h) luminances(y + 1);
+            denoise_detail::temporalRow(isa, tr, &unitP[row], &unitP[n + row], &unitP[2 * n + row], &gx_[row], &gy_[row],
+                                        &gradientP[row], pxRow, pyRow, expectedRow);
             for (int x = 0; x < w; ++x) {
                 const size_t i = size_t(y) * size_t(w) + size_t(x);
                 const float* c = rgb + 3 * i;
                 const float* al = albedo ? albedo + 3 * i : kWhite;
                 const bool finite = std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]);
                 if (!finite) ++st.invalid;
-                float* co = &colour_[3 * i];
-                float* ao = &albedo_[3 * i];
-                float* mo = &moments_[2 * i];
-                gradient_[i] = gx_[i] = gy_[i] = 0.0f;
+                float* co = &colourP[3 * i];
+                float* ao = &albedoP[3 * i];
+                float* mo = &momentsP[2 * i];
                 for (int k = 0; k < 3; ++k) ao[k] = al[k];
                 if (!isSurface(depth[i])) {  // background (or no depth)
                     // A still view averages it as every pixel: a pixel whose samples fall on a
                     // leaf in some frames and on the sky in others (a silhouette) converges to
                     // the plain mean of all of them, as with the Accumulator. Moving: shown as
                     // it came.
-                    if (still && lengthPrev_[i] > 0.0f) {
-                        const float* hc = &colourPrev_[3 * i];
-                        const float* ha = &albedoPrev_[3 * i];
-                        const float* hm = &momentsPrev_[2 * i];
-                        valid_[i] = 1;
+                    if (still && lengthPrevP[i] > 0.0f) {
+                        const float* hc = &colourPrevP[3 * i];
+                        const float* ha = &albedoPrevP[3 * i];
+                        const float* hm = &momentsPrevP[2 * i];
+                        validP[i] = 1;
                         if (!finite) {  // nothing new: the history as it was
-                            length_[i] = lengthPrev_[i];
+                            lengthP[i] = lengthPrevP[i];
                             for (int k = 0; k < 3; ++k) co[k] = hc[k], ao[k] = ha[k];
                             mo[0] = hm[0], mo[1] = hm[1];
                             continue;
                         }
-                        const float len = lengthPrev_[i] + 1.0f, a = 1.0f / len;
+                        const float len = lengthPrevP[i] + 1.0f, a = 1.0f / len;
                         float il[3];
                         for (int k = 0; k < 3; ++k) il[k] = c[k] / demodulator(al[k]);
                         const float l = luminance(il);
                         blend(hc, ha, hm, c, al, l, a, co, ao, mo);
-                        length_[i] = len;
+                        lengthP[i] = len;
                         ++st.reused;
                         st.maxHistory = std::max(st.maxHistory, int(std::min(len, 1e9f)));
                         continue;
                     }
-                    valid_[i] = finite;
-                    length_[i] = finite ? 1.0f : 0.0f;
+                    validP[i] = finite;
+                    lengthP[i] = finite ? 1.0f : 0.0f;
                     for (int k = 0; k < 3; ++k) co[k] = finite ? c[k] : 0.0f;
                     mo[0] = mo[1] = 0.0f;
                     continue;
                 }
-                gradient_[i] = gradientAt(x, y);
                 // The history: this pixel's own when still, else bilinear at the point's place in
                 // the previous frame, over the taps that saw the same surface.
                 float hist[3] = {0, 0, 0}, histAl[3] = {0, 0, 0}, histMo[2] = {0, 0}, histLen = 0.0f;
                 auto take = [&](size_t q, float wt) {
                     for (int k = 0; k < 3; ++k) {
-                        hist[k] += wt * colourPrev_[3 * q + k];
-                        histAl[k] += wt * albedoPrev_[3 * q + k];
+                        hist[k] += wt * colourPrevP[3 * q + k];
+                        histAl[k] += wt * albedoPrevP[3 * q + k];
                     }
-                    histMo[0] += wt * momentsPrev_[2 * q];
-                    histMo[1] += wt * momentsPrev_[2 * q + 1];
-                    histLen += wt * lengthPrev_[q];
+                    histMo[0] += wt * momentsPrevP[2 * q];
+                    histMo[1] += wt * momentsPrevP[2 * q + 1];
+                    histLen += wt * lengthPrevP[q];
                 };
                 if (still) {
-                    if (lengthPrev_[i] > 0.0f) take(i, 1.0f);
+                    if (lengthPrevP[i] > 0.0f) take(i, 1.0f);
                 } else if (!restart) {
-                    const Float3 d = camera.direction(float(wx + x) + 0.5f, float(wy + y) + 0.5f);
-                    const double dl = std::sqrt(double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z);
-                    const double s = double(depth[i]) / dl;
-                    const double v[3] = {double(origin.x) + double(d.x) * s - previous.origin[0],
-                                         double(origin.y) + double(d.y) * s - previous.origin[1],
-                                         double(origin.z) + double(d.z) * s - previous.origin[2]};
-                    double abc[3];
-                    previous.solve(v, abc);
-                    const double px = abc[2] > 0.0 ? abc[0] / abc[2] - 0.5 - wx : -1e9,
-                                 py = abc[2] > 0.0 ? abc[1] / abc[2] - 0.5 - wy : -1e9;
+                    const double px = pxRow[x], py = pyRow[x];
                     if (px > -2.0 && py > -2.0 && px < double(w) + 1.0 && py < double(h) + 1.0) {
-                        const float expected = float(std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
-                        const float tolerance = kDepthTolerance * expected + 1.5f * gradient_[i];
-                        float un[3];
-                        unitNormal(i, un);
+                        const float expected = expectedRow[x];
+                        const float tolerance = kDepthTolerance * expected + 1.5f * gradientP[i];
+                        const float un[3] = {unitP[i], unitP[n + i], unitP[2 * n + i]};
                         const int x0 = int(std::floor(px)), yy0 = int(std::floor(py));
                         const float tx = float(px - x0), ty = float(py - yy0);
                         float sumW = 0.0f;
@@ -350,10 +363,10 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
                             const int qx = x0 + (t & 1), qy = yy0 + (t >> 1);
                             if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
                             const size_t q = size_t(qy) * size_t(w) + size_t(qx);
-                            if (lengthPrev_[q] <= 0.0f || idPrev_[q] != id[i]) continue;
-                            const float* pn = &normalPrev_[3 * q];
+                            if (lengthPrevP[q] <= 0.0f || idPrevP[q] != id[i]) continue;
+                            const float* pn = &normalPrevP[3 * q];
                             if (pn[0] * un[0] + pn[1] * un[1] + pn[2] * un[2] < kNormalCosine) continue;
-                            if (!(std::fabs(depthPrev_[q] - expected) <= tolerance)) continue;
+                            if (!(std::fabs(depthPrevP[q] - expected) <= tolerance)) continue;
                             const float wt = ((t & 1) ? tx : 1.0f - tx) * ((t >> 1) ? ty : 1.0f - ty);
                             if (!(wt > 0.0f)) continue;
                             sumW += wt;
@@ -372,8 +385,8 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
                 }
                 if (histLen > 0.0f) ++st.reused;
                 if (!finite) {  // nothing new: the history as it was (or nothing)
-                    valid_[i] = histLen > 0.0f;
-                    length_[i] = histLen;
+                    validP[i] = histLen > 0.0f;
+                    lengthP[i] = histLen;
                     for (int k = 0; k < 3; ++k) co[k] = hist[k];
                     if (histLen > 0.0f)
                         for (int k = 0; k < 3; ++k) ao[k] = histAl[k];
@@ -394,19 +407,20 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
                     }
                 }
                 c = scaled;
-                valid_[i] = 1;
+                validP[i] = 1;
                 if (histLen > 0.0f) {
                     const float len = std::min(histLen + 1.0f, std::max(cap, 1.0f));
                     const float a = 1.0f / len;
                     blend(hist, histAl, histMo, c, al, l, a, co, ao, mo);
-                    length_[i] = len;
+                    lengthP[i] = len;
                 } else {
                     for (int k = 0; k < 3; ++k) co[k] = c[k];
                     mo[0] = l, mo[1] = l * l;
-                    length_[i] = 1.0f;
+                    lengthP[i] = 1.0f;
                 }
-                st.maxHistory = std::max(st.maxHistory, int(std::min(length_[i], 1e9f)));
+                st.maxHistory = std::max(st.maxHistory, int(std::min(lengthP[i], 1e9f)));
             }
+        }
     };
 
     // The edge stops between pixel i and neighbour q at `reach` pixel steps (depth, normal, id).
@@ -617,25 +631,23 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
     };
     auto work = [&](int part) {
         auto [y0, y1] = rowsOf(h, threads, part);
-        temporal(y0, y1, partStats_[size_t(part)]);
+        temporal(y0, y1, partStats_[size_t(part)], part);
         sync.arrive_and_wait();
         lap(part, 0);
         // The previous frame's normals were read by phase 1 only: now they become this frame's
-        // (unit length), and the filter's input is the averaged colour over the averaged albedo.
+        // (unit length, made by phase 1 in unit_'s planes), and the filter's input is the
+        // averaged colour over the averaged albedo.
         for (int y = y0; y < y1; ++y)
             for (int x = 0; x < w; ++x) {
                 const size_t i = size_t(y) * size_t(w) + size_t(x);
-                unitNormal(i, &normalPrev_[3 * i]);
+                for (int k = 0; k < 3; ++k) normalPrev_[3 * i + k] = unit_[size_t(k) * n + i];
                 known_[i] = valid_[i];
                 if (!filter) continue;
                 const bool surface = isSurface(depth[i]);
                 centre_[i] = surface ? id[i] : kBackgroundKey;
                 zf_[i] = surface ? depth[i] : 0.0f;
                 key_[i] = surface && valid_[i] ? id[i] : kNoKey;
-                for (int k = 0; k < 3; ++k) {
-                    filtered_[size_t(k) * n + i] = colour_[3 * i + k] / demodulator(albedo_[3 * i + k]);
-                    unit_[size_t(k) * n + i] = normalPrev_[3 * i + k];
-                }
+                for (int k = 0; k < 3; ++k) filtered_[size_t(k) * n + i] = colour_[3 * i + k] / demodulator(albedo_[3 * i + k]);
             }
         sync.arrive_and_wait();
         lap(part, 1);

@@ -1,7 +1,8 @@
-// The denoiser's a-trous tap loop (denoise.cpp's filter, rtwall/denoise.h), once per instruction
-// set: the loop is inlined into a function per ISA and vectorised there. Included by
-// denoise.cpp alone, whose compile options (-O3, no FP contraction, no trapping maths) make every
-// width give the same bytes.
+// The denoiser's loops that vectorise (denoise.cpp's filter, rtwall/denoise.h), once per
+// instruction set: the a-trous tap loop and the temporal phase's arithmetic of a row. Each is
+// inlined into a function per ISA and vectorised there. Included by denoise.cpp alone, whose
+// compile options (-O3, no FP contraction, no trapping maths, no errno) make every width give the
+// same bytes as the scalar rule.
 #pragma once
 
 #include <rtwall/denoise.h>
@@ -83,5 +84,160 @@ template <class Power> void accumulateTaps(DenoiseIsa isa, RTWALL_TAPS_ARGS) {
     }
 }
 #undef RTWALL_TAPS_ARGS
+
+// The temporal phase's arithmetic for one row of the window, everything in it that does not
+// depend on the history: the pixels' depth gradients and where their surface points lie in the
+// previous frame. Branch-free, so that it vectorises (doubles: 2, 4 or 8 lanes); the
+// per-pixel part that reads the history (four taps, each refused or kept) stays scalar.
+struct TemporalRow {
+    int w;
+    const float *z, *zUp, *zDown;            // the row's depths and its neighbours' (zUp/zDown: this row if none)
+    const uint32_t *id, *idUp, *idDown;      // their ids
+    const float* normal;                     // the row's normals, 3 a pixel
+    bool up, down;                           // whether the rows above and below are in the window
+    bool reproject;                          // a moving view with a history: where its points were
+    float cornerX, cornerY, cornerZ, duX, duY, duZ, dvX, dvY, dvZ;  // this camera (Camera::flatDirection)
+    float py;                                // the row's image position, float(wy + y) + 0.5f
+    int wx;                                  // the window's place in its frame
+    double wxD, wyD;
+    double origin[3];                        // this camera's origin
+    double prevOrigin[3], inv[3][3];         // the previous camera (ImageProjection)
+};
+
+[[gnu::always_inline]] inline bool rowSurface(float z) { return (z > 0.0f) & (z < kBackgroundDepth); }  // = isSurface
+
+// The depth gradient of pixel x of a row (below): its neighbours before and after along x exist
+// where hasBefore/hasAfter (the row's ends), above and below where the row says. Bitwise logic,
+// unconditional loads and selects: no control flow, so that the loop vectorises.
+[[gnu::always_inline]] inline void rowGradient(const TemporalRow& r, int x, bool hasBefore, bool hasAfter, float* __restrict gx,
+                                               float* __restrict gy, float* __restrict gradient) {
+    const float* z = r.z;
+    const uint32_t* id = r.id;
+    const float zc = z[x];
+    const uint32_t ic = id[x];
+    const int xl = hasBefore ? x - 1 : x, xr = hasAfter ? x + 1 : x;
+    const bool okL = hasBefore & (id[xl] == ic) & rowSurface(z[xl]);
+    const bool okR = hasAfter & (id[xr] == ic) & rowSurface(z[xr]);
+    const float dL = -1.0f * (z[xl] - zc), dR = 1.0f * (z[xr] - zc);
+    const float bl = okL ? dL : INFINITY;
+    const float bx = okR & (std::fabs(dR) < std::fabs(bl)) ? dR : bl;
+    const bool okU = r.up & (r.idUp[x] == ic) & rowSurface(r.zUp[x]);
+    const bool okD = r.down & (r.idDown[x] == ic) & rowSurface(r.zDown[x]);
+    const float dU = -1.0f * (r.zUp[x] - zc), dD = 1.0f * (r.zDown[x] - zc);
+    const float bu = okU ? dU : INFINITY;
+    const float by = okD & (std::fabs(dD) < std::fabs(bu)) ? dD : bu;
+    const bool surface = rowSurface(zc);
+    const float g0 = surface & (bx != INFINITY) ? bx : 0.0f, g1 = surface & (by != INFINITY) ? by : 0.0f;
+    gx[x] = g0;
+    gy[x] = g1;
+    gradient[x] = std::max(std::fabs(g0), std::fabs(g1));
+}
+
+// Per pixel x: nx, ny, nz (its unit normal, zero without one); gx, gy (signed depth change per step along x and y: per axis the smaller
+// one-sided difference to a neighbour of the same object, the one before on a tie), gradient
+// (the larger size; all three 0 off a surface); px, py (its point's place in the previous
+// frame's window, -1e9 behind that camera) and expected (its distance from that camera), where
+// r.reproject; pixels off a surface get px, py and expected of no meaning.
+[[gnu::always_inline]] inline void temporalRowLoop(const TemporalRow& r, float* __restrict nx, float* __restrict ny,
+                                                   float* __restrict nz, float* __restrict gx, float* __restrict gy,
+                                                   float* __restrict gradient, double* __restrict px,
+                                                   double* __restrict py, float* __restrict expected) {
+    const int w = r.w;
+    const float* n = r.normal;
+    for (int x = 0; x < w; ++x) {
+        const float a = n[3 * x], b = n[3 * x + 1], c = n[3 * x + 2];
+        const float l = std::sqrt(a * a + b * b + c * c);
+        const float inv = 1.0f / l;
+        const float s = (l > 0.0f) & (l < INFINITY) ? inv : 0.0f;  // l is never negative: finite and positive
+        nx[x] = a * s, ny[x] = b * s, nz[x] = c * s;
+    }
+    rowGradient(r, 0, false, w > 1, gx, gy, gradient);
+    for (int x = 1; x < w - 1; ++x) rowGradient(r, x, true, true, gx, gy, gradient);
+    if (w > 1) rowGradient(r, w - 1, true, false, gx, gy, gradient);
+    if (!r.reproject) return;
+    // The surface point: along the pixel's ray at its depth (Camera::flatDirection's sums in
+    // their order), solved for the previous camera's image (ImageProjection::solve).
+    const float* z = r.z;
+    const float ux = r.duX, uy = r.duY, uz = r.duZ, vx = r.dvX * r.py, vy = r.dvY * r.py, vz = r.dvZ * r.py;
+    const float ox = r.cornerX, oy = r.cornerY, oz = r.cornerZ;
+    const double o0 = r.origin[0], o1 = r.origin[1], o2 = r.origin[2];
+    const double p0 = r.prevOrigin[0], p1 = r.prevOrigin[1], p2 = r.prevOrigin[2];
+    const double m00 = r.inv[0][0], m01 = r.inv[0][1], m02 = r.inv[0][2], m10 = r.inv[1][0], m11 = r.inv[1][1],
+                 m12 = r.inv[1][2], m20 = r.inv[2][0], m21 = r.inv[2][1], m22 = r.inv[2][2];
+    const double wxD = r.wxD, wyD = r.wyD;
+    const int wx = r.wx;
+    for (int x = 0; x < w; ++x) {
+        const float fx = float(wx + x) + 0.5f;
+        const float dx = ox + ux * fx + vx, dy = oy + uy * fx + vy, dz = oz + uz * fx + vz;
+        const double dl = std::sqrt(double(dx) * dx + double(dy) * dy + double(dz) * dz);
+        const double s = double(z[x]) / dl;
+        const double v0 = o0 + double(dx) * s - p0;
+        const double v1 = o1 + double(dy) * s - p1;
+        const double v2 = o2 + double(dz) * s - p2;
+        const double a = m00 * v0 + m01 * v1 + m02 * v2;
+        const double b = m10 * v0 + m11 * v1 + m12 * v2;
+        const double c = m20 * v0 + m21 * v1 + m22 * v2;
+        const double qa = a / c, qb = b / c;
+        px[x] = c > 0.0 ? qa - 0.5 - wxD : -1e9;
+        py[x] = c > 0.0 ? qb - 0.5 - wyD : -1e9;
+        expected[x] = float(std::sqrt(v0 * v0 + v1 * v1 + v2 * v2));
+    }
+}
+
+#define RTWALL_ROW_ARGS                                                                                 \
+    const TemporalRow &r, float *__restrict nx, float *__restrict ny, float *__restrict nz, float *__restrict gx, float *__restrict gy, float *__restrict gradient, \
+        double *__restrict px, double *__restrict py, float *__restrict expected
+inline void temporalRowSse2(RTWALL_ROW_ARGS) { temporalRowLoop(r, nx, ny, nz, gx, gy, gradient, px, py, expected); }
+[[gnu::target("avx2")]] inline void temporalRowAvx2(RTWALL_ROW_ARGS) {
+    temporalRowLoop(r, nx, ny, nz, gx, gy, gradient, px, py, expected);
+}
+[[gnu::target("avx512f,avx512vl,prefer-vector-width=512")]] inline void temporalRowAvx512(RTWALL_ROW_ARGS) {
+    temporalRowLoop(r, nx, ny, nz, gx, gy, gradient, px, py, expected);
+}
+inline void temporalRow(DenoiseIsa isa, RTWALL_ROW_ARGS) {
+    switch (isa) {
+    case DenoiseIsa::Avx512: return temporalRowAvx512(r, nx, ny, nz, gx, gy, gradient, px, py, expected);
+    case DenoiseIsa::Avx2: return temporalRowAvx2(r, nx, ny, nz, gx, gy, gradient, px, py, expected);
+    default: return temporalRowSse2(r, nx, ny, nz, gx, gy, gradient, px, py, expected);
+    }
+}
+#undef RTWALL_ROW_ARGS
+
+// The demodulated luminance of each pixel of a row (lum) and whether it has one (ok, 1 or 0: a
+// finite sample on a surface): what the firefly clamp's mean of the 3x3 neighbours sums.
+// albedo: the row's (3 a pixel), or null for white. Vectorised per instruction set as above.
+[[gnu::always_inline]] inline void luminanceRowLoop(int w, const float* rgb, const float* albedo, const float* z,
+                                                    float* __restrict lum, float* __restrict ok) {
+    auto demodulator = [](float a) { return a > 1e-3f ? a : 1.0f; };  // denoise.cpp's kAlbedoFloor
+    for (int x = 0; x < w; ++x) {
+        const float r = rgb[3 * x], g = rgb[3 * x + 1], b = rgb[3 * x + 2];
+        const bool finite = (std::fabs(r) < INFINITY) & (std::fabs(g) < INFINITY) & (std::fabs(b) < INFINITY);
+        const float ar = albedo ? albedo[3 * x] : 1.0f, ag = albedo ? albedo[3 * x + 1] : 1.0f,
+                    ab = albedo ? albedo[3 * x + 2] : 1.0f;
+        lum[x] = 0.2126f * (r / demodulator(ar)) + 0.7152f * (g / demodulator(ag)) + 0.0722f * (b / demodulator(ab));
+        ok[x] = finite & rowSurface(z[x]) ? 1.0f : 0.0f;
+    }
+}
+#define RTWALL_LUM_ARGS int w, const float *rgb, const float *albedo, const float *z, float *__restrict lum, float *__restrict ok
+inline void luminanceRowSse2(RTWALL_LUM_ARGS) {
+    if (albedo) luminanceRowLoop(w, rgb, albedo, z, lum, ok);
+    else luminanceRowLoop(w, rgb, nullptr, z, lum, ok);
+}
+[[gnu::target("avx2")]] inline void luminanceRowAvx2(RTWALL_LUM_ARGS) {
+    if (albedo) luminanceRowLoop(w, rgb, albedo, z, lum, ok);
+    else luminanceRowLoop(w, rgb, nullptr, z, lum, ok);
+}
+[[gnu::target("avx512f,avx512vl,prefer-vector-width=512")]] inline void luminanceRowAvx512(RTWALL_LUM_ARGS) {
+    if (albedo) luminanceRowLoop(w, rgb, albedo, z, lum, ok);
+    else luminanceRowLoop(w, rgb, nullptr, z, lum, ok);
+}
+inline void luminanceRow(DenoiseIsa isa, RTWALL_LUM_ARGS) {
+    switch (isa) {
+    case DenoiseIsa::Avx512: return luminanceRowAvx512(w, rgb, albedo, z, lum, ok);
+    case DenoiseIsa::Avx2: return luminanceRowAvx2(w, rgb, albedo, z, lum, ok);
+    default: return luminanceRowSse2(w, rgb, albedo, z, lum, ok);
+    }
+}
+#undef RTWALL_LUM_ARGS
 
 }  // namespace rtwall::denoise_detail

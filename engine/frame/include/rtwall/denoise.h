@@ -156,6 +156,7 @@ private:
     std::vector<float> unit_;                     // this frame's unit normals: planes of x, y, z
     std::vector<uint32_t> key_, centre_;          // the filter's ids: as a neighbour (none: no value), as a centre
     std::vector<float> rowScratch_;               // per thread: 9 rows of sums and scales
+    std::vector<double> reprojected_;             // per thread: a row's places in the previous frame (x, y)
     std::vector<float> gradient_;                 // depth change per pixel step
     std::vector<float> zf_;                       // the filter's depth: finite everywhere (0: no surface)
     std::vector<float> gx_, gy_;                  // signed depth change per pixel step along x and y
