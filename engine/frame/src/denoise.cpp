@@ -5,19 +5,18 @@
 #include <rtwall/denoise.h>
 
 #include "denoise_taps.h"
+#include "denoise_workers.h"
 #include <rtwall/depth_codec.h>
 #include <rtwall/warp.h>
 
 #include <algorithm>
 #include <barrier>
 #include <array>
-#include <atomic>
 #include <bit>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <type_traits>
 #include <utility>
 
@@ -25,9 +24,11 @@ namespace rtwall {
 
 namespace {
 
+using denoise_detail::demodulator;
+using denoise_detail::isSurface;
+
 using namespace denoise_detail;
 
-constexpr float kAlbedoFloor = 1e-3f;     // below this a channel is not divided (nor multiplied back)
 constexpr float kNormalCosine = 0.906f;   // history from a normal within 25 degrees
 constexpr float kDepthTolerance = 0.02f;  // history from a depth within 2 % (+ 1.5 pixel steps of depth)
 constexpr float kTapWeightFloor = 0.01f;  // less bilinear weight than this in agreeing taps: no history
@@ -43,9 +44,7 @@ constexpr float kFireflyRatio = 8.0f;
 
 inline float luminance(const float* c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
 
-inline bool isSurface(float depth) { return depth > 0.0f && depth < kBackgroundDepth && std::isfinite(depth); }
 
-inline float demodulator(float albedo) { return albedo > kAlbedoFloor ? albedo : 1.0f; }
 
 std::pair<int, int> rowsOf(int n, int threads, int i) {
     return {int(int64_t(n) * i / threads), int(int64_t(n) * (i + 1) / threads)};
@@ -58,66 +57,6 @@ void checkSpan(size_t got, size_t want, const char* what) {
 }
 
 }  // namespace
-
-// Threads that live as long as their Denoiser: each frame sets the job and bumps the generation,
-// every worker runs its part and counts down, and the caller runs part 0 and waits for the count.
-// The phases inside a job meet at the one barrier. No lock, no allocation per frame.
-class DenoiseWorkers {
-public:
-    explicit DenoiseWorkers(int threads) : threads_(threads), sync_(threads) {
-        pool_.reserve(size_t(threads - 1));
-        for (int part = 1; part < threads; ++part) pool_.emplace_back([this, part] { loop(part); });
-    }
-    ~DenoiseWorkers() {
-        stop_.store(true, std::memory_order_relaxed);
-        generation_.fetch_add(1, std::memory_order_release);
-        generation_.notify_all();
-        pool_.clear();  // joins
-    }
-    DenoiseWorkers(const DenoiseWorkers&) = delete;
-    DenoiseWorkers& operator=(const DenoiseWorkers&) = delete;
-    int threads() const { return threads_; }
-    std::barrier<>& sync() { return sync_; }
-    // job(context, part) for every part; returns when all are done.
-    void run(void (*job)(void*, int), void* context) {
-        job_ = job;
-        context_ = context;
-        remaining_.store(threads_ - 1, std::memory_order_relaxed);
-        generation_.fetch_add(1, std::memory_order_release);
-        generation_.notify_all();
-        job(context, 0);
-        for (int left = remaining_.load(std::memory_order_acquire); left != 0; left = remaining_.load(std::memory_order_acquire))
-            remaining_.wait(left, std::memory_order_acquire);
-    }
-
-private:
-    void loop(int part) {
-        uint64_t seen = 0;
-        for (;;) {
-            generation_.wait(seen, std::memory_order_acquire);
-            seen = generation_.load(std::memory_order_acquire);
-            if (stop_.load(std::memory_order_relaxed)) return;
-            job_(context_, part);
-            if (remaining_.fetch_sub(1, std::memory_order_acq_rel) == 1) remaining_.notify_one();
-        }
-    }
-
-    int threads_;
-    std::barrier<> sync_;
-    std::atomic<uint64_t> generation_{0};
-    std::atomic<int> remaining_{0};
-    std::atomic<bool> stop_{false};
-    void (*job_)(void*, int) = nullptr;
-    void* context_ = nullptr;
-    std::vector<std::jthread> pool_;  // last: its threads start once the rest is built
-};
-
-DenoiseWorkerPool::DenoiseWorkerPool() = default;
-DenoiseWorkerPool::DenoiseWorkerPool(const DenoiseWorkerPool&) {}
-DenoiseWorkerPool& DenoiseWorkerPool::operator=(const DenoiseWorkerPool&) { return *this; }
-DenoiseWorkerPool::DenoiseWorkerPool(DenoiseWorkerPool&&) noexcept = default;
-DenoiseWorkerPool& DenoiseWorkerPool::operator=(DenoiseWorkerPool&&) noexcept = default;
-DenoiseWorkerPool::~DenoiseWorkerPool() = default;
 
 void quantiseAsSent(FeatureFrame& f, uint8_t bits) {
     std::vector<uint16_t> halfs(f.linear.size());
@@ -225,8 +164,7 @@ std::span<const float> Denoiser::denoise(const DenoiseInput& in, const DenoiseSe
     rowIn.cornerX = camera.corner().x, rowIn.cornerY = camera.corner().y, rowIn.cornerZ = camera.corner().z;
     rowIn.duX = camera.du().x, rowIn.duY = camera.du().y, rowIn.duZ = camera.du().z;
     rowIn.dvX = camera.dv().x, rowIn.dvY = camera.dv().y, rowIn.dvZ = camera.dv().z;
-    rowIn.wx = wx;
-    rowIn.wxD = double(wx), rowIn.wyD = double(wy);
+    rowIn.wx = wx, rowIn.wy = wy;
     rowIn.origin[0] = double(origin.x), rowIn.origin[1] = double(origin.y), rowIn.origin[2] = double(origin.z);
     for (int k = 0; k < 3; ++k) {
         rowIn.prevOrigin[k] = previous.origin[k];

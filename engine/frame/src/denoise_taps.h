@@ -14,6 +14,12 @@
 
 namespace rtwall::denoise_detail {
 
+constexpr float kAlbedoFloor = 1e-3f;  // below this a channel is not divided (nor multiplied back)
+inline float demodulator(float albedo) { return albedo > kAlbedoFloor ? albedo : 1.0f; }
+// A depth on a surface: positive and below kBackgroundDepth (so finite: NaN and infinity fail
+// both). Bitwise, so that it vectorises.
+[[gnu::always_inline]] inline bool isSurface(float z) { return (z > 0.0f) & (z < kBackgroundDepth); }
+
 // e^x for x <= 0 (what the edge stops need), to 2e-6 relative: 2^(x log2 e) as the exponent
 // bits of its whole part times a degree-7 polynomial of its fraction. Branch-free and the same
 // bits on every thread and CPU (no libm, whose vector and scalar forms may differ); several
@@ -98,13 +104,10 @@ struct TemporalRow {
     bool reproject;                          // a moving view with a history: where its points were
     float cornerX, cornerY, cornerZ, duX, duY, duZ, dvX, dvY, dvZ;  // this camera (Camera::flatDirection)
     float py;                                // the row's image position, float(wy + y) + 0.5f
-    int wx;                                  // the window's place in its frame
-    double wxD, wyD;
+    int wx, wy;                              // the window's place in its frame
     double origin[3];                        // this camera's origin
     double prevOrigin[3], inv[3][3];         // the previous camera (ImageProjection)
 };
-
-[[gnu::always_inline]] inline bool rowSurface(float z) { return (z > 0.0f) & (z < kBackgroundDepth); }  // = isSurface
 
 // The depth gradient of pixel x of a row (below): its neighbours before and after along x exist
 // where hasBefore/hasAfter (the row's ends), above and below where the row says. Bitwise logic,
@@ -116,17 +119,17 @@ struct TemporalRow {
     const float zc = z[x];
     const uint32_t ic = id[x];
     const int xl = hasBefore ? x - 1 : x, xr = hasAfter ? x + 1 : x;
-    const bool okL = hasBefore & (id[xl] == ic) & rowSurface(z[xl]);
-    const bool okR = hasAfter & (id[xr] == ic) & rowSurface(z[xr]);
+    const bool okL = hasBefore & (id[xl] == ic) & isSurface(z[xl]);
+    const bool okR = hasAfter & (id[xr] == ic) & isSurface(z[xr]);
     const float dL = -1.0f * (z[xl] - zc), dR = 1.0f * (z[xr] - zc);
     const float bl = okL ? dL : INFINITY;
     const float bx = okR & (std::fabs(dR) < std::fabs(bl)) ? dR : bl;
-    const bool okU = r.up & (r.idUp[x] == ic) & rowSurface(r.zUp[x]);
-    const bool okD = r.down & (r.idDown[x] == ic) & rowSurface(r.zDown[x]);
+    const bool okU = r.up & (r.idUp[x] == ic) & isSurface(r.zUp[x]);
+    const bool okD = r.down & (r.idDown[x] == ic) & isSurface(r.zDown[x]);
     const float dU = -1.0f * (r.zUp[x] - zc), dD = 1.0f * (r.zDown[x] - zc);
     const float bu = okU ? dU : INFINITY;
     const float by = okD & (std::fabs(dD) < std::fabs(bu)) ? dD : bu;
-    const bool surface = rowSurface(zc);
+    const bool surface = isSurface(zc);
     const float g0 = surface & (bx != INFINITY) ? bx : 0.0f, g1 = surface & (by != INFINITY) ? by : 0.0f;
     gx[x] = g0;
     gy[x] = g1;
@@ -164,7 +167,7 @@ struct TemporalRow {
     const double p0 = r.prevOrigin[0], p1 = r.prevOrigin[1], p2 = r.prevOrigin[2];
     const double m00 = r.inv[0][0], m01 = r.inv[0][1], m02 = r.inv[0][2], m10 = r.inv[1][0], m11 = r.inv[1][1],
                  m12 = r.inv[1][2], m20 = r.inv[2][0], m21 = r.inv[2][1], m22 = r.inv[2][2];
-    const double wxD = r.wxD, wyD = r.wyD;
+    const double wxD = r.wx, wyD = r.wy;
     const int wx = r.wx;
     for (int x = 0; x < w; ++x) {
         const float fx = float(wx + x) + 0.5f;
@@ -208,14 +211,13 @@ inline void temporalRow(DenoiseIsa isa, RTWALL_ROW_ARGS) {
 // albedo: the row's (3 a pixel), or null for white. Vectorised per instruction set as above.
 [[gnu::always_inline]] inline void luminanceRowLoop(int w, const float* rgb, const float* albedo, const float* z,
                                                     float* __restrict lum, float* __restrict ok) {
-    auto demodulator = [](float a) { return a > 1e-3f ? a : 1.0f; };  // denoise.cpp's kAlbedoFloor
     for (int x = 0; x < w; ++x) {
         const float r = rgb[3 * x], g = rgb[3 * x + 1], b = rgb[3 * x + 2];
         const bool finite = (std::fabs(r) < INFINITY) & (std::fabs(g) < INFINITY) & (std::fabs(b) < INFINITY);
         const float ar = albedo ? albedo[3 * x] : 1.0f, ag = albedo ? albedo[3 * x + 1] : 1.0f,
                     ab = albedo ? albedo[3 * x + 2] : 1.0f;
         lum[x] = 0.2126f * (r / demodulator(ar)) + 0.7152f * (g / demodulator(ag)) + 0.0722f * (b / demodulator(ab));
-        ok[x] = finite & rowSurface(z[x]) ? 1.0f : 0.0f;
+        ok[x] = finite & isSurface(z[x]) ? 1.0f : 0.0f;
     }
 }
 #define RTWALL_LUM_ARGS int w, const float *rgb, const float *albedo, const float *z, float *__restrict lum, float *__restrict ok
